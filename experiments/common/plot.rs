@@ -1,0 +1,308 @@
+//! Plots with plotters: every figure is drawn once into an SVG string and once into a PNG,
+//! with the bundled DejaVu Sans font so that no system font library is needed.
+
+use anyhow::{anyhow, Result};
+use plotters::coord::Shift;
+use plotters::prelude::*;
+use std::sync::Once;
+
+static FONT: &[u8] = include_bytes!("../../assets/fonts/DejaVuSans.ttf");
+
+fn register_font() {
+    static ONCE: Once = Once::new();
+    ONCE.call_once(|| {
+        for style in [FontStyle::Normal, FontStyle::Bold, FontStyle::Italic] {
+            plotters::style::register_font("sans-serif", style, FONT)
+                .unwrap_or_else(|_| panic!("bundled font is valid"));
+        }
+    });
+}
+
+/// Something that can draw itself on any plotters backend.
+pub trait Figure {
+    /// Pixel size (width, height).
+    fn size(&self) -> (u32, u32) {
+        (960, 640)
+    }
+    /// Draws on a drawing area.
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<()>
+    where
+        DB::ErrorType: 'static;
+}
+
+/// Renders a figure to (SVG text, PNG bytes).
+pub fn render<F: Figure>(fig: &F) -> Result<(String, Vec<u8>)> {
+    register_font();
+    let (w, h) = fig.size();
+    let mut svg = String::new();
+    {
+        let root = SVGBackend::with_string(&mut svg, (w, h)).into_drawing_area();
+        fig.draw(&root)?;
+        root.present().map_err(|e| anyhow!("svg: {e}"))?;
+    }
+    let mut rgb = vec![0u8; (w * h * 3) as usize];
+    {
+        let root = BitMapBackend::with_buffer(&mut rgb, (w, h)).into_drawing_area();
+        fig.draw(&root)?;
+        root.present().map_err(|e| anyhow!("png: {e}"))?;
+    }
+    let img = image::RgbImage::from_raw(w, h, rgb).ok_or_else(|| anyhow!("png buffer size"))?;
+    let mut png = Vec::new();
+    img.write_to(
+        &mut std::io::Cursor::new(&mut png),
+        image::ImageOutputFormat::Png,
+    )?;
+    Ok((svg, png))
+}
+
+/// How a series is drawn.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Style {
+    /// Solid line.
+    Line,
+    /// Dashed line.
+    Dashed,
+    /// Markers only.
+    Points,
+    /// Solid line with markers.
+    LinePoints,
+}
+
+/// One labelled curve.
+#[derive(Debug, Clone)]
+pub struct Series {
+    /// Legend label (empty: not in the legend).
+    pub label: String,
+    /// (x, y) points.
+    pub points: Vec<(f64, f64)>,
+    /// Colour.
+    pub color: RGBColor,
+    /// Drawing style.
+    pub style: Style,
+}
+
+impl Series {
+    /// A series.
+    pub fn new(label: &str, points: Vec<(f64, f64)>, color: RGBColor, style: Style) -> Self {
+        Self {
+            label: label.to_string(),
+            points,
+            color,
+            style,
+        }
+    }
+}
+
+/// A palette that reads well in print and for colour-blind readers (Okabe-Ito).
+pub const PALETTE: [RGBColor; 8] = [
+    RGBColor(0, 114, 178),
+    RGBColor(213, 94, 0),
+    RGBColor(0, 158, 115),
+    RGBColor(204, 121, 167),
+    RGBColor(230, 159, 0),
+    RGBColor(86, 180, 233),
+    RGBColor(0, 0, 0),
+    RGBColor(240, 228, 66),
+];
+
+/// Where the legend goes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum LegendPos {
+    /// Upper right corner.
+    UpperRight,
+    /// Upper left corner.
+    UpperLeft,
+    /// Lower right corner.
+    LowerRight,
+    /// Lower left corner.
+    LowerLeft,
+}
+
+impl LegendPos {
+    fn to_plotters(self) -> SeriesLabelPosition {
+        match self {
+            LegendPos::UpperRight => SeriesLabelPosition::UpperRight,
+            LegendPos::UpperLeft => SeriesLabelPosition::UpperLeft,
+            LegendPos::LowerRight => SeriesLabelPosition::LowerRight,
+            LegendPos::LowerLeft => SeriesLabelPosition::LowerLeft,
+        }
+    }
+}
+
+/// A single-panel x-y plot with optional log axes.
+#[derive(Debug, Clone)]
+pub struct LinePlot {
+    /// Title (top).
+    pub title: String,
+    /// x-axis label with unit.
+    pub x_label: String,
+    /// y-axis label with unit.
+    pub y_label: String,
+    /// x range.
+    pub x_range: (f64, f64),
+    /// y range.
+    pub y_range: (f64, f64),
+    /// Logarithmic x axis.
+    pub log_x: bool,
+    /// Logarithmic y axis.
+    pub log_y: bool,
+    /// The curves.
+    pub series: Vec<Series>,
+    /// Legend position.
+    pub legend: LegendPos,
+    /// Size in pixels.
+    pub size: (u32, u32),
+}
+
+impl LinePlot {
+    /// A linear-axes plot; ranges are fitted to the data with a margin.
+    pub fn new(title: &str, x_label: &str, y_label: &str, series: Vec<Series>) -> Self {
+        let (mut x0, mut x1, mut y0, mut y1) = (f64::MAX, f64::MIN, f64::MAX, f64::MIN);
+        for s in &series {
+            for &(x, y) in &s.points {
+                if x.is_finite() && y.is_finite() {
+                    x0 = x0.min(x);
+                    x1 = x1.max(x);
+                    y0 = y0.min(y);
+                    y1 = y1.max(y);
+                }
+            }
+        }
+        if x0 > x1 {
+            (x0, x1, y0, y1) = (0.0, 1.0, 0.0, 1.0);
+        }
+        let dy = (y1 - y0).max(1e-300);
+        Self {
+            title: title.to_string(),
+            x_label: x_label.to_string(),
+            y_label: y_label.to_string(),
+            x_range: (x0, x1),
+            y_range: (y0.min(0.0).max(y0 - 0.05 * dy), y1 + 0.08 * dy),
+            log_x: false,
+            log_y: false,
+            series,
+            legend: LegendPos::UpperRight,
+            size: (960, 640),
+        }
+    }
+
+    /// Sets the x range.
+    pub fn x(mut self, lo: f64, hi: f64) -> Self {
+        self.x_range = (lo, hi);
+        self
+    }
+
+    /// Sets the y range.
+    pub fn y(mut self, lo: f64, hi: f64) -> Self {
+        self.y_range = (lo, hi);
+        self
+    }
+
+    /// Log axes.
+    pub fn log(mut self, log_x: bool, log_y: bool) -> Self {
+        self.log_x = log_x;
+        self.log_y = log_y;
+        self
+    }
+
+    /// Legend position.
+    pub fn legend(mut self, pos: LegendPos) -> Self {
+        self.legend = pos;
+        self
+    }
+}
+
+macro_rules! draw_chart {
+    ($self:ident, $root:ident, $xr:expr, $yr:expr) => {{
+        let mut chart = ChartBuilder::on($root)
+            .caption(&$self.title, ("sans-serif", 22))
+            .margin(18)
+            .x_label_area_size(48)
+            .y_label_area_size(84)
+            .build_cartesian_2d($xr, $yr)
+            .map_err(|e| anyhow!("chart: {e}"))?;
+        chart
+            .configure_mesh()
+            .x_desc(&$self.x_label)
+            .y_desc(&$self.y_label)
+            .label_style(("sans-serif", 15))
+            .axis_desc_style(("sans-serif", 17))
+            .light_line_style(RGBColor(235, 235, 235))
+            .bold_line_style(RGBColor(210, 210, 210))
+            .draw()
+            .map_err(|e| anyhow!("mesh: {e}"))?;
+        let mut any_label = false;
+        for s in &$self.series {
+            let color = s.color;
+            let pts: Vec<(f64, f64)> = s
+                .points
+                .iter()
+                .copied()
+                .filter(|&(x, y)| {
+                    x.is_finite()
+                        && y.is_finite()
+                        && (!$self.log_x || x > 0.0)
+                        && (!$self.log_y || y > 0.0)
+                })
+                .collect();
+            let line = ShapeStyle::from(&color).stroke_width(2);
+            let anno = match s.style {
+                Style::Line => chart
+                    .draw_series(LineSeries::new(pts.clone(), line))
+                    .map_err(|e| anyhow!("series: {e}"))?,
+                Style::Dashed => chart
+                    .draw_series(DashedLineSeries::new(pts.clone(), 8, 5, line))
+                    .map_err(|e| anyhow!("series: {e}"))?,
+                Style::Points => chart
+                    .draw_series(pts.iter().map(|&p| Circle::new(p, 3, color.filled())))
+                    .map_err(|e| anyhow!("series: {e}"))?,
+                Style::LinePoints => {
+                    chart
+                        .draw_series(LineSeries::new(pts.clone(), line))
+                        .map_err(|e| anyhow!("series: {e}"))?;
+                    chart
+                        .draw_series(pts.iter().map(|&p| Circle::new(p, 3, color.filled())))
+                        .map_err(|e| anyhow!("series: {e}"))?
+                }
+            };
+            if !s.label.is_empty() {
+                any_label = true;
+                anno.label(s.label.clone()).legend(move |(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 22, y)], color.stroke_width(3))
+                });
+            }
+        }
+        if any_label {
+            chart
+                .configure_series_labels()
+                .position($self.legend.to_plotters())
+                .label_font(("sans-serif", 15))
+                .background_style(WHITE.mix(0.85))
+                .border_style(BLACK)
+                .draw()
+                .map_err(|e| anyhow!("legend: {e}"))?;
+        }
+    }};
+}
+
+impl Figure for LinePlot {
+    fn size(&self) -> (u32, u32) {
+        self.size
+    }
+
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<()>
+    where
+        DB::ErrorType: 'static,
+    {
+        root.fill(&WHITE).map_err(|e| anyhow!("fill: {e}"))?;
+        let (x0, x1) = self.x_range;
+        let (y0, y1) = self.y_range;
+        match (self.log_x, self.log_y) {
+            (false, false) => draw_chart!(self, root, x0..x1, y0..y1),
+            (true, false) => draw_chart!(self, root, (x0..x1).log_scale(), y0..y1),
+            (false, true) => draw_chart!(self, root, x0..x1, (y0..y1).log_scale()),
+            (true, true) => draw_chart!(self, root, (x0..x1).log_scale(), (y0..y1).log_scale()),
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,5 @@
+//! fig09: not implemented yet (placeholder so the package layout is complete).
+fn main() {
+    eprintln!("[fig09] not implemented yet");
+    std::process::exit(2);
+}

@@ -1,0 +1,5 @@
+//! fig12: not implemented yet (placeholder so the package layout is complete).
+fn main() {
+    eprintln!("[fig12] not implemented yet");
+    std::process::exit(2);
+}

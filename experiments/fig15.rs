@@ -1,0 +1,5 @@
+//! fig15: not implemented yet (placeholder so the package layout is complete).
+fn main() {
+    eprintln!("[fig15] not implemented yet");
+    std::process::exit(2);
+}

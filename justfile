@@ -1,0 +1,30 @@
+# Short forms of the project's commands. Everything also works with plain cargo.
+
+# List the recipes.
+default:
+    @just --list
+
+# Run every experiment, write the scorecard and build the book (extra ARGS go to `reproduce`).
+reproduce *ARGS:
+    cargo run --release --bin reproduce -- {{ARGS}}
+
+# Run the test suite.
+test:
+    cargo test --release
+
+# Run one experiment, e.g. `just fig fig08` or `just fig table3`.
+fig NAME:
+    cargo run --release --bin {{NAME}}
+
+# Rebuild the book from the existing results without rerunning the experiments.
+book:
+    cargo run --release --bin reproduce -- --book-only
+
+# Check formatting and lints (warnings are errors).
+lint:
+    cargo fmt --check
+    cargo clippy --release --all-targets -- -D warnings
+
+# Run the benchmarks.
+bench:
+    cargo run --release --bin bench
