@@ -10,10 +10,7 @@ use common::{fmt_sig, load_device, Experiment};
 use endstop::hertz::{normalised_delta, HertzLine, LinearFits};
 use polars::prelude::*;
 
-/// Fit range of eq 19 in the paper: 0 to 0.5 um.
-const FIT_RANGE_M: f64 = 0.5e-6;
-/// Samples of the fit range.
-const FIT_SAMPLES: usize = 10_001;
+use endstop::hertz::{EQ19_FIT_RANGE_M as FIT_RANGE_M, EQ19_FIT_SAMPLES as FIT_SAMPLES};
 
 fn main() {
     common::run_main("fig05", run);
@@ -55,10 +52,16 @@ fn run() -> Result<()> {
         ));
         let fit = h.linear_fits(FIT_RANGE_M, FIT_SAMPLES);
         for (label, c) in [
-            ("least squares through origin, uniform in delta", fit.through_origin),
+            (
+                "least squares through origin, uniform in delta",
+                fit.through_origin,
+            ),
             ("least squares with intercept (slope)", fit.with_intercept),
             ("secant F(0.5 um)/0.5 um", fit.secant),
-            ("least squares through origin, uniform in force", fit.force_sampled),
+            (
+                "least squares through origin, uniform in force",
+                fit.force_sampled,
+            ),
             ("least squares of delta on F (errors in delta)", fit.inverse),
         ] {
             rows.push((name.to_string(), label, c, c * h.length_m / h.lambda_per_pa));
@@ -67,17 +70,35 @@ fn run() -> Result<()> {
     }
     let (h1, fit1) = (fits[0].1, fits[0].2);
     let h2 = fits[1].1;
-    exp.claim("F5-a", "delta0_p1_um", "published", h1.delta_scale_m() * 1e6);
-    exp.claim("F5-a", "delta0_p2_um", "published", h2.delta_scale_m() * 1e6);
+    exp.claim(
+        "F5-a",
+        "delta0_p1_um",
+        "published",
+        h1.delta_scale_m() * 1e6,
+    );
+    exp.claim(
+        "F5-a",
+        "delta0_p2_um",
+        "published",
+        h2.delta_scale_m() * 1e6,
+    );
     // Our reading of "least-squares fit" (eq 19): a line through the origin, F = k delta,
     // fitted to eq 6 sampled uniformly in delta over 0..0.5 um, for prototype 1 (whose Figure
     // 8 first used it). The other readings are shown beside it.
-    exp.claim("F5-b", "eq19_coefficient", "published", fit1.through_origin);
+    exp.claim(
+        "F5-b",
+        "eq19_coefficient",
+        "published",
+        fit1.paper_reading(),
+    );
     exp.number("eq19_coefficient_p1_through_origin", fit1.through_origin);
     exp.number("eq19_coefficient_p1_with_intercept", fit1.with_intercept);
     exp.number("eq19_coefficient_p1_secant", fit1.secant);
     exp.number("eq19_coefficient_p1_force_sampled", fit1.force_sampled);
-    exp.number("eq19_coefficient_p2_through_origin", fits[1].2.through_origin);
+    exp.number(
+        "eq19_coefficient_p2_through_origin",
+        fits[1].2.through_origin,
+    );
     exp.number("delta0_p1_m", h1.delta_scale_m());
     exp.number("delta0_p2_m", h2.delta_scale_m());
     exp.number(
@@ -109,7 +130,13 @@ fn run() -> Result<()> {
     // Sensitivity of the eq 19 stiffness to E and nu (SPEC 1: not given in the paper).
     md.push_str("\n**Sensitivity to the elastic constants** (eq 19 with the printed c = 0.058, prototype 1): k_im scales as E/(1 - nu^2).\n\n| E (GPa) | nu | k_im (N/m) | relative to default |\n|---|---|---|---|\n");
     let k_ref = p1.device.linear_endstop_stiffness_n_per_m();
-    for (e, nu) in [(130e9, 0.28), (150e9, 0.17), (169e9, 0.22), (169e9, 0.064), (188e9, 0.26)] {
+    for (e, nu) in [
+        (130e9, 0.28),
+        (150e9, 0.17),
+        (169e9, 0.22),
+        (169e9, 0.064),
+        (188e9, 0.26),
+    ] {
         let mut d = p1.device.clone();
         d.material.youngs_modulus_pa = e;
         d.material.poisson_ratio = nu;

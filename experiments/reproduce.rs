@@ -1,1 +1,299 @@
-fn main() {}
+//! `reproduce`: runs every experiment, joins the claims with our values into the scorecard,
+//! writes the provenance table, and builds the book into `book/build/`.
+//!
+//! Usage: `cargo run --release --bin reproduce [-- --only fig08,fig09] [--book-only] [--jobs N]`.
+//!
+//! The experiments run as separate processes (the binaries next to this one, built first with
+//! `cargo build --release --bins`), at most `--jobs` at a time; each one's log goes to
+//! `data/results/<name>/log.txt`. A failed experiment makes `reproduce` exit non-zero after the
+//! others have finished.
+
+#[path = "common/mod.rs"]
+mod common;
+
+use std::path::PathBuf;
+use std::process::Command;
+use std::sync::Mutex;
+use std::time::Instant;
+
+use anyhow::{bail, Context, Result};
+use clap::Parser;
+use endstop::scorecard::{parse_claims, score, Row, Value, Verdict};
+use serde::Deserialize;
+
+/// Every experiment, in the order of the paper.
+const EXPERIMENTS: [&str; 10] = [
+    "fig05", "table3", "fig08", "fig09", "fig10", "fig11", "fig12", "fig13", "fig14", "fig15",
+];
+
+#[derive(Parser, Debug)]
+#[command(about = "Run every experiment, write the scorecard and build the book")]
+struct Args {
+    /// Run only these experiments (comma separated), e.g. `--only fig08,fig13`.
+    #[arg(long, value_delimiter = ',')]
+    only: Vec<String>,
+    /// Do not run experiments: rebuild the scorecard and the book from existing results.
+    #[arg(long)]
+    book_only: bool,
+    /// How many experiments run at once (each also uses all cores internally).
+    #[arg(long, default_value_t = 2)]
+    jobs: usize,
+    /// Do not call `cargo build` first (the binaries must already be built).
+    #[arg(long)]
+    no_build: bool,
+}
+
+fn main() {
+    common::run_main("reproduce", run);
+}
+
+fn run() -> Result<()> {
+    let args = Args::parse();
+    let root = common::root();
+    for name in &args.only {
+        if !EXPERIMENTS.contains(&name.as_str()) {
+            bail!(
+                "unknown experiment `{name}`; known: {}",
+                EXPERIMENTS.join(", ")
+            );
+        }
+    }
+    let selected: Vec<&str> = EXPERIMENTS
+        .iter()
+        .copied()
+        .filter(|n| args.only.is_empty() || args.only.iter().any(|o| o == n))
+        .collect();
+    let mut failures = Vec::new();
+    let mut timings: Vec<(String, f64)> = Vec::new();
+    if !args.book_only {
+        if !args.no_build {
+            build_binaries()?;
+        }
+        let (t, f) = run_experiments(&selected, args.jobs.max(1))?;
+        timings = t;
+        failures = f;
+    }
+    let rows = write_scorecard()?;
+    write_provenance()?;
+    eprintln!("[reproduce] building the book");
+    let book = mdbook_driver::MDBook::load(root.join("book"))
+        .map_err(|e| anyhow::anyhow!("loading the book: {e:#}"))?;
+    book.build()
+        .map_err(|e| anyhow::anyhow!("building the book: {e:#}"))?;
+
+    let count = |v: Verdict| rows.iter().filter(|r| r.verdict == v).count();
+    if !timings.is_empty() {
+        eprintln!("\n experiment   wall time");
+        for (n, t) in &timings {
+            eprintln!(" {n:<10} {t:>8.2} s");
+        }
+    }
+    eprintln!(
+        "\nscorecard: {} reproduced, {} deviates, {} not yet ({} rows) -> data/results/scorecard.json",
+        count(Verdict::Reproduced),
+        count(Verdict::Deviates),
+        count(Verdict::NotYet),
+        rows.len()
+    );
+    eprintln!("book: {}", root.join("book/build/index.html").display());
+    if !failures.is_empty() {
+        bail!("experiments failed: {}", failures.join(", "));
+    }
+    Ok(())
+}
+
+fn build_binaries() -> Result<()> {
+    let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".to_string());
+    eprintln!("[reproduce] cargo build --release --bins");
+    let status = Command::new(cargo)
+        .args(["build", "--release", "--bins", "--quiet"])
+        .current_dir(common::root())
+        .status()
+        .context("running cargo build (pass --no-build if the binaries are already built)")?;
+    if !status.success() {
+        bail!("cargo build --release --bins failed");
+    }
+    Ok(())
+}
+
+fn binary_dir() -> Result<PathBuf> {
+    let exe = std::env::current_exe().context("locating this executable")?;
+    Ok(exe
+        .parent()
+        .context("executable has no directory")?
+        .to_path_buf())
+}
+
+/// Runs the experiments, at most `jobs` at once; returns wall times and failures.
+fn run_experiments(names: &[&str], jobs: usize) -> Result<(Vec<(String, f64)>, Vec<String>)> {
+    let dir = binary_dir()?;
+    let queue = Mutex::new(names.iter().map(|s| s.to_string()).collect::<Vec<_>>());
+    let results = Mutex::new(Vec::new());
+    let pb = common::progress(names.len() as u64, "reproduce");
+    std::thread::scope(|s| {
+        for _ in 0..jobs.min(names.len()) {
+            s.spawn(|| loop {
+                let Some(name) = ({
+                    let mut q = queue.lock().expect("queue lock");
+                    if q.is_empty() {
+                        None
+                    } else {
+                        Some(q.remove(0))
+                    }
+                }) else {
+                    break;
+                };
+                pb.set_message(name.clone());
+                let t = Instant::now();
+                let out = Command::new(dir.join(&name))
+                    .current_dir(common::root())
+                    .output();
+                let secs = t.elapsed().as_secs_f64();
+                let ok = match &out {
+                    Ok(o) => {
+                        let log = common::root()
+                            .join("data/results")
+                            .join(&name)
+                            .join("log.txt");
+                        let mut text = String::from_utf8_lossy(&o.stdout).to_string();
+                        text.push_str(&String::from_utf8_lossy(&o.stderr));
+                        let _ = common::write_atomic(&log, text.as_bytes());
+                        if !o.status.success() {
+                            pb.println(format!("[{name}] FAILED:\n{text}"));
+                        }
+                        o.status.success()
+                    }
+                    Err(e) => {
+                        pb.println(format!("[{name}] could not start: {e}"));
+                        false
+                    }
+                };
+                pb.println(format!(
+                    "[{name}] {} in {secs:.2} s",
+                    if ok { "done" } else { "failed" }
+                ));
+                pb.inc(1);
+                results.lock().expect("results lock").push((name, secs, ok));
+            });
+        }
+    });
+    pb.finish_and_clear();
+    let mut results = results.into_inner().expect("results");
+    results.sort_by_key(|(n, _, _)| EXPERIMENTS.iter().position(|e| e == n));
+    let failures = results
+        .iter()
+        .filter(|r| !r.2)
+        .map(|r| r.0.clone())
+        .collect();
+    Ok((
+        results.into_iter().map(|(n, t, _)| (n, t)).collect(),
+        failures,
+    ))
+}
+
+#[derive(Deserialize)]
+struct SummaryIn {
+    #[serde(default)]
+    values: Vec<Value>,
+    #[serde(default)]
+    commit: String,
+    #[serde(default)]
+    seed: Option<u64>,
+    #[serde(default)]
+    params: Vec<(String, String)>,
+}
+
+fn read_summary(name: &str) -> Option<SummaryIn> {
+    let path = common::root()
+        .join("data/results")
+        .join(name)
+        .join("summary.json");
+    let text = std::fs::read_to_string(path).ok()?;
+    serde_json::from_str(&text).ok()
+}
+
+/// Joins `data/claims.toml` with every experiment's summary.
+fn write_scorecard() -> Result<Vec<Row>> {
+    let root = common::root();
+    let text = std::fs::read_to_string(root.join("data/claims.toml"))
+        .context("reading data/claims.toml")?;
+    let claims = parse_claims(&text).map_err(|e| anyhow::anyhow!("data/claims.toml: {e}"))?;
+    let values: Vec<Value> = EXPERIMENTS
+        .iter()
+        .filter_map(|n| read_summary(n))
+        .flat_map(|s| s.values)
+        .collect();
+    let rows = score(&claims, &values);
+    common::write_atomic(
+        &root.join("data/results/scorecard.json"),
+        serde_json::to_string_pretty(&rows)?.as_bytes(),
+    )?;
+    let mut md = String::from(
+        "| claim | quantity | set | paper | ours | ± | unit | tolerance | verdict |\n|---|---|---|---|---|---|---|---|---|\n",
+    );
+    for r in &rows {
+        let ours = r
+            .ours
+            .map(|v| common::fmt_sig(v, 4))
+            .unwrap_or_else(|| "-".into());
+        let unc = r
+            .uncertainty
+            .map(|v| common::fmt_sig(v, 2))
+            .unwrap_or_default();
+        let verdict = match r.verdict {
+            Verdict::Reproduced => "**reproduced**",
+            Verdict::Deviates => "*deviates*",
+            Verdict::NotYet => "not yet",
+        };
+        md.push_str(&format!(
+            "| {} | {} | {} | {} | {} | {} | {} | {} | {} |\n",
+            r.claim,
+            r.quantity,
+            r.set,
+            r.paper,
+            ours,
+            unc,
+            r.unit,
+            common::fmt_sig(r.tolerance, 2),
+            verdict
+        ));
+    }
+    common::write_atomic(&root.join("book/src/generated/scorecard.md"), md.as_bytes())?;
+    Ok(rows)
+}
+
+/// The provenance table: experiment, parameter files, seed, commit, wall time.
+fn write_provenance() -> Result<()> {
+    let root = common::root();
+    let mut md = String::from(
+        "| experiment | parameter files (set) | seed | commit | wall time (s) |\n|---|---|---|---|---|\n",
+    );
+    for name in EXPERIMENTS {
+        let Some(s) = read_summary(name) else {
+            md.push_str(&format!("| {name} | (no results) | | | |\n"));
+            continue;
+        };
+        let wall =
+            std::fs::read_to_string(root.join("data/results").join(name).join("timing.json"))
+                .ok()
+                .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok())
+                .and_then(|v| v["wall_time_s"].as_f64())
+                .map(|t| format!("{t:.2}"))
+                .unwrap_or_default();
+        let params: Vec<String> = s
+            .params
+            .iter()
+            .map(|(f, l)| format!("`{f}` ({l})"))
+            .collect();
+        md.push_str(&format!(
+            "| {name} | {} | {} | `{}` | {wall} |\n",
+            params.join(", "),
+            s.seed.map(|x| x.to_string()).unwrap_or_else(|| "-".into()),
+            s.commit,
+        ));
+    }
+    common::write_atomic(
+        &root.join("book/src/generated/provenance.md"),
+        md.as_bytes(),
+    )
+}

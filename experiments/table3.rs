@@ -14,12 +14,10 @@ fn main() {
     common::run_main("table3", run);
 }
 
-/// The Qm reading our verdicts use: m w0 / b with the resonance the paper quotes (1220 Hz for
-/// prototype 1 with Figure 9, 675 Hz for prototype 2 with Figure 15). Both of Table 3's Qm
-/// values are consistent with it; see the book for the other two readings.
-const DEFAULT_QM: QmReading = QmReading::MeasuredResonance;
-/// Eq 21 is derived with the open-circuit stiffness K throughout: Qm = sqrt(K m)/b.
-const EQ21_QM: QmReading = QmReading::OpenCircuit;
+/// The Qm reading of our Table 3 verdicts (see `endstop::linear::TABLE3_QM`).
+const DEFAULT_QM: QmReading = endstop::linear::TABLE3_QM;
+/// The Qm reading of eq 21 (see `endstop::linear::EQ21_QM`).
+const EQ21_QM: QmReading = endstop::linear::EQ21_QM;
 
 fn run() -> Result<()> {
     let mut exp = Experiment::start("table3");
@@ -27,14 +25,31 @@ fn run() -> Result<()> {
     let p2 = load_device("prototype2")?;
     exp.uses(&p1, "published");
     exp.uses(&p2, "published");
-    let cases = [("prototype 1", "p1", 30.0, &p1), ("prototype 2", "p2", 15.0, &p2)];
+    let cases = [
+        ("prototype 1", "p1", 30.0, &p1),
+        ("prototype 2", "p2", 15.0, &p2),
+    ];
 
-    let mut cols: (Vec<String>, Vec<f64>, Vec<String>, Vec<f64>, Vec<f64>, Vec<f64>) =
-        Default::default();
-    let mut extra: (Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>, Vec<String>) =
-        Default::default();
+    let mut cols: (
+        Vec<String>,
+        Vec<f64>,
+        Vec<String>,
+        Vec<f64>,
+        Vec<f64>,
+        Vec<f64>,
+    ) = Default::default();
+    let mut extra: (
+        Vec<f64>,
+        Vec<f64>,
+        Vec<f64>,
+        Vec<f64>,
+        Vec<f64>,
+        Vec<String>,
+    ) = Default::default();
     let mut md = String::from("| device | Vb (V) | C (pF) | Gamma (uN/V) | K (N/m) | f_oc = sqrt(K/m)/2pi (Hz) | k^2 (%) | rL (eq 22) |\n|---|---|---|---|---|---|---|---|\n");
-    let mut md_q = String::from("\n| device | Qm reading | Qm | k^2 Qm | eq 21 efficiency (%) |\n|---|---|---|---|---|\n");
+    let mut md_q = String::from(
+        "\n| device | Qm reading | Qm | k^2 Qm | eq 21 efficiency (%) |\n|---|---|---|---|---|\n",
+    );
     for (label, key, vb, dev) in cases {
         let tp = TwoPort::of(&dev.device.with_bias(vb));
         md.push_str(&format!(
@@ -52,7 +67,11 @@ fn run() -> Result<()> {
             md_q.push_str(&format!(
                 "| {label} | {}{} | {} | {} | {} |\n",
                 reading.label(),
-                if reading == DEFAULT_QM { " (default)" } else { "" },
+                if reading == DEFAULT_QM {
+                    " (default)"
+                } else {
+                    ""
+                },
                 fmt_sig(qm, 5),
                 fmt_sig(tp.k2 * qm, 4),
                 fmt_sig(eff * 100.0, 4),
@@ -174,7 +193,12 @@ fn write_efficiency_plot(exp: &Experiment, p2: &endstop::params::Device) -> Resu
         "efficiency 2P/(m Sa) [%]",
         vec![
             Series::new("eq 21, Qm = sqrt(K m)/b", pts, PALETTE[0], Style::Line),
-            Series::new("Table 2's RL = 15.2 MOhm", marker, PALETTE[1], Style::Points),
+            Series::new(
+                "Table 2's RL = 15.2 MOhm",
+                marker,
+                PALETTE[1],
+                Style::Points,
+            ),
         ],
     )
     .log(true, false)

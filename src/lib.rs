@@ -17,15 +17,19 @@
 //! | [`noise`] | band-limited white-noise generation (Figure 10) |
 //! | [`spectral`] | Welch PSD estimation, bandwidths |
 //! | [`sweep`] | stepped-sine sweeps with continuation, jump and onset detection |
+//! | [`narrowband`] | Figures 8, 9, 13: sweeps, onsets, jumps, calibration, b_im fits |
+//! | [`broadband`] | Figures 10-15: random-vibration records, ensembles, spectra |
 //! | [`scorecard`] | claims, tolerances and verdicts |
 //!
 //! Units are SI throughout unless a name says otherwise (`accel_rms_g`, `freq_hz`).
 
+pub mod broadband;
 pub mod excitation;
 pub mod hertz;
 pub mod integrator;
 pub mod linear;
 pub mod model;
+pub mod narrowband;
 pub mod noise;
 pub mod params;
 pub mod scorecard;

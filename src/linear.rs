@@ -37,6 +37,15 @@ impl QmReading {
     }
 }
 
+/// The Qm reading used for Table 3's verdicts: m w0/b with the resonance the paper quotes
+/// (1220 Hz with Figure 9, 675 Hz with Figure 15). Of the three readings it is the only one
+/// consistent with both printed Qm values (5.7 and 203.5); the others are shown beside it.
+pub const TABLE3_QM: QmReading = QmReading::MeasuredResonance;
+
+/// The Qm reading used in eq 21: the derivation works with the open-circuit stiffness K
+/// throughout (rL of eq 22 also uses sqrt(K/m)), so Qm = sqrt(K m)/b.
+pub const EQ21_QM: QmReading = QmReading::OpenCircuit;
+
 /// The differential-mode two-port and its figures of merit at one bias voltage.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct TwoPort {

@@ -38,10 +38,19 @@ pub struct LoadedDevice {
     pub text: String,
 }
 
-/// Loads and validates `data/<name>.toml`; the error names the file and the field.
+/// Loads and validates `data/<name>.toml` (or `$ENDSTOP_DATA_DIR/<name>.toml` when that
+/// variable is set); the error names the file and the field.
 pub fn load_device(name: &str) -> Result<LoadedDevice> {
-    let rel = format!("data/{name}.toml");
-    let path = root().join(&rel);
+    let (rel, path) = match std::env::var_os("ENDSTOP_DATA_DIR") {
+        Some(dir) => {
+            let p = PathBuf::from(dir).join(format!("{name}.toml"));
+            (p.display().to_string(), p)
+        }
+        None => {
+            let rel = format!("data/{name}.toml");
+            (rel.clone(), root().join(&rel))
+        }
+    };
     let text = std::fs::read_to_string(&path)
         .with_context(|| format!("cannot read parameter file {}", path.display()))?;
     let device = Device::from_toml_str(&text, &rel)?;

@@ -1,0 +1,313 @@
+//! The integrator against exact solutions: a free oscillator, free flight onto a wall, a
+//! piecewise-linear contact on the real harvester model, and the energy balance of a run with
+//! impacts. Tolerances are stated in the integrator's own units (rtol) or derived from them.
+
+use endstop::excitation::{Excitation, Sine};
+use endstop::integrator::{Dopri5, Guards, HybridSystem, Options, SolverError};
+use endstop::model::{Harvester, Mode, Side, State};
+use endstop::params::{Device, StiffnessModel};
+use nalgebra::SVector;
+
+fn device(name: &str) -> Device {
+    let text = std::fs::read_to_string(format!("{}/data/{name}.toml", env!("CARGO_MANIFEST_DIR")))
+        .unwrap();
+    Device::from_toml_str(&text, name).unwrap()
+}
+
+fn opts<const N: usize>(rtol: f64, atol: f64) -> Options<N> {
+    Options {
+        rtol,
+        atol: SVector::repeat(atol),
+        h_max: 1.0,
+        h_min: 1e-14,
+        h_init: 1e-4,
+        max_steps: 10_000_000,
+        event_time_tol: 1e-14,
+    }
+}
+
+/// y'' = -w^2 y, single mode; optional wall at x = wall.
+struct Oscillator {
+    w: f64,
+}
+
+impl HybridSystem<2> for Oscillator {
+    type Mode = ();
+    fn rhs(&self, _: (), _t: f64, y: &SVector<f64, 2>) -> SVector<f64, 2> {
+        SVector::<f64, 2>::new(y[1], -self.w * self.w * y[0])
+    }
+    fn guards(&self, _: (), _t: f64, _y: &SVector<f64, 2>) -> Guards {
+        [f64::NEG_INFINITY; 3]
+    }
+    fn switch(&self, _: (), _: usize, _: f64, _: &mut SVector<f64, 2>) {}
+}
+
+#[test]
+fn free_oscillator_error_is_of_the_order_of_the_tolerance_and_shrinks_with_it() {
+    let sys = Oscillator {
+        w: 2.0 * std::f64::consts::PI,
+    };
+    let mut errs = Vec::new();
+    for rtol in [1e-6, 1e-8, 1e-10] {
+        let y0 = SVector::<f64, 2>::new(1.0, 0.0);
+        let mut ode = Dopri5::new(0.0, y0, (), opts(rtol, rtol));
+        let mut max_err: f64 = 0.0;
+        ode.integrate(&sys, 10.0, |st, _| {
+            // Check the dense output too, at the midpoint of every step.
+            let t = st.t0 + 0.5 * st.h;
+            let e = (st.at(t)[0] - (sys.w * t).cos()).abs();
+            max_err = max_err.max(e);
+        })
+        .unwrap();
+        let e_end = (ode.y[0] - (sys.w * 10.0).cos()).abs();
+        max_err = max_err.max(e_end);
+        // Global error over 10 periods: bounded by 100 x the local tolerance (error accumulates
+        // over ~10 periods and the controller targets the local error only).
+        assert!(max_err < 100.0 * rtol, "rtol {rtol}: max error {max_err:e}");
+        errs.push(max_err);
+    }
+    // Tightening the tolerance by 100 must cut the error by at least 10.
+    assert!(
+        errs[1] < errs[0] / 10.0 && errs[2] < errs[1] / 10.0,
+        "{errs:?}"
+    );
+}
+
+/// Free flight with constant acceleration onto a wall at x = 1: x = v0 t + a t^2 / 2.
+struct Flight {
+    a: f64,
+}
+
+impl HybridSystem<2> for Flight {
+    type Mode = u8;
+    fn rhs(&self, mode: u8, _t: f64, y: &SVector<f64, 2>) -> SVector<f64, 2> {
+        if mode == 0 {
+            SVector::<f64, 2>::new(y[1], self.a)
+        } else {
+            SVector::<f64, 2>::zeros()
+        }
+    }
+    fn guards(&self, mode: u8, _t: f64, y: &SVector<f64, 2>) -> Guards {
+        if mode == 0 {
+            [y[0] - 1.0, f64::NEG_INFINITY, f64::NEG_INFINITY]
+        } else {
+            [f64::NEG_INFINITY; 3]
+        }
+    }
+    fn switch(&self, _: u8, _: usize, _: f64, _: &mut SVector<f64, 2>) -> u8 {
+        1
+    }
+}
+
+#[test]
+fn free_flight_hits_the_wall_at_the_exact_time() {
+    let (v0, a) = (0.3, 0.7);
+    let sys = Flight { a };
+    let mut ode = Dopri5::new(0.0, SVector::<f64, 2>::new(0.0, v0), 0u8, opts(1e-9, 1e-12));
+    let mut t_hit = f64::NAN;
+    ode.integrate(&sys, 5.0, |st, m| {
+        if m == 0 {
+            t_hit = st.t1();
+        }
+    })
+    .unwrap();
+    let exact = (-v0 + (v0 * v0 + 2.0 * a).sqrt()) / a;
+    // The trajectory is a quadratic, which the 4th-order dense output represents exactly, so
+    // the event is located to the root finder's time tolerance (1e-14 s) plus rounding.
+    assert!((t_hit - exact).abs() < 1e-12, "{t_hit} vs {exact}");
+    assert_eq!(ode.stats.events, 1);
+}
+
+fn elastic_p1(km: f64, kim: f64) -> Harvester<Sine> {
+    let mut d = device("prototype1").with_endstop(StiffnessModel::Linear, 0.0);
+    d.mechanics.damping_n_s_per_m = 1e-300;
+    d.mechanics.stiffness_n_per_m = km;
+    d.electrical.bias_v = 0.0;
+    let mut h = Harvester::new(&d, Sine::from_rms_g(0.0, 1000.0));
+    h.damping = 0.0;
+    h.law = endstop::model::ContactLaw::Linear(kim);
+    h
+}
+
+#[test]
+fn piecewise_linear_contact_on_the_harvester_model_matches_the_exact_solution() {
+    // Undamped, unbiased (the electrical states stay zero), linear stop: the motion is a
+    // free sine until x = xmax and a faster sine about x_c while in contact.
+    let (km, kim) = (166.5, 1.94e6);
+    let h = elastic_p1(km, kim);
+    let (m, xmax) = (h.mass_kg, h.xmax);
+    let w0 = (km / m).sqrt();
+    let w1 = ((km + kim) / m).sqrt();
+    let v0 = 1.5 * w0 * xmax;
+    let t_in = (xmax * w0 / v0).asin() / w0;
+    let v_in = v0 * (w0 * t_in).cos();
+    let xc = kim * xmax / (km + kim);
+    let theta = 2.0 * (v_in / w1).atan2(xmax - xc);
+    let t_out = t_in + theta / w1;
+
+    let mut o = h.solver_options(1e-10);
+    o.event_time_tol = 1e-16;
+    let mut ode = Dopri5::new(0.0, State::new(0.0, v0, 0.0, 0.0), Mode::Free, o);
+    let mut switches: Vec<(f64, Mode, f64)> = Vec::new();
+    let mut last = Mode::Free;
+    ode.integrate(&h, t_out * 1.01, |st, mode| {
+        if mode != last {
+            switches.push((st.t0, mode, st.y0[1]));
+            last = mode;
+        }
+    })
+    .unwrap();
+    assert_eq!(switches.len(), 2, "{switches:?}");
+    assert_eq!(switches[0].1, Mode::Contact(Side::Upper));
+    assert_eq!(switches[1].1, Mode::Free);
+    // Event times to 1e-9 relative (the contact lasts ~3.7 us; 1e-9 of t_out is ~0.2 ps).
+    assert!(
+        ((switches[0].0 - t_in) / t_in).abs() < 1e-9,
+        "entry {} vs {t_in}",
+        switches[0].0
+    );
+    assert!(
+        ((switches[1].0 - t_out) / t_out).abs() < 1e-9,
+        "exit {} vs {t_out}",
+        switches[1].0
+    );
+    // The contact duration itself, to 1e-6 relative.
+    let dur = switches[1].0 - switches[0].0;
+    assert!(((dur - theta / w1) / (theta / w1)).abs() < 1e-6, "{dur}");
+    // Elastic impact: the exit speed equals the entry speed.
+    assert!(
+        ((switches[1].2 + v_in) / v_in).abs() < 1e-8,
+        "{} vs {}",
+        switches[1].2,
+        -v_in
+    );
+}
+
+/// The harvester with the work of every force accumulated as extra states:
+/// y[4] = excitation work, y[5] = mechanical damping, y[6] = end-stop damping, y[7] = loads.
+struct Audit<E: Excitation>(Harvester<E>);
+
+fn split(y: &SVector<f64, 8>) -> State {
+    State::new(y[0], y[1], y[2], y[3])
+}
+
+impl<E: Excitation> HybridSystem<8> for Audit<E> {
+    type Mode = Mode;
+    fn rhs(&self, mode: Mode, t: f64, y: &SVector<f64, 8>) -> SVector<f64, 8> {
+        let s = split(y);
+        let f = self.0.rhs(mode, t, &s);
+        let p = self.0.power_terms(mode, t, &s);
+        SVector::<f64, 8>::from_column_slice(&[
+            f[0],
+            f[1],
+            f[2],
+            f[3],
+            p.excitation,
+            p.mech_damping,
+            p.stop_damping,
+            p.load,
+        ])
+    }
+    fn guards(&self, mode: Mode, t: f64, y: &SVector<f64, 8>) -> Guards {
+        self.0.guards(mode, t, &split(y))
+    }
+    fn switch(&self, mode: Mode, i: usize, t: f64, y: &mut SVector<f64, 8>) -> Mode {
+        let mut s = split(y);
+        let m = self.0.switch(mode, i, t, &mut s);
+        y[0] = s[0];
+        m
+    }
+}
+
+#[test]
+fn energy_balance_closes_over_a_run_with_impacts() {
+    // Prototype 1 driven hard at 1300 Hz (Hertz stop, b_im = 1.5, Vb = 30 V): impacts on both
+    // stops every period.
+    let d = device("prototype1");
+    let h = Harvester::new(&d, Sine::from_rms_g(8.0, 1300.0));
+    let audit = Audit(h.clone());
+    let base = h.solver_options(1e-10);
+    let e_scale = 0.5 * d.mechanics.stiffness_n_per_m * d.geometry.endstop_gap_m.powi(2);
+    let mut atol = SVector::<f64, 8>::repeat(e_scale * 1e-10);
+    for i in 0..4 {
+        atol[i] = base.atol[i];
+    }
+    let o = Options {
+        rtol: 1e-10,
+        atol,
+        h_max: base.h_max,
+        h_min: base.h_min,
+        h_init: base.h_init,
+        max_steps: base.max_steps,
+        event_time_tol: base.event_time_tol,
+    };
+    let y0 = SVector::<f64, 8>::zeros();
+    let mut ode = Dopri5::new(0.0, y0, Mode::Free, o);
+    ode.integrate(&audit, 40.0 / 1300.0, |_, _| {}).unwrap();
+    assert!(
+        ode.stats.events > 40,
+        "expected impacts, got {} events",
+        ode.stats.events
+    );
+    let y = ode.y;
+    let s1 = split(&y);
+    let stored = h.stored_energy(ode.mode, &s1) - h.stored_energy(Mode::Free, &State::zeros());
+    let source = h.vb * (h.source_charge(&s1) - h.source_charge(&State::zeros()));
+    let (w_exc, d_mech, d_stop, d_load) = (y[4], y[5], y[6], y[7]);
+    assert!(d_stop > 0.0 && d_load > 0.0);
+    let residual = w_exc + source - (d_mech + d_stop + d_load + stored);
+    let scale = d_mech + d_stop + d_load;
+    assert!(
+        (residual / scale).abs() < 1e-6,
+        "residual {residual:e} J of {scale:e} J dissipated ({:e} relative)",
+        residual / scale
+    );
+}
+
+/// y' = y^2 blows up at t = 1.
+struct BlowUp;
+
+impl HybridSystem<1> for BlowUp {
+    type Mode = ();
+    fn rhs(&self, _: (), _t: f64, y: &SVector<f64, 1>) -> SVector<f64, 1> {
+        SVector::<f64, 1>::new(y[0] * y[0])
+    }
+    fn guards(&self, _: (), _t: f64, _y: &SVector<f64, 1>) -> Guards {
+        [f64::NEG_INFINITY; 3]
+    }
+    fn switch(&self, _: (), _: usize, _: f64, _: &mut SVector<f64, 1>) {}
+}
+
+#[test]
+fn a_blow_up_is_an_error_with_the_time_never_a_silent_nan() {
+    let mut ode = Dopri5::new(0.0, SVector::<f64, 1>::new(1.0), (), opts(1e-8, 1e-8));
+    let err = ode.integrate(&BlowUp, 2.0, |_, _| {}).unwrap_err();
+    let t = match &err {
+        SolverError::StepSizeTooSmall { t, .. }
+        | SolverError::NonFinite { t, .. }
+        | SolverError::TooManySteps { t, .. } => *t,
+        other => panic!("unexpected error {other:?}"),
+    };
+    assert!((t - 1.0).abs() < 1e-3, "stopped at {t}: {err}");
+    assert!(err.to_string().contains("t = "), "{err}");
+}
+
+#[test]
+fn every_sample_instant_of_a_sampled_input_is_a_step_boundary() {
+    use endstop::excitation::Sampled;
+    let samples: std::sync::Arc<[f64]> = (0..101).map(|k| (k as f64 * 0.37).sin()).collect();
+    let ex = Sampled::new(samples, 1e5);
+    let d = device("prototype1");
+    let h = Harvester::new(&d, ex.clone());
+    let mut ode = Dopri5::new(0.0, State::zeros(), Mode::Free, h.solver_options(1e-8));
+    let mut ends = Vec::new();
+    ode.integrate(&h, ex.duration_s(), |st, _| ends.push(st.t1()))
+        .unwrap();
+    for k in 1..=100 {
+        let t = ex.time_of(k);
+        assert!(
+            ends.iter().any(|&e| e == t),
+            "no step ends exactly at sample {k} (t = {t:e})"
+        );
+    }
+}
