@@ -41,6 +41,9 @@ struct Args {
     /// Do not call `cargo build` first (the binaries must already be built).
     #[arg(long)]
     no_build: bool,
+    /// Rerun experiments even when their inputs are unchanged.
+    #[arg(long)]
+    force: bool,
 }
 
 fn main() {
@@ -69,7 +72,16 @@ fn run() -> Result<()> {
         if !args.no_build {
             build_binaries()?;
         }
-        let (t, f) = run_experiments(&selected, args.jobs.max(1))?;
+        let key = inputs_key()?;
+        let mut to_run = Vec::new();
+        for &name in &selected {
+            if !args.force && is_fresh(name, &key) {
+                eprintln!("[{name}] skipped: inputs unchanged since its last run (use --force to rerun)");
+            } else {
+                to_run.push(name);
+            }
+        }
+        let (t, f) = run_experiments(&to_run, args.jobs.max(1), &key)?;
         timings = t;
         failures = f;
     }
@@ -125,7 +137,11 @@ fn binary_dir() -> Result<PathBuf> {
 }
 
 /// Runs the experiments, at most `jobs` at once; returns wall times and failures.
-fn run_experiments(names: &[&str], jobs: usize) -> Result<(Vec<(String, f64)>, Vec<String>)> {
+fn run_experiments(
+    names: &[&str],
+    jobs: usize,
+    key: &str,
+) -> Result<(Vec<(String, f64)>, Vec<String>)> {
     let dir = binary_dir()?;
     let queue = Mutex::new(names.iter().map(|s| s.to_string()).collect::<Vec<_>>());
     let results = Mutex::new(Vec::new());
@@ -151,14 +167,16 @@ fn run_experiments(names: &[&str], jobs: usize) -> Result<(Vec<(String, f64)>, V
                 let secs = t.elapsed().as_secs_f64();
                 let ok = match &out {
                     Ok(o) => {
-                        let log = common::root()
-                            .join("data/results")
+                        let log = common::results_root()
                             .join(&name)
                             .join("log.txt");
                         let mut text = String::from_utf8_lossy(&o.stdout).to_string();
                         text.push_str(&String::from_utf8_lossy(&o.stderr));
                         let _ = common::write_atomic(&log, text.as_bytes());
-                        if !o.status.success() {
+                        if o.status.success() {
+                            let _ = common::write_atomic(&key_path(&name), key.as_bytes());
+                        } else {
+                            let _ = std::fs::remove_file(key_path(&name));
                             pb.println(format!("[{name}] FAILED:\n{text}"));
                         }
                         o.status.success()
@@ -191,6 +209,61 @@ fn run_experiments(names: &[&str], jobs: usize) -> Result<(Vec<(String, f64)>, V
     ))
 }
 
+/// Files whose content determines every experiment's output: the code, the parameter files,
+/// the lock file and the bundled font. (Seeds are constants in the code.)
+fn input_files() -> Result<Vec<PathBuf>> {
+    fn walk(dir: &std::path::Path, out: &mut Vec<PathBuf>) -> Result<()> {
+        for entry in std::fs::read_dir(dir).with_context(|| format!("reading {}", dir.display()))? {
+            let p = entry?.path();
+            if p.is_dir() {
+                walk(&p, out)?;
+            } else {
+                out.push(p);
+            }
+        }
+        Ok(())
+    }
+    let root = common::root();
+    let mut files = vec![root.join("Cargo.toml"), root.join("Cargo.lock")];
+    for d in ["src", "experiments", "assets"] {
+        walk(&root.join(d), &mut files)?;
+    }
+    for entry in std::fs::read_dir(root.join("data"))? {
+        let p = entry?.path();
+        if p.extension().is_some_and(|e| e == "toml") && !p.ends_with("claims.toml") {
+            files.push(p);
+        }
+    }
+    files.sort();
+    Ok(files)
+}
+
+/// Content hash (SHA-256) of every input file, with their paths.
+fn inputs_key() -> Result<String> {
+    use sha2::{Digest, Sha256};
+    let root = common::root();
+    let mut h = Sha256::new();
+    for f in input_files()? {
+        h.update(f.strip_prefix(&root).unwrap_or(&f).to_string_lossy().as_bytes());
+        h.update([0u8]);
+        h.update(std::fs::read(&f).with_context(|| format!("reading {}", f.display()))?);
+        h.update([0u8]);
+    }
+    Ok(format!("{:x}", h.finalize()))
+}
+
+fn key_path(name: &str) -> PathBuf {
+    common::results_root().join(name).join("inputs.sha256")
+}
+
+/// An experiment is fresh when its last successful run had the same inputs and its outputs
+/// (summary and book snippet) are still there.
+fn is_fresh(name: &str, key: &str) -> bool {
+    let same = std::fs::read_to_string(key_path(name)).is_ok_and(|k| k.trim() == key);
+    same && common::results_root().join(name).join("summary.json").exists()
+        && common::book_generated_root().join(name).join("numbers.md").exists()
+}
+
 #[derive(Deserialize)]
 struct SummaryIn {
     #[serde(default)]
@@ -204,8 +277,7 @@ struct SummaryIn {
 }
 
 fn read_summary(name: &str) -> Option<SummaryIn> {
-    let path = common::root()
-        .join("data/results")
+    let path = common::results_root()
         .join(name)
         .join("summary.json");
     let text = std::fs::read_to_string(path).ok()?;
@@ -225,7 +297,7 @@ fn write_scorecard() -> Result<Vec<Row>> {
         .collect();
     let rows = score(&claims, &values);
     common::write_atomic(
-        &root.join("data/results/scorecard.json"),
+        &common::results_root().join("scorecard.json"),
         serde_json::to_string_pretty(&rows)?.as_bytes(),
     )?;
     let mut md = String::from(
@@ -258,13 +330,12 @@ fn write_scorecard() -> Result<Vec<Row>> {
             verdict
         ));
     }
-    common::write_atomic(&root.join("book/src/generated/scorecard.md"), md.as_bytes())?;
+    common::write_atomic(&common::book_generated_root().join("scorecard.md"), md.as_bytes())?;
     Ok(rows)
 }
 
 /// The provenance table: experiment, parameter files, seed, commit, wall time.
 fn write_provenance() -> Result<()> {
-    let root = common::root();
     let mut md = String::from(
         "| experiment | parameter files (set) | seed | commit | wall time (s) |\n|---|---|---|---|---|\n",
     );
@@ -274,7 +345,7 @@ fn write_provenance() -> Result<()> {
             continue;
         };
         let wall =
-            std::fs::read_to_string(root.join("data/results").join(name).join("timing.json"))
+            std::fs::read_to_string(common::results_root().join(name).join("timing.json"))
                 .ok()
                 .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok())
                 .and_then(|v| v["wall_time_s"].as_f64())
@@ -293,7 +364,7 @@ fn write_provenance() -> Result<()> {
         ));
     }
     common::write_atomic(
-        &root.join("book/src/generated/provenance.md"),
+        &common::book_generated_root().join("provenance.md"),
         md.as_bytes(),
     )
 }

@@ -408,3 +408,95 @@ impl<E: Excitation> HybridSystem<4> for Harvester<E> {
         Ok(())
     }
 }
+
+/// The harvester with the work of every force accumulated as four extra states, for energy
+/// audits: y[4] excitation work, y[5] mechanical damping, y[6] end-stop losses (damping, and
+/// the spring energy dropped when a tension-free contact unloads), y[7] loads.
+///
+/// Over any run, `y[4] + Vb * delta(source_charge) = y[5] + y[6] + y[7] + delta(stored_energy)`
+/// (see [`Harvester::stored_energy`] and [`Harvester::source_charge`]); the tests use it to
+/// check the model and the integrator together.
+#[derive(Debug, Clone)]
+pub struct EnergyAudit<E: Excitation>(pub Harvester<E>);
+
+/// Splits the audit state into the model state.
+pub fn audit_state(y: &SVector<f64, 8>) -> State {
+    State::new(y[0], y[1], y[2], y[3])
+}
+
+impl<E: Excitation> EnergyAudit<E> {
+    /// Integrator options: the model's, with absolute tolerances for the energy accumulators
+    /// of `rtol` times the suspension energy at the stop, km xmax^2 / 2.
+    pub fn solver_options(&self, rtol: f64) -> Options<8> {
+        let base = self.0.solver_options(rtol);
+        let e_scale = 0.5 * self.0.km * self.0.xmax * self.0.xmax;
+        let mut atol = SVector::<f64, 8>::repeat(e_scale * rtol);
+        for i in 0..4 {
+            atol[i] = base.atol[i];
+        }
+        Options {
+            rtol,
+            atol,
+            h_max: base.h_max,
+            h_min: base.h_min,
+            h_init: base.h_init,
+            max_steps: base.max_steps,
+            event_time_tol: base.event_time_tol,
+        }
+    }
+
+    /// Relative residual of the energy balance between the rest state and `y` (in `mode`):
+    /// (work in - dissipated - stored) / (|excitation work| + |source work|).
+    pub fn relative_residual(&self, mode: Mode, y: &SVector<f64, 8>) -> f64 {
+        let h = &self.0;
+        let s = audit_state(y);
+        let stored = h.stored_energy(mode, &s) - h.stored_energy(Mode::Free, &State::zeros());
+        let source = h.vb * (h.source_charge(&s) - h.source_charge(&State::zeros()));
+        let dissipated = y[5] + y[6] + y[7];
+        (y[4] + source - dissipated - stored) / (y[4].abs() + source.abs())
+    }
+}
+
+impl<E: Excitation> HybridSystem<8> for EnergyAudit<E> {
+    type Mode = Mode;
+
+    fn rhs(&self, mode: Mode, t: f64, y: &SVector<f64, 8>) -> SVector<f64, 8> {
+        let s = audit_state(y);
+        let f = self.0.rhs(mode, t, &s);
+        let p = self.0.power_terms(mode, t, &s);
+        SVector::<f64, 8>::from_column_slice(&[
+            f[0],
+            f[1],
+            f[2],
+            f[3],
+            p.excitation,
+            p.mech_damping,
+            p.stop_damping,
+            p.load,
+        ])
+    }
+
+    fn guards(&self, mode: Mode, t: f64, y: &SVector<f64, 8>) -> Guards {
+        self.0.guards(mode, t, &audit_state(y))
+    }
+
+    /// Switches mode; any stored energy that the switch makes disappear (a tension-free
+    /// contact that unloads while still pressed drops the spring energy U(delta)) is booked
+    /// as end-stop dissipation, so the balance stays exact.
+    fn switch(&self, mode: Mode, i: usize, t: f64, y: &mut SVector<f64, 8>) -> Mode {
+        let mut s = audit_state(y);
+        let before = self.0.stored_energy(mode, &s);
+        let m = self.0.switch(mode, i, t, &mut s);
+        y[0] = s[0];
+        y[6] += before - self.0.stored_energy(m, &s);
+        m
+    }
+
+    fn next_breakpoint(&self, t: f64) -> f64 {
+        self.0.next_breakpoint(t)
+    }
+
+    fn check_state(&self, mode: Mode, t: f64, y: &SVector<f64, 8>) -> Result<(), String> {
+        self.0.check_state(mode, t, &audit_state(y))
+    }
+}

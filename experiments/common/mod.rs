@@ -27,6 +27,24 @@ pub fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
 }
 
+/// Where results go: `data/results/`, or `$ENDSTOP_OUTPUT_DIR` when set (used by tests that
+/// must not overwrite the user's results).
+pub fn results_root() -> PathBuf {
+    match std::env::var_os("ENDSTOP_OUTPUT_DIR") {
+        Some(d) => PathBuf::from(d),
+        None => root().join("data/results"),
+    }
+}
+
+/// Where the generated book snippets go: `book/src/generated/`, or
+/// `$ENDSTOP_OUTPUT_DIR/book-generated` when that variable is set.
+pub fn book_generated_root() -> PathBuf {
+    match std::env::var_os("ENDSTOP_OUTPUT_DIR") {
+        Some(d) => PathBuf::from(d).join("book-generated"),
+        None => root().join("book/src/generated"),
+    }
+}
+
 /// A loaded, validated parameter file.
 #[derive(Debug, Clone)]
 pub struct LoadedDevice {
@@ -144,8 +162,8 @@ impl Experiment {
         eprintln!("[{name}] running (commit {})", git_commit());
         Self {
             name: name.to_string(),
-            dir: root().join("data/results").join(name),
-            book_dir: root().join("book/src/generated").join(name),
+            dir: results_root().join(name),
+            book_dir: book_generated_root().join(name),
             params: Vec::new(),
             seed: None,
             values: Vec::new(),
