@@ -1,5 +1,309 @@
-//! fig13: not implemented yet (placeholder so the package layout is complete).
+//! Figure 13: prototype 2 at 10 V, stepped-sine up-sweeps 600-850 Hz at 0.12 and 0.31 g rms
+//! with the linear end-stop law (eq 19, b_im = 0.4 N s/m) and the Hertz law (b_im = 0.34 N s/m)
+//! (claim F13), published parameters, with a convergence check and the cost of the sweeps
+//! (prototype 2 rings up over hundreds of periods).
+
+#[path = "common/mod.rs"]
+mod common;
+
+use anyhow::{Context, Result};
+use common::plot::{LegendPos, LinePlot, Series, Style, PALETTE};
+use common::{fmt_sig, load_device, root, Experiment};
+use endstop::narrowband::{
+    compare_sweeps, figure13_claims, figure13_curves, run_curves, ClaimValue, Curve, SweepSettings,
+    FIG13_BIAS_V,
+};
+use endstop::params::StiffnessModel;
+use endstop::scorecard::parse_claims;
+use polars::prelude::*;
+
+const CONV_FREQ_REL: f64 = 0.005;
+const CONV_RMS_REL: f64 = 0.01;
+
 fn main() {
-    eprintln!("[fig13] not implemented yet");
-    std::process::exit(2);
+    common::run_main("fig13", run);
+}
+
+fn law(s: StiffnessModel) -> &'static str {
+    match s {
+        StiffnessModel::Hertz => "hertz",
+        StiffnessModel::Linear => "linear",
+    }
+}
+
+fn run() -> Result<()> {
+    let mut exp = Experiment::start("fig13");
+    let p2 = load_device("prototype2")?;
+    exp.uses(&p2, "published");
+    let claims_file = parse_claims(
+        &std::fs::read_to_string(root().join("data/claims.toml"))
+            .context("reading data/claims.toml")?,
+    )
+    .map_err(anyhow::Error::msg)?;
+    let device = p2.device.with_bias(FIG13_BIAS_V);
+    let specs = figure13_curves();
+    let settings = SweepSettings::prototype2(&device);
+    let fine = settings.halved();
+    let total = specs.len() * (settings.freqs_hz.len() + fine.freqs_hz.len());
+    let pb = common::progress(total as u64, "fig13");
+    let tick = || pb.inc(1);
+    let (curves, halved) = rayon::join(
+        || run_curves(&device, &specs, &settings, &tick),
+        || run_curves(&device, &specs, &fine, &tick),
+    );
+    let (curves, halved) = (curves?, halved?);
+    pb.finish_and_clear();
+    let claims: Vec<ClaimValue> = figure13_claims(&curves);
+    for c in &claims {
+        exp.claim_with_uncertainty(c.id, c.quantity, "published", c.value, c.uncertainty);
+    }
+    for c in &curves {
+        let k = format!(
+            "{}g_{}_bim{}",
+            c.spec.accel_rms_g,
+            law(c.spec.stiffness),
+            c.spec.bim_n_s_per_m
+        )
+        .replace('.', "p");
+        if let Some(t) = c.report.onset {
+            exp.number(&format!("{k}_onset_hz"), t.value());
+        }
+        if let Some(t) = c.report.jump {
+            exp.number(&format!("{k}_jump_hz"), t.value());
+        }
+        exp.number(&format!("{k}_max_v1_rms_v"), c.report.max_v1_rms_v());
+    }
+
+    // Per-step Parquet.
+    let mut rows = Rows::default();
+    for c in &curves {
+        rows.push(c);
+    }
+    let mut df = rows.frame()?;
+    exp.write_parquet("fig13", &mut df, "published")?;
+
+    // numbers.md
+    let mut md = String::from(
+        "### Claims\n\n| claim | quantity | paper | ours | what | verdict |\n|---|---|---|---|---|---|\n",
+    );
+    for c in claims_file.iter().filter(|c| c.experiment == "fig13") {
+        match claims
+            .iter()
+            .find(|v| v.id == c.id && v.quantity == c.quantity)
+        {
+            Some(v) => md.push_str(&format!(
+                "| {} | `{}` | yes | {} | {} | **{}** |\n",
+                c.id,
+                c.quantity,
+                if v.value > 0.5 { "yes" } else { "no" },
+                v.note,
+                c.verdict(Some(v.value)).label()
+            )),
+            None => md.push_str(&format!(
+                "| {} | `{}` | yes | - | no value | **not yet** |\n",
+                c.id, c.quantity
+            )),
+        }
+    }
+    let block = settings.cfg.block_periods;
+    md.push_str(&format!(
+        "\n### Every sweep\n\n{} Hz to {} Hz in {} Hz steps, Vb = {FIG13_BIAS_V} V. Steady state: \
+         blocks of {block} periods (about the ring-up time 2m/b), one block to settle, then \
+         blocks until the RMS voltages change by less than {} between two blocks. Onset and jump \
+         refined to brackets of {} Hz (midpoints shown).\n\n\
+         | curve | onset (Hz) | jump (Hz) | jump power ratio | loss of contact (Hz) | max V1 rms (V) | max (V2-V1) rms (V) | mean blocks per step | simulated periods | integrator steps | contact events |\n\
+         |---|---|---|---|---|---|---|---|---|---|---|\n",
+        settings.freqs_hz[0],
+        settings.freqs_hz[settings.freqs_hz.len() - 1],
+        settings.freqs_hz[1] - settings.freqs_hz[0],
+        settings.cfg.rel_change_tol,
+        settings.refine_tol_hz,
+    ));
+    let hz = |x: Option<f64>| x.map(|v| fmt_sig(v, 5)).unwrap_or_else(|| "none".into());
+    for c in &curves {
+        let r = &c.report;
+        let st = r.total_stats();
+        let n = r.sweep.steps.len();
+        let blocks: usize = r.measurements().map(|m| m.blocks).sum();
+        let periods = blocks_to_periods(r, block, settings.cfg.settle_blocks);
+        let vd = r
+            .measurements_in_range()
+            .map(|m| m.vdiff_rms_v)
+            .fold(0.0, f64::max);
+        md.push_str(&format!(
+            "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |\n",
+            c.spec.label(),
+            hz(r.onset.map(|t| t.value())),
+            hz(r.jump.map(|t| t.value())),
+            r.jump_power_ratio
+                .map(|x| fmt_sig(x, 3))
+                .unwrap_or_else(|| "-".into()),
+            hz(r.contact_lost.map(|t| t.value())),
+            fmt_sig(r.max_v1_rms_v(), 4),
+            fmt_sig(vd, 4),
+            fmt_sig(blocks as f64 / n as f64, 3),
+            periods,
+            st.accepted + st.rejected,
+            st.events
+        ));
+    }
+    let lin = curves
+        .iter()
+        .find(|c| c.spec.accel_rms_g == 0.31 && c.spec.stiffness == StiffnessModel::Linear);
+    let her = curves
+        .iter()
+        .find(|c| c.spec.accel_rms_g == 0.31 && c.spec.stiffness == StiffnessModel::Hertz);
+    if let (Some(l), Some(h)) = (lin, her) {
+        if let (Some(jl), Some(jh)) = (l.report.jump, h.report.jump) {
+            let rel = (jh.value() - jl.value()) / jl.value();
+            exp.number("jump_hertz_minus_linear_rel", rel);
+            md.push_str(&format!(
+                "\nJump with the Hertz law (b_im = 0.34) relative to the linear law (b_im = 0.4): \
+                 {} % (agreement means within 3 %).\n",
+                fmt_sig(100.0 * rel, 2)
+            ));
+        }
+    }
+    md.push_str(&format!(
+        "\n### Convergence\n\nEach sweep repeated with half the frequency step, half the \
+         integrator tolerance, half the steady-state tolerance and half the refinement bracket. \
+         Required: onset and branch end move by less than {} %, RMS voltages by less than {} %.\n\n\
+         | curve | onset change | branch end change | same kind of end | max V1 change | max V2 change | frequencies compared / excluded | within limits |\n\
+         |---|---|---|---|---|---|---|---|\n",
+        100.0 * CONV_FREQ_REL,
+        100.0 * CONV_RMS_REL
+    ));
+    let pct = |x: Option<f64>| {
+        x.map(|v| format!("{} %", fmt_sig(100.0 * v, 2)))
+            .unwrap_or_else(|| "n/a".into())
+    };
+    for (c, f) in curves.iter().zip(&halved) {
+        let cmp = compare_sweeps(&c.report, &f.report);
+        let ok = cmp.onset_rel.unwrap_or(0.0) < CONV_FREQ_REL
+            && cmp.end_rel.unwrap_or(0.0) < CONV_FREQ_REL
+            && cmp.same_end_kind
+            && cmp.max_v1_rel.max(cmp.max_v2_rel) < CONV_RMS_REL;
+        md.push_str(&format!(
+            "| {} | {} | {} | {} | {} | {} | {} / {} | {} |\n",
+            c.spec.label(),
+            pct(cmp.onset_rel),
+            pct(cmp.end_rel),
+            if cmp.same_end_kind { "yes" } else { "no" },
+            pct(Some(cmp.max_v1_rel)),
+            pct(Some(cmp.max_v2_rel)),
+            cmp.compared,
+            cmp.excluded,
+            if ok { "yes" } else { "**no**" }
+        ));
+    }
+    exp.write_numbers_md(&md)?;
+    exp.write_plot(&plot(&curves))?;
+    exp.finish()
+}
+
+/// Simulated periods of a sweep's coarse steps: (settle + measured blocks) x block length.
+fn blocks_to_periods(r: &endstop::narrowband::SweepReport, block: usize, settle: usize) -> usize {
+    r.measurements().map(|m| (m.blocks + settle) * block).sum()
+}
+
+#[derive(Default)]
+struct Rows {
+    f: Vec<f64>,
+    a: Vec<f64>,
+    v1: Vec<f64>,
+    v2: Vec<f64>,
+    vd: Vec<f64>,
+    p1: Vec<f64>,
+    p2: Vec<f64>,
+    x: Vec<f64>,
+    cf: Vec<f64>,
+    imp: Vec<f64>,
+    blocks: Vec<u32>,
+    conv: Vec<bool>,
+    beyond: Vec<bool>,
+    series: Vec<String>,
+    stiffness: Vec<String>,
+    bim: Vec<f64>,
+}
+
+impl Rows {
+    fn push(&mut self, c: &Curve) {
+        let ext = c.report.extended_from.unwrap_or(usize::MAX);
+        for (i, m) in c.report.measurements().enumerate() {
+            self.f.push(m.freq_hz);
+            self.a.push(m.accel_rms_g);
+            self.v1.push(m.v1_rms_v);
+            self.v2.push(m.v2_rms_v);
+            self.vd.push(m.vdiff_rms_v);
+            self.p1.push(m.p1_w);
+            self.p2.push(m.p2_w);
+            self.x.push(m.x_peak_m);
+            self.cf.push(m.contact_fraction);
+            self.imp.push(m.impacts_per_period);
+            self.blocks.push(m.blocks as u32);
+            self.conv.push(m.converged);
+            self.beyond.push(i >= ext);
+            self.series.push(c.spec.label());
+            self.stiffness.push(law(c.spec.stiffness).to_string());
+            self.bim.push(c.spec.bim_n_s_per_m);
+        }
+    }
+
+    fn frame(self) -> Result<DataFrame> {
+        let n = self.f.len();
+        Ok(df!(
+            "freq_hz" => self.f,
+            "accel_rms_g" => self.a,
+            "v1_rms_v" => self.v1,
+            "v2_rms_v" => self.v2,
+            "vdiff_rms_v" => self.vd,
+            "p1_w" => self.p1,
+            "p2_w" => self.p2,
+            "x_peak_m" => self.x,
+            "contact_fraction" => self.cf,
+            "impacts_per_period" => self.imp,
+            "blocks" => self.blocks,
+            "converged" => self.conv,
+            "beyond_paper_range" => self.beyond,
+            "series" => self.series,
+            "params" => vec!["published"; n],
+            "stiffness" => self.stiffness,
+            "bim_n_s_per_m" => self.bim,
+            "tension_free" => vec![false; n],
+            "bias_v" => vec![FIG13_BIAS_V; n],
+        )?)
+    }
+}
+
+fn plot(curves: &[Curve]) -> LinePlot {
+    let series = curves
+        .iter()
+        .enumerate()
+        .map(|(i, c)| {
+            let pts = c
+                .report
+                .measurements_in_range()
+                .map(|m| (m.freq_hz, m.v1_rms_v))
+                .collect();
+            let style = if c.spec.stiffness == StiffnessModel::Hertz {
+                Style::Dashed
+            } else {
+                Style::LinePoints
+            };
+            Series::new(
+                &format!("simulation: {}", c.spec.label()),
+                pts,
+                PALETTE[i],
+                style,
+            )
+        })
+        .collect();
+    LinePlot::new(
+        &format!("Figure 13: prototype 2, {FIG13_BIAS_V} V, up-sweeps (published parameters)"),
+        "Frequency [Hz]",
+        "RMS output voltage V1 [V]",
+        series,
+    )
+    .x(600.0, 850.0)
+    .legend(LegendPos::UpperRight)
 }

@@ -11,9 +11,9 @@
 //! of the tolerance. The last block is the measurement.
 //!
 //! # Transitions
-//! [`refine`] bisects between the last step before a transition (onset of impacts, loss of the
-//! upper branch) and the first step after it, each trial continuing from the state of the
-//! bracket's lower end, until the bracket is narrower than a tolerance.
+//! [`Continuation::refine`] bisects between the last step before a transition (onset of
+//! impacts, loss of the upper branch) and the first step after it, each trial continuing from
+//! the state of the bracket's lower end, until the bracket is narrower than a tolerance.
 
 use crate::excitation::Sine;
 use crate::integrator::{Dopri5, SolverError, Stats};
@@ -230,7 +230,11 @@ impl<D: Drive> Continuation<'_, D> {
 
     /// Runs the continuation over `values` (increasing for an up-sweep), starting from rest;
     /// `on_step(i)` is called after each step.
-    pub fn run(&self, values: &[f64], mut on_step: impl FnMut(usize)) -> Result<Sweep, SolverError> {
+    pub fn run(
+        &self,
+        values: &[f64],
+        mut on_step: impl FnMut(usize),
+    ) -> Result<Sweep, SolverError> {
         let mut y = self.base.rest_state();
         let mut mode = Mode::Free;
         let mut steps = Vec::with_capacity(values.len());
@@ -260,27 +264,60 @@ impl<D: Drive> Continuation<'_, D> {
         still_before: P,
         tol: f64,
     ) -> Result<Transition, SolverError> {
-        assert!(k >= 1 && k < sweep.steps.len(), "transition index out of range");
+        self.refine_steps(sweep, k, still_before, tol)
+            .map(|r| r.transition)
+    }
+
+    /// As [`Continuation::refine`], and also returns the steps measured at the two ends of
+    /// the final bracket (so that a caller can tell a discontinuity from a steep but
+    /// continuous change).
+    pub fn refine_steps<P: Fn(&Measurement) -> bool>(
+        &self,
+        sweep: &Sweep,
+        k: usize,
+        still_before: P,
+        tol: f64,
+    ) -> Result<RefinedTransition, SolverError> {
+        assert!(
+            k >= 1 && k < sweep.steps.len(),
+            "transition index out of range"
+        );
         let mut lo = sweep.values[k - 1];
         let mut hi = sweep.values[k];
-        let mut y = sweep.steps[k - 1].state;
-        let mut mode = sweep.steps[k - 1].mode;
+        let mut before = sweep.steps[k - 1].clone();
+        let mut after = sweep.steps[k].clone();
         while hi - lo > tol {
             let mid = 0.5 * (lo + hi);
-            let step = self.measure(mid, y, mode)?;
+            let step = self.measure(mid, before.state, before.mode)?;
             if still_before(&step.measurement) {
                 lo = mid;
-                y = step.state;
-                mode = step.mode;
+                before = step;
             } else {
                 hi = mid;
+                after = step;
             }
         }
-        Ok(Transition {
-            before: lo,
-            after: hi,
+        Ok(RefinedTransition {
+            transition: Transition {
+                before: lo,
+                after: hi,
+            },
+            before,
+            after,
         })
     }
+}
+
+/// A refined transition with the steps measured at its bracket ends.
+#[derive(Debug, Clone)]
+pub struct RefinedTransition {
+    /// The bracket.
+    pub transition: Transition,
+    /// The step at `transition.before` (continued along the branch).
+    pub before: SweepStep,
+    /// The step at `transition.after`, continued from the state at the lower end of the
+    /// bracket current when it was measured.
+    pub after: SweepStep,
 }
 
 fn add_stats(acc: &mut Stats, s: &Stats) {
