@@ -42,7 +42,20 @@
 //! power), both from [`crate::spectral::width_at_fraction`] searched inside the ensemble's
 //! analysis band. They are computed on the ensemble-averaged PSD and on every single record;
 //! [`Spread`] summarises the sampling distribution of a single-record estimate (the paper
-//! used one 10 s record per level), and [`ratio_spread`] that of a ratio of two of them.
+//! used one 10 s record per level), and [`ratio_spread`] that of a ratio of two of them. The
+//! width of the ensemble-mean PSD carries a delete-one jackknife interval
+//! ([`Ensemble::mean_width`], [`JackknifeWidth`]).
+//!
+//! # Linear theory
+//! [`linear_output_psd_w_per_hz`] is the small-signal output PSD of the same model (eqs 7-17
+//! in the frequency domain, no end-stops); it integrates to eq 21 and gives the bandwidth the
+//! device has without impacts ([`linear_widths`]).
+//!
+//! # Protocols
+//! The levels, record counts, Welch settings and the rules behind the claims of Figures 11-15
+//! ([`FIG15_LEVELS`], [`protocol_spec`], [`pooled_efficiency`], [`sublinear_growth`],
+//! [`edge_shifts`], ...) live here, so the experiments and the tests compute the same numbers
+//! from the same records.
 
 use std::sync::Arc;
 
@@ -636,9 +649,77 @@ impl Ensemble {
             .collect()
     }
 
+    /// Width of the ensemble-averaged PSD of both loads at `fraction` of its peak (0.5: 3 dB),
+    /// with its delete-one jackknife uncertainty over the records (see [`JackknifeWidth`]).
+    pub fn mean_width(&self, fraction: f64) -> JackknifeWidth {
+        let est = spectral::width_at_fraction(&self.mean_spectrum.total, fraction)
+            .map_or(f64::NAN, |b| b.width_hz);
+        let n = self.records.len();
+        if n < 2 {
+            return JackknifeWidth {
+                width_hz: est,
+                se_hz: f64::NAN,
+                ci95_hz: f64::NAN,
+                n,
+            };
+        }
+        let sum = &self.mean_spectrum.total;
+        let mut loo = Vec::with_capacity(n);
+        let mut p = sum.clone();
+        for r in &self.records {
+            for ((d, m), x) in p
+                .density
+                .iter_mut()
+                .zip(&sum.density)
+                .zip(&r.spectrum.total.density)
+            {
+                *d = (n as f64 * m - x) / (n - 1) as f64;
+            }
+            loo.push(spectral::width_at_fraction(&p, fraction).map_or(f64::NAN, |b| b.width_hz));
+        }
+        let mean = loo.iter().sum::<f64>() / n as f64;
+        let se = ((n - 1) as f64 / n as f64 * loo.iter().map(|w| (w - mean).powi(2)).sum::<f64>())
+            .sqrt();
+        JackknifeWidth {
+            width_hz: est,
+            se_hz: se,
+            ci95_hz: student_t_975(n - 1) * se,
+            n,
+        }
+    }
+
     /// True if no record of the ensemble touched a stop.
     pub fn no_impact(&self) -> bool {
         self.impacts == 0
+    }
+}
+
+/// The width of an ensemble-averaged PSD with a delete-one jackknife standard error: the
+/// width is recomputed from the mean of the records without record `i`, for each `i`, and
+/// `se = sqrt((n-1)/n sum (w_(i) - mean w_(.))²)`; `ci95 = t_{0.975, n-1} se`. A NaN `se`
+/// means a delete-one width was undetermined.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct JackknifeWidth {
+    /// Width of the full ensemble's mean PSD (Hz).
+    pub width_hz: f64,
+    /// Jackknife standard error (Hz).
+    pub se_hz: f64,
+    /// Half-width of the 95 % confidence interval (Hz).
+    pub ci95_hz: f64,
+    /// Records.
+    pub n: usize,
+}
+
+impl JackknifeWidth {
+    /// The ratio `self / other` of two widths from independent ensembles, with the 95 %
+    /// half-width propagated in relative terms:
+    /// `ci(r)/r = sqrt((ci_a/a)² + (ci_b/b)²)`.
+    pub fn ratio(&self, other: &JackknifeWidth) -> (f64, f64) {
+        let r = self.width_hz / other.width_hz;
+        let rel = ((self.ci95_hz / self.width_hz).powi(2)
+            + (other.ci95_hz / other.width_hz).powi(2))
+        .sqrt();
+        (r, r * rel)
     }
 }
 
@@ -811,6 +892,202 @@ fn analyse(case: &EnsembleCase, records: Vec<RecordResult>) -> Ensemble {
         mean_spectrum,
         records,
     }
+}
+
+// ------------------------------------------------------------------------------------------
+// Protocols of Figures 11-15: shared by the experiments and the tests, so both compute the
+// same numbers from the same records. (The book includes this section between the anchors.)
+// ANCHOR: protocols
+
+/// Welch segment of prototype 1: 2^12 samples, 24.4 Hz bins at 100 kHz. Its responses are
+/// broad (a linear half-power width of about 220 Hz, 9 bins, growing to some 600 Hz with
+/// impacts), so short segments cost no resolution and buy 487 segments per 10 s record, which
+/// keeps the flat top of the high-level spectra from being read off a noisy maximum.
+pub const P1_NPERSEG: usize = 1 << 12;
+/// Welch segment of prototype 2: 2^16 samples, 1.53 Hz bins at 100 kHz (its linear half-power
+/// width of about 12 Hz spans some 8 bins), 29 segments per 10 s record.
+pub const P2_NPERSEG: usize = 1 << 16;
+/// Band in which prototype 1's spectra are kept and its bandwidths searched (Hz).
+pub const P1_BAND_HZ: (f64, f64) = (200.0, 5000.0);
+/// Band in which prototype 2's spectra are kept and its bandwidths searched (Hz).
+pub const P2_BAND_HZ: (f64, f64) = (100.0, 3000.0);
+
+/// Figure 11's levels (g²/Hz).
+pub const FIG11_LEVELS: [f64; 3] = [4.42e-6, 1.12e-4, 3.49e-4];
+/// Figure 12's levels (g²/Hz).
+pub const FIG12_LEVELS: [f64; 3] = [7.4e-3, 1.31e-2, 2.85e-2];
+/// Figure 14's levels (g²/Hz): a logarithmic grid from 1e-5 to 2e-3 that includes the paper's
+/// 0.34e-3, 0.55e-3 and 1.69e-3.
+pub const FIG14_LEVELS: [f64; 10] = [
+    1e-5, 2e-5, 5e-5, 1e-4, 2e-4, 0.34e-3, 0.55e-3, 1e-3, 1.69e-3, 2e-3,
+];
+/// Figure 15's levels (g²/Hz).
+pub const FIG15_LEVELS: [f64; 3] = [0.34e-3, 0.55e-3, 1.69e-3];
+/// Records per level in Figure 11 (prototype 1 is broad-band, Qm = 5.7: a 10 s record spans
+/// thousands of correlation times, so a few records give width CIs of a few per cent).
+pub const FIG11_REALISATIONS: usize = 6;
+/// Records per level in Figure 12 (as Figure 11; the contact statistics need a few more).
+pub const FIG12_REALISATIONS: usize = 8;
+/// Records per level in Figure 14. A record's efficiency scatters by about 6 % (relative) in
+/// the linear regime (10 s span only some 150 correlation times of a 12 Hz wide response), so
+/// eight give a 95 % CI of about 5 % per level, and the linear levels pooled about 2 %.
+pub const FIG14_REALISATIONS: usize = 8;
+/// Records per level in Figure 15: enough for 5-95 % quantiles of single-record widths and
+/// 256 record pairs per ratio.
+pub const FIG15_REALISATIONS: usize = 16;
+/// "Impacts are frequent" (the paper's wording for the sublinear regime of Figure 14): the
+/// mass spends at least this fraction of the time in contact.
+pub const FREQUENT_CONTACT: f64 = 1e-5;
+
+/// Prototype 1 as Figures 8-12 simulate it: 30 V, Hertz contact (eq 6), b_im = 1.5 N s/m.
+pub fn prototype1_setup(device: &Device) -> Device {
+    device
+        .with_bias(30.0)
+        .with_endstop(crate::params::StiffnessModel::Hertz, 1.5)
+}
+
+/// Prototype 2 as Figures 14 and 15 simulate it: 15 V, linear k_im (eq 19), b_im = 0.4 N s/m.
+pub fn prototype2_setup(device: &Device) -> Device {
+    device
+        .with_bias(15.0)
+        .with_endstop(crate::params::StiffnessModel::Linear, 0.4)
+}
+
+/// The ensemble of one level: the paper's record ([`RecordSpec::paper`]), Welch segments of
+/// `nperseg` with 50 % overlap, MATLAB's default segmenting beside when `matlab_alt`, seed
+/// [`DEFAULT_SEED`] and streams keyed by the level ([`first_stream_for_level`]).
+pub fn protocol_spec(
+    device: &Device,
+    psd_g2_per_hz: f64,
+    nperseg: usize,
+    analysis_band_hz: (f64, f64),
+    realisations: usize,
+    matlab_alt: bool,
+) -> EnsembleSpec {
+    let record = RecordSpec::paper(device, psd_g2_per_hz);
+    let alt_welch = matlab_alt
+        .then(|| WelchConfig::half_overlap(matlab_default_nperseg(record.analysed_samples())));
+    EnsembleSpec {
+        record,
+        welch: WelchConfig::half_overlap(nperseg),
+        alt_welch,
+        analysis_band_hz,
+        seed: DEFAULT_SEED,
+        first_stream: first_stream_for_level(psd_g2_per_hz),
+        realisations,
+    }
+}
+
+/// Efficiency `2P/(m Sa)` of every record of the ensembles pooled (in the linear regime the
+/// efficiency does not depend on the level): mean and 95 % CI over the records (claim F14-a).
+pub fn pooled_efficiency(device: &Device, ensembles: &[&Ensemble]) -> MeanCi {
+    let effs: Vec<f64> = ensembles
+        .iter()
+        .flat_map(|e| {
+            let sa = e.psd_g2_per_hz();
+            e.records
+                .iter()
+                .map(move |r| efficiency(device, r.summary.p_total_w(), sa))
+        })
+        .collect();
+    MeanCi::of(&effs)
+}
+
+/// Sublinear growth of the power with `Sa` (claim F14-b): starting from the linear-regime
+/// efficiency `linear`, the efficiency of every ensemble (in increasing `Sa`) whose mean time
+/// in contact is at least [`FREQUENT_CONTACT`] is below that of the one before (`P/Sa`
+/// falls), and the last is below the linear value by more than both 95 % CIs. False when no
+/// ensemble has frequent impacts.
+pub fn sublinear_growth(linear: &MeanCi, ensembles: &[&Ensemble]) -> bool {
+    let frequent: Vec<&&Ensemble> = ensembles
+        .iter()
+        .filter(|e| e.contact_fraction.mean >= FREQUENT_CONTACT)
+        .collect();
+    let mut prev = linear.mean;
+    let mut falling = !frequent.is_empty();
+    for e in &frequent {
+        falling &= e.efficiency.mean < prev;
+        prev = e.efficiency.mean;
+    }
+    let last_drop = frequent
+        .last()
+        .is_some_and(|e| linear.mean - e.efficiency.mean > linear.ci95 + e.efficiency.ci95);
+    falling && last_drop
+}
+
+/// Shifts of the half-power band edges of the ensemble-mean PSD from `low` to `high` (Hz):
+/// `(up, down)` = (upper edge of `high` minus that of `low`, lower edge of `low` minus that of
+/// `high`); `None` if either band is undetermined. The widening is "towards higher
+/// frequencies" (claim F15-c) when `up > down` and `up > 0`.
+pub fn edge_shifts(low: &Ensemble, high: &Ensemble) -> Option<(f64, f64)> {
+    let a = low.mean_widths.half_power?;
+    let b = high.mean_widths.half_power?;
+    Some((b.f_hi_hz - a.f_hi_hz, a.f_lo_hz - b.f_lo_hz))
+}
+// ANCHOR_END: protocols
+
+/// Seed of the ChaCha8 streams of every broadband experiment (a named constant, so that runs
+/// are deterministic).
+pub const DEFAULT_SEED: u64 = 20_120_704;
+
+/// First ChaCha8 stream of the ensemble at level `psd_g2_per_hz`: `round(Sa * 1e9) * 1000`.
+///
+/// Keying the streams by the level makes ensembles at different levels independent, and makes
+/// the same level in two experiments (Figures 14 and 15) reuse the same records.
+pub fn first_stream_for_level(psd_g2_per_hz: f64) -> u64 {
+    (psd_g2_per_hz * 1e9).round() as u64 * 1000
+}
+
+/// Linearised small-signal response of the harvester (eqs 11-17 in the frequency domain): the
+/// output power PSD of both loads under white acceleration, one-sided, W/Hz.
+///
+/// In the differential mode (V1 = -V2 = V, which the symmetric start from rest preserves to
+/// first order) the linearised model of eqs 7-10 reads, with `Ct = C0 + Cp + CL` and
+/// `Gamma = C0 Vb / x0`:
+/// `V = Gamma x jw RL / (1 + jw RL Ct)`, and
+/// `(km - w² m + jw b + 2 Gamma² jw RL / (1 + jw RL Ct)) x = m a`.
+/// The power of both loads is `2|V|²/RL`, and the one-sided acceleration PSD is `2 Sa`, so
+/// `S_P(f) = 4 Sa |V/a|² / RL`. Its integral over `f > 0` equals eq 21 (tested), and at high
+/// frequency the electrical term tends to the stiffness `K - km` of eq 17.
+pub fn linear_output_psd_w_per_hz(device: &Device, psd_g2_per_hz: f64, freq_hz: f64) -> f64 {
+    let m = device.mechanics.mass_kg;
+    let b = device.mechanics.damping_n_s_per_m;
+    let km = device.mechanics.stiffness_n_per_m;
+    let e = &device.electrical;
+    let ct = e.c0_f + e.cp_f + e.load_capacitance_f;
+    let gamma = e.c0_f * e.bias_v / device.geometry.finger_overlap_m;
+    let rl = e.load_resistance_ohm;
+    let w = 2.0 * std::f64::consts::PI * freq_hz;
+    // z = jw RL / (1 + jw RL Ct) = (jw RL)(1 - jw RL Ct) / (1 + (w RL Ct)^2).
+    let wrc = w * rl * ct;
+    let den = 1.0 + wrc * wrc;
+    let (z_re, z_im) = (w * rl * wrc / den, w * rl / den);
+    // Mechanical impedance plus 2 Gamma^2 z.
+    let d_re = km - w * w * m + 2.0 * gamma * gamma * z_re;
+    let d_im = w * b + 2.0 * gamma * gamma * z_im;
+    let x_over_a_sq = m * m / (d_re * d_re + d_im * d_im);
+    let v_over_a_sq = gamma * gamma * (z_re * z_re + z_im * z_im) * x_over_a_sq;
+    4.0 * psd_g2_per_hz * G * G * v_over_a_sq / rl
+}
+
+/// [`linear_output_psd_w_per_hz`] on a grid of frequencies, as a [`Psd`] (W/Hz).
+pub fn linear_output_psd(device: &Device, psd_g2_per_hz: f64, freq_hz: &[f64]) -> Psd {
+    Psd {
+        freq_hz: freq_hz.to_vec(),
+        density: freq_hz
+            .iter()
+            .map(|&f| linear_output_psd_w_per_hz(device, psd_g2_per_hz, f))
+            .collect(),
+        segments: 0,
+    }
+}
+
+/// Widths of the linearised output PSD ([`linear_output_psd_w_per_hz`]), evaluated on a grid
+/// of 0.01 Hz over `f_lo..f_hi` (the true widths, free of any estimator).
+pub fn linear_widths(device: &Device, f_lo: f64, f_hi: f64) -> Widths {
+    let n = ((f_hi - f_lo) / 0.01).ceil() as usize + 1;
+    let f: Vec<f64> = (0..n).map(|i| f_lo + 0.01 * i as f64).collect();
+    Widths::of(&linear_output_psd(device, 1.0, &f))
 }
 
 /// Linear theory of eq 21: mean power of both loads (W) at a two-sided acceleration PSD

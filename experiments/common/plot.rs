@@ -212,6 +212,27 @@ impl LinePlot {
     }
 }
 
+/// Tick label on a logarithmic axis: `1e-5`, `2e-5`, or plain decimals between 0.01 and 1000.
+fn log_tick_label(v: &f64) -> String {
+    let v = *v;
+    if !(v.is_finite() && v > 0.0) {
+        return format!("{v}");
+    }
+    let mut e = v.log10().floor() as i32;
+    let mut m = (v / 10f64.powi(e) * 100.0).round() / 100.0;
+    if m >= 10.0 {
+        m /= 10.0;
+        e += 1;
+    }
+    if (-2..=3).contains(&e) {
+        let x = m * 10f64.powi(e);
+        let decimals = (-e).max(0) as usize + usize::from(m.fract() != 0.0);
+        format!("{x:.decimals$}")
+    } else {
+        format!("{m}e{e}")
+    }
+}
+
 macro_rules! draw_chart {
     ($self:ident, $root:ident, $xr:expr, $yr:expr) => {{
         let mut chart = ChartBuilder::on($root)
@@ -221,16 +242,21 @@ macro_rules! draw_chart {
             .y_label_area_size(84)
             .build_cartesian_2d($xr, $yr)
             .map_err(|e| anyhow!("chart: {e}"))?;
-        chart
-            .configure_mesh()
-            .x_desc(&$self.x_label)
+        let mut mesh = chart.configure_mesh();
+        mesh.x_desc(&$self.x_label)
             .y_desc(&$self.y_label)
             .label_style(("sans-serif", 15))
             .axis_desc_style(("sans-serif", 17))
             .light_line_style(RGBColor(235, 235, 235))
-            .bold_line_style(RGBColor(210, 210, 210))
-            .draw()
-            .map_err(|e| anyhow!("mesh: {e}"))?;
+            .bold_line_style(RGBColor(210, 210, 210));
+        // Log axes: tick labels such as 1e-5 instead of plotters' 9.999999999e-6.
+        if $self.log_x {
+            mesh.x_label_formatter(&log_tick_label);
+        }
+        if $self.log_y {
+            mesh.y_label_formatter(&log_tick_label);
+        }
+        mesh.draw().map_err(|e| anyhow!("mesh: {e}"))?;
         let mut any_label = false;
         for s in &$self.series {
             let color = s.color;
