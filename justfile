@@ -28,3 +28,11 @@ lint:
 # Run the benchmarks.
 bench:
     cargo run --release --bin bench
+
+# Cross-check our integrator against ngspice (needs `apt-get install ngspice`).
+crosscheck:
+    cargo run --release --bin crosscheck
+
+# Run the model on your own device file, e.g. `just own sweep --device my.toml --from 500 --to 900 --accel-rms-g 0.3`.
+own *ARGS:
+    cargo run --release --bin endstop -- {{ARGS}}

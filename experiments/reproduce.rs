@@ -26,6 +26,96 @@ const EXPERIMENTS: [&str; 10] = [
     "fig05", "table3", "fig08", "fig09", "fig10", "fig11", "fig12", "fig13", "fig14", "fig15",
 ];
 
+/// Runs of the `endstop` tool on the example device of the "Model your own harvester"
+/// chapter: (job name, arguments before `--out`).
+const OWN_DEVICE: [(&str, &[&str]); 2] = [
+    (
+        "own_device_sweep",
+        &[
+            "sweep",
+            "--device",
+            "data/examples/my_harvester.toml",
+            "--from",
+            "500",
+            "--to",
+            "800",
+            "--step",
+            "2",
+            "--accel-rms-g",
+            "0.3",
+        ],
+    ),
+    (
+        "own_device_random",
+        &[
+            "random",
+            "--device",
+            "data/examples/my_harvester.toml",
+            "--psd",
+            "1e-4",
+            "--records",
+            "4",
+        ],
+    ),
+];
+
+/// The benchmark runs last and alone, so that nothing else competes for the cores it times.
+const BENCH: &str = "bench";
+
+/// The ngspice cross-check: run when `ngspice` is on PATH, otherwise the book says it was not.
+const CROSSCHECK: &str = "crosscheck";
+
+/// Every job `reproduce` knows: the experiments, the own-device runs, the ngspice
+/// cross-check, then the benchmark.
+fn all_jobs() -> Vec<&'static str> {
+    EXPERIMENTS
+        .iter()
+        .copied()
+        .chain(OWN_DEVICE.iter().map(|(n, _)| *n))
+        .chain([CROSSCHECK, BENCH])
+        .collect()
+}
+
+fn ngspice_available() -> bool {
+    Command::new("ngspice")
+        .arg("--version")
+        .output()
+        .is_ok_and(|o| o.status.success())
+}
+
+/// The program and arguments of a job.
+fn job_command(name: &str) -> (String, Vec<String>) {
+    match OWN_DEVICE.iter().find(|(n, _)| *n == name) {
+        Some((_, args)) => {
+            let mut a: Vec<String> = args.iter().map(|s| s.to_string()).collect();
+            a.push("--out".into());
+            a.push(common::results_root().join(name).display().to_string());
+            ("endstop".into(), a)
+        }
+        None => (name.to_string(), Vec::new()),
+    }
+}
+
+/// Copies the own-device runs' numbers and plots into the book's generated directory.
+fn publish_own_device() -> Result<()> {
+    let dst = common::book_generated_root().join("own_device");
+    for (name, _) in OWN_DEVICE {
+        let src = common::results_root().join(name);
+        let stem = name.trim_start_matches("own_device_");
+        let tool = format!("endstop-{stem}");
+        for (from, to) in [
+            ("numbers.md".to_string(), format!("{stem}.md")),
+            (format!("{tool}.svg"), format!("{stem}.svg")),
+            (format!("{tool}.png"), format!("{stem}.png")),
+        ] {
+            if let Ok(bytes) = std::fs::read(src.join(&from)) {
+                common::write_atomic(&dst.join(to), &bytes)?;
+            }
+        }
+    }
+    Ok(())
+}
+
 #[derive(Parser, Debug)]
 #[command(about = "Run every experiment, write the scorecard and build the book")]
 struct Args {
@@ -53,15 +143,13 @@ fn main() {
 fn run() -> Result<()> {
     let args = Args::parse();
     let root = common::root();
+    let jobs = all_jobs();
     for name in &args.only {
-        if !EXPERIMENTS.contains(&name.as_str()) {
-            bail!(
-                "unknown experiment `{name}`; known: {}",
-                EXPERIMENTS.join(", ")
-            );
+        if !jobs.contains(&name.as_str()) {
+            bail!("unknown experiment `{name}`; known: {}", jobs.join(", "));
         }
     }
-    let selected: Vec<&str> = EXPERIMENTS
+    let selected: Vec<&str> = jobs
         .iter()
         .copied()
         .filter(|n| args.only.is_empty() || args.only.iter().any(|o| o == n))
@@ -76,15 +164,31 @@ fn run() -> Result<()> {
         let mut to_run = Vec::new();
         for &name in &selected {
             if !args.force && is_fresh(name, &key) {
-                eprintln!("[{name}] skipped: inputs unchanged since its last run (use --force to rerun)");
+                eprintln!(
+                    "[{name}] skipped: inputs unchanged since its last run (use --force to rerun)"
+                );
             } else {
                 to_run.push(name);
             }
         }
-        let (t, f) = run_experiments(&to_run, args.jobs.max(1), &key)?;
-        timings = t;
-        failures = f;
+        if to_run.contains(&CROSSCHECK) && !ngspice_available() {
+            eprintln!("[{CROSSCHECK}] not run: ngspice is not installed (apt-get install ngspice)");
+            to_run.retain(|n| *n != CROSSCHECK);
+            let note = "*Not run in this build: `ngspice` was not installed. Install it \
+                        (`apt-get install ngspice`) and rerun `reproduce`.*\n";
+            let dir = common::book_generated_root().join(CROSSCHECK);
+            common::write_atomic(&dir.join("numbers.md"), note.as_bytes())?;
+            if !dir.join("p1_impacting.cir").exists() {
+                common::write_atomic(&dir.join("p1_impacting.cir"), b"* not generated\n")?;
+            }
+        }
+        let (parallel, alone): (Vec<&str>, Vec<&str>) = to_run.iter().partition(|n| **n != BENCH);
+        let first = run_experiments(&parallel, args.jobs.max(1), &key)?;
+        let last = run_experiments(&alone, 1, &key)?;
+        timings = [first.timings, last.timings].concat();
+        failures = [first.failures, last.failures].concat();
     }
+    publish_own_device()?;
     let rows = write_scorecard()?;
     write_provenance()?;
     eprintln!("[reproduce] building the book");
@@ -136,77 +240,76 @@ fn binary_dir() -> Result<PathBuf> {
         .to_path_buf())
 }
 
-/// Runs the experiments, at most `jobs` at once; returns wall times and failures.
-fn run_experiments(
-    names: &[&str],
-    jobs: usize,
-    key: &str,
-) -> Result<(Vec<(String, f64)>, Vec<String>)> {
+/// Wall time (s) of each job that ran, and the names of those that failed.
+struct Outcome {
+    timings: Vec<(String, f64)>,
+    failures: Vec<String>,
+}
+
+/// Runs the experiments, at most `jobs` at once.
+fn run_experiments(names: &[&str], jobs: usize, key: &str) -> Result<Outcome> {
     let dir = binary_dir()?;
     let queue = Mutex::new(names.iter().map(|s| s.to_string()).collect::<Vec<_>>());
     let results = Mutex::new(Vec::new());
     let pb = common::progress(names.len() as u64, "reproduce");
     std::thread::scope(|s| {
         for _ in 0..jobs.min(names.len()) {
-            s.spawn(|| loop {
-                let Some(name) = ({
+            s.spawn(|| {
+                let next = || {
                     let mut q = queue.lock().expect("queue lock");
-                    if q.is_empty() {
-                        None
-                    } else {
-                        Some(q.remove(0))
-                    }
-                }) else {
-                    break;
+                    (!q.is_empty()).then(|| q.remove(0))
                 };
-                pb.set_message(name.clone());
-                let t = Instant::now();
-                let out = Command::new(dir.join(&name))
-                    .current_dir(common::root())
-                    .output();
-                let secs = t.elapsed().as_secs_f64();
-                let ok = match &out {
-                    Ok(o) => {
-                        let log = common::results_root()
-                            .join(&name)
-                            .join("log.txt");
-                        let mut text = String::from_utf8_lossy(&o.stdout).to_string();
-                        text.push_str(&String::from_utf8_lossy(&o.stderr));
-                        let _ = common::write_atomic(&log, text.as_bytes());
-                        if o.status.success() {
-                            let _ = common::write_atomic(&key_path(&name), key.as_bytes());
-                        } else {
-                            let _ = std::fs::remove_file(key_path(&name));
-                            pb.println(format!("[{name}] FAILED:\n{text}"));
+                while let Some(name) = next() {
+                    pb.set_message(name.clone());
+                    let t = Instant::now();
+                    let (program, job_args) = job_command(&name);
+                    let out = Command::new(dir.join(&program))
+                        .args(&job_args)
+                        .current_dir(common::root())
+                        .output();
+                    let secs = t.elapsed().as_secs_f64();
+                    let ok = match &out {
+                        Ok(o) => {
+                            let log = common::results_root().join(&name).join("log.txt");
+                            let mut text = String::from_utf8_lossy(&o.stdout).to_string();
+                            text.push_str(&String::from_utf8_lossy(&o.stderr));
+                            let _ = common::write_atomic(&log, text.as_bytes());
+                            if o.status.success() {
+                                let _ = common::write_atomic(&key_path(&name), key.as_bytes());
+                            } else {
+                                let _ = std::fs::remove_file(key_path(&name));
+                                pb.println(format!("[{name}] FAILED:\n{text}"));
+                            }
+                            o.status.success()
                         }
-                        o.status.success()
-                    }
-                    Err(e) => {
-                        pb.println(format!("[{name}] could not start: {e}"));
-                        false
-                    }
-                };
-                pb.println(format!(
-                    "[{name}] {} in {secs:.2} s",
-                    if ok { "done" } else { "failed" }
-                ));
-                pb.inc(1);
-                results.lock().expect("results lock").push((name, secs, ok));
+                        Err(e) => {
+                            pb.println(format!("[{name}] could not start: {e}"));
+                            false
+                        }
+                    };
+                    pb.println(format!(
+                        "[{name}] {} in {secs:.2} s",
+                        if ok { "done" } else { "failed" }
+                    ));
+                    pb.inc(1);
+                    results.lock().expect("results lock").push((name, secs, ok));
+                }
             });
         }
     });
     pb.finish_and_clear();
     let mut results = results.into_inner().expect("results");
-    results.sort_by_key(|(n, _, _)| EXPERIMENTS.iter().position(|e| e == n));
+    let order = all_jobs();
+    results.sort_by_key(|(n, _, _)| order.iter().position(|e| e == n));
     let failures = results
         .iter()
         .filter(|r| !r.2)
         .map(|r| r.0.clone())
         .collect();
-    Ok((
-        results.into_iter().map(|(n, t, _)| (n, t)).collect(),
+    Ok(Outcome {
+        timings: results.into_iter().map(|(n, t, _)| (n, t)).collect(),
         failures,
-    ))
+    })
 }
 
 /// Files whose content determines every experiment's output: the code, the parameter files,
@@ -244,7 +347,12 @@ fn inputs_key() -> Result<String> {
     let root = common::root();
     let mut h = Sha256::new();
     for f in input_files()? {
-        h.update(f.strip_prefix(&root).unwrap_or(&f).to_string_lossy().as_bytes());
+        h.update(
+            f.strip_prefix(&root)
+                .unwrap_or(&f)
+                .to_string_lossy()
+                .as_bytes(),
+        );
         h.update([0u8]);
         h.update(std::fs::read(&f).with_context(|| format!("reading {}", f.display()))?);
         h.update([0u8]);
@@ -260,8 +368,16 @@ fn key_path(name: &str) -> PathBuf {
 /// (summary and book snippet) are still there.
 fn is_fresh(name: &str, key: &str) -> bool {
     let same = std::fs::read_to_string(key_path(name)).is_ok_and(|k| k.trim() == key);
-    same && common::results_root().join(name).join("summary.json").exists()
-        && common::book_generated_root().join(name).join("numbers.md").exists()
+    let snippet = if OWN_DEVICE.iter().any(|(n, _)| *n == name) {
+        common::results_root().join(name).join("numbers.md")
+    } else {
+        common::book_generated_root().join(name).join("numbers.md")
+    };
+    same && common::results_root()
+        .join(name)
+        .join("summary.json")
+        .exists()
+        && snippet.exists()
 }
 
 #[derive(Deserialize)]
@@ -277,9 +393,7 @@ struct SummaryIn {
 }
 
 fn read_summary(name: &str) -> Option<SummaryIn> {
-    let path = common::results_root()
-        .join(name)
-        .join("summary.json");
+    let path = common::results_root().join(name).join("summary.json");
     let text = std::fs::read_to_string(path).ok()?;
     serde_json::from_str(&text).ok()
 }
@@ -330,7 +444,10 @@ fn write_scorecard() -> Result<Vec<Row>> {
             verdict
         ));
     }
-    common::write_atomic(&common::book_generated_root().join("scorecard.md"), md.as_bytes())?;
+    common::write_atomic(
+        &common::book_generated_root().join("scorecard.md"),
+        md.as_bytes(),
+    )?;
     Ok(rows)
 }
 
@@ -339,18 +456,17 @@ fn write_provenance() -> Result<()> {
     let mut md = String::from(
         "| experiment | parameter files (set) | seed | commit | wall time (s) |\n|---|---|---|---|---|\n",
     );
-    for name in EXPERIMENTS {
+    for name in all_jobs() {
         let Some(s) = read_summary(name) else {
             md.push_str(&format!("| {name} | (no results) | | | |\n"));
             continue;
         };
-        let wall =
-            std::fs::read_to_string(common::results_root().join(name).join("timing.json"))
-                .ok()
-                .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok())
-                .and_then(|v| v["wall_time_s"].as_f64())
-                .map(|t| format!("{t:.2}"))
-                .unwrap_or_default();
+        let wall = std::fs::read_to_string(common::results_root().join(name).join("timing.json"))
+            .ok()
+            .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok())
+            .and_then(|v| v["wall_time_s"].as_f64())
+            .map(|t| format!("{t:.2}"))
+            .unwrap_or_default();
         let params: Vec<String> = s
             .params
             .iter()

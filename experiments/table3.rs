@@ -10,6 +10,9 @@ use common::{fmt_sig, load_device, Experiment};
 use endstop::linear::{QmReading, TwoPort};
 use polars::prelude::*;
 
+/// One row of the output: device label, bias voltage (V), Qm reading, two-port.
+type Row = (String, f64, QmReading, TwoPort);
+
 fn main() {
     common::run_main("table3", run);
 }
@@ -30,22 +33,8 @@ fn run() -> Result<()> {
         ("prototype 2", "p2", 15.0, &p2),
     ];
 
-    let mut cols: (
-        Vec<String>,
-        Vec<f64>,
-        Vec<String>,
-        Vec<f64>,
-        Vec<f64>,
-        Vec<f64>,
-    ) = Default::default();
-    let mut extra: (
-        Vec<f64>,
-        Vec<f64>,
-        Vec<f64>,
-        Vec<f64>,
-        Vec<f64>,
-        Vec<String>,
-    ) = Default::default();
+    // One row per device and Qm reading: (device label, bias, reading, two-port).
+    let mut rows: Vec<Row> = Vec::new();
     let mut md = String::from("| device | Vb (V) | C (pF) | Gamma (uN/V) | K (N/m) | f_oc = sqrt(K/m)/2pi (Hz) | k^2 (%) | rL (eq 22) |\n|---|---|---|---|---|---|---|---|\n");
     let mut md_q = String::from(
         "\n| device | Qm reading | Qm | k^2 Qm | eq 21 efficiency (%) |\n|---|---|---|---|---|\n",
@@ -76,18 +65,7 @@ fn run() -> Result<()> {
                 fmt_sig(tp.k2 * qm, 4),
                 fmt_sig(eff * 100.0, 4),
             ));
-            cols.0.push(label.to_string());
-            cols.1.push(vb);
-            cols.2.push(reading.label().to_string());
-            cols.3.push(tp.k2);
-            cols.4.push(qm);
-            cols.5.push(eff);
-            extra.0.push(tp.capacitance_f);
-            extra.1.push(tp.gamma_n_per_v);
-            extra.2.push(tp.stiffness_n_per_m);
-            extra.3.push(tp.r_load());
-            extra.4.push(tp.resonance_hz());
-            extra.5.push("published".to_string());
+            rows.push((label.to_string(), vb, reading, tp));
         }
         let (claim, qm) = (if key == "p1" { "T3-a" } else { "T3-b" }, tp.qm(DEFAULT_QM));
         exp.claim(claim, &format!("k2_pct_{key}"), "published", tp.k2 * 100.0);
@@ -148,21 +126,36 @@ fn run() -> Result<()> {
         "\nThe abstract quotes k^2 = 1.44 % for prototype 1; eq 18 gives that value at Vb = {} V, not at Table 3's 30 V.\n",
         fmt_sig(0.5 * (lo + hi), 3)
     ));
+    // Another reading of the abstract's coupling factors: eq 18 without the load capacitance
+    // (C = (C0 + Cp)/2, K with C0 + Cp), i.e. the transducer alone.
+    let mut no_cl = Vec::new();
+    for (key, vb, dev) in [("p1", 30.0, &p1), ("p2", 15.0, &p2)] {
+        let mut d = dev.device.with_bias(vb);
+        d.electrical.load_capacitance_f = 0.0;
+        let k2 = TwoPort::of(&d).k2;
+        exp.number(&format!("k2_without_cl_{key}"), k2);
+        no_cl.push(fmt_sig(k2 * 100.0, 3));
+    }
+    md.push_str(&format!(
+        "Without the load capacitance in eq 18 (the transducer alone), k^2 = {} % for prototype 1 at 30 V and {} % for prototype 2 at 15 V; the abstract quotes 1.44 % and 2.52 %.\n",
+        no_cl[0], no_cl[1]
+    ));
     exp.write_numbers_md(&md)?;
 
+    let col = |f: &dyn Fn(&Row) -> f64| -> Vec<f64> { rows.iter().map(f).collect() };
     let mut df = df!(
-        "device" => cols.0,
-        "bias_v" => cols.1,
-        "qm_reading" => cols.2,
-        "k2" => cols.3,
-        "qm" => cols.4,
-        "efficiency_eq21" => cols.5,
-        "capacitance_f" => extra.0,
-        "gamma_n_per_v" => extra.1,
-        "stiffness_k_n_per_m" => extra.2,
-        "r_load" => extra.3,
-        "resonance_oc_hz" => extra.4,
-        "params" => extra.5,
+        "device" => rows.iter().map(|r| r.0.clone()).collect::<Vec<_>>(),
+        "bias_v" => col(&|r| r.1),
+        "qm_reading" => rows.iter().map(|r| r.2.label().to_string()).collect::<Vec<_>>(),
+        "k2" => col(&|r| r.3.k2),
+        "qm" => col(&|r| r.3.qm(r.2)),
+        "efficiency_eq21" => col(&|r| r.3.broadband_efficiency(r.3.qm(r.2))),
+        "capacitance_f" => col(&|r| r.3.capacitance_f),
+        "gamma_n_per_v" => col(&|r| r.3.gamma_n_per_v),
+        "stiffness_k_n_per_m" => col(&|r| r.3.stiffness_n_per_m),
+        "r_load" => col(&|r| r.3.r_load()),
+        "resonance_oc_hz" => col(&|r| r.3.resonance_hz()),
+        "params" => vec!["published"; rows.len()],
     )?;
     exp.write_parquet("table3", &mut df, "published")?;
     // Table 3 is a table; its plot is eq 21's efficiency against the normalised load.

@@ -16,6 +16,7 @@
 //! | [`excitation`] | sinusoidal and sampled (random) accelerations |
 //! | [`noise`] | band-limited white-noise generation (Figure 10) |
 //! | [`spectral`] | Welch PSD estimation, bandwidths |
+//! | [`spice`] | section 2.3, Figure 6: ngspice netlist export for cross-validation |
 //! | [`sweep`] | stepped-sine sweeps with continuation, jump and onset detection |
 //! | [`narrowband`] | Figures 8, 9, 13: sweeps, onsets, jumps, calibration, b_im fits |
 //! | [`broadband`] | Figures 10-15: random-vibration records, ensembles, spectra |
@@ -34,6 +35,7 @@ pub mod noise;
 pub mod params;
 pub mod scorecard;
 pub mod spectral;
+pub mod spice;
 pub mod sweep;
 
 /// Standard gravity used to convert accelerations quoted in g (SPEC 5: g = 9.81 m/s^2).

@@ -190,9 +190,18 @@ fn energy_balance_closes_over_a_run_with_impacts() {
     let d = device("prototype1");
     let h = Harvester::new(&d, Sine::from_rms_g(8.0, 1300.0));
     let audit = EnergyAudit(h.clone());
-    let mut ode = Dopri5::new(0.0, SVector::<f64, 8>::zeros(), Mode::Free, audit.solver_options(1e-10));
+    let mut ode = Dopri5::new(
+        0.0,
+        SVector::<f64, 8>::zeros(),
+        Mode::Free,
+        audit.solver_options(1e-10),
+    );
     ode.integrate(&audit, 40.0 / 1300.0, |_, _| {}).unwrap();
-    assert!(ode.stats.events > 40, "expected impacts, got {} events", ode.stats.events);
+    assert!(
+        ode.stats.events > 40,
+        "expected impacts, got {} events",
+        ode.stats.events
+    );
     let y = ode.y;
     assert!(y[6] > 0.0 && y[7] > 0.0, "no end-stop or load dissipation");
     // The source's work matters at this tolerance (it is ~1e-4 of the dissipation): a sign
@@ -203,7 +212,12 @@ fn energy_balance_closes_over_a_run_with_impacts() {
     let mut d2 = d.clone();
     d2.endstop.tension_free = true;
     let audit2 = EnergyAudit(Harvester::new(&d2, Sine::from_rms_g(8.0, 1300.0)));
-    let mut ode2 = Dopri5::new(0.0, SVector::<f64, 8>::zeros(), Mode::Free, audit2.solver_options(1e-10));
+    let mut ode2 = Dopri5::new(
+        0.0,
+        SVector::<f64, 8>::zeros(),
+        Mode::Free,
+        audit2.solver_options(1e-10),
+    );
     ode2.integrate(&audit2, 40.0 / 1300.0, |_, _| {}).unwrap();
     let r2 = audit2.relative_residual(ode2.mode, &ode2.y);
     assert!(ode2.stats.events > 40);
@@ -252,7 +266,7 @@ fn every_sample_instant_of_a_sampled_input_is_a_step_boundary() {
     for k in 1..=100 {
         let t = ex.time_of(k);
         assert!(
-            ends.iter().any(|&e| e == t),
+            ends.contains(&t),
             "no step ends exactly at sample {k} (t = {t:e})"
         );
     }

@@ -79,6 +79,15 @@ pub fn load_device(name: &str) -> Result<LoadedDevice> {
     })
 }
 
+/// Loads and validates a device file given by path (the `endstop` command-line tool).
+pub fn load_device_file(path: &Path) -> Result<LoadedDevice> {
+    let text = std::fs::read_to_string(path)
+        .with_context(|| format!("cannot read device file {}", path.display()))?;
+    let file = path.display().to_string();
+    let device = Device::from_toml_str(&text, &file)?;
+    Ok(LoadedDevice { device, file, text })
+}
+
 /// The git commit of the working tree (with `-dirty` if it has uncommitted changes).
 pub fn git_commit() -> String {
     static COMMIT: OnceLock<String> = OnceLock::new();
@@ -170,6 +179,15 @@ impl Experiment {
             numbers: BTreeMap::new(),
             started: Instant::now(),
         }
+    }
+
+    /// Starts a run whose outputs all go to `dir` (data, plot, summary and the markdown
+    /// snippet), for the `endstop` command-line tool.
+    pub fn start_in(name: &str, dir: PathBuf) -> Self {
+        let mut e = Self::start(name);
+        e.book_dir = dir.clone();
+        e.dir = dir;
+        e
     }
 
     /// Records a parameter file used by this experiment under a set label.

@@ -1,0 +1,222 @@
+//! `bench`: how fast the model runs, on fixed cases (issue 5). Speed is measured here, never
+//! asserted by a test.
+//!
+//! * a 10 s prototype-1 record at Sa = 2.85e-2 g^2/Hz (heavy impacts; calibrated set, whose
+//!   stops are closer, and published set);
+//! * a 10 s prototype-2 record at Sa = 1.69e-3 g^2/Hz;
+//! * a full Figure 8 sweep (every curve of the published set, one thread and all threads);
+//! * a steady impacting sine of prototype 1 (calibrated, 5.5 g at 1300 Hz): the share of
+//!   integrator steps and right-hand-side evaluations spent in contact.
+//!
+//! Each case runs `REPEATS` times; the table gives the median and the fastest wall time.
+//! Results go to `data/results/bench/` and the book's Performance page.
+
+#[path = "common/mod.rs"]
+mod common;
+
+use std::time::Instant;
+
+use anyhow::Result;
+use common::{fmt_sig, load_device, Experiment};
+use endstop::broadband::{simulate_record, RecordSpec};
+use endstop::excitation::Sine;
+use endstop::integrator::Dopri5;
+use endstop::model::{Harvester, Mode};
+use endstop::narrowband::{self, SweepSettings};
+use polars::prelude::*;
+
+const REPEATS: usize = 5;
+const SEED: u64 = 2012;
+
+fn main() {
+    common::run_main("bench", run);
+}
+
+fn timed<T>(mut f: impl FnMut() -> Result<T>) -> Result<(T, Vec<f64>)> {
+    let mut times = Vec::with_capacity(REPEATS);
+    let mut last = None;
+    for _ in 0..REPEATS {
+        let t = Instant::now();
+        last = Some(f()?);
+        times.push(t.elapsed().as_secs_f64());
+    }
+    times.sort_by(f64::total_cmp);
+    Ok((last.expect("REPEATS > 0"), times))
+}
+
+struct Row {
+    case: String,
+    median_s: f64,
+    min_s: f64,
+    simulated_s: f64,
+    steps: u64,
+    rhs_evals: u64,
+    events: u64,
+    note: String,
+}
+
+fn run() -> Result<()> {
+    let mut exp = Experiment::start("bench");
+    exp.seed = Some(SEED);
+    let p1 = load_device("prototype1")?;
+    let p2 = load_device("prototype2")?;
+    exp.uses(&p1, "published");
+    exp.uses(&p2, "published");
+    let cal = narrowband::calibrate_prototype1(&p1.device)?.device;
+    let mut rows = Vec::new();
+
+    let records = [
+        (
+            "P1 calibrated, 10 s record, Sa = 2.85e-2",
+            cal.clone(),
+            2.85e-2,
+        ),
+        (
+            "P1 published, 10 s record, Sa = 2.85e-2",
+            p1.device.clone(),
+            2.85e-2,
+        ),
+        (
+            "P2 published, 10 s record, Sa = 1.69e-3",
+            p2.device.clone(),
+            1.69e-3,
+        ),
+    ];
+    for (case, dev, sa) in records {
+        let spec = RecordSpec::paper(&dev, sa);
+        let (rec, times) = timed(|| Ok(simulate_record(&dev, &spec, SEED, 0)?))?;
+        let sim = spec.transient_s + spec.noise.duration_s;
+        let s = rec.summary;
+        rows.push(Row {
+            case: case.to_string(),
+            median_s: times[REPEATS / 2],
+            min_s: times[0],
+            simulated_s: sim,
+            steps: s.stats.accepted + s.stats.rejected,
+            rhs_evals: s.stats.rhs_evals,
+            events: s.stats.events,
+            note: format!(
+                "{} impacts, {} % of time in contact",
+                s.impacts,
+                fmt_sig(100.0 * s.contact_fraction, 3)
+            ),
+        });
+    }
+
+    // A full Figure 8 sweep: every curve of the published set.
+    let settings = SweepSettings::prototype1(&p1.device);
+    let curves = narrowband::figure8_curves();
+    for (label, threads) in [("1 thread", 1usize), ("all threads", 0)] {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()?;
+        let (res, times) = timed(|| {
+            pool.install(|| {
+                Ok(narrowband::run_curves(
+                    &p1.device,
+                    &curves,
+                    &settings,
+                    &|| {},
+                )?)
+            })
+        })?;
+        let (mut steps, mut evals, mut events, mut periods) = (0, 0, 0, 0.0);
+        for c in &res {
+            let st = &c.report.sweep.stats;
+            steps += st.accepted + st.rejected;
+            evals += st.rhs_evals;
+            events += st.events;
+            for s in &c.report.sweep.steps {
+                periods += (s.measurement.blocks + settings.cfg.settle_blocks) as f64
+                    * settings.cfg.block_periods as f64
+                    / s.measurement.freq_hz;
+            }
+        }
+        rows.push(Row {
+            case: format!(
+                "Figure 8 sweeps, published set, {} curves, {label}",
+                curves.len()
+            ),
+            median_s: times[REPEATS / 2],
+            min_s: times[0],
+            simulated_s: periods,
+            steps,
+            rhs_evals: evals,
+            events,
+            note: "coarse sweeps only (refinements excluded from the counts)".into(),
+        });
+    }
+
+    // Steady impacting sine: how much of the work is spent in contact.
+    let h = Harvester::new(&cal, Sine::from_rms_g(5.5, 1300.0));
+    let t_end = 200.0 / 1300.0;
+    let ((contact_steps, free_steps, stats), times) = timed(|| {
+        let mut ode = Dopri5::new(0.0, h.rest_state(), Mode::Free, h.solver_options(1e-8));
+        let (mut c, mut f) = (0u64, 0u64);
+        ode.integrate(
+            &h,
+            t_end,
+            |_, m| {
+                if m.in_contact() {
+                    c += 1
+                } else {
+                    f += 1
+                }
+            },
+        )?;
+        Ok((c, f, ode.stats))
+    })?;
+    let share = contact_steps as f64 / (contact_steps + free_steps) as f64;
+    rows.push(Row {
+        case: "P1 calibrated, sine 5.5 g at 1300 Hz, 200 periods".into(),
+        median_s: times[REPEATS / 2],
+        min_s: times[0],
+        simulated_s: t_end,
+        steps: stats.accepted + stats.rejected,
+        rhs_evals: stats.rhs_evals,
+        events: stats.events,
+        note: format!(
+            "{} % of accepted steps are in contact",
+            fmt_sig(100.0 * share, 3)
+        ),
+    });
+    exp.number("contact_step_share_sine_p1", share);
+
+    let mut md = format!(
+        "Machine: {} logical cores (RAYON_NUM_THREADS unset unless stated). Each case ran {REPEATS} times.\n\n\
+         | case | median wall (s) | fastest (s) | simulated s per wall s | steps per simulated s | RHS evals per simulated s | events | notes |\n|---|---|---|---|---|---|---|---|\n",
+        std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1)
+    );
+    for r in &rows {
+        md.push_str(&format!(
+            "| {} | {} | {} | {} | {} | {} | {} | {} |\n",
+            r.case,
+            fmt_sig(r.median_s, 3),
+            fmt_sig(r.min_s, 3),
+            fmt_sig(r.simulated_s / r.median_s, 3),
+            fmt_sig(r.steps as f64 / r.simulated_s, 3),
+            fmt_sig(r.rhs_evals as f64 / r.simulated_s, 3),
+            r.events,
+            r.note
+        ));
+    }
+    exp.number("p1_record_calibrated_median_s", rows[0].median_s);
+    exp.number("p1_record_published_median_s", rows[1].median_s);
+    exp.number("p2_record_median_s", rows[2].median_s);
+    exp.number("fig08_sweeps_1thread_median_s", rows[3].median_s);
+    exp.number("fig08_sweeps_all_threads_median_s", rows[4].median_s);
+    exp.write_numbers_md(&md)?;
+    print!("{md}");
+    let mut df = df!(
+        "case" => rows.iter().map(|r| r.case.clone()).collect::<Vec<_>>(),
+        "median_wall_s" => rows.iter().map(|r| r.median_s).collect::<Vec<_>>(),
+        "min_wall_s" => rows.iter().map(|r| r.min_s).collect::<Vec<_>>(),
+        "simulated_s" => rows.iter().map(|r| r.simulated_s).collect::<Vec<_>>(),
+        "steps" => rows.iter().map(|r| r.steps).collect::<Vec<_>>(),
+        "rhs_evals" => rows.iter().map(|r| r.rhs_evals).collect::<Vec<_>>(),
+        "events" => rows.iter().map(|r| r.events).collect::<Vec<_>>(),
+        "params" => vec!["published+calibrated"; rows.len()],
+    )?;
+    exp.write_parquet("bench", &mut df, "published+calibrated")?;
+    exp.finish()
+}

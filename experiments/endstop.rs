@@ -1,0 +1,355 @@
+//! `endstop`: run the Le & Halvorsen (2012) harvester model on your own device file.
+//!
+//! ```text
+//! endstop sweep  --device my.toml --from 500 --to 900 --accel-rms-g 0.3 [--out DIR]
+//! endstop random --device my.toml --psd 1e-3 [--out DIR]
+//! ```
+//!
+//! Both write the same kinds of output as the figure experiments: Parquet data with
+//! provenance metadata, an SVG and a PNG plot, `summary.json`, and `numbers.md`.
+
+#[path = "common/mod.rs"]
+mod common;
+
+use std::path::PathBuf;
+
+use anyhow::{bail, Result};
+use clap::{Parser, Subcommand};
+use common::plot::{LegendPos, LinePlot, Series, Style, PALETTE};
+use common::{fmt_sig, load_device_file, Experiment};
+use endstop::broadband::{self, EnsembleSpec, RecordSpec};
+use endstop::linear::{TwoPort, EQ21_QM};
+use endstop::narrowband;
+use endstop::spectral::WelchConfig;
+use endstop::sweep::linspace_step;
+use polars::prelude::*;
+
+#[derive(Parser, Debug)]
+#[command(
+    name = "endstop",
+    version,
+    about = "Simulate a MEMS electrostatic energy harvester with end-stops on your own device",
+    long_about = "Simulate a MEMS electrostatic energy harvester with end-stops (the model of \
+Le & Halvorsen 2012, eqs 1-10) on a device described by a TOML file. Start from \
+data/prototype1.toml or data/prototype2.toml: copy it, edit the values (SI units; the key names \
+carry the unit), and pass it with --device. Every value is checked on load; an error names the \
+field and its valid range.\n\nTwo studies:\n  sweep   stepped-sine up-sweep: RMS voltages, power, \
+impact onset and jump\n  random  band-limited white-noise vibration: power, efficiency, \
+output spectrum, bandwidth"
+)]
+struct Cli {
+    #[command(subcommand)]
+    study: Study,
+}
+
+#[derive(Subcommand, Debug)]
+enum Study {
+    /// Stepped-sine up-sweep with continuation (each frequency starts from the previous
+    /// steady state), with impact onset and jump refined by bisection.
+    Sweep(SweepArgs),
+    /// Random vibration: an ensemble of band-limited white-noise records (10 kHz band,
+    /// 100 kHz sampling), with mean power, efficiency and output power spectrum.
+    Random(RandomArgs),
+}
+
+#[derive(Parser, Debug)]
+struct SweepArgs {
+    /// Device file (TOML), e.g. a copy of data/prototype2.toml.
+    #[arg(long)]
+    device: PathBuf,
+    /// First frequency of the up-sweep (Hz).
+    #[arg(long)]
+    from: f64,
+    /// Last frequency of the up-sweep (Hz).
+    #[arg(long)]
+    to: f64,
+    /// Frequency step (Hz).
+    #[arg(long, default_value_t = 2.0)]
+    step: f64,
+    /// RMS base acceleration (g = 9.81 m/s^2); the sine's amplitude is sqrt(2) times this.
+    #[arg(long)]
+    accel_rms_g: f64,
+    /// Bias voltage (V); default: the device file's.
+    #[arg(long)]
+    bias_v: Option<f64>,
+    /// Output directory.
+    #[arg(long, default_value = "data/results/endstop-sweep")]
+    out: PathBuf,
+}
+
+#[derive(Parser, Debug)]
+struct RandomArgs {
+    /// Device file (TOML), e.g. a copy of data/prototype2.toml.
+    #[arg(long)]
+    device: PathBuf,
+    /// Two-sided acceleration PSD in the flat band (g^2/Hz).
+    #[arg(long)]
+    psd: f64,
+    /// Number of independent 10 s records (their mean and 95 % interval are reported).
+    #[arg(long, default_value_t = 4)]
+    records: usize,
+    /// Length of each record (s).
+    #[arg(long, default_value_t = 10.0)]
+    duration_s: f64,
+    /// Seed of the random streams (record i uses stream i).
+    #[arg(long, default_value_t = 2012)]
+    seed: u64,
+    /// Bias voltage (V); default: the device file's.
+    #[arg(long)]
+    bias_v: Option<f64>,
+    /// Output directory.
+    #[arg(long, default_value = "data/results/endstop-random")]
+    out: PathBuf,
+}
+
+fn main() {
+    common::run_main("endstop", || match Cli::parse().study {
+        Study::Sweep(a) => sweep(a),
+        Study::Random(a) => random(a),
+    });
+}
+
+fn out_dir(p: PathBuf) -> PathBuf {
+    if p.is_absolute() {
+        p
+    } else {
+        std::env::current_dir().unwrap_or_default().join(p)
+    }
+}
+
+fn sweep(a: SweepArgs) -> Result<()> {
+    if !(a.from.is_finite() && a.to.is_finite() && a.from > 0.0 && a.to > a.from) {
+        bail!("--from and --to must be positive frequencies with --to > --from");
+    }
+    if !(a.step > 0.0 && a.step <= a.to - a.from) {
+        bail!("--step must be positive and not larger than the range");
+    }
+    if !(a.accel_rms_g.is_finite() && a.accel_rms_g >= 0.0) {
+        bail!("--accel-rms-g must be a finite non-negative number");
+    }
+    let loaded = load_device_file(&a.device)?;
+    let mut device = loaded.device.clone();
+    if let Some(v) = a.bias_v {
+        device = device.with_bias(v);
+        device.validate("--bias-v")?;
+    }
+    let mut exp = Experiment::start_in("endstop-sweep", out_dir(a.out));
+    exp.uses(&loaded, &device.params);
+    let freqs = linspace_step(a.from, a.to, a.step);
+    let cfg = narrowband::steady_config(&device, 0.5 * (a.from + a.to));
+    let pb = common::progress(freqs.len() as u64, "sweep");
+    let report =
+        narrowband::up_sweep_report(&device, &freqs, a.accel_rms_g, &cfg, 0.1, |_| pb.inc(1))?;
+    pb.finish_and_clear();
+
+    let steps = &report.sweep.steps;
+    let col = |f: &dyn Fn(&endstop::sweep::Measurement) -> f64| -> Vec<f64> {
+        steps.iter().map(|s| f(&s.measurement)).collect()
+    };
+    let n = steps.len();
+    let mut df = df!(
+        "freq_hz" => col(&|m| m.freq_hz),
+        "accel_rms_g" => col(&|m| m.accel_rms_g),
+        "v1_rms_v" => col(&|m| m.v1_rms_v),
+        "v2_rms_v" => col(&|m| m.v2_rms_v),
+        "vdiff_rms_v" => col(&|m| m.vdiff_rms_v),
+        "p1_w" => col(&|m| m.p1_w),
+        "p2_w" => col(&|m| m.p2_w),
+        "x_peak_m" => col(&|m| m.x_peak_m),
+        "contact_fraction" => col(&|m| m.contact_fraction),
+        "impacts_per_period" => col(&|m| m.impacts_per_period),
+        "converged" => steps.iter().map(|s| s.measurement.converged).collect::<Vec<_>>(),
+        "series" => vec![format!("{} g rms up-sweep", a.accel_rms_g); n],
+        "params" => vec![device.params.clone(); n],
+    )?;
+    exp.write_parquet("sweep", &mut df, &device.params)?;
+
+    let mut md = format!(
+        "Up-sweep of `{}` ({} set) from {} to {} Hz in {} Hz steps at {} g rms, Vb = {} V.\n\n",
+        loaded.file, device.params, a.from, a.to, a.step, a.accel_rms_g, device.electrical.bias_v
+    );
+    let vmax = col(&|m| m.v1_rms_v).into_iter().fold(0.0, f64::max);
+    exp.number("v1_rms_max_v", vmax);
+    md.push_str(&format!(
+        "- largest RMS voltage of one load: {} V\n",
+        fmt_sig(vmax, 4)
+    ));
+    match report.onset {
+        Some(t) => {
+            exp.number("impact_onset_hz", t.value());
+            md.push_str(&format!(
+                "- impacts begin at {} Hz (bracket {}-{} Hz)\n",
+                fmt_sig(t.value(), 5),
+                fmt_sig(t.before, 5),
+                fmt_sig(t.after, 5)
+            ));
+        }
+        None if report.contact_at_start => md.push_str("- in contact from the first step\n"),
+        None => md.push_str("- no impact in this range\n"),
+    }
+    if let Some(end) = report.branch_end() {
+        exp.number("branch_end_hz", end.transition.value());
+        md.push_str(&format!(
+            "- the impacting branch ends at {} Hz ({})\n",
+            fmt_sig(end.transition.value(), 5),
+            end.kind.label()
+        ));
+    }
+    exp.write_numbers_md(&md)?;
+    print!("{md}");
+
+    let pts = |f: &dyn Fn(&endstop::sweep::Measurement) -> f64| -> Vec<(f64, f64)> {
+        steps
+            .iter()
+            .map(|s| (s.measurement.freq_hz, f(&s.measurement)))
+            .collect()
+    };
+    let plot = LinePlot::new(
+        &format!("Up-sweep at {} g rms: {}", a.accel_rms_g, device.name),
+        "frequency [Hz]",
+        "RMS output voltage [V]",
+        vec![
+            Series::new(
+                "V1 (one load)",
+                pts(&|m| m.v1_rms_v),
+                PALETTE[0],
+                Style::LinePoints,
+            ),
+            Series::new(
+                "V2 - V1",
+                pts(&|m| m.vdiff_rms_v),
+                PALETTE[1],
+                Style::Dashed,
+            ),
+        ],
+    )
+    .legend(LegendPos::UpperLeft);
+    exp.write_plot(&plot)?;
+    exp.finish()
+}
+
+/// Welch segment for a device: bins of about a tenth of its linear half-power width, a power
+/// of two, at least 2^10 and at most an eighth of the record.
+fn nperseg_for(device: &endstop::params::Device, fs: f64, n: usize) -> usize {
+    let tp = TwoPort::of(device);
+    let width = tp.resonance_hz() / tp.qm(EQ21_QM).max(0.5);
+    let target = fs / (0.1 * width);
+    let mut p = 1usize << 10;
+    while (p as f64) < target && p * 2 <= n / 8 {
+        p *= 2;
+    }
+    p
+}
+
+fn random(a: RandomArgs) -> Result<()> {
+    if !(a.psd.is_finite() && a.psd > 0.0) {
+        bail!("--psd must be a positive two-sided PSD in g^2/Hz");
+    }
+    if a.records == 0 {
+        bail!("--records must be at least 1");
+    }
+    let loaded = load_device_file(&a.device)?;
+    let mut device = loaded.device.clone();
+    if let Some(v) = a.bias_v {
+        device = device.with_bias(v);
+        device.validate("--bias-v")?;
+    }
+    let mut exp = Experiment::start_in("endstop-random", out_dir(a.out));
+    exp.uses(&loaded, &device.params);
+    exp.seed = Some(a.seed);
+    let mut record = RecordSpec::paper(&device, a.psd);
+    record.noise.duration_s = a.duration_s;
+    let n = record.analysed_samples();
+    let fs = record.noise.sample_rate_hz;
+    let nperseg = nperseg_for(&device, fs, n);
+    let f0 = TwoPort::of(&device).resonance_hz();
+    let spec = EnsembleSpec {
+        record,
+        welch: WelchConfig::half_overlap(nperseg),
+        alt_welch: None,
+        analysis_band_hz: (0.25 * f0, (4.0 * f0).min(0.45 * fs)),
+        seed: a.seed,
+        first_stream: 0,
+        realisations: a.records,
+    };
+    let pb = common::progress(a.records as u64, "records");
+    let ens = broadband::run_ensemble(&device, &spec, || pb.inc(1))?;
+    pb.finish_and_clear();
+
+    let psd = &ens.mean_spectrum.total;
+    let m = psd.freq_hz.len();
+    let mut df = df!(
+        "freq_hz" => psd.freq_hz.clone(),
+        "out_psd_uw_per_hz" => psd.density.iter().map(|d| d * 1e6).collect::<Vec<_>>(),
+        "psd_g2_per_hz" => vec![a.psd; m],
+        "series" => vec![format!("mean of {} records", a.records); m],
+        "params" => vec![device.params.clone(); m],
+    )?;
+    exp.write_parquet("output_psd", &mut df, &device.params)?;
+    let recs = &ens.records;
+    let mut per = df!(
+        "realisation" => recs.iter().map(|r| r.stream).collect::<Vec<_>>(),
+        "p_w" => recs.iter().map(|r| r.summary.p_total_w()).collect::<Vec<_>>(),
+        "x_rms_m" => recs.iter().map(|r| r.summary.x_rms_m).collect::<Vec<_>>(),
+        "contact_fraction" => recs.iter().map(|r| r.summary.contact_fraction).collect::<Vec<_>>(),
+        "impacts" => recs.iter().map(|r| r.summary.impacts).collect::<Vec<_>>(),
+        "bw3db_hz" => recs.iter().map(|r| r.widths.bw3db_hz()).collect::<Vec<_>>(),
+        "psd_g2_per_hz" => vec![a.psd; recs.len()],
+        "params" => vec![device.params.clone(); recs.len()],
+    )?;
+    exp.write_parquet("records", &mut per, &device.params)?;
+
+    let eq21 = broadband::eq21_power_w(&device, a.psd);
+    exp.number("power_w", ens.power_w.mean);
+    exp.number("power_ci95_w", ens.power_w.ci95);
+    exp.number("efficiency", ens.efficiency.mean);
+    exp.number("eq21_power_w", eq21);
+    exp.number("bw3db_hz", ens.mean_widths.bw3db_hz());
+    exp.number("contact_fraction", ens.contact_fraction.mean);
+    let md = format!(
+        "Random vibration of `{}` ({} set): two-sided Sa = {} g^2/Hz up to 10 kHz, {} records of {} s, seed {}, Welch segments of {} samples.\n\n\
+         - power of both loads: {} nW ± {} nW (95 %); linear theory (eq 21): {} nW\n\
+         - efficiency 2P/(m Sa): {} %\n\
+         - 3 dB bandwidth of the mean output PSD: {} Hz\n\
+         - RMS displacement: {} um; time in contact: {} %; impacts: {}\n",
+        loaded.file,
+        device.params,
+        a.psd,
+        a.records,
+        a.duration_s,
+        a.seed,
+        nperseg,
+        fmt_sig(ens.power_w.mean * 1e9, 4),
+        fmt_sig(ens.power_w.ci95 * 1e9, 2),
+        fmt_sig(eq21 * 1e9, 4),
+        fmt_sig(ens.efficiency.mean * 100.0, 4),
+        fmt_sig(ens.mean_widths.bw3db_hz(), 4),
+        fmt_sig(ens.x_rms_m.mean * 1e6, 3),
+        fmt_sig(ens.contact_fraction.mean * 100.0, 3),
+        ens.impacts
+    );
+    exp.write_numbers_md(&md)?;
+    print!("{md}");
+    let pts: Vec<(f64, f64)> = psd
+        .freq_hz
+        .iter()
+        .zip(&psd.density)
+        .map(|(&f, &d)| (f, d * 1e6))
+        .collect();
+    let ymax = pts.iter().map(|p| p.1).fold(0.0, f64::max);
+    let plot = LinePlot::new(
+        &format!("Output power PSD at Sa = {} g^2/Hz: {}", a.psd, device.name),
+        "frequency [Hz]",
+        "output power PSD [uW/Hz] (both loads, one-sided)",
+        vec![Series::new(
+            &format!("mean of {} records", a.records),
+            pts,
+            PALETTE[0],
+            Style::Line,
+        )],
+    )
+    .log(false, true)
+    .y((ymax * 1e-5).max(1e-30), ymax * 2.0);
+    exp.write_plot(&plot)?;
+    exp.finish()
+}
