@@ -409,13 +409,19 @@ fn write_scorecard() -> Result<Vec<Row>> {
         .filter_map(|n| read_summary(n))
         .flat_map(|s| s.values)
         .collect();
-    let rows = score(&claims, &values);
+    let mut rows = score(&claims, &values);
+    let (target_id, target_q) = endstop::narrowband::CALIBRATION_TARGET;
+    for r in &mut rows {
+        if r.set == "calibrated" && r.claim == target_id && r.quantity == target_q {
+            r.note = "calibration target: fitted, not a prediction".into();
+        }
+    }
     common::write_atomic(
         &common::results_root().join("scorecard.json"),
         serde_json::to_string_pretty(&rows)?.as_bytes(),
     )?;
     let mut md = String::from(
-        "| claim | quantity | set | paper | ours | ± | unit | tolerance | verdict |\n|---|---|---|---|---|---|---|---|---|\n",
+        "| claim | quantity | set | paper | ours | ± | unit | tolerance | verdict | note |\n|---|---|---|---|---|---|---|---|---|---|\n",
     );
     for r in &rows {
         let ours = r
@@ -432,7 +438,7 @@ fn write_scorecard() -> Result<Vec<Row>> {
             Verdict::NotYet => "not yet",
         };
         md.push_str(&format!(
-            "| {} | {} | {} | {} | {} | {} | {} | {} | {} |\n",
+            "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |\n",
             r.claim,
             r.quantity,
             r.set,
@@ -441,7 +447,8 @@ fn write_scorecard() -> Result<Vec<Row>> {
             unc,
             r.unit,
             common::fmt_sig(r.tolerance, 2),
-            verdict
+            verdict,
+            r.note
         ));
     }
     common::write_atomic(

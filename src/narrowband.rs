@@ -693,7 +693,11 @@ fn onset_search(
     )?))
 }
 
-/// Result of the one-parameter calibration of prototype 1.
+/// The claim the calibrated set is fitted to, (claim id, quantity): under the calibrated set
+/// its agreement holds by construction and is no evidence.
+pub const CALIBRATION_TARGET: (&str, &str) = ("F8-b", "impact_onset_5p5g_hz");
+
+/// Result of the one-parameter calibration of prototype 1 ([`calibrate_prototype1`]).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Calibration {
     /// The calibrated device: the published one with the fitted end-stop gap and

@@ -157,6 +157,9 @@ pub struct Row {
     pub verdict: Verdict,
     /// What is compared.
     pub text: String,
+    /// A remark on the row (e.g. that a value is a calibration target, not a prediction).
+    #[serde(default)]
+    pub note: String,
 }
 
 /// Joins claims with our values: one row per claim number and per parameter set that has a
@@ -180,6 +183,7 @@ pub fn score(claims: &[Claim], values: &[Value]) -> Vec<Row> {
                 tolerance: c.tolerance(),
                 verdict: c.verdict(ours),
                 text: c.text.clone(),
+                note: String::new(),
             })
         };
         if mine.is_empty() {
