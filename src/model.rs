@@ -446,14 +446,18 @@ impl<E: Excitation> EnergyAudit<E> {
     }
 
     /// Relative residual of the energy balance between the rest state and `y` (in `mode`):
-    /// (work in - dissipated - stored) / (|excitation work| + |source work|).
+    /// (work in - dissipated - stored) divided by the sum of the magnitudes of its terms
+    /// (excitation work, source work, dissipation, change of stored energy). Dividing by the
+    /// work in alone would be ill-conditioned for a detuned drive, whose net work passes
+    /// through zero while energy sloshes in and out of the resonator.
     pub fn relative_residual(&self, mode: Mode, y: &SVector<f64, 8>) -> f64 {
         let h = &self.0;
         let s = audit_state(y);
         let stored = h.stored_energy(mode, &s) - h.stored_energy(Mode::Free, &State::zeros());
         let source = h.vb * (h.source_charge(&s) - h.source_charge(&State::zeros()));
         let dissipated = y[5] + y[6] + y[7];
-        (y[4] + source - dissipated - stored) / (y[4].abs() + source.abs())
+        let scale = y[4].abs() + source.abs() + dissipated.abs() + stored.abs();
+        (y[4] + source - dissipated - stored) / scale
     }
 }
 

@@ -18,7 +18,13 @@ fn p1_text() -> String {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig { cases: 256, ..ProptestConfig::default() })]
+    // A fixed seed, so that CI runs the same cases every time (deterministic by default); a
+    // failing case found while developing is kept in `robustness.proptest-regressions`.
+    #![proptest_config(ProptestConfig {
+        cases: 256,
+        rng_seed: proptest::test_runner::RngSeed::Fixed(2012),
+        ..ProptestConfig::default()
+    })]
 
     /// Replace one line of a valid file by arbitrary text: the loader returns Ok or Err.
     #[test]
@@ -86,8 +92,20 @@ proptest! {
         d.endstop.tension_free = tension_free;
         let d = d.with_endstop(if hertz { StiffnessModel::Hertz } else { StiffnessModel::Linear }, bim);
         d.validate("random").unwrap();
-        let audit = EnergyAudit(Harvester::new(&d, Sine::from_rms_g(accel_g, detune * f0)));
-        let mut ode = Dopri5::new(0.0, SVector::<f64, 8>::zeros(), Mode::Free, audit.solver_options(1e-10));
+        let drive = Sine::from_rms_g(accel_g, detune * f0);
+        let audit = EnergyAudit(Harvester::new(&d, drive));
+        // Absolute tolerances follow the size of the motion, so that a weak, detuned drive
+        // (nanometres against a stop micrometres away) is integrated as accurately, relative to
+        // its own energy, as a strong one: the expected amplitude is that of the linear
+        // oscillator (or the stop gap, whichever is smaller).
+        let (w0, w) = (2.0 * std::f64::consts::PI * f0, 2.0 * std::f64::consts::PI * detune * f0);
+        let x_lin = drive.amplitude_m_s2 / ((w0 * w0 - w * w).powi(2) + (w0 * w / q).powi(2)).sqrt();
+        let motion = (x_lin / d.geometry.endstop_gap_m).min(1.0);
+        let mut opts = audit.solver_options(1e-10);
+        for i in 0..8 {
+            opts.atol[i] *= if i < 4 { motion } else { motion * motion };
+        }
+        let mut ode = Dopri5::new(0.0, SVector::<f64, 8>::zeros(), Mode::Free, opts);
         match ode.integrate(&audit, 15.0 / (detune * f0), |_, _| {}) {
             Ok(()) => {
                 prop_assert!(ode.y.iter().all(|v| v.is_finite()));
