@@ -302,6 +302,30 @@ impl Experiment {
         let json = serde_json::to_string_pretty(&summary)?;
         write_atomic(&self.dir.join("summary.json"), json.as_bytes())?;
         let secs = self.started.elapsed().as_secs_f64();
+        // Provenance of the book's numbers: which program, parameter files, seed and commit
+        // produced them, and how long it took (the book only; the data files stay free of
+        // wall-clock content so that they are byte-identical between runs).
+        let snippet = self.book_dir.join("numbers.md");
+        if let Ok(mut md) = std::fs::read_to_string(&snippet) {
+            let files: Vec<String> = self
+                .params
+                .iter()
+                .map(|(f, l, _)| format!("`{f}` ({l})"))
+                .collect();
+            md.push_str(&format!(
+                "\n*Produced by `{}` from {}; seed {}; commit `{}`; {:.2} s wall time.*\n",
+                self.name,
+                if files.is_empty() {
+                    "no parameter file".to_string()
+                } else {
+                    files.join(", ")
+                },
+                self.seed.map_or("none".to_string(), |s| s.to_string()),
+                git_commit(),
+                secs
+            ));
+            write_atomic(&snippet, md.as_bytes())?;
+        }
         let timing = serde_json::json!({ "experiment": self.name, "wall_time_s": secs });
         write_atomic(
             &self.dir.join("timing.json"),
