@@ -146,22 +146,14 @@ fn sweep(a: SweepArgs) -> Result<()> {
     let col = |f: &dyn Fn(&endstop::sweep::Measurement) -> f64| -> Vec<f64> {
         steps.iter().map(|s| f(&s.measurement)).collect()
     };
-    let n = steps.len();
-    let mut df = df!(
-        "freq_hz" => col(&|m| m.freq_hz),
-        "accel_rms_g" => col(&|m| m.accel_rms_g),
-        "v1_rms_v" => col(&|m| m.v1_rms_v),
-        "v2_rms_v" => col(&|m| m.v2_rms_v),
-        "vdiff_rms_v" => col(&|m| m.vdiff_rms_v),
-        "p1_w" => col(&|m| m.p1_w),
-        "p2_w" => col(&|m| m.p2_w),
-        "x_peak_m" => col(&|m| m.x_peak_m),
-        "contact_fraction" => col(&|m| m.contact_fraction),
-        "impacts_per_period" => col(&|m| m.impacts_per_period),
-        "converged" => steps.iter().map(|s| s.measurement.converged).collect::<Vec<_>>(),
-        "series" => vec![format!("{} g rms up-sweep", a.accel_rms_g); n],
-        "params" => vec![device.params.clone(); n],
-    )?;
+    let mut table = common::sweep_table::SweepTable::default();
+    table.push(
+        &format!("{} g rms up-sweep", a.accel_rms_g),
+        &device,
+        report.measurements(),
+        report.extended_from,
+    );
+    let mut df = table.frame()?;
     exp.write_parquet("sweep", &mut df, &device.params)?;
 
     let mut md = format!(

@@ -8,6 +8,8 @@
 #[path = "common/mod.rs"]
 mod common;
 
+use common::sweep_table::SweepTable;
+
 use anyhow::{Context, Result};
 use common::plot::{LegendPos, LinePlot, Series, Style, PALETTE};
 use common::{fmt_sig, load_device, root, Experiment, LoadedDevice};
@@ -181,13 +183,19 @@ fn record_numbers(exp: &mut Experiment, cal: &Calibration, runs: &[SetRun]) {
 }
 
 fn write_parquet(exp: &Experiment, runs: &[SetRun]) -> Result<()> {
-    let mut cols = Cols::default();
+    let mut table = SweepTable::default();
     for r in runs {
         for c in &r.curves {
-            cols.push(r.set, &r.device, c);
+            let dev = c.spec.device(&r.device);
+            table.push(
+                &c.spec.label(),
+                &dev,
+                c.report.measurements(),
+                c.report.extended_from,
+            );
         }
     }
-    let mut df = cols.frame()?;
+    let mut df = table.frame()?;
     exp.write_parquet("fig08", &mut df, "published+calibrated")?;
 
     // Convergence: one row per set and curve.
@@ -222,81 +230,6 @@ fn write_parquet(exp: &Experiment, runs: &[SetRun]) -> Result<()> {
     )?;
     exp.write_parquet("fig08_bim_fits", &mut df, "published+calibrated")?;
     Ok(())
-}
-
-/// Columns of the per-step Parquet file.
-#[derive(Default)]
-struct Cols {
-    f: Vec<f64>,
-    a: Vec<f64>,
-    v1: Vec<f64>,
-    v2: Vec<f64>,
-    vd: Vec<f64>,
-    p1: Vec<f64>,
-    p2: Vec<f64>,
-    x: Vec<f64>,
-    cf: Vec<f64>,
-    imp: Vec<f64>,
-    blocks: Vec<u32>,
-    conv: Vec<bool>,
-    beyond: Vec<bool>,
-    series: Vec<String>,
-    params: Vec<String>,
-    stiffness: Vec<String>,
-    bim: Vec<f64>,
-    tf: Vec<bool>,
-    gap: Vec<f64>,
-}
-
-impl Cols {
-    fn push(&mut self, set: &str, device: &Device, c: &Curve) {
-        let ext = c.report.extended_from.unwrap_or(usize::MAX);
-        for (i, m) in c.report.measurements().enumerate() {
-            self.f.push(m.freq_hz);
-            self.a.push(m.accel_rms_g);
-            self.v1.push(m.v1_rms_v);
-            self.v2.push(m.v2_rms_v);
-            self.vd.push(m.vdiff_rms_v);
-            self.p1.push(m.p1_w);
-            self.p2.push(m.p2_w);
-            self.x.push(m.x_peak_m);
-            self.cf.push(m.contact_fraction);
-            self.imp.push(m.impacts_per_period);
-            self.blocks.push(m.blocks as u32);
-            self.conv.push(m.converged);
-            self.beyond.push(i >= ext);
-            self.series.push(c.spec.label());
-            self.params.push(set.to_string());
-            self.stiffness.push(law(c.spec.stiffness).to_string());
-            self.bim.push(c.spec.bim_n_s_per_m);
-            self.tf.push(c.spec.tension_free);
-            self.gap.push(device.geometry.endstop_gap_m);
-        }
-    }
-
-    fn frame(self) -> Result<DataFrame> {
-        Ok(df!(
-            "freq_hz" => self.f,
-            "accel_rms_g" => self.a,
-            "v1_rms_v" => self.v1,
-            "v2_rms_v" => self.v2,
-            "vdiff_rms_v" => self.vd,
-            "p1_w" => self.p1,
-            "p2_w" => self.p2,
-            "x_peak_m" => self.x,
-            "contact_fraction" => self.cf,
-            "impacts_per_period" => self.imp,
-            "blocks" => self.blocks,
-            "converged" => self.conv,
-            "beyond_paper_range" => self.beyond,
-            "series" => self.series,
-            "params" => self.params,
-            "stiffness" => self.stiffness,
-            "bim_n_s_per_m" => self.bim,
-            "tension_free" => self.tf,
-            "endstop_gap_m" => self.gap,
-        )?)
-    }
 }
 
 #[derive(Default)]

@@ -6,6 +6,8 @@
 #[path = "common/mod.rs"]
 mod common;
 
+use common::sweep_table::SweepTable;
+
 use anyhow::{Context, Result};
 use common::plot::{LegendPos, LinePlot, Series, Style, PALETTE};
 use common::{fmt_sig, load_device, root, Experiment};
@@ -15,7 +17,6 @@ use endstop::narrowband::{
 };
 use endstop::params::StiffnessModel;
 use endstop::scorecard::parse_claims;
-use polars::prelude::*;
 
 const CONV_FREQ_REL: f64 = 0.005;
 const CONV_RMS_REL: f64 = 0.01;
@@ -75,11 +76,17 @@ fn run() -> Result<()> {
     }
 
     // Per-step Parquet.
-    let mut rows = Rows::default();
+    let mut table = SweepTable::default();
     for c in &curves {
-        rows.push(c);
+        let dev = c.spec.device(&device);
+        table.push(
+            &c.spec.label(),
+            &dev,
+            c.report.measurements(),
+            c.report.extended_from,
+        );
     }
-    let mut df = rows.frame()?;
+    let mut df = table.frame()?;
     exp.write_parquet("fig13", &mut df, "published")?;
 
     // numbers.md
@@ -204,75 +211,6 @@ fn run() -> Result<()> {
 /// Simulated periods of a sweep's coarse steps: (settle + measured blocks) x block length.
 fn blocks_to_periods(r: &endstop::narrowband::SweepReport, block: usize, settle: usize) -> usize {
     r.measurements().map(|m| (m.blocks + settle) * block).sum()
-}
-
-#[derive(Default)]
-struct Rows {
-    f: Vec<f64>,
-    a: Vec<f64>,
-    v1: Vec<f64>,
-    v2: Vec<f64>,
-    vd: Vec<f64>,
-    p1: Vec<f64>,
-    p2: Vec<f64>,
-    x: Vec<f64>,
-    cf: Vec<f64>,
-    imp: Vec<f64>,
-    blocks: Vec<u32>,
-    conv: Vec<bool>,
-    beyond: Vec<bool>,
-    series: Vec<String>,
-    stiffness: Vec<String>,
-    bim: Vec<f64>,
-}
-
-impl Rows {
-    fn push(&mut self, c: &Curve) {
-        let ext = c.report.extended_from.unwrap_or(usize::MAX);
-        for (i, m) in c.report.measurements().enumerate() {
-            self.f.push(m.freq_hz);
-            self.a.push(m.accel_rms_g);
-            self.v1.push(m.v1_rms_v);
-            self.v2.push(m.v2_rms_v);
-            self.vd.push(m.vdiff_rms_v);
-            self.p1.push(m.p1_w);
-            self.p2.push(m.p2_w);
-            self.x.push(m.x_peak_m);
-            self.cf.push(m.contact_fraction);
-            self.imp.push(m.impacts_per_period);
-            self.blocks.push(m.blocks as u32);
-            self.conv.push(m.converged);
-            self.beyond.push(i >= ext);
-            self.series.push(c.spec.label());
-            self.stiffness.push(law(c.spec.stiffness).to_string());
-            self.bim.push(c.spec.bim_n_s_per_m);
-        }
-    }
-
-    fn frame(self) -> Result<DataFrame> {
-        let n = self.f.len();
-        Ok(df!(
-            "freq_hz" => self.f,
-            "accel_rms_g" => self.a,
-            "v1_rms_v" => self.v1,
-            "v2_rms_v" => self.v2,
-            "vdiff_rms_v" => self.vd,
-            "p1_w" => self.p1,
-            "p2_w" => self.p2,
-            "x_peak_m" => self.x,
-            "contact_fraction" => self.cf,
-            "impacts_per_period" => self.imp,
-            "blocks" => self.blocks,
-            "converged" => self.conv,
-            "beyond_paper_range" => self.beyond,
-            "series" => self.series,
-            "params" => vec!["published"; n],
-            "stiffness" => self.stiffness,
-            "bim_n_s_per_m" => self.bim,
-            "tension_free" => vec![false; n],
-            "bias_v" => vec![FIG13_BIAS_V; n],
-        )?)
-    }
 }
 
 fn plot(curves: &[Curve]) -> LinePlot {

@@ -8,6 +8,7 @@
 #![allow(dead_code)]
 
 pub mod plot;
+pub mod sweep_table;
 
 use std::collections::BTreeMap;
 use std::io::Write;
