@@ -10,7 +10,7 @@ mod common;
 mod bbio;
 
 use anyhow::Result;
-use bbio::{find, pm, sa_label, spread_str, Level};
+use bbio::{find, pm, sa_label, spread_str};
 use common::{fmt_sig, Experiment};
 use endstop::broadband::{self, ratio_spread, DEFAULT_SEED, P1_BAND_HZ, P1_NPERSEG};
 
@@ -94,30 +94,14 @@ fn run() -> Result<()> {
     }
     exp.write_numbers_md(&md)?;
 
-    let set_label = "published+calibrated";
-    exp.write_parquet("fig11_summary", &mut bbio::summary_df(&levels)?, set_label)?;
-    exp.write_parquet("fig11_records", &mut bbio::records_df(&levels)?, set_label)?;
-    exp.write_parquet(
-        "fig11_spectra",
-        &mut bbio::spectra_df(&levels, 600.0, 2000.0)?,
-        set_label,
-    )?;
-
-    // As the paper: 600-2000 Hz, log y. The calibrated set (dashed) lies on the published one
-    // when no record reaches a stop.
-    let refs: Vec<&Level> = levels.iter().collect();
-    let top = refs
-        .iter()
-        .map(|l| l.ens.mean_spectrum.total.peak().1 * 1e6)
-        .fold(0.0, f64::max);
-    let y_hi = 10f64.powf((2.0 * top).log10().ceil());
-    let plot = bbio::spectra_plot(
+    // As the paper: log y over (600.0, 2000.0); the calibrated set is dashed.
+    bbio::write_p1_spectra(
+        &exp,
+        "fig11",
         "Figure 11: prototype 1 at 30 V, output power PSD (both loads, one-sided)",
-        &refs,
+        &levels,
         (600.0, 2000.0),
-        (y_hi / 1e4, y_hi),
         true,
-    );
-    exp.write_plot(&plot)?;
+    )?;
     exp.finish()
 }

@@ -117,28 +117,14 @@ fn run() -> Result<()> {
     }
     exp.write_numbers_md(&md)?;
 
-    let set_label = "published+calibrated";
-    exp.write_parquet("fig12_summary", &mut bbio::summary_df(&levels)?, set_label)?;
-    exp.write_parquet("fig12_records", &mut bbio::records_df(&levels)?, set_label)?;
-    exp.write_parquet(
-        "fig12_spectra",
-        &mut bbio::spectra_df(&levels, 500.0, 3000.0)?,
-        set_label,
-    )?;
-
-    let refs: Vec<&Level> = levels.iter().collect();
-    let top = refs
-        .iter()
-        .map(|l| l.ens.mean_spectrum.total.peak().1 * 1e6)
-        .fold(0.0, f64::max);
-    let y_hi = 10f64.powf((2.0 * top).log10().ceil());
-    let plot = bbio::spectra_plot(
+    // As the paper: log y over (500.0, 3000.0); the calibrated set is dashed.
+    bbio::write_p1_spectra(
+        &exp,
+        "fig12",
         "Figure 12: prototype 1 at 30 V, output power PSD (both loads, one-sided)",
-        &refs,
+        &levels,
         (500.0, 3000.0),
-        (y_hi / 1e4, y_hi),
         false,
-    );
-    exp.write_plot(&plot)?;
+    )?;
     exp.finish()
 }

@@ -454,3 +454,40 @@ pub fn prototype1_sets(exp: &mut crate::common::Experiment) -> Result<Vec<(Strin
         ("calibrated".to_string(), setup(&cal.device)),
     ])
 }
+
+/// Writes the three Parquet files of a prototype-1 spectra experiment (Figures 11 and 12):
+/// `<name>_summary`, `<name>_records` and `<name>_spectra` over `band_hz`, and its plot of the
+/// mean output PSDs on a log axis spanning four decades below the highest peak.
+pub fn write_p1_spectra(
+    exp: &crate::common::Experiment,
+    name: &str,
+    title: &str,
+    levels: &[Level],
+    band_hz: (f64, f64),
+    theory: bool,
+) -> Result<()> {
+    let set_label = "published+calibrated";
+    exp.write_parquet(
+        &format!("{name}_summary"),
+        &mut summary_df(levels)?,
+        set_label,
+    )?;
+    exp.write_parquet(
+        &format!("{name}_records"),
+        &mut records_df(levels)?,
+        set_label,
+    )?;
+    exp.write_parquet(
+        &format!("{name}_spectra"),
+        &mut spectra_df(levels, band_hz.0, band_hz.1)?,
+        set_label,
+    )?;
+    let refs: Vec<&Level> = levels.iter().collect();
+    let top = refs
+        .iter()
+        .map(|l| l.ens.mean_spectrum.total.peak().1 * 1e6)
+        .fold(0.0, f64::max);
+    let y_hi = 10f64.powf((2.0 * top).log10().ceil());
+    let plot = spectra_plot(title, &refs, band_hz, (y_hi / 1e4, y_hi), theory);
+    exp.write_plot(&plot)
+}
