@@ -42,8 +42,6 @@ const MIN_SPAN_PERIODS: usize = 200;
 /// Output step `tstep` of `.tran`: this many per period (ngspice's default max step is bounded
 /// by it).
 const OUTPUT_STEPS_PER_PERIOD: f64 = 100.0;
-/// Max step of the documented settings: this many per period.
-const MAX_STEPS_PER_PERIOD: f64 = 1000.0;
 /// Steady-state criterion of our integrator: relative change of the RMS voltages between two
 /// blocks (tighter than the sweeps' 1e-3, so that the comparison window is in steady state).
 const REL_CHANGE_TOL: f64 = 1e-5;
@@ -93,7 +91,7 @@ fn s_defaults(_period: f64) -> SolverSettings {
 /// Defaults with only the max step reduced to T/1000.
 fn s_defaults_maxstep(period: f64) -> SolverSettings {
     SolverSettings {
-        max_step_s: Some(period / MAX_STEPS_PER_PERIOD),
+        max_step_s: Some(period / endstop::spice::DOCUMENTED_STEPS_PER_PERIOD),
         ..SolverSettings::ngspice_defaults()
     }
 }
@@ -106,19 +104,9 @@ fn s_documented_no_maxstep(period: f64) -> SolverSettings {
     }
 }
 
-/// The documented settings: reltol 1e-6; abstol 1e-15 A (= mN on the mechanical side);
-/// vntol 1e-9 V (= 1e-9 um and mm/s on the mechanical side); chgtol 1e-20 C; trapezoidal;
-/// max step T/1000.
+/// The documented settings (`SolverSettings::documented`).
 fn s_documented(period: f64) -> SolverSettings {
-    SolverSettings {
-        reltol: Some(1e-6),
-        abstol: Some(1e-15),
-        vntol: Some(1e-9),
-        chgtol: Some(1e-20),
-        trtol: None,
-        method: Method::Trapezoidal,
-        max_step_s: Some(period / MAX_STEPS_PER_PERIOD),
-    }
+    SolverSettings::documented(period)
 }
 
 /// The documented settings with Gear's method of order 2.

@@ -8,7 +8,7 @@
 #[path = "common/mod.rs"]
 mod common;
 
-use common::sweep_table::SweepTable;
+use common::sweep_table::{claim_cells, SweepTable};
 
 use anyhow::{Context, Result};
 use common::plot::{LegendPos, LinePlot, Series, Style, PALETTE};
@@ -185,15 +185,7 @@ fn record_numbers(exp: &mut Experiment, cal: &Calibration, runs: &[SetRun]) {
 fn write_parquet(exp: &Experiment, runs: &[SetRun]) -> Result<()> {
     let mut table = SweepTable::default();
     for r in runs {
-        for c in &r.curves {
-            let dev = c.spec.device(&r.device);
-            table.push(
-                &c.spec.label(),
-                &dev,
-                c.report.measurements(),
-                c.report.extended_from,
-            );
-        }
+        table.push_curves(&r.device, &r.curves);
     }
     let mut df = table.frame()?;
     exp.write_parquet("fig08", &mut df, "published+calibrated")?;
@@ -325,30 +317,7 @@ fn numbers_md(cal: &Calibration, runs: &[SetRun], claims: &[Claim]) -> String {
     let pubr = &runs[0];
     let calr = &runs[1];
     for c in claims.iter().filter(|c| c.experiment == "fig08") {
-        let cell = |r: &SetRun| -> (String, String, String) {
-            match r
-                .claims
-                .iter()
-                .find(|v| v.id == c.id && v.quantity == c.quantity)
-            {
-                Some(v) => (
-                    if c.unit == "bool" {
-                        if v.value > 0.5 { "yes" } else { "no" }.to_string()
-                    } else {
-                        format!(
-                            "{}{}",
-                            fmt_sig(v.value, 5),
-                            v.uncertainty
-                                .map(|u| format!(" +- {}", fmt_sig(u, 1)))
-                                .unwrap_or_default()
-                        )
-                    },
-                    v.note.clone(),
-                    c.verdict(Some(v.value)).label().to_string(),
-                ),
-                None => ("-".into(), "no value".into(), "not yet".into()),
-            }
-        };
+        let cell = |r: &SetRun| claim_cells(c, &r.claims, 5);
         let (a, b, v) = cell(pubr);
         let (d, e, w) = cell(calr);
         let paper = if c.unit == "bool" {

@@ -6,6 +6,8 @@
 #[path = "common/mod.rs"]
 mod common;
 
+use common::sweep_table::claim_cells;
+
 use anyhow::{Context, Result};
 use common::plot::{LegendPos, LinePlot, Series, Style, PALETTE};
 use common::{fmt_sig, load_device, root, Experiment, LoadedDevice};
@@ -174,30 +176,7 @@ fn claims_table(md: &mut String, runs: &[SetRun], claims: &[Claim], both: bool) 
         if both && c.id != "F9-b" {
             continue;
         }
-        let cell = |r: &SetRun| -> (String, String, String) {
-            let list = if both { &r.claims_both } else { &r.claims };
-            match list
-                .iter()
-                .find(|v| v.id == c.id && v.quantity == c.quantity)
-            {
-                Some(v) => (
-                    if c.unit == "bool" {
-                        if v.value > 0.5 { "yes" } else { "no" }.to_string()
-                    } else {
-                        format!(
-                            "{}{}",
-                            fmt_sig(v.value, 4),
-                            v.uncertainty
-                                .map(|u| format!(" +- {}", fmt_sig(u, 1)))
-                                .unwrap_or_default()
-                        )
-                    },
-                    v.note.clone(),
-                    c.verdict(Some(v.value)).label().to_string(),
-                ),
-                None => ("-".into(), "no value".into(), "not yet".into()),
-            }
-        };
+        let cell = |r: &SetRun| claim_cells(c, if both { &r.claims_both } else { &r.claims }, 4);
         let (a, b, v) = cell(&runs[0]);
         let (d, e, w) = cell(&runs[1]);
         let paper = if c.unit == "bool" {

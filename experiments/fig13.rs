@@ -6,7 +6,7 @@
 #[path = "common/mod.rs"]
 mod common;
 
-use common::sweep_table::SweepTable;
+use common::sweep_table::{claim_cells, SweepTable};
 
 use anyhow::{Context, Result};
 use common::plot::{LegendPos, LinePlot, Series, Style, PALETTE};
@@ -77,15 +77,7 @@ fn run() -> Result<()> {
 
     // Per-step Parquet.
     let mut table = SweepTable::default();
-    for c in &curves {
-        let dev = c.spec.device(&device);
-        table.push(
-            &c.spec.label(),
-            &dev,
-            c.report.measurements(),
-            c.report.extended_from,
-        );
-    }
+    table.push_curves(&device, &curves);
     let mut df = table.frame()?;
     exp.write_parquet("fig13", &mut df, "published")?;
 
@@ -94,23 +86,11 @@ fn run() -> Result<()> {
         "### Claims\n\n| claim | quantity | paper | ours | what | verdict |\n|---|---|---|---|---|---|\n",
     );
     for c in claims_file.iter().filter(|c| c.experiment == "fig13") {
-        match claims
-            .iter()
-            .find(|v| v.id == c.id && v.quantity == c.quantity)
-        {
-            Some(v) => md.push_str(&format!(
-                "| {} | `{}` | yes | {} | {} | **{}** |\n",
-                c.id,
-                c.quantity,
-                if v.value > 0.5 { "yes" } else { "no" },
-                v.note,
-                c.verdict(Some(v.value)).label()
-            )),
-            None => md.push_str(&format!(
-                "| {} | `{}` | yes | - | no value | **not yet** |\n",
-                c.id, c.quantity
-            )),
-        }
+        let (ours, what, verdict) = claim_cells(c, &claims, 5);
+        md.push_str(&format!(
+            "| {} | `{}` | yes | {ours} | {what} | **{verdict}** |\n",
+            c.id, c.quantity
+        ));
     }
     let block = settings.cfg.block_periods;
     md.push_str(&format!(

@@ -10,7 +10,7 @@ mod bbio;
 
 use anyhow::Result;
 use bbio::{find, pm, sa_label, Level};
-use common::plot::{LegendPos, LinePlot, Series, Style, PALETTE};
+use common::plot::{error_bars, LegendPos, LinePlot, Series, Style, PALETTE};
 use common::{fmt_sig, load_device, Experiment};
 use endstop::broadband::{self, DEFAULT_SEED, P2_BAND_HZ, P2_NPERSEG};
 use endstop::params::StiffnessModel;
@@ -297,15 +297,12 @@ fn write_power_plot(
             Style::LinePoints,
         ),
     ];
-    for l in levels {
-        let (m, c) = (l.ens.power_w.mean * 1e9, l.ens.power_w.ci95 * 1e9);
-        series.push(Series::new(
-            "",
-            vec![(l.sa(), m - c), (l.sa(), m + c)],
-            PALETTE[0],
-            Style::Line,
-        ));
-    }
+    series.extend(error_bars(
+        levels
+            .iter()
+            .map(|l| (l.sa(), l.ens.power_w.mean * 1e9, l.ens.power_w.ci95 * 1e9)),
+        PALETTE[0],
+    ));
     let plot = LinePlot::new(
         "Figure 14: prototype 2 at 15 V, output power of both loads",
         "acceleration PSD Sa [g²/Hz] (two-sided)",
@@ -355,15 +352,13 @@ fn write_efficiency_plot(exp: &Experiment, levels: &[Level], eq21: f64) -> Resul
         PALETTE[3],
         Style::Points,
     ));
-    for l in levels {
-        let (m, c) = (l.ens.efficiency.mean * 100.0, l.ens.efficiency.ci95 * 100.0);
-        series.push(Series::new(
-            "",
-            vec![(l.sa(), m - c), (l.sa(), m + c)],
-            PALETTE[0],
-            Style::Line,
-        ));
-    }
+    series.extend(error_bars(
+        levels.iter().map(|l| {
+            let e = &l.ens.efficiency;
+            (l.sa(), e.mean * 100.0, e.ci95 * 100.0)
+        }),
+        PALETTE[0],
+    ));
     let plot = LinePlot::new(
         "Prototype 2 at 15 V: efficiency 2P/(m Sa) and time in contact",
         "acceleration PSD Sa [g²/Hz] (two-sided)",

@@ -262,12 +262,6 @@ impl<S: HybridSystem<N>, const N: usize> Dopri5<S, N> {
         }
     }
 
-    /// Resets time to `t` keeping state and mode (used to restart a periodic drive at phase 0).
-    pub fn reset_time(&mut self, t: f64) {
-        self.t = t;
-        self.k1_valid = false;
-    }
-
     fn state_vec(&self) -> Vec<f64> {
         self.y.iter().copied().collect()
     }

@@ -197,7 +197,26 @@ pub struct SolverSettings {
     pub max_step_s: Option<f64>,
 }
 
+/// Maximum step of the documented settings, in steps per drive period.
+pub const DOCUMENTED_STEPS_PER_PERIOD: f64 = 1000.0;
+
 impl SolverSettings {
+    /// The settings with which ngspice agrees with our integrator (see the cross-check
+    /// chapter): reltol 1e-6; abstol 1e-15 A (= mN on the mechanical side); vntol 1e-9 V
+    /// (= um and mm/s on the mechanical side); chgtol 1e-20 C; trapezoidal; maximum step of
+    /// a thousandth of the drive period `period_s`.
+    pub fn documented(period_s: f64) -> Self {
+        Self {
+            reltol: Some(1e-6),
+            abstol: Some(1e-15),
+            vntol: Some(1e-9),
+            chgtol: Some(1e-20),
+            trtol: None,
+            method: Method::Trapezoidal,
+            max_step_s: Some(period_s / DOCUMENTED_STEPS_PER_PERIOD),
+        }
+    }
+
     /// Every setting at ngspice's default.
     pub fn ngspice_defaults() -> Self {
         Self {

@@ -355,16 +355,6 @@ pub fn first_contact(sweep: &Sweep) -> Option<usize> {
         .position(|s| s.measurement.contact_fraction > 0.0)
 }
 
-/// Index of the first step after a jump down: the total power falls below `(1 - drop)` times
-/// that of the previous step, and the previous step was in contact.
-pub fn jump_down(sweep: &Sweep, drop: f64) -> Option<usize> {
-    (1..sweep.steps.len()).find(|&k| {
-        let a = &sweep.steps[k - 1].measurement;
-        let b = &sweep.steps[k].measurement;
-        a.contact_fraction > 0.0 && b.p_total_w() < (1.0 - drop) * a.p_total_w()
-    })
-}
-
 /// Evenly spaced values from `start` to `stop` inclusive with spacing close to `step`.
 pub fn linspace_step(start: f64, stop: f64, step: f64) -> Vec<f64> {
     let n = ((stop - start) / step).round().max(1.0) as usize;

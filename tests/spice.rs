@@ -433,15 +433,7 @@ fn ngspice_agrees_with_our_integrator() {
         let (m, _, _, _) = steady_state(&model, model.rest_state(), Mode::Free, a, &cfg).unwrap();
         let block = 5.0 * period;
         let (t0, t1) = (3.0 * block, 4.0 * block);
-        let solver = SolverSettings {
-            reltol: Some(1e-6),
-            abstol: Some(1e-15),
-            vntol: Some(1e-9),
-            chgtol: Some(1e-20),
-            trtol: None,
-            method: Method::Trapezoidal,
-            max_step_s: Some(period / 1000.0),
-        };
+        let solver = SolverSettings::documented(period);
         let w = run_ngspice(tag, |dat| {
             netlist(
                 &dev,

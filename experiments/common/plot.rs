@@ -93,6 +93,17 @@ impl Series {
     }
 }
 
+/// Vertical error bars: one unlabelled segment (x, y - e) to (x, y + e) per (x, y, e).
+pub fn error_bars(
+    points: impl IntoIterator<Item = (f64, f64, f64)>,
+    color: RGBColor,
+) -> Vec<Series> {
+    points
+        .into_iter()
+        .map(|(x, y, e)| Series::new("", vec![(x, y - e), (x, y + e)], color, Style::Line))
+        .collect()
+}
+
 /// A palette that reads well in print and for colour-blind readers (Okabe-Ito).
 pub const PALETTE: [RGBColor; 8] = [
     RGBColor(0, 114, 178),

@@ -2,7 +2,9 @@
 //! with the device options that produced it, in the column names of SPEC 7.
 
 use anyhow::Result;
+use endstop::narrowband::{ClaimValue, Curve};
 use endstop::params::{Device, StiffnessModel};
+use endstop::scorecard::Claim;
 use endstop::sweep::Measurement;
 use polars::prelude::*;
 
@@ -71,6 +73,19 @@ impl SweepTable {
         }
     }
 
+    /// Adds every curve of a figure, each with its own end-stop options applied to `base`.
+    pub fn push_curves(&mut self, base: &Device, curves: &[Curve]) {
+        for c in curves {
+            let dev = c.spec.device(base);
+            self.push(
+                &c.spec.label(),
+                &dev,
+                c.report.measurements(),
+                c.report.extended_from,
+            );
+        }
+    }
+
     /// The data frame (SI units unless the column name says otherwise).
     pub fn frame(self) -> Result<DataFrame> {
         Ok(df!(
@@ -96,4 +111,31 @@ impl SweepTable {
             "bias_v" => self.bias,
         )?)
     }
+}
+
+/// One claim's cells in a generated table: (our value, what it is, verdict). Qualitative
+/// claims read yes/no; numbers get `sig` significant digits and their bracket half-width.
+pub fn claim_cells(claim: &Claim, values: &[ClaimValue], sig: usize) -> (String, String, String) {
+    let Some(v) = values
+        .iter()
+        .find(|v| v.id == claim.id && v.quantity == claim.quantity)
+    else {
+        return ("-".into(), "no value".into(), "not yet".into());
+    };
+    let ours = if claim.unit == "bool" {
+        if v.value > 0.5 { "yes" } else { "no" }.to_string()
+    } else {
+        format!(
+            "{}{}",
+            crate::common::fmt_sig(v.value, sig),
+            v.uncertainty
+                .map(|u| format!(" +- {}", crate::common::fmt_sig(u, 1)))
+                .unwrap_or_default()
+        )
+    };
+    (
+        ours,
+        v.note.clone(),
+        claim.verdict(Some(v.value)).label().to_string(),
+    )
 }
