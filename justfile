@@ -23,7 +23,7 @@ book:
 # Check formatting and lints (warnings are errors).
 lint:
     cargo fmt --check
-    cargo clippy --release --all-targets -- -D warnings
+    cargo clippy --release --workspace --all-targets -- -D warnings
 
 # Run the benchmarks.
 bench:

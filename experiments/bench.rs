@@ -1,4 +1,4 @@
-//! `bench`: how fast the model runs, on fixed cases (issue 5). Speed is measured here, never
+//! `bench`: how fast the model runs, on fixed cases. Speed is measured here, never
 //! asserted by a test.
 //!
 //! * a 10 s prototype-1 record at Sa = 2.85e-2 g^2/Hz (heavy impacts; calibrated set, whose
@@ -11,18 +11,18 @@
 //! Each case runs `REPEATS` times; the table gives the median and the fastest wall time.
 //! Results go to `data/results/bench/` and the book's Performance page.
 
-#[path = "common/mod.rs"]
-mod common;
+use endstop_experiments as common;
 
 use std::time::Instant;
 
 use anyhow::Result;
 use common::{fmt_sig, load_device, Experiment};
-use endstop::broadband::{simulate_record, RecordSpec};
-use endstop::excitation::Sine;
-use endstop::integrator::Dopri5;
-use endstop::model::{Harvester, Mode};
-use endstop::narrowband::{self, SweepSettings};
+use endstop::drive::Sine;
+use endstop::ode::Dopri5;
+use endstop::physics::contact::Mode;
+use endstop::physics::harvester::Harvester;
+use endstop::study::record::simulate_record;
+use endstop::study::record::RecordSpec;
 use polars::prelude::*;
 
 const REPEATS: usize = 5;
@@ -62,7 +62,7 @@ fn run() -> Result<()> {
     let p2 = load_device("prototype2")?;
     exp.uses(&p1, "published");
     exp.uses(&p2, "published");
-    let cal = narrowband::calibrate_prototype1(&p1.device)?.device;
+    let cal = endstop::paper::calibration::calibrate_prototype1(&p1.device)?.device;
     let mut rows = Vec::new();
 
     let records = [
@@ -104,15 +104,15 @@ fn run() -> Result<()> {
     }
 
     // A full Figure 8 sweep: every curve of the published set.
-    let settings = SweepSettings::prototype1(&p1.device);
-    let curves = narrowband::figure8_curves();
+    let settings = endstop::paper::fig08::sweep_settings(&p1.device);
+    let curves = endstop::paper::fig08::figure8_curves();
     for (label, threads) in [("1 thread", 1usize), ("all threads", 0)] {
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(threads)
             .build()?;
         let (res, times) = timed(|| {
             pool.install(|| {
-                Ok(narrowband::run_curves(
+                Ok(endstop::paper::curves::run_curves(
                     &p1.device,
                     &curves,
                     &settings,

@@ -10,8 +10,7 @@
 //! installed or if the documented settings miss the acceptance tolerances (0.1 % without
 //! impacts, 1 % with impacts).
 
-#[path = "common/mod.rs"]
-mod common;
+use endstop_experiments as common;
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -20,16 +19,29 @@ use std::time::Instant;
 use anyhow::{bail, Context, Result};
 use common::plot::{LegendPos, LinePlot, Series, Style, PALETTE};
 use common::{fmt_sig, load_device, write_atomic, Experiment};
-use endstop::excitation::Sine;
-use endstop::integrator::Dopri5;
-use endstop::model::{Harvester, Mode, State};
-use endstop::narrowband::steady_config;
-use endstop::params::{Device, StiffnessModel};
-use endstop::spice::{
-    netlist, parse_wrdata, InitialCondition, Method, SolverSettings, SpiceDrive, SpiceOptions,
-    Transient, Waveforms, HERTZ_NEWTON_STEPS,
-};
-use endstop::sweep::{linspace_step, steady_state, Continuation, Measurement, SteadyConfig};
+use endstop::device::Device;
+use endstop::device::StiffnessModel;
+use endstop::drive::Sine;
+use endstop::ode::Dopri5;
+use endstop::physics::contact::Mode;
+use endstop::physics::harvester::Harvester;
+use endstop::physics::harvester::State;
+use endstop::spice::netlist;
+use endstop::spice::parse_wrdata;
+use endstop::spice::InitialCondition;
+use endstop::spice::Method;
+use endstop::spice::SolverSettings;
+use endstop::spice::SpiceDrive;
+use endstop::spice::SpiceOptions;
+use endstop::spice::Transient;
+use endstop::spice::Waveforms;
+use endstop::spice::HERTZ_NEWTON_STEPS;
+use endstop::study::steady::steady_config;
+use endstop::study::steady::steady_state;
+use endstop::study::steady::Measurement;
+use endstop::study::steady::SteadyConfig;
+use endstop::study::stepped::linspace_step;
+use endstop::study::stepped::SteppedDrive;
 use polars::prelude::*;
 
 fn main() {
@@ -45,7 +57,7 @@ const OUTPUT_STEPS_PER_PERIOD: f64 = 100.0;
 /// Steady-state criterion of our integrator: relative change of the RMS voltages between two
 /// blocks (tighter than the sweeps' 1e-3, so that the comparison window is in steady state).
 const REL_CHANGE_TOL: f64 = 1e-5;
-/// Acceptance (issue 6): relative difference of the RMS voltages with the documented settings.
+/// Acceptance: relative difference of the RMS voltages with the documented settings.
 const TOL_FREE: f64 = 1e-3;
 /// Acceptance with impacts.
 const TOL_IMPACTING: f64 = 1e-2;
@@ -419,7 +431,7 @@ fn run() -> Result<()> {
         let (y0, mode0, start_label) = match case.start {
             Start::Rest => (model.rest_state(), Mode::Free, "rest".to_string()),
             Start::UpSweep { from_hz, step_hz } => {
-                let c = Continuation {
+                let c = SteppedDrive {
                     base: &model,
                     drive: move |ff: f64| (ff, a),
                     cfg: cfg.clone(),
@@ -668,7 +680,7 @@ fn numbers_md(rows: &[Row], version: &str) -> String {
     let mut md = format!(
         "Simulator: {version}. Relative difference = (ngspice - ours)/ours of the RMS voltage \
          over the comparison window, the larger of V1 and V2. Tolerance: {} % without impacts, \
-         {} % with impacts (issue 6), applied to the documented settings. Settings marked * \
+         {} % with impacts, applied to the documented settings. Settings marked * \
          are ngspice's defaults; T is the drive period; the output step of `.tran` is \
          T/{OUTPUT_STEPS_PER_PERIOD}. The verdict applies the tolerance to every row; only the \
          documented settings (in bold) are required to meet it. Run times are wall-clock seconds on the machine that \

@@ -8,8 +8,7 @@
 //! Both write the same kinds of output as the figure experiments: Parquet data with
 //! provenance metadata, an SVG and a PNG plot, `summary.json`, and `numbers.md`.
 
-#[path = "common/mod.rs"]
-mod common;
+use endstop_experiments as common;
 
 use std::path::PathBuf;
 
@@ -17,11 +16,12 @@ use anyhow::{bail, Result};
 use clap::{Parser, Subcommand};
 use common::plot::{LegendPos, LinePlot, Series, Style, PALETTE};
 use common::{fmt_sig, load_device_file, Experiment};
-use endstop::broadband::{self, EnsembleSpec, RecordSpec};
-use endstop::linear::{TwoPort, EQ21_QM};
-use endstop::narrowband;
-use endstop::spectral::WelchConfig;
-use endstop::sweep::linspace_step;
+use endstop::physics::two_port::TwoPort;
+use endstop::physics::two_port::EQ21_QM;
+use endstop::signal::WelchConfig;
+use endstop::study::ensemble::EnsembleSpec;
+use endstop::study::record::RecordSpec;
+use endstop::study::stepped::linspace_step;
 use polars::prelude::*;
 
 #[derive(Parser, Debug)]
@@ -136,14 +136,16 @@ fn sweep(a: SweepArgs) -> Result<()> {
     let mut exp = Experiment::start_in("endstop-sweep", out_dir(a.out));
     exp.uses(&loaded, &device.params);
     let freqs = linspace_step(a.from, a.to, a.step);
-    let cfg = narrowband::steady_config(&device, 0.5 * (a.from + a.to));
+    let cfg = endstop::study::steady::steady_config(&device, 0.5 * (a.from + a.to));
     let pb = common::progress(freqs.len() as u64, "sweep");
     let report =
-        narrowband::up_sweep_report(&device, &freqs, a.accel_rms_g, &cfg, 0.1, |_| pb.inc(1))?;
+        endstop::study::sweep::up_sweep_report(&device, &freqs, a.accel_rms_g, &cfg, 0.1, |_| {
+            pb.inc(1)
+        })?;
     pb.finish_and_clear();
 
     let steps = &report.sweep.steps;
-    let col = |f: &dyn Fn(&endstop::sweep::Measurement) -> f64| -> Vec<f64> {
+    let col = |f: &dyn Fn(&endstop::study::steady::Measurement) -> f64| -> Vec<f64> {
         steps.iter().map(|s| f(&s.measurement)).collect()
     };
     let mut table = common::sweep_table::SweepTable::default();
@@ -190,7 +192,7 @@ fn sweep(a: SweepArgs) -> Result<()> {
     exp.write_numbers_md(&md)?;
     print!("{md}");
 
-    let pts = |f: &dyn Fn(&endstop::sweep::Measurement) -> f64| -> Vec<(f64, f64)> {
+    let pts = |f: &dyn Fn(&endstop::study::steady::Measurement) -> f64| -> Vec<(f64, f64)> {
         steps
             .iter()
             .map(|s| (s.measurement.freq_hz, f(&s.measurement)))
@@ -222,7 +224,7 @@ fn sweep(a: SweepArgs) -> Result<()> {
 
 /// Welch segment for a device: bins of about a tenth of its linear half-power width, a power
 /// of two, at least 2^10 and at most an eighth of the record.
-fn nperseg_for(device: &endstop::params::Device, fs: f64, n: usize) -> usize {
+fn nperseg_for(device: &endstop::device::Device, fs: f64, n: usize) -> usize {
     let tp = TwoPort::of(device);
     let width = tp.resonance_hz() / tp.qm(EQ21_QM).max(0.5);
     let target = fs / (0.1 * width);
@@ -265,7 +267,7 @@ fn random(a: RandomArgs) -> Result<()> {
         realisations: a.records,
     };
     let pb = common::progress(a.records as u64, "records");
-    let ens = broadband::run_ensemble(&device, &spec, || pb.inc(1))?;
+    let ens = endstop::study::ensemble::run_ensemble(&device, &spec, || pb.inc(1))?;
     pb.finish_and_clear();
 
     let psd = &ens.mean_spectrum.total;
@@ -291,7 +293,7 @@ fn random(a: RandomArgs) -> Result<()> {
     )?;
     exp.write_parquet("records", &mut per, &device.params)?;
 
-    let eq21 = broadband::eq21_power_w(&device, a.psd);
+    let eq21 = endstop::physics::two_port::eq21_power_w(&device, a.psd);
     exp.number("power_w", ens.power_w.mean);
     exp.number("power_ci95_w", ens.power_w.ci95);
     exp.number("efficiency", ens.efficiency.mean);

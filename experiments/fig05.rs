@@ -1,16 +1,17 @@
 //! Figure 5: the Hertz line-contact law (eq 6) in normalised form, delta0 for both prototypes
 //! (claim F5-a), and the linear end-stop stiffness of eq 19 (claim F5-b).
 
-#[path = "common/mod.rs"]
-mod common;
+use endstop_experiments as common;
 
 use anyhow::Result;
 use common::plot::{LinePlot, Series, Style, PALETTE};
 use common::{fmt_sig, load_device, Experiment};
-use endstop::hertz::{normalised_delta, HertzLine, LinearFits};
+use endstop::physics::hertz::normalised_delta;
+use endstop::physics::hertz::HertzLine;
+use endstop::physics::hertz::LinearFits;
+use endstop::physics::hertz::EQ19_FIT_RANGE_M as FIT_RANGE_M;
+use endstop::physics::hertz::EQ19_FIT_SAMPLES as FIT_SAMPLES;
 use polars::prelude::*;
-
-use endstop::hertz::{EQ19_FIT_RANGE_M as FIT_RANGE_M, EQ19_FIT_SAMPLES as FIT_SAMPLES};
 
 fn main() {
     common::run_main("fig05", run);
@@ -127,7 +128,7 @@ fn run() -> Result<()> {
     )?;
     exp.write_parquet("fig05_fits", &mut fit_df, "published")?;
 
-    // Sensitivity of the eq 19 stiffness to E and nu (SPEC 1: not given in the paper).
+    // Sensitivity of the eq 19 stiffness to E and nu (not given in the paper).
     md.push_str("\n**Sensitivity to the elastic constants** (eq 19 with the printed c = 0.058, prototype 1): k_im scales as E/(1 - nu^2).\n\n| E (GPa) | nu | k_im (N/m) | relative to default |\n|---|---|---|---|\n");
     let k_ref = p1.device.linear_endstop_stiffness_n_per_m();
     for (e, nu) in [

@@ -1,29 +1,41 @@
 //! Figure 8: prototype 1 at 30 V, stepped-sine up-sweeps 900-1600 Hz at 4.1 and 5.5 g rms with
 //! several end-stop models (claims F8-a..F8-f), under the published parameters and under the
 //! calibrated set (end-stop gap fitted to the measured impact onset, see
-//! `endstop::narrowband::calibrate_prototype1`). Also: the paper's own fit of b_im to the
+//! `endstop::paper::calibration::calibrate_prototype1`). Also: the paper's own fit of b_im to the
 //! measured jump, the tension-free contact as a sensitivity, and a convergence study (half the
 //! frequency step, integrator tolerance, steady-state tolerance and refinement bracket).
 
-#[path = "common/mod.rs"]
-mod common;
+use endstop_experiments as common;
 
-use common::sweep_table::{claim_cells, SweepTable};
+use endstop_experiments::sweep_table::{claim_cells, SweepTable};
 
-use anyhow::{Context, Result};
+use anyhow::Result;
 use common::plot::{LegendPos, LinePlot, Series, Style, PALETTE};
-use common::{fmt_sig, load_device, root, Experiment, LoadedDevice};
-use endstop::narrowband::{
-    calibrate_prototype1, compare_sweeps, figure8_claims, figure8_curves, fit_bim_for_jump,
-    run_curves, BimFit, Calibration, ClaimValue, Curve, SweepComparison, SweepSettings,
-    BIM_FIT_TOL_HZ, P1_BIAS_V, P1_HIGH_ACCEL_RMS_G, P1_MEASURED_JUMP_HZ, P1_MEASURED_ONSET_HZ,
-    P1_SWEEP_STOP_HZ,
-};
-use endstop::params::{Device, StiffnessModel};
-use endstop::scorecard::{parse_claims, Claim};
+use common::{fmt_sig, load_device, Experiment, LoadedDevice};
+use endstop::device::Device;
+use endstop::device::StiffnessModel;
+use endstop::paper::calibration::calibrate_prototype1;
+use endstop::paper::calibration::fit_bim_for_jump;
+use endstop::paper::calibration::BimFit;
+use endstop::paper::calibration::Calibration;
+use endstop::paper::calibration::BIM_FIT_TOL_HZ;
+use endstop::paper::claims::Claim;
+use endstop::paper::claims::ClaimValue;
+use endstop::paper::claims::Claims;
+use endstop::paper::curves::run_curves;
+use endstop::paper::curves::Curve;
+use endstop::paper::fig08::figure8_claims;
+use endstop::paper::fig08::figure8_curves;
+use endstop::paper::fig08::P1_HIGH_ACCEL_RMS_G;
+use endstop::paper::fig08::P1_SWEEP_STOP_HZ;
+use endstop::paper::measured::P1_MEASURED_JUMP_HZ;
+use endstop::paper::measured::P1_MEASURED_ONSET_HZ;
+use endstop::paper::setups::P1_BIAS_V;
+use endstop::study::sweep::compare_sweeps;
+use endstop::study::sweep::SweepComparison;
 use polars::prelude::*;
 
-/// Convergence thresholds of the issue: transitions 0.5 %, RMS voltages 1 %.
+/// Convergence thresholds: transitions 0.5 %, RMS voltages 1 %.
 const CONV_FREQ_REL: f64 = 0.005;
 const CONV_RMS_REL: f64 = 0.01;
 
@@ -53,18 +65,14 @@ fn run() -> Result<()> {
         text: cal.device.to_toml_string(),
     };
     exp.uses(&cal_loaded, "calibrated");
-    let claims_file = parse_claims(
-        &std::fs::read_to_string(root().join("data/claims.toml"))
-            .context("reading data/claims.toml")?,
-    )
-    .map_err(anyhow::Error::msg)?;
+    let claims_file = Claims::bundled()?.claims;
 
     let specs = figure8_curves();
     let sets: Vec<(&'static str, Device)> = vec![
         ("published", p1.device.with_bias(P1_BIAS_V)),
         ("calibrated", cal.device.with_bias(P1_BIAS_V)),
     ];
-    let settings = SweepSettings::prototype1(&p1.device);
+    let settings = endstop::paper::fig08::sweep_settings(&p1.device);
     let fine = settings.halved();
     let total = sets.len() * specs.len() * (settings.freqs_hz.len() + fine.freqs_hz.len());
     let pb = common::progress(total as u64, "fig08");
@@ -164,7 +172,9 @@ fn record_numbers(exp: &mut Experiment, cal: &Calibration, runs: &[SetRun]) {
                 exp.number(&format!("{k}_branch_end_hz"), e.transition.value());
                 exp.number(
                     &format!("{k}_branch_end_is_jump"),
-                    f64::from(u8::from(e.kind == endstop::narrowband::BranchEndKind::Jump)),
+                    f64::from(u8::from(
+                        e.kind == endstop::study::sweep::BranchEndKind::Jump,
+                    )),
                 );
             }
             exp.number(&format!("{k}_max_v1_rms_v"), c.report.max_v1_rms_v());

@@ -3,27 +3,33 @@
 //! parameters, with both readings of "output power" (one load, both loads) and a convergence
 //! check (half the amplitude step, integrator tolerance, steady-state tolerance and bracket).
 
-#[path = "common/mod.rs"]
-mod common;
+use endstop_experiments as common;
 
-use common::sweep_table::claim_cells;
+use endstop_experiments::sweep_table::claim_cells;
 
-use anyhow::{Context, Result};
+use anyhow::Result;
 use common::plot::{LegendPos, LinePlot, Series, Style, PALETTE};
-use common::{fmt_sig, load_device, root, Experiment, LoadedDevice};
-use endstop::narrowband::{
-    calibrate_prototype1, compare_amplitude, figure9_claims, run_figure9, AmplitudeCurve,
-    AmplitudeSettings, ClaimValue, PowerReading, FIG9_BIASES_V, FIG9_BIM_N_S_PER_M, FIG9_FREQ_HZ,
-    ONSET_SAME_TOL_G,
-};
-use endstop::params::Device;
-use endstop::scorecard::{parse_claims, Claim};
+use common::{fmt_sig, load_device, Experiment, LoadedDevice};
+use endstop::device::Device;
+use endstop::paper::calibration::calibrate_prototype1;
+use endstop::paper::claims::Claim;
+use endstop::paper::claims::ClaimValue;
+use endstop::paper::claims::Claims;
+use endstop::paper::fig09::figure9_claims;
+use endstop::paper::fig09::run_figure9;
+use endstop::paper::fig09::AmplitudeCurve;
+use endstop::paper::fig09::PowerReading;
+use endstop::paper::fig09::FIG9_BIASES_V;
+use endstop::paper::fig09::FIG9_BIM_N_S_PER_M;
+use endstop::paper::fig09::ONSET_SAME_TOL_G;
+use endstop::paper::measured::P1_RESONANCE_HZ;
+use endstop::study::amplitude::compare_amplitude;
 use polars::prelude::*;
 
 /// The reading of "output power" our verdicts use (see the chapter: the paper's own numbers
 /// support one load).
 const DEFAULT_READING: PowerReading = PowerReading::OneLoad;
-/// Convergence limits of the issue, applied to the onset (g) and the powers.
+/// Convergence limits, applied to the onset (g) and the powers.
 const CONV_ONSET_G: f64 = 0.01;
 const CONV_RMS_REL: f64 = 0.01;
 
@@ -53,13 +59,9 @@ fn run() -> Result<()> {
         },
         "calibrated",
     );
-    let claims_file = parse_claims(
-        &std::fs::read_to_string(root().join("data/claims.toml"))
-            .context("reading data/claims.toml")?,
-    )
-    .map_err(anyhow::Error::msg)?;
+    let claims_file = Claims::bundled()?.claims;
 
-    let settings = AmplitudeSettings::figure9(&p1.device);
+    let settings = endstop::paper::fig09::amplitude_settings(&p1.device);
     let fine = settings.halved();
     let sets: Vec<(&'static str, Device)> = vec![
         ("published", p1.device.clone()),
@@ -208,7 +210,7 @@ fn numbers_md(runs: &[SetRun], claims: &[Claim]) -> String {
     claims_table(&mut md, runs, claims, true);
 
     md.push_str(&format!(
-        "\n### Every continuation\n\n{FIG9_FREQ_HZ} Hz, Hertz contact, b_im = \
+        "\n### Every continuation\n\n{P1_RESONANCE_HZ} Hz, Hertz contact, b_im = \
          {FIG9_BIM_N_S_PER_M} N s/m; onset refined to a bracket of 0.005 g (midpoint shown). A \
          continuation that has not touched a stop by 5.5 g is continued in the same steps until \
          it does.\n\n\
@@ -307,7 +309,7 @@ fn power_plot(runs: &[SetRun]) -> LinePlot {
     ));
     LinePlot::new(
         &format!(
-            "Figure 9: prototype 1 at {FIG9_FREQ_HZ} Hz (solid: calibrated, dashed: published)"
+            "Figure 9: prototype 1 at {P1_RESONANCE_HZ} Hz (solid: calibrated, dashed: published)"
         ),
         "RMS acceleration [g]",
         &format!("Output power, {} [nW]", DEFAULT_READING.label()),

@@ -2,19 +2,20 @@
 //! example level Sa = 1e-2 g²/Hz (two-sided), 10 kHz band, 10 s at 100 kHz, and its Welch PSD
 //! against the target (claim F10: level and band).
 
-#[path = "common/mod.rs"]
-mod common;
+use endstop_experiments as common;
 
-#[path = "common/broadband_io.rs"]
-mod bbio;
+use endstop_experiments::broadband_io as bbio;
 
 use anyhow::Result;
 use bbio::{paper_value, pm};
 use common::plot::{LegendPos, LinePlot, Series, Style, PALETTE};
 use common::{fmt_sig, Experiment};
-use endstop::broadband::{self, MeanCi, DEFAULT_SEED};
-use endstop::noise::{self, NoiseSpec};
-use endstop::spectral::{welch, Psd, WelchConfig};
+use endstop::drive::noise::NoiseSpec;
+use endstop::num::stats::MeanCi;
+use endstop::signal::welch;
+use endstop::signal::Psd;
+use endstop::signal::WelchConfig;
+use endstop::study::ensemble::DEFAULT_SEED;
 use endstop::G;
 use polars::prelude::*;
 use rayon::prelude::*;
@@ -38,14 +39,14 @@ fn run() -> Result<()> {
     let mut exp = Experiment::start("fig10");
     exp.seed = Some(DEFAULT_SEED);
     let spec = NoiseSpec::paper(SA);
-    let first = broadband::first_stream_for_level(SA);
+    let first = endstop::study::ensemble::first_stream_for_level(SA);
     let cfg = WelchConfig::half_overlap(NPERSEG);
     let pb = common::progress(RECORDS as u64, "fig10");
     // Per record: the one-sided Welch PSD in g²/Hz and the sample mean square (g²).
     let recs: Vec<(Psd, f64)> = (0..RECORDS as u64)
         .into_par_iter()
         .map(|i| -> Result<(Psd, f64)> {
-            let a = noise::generate(&spec, DEFAULT_SEED, first + i)?;
+            let a = endstop::drive::noise::generate(&spec, DEFAULT_SEED, first + i)?;
             let g: Vec<f64> = a.iter().map(|x| x / G).collect();
             let ms = g.iter().map(|x| x * x).sum::<f64>() / g.len() as f64;
             let psd = welch(&g, spec.sample_rate_hz, &cfg)?;
@@ -58,7 +59,8 @@ fn run() -> Result<()> {
     // Level: mean two-sided density over the flat band; edge: where the one-sided density
     // falls to half the flat level (the -3 dB edge), scanning down from the top.
     let level_of = |p: &Psd| p.two_sided_level_in_band(FLAT_BAND_HZ.0, FLAT_BAND_HZ.1);
-    let edge_of = |p: &Psd| broadband::upper_band_edge_hz(p, 2.0 * level_of(p), 0.5);
+    let edge_of =
+        |p: &Psd| endstop::signal::bandwidth::upper_band_edge_hz(p, 2.0 * level_of(p), 0.5);
     let levels: Vec<f64> = recs.iter().map(|(p, _)| level_of(p)).collect();
     let edges: Vec<f64> = recs.iter().map(|(p, _)| edge_of(p)).collect();
     let ms: Vec<f64> = recs.iter().map(|(_, m)| *m).collect();
@@ -107,7 +109,7 @@ fn run() -> Result<()> {
     exp.number("leakage_above_10p5khz_relative", leak);
 
     let mut md = format!(
-        "Generator: `endstop::noise::generate` (frequency-domain synthesis, flat to {} kHz and \
+        "Generator: `endstop::drive::noise::generate` (frequency-domain synthesis, flat to {} kHz and \
          empty above), {} records of {} s at {} kHz, ChaCha8 seed {}, streams {} to {}. Welch: \
          periodic Hann, {} samples per segment ({} Hz bins), 50 % overlap, {} segments per \
          record; the two-sided density is half the one-sided estimate. Level: mean two-sided \

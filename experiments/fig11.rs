@@ -3,20 +3,21 @@
 //! bandwidth does not change (claim F11), under the published and the calibrated parameter
 //! sets.
 
-#[path = "common/mod.rs"]
-mod common;
+use endstop_experiments as common;
 
-#[path = "common/broadband_io.rs"]
-mod bbio;
+use endstop_experiments::broadband_io as bbio;
 
 use anyhow::Result;
 use bbio::{find, pm, sa_label, spread_str};
 use common::{fmt_sig, Experiment};
-use endstop::broadband::{self, ratio_spread, DEFAULT_SEED, P1_BAND_HZ, P1_NPERSEG};
+use endstop::num::stats::ratio_spread;
+use endstop::paper::ensembles::P1_BAND_HZ;
+use endstop::paper::ensembles::P1_NPERSEG;
+use endstop::study::ensemble::DEFAULT_SEED;
 
 /// The paper's levels (g²/Hz) and records per level and set (see `endstop::broadband`).
-const LEVELS: [f64; 3] = broadband::FIG11_LEVELS;
-const REALISATIONS: usize = broadband::FIG11_REALISATIONS;
+const LEVELS: [f64; 3] = endstop::paper::fig11::FIG11_LEVELS;
+const REALISATIONS: usize = endstop::paper::fig11::FIG11_REALISATIONS;
 
 fn main() {
     common::run_main("fig11", run);
@@ -44,7 +45,7 @@ fn run() -> Result<()> {
     md.push_str(&bbio::power_table_md(&levels));
     md.push_str("\n**Peak and widths of the ensemble-mean output PSD** (CI: delete-one jackknife over the records, 95 %), and the spread of the same widths read from single records\n\n");
     md.push_str(&bbio::width_table_md(&levels));
-    let lin = broadband::linear_widths(&sets[0].1, P1_BAND_HZ.0, P1_BAND_HZ.1);
+    let lin = endstop::physics::two_port::linear_widths(&sets[0].1, P1_BAND_HZ.0, P1_BAND_HZ.1);
     md.push_str(&format!(
         "\nLinearised theory (eqs 11-17, no end-stops): 3 dB width {} Hz, half-amplitude width \
          {} Hz, peak {} Hz.\n\n**Claims**\n\n| set | impacts in all records | 3 dB width ratio \
@@ -82,11 +83,11 @@ fn run() -> Result<()> {
             let t = sa_label(l.sa());
             exp.number(
                 &format!("bw3db_{t}_{set}_hz"),
-                l.ens.mean_width(0.5).width_hz,
+                l.ens.mean_width(0.5).estimate,
             );
             exp.number(
                 &format!("bw6db_{t}_{set}_hz"),
-                l.ens.mean_width(0.25).width_hz,
+                l.ens.mean_width(0.25).estimate,
             );
             exp.number(&format!("efficiency_{t}_{set}"), l.ens.efficiency.mean);
             exp.number(&format!("x_peak_{t}_{set}_m"), l.ens.x_peak_m);

@@ -2,20 +2,21 @@
 //! Sa = 7.4e-3, 1.31e-2 and 2.85e-2 g²/Hz, where the mass hits the stops: the 3 dB bandwidth
 //! grows with the input (claim F12), under the published and the calibrated parameter sets.
 
-#[path = "common/mod.rs"]
-mod common;
+use endstop_experiments as common;
 
-#[path = "common/broadband_io.rs"]
-mod bbio;
+use endstop_experiments::broadband_io as bbio;
 
 use anyhow::Result;
 use bbio::{find, pm, sa_label, spread_str, Level};
 use common::{fmt_sig, Experiment};
-use endstop::broadband::{self, ratio_spread, DEFAULT_SEED, P1_BAND_HZ, P1_NPERSEG};
+use endstop::num::stats::ratio_spread;
+use endstop::paper::ensembles::P1_BAND_HZ;
+use endstop::paper::ensembles::P1_NPERSEG;
+use endstop::study::ensemble::DEFAULT_SEED;
 
 /// The paper's levels (g²/Hz) and records per level and set (see `endstop::broadband`).
-const LEVELS: [f64; 3] = broadband::FIG12_LEVELS;
-const REALISATIONS: usize = broadband::FIG12_REALISATIONS;
+const LEVELS: [f64; 3] = endstop::paper::fig12::FIG12_LEVELS;
+const REALISATIONS: usize = endstop::paper::fig12::FIG12_REALISATIONS;
 
 fn main() {
     common::run_main("fig12", run);
@@ -44,7 +45,7 @@ fn run() -> Result<()> {
     md.push_str(&bbio::power_table_md(&levels));
     md.push_str("\n**Peak and widths of the ensemble-mean output PSD** (CI: delete-one jackknife over the records, 95 %), and the spread of the same widths read from single records\n\n");
     md.push_str(&bbio::width_table_md(&levels));
-    let lin = broadband::linear_widths(&sets[0].1, P1_BAND_HZ.0, P1_BAND_HZ.1);
+    let lin = endstop::physics::two_port::linear_widths(&sets[0].1, P1_BAND_HZ.0, P1_BAND_HZ.1);
     md.push_str(&format!(
         "\nLinearised theory (eqs 11-17, no end-stops): 3 dB width {} Hz, half-amplitude width \
          {} Hz, peak {} Hz.\n\n**Claims and the two readings of \"3 dB\"**\n\n| set | reading | \
@@ -73,30 +74,18 @@ fn run() -> Result<()> {
             let rs = ratio_spread(&single(hi), &single(lo));
             md.push_str(&format!(
                 "| {set} | {reading} | {} | {} | {} | {} |\n",
-                pm(wa.width_hz, wa.ci95_hz),
-                pm(wb.width_hz, wb.ci95_hz),
+                pm(wa.estimate, wa.ci95),
+                pm(wb.estimate, wb.ci95),
                 pm(r, rci),
                 spread_str(&rs, 3),
             ));
             let tag = if fraction == 0.5 { "bw3db" } else { "bw6db" };
-            exp.number(&format!("{tag}_7p4e-3_{set}_hz"), wa.width_hz);
-            exp.number(&format!("{tag}_2p85e-2_{set}_hz"), wb.width_hz);
+            exp.number(&format!("{tag}_7p4e-3_{set}_hz"), wa.estimate);
+            exp.number(&format!("{tag}_2p85e-2_{set}_hz"), wb.estimate);
             exp.number(&format!("{tag}_ratio_{set}"), r);
             if fraction == 0.5 {
-                exp.claim_with_uncertainty(
-                    "F12",
-                    "bw_7p4e-3_hz",
-                    set,
-                    wa.width_hz,
-                    Some(wa.ci95_hz),
-                );
-                exp.claim_with_uncertainty(
-                    "F12",
-                    "bw_2p85e-2_hz",
-                    set,
-                    wb.width_hz,
-                    Some(wb.ci95_hz),
-                );
+                exp.claim_with_uncertainty("F12", "bw_7p4e-3_hz", set, wa.estimate, Some(wa.ci95));
+                exp.claim_with_uncertainty("F12", "bw_2p85e-2_hz", set, wb.estimate, Some(wb.ci95));
                 exp.claim_with_uncertainty(
                     "F12",
                     "bw_ratio_2p85e-2_over_7p4e-3",

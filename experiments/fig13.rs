@@ -3,20 +3,22 @@
 //! (claim F13), published parameters, with a convergence check and the cost of the sweeps
 //! (prototype 2 rings up over hundreds of periods).
 
-#[path = "common/mod.rs"]
-mod common;
+use endstop_experiments as common;
 
-use common::sweep_table::{claim_cells, SweepTable};
+use endstop_experiments::sweep_table::{claim_cells, SweepTable};
 
-use anyhow::{Context, Result};
+use anyhow::Result;
 use common::plot::{LegendPos, LinePlot, Series, Style, PALETTE};
-use common::{fmt_sig, load_device, root, Experiment};
-use endstop::narrowband::{
-    compare_sweeps, figure13_claims, figure13_curves, run_curves, ClaimValue, Curve, SweepSettings,
-    FIG13_BIAS_V,
-};
-use endstop::params::StiffnessModel;
-use endstop::scorecard::parse_claims;
+use common::{fmt_sig, load_device, Experiment};
+use endstop::device::StiffnessModel;
+use endstop::paper::claims::ClaimValue;
+use endstop::paper::claims::Claims;
+use endstop::paper::curves::run_curves;
+use endstop::paper::curves::Curve;
+use endstop::paper::fig13::figure13_claims;
+use endstop::paper::fig13::figure13_curves;
+use endstop::paper::setups::FIG13_BIAS_V;
+use endstop::study::sweep::compare_sweeps;
 
 const CONV_FREQ_REL: f64 = 0.005;
 const CONV_RMS_REL: f64 = 0.01;
@@ -36,14 +38,10 @@ fn run() -> Result<()> {
     let mut exp = Experiment::start("fig13");
     let p2 = load_device("prototype2")?;
     exp.uses(&p2, "published");
-    let claims_file = parse_claims(
-        &std::fs::read_to_string(root().join("data/claims.toml"))
-            .context("reading data/claims.toml")?,
-    )
-    .map_err(anyhow::Error::msg)?;
+    let claims_file = Claims::bundled()?.claims;
     let device = p2.device.with_bias(FIG13_BIAS_V);
     let specs = figure13_curves();
-    let settings = SweepSettings::prototype2(&device);
+    let settings = endstop::paper::fig13::sweep_settings(&device);
     let fine = settings.halved();
     let total = specs.len() * (settings.freqs_hz.len() + fine.freqs_hz.len());
     let pb = common::progress(total as u64, "fig13");
@@ -189,7 +187,7 @@ fn run() -> Result<()> {
 }
 
 /// Simulated periods of a sweep's coarse steps: (settle + measured blocks) x block length.
-fn blocks_to_periods(r: &endstop::narrowband::SweepReport, block: usize, settle: usize) -> usize {
+fn blocks_to_periods(r: &endstop::study::sweep::SweepReport, block: usize, settle: usize) -> usize {
     r.measurements().map(|m| (m.blocks + settle) * block).sum()
 }
 

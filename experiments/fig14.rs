@@ -2,23 +2,23 @@
 //! eq 19, b_im = 0.4 N s/m) against the acceleration PSD, with the linear theory of eq 21
 //! (claims F14-a, F14-b).
 
-#[path = "common/mod.rs"]
-mod common;
+use endstop_experiments as common;
 
-#[path = "common/broadband_io.rs"]
-mod bbio;
+use endstop_experiments::broadband_io as bbio;
 
 use anyhow::Result;
 use bbio::{find, pm, sa_label, Level};
 use common::plot::{error_bars, LegendPos, LinePlot, Series, Style, PALETTE};
 use common::{fmt_sig, load_device, Experiment};
-use endstop::broadband::{self, DEFAULT_SEED, P2_BAND_HZ, P2_NPERSEG};
-use endstop::params::StiffnessModel;
+use endstop::device::StiffnessModel;
+use endstop::paper::ensembles::P2_BAND_HZ;
+use endstop::paper::ensembles::P2_NPERSEG;
+use endstop::study::ensemble::DEFAULT_SEED;
 use rayon::prelude::*;
 
 /// Levels (g²/Hz) and records per level (see `endstop::broadband`).
-const LEVELS: [f64; 10] = broadband::FIG14_LEVELS;
-const REALISATIONS: usize = broadband::FIG14_REALISATIONS;
+const LEVELS: [f64; 10] = endstop::paper::fig14::FIG14_LEVELS;
+const REALISATIONS: usize = endstop::paper::fig14::FIG14_REALISATIONS;
 /// The level of claim F14-b.
 const SA_F14B: f64 = 1.69e-3;
 /// Tolerance of the convergence check (a hundred times tighter than the default).
@@ -33,7 +33,7 @@ fn run() -> Result<()> {
     exp.seed = Some(DEFAULT_SEED);
     let p2 = load_device("prototype2")?;
     exp.uses(&p2, "published");
-    let dev = broadband::prototype2_setup(&p2.device);
+    let dev = endstop::paper::setups::prototype2_setup(&p2.device);
 
     let mut cases: Vec<_> = LEVELS
         .iter()
@@ -42,7 +42,7 @@ fn run() -> Result<()> {
             ("published".to_string(), dev.clone(), s)
         })
         .collect();
-    // The end-stop readings one switch away (SPEC 5b), at the level of claim F14-b only:
+    // The end-stop readings one switch away (see "Readings of ambiguities"), at the level of claim F14-b only:
     // Hertz contact with the paper's equally good b_im = 0.34 N s/m, and a tension-free
     // contact (eq 1 clipped at zero). Same records (streams) as the published run.
     let mut tension_free = dev.clone();
@@ -60,13 +60,14 @@ fn run() -> Result<()> {
     }
     let mut levels = bbio::run(cases, "fig14")?;
     let variant_levels = levels.split_off(LEVELS.len());
-    let eq21 = broadband::eq21_efficiency(&dev);
+    let eq21 = endstop::physics::two_port::eq21_efficiency(&dev);
 
     // F14-a: the levels where no record touched a stop, pooled (the efficiency does not
     // depend on the level in the linear regime).
     let linear: Vec<&Level> = levels.iter().filter(|l| l.ens.no_impact()).collect();
-    let linear_ens: Vec<&broadband::Ensemble> = linear.iter().map(|l| &l.ens).collect();
-    let eff_lin = broadband::pooled_efficiency(&dev, &linear_ens);
+    let linear_ens: Vec<&endstop::study::ensemble::Ensemble> =
+        linear.iter().map(|l| &l.ens).collect();
+    let eff_lin = endstop::paper::fig14::pooled_efficiency(&dev, &linear_ens);
     exp.claim_with_uncertainty(
         "F14-a",
         "eff_sim_linear_pct",
@@ -83,12 +84,12 @@ fn run() -> Result<()> {
         l_b.ens.efficiency.mean * 100.0,
         Some(l_b.ens.efficiency.ci95 * 100.0),
     );
-    // F14-b: sublinear growth (rule in `broadband::sublinear_growth`).
-    let all: Vec<&broadband::Ensemble> = levels.iter().map(|l| &l.ens).collect();
-    let sublinear = broadband::sublinear_growth(&eff_lin, &all);
+    // F14-b: sublinear growth (rule in `endstop::paper::fig14::sublinear_growth`).
+    let all: Vec<&endstop::study::ensemble::Ensemble> = levels.iter().map(|l| &l.ens).collect();
+    let sublinear = endstop::paper::fig14::sublinear_growth(&eff_lin, &all);
     let frequent: Vec<&Level> = levels
         .iter()
-        .filter(|l| l.ens.contact_fraction.mean >= broadband::FREQUENT_CONTACT)
+        .filter(|l| l.ens.contact_fraction.mean >= endstop::paper::fig14::FREQUENT_CONTACT)
         .collect();
     exp.claim(
         "F14-b",
@@ -134,7 +135,7 @@ fn run() -> Result<()> {
             let l = find(&levels, "published", sa);
             let mut spec = l.ens.spec.record;
             spec.rtol = TIGHT_RTOL;
-            let r = broadband::simulate_record(
+            let r = endstop::study::record::simulate_record(
                 &dev,
                 &spec,
                 l.ens.spec.seed,
@@ -212,7 +213,7 @@ fn run() -> Result<()> {
             l_b.ens.efficiency.mean * 100.0,
             l_b.ens.efficiency.ci95 * 100.0
         ),
-        broadband::FREQUENT_CONTACT,
+        endstop::paper::fig14::FREQUENT_CONTACT,
         frequent
             .iter()
             .map(|l| sa_label(l.sa()))
@@ -267,14 +268,14 @@ fn run() -> Result<()> {
 fn write_power_plot(
     exp: &Experiment,
     levels: &[Level],
-    dev: &endstop::params::Device,
+    dev: &endstop::device::Device,
 ) -> Result<()> {
     let (lo, hi): (f64, f64) = (5e-6, 4e-3);
     let n = 60;
     let line: Vec<(f64, f64)> = (0..=n)
         .map(|i| {
             let sa = lo * (hi / lo).powf(i as f64 / n as f64);
-            (sa, broadband::eq21_power_w(dev, sa) * 1e9)
+            (sa, endstop::physics::two_port::eq21_power_w(dev, sa) * 1e9)
         })
         .collect();
     let mut series = vec![

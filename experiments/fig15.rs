@@ -2,21 +2,23 @@
 //! at Sa = 0.34e-3, 0.55e-3 and 1.69e-3 g²/Hz (claims F15-a, F15-b, F15-c), and the sampling
 //! distribution of the bandwidths and of their ratio when each is read from one 10 s record.
 
-#[path = "common/mod.rs"]
-mod common;
+use endstop_experiments as common;
 
-#[path = "common/broadband_io.rs"]
-mod bbio;
+use endstop_experiments::broadband_io as bbio;
 
 use anyhow::Result;
 use bbio::{ecdf, find, pm, sa_label, spread_str, Level};
 use common::plot::{LegendPos, LinePlot, Series, Style, PALETTE};
 use common::{fmt_sig, load_device, Experiment};
-use endstop::broadband::{self, ratio_spread, Spread, DEFAULT_SEED, P2_BAND_HZ, P2_NPERSEG};
+use endstop::num::stats::ratio_spread;
+use endstop::num::stats::Spread;
+use endstop::paper::ensembles::P2_BAND_HZ;
+use endstop::paper::ensembles::P2_NPERSEG;
+use endstop::study::ensemble::DEFAULT_SEED;
 
 /// The paper's levels (g²/Hz) and records per level (see `endstop::broadband`).
-const LEVELS: [f64; 3] = broadband::FIG15_LEVELS;
-const REALISATIONS: usize = broadband::FIG15_REALISATIONS;
+const LEVELS: [f64; 3] = endstop::paper::fig15::FIG15_LEVELS;
+const REALISATIONS: usize = endstop::paper::fig15::FIG15_REALISATIONS;
 
 fn main() {
     common::run_main("fig15", run);
@@ -27,7 +29,7 @@ fn run() -> Result<()> {
     exp.seed = Some(DEFAULT_SEED);
     let p2 = load_device("prototype2")?;
     exp.uses(&p2, "published");
-    let dev = broadband::prototype2_setup(&p2.device);
+    let dev = endstop::paper::setups::prototype2_setup(&p2.device);
     let paper_bw_hz = bbio::paper_value("F15-a", "bw_0p34e-3_hz");
     let ratio_claim = bbio::claim("F15-b", "bw_ratio_0p55e-3_over_0p34e-3");
     let (paper_ratio, ratio_tol) = (ratio_claim.paper, ratio_claim.tol_rel);
@@ -48,7 +50,7 @@ fn run() -> Result<()> {
 
     // F15-a: peak and 3 dB width of the ensemble-mean PSD at 0.34e-3.
     let peak = l34.ens.mean_spectrum.total.peak().0;
-    let peak_single = endstop::broadband::MeanCi::of(&l34.ens.single_peak_hz());
+    let peak_single = endstop::num::stats::MeanCi::of(&l34.ens.single_peak_hz());
     let half_bin = 0.5 * l34.ens.mean_spectrum.total.df();
     let w34 = l34.ens.mean_width(0.5);
     let w55 = l55.ens.mean_width(0.5);
@@ -64,8 +66,8 @@ fn run() -> Result<()> {
         "F15-a",
         "bw_0p34e-3_hz",
         "published",
-        w34.width_hz,
-        Some(w34.ci95_hz),
+        w34.estimate,
+        Some(w34.ci95),
     );
     // F15-b: ratio of the mean-PSD widths, CI propagated from the jackknife CIs.
     let (ratio, ratio_ci) = w55.ratio(&w34);
@@ -77,7 +79,8 @@ fn run() -> Result<()> {
         Some(ratio_ci),
     );
     // F15-c: at 1.69e-3 the half-power band has moved up more than down, relative to 0.34e-3.
-    let (up, down) = broadband::edge_shifts(&l34.ens, &l169.ens).unwrap_or((f64::NAN, f64::NAN));
+    let (up, down) =
+        endstop::paper::fig15::edge_shifts(&l34.ens, &l169.ens).unwrap_or((f64::NAN, f64::NAN));
     let widening_up = up > down && up > 0.0;
     exp.claim(
         "F15-c",
@@ -87,7 +90,7 @@ fn run() -> Result<()> {
     );
 
     // Numbers for the summary.
-    let lin = broadband::linear_widths(&dev, P2_BAND_HZ.0, P2_BAND_HZ.1);
+    let lin = endstop::physics::two_port::linear_widths(&dev, P2_BAND_HZ.0, P2_BAND_HZ.1);
     exp.number("linear_theory_bw3db_hz", lin.bw3db_hz());
     exp.number("linear_theory_bw6db_hz", lin.bw6db_hz());
     exp.number(
@@ -99,8 +102,8 @@ fn run() -> Result<()> {
     exp.number("peak_single_record_mean_0p34e-3_hz", peak_single.mean);
     for l in &levels {
         let t = sa_label(l.sa());
-        exp.number(&format!("bw3db_{t}_hz"), l.ens.mean_width(0.5).width_hz);
-        exp.number(&format!("bw6db_{t}_hz"), l.ens.mean_width(0.25).width_hz);
+        exp.number(&format!("bw3db_{t}_hz"), l.ens.mean_width(0.5).estimate);
+        exp.number(&format!("bw6db_{t}_hz"), l.ens.mean_width(0.25).estimate);
         exp.number(&format!("efficiency_{t}"), l.ens.efficiency.mean);
         exp.number(
             &format!("contact_fraction_{t}"),
@@ -187,7 +190,7 @@ fn run() -> Result<()> {
          the upper half-power edge moves up by {} Hz and the lower edge down by {} Hz, so the \
          widening is towards higher frequencies: **{}**.\n",
         fmt_sig(peak, 4),
-        pm(w34.width_hz, w34.ci95_hz),
+        pm(w34.estimate, w34.ci95),
         pm(ratio, ratio_ci),
         pm(w6r.0, w6r.1),
         fmt_sig(up, 3),
@@ -200,7 +203,7 @@ fn run() -> Result<()> {
         md.push_str(&format!(
             "| 3 dB width at {} (Hz) | {} | {} | {} | {} |\n",
             sa_label(l.sa()),
-            fmt_sig(l.ens.mean_width(0.5).width_hz, 3),
+            fmt_sig(l.ens.mean_width(0.5).estimate, 3),
             spread_str(&s, 3),
             fmt_sig(s.median, 3),
             spread_str(&Spread::of(&l.ens.single_alt_bw3db_hz()), 3),
@@ -215,7 +218,7 @@ fn run() -> Result<()> {
     ));
     md.push_str(&format!(
         "| 3 dB ratio 1.69e-3 / 0.34e-3 | {} | {} | {} | |\n",
-        fmt_sig(w169.width_hz / w34.width_hz, 3),
+        fmt_sig(w169.estimate / w34.estimate, 3),
         spread_str(&r_single_169, 3),
         fmt_sig(r_single_169.median, 3),
     ));
@@ -270,7 +273,7 @@ fn run() -> Result<()> {
 /// One record at 0.34e-3 under both segmentings, against the ensemble mean and the theory.
 fn write_single_record_plot(exp: &Experiment, l: &Level) -> Result<()> {
     let (lo, hi) = (630.0, 715.0);
-    let pts = |p: &endstop::spectral::Psd| -> Vec<(f64, f64)> {
+    let pts = |p: &endstop::signal::Psd| -> Vec<(f64, f64)> {
         p.freq_hz
             .iter()
             .zip(&p.density)
@@ -300,7 +303,7 @@ fn write_single_record_plot(exp: &Experiment, l: &Level) -> Result<()> {
         ));
     }
     let f: Vec<f64> = (0..=850).map(|i| lo + 0.1 * i as f64).collect();
-    let lin = broadband::linear_output_psd(&l.device, l.sa(), &f);
+    let lin = endstop::physics::two_port::linear_output_psd(&l.device, l.sa(), &f);
     series.push(Series::new(
         "linear theory",
         f.iter()
@@ -341,7 +344,7 @@ fn write_spread_plots(
             PALETTE[i],
             Style::LinePoints,
         ));
-        let w = l.ens.mean_width(0.5).width_hz;
+        let w = l.ens.mean_width(0.5).estimate;
         series.push(Series::new(
             "",
             vec![(w, 0.0), (w, 1.0)],
@@ -358,7 +361,7 @@ fn write_spread_plots(
     let xmax = levels
         .iter()
         .flat_map(|l| l.ens.single_bw3db_hz())
-        .chain(levels.iter().map(|l| l.ens.mean_width(0.5).width_hz))
+        .chain(levels.iter().map(|l| l.ens.mean_width(0.5).estimate))
         .filter(|x| x.is_finite())
         .fold(0.0, f64::max);
     let plot = LinePlot::new(
@@ -384,7 +387,7 @@ fn write_spread_plots(
         &l55.ens.single_alt_bw3db_hz(),
         &l34.ens.single_alt_bw3db_hz(),
     );
-    let mean_ratio = l55.ens.mean_width(0.5).width_hz / l34.ens.mean_width(0.5).width_hz;
+    let mean_ratio = l55.ens.mean_width(0.5).estimate / l34.ens.mean_width(0.5).estimate;
     let xmax = r
         .iter()
         .chain(&r_m)

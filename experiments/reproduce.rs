@@ -8,8 +8,7 @@
 //! `data/results/<name>/log.txt`. A failed experiment makes `reproduce` exit non-zero after the
 //! others have finished.
 
-#[path = "common/mod.rs"]
-mod common;
+use endstop_experiments as common;
 
 use std::path::PathBuf;
 use std::process::Command;
@@ -18,7 +17,11 @@ use std::time::Instant;
 
 use anyhow::{bail, Context, Result};
 use clap::Parser;
-use endstop::scorecard::{parse_claims, score, Row, Value, Verdict};
+use endstop::paper::claims::score;
+use endstop::paper::claims::Claims;
+use endstop::paper::claims::Row;
+use endstop::paper::claims::Value;
+use endstop::paper::claims::Verdict;
 use serde::Deserialize;
 
 /// Every experiment, in the order of the paper.
@@ -400,17 +403,14 @@ fn read_summary(name: &str) -> Option<SummaryIn> {
 
 /// Joins `data/claims.toml` with every experiment's summary.
 fn write_scorecard() -> Result<Vec<Row>> {
-    let root = common::root();
-    let text = std::fs::read_to_string(root.join("data/claims.toml"))
-        .context("reading data/claims.toml")?;
-    let claims = parse_claims(&text).map_err(|e| anyhow::anyhow!("data/claims.toml: {e}"))?;
+    let claims = Claims::bundled()?;
     let values: Vec<Value> = EXPERIMENTS
         .iter()
         .filter_map(|n| read_summary(n))
         .flat_map(|s| s.values)
         .collect();
-    let mut rows = score(&claims, &values);
-    let (target_id, target_q) = endstop::narrowband::CALIBRATION_TARGET;
+    let mut rows = score(&claims, &values)?;
+    let (target_id, target_q) = endstop::paper::calibration::CALIBRATION_TARGET;
     for r in &mut rows {
         if r.set == "calibrated" && r.claim == target_id && r.quantity == target_q {
             r.note = "calibration target: fitted, not a prediction".into();

@@ -2,12 +2,12 @@
 //! both prototypes (eqs 15-18), with the broadband efficiency of eq 21 (claims T3-a, T3-b,
 //! F14-a's linear-theory value).
 
-#[path = "common/mod.rs"]
-mod common;
+use endstop_experiments as common;
 
 use anyhow::Result;
 use common::{fmt_sig, load_device, Experiment};
-use endstop::linear::{QmReading, TwoPort};
+use endstop::physics::two_port::QmReading;
+use endstop::physics::two_port::TwoPort;
 use polars::prelude::*;
 
 /// One row of the output: device label, bias voltage (V), Qm reading, two-port.
@@ -17,10 +17,10 @@ fn main() {
     common::run_main("table3", run);
 }
 
-/// The Qm reading of our Table 3 verdicts (see `endstop::linear::TABLE3_QM`).
-const DEFAULT_QM: QmReading = endstop::linear::TABLE3_QM;
-/// The Qm reading of eq 21 (see `endstop::linear::EQ21_QM`).
-const EQ21_QM: QmReading = endstop::linear::EQ21_QM;
+/// The Qm reading of our Table 3 verdicts (see `endstop::physics::two_port::TABLE3_QM`).
+const DEFAULT_QM: QmReading = endstop::physics::two_port::TABLE3_QM;
+/// The Qm reading of eq 21 (see `endstop::physics::two_port::EQ21_QM`).
+const EQ21_QM: QmReading = endstop::physics::two_port::EQ21_QM;
 
 fn run() -> Result<()> {
     let mut exp = Experiment::start("table3");
@@ -163,7 +163,7 @@ fn run() -> Result<()> {
     exp.finish()
 }
 
-fn write_efficiency_plot(exp: &Experiment, p2: &endstop::params::Device) -> Result<()> {
+fn write_efficiency_plot(exp: &Experiment, p2: &endstop::device::Device) -> Result<()> {
     use common::plot::{LinePlot, Series, Style, PALETTE};
     let base = p2.with_bias(15.0);
     let mut pts = Vec::new();

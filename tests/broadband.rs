@@ -11,11 +11,24 @@
 //!
 //! Run time: about 140 ten-second records (a few tenths of a second each) on all cores.
 
-use endstop::broadband::*;
-use endstop::noise::{self, NoiseSpec};
-use endstop::params::Device;
-use endstop::scorecard::{parse_claims, Claim, Verdict};
-use endstop::spectral::{welch, WelchConfig};
+use endstop::device::Device;
+use endstop::drive::noise::NoiseSpec;
+use endstop::num::stats::*;
+use endstop::paper::claims::Claim;
+use endstop::paper::claims::Claims;
+use endstop::paper::claims::Verdict;
+use endstop::paper::ensembles::*;
+use endstop::paper::fig11::*;
+use endstop::paper::fig12::*;
+use endstop::paper::fig14::*;
+use endstop::paper::fig15::*;
+use endstop::paper::setups::*;
+use endstop::physics::two_port::*;
+use endstop::signal::bandwidth::*;
+use endstop::signal::welch;
+use endstop::signal::WelchConfig;
+use endstop::study::ensemble::*;
+use endstop::study::record::*;
 use endstop::G;
 
 fn device(name: &str) -> Device {
@@ -24,7 +37,8 @@ fn device(name: &str) -> Device {
 }
 
 fn claim(id: &str, quantity: &str) -> Claim {
-    parse_claims(include_str!("../data/claims.toml"))
+    Claims::bundled()
+        .map(|c| c.claims)
         .unwrap()
         .into_iter()
         .find(|c| c.id == id && c.quantity == quantity)
@@ -144,7 +158,7 @@ fn f10_excitation_level_and_band() {
     let cfg = WelchConfig::half_overlap(1 << 14);
     let (mut levels, mut edges) = (Vec::new(), Vec::new());
     for i in 0..16 {
-        let a = noise::generate(&spec, DEFAULT_SEED, first + i).unwrap();
+        let a = endstop::drive::noise::generate(&spec, DEFAULT_SEED, first + i).unwrap();
         let g: Vec<f64> = a.iter().map(|x| x / G).collect();
         let p = welch(&g, spec.sample_rate_hz, &cfg).unwrap();
         let level = p.two_sided_level_in_band(100.0, 9500.0);
@@ -263,12 +277,12 @@ fn f15_and_f14b_prototype2_nonlinear_regime() {
         "width at 0.34e-3: {w34:?}, linear theory {}",
         lin.bw3db_hz()
     );
-    assert!(w34.width_hz + w34.ci95_hz >= lin.bw3db_hz());
+    assert!(w34.estimate + w34.ci95 >= lin.bw3db_hz());
     assert_verdict(
         "F15-a",
         "bw_0p34e-3_hz",
-        w34.width_hz,
-        w34.ci95_hz,
+        w34.estimate,
+        w34.ci95,
         Verdict::Reproduced,
     );
 
@@ -338,7 +352,7 @@ fn f15_and_f14b_prototype2_nonlinear_regime() {
 #[test]
 fn f11_and_f12_prototype1_bandwidths() {
     let published = device("prototype1");
-    let calibrated = endstop::narrowband::calibrate_prototype1(&published)
+    let calibrated = endstop::paper::calibration::calibrate_prototype1(&published)
         .unwrap()
         .device;
     for (set, dev) in [("published", &published), ("calibrated", &calibrated)] {
@@ -368,7 +382,7 @@ fn f11_and_f12_prototype1_bandwidths() {
         // plus one 24 Hz bin.
         for w in [w_lo, w_hi] {
             assert!(
-                (w.width_hz - lin.bw3db_hz()).abs() <= w.ci95_hz + 24.5,
+                (w.estimate - lin.bw3db_hz()).abs() <= w.ci95 + 24.5,
                 "{set}: {w:?} vs {}",
                 lin.bw3db_hz()
             );
@@ -400,22 +414,22 @@ fn f11_and_f12_prototype1_bandwidths() {
         // Our values: the impacts widen the band beyond the linear width, and more at the
         // higher level.
         assert!(f12[0].impacts > 0 && f12[1].impacts > f12[0].impacts);
-        assert!(w_hi.width_hz - w_hi.ci95_hz > lin.bw3db_hz());
-        assert!(w_hi.width_hz - w_hi.ci95_hz > w_lo.width_hz + w_lo.ci95_hz);
+        assert!(w_hi.estimate - w_hi.ci95 > lin.bw3db_hz());
+        assert!(w_hi.estimate - w_hi.ci95 > w_lo.estimate + w_lo.ci95);
         // The paper's 380 and 600 Hz are not reached (the half-power widths are far smaller):
         // deviates; the growth ratio is reproduced.
         assert_verdict(
             "F12",
             "bw_7p4e-3_hz",
-            w_lo.width_hz,
-            w_lo.ci95_hz,
+            w_lo.estimate,
+            w_lo.ci95,
             Verdict::Deviates,
         );
         assert_verdict(
             "F12",
             "bw_2p85e-2_hz",
-            w_hi.width_hz,
-            w_hi.ci95_hz,
+            w_hi.estimate,
+            w_hi.ci95,
             Verdict::Deviates,
         );
         let (r, rci) = w_hi.ratio(&w_lo);

@@ -2,10 +2,20 @@
 //! piecewise-linear contact on the real harvester model, and the energy balance of a run with
 //! impacts. Tolerances are stated in the integrator's own units (rtol) or derived from them.
 
-use endstop::excitation::Sine;
-use endstop::integrator::{Dopri5, Guards, HybridSystem, Options, SolverError};
-use endstop::model::{EnergyAudit, Harvester, Mode, Side, State};
-use endstop::params::{Device, StiffnessModel};
+use endstop::device::Device;
+use endstop::device::StiffnessModel;
+use endstop::drive::Sampled;
+use endstop::drive::Sine;
+use endstop::ode::Dopri5;
+use endstop::ode::Guards;
+use endstop::ode::HybridSystem;
+use endstop::ode::Options;
+use endstop::ode::SolverError;
+use endstop::physics::contact::Mode;
+use endstop::physics::contact::Side;
+use endstop::physics::energy::EnergyAudit;
+use endstop::physics::harvester::Harvester;
+use endstop::physics::harvester::State;
 use nalgebra::SVector;
 
 fn device(name: &str) -> Device {
@@ -125,7 +135,7 @@ fn elastic_p1(km: f64, kim: f64) -> Harvester<Sine> {
     d.electrical.bias_v = 0.0;
     let mut h = Harvester::new(&d, Sine::from_rms_g(0.0, 1000.0));
     h.damping = 0.0;
-    h.law = endstop::model::ContactLaw::Linear(kim);
+    h.law = endstop::physics::contact::ContactLaw::Linear(kim);
     h
 }
 
@@ -254,7 +264,6 @@ fn a_blow_up_is_an_error_with_the_time_never_a_silent_nan() {
 
 #[test]
 fn every_sample_instant_of_a_sampled_input_is_a_step_boundary() {
-    use endstop::excitation::Sampled;
     let samples: std::sync::Arc<[f64]> = (0..101).map(|k| (k as f64 * 0.37).sin()).collect();
     let ex = Sampled::new(samples, 1e5);
     let d = device("prototype1");

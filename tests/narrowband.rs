@@ -11,14 +11,26 @@
 //! powers by far less. The tolerances below are a little above those changes; they are not
 //! fitted to make anything pass.
 
+use endstop::device::Device;
+use endstop::device::StiffnessModel;
+use endstop::drive::Sine;
+use endstop::paper::calibration::*;
+use endstop::paper::claims::Claim;
+use endstop::paper::claims::Claims;
+use endstop::paper::claims::Verdict;
+use endstop::paper::claims::*;
+use endstop::paper::curves::*;
+use endstop::paper::fig08::*;
+use endstop::paper::fig09::*;
+use endstop::paper::fig13::*;
+use endstop::paper::measured::*;
+use endstop::paper::setups::*;
+use endstop::physics::contact::Mode;
+use endstop::physics::harvester::Harvester;
+use endstop::study::steady::steady_config;
+use endstop::study::steady::steady_state;
+use endstop::study::sweep::*;
 use std::sync::OnceLock;
-
-use endstop::excitation::Sine;
-use endstop::model::{Harvester, Mode};
-use endstop::narrowband::*;
-use endstop::params::{Device, StiffnessModel};
-use endstop::scorecard::{parse_claims, Claim, Verdict};
-use endstop::sweep::steady_state;
 
 /// Relative tolerance on our transition frequencies: twice the largest change (0.05 %) seen
 /// when the sweep is refined.
@@ -32,7 +44,7 @@ const POWER_REL_TOL: f64 = 5e-3;
 
 fn claims() -> &'static [Claim] {
     static C: OnceLock<Vec<Claim>> = OnceLock::new();
-    C.get_or_init(|| parse_claims(include_str!("../data/claims.toml")).expect("claims parse"))
+    C.get_or_init(|| Claims::bundled().map(|c| c.claims).expect("claims parse"))
 }
 
 fn claim(id: &str, quantity: &str) -> &'static Claim {
@@ -69,7 +81,7 @@ fn fig8() -> &'static (Vec<ClaimValue>, Vec<ClaimValue>) {
     R.get_or_init(|| {
         let run = |d: &Device| {
             let dev = d.with_bias(P1_BIAS_V);
-            let settings = SweepSettings::prototype1(&dev);
+            let settings = endstop::paper::fig08::sweep_settings(&dev);
             let curves = run_curves(&dev, &figure8_curves(), &settings, &|| {}).expect("sweeps");
             figure8_claims(&curves, P1_SWEEP_STOP_HZ)
         };
@@ -82,7 +94,7 @@ fn fig9() -> &'static (Vec<ClaimValue>, Vec<ClaimValue>) {
     static R: OnceLock<(Vec<ClaimValue>, Vec<ClaimValue>)> = OnceLock::new();
     R.get_or_init(|| {
         let run = |d: &Device| {
-            let settings = AmplitudeSettings::figure9(d);
+            let settings = endstop::paper::fig09::amplitude_settings(d);
             let curves = run_figure9(d, &FIG9_BIASES_V, &settings, &|| {}).expect("sweeps");
             figure9_claims(&curves, PowerReading::OneLoad)
         };
@@ -203,7 +215,7 @@ fn calibration_does_not_depend_on_the_starting_gap() {
 
 #[test]
 fn gradual_exit_is_not_a_jump_and_a_discontinuity_is() {
-    let settings = SweepSettings::prototype1(&p1());
+    let settings = endstop::paper::fig08::sweep_settings(&p1());
     let dev = |d: &Device| {
         d.with_bias(P1_BIAS_V)
             .with_endstop(StiffnessModel::Hertz, 1.5)
@@ -228,7 +240,7 @@ fn gradual_exit_is_not_a_jump_and_a_discontinuity_is() {
 
 #[test]
 fn bim_fit_hits_the_measured_jump_only_with_the_calibrated_gap() {
-    let settings = SweepSettings::prototype1(&p1());
+    let settings = endstop::paper::fig08::sweep_settings(&p1());
     let hertz = |d: &Device| {
         d.with_bias(P1_BIAS_V)
             .with_endstop(StiffnessModel::Hertz, 1.5)
@@ -424,7 +436,7 @@ fn f9b_saturated_powers_and_their_vb_squared_scaling() {
 #[test]
 fn f13_no_impact_low_a_jump_high_and_hertz_agrees_with_linear() {
     let d = p2().with_bias(FIG13_BIAS_V);
-    let settings = SweepSettings::prototype2(&d);
+    let settings = endstop::paper::fig13::sweep_settings(&d);
     let curves = run_curves(&d, &figure13_curves(), &settings, &|| {}).unwrap();
     let v = figure13_claims(&curves);
     check_bool(&v, "F13", "no_impact_0p12g", true, Verdict::Reproduced);

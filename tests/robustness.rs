@@ -6,10 +6,14 @@
 //! cores). The cases here are drawn from a fixed ChaCha8 seed (the same cases on every run);
 //! cases that once failed during development are kept as explicit regression cases below.
 
-use endstop::excitation::Sine;
-use endstop::integrator::{Dopri5, SolverError};
-use endstop::model::{EnergyAudit, Harvester, Mode};
-use endstop::params::{Device, StiffnessModel};
+use endstop::device::Device;
+use endstop::device::StiffnessModel;
+use endstop::drive::Sine;
+use endstop::ode::Dopri5;
+use endstop::ode::SolverError;
+use endstop::physics::contact::Mode;
+use endstop::physics::energy::EnergyAudit;
+use endstop::physics::harvester::Harvester;
 use nalgebra::SVector;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;

@@ -1,8 +1,11 @@
 //! Integration tests of `endstop::spectral` (Welch PSD, bandwidths) and `endstop::noise`
 //! (band-limited white noise, Figure 10). Each tolerance is stated with its reason.
 
-use endstop::noise::{self, NoiseSpec};
-use endstop::spectral::{self, hann_periodic, welch, Psd, WelchConfig};
+use endstop::drive::noise::NoiseSpec;
+use endstop::signal::hann_periodic;
+use endstop::signal::welch;
+use endstop::signal::Psd;
+use endstop::signal::WelchConfig;
 use endstop::G;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -12,7 +15,7 @@ use rustfft::FftPlanner;
 /// Named constant seed, so that the statistical tests are deterministic.
 const SEED: u64 = 20120704;
 
-/// `n` iid standard normals (Box-Muller), independent of `noise::generate`.
+/// `n` iid standard normals (Box-Muller), independent of `endstop::drive::noise::generate`.
 fn white(n: usize, seed: u64) -> Vec<f64> {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let mut out = Vec::with_capacity(n + 1);
@@ -272,7 +275,7 @@ fn lorentzian_half_power_width() {
         density,
         segments: 0,
     };
-    let bw = spectral::width_at_fraction(&psd, 0.5).unwrap();
+    let bw = endstop::signal::width_at_fraction(&psd, 0.5).unwrap();
     let r = rel(bw.width_hz, 2.0 * g);
     println!(
         "lorentzian: 3 dB width {} vs {}, rel {r:e}",
@@ -282,7 +285,7 @@ fn lorentzian_half_power_width() {
     assert!(r < 0.01);
     assert!(rel(bw.f_lo_hz, f0 - g) < 1e-3 && rel(bw.f_hi_hz, f0 + g) < 1e-3);
     assert_eq!(bw.peak_hz, 675.5);
-    let bw6 = spectral::width_at_fraction(&psd, 0.25).unwrap();
+    let bw6 = endstop::signal::width_at_fraction(&psd, 0.25).unwrap();
     assert!(rel(bw6.width_hz, 2.0 * g * 3f64.sqrt()) < 0.01);
 }
 
@@ -292,13 +295,13 @@ fn lorentzian_half_power_width() {
 #[test]
 fn noise_zero_mean_and_variance_matches_its_spectrum() {
     let spec = NoiseSpec::paper(1e-2);
-    let x = noise::generate(&spec, SEED, 3).unwrap();
-    let coeffs = noise::spectrum(&spec, SEED, 3).unwrap();
+    let x = endstop::drive::noise::generate(&spec, SEED, 3).unwrap();
+    let coeffs = endstop::drive::noise::spectrum(&spec, SEED, 3).unwrap();
     let n = x.len();
     assert_eq!(n, 1_000_000);
     assert_eq!(coeffs.len(), 100_001);
     let nf = n as f64;
-    let rms = noise::rms_si(&spec);
+    let rms = endstop::drive::noise::rms_si(&spec);
 
     // Zero mean: X_0 = 0, so only rounding (~1e-16 rms per sample) remains. Tolerance 1e-12 rms.
     let mean = x.iter().sum::<f64>() / nf;
@@ -343,7 +346,7 @@ fn noise_welch_level_and_stopband() {
     // only Hann leakage, which 500 Hz (20 bins) past the edge is far below -40 dB.
     let sa = 1e-2;
     let spec = NoiseSpec::paper(sa);
-    let x = noise::generate(&spec, SEED, 0).unwrap();
+    let x = endstop::drive::noise::generate(&spec, SEED, 0).unwrap();
     let psd = welch(&x, spec.sample_rate_hz, &WelchConfig::half_overlap(4096)).unwrap();
     let (lo, hi) = (100.0, 9.5e3);
     let m = psd
@@ -378,10 +381,10 @@ fn noise_is_deterministic_per_stream() {
         ..NoiseSpec::paper(1e-3)
     };
     let bits = |v: Vec<f64>| v.into_iter().map(f64::to_bits).collect::<Vec<_>>();
-    let a = bits(noise::generate(&spec, 7, 1).unwrap());
-    let b = bits(noise::generate(&spec, 7, 1).unwrap());
-    let c = bits(noise::generate(&spec, 7, 2).unwrap());
-    let d = bits(noise::generate(&spec, 8, 1).unwrap());
+    let a = bits(endstop::drive::noise::generate(&spec, 7, 1).unwrap());
+    let b = bits(endstop::drive::noise::generate(&spec, 7, 1).unwrap());
+    let c = bits(endstop::drive::noise::generate(&spec, 7, 2).unwrap());
+    let d = bits(endstop::drive::noise::generate(&spec, 8, 1).unwrap());
     assert_eq!(a, b);
     assert_ne!(a, c);
     assert_ne!(a, d);
@@ -402,8 +405,8 @@ fn noise_golden_first_samples() {
         93.15278623360747,
     ];
     let spec = NoiseSpec::paper(1e-2);
-    let x = noise::generate(&spec, 42, 0).unwrap();
-    let rms = noise::rms_si(&spec);
+    let x = endstop::drive::noise::generate(&spec, 42, 0).unwrap();
+    let rms = endstop::drive::noise::rms_si(&spec);
     println!("golden: {:?}", &x[..5]);
     for (k, (a, b)) in x.iter().zip(GOLDEN).enumerate() {
         assert!((a - b).abs() < 1e-12 * rms, "sample {k}: {a:e} vs {b:e}");
@@ -414,7 +417,9 @@ fn noise_golden_first_samples() {
 fn noise_spec_errors() {
     let mut spec = NoiseSpec::paper(1e-2);
     spec.sample_rate_hz = f64::INFINITY;
-    let msg = noise::generate(&spec, 0, 0).unwrap_err().to_string();
+    let msg = endstop::drive::noise::generate(&spec, 0, 0)
+        .unwrap_err()
+        .to_string();
     assert!(msg.contains("sample_rate_hz = inf"), "{msg}");
     let spec = NoiseSpec {
         bandwidth_hz: 60e3,

@@ -2,15 +2,18 @@
 //! except `ngspice_agrees_with_our_integrator`, which prints a skip message and returns when
 //! `ngspice` is not on PATH.
 
+use endstop::device::Device;
+use endstop::device::StiffnessModel;
+use endstop::drive::Sine;
+use endstop::physics::contact::Mode;
+use endstop::physics::harvester::Harvester;
+use endstop::physics::harvester::State;
+use endstop::physics::hertz::HertzLine;
+use endstop::spice::*;
+use endstop::study::steady::steady_state;
+use endstop::study::steady::SteadyConfig;
 use std::collections::BTreeMap;
 use std::process::Command;
-
-use endstop::excitation::Sine;
-use endstop::hertz::HertzLine;
-use endstop::model::{Harvester, Mode, State};
-use endstop::params::{Device, StiffnessModel};
-use endstop::spice::*;
-use endstop::sweep::{steady_state, SteadyConfig};
 
 fn p1() -> Device {
     Device::from_toml_str(include_str!("../data/prototype1.toml"), "prototype1.toml").unwrap()

@@ -1,0 +1,376 @@
+//! Shared edge of the experiment binaries: loading parameter files, writing Parquet with
+//! provenance metadata, plots (SVG + PNG with a bundled font), `summary.json`, and the
+//! generated snippets the book includes. The physics lives in the `endstop` library; nothing
+//! here computes a result.
+//!
+//! Every file is written to a temporary name in the same directory and renamed, so a failed
+//! run never leaves a partial output behind.
+pub mod broadband_io;
+pub mod frame;
+pub mod md;
+pub mod plot;
+pub mod sweep_table;
+
+use std::collections::BTreeMap;
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::sync::OnceLock;
+use std::time::Instant;
+
+use anyhow::{Context, Result};
+use endstop::device::Device;
+use endstop::paper::claims::Value;
+use indicatif::{ProgressBar, ProgressStyle};
+use polars::prelude::*;
+use serde::Serialize;
+
+/// Project root (found from this package's manifest, never from the working directory): the
+/// workspace root, one level above `experiments/`.
+pub fn root() -> PathBuf {
+    let manifest = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    manifest.parent().map_or(manifest.clone(), PathBuf::from)
+}
+
+/// Where results go: `data/results/`, or `$ENDSTOP_OUTPUT_DIR` when set (used by tests that
+/// must not overwrite the user's results).
+pub fn results_root() -> PathBuf {
+    match std::env::var_os("ENDSTOP_OUTPUT_DIR") {
+        Some(d) => PathBuf::from(d),
+        None => root().join("data/results"),
+    }
+}
+
+/// Where the generated book snippets go: `book/src/generated/`, or
+/// `$ENDSTOP_OUTPUT_DIR/book-generated` when that variable is set.
+pub fn book_generated_root() -> PathBuf {
+    match std::env::var_os("ENDSTOP_OUTPUT_DIR") {
+        Some(d) => PathBuf::from(d).join("book-generated"),
+        None => root().join("book/src/generated"),
+    }
+}
+
+/// A loaded, validated parameter file.
+#[derive(Debug, Clone)]
+pub struct LoadedDevice {
+    /// The device.
+    pub device: Device,
+    /// File name relative to the project root, e.g. `data/prototype1.toml`.
+    pub file: String,
+    /// The file's text, recorded in every output's metadata.
+    pub text: String,
+}
+
+/// Loads and validates `data/<name>.toml` (or `$ENDSTOP_DATA_DIR/<name>.toml` when that
+/// variable is set); the error names the file and the field.
+pub fn load_device(name: &str) -> Result<LoadedDevice> {
+    let (rel, path) = match std::env::var_os("ENDSTOP_DATA_DIR") {
+        Some(dir) => {
+            let p = PathBuf::from(dir).join(format!("{name}.toml"));
+            (p.display().to_string(), p)
+        }
+        None => {
+            let rel = format!("data/{name}.toml");
+            (rel.clone(), root().join(&rel))
+        }
+    };
+    let text = std::fs::read_to_string(&path)
+        .with_context(|| format!("cannot read parameter file {}", path.display()))?;
+    let device = Device::from_toml_str(&text, &rel)?;
+    Ok(LoadedDevice {
+        device,
+        file: rel,
+        text,
+    })
+}
+
+/// Loads and validates a device file given by path (the `endstop` command-line tool).
+pub fn load_device_file(path: &Path) -> Result<LoadedDevice> {
+    let text = std::fs::read_to_string(path)
+        .with_context(|| format!("cannot read device file {}", path.display()))?;
+    let file = path.display().to_string();
+    let device = Device::from_toml_str(&text, &file)?;
+    Ok(LoadedDevice { device, file, text })
+}
+
+/// The git commit of the working tree (with `-dirty` if it has uncommitted changes).
+pub fn git_commit() -> String {
+    static COMMIT: OnceLock<String> = OnceLock::new();
+    COMMIT
+        .get_or_init(|| {
+            let run = |args: &[&str]| {
+                std::process::Command::new("git")
+                    .args(args)
+                    .current_dir(root())
+                    .output()
+                    .ok()
+                    .filter(|o| o.status.success())
+                    .map(|o| String::from_utf8_lossy(&o.stdout).trim().to_string())
+            };
+            match run(&["rev-parse", "HEAD"]) {
+                Some(c) => {
+                    let dirty = run(&["status", "--porcelain", "--untracked-files=no"])
+                        .map(|s| !s.is_empty())
+                        .unwrap_or(false);
+                    if dirty {
+                        format!("{c}-dirty")
+                    } else {
+                        c
+                    }
+                }
+                None => "unknown".to_string(),
+            }
+        })
+        .clone()
+}
+
+/// Writes `bytes` to `path` atomically (temporary file in the same directory, then rename).
+pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
+    let dir = path.parent().context("output path has no parent")?;
+    std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
+    let tmp = dir.join(format!(
+        ".{}.tmp",
+        path.file_name().unwrap_or_default().to_string_lossy()
+    ));
+    {
+        let mut f = std::fs::File::create(&tmp)
+            .with_context(|| format!("cannot create {}", tmp.display()))?;
+        f.write_all(bytes)?;
+        f.sync_all()?;
+    }
+    std::fs::rename(&tmp, path).with_context(|| format!("cannot rename to {}", path.display()))?;
+    Ok(())
+}
+
+/// One experiment's output directory and provenance.
+pub struct Experiment {
+    /// Experiment name (`fig08`).
+    pub name: String,
+    /// `data/results/<name>/`.
+    pub dir: PathBuf,
+    /// `book/src/generated/<name>/`.
+    pub book_dir: PathBuf,
+    /// Parameter files used: (file, parameter set label, text).
+    pub params: Vec<(String, String, String)>,
+    /// Seed of the random streams, if any.
+    pub seed: Option<u64>,
+    values: Vec<Value>,
+    numbers: BTreeMap<String, f64>,
+    started: Instant,
+}
+
+#[derive(Serialize)]
+struct Summary<'a> {
+    experiment: &'a str,
+    commit: String,
+    crate_version: &'static str,
+    seed: Option<u64>,
+    params: Vec<(String, String)>,
+    values: &'a [Value],
+    numbers: &'a BTreeMap<String, f64>,
+}
+
+impl Experiment {
+    /// Starts an experiment: prints its name and prepares its directories.
+    pub fn start(name: &str) -> Self {
+        eprintln!("[{name}] running (commit {})", git_commit());
+        Self {
+            name: name.to_string(),
+            dir: results_root().join(name),
+            book_dir: book_generated_root().join(name),
+            params: Vec::new(),
+            seed: None,
+            values: Vec::new(),
+            numbers: BTreeMap::new(),
+            started: Instant::now(),
+        }
+    }
+
+    /// Starts a run whose outputs all go to `dir` (data, plot, summary and the markdown
+    /// snippet), for the `endstop` command-line tool.
+    pub fn start_in(name: &str, dir: PathBuf) -> Self {
+        let mut e = Self::start(name);
+        e.book_dir = dir.clone();
+        e.dir = dir;
+        e
+    }
+
+    /// Records a parameter file used by this experiment under a set label.
+    pub fn uses(&mut self, dev: &LoadedDevice, set: &str) {
+        self.params
+            .push((dev.file.clone(), set.to_string(), dev.text.clone()));
+    }
+
+    /// Records our value for a claim's quantity (scorecard input).
+    pub fn claim(&mut self, claim: &str, quantity: &str, set: &str, ours: f64) {
+        self.claim_with_uncertainty(claim, quantity, set, ours, None);
+    }
+
+    /// Records our value with an uncertainty (same unit).
+    pub fn claim_with_uncertainty(
+        &mut self,
+        claim: &str,
+        quantity: &str,
+        set: &str,
+        ours: f64,
+        uncertainty: Option<f64>,
+    ) {
+        self.values.push(Value {
+            claim: claim.to_string(),
+            quantity: quantity.to_string(),
+            set: set.to_string(),
+            ours,
+            uncertainty,
+        });
+    }
+
+    /// Records a named number for the summary (not a claim).
+    pub fn number(&mut self, key: &str, value: f64) {
+        self.numbers.insert(key.to_string(), value);
+    }
+
+    /// Key-value metadata written into every Parquet file.
+    fn metadata(&self, set: &str) -> Vec<(String, String)> {
+        let mut kv = vec![
+            ("experiment".to_string(), self.name.clone()),
+            ("git_commit".to_string(), git_commit()),
+            (
+                "crate_version".to_string(),
+                env!("CARGO_PKG_VERSION").to_string(),
+            ),
+            (
+                "seed".to_string(),
+                self.seed.map(|s| s.to_string()).unwrap_or("none".into()),
+            ),
+            ("params".to_string(), set.to_string()),
+        ];
+        for (file, label, text) in &self.params {
+            kv.push((format!("param_file:{file}:{label}"), text.clone()));
+        }
+        kv
+    }
+
+    /// Writes a data frame to `<dir>/<stem>.parquet` with provenance metadata; `set` names the
+    /// parameter set(s) in it (`published`, `calibrated`, `published+calibrated`).
+    pub fn write_parquet(&self, stem: &str, df: &mut DataFrame, set: &str) -> Result<PathBuf> {
+        let path = self.dir.join(format!("{stem}.parquet"));
+        let mut buf = Vec::new();
+        ParquetWriter::new(&mut buf)
+            .with_key_value_metadata(Some(KeyValueMetadata::from_static(self.metadata(set))))
+            .set_parallel(false)
+            .finish(df)
+            .with_context(|| format!("writing {}", path.display()))?;
+        write_atomic(&path, &buf)?;
+        Ok(path)
+    }
+
+    /// Renders a figure as `<dir>/<name>.svg` and `.png`, and copies both for the book.
+    pub fn write_plot<F: plot::Figure>(&self, fig: &F) -> Result<()> {
+        let (svg, png) = plot::render(fig)?;
+        for dir in [&self.dir, &self.book_dir] {
+            write_atomic(&dir.join(format!("{}.svg", self.name)), svg.as_bytes())?;
+            write_atomic(&dir.join(format!("{}.png", self.name)), &png)?;
+        }
+        Ok(())
+    }
+
+    /// Renders an extra figure under another file stem (e.g. `fig08_convergence`).
+    pub fn write_extra_plot<F: plot::Figure>(&self, stem: &str, fig: &F) -> Result<()> {
+        let (svg, png) = plot::render(fig)?;
+        for dir in [&self.dir, &self.book_dir] {
+            write_atomic(&dir.join(format!("{stem}.svg")), svg.as_bytes())?;
+            write_atomic(&dir.join(format!("{stem}.png")), &png)?;
+        }
+        Ok(())
+    }
+
+    /// Writes the generated markdown the book includes (`book/src/generated/<name>/numbers.md`).
+    pub fn write_numbers_md(&self, markdown: &str) -> Result<()> {
+        write_atomic(&self.book_dir.join("numbers.md"), markdown.as_bytes())
+    }
+
+    /// Writes `summary.json` (deterministic: no wall-clock content) and `timing.json`.
+    pub fn finish(self) -> Result<()> {
+        let summary = Summary {
+            experiment: &self.name,
+            commit: git_commit(),
+            crate_version: env!("CARGO_PKG_VERSION"),
+            seed: self.seed,
+            params: self
+                .params
+                .iter()
+                .map(|(f, l, _)| (f.clone(), l.clone()))
+                .collect(),
+            values: &self.values,
+            numbers: &self.numbers,
+        };
+        let json = serde_json::to_string_pretty(&summary)?;
+        write_atomic(&self.dir.join("summary.json"), json.as_bytes())?;
+        let secs = self.started.elapsed().as_secs_f64();
+        // Provenance of the book's numbers: which program, parameter files, seed and commit
+        // produced them, and how long it took (the book only; the data files stay free of
+        // wall-clock content so that they are byte-identical between runs).
+        let snippet = self.book_dir.join("numbers.md");
+        if let Ok(mut md) = std::fs::read_to_string(&snippet) {
+            let files: Vec<String> = self
+                .params
+                .iter()
+                .map(|(f, l, _)| format!("`{f}` ({l})"))
+                .collect();
+            md.push_str(&format!(
+                "\n*Produced by `{}` from {}; seed {}; commit `{}`; {:.2} s wall time.*\n",
+                self.name,
+                if files.is_empty() {
+                    "no parameter file".to_string()
+                } else {
+                    files.join(", ")
+                },
+                self.seed.map_or("none".to_string(), |s| s.to_string()),
+                git_commit(),
+                secs
+            ));
+            write_atomic(&snippet, md.as_bytes())?;
+        }
+        let timing = serde_json::json!({ "experiment": self.name, "wall_time_s": secs });
+        write_atomic(
+            &self.dir.join("timing.json"),
+            serde_json::to_string_pretty(&timing)?.as_bytes(),
+        )?;
+        eprintln!(
+            "[{}] wrote {} ({:.2} s)",
+            self.name,
+            self.dir.strip_prefix(root()).unwrap_or(&self.dir).display(),
+            secs
+        );
+        Ok(())
+    }
+}
+
+/// A progress bar on stderr (hidden when stderr is not a terminal).
+pub fn progress(len: u64, what: &str) -> ProgressBar {
+    let pb = ProgressBar::new(len);
+    pb.set_style(
+        ProgressStyle::with_template("{prefix:>10} [{bar:30}] {pos}/{len} {msg} ({elapsed})")
+            .unwrap_or_else(|_| ProgressStyle::default_bar())
+            .progress_chars("=> "),
+    );
+    pb.set_prefix(what.to_string());
+    pb
+}
+
+/// Formats a number with `sig` significant digits for generated prose.
+pub fn fmt_sig(x: f64, sig: usize) -> String {
+    if x == 0.0 || !x.is_finite() {
+        return format!("{x}");
+    }
+    let mag = x.abs().log10().floor() as i32;
+    let decimals = (sig as i32 - 1 - mag).max(0) as usize;
+    format!("{x:.decimals$}")
+}
+
+/// Runs an experiment's body, printing the error chain and exiting non-zero on failure.
+pub fn run_main(name: &str, body: impl FnOnce() -> Result<()>) {
+    if let Err(e) = body() {
+        eprintln!("[{name}] error: {e:#}");
+        std::process::exit(1);
+    }
+}

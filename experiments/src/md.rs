@@ -1,0 +1,64 @@
+//! Markdown tables for the book's generated snippets. The header and every row are arrays of
+//! the same length `N`, so a table cannot fall out of step with its header.
+
+/// A Markdown table with `N` columns.
+#[derive(Debug, Clone)]
+pub struct Table<const N: usize> {
+    header: [String; N],
+    rows: Vec<[String; N]>,
+}
+
+impl<const N: usize> Table<N> {
+    /// A table with this header.
+    pub fn new(header: [&str; N]) -> Self {
+        Self {
+            header: header.map(str::to_string),
+            rows: Vec::new(),
+        }
+    }
+
+    /// Appends a row.
+    pub fn row(&mut self, cells: [String; N]) -> &mut Self {
+        self.rows.push(cells);
+        self
+    }
+
+    /// Number of rows.
+    pub fn len(&self) -> usize {
+        self.rows.len()
+    }
+
+    /// True without rows.
+    pub fn is_empty(&self) -> bool {
+        self.rows.is_empty()
+    }
+
+    /// The table as Markdown (a `|` inside a cell is escaped).
+    pub fn render(&self) -> String {
+        let line = |cells: &[String; N]| {
+            let esc: Vec<String> = cells.iter().map(|c| c.replace('|', "\\|")).collect();
+            format!("| {} |\n", esc.join(" | "))
+        };
+        let mut s = line(&self.header);
+        s.push_str(&format!("|{}\n", "---|".repeat(N)));
+        for r in &self.rows {
+            s.push_str(&line(r));
+        }
+        s
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn renders_header_rule_and_rows() {
+        let mut t = Table::new(["claim", "ours"]);
+        t.row(["F8-c".into(), "1 | 2".into()]);
+        assert_eq!(
+            t.render(),
+            "| claim | ours |\n|---|---|\n| F8-c | 1 \\| 2 |\n"
+        );
+    }
+}

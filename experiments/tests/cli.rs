@@ -1,0 +1,135 @@
+//! The `endstop` command-line tool end to end on a device that is not one of the paper's
+//! (`data/examples/my_harvester.toml`): both studies run, write readable Parquet with
+//! provenance metadata, a plot and a summary; bad input is refused with a clear message.
+
+use std::path::Path;
+use std::process::Command;
+
+const BIN: &str = env!("CARGO_BIN_EXE_endstop");
+
+fn example() -> String {
+    format!(
+        "{}/../data/examples/my_harvester.toml",
+        env!("CARGO_MANIFEST_DIR")
+    )
+}
+
+fn tmp(tag: &str) -> std::path::PathBuf {
+    let d = std::env::temp_dir().join(format!("endstop-cli-{}-{tag}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    d
+}
+
+fn summary_number(dir: &Path, key: &str) -> Option<f64> {
+    let text = std::fs::read_to_string(dir.join("summary.json")).unwrap();
+    let v: serde_json::Value = serde_json::from_str(&text).unwrap();
+    v["numbers"][key].as_f64()
+}
+
+fn read_parquet(path: &Path) -> polars::prelude::DataFrame {
+    use polars::prelude::*;
+    let f = std::fs::File::open(path).unwrap();
+    ParquetReader::new(f).finish().unwrap()
+}
+
+#[test]
+fn sweep_on_a_user_device_writes_data_plot_and_summary() {
+    let out = tmp("sweep");
+    let o = Command::new(BIN)
+        .args([
+            "sweep",
+            "--device",
+            &example(),
+            "--from",
+            "500",
+            "--to",
+            "700",
+        ])
+        .args(["--step", "4", "--accel-rms-g", "0.3", "--out"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    for f in [
+        "sweep.parquet",
+        "endstop-sweep.svg",
+        "endstop-sweep.png",
+        "summary.json",
+        "numbers.md",
+    ] {
+        assert!(out.join(f).exists(), "missing {f}");
+    }
+    let df = read_parquet(&out.join("sweep.parquet"));
+    assert_eq!(df.height(), 51);
+    let v = df.column("v1_rms_v").unwrap().f64().unwrap();
+    assert!(v.into_no_null_iter().all(|x| x.is_finite() && x > 0.0));
+    // This device at 0.3 g reaches its 8 um stops near its 616 Hz resonance.
+    let onset = summary_number(&out, "impact_onset_hz").expect("an impact onset");
+    assert!(onset > 500.0 && onset < 700.0, "onset {onset}");
+    let _ = std::fs::remove_dir_all(out);
+}
+
+#[test]
+fn random_on_a_user_device_writes_data_plot_and_summary() {
+    let out = tmp("random");
+    let o = Command::new(BIN)
+        .args([
+            "random",
+            "--device",
+            &example(),
+            "--psd",
+            "1e-5",
+            "--records",
+            "2",
+        ])
+        .args(["--duration-s", "2", "--out"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    for f in [
+        "output_psd.parquet",
+        "records.parquet",
+        "endstop-random.svg",
+        "summary.json",
+    ] {
+        assert!(out.join(f).exists(), "missing {f}");
+    }
+    let p = summary_number(&out, "power_w").unwrap();
+    let p21 = summary_number(&out, "eq21_power_w").unwrap();
+    // At 1e-5 g^2/Hz this device stays clear of its stops, so the simulated power must agree
+    // with eq 21 within the statistical error of 2 x 2 s records (~10 % for Qm ~ 150; we allow
+    // 30 %, about 3 sigma, since this test checks the tool, not the physics).
+    assert!(
+        p > 0.0 && ((p - p21) / p21).abs() < 0.3,
+        "power {p} vs eq 21 {p21}"
+    );
+    let md = std::fs::read_to_string(out.join("summary.json")).unwrap();
+    assert!(md.contains("my_harvester.toml"));
+    let _ = std::fs::remove_dir_all(out);
+}
+
+#[test]
+fn bad_input_is_refused_with_a_message() {
+    let o = Command::new(BIN)
+        .args([
+            "sweep",
+            "--device",
+            &example(),
+            "--from",
+            "900",
+            "--to",
+            "500",
+        ])
+        .args(["--accel-rms-g", "0.3"])
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("--to"));
+    let o = Command::new(BIN)
+        .args(["random", "--device", "/nonexistent.toml", "--psd", "1e-3"])
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("/nonexistent.toml"));
+}

@@ -1,0 +1,347 @@
+//! The Dormand-Prince 5(4) pair with its 4th-order dense output, stepping a
+//! [`HybridSystem`] and locating guard crossings on the dense output (see [`crate::ode`]).
+
+use nalgebra::SVector;
+
+use crate::ode::{HybridSystem, Options, SolverError, Stats, Step, MAX_GUARDS};
+
+// Dormand-Prince 5(4) coefficients.
+const C2: f64 = 1.0 / 5.0;
+const C3: f64 = 3.0 / 10.0;
+const C4: f64 = 4.0 / 5.0;
+const C5: f64 = 8.0 / 9.0;
+const A21: f64 = 1.0 / 5.0;
+const A31: f64 = 3.0 / 40.0;
+const A32: f64 = 9.0 / 40.0;
+const A41: f64 = 44.0 / 45.0;
+const A42: f64 = -56.0 / 15.0;
+const A43: f64 = 32.0 / 9.0;
+const A51: f64 = 19372.0 / 6561.0;
+const A52: f64 = -25360.0 / 2187.0;
+const A53: f64 = 64448.0 / 6561.0;
+const A54: f64 = -212.0 / 729.0;
+const A61: f64 = 9017.0 / 3168.0;
+const A62: f64 = -355.0 / 33.0;
+const A63: f64 = 46732.0 / 5247.0;
+const A64: f64 = 49.0 / 176.0;
+const A65: f64 = -5103.0 / 18656.0;
+const A71: f64 = 35.0 / 384.0;
+const A73: f64 = 500.0 / 1113.0;
+const A74: f64 = 125.0 / 192.0;
+const A75: f64 = -2187.0 / 6784.0;
+const A76: f64 = 11.0 / 84.0;
+const E1: f64 = 71.0 / 57600.0;
+const E3: f64 = -71.0 / 16695.0;
+const E4: f64 = 71.0 / 1920.0;
+const E5: f64 = -17253.0 / 339200.0;
+const E6: f64 = 22.0 / 525.0;
+const E7: f64 = -1.0 / 40.0;
+const D1: f64 = -12715105075.0 / 11282082432.0;
+const D3: f64 = 87487479700.0 / 32700410799.0;
+const D4: f64 = -10690763975.0 / 1880347072.0;
+const D5: f64 = 701980252875.0 / 199316789632.0;
+const D6: f64 = -1453857185.0 / 822651844.0;
+const D7: f64 = 69997945.0 / 29380423.0;
+
+/// Integrator state: time, state, mode, FSAL derivative, proposed step and counters.
+#[derive(Debug, Clone)]
+pub struct Dopri5<S: HybridSystem<N>, const N: usize> {
+    /// Current time (s).
+    pub t: f64,
+    /// Current state.
+    pub y: SVector<f64, N>,
+    /// Current mode.
+    pub mode: S::Mode,
+    /// Options.
+    pub opts: Options<N>,
+    /// Counters.
+    pub stats: Stats,
+    k1: SVector<f64, N>,
+    h: f64,
+    k1_valid: bool,
+}
+
+struct Trial<const N: usize> {
+    y1: SVector<f64, N>,
+    k: [SVector<f64, N>; 7],
+    err: f64,
+}
+
+impl<S: HybridSystem<N>, const N: usize> Dopri5<S, N> {
+    /// A new integrator at (t0, y0) in `mode`.
+    pub fn new(t0: f64, y0: SVector<f64, N>, mode: S::Mode, opts: Options<N>) -> Self {
+        let h = opts.h_init;
+        Self {
+            t: t0,
+            y: y0,
+            mode,
+            opts,
+            stats: Stats::default(),
+            k1: SVector::zeros(),
+            h,
+            k1_valid: false,
+        }
+    }
+
+    fn state_vec(&self) -> Vec<f64> {
+        self.y.iter().copied().collect()
+    }
+
+    fn trial(&mut self, sys: &S, h: f64) -> Trial<N> {
+        let (t, y, k1, mode) = (self.t, self.y, self.k1, self.mode);
+        let k2 = sys.rhs(mode, t + C2 * h, &(y + k1 * (A21 * h)));
+        let k3 = sys.rhs(mode, t + C3 * h, &(y + (k1 * A31 + k2 * A32) * h));
+        let k4 = sys.rhs(
+            mode,
+            t + C4 * h,
+            &(y + (k1 * A41 + k2 * A42 + k3 * A43) * h),
+        );
+        let k5 = sys.rhs(
+            mode,
+            t + C5 * h,
+            &(y + (k1 * A51 + k2 * A52 + k3 * A53 + k4 * A54) * h),
+        );
+        let k6 = sys.rhs(
+            mode,
+            t + h,
+            &(y + (k1 * A61 + k2 * A62 + k3 * A63 + k4 * A64 + k5 * A65) * h),
+        );
+        let y1 = y + (k1 * A71 + k3 * A73 + k4 * A74 + k5 * A75 + k6 * A76) * h;
+        let k7 = sys.rhs(mode, t + h, &y1);
+        self.stats.rhs_evals += 6;
+        let e = (k1 * E1 + k3 * E3 + k4 * E4 + k5 * E5 + k6 * E6 + k7 * E7) * h;
+        let mut acc = 0.0;
+        for i in 0..N {
+            let sc = self.opts.atol[i] + self.opts.rtol * y[i].abs().max(y1[i].abs());
+            let r = e[i] / sc;
+            acc += r * r;
+        }
+        let err = (acc / N as f64).sqrt();
+        Trial {
+            y1,
+            k: [k1, k2, k3, k4, k5, k6, k7],
+            err,
+        }
+    }
+
+    fn make_step(&self, h: f64, tr: &Trial<N>) -> Step<N> {
+        let y0 = self.y;
+        let k = &tr.k;
+        let ydiff = tr.y1 - y0;
+        let bspl = k[0] * h - ydiff;
+        let r3 = ydiff - k[6] * h - bspl;
+        let r4 = (k[0] * D1 + k[2] * D3 + k[3] * D4 + k[4] * D5 + k[5] * D6 + k[6] * D7) * h;
+        Step {
+            t0: self.t,
+            h,
+            y0,
+            y1: tr.y1,
+            rcont: [y0, ydiff, bspl, r3, r4],
+        }
+    }
+
+    /// Integrates to `t_end`, calling `observer` with every accepted step (and with the mode
+    /// that was active over it).
+    pub fn integrate<O: FnMut(&Step<N>, S::Mode)>(
+        &mut self,
+        sys: &S,
+        t_end: f64,
+        mut observer: O,
+    ) -> Result<(), SolverError> {
+        let mut steps: u64 = 0;
+        while self.t < t_end {
+            if !self.k1_valid {
+                self.k1 = sys.rhs(self.mode, self.t, &self.y);
+                self.stats.rhs_evals += 1;
+                self.k1_valid = true;
+                if !self.k1.iter().all(|v| v.is_finite()) {
+                    return Err(SolverError::NonFinite {
+                        t: self.t,
+                        state: self.state_vec(),
+                    });
+                }
+                // A guard already positive at the start of a step fires at once.
+                let g = sys.guards(self.mode, self.t, &self.y);
+                if let Some(i) = (0..MAX_GUARDS).find(|&i| g[i] > 0.0) {
+                    let mut y = self.y;
+                    self.mode = sys.switch(self.mode, i, self.t, &mut y);
+                    self.y = y;
+                    self.stats.events += 1;
+                    self.k1_valid = false;
+                    continue;
+                }
+            }
+            steps += 1;
+            if steps > self.opts.max_steps {
+                return Err(SolverError::TooManySteps {
+                    max_steps: self.opts.max_steps,
+                    t: self.t,
+                    t_end,
+                });
+            }
+            let limit = t_end.min(sys.next_breakpoint(self.t));
+            let mut h = self.h.min(self.opts.h_max);
+            let mut clipped = false;
+            if self.t + h >= limit {
+                h = limit - self.t;
+                clipped = true;
+            }
+            let tr = self.trial(sys, h);
+            if !tr.err.is_finite() || !tr.y1.iter().all(|v| v.is_finite()) {
+                self.stats.rejected += 1;
+                self.h = h * 0.2;
+                if self.h < self.opts.h_min {
+                    return Err(SolverError::NonFinite {
+                        t: self.t,
+                        state: self.state_vec(),
+                    });
+                }
+                continue;
+            }
+            let fac = (0.9 * tr.err.powf(-0.2)).clamp(0.2, 10.0);
+            if tr.err > 1.0 {
+                self.stats.rejected += 1;
+                self.h = h * fac.min(1.0);
+                if self.h < self.opts.h_min {
+                    return Err(SolverError::StepSizeTooSmall {
+                        t: self.t,
+                        h: self.h,
+                        state: self.state_vec(),
+                    });
+                }
+                continue;
+            }
+            // Accepted: look for guard crossings on the dense output.
+            let step = self.make_step(h, &tr);
+            let t_new = if clipped { limit } else { self.t + h };
+            match self.locate_event(sys, &step) {
+                None => {
+                    self.stats.accepted += 1;
+                    observer(&step, self.mode);
+                    self.t = t_new;
+                    self.y = tr.y1;
+                    self.k1 = tr.k[6];
+                    if !clipped || fac < 1.0 {
+                        self.h = h * fac;
+                    }
+                }
+                Some((theta, index)) => {
+                    // Re-take the step so that it ends exactly on the event.
+                    let h_ev = theta * h;
+                    let (t_ev, mut y_ev) = if h_ev > 0.0 {
+                        let tr_ev = self.trial(sys, h_ev);
+                        let st = self.make_step(h_ev, &tr_ev);
+                        self.stats.accepted += 1;
+                        observer(&st, self.mode);
+                        (self.t + h_ev, tr_ev.y1)
+                    } else {
+                        (self.t, self.y)
+                    };
+                    self.mode = sys.switch(self.mode, index, t_ev, &mut y_ev);
+                    self.stats.events += 1;
+                    self.t = t_ev;
+                    self.y = y_ev;
+                    self.k1_valid = false;
+                    self.h = h;
+                }
+            }
+            if let Err(message) = sys.check_state(self.mode, self.t, &self.y) {
+                return Err(SolverError::InvalidState {
+                    t: self.t,
+                    message,
+                    state: self.state_vec(),
+                });
+            }
+        }
+        Ok(())
+    }
+
+    /// Earliest guard crossing within the step as (theta, guard index).
+    fn locate_event(&self, sys: &S, step: &Step<N>) -> Option<(f64, usize)> {
+        const PROBES: [f64; 3] = [1.0 / 3.0, 2.0 / 3.0, 1.0];
+        let g0 = sys.guards(self.mode, step.t0, &step.y0);
+        let mut best: Option<(f64, usize)> = None;
+        let mut lo_theta = [0.0; MAX_GUARDS];
+        let mut lo_val = g0;
+        let mut found = [false; MAX_GUARDS];
+        let mut hi_theta = [1.0; MAX_GUARDS];
+        let mut hi_val = [0.0; MAX_GUARDS];
+        for &th in &PROBES {
+            let y = if th == 1.0 {
+                step.y1
+            } else {
+                step.at_theta(th)
+            };
+            let g = sys.guards(self.mode, step.t0 + th * step.h, &y);
+            for i in 0..MAX_GUARDS {
+                if found[i] {
+                    continue;
+                }
+                if g[i] > 0.0 {
+                    found[i] = true;
+                    hi_theta[i] = th;
+                    hi_val[i] = g[i];
+                } else {
+                    lo_theta[i] = th;
+                    lo_val[i] = g[i];
+                }
+            }
+        }
+        for i in 0..MAX_GUARDS {
+            if !found[i] {
+                continue;
+            }
+            if best.is_some_and(|(b, _)| b <= lo_theta[i]) {
+                continue;
+            }
+            let th = self.illinois(sys, step, i, lo_theta[i], lo_val[i], hi_theta[i], hi_val[i]);
+            if best.is_none_or(|(b, _)| th < b) {
+                best = Some((th, i));
+            }
+        }
+        best
+    }
+
+    /// Illinois (modified regula falsi) on the dense output; returns the upper end of the final
+    /// bracket, so the event is never placed before the crossing.
+    #[allow(clippy::too_many_arguments)]
+    fn illinois(
+        &self,
+        sys: &S,
+        step: &Step<N>,
+        i: usize,
+        mut a: f64,
+        mut ga: f64,
+        mut b: f64,
+        mut gb: f64,
+    ) -> f64 {
+        let tol = self.opts.event_time_tol / step.h;
+        let mut side = 0i8;
+        for _ in 0..200 {
+            if b - a <= tol {
+                break;
+            }
+            let mut c = (a * gb - b * ga) / (gb - ga);
+            if !(c > a && c < b) {
+                c = 0.5 * (a + b);
+            }
+            let gc = sys.guards(self.mode, step.t0 + c * step.h, &step.at_theta(c))[i];
+            if gc > 0.0 {
+                b = c;
+                gb = gc;
+                if side == 1 {
+                    ga *= 0.5;
+                }
+                side = 1;
+            } else {
+                a = c;
+                ga = gc;
+                if side == -1 {
+                    gb *= 0.5;
+                }
+                side = -1;
+            }
+        }
+        b
+    }
+}

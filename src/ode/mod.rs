@@ -1,0 +1,200 @@
+//! Adaptive Dormand-Prince 5(4) integrator with dense output and event location for hybrid
+//! (piecewise-smooth) systems.
+//!
+//! # Why it is hand-written
+//! The end-stop model switches its right-hand side when the proof mass touches or leaves a
+//! stop. An integrator that steps across such a switch sees a non-smooth right-hand side, its
+//! error estimate breaks down, and the contact time is only known to within one step. At the
+//! time of writing no Rust crate locates events on the dense output and steps onto them
+//! (`differential-equations` 0.7 misplaces events, `ode_solvers` has none), so this module does.
+//!
+//! # Conventions
+//! * A [`HybridSystem`] has a discrete `Mode`. Within one step the mode is fixed, so the
+//!   right-hand side is smooth over the step.
+//! * In each mode the system exposes up to [`MAX_GUARDS`] guard functions g_i(t, y). A guard
+//!   that becomes **positive** asks to leave the mode. After each accepted step the guards are
+//!   evaluated at the end point and at two interior points of the dense output; the earliest
+//!   sign change from <= 0 to > 0 is located by the Illinois method on the dense output to a
+//!   time tolerance of [`Options::event_time_tol`] seconds, and the step is **re-taken** from
+//!   its start with exactly the length that lands on the event. The system then picks the new
+//!   mode (and may project the state, e.g. put x exactly on the stop).
+//! * A guard that is already positive at the start of a step (a mode entered at a grazing
+//!   point) fires at once.
+//! * The system may also impose breakpoints (the sample instants of a sampled input, the ends
+//!   of whole periods): no step crosses a breakpoint.
+//! * Error norm: RMS over components of err_i / (atol_i + rtol max(|y0_i|, |y1_i|)); a step is
+//!   accepted when the norm is <= 1. Step-size factor 0.9 err^(-1/5), limited to [0.2, 10].
+//! * Dense output: the 4th-order continuous extension of Hairer, Norsett and Wanner (the
+//!   `contd5` of their DOPRI5 code).
+
+mod dopri5;
+
+use std::ops::AddAssign;
+
+use nalgebra::SVector;
+use thiserror::Error;
+
+pub use dopri5::Dopri5;
+
+/// Maximum number of guard functions of one mode.
+pub const MAX_GUARDS: usize = 3;
+
+/// Guard values of one mode; unused entries are `f64::NEG_INFINITY`.
+pub type Guards = [f64; MAX_GUARDS];
+
+/// A piecewise-smooth ODE system y' = f_mode(t, y).
+pub trait HybridSystem<const N: usize> {
+    /// Discrete mode (e.g. free flight or contact with one stop).
+    type Mode: Copy + PartialEq + std::fmt::Debug;
+
+    /// Right-hand side in a given mode.
+    fn rhs(&self, mode: Self::Mode, t: f64, y: &SVector<f64, N>) -> SVector<f64, N>;
+
+    /// Guard functions of a mode: a guard > 0 asks to leave the mode.
+    fn guards(&self, mode: Self::Mode, t: f64, y: &SVector<f64, N>) -> Guards;
+
+    /// Called when guard `index` of `mode` fires at time `t`: returns the new mode and may
+    /// adjust the state (a projection within the integration tolerance).
+    fn switch(&self, mode: Self::Mode, index: usize, t: f64, y: &mut SVector<f64, N>)
+        -> Self::Mode;
+
+    /// The first breakpoint strictly after `t` that no step may cross (default: none).
+    fn next_breakpoint(&self, _t: f64) -> f64 {
+        f64::INFINITY
+    }
+
+    /// Checks that a state is physically admissible; an `Err` stops the integration.
+    fn check_state(&self, _mode: Self::Mode, _t: f64, _y: &SVector<f64, N>) -> Result<(), String> {
+        Ok(())
+    }
+}
+
+/// Integrator failure, with the simulated time and state where it happened.
+#[derive(Debug, Error, Clone, PartialEq)]
+pub enum SolverError {
+    /// The step size fell below [`Options::h_min`].
+    #[error("step size {h:e} s below the minimum at t = {t:e} s (state {state:?})")]
+    StepSizeTooSmall {
+        /// Simulated time (s).
+        t: f64,
+        /// Rejected step size (s).
+        h: f64,
+        /// State at `t`.
+        state: Vec<f64>,
+    },
+    /// A stage or the state became NaN or infinite.
+    #[error("non-finite state at t = {t:e} s (state {state:?})")]
+    NonFinite {
+        /// Simulated time (s).
+        t: f64,
+        /// State at `t`.
+        state: Vec<f64>,
+    },
+    /// More than [`Options::max_steps`] steps in one call.
+    #[error(
+        "more than {max_steps} steps before reaching t = {t_end:e} s (stopped at t = {t:e} s)"
+    )]
+    TooManySteps {
+        /// Step limit.
+        max_steps: u64,
+        /// Time reached (s).
+        t: f64,
+        /// Requested end time (s).
+        t_end: f64,
+    },
+    /// The system reported an inadmissible state.
+    #[error("inadmissible state at t = {t:e} s: {message} (state {state:?})")]
+    InvalidState {
+        /// Simulated time (s).
+        t: f64,
+        /// The system's message.
+        message: String,
+        /// State at `t`.
+        state: Vec<f64>,
+    },
+}
+
+/// Integrator options.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Options<const N: usize> {
+    /// Relative tolerance.
+    pub rtol: f64,
+    /// Absolute tolerance per component (in the component's units).
+    pub atol: SVector<f64, N>,
+    /// Largest step (s).
+    pub h_max: f64,
+    /// Smallest step before giving up (s).
+    pub h_min: f64,
+    /// First trial step (s).
+    pub h_init: f64,
+    /// Maximum number of accepted + rejected steps per [`Dopri5::integrate`] call.
+    pub max_steps: u64,
+    /// Time tolerance for event location (s).
+    pub event_time_tol: f64,
+}
+
+/// Counters, for benchmarks and convergence reports.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct Stats {
+    /// Accepted steps (including the re-taken steps that land on events).
+    pub accepted: u64,
+    /// Rejected steps.
+    pub rejected: u64,
+    /// Right-hand-side evaluations.
+    pub rhs_evals: u64,
+    /// Events (mode switches).
+    pub events: u64,
+}
+
+impl AddAssign for Stats {
+    fn add_assign(&mut self, other: Stats) {
+        self.accepted += other.accepted;
+        self.rejected += other.rejected;
+        self.rhs_evals += other.rhs_evals;
+        self.events += other.events;
+    }
+}
+
+/// One accepted step, with its dense output, as seen by an observer.
+#[derive(Debug, Clone)]
+pub struct Step<const N: usize> {
+    /// Start time (s).
+    pub t0: f64,
+    /// Step length (s).
+    pub h: f64,
+    /// State at the start.
+    pub y0: SVector<f64, N>,
+    /// State at the end.
+    pub y1: SVector<f64, N>,
+    rcont: [SVector<f64, N>; 5],
+}
+
+impl<const N: usize> Step<N> {
+    /// End time (s).
+    pub fn t1(&self) -> f64 {
+        self.t0 + self.h
+    }
+
+    /// Dense output at theta = (t - t0)/h in [0, 1].
+    pub fn at_theta(&self, theta: f64) -> SVector<f64, N> {
+        let th1 = 1.0 - theta;
+        let r = &self.rcont;
+        r[0] + (r[1] + (r[2] + (r[3] + r[4] * th1) * theta) * th1) * theta
+    }
+
+    /// Dense output at time t (s), t in [t0, t0 + h].
+    pub fn at(&self, t: f64) -> SVector<f64, N> {
+        self.at_theta((t - self.t0) / self.h)
+    }
+
+    /// Integral over the step of `f(y(t))` by 3-point Gauss-Legendre on the dense output.
+    pub fn integrate<F: Fn(&SVector<f64, N>) -> f64>(&self, f: F) -> f64 {
+        const X: [f64; 3] = [0.112_701_665_379_258_3, 0.5, 0.887_298_334_620_741_7];
+        const W: [f64; 3] = [5.0 / 18.0, 8.0 / 18.0, 5.0 / 18.0];
+        let mut s = 0.0;
+        for i in 0..3 {
+            s += W[i] * f(&self.at_theta(X[i]));
+        }
+        s * self.h
+    }
+}

@@ -1,0 +1,450 @@
+//! Claims of the paper, our values, tolerances and verdicts.
+//!
+//! `data/claims.toml` lists every number the paper claims, each in a tolerance class fixed
+//! before any of our results existed ([`ToleranceClass`]). It is compiled into the crate
+//! ([`Claims::bundled`]) so that the figures' `claims` functions, the tests and the scorecard
+//! read the same file. Experiments emit [`Value`] rows keyed by (claim id, quantity, parameter
+//! set); [`score`] joins them into [`Row`]s with a [`Verdict`]:
+//!
+//! * quantitative: `reproduced` iff |ours - paper| <= max(tol_rel |paper|, tol_abs);
+//! * qualitative (paper = 1.0 for "yes"): `reproduced` iff ours == paper;
+//! * no value from us yet: `not yet`.
+//!
+//! A value whose (claim, quantity) matches no claim is an error ([`ClaimsError::Unknown`]): a
+//! typo in a key must not drop a number from the scorecard silently.
+
+use std::collections::BTreeMap;
+
+use serde::{Deserialize, Serialize};
+use thiserror::Error;
+
+/// The claims file as compiled into the crate.
+pub const CLAIMS_TOML: &str = include_str!("../../data/claims.toml");
+
+/// Errors of the claims file and of scoring.
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum ClaimsError {
+    /// The file is not valid TOML for the claims schema.
+    #[error("data/claims.toml: {0}")]
+    Parse(String),
+    /// A claim names a tolerance class that the file does not define.
+    #[error("data/claims.toml: claim ({id}, {quantity}) has class `{class}`, which is not defined under [class]")]
+    UnknownClass {
+        /// Claim id.
+        id: String,
+        /// Quantity key.
+        quantity: String,
+        /// The class named.
+        class: String,
+    },
+    /// Two claims share an (id, quantity) key.
+    #[error("data/claims.toml: claim ({id}, {quantity}) appears twice")]
+    Duplicate {
+        /// Claim id.
+        id: String,
+        /// Quantity key.
+        quantity: String,
+    },
+    /// A value matches no claim.
+    #[error(
+        "value ({claim}, {quantity}) for set `{set}` = {ours} matches no claim in data/claims.toml"
+    )]
+    Unknown {
+        /// Claim id of the value.
+        claim: String,
+        /// Quantity key of the value.
+        quantity: String,
+        /// Parameter set of the value.
+        set: String,
+        /// The value.
+        ours: f64,
+    },
+}
+
+/// A tolerance class: how close our value must be to the paper's for `reproduced`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ToleranceClass {
+    /// Relative tolerance.
+    #[serde(default)]
+    pub tol_rel: f64,
+    /// Absolute tolerance, in the claim's unit.
+    #[serde(default)]
+    pub tol_abs: f64,
+    /// What the class covers and why.
+    pub why: String,
+}
+
+/// Whether a claim is a number or a yes/no statement.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Kind {
+    /// A number with a tolerance.
+    Quantitative,
+    /// A yes/no statement (1.0 = yes).
+    Qualitative,
+}
+
+/// One number claimed by the paper, with its tolerance resolved from its class.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Claim {
+    /// Claim id, e.g. `F8-c`.
+    pub id: String,
+    /// Figure or table.
+    pub figure: String,
+    /// Quantity key within the claim.
+    pub quantity: String,
+    /// What is compared.
+    pub text: String,
+    /// Experiment that produces our value.
+    pub experiment: String,
+    /// Unit of `paper` and our value.
+    pub unit: String,
+    /// The paper's value.
+    pub paper: f64,
+    /// Quantitative, or qualitative (the class `qualitative`).
+    pub kind: Kind,
+    /// Name of the tolerance class.
+    pub class: String,
+    /// Relative tolerance (from the class).
+    pub tol_rel: f64,
+    /// Absolute tolerance in `unit`: the class's, or half a unit of the paper's last printed
+    /// digit for analytic quantities.
+    pub tol_abs: f64,
+    /// Why this tolerance (the class's reason).
+    pub why: String,
+    /// A remark on how the claim is judged.
+    pub note: String,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ClaimEntry {
+    id: String,
+    figure: String,
+    quantity: String,
+    text: String,
+    experiment: String,
+    unit: String,
+    paper: f64,
+    class: String,
+    #[serde(default)]
+    printed_half_unit: Option<f64>,
+    #[serde(default)]
+    note: String,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ClaimsFile {
+    class: BTreeMap<String, ToleranceClass>,
+    claim: Vec<ClaimEntry>,
+}
+
+/// The claims file: tolerance classes and claims.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Claims {
+    /// Tolerance classes by name.
+    pub classes: BTreeMap<String, ToleranceClass>,
+    /// Every claim, in file order.
+    pub claims: Vec<Claim>,
+}
+
+impl Claims {
+    /// Parses and checks the text of a claims file: every class named exists, every
+    /// (id, quantity) is unique.
+    pub fn parse(text: &str) -> Result<Self, ClaimsError> {
+        let f: ClaimsFile = toml::from_str(text).map_err(|e| ClaimsError::Parse(e.to_string()))?;
+        let mut claims: Vec<Claim> = Vec::with_capacity(f.claim.len());
+        for e in f.claim {
+            let class = f
+                .class
+                .get(&e.class)
+                .ok_or_else(|| ClaimsError::UnknownClass {
+                    id: e.id.clone(),
+                    quantity: e.quantity.clone(),
+                    class: e.class.clone(),
+                })?;
+            if claims
+                .iter()
+                .any(|c| c.id == e.id && c.quantity == e.quantity)
+            {
+                return Err(ClaimsError::Duplicate {
+                    id: e.id,
+                    quantity: e.quantity,
+                });
+            }
+            claims.push(Claim {
+                kind: if e.class == "qualitative" {
+                    Kind::Qualitative
+                } else {
+                    Kind::Quantitative
+                },
+                tol_rel: class.tol_rel,
+                tol_abs: e.printed_half_unit.unwrap_or(class.tol_abs),
+                why: class.why.clone(),
+                id: e.id,
+                figure: e.figure,
+                quantity: e.quantity,
+                text: e.text,
+                experiment: e.experiment,
+                unit: e.unit,
+                paper: e.paper,
+                class: e.class,
+                note: e.note,
+            });
+        }
+        Ok(Self {
+            classes: f.class,
+            claims,
+        })
+    }
+
+    /// The claims file compiled into the crate ([`CLAIMS_TOML`]).
+    pub fn bundled() -> Result<Self, ClaimsError> {
+        Self::parse(CLAIMS_TOML)
+    }
+
+    /// The claim with this id and quantity.
+    pub fn get(&self, id: &str, quantity: &str) -> Option<&Claim> {
+        self.claims
+            .iter()
+            .find(|c| c.id == id && c.quantity == quantity)
+    }
+
+    /// A tolerance class by name.
+    pub fn class(&self, name: &str) -> Option<&ToleranceClass> {
+        self.classes.get(name)
+    }
+
+    /// The claims an experiment produces, in file order.
+    pub fn of_experiment<'a>(&'a self, experiment: &'a str) -> impl Iterator<Item = &'a Claim> {
+        self.claims
+            .iter()
+            .filter(move |c| c.experiment == experiment)
+    }
+}
+
+/// Our value for a claim's quantity under one parameter set.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Value {
+    /// Claim id.
+    pub claim: String,
+    /// Quantity key.
+    pub quantity: String,
+    /// Parameter set (`published`, `calibrated`).
+    pub set: String,
+    /// Our value (qualitative: 1.0 yes, 0.0 no).
+    pub ours: f64,
+    /// Optional uncertainty of our value (same unit), e.g. a bracket half-width or a 95 % CI.
+    #[serde(default)]
+    pub uncertainty: Option<f64>,
+}
+
+/// Outcome of a comparison.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Verdict {
+    /// Within tolerance.
+    #[serde(rename = "reproduced")]
+    Reproduced,
+    /// Outside tolerance: our value is reported.
+    #[serde(rename = "deviates")]
+    Deviates,
+    /// No value from us yet.
+    #[serde(rename = "not yet")]
+    NotYet,
+}
+
+impl Verdict {
+    /// The label used in files and the book.
+    pub fn label(self) -> &'static str {
+        match self {
+            Verdict::Reproduced => "reproduced",
+            Verdict::Deviates => "deviates",
+            Verdict::NotYet => "not yet",
+        }
+    }
+}
+
+impl Claim {
+    /// Effective absolute tolerance max(tol_rel |paper|, tol_abs).
+    pub fn tolerance(&self) -> f64 {
+        (self.tol_rel * self.paper.abs()).max(self.tol_abs)
+    }
+
+    /// Verdict for our value.
+    pub fn verdict(&self, ours: Option<f64>) -> Verdict {
+        match ours {
+            None => Verdict::NotYet,
+            Some(v) if !v.is_finite() => Verdict::Deviates,
+            Some(v) => {
+                let within = match self.kind {
+                    Kind::Qualitative => (v - self.paper).abs() < 0.5,
+                    Kind::Quantitative => (v - self.paper).abs() <= self.tolerance(),
+                };
+                if within {
+                    Verdict::Reproduced
+                } else {
+                    Verdict::Deviates
+                }
+            }
+        }
+    }
+}
+
+/// A scorecard row.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Row {
+    /// Claim id.
+    pub claim: String,
+    /// Quantity key.
+    pub quantity: String,
+    /// Parameter set.
+    pub set: String,
+    /// The paper's value.
+    pub paper: f64,
+    /// Our value (None: not yet).
+    pub ours: Option<f64>,
+    /// Uncertainty of our value, if known.
+    pub uncertainty: Option<f64>,
+    /// Unit.
+    pub unit: String,
+    /// Effective absolute tolerance.
+    pub tolerance: f64,
+    /// Verdict.
+    pub verdict: Verdict,
+    /// What is compared.
+    pub text: String,
+    /// A remark on the row (e.g. that a value is a calibration target, not a prediction).
+    #[serde(default)]
+    pub note: String,
+}
+
+/// Joins claims with our values: one row per claim number and per parameter set that has a
+/// value; a claim with no value at all gets one `not yet` row for the `published` set. A value
+/// that matches no claim is an error naming it.
+pub fn score(claims: &Claims, values: &[Value]) -> Result<Vec<Row>, ClaimsError> {
+    if let Some(v) = values
+        .iter()
+        .find(|v| claims.get(&v.claim, &v.quantity).is_none())
+    {
+        return Err(ClaimsError::Unknown {
+            claim: v.claim.clone(),
+            quantity: v.quantity.clone(),
+            set: v.set.clone(),
+            ours: v.ours,
+        });
+    }
+    let mut rows = Vec::new();
+    for c in &claims.claims {
+        let mine: Vec<&Value> = values
+            .iter()
+            .filter(|v| v.claim == c.id && v.quantity == c.quantity)
+            .collect();
+        let mut push = |set: &str, ours: Option<f64>, unc: Option<f64>| {
+            rows.push(Row {
+                claim: c.id.clone(),
+                quantity: c.quantity.clone(),
+                set: set.to_string(),
+                paper: c.paper,
+                ours,
+                uncertainty: unc,
+                unit: c.unit.clone(),
+                tolerance: c.tolerance(),
+                verdict: c.verdict(ours),
+                text: c.text.clone(),
+                note: String::new(),
+            })
+        };
+        if mine.is_empty() {
+            push("published", None, None);
+        }
+        for v in mine {
+            push(&v.set, Some(v.ours), v.uncertainty);
+        }
+    }
+    Ok(rows)
+}
+
+/// Our value for one number of a claim (`data/claims.toml`), with a note for the book.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ClaimValue {
+    /// Claim id, e.g. `F8-c`.
+    pub id: &'static str,
+    /// Quantity key.
+    pub quantity: &'static str,
+    /// Our value (qualitative: 1 yes, 0 no).
+    pub value: f64,
+    /// Uncertainty (bracket half-width), same unit.
+    pub uncertainty: Option<f64>,
+    /// What the value is (e.g. "loss of contact, no jump").
+    pub note: String,
+}
+
+pub(crate) fn bool_value(
+    id: &'static str,
+    quantity: &'static str,
+    yes: bool,
+    note: String,
+) -> ClaimValue {
+    ClaimValue {
+        id,
+        quantity,
+        value: if yes { 1.0 } else { 0.0 },
+        uncertainty: None,
+        note,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn value(claim: &str, quantity: &str, ours: f64) -> Value {
+        Value {
+            claim: claim.into(),
+            quantity: quantity.into(),
+            set: "published".into(),
+            ours,
+            uncertainty: None,
+        }
+    }
+
+    #[test]
+    fn the_bundled_file_parses_with_resolved_tolerances() {
+        let c = Claims::bundled().expect("data/claims.toml parses");
+        let f = c.get("F8-c", "jump_hertz_bim1p5_hz").expect("F8-c");
+        assert_eq!(f.tol_rel, c.class("frequency").unwrap().tol_rel);
+        let d = c.get("F5-a", "delta0_p1_um").expect("F5-a");
+        assert_eq!((d.tol_rel, d.tol_abs), (0.01, 0.5));
+    }
+
+    #[test]
+    fn a_value_matching_no_claim_is_an_error_naming_it() {
+        let c = Claims::bundled().unwrap();
+        let ok = score(&c, &[value("F8-c", "jump_hertz_bim1p5_hz", 1425.0)]).unwrap();
+        assert!(ok
+            .iter()
+            .any(|r| r.claim == "F8-c" && r.verdict == Verdict::Reproduced));
+        let err = score(&c, &[value("F8-c", "jump_hertz_bim1p5", 1425.0)]).unwrap_err();
+        let msg = err.to_string();
+        assert!(
+            msg.contains("(F8-c, jump_hertz_bim1p5)") && msg.contains("published"),
+            "{msg}"
+        );
+    }
+
+    #[test]
+    fn an_unknown_class_or_a_duplicate_is_rejected() {
+        let text = CLAIMS_TOML.replacen("class = \"frequency\"", "class = \"freq\"", 1);
+        assert!(matches!(
+            Claims::parse(&text),
+            Err(ClaimsError::UnknownClass { .. })
+        ));
+        let first = CLAIMS_TOML.find("\n[[claim]]").unwrap() + 1;
+        let second = CLAIMS_TOML[first..].find("\n[[claim]]").unwrap() + first + 1;
+        let dup = format!("{}\n{}", CLAIMS_TOML, &CLAIMS_TOML[first..second]);
+        let r = Claims::parse(&dup);
+        assert!(matches!(r, Err(ClaimsError::Duplicate { .. })), "{r:?}");
+    }
+}

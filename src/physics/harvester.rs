@@ -1,0 +1,279 @@
+//! The lumped electromechanical model with end-stops (eqs 1-2 and 7-10).
+//!
+//! Mechanics (eq 7): m x'' + b x' + km x + F_e + F_im = m a(t).
+//!
+//! Transducers (eq 10): C_1,2(x) = C0 (1 +- x/x0), each with Cp in parallel. The bias Vb is on
+//! the proof mass; fixed electrode i is a node with voltage V_i that goes to ground through RL
+//! in parallel with CL. With node charge Q_i = (C_i + Cp)(V_i - Vb) + CL V_i (eq 8 plus the
+//! load capacitor), the explicit state is (x, v, s_1, s_2) where s_i = Q_i + (C0 + Cp) Vb is
+//! the node charge measured from its rest value (so that the state has no large constant
+//! offset, which would spoil the relative error control):
+//!
+//! * V_i = (s_i + (C_i - C0) Vb) / (C_i + Cp + CL),
+//! * ds_i/dt = -V_i / RL,
+//! * electrostatic force on the mass +1/2 sum_i (V_i - Vb)^2 dC_i/dx (eq 9, i.e. -F_e of eq 7).
+//!
+//! End-stop (eqs 1-2): for |x| > xmax, delta = |x| - xmax and
+//! F_im = sign(x) (F_k(delta) + b_im d(delta)/dt) with F_k the Hertz law (eq 6) or the linear
+//! law of eq 19. With `tension_free` the bracket is clipped at zero, so the stop never pulls.
+//!
+//! Modes for the integrator ([`crate::physics::contact::Mode`]): `Free`, `Contact(side)` and (tension-free only) `Clipped(side)`,
+//! where the mass is past the stop but the contact force would be tensile.
+
+use nalgebra::SVector;
+
+use crate::device::{Device, StiffnessModel};
+use crate::drive::Excitation;
+use crate::ode::{Guards, HybridSystem, Options};
+use crate::physics::contact::{ContactLaw, Mode, Side};
+use crate::physics::hertz::HertzLine;
+
+/// State (x [m], v [m/s], s1 [C], s2 [C]).
+pub type State = SVector<f64, 4>;
+
+/// The harvester driven by an excitation: a [`HybridSystem`] of dimension 4.
+#[derive(Debug, Clone)]
+pub struct Harvester<E: Excitation> {
+    /// Proof mass m (kg).
+    pub mass_kg: f64,
+    /// Mechanical damping b (N s/m).
+    pub damping: f64,
+    /// Suspension stiffness km (N/m).
+    pub km: f64,
+    /// Finger overlap x0 (m).
+    pub x0: f64,
+    /// End-stop position xmax (m).
+    pub xmax: f64,
+    /// C0 (F).
+    pub c0: f64,
+    /// Cp (F).
+    pub cp: f64,
+    /// CL (F).
+    pub cl: f64,
+    /// RL (ohm).
+    pub rl: f64,
+    /// Vb (V).
+    pub vb: f64,
+    /// Spring law of the stop.
+    pub law: ContactLaw,
+    /// End-stop damping b_im (N s/m).
+    pub bim: f64,
+    /// Clip the contact force at zero.
+    pub tension_free: bool,
+    /// The base acceleration.
+    pub excitation: E,
+}
+
+/// Derived electrical quantities at one state.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Electrical {
+    /// Node voltages V1, V2 (V).
+    pub v: [f64; 2],
+    /// Transducer capacitances C1, C2 (F).
+    pub c: [f64; 2],
+}
+
+impl<E: Excitation> Harvester<E> {
+    /// Builds the model of a device (at its bias voltage and end-stop options).
+    pub fn new(device: &Device, excitation: E) -> Self {
+        let law = match device.endstop.stiffness {
+            StiffnessModel::Hertz => ContactLaw::Hertz(HertzLine::of(device)),
+            StiffnessModel::Linear => ContactLaw::Linear(device.linear_endstop_stiffness_n_per_m()),
+        };
+        let e = &device.electrical;
+        Self {
+            mass_kg: device.mechanics.mass_kg,
+            damping: device.mechanics.damping_n_s_per_m,
+            km: device.mechanics.stiffness_n_per_m,
+            x0: device.geometry.finger_overlap_m,
+            xmax: device.geometry.endstop_gap_m,
+            c0: e.c0_f,
+            cp: e.cp_f,
+            cl: e.load_capacitance_f,
+            rl: e.load_resistance_ohm,
+            vb: e.bias_v,
+            law,
+            bim: device.endstop.damping_n_s_per_m,
+            tension_free: device.endstop.tension_free,
+            excitation,
+        }
+    }
+
+    /// Replaces the excitation, keeping the device.
+    pub fn with_excitation<F: Excitation>(&self, excitation: F) -> Harvester<F> {
+        Harvester {
+            mass_kg: self.mass_kg,
+            damping: self.damping,
+            km: self.km,
+            x0: self.x0,
+            xmax: self.xmax,
+            c0: self.c0,
+            cp: self.cp,
+            cl: self.cl,
+            rl: self.rl,
+            vb: self.vb,
+            law: self.law,
+            bim: self.bim,
+            tension_free: self.tension_free,
+            excitation,
+        }
+    }
+
+    /// The rest state: x = v = 0 and both node voltages zero.
+    pub fn rest_state(&self) -> State {
+        State::zeros()
+    }
+
+    /// Capacitances and node voltages at a state.
+    #[inline]
+    pub fn electrical(&self, y: &State) -> Electrical {
+        let dc = self.c0 * y[0] / self.x0;
+        let c1 = self.c0 + dc;
+        let c2 = self.c0 - dc;
+        let v1 = (y[2] + dc * self.vb) / (c1 + self.cp + self.cl);
+        let v2 = (y[3] - dc * self.vb) / (c2 + self.cp + self.cl);
+        Electrical {
+            v: [v1, v2],
+            c: [c1, c2],
+        }
+    }
+
+    /// Penetration delta into the stop on `side` (m; negative when not touching).
+    #[inline]
+    pub fn penetration(&self, side: Side, x: f64) -> f64 {
+        side.sign() * x - self.xmax
+    }
+
+    /// The bracket F_k(delta) + b_im d(delta)/dt of eq 1 for a side (N).
+    #[inline]
+    pub fn contact_bracket(&self, side: Side, y: &State) -> f64 {
+        let delta = self.penetration(side, y[0]);
+        self.law.force(delta) + self.bim * side.sign() * y[1]
+    }
+
+    /// End-stop force F_im of eq 1 in a mode (N, along +x, as in eq 7's left-hand side).
+    #[inline]
+    pub fn endstop_force(&self, mode: Mode, y: &State) -> f64 {
+        match mode {
+            Mode::Contact(side) => {
+                let b = self.contact_bracket(side, y);
+                let b = if self.tension_free { b.max(0.0) } else { b };
+                side.sign() * b
+            }
+            _ => 0.0,
+        }
+    }
+
+    /// Electrostatic force on the mass, +1/2 sum (V_i - Vb)^2 dC_i/dx (N).
+    #[inline]
+    pub fn electrostatic_force(&self, el: &Electrical) -> f64 {
+        let dcdx = self.c0 / self.x0;
+        let u1 = el.v[0] - self.vb;
+        let u2 = el.v[1] - self.vb;
+        0.5 * dcdx * (u1 * u1 - u2 * u2)
+    }
+
+    /// Characteristic scales of (x, v, s1, s2), used for absolute tolerances.
+    pub fn scales(&self) -> State {
+        let w0 = ((self.km) / self.mass_kg).sqrt();
+        let x = self.xmax;
+        let q = self.c0 * self.vb.max(1.0) * x / self.x0;
+        State::new(x, w0 * x, q, q)
+    }
+
+    /// Integrator options with relative tolerance `rtol` and absolute tolerances
+    /// `rtol` times [`Harvester::scales`].
+    pub fn solver_options(&self, rtol: f64) -> Options<4> {
+        let w0 = (self.km / self.mass_kg).sqrt();
+        Options {
+            rtol,
+            atol: self.scales() * rtol,
+            h_max: 0.02 * 2.0 * std::f64::consts::PI / w0,
+            h_min: 1e-16,
+            h_init: 1e-7,
+            max_steps: 50_000_000,
+            event_time_tol: 1e-14,
+        }
+    }
+}
+
+impl<E: Excitation> HybridSystem<4> for Harvester<E> {
+    type Mode = Mode;
+
+    #[inline]
+    fn rhs(&self, mode: Mode, t: f64, y: &State) -> State {
+        let el = self.electrical(y);
+        let f = self.mass_kg * self.excitation.accel(t) - self.damping * y[1] - self.km * y[0]
+            + self.electrostatic_force(&el)
+            - self.endstop_force(mode, y);
+        State::new(
+            y[1],
+            f / self.mass_kg,
+            -el.v[0] / self.rl,
+            -el.v[1] / self.rl,
+        )
+    }
+
+    #[inline]
+    fn guards(&self, mode: Mode, _t: f64, y: &State) -> Guards {
+        const OFF: f64 = f64::NEG_INFINITY;
+        match mode {
+            Mode::Free => [
+                self.penetration(Side::Upper, y[0]),
+                self.penetration(Side::Lower, y[0]),
+                OFF,
+            ],
+            Mode::Contact(side) => [
+                -self.penetration(side, y[0]),
+                if self.tension_free {
+                    -self.contact_bracket(side, y)
+                } else {
+                    OFF
+                },
+                OFF,
+            ],
+            Mode::Clipped(side) => [
+                -self.penetration(side, y[0]),
+                self.contact_bracket(side, y),
+                OFF,
+            ],
+        }
+    }
+
+    fn switch(&self, mode: Mode, index: usize, _t: f64, y: &mut State) -> Mode {
+        match (mode, index) {
+            (Mode::Free, 0) => {
+                y[0] = self.xmax;
+                Mode::Contact(Side::Upper)
+            }
+            (Mode::Free, _) => {
+                y[0] = -self.xmax;
+                Mode::Contact(Side::Lower)
+            }
+            (Mode::Contact(side), 0) | (Mode::Clipped(side), 0) => {
+                y[0] = side.sign() * self.xmax;
+                Mode::Free
+            }
+            (Mode::Contact(side), _) => Mode::Clipped(side),
+            (Mode::Clipped(side), _) => Mode::Contact(side),
+        }
+    }
+
+    fn next_breakpoint(&self, t: f64) -> f64 {
+        self.excitation.next_breakpoint(t)
+    }
+
+    fn check_state(&self, _mode: Mode, t: f64, y: &State) -> Result<(), String> {
+        let el = self.electrical(y);
+        if el.c[0] + self.cp <= 0.0 || el.c[1] + self.cp <= 0.0 {
+            return Err(format!(
+                "a transducer capacitance plus Cp is not positive at t = {t:e} s \
+                 (x = {:e} m): C1+Cp = {:e} F, C2+Cp = {:e} F",
+                y[0],
+                el.c[0] + self.cp,
+                el.c[1] + self.cp
+            ));
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,274 @@
+//! Welch power spectral density, matching `scipy.signal.welch`.
+//!
+//! # Conventions
+//!
+//! [`welch`] follows `scipy.signal.welch` with its defaults except the segment length
+//! (`window='hann', detrend='constant', return_onesided=True, scaling='density',
+//! average='mean'`), so `welch(x, fs, &WelchConfig { nperseg, noverlap })` equals
+//! `scipy.signal.welch(x, fs=fs, nperseg=nperseg, noverlap=noverlap)` to rounding.
+//!
+//! * **Segments.** Segment `j` is `x[j·step .. j·step + nperseg]` with
+//!   `step = nperseg - noverlap`; only full segments are used (a tail shorter than `nperseg`
+//!   is dropped, no padding), so there are `(len - nperseg) / step + 1` of them.
+//! * **Detrend.** Each segment's own mean is subtracted before windowing (`'constant'`).
+//! * **Window.** Periodic Hann, `w[n] = 0.5 - 0.5 cos(2πn / nperseg)` for
+//!   `n = 0..nperseg` (scipy's `get_window('hann', nperseg)`, which is periodic: `fftbins=True`).
+//! * **Transform.** An un-normalised forward DFT of length `nperseg` (no zero padding),
+//!   `X_k = Σ_n w[n] (x[n] - mean) e^{-2πikn/nperseg}`.
+//! * **Scaling.** Density: `|X_k|² / (fs Σ w²)`, in *units²/Hz* where *units* are those of `x`
+//!   (m²/s⁴/Hz for an acceleration in m/s²). With this scaling the integral of the PSD is the
+//!   variance (Parseval), for any window.
+//! * **One-sided.** Bins `k = 0..=nperseg/2` at `f_k = k fs / nperseg` Hz (`0..=fs/2`); every
+//!   bin except DC and, for even `nperseg`, Nyquist is doubled, so the one-sided density of
+//!   white noise is twice its two-sided level.
+//! * **Averaging.** Arithmetic mean of the segment periodograms (`average='mean'`).
+//!
+//! Bandwidths ([`crate::signal::width_at_fraction`]) are read from the density as given: no smoothing is
+
+use rustfft::num_complex::Complex;
+use rustfft::FftPlannerScalar;
+use thiserror::Error;
+
+/// Segmenting of a Welch estimate: segment length and overlap, in samples.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct WelchConfig {
+    /// Segment (and DFT) length, samples. Bin spacing is `fs / nperseg`.
+    pub nperseg: usize,
+    /// Samples shared by consecutive segments; must be below `nperseg`.
+    pub noverlap: usize,
+}
+
+impl WelchConfig {
+    /// Segments of `nperseg` samples with 50 % overlap (`noverlap = nperseg / 2`), the paper's
+    /// choice and scipy's default overlap.
+    pub fn half_overlap(nperseg: usize) -> Self {
+        Self {
+            nperseg,
+            noverlap: nperseg / 2,
+        }
+    }
+}
+
+/// Errors from [`welch`].
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum SpectralError {
+    /// `nperseg` is zero.
+    #[error("welch: nperseg = 0 is invalid; expected 1 <= nperseg <= signal length")]
+    NpersegZero,
+    /// `nperseg` exceeds the number of samples.
+    #[error(
+        "welch: nperseg = {nperseg} is invalid; expected 1 <= nperseg <= signal length = {len}"
+    )]
+    NpersegTooLong {
+        /// Requested segment length.
+        nperseg: usize,
+        /// Number of samples in the signal.
+        len: usize,
+    },
+    /// `noverlap` is not below `nperseg`.
+    #[error(
+        "welch: noverlap = {noverlap} is invalid; expected 0 <= noverlap < nperseg = {nperseg}"
+    )]
+    NoverlapTooLarge {
+        /// Requested overlap.
+        noverlap: usize,
+        /// Segment length.
+        nperseg: usize,
+    },
+    /// The sample rate is zero, negative, NaN or infinite.
+    #[error("welch: fs = {fs} is invalid; expected a positive finite sample rate in Hz")]
+    InvalidSampleRate {
+        /// Requested sample rate, Hz.
+        fs: f64,
+    },
+}
+
+/// A one-sided power spectral density on a uniform frequency grid.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Psd {
+    /// Bin frequencies, Hz, uniformly spaced and increasing (from 0 for [`welch`]).
+    pub freq_hz: Vec<f64>,
+    /// One-sided density, units²/Hz (twice the two-sided level except at DC and Nyquist).
+    pub density: Vec<f64>,
+    /// Number of segments averaged (0 for a density not produced by [`welch`]).
+    pub segments: usize,
+}
+
+impl Psd {
+    /// Bin spacing, Hz: `(f_last - f_first) / (bins - 1)`; NaN with fewer than two bins.
+    pub fn df(&self) -> f64 {
+        match self.freq_hz.len() {
+            0 | 1 => f64::NAN,
+            n => (self.freq_hz[n - 1] - self.freq_hz[0]) / (n - 1) as f64,
+        }
+    }
+
+    /// Rectangle-rule integral `Σ density · df`, units². For [`welch`] this is the mean
+    /// variance of the detrended segments (Parseval).
+    pub fn integral(&self) -> f64 {
+        self.density.iter().sum::<f64>() * self.df()
+    }
+
+    /// Frequency and value of the largest density (first one on ties); NaN values are
+    /// skipped; `(NaN, NaN)` if there is none.
+    pub fn peak(&self) -> (f64, f64) {
+        match peak_index(&self.density) {
+            Some(i) => (self.freq_hz[i], self.density[i]),
+            None => (f64::NAN, f64::NAN),
+        }
+    }
+
+    /// Mean two-sided level over the bins with `f_lo <= f <= f_hi`: the mean of
+    /// `density / 2`, units²/Hz. NaN if no bin lies in the band. Keep DC and Nyquist out of
+    /// the band (they are not doubled in a one-sided density).
+    pub fn two_sided_level_in_band(&self, f_lo: f64, f_hi: f64) -> f64 {
+        let (sum, count) = self
+            .freq_hz
+            .iter()
+            .zip(&self.density)
+            .filter(|(f, _)| (f_lo..=f_hi).contains(*f))
+            .fold((0.0, 0usize), |(s, c), (_, d)| (s + d, c + 1));
+        if count == 0 {
+            f64::NAN
+        } else {
+            0.5 * sum / count as f64
+        }
+    }
+}
+
+/// Welch PSD of `x` sampled at `fs` Hz, with scipy's conventions (see the module docs).
+pub fn welch(x: &[f64], fs: f64, cfg: &WelchConfig) -> Result<Psd, SpectralError> {
+    let WelchConfig { nperseg, noverlap } = *cfg;
+    if !(fs.is_finite() && fs > 0.0) {
+        return Err(SpectralError::InvalidSampleRate { fs });
+    }
+    if nperseg == 0 {
+        return Err(SpectralError::NpersegZero);
+    }
+    if nperseg > x.len() {
+        return Err(SpectralError::NpersegTooLong {
+            nperseg,
+            len: x.len(),
+        });
+    }
+    if noverlap >= nperseg {
+        return Err(SpectralError::NoverlapTooLarge { noverlap, nperseg });
+    }
+
+    let step = nperseg - noverlap;
+    let segments = (x.len() - nperseg) / step + 1;
+    let n_bins = nperseg / 2 + 1;
+
+    let window = hann_periodic(nperseg);
+    let win_sq_sum: f64 = window.iter().map(|w| w * w).sum();
+
+    let fft = FftPlannerScalar::new().plan_fft_forward(nperseg);
+    let mut buf = vec![Complex::new(0.0, 0.0); nperseg];
+    let mut scratch = vec![Complex::new(0.0, 0.0); fft.get_inplace_scratch_len()];
+    let mut acc = vec![0.0; n_bins];
+
+    for seg in x.windows(nperseg).step_by(step).take(segments) {
+        let mean = seg.iter().sum::<f64>() / nperseg as f64;
+        for ((b, &v), &w) in buf.iter_mut().zip(seg).zip(&window) {
+            *b = Complex::new(w * (v - mean), 0.0);
+        }
+        fft.process_with_scratch(&mut buf, &mut scratch);
+        for (a, c) in acc.iter_mut().zip(&buf) {
+            *a += c.norm_sqr();
+        }
+    }
+
+    // Density scaling, one-sided doubling (not DC, not an even-length Nyquist), mean.
+    let scale = 1.0 / (fs * win_sq_sum) / segments as f64;
+    let last_doubled = if nperseg % 2 == 0 { n_bins - 1 } else { n_bins };
+    let density = acc
+        .iter()
+        .enumerate()
+        .map(|(k, &p)| {
+            let one_sided = if k >= 1 && k < last_doubled { 2.0 } else { 1.0 };
+            p * scale * one_sided
+        })
+        .collect();
+    let freq_hz = (0..n_bins)
+        .map(|k| k as f64 * fs / nperseg as f64)
+        .collect();
+
+    Ok(Psd {
+        freq_hz,
+        density,
+        segments,
+    })
+}
+
+/// Periodic Hann window of length `n`: `0.5 - 0.5 cos(2πi/n)` (scipy `get_window('hann', n)`).
+pub fn hann_periodic(n: usize) -> Vec<f64> {
+    let nf = n as f64;
+    (0..n)
+        .map(|i| 0.5 - 0.5 * (std::f64::consts::TAU * i as f64 / nf).cos())
+        .collect()
+}
+
+/// Welch segment length for MATLAB's `pwelch` default: eight segments with 50 % overlap,
+/// `floor(N / 4.5)` samples each (MATLAB also zero-pads to a power of two and uses a Hamming
+/// window; we keep our Hann window and no padding, so only the segmenting is MATLAB's).
+pub fn matlab_default_nperseg(len: usize) -> usize {
+    (len as f64 / 4.5).floor() as usize
+}
+
+/// Index of the largest non-NaN value (first on ties).
+pub(crate) fn peak_index(d: &[f64]) -> Option<usize> {
+    let mut best: Option<usize> = None;
+    for (i, &v) in d.iter().enumerate() {
+        if v.is_nan() {
+            continue;
+        }
+        if best.is_none_or(|b| v > d[b]) {
+            best = Some(i);
+        }
+    }
+    best
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn errors_name_the_parameter() {
+        let x = vec![0.0; 100];
+        let e = |n, o, fs| {
+            welch(
+                &x,
+                fs,
+                &WelchConfig {
+                    nperseg: n,
+                    noverlap: o,
+                },
+            )
+        };
+        assert!(e(0, 0, 1.0)
+            .unwrap_err()
+            .to_string()
+            .contains("nperseg = 0"));
+        let msg = e(101, 0, 1.0).unwrap_err().to_string();
+        assert!(
+            msg.contains("nperseg = 101") && msg.contains("= 100"),
+            "{msg}"
+        );
+        let msg = e(10, 10, 1.0).unwrap_err().to_string();
+        assert!(msg.contains("noverlap = 10"), "{msg}");
+        let msg = e(10, 5, f64::NAN).unwrap_err().to_string();
+        assert!(msg.contains("fs = NaN"), "{msg}");
+        assert_eq!(e(100, 50, 1.0).unwrap().segments, 1);
+        assert_eq!(e(10, 5, 1.0).unwrap().segments, 19);
+    }
+
+    #[test]
+    fn window_is_periodic_hann() {
+        let w = hann_periodic(4);
+        let expect = [0.0, 0.5, 1.0, 0.5];
+        for (a, b) in w.iter().zip(expect) {
+            assert!((a - b).abs() < 1e-15);
+        }
+    }
+}

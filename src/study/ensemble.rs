@@ -1,0 +1,309 @@
+//! Ensembles of random-vibration records at one or more excitation levels.
+//!
+//! # Ensembles
+//! Every excitation level is an ensemble of independent records: realisation `i` uses ChaCha8
+//! stream `first_stream + i` of a fixed seed (so results do not depend on thread scheduling),
+//! and [`run_ensembles`] runs all records of all levels in parallel with rayon. Means carry a
+//! 95 % confidence interval from Student's t with `n - 1` degrees of freedom ([`MeanCi`]).
+//!
+//! # Bandwidths
+//! [`Widths`] holds the width of the output power PSD at half its peak (3 dB, half power; the
+//! default reading of "3 dB bandwidth") and at a quarter of its peak (half amplitude, -6 dB of
+//! power), both from [`crate::signal::width_at_fraction`] searched inside the ensemble's
+//! analysis band. They are computed on the ensemble-averaged PSD and on every single record;
+//! [`Spread`] summarises the sampling distribution of a single-record estimate (the paper
+//! used one 10 s record per level), and [`ratio_spread`] that of a ratio of two of them. The
+//! width of the ensemble-mean PSD carries a delete-one jackknife interval
+//! ([`Ensemble::mean_width`], [`Jackknife`]).
+//!
+//! # Linear theory
+//! [`linear_output_psd_w_per_hz`] is the small-signal output PSD of the same model (eqs 7-17
+//! in the frequency domain, no end-stops); it integrates to eq 21 and gives the bandwidth the
+//! device has without impacts ([`linear_widths`]).
+
+use rayon::prelude::*;
+
+use crate::device::Device;
+use crate::num::stats::{Jackknife, MeanCi, Spread};
+use crate::ode::Stats;
+use crate::signal::bandwidth::{mean_psd, restrict, Widths};
+use crate::signal::{self, Psd, WelchConfig};
+use crate::study::record::{
+    output_psd, simulate_record, BroadbandError, OutputSpectrum, RecordSpec, RecordSummary,
+};
+
+/// Settings of an ensemble at one excitation level.
+#[derive(Debug, Clone, PartialEq)]
+pub struct EnsembleSpec {
+    /// The record.
+    pub record: RecordSpec,
+    /// Welch segmenting of the output PSD.
+    pub welch: WelchConfig,
+    /// A second segmenting whose single-record widths are reported beside (e.g. MATLAB's
+    /// default of eight segments, [`matlab_default_nperseg`]).
+    pub alt_welch: Option<WelchConfig>,
+    /// Band (Hz) in which spectra are kept and bandwidths are searched.
+    pub analysis_band_hz: (f64, f64),
+    /// ChaCha8 seed of the excitation.
+    pub seed: u64,
+    /// Stream of realisation 0; realisation `i` uses `first_stream + i`.
+    pub first_stream: u64,
+    /// Number of independent records.
+    pub realisations: usize,
+}
+
+/// One record of an ensemble, analysed (the voltages themselves are not kept).
+#[derive(Debug, Clone, PartialEq)]
+pub struct RecordResult {
+    /// Its ChaCha8 stream.
+    pub stream: u64,
+    /// Scalar results.
+    pub summary: RecordSummary,
+    /// Output power PSD restricted to the analysis band (W/Hz).
+    pub spectrum: OutputSpectrum,
+    /// Widths of `spectrum.total`.
+    pub widths: Widths,
+    /// Output power PSD of both loads with the alternative segmenting, restricted to the
+    /// analysis band, and its widths.
+    pub alt: Option<(Psd, Widths)>,
+}
+
+/// An ensemble at one excitation level, analysed.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Ensemble {
+    /// The settings.
+    pub spec: EnsembleSpec,
+    /// Every record, in stream order.
+    pub records: Vec<RecordResult>,
+    /// Ensemble average of the records' Welch estimates (analysis band, W/Hz).
+    pub mean_spectrum: OutputSpectrum,
+    /// Widths of the ensemble-averaged PSD of both loads.
+    pub mean_widths: Widths,
+    /// Mean power of both loads (W).
+    pub power_w: MeanCi,
+    /// Mean power of load 1 (W).
+    pub p1_w: MeanCi,
+    /// Mean power of load 2 (W).
+    pub p2_w: MeanCi,
+    /// Efficiency `2P/(m Sa)` per record (fraction).
+    pub efficiency: MeanCi,
+    /// RMS displacement (m).
+    pub x_rms_m: MeanCi,
+    /// Fraction of time in contact.
+    pub contact_fraction: MeanCi,
+    /// Largest |x| over all records (m).
+    pub x_peak_m: f64,
+    /// Impacts over all records.
+    pub impacts: u64,
+    /// Integrator counters summed over the records.
+    pub stats: Stats,
+}
+
+impl Ensemble {
+    /// Two-sided acceleration PSD of the level (g²/Hz).
+    pub fn psd_g2_per_hz(&self) -> f64 {
+        self.spec.record.noise.psd_g2_per_hz
+    }
+
+    /// Single-record 3 dB widths (Hz; NaN where undetermined), in stream order.
+    pub fn single_bw3db_hz(&self) -> Vec<f64> {
+        self.records.iter().map(|r| r.widths.bw3db_hz()).collect()
+    }
+
+    /// Single-record half-amplitude widths (Hz).
+    pub fn single_bw6db_hz(&self) -> Vec<f64> {
+        self.records.iter().map(|r| r.widths.bw6db_hz()).collect()
+    }
+
+    /// Single-record 3 dB widths with the alternative segmenting (Hz).
+    pub fn single_alt_bw3db_hz(&self) -> Vec<f64> {
+        self.records
+            .iter()
+            .map(|r| r.alt.as_ref().map_or(f64::NAN, |a| a.1.bw3db_hz()))
+            .collect()
+    }
+
+    /// Sampling distribution of the single-record 3 dB width.
+    pub fn single_bw3db_spread(&self) -> Spread {
+        Spread::of(&self.single_bw3db_hz())
+    }
+
+    /// Sampling distribution of the single-record half-amplitude width.
+    pub fn single_bw6db_spread(&self) -> Spread {
+        Spread::of(&self.single_bw6db_hz())
+    }
+
+    /// Single-record peak frequencies of the output PSD of both loads (Hz).
+    pub fn single_peak_hz(&self) -> Vec<f64> {
+        self.records
+            .iter()
+            .map(|r| r.spectrum.total.peak().0)
+            .collect()
+    }
+
+    /// Width of the ensemble-averaged PSD of both loads at `fraction` of its peak (0.5: 3 dB),
+    /// with its delete-one jackknife uncertainty over the records (Hz).
+    pub fn mean_width(&self, fraction: f64) -> Jackknife {
+        let width =
+            |p: &Psd| signal::width_at_fraction(p, fraction).map_or(f64::NAN, |b| b.width_hz);
+        let sum = &self.mean_spectrum.total;
+        let n = self.records.len();
+        let mut p = sum.clone();
+        Jackknife::of(n, width(sum), |i| {
+            let x = &self.records[i].spectrum.total.density;
+            for ((d, m), x) in p.density.iter_mut().zip(&sum.density).zip(x) {
+                *d = (n as f64 * m - x) / (n - 1) as f64;
+            }
+            width(&p)
+        })
+    }
+
+    /// True if no record of the ensemble touched a stop.
+    pub fn no_impact(&self) -> bool {
+        self.impacts == 0
+    }
+}
+
+/// One level of one device, for [`run_ensembles`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct EnsembleCase {
+    /// The device (bias voltage and end-stop options included).
+    pub device: Device,
+    /// The ensemble.
+    pub spec: EnsembleSpec,
+}
+
+/// Simulates and analyses one record of an ensemble (realisation `i`).
+pub fn run_record(
+    device: &Device,
+    spec: &EnsembleSpec,
+    i: usize,
+) -> Result<RecordResult, BroadbandError> {
+    let stream = spec.first_stream + i as u64;
+    let rec = simulate_record(device, &spec.record, spec.seed, stream)?;
+    let rl = device.electrical.load_resistance_ohm;
+    let (lo, hi) = spec.analysis_band_hz;
+    let spectrum =
+        output_psd(&rec.v1_v, &rec.v2_v, rec.sample_rate_hz, rl, &spec.welch)?.restrict(lo, hi);
+    let widths = Widths::of(&spectrum.total);
+    let alt = match &spec.alt_welch {
+        Some(cfg) => {
+            let s = output_psd(&rec.v1_v, &rec.v2_v, rec.sample_rate_hz, rl, cfg)?;
+            let t = restrict(&s.total, lo, hi);
+            let w = Widths::of(&t);
+            Some((t, w))
+        }
+        None => None,
+    };
+    Ok(RecordResult {
+        stream,
+        summary: rec.summary,
+        spectrum,
+        widths,
+        alt,
+    })
+}
+
+/// Runs every record of every case in parallel (rayon; one task per record, so that the
+/// cores stay busy across levels of very different cost), calling `on_record` after each,
+/// and analyses each case into an [`Ensemble`] (in the order of `cases`).
+pub fn run_ensembles<F: Fn() + Sync>(
+    cases: &[EnsembleCase],
+    on_record: F,
+) -> Result<Vec<Ensemble>, BroadbandError> {
+    for c in cases {
+        if c.spec.realisations == 0 {
+            return Err(BroadbandError::InvalidSpec {
+                field: "realisations",
+                value: 0.0,
+                expected: "at least 1",
+            });
+        }
+        c.spec.record.validate()?;
+    }
+    let jobs: Vec<(usize, usize)> = cases
+        .iter()
+        .enumerate()
+        .flat_map(|(c, case)| (0..case.spec.realisations).map(move |i| (c, i)))
+        .collect();
+    let results: Vec<RecordResult> = jobs
+        .par_iter()
+        .map(|&(c, i)| {
+            let r = run_record(&cases[c].device, &cases[c].spec, i);
+            on_record();
+            r
+        })
+        .collect::<Result<_, _>>()?;
+    let mut it = results.into_iter();
+    Ok(cases
+        .iter()
+        .map(|case| {
+            let recs: Vec<RecordResult> = it.by_ref().take(case.spec.realisations).collect();
+            analyse(case, recs)
+        })
+        .collect())
+}
+
+/// Runs one ensemble (see [`run_ensembles`]).
+pub fn run_ensemble<F: Fn() + Sync>(
+    device: &Device,
+    spec: &EnsembleSpec,
+    on_record: F,
+) -> Result<Ensemble, BroadbandError> {
+    let case = EnsembleCase {
+        device: device.clone(),
+        spec: spec.clone(),
+    };
+    Ok(run_ensembles(std::slice::from_ref(&case), on_record)?.remove(0))
+}
+
+fn analyse(case: &EnsembleCase, records: Vec<RecordResult>) -> Ensemble {
+    let mean_spectrum = OutputSpectrum {
+        total: mean_psd(records.iter().map(|r| &r.spectrum.total)),
+        load1: mean_psd(records.iter().map(|r| &r.spectrum.load1)),
+        load2: mean_psd(records.iter().map(|r| &r.spectrum.load2)),
+    };
+    let mean_widths = Widths::of(&mean_spectrum.total);
+    let col = |f: &dyn Fn(&RecordSummary) -> f64| -> Vec<f64> {
+        records.iter().map(|r| f(&r.summary)).collect()
+    };
+    let m = case.device.mechanics.mass_kg;
+    let sa_si = case.spec.record.noise.psd_si();
+    let mut stats = Stats::default();
+    for r in &records {
+        stats.accepted += r.summary.stats.accepted;
+        stats.rejected += r.summary.stats.rejected;
+        stats.rhs_evals += r.summary.stats.rhs_evals;
+        stats.events += r.summary.stats.events;
+    }
+    Ensemble {
+        spec: case.spec.clone(),
+        mean_widths,
+        power_w: MeanCi::of(&col(&|s| s.p_total_w())),
+        p1_w: MeanCi::of(&col(&|s| s.p1_w)),
+        p2_w: MeanCi::of(&col(&|s| s.p2_w)),
+        efficiency: MeanCi::of(&col(&|s| 2.0 * s.p_total_w() / (m * sa_si))),
+        x_rms_m: MeanCi::of(&col(&|s| s.x_rms_m)),
+        contact_fraction: MeanCi::of(&col(&|s| s.contact_fraction)),
+        x_peak_m: records
+            .iter()
+            .map(|r| r.summary.x_peak_m)
+            .fold(0.0, f64::max),
+        impacts: records.iter().map(|r| r.summary.impacts).sum(),
+        stats,
+        mean_spectrum,
+        records,
+    }
+}
+
+/// Seed of the ChaCha8 streams of every broadband experiment (a named constant, so that runs
+/// are deterministic).
+pub const DEFAULT_SEED: u64 = 20_120_704;
+
+/// First ChaCha8 stream of the ensemble at level `psd_g2_per_hz`: `round(Sa * 1e9) * 1000`.
+///
+/// Keying the streams by the level makes ensembles at different levels independent, and makes
+/// the same level in two experiments (Figures 14 and 15) reuse the same records.
+pub fn first_stream_for_level(psd_g2_per_hz: f64) -> u64 {
+    (psd_g2_per_hz * 1e9).round() as u64 * 1000
+}

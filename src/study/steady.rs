@@ -1,0 +1,184 @@
+//! Steady state of the harvester under a sinusoidal drive.
+//!
+//! The drive starts at phase zero from a given state (every measurement ends on a whole number
+//! of periods, so a sweep that continues from the final state keeps the drive phase
+//! continuous). The model is integrated for `settle_blocks` blocks of `block_periods` periods,
+//! then measured block by block; the steady state is reached when the RMS voltages of two
+//! successive blocks differ by less than `rel_change_tol` (relative). Blocks of about the
+//! mechanical ring-up time 2m/b ([`steady_config`]) leave a transient of the order of the
+//! tolerance. The last block is the measurement.
+
+use crate::device::Device;
+use crate::drive::Sine;
+use crate::ode::{Dopri5, SolverError, Stats};
+use crate::physics::contact::Mode;
+use crate::physics::harvester::{Harvester, State};
+
+/// Minimum block length in periods for the default steady-state settings.
+pub const MIN_BLOCK_PERIODS: usize = 5;
+
+/// Steady-state measurement settings.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SteadyConfig {
+    /// Integrator relative tolerance.
+    pub rtol: f64,
+    /// Periods per block.
+    pub block_periods: usize,
+    /// Blocks simulated before the first measured block.
+    pub settle_blocks: usize,
+    /// Convergence: relative change of RMS voltages between successive blocks.
+    pub rel_change_tol: f64,
+    /// Maximum measured blocks per step (the step is flagged unconverged beyond).
+    pub max_blocks: usize,
+}
+
+impl SteadyConfig {
+    /// Settings for a device: blocks of about the ring-up time 2m/b at `freq_hz`, at least
+    /// `min_periods`.
+    pub fn for_ring_time(ring_time_s: f64, freq_hz: f64, min_periods: usize) -> Self {
+        let periods = (ring_time_s * freq_hz).ceil() as usize;
+        Self {
+            rtol: 1e-8,
+            block_periods: periods.max(min_periods),
+            settle_blocks: 1,
+            rel_change_tol: 1e-3,
+            max_blocks: 60,
+        }
+    }
+}
+
+/// Default steady-state settings for a device driven near `freq_hz`: blocks of about the
+/// mechanical ring-up time 2m/b, at least [`MIN_BLOCK_PERIODS`] periods, see
+/// [`SteadyConfig::for_ring_time`].
+pub fn steady_config(device: &Device, freq_hz: f64) -> SteadyConfig {
+    let ring_s = 2.0 * device.mechanics.mass_kg / device.mechanics.damping_n_s_per_m;
+    SteadyConfig::for_ring_time(ring_s, freq_hz, MIN_BLOCK_PERIODS)
+}
+
+/// Steady-state response at one drive.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Measurement {
+    /// Drive frequency (Hz).
+    pub freq_hz: f64,
+    /// Drive RMS acceleration (g).
+    pub accel_rms_g: f64,
+    /// RMS voltage of load 1 (V).
+    pub v1_rms_v: f64,
+    /// RMS voltage of load 2 (V).
+    pub v2_rms_v: f64,
+    /// RMS of the differential voltage V2 - V1 (V).
+    pub vdiff_rms_v: f64,
+    /// Mean power in load 1 (W).
+    pub p1_w: f64,
+    /// Mean power in load 2 (W).
+    pub p2_w: f64,
+    /// Largest |x| (m).
+    pub x_peak_m: f64,
+    /// Fraction of time past a stop.
+    pub contact_fraction: f64,
+    /// Impacts (contact entries) per period.
+    pub impacts_per_period: f64,
+    /// Measured blocks needed.
+    pub blocks: usize,
+    /// Relative change between the last two blocks.
+    pub last_rel_change: f64,
+    /// True when the convergence criterion was met.
+    pub converged: bool,
+}
+
+impl Measurement {
+    /// Power of both loads (W).
+    pub fn p_total_w(&self) -> f64 {
+        self.p1_w + self.p2_w
+    }
+}
+
+/// Accumulates whole-period averages over accepted steps.
+#[derive(Debug, Clone, Copy, Default)]
+struct Block {
+    v1sq: f64,
+    v2sq: f64,
+    vdsq: f64,
+    x_peak: f64,
+    contact_time: f64,
+    impacts: u64,
+    prev_mode_free: bool,
+}
+
+/// Integrates `model` from (y, mode) at phase zero to steady state and measures it.
+/// Returns the measurement, the final state and mode (at a whole period), and the counters.
+pub fn steady_state(
+    model: &Harvester<Sine>,
+    y: State,
+    mode: Mode,
+    accel_rms_g: f64,
+    cfg: &SteadyConfig,
+) -> Result<(Measurement, State, Mode, Stats), SolverError> {
+    let period = model.excitation.period_s();
+    let block_t = cfg.block_periods as f64 * period;
+    let mut ode = Dopri5::new(0.0, y, mode, model.solver_options(cfg.rtol));
+    let mut t_end = 0.0;
+    for _ in 0..cfg.settle_blocks {
+        t_end += block_t;
+        ode.integrate(model, t_end, |_, _| {})?;
+    }
+    let mut prev: Option<(f64, f64)> = None;
+    let mut blocks = 0;
+    let mut last_change = f64::INFINITY;
+    loop {
+        let t_start = t_end;
+        t_end += block_t;
+        let mut b = Block {
+            prev_mode_free: ode.mode == Mode::Free,
+            ..Block::default()
+        };
+        ode.integrate(model, t_end, |st, m| {
+            let el = |y: &State| model.electrical(y).v;
+            b.v1sq += st.integrate(|y| el(y)[0].powi(2));
+            b.v2sq += st.integrate(|y| el(y)[1].powi(2));
+            b.vdsq += st.integrate(|y| {
+                let v = el(y);
+                (v[1] - v[0]).powi(2)
+            });
+            let xm = st.at_theta(0.5)[0].abs();
+            b.x_peak = b.x_peak.max(st.y1[0].abs()).max(xm);
+            if m.in_contact() {
+                b.contact_time += st.h;
+                if b.prev_mode_free {
+                    b.impacts += 1;
+                }
+            }
+            b.prev_mode_free = !m.in_contact();
+        })?;
+        blocks += 1;
+        let dur = t_end - t_start;
+        let v1 = (b.v1sq / dur).sqrt();
+        let v2 = (b.v2sq / dur).sqrt();
+        let converged = if let Some((p1, p2)) = prev {
+            let rel = |a: f64, b: f64| (a - b).abs() / a.abs().max(b.abs()).max(1e-300);
+            last_change = rel(v1, p1).max(rel(v2, p2));
+            last_change < cfg.rel_change_tol
+        } else {
+            false
+        };
+        prev = Some((v1, v2));
+        if converged || blocks >= cfg.max_blocks {
+            let m = Measurement {
+                freq_hz: model.excitation.freq_hz,
+                accel_rms_g,
+                v1_rms_v: v1,
+                v2_rms_v: v2,
+                vdiff_rms_v: (b.vdsq / dur).sqrt(),
+                p1_w: b.v1sq / dur / model.rl,
+                p2_w: b.v2sq / dur / model.rl,
+                x_peak_m: b.x_peak,
+                contact_fraction: b.contact_time / dur,
+                impacts_per_period: b.impacts as f64 / cfg.block_periods as f64,
+                blocks,
+                last_rel_change: last_change,
+                converged,
+            };
+            return Ok((m, ode.y, ode.mode, ode.stats));
+        }
+    }
+}

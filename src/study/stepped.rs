@@ -1,0 +1,237 @@
+//! The stepped-drive engine behind every sweep: a sequence of drive values (frequencies or
+//! amplitudes), each measured in steady state starting from the final state of the previous
+//! one ([`SteppedDrive::run`]), and the bisection of a transition between two steps
+//! ([`SteppedDrive::refine_steps`]), each trial continuing from the state at the bracket's
+//! lower end.
+
+use crate::drive::Sine;
+use crate::ode::{SolverError, Stats};
+use crate::physics::contact::Mode;
+use crate::physics::harvester::{Harvester, State};
+use crate::study::steady::{steady_state, Measurement, SteadyConfig};
+
+/// One step of a continuation: the measurement and the state it ended in.
+#[derive(Debug, Clone)]
+pub struct SweepStep {
+    /// The measurement.
+    pub measurement: Measurement,
+    /// Final state (at a whole period).
+    pub state: State,
+    /// Final mode.
+    pub mode: Mode,
+    /// Integrator counters of this step.
+    pub stats: Stats,
+}
+
+/// A continuation in one drive parameter (frequency or amplitude).
+#[derive(Debug, Clone)]
+pub struct Sweep {
+    /// Parameter values (Hz or g), one per step.
+    pub values: Vec<f64>,
+    /// Steps in order.
+    pub steps: Vec<SweepStep>,
+    /// Integrator counters summed over the sweep.
+    pub stats: Stats,
+}
+
+/// The drive of a continuation at parameter value p: (frequency Hz, RMS acceleration g).
+pub trait Drive: Fn(f64) -> (f64, f64) + Sync {}
+
+impl<T: Fn(f64) -> (f64, f64) + Sync> Drive for T {}
+
+/// A continuation in one drive parameter (frequency or amplitude) of a device.
+pub struct SteppedDrive<'a, D: Drive> {
+    /// The device model (its excitation is replaced at every step).
+    pub base: &'a Harvester<Sine>,
+    /// Drive at parameter value p: (frequency Hz, RMS acceleration g).
+    pub drive: D,
+    /// Steady-state settings.
+    pub cfg: SteadyConfig,
+}
+
+impl<D: Drive> SteppedDrive<'_, D> {
+    fn measure(&self, p: f64, y: State, mode: Mode) -> Result<SweepStep, SolverError> {
+        let (f, a) = (self.drive)(p);
+        let model = self.base.with_excitation(Sine::from_rms_g(a, f));
+        let (m, y1, mode1, stats) = steady_state(&model, y, mode, a, &self.cfg)?;
+        Ok(SweepStep {
+            measurement: m,
+            state: y1,
+            mode: mode1,
+            stats,
+        })
+    }
+
+    /// Runs the continuation over `values` (increasing for an up-sweep), starting from rest;
+    /// `on_step(i)` is called after each step.
+    pub fn run(
+        &self,
+        values: &[f64],
+        mut on_step: impl FnMut(usize),
+    ) -> Result<Sweep, SolverError> {
+        let mut y = self.base.rest_state();
+        let mut mode = Mode::Free;
+        let mut steps = Vec::with_capacity(values.len());
+        let mut stats = Stats::default();
+        for (i, &p) in values.iter().enumerate() {
+            let step = self.measure(p, y, mode)?;
+            stats += step.stats;
+            y = step.state;
+            mode = step.mode;
+            steps.push(step);
+            on_step(i);
+        }
+        Ok(Sweep {
+            values: values.to_vec(),
+            steps,
+            stats,
+        })
+    }
+
+    /// Bisects a transition between steps `k - 1` and `k` of `sweep` to a bracket narrower
+    /// than `tol`. `still_before(m)` tells whether a measurement is still before the
+    /// transition. Each trial continues from the state at the current lower end.
+    pub fn refine<P: Fn(&Measurement) -> bool>(
+        &self,
+        sweep: &Sweep,
+        k: usize,
+        still_before: P,
+        tol: f64,
+    ) -> Result<Transition, SolverError> {
+        self.refine_steps(sweep, k, still_before, tol)
+            .map(|r| r.transition)
+    }
+
+    /// As [`SteppedDrive::refine`], and also returns the steps measured at the two ends of
+    /// the final bracket (so that a caller can tell a discontinuity from a steep but
+    /// continuous change).
+    pub fn refine_steps<P: Fn(&Measurement) -> bool>(
+        &self,
+        sweep: &Sweep,
+        k: usize,
+        still_before: P,
+        tol: f64,
+    ) -> Result<RefinedTransition, SolverError> {
+        assert!(
+            k >= 1 && k < sweep.steps.len(),
+            "transition index out of range"
+        );
+        let mut lo = sweep.values[k - 1];
+        let mut hi = sweep.values[k];
+        let mut before = sweep.steps[k - 1].clone();
+        let mut after = sweep.steps[k].clone();
+        while hi - lo > tol {
+            let mid = 0.5 * (lo + hi);
+            let step = self.measure(mid, before.state, before.mode)?;
+            if still_before(&step.measurement) {
+                lo = mid;
+                before = step;
+            } else {
+                hi = mid;
+                after = step;
+            }
+        }
+        Ok(RefinedTransition {
+            transition: Transition {
+                before: lo,
+                after: hi,
+            },
+            before,
+            after,
+        })
+    }
+}
+
+/// A refined transition with the steps measured at its bracket ends.
+#[derive(Debug, Clone)]
+pub struct RefinedTransition {
+    /// The bracket.
+    pub transition: Transition,
+    /// The step at `transition.before` (continued along the branch).
+    pub before: SweepStep,
+    /// The step at `transition.after`, continued from the state at the lower end of the
+    /// bracket current when it was measured.
+    pub after: SweepStep,
+}
+
+/// A transition located between two parameter values.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Transition {
+    /// Last value before the transition.
+    pub before: f64,
+    /// First value after it.
+    pub after: f64,
+}
+
+impl Transition {
+    /// Midpoint estimate.
+    pub fn value(&self) -> f64 {
+        0.5 * (self.before + self.after)
+    }
+    /// Half-width of the bracket (the estimate's uncertainty from bracketing alone).
+    pub fn half_width(&self) -> f64 {
+        0.5 * (self.after - self.before)
+    }
+}
+
+/// Is this measurement in contact with a stop (non-zero contact fraction)?
+pub fn in_contact(m: &Measurement) -> bool {
+    m.contact_fraction > 0.0
+}
+
+/// Index of the first step with contact, if any.
+pub fn first_contact(sweep: &Sweep) -> Option<usize> {
+    sweep
+        .steps
+        .iter()
+        .position(|s| s.measurement.contact_fraction > 0.0)
+}
+
+/// Evenly spaced values from `start` to `stop` inclusive with spacing close to `step`.
+pub fn linspace_step(start: f64, stop: f64, step: f64) -> Vec<f64> {
+    let n = ((stop - start) / step).round().max(1.0) as usize;
+    (0..=n)
+        .map(|i| start + (stop - start) * i as f64 / n as f64)
+        .collect()
+}
+
+/// Appends steps to `sweep` at `values`, each continuing from the last state, at drive
+/// `drive(p)` = (Hz, g rms); stops after the first step for which `stop(m)` is true.
+pub fn continue_sweep(
+    base: &Harvester<Sine>,
+    drive: impl Fn(f64) -> (f64, f64),
+    cfg: &SteadyConfig,
+    sweep: &mut Sweep,
+    values: impl IntoIterator<Item = f64>,
+    stop: impl Fn(&Measurement) -> bool,
+) -> Result<(), SolverError> {
+    for p in values {
+        let (mut y, mut mode) = (base.rest_state(), Mode::Free);
+        if let Some(last) = sweep.steps.last() {
+            y = last.state;
+            mode = last.mode;
+        }
+        let (f, a) = drive(p);
+        let model = base.with_excitation(Sine::from_rms_g(a, f));
+        let (m, y1, mode1, st) = steady_state(&model, y, mode, a, cfg)?;
+        sweep.stats += st;
+        sweep.values.push(p);
+        sweep.steps.push(SweepStep {
+            measurement: m,
+            state: y1,
+            mode: mode1,
+            stats: st,
+        });
+        if stop(&m) {
+            break;
+        }
+    }
+    Ok(())
+}
+
+/// Values `last + step, last + 2 step, ...` up to `max` (inclusive, with rounding slack).
+pub fn values_beyond(last: f64, step: f64, max: f64) -> impl Iterator<Item = f64> {
+    (1..)
+        .map(move |i| last + step * i as f64)
+        .take_while(move |&v| v <= max + 1e-9 * max.abs())
+}

@@ -1,0 +1,397 @@
+//! Frequency sweeps (stepped sine) with their impact onset, jump and loss of contact refined.
+//!
+//! Everything here is built on [`crate::study::stepped`]: a [`SteppedDrive`] runs the stepped sine
+//! (each step starts from the previous final state and is measured in steady state), and
+//! [`SteppedDrive::refine_steps`] bisects transitions between two steps.
+//!
+//! # What an up-sweep report contains
+//! * **Impact onset**: the first step with a non-zero contact fraction, refined by bisection
+//!   with "still before" meaning "no contact in the measured block". This is the kink of
+//!   Figure 8 (1135 Hz in the paper at 5.5 g).
+//! * **Jump**: the upper (impacting) branch is lost *discontinuously*. A candidate is a step
+//!   that follows a step in contact and whose total power (both loads) is more than
+//!   [`CANDIDATE_DROP`] below the previous one. It is refined by bisection with "still before"
+//!   meaning "total power above the geometric mean of the powers of the two coarse steps". The
+//!   candidate is a jump only if, across the final bracket (narrower than the refinement
+//!   tolerance, typically 0.1 Hz), the power still falls by more than [`JUMP_MIN_DROP`]: a
+//!   saddle-node jump keeps its full drop however narrow the bracket, whereas a steep but
+//!   continuous decline does not. Candidates are tried in order and the first confirmed one is
+//!   the jump.
+//! * **Loss of contact**: the first step after the onset without contact, refined with "still
+//!   before" meaning "in contact". When the upper branch ends with a jump the two coincide;
+//!   when it is left gradually (as with the published prototype 1 parameters, see the Figure 8
+//!   chapter) there is no jump and the loss of contact is where the impacting branch ends.
+//!
+//! [`SweepReport::branch_end`] returns the jump if there is one and the loss of contact
+//! otherwise, labelled by [`BranchEndKind`], so that a caller never presents a gradual exit as
+//! a jump. If the mass is still in contact at the last requested frequency, the sweep is
+//! continued in the same steps beyond the requested range ([`SweepSettings::extend_to_hz`])
+//! until contact is lost, and the extra steps are marked ([`SweepReport::extended_from`]).
+//!
+//! # Steady state
+
+use crate::device::Device;
+use crate::drive::Sine;
+use crate::ode::{SolverError, Stats};
+use crate::physics::harvester::Harvester;
+use crate::study::steady::{Measurement, SteadyConfig};
+use crate::study::stepped::{
+    continue_sweep, first_contact, in_contact, values_beyond, Drive, SteppedDrive, Sweep,
+    Transition,
+};
+
+/// A coarse step is a jump candidate when the total power falls by more than this fraction
+/// relative to the previous step (which must be in contact).
+pub const CANDIDATE_DROP: f64 = 0.05;
+
+/// A candidate is confirmed as a jump when the total power still falls by more than this
+/// fraction across the refined bracket (of width [`REFINE_TOL_HZ`] or less). A continuous
+/// branch changes far less across such a bracket in these sweeps (a few tenths of a percent
+/// for prototype 1, a few percent at most on the steep flank of prototype 2's narrow peak),
+/// whereas a saddle-node jump keeps its full drop however narrow the bracket.
+pub const JUMP_MIN_DROP: f64 = 0.05;
+
+/// How the impacting (upper) branch of an up-sweep ends.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum BranchEndKind {
+    /// A confirmed jump down (a discontinuity of the response).
+    Jump,
+    /// A gradual exit: contact is lost without a discontinuity.
+    ContactLoss,
+}
+
+impl BranchEndKind {
+    /// Label for tables.
+    pub fn label(self) -> &'static str {
+        match self {
+            BranchEndKind::Jump => "jump",
+            BranchEndKind::ContactLoss => "loss of contact, no jump",
+        }
+    }
+}
+
+/// Where and how the impacting branch ends.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BranchEnd {
+    /// Jump or gradual loss of contact.
+    pub kind: BranchEndKind,
+    /// The refined bracket (Hz).
+    pub transition: Transition,
+}
+
+/// An up-sweep (Figures 8 and 13) with its refined transitions.
+#[derive(Debug, Clone)]
+pub struct SweepReport {
+    /// The coarse sweep (including any extension beyond the requested range).
+    pub sweep: Sweep,
+    /// Index of the first step beyond the requested range (`None`: not extended).
+    pub extended_from: Option<usize>,
+    /// Impact onset: bracket between the last frequency without contact and the first with.
+    /// `None` if the sweep never touches a stop or is in contact from its first step.
+    pub onset: Option<Transition>,
+    /// True when the first step is already in contact (no onset inside the range).
+    pub contact_at_start: bool,
+    /// A confirmed jump down (see the module docs for the criterion).
+    pub jump: Option<Transition>,
+    /// Total power after / before across the refined jump bracket.
+    pub jump_power_ratio: Option<f64>,
+    /// First loss of contact after the onset, refined.
+    pub contact_lost: Option<Transition>,
+    /// Integrator counters of the refinements (the sweep's own are in `sweep.stats`).
+    pub refine_stats: Stats,
+}
+
+impl SweepReport {
+    /// True if any step of the coarse sweep is in contact.
+    pub fn any_contact(&self) -> bool {
+        first_contact(&self.sweep).is_some()
+    }
+
+    /// Where the impacting branch ends: the jump if there is one, else the loss of contact.
+    pub fn branch_end(&self) -> Option<BranchEnd> {
+        if let Some(t) = self.jump {
+            Some(BranchEnd {
+                kind: BranchEndKind::Jump,
+                transition: t,
+            })
+        } else {
+            self.contact_lost.map(|t| BranchEnd {
+                kind: BranchEndKind::ContactLoss,
+                transition: t,
+            })
+        }
+    }
+
+    /// The coarse measurements, in order.
+    pub fn measurements(&self) -> impl Iterator<Item = &Measurement> {
+        self.sweep.steps.iter().map(|s| &s.measurement)
+    }
+
+    /// The coarse measurements inside the requested range (without the extension).
+    pub fn measurements_in_range(&self) -> impl Iterator<Item = &Measurement> {
+        let n = self.extended_from.unwrap_or(self.sweep.steps.len());
+        self.sweep.steps[..n].iter().map(|s| &s.measurement)
+    }
+
+    /// Integrator counters of the sweep and its refinements together.
+    pub fn total_stats(&self) -> Stats {
+        let mut s = self.sweep.stats;
+        s += self.refine_stats;
+        s
+    }
+
+    /// Largest RMS voltage of load 1 over the requested range (V).
+    pub fn max_v1_rms_v(&self) -> f64 {
+        self.measurements_in_range()
+            .map(|m| m.v1_rms_v)
+            .fold(0.0, f64::max)
+    }
+
+    /// True if every coarse step met the steady-state criterion.
+    pub fn all_converged(&self) -> bool {
+        self.measurements().all(|m| m.converged)
+    }
+}
+
+/// The continuation of an up-sweep in frequency at fixed RMS acceleration.
+pub fn frequency_continuation<'a>(
+    base: &'a Harvester<Sine>,
+    accel_rms_g: f64,
+    cfg: &SteadyConfig,
+) -> SteppedDrive<'a, impl Drive> {
+    SteppedDrive {
+        base,
+        drive: move |f: f64| (f, accel_rms_g),
+        cfg: cfg.clone(),
+    }
+}
+
+/// Runs an up-sweep of `device` over `freqs_hz` (increasing) at `accel_rms_g` and refines its
+/// impact onset, jump and loss of contact to brackets narrower than `refine_tol_hz` (see the
+/// module docs; Figures 8 and 13). `progress(i)` is called after each coarse step.
+pub fn up_sweep_report(
+    device: &Device,
+    freqs_hz: &[f64],
+    accel_rms_g: f64,
+    cfg: &SteadyConfig,
+    refine_tol_hz: f64,
+    progress: impl FnMut(usize),
+) -> Result<SweepReport, SolverError> {
+    let settings = SweepSettings {
+        freqs_hz: freqs_hz.to_vec(),
+        extend_to_hz: f64::NEG_INFINITY,
+        cfg: cfg.clone(),
+        refine_tol_hz,
+    };
+    settings.run(device, accel_rms_g, progress)
+}
+
+/// Settings of an up-sweep: the frequency grid, an optional extension, the steady-state
+/// criterion and the refinement tolerance.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SweepSettings {
+    /// Frequencies (Hz, increasing), the requested range.
+    pub freqs_hz: Vec<f64>,
+    /// If the mass is still in contact at the last requested frequency, the sweep continues
+    /// with the same spacing until contact is lost or this frequency is passed (Hz), so that
+    /// an impacting branch that outlives the paper's range still gets an end. Steps beyond
+    /// the requested range are marked by [`SweepReport::extended_from`].
+    pub extend_to_hz: f64,
+    /// Steady-state criterion.
+    pub cfg: SteadyConfig,
+    /// Bracket width of the refined onset, jump and loss of contact (Hz).
+    pub refine_tol_hz: f64,
+}
+
+/// Refinement tolerance of the onsets and jumps of Figures 8 and 13 (Hz): well below the 1 Hz
+/// a jump claim needs.
+pub const REFINE_TOL_HZ: f64 = 0.1;
+
+impl SweepSettings {
+    /// The convergence check: half the frequency step, half the integrator
+    /// tolerance, half the steady-state tolerance and half the refinement bracket.
+    pub fn halved(&self) -> Self {
+        let f = &self.freqs_hz;
+        let mut freqs = Vec::with_capacity(2 * f.len());
+        for w in f.windows(2) {
+            freqs.push(w[0]);
+            freqs.push(0.5 * (w[0] + w[1]));
+        }
+        if let Some(&last) = f.last() {
+            freqs.push(last);
+        }
+        let mut cfg = self.cfg.clone();
+        cfg.rtol *= 0.5;
+        cfg.rel_change_tol *= 0.5;
+        Self {
+            freqs_hz: freqs,
+            extend_to_hz: self.extend_to_hz,
+            cfg,
+            refine_tol_hz: 0.5 * self.refine_tol_hz,
+        }
+    }
+
+    /// Runs the up-sweep of `device` at `accel_rms_g`, extends it if needed, and refines its
+    /// transitions. `progress(i)` is called after each coarse step of the requested range.
+    pub fn run(
+        &self,
+        device: &Device,
+        accel_rms_g: f64,
+        progress: impl FnMut(usize),
+    ) -> Result<SweepReport, SolverError> {
+        let freqs = &self.freqs_hz;
+        let base = Harvester::new(device, Sine::from_rms_g(accel_rms_g, freqs[0]));
+        let cont = frequency_continuation(&base, accel_rms_g, &self.cfg);
+        let mut sweep = cont.run(freqs, progress)?;
+        let n = sweep.steps.len();
+        let mut extended_from = None;
+        let last_in_contact = sweep
+            .steps
+            .last()
+            .is_some_and(|s| in_contact(&s.measurement));
+        if last_in_contact && n >= 2 {
+            let step = freqs[n - 1] - freqs[n - 2];
+            let more = values_beyond(freqs[n - 1], step, self.extend_to_hz);
+            continue_sweep(
+                &base,
+                |f| (f, accel_rms_g),
+                &self.cfg,
+                &mut sweep,
+                more,
+                |m| !in_contact(m),
+            )?;
+            if sweep.steps.len() > n {
+                extended_from = Some(n);
+            }
+        }
+        let mut report = analyse_up_sweep(&cont, sweep, self.refine_tol_hz)?;
+        report.extended_from = extended_from;
+        Ok(report)
+    }
+}
+
+fn analyse_up_sweep<D: Drive>(
+    cont: &SteppedDrive<'_, D>,
+    sweep: Sweep,
+    tol: f64,
+) -> Result<SweepReport, SolverError> {
+    let mut refine_stats = Stats::default();
+    let steps = &sweep.steps;
+    let k_on = first_contact(&sweep);
+    let contact_at_start = k_on == Some(0);
+    let onset = match k_on {
+        Some(k) if k > 0 => {
+            let r = cont.refine_steps(&sweep, k, |m| !in_contact(m), tol)?;
+            refine_stats += r.before.stats;
+            Some(r.transition)
+        }
+        _ => None,
+    };
+    let mut jump = None;
+    let mut jump_power_ratio = None;
+    let mut contact_lost = None;
+    if let Some(k0) = k_on {
+        for k in (k0 + 1)..steps.len() {
+            let a = &steps[k - 1].measurement;
+            let b = &steps[k].measurement;
+            if !(in_contact(a) && b.p_total_w() < (1.0 - CANDIDATE_DROP) * a.p_total_w()) {
+                continue;
+            }
+            let threshold = (a.p_total_w() * b.p_total_w()).sqrt();
+            let r = cont.refine_steps(&sweep, k, |m| m.p_total_w() > threshold, tol)?;
+            refine_stats += r.before.stats;
+            let ratio = r.after.measurement.p_total_w() / r.before.measurement.p_total_w();
+            if ratio < 1.0 - JUMP_MIN_DROP {
+                jump = Some(r.transition);
+                jump_power_ratio = Some(ratio);
+                break;
+            }
+        }
+        if let Some(k) = ((k0 + 1)..steps.len()).find(|&k| !in_contact(&steps[k].measurement)) {
+            let r = cont.refine_steps(&sweep, k, in_contact, tol)?;
+            refine_stats += r.before.stats;
+            contact_lost = Some(r.transition);
+        }
+    }
+    Ok(SweepReport {
+        sweep,
+        extended_from: None,
+        onset,
+        contact_at_start,
+        jump,
+        jump_power_ratio,
+        contact_lost,
+        refine_stats,
+    })
+}
+
+/// Differences between a sweep and its refined repetition ([`SweepSettings::halved`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SweepComparison {
+    /// Relative change of the onset (`None` if either has none).
+    pub onset_rel: Option<f64>,
+    /// Relative change of the branch end (`None` if either has none).
+    pub end_rel: Option<f64>,
+    /// Whether the two runs agree on the kind of branch end.
+    pub same_end_kind: bool,
+    /// Largest relative change of the RMS voltage of load 1 at the common frequencies.
+    pub max_v1_rel: f64,
+    /// Largest relative change of the RMS voltage of load 2 at the common frequencies.
+    pub max_v2_rel: f64,
+    /// Common frequencies compared.
+    pub compared: usize,
+    /// Common frequencies left out because they lie between the two runs' branch ends
+    /// (there the runs are legitimately on different branches).
+    pub excluded: usize,
+}
+
+/// Compares `reference` with `refined` at the frequencies they share (see
+/// [`SweepComparison`]).
+pub fn compare_sweeps(reference: &SweepReport, refined: &SweepReport) -> SweepComparison {
+    let rel = |a: f64, b: f64| (a - b).abs() / a.abs().max(b.abs()).max(1e-300);
+    let onset_rel = match (reference.onset, refined.onset) {
+        (Some(a), Some(b)) => Some(rel(a.value(), b.value())),
+        _ => None,
+    };
+    let (ea, eb) = (reference.branch_end(), refined.branch_end());
+    let end_rel = match (ea, eb) {
+        (Some(a), Some(b)) => Some(rel(a.transition.value(), b.transition.value())),
+        _ => None,
+    };
+    let same_end_kind = ea.map(|e| e.kind) == eb.map(|e| e.kind);
+    let between = match (ea, eb) {
+        (Some(a), Some(b)) => {
+            let (x, y) = (a.transition.value(), b.transition.value());
+            Some((x.min(y), x.max(y)))
+        }
+        _ => None,
+    };
+    let mut out = SweepComparison {
+        onset_rel,
+        end_rel,
+        same_end_kind,
+        max_v1_rel: 0.0,
+        max_v2_rel: 0.0,
+        compared: 0,
+        excluded: 0,
+    };
+    for ma in reference.measurements() {
+        let f = ma.freq_hz;
+        let Some(mb) = refined
+            .measurements()
+            .find(|m| (m.freq_hz - f).abs() <= 1e-9 * f)
+        else {
+            continue;
+        };
+        if let Some((lo, hi)) = between {
+            if f >= lo && f <= hi {
+                out.excluded += 1;
+                continue;
+            }
+        }
+        out.compared += 1;
+        out.max_v1_rel = out.max_v1_rel.max(rel(ma.v1_rms_v, mb.v1_rms_v));
+        out.max_v2_rel = out.max_v2_rel.max(rel(ma.v2_rms_v, mb.v2_rms_v));
+    }
+    out
+}
