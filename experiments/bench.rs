@@ -62,7 +62,7 @@ fn run() -> Result<()> {
     let p2 = load_device("prototype2")?;
     exp.uses(&p1, "published");
     exp.uses(&p2, "published");
-    let cal = endstop::paper::calibration::calibrate_prototype1(&p1.device)?.device;
+    let cal = common::calibrated_prototype1(&p1)?.0.device;
     let mut rows = Vec::new();
 
     let records = [

@@ -11,10 +11,9 @@ use endstop_experiments::sweep_table::{claim_cells, SweepTable};
 
 use anyhow::Result;
 use common::plot::{LegendPos, LinePlot, Series, Style, PALETTE};
-use common::{fmt_sig, load_device, Experiment, LoadedDevice};
+use common::{fmt_sig, load_device, Experiment};
 use endstop::device::Device;
 use endstop::device::StiffnessModel;
-use endstop::paper::calibration::calibrate_prototype1;
 use endstop::paper::calibration::fit_bim_for_jump;
 use endstop::paper::calibration::BimFit;
 use endstop::paper::calibration::Calibration;
@@ -57,13 +56,7 @@ fn run() -> Result<()> {
     let mut exp = Experiment::start("fig08");
     let p1 = load_device("prototype1")?;
     exp.uses(&p1, "published");
-    let cal: Calibration = calibrate_prototype1(&p1.device)?;
-    // The calibrated set is computed, not read: record it in the provenance as TOML.
-    let cal_loaded = LoadedDevice {
-        device: cal.device.clone(),
-        file: "data/prototype1.toml (calibrated by calibrate_prototype1)".into(),
-        text: cal.device.to_toml_string(),
-    };
+    let (cal_loaded, cal) = common::calibrated_prototype1(&p1)?;
     exp.uses(&cal_loaded, "calibrated");
     let claims_file = Claims::bundled()?.claims;
 

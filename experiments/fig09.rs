@@ -9,9 +9,8 @@ use endstop_experiments::sweep_table::claim_cells;
 
 use anyhow::Result;
 use common::plot::{LegendPos, LinePlot, Series, Style, PALETTE};
-use common::{fmt_sig, load_device, Experiment, LoadedDevice};
+use common::{fmt_sig, load_device, Experiment};
 use endstop::device::Device;
-use endstop::paper::calibration::calibrate_prototype1;
 use endstop::paper::claims::Claim;
 use endstop::paper::claims::ClaimValue;
 use endstop::paper::claims::Claims;
@@ -50,15 +49,8 @@ fn run() -> Result<()> {
     let mut exp = Experiment::start("fig09");
     let p1 = load_device("prototype1")?;
     exp.uses(&p1, "published");
-    let cal = calibrate_prototype1(&p1.device)?;
-    exp.uses(
-        &LoadedDevice {
-            device: cal.device.clone(),
-            file: "data/prototype1.toml (calibrated by calibrate_prototype1)".into(),
-            text: cal.device.to_toml_string(),
-        },
-        "calibrated",
-    );
+    let (cal_loaded, cal) = common::calibrated_prototype1(&p1)?;
+    exp.uses(&cal_loaded, "calibrated");
     let claims_file = Claims::bundled()?.claims;
 
     let settings = endstop::paper::fig09::amplitude_settings(&p1.device);

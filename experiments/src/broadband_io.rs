@@ -450,10 +450,10 @@ pub fn paper_value(id: &str, quantity: &str) -> f64 {
 /// sets on the experiment and the fitted gap as a number.
 pub fn prototype1_sets(exp: &mut crate::Experiment) -> Result<Vec<(String, Device)>> {
     let p1 = crate::load_device("prototype1")?;
+    let (cal_loaded, cal) = crate::calibrated_prototype1(&p1)?;
     exp.uses(&p1, "published");
-    exp.uses(&p1, "calibrated");
+    exp.uses(&cal_loaded, "calibrated");
     let setup = endstop::paper::setups::prototype1_setup;
-    let cal = endstop::paper::calibration::calibrate_prototype1(&p1.device)?;
     exp.number("calibrated_endstop_gap_m", cal.fitted_gap_m);
     exp.number("published_endstop_gap_m", p1.device.geometry.endstop_gap_m);
     Ok(vec![
