@@ -234,7 +234,14 @@ impl Experiment {
             set: set.to_string(),
             ours,
             uncertainty,
+            note: String::new(),
         });
+    }
+
+    /// Records our values for claims (scorecard input), as the paper layer's `claims`
+    /// functions return them.
+    pub fn claims(&mut self, values: impl IntoIterator<Item = Value>) {
+        self.values.extend(values);
     }
 
     /// Records a named number for the summary (not a claim).

@@ -239,6 +239,9 @@ pub struct Value {
     /// Optional uncertainty of our value (same unit), e.g. a bracket half-width or a 95 % CI.
     #[serde(default)]
     pub uncertainty: Option<f64>,
+    /// What the value is, for the book (e.g. "loss of contact, no jump").
+    #[serde(default)]
+    pub note: String,
 }
 
 /// Outcome of a comparison.
@@ -407,6 +410,7 @@ mod tests {
             set: "published".into(),
             ours,
             uncertainty: None,
+            note: String::new(),
         }
     }
 
