@@ -4,6 +4,8 @@
 //! ([`SteppedDrive::refine_steps`]), each trial continuing from the state at the bracket's
 //! lower end.
 
+use serde::{Deserialize, Serialize};
+
 use crate::drive::Sine;
 use crate::ode::{SolverError, Stats};
 use crate::physics::contact::Mode;
@@ -161,7 +163,7 @@ pub struct RefinedTransition {
 }
 
 /// A transition located between two parameter values.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Transition {
     /// Last value before the transition.
     pub before: f64,
