@@ -279,13 +279,9 @@ fn numbers_md(cal: &Calibration, run: &fig08::Run, values: &[Value], claims: &Cl
         "frequencies compared / excluded",
         "within limits",
     ]);
-    let mut worst: (f64, f64, f64) = (0.0, 0.0, 0.0);
     for r in &run.sets {
         for (c, v) in r.curves.iter().zip(r.convergence()) {
             let cmp = v.comparison;
-            worst.0 = worst.0.max(cmp.onset_rel.unwrap_or(0.0));
-            worst.1 = worst.1.max(cmp.end_rel.unwrap_or(0.0));
-            worst.2 = worst.2.max(cmp.max_v1_rel.max(cmp.max_v2_rel));
             t.row([
                 r.set.label().into(),
                 c.spec.label(),
@@ -300,6 +296,7 @@ fn numbers_md(cal: &Calibration, run: &fig08::Run, values: &[Value], claims: &Cl
         }
     }
     md.push_str(&t.render());
+    let worst = run.largest_changes();
     md.push_str(&format!(
         "\nLargest changes over all sweeps: onset {}, branch end {}, RMS voltage {}.\n",
         pct(Some(worst.0)),

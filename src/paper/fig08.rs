@@ -163,6 +163,19 @@ pub struct Run {
 }
 
 impl Run {
+    /// The largest relative changes over every sweep of both sets when the numerics are
+    /// refined: (onset, branch end, RMS voltage of either load).
+    pub fn largest_changes(&self) -> (f64, f64, f64) {
+        let mut worst = (0.0f64, 0.0f64, 0.0f64);
+        for v in self.sets.iter().flat_map(SetRun::convergence) {
+            let c = v.comparison;
+            worst.0 = worst.0.max(c.onset_rel.unwrap_or(0.0));
+            worst.1 = worst.1.max(c.end_rel.unwrap_or(0.0));
+            worst.2 = worst.2.max(c.max_v1_rel.max(c.max_v2_rel));
+        }
+        worst
+    }
+
     /// The run of one parameter set.
     pub fn set(&self, set: ParamSet) -> &SetRun {
         self.sets
