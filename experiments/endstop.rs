@@ -148,14 +148,13 @@ fn sweep(a: SweepArgs) -> Result<()> {
     let col = |f: &dyn Fn(&endstop::study::steady::Measurement) -> f64| -> Vec<f64> {
         steps.iter().map(|s| f(&s.measurement)).collect()
     };
-    let mut table = common::sweep_table::SweepTable::default();
-    table.push(
+    let rows = common::narrowband_io::sweep_rows(
         &format!("{} g rms up-sweep", a.accel_rms_g),
         &device,
         report.measurements(),
         report.extended_from,
     );
-    let mut df = table.frame()?;
+    let mut df = common::frame::frame(rows)?;
     exp.write_parquet("sweep", &mut df, &device.params)?;
 
     let mut md = format!(

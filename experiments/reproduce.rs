@@ -62,18 +62,21 @@ const OWN_DEVICE: [(&str, &[&str]); 2] = [
     ),
 ];
 
+/// The calibration of prototype 1 runs first and alone: every experiment of the calibrated set
+/// (fig08, fig09, fig11, fig12, bench) reads its artefact, in `data/results/calibration/`.
+const CALIBRATE: &str = "calibrate";
+
 /// The benchmark runs last and alone, so that nothing else competes for the cores it times.
 const BENCH: &str = "bench";
 
 /// The ngspice cross-check: run when `ngspice` is on PATH, otherwise the book says it was not.
 const CROSSCHECK: &str = "crosscheck";
 
-/// Every job `reproduce` knows: the experiments, the own-device runs, the ngspice
-/// cross-check, then the benchmark.
+/// Every job `reproduce` knows: the calibration, the experiments, the own-device runs, the
+/// ngspice cross-check, then the benchmark.
 fn all_jobs() -> Vec<&'static str> {
-    EXPERIMENTS
-        .iter()
-        .copied()
+    std::iter::once(CALIBRATE)
+        .chain(EXPERIMENTS.iter().copied())
         .chain(OWN_DEVICE.iter().map(|(n, _)| *n))
         .chain([CROSSCHECK, BENCH])
         .collect()
@@ -84,6 +87,15 @@ fn ngspice_available() -> bool {
         .arg("--version")
         .output()
         .is_ok_and(|o| o.status.success())
+}
+
+/// The results directory of a job (the calibration's is its artefact's directory).
+fn job_dir(name: &str) -> PathBuf {
+    if name == CALIBRATE {
+        common::calibration_io::calibration_dir()
+    } else {
+        common::results_root().join(name)
+    }
 }
 
 /// The program and arguments of a job.
@@ -185,11 +197,14 @@ fn run() -> Result<()> {
                 common::write_atomic(&dir.join("p1_impacting.cir"), b"* not generated\n")?;
             }
         }
-        let (parallel, alone): (Vec<&str>, Vec<&str>) = to_run.iter().partition(|n| **n != BENCH);
+        let (calibrate, rest): (Vec<&str>, Vec<&str>) =
+            to_run.iter().partition(|n| **n == CALIBRATE);
+        let (parallel, alone): (Vec<&str>, Vec<&str>) = rest.iter().partition(|n| **n != BENCH);
+        let before = run_experiments(&calibrate, 1, &key)?;
         let first = run_experiments(&parallel, args.jobs.max(1), &key)?;
         let last = run_experiments(&alone, 1, &key)?;
-        timings = [first.timings, last.timings].concat();
-        failures = [first.failures, last.failures].concat();
+        timings = [before.timings, first.timings, last.timings].concat();
+        failures = [before.failures, first.failures, last.failures].concat();
     }
     publish_own_device()?;
     let rows = write_scorecard()?;
@@ -273,7 +288,7 @@ fn run_experiments(names: &[&str], jobs: usize, key: &str) -> Result<Outcome> {
                     let secs = t.elapsed().as_secs_f64();
                     let ok = match &out {
                         Ok(o) => {
-                            let log = common::results_root().join(&name).join("log.txt");
+                            let log = job_dir(&name).join("log.txt");
                             let mut text = String::from_utf8_lossy(&o.stdout).to_string();
                             text.push_str(&String::from_utf8_lossy(&o.stderr));
                             let _ = common::write_atomic(&log, text.as_bytes());
@@ -364,23 +379,21 @@ fn inputs_key() -> Result<String> {
 }
 
 fn key_path(name: &str) -> PathBuf {
-    common::results_root().join(name).join("inputs.sha256")
+    job_dir(name).join("inputs.sha256")
 }
 
 /// An experiment is fresh when its last successful run had the same inputs and its outputs
 /// (summary and book snippet) are still there.
 fn is_fresh(name: &str, key: &str) -> bool {
     let same = std::fs::read_to_string(key_path(name)).is_ok_and(|k| k.trim() == key);
-    let snippet = if OWN_DEVICE.iter().any(|(n, _)| *n == name) {
+    let snippet = if name == CALIBRATE {
+        job_dir(name).join(common::calibration_io::DEVICE_FILE)
+    } else if OWN_DEVICE.iter().any(|(n, _)| *n == name) {
         common::results_root().join(name).join("numbers.md")
     } else {
         common::book_generated_root().join(name).join("numbers.md")
     };
-    same && common::results_root()
-        .join(name)
-        .join("summary.json")
-        .exists()
-        && snippet.exists()
+    same && job_dir(name).join("summary.json").exists() && snippet.exists()
 }
 
 #[derive(Deserialize)]
@@ -396,7 +409,7 @@ struct SummaryIn {
 }
 
 fn read_summary(name: &str) -> Option<SummaryIn> {
-    let path = common::results_root().join(name).join("summary.json");
+    let path = job_dir(name).join("summary.json");
     let text = std::fs::read_to_string(path).ok()?;
     serde_json::from_str(&text).ok()
 }
@@ -468,7 +481,7 @@ fn write_provenance() -> Result<()> {
             md.push_str(&format!("| {name} | (no results) | | | |\n"));
             continue;
         };
-        let wall = std::fs::read_to_string(common::results_root().join(name).join("timing.json"))
+        let wall = std::fs::read_to_string(job_dir(name).join("timing.json"))
             .ok()
             .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok())
             .and_then(|v| v["wall_time_s"].as_f64())

@@ -6,10 +6,13 @@
 //! Every file is written to a temporary name in the same directory and renamed, so a failed
 //! run never leaves a partial output behind.
 pub mod broadband_io;
+pub mod calibration_io;
 pub mod frame;
 pub mod md;
+pub mod narrowband_io;
 pub mod plot;
-pub mod sweep_table;
+
+pub use calibration_io::calibrated_prototype1;
 
 use std::collections::BTreeMap;
 use std::io::Write;
@@ -19,7 +22,6 @@ use std::time::Instant;
 
 use anyhow::{Context, Result};
 use endstop::device::Device;
-use endstop::paper::calibration::{calibrate_prototype1, Calibration};
 use endstop::paper::claims::Value;
 use indicatif::{ProgressBar, ProgressStyle};
 use polars::prelude::*;
@@ -91,19 +93,6 @@ pub fn load_device_file(path: &Path) -> Result<LoadedDevice> {
     let file = path.display().to_string();
     let device = Device::from_toml_str(&text, &file)?;
     Ok(LoadedDevice { device, file, text })
-}
-
-/// The calibrated prototype 1 (see `endstop::paper::calibration::calibrate_prototype1`) for the
-/// published set `published`: the device as a loaded parameter set (for provenance) and the
-/// calibration's record.
-pub fn calibrated_prototype1(published: &LoadedDevice) -> Result<(LoadedDevice, Calibration)> {
-    let cal = calibrate_prototype1(&published.device)?;
-    let loaded = LoadedDevice {
-        device: cal.device.clone(),
-        file: format!("{} (calibrated: end-stop gap fitted)", published.file),
-        text: cal.device.to_toml_string(),
-    };
-    Ok((loaded, cal))
 }
 
 /// The git commit of the working tree (with `-dirty` if it has uncommitted changes).

@@ -1,33 +1,38 @@
+//! The calibration of prototype 1 and the paper's fit of the end-stop damping, both root finds
+//! with the crate's one root finder ([`illinois`]), each evaluation being a whole sweep.
+//!
+//! # The calibration of prototype 1
 //! With the published parameters the 5.5 g up-sweep reaches the stops later than the measured
 //! kink at 1135 Hz (Figure 8). [`calibrate_prototype1`] fits ONE parameter, the effective
-//! end-stop gap xmax, to ONE measured feature, that kink: a root find (Illinois-modified
-//! regula falsi, bisection while a bracket end is outside the swept range) on xmax, each
-//! evaluation being the refined impact onset of a 5.5 g, 30 V up-sweep (Hertz contact,
-//! b_im = 1.5 N s/m; the onset does not depend on the contact law, since before the first
-//! contact the stop exerts no force). Everything else about prototype 1 is then a prediction.
+//! end-stop gap xmax, to ONE measured feature, that kink: a root find on xmax (bisection while
+//! a bracket end is outside the swept range), each evaluation being the refined impact onset of
+//! a 5.5 g, 30 V up-sweep (Hertz contact, b_im = 1.5 N s/m; the onset does not depend on the
+//! contact law, since before the first contact the stop exerts no force). Everything else
+//! about prototype 1 is then a prediction.
 //!
 //! # The paper's fit of b_im
 //! [`fit_bim_for_jump`] is the procedure of section 3.2: the end-stop damping for which the
 //! impacting branch of the 5.5 g up-sweep ends at the measured 1425 Hz, for a given stiffness
 //! law and parameter set.
-//!
-//! # Figure studies
 
+use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
 use crate::device::{Device, StiffnessModel};
 use crate::drive::Sine;
+use crate::num::roots::{illinois, RootError, RootOptions, Sample, Stop};
 use crate::ode::{SolverError, Stats};
 use crate::paper::fig08::{self, P1_HIGH_ACCEL_RMS_G};
 use crate::paper::measured::P1_MEASURED_ONSET_HZ;
-use crate::paper::setups::P1_BIAS_V;
+use crate::paper::setups::prototype1_setup;
 use crate::physics::harvester::Harvester;
 use crate::study::steady::SteadyConfig;
 use crate::study::stepped::{continue_sweep, in_contact, Sweep, Transition};
 use crate::study::sweep::frequency_continuation;
 use crate::study::sweep::{BranchEnd, SweepSettings};
 
-/// The calibration stops when the achieved onset is this close to the target (Hz).
+/// The calibration stops when the achieved onset is this close to the target (Hz): a
+/// numerical requirement of the fit, well inside the frequency class of the claims.
 pub const CALIBRATION_TOL_HZ: f64 = 0.25;
 
 /// Bracket width to which the calibration refines each onset (Hz).
@@ -72,6 +77,25 @@ pub enum NarrowbandError {
         /// Final bracket.
         hi: f64,
     },
+}
+
+impl NarrowbandError {
+    fn from_root(e: RootError<SolverError>, what: &str, target: f64) -> Self {
+        match e {
+            RootError::Eval(e) => NarrowbandError::Solver(e),
+            RootError::NotBracketed { a, b } => {
+                let ((lo, f_lo), (hi, f_hi)) = if a.0 <= b.0 { (a, b) } else { (b, a) };
+                NarrowbandError::NotBracketed {
+                    what: what.to_string(),
+                    target,
+                    lo,
+                    f_lo,
+                    hi,
+                    f_hi,
+                }
+            }
+        }
+    }
 }
 
 /// Where an onset search ended.
@@ -127,11 +151,30 @@ fn onset_search(
 /// its agreement holds by construction and is no evidence.
 pub const CALIBRATION_TARGET: (&str, &str) = ("F8-b", "impact_onset_5p5g_hz");
 
+/// What the calibration found, without the device (the artefact's record; the device is the
+/// published one with [`CalibrationRecord::fitted_gap_m`], see [`calibrated_device`]).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct CalibrationRecord {
+    /// Fitted effective end-stop gap xmax (m).
+    pub fitted_gap_m: f64,
+    /// The published gap it replaces (m).
+    pub published_gap_m: f64,
+    /// Target: the measured kink of Figure 8 (Hz).
+    pub target_onset_hz: f64,
+    /// Refined onset of the calibrated device (Hz, midpoint of `onset_bracket`).
+    pub achieved_onset_hz: f64,
+    /// The refined onset bracket of the calibrated device (Hz).
+    pub onset_bracket: Transition,
+    /// Onset evaluations made by the root find, the bracket's ends included (each a sweep
+    /// plus a refinement).
+    pub evaluations: usize,
+}
+
 /// Result of the one-parameter calibration of prototype 1 ([`calibrate_prototype1`]).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Calibration {
     /// The calibrated device: the published one with the fitted end-stop gap and
-    /// `params = "calibrated"`; everything else unchanged.
+    /// `params = "calibrated"`; everything else unchanged ([`calibrated_device`]).
     pub device: Device,
     /// Fitted effective end-stop gap xmax (m).
     pub fitted_gap_m: f64,
@@ -143,125 +186,128 @@ pub struct Calibration {
     pub achieved_onset_hz: f64,
     /// The refined onset bracket of the calibrated device (Hz).
     pub onset_bracket: Transition,
-    /// Onset evaluations made by the root find (each a sweep plus a refinement).
-    pub iterations: usize,
+    /// Onset evaluations made by the root find, the bracket's ends included.
+    pub evaluations: usize,
+}
+
+impl Calibration {
+    /// The record of the calibration (everything but the device).
+    pub fn record(&self) -> CalibrationRecord {
+        CalibrationRecord {
+            fitted_gap_m: self.fitted_gap_m,
+            published_gap_m: self.published_gap_m,
+            target_onset_hz: self.target_onset_hz,
+            achieved_onset_hz: self.achieved_onset_hz,
+            onset_bracket: self.onset_bracket,
+            evaluations: self.evaluations,
+        }
+    }
+
+    /// A calibration from its record and the calibrated device (as saved and read back).
+    pub fn from_record(device: Device, r: &CalibrationRecord) -> Self {
+        Self {
+            device,
+            fitted_gap_m: r.fitted_gap_m,
+            published_gap_m: r.published_gap_m,
+            target_onset_hz: r.target_onset_hz,
+            achieved_onset_hz: r.achieved_onset_hz,
+            onset_bracket: r.onset_bracket,
+            evaluations: r.evaluations,
+        }
+    }
+}
+
+/// The calibrated device for a fitted gap: `published` with only `geometry.endstop_gap_m`
+/// changed, `params = "calibrated"` and a description that says so.
+pub fn calibrated_device(published: &Device, gap_m: f64) -> Device {
+    let mut d = published.clone();
+    d.geometry.endstop_gap_m = gap_m;
+    d.params = "calibrated".into();
+    d.description = format!(
+        "{}; calibrated: end-stop gap fitted so the 5.5 g, 30 V up-sweep's impact onset is at \
+         the measured {P1_MEASURED_ONSET_HZ} Hz (src/paper/calibration.rs, calibrate_prototype1)",
+        published.description
+    );
+    d
 }
 
 /// Calibrates prototype 1: the effective end-stop gap xmax for which the 5.5 g rms, 30 V
-/// up-sweep (900 Hz upwards in 10 Hz steps, Hertz contact, b_im = 1.5 N s/m) first touches a
-/// stop at the measured kink of Figure 8, 1135 Hz (section 3.2). A root find on xmax (see the
-/// module docs), stopped when the refined onset is within [`CALIBRATION_TOL_HZ`] of the
-/// target. The returned device is `published` with only `geometry.endstop_gap_m` changed and
-/// `params = "calibrated"`.
+/// up-sweep (Figure 8's settings, Hertz contact, b_im = 1.5 N s/m) first touches a stop at
+/// the measured kink of Figure 8, 1135 Hz (section 3.2). A root find on xmax between half the
+/// published gap and the published gap (or, if the published gap is already hit too early,
+/// between it and the finger overlap x0, which xmax must not exceed), stopped when the refined
+/// onset is within [`CALIBRATION_TOL_HZ`] of the target. The returned device is
+/// [`calibrated_device`].
 pub fn calibrate_prototype1(published: &Device) -> Result<Calibration, NarrowbandError> {
-    let setup = published
-        .with_bias(P1_BIAS_V)
-        .with_endstop(StiffnessModel::Hertz, 1.5);
+    const WHAT: &str = "calibration of the end-stop gap to the impact onset";
+    let setup = prototype1_setup(published);
     let settings = fig08::sweep_settings(published);
-    let (freqs, cfg) = (settings.freqs_hz, settings.cfg);
     let target = P1_MEASURED_ONSET_HZ;
     let mut evaluations = 0usize;
     let mut eval = |gap: f64| -> Result<(f64, Option<Transition>), SolverError> {
         evaluations += 1;
         let mut d = setup.clone();
         d.geometry.endstop_gap_m = gap;
-        Ok(
-            match onset_search(
-                &d,
-                &freqs,
-                P1_HIGH_ACCEL_RMS_G,
-                &cfg,
-                CALIBRATION_REFINE_TOL_HZ,
-            )? {
-                OnsetSearch::BelowRange => (f64::NEG_INFINITY, None),
-                OnsetSearch::AboveRange => (f64::INFINITY, None),
-                OnsetSearch::At(t) => (t.value() - target, Some(t)),
-            },
-        )
+        let found = onset_search(
+            &d,
+            &settings.freqs_hz,
+            P1_HIGH_ACCEL_RMS_G,
+            &settings.cfg,
+            CALIBRATION_REFINE_TOL_HZ,
+        )?;
+        Ok(match found {
+            OnsetSearch::BelowRange => (f64::NEG_INFINITY, None),
+            OnsetSearch::AboveRange => (f64::INFINITY, None),
+            OnsetSearch::At(t) => (t.value() - target, Some(t)),
+        })
     };
+    let sample = |eval: &mut dyn FnMut(f64) -> Result<(f64, Option<Transition>), SolverError>,
+                  x: f64| { eval(x).map(|(f, t)| Sample::new(x, f, t)) };
     let published_gap = published.geometry.endstop_gap_m;
-    let mut a = 0.5 * published_gap;
-    let mut b = published_gap;
-    let (mut fa, _) = eval(a)?;
-    let (mut fb, mut tb) = eval(b)?;
-    // If the published gap is already hit too early, widen up to the finger overlap x0
-    // (the fingers must not disengage: params.rs validates xmax <= x0).
-    if fb < 0.0 {
+    let mut a = sample(&mut eval, 0.5 * published_gap)?;
+    let mut b = sample(&mut eval, published_gap)?;
+    if b.f < 0.0 {
         a = b;
-        fa = fb;
-        b = published.geometry.finger_overlap_m;
-        (fb, tb) = eval(b)?;
+        b = sample(&mut eval, published.geometry.finger_overlap_m)?;
     }
-    if !(fa < 0.0 && fb > 0.0) {
+    if !(a.f < 0.0 && b.f > 0.0) {
         return Err(NarrowbandError::NotBracketed {
-            what: "calibration of the end-stop gap to the impact onset".into(),
+            what: WHAT.into(),
             target,
-            lo: a,
-            f_lo: fa,
-            hi: b,
-            f_hi: fb,
+            lo: a.x,
+            f_lo: a.f,
+            hi: b.x,
+            f_hi: b.f,
         });
     }
-    let done = |g: f64, f: f64, t: Transition, n: usize| Calibration {
-        device: {
-            let mut d = published.clone();
-            d.geometry.endstop_gap_m = g;
-            d.params = "calibrated".into();
-            d.description = format!(
-                "{}; calibrated: end-stop gap fitted so the 5.5 g, 30 V up-sweep's impact onset \
-                 is at the measured {target} Hz (src/narrowband.rs, calibrate_prototype1)",
-                published.description
-            );
-            d
-        },
-        fitted_gap_m: g,
+    let opts = RootOptions {
+        f_tol: Some(CALIBRATION_TOL_HZ),
+        x_tol_abs: 1e-6 * published_gap,
+        x_tol_rel: 0.0,
+        max_iter: 60,
+    };
+    let root = illinois(&mut eval, a, b, &opts)
+        .map_err(|e| NarrowbandError::from_root(e, WHAT, target))?;
+    if root.stop != Stop::Value {
+        return Err(NarrowbandError::NotConverged {
+            what: WHAT.into(),
+            iterations: evaluations,
+            lo: root.non_positive.x.min(root.positive.x),
+            hi: root.non_positive.x.max(root.positive.x),
+        });
+    }
+    let best = root.best;
+    let t = best
+        .payload
+        .expect("an onset within the tolerance has a bracket");
+    Ok(Calibration {
+        device: calibrated_device(published, best.x),
+        fitted_gap_m: best.x,
         published_gap_m: published_gap,
         target_onset_hz: target,
-        achieved_onset_hz: f + target,
+        achieved_onset_hz: t.value(),
         onset_bracket: t,
-        iterations: n,
-    };
-    if fb.abs() <= CALIBRATION_TOL_HZ {
-        let t = tb.expect("a finite onset has a bracket");
-        return Ok(done(b, fb, t, evaluations));
-    }
-    // Illinois-modified regula falsi; plain bisection while an end is outside the range.
-    let mut side = 0i8;
-    for _ in 0..60 {
-        let c = if fa.is_finite() && fb.is_finite() {
-            (a * fb - b * fa) / (fb - fa)
-        } else {
-            0.5 * (a + b)
-        };
-        let (fc, tc) = eval(c)?;
-        if fc.abs() <= CALIBRATION_TOL_HZ {
-            let t = tc.expect("a finite onset has a bracket");
-            return Ok(done(c, fc, t, evaluations));
-        }
-        if fc > 0.0 {
-            b = c;
-            fb = fc;
-            if side == 1 {
-                fa *= 0.5;
-            }
-            side = 1;
-        } else {
-            a = c;
-            fa = fc;
-            if side == -1 {
-                fb *= 0.5;
-            }
-            side = -1;
-        }
-        if b - a < 1e-6 * published_gap {
-            break;
-        }
-    }
-    Err(NarrowbandError::NotConverged {
-        what: "calibration of the end-stop gap to the impact onset".into(),
-        iterations: evaluations,
-        lo: a,
-        hi: b,
+        evaluations,
     })
 }
 
@@ -292,18 +338,19 @@ pub struct BimFit {
     pub samples: Vec<BimSample>,
 }
 
-/// Tolerance of [`fit_bim_for_jump`] on the branch end (Hz).
+/// Tolerance of [`fit_bim_for_jump`] on the branch end (Hz): a numerical requirement of the
+/// fit, well inside the frequency class of the claims.
 pub const BIM_FIT_TOL_HZ: f64 = 0.5;
 
 /// The paper's procedure for the end-stop damping (section 3.2): the b_im for which the
 /// impacting branch of the up-sweep of `device` (its stiffness model, bias and gap) at
 /// `accel_rms_g` ends at `target_hz` (Figure 8: 1425 Hz). The branch end is the jump if there
-/// is one and the loss of contact otherwise ([`SweepReport::branch_end`]); the result records
-/// which. The end is assumed to fall as b_im grows (more end-stop damping, lower jump: claim
-/// F8-e): b_im = 0 is tried first, and if its branch already ends below the target no b_im >= 0
-/// can reach it and `bim_n_s_per_m` is `None`. Otherwise b_im is bracketed by doubling from
-/// 1 N s/m and found by Illinois-modified regula falsi until the end is within `tol_hz` of
-/// the target or the b_im bracket is narrower than 0.1 %; the best evaluation is returned.
+/// is one and the loss of contact otherwise ([`crate::study::sweep::SweepReport::branch_end`]);
+/// the result records which. The end is assumed to fall as b_im grows (more end-stop damping,
+/// lower jump: claim F8-e): b_im = 0 is tried first, and if its branch already ends below the
+/// target no b_im >= 0 can reach it and `bim_n_s_per_m` is `None`. Otherwise b_im is bracketed
+/// by doubling from 1 N s/m and found by [`illinois`] until the end is within `tol_hz` of the
+/// target or the b_im bracket is narrower than 0.1 %; the best evaluation is returned.
 pub fn fit_bim_for_jump(
     device: &Device,
     target_hz: f64,
@@ -312,6 +359,7 @@ pub fn fit_bim_for_jump(
     tol_hz: f64,
 ) -> Result<BimFit, NarrowbandError> {
     let stiffness = device.endstop.stiffness;
+    let what = format!("b_im fit ({stiffness:?}) to the jump");
     let mut samples = Vec::new();
     let mut eval = |bim: f64| -> Result<(f64, Option<BranchEnd>), SolverError> {
         let d = device.with_endstop(stiffness, bim);
@@ -329,61 +377,39 @@ pub fn fit_bim_for_jump(
         Ok((f, end))
     };
     let (f0, end0) = eval(0.0)?;
-    let mut found: Option<(f64, Option<BranchEnd>)> = None;
-    if f0 >= 0.0 {
-        if f0.abs() <= tol_hz {
-            found = Some((0.0, end0));
-        } else {
-            let (mut a, mut fa) = (0.0, f0);
-            let mut b = 1.0;
-            let (mut fb, mut eb) = eval(b)?;
-            while fb > 0.0 {
-                if b > 1e4 {
-                    return Err(NarrowbandError::NotBracketed {
-                        what: format!("b_im fit ({stiffness:?}) to the jump"),
-                        target: target_hz,
-                        lo: 0.0,
-                        f_lo: f0,
-                        hi: b,
-                        f_hi: fb,
-                    });
-                }
-                a = b;
-                fa = fb;
-                b *= 2.0;
-                (fb, eb) = eval(b)?;
+    let found = if f0 < 0.0 {
+        None
+    } else if f0 <= tol_hz {
+        Some((0.0, end0))
+    } else {
+        let mut a = Sample::new(0.0, f0, end0);
+        let mut b = 1.0;
+        let (mut fb, mut eb) = eval(b)?;
+        while fb > 0.0 {
+            if b > 1e4 {
+                return Err(NarrowbandError::NotBracketed {
+                    what,
+                    target: target_hz,
+                    lo: 0.0,
+                    f_lo: f0,
+                    hi: b,
+                    f_hi: fb,
+                });
             }
-            let mut best = (b, fb, eb);
-            let mut side = 0i8;
-            while best.1.abs() > tol_hz && (b - a) > 1e-3 * b {
-                let c = if fa.is_finite() && fb.is_finite() {
-                    (a * fb - b * fa) / (fb - fa)
-                } else {
-                    0.5 * (a + b)
-                };
-                let (fc, ec) = eval(c)?;
-                if fc.abs() < best.1.abs() {
-                    best = (c, fc, ec);
-                }
-                if fc > 0.0 {
-                    a = c;
-                    fa = fc;
-                    if side == -1 {
-                        fb *= 0.5;
-                    }
-                    side = -1;
-                } else {
-                    b = c;
-                    fb = fc;
-                    if side == 1 {
-                        fa *= 0.5;
-                    }
-                    side = 1;
-                }
-            }
-            found = Some((best.0, best.2));
+            a = Sample::new(b, fb, eb);
+            b *= 2.0;
+            (fb, eb) = eval(b)?;
         }
-    }
+        let opts = RootOptions {
+            f_tol: Some(tol_hz),
+            x_tol_abs: 0.0,
+            x_tol_rel: 1e-3,
+            max_iter: 100,
+        };
+        let root = illinois(&mut eval, a, Sample::new(b, fb, eb), &opts)
+            .map_err(|e| NarrowbandError::from_root(e, &what, target_hz))?;
+        Some((root.best.x, root.best.payload))
+    };
     Ok(BimFit {
         target_hz,
         stiffness,

@@ -45,6 +45,12 @@ pub enum ClaimsError {
         /// Quantity key.
         quantity: String,
     },
+    /// A rule needs a tolerance class that the file does not define.
+    #[error("data/claims.toml: no tolerance class `{class}` (a rule of the paper layer needs it)")]
+    MissingClass {
+        /// The class needed.
+        class: String,
+    },
     /// A value matches no claim.
     #[error(
         "value ({claim}, {quantity}) for set `{set}` = {ours} matches no claim in data/claims.toml"
@@ -73,6 +79,14 @@ pub struct ToleranceClass {
     pub tol_abs: f64,
     /// What the class covers and why.
     pub why: String,
+}
+
+impl ToleranceClass {
+    /// The class's absolute tolerance about a reference value: max(tol_rel |reference|,
+    /// tol_abs), the rule of the verdicts applied to a comparison of two of our own values.
+    pub fn tolerance(&self, reference: f64) -> f64 {
+        (self.tol_rel * reference.abs()).max(self.tol_abs)
+    }
 }
 
 /// Whether a claim is a number or a yes/no statement.
@@ -215,6 +229,31 @@ impl Claims {
     /// A tolerance class by name.
     pub fn class(&self, name: &str) -> Option<&ToleranceClass> {
         self.classes.get(name)
+    }
+
+    /// A tolerance class by name, or an error naming it (for the rules of the paper layer,
+    /// which take their tolerances from the file rather than from literals in code).
+    pub fn require_class(&self, name: &str) -> Result<&ToleranceClass, ClaimsError> {
+        self.class(name).ok_or_else(|| ClaimsError::MissingClass {
+            class: name.to_string(),
+        })
+    }
+
+    /// `values` unchanged if every one matches a claim of this file, else the error naming
+    /// the first that does not (a typo in a key must not drop a number silently).
+    pub fn known(&self, values: Vec<Value>) -> Result<Vec<Value>, ClaimsError> {
+        match values
+            .iter()
+            .find(|v| self.get(&v.claim, &v.quantity).is_none())
+        {
+            Some(v) => Err(ClaimsError::Unknown {
+                claim: v.claim.clone(),
+                quantity: v.quantity.clone(),
+                set: v.set.clone(),
+                ours: v.ours,
+            }),
+            None => Ok(values),
+        }
     }
 
     /// The claims an experiment produces, in file order.
@@ -382,6 +421,20 @@ pub struct ClaimValue {
     pub uncertainty: Option<f64>,
     /// What the value is (e.g. "loss of contact, no jump").
     pub note: String,
+}
+
+impl ClaimValue {
+    /// The scorecard row input of this value under a parameter set.
+    pub fn to_value(&self, set: &str) -> Value {
+        Value {
+            claim: self.id.to_string(),
+            quantity: self.quantity.to_string(),
+            set: set.to_string(),
+            ours: self.value,
+            uncertainty: self.uncertainty,
+            note: self.note.clone(),
+        }
+    }
 }
 
 pub(crate) fn bool_value(

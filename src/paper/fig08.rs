@@ -1,9 +1,16 @@
 //! Figure 8: prototype 1 at 30 V, stepped-sine up-sweeps from 900 to 1600 Hz at 4.1 and
-//! 5.5 g rms with several end-stop models (claims F8-a to F8-f).
+//! 5.5 g rms with several end-stop models (claims F8-a to F8-f), under the published and the
+//! calibrated parameter set; the paper's fit of b_im to the measured jump under both; and the
+//! convergence repetition of every sweep with refined numerics.
 
 use crate::device::{Device, StiffnessModel};
-use crate::paper::claims::{bool_value, ClaimValue};
-use crate::paper::curves::{branch_end_value, find_curve, Curve, CurveSpec};
+use crate::paper::calibration::{fit_bim_for_jump, BimFit, NarrowbandError, BIM_FIT_TOL_HZ};
+use crate::paper::claims::{bool_value, ClaimValue, Claims, ClaimsError, Value};
+use crate::paper::curves::{
+    branch_end_value, no_impact_value, run_curves, Curve, CurveConvergence, CurveSpec,
+};
+use crate::paper::measured::P1_MEASURED_JUMP_HZ;
+use crate::paper::setups::{ParamSet, P1_BIAS_V};
 use crate::study::steady::steady_config;
 use crate::study::stepped;
 use crate::study::sweep::{SweepSettings, REFINE_TOL_HZ};
@@ -34,21 +41,224 @@ pub fn sweep_settings(device: &Device) -> SweepSettings {
     }
 }
 
-/// Figure 8's curves (prototype 1, 30 V): 4.1 g Hertz 1.5; 5.5 g Hertz b_im = 0, 1.5, 10;
-/// 5.5 g linear (eq 19) b_im = 2; and, as a sensitivity, 5.5 g Hertz 1.5 tension-free.
-pub fn figure8_curves() -> Vec<CurveSpec> {
-    use StiffnessModel::{Hertz, Linear};
-    vec![
-        CurveSpec::new(P1_LOW_ACCEL_RMS_G, Hertz, 1.5),
-        CurveSpec::new(P1_HIGH_ACCEL_RMS_G, Hertz, 0.0),
-        CurveSpec::new(P1_HIGH_ACCEL_RMS_G, Hertz, 1.5),
-        CurveSpec::new(P1_HIGH_ACCEL_RMS_G, Hertz, 10.0),
-        CurveSpec::new(P1_HIGH_ACCEL_RMS_G, Linear, 2.0),
-        CurveSpec::new(P1_HIGH_ACCEL_RMS_G, Hertz, 1.5).tension_free(),
-    ]
+/// The curves of Figure 8 (prototype 1, 30 V), in the order of [`Fig8Curve::ALL`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Fig8Curve {
+    /// 4.1 g, Hertz, b_im = 1.5 N s/m: no impacts (F8-a).
+    Low,
+    /// 5.5 g, Hertz, no end-stop damping (F8-d).
+    Hertz0,
+    /// 5.5 g, Hertz, b_im = 1.5 N s/m: the paper's fit (F8-b, F8-c).
+    Hertz1p5,
+    /// 5.5 g, Hertz, b_im = 10 N s/m (F8-e).
+    Hertz10,
+    /// 5.5 g, linear law of eq 19, b_im = 2 N s/m: the paper's other fit (F8-f).
+    Linear2,
+    /// 5.5 g, Hertz, b_im = 1.5 N s/m with a tension-free contact: a sensitivity.
+    Hertz1p5TensionFree,
 }
 
-/// Figure 8's claim values from its curves ([`figure8_curves`]).
+impl Fig8Curve {
+    /// Every curve, in the order the figure runs and reports them.
+    pub const ALL: [Fig8Curve; 6] = [
+        Fig8Curve::Low,
+        Fig8Curve::Hertz0,
+        Fig8Curve::Hertz1p5,
+        Fig8Curve::Hertz10,
+        Fig8Curve::Linear2,
+        Fig8Curve::Hertz1p5TensionFree,
+    ];
+
+    /// Drive level and end-stop model of the curve.
+    pub const fn spec(self) -> CurveSpec {
+        use StiffnessModel::{Hertz, Linear};
+        let hi = P1_HIGH_ACCEL_RMS_G;
+        match self {
+            Fig8Curve::Low => CurveSpec::new(P1_LOW_ACCEL_RMS_G, Hertz, 1.5),
+            Fig8Curve::Hertz0 => CurveSpec::new(hi, Hertz, 0.0),
+            Fig8Curve::Hertz1p5 => CurveSpec::new(hi, Hertz, 1.5),
+            Fig8Curve::Hertz10 => CurveSpec::new(hi, Hertz, 10.0),
+            Fig8Curve::Linear2 => CurveSpec::new(hi, Linear, 2.0),
+            Fig8Curve::Hertz1p5TensionFree => CurveSpec::new(hi, Hertz, 1.5).tension_free(),
+        }
+    }
+
+    fn index(self) -> usize {
+        Self::ALL
+            .iter()
+            .position(|&c| c == self)
+            .expect("every curve is in ALL")
+    }
+}
+
+/// The paper's two fitted end-stop models, whose b_im is refitted to the measured jump
+/// ([`fit_bim_for_jump`]): the fit starts from each curve's stiffness law.
+pub const BIM_FITS: [Fig8Curve; 2] = [Fig8Curve::Hertz1p5, Fig8Curve::Linear2];
+
+/// Figure 8's sweep settings and their convergence repetition.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Protocol {
+    /// The figure's sweeps ([`sweep_settings`]).
+    pub settings: SweepSettings,
+    /// The repetition: half the step and the tolerances ([`SweepSettings::halved`]).
+    pub halved: SweepSettings,
+}
+
+impl Protocol {
+    /// The protocol for prototype 1 (the settings depend on its mass and damping only, which
+    /// the calibration leaves unchanged).
+    pub fn new(published: &Device) -> Self {
+        let settings = sweep_settings(published);
+        let halved = settings.halved();
+        Self { settings, halved }
+    }
+
+    /// Coarse steps of a whole run (both sets, every curve, both repetitions), for a
+    /// progress bar.
+    pub fn coarse_steps(&self) -> usize {
+        ParamSet::BOTH.len()
+            * Fig8Curve::ALL.len()
+            * (self.settings.freqs_hz.len() + self.halved.freqs_hz.len())
+    }
+}
+
+/// One parameter set's sweeps and b_im fits.
+#[derive(Debug, Clone)]
+pub struct SetRun {
+    /// The set.
+    pub set: ParamSet,
+    /// Prototype 1 of this set at 30 V (each curve applies its own end-stop model).
+    pub device: Device,
+    /// The sweeps, in the order of [`Fig8Curve::ALL`].
+    pub curves: Vec<Curve>,
+    /// The same sweeps with refined numerics ([`Protocol::halved`]).
+    pub halved: Vec<Curve>,
+    /// The b_im fits, in the order of [`BIM_FITS`].
+    pub fits: Vec<BimFit>,
+}
+
+impl SetRun {
+    /// One curve's sweep.
+    pub fn curve(&self, which: Fig8Curve) -> &Curve {
+        &self.curves[which.index()]
+    }
+
+    /// Every sweep against its refined repetition, in the order of [`Fig8Curve::ALL`].
+    pub fn convergence(&self) -> Vec<CurveConvergence> {
+        self.curves
+            .iter()
+            .zip(&self.halved)
+            .map(|(c, f)| CurveConvergence::of(c, f))
+            .collect()
+    }
+}
+
+/// Everything Figure 8 computes.
+#[derive(Debug, Clone)]
+pub struct Run {
+    /// The settings used.
+    pub protocol: Protocol,
+    /// Published set, then calibrated set.
+    pub sets: Vec<SetRun>,
+}
+
+impl Run {
+    /// The largest relative changes over every sweep of both sets when the numerics are
+    /// refined: (onset, branch end, RMS voltage of either load).
+    pub fn largest_changes(&self) -> (f64, f64, f64) {
+        let mut worst = (0.0f64, 0.0f64, 0.0f64);
+        for v in self.sets.iter().flat_map(SetRun::convergence) {
+            let c = v.comparison;
+            worst.0 = worst.0.max(c.onset_rel.unwrap_or(0.0));
+            worst.1 = worst.1.max(c.end_rel.unwrap_or(0.0));
+            worst.2 = worst.2.max(c.max_v1_rel.max(c.max_v2_rel));
+        }
+        worst
+    }
+
+    /// The run of one parameter set.
+    pub fn set(&self, set: ParamSet) -> &SetRun {
+        self.sets
+            .iter()
+            .find(|r| r.set == set)
+            .expect("a run holds both sets")
+    }
+}
+
+/// Runs Figure 8 for both parameter sets of prototype 1 (`published` and `calibrated`, as
+/// loaded; the bias is set here): every curve, its repetition with refined numerics, and the
+/// b_im fits, in parallel. `on_step()` is called after every coarse step of every sweep.
+pub fn run(
+    published: &Device,
+    calibrated: &Device,
+    on_step: &(dyn Fn() + Sync),
+) -> Result<Run, NarrowbandError> {
+    use rayon::prelude::*;
+    let protocol = Protocol::new(published);
+    let specs = Fig8Curve::ALL.map(Fig8Curve::spec);
+    let sets = [
+        (ParamSet::Published, published),
+        (ParamSet::Calibrated, calibrated),
+    ]
+    .into_iter()
+    .map(|(set, d)| -> Result<SetRun, NarrowbandError> {
+        let device = d.with_bias(P1_BIAS_V);
+        let p = &protocol;
+        let ((curves, halved), fits) = rayon::join(
+            || {
+                rayon::join(
+                    || run_curves(&device, &specs, &p.settings, on_step),
+                    || run_curves(&device, &specs, &p.halved, on_step),
+                )
+            },
+            || {
+                BIM_FITS
+                    .par_iter()
+                    .map(|c| {
+                        fit_bim_for_jump(
+                            &c.spec().device(&device),
+                            P1_MEASURED_JUMP_HZ,
+                            P1_HIGH_ACCEL_RMS_G,
+                            &p.settings,
+                            BIM_FIT_TOL_HZ,
+                        )
+                    })
+                    .collect::<Result<Vec<_>, _>>()
+            },
+        );
+        Ok(SetRun {
+            set,
+            device,
+            curves: curves?,
+            halved: halved?,
+            fits: fits?,
+        })
+    })
+    .collect::<Result<Vec<_>, _>>()?;
+    Ok(Run { protocol, sets })
+}
+
+/// Figure 8's claim values, both sets (see [`set_claims`]).
+pub fn claims(run: &Run, claims: &Claims) -> Result<Vec<Value>, ClaimsError> {
+    let stop_hz = *run
+        .protocol
+        .settings
+        .freqs_hz
+        .last()
+        .expect("a sweep has frequencies");
+    claims.known(
+        run.sets
+            .iter()
+            .flat_map(|r| {
+                set_claims(r, stop_hz)
+                    .into_iter()
+                    .map(|v| v.to_value(r.set.label()))
+            })
+            .collect(),
+    )
+}
+
+/// One set's claim values; `stop_hz` is the end of the paper's range.
 ///
 /// * F8-a: 1 if the 4.1 g sweep never touches a stop.
 /// * F8-b: refined onset of the 5.5 g Hertz b_im = 1.5 sweep.
@@ -56,25 +266,10 @@ pub fn figure8_curves() -> Vec<CurveSpec> {
 ///   contact when there is no jump; the note says which).
 /// * F8-e order: 1 only if all three Hertz sweeps end with a confirmed jump and the jump
 ///   frequencies fall strictly as b_im grows.
-pub fn figure8_claims(curves: &[Curve], stop_hz: f64) -> Vec<ClaimValue> {
-    use StiffnessModel::{Hertz, Linear};
-    let hi = P1_HIGH_ACCEL_RMS_G;
-    let mut out = Vec::new();
-    if let Some(c) = find_curve(curves, &CurveSpec::new(P1_LOW_ACCEL_RMS_G, Hertz, 1.5)) {
-        let touched = c.report.any_contact();
-        out.push(bool_value(
-            "F8-a",
-            "no_impact_4p1g",
-            !touched,
-            if touched {
-                "the mass reaches the stops".into()
-            } else {
-                "no step of the sweep has contact".into()
-            },
-        ));
-    }
-    let h15 = find_curve(curves, &CurveSpec::new(hi, Hertz, 1.5));
-    if let Some(t) = h15.and_then(|c| c.report.onset) {
+pub fn set_claims(r: &SetRun, stop_hz: f64) -> Vec<ClaimValue> {
+    use Fig8Curve::{Hertz0, Hertz10, Hertz1p5, Linear2, Low};
+    let mut out = vec![no_impact_value("F8-a", "no_impact_4p1g", r.curve(Low))];
+    if let Some(t) = r.curve(Hertz1p5).report.onset {
         out.push(ClaimValue {
             id: "F8-b",
             quantity: "impact_onset_5p5g_hz",
@@ -84,37 +279,16 @@ pub fn figure8_claims(curves: &[Curve], stop_hz: f64) -> Vec<ClaimValue> {
         });
     }
     let jump_claims = [
-        (
-            "F8-c",
-            "jump_hertz_bim1p5_hz",
-            CurveSpec::new(hi, Hertz, 1.5),
-        ),
-        ("F8-d", "jump_hertz_bim0_hz", CurveSpec::new(hi, Hertz, 0.0)),
-        (
-            "F8-e",
-            "jump_hertz_bim10_hz",
-            CurveSpec::new(hi, Hertz, 10.0),
-        ),
-        (
-            "F8-f",
-            "jump_linear_bim2_hz",
-            CurveSpec::new(hi, Linear, 2.0),
-        ),
+        ("F8-c", "jump_hertz_bim1p5_hz", Hertz1p5),
+        ("F8-d", "jump_hertz_bim0_hz", Hertz0),
+        ("F8-e", "jump_hertz_bim10_hz", Hertz10),
+        ("F8-f", "jump_linear_bim2_hz", Linear2),
     ];
-    for (id, q, spec) in jump_claims {
-        if let Some(v) = find_curve(curves, &spec).and_then(|c| branch_end_value(id, q, c, stop_hz))
-        {
-            out.push(v);
-        }
+    for (id, q, c) in jump_claims {
+        out.extend(branch_end_value(id, q, r.curve(c), stop_hz));
     }
-    let jumps: Vec<Option<f64>> = [0.0, 1.5, 10.0]
-        .iter()
-        .map(|&b| {
-            find_curve(curves, &CurveSpec::new(hi, Hertz, b))
-                .and_then(|c| c.report.jump.map(|t| t.value()))
-        })
-        .collect();
-    let (ordered, note) = match (jumps[0], jumps[1], jumps[2]) {
+    let jump = |c: Fig8Curve| r.curve(c).report.jump.map(|t| t.value());
+    let (ordered, note) = match (jump(Hertz0), jump(Hertz1p5), jump(Hertz10)) {
         (Some(j0), Some(j1), Some(j10)) => (
             j0 > j1 && j1 > j10,
             "all three sweeps jump; order of the jump frequencies".to_string(),

@@ -4,6 +4,8 @@
 //! ([`SteppedDrive::refine_steps`]), each trial continuing from the state at the bracket's
 //! lower end.
 
+use serde::{Deserialize, Serialize};
+
 use crate::drive::Sine;
 use crate::ode::{SolverError, Stats};
 use crate::physics::contact::Mode;
@@ -120,9 +122,11 @@ impl<D: Drive> SteppedDrive<'_, D> {
         let mut hi = sweep.values[k];
         let mut before = sweep.steps[k - 1].clone();
         let mut after = sweep.steps[k].clone();
+        let mut stats = Stats::default();
         while hi - lo > tol {
             let mid = 0.5 * (lo + hi);
             let step = self.measure(mid, before.state, before.mode)?;
+            stats += step.stats;
             if still_before(&step.measurement) {
                 lo = mid;
                 before = step;
@@ -138,6 +142,7 @@ impl<D: Drive> SteppedDrive<'_, D> {
             },
             before,
             after,
+            stats,
         })
     }
 }
@@ -152,10 +157,13 @@ pub struct RefinedTransition {
     /// The step at `transition.after`, continued from the state at the lower end of the
     /// bracket current when it was measured.
     pub after: SweepStep,
+    /// Integrator counters of every trial of the bisection, each counted once (the two
+    /// coarse steps that bound the initial bracket are not trials and are not included).
+    pub stats: Stats,
 }
 
 /// A transition located between two parameter values.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Transition {
     /// Last value before the transition.
     pub before: f64,

@@ -97,7 +97,8 @@ pub struct SweepReport {
     pub jump_power_ratio: Option<f64>,
     /// First loss of contact after the onset, refined.
     pub contact_lost: Option<Transition>,
-    /// Integrator counters of the refinements (the sweep's own are in `sweep.stats`).
+    /// Integrator counters of every trial of every refinement, each counted once (the coarse
+    /// steps' own are in `sweep.stats`).
     pub refine_stats: Stats,
 }
 
@@ -282,7 +283,7 @@ fn analyse_up_sweep<D: Drive>(
     let onset = match k_on {
         Some(k) if k > 0 => {
             let r = cont.refine_steps(&sweep, k, |m| !in_contact(m), tol)?;
-            refine_stats += r.before.stats;
+            refine_stats += r.stats;
             Some(r.transition)
         }
         _ => None,
@@ -299,7 +300,7 @@ fn analyse_up_sweep<D: Drive>(
             }
             let threshold = (a.p_total_w() * b.p_total_w()).sqrt();
             let r = cont.refine_steps(&sweep, k, |m| m.p_total_w() > threshold, tol)?;
-            refine_stats += r.before.stats;
+            refine_stats += r.stats;
             let ratio = r.after.measurement.p_total_w() / r.before.measurement.p_total_w();
             if ratio < 1.0 - JUMP_MIN_DROP {
                 jump = Some(r.transition);
@@ -309,7 +310,7 @@ fn analyse_up_sweep<D: Drive>(
         }
         if let Some(k) = ((k0 + 1)..steps.len()).find(|&k| !in_contact(&steps[k].measurement)) {
             let r = cont.refine_steps(&sweep, k, in_contact, tol)?;
-            refine_stats += r.before.stats;
+            refine_stats += r.stats;
             contact_lost = Some(r.transition);
         }
     }
@@ -394,4 +395,57 @@ pub fn compare_sweeps(reference: &SweepReport, refined: &SweepReport) -> SweepCo
         out.max_v2_rel = out.max_v2_rel.max(rel(ma.v2_rms_v, mb.v2_rms_v));
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::device::StiffnessModel;
+    use crate::study::steady::{steady_config, steady_state};
+    use crate::study::stepped::linspace_step;
+
+    /// The integrator counters of a report count every trial of a refinement exactly once:
+    /// here the onset bisection is redone by hand, trial by trial, from the same states, and
+    /// its summed counters must equal the report's `refine_stats` (the coarse steps are in
+    /// `sweep.stats` only).
+    #[test]
+    fn refinement_stats_count_every_trial_exactly_once() {
+        let device = Device::from_toml_str(
+            include_str!("../../data/prototype1.toml"),
+            "data/prototype1.toml",
+        )
+        .unwrap()
+        .with_bias(30.0)
+        .with_endstop(StiffnessModel::Hertz, 1.5);
+        // Published prototype 1 at 5.5 g: first contact near 1197 Hz, contact kept up to
+        // 1210 Hz and the power still rising, so the onset is the only refinement.
+        let (accel, tol) = (5.5, 0.1);
+        let freqs = linspace_step(1170.0, 1210.0, 10.0);
+        let cfg = steady_config(&device, 1220.0);
+        let r = up_sweep_report(&device, &freqs, accel, &cfg, tol, |_| {}).unwrap();
+        assert!(r.onset.is_some() && r.jump.is_none() && r.contact_lost.is_none());
+        let k = first_contact(&r.sweep).unwrap();
+        let base = Harvester::new(&device, Sine::from_rms_g(accel, freqs[0]));
+        let (mut lo, mut hi) = (r.sweep.values[k - 1], r.sweep.values[k]);
+        let before = &r.sweep.steps[k - 1];
+        let (mut y, mut mode) = (before.state, before.mode);
+        let (mut expected, mut trials) = (Stats::default(), 0);
+        while hi - lo > tol {
+            let mid = 0.5 * (lo + hi);
+            let model = base.with_excitation(Sine::from_rms_g(accel, mid));
+            let (m, y1, mode1, st) = steady_state(&model, y, mode, accel, &cfg).unwrap();
+            expected += st;
+            trials += 1;
+            if in_contact(&m) {
+                hi = mid;
+            } else {
+                (lo, y, mode) = (mid, y1, mode1);
+            }
+        }
+        assert!(trials >= 2, "{trials} trials");
+        assert_eq!(r.refine_stats, expected);
+        let mut total = r.sweep.stats;
+        total += expected;
+        assert_eq!(r.total_stats(), total);
+    }
 }

@@ -1,0 +1,153 @@
+//! The I/O shared by the narrowband experiments (Figures 8, 9 and 13, and `endstop sweep`):
+//! the per-step rows of a sweep in the project's column names (through [`crate::frame`]), and
+//! the cells of the claims tables of the book.
+
+use endstop::device::Device;
+use endstop::paper::claims::{Claim, Value};
+use endstop::paper::curves::{law_key, Curve};
+use endstop::study::steady::Measurement;
+
+use crate::frame::Row;
+use crate::md::Table;
+use crate::row;
+
+/// One row per step of a sweep of `device` (the device as simulated: its parameter-set label,
+/// end-stop law, damping, gap and bias go into every row), labelled `series`. Steps from index
+/// `extended_from` on lie beyond the requested range. SI units unless the name says otherwise.
+pub fn sweep_rows<'a>(
+    series: &str,
+    device: &Device,
+    steps: impl Iterator<Item = &'a Measurement>,
+    extended_from: Option<usize>,
+) -> Vec<Row> {
+    let beyond_from = extended_from.unwrap_or(usize::MAX);
+    steps
+        .enumerate()
+        .map(|(i, m)| {
+            row![
+                "freq_hz" => m.freq_hz,
+                "accel_rms_g" => m.accel_rms_g,
+                "v1_rms_v" => m.v1_rms_v,
+                "v2_rms_v" => m.v2_rms_v,
+                "vdiff_rms_v" => m.vdiff_rms_v,
+                "p1_w" => m.p1_w,
+                "p2_w" => m.p2_w,
+                "x_peak_m" => m.x_peak_m,
+                "contact_fraction" => m.contact_fraction,
+                "impacts_per_period" => m.impacts_per_period,
+                "blocks" => m.blocks as u32,
+                "converged" => m.converged,
+                "beyond_paper_range" => i >= beyond_from,
+                "series" => series,
+                "params" => device.params.as_str(),
+                "stiffness" => law_key(device.endstop.stiffness),
+                "bim_n_s_per_m" => device.endstop.damping_n_s_per_m,
+                "tension_free" => device.endstop.tension_free,
+                "endstop_gap_m" => device.geometry.endstop_gap_m,
+                "bias_v" => device.electrical.bias_v,
+            ]
+        })
+        .collect()
+}
+
+/// The rows of every curve of a figure, each with its own end-stop model applied to `base`.
+pub fn curve_rows(base: &Device, curves: &[Curve]) -> Vec<Row> {
+    curves
+        .iter()
+        .flat_map(|c| {
+            sweep_rows(
+                &c.spec.label(),
+                &c.spec.device(base),
+                c.report.measurements(),
+                c.report.extended_from,
+            )
+        })
+        .collect()
+}
+
+/// One claim's cells in a generated table under a parameter set: (our value, what it is,
+/// verdict). Qualitative claims read yes/no; numbers get `sig` significant digits and their
+/// bracket half-width.
+pub fn claim_cells(claim: &Claim, values: &[Value], set: &str, sig: usize) -> [String; 3] {
+    let Some(v) = values
+        .iter()
+        .find(|v| v.claim == claim.id && v.quantity == claim.quantity && v.set == set)
+    else {
+        return ["-".into(), "no value".into(), "not yet".into()];
+    };
+    let ours = if claim.unit == "bool" {
+        if v.ours > 0.5 { "yes" } else { "no" }.to_string()
+    } else {
+        format!(
+            "{}{}",
+            crate::fmt_sig(v.ours, sig),
+            v.uncertainty
+                .map(|u| format!(" +- {}", crate::fmt_sig(u, 1)))
+                .unwrap_or_default()
+        )
+    };
+    [
+        ours,
+        v.note.clone(),
+        format!("**{}**", claim.verdict(Some(v.ours)).label()),
+    ]
+}
+
+/// The paper's value of a claim for a table: "yes" for a qualitative claim.
+pub fn paper_cell(claim: &Claim) -> String {
+    if claim.unit == "bool" {
+        "yes".to_string()
+    } else {
+        format!("{} {}", claim.paper, claim.unit)
+    }
+}
+
+/// The claims table of a prototype 1 figure under both parameter sets: claim, quantity,
+/// paper, then our value, what it is and the verdict under each set.
+pub fn claims_table_both_sets<'a>(
+    claims: impl Iterator<Item = &'a Claim>,
+    values: &[Value],
+    sig: usize,
+) -> Table<9> {
+    let mut t = Table::new([
+        "claim",
+        "quantity",
+        "paper",
+        "published: ours",
+        "what",
+        "verdict",
+        "calibrated: ours",
+        "what",
+        "verdict",
+    ]);
+    for c in claims {
+        let [a, b, v] = claim_cells(c, values, "published", sig);
+        let [d, e, w] = claim_cells(c, values, "calibrated", sig);
+        t.row([
+            c.id.clone(),
+            format!("`{}`", c.quantity),
+            paper_cell(c),
+            a,
+            b,
+            v,
+            d,
+            e,
+            w,
+        ]);
+    }
+    t
+}
+
+/// A frequency (Hz) for a table with 5 significant digits, "none" if absent.
+pub fn hz(x: Option<f64>) -> String {
+    x.map(|v| crate::fmt_sig(v, 5))
+        .unwrap_or_else(|| "none".into())
+}
+
+/// A relative change as a percentage with 2 significant digits, "n/a" if absent.
+pub fn pct(x: Option<f64>) -> String {
+    match x {
+        Some(v) if v.is_finite() => format!("{} %", crate::fmt_sig(100.0 * v, 2)),
+        _ => "n/a".into(),
+    }
+}
