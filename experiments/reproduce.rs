@@ -22,65 +22,9 @@ use endstop::paper::claims::Claims;
 use endstop::paper::claims::Row;
 use endstop::paper::claims::Value;
 use endstop::paper::claims::Verdict;
+use endstop_experiments::freshness;
+use endstop_experiments::jobs::{Job, Phase, CROSSCHECK, JOBS};
 use serde::Deserialize;
-
-/// Every experiment, in the order of the paper.
-const EXPERIMENTS: [&str; 10] = [
-    "fig05", "table3", "fig08", "fig09", "fig10", "fig11", "fig12", "fig13", "fig14", "fig15",
-];
-
-/// Runs of the `endstop` tool on the example device of the "Model your own harvester"
-/// chapter: (job name, arguments before `--out`).
-const OWN_DEVICE: [(&str, &[&str]); 2] = [
-    (
-        "own_device_sweep",
-        &[
-            "sweep",
-            "--device",
-            "data/examples/my_harvester.toml",
-            "--from",
-            "500",
-            "--to",
-            "800",
-            "--step",
-            "2",
-            "--accel-rms-g",
-            "0.3",
-        ],
-    ),
-    (
-        "own_device_random",
-        &[
-            "random",
-            "--device",
-            "data/examples/my_harvester.toml",
-            "--psd",
-            "1e-4",
-            "--records",
-            "4",
-        ],
-    ),
-];
-
-/// The calibration of prototype 1 runs first and alone: every experiment of the calibrated set
-/// (fig08, fig09, fig11, fig12, bench) reads its artefact, in `data/results/calibration/`.
-const CALIBRATE: &str = "calibrate";
-
-/// The benchmark runs last and alone, so that nothing else competes for the cores it times.
-const BENCH: &str = "bench";
-
-/// The ngspice cross-check: run when `ngspice` is on PATH, otherwise the book says it was not.
-const CROSSCHECK: &str = "crosscheck";
-
-/// Every job `reproduce` knows: the calibration, the experiments, the own-device runs, the
-/// ngspice cross-check, then the benchmark.
-fn all_jobs() -> Vec<&'static str> {
-    std::iter::once(CALIBRATE)
-        .chain(EXPERIMENTS.iter().copied())
-        .chain(OWN_DEVICE.iter().map(|(n, _)| *n))
-        .chain([CROSSCHECK, BENCH])
-        .collect()
-}
 
 fn ngspice_available() -> bool {
     Command::new("ngspice")
@@ -89,34 +33,16 @@ fn ngspice_available() -> bool {
         .is_ok_and(|o| o.status.success())
 }
 
-/// The results directory of a job (the calibration's is its artefact's directory).
-fn job_dir(name: &str) -> PathBuf {
-    if name == CALIBRATE {
-        common::calibration_io::calibration_dir()
-    } else {
-        common::results_root().join(name)
-    }
-}
-
-/// The program and arguments of a job.
-fn job_command(name: &str) -> (String, Vec<String>) {
-    match OWN_DEVICE.iter().find(|(n, _)| *n == name) {
-        Some((_, args)) => {
-            let mut a: Vec<String> = args.iter().map(|s| s.to_string()).collect();
-            a.push("--out".into());
-            a.push(common::results_root().join(name).display().to_string());
-            ("endstop".into(), a)
-        }
-        None => (name.to_string(), Vec::new()),
-    }
+fn job_names() -> Vec<&'static str> {
+    JOBS.iter().map(|j| j.name).collect()
 }
 
 /// Copies the own-device runs' numbers and plots into the book's generated directory.
 fn publish_own_device() -> Result<()> {
     let dst = common::book_generated_root().join("own_device");
-    for (name, _) in OWN_DEVICE {
-        let src = common::results_root().join(name);
-        let stem = name.trim_start_matches("own_device_");
+    for job in JOBS.iter().filter(|j| j.is_tool_run()) {
+        let src = job.dir();
+        let stem = job.name.trim_start_matches("own_device_");
         let tool = format!("endstop-{stem}");
         for (from, to) in [
             ("numbers.md".to_string(), format!("{stem}.md")),
@@ -158,16 +84,15 @@ fn main() {
 fn run() -> Result<()> {
     let args = Args::parse();
     let root = common::root();
-    let jobs = all_jobs();
+    let names = job_names();
     for name in &args.only {
-        if !jobs.contains(&name.as_str()) {
-            bail!("unknown experiment `{name}`; known: {}", jobs.join(", "));
+        if !names.contains(&name.as_str()) {
+            bail!("unknown experiment `{name}`; known: {}", names.join(", "));
         }
     }
-    let selected: Vec<&str> = jobs
+    let selected: Vec<&'static Job> = JOBS
         .iter()
-        .copied()
-        .filter(|n| args.only.is_empty() || args.only.iter().any(|o| o == n))
+        .filter(|j| args.only.is_empty() || args.only.iter().any(|o| o == j.name))
         .collect();
     let mut failures = Vec::new();
     let mut timings: Vec<(String, f64)> = Vec::new();
@@ -175,20 +100,10 @@ fn run() -> Result<()> {
         if !args.no_build {
             build_binaries()?;
         }
-        let key = inputs_key()?;
-        let mut to_run = Vec::new();
-        for &name in &selected {
-            if !args.force && is_fresh(name, &key) {
-                eprintln!(
-                    "[{name}] skipped: inputs unchanged since its last run (use --force to rerun)"
-                );
-            } else {
-                to_run.push(name);
-            }
-        }
-        if to_run.contains(&CROSSCHECK) && !ngspice_available() {
+        let mut selected = selected;
+        if selected.iter().any(|j| j.name == CROSSCHECK) && !ngspice_available() {
             eprintln!("[{CROSSCHECK}] not run: ngspice is not installed (apt-get install ngspice)");
-            to_run.retain(|n| *n != CROSSCHECK);
+            selected.retain(|j| j.name != CROSSCHECK);
             let note = "*Not run in this build: `ngspice` was not installed. Install it \
                         (`apt-get install ngspice`) and rerun `reproduce`.*\n";
             let dir = common::book_generated_root().join(CROSSCHECK);
@@ -197,14 +112,29 @@ fn run() -> Result<()> {
                 common::write_atomic(&dir.join("p1_impacting.cir"), b"* not generated\n")?;
             }
         }
-        let (calibrate, rest): (Vec<&str>, Vec<&str>) =
-            to_run.iter().partition(|n| **n == CALIBRATE);
-        let (parallel, alone): (Vec<&str>, Vec<&str>) = rest.iter().partition(|n| **n != BENCH);
-        let before = run_experiments(&calibrate, 1, &key)?;
-        let first = run_experiments(&parallel, args.jobs.max(1), &key)?;
-        let last = run_experiments(&alone, 1, &key)?;
-        timings = [before.timings, first.timings, last.timings].concat();
-        failures = [before.failures, first.failures, last.failures].concat();
+        // Phase by phase: a job's key is computed when its phase starts, after the artefacts
+        // of earlier phases (the calibration) are written.
+        for (phase, parallel) in [
+            (Phase::First, 1),
+            (Phase::Parallel, args.jobs.max(1)),
+            (Phase::Last, 1),
+        ] {
+            let mut to_run = Vec::new();
+            for job in selected.iter().filter(|j| j.phase == phase) {
+                let key = freshness::key(job)?;
+                if !args.force && freshness::is_fresh(job, &key) {
+                    eprintln!(
+                        "[{}] skipped: inputs unchanged since its last run (use --force to rerun)",
+                        job.name
+                    );
+                } else {
+                    to_run.push((*job, key));
+                }
+            }
+            let out = run_jobs(&to_run, parallel)?;
+            timings.extend(out.timings);
+            failures.extend(out.failures);
+        }
     }
     publish_own_device()?;
     let rows = write_scorecard()?;
@@ -264,38 +194,38 @@ struct Outcome {
     failures: Vec<String>,
 }
 
-/// Runs the experiments, at most `jobs` at once.
-fn run_experiments(names: &[&str], jobs: usize, key: &str) -> Result<Outcome> {
+/// Runs the jobs (each with its freshness key), at most `parallel` at once.
+fn run_jobs(jobs: &[(&'static Job, String)], parallel: usize) -> Result<Outcome> {
     let dir = binary_dir()?;
-    let queue = Mutex::new(names.iter().map(|s| s.to_string()).collect::<Vec<_>>());
+    let queue = Mutex::new(jobs.iter().collect::<Vec<_>>());
     let results = Mutex::new(Vec::new());
-    let pb = common::progress(names.len() as u64, "reproduce");
+    let pb = common::progress(jobs.len() as u64, "reproduce");
     std::thread::scope(|s| {
-        for _ in 0..jobs.min(names.len()) {
+        for _ in 0..parallel.min(jobs.len()) {
             s.spawn(|| {
                 let next = || {
                     let mut q = queue.lock().expect("queue lock");
                     (!q.is_empty()).then(|| q.remove(0))
                 };
-                while let Some(name) = next() {
-                    pb.set_message(name.clone());
+                while let Some((job, key)) = next() {
+                    let name = job.name;
+                    pb.set_message(name);
                     let t = Instant::now();
-                    let (program, job_args) = job_command(&name);
-                    let out = Command::new(dir.join(&program))
-                        .args(&job_args)
+                    let out = Command::new(dir.join(job.program))
+                        .args(job.command_args())
                         .current_dir(common::root())
                         .output();
                     let secs = t.elapsed().as_secs_f64();
                     let ok = match &out {
                         Ok(o) => {
-                            let log = job_dir(&name).join("log.txt");
+                            let log = job.dir().join("log.txt");
                             let mut text = String::from_utf8_lossy(&o.stdout).to_string();
                             text.push_str(&String::from_utf8_lossy(&o.stderr));
                             let _ = common::write_atomic(&log, text.as_bytes());
                             if o.status.success() {
-                                let _ = common::write_atomic(&key_path(&name), key.as_bytes());
+                                let _ = freshness::mark_done(job, key);
                             } else {
-                                let _ = std::fs::remove_file(key_path(&name));
+                                freshness::forget(job);
                                 pb.println(format!("[{name}] FAILED:\n{text}"));
                             }
                             o.status.success()
@@ -310,14 +240,17 @@ fn run_experiments(names: &[&str], jobs: usize, key: &str) -> Result<Outcome> {
                         if ok { "done" } else { "failed" }
                     ));
                     pb.inc(1);
-                    results.lock().expect("results lock").push((name, secs, ok));
+                    results
+                        .lock()
+                        .expect("results lock")
+                        .push((name.to_string(), secs, ok));
                 }
             });
         }
     });
     pb.finish_and_clear();
     let mut results = results.into_inner().expect("results");
-    let order = all_jobs();
+    let order = job_names();
     results.sort_by_key(|(n, _, _)| order.iter().position(|e| e == n));
     let failures = results
         .iter()
@@ -328,72 +261,6 @@ fn run_experiments(names: &[&str], jobs: usize, key: &str) -> Result<Outcome> {
         timings: results.into_iter().map(|(n, t, _)| (n, t)).collect(),
         failures,
     })
-}
-
-/// Files whose content determines every experiment's output: the code, the parameter files,
-/// the lock file and the bundled font. (Seeds are constants in the code.)
-fn input_files() -> Result<Vec<PathBuf>> {
-    fn walk(dir: &std::path::Path, out: &mut Vec<PathBuf>) -> Result<()> {
-        for entry in std::fs::read_dir(dir).with_context(|| format!("reading {}", dir.display()))? {
-            let p = entry?.path();
-            if p.is_dir() {
-                walk(&p, out)?;
-            } else {
-                out.push(p);
-            }
-        }
-        Ok(())
-    }
-    let root = common::root();
-    let mut files = vec![root.join("Cargo.toml"), root.join("Cargo.lock")];
-    for d in ["src", "experiments", "assets"] {
-        walk(&root.join(d), &mut files)?;
-    }
-    for entry in std::fs::read_dir(root.join("data"))? {
-        let p = entry?.path();
-        if p.extension().is_some_and(|e| e == "toml") && !p.ends_with("claims.toml") {
-            files.push(p);
-        }
-    }
-    files.sort();
-    Ok(files)
-}
-
-/// Content hash (SHA-256) of every input file, with their paths.
-fn inputs_key() -> Result<String> {
-    use sha2::{Digest, Sha256};
-    let root = common::root();
-    let mut h = Sha256::new();
-    for f in input_files()? {
-        h.update(
-            f.strip_prefix(&root)
-                .unwrap_or(&f)
-                .to_string_lossy()
-                .as_bytes(),
-        );
-        h.update([0u8]);
-        h.update(std::fs::read(&f).with_context(|| format!("reading {}", f.display()))?);
-        h.update([0u8]);
-    }
-    Ok(format!("{:x}", h.finalize()))
-}
-
-fn key_path(name: &str) -> PathBuf {
-    job_dir(name).join("inputs.sha256")
-}
-
-/// An experiment is fresh when its last successful run had the same inputs and its outputs
-/// (summary and book snippet) are still there.
-fn is_fresh(name: &str, key: &str) -> bool {
-    let same = std::fs::read_to_string(key_path(name)).is_ok_and(|k| k.trim() == key);
-    let snippet = if name == CALIBRATE {
-        job_dir(name).join(common::calibration_io::DEVICE_FILE)
-    } else if OWN_DEVICE.iter().any(|(n, _)| *n == name) {
-        common::results_root().join(name).join("numbers.md")
-    } else {
-        common::book_generated_root().join(name).join("numbers.md")
-    };
-    same && job_dir(name).join("summary.json").exists() && snippet.exists()
 }
 
 #[derive(Deserialize)]
@@ -408,8 +275,8 @@ struct SummaryIn {
     params: Vec<(String, String)>,
 }
 
-fn read_summary(name: &str) -> Option<SummaryIn> {
-    let path = job_dir(name).join("summary.json");
+fn read_summary(job: &Job) -> Option<SummaryIn> {
+    let path = job.dir().join("summary.json");
     let text = std::fs::read_to_string(path).ok()?;
     serde_json::from_str(&text).ok()
 }
@@ -417,9 +284,10 @@ fn read_summary(name: &str) -> Option<SummaryIn> {
 /// Joins `data/claims.toml` with every experiment's summary.
 fn write_scorecard() -> Result<Vec<Row>> {
     let claims = Claims::bundled()?;
-    let values: Vec<Value> = EXPERIMENTS
+    let values: Vec<Value> = JOBS
         .iter()
-        .filter_map(|n| read_summary(n))
+        .filter(|j| j.scored)
+        .filter_map(read_summary)
         .flat_map(|s| s.values)
         .collect();
     let mut rows = score(&claims, &values)?;
@@ -476,12 +344,13 @@ fn write_provenance() -> Result<()> {
     let mut md = String::from(
         "| experiment | parameter files (set) | seed | commit | wall time (s) |\n|---|---|---|---|---|\n",
     );
-    for name in all_jobs() {
-        let Some(s) = read_summary(name) else {
+    for job in JOBS {
+        let name = job.name;
+        let Some(s) = read_summary(job) else {
             md.push_str(&format!("| {name} | (no results) | | | |\n"));
             continue;
         };
-        let wall = std::fs::read_to_string(job_dir(name).join("timing.json"))
+        let wall = std::fs::read_to_string(job.dir().join("timing.json"))
             .ok()
             .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok())
             .and_then(|v| v["wall_time_s"].as_f64())

@@ -8,6 +8,8 @@
 pub mod broadband_io;
 pub mod calibration_io;
 pub mod frame;
+pub mod freshness;
+pub mod jobs;
 pub mod md;
 pub mod narrowband_io;
 pub mod plot;

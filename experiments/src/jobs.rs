@@ -1,0 +1,181 @@
+//! The jobs `reproduce` runs: what each one executes, which data files it reads (for its
+//! freshness key, see [`crate::freshness`]), and when it runs.
+
+use std::path::PathBuf;
+
+/// When a job runs relative to the others.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Phase {
+    /// Alone, before everything else (its output is read by later jobs).
+    First,
+    /// With the other jobs of this phase, `--jobs` at a time.
+    Parallel,
+    /// Alone, after everything else (a benchmark must not compete for the cores).
+    Last,
+}
+
+/// One job of `reproduce`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Job {
+    /// Name: the results directory under `data/results/` and the label in logs.
+    pub name: &'static str,
+    /// The binary next to `reproduce` that runs it.
+    pub program: &'static str,
+    /// Arguments (an `--out <results dir>` is appended for the `endstop` tool).
+    pub args: &'static [&'static str],
+    /// Data files it reads, relative to the project root (besides the code and
+    /// `data/claims.toml`, which every job's key holds).
+    pub reads: &'static [&'static str],
+    /// True when it reads the calibrated prototype 1 (the `calibrate` job's artefact).
+    pub reads_calibration: bool,
+    /// When it runs.
+    pub phase: Phase,
+    /// True when its numbers feed the scorecard (its `summary.json` holds claim values).
+    pub scored: bool,
+}
+
+const P1: &str = "data/prototype1.toml";
+const P2: &str = "data/prototype2.toml";
+const EXAMPLE: &str = "data/examples/my_harvester.toml";
+
+const fn experiment(name: &'static str, reads: &'static [&'static str], cal: bool) -> Job {
+    Job {
+        name,
+        program: name,
+        args: &[],
+        reads,
+        reads_calibration: cal,
+        phase: Phase::Parallel,
+        scored: true,
+    }
+}
+
+/// The calibration of prototype 1: runs first; fig08, fig09, fig11, fig12 and bench read it.
+pub const CALIBRATE: &str = "calibrate";
+/// The ngspice cross-check: runs only where `ngspice` is installed.
+pub const CROSSCHECK: &str = "crosscheck";
+/// The benchmark: runs last and alone.
+pub const BENCH: &str = "bench";
+
+/// Every job, in the order of the paper and then the extras.
+pub const JOBS: &[Job] = &[
+    Job {
+        name: CALIBRATE,
+        program: CALIBRATE,
+        args: &[],
+        reads: &[P1],
+        reads_calibration: false,
+        phase: Phase::First,
+        scored: false,
+    },
+    experiment("fig05", &[P1, P2], false),
+    experiment("table3", &[P1, P2], false),
+    experiment("fig08", &[P1], true),
+    experiment("fig09", &[P1], true),
+    experiment("fig10", &[], false),
+    experiment("fig11", &[P1], true),
+    experiment("fig12", &[P1], true),
+    experiment("fig13", &[P2], false),
+    experiment("fig14", &[P2], false),
+    experiment("fig15", &[P2], false),
+    Job {
+        name: "own_device_sweep",
+        program: "endstop",
+        args: &[
+            "sweep",
+            "--device",
+            EXAMPLE,
+            "--from",
+            "500",
+            "--to",
+            "800",
+            "--step",
+            "2",
+            "--accel-rms-g",
+            "0.3",
+        ],
+        reads: &[EXAMPLE],
+        reads_calibration: false,
+        phase: Phase::Parallel,
+        scored: false,
+    },
+    Job {
+        name: "own_device_random",
+        program: "endstop",
+        args: &[
+            "random",
+            "--device",
+            EXAMPLE,
+            "--psd",
+            "1e-4",
+            "--records",
+            "4",
+        ],
+        reads: &[EXAMPLE],
+        reads_calibration: false,
+        phase: Phase::Parallel,
+        scored: false,
+    },
+    Job {
+        name: CROSSCHECK,
+        program: CROSSCHECK,
+        args: &[],
+        reads: &[P1, P2],
+        reads_calibration: false,
+        phase: Phase::Parallel,
+        scored: false,
+    },
+    Job {
+        name: BENCH,
+        program: BENCH,
+        args: &[],
+        reads: &[P1, P2],
+        reads_calibration: true,
+        phase: Phase::Last,
+        scored: false,
+    },
+];
+
+/// The job of this name.
+pub fn job(name: &str) -> Option<&'static Job> {
+    JOBS.iter().find(|j| j.name == name)
+}
+
+impl Job {
+    /// True for a run of the `endstop` tool (its outputs all go to its results directory).
+    pub fn is_tool_run(&self) -> bool {
+        self.program == "endstop"
+    }
+
+    /// Its results directory (the calibration's is its artefact's directory).
+    pub fn dir(&self) -> PathBuf {
+        if self.name == CALIBRATE {
+            crate::calibration_io::calibration_dir()
+        } else {
+            crate::results_root().join(self.name)
+        }
+    }
+
+    /// The arguments to run it with.
+    pub fn command_args(&self) -> Vec<String> {
+        let mut a: Vec<String> = self.args.iter().map(|s| s.to_string()).collect();
+        if self.is_tool_run() {
+            a.push("--out".into());
+            a.push(self.dir().display().to_string());
+        }
+        a
+    }
+
+    /// The output whose presence (with `summary.json`) says a past run completed.
+    pub fn completion_marker(&self) -> PathBuf {
+        if self.name == CALIBRATE {
+            self.dir().join(crate::calibration_io::DEVICE_FILE)
+        } else if self.is_tool_run() {
+            self.dir().join("numbers.md")
+        } else {
+            crate::book_generated_root()
+                .join(self.name)
+                .join("numbers.md")
+        }
+    }
+}
