@@ -69,7 +69,7 @@ fn free_oscillator_error_is_of_the_order_of_the_tolerance_and_shrinks_with_it() 
             max_err = max_err.max(e);
         })
         .unwrap();
-        let e_end = (ode.y[0] - (sys.w * 10.0).cos()).abs();
+        let e_end = (ode.y()[0] - (sys.w * 10.0).cos()).abs();
         max_err = max_err.max(e_end);
         // Global error over 10 periods: bounded by 100 x the local tolerance (error accumulates
         // over ~10 periods and the controller targets the local error only).
@@ -125,7 +125,7 @@ fn free_flight_hits_the_wall_at_the_exact_time() {
     // The trajectory is a quadratic, which the 4th-order dense output represents exactly, so
     // the event is located to the root finder's time tolerance (1e-14 s) plus rounding.
     assert!((t_hit - exact).abs() < 1e-12, "{t_hit} vs {exact}");
-    assert_eq!(ode.stats.events, 1);
+    assert_eq!(ode.stats().events, 1);
 }
 
 fn elastic_p1(km: f64, kim: f64) -> Harvester<Sine> {
@@ -208,15 +208,15 @@ fn energy_balance_closes_over_a_run_with_impacts() {
     );
     ode.integrate(&audit, 40.0 / 1300.0, |_, _| {}).unwrap();
     assert!(
-        ode.stats.events > 40,
+        ode.stats().events > 40,
         "expected impacts, got {} events",
-        ode.stats.events
+        ode.stats().events
     );
-    let y = ode.y;
+    let y = ode.y();
     assert!(y[6] > 0.0 && y[7] > 0.0, "no end-stop or load dissipation");
     // The source's work matters at this tolerance (it is ~1e-4 of the dissipation): a sign
     // error in the electrical bookkeeping would fail the check below.
-    let residual = audit.relative_residual(ode.mode, &y);
+    let residual = audit.relative_residual(ode.mode(), &y);
     assert!(residual.abs() < 1e-6, "relative residual {residual:e}");
     // Tension-free contact: the same balance (the clipped phase has no contact force).
     let mut d2 = d.clone();
@@ -229,8 +229,8 @@ fn energy_balance_closes_over_a_run_with_impacts() {
         audit2.solver_options(1e-10),
     );
     ode2.integrate(&audit2, 40.0 / 1300.0, |_, _| {}).unwrap();
-    let r2 = audit2.relative_residual(ode2.mode, &ode2.y);
-    assert!(ode2.stats.events > 40);
+    let r2 = audit2.relative_residual(ode2.mode(), &ode2.y());
+    assert!(ode2.stats().events > 40);
     assert!(r2.abs() < 1e-6, "tension-free relative residual {r2:e}");
 }
 
@@ -279,4 +279,30 @@ fn every_sample_instant_of_a_sampled_input_is_a_step_boundary() {
             "no step ends exactly at sample {k} (t = {t:e})"
         );
     }
+}
+
+#[test]
+fn restart_drops_the_cached_derivative() {
+    // Before the fields were private, a caller could write the state between two calls and the
+    // next step reused the derivative of the old state (its first step was wrong by 13 % here).
+    let sys = Oscillator { w: 1.0 };
+    let o = opts::<2>(1e-8, 1e-8);
+    let mut a = Dopri5::new(0.0, SVector::<f64, 2>::new(1.0, 0.0), (), o.clone());
+    a.integrate(&sys, 1.0, |_, _| {}).unwrap();
+    let moved = SVector::<f64, 2>::new(0.0, 2.0);
+    a.restart(1.0, moved, ());
+    let mut first = None;
+    a.integrate(&sys, 2.0, |st, _| {
+        first.get_or_insert((st.h, st.y1));
+    })
+    .unwrap();
+    // The restarted integrator is a fresh one at the new point (same options, same steps).
+    let mut b = Dopri5::new(1.0, moved, (), o);
+    b.integrate(&sys, 2.0, |_, _| {}).unwrap();
+    assert_eq!(a.y(), b.y());
+    assert_eq!(a.t(), 2.0);
+    // And its first step follows x = 2 sin(t - 1): the controller holds a step's local error
+    // to about atol + rtol |x| (~1e-8 here); the stale derivative gave 1e-6.
+    let (h, y1) = first.unwrap();
+    assert!((y1[0] - 2.0 * h.sin()).abs() < 1e-8, "{y1:?} after {h}");
 }

@@ -191,10 +191,13 @@ fn simulate(c: &Case) -> Result<(f64, u64), SolverError> {
     let mut ode = Dopri5::new(0.0, SVector::<f64, 8>::zeros(), Mode::Free, opts);
     ode.integrate(&audit, 15.0 / (c.detune * c.f0), |_, _| {})?;
     assert!(
-        ode.y.iter().all(|v| v.is_finite()),
+        ode.y().iter().all(|v| v.is_finite()),
         "{c:?}: non-finite state"
     );
-    Ok((audit.relative_residual(ode.mode, &ode.y), ode.stats.events))
+    Ok((
+        audit.relative_residual(ode.mode(), &ode.y()),
+        ode.stats().events,
+    ))
 }
 
 fn check(c: &Case) -> u64 {

@@ -3,6 +3,7 @@
 
 use nalgebra::SVector;
 
+use crate::ode::events;
 use crate::ode::{HybridSystem, Options, SolverError, Stats, Step, MAX_GUARDS};
 
 // Dormand-Prince 5(4) coefficients.
@@ -44,18 +45,18 @@ const D6: f64 = -1453857185.0 / 822651844.0;
 const D7: f64 = 69997945.0 / 29380423.0;
 
 /// Integrator state: time, state, mode, FSAL derivative, proposed step and counters.
+///
+/// The fields are private because the derivative at the current point (`k1`, reused by the
+/// next step) is cached: read them with [`Dopri5::t`], [`Dopri5::y`], [`Dopri5::mode`],
+/// [`Dopri5::stats`] and [`Dopri5::options`], and move the integrator to another state with
+/// [`Dopri5::restart`], which drops the cache.
 #[derive(Debug, Clone)]
 pub struct Dopri5<S: HybridSystem<N>, const N: usize> {
-    /// Current time (s).
-    pub t: f64,
-    /// Current state.
-    pub y: SVector<f64, N>,
-    /// Current mode.
-    pub mode: S::Mode,
-    /// Options.
-    pub opts: Options<N>,
-    /// Counters.
-    pub stats: Stats,
+    t: f64,
+    y: SVector<f64, N>,
+    mode: S::Mode,
+    opts: Options<N>,
+    stats: Stats,
     k1: SVector<f64, N>,
     h: f64,
     k1_valid: bool,
@@ -81,6 +82,41 @@ impl<S: HybridSystem<N>, const N: usize> Dopri5<S, N> {
             h,
             k1_valid: false,
         }
+    }
+
+    /// Current time (s).
+    pub fn t(&self) -> f64 {
+        self.t
+    }
+
+    /// Current state.
+    pub fn y(&self) -> SVector<f64, N> {
+        self.y
+    }
+
+    /// Current mode.
+    pub fn mode(&self) -> S::Mode {
+        self.mode
+    }
+
+    /// Counters since [`Dopri5::new`].
+    pub fn stats(&self) -> Stats {
+        self.stats
+    }
+
+    /// Options.
+    pub fn options(&self) -> &Options<N> {
+        &self.opts
+    }
+
+    /// Continues from a new point (t, y, mode), keeping the options and the counters: the
+    /// cached derivative is dropped and the next trial step is [`Options::h_init`].
+    pub fn restart(&mut self, t: f64, y: SVector<f64, N>, mode: S::Mode) {
+        self.t = t;
+        self.y = y;
+        self.mode = mode;
+        self.h = self.opts.h_init;
+        self.k1_valid = false;
     }
 
     fn state_vec(&self) -> Vec<f64> {
@@ -214,7 +250,7 @@ impl<S: HybridSystem<N>, const N: usize> Dopri5<S, N> {
             // Accepted: look for guard crossings on the dense output.
             let step = self.make_step(h, &tr);
             let t_new = if clipped { limit } else { self.t + h };
-            match self.locate_event(sys, &step) {
+            match events::locate(sys, self.mode, &step, self.opts.event_time_tol) {
                 None => {
                     self.stats.accepted += 1;
                     observer(&step, self.mode);
@@ -254,94 +290,5 @@ impl<S: HybridSystem<N>, const N: usize> Dopri5<S, N> {
             }
         }
         Ok(())
-    }
-
-    /// Earliest guard crossing within the step as (theta, guard index).
-    fn locate_event(&self, sys: &S, step: &Step<N>) -> Option<(f64, usize)> {
-        const PROBES: [f64; 3] = [1.0 / 3.0, 2.0 / 3.0, 1.0];
-        let g0 = sys.guards(self.mode, step.t0, &step.y0);
-        let mut best: Option<(f64, usize)> = None;
-        let mut lo_theta = [0.0; MAX_GUARDS];
-        let mut lo_val = g0;
-        let mut found = [false; MAX_GUARDS];
-        let mut hi_theta = [1.0; MAX_GUARDS];
-        let mut hi_val = [0.0; MAX_GUARDS];
-        for &th in &PROBES {
-            let y = if th == 1.0 {
-                step.y1
-            } else {
-                step.at_theta(th)
-            };
-            let g = sys.guards(self.mode, step.t0 + th * step.h, &y);
-            for i in 0..MAX_GUARDS {
-                if found[i] {
-                    continue;
-                }
-                if g[i] > 0.0 {
-                    found[i] = true;
-                    hi_theta[i] = th;
-                    hi_val[i] = g[i];
-                } else {
-                    lo_theta[i] = th;
-                    lo_val[i] = g[i];
-                }
-            }
-        }
-        for i in 0..MAX_GUARDS {
-            if !found[i] {
-                continue;
-            }
-            if best.is_some_and(|(b, _)| b <= lo_theta[i]) {
-                continue;
-            }
-            let th = self.illinois(sys, step, i, lo_theta[i], lo_val[i], hi_theta[i], hi_val[i]);
-            if best.is_none_or(|(b, _)| th < b) {
-                best = Some((th, i));
-            }
-        }
-        best
-    }
-
-    /// Illinois (modified regula falsi) on the dense output; returns the upper end of the final
-    /// bracket, so the event is never placed before the crossing.
-    #[allow(clippy::too_many_arguments)]
-    fn illinois(
-        &self,
-        sys: &S,
-        step: &Step<N>,
-        i: usize,
-        mut a: f64,
-        mut ga: f64,
-        mut b: f64,
-        mut gb: f64,
-    ) -> f64 {
-        let tol = self.opts.event_time_tol / step.h;
-        let mut side = 0i8;
-        for _ in 0..200 {
-            if b - a <= tol {
-                break;
-            }
-            let mut c = (a * gb - b * ga) / (gb - ga);
-            if !(c > a && c < b) {
-                c = 0.5 * (a + b);
-            }
-            let gc = sys.guards(self.mode, step.t0 + c * step.h, &step.at_theta(c))[i];
-            if gc > 0.0 {
-                b = c;
-                gb = gc;
-                if side == 1 {
-                    ga *= 0.5;
-                }
-                side = 1;
-            } else {
-                a = c;
-                ga = gc;
-                if side == -1 {
-                    gb *= 0.5;
-                }
-                side = -1;
-            }
-        }
-        b
     }
 }

@@ -28,6 +28,7 @@
 //!   `contd5` of their DOPRI5 code).
 
 mod dopri5;
+mod events;
 
 use std::ops::AddAssign;
 
