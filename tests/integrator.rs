@@ -306,3 +306,142 @@ fn restart_drops_the_cached_derivative() {
     let (h, y1) = first.unwrap();
     assert!((y1[0] - 2.0 * h.sin()).abs() < 1e-8, "{y1:?} after {h}");
 }
+
+/// y' = w cos(w t), y = sin(w t) from y(0) = 0: a forcing so fast that the step it needs is
+/// below the spacing of doubles at the start time.
+struct FastForcing {
+    w: f64,
+}
+
+impl HybridSystem<1> for FastForcing {
+    type Mode = ();
+    fn rhs(&self, _: (), t: f64, _y: &SVector<f64, 1>) -> SVector<f64, 1> {
+        SVector::<f64, 1>::new(self.w * (self.w * t).cos())
+    }
+    fn guards(&self, _: (), _t: f64, _y: &SVector<f64, 1>) -> Guards {
+        [f64::NEG_INFINITY; 3]
+    }
+    fn switch(&self, _: (), _: usize, _: f64, _: &mut SVector<f64, 1>) {}
+}
+
+#[test]
+fn a_step_below_the_resolution_of_time_is_a_step_size_error_with_the_time() {
+    // At t = 1e7 s doubles are 1.9e-9 s apart, and w = 1e9 rad/s asks for steps of ~1e-11 s:
+    // such a step cannot advance t. The absolute floor (1e-14 s) is far below; the relative
+    // floor (16 eps |t| = 3.6e-8 s) stops the run at once, where the integrator used to
+    // accept steps that left t unchanged until the step budget ran out.
+    let t0 = 1e7;
+    let mut o = opts::<1>(1e-8, 1e-8);
+    o.max_steps = 1_000_000;
+    let mut ode = Dopri5::new(t0, SVector::<f64, 1>::new((1e9 * t0).sin()), (), o);
+    let err = ode
+        .integrate(&FastForcing { w: 1e9 }, t0 + 1.0, |_, _| {})
+        .unwrap_err();
+    match &err {
+        SolverError::StepSizeTooSmall { t, h, .. } => {
+            assert_eq!(*t, t0, "{err}");
+            assert!(*h < 16.0 * f64::EPSILON * t0, "{err}");
+        }
+        other => panic!("expected a step-size error, got {other}"),
+    }
+    assert!(err.to_string().contains("t = 1e7 s"), "{err}");
+}
+
+/// Free flight onto a wall at x = 1 (as [`Flight`]) whose right-hand side turns to NaN once a
+/// guard has been seen positive: the step re-taken to land on the event is then non-finite.
+struct PoisonedFlight {
+    seen_positive: std::cell::Cell<bool>,
+}
+
+impl HybridSystem<2> for PoisonedFlight {
+    type Mode = u8;
+    fn rhs(&self, mode: u8, _t: f64, y: &SVector<f64, 2>) -> SVector<f64, 2> {
+        match (mode, self.seen_positive.get()) {
+            (0, false) => SVector::<f64, 2>::new(y[1], 0.7),
+            (0, true) => SVector::<f64, 2>::repeat(f64::NAN),
+            _ => SVector::<f64, 2>::zeros(),
+        }
+    }
+    fn guards(&self, mode: u8, _t: f64, y: &SVector<f64, 2>) -> Guards {
+        if mode == 0 {
+            if y[0] > 1.0 {
+                self.seen_positive.set(true);
+            }
+            [y[0] - 1.0, f64::NEG_INFINITY, f64::NEG_INFINITY]
+        } else {
+            [f64::NEG_INFINITY; 3]
+        }
+    }
+    fn switch(&self, _: u8, _: usize, _: f64, _: &mut SVector<f64, 2>) -> u8 {
+        1
+    }
+}
+
+#[test]
+fn a_non_finite_step_onto_an_event_is_an_error() {
+    let sys = PoisonedFlight {
+        seen_positive: std::cell::Cell::new(false),
+    };
+    let mut ode = Dopri5::new(
+        0.0,
+        SVector::<f64, 2>::new(0.0, 0.3),
+        0u8,
+        opts(1e-9, 1e-12),
+    );
+    let mut observed_nan = false;
+    let res = ode.integrate(&sys, 5.0, |st, _| {
+        observed_nan |= !st.y1.iter().all(|v| v.is_finite());
+    });
+    assert!(!observed_nan, "a non-finite step reached the observer");
+    match res {
+        // The wall is reached at t = 1.26 s; the error carries the start of the failed step.
+        Err(SolverError::NonFinite { t, state }) => {
+            assert!(t > 0.5 && t < 1.27, "t = {t}");
+            assert!(state.iter().all(|v| v.is_finite()), "{state:?}");
+        }
+        other => panic!("expected a non-finite error, got {other:?}"),
+    }
+}
+
+/// Two modes whose guards are both positive at x > 0, whatever the mode: every switch lands in
+/// a mode that asks to leave at once.
+struct Chatter;
+
+impl HybridSystem<1> for Chatter {
+    type Mode = bool;
+    fn rhs(&self, _: bool, _t: f64, _y: &SVector<f64, 1>) -> SVector<f64, 1> {
+        SVector::<f64, 1>::new(1.0)
+    }
+    fn guards(&self, _: bool, _t: f64, y: &SVector<f64, 1>) -> Guards {
+        [y[0], f64::NEG_INFINITY, f64::NEG_INFINITY]
+    }
+    fn switch(&self, mode: bool, _: usize, _: f64, _: &mut SVector<f64, 1>) -> bool {
+        !mode
+    }
+}
+
+#[test]
+fn endless_switching_at_one_time_is_a_chattering_error() {
+    // Run on a thread with a deadline: without a cap the integrator would switch forever.
+    let (tx, rx) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        let mut ode = Dopri5::new(0.25, SVector::<f64, 1>::new(0.5), false, opts(1e-8, 1e-8));
+        let _ = tx.send(ode.integrate(&Chatter, 1.0, |_, _| {}));
+    });
+    let res = rx
+        .recv_timeout(std::time::Duration::from_secs(20))
+        .expect("the integrator did not return within 20 s");
+    match res {
+        Err(SolverError::Chattering {
+            t,
+            switches,
+            ref modes,
+            ..
+        }) => {
+            assert_eq!(t, 0.25);
+            assert_eq!(switches, endstop::ode::MAX_SWITCHES_AT_ONE_TIME + 1);
+            assert_eq!(modes[..3], ["false", "true", "false"]);
+        }
+        other => panic!("expected a chattering error, got {other:?}"),
+    }
+}

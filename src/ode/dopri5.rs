@@ -4,7 +4,9 @@
 use nalgebra::SVector;
 
 use crate::ode::events;
-use crate::ode::{HybridSystem, Options, SolverError, Stats, Step, MAX_GUARDS};
+use crate::ode::{
+    HybridSystem, Options, SolverError, Stats, Step, MAX_GUARDS, MAX_SWITCHES_AT_ONE_TIME,
+};
 
 // Dormand-Prince 5(4) coefficients.
 const C2: f64 = 1.0 / 5.0;
@@ -60,6 +62,8 @@ pub struct Dopri5<S: HybridSystem<N>, const N: usize> {
     k1: SVector<f64, N>,
     h: f64,
     k1_valid: bool,
+    /// The modes visited since time last advanced (empty when no switch happened since).
+    switch_trail: Vec<S::Mode>,
 }
 
 struct Trial<const N: usize> {
@@ -81,6 +85,7 @@ impl<S: HybridSystem<N>, const N: usize> Dopri5<S, N> {
             k1: SVector::zeros(),
             h,
             k1_valid: false,
+            switch_trail: Vec::new(),
         }
     }
 
@@ -117,6 +122,7 @@ impl<S: HybridSystem<N>, const N: usize> Dopri5<S, N> {
         self.mode = mode;
         self.h = self.opts.h_init;
         self.k1_valid = false;
+        self.switch_trail.clear();
     }
 
     fn state_vec(&self) -> Vec<f64> {
@@ -176,6 +182,37 @@ impl<S: HybridSystem<N>, const N: usize> Dopri5<S, N> {
         }
     }
 
+    /// Switches the mode through guard `index` at the current time and state (the state may
+    /// be projected by the system); errs when switches keep firing without time advancing.
+    fn switch(&mut self, sys: &S, index: usize) -> Result<(), SolverError> {
+        if self.switch_trail.is_empty() {
+            self.switch_trail.push(self.mode);
+        }
+        let mut y = self.y;
+        self.mode = sys.switch(self.mode, index, self.t, &mut y);
+        self.y = y;
+        self.stats.events += 1;
+        self.k1_valid = false;
+        self.switch_trail.push(self.mode);
+        let switches = (self.switch_trail.len() - 1) as u32;
+        if switches > MAX_SWITCHES_AT_ONE_TIME {
+            return Err(SolverError::Chattering {
+                t: self.t,
+                switches,
+                modes: self.switch_trail.iter().map(|m| format!("{m:?}")).collect(),
+                state: self.state_vec(),
+            });
+        }
+        Ok(())
+    }
+
+    /// Moves to the end of an accepted step of positive length.
+    fn advance(&mut self, t: f64, y: SVector<f64, N>) {
+        self.t = t;
+        self.y = y;
+        self.switch_trail.clear();
+    }
+
     /// Integrates to `t_end`, calling `observer` with every accepted step (and with the mode
     /// that was active over it).
     pub fn integrate<O: FnMut(&Step<N>, S::Mode)>(
@@ -199,11 +236,7 @@ impl<S: HybridSystem<N>, const N: usize> Dopri5<S, N> {
                 // A guard already positive at the start of a step fires at once.
                 let g = sys.guards(self.mode, self.t, &self.y);
                 if let Some(i) = (0..MAX_GUARDS).find(|&i| g[i] > 0.0) {
-                    let mut y = self.y;
-                    self.mode = sys.switch(self.mode, i, self.t, &mut y);
-                    self.y = y;
-                    self.stats.events += 1;
-                    self.k1_valid = false;
+                    self.switch(sys, i)?;
                     continue;
                 }
             }
@@ -222,11 +255,21 @@ impl<S: HybridSystem<N>, const N: usize> Dopri5<S, N> {
                 h = limit - self.t;
                 clipped = true;
             }
+            // A step below the resolution of time cannot advance it (a step clipped to a
+            // breakpoint ends exactly on it, however short).
+            let h_floor = self.opts.min_step(self.t);
+            if !clipped && h < h_floor {
+                return Err(SolverError::StepSizeTooSmall {
+                    t: self.t,
+                    h,
+                    state: self.state_vec(),
+                });
+            }
             let tr = self.trial(sys, h);
             if !tr.err.is_finite() || !tr.y1.iter().all(|v| v.is_finite()) {
                 self.stats.rejected += 1;
                 self.h = h * 0.2;
-                if self.h < self.opts.h_min {
+                if self.h < h_floor {
                     return Err(SolverError::NonFinite {
                         t: self.t,
                         state: self.state_vec(),
@@ -238,7 +281,7 @@ impl<S: HybridSystem<N>, const N: usize> Dopri5<S, N> {
             if tr.err > 1.0 {
                 self.stats.rejected += 1;
                 self.h = h * fac.min(1.0);
-                if self.h < self.opts.h_min {
+                if self.h < h_floor {
                     return Err(SolverError::StepSizeTooSmall {
                         t: self.t,
                         h: self.h,
@@ -254,8 +297,7 @@ impl<S: HybridSystem<N>, const N: usize> Dopri5<S, N> {
                 None => {
                     self.stats.accepted += 1;
                     observer(&step, self.mode);
-                    self.t = t_new;
-                    self.y = tr.y1;
+                    self.advance(t_new, tr.y1);
                     self.k1 = tr.k[6];
                     if !clipped || fac < 1.0 {
                         self.h = h * fac;
@@ -264,20 +306,20 @@ impl<S: HybridSystem<N>, const N: usize> Dopri5<S, N> {
                 Some((theta, index)) => {
                     // Re-take the step so that it ends exactly on the event.
                     let h_ev = theta * h;
-                    let (t_ev, mut y_ev) = if h_ev > 0.0 {
+                    if h_ev > 0.0 {
                         let tr_ev = self.trial(sys, h_ev);
+                        if !tr_ev.err.is_finite() || !tr_ev.y1.iter().all(|v| v.is_finite()) {
+                            return Err(SolverError::NonFinite {
+                                t: self.t,
+                                state: self.state_vec(),
+                            });
+                        }
                         let st = self.make_step(h_ev, &tr_ev);
                         self.stats.accepted += 1;
                         observer(&st, self.mode);
-                        (self.t + h_ev, tr_ev.y1)
-                    } else {
-                        (self.t, self.y)
-                    };
-                    self.mode = sys.switch(self.mode, index, t_ev, &mut y_ev);
-                    self.stats.events += 1;
-                    self.t = t_ev;
-                    self.y = y_ev;
-                    self.k1_valid = false;
+                        self.advance(self.t + h_ev, tr_ev.y1);
+                    }
+                    self.switch(sys, index)?;
                     self.h = h;
                 }
             }

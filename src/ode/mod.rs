@@ -40,6 +40,9 @@ pub use dopri5::Dopri5;
 /// Maximum number of guard functions of one mode.
 pub const MAX_GUARDS: usize = 3;
 
+/// Most mode switches allowed in a row without time advancing (see [`SolverError::Chattering`]).
+pub const MAX_SWITCHES_AT_ONE_TIME: u32 = 16;
+
 /// Guard values of one mode; unused entries are `f64::NEG_INFINITY`.
 pub type Guards = [f64; MAX_GUARDS];
 
@@ -73,7 +76,7 @@ pub trait HybridSystem<const N: usize> {
 /// Integrator failure, with the simulated time and state where it happened.
 #[derive(Debug, Error, Clone, PartialEq)]
 pub enum SolverError {
-    /// The step size fell below [`Options::h_min`].
+    /// The step size fell below [`Options::min_step`].
     #[error("step size {h:e} s below the minimum at t = {t:e} s (state {state:?})")]
     StepSizeTooSmall {
         /// Simulated time (s).
@@ -103,6 +106,19 @@ pub enum SolverError {
         /// Requested end time (s).
         t_end: f64,
     },
+    /// Mode switches kept firing without time advancing: a guard of each new mode was
+    /// positive at once, more than [`MAX_SWITCHES_AT_ONE_TIME`] times in a row.
+    #[error("{switches} mode switches at t = {t:e} s without time advancing (modes {modes:?}, state {state:?})")]
+    Chattering {
+        /// Simulated time (s).
+        t: f64,
+        /// Switches made at `t`.
+        switches: u32,
+        /// The modes visited at `t`, in order (their `Debug` text).
+        modes: Vec<String>,
+        /// State at `t`.
+        state: Vec<f64>,
+    },
     /// The system reported an inadmissible state.
     #[error("inadmissible state at t = {t:e} s: {message} (state {state:?})")]
     InvalidState {
@@ -124,7 +140,8 @@ pub struct Options<const N: usize> {
     pub atol: SVector<f64, N>,
     /// Largest step (s).
     pub h_max: f64,
-    /// Smallest step before giving up (s).
+    /// Absolute floor of the smallest step (s); the smallest step at time t is
+    /// [`Options::min_step`].
     pub h_min: f64,
     /// First trial step (s).
     pub h_init: f64,
@@ -133,6 +150,18 @@ pub struct Options<const N: usize> {
     /// Time tolerance for event location (s).
     pub event_time_tol: f64,
 }
+
+impl<const N: usize> Options<N> {
+    /// The smallest step allowed at time `t` (s): `max(h_min, MIN_STEP_REL |t|)`. A step
+    /// shorter than a few units in the last place of t cannot advance t (as in Hairer's codes,
+    /// whose DOPRI5 stops when 0.1 |h| <= |t| eps).
+    pub fn min_step(&self, t: f64) -> f64 {
+        self.h_min.max(MIN_STEP_REL * t.abs())
+    }
+}
+
+/// The smallest step relative to |t| (16 machine epsilons, see [`Options::min_step`]).
+pub const MIN_STEP_REL: f64 = 16.0 * f64::EPSILON;
 
 /// Counters, for benchmarks and convergence reports.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
