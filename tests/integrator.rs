@@ -445,3 +445,73 @@ fn endless_switching_at_one_time_is_a_chattering_error() {
         other => panic!("expected a chattering error, got {other:?}"),
     }
 }
+/// A ball thrown up towards a ceiling at x = 1 under constant deceleration: x'' = -a with the
+/// apex at time `t_apex` and height `1 + excess`.
+struct Graze {
+    a: f64,
+}
+
+impl HybridSystem<2> for Graze {
+    type Mode = u8;
+    fn rhs(&self, mode: u8, _t: f64, y: &SVector<f64, 2>) -> SVector<f64, 2> {
+        if mode == 0 {
+            SVector::<f64, 2>::new(y[1], -self.a)
+        } else {
+            SVector::<f64, 2>::zeros()
+        }
+    }
+    fn guards(&self, mode: u8, _t: f64, y: &SVector<f64, 2>) -> Guards {
+        if mode == 0 {
+            [y[0] - 1.0, f64::NEG_INFINITY, f64::NEG_INFINITY]
+        } else {
+            [f64::NEG_INFINITY; 3]
+        }
+    }
+    fn switch(&self, _: u8, _: usize, _: f64, _: &mut SVector<f64, 2>) -> u8 {
+        1
+    }
+}
+
+/// Runs [`Graze`] over [0, 2] with a first step of exactly [0, 1]; returns the switch time
+/// (if any) and the first accepted step's length.
+fn graze(t_apex: f64, excess: f64) -> (Option<f64>, f64) {
+    let a = 2.0 * (1.0 + excess) / (t_apex * t_apex);
+    let sys = Graze { a };
+    let mut o = opts::<2>(1e-9, 1e-12);
+    o.h_init = 1.0;
+    let mut ode = Dopri5::new(0.0, SVector::<f64, 2>::new(0.0, a * t_apex), 0u8, o);
+    let (mut hit, mut first_h) = (None, None);
+    ode.integrate(&sys, 2.0, |st, m| {
+        first_h.get_or_insert(st.h);
+        if m == 0 {
+            hit = Some(st.t1());
+        }
+    })
+    .unwrap();
+    let switched = (ode.mode() == 1).then(|| hit.unwrap());
+    (switched, first_h.unwrap())
+}
+
+#[test]
+fn a_grazing_crossing_between_the_guard_probes_is_found() {
+    // The guard x - 1 is sampled at theta = 0, 1/3, 2/3, 1 of the step [0, 1]; with the apex
+    // 1e-3 above the ceiling the guard is positive only for |t - t_apex| < sqrt(2e-3 / a)
+    // (0.003 to 0.03 s), inside one probe interval, so every probe sees it negative. The
+    // trajectory is a quadratic, which the dense output reproduces exactly, so the crossing is
+    // located to the event time tolerance (1e-14 s) plus rounding.
+    for t_apex in [0.1f64, 0.5, 0.9] {
+        let excess = 1e-3f64;
+        let a = 2.0 * (1.0 + excess) / (t_apex * t_apex);
+        let exact = t_apex - (2.0 * excess / a).sqrt();
+        let (hit, _) = graze(t_apex, excess);
+        let hit = hit.unwrap_or_else(|| panic!("apex at {t_apex}: grazing contact missed"));
+        assert!(
+            (hit - exact).abs() < 1e-12,
+            "apex at {t_apex}: {hit} vs {exact}"
+        );
+        // Just below the ceiling: no event, and the first step did span [0, 1].
+        let (miss, first_h) = graze(t_apex, -excess);
+        assert_eq!(miss, None, "apex at {t_apex}, below the ceiling");
+        assert_eq!(first_h, 1.0);
+    }
+}
