@@ -64,6 +64,11 @@ pub struct Dopri5<S: HybridSystem<N>, const N: usize> {
     k1_valid: bool,
     /// The modes visited since time last advanced (empty when no switch happened since).
     switch_trail: Vec<S::Mode>,
+    /// No step has been accepted since the last mode switch.
+    after_event: bool,
+    /// Per mode, the first full step accepted after the last switch into it: the step
+    /// proposed after the next switch into that mode (see [`Dopri5::switch`]).
+    entry_steps: Vec<(S::Mode, f64)>,
 }
 
 struct Trial<const N: usize> {
@@ -86,6 +91,8 @@ impl<S: HybridSystem<N>, const N: usize> Dopri5<S, N> {
             h,
             k1_valid: false,
             switch_trail: Vec::new(),
+            after_event: false,
+            entry_steps: Vec::new(),
         }
     }
 
@@ -122,6 +129,7 @@ impl<S: HybridSystem<N>, const N: usize> Dopri5<S, N> {
         self.mode = mode;
         self.h = self.opts.h_init;
         self.k1_valid = false;
+        self.after_event = false;
         self.switch_trail.clear();
     }
 
@@ -184,6 +192,14 @@ impl<S: HybridSystem<N>, const N: usize> Dopri5<S, N> {
 
     /// Switches the mode through guard `index` at the current time and state (the state may
     /// be projected by the system); errs when switches keep firing without time advancing.
+    ///
+    /// The next trial step is the current one capped by the first full step accepted after
+    /// the previous switch into the new mode: a mode's own dynamics set its step (the end-stop
+    /// contact rings ~100 times faster than the free motion, and the step from before the
+    /// impact used to be rejected several times). Hairer's starting-step heuristic evaluated
+    /// at the switch does not serve here: at a contact entry the penetration, hence the contact
+    /// force, is zero, so a derivative estimate at that point cannot see the stiffness that
+    /// builds up within the step.
     fn switch(&mut self, sys: &S, index: usize) -> Result<(), SolverError> {
         if self.switch_trail.is_empty() {
             self.switch_trail.push(self.mode);
@@ -193,6 +209,10 @@ impl<S: HybridSystem<N>, const N: usize> Dopri5<S, N> {
         self.y = y;
         self.stats.events += 1;
         self.k1_valid = false;
+        self.after_event = true;
+        if let Some(&(_, h)) = self.entry_steps.iter().find(|(m, _)| *m == self.mode) {
+            self.h = self.h.min(h);
+        }
         self.switch_trail.push(self.mode);
         let switches = (self.switch_trail.len() - 1) as u32;
         if switches > MAX_SWITCHES_AT_ONE_TIME {
@@ -204,6 +224,17 @@ impl<S: HybridSystem<N>, const N: usize> Dopri5<S, N> {
             });
         }
         Ok(())
+    }
+
+    /// Records `h` as the first full step of the current mode after a switch into it.
+    fn remember_entry_step(&mut self, h: f64) {
+        /// Modes remembered (a hybrid system has few).
+        const MAX_MODES: usize = 16;
+        if let Some(e) = self.entry_steps.iter_mut().find(|(m, _)| *m == self.mode) {
+            e.1 = h;
+        } else if self.entry_steps.len() < MAX_MODES {
+            self.entry_steps.push((self.mode, h));
+        }
     }
 
     /// Moves to the end of an accepted step of positive length.
@@ -268,6 +299,9 @@ impl<S: HybridSystem<N>, const N: usize> Dopri5<S, N> {
             let tr = self.trial(sys, h);
             if !tr.err.is_finite() || !tr.y1.iter().all(|v| v.is_finite()) {
                 self.stats.rejected += 1;
+                if self.after_event {
+                    self.stats.rejected_after_event += 1;
+                }
                 self.h = h * 0.2;
                 if self.h < h_floor {
                     return Err(SolverError::NonFinite {
@@ -280,6 +314,9 @@ impl<S: HybridSystem<N>, const N: usize> Dopri5<S, N> {
             let fac = (0.9 * tr.err.powf(-0.2)).clamp(0.2, 10.0);
             if tr.err > 1.0 {
                 self.stats.rejected += 1;
+                if self.after_event {
+                    self.stats.rejected_after_event += 1;
+                }
                 self.h = h * fac.min(1.0);
                 if self.h < h_floor {
                     return Err(SolverError::StepSizeTooSmall {
@@ -291,6 +328,7 @@ impl<S: HybridSystem<N>, const N: usize> Dopri5<S, N> {
                 continue;
             }
             // Accepted: look for guard crossings on the dense output.
+            let first_after_event = std::mem::replace(&mut self.after_event, false);
             let step = self.make_step(h, &tr);
             let t_new = if clipped { limit } else { self.t + h };
             match events::locate(sys, self.mode, &step, self.opts.event_time_tol) {
@@ -299,6 +337,9 @@ impl<S: HybridSystem<N>, const N: usize> Dopri5<S, N> {
                     observer(&step, self.mode);
                     self.advance(t_new, tr.y1);
                     self.k1 = tr.k[6];
+                    if first_after_event && !clipped {
+                        self.remember_entry_step(h);
+                    }
                     if !clipped || fac < 1.0 {
                         self.h = h * fac;
                     }
@@ -319,8 +360,8 @@ impl<S: HybridSystem<N>, const N: usize> Dopri5<S, N> {
                         observer(&st, self.mode);
                         self.advance(self.t + h_ev, tr_ev.y1);
                     }
-                    self.switch(sys, index)?;
                     self.h = h;
+                    self.switch(sys, index)?;
                 }
             }
             if let Err(message) = sys.check_state(self.mode, self.t, &self.y) {

@@ -170,6 +170,8 @@ pub struct Stats {
     pub accepted: u64,
     /// Rejected steps.
     pub rejected: u64,
+    /// Rejected trials of the first step after an event (included in `rejected`).
+    pub rejected_after_event: u64,
     /// Right-hand-side evaluations.
     pub rhs_evals: u64,
     /// Events (mode switches).
@@ -180,6 +182,7 @@ impl AddAssign for Stats {
     fn add_assign(&mut self, other: Stats) {
         self.accepted += other.accepted;
         self.rejected += other.rejected;
+        self.rejected_after_event += other.rejected_after_event;
         self.rhs_evals += other.rhs_evals;
         self.events += other.events;
     }
