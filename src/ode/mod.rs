@@ -14,21 +14,30 @@
 //! * In each mode the system exposes up to [`MAX_GUARDS`] guard functions g_i(t, y). A guard
 //!   that becomes **positive** asks to leave the mode. After each accepted step the guards are
 //!   evaluated at the end point and at two interior points of the dense output; the earliest
-//!   sign change from <= 0 to > 0 is located by the Illinois method on the dense output to a
-//!   time tolerance of [`Options::event_time_tol`] seconds, and the step is **re-taken** from
-//!   its start with exactly the length that lands on the event. The system then picks the new
-//!   mode (and may project the state, e.g. put x exactly on the stop).
+//!   sign change from <= 0 to > 0 is located on the dense output by the crate's root finder
+//!   ([`crate::num::roots::illinois`]) to a time tolerance of [`Options::event_time_tol`]
+//!   seconds, and the step is **re-taken** from its start with exactly the length that lands
+//!   on the event (and checked for finiteness like any step). A guard that rises above zero
+//!   and falls back between two probes (a grazing contact) is found by maximising it on the
+//!   dense output where the probes suggest a maximum near zero (see `events.rs`). The system
+//!   then picks the new mode (and may project the state, e.g. put x exactly on the stop).
+//! * After a switch, the next trial step is capped by the first full step accepted after the
+//!   previous switch into the new mode, so that a mode with faster dynamics (a stiff contact)
+//!   does not start with the step of the mode it left.
 //! * A guard that is already positive at the start of a step (a mode entered at a grazing
-//!   point) fires at once.
+//!   point) fires at once; more than [`MAX_SWITCHES_AT_ONE_TIME`] switches in a row without
+//!   time advancing are an error ([`SolverError::Chattering`]).
 //! * The system may also impose breakpoints (the sample instants of a sampled input, the ends
 //!   of whole periods): no step crosses a breakpoint.
+//! * The smallest step at time t is max(h_min, 16 eps |t|) ([`Options::min_step`]): a shorter
+//!   step could not advance t.
 //! * Error norm: RMS over components of err_i / (atol_i + rtol max(|y0_i|, |y1_i|)); a step is
 //!   accepted when the norm is <= 1. Step-size factor 0.9 err^(-1/5), limited to [0.2, 10].
 //! * Dense output: the 4th-order continuous extension of Hairer, Norsett and Wanner (the
 //!   `contd5` of their DOPRI5 code).
 
 mod dopri5;
-mod events;
+pub mod events;
 
 use std::ops::AddAssign;
 

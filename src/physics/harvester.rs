@@ -189,6 +189,7 @@ impl<E: Excitation> Harvester<E> {
             rtol,
             atol: self.scales() * rtol,
             h_max: 0.02 * 2.0 * std::f64::consts::PI / w0,
+            // Absolute floor; the smallest step grows with |t| (`Options::min_step`).
             h_min: 1e-16,
             h_init: 1e-7,
             max_steps: 50_000_000,
