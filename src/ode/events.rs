@@ -9,7 +9,7 @@
 //! A guard may also rise above zero and fall back between two probes (a trajectory grazing a
 //! stop). Where the cubic through the four samples has an interior maximum near zero, the
 //! guard is maximised on the dense output and, if it is positive there, the crossing before
-//! the maximum is bracketed and located like any other (see [`graze`] for the criterion and
+//! the maximum is bracketed and located like any other (see `graze` for the criterion and
 //! what can still be missed).
 
 use std::convert::Infallible;

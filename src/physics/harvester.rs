@@ -28,7 +28,7 @@ use crate::ode::{Guards, HybridSystem, Options};
 use crate::physics::contact::{ContactLaw, Mode, Side};
 use crate::physics::hertz::HertzLine;
 
-/// State (x [m], v [m/s], s1 [C], s2 [C]).
+/// State (x in m, v in m/s, s1 and s2 in C).
 pub type State = SVector<f64, 4>;
 
 /// The harvester driven by an excitation: a [`HybridSystem`] of dimension 4.
