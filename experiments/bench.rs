@@ -164,7 +164,7 @@ fn run() -> Result<()> {
                 }
             },
         )?;
-        Ok((c, f, ode.stats))
+        Ok((c, f, ode.stats()))
     })?;
     let share = contact_steps as f64 / (contact_steps + free_steps) as f64;
     rows.push(Row {

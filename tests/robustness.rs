@@ -12,9 +12,10 @@ use endstop::drive::Sine;
 use endstop::ode::Dopri5;
 use endstop::ode::SolverError;
 use endstop::physics::contact::Mode;
+use endstop::physics::energy::AuditState;
 use endstop::physics::energy::EnergyAudit;
+use endstop::physics::energy::AUDIT_DIM;
 use endstop::physics::harvester::Harvester;
-use nalgebra::SVector;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
@@ -185,16 +186,19 @@ fn simulate(c: &Case) -> Result<(f64, u64), SolverError> {
     let x_lin = drive.amplitude_m_s2 / ((w0 * w0 - w * w).powi(2) + (w0 * w / c.q).powi(2)).sqrt();
     let motion = (x_lin / d.geometry.endstop_gap_m).min(1.0);
     let mut opts = audit.solver_options(1e-10);
-    for i in 0..8 {
+    for i in 0..AUDIT_DIM {
         opts.atol[i] *= if i < 4 { motion } else { motion * motion };
     }
-    let mut ode = Dopri5::new(0.0, SVector::<f64, 8>::zeros(), Mode::Free, opts);
+    let mut ode = Dopri5::new(0.0, AuditState::zeros(), Mode::Free, opts);
     ode.integrate(&audit, 15.0 / (c.detune * c.f0), |_, _| {})?;
     assert!(
-        ode.y.iter().all(|v| v.is_finite()),
+        ode.y().iter().all(|v| v.is_finite()),
         "{c:?}: non-finite state"
     );
-    Ok((audit.relative_residual(ode.mode, &ode.y), ode.stats.events))
+    Ok((
+        audit.relative_residual(ode.mode(), &ode.y()),
+        ode.stats().events,
+    ))
 }
 
 fn check(c: &Case) -> u64 {

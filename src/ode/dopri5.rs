@@ -3,7 +3,10 @@
 
 use nalgebra::SVector;
 
-use crate::ode::{HybridSystem, Options, SolverError, Stats, Step, MAX_GUARDS};
+use crate::ode::events;
+use crate::ode::{
+    HybridSystem, Options, SolverError, Stats, Step, MAX_GUARDS, MAX_SWITCHES_AT_ONE_TIME,
+};
 
 // Dormand-Prince 5(4) coefficients.
 const C2: f64 = 1.0 / 5.0;
@@ -44,21 +47,28 @@ const D6: f64 = -1453857185.0 / 822651844.0;
 const D7: f64 = 69997945.0 / 29380423.0;
 
 /// Integrator state: time, state, mode, FSAL derivative, proposed step and counters.
+///
+/// The fields are private because the derivative at the current point (`k1`, reused by the
+/// next step) is cached: read them with [`Dopri5::t`], [`Dopri5::y`], [`Dopri5::mode`],
+/// [`Dopri5::stats`] and [`Dopri5::options`], and move the integrator to another state with
+/// [`Dopri5::restart`], which drops the cache.
 #[derive(Debug, Clone)]
 pub struct Dopri5<S: HybridSystem<N>, const N: usize> {
-    /// Current time (s).
-    pub t: f64,
-    /// Current state.
-    pub y: SVector<f64, N>,
-    /// Current mode.
-    pub mode: S::Mode,
-    /// Options.
-    pub opts: Options<N>,
-    /// Counters.
-    pub stats: Stats,
+    t: f64,
+    y: SVector<f64, N>,
+    mode: S::Mode,
+    opts: Options<N>,
+    stats: Stats,
     k1: SVector<f64, N>,
     h: f64,
     k1_valid: bool,
+    /// The modes visited since time last advanced (empty when no switch happened since).
+    switch_trail: Vec<S::Mode>,
+    /// No step has been accepted since the last mode switch.
+    after_event: bool,
+    /// Per mode, the first full step accepted after the last switch into it: the step
+    /// proposed after the next switch into that mode (see [`Dopri5::switch`]).
+    entry_steps: Vec<(S::Mode, f64)>,
 }
 
 struct Trial<const N: usize> {
@@ -80,7 +90,47 @@ impl<S: HybridSystem<N>, const N: usize> Dopri5<S, N> {
             k1: SVector::zeros(),
             h,
             k1_valid: false,
+            switch_trail: Vec::new(),
+            after_event: false,
+            entry_steps: Vec::new(),
         }
+    }
+
+    /// Current time (s).
+    pub fn t(&self) -> f64 {
+        self.t
+    }
+
+    /// Current state.
+    pub fn y(&self) -> SVector<f64, N> {
+        self.y
+    }
+
+    /// Current mode.
+    pub fn mode(&self) -> S::Mode {
+        self.mode
+    }
+
+    /// Counters since [`Dopri5::new`].
+    pub fn stats(&self) -> Stats {
+        self.stats
+    }
+
+    /// Options.
+    pub fn options(&self) -> &Options<N> {
+        &self.opts
+    }
+
+    /// Continues from a new point (t, y, mode), keeping the options and the counters: the
+    /// cached derivative is dropped and the next trial step is [`Options::h_init`].
+    pub fn restart(&mut self, t: f64, y: SVector<f64, N>, mode: S::Mode) {
+        self.t = t;
+        self.y = y;
+        self.mode = mode;
+        self.h = self.opts.h_init;
+        self.k1_valid = false;
+        self.after_event = false;
+        self.switch_trail.clear();
     }
 
     fn state_vec(&self) -> Vec<f64> {
@@ -140,6 +190,60 @@ impl<S: HybridSystem<N>, const N: usize> Dopri5<S, N> {
         }
     }
 
+    /// Switches the mode through guard `index` at the current time and state (the state may
+    /// be projected by the system); errs when switches keep firing without time advancing.
+    ///
+    /// The next trial step is the current one capped by the first full step accepted after
+    /// the previous switch into the new mode: a mode's own dynamics set its step (the end-stop
+    /// contact rings ~100 times faster than the free motion, and the step from before the
+    /// impact used to be rejected several times). Hairer's starting-step heuristic evaluated
+    /// at the switch does not serve here: at a contact entry the penetration, hence the contact
+    /// force, is zero, so a derivative estimate at that point cannot see the stiffness that
+    /// builds up within the step.
+    fn switch(&mut self, sys: &S, index: usize) -> Result<(), SolverError> {
+        if self.switch_trail.is_empty() {
+            self.switch_trail.push(self.mode);
+        }
+        let mut y = self.y;
+        self.mode = sys.switch(self.mode, index, self.t, &mut y);
+        self.y = y;
+        self.stats.events += 1;
+        self.k1_valid = false;
+        self.after_event = true;
+        if let Some(&(_, h)) = self.entry_steps.iter().find(|(m, _)| *m == self.mode) {
+            self.h = self.h.min(h);
+        }
+        self.switch_trail.push(self.mode);
+        let switches = (self.switch_trail.len() - 1) as u32;
+        if switches > MAX_SWITCHES_AT_ONE_TIME {
+            return Err(SolverError::Chattering {
+                t: self.t,
+                switches,
+                modes: self.switch_trail.iter().map(|m| format!("{m:?}")).collect(),
+                state: self.state_vec(),
+            });
+        }
+        Ok(())
+    }
+
+    /// Records `h` as the first full step of the current mode after a switch into it.
+    fn remember_entry_step(&mut self, h: f64) {
+        /// Modes remembered (a hybrid system has few).
+        const MAX_MODES: usize = 16;
+        if let Some(e) = self.entry_steps.iter_mut().find(|(m, _)| *m == self.mode) {
+            e.1 = h;
+        } else if self.entry_steps.len() < MAX_MODES {
+            self.entry_steps.push((self.mode, h));
+        }
+    }
+
+    /// Moves to the end of an accepted step of positive length.
+    fn advance(&mut self, t: f64, y: SVector<f64, N>) {
+        self.t = t;
+        self.y = y;
+        self.switch_trail.clear();
+    }
+
     /// Integrates to `t_end`, calling `observer` with every accepted step (and with the mode
     /// that was active over it).
     pub fn integrate<O: FnMut(&Step<N>, S::Mode)>(
@@ -163,11 +267,7 @@ impl<S: HybridSystem<N>, const N: usize> Dopri5<S, N> {
                 // A guard already positive at the start of a step fires at once.
                 let g = sys.guards(self.mode, self.t, &self.y);
                 if let Some(i) = (0..MAX_GUARDS).find(|&i| g[i] > 0.0) {
-                    let mut y = self.y;
-                    self.mode = sys.switch(self.mode, i, self.t, &mut y);
-                    self.y = y;
-                    self.stats.events += 1;
-                    self.k1_valid = false;
+                    self.switch(sys, i)?;
                     continue;
                 }
             }
@@ -186,11 +286,24 @@ impl<S: HybridSystem<N>, const N: usize> Dopri5<S, N> {
                 h = limit - self.t;
                 clipped = true;
             }
+            // A step below the resolution of time cannot advance it (a step clipped to a
+            // breakpoint ends exactly on it, however short).
+            let h_floor = self.opts.min_step(self.t);
+            if !clipped && h < h_floor {
+                return Err(SolverError::StepSizeTooSmall {
+                    t: self.t,
+                    h,
+                    state: self.state_vec(),
+                });
+            }
             let tr = self.trial(sys, h);
             if !tr.err.is_finite() || !tr.y1.iter().all(|v| v.is_finite()) {
                 self.stats.rejected += 1;
+                if self.after_event {
+                    self.stats.rejected_after_event += 1;
+                }
                 self.h = h * 0.2;
-                if self.h < self.opts.h_min {
+                if self.h < h_floor {
                     return Err(SolverError::NonFinite {
                         t: self.t,
                         state: self.state_vec(),
@@ -201,8 +314,11 @@ impl<S: HybridSystem<N>, const N: usize> Dopri5<S, N> {
             let fac = (0.9 * tr.err.powf(-0.2)).clamp(0.2, 10.0);
             if tr.err > 1.0 {
                 self.stats.rejected += 1;
+                if self.after_event {
+                    self.stats.rejected_after_event += 1;
+                }
                 self.h = h * fac.min(1.0);
-                if self.h < self.opts.h_min {
+                if self.h < h_floor {
                     return Err(SolverError::StepSizeTooSmall {
                         t: self.t,
                         h: self.h,
@@ -212,15 +328,18 @@ impl<S: HybridSystem<N>, const N: usize> Dopri5<S, N> {
                 continue;
             }
             // Accepted: look for guard crossings on the dense output.
+            let first_after_event = std::mem::replace(&mut self.after_event, false);
             let step = self.make_step(h, &tr);
             let t_new = if clipped { limit } else { self.t + h };
-            match self.locate_event(sys, &step) {
+            match events::locate(sys, self.mode, &step, self.opts.event_time_tol) {
                 None => {
                     self.stats.accepted += 1;
                     observer(&step, self.mode);
-                    self.t = t_new;
-                    self.y = tr.y1;
+                    self.advance(t_new, tr.y1);
                     self.k1 = tr.k[6];
+                    if first_after_event && !clipped {
+                        self.remember_entry_step(h);
+                    }
                     if !clipped || fac < 1.0 {
                         self.h = h * fac;
                     }
@@ -228,21 +347,21 @@ impl<S: HybridSystem<N>, const N: usize> Dopri5<S, N> {
                 Some((theta, index)) => {
                     // Re-take the step so that it ends exactly on the event.
                     let h_ev = theta * h;
-                    let (t_ev, mut y_ev) = if h_ev > 0.0 {
+                    if h_ev > 0.0 {
                         let tr_ev = self.trial(sys, h_ev);
+                        if !tr_ev.err.is_finite() || !tr_ev.y1.iter().all(|v| v.is_finite()) {
+                            return Err(SolverError::NonFinite {
+                                t: self.t,
+                                state: self.state_vec(),
+                            });
+                        }
                         let st = self.make_step(h_ev, &tr_ev);
                         self.stats.accepted += 1;
                         observer(&st, self.mode);
-                        (self.t + h_ev, tr_ev.y1)
-                    } else {
-                        (self.t, self.y)
-                    };
-                    self.mode = sys.switch(self.mode, index, t_ev, &mut y_ev);
-                    self.stats.events += 1;
-                    self.t = t_ev;
-                    self.y = y_ev;
-                    self.k1_valid = false;
+                        self.advance(self.t + h_ev, tr_ev.y1);
+                    }
                     self.h = h;
+                    self.switch(sys, index)?;
                 }
             }
             if let Err(message) = sys.check_state(self.mode, self.t, &self.y) {
@@ -254,94 +373,5 @@ impl<S: HybridSystem<N>, const N: usize> Dopri5<S, N> {
             }
         }
         Ok(())
-    }
-
-    /// Earliest guard crossing within the step as (theta, guard index).
-    fn locate_event(&self, sys: &S, step: &Step<N>) -> Option<(f64, usize)> {
-        const PROBES: [f64; 3] = [1.0 / 3.0, 2.0 / 3.0, 1.0];
-        let g0 = sys.guards(self.mode, step.t0, &step.y0);
-        let mut best: Option<(f64, usize)> = None;
-        let mut lo_theta = [0.0; MAX_GUARDS];
-        let mut lo_val = g0;
-        let mut found = [false; MAX_GUARDS];
-        let mut hi_theta = [1.0; MAX_GUARDS];
-        let mut hi_val = [0.0; MAX_GUARDS];
-        for &th in &PROBES {
-            let y = if th == 1.0 {
-                step.y1
-            } else {
-                step.at_theta(th)
-            };
-            let g = sys.guards(self.mode, step.t0 + th * step.h, &y);
-            for i in 0..MAX_GUARDS {
-                if found[i] {
-                    continue;
-                }
-                if g[i] > 0.0 {
-                    found[i] = true;
-                    hi_theta[i] = th;
-                    hi_val[i] = g[i];
-                } else {
-                    lo_theta[i] = th;
-                    lo_val[i] = g[i];
-                }
-            }
-        }
-        for i in 0..MAX_GUARDS {
-            if !found[i] {
-                continue;
-            }
-            if best.is_some_and(|(b, _)| b <= lo_theta[i]) {
-                continue;
-            }
-            let th = self.illinois(sys, step, i, lo_theta[i], lo_val[i], hi_theta[i], hi_val[i]);
-            if best.is_none_or(|(b, _)| th < b) {
-                best = Some((th, i));
-            }
-        }
-        best
-    }
-
-    /// Illinois (modified regula falsi) on the dense output; returns the upper end of the final
-    /// bracket, so the event is never placed before the crossing.
-    #[allow(clippy::too_many_arguments)]
-    fn illinois(
-        &self,
-        sys: &S,
-        step: &Step<N>,
-        i: usize,
-        mut a: f64,
-        mut ga: f64,
-        mut b: f64,
-        mut gb: f64,
-    ) -> f64 {
-        let tol = self.opts.event_time_tol / step.h;
-        let mut side = 0i8;
-        for _ in 0..200 {
-            if b - a <= tol {
-                break;
-            }
-            let mut c = (a * gb - b * ga) / (gb - ga);
-            if !(c > a && c < b) {
-                c = 0.5 * (a + b);
-            }
-            let gc = sys.guards(self.mode, step.t0 + c * step.h, &step.at_theta(c))[i];
-            if gc > 0.0 {
-                b = c;
-                gb = gc;
-                if side == 1 {
-                    ga *= 0.5;
-                }
-                side = 1;
-            } else {
-                a = c;
-                ga = gc;
-                if side == -1 {
-                    gb *= 0.5;
-                }
-                side = -1;
-            }
-        }
-        b
     }
 }

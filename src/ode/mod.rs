@@ -14,20 +14,30 @@
 //! * In each mode the system exposes up to [`MAX_GUARDS`] guard functions g_i(t, y). A guard
 //!   that becomes **positive** asks to leave the mode. After each accepted step the guards are
 //!   evaluated at the end point and at two interior points of the dense output; the earliest
-//!   sign change from <= 0 to > 0 is located by the Illinois method on the dense output to a
-//!   time tolerance of [`Options::event_time_tol`] seconds, and the step is **re-taken** from
-//!   its start with exactly the length that lands on the event. The system then picks the new
-//!   mode (and may project the state, e.g. put x exactly on the stop).
+//!   sign change from <= 0 to > 0 is located on the dense output by the crate's root finder
+//!   ([`crate::num::roots::illinois`]) to a time tolerance of [`Options::event_time_tol`]
+//!   seconds, and the step is **re-taken** from its start with exactly the length that lands
+//!   on the event (and checked for finiteness like any step). A guard that rises above zero
+//!   and falls back between two probes (a grazing contact) is found by maximising it on the
+//!   dense output where the probes suggest a maximum near zero (see `events.rs`). The system
+//!   then picks the new mode (and may project the state, e.g. put x exactly on the stop).
+//! * After a switch, the next trial step is capped by the first full step accepted after the
+//!   previous switch into the new mode, so that a mode with faster dynamics (a stiff contact)
+//!   does not start with the step of the mode it left.
 //! * A guard that is already positive at the start of a step (a mode entered at a grazing
-//!   point) fires at once.
+//!   point) fires at once; more than [`MAX_SWITCHES_AT_ONE_TIME`] switches in a row without
+//!   time advancing are an error ([`SolverError::Chattering`]).
 //! * The system may also impose breakpoints (the sample instants of a sampled input, the ends
 //!   of whole periods): no step crosses a breakpoint.
+//! * The smallest step at time t is max(h_min, 16 eps |t|) ([`Options::min_step`]): a shorter
+//!   step could not advance t.
 //! * Error norm: RMS over components of err_i / (atol_i + rtol max(|y0_i|, |y1_i|)); a step is
 //!   accepted when the norm is <= 1. Step-size factor 0.9 err^(-1/5), limited to [0.2, 10].
 //! * Dense output: the 4th-order continuous extension of Hairer, Norsett and Wanner (the
 //!   `contd5` of their DOPRI5 code).
 
 mod dopri5;
+pub mod events;
 
 use std::ops::AddAssign;
 
@@ -38,6 +48,9 @@ pub use dopri5::Dopri5;
 
 /// Maximum number of guard functions of one mode.
 pub const MAX_GUARDS: usize = 3;
+
+/// Most mode switches allowed in a row without time advancing (see [`SolverError::Chattering`]).
+pub const MAX_SWITCHES_AT_ONE_TIME: u32 = 16;
 
 /// Guard values of one mode; unused entries are `f64::NEG_INFINITY`.
 pub type Guards = [f64; MAX_GUARDS];
@@ -72,7 +85,7 @@ pub trait HybridSystem<const N: usize> {
 /// Integrator failure, with the simulated time and state where it happened.
 #[derive(Debug, Error, Clone, PartialEq)]
 pub enum SolverError {
-    /// The step size fell below [`Options::h_min`].
+    /// The step size fell below [`Options::min_step`].
     #[error("step size {h:e} s below the minimum at t = {t:e} s (state {state:?})")]
     StepSizeTooSmall {
         /// Simulated time (s).
@@ -102,6 +115,19 @@ pub enum SolverError {
         /// Requested end time (s).
         t_end: f64,
     },
+    /// Mode switches kept firing without time advancing: a guard of each new mode was
+    /// positive at once, more than [`MAX_SWITCHES_AT_ONE_TIME`] times in a row.
+    #[error("{switches} mode switches at t = {t:e} s without time advancing (modes {modes:?}, state {state:?})")]
+    Chattering {
+        /// Simulated time (s).
+        t: f64,
+        /// Switches made at `t`.
+        switches: u32,
+        /// The modes visited at `t`, in order (their `Debug` text).
+        modes: Vec<String>,
+        /// State at `t`.
+        state: Vec<f64>,
+    },
     /// The system reported an inadmissible state.
     #[error("inadmissible state at t = {t:e} s: {message} (state {state:?})")]
     InvalidState {
@@ -123,7 +149,8 @@ pub struct Options<const N: usize> {
     pub atol: SVector<f64, N>,
     /// Largest step (s).
     pub h_max: f64,
-    /// Smallest step before giving up (s).
+    /// Absolute floor of the smallest step (s); the smallest step at time t is
+    /// [`Options::min_step`].
     pub h_min: f64,
     /// First trial step (s).
     pub h_init: f64,
@@ -133,6 +160,18 @@ pub struct Options<const N: usize> {
     pub event_time_tol: f64,
 }
 
+impl<const N: usize> Options<N> {
+    /// The smallest step allowed at time `t` (s): `max(h_min, MIN_STEP_REL |t|)`. A step
+    /// shorter than a few units in the last place of t cannot advance t (as in Hairer's codes,
+    /// whose DOPRI5 stops when 0.1 |h| <= |t| eps).
+    pub fn min_step(&self, t: f64) -> f64 {
+        self.h_min.max(MIN_STEP_REL * t.abs())
+    }
+}
+
+/// The smallest step relative to |t| (16 machine epsilons, see [`Options::min_step`]).
+pub const MIN_STEP_REL: f64 = 16.0 * f64::EPSILON;
+
 /// Counters, for benchmarks and convergence reports.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct Stats {
@@ -140,6 +179,8 @@ pub struct Stats {
     pub accepted: u64,
     /// Rejected steps.
     pub rejected: u64,
+    /// Rejected trials of the first step after an event (included in `rejected`).
+    pub rejected_after_event: u64,
     /// Right-hand-side evaluations.
     pub rhs_evals: u64,
     /// Events (mode switches).
@@ -150,6 +191,7 @@ impl AddAssign for Stats {
     fn add_assign(&mut self, other: Stats) {
         self.accepted += other.accepted;
         self.rejected += other.rejected;
+        self.rejected_after_event += other.rejected_after_event;
         self.rhs_evals += other.rhs_evals;
         self.events += other.events;
     }

@@ -1,6 +1,13 @@
 //! Energy bookkeeping of the harvester: the power of every force, the stored energy, and an
 //! augmented system ([`EnergyAudit`]) that integrates the work of each force beside the state,
 //! so that a run can be checked against the energy balance.
+//!
+//! The tension-free end stop (eq 1 with the bracket clipped at zero) also moves energy at its
+//! mode switches: when the contact force would turn tensile while the mass is still pressed
+//! in, the contact unloads and its spring energy U(delta) leaves the stored energy (a clip
+//! loss); if a clipped contact re-engages while pressed, U(delta) reappears (a re-engagement
+//! gain). The audit books the two apart, so that the end stop's net absorption, damper plus
+//! clip losses minus re-engagement gains, shows whether the variant is passive.
 
 use nalgebra::SVector;
 
@@ -65,34 +72,123 @@ pub struct PowerTerms {
     pub excitation: f64,
     /// Dissipated in the mechanical damper, b v^2.
     pub mech_damping: f64,
-    /// Dissipated in the end-stop damper, b_im v^2 while in contact.
+    /// Dissipated in the end-stop damper, b_im v^2 while the contact force acts.
     pub stop_damping: f64,
     /// Dissipated in both load resistors, (V1^2 + V2^2)/RL.
     pub load: f64,
 }
 
-/// The harvester with the work of every force accumulated as four extra states, for energy
-/// audits: y[4] excitation work, y[5] mechanical damping, y[6] end-stop losses (damping, and
-/// the spring energy dropped when a tension-free contact unloads), y[7] loads.
+/// Number of states of the audit: the model's four and seven accumulators ([`ledger_index`]).
+pub const AUDIT_DIM: usize = 11;
+
+/// The audit state: (x, v, s1, s2) and the accumulators of [`EnergyAudit`].
+pub type AuditState = SVector<f64, AUDIT_DIM>;
+
+/// Indices of the accumulators in [`AuditState`] (J).
+pub mod ledger_index {
+    /// Work of the inertial force m a(t) v.
+    pub const EXCITATION: usize = 4;
+    /// Mechanical damper, b v^2.
+    pub const MECH_DAMPING: usize = 5;
+    /// End-stop damper, b_im v^2 while the contact force acts.
+    pub const STOP_DAMPING: usize = 6;
+    /// Both load resistors.
+    pub const LOADS: usize = 7;
+    /// Contact spring energy U(delta) dropped when a tension-free contact unloads while still
+    /// pressed (Contact -> Clipped).
+    pub const CLIP_LOSSES: usize = 8;
+    /// Contact spring energy U(delta) that reappears when a clipped contact re-engages while
+    /// still pressed (Clipped -> Contact).
+    pub const REENGAGEMENT_GAINS: usize = 9;
+    /// Stored energy removed by the projections onto the stop at entry and exit (signed, of the
+    /// order of the event time tolerance).
+    pub const PROJECTIONS: usize = 10;
+}
+
+/// The harvester with the work of every force accumulated as extra states (see
+/// [`ledger_index`]): the excitation's work, the mechanical damper, the end-stop damper, the
+/// loads, and, booked at mode switches, the clip losses, the re-engagement gains and the
+/// projections.
 ///
-/// Over any run, `y[4] + Vb * delta(source_charge) = y[5] + y[6] + y[7] + delta(stored_energy)`
-/// (see [`Harvester::stored_energy`] and [`Harvester::source_charge`]); the tests use it to
-/// check the model and the integrator together.
+/// Over any run, excitation + source + re-engagement gains = mechanical damping + end-stop
+/// damping + loads + clip losses + projections + change of stored energy, where the source's
+/// work is Vb times the change of [`Harvester::source_charge`] and the stored energy is
+/// [`Harvester::stored_energy`]; [`EnergyAudit::ledger`] evaluates every term and the tests
+/// use it to check the model and the integrator together. The end stop absorbs
+/// end-stop damping + clip losses - re-engagement gains in all.
 #[derive(Debug, Clone)]
 pub struct EnergyAudit<E: Excitation>(pub Harvester<E>);
 
 /// Splits the audit state into the model state.
-pub fn audit_state(y: &SVector<f64, 8>) -> State {
+pub fn audit_state(y: &AuditState) -> State {
     State::new(y[0], y[1], y[2], y[3])
+}
+
+/// The energy balance of an audited run from the rest state (J).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct EnergyLedger {
+    /// Work of the inertial force.
+    pub excitation: f64,
+    /// Work of the bias source, Vb times the charge it delivered.
+    pub source: f64,
+    /// Mechanical damper.
+    pub mech_damping: f64,
+    /// End-stop damper.
+    pub stop_damping: f64,
+    /// Load resistors.
+    pub loads: f64,
+    /// Contact spring energy dropped at clips (tension-free contact only).
+    pub clip_losses: f64,
+    /// Contact spring energy restored at re-engagements (tension-free contact only).
+    pub reengagement_gains: f64,
+    /// Stored energy removed by the projections onto the stop.
+    pub projections: f64,
+    /// Change of the stored energy.
+    pub stored_change: f64,
+}
+
+impl EnergyLedger {
+    /// Energy in minus energy out and stored (J); zero for an exact run.
+    pub fn residual(&self) -> f64 {
+        self.excitation + self.source + self.reengagement_gains
+            - self.mech_damping
+            - self.stop_damping
+            - self.loads
+            - self.clip_losses
+            - self.projections
+            - self.stored_change
+    }
+
+    /// The residual divided by the sum of the magnitudes of the terms. Dividing by the work
+    /// in alone would be ill-conditioned for a detuned drive, whose net work passes through
+    /// zero while energy sloshes in and out of the resonator.
+    pub fn relative_residual(&self) -> f64 {
+        let scale = self.excitation.abs()
+            + self.source.abs()
+            + self.reengagement_gains.abs()
+            + self.mech_damping.abs()
+            + self.stop_damping.abs()
+            + self.loads.abs()
+            + self.clip_losses.abs()
+            + self.projections.abs()
+            + self.stored_change.abs();
+        self.residual() / scale
+    }
+
+    /// Net energy absorbed by the end stop: its damper plus the clip losses minus the
+    /// re-engagement gains.
+    pub fn stop_absorbed(&self) -> f64 {
+        self.stop_damping + self.clip_losses - self.reengagement_gains
+    }
 }
 
 impl<E: Excitation> EnergyAudit<E> {
     /// Integrator options: the model's, with absolute tolerances for the energy accumulators
     /// of `rtol` times the suspension energy at the stop, km xmax^2 / 2.
-    pub fn solver_options(&self, rtol: f64) -> Options<8> {
+    pub fn solver_options(&self, rtol: f64) -> Options<AUDIT_DIM> {
         let base = self.0.solver_options(rtol);
         let e_scale = 0.5 * self.0.km * self.0.xmax * self.0.xmax;
-        let mut atol = SVector::<f64, 8>::repeat(e_scale * rtol);
+        let mut atol = AuditState::repeat(e_scale * rtol);
         for i in 0..4 {
             atol[i] = base.atol[i];
         }
@@ -107,54 +203,69 @@ impl<E: Excitation> EnergyAudit<E> {
         }
     }
 
-    /// Relative residual of the energy balance between the rest state and `y` (in `mode`):
-    /// (work in - dissipated - stored) divided by the sum of the magnitudes of its terms
-    /// (excitation work, source work, dissipation, change of stored energy). Dividing by the
-    /// work in alone would be ill-conditioned for a detuned drive, whose net work passes
-    /// through zero while energy sloshes in and out of the resonator.
-    pub fn relative_residual(&self, mode: Mode, y: &SVector<f64, 8>) -> f64 {
+    /// Every term of the energy balance between the rest state and `y` (in `mode`).
+    pub fn ledger(&self, mode: Mode, y: &AuditState) -> EnergyLedger {
+        use ledger_index as l;
         let h = &self.0;
         let s = audit_state(y);
-        let stored = h.stored_energy(mode, &s) - h.stored_energy(Mode::Free, &State::zeros());
-        let source = h.vb * (h.source_charge(&s) - h.source_charge(&State::zeros()));
-        let dissipated = y[5] + y[6] + y[7];
-        let scale = y[4].abs() + source.abs() + dissipated.abs() + stored.abs();
-        (y[4] + source - dissipated - stored) / scale
+        EnergyLedger {
+            excitation: y[l::EXCITATION],
+            source: h.vb * (h.source_charge(&s) - h.source_charge(&State::zeros())),
+            mech_damping: y[l::MECH_DAMPING],
+            stop_damping: y[l::STOP_DAMPING],
+            loads: y[l::LOADS],
+            clip_losses: y[l::CLIP_LOSSES],
+            reengagement_gains: y[l::REENGAGEMENT_GAINS],
+            projections: y[l::PROJECTIONS],
+            stored_change: h.stored_energy(mode, &s) - h.stored_energy(Mode::Free, &State::zeros()),
+        }
+    }
+
+    /// Relative residual of the energy balance between the rest state and `y` (in `mode`);
+    /// see [`EnergyLedger::relative_residual`].
+    pub fn relative_residual(&self, mode: Mode, y: &AuditState) -> f64 {
+        self.ledger(mode, y).relative_residual()
     }
 }
 
-impl<E: Excitation> HybridSystem<8> for EnergyAudit<E> {
+impl<E: Excitation> HybridSystem<AUDIT_DIM> for EnergyAudit<E> {
     type Mode = Mode;
 
-    fn rhs(&self, mode: Mode, t: f64, y: &SVector<f64, 8>) -> SVector<f64, 8> {
+    fn rhs(&self, mode: Mode, t: f64, y: &AuditState) -> AuditState {
+        use ledger_index as l;
         let s = audit_state(y);
         let f = self.0.rhs(mode, t, &s);
         let p = self.0.power_terms(mode, t, &s);
-        SVector::<f64, 8>::from_column_slice(&[
-            f[0],
-            f[1],
-            f[2],
-            f[3],
-            p.excitation,
-            p.mech_damping,
-            p.stop_damping,
-            p.load,
-        ])
+        let mut d = AuditState::zeros();
+        d.fixed_rows_mut::<4>(0).copy_from(&f);
+        d[l::EXCITATION] = p.excitation;
+        d[l::MECH_DAMPING] = p.mech_damping;
+        d[l::STOP_DAMPING] = p.stop_damping;
+        d[l::LOADS] = p.load;
+        d
     }
 
-    fn guards(&self, mode: Mode, t: f64, y: &SVector<f64, 8>) -> Guards {
+    fn guards(&self, mode: Mode, t: f64, y: &AuditState) -> Guards {
         self.0.guards(mode, t, &audit_state(y))
     }
 
-    /// Switches mode; any stored energy that the switch makes disappear (a tension-free
-    /// contact that unloads while still pressed drops the spring energy U(delta)) is booked
-    /// as end-stop dissipation, so the balance stays exact.
-    fn switch(&self, mode: Mode, i: usize, t: f64, y: &mut SVector<f64, 8>) -> Mode {
+    /// Switches mode and books the stored energy that the switch makes disappear or appear:
+    /// a tension-free contact that unloads while still pressed drops the spring energy
+    /// U(delta) (a clip loss), one that re-engages while pressed restores it (a re-engagement
+    /// gain), and the projection onto the stop at entry and exit moves the stored energy by
+    /// the order of the event time tolerance.
+    fn switch(&self, mode: Mode, i: usize, t: f64, y: &mut AuditState) -> Mode {
+        use ledger_index as l;
         let mut s = audit_state(y);
         let before = self.0.stored_energy(mode, &s);
         let m = self.0.switch(mode, i, t, &mut s);
         y[0] = s[0];
-        y[6] += before - self.0.stored_energy(m, &s);
+        let dropped = before - self.0.stored_energy(m, &s);
+        match (mode, m) {
+            (Mode::Contact(_), Mode::Clipped(_)) => y[l::CLIP_LOSSES] += dropped,
+            (Mode::Clipped(_), Mode::Contact(_)) => y[l::REENGAGEMENT_GAINS] -= dropped,
+            _ => y[l::PROJECTIONS] += dropped,
+        }
         m
     }
 
@@ -162,7 +273,7 @@ impl<E: Excitation> HybridSystem<8> for EnergyAudit<E> {
         self.0.next_breakpoint(t)
     }
 
-    fn check_state(&self, mode: Mode, t: f64, y: &SVector<f64, 8>) -> Result<(), String> {
+    fn check_state(&self, mode: Mode, t: f64, y: &AuditState) -> Result<(), String> {
         self.0.check_state(mode, t, &audit_state(y))
     }
 }

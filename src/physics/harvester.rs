@@ -28,7 +28,7 @@ use crate::ode::{Guards, HybridSystem, Options};
 use crate::physics::contact::{ContactLaw, Mode, Side};
 use crate::physics::hertz::HertzLine;
 
-/// State (x [m], v [m/s], s1 [C], s2 [C]).
+/// State (x in m, v in m/s, s1 and s2 in C).
 pub type State = SVector<f64, 4>;
 
 /// The harvester driven by an excitation: a [`HybridSystem`] of dimension 4.
@@ -189,6 +189,7 @@ impl<E: Excitation> Harvester<E> {
             rtol,
             atol: self.scales() * rtol,
             h_max: 0.02 * 2.0 * std::f64::consts::PI / w0,
+            // Absolute floor; the smallest step grows with |t| (`Options::min_step`).
             h_min: 1e-16,
             h_init: 1e-7,
             max_steps: 50_000_000,

@@ -245,10 +245,10 @@ pub fn simulate_record(
             })?;
         }
         if k >= n_tr {
-            let el = model.electrical(&ode.y);
+            let el = model.electrical(&ode.y());
             v1.push(el.v[0]);
             v2.push(el.v[1]);
-            sx2 += ode.y[0] * ode.y[0];
+            sx2 += ode.y()[0] * ode.y()[0];
             sa2 += accel[k] * accel[k];
         }
     }
@@ -270,7 +270,7 @@ pub fn simulate_record(
         },
         impacts,
         accel_mean_square_si: sa2 / nf,
-        stats: ode.stats,
+        stats: ode.stats(),
     };
     Ok(Record {
         sample_rate_hz: fs,

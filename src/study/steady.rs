@@ -129,7 +129,7 @@ pub fn steady_state(
         let t_start = t_end;
         t_end += block_t;
         let mut b = Block {
-            prev_mode_free: ode.mode == Mode::Free,
+            prev_mode_free: ode.mode() == Mode::Free,
             ..Block::default()
         };
         ode.integrate(model, t_end, |st, m| {
@@ -178,7 +178,7 @@ pub fn steady_state(
                 last_rel_change: last_change,
                 converged,
             };
-            return Ok((m, ode.y, ode.mode, ode.stats));
+            return Ok((m, ode.y(), ode.mode(), ode.stats()));
         }
     }
 }
