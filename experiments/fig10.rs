@@ -1,35 +1,20 @@
-//! Figure 10: the random excitation. A band-limited white-noise acceleration at the paper's
-//! example level Sa = 1e-2 g²/Hz (two-sided), 10 kHz band, 10 s at 100 kHz, and its Welch PSD
-//! against the target (claim F10: level and band).
+//! Figure 10: the random excitation at the paper's example level Sa = 1e-2 g²/Hz and its
+//! Welch PSD against the target (claim F10: level and band). The figure is stated in
+//! `endstop::paper::fig10`; this binary writes its outputs.
 
 use endstop_experiments as common;
 
-use endstop_experiments::broadband_io as bbio;
-
 use anyhow::Result;
-use bbio::{paper_value, pm};
+use common::broadband_io::{pm, sa_label};
+use common::frame::frame;
+use common::md::Table;
 use common::plot::{LegendPos, LinePlot, Series, Style, PALETTE};
-use common::{fmt_sig, Experiment};
-use endstop::drive::noise::NoiseSpec;
-use endstop::num::stats::MeanCi;
-use endstop::signal::welch;
-use endstop::signal::Psd;
-use endstop::signal::WelchConfig;
-use endstop::study::ensemble::DEFAULT_SEED;
-use endstop::G;
-use polars::prelude::*;
-use rayon::prelude::*;
+use common::{fmt_sig, row, Experiment};
+use endstop::paper::claims::Claims;
+use endstop::paper::fig10::{self, FIG10_SA, FLAT_BAND_HZ, LEAKAGE_FROM_HZ, NPERSEG, RECORDS};
 
-/// The paper's example level (g²/Hz, two-sided).
-const SA: f64 = 1e-2;
-/// Welch segment: 2^14 samples (6.1 Hz bins), 121 segments per 10 s record.
-const NPERSEG: usize = 1 << 14;
-/// Band over which the flat level is averaged (Hz): clear of DC and of the band edge.
-const FLAT_BAND_HZ: (f64, f64) = (100.0, 9500.0);
 /// Bottom of the plot's y axis (g²/Hz), as in the paper's Figure 10.
 const Y_MIN: f64 = 1e-5;
-/// Independent records (cheap: no integration), for the uncertainty of the level and edge.
-const RECORDS: usize = 16;
 
 fn main() {
     common::run_main("fig10", run);
@@ -37,76 +22,23 @@ fn main() {
 
 fn run() -> Result<()> {
     let mut exp = Experiment::start("fig10");
-    exp.seed = Some(DEFAULT_SEED);
-    let spec = NoiseSpec::paper(SA);
-    let first = endstop::study::ensemble::first_stream_for_level(SA);
-    let cfg = WelchConfig::half_overlap(NPERSEG);
+    let claims = Claims::bundled()?;
     let pb = common::progress(RECORDS as u64, "fig10");
-    // Per record: the one-sided Welch PSD in g²/Hz and the sample mean square (g²).
-    let recs: Vec<(Psd, f64)> = (0..RECORDS as u64)
-        .into_par_iter()
-        .map(|i| -> Result<(Psd, f64)> {
-            let a = endstop::drive::noise::generate(&spec, DEFAULT_SEED, first + i)?;
-            let g: Vec<f64> = a.iter().map(|x| x / G).collect();
-            let ms = g.iter().map(|x| x * x).sum::<f64>() / g.len() as f64;
-            let psd = welch(&g, spec.sample_rate_hz, &cfg)?;
-            pb.inc(1);
-            Ok((psd, ms))
-        })
-        .collect::<Result<_>>()?;
+    let run = fig10::run(&|| pb.inc(1))?;
     pb.finish_and_clear();
+    exp.seed = Some(run.seed);
+    exp.claims(fig10::claims(&run, &claims));
+    let f = fig10::findings(&run);
+    let spec = &run.spec;
+    let first = run.first_stream;
+    let ex = &run.records[0];
 
-    // Level: mean two-sided density over the flat band; edge: where the one-sided density
-    // falls to half the flat level (the -3 dB edge), scanning down from the top.
-    let level_of = |p: &Psd| p.two_sided_level_in_band(FLAT_BAND_HZ.0, FLAT_BAND_HZ.1);
-    let edge_of =
-        |p: &Psd| endstop::signal::bandwidth::upper_band_edge_hz(p, 2.0 * level_of(p), 0.5);
-    let levels: Vec<f64> = recs.iter().map(|(p, _)| level_of(p)).collect();
-    let edges: Vec<f64> = recs.iter().map(|(p, _)| edge_of(p)).collect();
-    let ms: Vec<f64> = recs.iter().map(|(_, m)| *m).collect();
-    let level = MeanCi::of(&levels);
-    let edge = MeanCi::of(&edges);
-    let mean_sq = MeanCi::of(&ms);
-    let ex = &recs[0].0;
-    // Flatness of the example record: relative scatter of its bins in the flat band.
-    let flat: Vec<f64> = ex
-        .freq_hz
-        .iter()
-        .zip(&ex.density)
-        .filter(|(f, _)| (FLAT_BAND_HZ.0..=FLAT_BAND_HZ.1).contains(*f))
-        .map(|(_, d)| d / 2.0)
-        .collect();
-    let flat_ci = MeanCi::of(&flat);
-    // Above the band: the largest density beyond 10.5 kHz relative to the level.
-    let leak = ex
-        .freq_hz
-        .iter()
-        .zip(&ex.density)
-        .filter(|(f, _)| **f >= 10.5e3)
-        .map(|(_, d)| d / 2.0)
-        .fold(0.0, f64::max)
-        / level_of(ex);
-
-    exp.claim_with_uncertainty(
-        "F10",
-        "excitation_psd_g2_per_hz",
-        "published",
-        level.mean,
-        Some(level.ci95),
-    );
-    exp.claim_with_uncertainty(
-        "F10",
-        "excitation_band_hz",
-        "published",
-        edge.mean,
-        Some(edge.ci95),
-    );
-    exp.number("level_example_record_g2_per_hz", level_of(ex));
-    exp.number("edge_example_record_hz", edge_of(ex));
-    exp.number("mean_square_g2", mean_sq.mean);
-    exp.number("mean_square_target_g2", 2.0 * spec.bandwidth_hz * SA);
-    exp.number("bin_relative_std_example", flat_ci.std / flat_ci.mean);
-    exp.number("leakage_above_10p5khz_relative", leak);
+    exp.number("level_example_record_g2_per_hz", f.example_level);
+    exp.number("edge_example_record_hz", f.example_edge_hz);
+    exp.number("mean_square_g2", f.mean_square.mean);
+    exp.number("mean_square_target_g2", spec.mean_square_g2());
+    exp.number("bin_relative_std_example", f.example_bin_relative_std);
+    exp.number("leakage_above_10p5khz_relative", f.example_leakage);
 
     let mut md = format!(
         "Generator: `endstop::drive::noise::generate` (frequency-domain synthesis, flat to {} kHz and \
@@ -120,105 +52,128 @@ fn run() -> Result<()> {
         RECORDS,
         fmt_sig(spec.duration_s, 3),
         fmt_sig(spec.sample_rate_hz / 1e3, 3),
-        DEFAULT_SEED,
+        run.seed,
         first,
         first + RECORDS as u64 - 1,
         NPERSEG,
-        fmt_sig(ex.df(), 3),
-        ex.segments,
+        fmt_sig(ex.psd.df(), 3),
+        ex.psd.segments,
         FLAT_BAND_HZ.0,
         FLAT_BAND_HZ.1,
     );
-    md.push_str(&format!(
-        "| quantity | target | example record (stream {first}) | {RECORDS} records: mean ± 95 % CI |\n|---|---|---|---|\n\
-         | flat-band level, two-sided (g²/Hz) | {} | {} | {} |\n\
-         | -3 dB band edge (Hz) | {} | {} | {} |\n\
-         | mean square acceleration (g²) | {} | {} | {} |\n\
-         | RMS acceleration (g) | {} | {} | {} |\n",
-        fmt_sig(SA, 3),
-        fmt_sig(level_of(ex), 4),
-        pm(level.mean, level.ci95),
+    let mut t = Table::new([
+        "quantity",
+        "target",
+        &format!("example record (stream {first})"),
+        &format!("{RECORDS} records: mean ± 95 % CI"),
+    ]);
+    let ms_target = spec.mean_square_g2();
+    t.row([
+        "flat-band level, two-sided (g²/Hz)".into(),
+        fmt_sig(FIG10_SA, 3),
+        fmt_sig(f.example_level, 4),
+        pm(f.level.mean, f.level.ci95),
+    ]);
+    t.row([
+        "-3 dB band edge (Hz)".into(),
         fmt_sig(spec.bandwidth_hz, 4),
-        fmt_sig(edge_of(ex), 5),
-        pm(edge.mean, edge.ci95),
-        fmt_sig(2.0 * spec.bandwidth_hz * SA, 4),
-        fmt_sig(ms[0], 4),
-        pm(mean_sq.mean, mean_sq.ci95),
-        fmt_sig((2.0 * spec.bandwidth_hz * SA).sqrt(), 4),
-        fmt_sig(ms[0].sqrt(), 4),
-        fmt_sig(mean_sq.mean.sqrt(), 4),
-    ));
+        fmt_sig(f.example_edge_hz, 5),
+        pm(f.edge.mean, f.edge.ci95),
+    ]);
+    t.row([
+        "mean square acceleration (g²)".into(),
+        fmt_sig(ms_target, 4),
+        fmt_sig(ex.mean_square_g2, 4),
+        pm(f.mean_square.mean, f.mean_square.ci95),
+    ]);
+    t.row([
+        "RMS acceleration (g)".into(),
+        fmt_sig(ms_target.sqrt(), 4),
+        fmt_sig(ex.mean_square_g2.sqrt(), 4),
+        fmt_sig(f.mean_square.mean.sqrt(), 4),
+    ]);
+    md.push_str(&t.render());
     md.push_str(&format!(
         "\nIn the example record the bins of the flat band scatter by {} (relative standard \
          deviation; expected about 1/sqrt(segments) for Welch with 50 % overlap), and nothing \
-         above 10.5 kHz exceeds {leak:.1e} of the level (window leakage from the band edge).\n",
-        fmt_sig(flat_ci.std / flat_ci.mean, 2),
+         above {} kHz exceeds {:.1e} of the level (window leakage from the band edge).\n",
+        fmt_sig(f.example_bin_relative_std, 2),
+        LEAKAGE_FROM_HZ / 1e3,
+        f.example_leakage,
     ));
     exp.write_numbers_md(&md)?;
 
-    // Parquet: the example record's two-sided PSD, the ensemble mean and the target.
-    let mean_density: Vec<f64> = (0..ex.density.len())
-        .map(|k| recs.iter().map(|(p, _)| p.density[k]).sum::<f64>() / RECORDS as f64 / 2.0)
-        .collect();
-    let n = ex.freq_hz.len();
-    let target: Vec<f64> = ex
-        .freq_hz
-        .iter()
-        .map(|&f| {
-            if f > 0.0 && f <= spec.bandwidth_hz {
-                SA
-            } else {
-                0.0
-            }
-        })
-        .collect();
-    let mut df = df!(
-        "freq_hz" => [ex.freq_hz.clone(), ex.freq_hz.clone(), ex.freq_hz.clone()].concat(),
-        "psd_g2_per_hz" => [ex.density.iter().map(|d| d / 2.0).collect::<Vec<_>>(), mean_density.clone(), target.clone()].concat(),
-        "series" => [vec!["example record"; n], vec!["mean of records"; n], vec!["target"; n]].concat(),
-        "realisation" => [vec!["0".to_string(); n], vec!["mean".to_string(); n], vec!["target".to_string(); n]].concat(),
-        "params" => vec!["none"; 3 * n],
-    )?;
-    exp.write_parquet("fig10_psd", &mut df, "none")?;
+    // Parquet: the example record's two-sided PSD, the mean of the records and the target.
+    let mut rows = Vec::new();
+    for (series, real, psd) in [
+        ("example record", "0", &f.example_two_sided),
+        ("mean of records", "mean", &f.mean_two_sided),
+    ] {
+        for (&fr, &d) in psd.freq_hz.iter().zip(&psd.density) {
+            rows.push(row![
+                "freq_hz" => fr,
+                "psd_g2_per_hz" => d,
+                "series" => series,
+                "realisation" => real,
+                "params" => "none",
+            ]);
+        }
+    }
+    for &fr in &ex.psd.freq_hz {
+        rows.push(row![
+            "freq_hz" => fr,
+            "psd_g2_per_hz" => spec.ideal_psd_g2_per_hz(fr),
+            "series" => "target",
+            "realisation" => "target",
+            "params" => "none",
+        ]);
+    }
+    exp.write_parquet("fig10_psd", &mut frame(rows)?, "none")?;
 
-    // Figure 10 as in the paper: log-log, two-sided density.
-    // Points from 10 Hz on; the line drops to the bottom of the axis at the first bin below
-    // it (above the band the density is some twelve decades down) and stops there.
-    let pts = |d: &[f64]| -> Vec<(f64, f64)> {
+    // Figure 10 as in the paper: log-log, two-sided density. Points from 10 Hz on; the line
+    // drops to the bottom of the axis at the first bin below it (above the band the density
+    // is some twelve decades down) and stops there.
+    let pts = |p: &endstop::signal::Psd| -> Vec<(f64, f64)> {
         let mut out = Vec::new();
-        for (&f, &v) in ex.freq_hz.iter().zip(d).filter(|(f, _)| **f >= 10.0) {
-            out.push((f, v.max(Y_MIN)));
+        for (&fr, &v) in p
+            .freq_hz
+            .iter()
+            .zip(&p.density)
+            .filter(|(fr, _)| **fr >= 10.0)
+        {
+            out.push((fr, v.max(Y_MIN)));
             if v < Y_MIN {
                 break;
             }
         }
         out
     };
-    let example: Vec<f64> = ex.density.iter().map(|d| d / 2.0).collect();
-    let paper = paper_value("F10", "excitation_psd_g2_per_hz");
+    let paper = claims
+        .get("F10", "excitation_psd_g2_per_hz")
+        .map_or(f64::NAN, |c| c.paper);
     let plot = LinePlot::new(
         &format!(
             "Figure 10: generated acceleration, Sa = {} g²/Hz, 10 s at 100 kHz, band 10 kHz",
-            bbio::sa_label(paper)
+            sa_label(paper)
         ),
         "frequency [Hz]",
         "two-sided PSD of the acceleration [g²/Hz]",
         vec![
             Series::new(
-                &format!("one record (Welch, {} Hz bins)", fmt_sig(ex.df(), 2)),
-                pts(&example),
+                &format!("one record (Welch, {} Hz bins)", fmt_sig(ex.psd.df(), 2)),
+                pts(&f.example_two_sided),
                 PALETTE[0],
                 Style::Line,
             ),
             Series::new(
                 &format!("mean of {RECORDS} records"),
-                pts(&mean_density),
+                pts(&f.mean_two_sided),
                 PALETTE[1],
                 Style::Line,
             ),
             Series::new(
                 "target: flat to 10 kHz",
-                vec![(10.0, SA), (spec.bandwidth_hz, SA)],
+                vec![(10.0, FIG10_SA), (spec.bandwidth_hz, FIG10_SA)],
                 PALETTE[6],
                 Style::Dashed,
             ),

@@ -1,28 +1,18 @@
-//! Figure 14: output power and efficiency 2P/(m Sa) of prototype 2 at 15 V (linear k_im of
-//! eq 19, b_im = 0.4 N s/m) against the acceleration PSD, with the linear theory of eq 21
-//! (claims F14-a, F14-b).
+//! Figure 14: output power and efficiency 2P/(m Sa) of prototype 2 at 15 V against the
+//! acceleration PSD, with the linear theory of eq 21 (claims F14-a, F14-b). The figure is
+//! stated in `endstop::paper::fig14`; this binary writes its outputs.
 
 use endstop_experiments as common;
 
-use endstop_experiments::broadband_io as bbio;
-
 use anyhow::Result;
-use bbio::{find, pm, sa_label, Level};
+use common::broadband_io::{self as bbio, pm, sa_label, Level};
+use common::md::Table;
 use common::plot::{error_bars, LegendPos, LinePlot, Series, Style, PALETTE};
 use common::{fmt_sig, load_device, Experiment};
-use endstop::device::StiffnessModel;
-use endstop::paper::ensembles::P2_BAND_HZ;
-use endstop::paper::ensembles::P2_NPERSEG;
+use endstop::paper::claims::Claims;
+use endstop::paper::fig14::{self, Protocol, F14B_LEVEL, FIG14_LEVELS, TIGHT_RTOL};
+use endstop::physics::two_port::eq21_power_w;
 use endstop::study::ensemble::DEFAULT_SEED;
-use rayon::prelude::*;
-
-/// Levels (g²/Hz) and records per level (see `endstop::broadband`).
-const LEVELS: [f64; 10] = endstop::paper::fig14::FIG14_LEVELS;
-const REALISATIONS: usize = endstop::paper::fig14::FIG14_REALISATIONS;
-/// The level of claim F14-b.
-const SA_F14B: f64 = 1.69e-3;
-/// Tolerance of the convergence check (a hundred times tighter than the default).
-const TIGHT_RTOL: f64 = 1e-9;
 
 fn main() {
     common::run_main("fig14", run);
@@ -31,78 +21,26 @@ fn main() {
 fn run() -> Result<()> {
     let mut exp = Experiment::start("fig14");
     exp.seed = Some(DEFAULT_SEED);
+    let claims = Claims::bundled()?;
     let p2 = load_device("prototype2")?;
     exp.uses(&p2, "published");
-    let dev = endstop::paper::setups::prototype2_setup(&p2.device);
+    let total = (FIG14_LEVELS.len() + 2) * fig14::FIG14_REALISATIONS;
+    let pb = common::progress(total as u64, "fig14");
+    let run = fig14::run(&p2.device, Protocol::FULL, &|| pb.inc(1))?;
+    pb.finish_and_clear();
+    exp.claims(fig14::claims(&run, &claims));
+    let f = fig14::findings(&run);
+    let l_b = &run.levels[F14B_LEVEL];
+    let labels = |idx: &[usize]| -> String {
+        let v: Vec<String> = idx.iter().map(|&i| sa_label(FIG14_LEVELS[i])).collect();
+        v.join(", ")
+    };
 
-    let mut cases: Vec<_> = LEVELS
-        .iter()
-        .map(|&sa| {
-            let s = bbio::spec(&dev, sa, P2_NPERSEG, P2_BAND_HZ, REALISATIONS, false);
-            ("published".to_string(), dev.clone(), s)
-        })
-        .collect();
-    // The end-stop readings one switch away (see "Readings of ambiguities"), at the level of claim F14-b only:
-    // Hertz contact with the paper's equally good b_im = 0.34 N s/m, and a tension-free
-    // contact (eq 1 clipped at zero). Same records (streams) as the published run.
-    let mut tension_free = dev.clone();
-    tension_free.endstop.tension_free = true;
-    let variants = [
-        (
-            "Hertz contact (eq 6), b_im = 0.34 N s/m",
-            dev.with_endstop(StiffnessModel::Hertz, 0.34),
-        ),
-        ("linear k_im, b_im = 0.4 N s/m, tension-free", tension_free),
-    ];
-    for (label, d) in &variants {
-        let s = bbio::spec(d, SA_F14B, P2_NPERSEG, P2_BAND_HZ, REALISATIONS, false);
-        cases.push((label.to_string(), d.clone(), s));
-    }
-    let mut levels = bbio::run(cases, "fig14")?;
-    let variant_levels = levels.split_off(LEVELS.len());
-    let eq21 = endstop::physics::two_port::eq21_efficiency(&dev);
-
-    // F14-a: the levels where no record touched a stop, pooled (the efficiency does not
-    // depend on the level in the linear regime).
-    let linear: Vec<&Level> = levels.iter().filter(|l| l.ens.no_impact()).collect();
-    let linear_ens: Vec<&endstop::study::ensemble::Ensemble> =
-        linear.iter().map(|l| &l.ens).collect();
-    let eff_lin = endstop::paper::fig14::pooled_efficiency(&dev, &linear_ens);
-    exp.claim_with_uncertainty(
-        "F14-a",
-        "eff_sim_linear_pct",
-        "published",
-        eff_lin.mean * 100.0,
-        Some(eff_lin.ci95 * 100.0),
-    );
-    // F14-b: efficiency at 1.69e-3.
-    let l_b = find(&levels, "published", SA_F14B);
-    exp.claim_with_uncertainty(
-        "F14-b",
-        "eff_1p69e-3_pct",
-        "published",
-        l_b.ens.efficiency.mean * 100.0,
-        Some(l_b.ens.efficiency.ci95 * 100.0),
-    );
-    // F14-b: sublinear growth (rule in `endstop::paper::fig14::sublinear_growth`).
-    let all: Vec<&endstop::study::ensemble::Ensemble> = levels.iter().map(|l| &l.ens).collect();
-    let sublinear = endstop::paper::fig14::sublinear_growth(&eff_lin, &all);
-    let frequent: Vec<&Level> = levels
-        .iter()
-        .filter(|l| l.ens.contact_fraction.mean >= endstop::paper::fig14::FREQUENT_CONTACT)
-        .collect();
-    exp.claim(
-        "F14-b",
-        "sublinear_power_growth",
-        "published",
-        if sublinear { 1.0 } else { 0.0 },
-    );
-
-    exp.number("efficiency_eq21", eq21);
-    exp.number("efficiency_linear_pooled", eff_lin.mean);
-    exp.number("efficiency_linear_pooled_ci95", eff_lin.ci95);
-    exp.number("efficiency_linear_records", eff_lin.n as f64);
-    for l in &levels {
+    exp.number("efficiency_eq21", f.eq21);
+    exp.number("efficiency_linear_pooled", f.pooled.mean);
+    exp.number("efficiency_linear_pooled_ci95", f.pooled.ci95);
+    exp.number("efficiency_linear_records", f.pooled.n as f64);
+    for l in &run.levels {
         let t = sa_label(l.sa());
         exp.number(&format!("p_{t}_w"), l.ens.power_w.mean);
         exp.number(&format!("efficiency_{t}"), l.ens.efficiency.mean);
@@ -112,172 +50,125 @@ fn run() -> Result<()> {
         );
         exp.number(&format!("x_rms_{t}_m"), l.ens.x_rms_m.mean);
     }
-    // Local log-log slope of P(Sa) between neighbouring levels.
-    let slopes: Vec<(f64, f64, f64)> = levels
-        .windows(2)
-        .map(|w| {
-            let s =
-                (w[1].ens.power_w.mean / w[0].ens.power_w.mean).ln() / (w[1].sa() / w[0].sa()).ln();
-            (w[0].sa(), w[1].sa(), s)
-        })
-        .collect();
 
-    // Convergence: the first two records of the lowest level and of 1.69e-3 again with a
-    // hundred times tighter tolerance. Without impacts the trajectory itself converges; with
-    // impacts it does not (nearby trajectories part after a few impacts), and only the
-    // statistics can: the change must then be small against the record-to-record scatter.
-    let conv: Vec<(f64, usize, f64, f64)> = [LEVELS[0], SA_F14B]
-        .iter()
-        .flat_map(|&sa| (0..2).map(move |i| (sa, i)))
-        .collect::<Vec<_>>()
-        .into_par_iter()
-        .map(|(sa, i)| -> Result<(f64, usize, f64, f64)> {
-            let l = find(&levels, "published", sa);
-            let mut spec = l.ens.spec.record;
-            spec.rtol = TIGHT_RTOL;
-            let r = endstop::study::record::simulate_record(
-                &dev,
-                &spec,
-                l.ens.spec.seed,
-                l.ens.spec.first_stream + i as u64,
-            )?;
-            Ok((
-                sa,
-                i,
-                l.ens.records[i].summary.p_total_w(),
-                r.summary.p_total_w(),
-            ))
-        })
-        .collect::<Result<_>>()?;
-
-    // Markdown.
-    let mut md = bbio::settings_md(&levels[0]);
+    let mut md = bbio::settings_md(&run.levels[0]);
     md.push_str(&format!(
         "\nEq 21 with Qm = sqrt(K m)/b (its derivation's reading; see Table 3 for the others): \
          efficiency {} %.\n\n",
-        fmt_sig(eq21 * 100.0, 4)
+        fmt_sig(f.eq21 * 100.0, 4)
     ));
-    md.push_str(&bbio::power_table_md(&levels));
+    md.push_str(&bbio::power_table(&run.levels).render());
     md.push_str(&format!(
         "\n**Convergence.** The same records with the integrator's relative tolerance {:e} \
-         instead of {:e}:\n\n| Sa (g²/Hz) | record | P (nW) | P, tight tolerance (nW) | \
-         relative change | record-to-record std of P at this level (relative) |\n|---|---|---|---|---|---|\n",
-        TIGHT_RTOL, levels[0].ens.spec.record.rtol
+         instead of {:e}:\n\n",
+        TIGHT_RTOL, run.levels[0].ens.spec.record.rtol
     ));
-    for (sa, i, p, q) in &conv {
-        let l = find(&levels, "published", *sa);
-        md.push_str(&format!(
-            "| {} | {i} | {} | {} | {:.1e} | {} |\n",
-            sa_label(*sa),
-            fmt_sig(p * 1e9, 5),
-            fmt_sig(q * 1e9, 5),
-            q / p - 1.0,
+    let mut t = Table::new([
+        "Sa (g²/Hz)",
+        "record",
+        "P (nW)",
+        "P, tight tolerance (nW)",
+        "relative change",
+        "record-to-record std of P at this level (relative)",
+    ]);
+    for c in &run.convergence {
+        let l = &run.levels[c.level];
+        let change = c.p_tight_w / c.p_w - 1.0;
+        t.row([
+            sa_label(l.sa()),
+            c.record.to_string(),
+            fmt_sig(c.p_w * 1e9, 5),
+            fmt_sig(c.p_tight_w * 1e9, 5),
+            format!("{change:.1e}"),
             fmt_sig(l.ens.power_w.std / l.ens.power_w.mean, 2),
-        ));
+        ]);
         exp.number(
-            &format!("convergence_rel_change_{}_{i}", sa_label(*sa)),
-            q / p - 1.0,
+            &format!("convergence_rel_change_{}_{}", sa_label(l.sa()), c.record),
+            change,
         );
     }
-    md.push_str(
-        "\n| Sa from (g²/Hz) | to (g²/Hz) | log-log slope of P(Sa) (1 = linear) |\n|---|---|---|\n",
-    );
-    for (a, b, s) in &slopes {
-        md.push_str(&format!(
-            "| {} | {} | {} |\n",
-            sa_label(*a),
-            sa_label(*b),
-            fmt_sig(*s, 3)
-        ));
+    md.push_str(&t.render());
+    let mut t = Table::new([
+        "Sa from (g²/Hz)",
+        "to (g²/Hz)",
+        "log-log slope of P(Sa) (1 = linear)",
+    ]);
+    for &(a, b, s) in &f.slopes {
+        t.row([
+            sa_label(FIG14_LEVELS[a]),
+            sa_label(FIG14_LEVELS[b]),
+            fmt_sig(s, 3),
+        ]);
     }
+    md.push('\n');
+    md.push_str(&t.render());
+    let eff_b = &l_b.ens.efficiency;
     md.push_str(&format!(
         "\n**Claims** (published set). F14-a: the {} records of the {} levels without any \
          impact ({}) pooled give an efficiency of {} % against eq 21's {} %; the difference is \
          {} standard errors. F14-b: at 1.69e-3 g²/Hz the efficiency is {} %. Sublinear growth \
          (efficiency falling from level to level once the mass is in contact at least {} of \
          the time, levels {}; the last below the linear value beyond both CIs): **{}**.\n",
-        eff_lin.n,
-        linear.len(),
-        linear
-            .iter()
-            .map(|l| sa_label(l.sa()))
-            .collect::<Vec<_>>()
-            .join(", "),
-        pm(eff_lin.mean * 100.0, eff_lin.ci95 * 100.0),
-        fmt_sig(eq21 * 100.0, 4),
-        fmt_sig(
-            (eff_lin.mean - eq21) / (eff_lin.std / (eff_lin.n as f64).sqrt()),
-            2
-        ),
-        pm(
-            l_b.ens.efficiency.mean * 100.0,
-            l_b.ens.efficiency.ci95 * 100.0
-        ),
-        endstop::paper::fig14::FREQUENT_CONTACT,
-        frequent
-            .iter()
-            .map(|l| sa_label(l.sa()))
-            .collect::<Vec<_>>()
-            .join(", "),
-        if sublinear { "yes" } else { "no" },
+        f.pooled.n,
+        f.linear_levels.len(),
+        labels(&f.linear_levels),
+        pm(f.pooled.mean * 100.0, f.pooled.ci95 * 100.0),
+        fmt_sig(f.eq21 * 100.0, 4),
+        fmt_sig(f.pooled_minus_eq21_se, 2),
+        pm(eff_b.mean * 100.0, eff_b.ci95 * 100.0),
+        fig14::FREQUENT_CONTACT,
+        labels(&f.frequent_levels),
+        if f.sublinear { "yes" } else { "no" },
     ));
     md.push_str(&format!(
-        "\n**Other end-stop readings at {} g²/Hz** (not scored; same records):\n\n| end-stop \
-         model | efficiency (%) | time in contact | impacts per record |\n|---|---|---|---|\n| \
-         linear k_im, b_im = 0.4 N s/m (published, scored) | {} | {:.2e} | {} |\n",
-        sa_label(SA_F14B),
-        pm(
-            l_b.ens.efficiency.mean * 100.0,
-            l_b.ens.efficiency.ci95 * 100.0
-        ),
-        l_b.ens.contact_fraction.mean,
-        fmt_sig(l_b.ens.impacts as f64 / l_b.ens.records.len() as f64, 3),
+        "\n**Other end-stop readings at {} g²/Hz** (not scored; same records):\n\n",
+        sa_label(l_b.sa())
     ));
-    for (i, l) in variant_levels.iter().enumerate() {
-        md.push_str(&format!(
-            "| {} | {} | {:.2e} | {} |\n",
-            l.set,
+    let mut t = Table::new([
+        "end-stop model",
+        "efficiency (%)",
+        "time in contact",
+        "impacts per record",
+    ]);
+    let reading_row = |label: String, l: &Level| {
+        [
+            label,
             pm(l.ens.efficiency.mean * 100.0, l.ens.efficiency.ci95 * 100.0),
-            l.ens.contact_fraction.mean,
-            fmt_sig(l.ens.impacts as f64 / l.ens.records.len() as f64, 3),
-        ));
+            format!("{:.2e}", l.ens.contact_fraction.mean),
+            fmt_sig(l.impacts_per_record(), 3),
+        ]
+    };
+    t.row(reading_row(
+        "linear k_im, b_im = 0.4 N s/m (published, scored)".into(),
+        l_b,
+    ));
+    for (i, l) in run.other_readings.iter().enumerate() {
+        t.row(reading_row(l.set.clone(), l));
         exp.number(
             &format!("efficiency_1p69e-3_variant_{i}"),
             l.ens.efficiency.mean,
         );
     }
+    md.push_str(&t.render());
     exp.write_numbers_md(&md)?;
 
-    exp.write_parquet(
-        "fig14_summary",
-        &mut bbio::summary_df(&levels)?,
-        "published",
-    )?;
-    exp.write_parquet(
-        "fig14_records",
-        &mut bbio::records_df(&levels)?,
-        "published",
-    )?;
-
-    write_power_plot(&exp, &levels, &dev)?;
-    write_efficiency_plot(&exp, &levels, eq21)?;
+    bbio::write_level_tables(&exp, "fig14", &run.levels, None, "published")?;
+    write_power_plot(&exp, &run)?;
+    write_efficiency_plot(&exp, &run, f.eq21, &claims)?;
     exp.finish()
 }
 
 /// Figure 14 as in the paper: power (nW) against Sa, log-log, with eq 21's line.
-fn write_power_plot(
-    exp: &Experiment,
-    levels: &[Level],
-    dev: &endstop::device::Device,
-) -> Result<()> {
+fn write_power_plot(exp: &Experiment, run: &fig14::Run) -> Result<()> {
     let (lo, hi): (f64, f64) = (5e-6, 4e-3);
     let n = 60;
     let line: Vec<(f64, f64)> = (0..=n)
         .map(|i| {
             let sa = lo * (hi / lo).powf(i as f64 / n as f64);
-            (sa, endstop::physics::two_port::eq21_power_w(dev, sa) * 1e9)
+            (sa, eq21_power_w(&run.device, sa) * 1e9)
         })
         .collect();
+    let levels = &run.levels;
     let mut series = vec![
         Series::new(
             "linear theory, eq 21 (Qm = sqrt(K m)/b)",
@@ -318,8 +209,14 @@ fn write_power_plot(
 }
 
 /// Efficiency and time in contact against Sa.
-fn write_efficiency_plot(exp: &Experiment, levels: &[Level], eq21: f64) -> Result<()> {
+fn write_efficiency_plot(
+    exp: &Experiment,
+    run: &fig14::Run,
+    eq21: f64,
+    claims: &Claims,
+) -> Result<()> {
     let (lo, hi) = (5e-6, 4e-3);
+    let levels = &run.levels;
     let mut series = vec![
         Series::new(
             "eq 21",
@@ -346,13 +243,15 @@ fn write_efficiency_plot(exp: &Experiment, levels: &[Level], eq21: f64) -> Resul
             Style::LinePoints,
         ),
     ];
-    let paper = bbio::paper_value("F14-b", "eff_1p69e-3_pct");
-    series.push(Series::new(
-        &format!("paper: {paper} % at {} g²/Hz", sa_label(SA_F14B)),
-        vec![(SA_F14B, paper)],
-        PALETTE[3],
-        Style::Points,
-    ));
+    if let Some(c) = claims.get("F14-b", "eff_1p69e-3_pct") {
+        let sa = FIG14_LEVELS[F14B_LEVEL];
+        series.push(Series::new(
+            &format!("paper: {} % at {} g²/Hz", c.paper, sa_label(sa)),
+            vec![(sa, c.paper)],
+            PALETTE[3],
+            Style::Points,
+        ));
+    }
     series.extend(error_bars(
         levels.iter().map(|l| {
             let e = &l.ens.efficiency;

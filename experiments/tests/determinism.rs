@@ -1,11 +1,17 @@
 //! The same experiment gives byte-identical Parquet and summary files on every run and for
 //! any thread count (RAYON_NUM_THREADS = 1 versus 2): one narrowband and one broadband
 //! experiment. Outputs go to temporary directories (ENDSTOP_OUTPUT_DIR), never to
-//! data/results/.
+//! data/results/. The broadband run also serves the provenance check of its Parquet metadata
+//! (each parameter set labelled with its own parameter file), so fig11 runs twice, not three
+//! times.
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::process::Command;
+use std::sync::OnceLock;
+
+use endstop::device::Device;
+use polars::prelude::{ParquetReader, SerReader};
 
 fn run(bin: &str, threads: &str, tag: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!(
@@ -48,29 +54,106 @@ fn outputs(dir: &Path) -> BTreeMap<String, Vec<u8>> {
     map
 }
 
-fn assert_identical(bin: &str) {
+/// The Parquet and summary files of `bin` run with 1 and with 2 threads.
+fn outputs_1_and_2_threads(bin: &str) -> [BTreeMap<String, Vec<u8>>; 2] {
     let a = run(bin, "1", "a");
     let b = run(bin, "2", "b");
-    let (oa, ob) = (outputs(&a), outputs(&b));
+    let out = [outputs(&a), outputs(&b)];
+    let _ = std::fs::remove_dir_all(a);
+    let _ = std::fs::remove_dir_all(b);
+    out
+}
+
+/// fig11's outputs, computed once for the tests of this file.
+fn fig11_outputs() -> &'static [BTreeMap<String, Vec<u8>>; 2] {
+    static OUT: OnceLock<[BTreeMap<String, Vec<u8>>; 2]> = OnceLock::new();
+    OUT.get_or_init(|| outputs_1_and_2_threads(env!("CARGO_BIN_EXE_fig11")))
+}
+
+fn assert_identical(bin: &str, [oa, ob]: &[BTreeMap<String, Vec<u8>>; 2]) {
     assert!(!oa.is_empty(), "{bin} wrote no Parquet or summary");
     assert_eq!(
         oa.keys().collect::<Vec<_>>(),
         ob.keys().collect::<Vec<_>>(),
         "{bin}: different file sets"
     );
-    for (k, va) in &oa {
+    for (k, va) in oa {
         assert!(va == &ob[k], "{bin}: {k} differs between 1 and 2 threads");
     }
-    let _ = std::fs::remove_dir_all(a);
-    let _ = std::fs::remove_dir_all(b);
 }
 
 #[test]
 fn narrowband_fig08_is_byte_identical_for_1_and_2_threads() {
-    assert_identical(env!("CARGO_BIN_EXE_fig08"));
+    let bin = env!("CARGO_BIN_EXE_fig08");
+    assert_identical(bin, &outputs_1_and_2_threads(bin));
 }
 
 #[test]
 fn broadband_fig11_is_byte_identical_for_1_and_2_threads() {
-    assert_identical(env!("CARGO_BIN_EXE_fig11"));
+    assert_identical(env!("CARGO_BIN_EXE_fig11"), fig11_outputs());
+}
+
+/// The key-value metadata of a Parquet file.
+fn parquet_metadata(bytes: &[u8]) -> BTreeMap<String, String> {
+    let mut reader = ParquetReader::new(std::io::Cursor::new(bytes.to_vec()));
+    let meta = reader.get_metadata().expect("Parquet footer");
+    meta.key_value_metadata()
+        .iter()
+        .flatten()
+        .map(|kv| (kv.key.clone(), kv.value.clone().unwrap_or_default()))
+        .collect()
+}
+
+#[test]
+fn fig11_parquet_metadata_holds_each_parameter_set_under_its_own_label() {
+    // Figure 11 runs prototype 1 under two parameter sets. Every Parquet file must record the
+    // published parameter file's text under `published` and the calibrated device (the
+    // end-stop gap fitted to Figure 8's onset, computed here independently) under
+    // `calibrated`, not the published text twice.
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let published_text = std::fs::read_to_string(root.join("data/prototype1.toml")).unwrap();
+    let published = Device::from_toml_str(&published_text, "prototype1.toml").unwrap();
+    let fitted = endstop::paper::calibration::calibrate_prototype1(&published)
+        .unwrap()
+        .device
+        .geometry
+        .endstop_gap_m;
+    let gap = published.geometry.endstop_gap_m;
+    assert!(
+        (fitted / gap - 1.0).abs() > 1e-3,
+        "the calibration moved the gap"
+    );
+    let files: Vec<(&String, &Vec<u8>)> = fig11_outputs()[0]
+        .iter()
+        .filter(|(k, _)| k.ends_with(".parquet"))
+        .collect();
+    assert_eq!(files.len(), 3, "fig11 writes summary, records and spectra");
+    for (name, bytes) in files {
+        let kv = parquet_metadata(bytes);
+        let entry = |label: &str| -> &String {
+            let found: Vec<&String> = kv
+                .iter()
+                .filter(|(k, _)| k.starts_with("param_file:") && k.ends_with(&format!(":{label}")))
+                .map(|(_, v)| v)
+                .collect();
+            assert_eq!(
+                found.len(),
+                1,
+                "{name}: one `{label}` parameter file in {kv:?}"
+            );
+            found[0]
+        };
+        assert_eq!(entry("published"), &published_text, "{name}");
+        let calibrated = entry("calibrated");
+        assert_ne!(
+            calibrated, &published_text,
+            "{name}: calibrated holds the published text"
+        );
+        let d = Device::from_toml_str(calibrated, "calibrated").unwrap();
+        let recorded = d.geometry.endstop_gap_m;
+        assert!(
+            (recorded / fitted - 1.0).abs() < 1e-12,
+            "{name}: calibrated gap {recorded} m, fitted {fitted} m"
+        );
+    }
 }

@@ -146,6 +146,21 @@ impl NoiseSpec {
         self.psd_g2_per_hz * G * G
     }
 
+    /// The ideal two-sided PSD at frequency `f_hz` (g²/Hz): `Sa` in the band `0 < f <= B`,
+    /// zero outside it.
+    pub fn ideal_psd_g2_per_hz(&self, f_hz: f64) -> f64 {
+        if f_hz > 0.0 && f_hz <= self.bandwidth_hz {
+            self.psd_g2_per_hz
+        } else {
+            0.0
+        }
+    }
+
+    /// Mean square of the ideal band-limited acceleration, `2 B Sa` (g²).
+    pub fn mean_square_g2(&self) -> f64 {
+        2.0 * self.bandwidth_hz * self.psd_g2_per_hz
+    }
+
     /// Validate, then return `(N, K)`: samples and the highest filled bin.
     fn grid(&self) -> Result<(usize, usize), NoiseError> {
         self.validate()?;
@@ -267,6 +282,16 @@ mod tests {
         spec.duration_s = 1e-6;
         let msg = generate(&spec, 1, 0).unwrap_err().to_string();
         assert!(msg.contains("samples"), "{msg}");
+    }
+
+    #[test]
+    fn ideal_level_and_mean_square() {
+        let spec = NoiseSpec::paper(1e-2);
+        assert_eq!(spec.ideal_psd_g2_per_hz(0.0), 0.0);
+        assert_eq!(spec.ideal_psd_g2_per_hz(10e3), 1e-2);
+        assert_eq!(spec.ideal_psd_g2_per_hz(10.001e3), 0.0);
+        // 2 B Sa = 2 x 10 kHz x 1e-2 g²/Hz = 200 g².
+        assert!((spec.mean_square_g2() - 200.0).abs() < 1e-12);
     }
 
     #[test]

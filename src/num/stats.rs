@@ -1,5 +1,7 @@
 //! Sample statistics: the mean with a Student-t confidence interval ([`MeanCi`]), the sampling
-//! distribution of an estimate ([`Spread`]), and the delete-one jackknife ([`Jackknife`]).
+//! distribution of an estimate ([`Spread`]), the delete-one jackknife ([`Jackknife`]), the
+//! ratios of two samples taken pairwise ([`pairwise_ratios`], [`ratio_spread`],
+//! [`pair_fraction`]) and the empirical distribution function ([`ecdf`]).
 
 use statrs::distribution::{ContinuousCDF, StudentsT};
 
@@ -168,13 +170,36 @@ impl Jackknife {
 /// draw of what one record per level, as in the paper, would give). Non-finite widths are
 /// counted as undetermined.
 pub fn ratio_spread(w_a: &[f64], w_b: &[f64]) -> Spread {
-    let mut r = Vec::with_capacity(w_a.len() * w_b.len());
-    for a in w_a {
-        for b in w_b {
-            r.push(a / b);
-        }
-    }
-    Spread::of(&r)
+    Spread::of(&pairwise_ratios(w_a, w_b))
+}
+
+/// Every ratio `a / b` with `a` from `w_a` and `b` from `w_b` (row-major in `w_a`).
+pub fn pairwise_ratios(w_a: &[f64], w_b: &[f64]) -> Vec<f64> {
+    w_a.iter()
+        .flat_map(|a| w_b.iter().map(move |b| a / b))
+        .collect()
+}
+
+/// Fraction of the finite pairwise ratios `a / b` ([`pairwise_ratios`]) that satisfy `pred`;
+/// 0 when no ratio is finite.
+pub fn pair_fraction(w_a: &[f64], w_b: &[f64], pred: impl Fn(f64) -> bool) -> f64 {
+    let finite: Vec<f64> = pairwise_ratios(w_a, w_b)
+        .into_iter()
+        .filter(|r| r.is_finite())
+        .collect();
+    let hits = finite.iter().filter(|&&r| pred(r)).count();
+    hits as f64 / finite.len().max(1) as f64
+}
+
+/// Empirical distribution function of the finite `values`: (sorted value, (rank + 1/2) / n).
+pub fn ecdf(values: &[f64]) -> Vec<(f64, f64)> {
+    let mut v: Vec<f64> = values.iter().copied().filter(|x| x.is_finite()).collect();
+    v.sort_by(|a, b| a.total_cmp(b));
+    let n = v.len() as f64;
+    v.iter()
+        .enumerate()
+        .map(|(i, &x)| (x, (i as f64 + 0.5) / n))
+        .collect()
 }
 
 #[cfg(test)]
@@ -211,6 +236,22 @@ mod tests {
         let std = (5.0f64 / 3.0).sqrt();
         assert!((m.std - std).abs() < 1e-15);
         assert!((m.ci95 - 3.182_446_305 * std / 2.0).abs() < 1e-8);
+    }
+
+    #[test]
+    fn pairwise_ratios_fractions_and_ecdf() {
+        let r = pairwise_ratios(&[2.0, 4.0], &[1.0, 2.0, 0.0]);
+        assert_eq!(r[..2], [2.0, 1.0]);
+        assert_eq!(r[3..5], [4.0, 2.0]);
+        assert!(r[2].is_infinite() && r[5].is_infinite());
+        // Four finite ratios 2, 1, 4, 2: three are at least 2.
+        assert_eq!(
+            pair_fraction(&[2.0, 4.0], &[1.0, 2.0, 0.0], |x| x >= 2.0),
+            0.75
+        );
+        assert_eq!(pair_fraction(&[1.0], &[0.0], |_| true), 0.0);
+        let e = ecdf(&[3.0, f64::NAN, 1.0]);
+        assert_eq!(e, vec![(1.0, 0.25), (3.0, 0.75)]);
     }
 
     #[test]

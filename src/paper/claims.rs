@@ -283,6 +283,46 @@ pub struct Value {
     pub note: String,
 }
 
+impl Value {
+    /// Our value `ours` of (`claim`, `quantity`) under parameter set `set`, with its
+    /// uncertainty (same unit) and a note for the book.
+    pub fn new(
+        claim: &str,
+        quantity: &str,
+        set: &str,
+        ours: f64,
+        uncertainty: Option<f64>,
+        note: impl Into<String>,
+    ) -> Self {
+        Self {
+            claim: claim.to_string(),
+            quantity: quantity.to_string(),
+            set: set.to_string(),
+            ours,
+            uncertainty,
+            note: note.into(),
+        }
+    }
+
+    /// A yes/no value (1 yes, 0 no) with a note.
+    pub fn yes_no(
+        claim: &str,
+        quantity: &str,
+        set: &str,
+        yes: bool,
+        note: impl Into<String>,
+    ) -> Self {
+        Self::new(
+            claim,
+            quantity,
+            set,
+            if yes { 1.0 } else { 0.0 },
+            None,
+            note,
+        )
+    }
+}
+
 /// Outcome of a comparison.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 pub enum Verdict {

@@ -1,7 +1,105 @@
-//! Figure 12: prototype 1 at 30 V under high-level random vibration (claim F12).
+//! Figure 12: prototype 1 at 30 V (Hertz contact, b_im = 1.5 N s/m) under high-level random
+//! vibration, where the mass hits the stops, published and calibrated parameter sets: the
+//! 3 dB bandwidth grows with the level (claim F12).
+
+use crate::device::Device;
+use crate::num::stats::{ratio_spread, Jackknife, Spread};
+use crate::paper::claims::{Claims, Value};
+use crate::paper::ensembles::{run_prototype1, Prototype1Run, WidthReading, P1_SETS};
+use crate::study::record::BroadbandError;
 
 /// Figure 12's levels (g²/Hz).
 pub const FIG12_LEVELS: [f64; 3] = [7.4e-3, 1.31e-2, 2.85e-2];
 
 /// Records per level in Figure 12 (as Figure 11; the contact statistics need a few more).
 pub const FIG12_REALISATIONS: usize = 8;
+
+/// Index in [`FIG12_LEVELS`] of the claim's lower level (7.4e-3).
+pub const LOW: usize = 0;
+
+/// Index in [`FIG12_LEVELS`] of the claim's upper level (2.85e-2).
+pub const HIGH: usize = 2;
+
+/// The ensembles of Figure 12: both parameter sets at every level.
+pub type Run = Prototype1Run;
+
+/// Runs Figure 12 for the published and the calibrated prototype 1 (the parameter files'
+/// devices; [`crate::paper::setups::prototype1_setup`] is applied here), calling `progress`
+/// after each record.
+pub fn run(
+    published: &Device,
+    calibrated: &Device,
+    progress: &(dyn Fn() + Sync),
+) -> Result<Run, BroadbandError> {
+    run_prototype1(
+        published,
+        calibrated,
+        &FIG12_LEVELS,
+        FIG12_REALISATIONS,
+        progress,
+    )
+}
+
+/// The widths of one reading of "3 dB" at the claim's two levels, for one parameter set.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Findings {
+    /// The reading.
+    pub reading: WidthReading,
+    /// Width of the ensemble-mean PSD at [`LOW`] with its jackknife interval (Hz).
+    pub low: Jackknife,
+    /// Width of the ensemble-mean PSD at [`HIGH`] (Hz).
+    pub high: Jackknife,
+    /// `high / low` with the 95 % half-width propagated from the two intervals.
+    pub ratio: (f64, f64),
+    /// Ratio of single-record widths over every pair of records (one at each level).
+    pub single_ratio: Spread,
+}
+
+/// Figure 12's findings for set `set` (an index into [`P1_SETS`]) under `reading`.
+pub fn findings(run: &Run, set: usize, reading: WidthReading) -> Findings {
+    let (lo, hi) = (&run.level(set, LOW).ens, &run.level(set, HIGH).ens);
+    let (low, high) = (reading.mean_width(lo), reading.mean_width(hi));
+    Findings {
+        reading,
+        low,
+        high,
+        ratio: high.ratio(&low),
+        single_ratio: ratio_spread(&reading.single(hi), &reading.single(lo)),
+    }
+}
+
+/// Claim F12 for both parameter sets: the half-power widths of the ensemble-mean PSDs at
+/// 7.4e-3 and 2.85e-2 g²/Hz and their ratio (the half-amplitude reading is reported beside,
+/// not scored).
+pub fn claims(run: &Run, _claims: &Claims) -> Vec<Value> {
+    let mut out = Vec::new();
+    for (s, set) in P1_SETS.iter().enumerate() {
+        let f = findings(run, s, WidthReading::HalfPower);
+        let note = "half-power width of the ensemble-mean PSD; CI: delete-one jackknife";
+        out.push(Value::new(
+            "F12",
+            "bw_7p4e-3_hz",
+            set,
+            f.low.estimate,
+            Some(f.low.ci95),
+            note,
+        ));
+        out.push(Value::new(
+            "F12",
+            "bw_2p85e-2_hz",
+            set,
+            f.high.estimate,
+            Some(f.high.ci95),
+            note,
+        ));
+        out.push(Value::new(
+            "F12",
+            "bw_ratio_2p85e-2_over_7p4e-3",
+            set,
+            f.ratio.0,
+            Some(f.ratio.1),
+            "ratio of the half-power widths; CI: the two jackknife intervals propagated",
+        ));
+    }
+    out
+}

@@ -3,8 +3,11 @@
 
 use crate::device::{Device, StiffnessModel};
 
-/// Prototype 1, Figure 8: bias voltage (V).
+/// Prototype 1, Figures 8-12 and Table 3: bias voltage (V).
 pub const P1_BIAS_V: f64 = 30.0;
+
+/// Prototype 2, Figures 14 and 15 and Table 3: bias voltage (V).
+pub const P2_BIAS_V: f64 = 15.0;
 
 /// Figure 13's bias voltage (V).
 pub const FIG13_BIAS_V: f64 = 10.0;
@@ -19,7 +22,7 @@ pub fn prototype1_setup(device: &Device) -> Device {
 /// Prototype 2 as Figures 14 and 15 simulate it: 15 V, linear k_im (eq 19), b_im = 0.4 N s/m.
 pub fn prototype2_setup(device: &Device) -> Device {
     device
-        .with_bias(15.0)
+        .with_bias(P2_BIAS_V)
         .with_endstop(StiffnessModel::Linear, 0.4)
 }
 

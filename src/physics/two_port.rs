@@ -135,6 +135,20 @@ impl TwoPort {
     }
 }
 
+/// The bias voltage (V) at which eq 18 gives the coupling `k2` (a fraction in `[0, 1)`), the
+/// inverse of [`TwoPort::of`]'s `k2` in closed form: with `a = C0²/x0²` and
+/// `Ct = C0 + Cp + CL`, eq 18 reads `k² = 2 a Vb² / (km Ct + 2 a Vb²)`, so
+/// `Vb² = k² km Ct / (2 a (1 - k²))`. NaN outside `[0, 1)`.
+pub fn bias_for_coupling(device: &Device, k2: f64) -> f64 {
+    if !(0.0..1.0).contains(&k2) {
+        return f64::NAN;
+    }
+    let e = &device.electrical;
+    let ct = e.c0_f + e.cp_f + e.load_capacitance_f;
+    let a = (e.c0_f / device.geometry.finger_overlap_m).powi(2);
+    (k2 * device.mechanics.stiffness_n_per_m * ct / (2.0 * a * (1.0 - k2))).sqrt()
+}
+
 /// Linearised small-signal response of the harvester (eqs 11-17 in the frequency domain): the
 /// output power PSD of both loads under white acceleration, one-sided, W/Hz.
 ///
@@ -204,4 +218,22 @@ pub fn eq21_efficiency(device: &Device) -> f64 {
 /// `psd_g2_per_hz` (g²/Hz) for `device`'s proof mass.
 pub fn efficiency(device: &Device, p_w: f64, psd_g2_per_hz: f64) -> f64 {
     2.0 * p_w / (device.mechanics.mass_kg * psd_g2_per_hz * G * G)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn bias_for_coupling_inverts_eq18() {
+        let text = include_str!("../../data/prototype1.toml");
+        let d = Device::from_toml_str(text, "prototype1.toml").unwrap();
+        for k2 in [1e-4, 0.0144, 0.3] {
+            let vb = bias_for_coupling(&d, k2);
+            let back = TwoPort::of(&d.with_bias(vb)).k2;
+            assert!((back / k2 - 1.0).abs() < 1e-12, "{k2}: {back}");
+        }
+        assert_eq!(bias_for_coupling(&d, 0.0), 0.0);
+        assert!(bias_for_coupling(&d, 1.0).is_nan());
+    }
 }

@@ -134,6 +134,36 @@ impl Psd {
             0.5 * sum / count as f64
         }
     }
+
+    /// The densities of the bins with `f_lo <= f <= f_hi`, in frequency order.
+    pub fn densities_in_band(&self, f_lo: f64, f_hi: f64) -> Vec<f64> {
+        self.freq_hz
+            .iter()
+            .zip(&self.density)
+            .filter(|(f, _)| (f_lo..=f_hi).contains(*f))
+            .map(|(_, d)| *d)
+            .collect()
+    }
+
+    /// The largest density at or above `f_lo` (0 if no bin lies there).
+    pub fn max_density_from(&self, f_lo: f64) -> f64 {
+        self.freq_hz
+            .iter()
+            .zip(&self.density)
+            .filter(|(f, _)| **f >= f_lo)
+            .map(|(_, d)| *d)
+            .fold(0.0, f64::max)
+    }
+
+    /// The same grid with every density multiplied by `factor` (for example 0.5 for the
+    /// two-sided level of a one-sided density away from DC and Nyquist).
+    pub fn scaled(&self, factor: f64) -> Psd {
+        Psd {
+            freq_hz: self.freq_hz.clone(),
+            density: self.density.iter().map(|d| d * factor).collect(),
+            segments: self.segments,
+        }
+    }
 }
 
 /// Welch PSD of `x` sampled at `fs` Hz, with scipy's conventions (see the module docs).
@@ -261,6 +291,20 @@ mod tests {
         assert!(msg.contains("fs = NaN"), "{msg}");
         assert_eq!(e(100, 50, 1.0).unwrap().segments, 1);
         assert_eq!(e(10, 5, 1.0).unwrap().segments, 19);
+    }
+
+    #[test]
+    fn band_selection_maximum_and_scaling() {
+        let p = Psd {
+            freq_hz: vec![0.0, 1.0, 2.0, 3.0],
+            density: vec![4.0, 2.0, 6.0, 1.0],
+            segments: 3,
+        };
+        assert_eq!(p.densities_in_band(1.0, 2.0), vec![2.0, 6.0]);
+        assert_eq!(p.max_density_from(2.5), 1.0);
+        assert_eq!(p.max_density_from(9.0), 0.0);
+        let h = p.scaled(0.5);
+        assert_eq!((h.density[2], h.segments), (3.0, 3));
     }
 
     #[test]
