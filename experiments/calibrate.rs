@@ -32,11 +32,11 @@ fn run() -> Result<()> {
     eprintln!(
         "[calibrate] end-stop gap {} um (published {} um), onset {} Hz (target {} Hz), {} \
          evaluations; wrote {} ({secs:.2} s)",
-        fmt_sig(cal.fitted_gap_m * 1e6, 5),
-        fmt_sig(cal.published_gap_m * 1e6, 4),
-        fmt_sig(cal.achieved_onset_hz, 6),
-        cal.target_onset_hz,
-        cal.evaluations,
+        fmt_sig(cal.record.fitted_gap_m * 1e6, 5),
+        fmt_sig(cal.record.published_gap_m * 1e6, 4),
+        fmt_sig(cal.record.achieved_onset_hz, 6),
+        cal.record.target_onset_hz,
+        cal.record.evaluations,
         calibration_dir().display()
     );
     Ok(())

@@ -11,7 +11,7 @@ use common::md::Table;
 use common::narrowband_io::{claims_table_both_sets, curve_rows, hz, pct};
 use common::plot::{LegendPos, LinePlot, Series, Style, PALETTE};
 use common::{fmt_sig, frame::frame, load_device, row, Experiment};
-use endstop::paper::calibration::{Calibration, BIM_FIT_TOL_HZ, CALIBRATION_TOL_HZ};
+use endstop::paper::calibration::{CalibrationRecord, BIM_FIT_TOL_HZ, CALIBRATION_TOL_HZ};
 use endstop::paper::claims::{Claims, Value};
 use endstop::paper::curves::{law_key, CONV_FREQ_REL, CONV_RMS_REL};
 use endstop::paper::fig08::{self, Fig8Curve, SetRun, BIM_FITS};
@@ -38,9 +38,9 @@ fn run() -> Result<()> {
     let values = fig08::claims(&run, &claims)?;
     exp.claims(values.clone());
 
-    record_numbers(&mut exp, &cal, &run);
+    record_numbers(&mut exp, &cal.record, &run);
     write_parquet(&exp, &run)?;
-    exp.write_numbers_md(&numbers_md(&cal, &run, &values, &claims))?;
+    exp.write_numbers_md(&numbers_md(&cal.record, &run, &values, &claims))?;
     for r in &run.sets {
         let plot = sweep_plot(r);
         match r.set {
@@ -51,7 +51,7 @@ fn run() -> Result<()> {
     exp.finish()
 }
 
-fn record_numbers(exp: &mut Experiment, cal: &Calibration, run: &fig08::Run) {
+fn record_numbers(exp: &mut Experiment, cal: &CalibrationRecord, run: &fig08::Run) {
     exp.number("calibrated_gap_m", cal.fitted_gap_m);
     exp.number("published_gap_m", cal.published_gap_m);
     exp.number("calibration_target_onset_hz", cal.target_onset_hz);
@@ -133,7 +133,12 @@ fn write_parquet(exp: &Experiment, run: &fig08::Run) -> Result<()> {
     Ok(())
 }
 
-fn numbers_md(cal: &Calibration, run: &fig08::Run, values: &[Value], claims: &Claims) -> String {
+fn numbers_md(
+    cal: &CalibrationRecord,
+    run: &fig08::Run,
+    values: &[Value],
+    claims: &Claims,
+) -> String {
     let mut md = format!(
         "### Calibration\n\nOne parameter, the end-stop gap xmax, fitted so that the 5.5 g, 30 V \
          up-sweep first touches a stop at the paper's measured kink ({P1_MEASURED_ONSET_HZ} Hz): \

@@ -47,7 +47,7 @@ fn run() -> Result<()> {
             exp.number(&format!("{k}_p_both_at_5p5g_w"), m.p_total_w());
         }
     }
-    exp.number("calibrated_gap_m", cal.fitted_gap_m);
+    exp.number("calibrated_gap_m", cal.record.fitted_gap_m);
     write_parquet(&exp, &run)?;
     let tol = claims.require_class("amplitude_threshold")?.tol_abs;
     exp.write_numbers_md(&numbers_md(&run, &values, &both_loads, &claims, tol))?;

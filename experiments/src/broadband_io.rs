@@ -357,7 +357,7 @@ pub fn prototype1_sets(exp: &mut Experiment) -> Result<(Device, Device)> {
     let (cal_loaded, cal) = crate::calibrated_prototype1(&p1)?;
     exp.uses(&p1, "published");
     exp.uses(&cal_loaded, "calibrated");
-    exp.number("calibrated_endstop_gap_m", cal.fitted_gap_m);
+    exp.number("calibrated_endstop_gap_m", cal.record.fitted_gap_m);
     exp.number("published_endstop_gap_m", p1.device.geometry.endstop_gap_m);
     Ok((p1.device, cal.device))
 }

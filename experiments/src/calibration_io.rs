@@ -81,10 +81,10 @@ fn device_text(published: &LoadedDevice, cal: &Calibration, sha: &str) -> String
          # fitted_gap_m: {:e} (published: {:e})\n\n{}",
         git_commit(),
         published.file,
-        cal.target_onset_hz,
-        cal.achieved_onset_hz,
-        cal.fitted_gap_m,
-        cal.published_gap_m,
+        cal.record.target_onset_hz,
+        cal.record.achieved_onset_hz,
+        cal.record.fitted_gap_m,
+        cal.record.published_gap_m,
         cal.device.to_toml_string()
     )
 }
@@ -101,7 +101,7 @@ pub fn write_calibration(published: &LoadedDevice, cal: &Calibration) -> Result<
         params: vec![(published.file.clone(), "published".into())],
         fitted_from: published.file.clone(),
         fitted_from_sha256: sha.clone(),
-        record: cal.record(),
+        record: cal.record,
     };
     write_atomic(
         &dir.join("summary.json"),
@@ -154,7 +154,10 @@ fn read_calibration(published: &LoadedDevice) -> Result<(LoadedDevice, Calibrati
         path.display(),
         summary_path.display()
     );
-    let cal = Calibration::from_record(device.clone(), &summary.record);
+    let cal = Calibration {
+        device: device.clone(),
+        record: summary.record,
+    };
     Ok((
         LoadedDevice {
             device,

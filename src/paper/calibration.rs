@@ -170,51 +170,15 @@ pub struct CalibrationRecord {
     pub evaluations: usize,
 }
 
-/// Result of the one-parameter calibration of prototype 1 ([`calibrate_prototype1`]).
+/// Result of the one-parameter calibration of prototype 1 ([`calibrate_prototype1`]): the
+/// calibrated device and the record of the fit (what the artefact saves next to the device).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Calibration {
     /// The calibrated device: the published one with the fitted end-stop gap and
     /// `params = "calibrated"`; everything else unchanged ([`calibrated_device`]).
     pub device: Device,
-    /// Fitted effective end-stop gap xmax (m).
-    pub fitted_gap_m: f64,
-    /// The published gap it replaces (m).
-    pub published_gap_m: f64,
-    /// Target: the measured kink of Figure 8 (Hz).
-    pub target_onset_hz: f64,
-    /// Refined onset of the calibrated device (Hz, midpoint of `onset_bracket`).
-    pub achieved_onset_hz: f64,
-    /// The refined onset bracket of the calibrated device (Hz).
-    pub onset_bracket: Transition,
-    /// Onset evaluations made by the root find, the bracket's ends included.
-    pub evaluations: usize,
-}
-
-impl Calibration {
-    /// The record of the calibration (everything but the device).
-    pub fn record(&self) -> CalibrationRecord {
-        CalibrationRecord {
-            fitted_gap_m: self.fitted_gap_m,
-            published_gap_m: self.published_gap_m,
-            target_onset_hz: self.target_onset_hz,
-            achieved_onset_hz: self.achieved_onset_hz,
-            onset_bracket: self.onset_bracket,
-            evaluations: self.evaluations,
-        }
-    }
-
-    /// A calibration from its record and the calibrated device (as saved and read back).
-    pub fn from_record(device: Device, r: &CalibrationRecord) -> Self {
-        Self {
-            device,
-            fitted_gap_m: r.fitted_gap_m,
-            published_gap_m: r.published_gap_m,
-            target_onset_hz: r.target_onset_hz,
-            achieved_onset_hz: r.achieved_onset_hz,
-            onset_bracket: r.onset_bracket,
-            evaluations: r.evaluations,
-        }
-    }
+    /// What the fit found.
+    pub record: CalibrationRecord,
 }
 
 /// The calibrated device for a fitted gap: `published` with only `geometry.endstop_gap_m`
@@ -302,12 +266,14 @@ pub fn calibrate_prototype1(published: &Device) -> Result<Calibration, Narrowban
         .expect("an onset within the tolerance has a bracket");
     Ok(Calibration {
         device: calibrated_device(published, best.x),
-        fitted_gap_m: best.x,
-        published_gap_m: published_gap,
-        target_onset_hz: target,
-        achieved_onset_hz: t.value(),
-        onset_bracket: t,
-        evaluations,
+        record: CalibrationRecord {
+            fitted_gap_m: best.x,
+            published_gap_m: published_gap,
+            target_onset_hz: target,
+            achieved_onset_hz: t.value(),
+            onset_bracket: t,
+            evaluations,
+        },
     })
 }
 

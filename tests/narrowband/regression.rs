@@ -74,7 +74,7 @@ fn snapshot(name: &str, text: &str) {
 
 #[test]
 fn calibration_numbers() {
-    let c = calibration();
+    let c = &calibration().record;
     let mut s = String::new();
     writeln!(s, "published gap: {:.2} um", c.published_gap_m * 1e6).unwrap();
     writeln!(s, "fitted gap: {:.2} um", c.fitted_gap_m * 1e6).unwrap();
