@@ -137,12 +137,11 @@ fn sweep(a: SweepArgs) -> Result<()> {
     exp.uses(&loaded, &device.params);
     let freqs = linspace_step(a.from, a.to, a.step);
     let cfg = endstop::study::steady::steady_config(&device, 0.5 * (a.from + a.to));
-    let pb = common::progress(freqs.len() as u64, "sweep");
-    let report =
+    let report = common::with_progress(freqs.len(), "sweep", |tick| {
         endstop::study::sweep::up_sweep_report(&device, &freqs, a.accel_rms_g, &cfg, 0.1, |_| {
-            pb.inc(1)
-        })?;
-    pb.finish_and_clear();
+            tick()
+        })
+    })?;
 
     let steps = &report.sweep.steps;
     let col = |f: &dyn Fn(&endstop::study::steady::Measurement) -> f64| -> Vec<f64> {
@@ -265,9 +264,9 @@ fn random(a: RandomArgs) -> Result<()> {
         first_stream: 0,
         realisations: a.records,
     };
-    let pb = common::progress(a.records as u64, "records");
-    let ens = endstop::study::ensemble::run_ensemble(&device, &spec, || pb.inc(1))?;
-    pb.finish_and_clear();
+    let ens = common::with_progress(a.records, "records", |tick| {
+        endstop::study::ensemble::run_ensemble(&device, &spec, tick)
+    })?;
 
     let psd = &ens.mean_spectrum.total;
     let m = psd.freq_hz.len();

@@ -10,7 +10,7 @@ use anyhow::Result;
 use common::md::Table;
 use common::narrowband_io::{claims_table_both_sets, curve_rows, hz, pct};
 use common::plot::{LegendPos, LinePlot, Series, Style, PALETTE};
-use common::{fmt_sig, frame::frame, load_device, row, Experiment};
+use common::{fmt_sig, frame::frame, row, Experiment};
 use endstop::paper::calibration::{CalibrationRecord, BIM_FIT_TOL_HZ, CALIBRATION_TOL_HZ};
 use endstop::paper::claims::{Claims, Value};
 use endstop::paper::curves::{law_key, CONV_FREQ_REL, CONV_RMS_REL};
@@ -25,16 +25,13 @@ fn main() {
 
 fn run() -> Result<()> {
     let mut exp = Experiment::start("fig08");
-    let p1 = load_device("prototype1")?;
-    exp.uses(&p1, "published");
-    let (cal_loaded, cal) = common::calibrated_prototype1(&p1)?;
-    exp.uses(&cal_loaded, "calibrated");
+    let (p1, cal) = common::prototype1_both_sets(&mut exp)?;
     let claims = Claims::bundled()?;
 
     let steps = fig08::Protocol::new(&p1.device).coarse_steps();
-    let pb = common::progress(steps as u64, "fig08");
-    let run = fig08::run(&p1.device, &cal.device, &|| pb.inc(1))?;
-    pb.finish_and_clear();
+    let run = common::with_progress(steps, "fig08", |tick| {
+        fig08::run(&p1.device, &cal.device, tick)
+    })?;
     let values = fig08::claims(&run, &claims)?;
     exp.claims(values.clone());
 

@@ -10,7 +10,7 @@ use anyhow::Result;
 use common::md::Table;
 use common::narrowband_io::claims_table_both_sets;
 use common::plot::{LegendPos, LinePlot, Series, Style, PALETTE};
-use common::{fmt_sig, frame::frame, load_device, row, Experiment};
+use common::{fmt_sig, frame::frame, row, Experiment};
 use endstop::paper::claims::{Claims, Value};
 use endstop::paper::fig09::{self, PowerReading, CONV_ONSET_G, CONV_RMS_REL, DEFAULT_READING};
 use endstop::paper::measured::P1_RESONANCE_HZ;
@@ -22,16 +22,13 @@ fn main() {
 
 fn run() -> Result<()> {
     let mut exp = Experiment::start("fig09");
-    let p1 = load_device("prototype1")?;
-    exp.uses(&p1, "published");
-    let (cal_loaded, cal) = common::calibrated_prototype1(&p1)?;
-    exp.uses(&cal_loaded, "calibrated");
+    let (p1, cal) = common::prototype1_both_sets(&mut exp)?;
     let claims = Claims::bundled()?;
 
     let steps = fig09::Protocol::new(&p1.device).coarse_steps();
-    let pb = common::progress(steps as u64, "fig09");
-    let run = fig09::run(&p1.device, &cal.device, &|| pb.inc(1))?;
-    pb.finish_and_clear();
+    let run = common::with_progress(steps, "fig09", |tick| {
+        fig09::run(&p1.device, &cal.device, tick)
+    })?;
     let values = fig09::claims(&run, &claims)?;
     let both_loads = fig09::claims_under(&run, PowerReading::BothLoads, &claims)?;
     exp.claims(values.clone());

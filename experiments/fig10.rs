@@ -23,9 +23,7 @@ fn main() {
 fn run() -> Result<()> {
     let mut exp = Experiment::start("fig10");
     let claims = Claims::bundled()?;
-    let pb = common::progress(RECORDS as u64, "fig10");
-    let run = fig10::run(&|| pb.inc(1))?;
-    pb.finish_and_clear();
+    let run = common::with_progress(RECORDS, "fig10", |tick| fig10::run(tick))?;
     exp.seed = Some(run.seed);
     exp.claims(fig10::claims(&run, &claims));
     let f = fig10::findings(&run);

@@ -23,9 +23,9 @@ fn run() -> Result<()> {
     let claims = Claims::bundled()?;
     let (published, calibrated) = bbio::prototype1_sets(&mut exp)?;
     let total = 2 * fig11::FIG11_LEVELS.len() * fig11::FIG11_REALISATIONS;
-    let pb = common::progress(total as u64, "fig11");
-    let run = fig11::run(&published, &calibrated, &|| pb.inc(1))?;
-    pb.finish_and_clear();
+    let run = common::with_progress(total, "fig11", |tick| {
+        fig11::run(&published, &calibrated, tick)
+    })?;
     exp.claims(fig11::claims(&run, &claims));
 
     let mut md = bbio::p1_tables_md(&run, "");

@@ -24,9 +24,9 @@ fn run() -> Result<()> {
     let claims = Claims::bundled()?;
     let (published, calibrated) = bbio::prototype1_sets(&mut exp)?;
     let total = 2 * FIG12_LEVELS.len() * fig12::FIG12_REALISATIONS;
-    let pb = common::progress(total as u64, "fig12");
-    let run = fig12::run(&published, &calibrated, &|| pb.inc(1))?;
-    pb.finish_and_clear();
+    let run = common::with_progress(total, "fig12", |tick| {
+        fig12::run(&published, &calibrated, tick)
+    })?;
     exp.claims(fig12::claims(&run, &claims));
 
     let mut md = bbio::p1_tables_md(

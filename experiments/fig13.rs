@@ -25,9 +25,9 @@ fn run() -> Result<()> {
     let p2 = load_device("prototype2")?;
     exp.uses(&p2, "published");
     let claims = Claims::bundled()?;
-    let pb = common::progress(fig13::coarse_steps(&p2.device) as u64, "fig13");
-    let run = fig13::run(&p2.device, &|| pb.inc(1))?;
-    pb.finish_and_clear();
+    let run = common::with_progress(fig13::coarse_steps(&p2.device), "fig13", |tick| {
+        fig13::run(&p2.device, tick)
+    })?;
     let values = fig13::claims(&run, &claims)?;
     exp.claims(values.clone());
     for c in &run.curves {

@@ -25,9 +25,9 @@ fn run() -> Result<()> {
     let p2 = load_device("prototype2")?;
     exp.uses(&p2, "published");
     let total = (FIG14_LEVELS.len() + 2) * fig14::FIG14_REALISATIONS;
-    let pb = common::progress(total as u64, "fig14");
-    let run = fig14::run(&p2.device, Protocol::FULL, &|| pb.inc(1))?;
-    pb.finish_and_clear();
+    let run = common::with_progress(total, "fig14", |tick| {
+        fig14::run(&p2.device, Protocol::FULL, tick)
+    })?;
     exp.claims(fig14::claims(&run, &claims));
     let f = fig14::findings(&run);
     let l_b = &run.levels[F14B_LEVEL];

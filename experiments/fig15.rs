@@ -27,9 +27,7 @@ fn run() -> Result<()> {
     let p2 = load_device("prototype2")?;
     exp.uses(&p2, "published");
     let total = fig15::FIG15_LEVELS.len() * fig15::FIG15_REALISATIONS;
-    let pb = common::progress(total as u64, "fig15");
-    let run = fig15::run(&p2.device, &|| pb.inc(1))?;
-    pb.finish_and_clear();
+    let run = common::with_progress(total, "fig15", |tick| fig15::run(&p2.device, tick))?;
     exp.claims(fig15::claims(&run, &claims));
     let f = fig15::findings(&run, &claims);
     let paper_ratio = claims

@@ -349,14 +349,11 @@ pub fn spectra_plot(
 }
 
 /// Prototype 1's two parameter sets as Figures 11 and 12 take them: `published` (Tables 1 and
-/// 2) and `calibrated` (the end-stop gap fitted to Figure 8's impact onset, through
-/// [`crate::calibrated_prototype1`]), as loaded devices. Records both parameter files on the
-/// experiment (the calibrated one with its own text) and both gaps as numbers.
+/// 2) and `calibrated` (the end-stop gap fitted to Figure 8's impact onset), as loaded devices.
+/// Records both parameter files on the experiment ([`crate::prototype1_both_sets`]) and both
+/// gaps as numbers.
 pub fn prototype1_sets(exp: &mut Experiment) -> Result<(Device, Device)> {
-    let p1 = crate::load_device("prototype1")?;
-    let (cal_loaded, cal) = crate::calibrated_prototype1(&p1)?;
-    exp.uses(&p1, "published");
-    exp.uses(&cal_loaded, "calibrated");
+    let (p1, cal) = crate::prototype1_both_sets(exp)?;
     exp.number("calibrated_endstop_gap_m", cal.record.fitted_gap_m);
     exp.number("published_endstop_gap_m", p1.device.geometry.endstop_gap_m);
     Ok((p1.device, cal.device))

@@ -14,7 +14,7 @@ pub mod md;
 pub mod narrowband_io;
 pub mod plot;
 
-pub use calibration_io::calibrated_prototype1;
+pub use calibration_io::{calibrated_prototype1, prototype1_both_sets};
 
 use std::collections::BTreeMap;
 use std::io::Write;
@@ -367,6 +367,15 @@ pub fn progress(len: u64, what: &str) -> ProgressBar {
     );
     pb.set_prefix(what.to_string());
     pb
+}
+
+/// Runs `work` under a progress bar of `len` steps labelled `what` (cleared when `work`
+/// returns); `work` gets the callback that advances the bar by one step.
+pub fn with_progress<T>(len: usize, what: &str, work: impl FnOnce(&(dyn Fn() + Sync)) -> T) -> T {
+    let pb = progress(len as u64, what);
+    let out = work(&|| pb.inc(1));
+    pb.finish_and_clear();
+    out
 }
 
 /// Formats a number with `sig` significant digits for generated prose.
