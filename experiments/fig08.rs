@@ -7,8 +7,10 @@
 use endstop_experiments as common;
 
 use anyhow::Result;
-use common::md::Table;
-use common::narrowband_io::{claims_table_both_sets, curve_rows, hz, pct};
+use common::md::{self, Table};
+use common::narrowband_io::{
+    claims_table_both_sets, convergence_cells, curve_rows, hz, pct, CONVERGENCE_COLUMNS,
+};
 use common::plot::{LegendPos, LinePlot, Series, Style, PALETTE};
 use common::{fmt_sig, frame::frame, row, Experiment};
 use endstop::paper::calibration::{CalibrationRecord, BIM_FIT_TOL_HZ, CALIBRATION_TOL_HZ};
@@ -270,31 +272,11 @@ fn numbers_md(
         100.0 * CONV_FREQ_REL,
         100.0 * CONV_RMS_REL
     ));
-    let mut t = Table::new([
-        "set",
-        "curve",
-        "onset change",
-        "branch end change",
-        "same kind of end",
-        "max V1 change",
-        "max V2 change",
-        "frequencies compared / excluded",
-        "within limits",
-    ]);
+    let mut t: Table<9> = Table::new(md::join(["set", "curve"], CONVERGENCE_COLUMNS));
     for r in &run.sets {
         for (c, v) in r.curves.iter().zip(r.convergence()) {
-            let cmp = v.comparison;
-            t.row([
-                r.set.label().into(),
-                c.spec.label(),
-                pct(cmp.onset_rel),
-                pct(cmp.end_rel),
-                if cmp.same_end_kind { "yes" } else { "no" }.into(),
-                pct(Some(cmp.max_v1_rel)),
-                pct(Some(cmp.max_v2_rel)),
-                format!("{} / {}", cmp.compared, cmp.excluded),
-                if v.within_limits { "yes" } else { "**no**" }.into(),
-            ]);
+            let lead = [r.set.label().into(), c.spec.label()];
+            t.row(md::join(lead, convergence_cells(&v)));
         }
     }
     md.push_str(&t.render());

@@ -8,7 +8,7 @@ use endstop_experiments as common;
 
 use anyhow::Result;
 use common::md::Table;
-use common::narrowband_io::claims_table_both_sets;
+use common::narrowband_io::{claims_table_both_sets, measurement_cells};
 use common::plot::{LegendPos, LinePlot, Series, Style, PALETTE};
 use common::{fmt_sig, frame::frame, row, Experiment};
 use endstop::paper::claims::{Claims, Value};
@@ -69,25 +69,21 @@ fn write_parquet(exp: &Experiment, run: &fig09::Run) -> Result<()> {
                 .enumerate()
                 .map(move |(i, s)| {
                     let m = &s.measurement;
-                    row![
-                        "accel_rms_g" => m.accel_rms_g,
-                        "freq_hz" => m.freq_hz,
-                        "bias_v" => c.bias.volts(),
-                        "v1_rms_v" => m.v1_rms_v,
-                        "v2_rms_v" => m.v2_rms_v,
-                        "vdiff_rms_v" => m.vdiff_rms_v,
-                        "p1_w" => m.p1_w,
-                        "p2_w" => m.p2_w,
-                        "x_peak_m" => m.x_peak_m,
-                        "contact_fraction" => m.contact_fraction,
-                        "impacts_per_period" => m.impacts_per_period,
-                        "blocks" => m.blocks as u32,
-                        "converged" => m.converged,
-                        "beyond_paper_range" => i >= beyond_from,
-                        "series" => series.as_str(),
-                        "params" => r.set.label(),
-                        "endstop_gap_m" => r.device.geometry.endstop_gap_m,
+                    [
+                        row![
+                            "accel_rms_g" => m.accel_rms_g,
+                            "freq_hz" => m.freq_hz,
+                            "bias_v" => c.bias.volts(),
+                        ],
+                        measurement_cells(m),
+                        row![
+                            "beyond_paper_range" => i >= beyond_from,
+                            "series" => series.as_str(),
+                            "params" => r.set.label(),
+                            "endstop_gap_m" => r.device.geometry.endstop_gap_m,
+                        ],
                     ]
+                    .concat()
                 })
                 .collect::<Vec<_>>()
         })

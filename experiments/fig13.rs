@@ -6,8 +6,8 @@
 use endstop_experiments as common;
 
 use anyhow::Result;
-use common::md::Table;
-use common::narrowband_io::{claim_cells, curve_rows, hz, pct};
+use common::md::{self, Table};
+use common::narrowband_io::{claim_cells, convergence_cells, curve_rows, hz, CONVERGENCE_COLUMNS};
 use common::plot::{LegendPos, LinePlot, Series, Style, PALETTE};
 use common::{fmt_sig, frame::frame, load_device, Experiment};
 use endstop::device::StiffnessModel;
@@ -124,28 +124,9 @@ fn run() -> Result<()> {
         100.0 * CONV_FREQ_REL,
         100.0 * CONV_RMS_REL
     ));
-    let mut t = Table::new([
-        "curve",
-        "onset change",
-        "branch end change",
-        "same kind of end",
-        "max V1 change",
-        "max V2 change",
-        "frequencies compared / excluded",
-        "within limits",
-    ]);
+    let mut t: Table<8> = Table::new(md::join(["curve"], CONVERGENCE_COLUMNS));
     for (c, v) in run.curves.iter().zip(run.convergence()) {
-        let cmp = v.comparison;
-        t.row([
-            c.spec.label(),
-            pct(cmp.onset_rel),
-            pct(cmp.end_rel),
-            if cmp.same_end_kind { "yes" } else { "no" }.into(),
-            pct(Some(cmp.max_v1_rel)),
-            pct(Some(cmp.max_v2_rel)),
-            format!("{} / {}", cmp.compared, cmp.excluded),
-            if v.within_limits { "yes" } else { "**no**" }.into(),
-        ]);
+        t.row(md::join([c.spec.label()], convergence_cells(&v)));
     }
     md.push_str(&t.render());
     exp.write_numbers_md(&md)?;

@@ -48,6 +48,22 @@ impl<const N: usize> Table<N> {
     }
 }
 
+/// The cells `lead` followed by the cells `rest`, as one header or row of `N = A + B` cells
+/// (for a table whose leading columns differ between figures); a wrong `N` does not compile.
+pub fn join<T, const A: usize, const B: usize, const N: usize>(
+    lead: [T; A],
+    rest: [T; B],
+) -> [T; N] {
+    const {
+        assert!(
+            A + B == N,
+            "a joined row has as many cells as its two parts"
+        )
+    };
+    let mut cells = lead.into_iter().chain(rest);
+    std::array::from_fn(|_| cells.next().expect("A + B == N cells"))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -60,5 +76,11 @@ mod tests {
             t.render(),
             "| claim | ours |\n|---|---|\n| F8-c | 1 \\| 2 |\n"
         );
+    }
+
+    #[test]
+    fn join_keeps_the_order_of_both_parts() {
+        let joined: [&str; 5] = join(["set", "curve"], ["a", "b", "c"]);
+        assert_eq!(joined, ["set", "curve", "a", "b", "c"]);
     }
 }

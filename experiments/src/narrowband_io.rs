@@ -1,15 +1,33 @@
 //! The I/O shared by the narrowband experiments (Figures 8, 9 and 13, and `endstop sweep`):
 //! the per-step rows of a sweep in the project's column names (through [`crate::frame`]), and
-//! the cells of the claims tables of the book.
+//! the cells of the claims and convergence tables of the book.
 
 use endstop::device::Device;
 use endstop::paper::claims::{Claim, Value};
-use endstop::paper::curves::{law_key, Curve};
+use endstop::paper::curves::{law_key, Curve, CurveConvergence};
 use endstop::study::steady::Measurement;
 
 use crate::frame::Row;
 use crate::md::Table;
 use crate::row;
+
+/// The columns of one steady-state measurement, between the columns that say where it was
+/// taken and those that say what was simulated: RMS voltages, powers, peak displacement,
+/// contact, measured blocks and convergence. SI units unless the name says otherwise.
+pub fn measurement_cells(m: &Measurement) -> Row {
+    row![
+        "v1_rms_v" => m.v1_rms_v,
+        "v2_rms_v" => m.v2_rms_v,
+        "vdiff_rms_v" => m.vdiff_rms_v,
+        "p1_w" => m.p1_w,
+        "p2_w" => m.p2_w,
+        "x_peak_m" => m.x_peak_m,
+        "contact_fraction" => m.contact_fraction,
+        "impacts_per_period" => m.impacts_per_period,
+        "blocks" => m.blocks as u32,
+        "converged" => m.converged,
+    ]
+}
 
 /// One row per step of a sweep of `device` (the device as simulated: its parameter-set label,
 /// end-stop law, damping, gap and bias go into every row), labelled `series`. Steps from index
@@ -24,28 +42,21 @@ pub fn sweep_rows<'a>(
     steps
         .enumerate()
         .map(|(i, m)| {
-            row![
-                "freq_hz" => m.freq_hz,
-                "accel_rms_g" => m.accel_rms_g,
-                "v1_rms_v" => m.v1_rms_v,
-                "v2_rms_v" => m.v2_rms_v,
-                "vdiff_rms_v" => m.vdiff_rms_v,
-                "p1_w" => m.p1_w,
-                "p2_w" => m.p2_w,
-                "x_peak_m" => m.x_peak_m,
-                "contact_fraction" => m.contact_fraction,
-                "impacts_per_period" => m.impacts_per_period,
-                "blocks" => m.blocks as u32,
-                "converged" => m.converged,
-                "beyond_paper_range" => i >= beyond_from,
-                "series" => series,
-                "params" => device.params.as_str(),
-                "stiffness" => law_key(device.endstop.stiffness),
-                "bim_n_s_per_m" => device.endstop.damping_n_s_per_m,
-                "tension_free" => device.endstop.tension_free,
-                "endstop_gap_m" => device.geometry.endstop_gap_m,
-                "bias_v" => device.electrical.bias_v,
+            [
+                row!["freq_hz" => m.freq_hz, "accel_rms_g" => m.accel_rms_g],
+                measurement_cells(m),
+                row![
+                    "beyond_paper_range" => i >= beyond_from,
+                    "series" => series,
+                    "params" => device.params.as_str(),
+                    "stiffness" => law_key(device.endstop.stiffness),
+                    "bim_n_s_per_m" => device.endstop.damping_n_s_per_m,
+                    "tension_free" => device.endstop.tension_free,
+                    "endstop_gap_m" => device.geometry.endstop_gap_m,
+                    "bias_v" => device.electrical.bias_v,
+                ],
             ]
+            .concat()
         })
         .collect()
 }
@@ -136,6 +147,31 @@ pub fn claims_table_both_sets<'a>(
         ]);
     }
     t
+}
+
+/// The columns of a convergence table of up-sweeps, after those that name the sweep.
+pub const CONVERGENCE_COLUMNS: [&str; 7] = [
+    "onset change",
+    "branch end change",
+    "same kind of end",
+    "max V1 change",
+    "max V2 change",
+    "frequencies compared / excluded",
+    "within limits",
+];
+
+/// One sweep's cells in a convergence table, in the order of [`CONVERGENCE_COLUMNS`].
+pub fn convergence_cells(v: &CurveConvergence) -> [String; 7] {
+    let cmp = v.comparison;
+    [
+        pct(cmp.onset_rel),
+        pct(cmp.end_rel),
+        if cmp.same_end_kind { "yes" } else { "no" }.into(),
+        pct(Some(cmp.max_v1_rel)),
+        pct(Some(cmp.max_v2_rel)),
+        format!("{} / {}", cmp.compared, cmp.excluded),
+        if v.within_limits { "yes" } else { "**no**" }.into(),
+    ]
 }
 
 /// A frequency (Hz) for a table with 5 significant digits, "none" if absent.
