@@ -57,7 +57,7 @@ fn record_numbers(exp: &mut Experiment, cal: &CalibrationRecord, run: &fig08::Ru
     exp.number("calibration_achieved_onset_hz", cal.achieved_onset_hz);
     exp.number("calibration_evaluations", cal.evaluations as f64);
     for r in &run.sets {
-        for c in &r.curves {
+        for c in &r.sweeps.curves {
             let k = format!("{}_{}", r.set.label(), c.spec.key());
             if let Some(t) = c.report.onset {
                 exp.number(&format!("{k}_onset_hz"), t.value());
@@ -90,27 +90,31 @@ fn write_parquet(exp: &Experiment, run: &fig08::Run) -> Result<()> {
     let rows = run
         .sets
         .iter()
-        .flat_map(|r| curve_rows(&r.device, &r.curves));
+        .flat_map(|r| curve_rows(&r.device, &r.sweeps.curves));
     exp.write_parquet("fig08", &mut frame(rows)?, sets)?;
 
     // Convergence: one row per set and curve (NaN where a run has no such transition).
     let rows = run.sets.iter().flat_map(|r| {
-        r.curves.iter().zip(r.convergence()).map(move |(c, v)| {
-            let cmp = v.comparison;
-            row![
-                "params" => r.set.label(),
-                "series" => c.spec.label(),
-                "onset_rel_change" => cmp.onset_rel.unwrap_or(f64::NAN),
-                "branch_end_rel_change" => cmp.end_rel.unwrap_or(f64::NAN),
-                "same_branch_end_kind" => cmp.same_end_kind,
-                "max_v1_rms_rel_change" => cmp.max_v1_rel,
-                "max_v2_rms_rel_change" => cmp.max_v2_rel,
-                "frequencies_compared" => cmp.compared as u32,
-                "frequencies_excluded" => cmp.excluded as u32,
-                "onset_refined_run_hz" => v.fine_onset_hz.unwrap_or(f64::NAN),
-                "branch_end_refined_run_hz" => v.fine_branch_end_hz.unwrap_or(f64::NAN),
-            ]
-        })
+        r.sweeps
+            .curves
+            .iter()
+            .zip(r.sweeps.convergence())
+            .map(move |(c, v)| {
+                let cmp = v.comparison;
+                row![
+                    "params" => r.set.label(),
+                    "series" => c.spec.label(),
+                    "onset_rel_change" => cmp.onset_rel.unwrap_or(f64::NAN),
+                    "branch_end_rel_change" => cmp.end_rel.unwrap_or(f64::NAN),
+                    "same_branch_end_kind" => cmp.same_end_kind,
+                    "max_v1_rms_rel_change" => cmp.max_v1_rel,
+                    "max_v2_rms_rel_change" => cmp.max_v2_rel,
+                    "frequencies_compared" => cmp.compared as u32,
+                    "frequencies_excluded" => cmp.excluded as u32,
+                    "onset_refined_run_hz" => v.fine_onset_hz.unwrap_or(f64::NAN),
+                    "branch_end_refined_run_hz" => v.fine_branch_end_hz.unwrap_or(f64::NAN),
+                ]
+            })
     });
     exp.write_parquet("fig08_convergence", &mut frame(rows)?, sets)?;
 
@@ -199,7 +203,7 @@ fn numbers_md(
     ]);
     let cfg = &run.protocol.settings.cfg;
     for r in &run.sets {
-        for c in &r.curves {
+        for c in &r.sweeps.curves {
             let s = c.summary(&r.device, cfg);
             let how = match s.branch_end {
                 Some(e) => e.kind.label(),
@@ -274,7 +278,7 @@ fn numbers_md(
     ));
     let mut t: Table<9> = Table::new(md::join(["set", "curve"], CONVERGENCE_COLUMNS));
     for r in &run.sets {
-        for (c, v) in r.curves.iter().zip(r.convergence()) {
+        for (c, v) in r.sweeps.curves.iter().zip(r.sweeps.convergence()) {
             let lead = [r.set.label().into(), c.spec.label()];
             t.row(md::join(lead, convergence_cells(&v)));
         }
@@ -305,7 +309,7 @@ fn numbers_md(
             (Fig8Curve::Hertz1p5, "eq 1 as written"),
             (Fig8Curve::Hertz1p5TensionFree, "tension-free"),
         ] {
-            let rep = &r.curve(which).report;
+            let rep = &r.sweeps.curve(which).report;
             let end = rep.branch_end();
             t.row([
                 r.set.label().into(),
@@ -324,7 +328,7 @@ fn numbers_md(
 fn sweep_plot(r: &SetRun) -> LinePlot {
     let mut series = Vec::new();
     let mut color = 0;
-    for c in &r.curves {
+    for c in &r.sweeps.curves {
         let pts: Vec<(f64, f64)> = c
             .report
             .measurements_in_range()

@@ -30,7 +30,7 @@ fn run() -> Result<()> {
     })?;
     let values = fig13::claims(&run, &claims)?;
     exp.claims(values.clone());
-    for c in &run.curves {
+    for c in &run.sweeps.curves {
         let k = c.spec.key();
         if let Some(t) = c.report.onset {
             exp.number(&format!("{k}_onset_hz"), t.value());
@@ -46,7 +46,7 @@ fn run() -> Result<()> {
     }
     exp.write_parquet(
         "fig13",
-        &mut frame(curve_rows(&run.device, &run.curves))?,
+        &mut frame(curve_rows(&run.device, &run.sweeps.curves))?,
         "published",
     )?;
 
@@ -91,7 +91,7 @@ fn run() -> Result<()> {
         "integrator steps",
         "contact events",
     ]);
-    for c in &run.curves {
+    for c in &run.sweeps.curves {
         let m = c.summary(&run.device, &s.cfg);
         t.row([
             c.spec.label(),
@@ -125,7 +125,7 @@ fn run() -> Result<()> {
         100.0 * CONV_RMS_REL
     ));
     let mut t: Table<8> = Table::new(md::join(["curve"], CONVERGENCE_COLUMNS));
-    for (c, v) in run.curves.iter().zip(run.convergence()) {
+    for (c, v) in run.sweeps.curves.iter().zip(run.sweeps.convergence()) {
         t.row(md::join([c.spec.label()], convergence_cells(&v)));
     }
     md.push_str(&t.render());
@@ -136,6 +136,7 @@ fn run() -> Result<()> {
 
 fn plot(run: &fig13::Run) -> LinePlot {
     let series = run
+        .sweeps
         .curves
         .iter()
         .enumerate()

@@ -1,10 +1,13 @@
 //! The curves of an up-sweep figure (Figures 8 and 13): a drive level and an end-stop model
-//! each, run in parallel on one device, what the figures' tables report of each, and the
-//! convergence check shared by both figures.
+//! each, run in parallel on one device together with their repetition with refined numerics
+//! ([`CurveSweeps`]), what the figures' tables report of each, and the convergence check
+//! shared by both figures.
 //!
-//! A figure names its curves by an enum and keeps them in the enum's order, so that a claim
-//! finds its curve by name and never by comparing drive levels or dampings (a changed literal
-//! cannot make a claim vanish).
+//! A figure names its curves by an enum ([`FigureCurve`]) and keeps them in the enum's order,
+//! so that a claim finds its curve by name and never by comparing drive levels or dampings (a
+//! changed literal cannot make a claim vanish).
+
+use std::marker::PhantomData;
 
 use crate::device::{Device, StiffnessModel};
 use crate::ode::SolverError;
@@ -126,6 +129,71 @@ pub fn run_curves(
             })
         })
         .collect()
+}
+
+/// The curves of one up-sweep figure, named by an enum.
+pub trait FigureCurve: Copy + PartialEq + 'static {
+    /// Every curve, in the order the figure runs and reports them.
+    const ALL: &'static [Self];
+
+    /// Drive level and end-stop model of the curve.
+    fn spec(self) -> CurveSpec;
+}
+
+/// A figure's sweeps, one per curve of `K` in the order of [`FigureCurve::ALL`], and the same
+/// sweeps with refined numerics.
+#[derive(Debug, Clone)]
+pub struct CurveSweeps<K> {
+    /// The sweeps.
+    pub curves: Vec<Curve>,
+    /// The same sweeps with refined numerics ([`SweepSettings::halved`]).
+    pub halved: Vec<Curve>,
+    names: PhantomData<K>,
+}
+
+impl<K: FigureCurve> CurveSweeps<K> {
+    /// Runs every curve of `K` on `device` with `settings` and again with `halved`, in
+    /// parallel ([`run_curves`]); `on_step()` is called after every coarse step of every sweep.
+    pub fn run(
+        device: &Device,
+        settings: &SweepSettings,
+        halved: &SweepSettings,
+        on_step: &(dyn Fn() + Sync),
+    ) -> Result<Self, SolverError> {
+        let specs: Vec<CurveSpec> = K::ALL.iter().map(|c| c.spec()).collect();
+        let (curves, halved) = rayon::join(
+            || run_curves(device, &specs, settings, on_step),
+            || run_curves(device, &specs, halved, on_step),
+        );
+        Ok(Self {
+            curves: curves?,
+            halved: halved?,
+            names: PhantomData,
+        })
+    }
+
+    /// Coarse steps of [`CurveSweeps::run`] with these settings, for a progress bar.
+    pub fn coarse_steps(settings: &SweepSettings, halved: &SweepSettings) -> usize {
+        K::ALL.len() * (settings.freqs_hz.len() + halved.freqs_hz.len())
+    }
+
+    /// One curve's sweep.
+    pub fn curve(&self, which: K) -> &Curve {
+        let i = K::ALL
+            .iter()
+            .position(|&c| c == which)
+            .expect("every curve is in ALL");
+        &self.curves[i]
+    }
+
+    /// Every sweep against its refined repetition, in the order of [`FigureCurve::ALL`].
+    pub fn convergence(&self) -> Vec<CurveConvergence> {
+        self.curves
+            .iter()
+            .zip(&self.halved)
+            .map(|(c, f)| CurveConvergence::of(c, f))
+            .collect()
+    }
 }
 
 /// What the tables of Figures 8 and 13 report of one sweep.

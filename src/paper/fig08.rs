@@ -7,7 +7,7 @@ use crate::device::{Device, StiffnessModel};
 use crate::paper::calibration::{fit_bim_for_jump, BimFit, NarrowbandError, BIM_FIT_TOL_HZ};
 use crate::paper::claims::{bool_value, ClaimValue, Claims, ClaimsError, Value};
 use crate::paper::curves::{
-    branch_end_value, no_impact_value, run_curves, Curve, CurveConvergence, CurveSpec,
+    branch_end_value, no_impact_value, CurveSpec, CurveSweeps, FigureCurve,
 };
 use crate::paper::measured::P1_MEASURED_JUMP_HZ;
 use crate::paper::setups::{ParamSet, P1_BIAS_V};
@@ -82,12 +82,13 @@ impl Fig8Curve {
             Fig8Curve::Hertz1p5TensionFree => CurveSpec::new(hi, Hertz, 1.5).tension_free(),
         }
     }
+}
 
-    fn index(self) -> usize {
-        Self::ALL
-            .iter()
-            .position(|&c| c == self)
-            .expect("every curve is in ALL")
+impl FigureCurve for Fig8Curve {
+    const ALL: &'static [Self] = &Fig8Curve::ALL;
+
+    fn spec(self) -> CurveSpec {
+        Fig8Curve::spec(self)
     }
 }
 
@@ -116,9 +117,7 @@ impl Protocol {
     /// Coarse steps of a whole run (both sets, every curve, both repetitions), for a
     /// progress bar.
     pub fn coarse_steps(&self) -> usize {
-        ParamSet::BOTH.len()
-            * Fig8Curve::ALL.len()
-            * (self.settings.freqs_hz.len() + self.halved.freqs_hz.len())
+        ParamSet::BOTH.len() * CurveSweeps::<Fig8Curve>::coarse_steps(&self.settings, &self.halved)
     }
 }
 
@@ -129,28 +128,10 @@ pub struct SetRun {
     pub set: ParamSet,
     /// Prototype 1 of this set at 30 V (each curve applies its own end-stop model).
     pub device: Device,
-    /// The sweeps, in the order of [`Fig8Curve::ALL`].
-    pub curves: Vec<Curve>,
-    /// The same sweeps with refined numerics ([`Protocol::halved`]).
-    pub halved: Vec<Curve>,
+    /// The sweeps of [`Fig8Curve::ALL`] and their repetition with [`Protocol::halved`].
+    pub sweeps: CurveSweeps<Fig8Curve>,
     /// The b_im fits, in the order of [`BIM_FITS`].
     pub fits: Vec<BimFit>,
-}
-
-impl SetRun {
-    /// One curve's sweep.
-    pub fn curve(&self, which: Fig8Curve) -> &Curve {
-        &self.curves[which.index()]
-    }
-
-    /// Every sweep against its refined repetition, in the order of [`Fig8Curve::ALL`].
-    pub fn convergence(&self) -> Vec<CurveConvergence> {
-        self.curves
-            .iter()
-            .zip(&self.halved)
-            .map(|(c, f)| CurveConvergence::of(c, f))
-            .collect()
-    }
 }
 
 /// Everything Figure 8 computes.
@@ -167,7 +148,7 @@ impl Run {
     /// refined: (onset, branch end, RMS voltage of either load).
     pub fn largest_changes(&self) -> (f64, f64, f64) {
         let mut worst = (0.0f64, 0.0f64, 0.0f64);
-        for v in self.sets.iter().flat_map(SetRun::convergence) {
+        for v in self.sets.iter().flat_map(|r| r.sweeps.convergence()) {
             let c = v.comparison;
             worst.0 = worst.0.max(c.onset_rel.unwrap_or(0.0));
             worst.1 = worst.1.max(c.end_rel.unwrap_or(0.0));
@@ -195,7 +176,6 @@ pub fn run(
 ) -> Result<Run, NarrowbandError> {
     use rayon::prelude::*;
     let protocol = Protocol::new(published);
-    let specs = Fig8Curve::ALL.map(Fig8Curve::spec);
     let sets = [
         (ParamSet::Published, published),
         (ParamSet::Calibrated, calibrated),
@@ -204,13 +184,8 @@ pub fn run(
     .map(|(set, d)| -> Result<SetRun, NarrowbandError> {
         let device = d.with_bias(P1_BIAS_V);
         let p = &protocol;
-        let ((curves, halved), fits) = rayon::join(
-            || {
-                rayon::join(
-                    || run_curves(&device, &specs, &p.settings, on_step),
-                    || run_curves(&device, &specs, &p.halved, on_step),
-                )
-            },
+        let (sweeps, fits) = rayon::join(
+            || CurveSweeps::run(&device, &p.settings, &p.halved, on_step),
             || {
                 BIM_FITS
                     .par_iter()
@@ -229,8 +204,7 @@ pub fn run(
         Ok(SetRun {
             set,
             device,
-            curves: curves?,
-            halved: halved?,
+            sweeps: sweeps?,
             fits: fits?,
         })
     })
@@ -268,8 +242,9 @@ pub fn claims(run: &Run, claims: &Claims) -> Result<Vec<Value>, ClaimsError> {
 ///   frequencies fall strictly as b_im grows.
 pub fn set_claims(r: &SetRun, stop_hz: f64) -> Vec<ClaimValue> {
     use Fig8Curve::{Hertz0, Hertz10, Hertz1p5, Linear2, Low};
-    let mut out = vec![no_impact_value("F8-a", "no_impact_4p1g", r.curve(Low))];
-    if let Some(t) = r.curve(Hertz1p5).report.onset {
+    let curve = |c: Fig8Curve| r.sweeps.curve(c);
+    let mut out = vec![no_impact_value("F8-a", "no_impact_4p1g", curve(Low))];
+    if let Some(t) = curve(Hertz1p5).report.onset {
         out.push(ClaimValue {
             id: "F8-b",
             quantity: "impact_onset_5p5g_hz",
@@ -285,9 +260,9 @@ pub fn set_claims(r: &SetRun, stop_hz: f64) -> Vec<ClaimValue> {
         ("F8-f", "jump_linear_bim2_hz", Linear2),
     ];
     for (id, q, c) in jump_claims {
-        out.extend(branch_end_value(id, q, r.curve(c), stop_hz));
+        out.extend(branch_end_value(id, q, curve(c), stop_hz));
     }
-    let jump = |c: Fig8Curve| r.curve(c).report.jump.map(|t| t.value());
+    let jump = |c: Fig8Curve| curve(c).report.jump.map(|t| t.value());
     let (ordered, note) = match (jump(Hertz0), jump(Hertz1p5), jump(Hertz10)) {
         (Some(j0), Some(j1), Some(j10)) => (
             j0 > j1 && j1 > j10,

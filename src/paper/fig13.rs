@@ -4,7 +4,7 @@
 use crate::device::{Device, StiffnessModel};
 use crate::ode::SolverError;
 use crate::paper::claims::{bool_value, Claims, ClaimsError, Value};
-use crate::paper::curves::{no_impact_value, run_curves, Curve, CurveConvergence, CurveSpec};
+use crate::paper::curves::{no_impact_value, CurveSpec, CurveSweeps, FigureCurve};
 use crate::paper::setups::{ParamSet, FIG13_BIAS_V};
 use crate::study::steady::steady_config;
 use crate::study::stepped;
@@ -44,12 +44,13 @@ impl Fig13Curve {
             Fig13Curve::Hertz => CurveSpec::new(0.31, StiffnessModel::Hertz, 0.34),
         }
     }
+}
 
-    fn index(self) -> usize {
-        Self::ALL
-            .iter()
-            .position(|&c| c == self)
-            .expect("every curve is in ALL")
+impl FigureCurve for Fig13Curve {
+    const ALL: &'static [Self] = &Fig13Curve::ALL;
+
+    fn spec(self) -> CurveSpec {
+        Fig13Curve::spec(self)
     }
 }
 
@@ -62,39 +63,23 @@ pub struct Run {
     pub settings: SweepSettings,
     /// The repetition: half the step and the tolerances ([`SweepSettings::halved`]).
     pub halved_settings: SweepSettings,
-    /// The sweeps, in the order of [`Fig13Curve::ALL`].
-    pub curves: Vec<Curve>,
-    /// The same with refined numerics.
-    pub halved: Vec<Curve>,
+    /// The sweeps of [`Fig13Curve::ALL`] and their repetition with `halved_settings`.
+    pub sweeps: CurveSweeps<Fig13Curve>,
 }
 
 /// Coarse steps of a whole run of Figure 13 (every curve, both repetitions), for a progress
 /// bar.
 pub fn coarse_steps(published: &Device) -> usize {
     let s = sweep_settings(&published.with_bias(FIG13_BIAS_V));
-    Fig13Curve::ALL.len() * (s.freqs_hz.len() + s.halved().freqs_hz.len())
+    CurveSweeps::<Fig13Curve>::coarse_steps(&s, &s.halved())
 }
 
 impl Run {
-    /// One curve's sweep.
-    pub fn curve(&self, which: Fig13Curve) -> &Curve {
-        &self.curves[which.index()]
-    }
-
-    /// Every sweep against its refined repetition, in the order of [`Fig13Curve::ALL`].
-    pub fn convergence(&self) -> Vec<CurveConvergence> {
-        self.curves
-            .iter()
-            .zip(&self.halved)
-            .map(|(c, f)| CurveConvergence::of(c, f))
-            .collect()
-    }
-
     /// The jump with the Hertz law relative to the jump with the linear law,
     /// (Hertz - linear) / linear; `None` unless both sweeps jump.
     pub fn jump_difference_rel(&self) -> Option<f64> {
-        let jl = self.curve(Fig13Curve::Linear).report.jump?.value();
-        let jh = self.curve(Fig13Curve::Hertz).report.jump?.value();
+        let jl = self.sweeps.curve(Fig13Curve::Linear).report.jump?.value();
+        let jh = self.sweeps.curve(Fig13Curve::Hertz).report.jump?.value();
         Some((jh - jl) / jl)
     }
 }
@@ -106,17 +91,12 @@ pub fn run(published: &Device, on_step: &(dyn Fn() + Sync)) -> Result<Run, Solve
     let device = published.with_bias(FIG13_BIAS_V);
     let settings = sweep_settings(&device);
     let halved_settings = settings.halved();
-    let specs = Fig13Curve::ALL.map(Fig13Curve::spec);
-    let (curves, halved) = rayon::join(
-        || run_curves(&device, &specs, &settings, on_step),
-        || run_curves(&device, &specs, &halved_settings, on_step),
-    );
+    let sweeps = CurveSweeps::run(&device, &settings, &halved_settings, on_step)?;
     Ok(Run {
         device,
         settings,
         halved_settings,
-        curves: curves?,
-        halved: halved?,
+        sweeps,
     })
 }
 
@@ -131,9 +111,9 @@ pub fn claims(run: &Run, claims: &Claims) -> Result<Vec<Value>, ClaimsError> {
     let mut out = vec![no_impact_value(
         "F13",
         "no_impact_0p12g",
-        run.curve(Fig13Curve::Low),
+        run.sweeps.curve(Fig13Curve::Low),
     )];
-    let lin = &run.curve(Fig13Curve::Linear).report;
+    let lin = &run.sweeps.curve(Fig13Curve::Linear).report;
     out.push(bool_value(
         "F13",
         "jump_0p31g",
@@ -143,7 +123,7 @@ pub fn claims(run: &Run, claims: &Claims) -> Result<Vec<Value>, ClaimsError> {
             None => "no confirmed jump".into(),
         },
     ));
-    let her = &run.curve(Fig13Curve::Hertz).report;
+    let her = &run.sweeps.curve(Fig13Curve::Hertz).report;
     let (agree, note) = match (lin.jump, her.jump) {
         (Some(jl), Some(jh)) => {
             let tol = class.tolerance(jl.value());

@@ -111,14 +111,14 @@ fn every_narrowband_claim_gets_a_value_under_every_set() {
 fn a_changed_curve_literal_cannot_make_a_claim_vanish() {
     let mut run = fig08_run().clone();
     for r in &mut run.sets {
-        for c in &mut r.curves {
+        for c in &mut r.sweeps.curves {
             c.spec.bim_n_s_per_m += 1e-9;
             c.spec.accel_rms_g += 1e-9;
         }
     }
     assert_eq!(fig08::claims(&run, claims_file()).unwrap(), fig08_values());
     let mut run = fig13_run().clone();
-    for c in &mut run.curves {
+    for c in &mut run.sweeps.curves {
         c.spec.bim_n_s_per_m += 1e-9;
     }
     assert_eq!(fig13::claims(&run, claims_file()).unwrap(), fig13_values());
@@ -294,6 +294,7 @@ fn gradual_exit_is_not_a_jump_and_a_discontinuity_is() {
     let run = fig08_run();
     let published = &run
         .set(ParamSet::Published)
+        .sweeps
         .curve(Fig8Curve::Hertz1p5)
         .report;
     assert!(published.jump.is_none() && published.jump_power_ratio.is_none());
@@ -301,6 +302,7 @@ fn gradual_exit_is_not_a_jump_and_a_discontinuity_is() {
     assert_eq!(end.kind, BranchEndKind::ContactLoss);
     let calibrated = &run
         .set(ParamSet::Calibrated)
+        .sweeps
         .curve(Fig8Curve::Hertz1p5)
         .report;
     let ratio = calibrated.jump_power_ratio.expect("a jump");
@@ -349,7 +351,13 @@ fn the_sweeps_of_figure_8_are_the_calibration_setup_and_its_variants() {
         spec.device(&r.device),
         prototype1_setup(&calibration().device)
     );
-    let onset = r.curve(Fig8Curve::Hertz1p5).report.onset.unwrap().value();
+    let onset = r
+        .sweeps
+        .curve(Fig8Curve::Hertz1p5)
+        .report
+        .onset
+        .unwrap()
+        .value();
     assert!((onset - calibration().record.achieved_onset_hz).abs() <= 0.5 * (REFINE_TOL_HZ + 0.05));
 }
 
@@ -516,7 +524,12 @@ fn f13_no_impact_low_a_jump_high_and_hertz_agrees_with_linear() {
         let set = ParamSet::Published;
         assert_eq!(verdict(&v, "F13", q, set), Verdict::Reproduced, "{q}");
     }
-    assert!(fig13_run().curve(Fig13Curve::Hertz).report.jump.is_some());
+    assert!(fig13_run()
+        .sweeps
+        .curve(Fig13Curve::Hertz)
+        .report
+        .jump
+        .is_some());
 }
 
 // ------------------------------------------------------------------ convergence
@@ -527,7 +540,7 @@ fn f13_no_impact_low_a_jump_high_and_hertz_agrees_with_linear() {
 #[test]
 fn every_narrowband_sweep_meets_the_convergence_limits() {
     for r in &fig08_run().sets {
-        for (c, conv) in Fig8Curve::ALL.iter().zip(r.convergence()) {
+        for (c, conv) in Fig8Curve::ALL.iter().zip(r.sweeps.convergence()) {
             assert!(conv.within_limits, "{:?} {c:?}: {conv:?}", r.set);
         }
     }
@@ -536,7 +549,7 @@ fn every_narrowband_sweep_meets_the_convergence_limits() {
             assert!(conv.within_limits, "{:?} {b:?}: {conv:?}", r.set);
         }
     }
-    for (c, conv) in Fig13Curve::ALL.iter().zip(fig13_run().convergence()) {
+    for (c, conv) in Fig13Curve::ALL.iter().zip(fig13_run().sweeps.convergence()) {
         assert!(conv.within_limits, "{c:?}: {conv:?}");
     }
 }

@@ -92,7 +92,7 @@ fn figure8_numbers() {
     }
     for r in &run.sets {
         for c in Fig8Curve::ALL {
-            let rep = &r.curve(c).report;
+            let rep = &r.sweeps.curve(c).report;
             writeln!(
                 s,
                 "{} {}: onset {}, branch end {}, max V1 {} V",
@@ -155,7 +155,7 @@ fn figure13_numbers() {
         claim_line(&mut s, &v);
     }
     for c in Fig13Curve::ALL {
-        let rep = &run.curve(c).report;
+        let rep = &run.sweeps.curve(c).report;
         writeln!(
             s,
             "{}: onset {}, jump {}, loss of contact {}, max V1 {} V",
