@@ -9,7 +9,7 @@
 //!
 //! * **Level.** `Sa` is the two-sided PSD: the density per Hz over `-B..B`. The variance of the
 //!   output is therefore `E[x²] = 2 B Sa_SI`, with `Sa_SI = Sa · G²` (m²/s⁴/Hz) and
-//!   [`crate::G`] = 9.81 m/s². A one-sided estimate (e.g. [`crate::signal::welch`]) reads
+//!   [`crate::G`] = 9.81 m/s². A one-sided estimate (e.g. [`crate::signal::welch()`]) reads
 //!   `2 Sa` in the band.
 //! * **Grid.** `N = round(duration_s · sample_rate_hz)` samples, bin spacing `df = fs / N`,
 //!   bin `k` at `f_k = k df`.

@@ -1,4 +1,4 @@
-//! Spectral estimation: Welch's power spectral density ([`welch`], scipy's conventions) and the
+//! Spectral estimation: Welch's power spectral density ([`welch()`], scipy's conventions) and the
 //! widths and edges read from a density ([`bandwidth`]).
 
 pub mod bandwidth;

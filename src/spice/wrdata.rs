@@ -47,7 +47,8 @@ pub struct Waveforms {
     pub columns: Vec<Vec<f64>>,
 }
 
-/// Parses the text of a `wrdata` file (see [`Transient::wrdata_file`]).
+/// Parses the text of a `wrdata` file (see
+/// [`Transient::wrdata_file`](super::Transient::wrdata_file)).
 pub fn parse_wrdata(text: &str) -> Result<Waveforms, SpiceError> {
     let mut lines = text
         .lines()

@@ -12,14 +12,17 @@
 //! power), both from [`crate::signal::width_at_fraction`] searched inside the ensemble's
 //! analysis band. They are computed on the ensemble-averaged PSD and on every single record;
 //! [`Spread`] summarises the sampling distribution of a single-record estimate (the paper
-//! used one 10 s record per level), and [`ratio_spread`] that of a ratio of two of them. The
+//! used one 10 s record per level), and [`ratio_spread`](crate::num::stats::ratio_spread)
+//! that of a ratio of two of them. The
 //! width of the ensemble-mean PSD carries a delete-one jackknife interval
 //! ([`Ensemble::mean_width`], [`Jackknife`]).
 //!
 //! # Linear theory
-//! [`linear_output_psd_w_per_hz`] is the small-signal output PSD of the same model (eqs 7-17
-//! in the frequency domain, no end-stops); it integrates to eq 21 and gives the bandwidth the
-//! device has without impacts ([`linear_widths`]).
+//! The ensembles are compared with the linear theory of [`crate::physics::two_port`]:
+//! [`linear_output_psd_w_per_hz`](crate::physics::two_port::linear_output_psd_w_per_hz) is
+//! the small-signal output PSD of the same model (eqs 7-17 in the frequency domain, no
+//! end-stops); it integrates to eq 21 and gives the bandwidth the device has without impacts
+//! ([`linear_widths`](crate::physics::two_port::linear_widths)).
 
 use rayon::prelude::*;
 
@@ -40,7 +43,8 @@ pub struct EnsembleSpec {
     /// Welch segmenting of the output PSD.
     pub welch: WelchConfig,
     /// A second segmenting whose single-record widths are reported beside (e.g. MATLAB's
-    /// default of eight segments, [`matlab_default_nperseg`]).
+    /// default of eight segments,
+    /// [`matlab_default_nperseg`](crate::signal::welch::matlab_default_nperseg)).
     pub alt_welch: Option<WelchConfig>,
     /// Band (Hz) in which spectra are kept and bandwidths are searched.
     pub analysis_band_hz: (f64, f64),
@@ -271,10 +275,7 @@ fn analyse(case: &EnsembleCase, records: Vec<RecordResult>) -> Ensemble {
     let sa_si = case.spec.record.noise.psd_si();
     let mut stats = Stats::default();
     for r in &records {
-        stats.accepted += r.summary.stats.accepted;
-        stats.rejected += r.summary.stats.rejected;
-        stats.rhs_evals += r.summary.stats.rhs_evals;
-        stats.events += r.summary.stats.events;
+        stats += r.summary.stats;
     }
     Ensemble {
         spec: case.spec.clone(),

@@ -19,7 +19,7 @@
 //! remaining amplitude deficit is below e^-5 = 0.7 %.
 //!
 //! # Output power spectral density
-//! [`output_psd`] is the one-sided Welch estimate ([`crate::signal::welch`], periodic Hann,
+//! [`output_psd`] is the one-sided Welch estimate ([`crate::signal::welch()`], periodic Hann,
 //! 50 % overlap, density scaling) of both load voltages, divided by the load:
 //! `S_P(f) = (S_V1(f) + S_V2(f)) / RL` in W/Hz, so that its integral over `f >= 0` is the mean
 //! power of **both loads** (the power of eq 21). The per-load densities are kept beside it.
@@ -27,8 +27,9 @@
 //! # Efficiency
 //! `2P/(m Sa)` with `P` the mean power of both loads and `Sa` the **two-sided** acceleration PSD
 //! in SI units (`Sa_g2 * 9.81^2`), the input power being `m Sa / 2` (eq 21 and its reference).
-//! [`eq21_power_w`] gives the linear theory with `Qm = sqrt(K m)/b`
-//! ([`crate::physics::two_port::QmReading::OpenCircuit`]), the reading eq 21 is derived with.
+//! [`eq21_power_w`](crate::physics::two_port::eq21_power_w) gives the linear theory with
+//! `Qm = sqrt(K m)/b` ([`crate::physics::two_port::QmReading::OpenCircuit`]), the reading
+//! eq 21 is derived with.
 //!
 
 use std::sync::Arc;
