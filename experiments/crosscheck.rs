@@ -1,7 +1,7 @@
 //! Cross-check with ngspice: the same model, exported as a SPICE netlist by `endstop::spice`
 //! (the paper's Figure 6), simulated by ngspice in batch mode and compared with our integrator
-//! (`sweep::steady_state`) for the same drive, from the same initial state, over the same time
-//! span, measured over the same window of whole periods.
+//! (`study::steady::steady_state`) for the same drive, from the same initial state, over the
+//! same time span, measured over the same window of whole periods.
 //!
 //! Cases: prototype 1 without impacts, prototype 1 on its impacting upper branch (Hertz and
 //! linear end-stop laws), prototype 1 grazing the stops at Figure 8's 5.5 g, and prototype 2 on

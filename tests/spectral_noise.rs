@@ -1,4 +1,4 @@
-//! Integration tests of `endstop::spectral` (Welch PSD, bandwidths) and `endstop::noise`
+//! Integration tests of `endstop::signal` (Welch PSD, bandwidths) and `endstop::drive::noise`
 //! (band-limited white noise, Figure 10). Each tolerance is stated with its reason.
 
 use endstop::drive::noise::NoiseSpec;
