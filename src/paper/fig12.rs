@@ -76,22 +76,16 @@ pub fn claims(run: &Run, _claims: &Claims) -> Vec<Value> {
     for (s, set) in P1_SETS.iter().enumerate() {
         let f = findings(run, s, WidthReading::HalfPower);
         let note = "half-power width of the ensemble-mean PSD; CI: delete-one jackknife";
-        out.push(Value::new(
-            "F12",
-            "bw_7p4e-3_hz",
-            set,
-            f.low.estimate,
-            Some(f.low.ci95),
-            note,
-        ));
-        out.push(Value::new(
-            "F12",
-            "bw_2p85e-2_hz",
-            set,
-            f.high.estimate,
-            Some(f.high.ci95),
-            note,
-        ));
+        for (quantity, width) in [("bw_7p4e-3_hz", f.low), ("bw_2p85e-2_hz", f.high)] {
+            out.push(Value::new(
+                "F12",
+                quantity,
+                set,
+                width.estimate,
+                Some(width.ci95),
+                note,
+            ));
+        }
         out.push(Value::new(
             "F12",
             "bw_ratio_2p85e-2_over_7p4e-3",

@@ -129,6 +129,22 @@ impl Waveforms {
         Ok(())
     }
 
+    /// The pieces `t[k]..t[k + 1]` of the time grid that overlap [t0, t1], as (k, a, b) with
+    /// a..b the non-empty overlap (after [`Waveforms::check_window`], so there are two or more
+    /// time points).
+    fn pieces(&self, t0: f64, t1: f64) -> impl Iterator<Item = (usize, f64, f64)> + '_ {
+        let t = &self.time;
+        (0..t.len() - 1).filter_map(move |k| {
+            let a = t[k].max(t0);
+            let b = t[k + 1].min(t1);
+            if b <= a {
+                None
+            } else {
+                Some((k, a, b))
+            }
+        })
+    }
+
     /// Integral of g(y) over [t0, t1] for the column `name`, with y linearly interpolated
     /// between time points and each piece integrated by Simpson's rule (exact for g(y) = y^2).
     fn integrate(
@@ -150,12 +166,7 @@ impl Waveforms {
             }
         };
         let mut acc = 0.0;
-        for k in 0..t.len() - 1 {
-            let a = t[k].max(t0);
-            let b = t[k + 1].min(t1);
-            if b <= a {
-                continue;
-            }
+        for (k, a, b) in self.pieces(t0, t1) {
             let (ya, yb) = (at(k, a), at(k, b));
             let ym = at(k, 0.5 * (a + b));
             acc += (b - a) / 6.0 * (g(ya) + 4.0 * g(ym) + g(yb));
@@ -193,12 +204,7 @@ impl Waveforms {
         let y = self.column(name)?;
         let t = &self.time;
         let mut above = 0.0;
-        for k in 0..t.len() - 1 {
-            let a = t[k].max(t0);
-            let b = t[k + 1].min(t1);
-            if b <= a {
-                continue;
-            }
+        for (k, a, b) in self.pieces(t0, t1) {
             // Subdivide at the crossings of +level and -level of the linear piece.
             let h = t[k + 1] - t[k];
             let lin = |tt: f64| y[k] + (y[k + 1] - y[k]) * (tt - t[k]) / h;

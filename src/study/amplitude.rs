@@ -7,7 +7,8 @@ use crate::ode::SolverError;
 use crate::physics::harvester::Harvester;
 use crate::study::steady::{Measurement, SteadyConfig};
 use crate::study::stepped::{
-    continue_sweep, first_contact, in_contact, values_beyond, SteppedDrive, Sweep, Transition,
+    continue_sweep, first_contact, in_contact, values_beyond, with_midpoints, SteppedDrive, Sweep,
+    Transition,
 };
 
 /// An amplitude continuation at fixed frequency (Figure 9) with its refined impact onset.
@@ -58,23 +59,11 @@ impl AmplitudeSettings {
     /// Half the amplitude step, the integrator tolerance, the steady-state tolerance and the
     /// refinement bracket (convergence check).
     pub fn halved(&self) -> Self {
-        let a = &self.accels_rms_g;
-        let mut acc = Vec::with_capacity(2 * a.len());
-        for w in a.windows(2) {
-            acc.push(w[0]);
-            acc.push(0.5 * (w[0] + w[1]));
-        }
-        if let Some(&last) = a.last() {
-            acc.push(last);
-        }
-        let mut cfg = self.cfg.clone();
-        cfg.rtol *= 0.5;
-        cfg.rel_change_tol *= 0.5;
         Self {
             freq_hz: self.freq_hz,
-            accels_rms_g: acc,
+            accels_rms_g: with_midpoints(&self.accels_rms_g),
             extend_to_g: self.extend_to_g,
-            cfg,
+            cfg: self.cfg.halved(),
             refine_tol_g: 0.5 * self.refine_tol_g,
         }
     }

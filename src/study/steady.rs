@@ -45,6 +45,16 @@ impl SteadyConfig {
             max_blocks: 60,
         }
     }
+
+    /// The same criterion with half the integrator tolerance and half the steady-state
+    /// tolerance (the numerics of a convergence repetition).
+    pub fn halved(&self) -> Self {
+        Self {
+            rtol: 0.5 * self.rtol,
+            rel_change_tol: 0.5 * self.rel_change_tol,
+            ..self.clone()
+        }
+    }
 }
 
 /// Default steady-state settings for a device driven near `freq_hz`: blocks of about the

@@ -203,6 +203,18 @@ pub fn linspace_step(start: f64, stop: f64, step: f64) -> Vec<f64> {
         .collect()
 }
 
+/// The grid `values` with the midpoint of every pair of neighbours inserted (half the step of
+/// an evenly spaced grid, every original value kept).
+pub fn with_midpoints(values: &[f64]) -> Vec<f64> {
+    let mut out = Vec::with_capacity(2 * values.len());
+    for w in values.windows(2) {
+        out.push(w[0]);
+        out.push(0.5 * (w[0] + w[1]));
+    }
+    out.extend(values.last());
+    out
+}
+
 /// Appends steps to `sweep` at `values`, each continuing from the last state, at drive
 /// `drive(p)` = (Hz, g rms); stops after the first step for which `stop(m)` is true.
 pub fn continue_sweep(
@@ -242,4 +254,16 @@ pub fn values_beyond(last: f64, step: f64, max: f64) -> impl Iterator<Item = f64
     (1..)
         .map(move |i| last + step * i as f64)
         .take_while(move |&v| v <= max + 1e-9 * max.abs())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn with_midpoints_inserts_one_value_between_neighbours_and_keeps_the_ends() {
+        assert_eq!(with_midpoints(&[1.0, 2.0, 4.0]), [1.0, 1.5, 2.0, 3.0, 4.0]);
+        assert_eq!(with_midpoints(&[5.0]), [5.0]);
+        assert!(with_midpoints(&[]).is_empty());
+    }
 }

@@ -36,8 +36,8 @@ use crate::ode::{SolverError, Stats};
 use crate::physics::harvester::Harvester;
 use crate::study::steady::{Measurement, SteadyConfig};
 use crate::study::stepped::{
-    continue_sweep, first_contact, in_contact, values_beyond, Drive, SteppedDrive, Sweep,
-    Transition,
+    continue_sweep, first_contact, in_contact, values_beyond, with_midpoints, Drive, SteppedDrive,
+    Sweep, Transition,
 };
 
 /// A coarse step is a jump candidate when the total power falls by more than this fraction
@@ -212,22 +212,10 @@ impl SweepSettings {
     /// The convergence check: half the frequency step, half the integrator
     /// tolerance, half the steady-state tolerance and half the refinement bracket.
     pub fn halved(&self) -> Self {
-        let f = &self.freqs_hz;
-        let mut freqs = Vec::with_capacity(2 * f.len());
-        for w in f.windows(2) {
-            freqs.push(w[0]);
-            freqs.push(0.5 * (w[0] + w[1]));
-        }
-        if let Some(&last) = f.last() {
-            freqs.push(last);
-        }
-        let mut cfg = self.cfg.clone();
-        cfg.rtol *= 0.5;
-        cfg.rel_change_tol *= 0.5;
         Self {
-            freqs_hz: freqs,
+            freqs_hz: with_midpoints(&self.freqs_hz),
             extend_to_hz: self.extend_to_hz,
-            cfg,
+            cfg: self.cfg.halved(),
             refine_tol_hz: 0.5 * self.refine_tol_hz,
         }
     }
