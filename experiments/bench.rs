@@ -16,7 +16,7 @@ use endstop_experiments as common;
 use std::time::Instant;
 
 use anyhow::Result;
-use common::{fmt_sig, load_device, Experiment};
+use common::{fmt_sig, Experiment};
 use endstop::drive::Sine;
 use endstop::ode::Dopri5;
 use endstop::physics::contact::Mode;
@@ -58,10 +58,8 @@ struct Row {
 fn run() -> Result<()> {
     let mut exp = Experiment::start("bench");
     exp.seed = Some(SEED);
-    let p1 = load_device("prototype1")?;
-    let p2 = load_device("prototype2")?;
-    exp.uses(&p1, "published");
-    exp.uses(&p2, "published");
+    let p1 = exp.load_published("prototype1")?;
+    let p2 = exp.load_published("prototype2")?;
     let cal = common::calibrated_prototype1(&p1)?.0.device;
     let mut rows = Vec::new();
 

@@ -18,7 +18,7 @@ use std::time::Instant;
 
 use anyhow::{bail, Context, Result};
 use common::plot::{LegendPos, LinePlot, Series, Style, PALETTE};
-use common::{fmt_sig, load_device, write_atomic, Experiment};
+use common::{fmt_sig, write_atomic, Experiment};
 use endstop::device::Device;
 use endstop::device::StiffnessModel;
 use endstop::drive::Sine;
@@ -406,10 +406,8 @@ fn run() -> Result<()> {
     let version = ngspice_version()?;
     let mut exp = Experiment::start("crosscheck");
     eprintln!("[crosscheck] using {version}");
-    let p1 = load_device("prototype1")?;
-    let p2 = load_device("prototype2")?;
-    exp.uses(&p1, "published");
-    exp.uses(&p2, "published");
+    let p1 = exp.load_published("prototype1")?;
+    let p2 = exp.load_published("prototype2")?;
 
     let tmp =
         TempDir(std::env::temp_dir().join(format!("endstop-crosscheck-{}", std::process::id())));

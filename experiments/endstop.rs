@@ -10,12 +10,13 @@
 
 use endstop_experiments as common;
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Result};
 use clap::{Parser, Subcommand};
 use common::plot::{LegendPos, LinePlot, Series, Style, PALETTE};
-use common::{fmt_sig, load_device_file, Experiment};
+use common::{fmt_sig, load_device_file, Experiment, LoadedDevice};
+use endstop::device::Device;
 use endstop::physics::two_port::TwoPort;
 use endstop::physics::two_port::EQ21_QM;
 use endstop::signal::WelchConfig;
@@ -117,6 +118,26 @@ fn out_dir(p: PathBuf) -> PathBuf {
     }
 }
 
+/// Loads the device file `path`, applies `--bias-v` if given (validated), and starts the
+/// experiment `name` writing to `out`, with the device file recorded: the experiment, the file
+/// as loaded, and the device to simulate.
+fn start(
+    name: &str,
+    path: &Path,
+    bias_v: Option<f64>,
+    out: PathBuf,
+) -> Result<(Experiment, LoadedDevice, Device)> {
+    let loaded = load_device_file(path)?;
+    let mut device = loaded.device.clone();
+    if let Some(v) = bias_v {
+        device = device.with_bias(v);
+        device.validate("--bias-v")?;
+    }
+    let mut exp = Experiment::start_in(name, out_dir(out));
+    exp.uses(&loaded, &device.params);
+    Ok((exp, loaded, device))
+}
+
 fn sweep(a: SweepArgs) -> Result<()> {
     if !(a.from.is_finite() && a.to.is_finite() && a.from > 0.0 && a.to > a.from) {
         bail!("--from and --to must be positive frequencies with --to > --from");
@@ -127,14 +148,7 @@ fn sweep(a: SweepArgs) -> Result<()> {
     if !(a.accel_rms_g.is_finite() && a.accel_rms_g >= 0.0) {
         bail!("--accel-rms-g must be a finite non-negative number");
     }
-    let loaded = load_device_file(&a.device)?;
-    let mut device = loaded.device.clone();
-    if let Some(v) = a.bias_v {
-        device = device.with_bias(v);
-        device.validate("--bias-v")?;
-    }
-    let mut exp = Experiment::start_in("endstop-sweep", out_dir(a.out));
-    exp.uses(&loaded, &device.params);
+    let (mut exp, loaded, device) = start("endstop-sweep", &a.device, a.bias_v, a.out)?;
     let freqs = linspace_step(a.from, a.to, a.step);
     let cfg = endstop::study::steady::steady_config(&device, 0.5 * (a.from + a.to));
     let report = common::with_progress(freqs.len(), "sweep", |tick| {
@@ -240,14 +254,7 @@ fn random(a: RandomArgs) -> Result<()> {
     if a.records == 0 {
         bail!("--records must be at least 1");
     }
-    let loaded = load_device_file(&a.device)?;
-    let mut device = loaded.device.clone();
-    if let Some(v) = a.bias_v {
-        device = device.with_bias(v);
-        device.validate("--bias-v")?;
-    }
-    let mut exp = Experiment::start_in("endstop-random", out_dir(a.out));
-    exp.uses(&loaded, &device.params);
+    let (mut exp, loaded, device) = start("endstop-random", &a.device, a.bias_v, a.out)?;
     exp.seed = Some(a.seed);
     let mut record = RecordSpec::paper(&device, a.psd);
     record.noise.duration_s = a.duration_s;

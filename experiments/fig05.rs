@@ -8,7 +8,7 @@ use anyhow::Result;
 use common::frame::frame;
 use common::md::Table;
 use common::plot::{LinePlot, Series, Style, PALETTE};
-use common::{fmt_sig, load_device, row, Experiment};
+use common::{fmt_sig, row, Experiment};
 use endstop::paper::claims::Claims;
 use endstop::paper::fig05::{self, FIT_READINGS};
 
@@ -19,10 +19,8 @@ fn main() {
 fn run() -> Result<()> {
     let mut exp = Experiment::start("fig05");
     let claims = Claims::bundled()?;
-    let p1 = load_device("prototype1")?;
-    let p2 = load_device("prototype2")?;
-    exp.uses(&p1, "published");
-    exp.uses(&p2, "published");
+    let p1 = exp.load_published("prototype1")?;
+    let p2 = exp.load_published("prototype2")?;
     let run = fig05::run(&p1.device, &p2.device);
     exp.claims(fig05::claims(&run, &claims));
     let [q1, q2] = &run.prototypes;

@@ -9,7 +9,7 @@ use anyhow::Result;
 use common::md::{self, Table};
 use common::narrowband_io::{claim_cells, convergence_cells, curve_rows, hz, CONVERGENCE_COLUMNS};
 use common::plot::{LegendPos, LinePlot, Series, Style, PALETTE};
-use common::{fmt_sig, frame::frame, load_device, Experiment};
+use common::{fmt_sig, frame::frame, Experiment};
 use endstop::device::StiffnessModel;
 use endstop::paper::claims::Claims;
 use endstop::paper::curves::{CONV_FREQ_REL, CONV_RMS_REL};
@@ -22,8 +22,7 @@ fn main() {
 
 fn run() -> Result<()> {
     let mut exp = Experiment::start("fig13");
-    let p2 = load_device("prototype2")?;
-    exp.uses(&p2, "published");
+    let p2 = exp.load_published("prototype2")?;
     let claims = Claims::bundled()?;
     let run = common::with_progress(fig13::coarse_steps(&p2.device), "fig13", |tick| {
         fig13::run(&p2.device, tick)

@@ -8,7 +8,7 @@ use anyhow::Result;
 use common::broadband_io::{self as bbio, pm, sa_label, Level};
 use common::md::Table;
 use common::plot::{error_bars, LegendPos, LinePlot, Series, Style, PALETTE};
-use common::{fmt_sig, load_device, Experiment};
+use common::{fmt_sig, Experiment};
 use endstop::paper::claims::Claims;
 use endstop::paper::fig14::{self, Protocol, F14B_LEVEL, FIG14_LEVELS, TIGHT_RTOL};
 use endstop::physics::two_port::eq21_power_w;
@@ -22,8 +22,7 @@ fn run() -> Result<()> {
     let mut exp = Experiment::start("fig14");
     exp.seed = Some(DEFAULT_SEED);
     let claims = Claims::bundled()?;
-    let p2 = load_device("prototype2")?;
-    exp.uses(&p2, "published");
+    let p2 = exp.load_published("prototype2")?;
     let total = (FIG14_LEVELS.len() + 2) * fig14::FIG14_REALISATIONS;
     let run = common::with_progress(total, "fig14", |tick| {
         fig14::run(&p2.device, Protocol::FULL, tick)

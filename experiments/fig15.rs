@@ -9,7 +9,7 @@ use anyhow::Result;
 use common::broadband_io::{self as bbio, pm, sa_label, spread_str, Level};
 use common::md::Table;
 use common::plot::{LegendPos, LinePlot, Series, Style, PALETTE};
-use common::{fmt_sig, load_device, Experiment};
+use common::{fmt_sig, Experiment};
 use endstop::num::stats::{ecdf, pairwise_ratios, Spread};
 use endstop::paper::claims::Claims;
 use endstop::paper::ensembles::WidthReading;
@@ -24,8 +24,7 @@ fn run() -> Result<()> {
     let mut exp = Experiment::start("fig15");
     exp.seed = Some(DEFAULT_SEED);
     let claims = Claims::bundled()?;
-    let p2 = load_device("prototype2")?;
-    exp.uses(&p2, "published");
+    let p2 = exp.load_published("prototype2")?;
     let total = fig15::FIG15_LEVELS.len() * fig15::FIG15_REALISATIONS;
     let run = common::with_progress(total, "fig15", |tick| fig15::run(&p2.device, tick))?;
     exp.claims(fig15::claims(&run, &claims));

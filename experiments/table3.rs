@@ -9,7 +9,7 @@ use anyhow::Result;
 use common::frame::frame;
 use common::md::Table;
 use common::plot::{LinePlot, Series, Style, PALETTE};
-use common::{fmt_sig, load_device, row, Experiment};
+use common::{fmt_sig, row, Experiment};
 use endstop::paper::claims::Claims;
 use endstop::paper::table3::{self, ABSTRACT_K2_P1};
 use endstop::physics::two_port::{QmReading, TABLE3_QM};
@@ -30,10 +30,8 @@ fn reading_key(reading: QmReading) -> &'static str {
 fn run() -> Result<()> {
     let mut exp = Experiment::start("table3");
     let claims = Claims::bundled()?;
-    let p1 = load_device("prototype1")?;
-    let p2 = load_device("prototype2")?;
-    exp.uses(&p1, "published");
-    exp.uses(&p2, "published");
+    let p1 = exp.load_published("prototype1")?;
+    let p2 = exp.load_published("prototype2")?;
     let run = table3::run(&p1.device, &p2.device);
     exp.claims(table3::claims(&run, &claims));
 

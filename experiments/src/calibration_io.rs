@@ -21,7 +21,7 @@ use endstop::paper::calibration::{
 use serde::{Deserialize, Serialize};
 use sha2::{Digest, Sha256};
 
-use crate::{git_commit, load_device, results_root, write_atomic, Experiment, LoadedDevice};
+use crate::{git_commit, results_root, write_atomic, Experiment, LoadedDevice};
 
 /// The directory of the artefact under the results root.
 pub const CALIBRATION_DIR: &str = "calibration";
@@ -193,9 +193,8 @@ pub fn calibrated_prototype1(published: &LoadedDevice) -> Result<(LoadedDevice, 
 /// parameter files recorded on `exp` (published, then calibrated: the artefact's device file
 /// with its own text).
 pub fn prototype1_both_sets(exp: &mut Experiment) -> Result<(LoadedDevice, Calibration)> {
-    let published = load_device("prototype1")?;
+    let published = exp.load_published("prototype1")?;
     let (calibrated, cal) = calibrated_prototype1(&published)?;
-    exp.uses(&published, "published");
     exp.uses(&calibrated, "calibrated");
     Ok((published, cal))
 }

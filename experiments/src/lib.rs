@@ -205,6 +205,14 @@ impl Experiment {
             .push((dev.file.clone(), set.to_string(), dev.text.clone()));
     }
 
+    /// Loads the parameter file of `name` ([`load_device`]) and records it under the set
+    /// `published`.
+    pub fn load_published(&mut self, name: &str) -> Result<LoadedDevice> {
+        let dev = load_device(name)?;
+        self.uses(&dev, "published");
+        Ok(dev)
+    }
+
     /// Records our value for a claim's quantity (scorecard input).
     pub fn claim(&mut self, claim: &str, quantity: &str, set: &str, ours: f64) {
         self.claim_with_uncertainty(claim, quantity, set, ours, None);
