@@ -4,6 +4,7 @@
 //! * [`measured`]: what the paper measured and the simulations use as targets;
 //! * [`claims`]: the paper's claims (`data/claims.toml`), our values and the verdicts;
 //! * [`calibration`]: the one-parameter calibration of prototype 1 and the paper's fit of b_im;
+//! * [`sensitivity`]: the uncertain inputs of the sensitivity study and their ranges;
 //! * one module per figure or table with its protocol, a `run` and a `claims` function, which
 //!   the experiment binaries and the tests both call.
 //!
@@ -23,5 +24,6 @@ pub mod fig13;
 pub mod fig14;
 pub mod fig15;
 pub mod measured;
+pub mod sensitivity;
 pub mod setups;
 pub mod table3;
