@@ -75,9 +75,9 @@ fn linear_claims_generated_at_a_known_set_are_met_and_its_identified_parameters_
         }
         figures(&d)
     };
-    let h = 1e-4;
+    let h: f64 = 1e-4;
     let jac = nalgebra::DMatrix::from_fn(4, 3, |j, i| {
-        (with(i, (h as f64).exp())[j].ln() - with(i, (-h as f64).exp())[j].ln()) / (2.0 * h)
+        (with(i, h.exp())[j].ln() - with(i, (-h).exp())[j].ln()) / (2.0 * h)
     });
     let pinv = jac
         .clone()
