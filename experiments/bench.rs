@@ -82,28 +82,29 @@ fn run() -> Result<()> {
             1.69e-3,
         ),
     ];
-    // The RK4 yardstick at equal accuracy: the fewest steps per sample interval with which
-    // an impact-free 1 s record's power is within 1e-6 of Dormand-Prince at rtol 1e-10, as
-    // ours is (both prototypes; Figure 14's and Figure 11's linear levels).
-    let (substeps, accuracy_md) = rk4_equal_accuracy(&p1.device, &p2.device)?;
+    // The RK4 yardstick at equal accuracy (see `rk4_equal_accuracy`): at the 1e-6 target and
+    // at our measured accuracy.
+    let (picks, accuracy_md) = rk4_equal_accuracy(&p1.device, &p2.device)?;
     let mut ratios = Vec::new();
     for (case, dev, sa) in records.clone() {
-        let spec = RecordSpec::paper(&dev, sa);
-        let mut ours = Vec::new();
-        let mut rk4 = Vec::new();
-        // Side by side, alternating, so that a change of the machine's speed hits both.
-        for _ in 0..RK4_REPEATS {
-            let t = Instant::now();
-            simulate_record(&dev, &spec, SEED, 0)?;
-            ours.push(t.elapsed().as_secs_f64());
-            let t = Instant::now();
-            rk4_record(&dev, &spec, 0, substeps)?;
-            rk4.push(t.elapsed().as_secs_f64());
+        for substeps in picks {
+            let spec = RecordSpec::paper(&dev, sa);
+            let mut ours = Vec::new();
+            let mut rk4 = Vec::new();
+            // Side by side, alternating, so that a change of the machine's speed hits both.
+            for _ in 0..RK4_REPEATS {
+                let t = Instant::now();
+                simulate_record(&dev, &spec, SEED, 0)?;
+                ours.push(t.elapsed().as_secs_f64());
+                let t = Instant::now();
+                rk4_record(&dev, &spec, 0, substeps)?;
+                rk4.push(t.elapsed().as_secs_f64());
+            }
+            ours.sort_by(f64::total_cmp);
+            rk4.sort_by(f64::total_cmp);
+            let (a, b) = (ours[RK4_REPEATS / 2], rk4[RK4_REPEATS / 2]);
+            ratios.push((case, substeps, a, b));
         }
-        ours.sort_by(f64::total_cmp);
-        rk4.sort_by(f64::total_cmp);
-        let (a, b) = (ours[RK4_REPEATS / 2], rk4[RK4_REPEATS / 2]);
-        ratios.push((case, a, b));
     }
     for (case, dev, sa) in records {
         let spec = RecordSpec::paper(&dev, sa);
@@ -230,24 +231,37 @@ fn run() -> Result<()> {
     exp.number("fig08_sweeps_all_threads_median_s", rows[4].median_s);
     md.push_str(&format!(
         "\n**Against a fixed-step RK4 at equal accuracy.** The yardstick (kept in the bench, \
-         not in the library) is the classical RK4 with {substeps} step(s) per 10 us sample \
+         not in the library) is the classical RK4 with a fixed number of steps per 10 us sample \
          interval and contacts located by the Illinois root finder on shortened RK4 steps. \
-         Equal accuracy: on impact-free 1 s records the power of each scheme against \
-         Dormand-Prince at rtol 1e-10 (the fewest RK4 steps per sample within 1e-6):\n\n{accuracy_md}\n\
+         Accuracy: the power of impact-free 1 s records against Dormand-Prince everywhere at \
+         rtol 1e-10 (relative error):\n\n{accuracy_md}\n\
+         RK4 meets the 1e-6 target with {} step(s) per sample, and reaches our accuracy (below \
+         1e-8, where the reference's own error is of the same size) with {}. \
          Medians of {RK4_REPEATS} runs of each, alternating in the same process:\n\n\
-         | case | ours (s) | RK4 (s) | ours / RK4 |\n|---|---|---|---|\n"
+         | case | RK4 steps per sample | ours (s) | RK4 (s) | ours / RK4 |\n|---|---|---|---|---|\n",
+        picks[0],
+        picks[1]
     ));
-    for (case, a, b) in &ratios {
+    for (case, substeps, a, b) in &ratios {
         md.push_str(&format!(
-            "| {case} | {} | {} | {} |\n",
+            "| {case} | {substeps} | {} | {} | {} |\n",
             fmt_sig(*a, 3),
             fmt_sig(*b, 3),
             fmt_sig(a / b, 3)
         ));
     }
-    exp.number("rk4_substeps", substeps as f64);
-    exp.number("p1_record_calibrated_over_rk4", ratios[0].1 / ratios[0].2);
-    exp.number("p2_record_over_rk4", ratios[2].1 / ratios[2].2);
+    exp.number("rk4_substeps_target", picks[0] as f64);
+    exp.number("rk4_substeps_equal", picks[1] as f64);
+    exp.number(
+        "p1_record_calibrated_over_rk4_target",
+        ratios[0].2 / ratios[0].3,
+    );
+    exp.number(
+        "p1_record_calibrated_over_rk4_equal",
+        ratios[1].2 / ratios[1].3,
+    );
+    exp.number("p2_record_over_rk4_target", ratios[4].2 / ratios[4].3);
+    exp.number("p2_record_over_rk4_equal", ratios[5].2 / ratios[5].3);
     exp.write_numbers_md(&md)?;
     print!("{md}");
     let mut df = df!(
@@ -346,12 +360,13 @@ fn rk4_record(
 }
 
 /// The fewest RK4 steps per sample interval (1, 2, 4, 8) with which the power of impact-free
-/// 1 s records of both prototypes is within 1e-6 of Dormand-Prince at rtol 1e-10, and a
-/// Markdown table of each scheme's error.
+/// 1 s records of both prototypes is within 1e-6 (the target), and within 1e-8 (ours' accuracy,
+/// at the reference's own error), of Dormand-Prince at rtol 1e-10; and a Markdown table of
+/// each scheme's error.
 fn rk4_equal_accuracy(
     p1: &endstop::device::Device,
     p2: &endstop::device::Device,
-) -> Result<(usize, String)> {
+) -> Result<([usize; 2], String)> {
     use endstop::paper::setups::{prototype1_setup, prototype2_setup};
     use endstop::study::record::Scheme;
     let cases = [
@@ -378,6 +393,6 @@ fn rk4_equal_accuracy(
         md.push_str(&row);
         md.push('\n');
     }
-    let pick = (0..4).find(|&i| worst[i] <= 1e-6).unwrap_or(3);
-    Ok((1 << pick, md))
+    let pick = |tol: f64| 1 << (0..4).find(|&i| worst[i] <= tol).unwrap_or(3);
+    Ok(([pick(1e-6), pick(1e-8)], md))
 }
