@@ -5,9 +5,12 @@
 //! [`simulate_record`] drives the lumped model of eq 7 with one realisation of band-limited
 //! white noise from [`crate::drive::noise::generate`] (two-sided level `Sa`, 10 kHz band, 100 kHz,
 //! the paper's section 4), read between samples by linear interpolation ([`crate::drive::Sampled`]), and
-//! integrates it with [`crate::ode::Dopri5`] from rest. Every sample instant is a
-//! breakpoint of the integrator, so the steps end on the sample instants and the node voltages
-//! V1, V2 are collected there without interpolation.
+//! integrates it from rest one sample interval at a time, so the node voltages V1, V2 are
+//! collected at the sample instants without interpolation. Between contacts an interval is one
+//! step of the exponential Adams-Bashforth method ([`crate::ode::exponential`], see
+//! [`Scheme::Exponential`]); an interval that may come near a stop, every contact and the
+//! samples just after it go to [`crate::ode::Dopri5`], for which every sample instant is a
+//! breakpoint and every contact an event located on its dense output.
 //!
 //! **Transient.** The model starts at rest, so its response needs a few mechanical ring-up
 //! times `2m/b` (the amplitude decay time of the unloaded resonator, an upper bound on that of
@@ -50,9 +53,10 @@ use crate::signal::{self, Psd, SpectralError, WelchConfig};
 /// Length of the discarded pre-roll in mechanical ring-up times `2m/b` (see the module docs).
 pub const TRANSIENT_RING_TIMES: f64 = 5.0;
 
-/// Default relative tolerance of the integrator for random records. In free flight the step
-/// is bounded by the 10 us sample interval, not by this tolerance; the tests show that the
-/// mean power changes by far less than the ensemble error when it is tightened.
+/// Default relative tolerance of the Dormand-Prince integrator for random records (the
+/// intervals near and in contact). In free flight the step is bounded by the 10 us sample
+/// interval, not by this tolerance; the tests show that the mean power changes by far less
+/// than the ensemble error when it is tightened.
 pub const DEFAULT_RTOL: f64 = 1e-7;
 
 /// Errors of a broadband simulation.
