@@ -736,6 +736,24 @@ fn numbers_md(rows: &[Row], version: &str) -> String {
             verdict,
         ));
     }
+    // Speed: ngspice at the documented settings against ours over the same span, measured in
+    // this run (ngspice's time includes starting the process and writing its output).
+    let mut ratios: Vec<f64> = rows
+        .iter()
+        .filter(|r| r.documented && r.spice_s.is_finite() && r.ours_s > 0.0)
+        .map(|r| r.spice_s / r.ours_s)
+        .collect();
+    ratios.sort_by(f64::total_cmp);
+    if let (Some(lo), Some(hi)) = (ratios.first(), ratios.last()) {
+        md.push_str(&format!(
+            "\n**Speed.** Over the same span, ngspice at the documented settings took {} times \
+             as long as ours (median of the {} cases; from {} to {}).\n",
+            fmt_sig(ratios[ratios.len() / 2], 3),
+            ratios.len(),
+            fmt_sig(*lo, 3),
+            fmt_sig(*hi, 3),
+        ));
+    }
     md
 }
 

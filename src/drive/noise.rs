@@ -25,6 +25,9 @@
 //! * **Normalisation.** RustFFT does not normalise. The inverse transform computes
 //!   `Σ_k X_k e^{+2πikn/N}`; we divide by `N` once, when copying the real part out
 //!   (`x[n] = Re(...) / N`), which makes it the inverse of the un-normalised forward DFT.
+//!   For an even `N` (the paper's records) the real output is computed with one complex
+//!   transform of length `N/2` (the even and odd samples as real and imaginary parts, see
+//!   `synthesize`), which equals the full-length transform to rounding and costs half.
 //! * **Random numbers.** `ChaCha8Rng::seed_from_u64(seed)` then `set_stream(stream)`; one
 //!   stream is one realisation, so parallel realisations do not depend on thread scheduling.
 //!   Gaussians come from Box-Muller on `rng.random::<f64>()` (53-bit uniforms in `[0, 1)`):
@@ -35,12 +38,16 @@
 //!   assumes the same `ln`/`sin`/`cos` (the platform libm) for Box-Muller and for RustFFT's
 //!   twiddle factors; on one platform the bytes are fixed by `(spec, seed, stream)`.
 //!
-//! Memory: one complex FFT buffer of `N` values (plus RustFFT's scratch) and the output vector.
+//! Memory: one complex FFT buffer of `N/2` values (plus RustFFT's scratch), kept per thread
+//! with the transform's plan for the next record of the same length, and the output vector.
 
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
+use std::cell::RefCell;
+use std::sync::Arc;
+
 use rustfft::num_complex::Complex;
-use rustfft::FftPlannerScalar;
+use rustfft::{Fft, FftPlannerScalar};
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
@@ -195,23 +202,140 @@ pub fn rms_si(spec: &NoiseSpec) -> f64 {
 /// `seed` fixes the ChaCha8 key and `stream` selects an independent realisation; the result is
 /// a pure function of `(spec, seed, stream)`. See the module docs for every convention.
 pub fn generate(spec: &NoiseSpec, seed: u64, stream: u64) -> Result<Vec<f64>, NoiseError> {
-    let (n, k_max) = spec.grid()?;
+    synthesize(spec, seed, stream, |n, sample| (0..n).map(sample).collect())
+}
 
-    let mut buf = vec![Complex::new(0.0, 0.0); n];
-    let mut rng = stream_rng(seed, stream);
-    let amp = coefficient_scale(spec, n);
-    for k in 1..=k_max {
-        let x = draw_coefficient(&mut rng, amp);
-        buf[k] = x;
-        buf[n - k] = x.conj();
+/// [`generate`] into a shared slice (for [`crate::drive::Sampled`]), written in place.
+pub fn generate_shared(spec: &NoiseSpec, seed: u64, stream: u64) -> Result<Arc<[f64]>, NoiseError> {
+    // A `Range` mapped is an exact-size iterator: `collect` allocates the slice once and
+    // writes into it.
+    synthesize(spec, seed, stream, |n, sample| (0..n).map(sample).collect())
+}
+
+/// The inverse transform of one record length, kept per thread: an ensemble's records all
+/// have the same length, so each thread plans (and computes the twiddle factors) once.
+struct Synthesis {
+    n: usize,
+    k_max: usize,
+    /// Inverse FFT of length `n / 2` (`n` even) or `n`.
+    fft: Arc<dyn Fft<f64>>,
+    /// `e^{2πik/n}` for `k = 0..=K` (`n` even only).
+    twiddle: Vec<Complex<f64>>,
+    /// The transform's buffer and scratch.
+    buf: Vec<Complex<f64>>,
+    scratch: Vec<Complex<f64>>,
+    /// The drawn coefficients `X_1..=X_K`.
+    coeffs: Vec<Complex<f64>>,
+}
+
+thread_local! {
+    static SYNTHESIS: RefCell<Option<Synthesis>> = const { RefCell::new(None) };
+}
+
+impl Synthesis {
+    fn new(n: usize, k_max: usize) -> Self {
+        let half = n.is_multiple_of(2);
+        let len = if half { n / 2 } else { n };
+        let fft = FftPlannerScalar::new().plan_fft_inverse(len);
+        let twiddle = if half {
+            (0..=k_max)
+                .map(|k| {
+                    let (s, c) = (std::f64::consts::TAU * k as f64 / n as f64).sin_cos();
+                    Complex::new(c, s)
+                })
+                .collect()
+        } else {
+            Vec::new()
+        };
+        let scratch = vec![Complex::new(0.0, 0.0); fft.get_inplace_scratch_len()];
+        Self {
+            n,
+            k_max,
+            fft,
+            twiddle,
+            buf: vec![Complex::new(0.0, 0.0); len],
+            scratch,
+            coeffs: Vec::with_capacity(k_max),
+        }
     }
+}
 
-    let ifft = FftPlannerScalar::new().plan_fft_inverse(n);
-    ifft.process(&mut buf);
-
-    // RustFFT's inverse is un-normalised: divide by N here, once.
-    let inv_n = 1.0 / n as f64;
-    Ok(buf.iter().map(|c| c.re * inv_n).collect())
+/// Draws the coefficients of `(spec, seed, stream)`, transforms them, and hands `out` the
+/// record length and the function that reads sample `j` off the transform.
+///
+/// For an even length `n` the real record is obtained from one complex transform of half the
+/// length: with `X_k` the Hermitian spectrum and `w = e^{2πi/n}`, the sequence
+/// `z_m = x_{2m} + i x_{2m+1}` is the (un-normalised, divided by `n`) inverse transform of
+/// length `n/2` of `Y_k = (X_k + X_{k+n/2}) + i (X_k - X_{k+n/2}) w^k`, where
+/// `X_{k+n/2} = conj(X_{n/2-k})` (split the sum over `k` that defines `x_j` into `k < n/2`
+/// and `k + n/2`, for even and for odd `j`). Only `Y_k` with `1 <= k <= K` or `n/2 - K <= k < n/2` are
+/// non-zero, and `w^{n/2-j} = -conj(w^j)`, so the twiddles of `k <= K` suffice. The result
+/// equals the full-length transform to rounding.
+fn synthesize<T>(
+    spec: &NoiseSpec,
+    seed: u64,
+    stream: u64,
+    out: impl FnOnce(usize, &dyn Fn(usize) -> f64) -> T,
+) -> Result<T, NoiseError> {
+    let (n, k_max) = spec.grid()?;
+    SYNTHESIS.with(|cell| {
+        let mut cache = cell.borrow_mut();
+        if cache.as_ref().is_none_or(|c| c.n != n || c.k_max != k_max) {
+            *cache = Some(Synthesis::new(n, k_max));
+        }
+        let Some(syn) = cache.as_mut() else {
+            unreachable!("the cache was just filled")
+        };
+        let mut rng = stream_rng(seed, stream);
+        let amp = coefficient_scale(spec, n);
+        syn.coeffs.clear();
+        syn.coeffs
+            .extend((1..=k_max).map(|_| draw_coefficient(&mut rng, amp)));
+        let zero = Complex::new(0.0, 0.0);
+        syn.buf.iter_mut().for_each(|b| *b = zero);
+        // RustFFT's inverse is un-normalised: divide by N when reading the samples, once.
+        let inv_n = 1.0 / n as f64;
+        if n.is_multiple_of(2) {
+            let half = n / 2;
+            // X_j for 1 <= j <= K, zero elsewhere on 0..=n/2.
+            let x = |j: usize| {
+                if (1..=k_max).contains(&j) {
+                    syn.coeffs[j - 1]
+                } else {
+                    zero
+                }
+            };
+            let i = Complex::new(0.0, 1.0);
+            let mut fill = |k: usize, w: Complex<f64>| {
+                let a = x(k);
+                let b = x(half - k).conj();
+                syn.buf[k] = (a + b) + i * (a - b) * w;
+            };
+            for k in 1..=k_max.min(half - 1) {
+                fill(k, syn.twiddle[k]);
+            }
+            for j in 1..=k_max.min(half - 1) {
+                let k = half - j;
+                if k > k_max {
+                    fill(k, -syn.twiddle[j].conj());
+                }
+            }
+            syn.fft.process_with_scratch(&mut syn.buf, &mut syn.scratch);
+            let buf = &syn.buf;
+            Ok(out(n, &|j| {
+                let z = buf[j / 2];
+                (if j % 2 == 0 { z.re } else { z.im }) * inv_n
+            }))
+        } else {
+            for (k, &c) in syn.coeffs.iter().enumerate() {
+                syn.buf[k + 1] = c;
+                syn.buf[n - k - 1] = c.conj();
+            }
+            syn.fft.process_with_scratch(&mut syn.buf, &mut syn.scratch);
+            let buf = &syn.buf;
+            Ok(out(n, &|j| buf[j].re * inv_n))
+        }
+    })
 }
 
 /// The Fourier coefficients `X_0..=X_K` that [`generate`] transforms for `(spec, seed, stream)`.

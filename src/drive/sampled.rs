@@ -47,8 +47,9 @@ impl Excitation for Sampled {
             return 0.0;
         }
         let u = t / self.dt_s;
-        let i = u.floor();
-        let k = i as usize;
+        // t >= 0, so truncation is the floor (and cheaper: no call into libm).
+        let k = u as usize;
+        let i = k as f64;
         if k + 1 >= self.samples.len() {
             return if k + 1 == self.samples.len() {
                 self.samples[k]

@@ -46,6 +46,10 @@ const D5: f64 = 701980252875.0 / 199316789632.0;
 const D6: f64 = -1453857185.0 / 822651844.0;
 const D7: f64 = 69997945.0 / 29380423.0;
 
+/// The error norm below which the step-size factor `0.9 err^(-1/5)` is at least 1:
+/// `0.9^5` (rounded down, so that the skipped factor is always >= 1).
+const MAX_ERR_KEEPING_STEP: f64 = 0.59;
+
 /// Integrator state: time, state, mode, FSAL derivative, proposed step and counters.
 ///
 /// The fields are private because the derivative at the current point (`k1`, reused by the
@@ -131,6 +135,14 @@ impl<S: HybridSystem<N>, const N: usize> Dopri5<S, N> {
         self.k1_valid = false;
         self.after_event = false;
         self.switch_trail.clear();
+    }
+
+    /// [`Dopri5::restart`] with the next trial step `h` instead of [`Options::h_init`] (for a
+    /// caller that knows the scale of the motion, e.g. the sample interval of a sampled
+    /// input in free flight).
+    pub fn restart_with_step(&mut self, t: f64, y: SVector<f64, N>, mode: S::Mode, h: f64) {
+        self.restart(t, y, mode);
+        self.h = h;
     }
 
     fn state_vec(&self) -> Vec<f64> {
@@ -311,7 +323,14 @@ impl<S: HybridSystem<N>, const N: usize> Dopri5<S, N> {
                 }
                 continue;
             }
-            let fac = (0.9 * tr.err.powf(-0.2)).clamp(0.2, 10.0);
+            // The step-size factor. A step clipped to a breakpoint keeps its proposal unless
+            // the factor is below 1, i.e. err > 0.9^5: skip the power where it cannot matter
+            // (most steps of a sampled input end on a breakpoint).
+            let fac = if clipped && tr.err <= MAX_ERR_KEEPING_STEP {
+                1.0
+            } else {
+                (0.9 * tr.err.powf(-0.2)).clamp(0.2, 10.0)
+            };
             if tr.err > 1.0 {
                 self.stats.rejected += 1;
                 if self.after_event {

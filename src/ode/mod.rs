@@ -38,6 +38,7 @@
 
 mod dopri5;
 pub mod events;
+pub mod exponential;
 
 use std::ops::AddAssign;
 

@@ -18,8 +18,9 @@ use crate::study::record::BroadbandError;
 pub const FIG15_LEVELS: [f64; 3] = [0.34e-3, 0.55e-3, 1.69e-3];
 
 /// Records per level in Figure 15: enough for 5-95 % quantiles of single-record widths and
-/// 256 record pairs per ratio.
-pub const FIG15_REALISATIONS: usize = 16;
+/// 1024 record pairs per ratio. The same as Figure 14's, whose ensembles at the three levels
+/// are the same records (same seed, streams and settings; [`from_fig14`] takes them).
+pub const FIG15_REALISATIONS: usize = crate::paper::fig14::FIG14_REALISATIONS;
 
 /// Index in [`FIG15_LEVELS`] of 0.34e-3 g²/Hz (claim F15-a, and the base of every ratio).
 pub const L034: usize = 0;
@@ -56,7 +57,7 @@ pub fn run(prototype2: &Device, progress: &(dyn Fn() + Sync)) -> Result<Run, Bro
             set: "published".to_string(),
             index,
             device: dev.clone(),
-            spec: protocol_spec(&dev, sa, P2_NPERSEG, P2_BAND_HZ, FIG15_REALISATIONS, true),
+            spec: level_spec(&dev, sa),
         })
         .collect();
     Ok(Run {
@@ -64,6 +65,43 @@ pub fn run(prototype2: &Device, progress: &(dyn Fn() + Sync)) -> Result<Run, Bro
         linear: linear_widths(&dev, P2_BAND_HZ.0, P2_BAND_HZ.1),
         device: dev,
     })
+}
+
+/// Index in Figure 14's levels ([`crate::paper::fig14::FIG14_LEVELS`]) of each of
+/// [`FIG15_LEVELS`] (a test checks that the levels agree).
+pub const IN_FIG14: [usize; 3] = [5, 6, 8];
+
+/// The ensemble of one of Figure 15's levels.
+fn level_spec(dev: &Device, sa: f64) -> crate::study::ensemble::EnsembleSpec {
+    protocol_spec(dev, sa, P2_NPERSEG, P2_BAND_HZ, FIG15_REALISATIONS, true)
+}
+
+/// Figure 15 from Figure 14's run, whose published ensembles at [`IN_FIG14`] are Figure 15's
+/// records (the same device, seed, streams, record and Welch settings: [`run`] would simulate
+/// the same records again).
+///
+/// # Panics
+/// If an ensemble of `fig14` is not the one [`run`] would simulate (a protocol constant of
+/// one figure changed without the other).
+pub fn from_fig14(fig14: &crate::paper::fig14::Run) -> Run {
+    let dev = fig14.device.clone();
+    let levels = IN_FIG14
+        .iter()
+        .enumerate()
+        .map(|(index, &j)| {
+            let l = &fig14.levels[j];
+            assert!(
+                l.set == "published" && l.ens.spec == level_spec(&dev, FIG15_LEVELS[index]),
+                "Figure 14's ensemble {j} is not Figure 15's level {index}"
+            );
+            Level { index, ..l.clone() }
+        })
+        .collect();
+    Run {
+        levels,
+        linear: linear_widths(&dev, P2_BAND_HZ.0, P2_BAND_HZ.1),
+        device: dev,
+    }
 }
 
 /// Shifts of the half-power band edges of the ensemble-mean PSD from `low` to `high` (Hz):

@@ -24,6 +24,7 @@ pub mod fig13;
 pub mod fig14;
 pub mod fig15;
 pub mod measured;
+pub mod resolution;
 pub mod sensitivity;
 pub mod setups;
 pub mod table3;

@@ -20,7 +20,7 @@
 //! Modes for the integrator ([`crate::physics::contact::Mode`]): `Free`, `Contact(side)` and (tension-free only) `Clipped(side)`,
 //! where the mass is past the stop but the contact force would be tensile.
 
-use nalgebra::SVector;
+use nalgebra::{SMatrix, SVector};
 
 use crate::device::{Device, StiffnessModel};
 use crate::drive::Excitation;
@@ -181,6 +181,25 @@ impl<E: Excitation> Harvester<E> {
         State::new(x, w0 * x, q, q)
     }
 
+    /// The free-flight model split into its linearisation about rest and a small remainder,
+    /// for [`crate::ode::exponential`] (see [`FreeFlight`]).
+    pub fn free_flight(&self) -> FreeFlight {
+        let ct = self.c0 + self.cp + self.cl;
+        FreeFlight {
+            dcdx: self.c0 / self.x0,
+            vb: self.vb,
+            ct,
+            gamma: self.c0 * self.vb / self.x0,
+            inv_ct: 1.0 / ct,
+            inv_mass: 1.0 / self.mass_kg,
+            inv_rl: 1.0 / self.rl,
+            inv_ct_rl: 1.0 / (ct * self.rl),
+            mass_kg: self.mass_kg,
+            damping: self.damping,
+            km: self.km,
+        }
+    }
+
     /// Integrator options with relative tolerance `rtol` and absolute tolerances
     /// `rtol` times [`Harvester::scales`].
     pub fn solver_options(&self, rtol: f64) -> Options<4> {
@@ -195,6 +214,85 @@ impl<E: Excitation> Harvester<E> {
             max_steps: 50_000_000,
             event_time_tol: 1e-14,
         }
+    }
+}
+
+/// The harvester in free flight (no contact force) as `y' = L y + c a(t) + N(y)`: `L` is the
+/// model of eqs 7-10 linearised about rest, `c = (0, 1, 0, 0)` takes the base acceleration,
+/// and `N` is the remainder, which comes only from the capacitances' dependence on x (eq 10):
+/// with `Ct = C0 + Cp + CL`, `Gamma = C0 Vb / x0` and `dC = C0 x / x0`,
+///
+/// * `L`: `x' = v`, `m v' = -(km + 2 Gamma²/Ct) x - b v - Gamma (s1 - s2)/Ct`,
+///   `RL s1' = -(s1 + Gamma x)/Ct`, `RL s2' = -(s2 - Gamma x)/Ct`
+///   (the differential two-port of eqs 11-17, with the common mode beside it);
+/// * `N`: `m N_v = (C0/x0) [ (V1² - V2²)/2 + Vb (dC/Ct) (V1 + V2) ]`,
+///   `RL N_s1 = V1 dC/Ct`, `RL N_s2 = -V2 dC/Ct`, with the exact node voltages of
+///   [`Harvester::electrical`].
+///
+/// `N` is written in closed form (not as the right-hand side minus `L y`) so that it keeps
+/// its relative precision: it is of relative size `dC/Ct`, a few per cent at the stops.
+/// [`FreeFlight::linear`] + [`FreeFlight::remainder`] equals the free-flight right-hand side
+/// to rounding (tested).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FreeFlight {
+    dcdx: f64,
+    vb: f64,
+    ct: f64,
+    gamma: f64,
+    inv_ct: f64,
+    inv_mass: f64,
+    inv_rl: f64,
+    inv_ct_rl: f64,
+    mass_kg: f64,
+    damping: f64,
+    km: f64,
+}
+
+impl FreeFlight {
+    /// `(L, c)`: the linearised free-flight model and the column of the base acceleration.
+    pub fn linear(&self) -> (SMatrix<f64, 4, 4>, State) {
+        let (m, g, ct) = (self.mass_kg, self.gamma, self.ct);
+        let k_oc = self.km + 2.0 * g * g / ct;
+        let rc = self.inv_ct_rl;
+        #[rustfmt::skip]
+        let l = SMatrix::<f64, 4, 4>::new(
+            0.0, 1.0, 0.0, 0.0,
+            -k_oc / m, -self.damping / m, -g / (m * ct), g / (m * ct),
+            -g * rc, 0.0, -rc, 0.0,
+            g * rc, 0.0, 0.0, -rc,
+        );
+        (l, State::new(0.0, 1.0, 0.0, 0.0))
+    }
+
+    /// The node voltages V1, V2 at a state (V), as [`Harvester::electrical`] computes them.
+    #[inline]
+    pub fn voltages(&self, y: &State) -> [f64; 2] {
+        let dc = self.dcdx * y[0];
+        [
+            (y[2] + dc * self.vb) / (self.ct + dc),
+            (y[3] - dc * self.vb) / (self.ct - dc),
+        ]
+    }
+
+    /// The remainder `N(y)` (see the type's docs).
+    #[inline]
+    pub fn remainder(&self, y: &State) -> State {
+        self.remainder_and_voltages(y).0
+    }
+
+    /// The remainder `N(y)` and the node voltages it is computed from.
+    #[inline]
+    pub fn remainder_and_voltages(&self, y: &State) -> (State, [f64; 2]) {
+        let dc = self.dcdx * y[0];
+        let [v1, v2] = self.voltages(y);
+        let r = dc * self.inv_ct;
+        let n = State::new(
+            0.0,
+            self.dcdx * (0.5 * (v1 * v1 - v2 * v2) + self.vb * r * (v1 + v2)) * self.inv_mass,
+            v1 * r * self.inv_rl,
+            -v2 * r * self.inv_rl,
+        );
+        (n, [v1, v2])
     }
 }
 
