@@ -534,16 +534,15 @@ fn f15_prototype2_spectra_widen_upwards() {
     let lin = &run.linear;
     let e34 = &run.levels[fig15::L034].ens;
     let bin = e34.mean_spectrum.total.df();
-    // The peak lies near the linearised resonance (impacts at 0.34e-3 are rare: contact 4e-5
-    // of the time), not below it by more than a bin (the stops only stiffen), and above it
-    // by at most three bins (0.7 %). With 32 records the peak bin of the mean PSD, a noisy
-    // maximum of a flat 12 Hz top read on 1.5 Hz bins, lies 1.7 Hz above the linear peak.
+    // The peak is not below the linearised resonance by more than a bin: the stops only
+    // stiffen. No upper bound is asserted here beyond the claim's own verdict above: the peak
+    // of the mean PSD is the arg-max of a noisy top, and a bound on how far above it may lie
+    // was first +-1 bin, then widened after a 32-record run put it 1.1 bins above; a bound
+    // chosen after seeing the number tests nothing, so the value is pinned in the regression
+    // snapshot (tests/snapshots/broadband_fig15.snap) instead.
     let peak = value(&values, "F15-a", "peak_0p34e-3_hz", "published").ours;
     let lin_peak = lin.half_power.unwrap().peak_hz;
-    assert!(
-        peak >= lin_peak - bin && peak <= lin_peak + 3.0 * bin,
-        "{peak} vs {lin_peak}"
-    );
+    assert!(peak >= lin_peak - bin, "{peak} vs {lin_peak}");
     // The width is at least the linear width (impacts only widen).
     let w = value(&values, "F15-a", "bw_0p34e-3_hz", "published");
     assert!(w.ours + w.uncertainty.unwrap() >= lin.bw3db_hz(), "{w:?}");
