@@ -49,7 +49,7 @@ impl Preprocessor for Math {
             }
         });
         if !failures.is_empty() {
-            return Err(anyhow!("{}", failures.join("\n")).into());
+            return Err(anyhow!("{}", failures.join("\n")));
         }
         Ok(book)
     }

@@ -55,3 +55,17 @@ def test_fig13_matches_the_fig13_program(tmp_path):
     ours = {(c["claim"], c["quantity"], c["set"]): c["ours"] for c in py["claims"]}
     theirs = {(c["claim"], c["quantity"], c["set"]): c["ours"] for c in cli["values"]}
     assert ours == theirs
+
+
+def test_fig09_matches_the_fig09_program(tmp_path):
+    # The program calibrates prototype 1 into the empty output directory first, as
+    # endstop.paper.fig09.run() does when no calibrated device is given.
+    out = run_cli([], tmp_path, program="fig09")
+    cli = summary(out / "fig09" / "summary.json")
+    py = endstop.paper.fig09.run()
+    assert set(py["numbers"]) == set(cli["numbers"])
+    for key, value in cli["numbers"].items():
+        assert close(py["numbers"][key], value), key
+    ours = {(c["claim"], c["quantity"], c["set"]): c["ours"] for c in py["claims"]}
+    theirs = {(c["claim"], c["quantity"], c["set"]): c["ours"] for c in cli["values"]}
+    assert ours == theirs
