@@ -492,3 +492,40 @@ pub fn run_main(name: &str, body: impl FnOnce() -> Result<()>) {
         std::process::exit(1);
     }
 }
+
+#[cfg(test)]
+mod caption_tests {
+    use super::*;
+
+    #[test]
+    fn caption_shows_the_image_and_links_parameter_files_and_parquet() {
+        let mut exp = Experiment::start("figxx");
+        exp.params.push((
+            "data/prototype2.toml".into(),
+            "published".into(),
+            String::new(),
+        ));
+        lock(&exp.parquet).push((
+            root().join("data/results/figxx/figxx.parquet"),
+            "published".into(),
+        ));
+        let md = exp.figure_markdown("figxx", "Figure XX");
+        assert!(
+            md.starts_with("![Figure XX](generated/figxx/figxx.svg)\n\n*Made by "),
+            "{md}"
+        );
+        assert!(
+            md.contains(
+                "from [`data/prototype2.toml`](../../data/prototype2.toml) (published parameters)"
+            ),
+            "{md}"
+        );
+        assert!(
+            md.ends_with(
+                "; data: [`data/results/figxx/figxx.parquet`]\
+                 (../../data/results/figxx/figxx.parquet) (published).*\n"
+            ),
+            "{md}"
+        );
+    }
+}
