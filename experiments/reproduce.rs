@@ -53,6 +53,16 @@ fn publish_own_device() -> Result<()> {
                 common::write_atomic(&dst.join(to), &bytes)?;
             }
         }
+        // The caption, with the image pointing at the copy above.
+        if let Ok(md) = std::fs::read_to_string(src.join(format!("{tool}.figure.md"))) {
+            let md = match (md.find("]("), md.find(".svg)")) {
+                (Some(a), Some(b)) if a < b => {
+                    format!("{}](generated/own_device/{stem}{}", &md[..a], &md[b..])
+                }
+                _ => md,
+            };
+            common::write_atomic(&dst.join(format!("{stem}.figure.md")), md.as_bytes())?;
+        }
     }
     Ok(())
 }
@@ -111,6 +121,9 @@ fn run() -> Result<()> {
             if !dir.join("p1_impacting.cir").exists() {
                 common::write_atomic(&dir.join("p1_impacting.cir"), b"* not generated\n")?;
             }
+            if !dir.join("crosscheck.figure.md").exists() {
+                common::write_atomic(&dir.join("crosscheck.figure.md"), b"*(no plot)*\n")?;
+            }
         }
         // Phase by phase: a job's key is computed when its phase starts, after the artefacts
         // of earlier phases (the calibration) are written.
@@ -144,10 +157,7 @@ fn run() -> Result<()> {
     let rows = write_scorecard()?;
     write_provenance()?;
     eprintln!("[reproduce] building the book");
-    let book = mdbook_driver::MDBook::load(root.join("book"))
-        .map_err(|e| anyhow::anyhow!("loading the book: {e:#}"))?;
-    book.build()
-        .map_err(|e| anyhow::anyhow!("building the book: {e:#}"))?;
+    common::book::build(&root.join("book"))?;
 
     let count = |v: Verdict| rows.iter().filter(|r| r.verdict == v).count();
     if !timings.is_empty() {

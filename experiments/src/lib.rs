@@ -5,6 +5,7 @@
 //!
 //! Every file is written to a temporary name in the same directory and renamed, so a failed
 //! run never leaves a partial output behind.
+pub mod book;
 pub mod broadband_io;
 pub mod calibration_io;
 pub mod frame;
@@ -19,7 +20,7 @@ pub use calibration_io::{calibrated_prototype1, prototype1_both_sets};
 use std::collections::BTreeMap;
 use std::io::Write;
 use std::path::{Path, PathBuf};
-use std::sync::OnceLock;
+use std::sync::{Mutex, MutexGuard, OnceLock};
 use std::time::Instant;
 
 use anyhow::{Context, Result};
@@ -160,6 +161,11 @@ pub struct Experiment {
     pub seed: Option<u64>,
     values: Vec<Value>,
     numbers: BTreeMap<String, f64>,
+    /// Parquet files written: (path, parameter set). (Behind a lock so that writing keeps
+    /// taking `&self`.)
+    parquet: Mutex<Vec<(PathBuf, String)>>,
+    /// Plots written: (file stem, title).
+    plots: Mutex<Vec<(String, String)>>,
     started: Instant,
 }
 
@@ -186,6 +192,8 @@ impl Experiment {
             seed: None,
             values: Vec::new(),
             numbers: BTreeMap::new(),
+            parquet: Mutex::new(Vec::new()),
+            plots: Mutex::new(Vec::new()),
             started: Instant::now(),
         }
     }
@@ -280,27 +288,95 @@ impl Experiment {
             .finish(df)
             .with_context(|| format!("writing {}", path.display()))?;
         write_atomic(&path, &buf)?;
+        lock(&self.parquet).push((path.clone(), set.to_string()));
         Ok(path)
     }
 
-    /// Renders a figure as `<dir>/<name>.svg` and `.png`, and copies both for the book.
+    /// Renders a figure as `<dir>/<name>.svg` and `.png`, and copies both for the book;
+    /// [`Experiment::finish`] writes its caption (`<name>.figure.md`).
     pub fn write_plot<F: plot::Figure>(&self, fig: &F) -> Result<()> {
-        let (svg, png) = plot::render(fig)?;
-        for dir in [&self.dir, &self.book_dir] {
-            write_atomic(&dir.join(format!("{}.svg", self.name)), svg.as_bytes())?;
-            write_atomic(&dir.join(format!("{}.png", self.name)), &png)?;
-        }
-        Ok(())
+        let stem = self.name.clone();
+        self.write_extra_plot(&stem, fig)
     }
 
-    /// Renders an extra figure under another file stem (e.g. `fig08_convergence`).
+    /// Renders an extra figure under another file stem (e.g. `fig08_convergence`), with its
+    /// caption as [`Experiment::write_plot`].
     pub fn write_extra_plot<F: plot::Figure>(&self, stem: &str, fig: &F) -> Result<()> {
         let (svg, png) = plot::render(fig)?;
         for dir in [&self.dir, &self.book_dir] {
             write_atomic(&dir.join(format!("{stem}.svg")), svg.as_bytes())?;
             write_atomic(&dir.join(format!("{stem}.png")), &png)?;
         }
+        lock(&self.plots).push((stem.to_string(), fig.title()));
         Ok(())
+    }
+
+    /// The book's Markdown for the plot `stem`: the image and a caption naming the program and
+    /// paper-layer file that made it, the parameter files with their sets, and the Parquet
+    /// files the experiment wrote, each linked (paths relative to the book's pages in
+    /// `book/build/`). Deterministic: the same run gives the same bytes.
+    pub fn figure_markdown(&self, stem: &str, title: &str) -> String {
+        let link = |rel: &str| format!("[`{rel}`](../../{rel})");
+        let program = std::env::current_exe()
+            .ok()
+            .and_then(|p| p.file_stem().map(|s| s.to_string_lossy().into_owned()))
+            .unwrap_or_else(|| self.name.clone());
+        let mut made_by = Vec::new();
+        let source = format!("experiments/{program}.rs");
+        if root().join(&source).exists() {
+            made_by.push(link(&source));
+        }
+        let paper = format!("src/paper/{program}.rs");
+        if root().join(&paper).exists() {
+            made_by.push(format!("the paper layer {}", link(&paper)));
+        }
+        let made_by = if made_by.is_empty() {
+            format!("`{program}`")
+        } else {
+            made_by.join(" and ")
+        };
+        let rel = |p: &Path| -> String {
+            p.strip_prefix(root())
+                .unwrap_or(p)
+                .to_string_lossy()
+                .replace('\\', "/")
+        };
+        let params: Vec<String> = self
+            .params
+            .iter()
+            .map(|(file, set, _)| format!("{} ({set} parameters)", link(file)))
+            .collect();
+        let data: Vec<String> = lock(&self.parquet)
+            .iter()
+            .map(|(path, set)| {
+                let r = rel(path);
+                if path.starts_with(root()) {
+                    format!("{} ({set})", link(&r))
+                } else {
+                    format!("`{r}` ({set})")
+                }
+            })
+            .collect();
+        let image_dir = rel(&self.book_dir);
+        let image_dir = image_dir
+            .strip_prefix("book/src/")
+            .unwrap_or(&image_dir)
+            .to_string();
+        let alt = if title.is_empty() { stem } else { title };
+        let mut md = format!("![{alt}]({image_dir}/{stem}.svg)\n\n*Made by {made_by}");
+        if !params.is_empty() {
+            md.push_str(&format!(" from {}", params.join(", ")));
+        }
+        md.push_str(if data.is_empty() {
+            "; no data file.*\n"
+        } else {
+            "; data: "
+        });
+        if !data.is_empty() {
+            md.push_str(&data.join(", "));
+            md.push_str(".*\n");
+        }
+        md
     }
 
     /// Writes the generated markdown the book includes (`book/src/generated/<name>/numbers.md`).
@@ -308,8 +384,16 @@ impl Experiment {
         write_atomic(&self.book_dir.join("numbers.md"), markdown.as_bytes())
     }
 
-    /// Writes `summary.json` (deterministic: no wall-clock content) and `timing.json`.
+    /// Writes `summary.json` (deterministic: no wall-clock content), `timing.json`, and the
+    /// caption of every plot (`<stem>.figure.md`, which the book includes in place of the
+    /// image).
     pub fn finish(self) -> Result<()> {
+        for (stem, title) in lock(&self.plots).iter() {
+            write_atomic(
+                &self.book_dir.join(format!("{stem}.figure.md")),
+                self.figure_markdown(stem, title).as_bytes(),
+            )?;
+        }
         let summary = Summary {
             experiment: &self.name,
             commit: git_commit(),
@@ -365,6 +449,11 @@ impl Experiment {
     }
 }
 
+/// Locks a mutex, also after a panic elsewhere (the data are append-only lists).
+fn lock<T>(m: &Mutex<T>) -> MutexGuard<'_, T> {
+    m.lock().unwrap_or_else(|e| e.into_inner())
+}
+
 /// A progress bar on stderr (hidden when stderr is not a terminal).
 pub fn progress(len: u64, what: &str) -> ProgressBar {
     let pb = ProgressBar::new(len);
@@ -401,5 +490,42 @@ pub fn run_main(name: &str, body: impl FnOnce() -> Result<()>) {
     if let Err(e) = body() {
         eprintln!("[{name}] error: {e:#}");
         std::process::exit(1);
+    }
+}
+
+#[cfg(test)]
+mod caption_tests {
+    use super::*;
+
+    #[test]
+    fn caption_shows_the_image_and_links_parameter_files_and_parquet() {
+        let mut exp = Experiment::start("figxx");
+        exp.params.push((
+            "data/prototype2.toml".into(),
+            "published".into(),
+            String::new(),
+        ));
+        lock(&exp.parquet).push((
+            root().join("data/results/figxx/figxx.parquet"),
+            "published".into(),
+        ));
+        let md = exp.figure_markdown("figxx", "Figure XX");
+        assert!(
+            md.starts_with("![Figure XX](generated/figxx/figxx.svg)\n\n*Made by "),
+            "{md}"
+        );
+        assert!(
+            md.contains(
+                "from [`data/prototype2.toml`](../../data/prototype2.toml) (published parameters)"
+            ),
+            "{md}"
+        );
+        assert!(
+            md.ends_with(
+                "; data: [`data/results/figxx/figxx.parquet`]\
+                 (../../data/results/figxx/figxx.parquet) (published).*\n"
+            ),
+            "{md}"
+        );
     }
 }

@@ -24,6 +24,10 @@ pub trait Figure {
     fn size(&self) -> (u32, u32) {
         (960, 640)
     }
+    /// Title, used as the image's alternative text in the book.
+    fn title(&self) -> String {
+        String::new()
+    }
     /// Draws on a drawing area.
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<()>
     where
@@ -55,18 +59,24 @@ pub fn render<F: Figure>(fig: &F) -> Result<(String, Vec<u8>)> {
     Ok((svg, png))
 }
 
-/// How a series is drawn.
+/// How a series is drawn; the legend shows the same glyph (a marker alone for [`Style::Points`],
+/// so that the paper's values stand apart from simulated curves).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Style {
     /// Solid line.
     Line,
     /// Dashed line.
     Dashed,
-    /// Markers only.
+    /// Crosses only, no line (the paper's values: no simulated curve is drawn so).
     Points,
-    /// Solid line with markers.
+    /// Solid line with small markers.
     LinePoints,
 }
+
+/// Half-size of a [`Style::Points`] cross (pixels).
+const POINT_RADIUS: i32 = 7;
+/// Radius of a [`Style::LinePoints`] marker (pixels).
+const LINE_POINT_RADIUS: i32 = 3;
 
 /// One labelled curve.
 #[derive(Debug, Clone)]
@@ -223,6 +233,26 @@ impl LinePlot {
     }
 }
 
+/// Tick label on a linear axis: the shortest decimal that reads back to the tick rounded to 10
+/// significant digits (`900`, `0.3`, `-2.5`), or `2.5e-7` outside 1e-3..1e6.
+fn linear_tick_label(v: &f64) -> String {
+    let v = *v;
+    if v == 0.0 || !v.is_finite() {
+        return if v == 0.0 { "0".into() } else { format!("{v}") };
+    }
+    let rounded: f64 = format!("{v:.9e}").parse().unwrap_or(v);
+    let a = rounded.abs();
+    if (1e-3..1e6).contains(&a) {
+        format!("{rounded}")
+    } else {
+        let e = a.log10().floor() as i32;
+        let m: f64 = format!("{:.9e}", rounded / 10f64.powi(e))
+            .parse()
+            .unwrap_or(rounded);
+        format!("{m}e{e}")
+    }
+}
+
 /// Tick label on a logarithmic axis: `1e-5`, `2e-5`, or plain decimals between 0.01 and 1000.
 fn log_tick_label(v: &f64) -> String {
     let v = *v;
@@ -260,12 +290,17 @@ macro_rules! draw_chart {
             .axis_desc_style(("sans-serif", 17))
             .light_line_style(RGBColor(235, 235, 235))
             .bold_line_style(RGBColor(210, 210, 210));
-        // Log axes: tick labels such as 1e-5 instead of plotters' 9.999999999e-6.
+        // Log axes: tick labels such as 1e-5 instead of plotters' 9.999999999e-6; linear
+        // axes: 900 instead of 900.0.
         if $self.log_x {
             mesh.x_label_formatter(&log_tick_label);
+        } else {
+            mesh.x_label_formatter(&linear_tick_label);
         }
         if $self.log_y {
             mesh.y_label_formatter(&log_tick_label);
+        } else {
+            mesh.y_label_formatter(&linear_tick_label);
         }
         mesh.draw().map_err(|e| anyhow!("mesh: {e}"))?;
         let mut any_label = false;
@@ -291,22 +326,53 @@ macro_rules! draw_chart {
                     .draw_series(DashedLineSeries::new(pts.clone(), 8, 5, line))
                     .map_err(|e| anyhow!("series: {e}"))?,
                 Style::Points => chart
-                    .draw_series(pts.iter().map(|&p| Circle::new(p, 3, color.filled())))
+                    .draw_series(
+                        pts.iter()
+                            .map(|&p| Cross::new(p, POINT_RADIUS, color.stroke_width(3))),
+                    )
                     .map_err(|e| anyhow!("series: {e}"))?,
                 Style::LinePoints => {
                     chart
                         .draw_series(LineSeries::new(pts.clone(), line))
                         .map_err(|e| anyhow!("series: {e}"))?;
                     chart
-                        .draw_series(pts.iter().map(|&p| Circle::new(p, 3, color.filled())))
+                        .draw_series(
+                            pts.iter()
+                                .map(|&p| Circle::new(p, LINE_POINT_RADIUS, color.filled())),
+                        )
                         .map_err(|e| anyhow!("series: {e}"))?
                 }
             };
             if !s.label.is_empty() {
                 any_label = true;
-                anno.label(s.label.clone()).legend(move |(x, y)| {
-                    PathElement::new(vec![(x, y), (x + 22, y)], color.stroke_width(3))
-                });
+                // The legend glyph is drawn as the series is: a marker alone, a dashed or a
+                // solid segment, or a segment with a marker.
+                let seg = color.stroke_width(3);
+                let anno = anno.label(s.label.clone());
+                match s.style {
+                    Style::Line => {
+                        anno.legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 22, y)], seg));
+                    }
+                    Style::Dashed => {
+                        anno.legend(move |(x, y)| {
+                            EmptyElement::at((x, y))
+                                + PathElement::new(vec![(0, 0), (8, 0)], seg)
+                                + PathElement::new(vec![(14, 0), (22, 0)], seg)
+                        });
+                    }
+                    Style::Points => {
+                        anno.legend(move |(x, y)| {
+                            Cross::new((x + 11, y), POINT_RADIUS, color.stroke_width(3))
+                        });
+                    }
+                    Style::LinePoints => {
+                        anno.legend(move |(x, y)| {
+                            EmptyElement::at((x, y))
+                                + PathElement::new(vec![(0, 0), (22, 0)], seg)
+                                + Circle::new((11, 0), LINE_POINT_RADIUS + 1, color.filled())
+                        });
+                    }
+                }
             }
         }
         if any_label {
@@ -327,6 +393,10 @@ impl Figure for LinePlot {
         self.size
     }
 
+    fn title(&self) -> String {
+        self.title.clone()
+    }
+
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<()>
     where
         DB::ErrorType: 'static,
@@ -341,5 +411,21 @@ impl Figure for LinePlot {
             (true, true) => draw_chart!(self, root, (x0..x1).log_scale(), (y0..y1).log_scale()),
         }
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn linear_tick_labels_have_no_trailing_zeros_or_float_noise() {
+        assert_eq!(linear_tick_label(&900.0), "900");
+        assert_eq!(linear_tick_label(&1000.0), "1000");
+        assert_eq!(linear_tick_label(&0.0), "0");
+        assert_eq!(linear_tick_label(&(0.1 + 0.2)), "0.3");
+        assert_eq!(linear_tick_label(&-2.5), "-2.5");
+        assert_eq!(linear_tick_label(&2.5e-7), "2.5e-7");
+        assert_eq!(linear_tick_label(&1e6), "1e6");
     }
 }

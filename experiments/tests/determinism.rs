@@ -1,5 +1,5 @@
-//! The same experiment gives byte-identical Parquet and summary files on every run and for
-//! any thread count (RAYON_NUM_THREADS = 1 versus 2): one narrowband and one broadband
+//! The same experiment gives byte-identical Parquet, summary and plot (SVG, PNG) files on every
+//! run and for any thread count (RAYON_NUM_THREADS = 1 versus 2): one narrowband and one broadband
 //! experiment. Outputs go to temporary directories (ENDSTOP_OUTPUT_DIR), never to
 //! data/results/. The broadband run also serves the provenance check of its Parquet metadata
 //! (each parameter set labelled with its own parameter file), so fig11 runs twice, not three
@@ -33,7 +33,7 @@ fn run(bin: &str, threads: &str, tag: &str) -> PathBuf {
     dir
 }
 
-/// Every .parquet and summary.json under `dir`, by relative path.
+/// Every .parquet, .svg, .png and summary.json under `dir`, by relative path.
 fn outputs(dir: &Path) -> BTreeMap<String, Vec<u8>> {
     let mut map = BTreeMap::new();
     let mut stack = vec![dir.to_path_buf()];
@@ -44,7 +44,8 @@ fn outputs(dir: &Path) -> BTreeMap<String, Vec<u8>> {
                 stack.push(p);
             } else {
                 let name = p.file_name().unwrap().to_string_lossy().to_string();
-                if name.ends_with(".parquet") || name == "summary.json" {
+                let kept = [".parquet", ".svg", ".png"];
+                if kept.iter().any(|ext| name.ends_with(ext)) || name == "summary.json" {
                     let rel = p.strip_prefix(dir).unwrap().to_string_lossy().to_string();
                     map.insert(rel, std::fs::read(&p).unwrap());
                 }
@@ -54,7 +55,7 @@ fn outputs(dir: &Path) -> BTreeMap<String, Vec<u8>> {
     map
 }
 
-/// The Parquet and summary files of `bin` run with 1 and with 2 threads.
+/// The Parquet, summary and plot files of `bin` run with 1 and with 2 threads.
 fn outputs_1_and_2_threads(bin: &str) -> [BTreeMap<String, Vec<u8>>; 2] {
     let a = run(bin, "1", "a");
     let b = run(bin, "2", "b");
@@ -72,6 +73,10 @@ fn fig11_outputs() -> &'static [BTreeMap<String, Vec<u8>>; 2] {
 
 fn assert_identical(bin: &str, [oa, ob]: &[BTreeMap<String, Vec<u8>>; 2]) {
     assert!(!oa.is_empty(), "{bin} wrote no Parquet or summary");
+    assert!(
+        oa.keys().any(|k| k.ends_with(".svg")) && oa.keys().any(|k| k.ends_with(".png")),
+        "{bin} wrote no plot"
+    );
     assert_eq!(
         oa.keys().collect::<Vec<_>>(),
         ob.keys().collect::<Vec<_>>(),

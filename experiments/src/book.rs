@@ -1,0 +1,169 @@
+//! Builds the book (`book/` into `book/build/`) with mdBook, its formulas rendered to HTML by
+//! KaTeX while the book is built, so that the pages need no network.
+//!
+//! The chapters write formulas as MathJax reads them from Markdown: `\\(...\\)` inline and
+//! `\\[...\\]` displayed, with Markdown's backslash escapes inside (`\\,` for TeX's `\,`).
+//! [`Math`], a preprocessor run after mdBook's own (so included files are in place), finds them
+//! with mdbook-katex's scanner (which skips code spans and fenced code), undoes the Markdown
+//! escapes, and replaces each formula with KaTeX's HTML (and MathML, for screen readers). The
+//! stylesheet and fonts are vendored in `book/src/katex/` and linked from `book/theme/head.hbs`.
+//! A formula KaTeX cannot parse stops the build with its chapter and source.
+
+use std::path::Path;
+
+use anyhow::{anyhow, bail, Result};
+use mdbook_driver::book::{Book, BookItem};
+use mdbook_katex::preprocess::{get_render_tasks, ExtraOpts, Render};
+use mdbook_katex::scan::Delimiter;
+use mdbook_preprocessor::{Preprocessor, PreprocessorContext};
+
+/// Builds the book at `book_root` (the directory holding `book.toml`).
+pub fn build(book_root: &Path) -> Result<()> {
+    let mut book =
+        mdbook_driver::MDBook::load(book_root).map_err(|e| anyhow!("loading the book: {e:#}"))?;
+    book.with_preprocessor(Math);
+    book.build()
+        .map_err(|e| anyhow!("building the book: {e:#}"))
+}
+
+/// The preprocessor that renders the chapters' formulas with KaTeX.
+pub struct Math;
+
+impl Preprocessor for Math {
+    fn name(&self) -> &str {
+        "endstop-katex"
+    }
+
+    fn run(
+        &self,
+        _ctx: &PreprocessorContext,
+        mut book: Book,
+    ) -> mdbook_preprocessor::errors::Result<Book> {
+        let mut failures = Vec::new();
+        book.for_each_mut(|item| {
+            if let BookItem::Chapter(ch) = item {
+                match render_chapter(&ch.content) {
+                    Ok(html) => ch.content = html,
+                    Err(e) => failures.push(format!("chapter `{}`: {e:#}", ch.name)),
+                }
+            }
+        });
+        if !failures.is_empty() {
+            return Err(anyhow!("{}", failures.join("\n")));
+        }
+        Ok(book)
+    }
+}
+
+fn delimiters() -> ExtraOpts {
+    ExtraOpts {
+        include_src: false,
+        block_delimiter: Delimiter {
+            left: r"\\[".into(),
+            right: r"\\]".into(),
+        },
+        inline_delimiter: Delimiter {
+            left: r"\\(".into(),
+            right: r"\\)".into(),
+        },
+    }
+}
+
+/// Undoes Markdown's backslash escapes: a backslash before ASCII punctuation stands for that
+/// character (`\\,` is TeX's `\,`, `\\\\` is TeX's `\\`); any other backslash is kept.
+pub fn unescape_markdown(s: &str) -> String {
+    let mut out = String::with_capacity(s.len());
+    let mut chars = s.chars().peekable();
+    while let Some(c) = chars.next() {
+        if c == '\\' {
+            if let Some(&next) = chars.peek() {
+                if next.is_ascii_punctuation() {
+                    out.push(next);
+                    chars.next();
+                    continue;
+                }
+            }
+        }
+        out.push(c);
+    }
+    out
+}
+
+/// Renders one formula (its TeX, Markdown escapes already undone) to HTML.
+pub fn render_formula(tex: &str, display: bool) -> Result<String> {
+    let opts = katex::Opts::builder()
+        .display_mode(display)
+        .throw_on_error(true)
+        .build()
+        .map_err(|e| anyhow!("KaTeX options: {e}"))?;
+    katex::render_with_opts(tex, &opts)
+        // One line, so that Markdown keeps it inside its paragraph.
+        .map(|html| html.replace('\n', " "))
+        .map_err(|e| anyhow!("KaTeX cannot render `{tex}`: {e}"))
+}
+
+/// A chapter's Markdown with every formula replaced by KaTeX's HTML.
+pub fn render_chapter(markdown: &str) -> Result<String> {
+    let opts = delimiters();
+    let mut out = String::with_capacity(markdown.len() * 2);
+    let mut errors = Vec::new();
+    for task in get_render_tasks(markdown, "", &opts) {
+        let (tex, display) = match task {
+            Render::Text(t) => {
+                out.push_str(t);
+                continue;
+            }
+            Render::InlineTask(t) => (t, false),
+            Render::DisplayTask(t) => (t, true),
+        };
+        match render_formula(&unescape_markdown(tex), display) {
+            Ok(html) => out.push_str(&html),
+            Err(e) => errors.push(e.to_string()),
+        }
+    }
+    if !errors.is_empty() {
+        bail!("{}", errors.join("\n"));
+    }
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn markdown_escapes_are_undone_before_katex() {
+        assert_eq!(
+            unescape_markdown(r"a \\, b_{\mathrm{im}}"),
+            r"a \, b_{\mathrm{im}}"
+        );
+        assert_eq!(unescape_markdown(r"\\\\ \lt"), r"\\ \lt");
+    }
+
+    #[test]
+    fn inline_and_display_formulas_become_katex_html() {
+        let md = "Force \\\\(F_{\\mathrm{im}} \\\\, x\\\\) and\n\n\\\\[ \\frac{1}{2} \\\\]\n";
+        let html = render_chapter(md).unwrap();
+        assert!(!html.contains(r"\\("), "{html}");
+        assert!(!html.contains(r"\\["), "{html}");
+        assert_eq!(html.matches(r#"<span class="katex">"#).count(), 2, "{html}");
+        assert_eq!(
+            html.matches(r#"class="katex-display""#).count(),
+            1,
+            "{html}"
+        );
+        assert!(html.starts_with("Force <span"), "{html}");
+    }
+
+    #[test]
+    fn code_is_left_alone() {
+        let md = "`\\\\(x\\\\)` and\n\n```text\n\\\\(y\\\\)\n```\n";
+        assert_eq!(render_chapter(md).unwrap(), md);
+    }
+
+    #[test]
+    fn a_formula_katex_cannot_parse_is_an_error_naming_it() {
+        let err = render_chapter("bad \\\\(\\frac{1}\\\\)").unwrap_err();
+        assert!(err.to_string().contains(r"\frac{1}"), "{err}");
+    }
+}

@@ -1,0 +1,20 @@
+"""The Le & Halvorsen (2012) MEMS electrostatic energy harvester with end-stops.
+
+The model runs in Rust (the repository's `endstop` library); this package is its Python face:
+
+* :class:`Device`: the parameters of a device file, validated (``Device.from_toml(path)``,
+  ``Device.from_dict(d)``, ``Device.prototype(1 | 2)``); a bad value raises
+  :class:`ParamError` naming the field and its valid range;
+* :mod:`endstop.linear`: linear theory (eqs 11-22): two-port, k^2, Qm readings, eq 21, the
+  linear output PSD;
+* :mod:`endstop.study`: simulations (frequency up-sweeps, amplitude sweeps, one random record,
+  an ensemble), returning dicts of numbers and numpy arrays;
+* :mod:`endstop.paper`: the paper's figure protocols (``endstop.paper.fig13.run()``).
+
+Every simulation releases the GIL while it runs.
+"""
+
+from ._native import Device, ParamError, SolverError, __version__
+from . import linear, paper, study
+
+__all__ = ["Device", "ParamError", "SolverError", "linear", "paper", "study", "__version__"]

@@ -1,0 +1,30 @@
+"""Linear theory of the differential mode (eqs 11-22 of the paper).
+
+* :func:`two_port`: C, Gamma, K, k^2, the open-circuit resonance, r_L (eq 22), the three Qm
+  readings and the eq 21 efficiency, as a dict;
+* :func:`k2`, :func:`qm`, :func:`eq21_efficiency`, :func:`eq21_power_w`;
+* :func:`output_psd`: the linearised model's output power PSD of both loads (W/Hz);
+* :func:`bias_for_coupling`: the bias giving a coupling k^2 (eq 18 inverted).
+"""
+
+import numpy as np
+
+from . import _native
+
+two_port = _native.two_port
+k2 = _native.k2
+qm = _native.qm
+eq21_efficiency = _native.eq21_efficiency
+eq21_power_w = _native.eq21_power_w
+bias_for_coupling = _native.bias_for_coupling
+
+
+def output_psd(device, psd_g2_per_hz, freq_hz):
+    """One-sided output power PSD of both loads (W/Hz) of the linearised model at the
+    frequencies ``freq_hz`` (Hz), for a two-sided acceleration PSD ``psd_g2_per_hz`` (g^2/Hz)."""
+    f = np.ascontiguousarray(freq_hz, dtype=np.float64)
+    return _native.linear_output_psd(device, float(psd_g2_per_hz), f)
+
+
+__all__ = ["two_port", "k2", "qm", "eq21_efficiency", "eq21_power_w", "output_psd",
+           "bias_for_coupling"]

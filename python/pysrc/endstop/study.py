@@ -1,0 +1,56 @@
+"""Simulations of the nonlinear model (eqs 1-10), each returning a dict of numbers and numpy
+arrays, with the GIL released while it runs.
+
+* :func:`up_sweep`: stepped-sine up-sweep with continuation, impact onset, jump and loss of
+  contact refined by bisection (the ``endstop sweep`` command; Figures 8 and 13);
+* :func:`amplitude_sweep`: amplitude continuation at one frequency with its impact onset
+  (Figure 9);
+* :func:`record`: one band-limited white-noise record, the load voltages and a summary;
+* :func:`ensemble`: independent records, mean output PSD, power, efficiency and bandwidth (the
+  ``endstop random`` command; Figures 11-15).
+
+Down-sweeps and periodic-orbit continuation (the library's ``study::orbit`` and
+``study::continuation``) are not exposed yet; they will join this module as
+``down_sweep`` and ``orbits`` with the same conventions (a Device in, a dict out).
+"""
+
+import numpy as np
+
+from . import _native
+
+
+def up_sweep(device, accel_rms_g, start_hz, stop_hz, step_hz=2.0, refine_tol_hz=0.1):
+    """Up-sweep of ``device`` from ``start_hz`` to ``stop_hz`` in ``step_hz`` steps at
+    ``accel_rms_g`` (g rms). Keys: the per-step arrays ``freq_hz``, ``v1_rms_v``,
+    ``v2_rms_v``, ``vdiff_rms_v``, ``p1_w``, ``p2_w``, ``p_total_w``, ``x_peak_m``,
+    ``contact_fraction``, ... (every step, including an extension past ``stop_hz`` while the
+    mass is still in contact, from index ``extended_from``), and ``onset_hz``, ``jump_hz``,
+    ``contact_lost_hz`` (midpoints of brackets ``*_bracket_hz``, or None), ``branch_end_hz``,
+    ``jump_power_ratio``, ``max_v1_rms_v``."""
+    return _native.up_sweep(device, float(accel_rms_g), float(start_hz), float(stop_hz),
+                            float(step_hz), float(refine_tol_hz))
+
+
+def amplitude_sweep(device, freq_hz, accels_rms_g, refine_tol_g=0.005):
+    """Amplitude continuation of ``device`` at ``freq_hz`` over the increasing
+    ``accels_rms_g`` (g rms), with the impact onset ``onset_g`` refined to ``refine_tol_g``."""
+    a = np.ascontiguousarray(accels_rms_g, dtype=np.float64)
+    return _native.amplitude_sweep(device, float(freq_hz), a, float(refine_tol_g))
+
+
+def record(device, psd_g2_per_hz, seed=2012, stream=0, duration_s=10.0):
+    """One record at two-sided level ``psd_g2_per_hz`` (g^2/Hz): ``v1_v``, ``v2_v`` (arrays at
+    ``sample_rate_hz``), ``p_total_w``, ``x_rms_m``, ``contact_fraction``, ``impacts``, ..."""
+    return _native.record(device, float(psd_g2_per_hz), int(seed), int(stream), float(duration_s))
+
+
+def ensemble(device, psd_g2_per_hz, records=4, duration_s=10.0, seed=2012):
+    """``records`` independent records (stream i of ``seed`` for record i): ``power_w`` and
+    its ``power_ci95_w``, ``efficiency`` (2P/(m Sa)), ``bw3db_hz`` of the mean PSD
+    (``freq_hz``, ``out_psd_w_per_hz``), ``eq21_power_w``, and per-record arrays in
+    ``records``."""
+    return _native.ensemble(device, float(psd_g2_per_hz), int(records), float(duration_s),
+                            int(seed))
+
+
+__all__ = ["up_sweep", "amplitude_sweep", "record", "ensemble"]

@@ -1,0 +1,71 @@
+"""The Python calls give the numbers of the Rust programs on the same device and seed.
+
+Both run the same library code, so the numbers agree far beyond the digits the programs print
+(4 to 5 significant digits): the tolerance is a relative 1e-9, which only floating-point
+differences between two builds of the same code could use."""
+
+import math
+
+import endstop
+from conftest import run_cli, summary
+
+REL = 1e-9
+
+
+def close(a, b):
+    return math.isclose(a, b, rel_tol=REL, abs_tol=0.0)
+
+
+def test_up_sweep_matches_endstop_sweep(root, tmp_path):
+    out = run_cli(["sweep", "--device", "data/examples/my_harvester.toml", "--from", "500",
+                   "--to", "800", "--step", "2", "--accel-rms-g", "0.3", "--out", str(tmp_path)],
+                  tmp_path)
+    cli = summary(out / "summary.json")["numbers"]
+    dev = endstop.Device.from_toml(root / "data/examples/my_harvester.toml")
+    py = endstop.study.up_sweep(dev, 0.3, start_hz=500, stop_hz=800, step_hz=2)
+    assert close(py["max_v1_rms_v"], cli["v1_rms_max_v"])
+    assert close(max(py["v1_rms_v"]), cli["v1_rms_max_v"])
+    assert ("impact_onset_hz" in cli) == (py["onset_hz"] is not None)
+    if py["onset_hz"] is not None:
+        assert close(py["onset_hz"], cli["impact_onset_hz"])
+    assert ("branch_end_hz" in cli) == (py["branch_end_hz"] is not None)
+    if py["branch_end_hz"] is not None:
+        assert close(py["branch_end_hz"], cli["branch_end_hz"])
+
+
+def test_ensemble_matches_endstop_random(root, tmp_path):
+    out = run_cli(["random", "--device", "data/examples/my_harvester.toml", "--psd", "1e-4",
+                   "--records", "2", "--duration-s", "2", "--seed", "7", "--out", str(tmp_path)],
+                  tmp_path)
+    cli = summary(out / "summary.json")["numbers"]
+    dev = endstop.Device.from_toml(root / "data/examples/my_harvester.toml")
+    py = endstop.study.ensemble(dev, 1e-4, records=2, duration_s=2.0, seed=7)
+    for key in ["power_w", "power_ci95_w", "efficiency", "eq21_power_w", "bw3db_hz",
+                "contact_fraction"]:
+        assert close(py[key], cli[key]), key
+
+
+def test_fig13_matches_the_fig13_program(tmp_path):
+    out = run_cli([], tmp_path, program="fig13")
+    cli = summary(out / "fig13" / "summary.json")
+    py = endstop.paper.fig13.run()
+    assert set(py["numbers"]) == set(cli["numbers"])
+    for key, value in cli["numbers"].items():
+        assert close(py["numbers"][key], value), key
+    ours = {(c["claim"], c["quantity"], c["set"]): c["ours"] for c in py["claims"]}
+    theirs = {(c["claim"], c["quantity"], c["set"]): c["ours"] for c in cli["values"]}
+    assert ours == theirs
+
+
+def test_fig09_matches_the_fig09_program(tmp_path):
+    # The program calibrates prototype 1 into the empty output directory first, as
+    # endstop.paper.fig09.run() does when no calibrated device is given.
+    out = run_cli([], tmp_path, program="fig09")
+    cli = summary(out / "fig09" / "summary.json")
+    py = endstop.paper.fig09.run()
+    assert set(py["numbers"]) == set(cli["numbers"])
+    for key, value in cli["numbers"].items():
+        assert close(py["numbers"][key], value), key
+    ours = {(c["claim"], c["quantity"], c["set"]): c["ours"] for c in py["claims"]}
+    theirs = {(c["claim"], c["quantity"], c["set"]): c["ours"] for c in cli["values"]}
+    assert ours == theirs
