@@ -50,6 +50,13 @@ type Vector5 = SVector<f64, 5>;
 const STOPS_REMOVED_M: f64 = 1.0;
 type Matrix5 = SMatrix<f64, 5, 5>;
 
+/// Largest distance of a corrected point from its predictor, in arclength steps: beyond it
+/// the step is rejected as having jumped to another branch.
+const MAX_CORRECTION: f64 = 0.5;
+
+/// Largest factor by which the largest Floquet multiplier's modulus may change in one step.
+const MAX_MULTIPLIER_RATIO: f64 = 2.0;
+
 /// Settings of a continuation.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ContinuationSettings {
@@ -57,7 +64,8 @@ pub struct ContinuationSettings {
     pub parameter: Parameter,
     /// First value (the branch starts here).
     pub start: f64,
-    /// The continuation stops at the first point beyond this value (either side of `start`).
+    /// The continuation stops at the first point beyond this value (either side of `start`),
+    /// or at the first point that falls back below `start` (beyond it, seen from `stop`).
     pub stop: f64,
     /// The parameter's unit in the arclength (Hz or g).
     pub param_scale: f64,
@@ -135,8 +143,10 @@ impl ContinuationSettings {
         }
     }
 
+    /// True once the branch has left the range between `start` and `stop` on either side (a
+    /// branch that turns back at a fold may run out below its start).
     fn beyond_stop(&self, p: f64) -> bool {
-        (p - self.stop) * self.direction() > 0.0
+        (p - self.stop) * self.direction() > 0.0 || (self.start - p) * self.direction() > 0.0
     }
 
     fn validate(&self) -> Result<(), OrbitError> {
@@ -880,7 +890,25 @@ pub fn continue_branch(
         let accepted = match attempt {
             Ok((p, its)) => {
                 let dp = (p.orbit.param(param) - p_last).abs();
-                if p.tangent.dot(&last.tangent) < cos_max || dp > settings.max_param_step {
+                // The corrector must stay near its predictor: a correction much longer than
+                // the step has left the branch (near a grazing corner it can land on another
+                // branch that passes close by).
+                let predicted = c.u_of(&last.orbit) + last.tangent * ds;
+                let moved = (c.u_of(&p.orbit) - predicted).norm();
+                // The largest multiplier moves continuously along a branch: a step that
+                // changes it by more than a factor MAX_MULTIPLIER_RATIO is refined (near a
+                // grazing corner the corrector can land on a neighbouring branch that is close
+                // in state but differs in stability).
+                let (ma, mb) = (
+                    last.orbit.max_multiplier_abs(),
+                    p.orbit.max_multiplier_abs(),
+                );
+                let jumped = (mb / ma).max(ma / mb) > MAX_MULTIPLIER_RATIO;
+                if p.tangent.dot(&last.tangent) < cos_max
+                    || dp > settings.max_param_step
+                    || moved > MAX_CORRECTION * ds
+                    || jumped
+                {
                     None
                 } else {
                     Some((p, its))
