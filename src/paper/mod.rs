@@ -23,5 +23,6 @@ pub mod fig13;
 pub mod fig14;
 pub mod fig15;
 pub mod measured;
+pub mod response;
 pub mod setups;
 pub mod table3;

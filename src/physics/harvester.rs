@@ -124,6 +124,13 @@ impl<E: Excitation> Harvester<E> {
         State::zeros()
     }
 
+    /// The state at position `x` and velocity `v` with the charges at their static
+    /// equilibrium: both node voltages zero (s_i = -+ dC Vb, dC = C0 x / x0).
+    pub fn static_state(&self, x: f64, v: f64) -> State {
+        let dc = self.c0 * x / self.x0;
+        State::new(x, v, -dc * self.vb, dc * self.vb)
+    }
+
     /// Capacitances and node voltages at a state.
     #[inline]
     pub fn electrical(&self, y: &State) -> Electrical {

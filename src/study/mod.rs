@@ -2,10 +2,11 @@
 //! stepped-drive engine ([`stepped`]) behind frequency sweeps ([`sweep`], up and down) and
 //! amplitude sweeps ([`amplitude`]), periodic orbits by shooting with their Floquet multipliers
 //! ([`orbit`]), their pseudo-arclength continuation with folds, branch points and grazing
-//! ([`continuation`]), and random-vibration records
+//! ([`continuation`]), basins of attraction ([`basins`]), and random-vibration records
 //! ([`record`]) and their ensembles ([`ensemble`]).
 
 pub mod amplitude;
+pub mod basins;
 pub mod continuation;
 pub mod ensemble;
 pub mod orbit;

@@ -340,11 +340,42 @@ pub struct DownSweepReport {
     /// First contact with a stop, refined (`None` if the sweep never touches one or is in
     /// contact from its first step).
     pub contact: Option<Transition>,
+    /// Total power after / before across the refined contact bracket.
+    pub contact_power_ratio: Option<f64>,
     /// Integrator counters of every refinement trial.
     pub refine_stats: Stats,
 }
 
+/// How a down-sweep leaves the lower (non-impacting) branch.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum DownEndKind {
+    /// A confirmed jump up (a discontinuity of the power).
+    Jump,
+    /// The first contact without a confirmed jump: where the lower branch ends at a grazing
+    /// point and the response moves onto the impacting branch with a power change below
+    /// [`JUMP_MIN_DROP`] (at a grazing corner the two orbits nearly coincide).
+    ContactOnset,
+}
+
+impl DownEndKind {
+    /// Label for tables.
+    pub fn label(self) -> &'static str {
+        match self {
+            DownEndKind::Jump => "jump",
+            DownEndKind::ContactOnset => "contact onset, no jump in power",
+        }
+    }
+}
+
 impl DownSweepReport {
+    /// Where the down-sweep leaves the lower branch: the jump if there is one, else the first
+    /// contact (labelled, so that a caller never presents the latter as a jump).
+    pub fn branch_end(&self) -> Option<(DownEndKind, Transition)> {
+        self.jump
+            .map(|t| (DownEndKind::Jump, t))
+            .or(self.contact.map(|t| (DownEndKind::ContactOnset, t)))
+    }
+
     /// The coarse measurements, in sweep order (frequency decreasing).
     pub fn measurements(&self) -> impl Iterator<Item = &Measurement> {
         self.sweep.steps.iter().map(|s| &s.measurement)
@@ -397,19 +428,21 @@ impl SweepSettings {
                 break;
             }
         }
-        let contact = match first_contact(&sweep) {
+        let (contact, contact_power_ratio) = match first_contact(&sweep) {
             Some(k) if k > 0 => {
                 let r = cont.refine_steps(&sweep, k, |m| !in_contact(m), tol)?;
                 refine_stats += r.stats;
-                Some(r.transition)
+                let ratio = r.after.measurement.p_total_w() / r.before.measurement.p_total_w();
+                (Some(r.transition), Some(ratio))
             }
-            _ => None,
+            _ => (None, None),
         };
         Ok(DownSweepReport {
             sweep,
             jump,
             jump_power_ratio,
             contact,
+            contact_power_ratio,
             refine_stats,
         })
     }
