@@ -54,8 +54,24 @@ fn run() -> Result<()> {
             exp.number(&k, v);
         }
     }
+    // The folds beside the scorecard's jump claims of Figure 8 (continuation only).
+    let claim_folds = response::claim_folds(&p1.device, &cal.device)?;
+    for (k, v) in &claim_folds {
+        exp.number(k, *v);
+    }
     write_tables(&exp, &run)?;
-    exp.write_numbers_md(&numbers_md(&run, &fine_shift))?;
+    let mut md = numbers_md(&run, &fine_shift);
+    md.push_str("\n### Folds beside the jump claims of Figure 8\n\n");
+    let mut t = Table::new(["claim", "quantity", "set", "upper fold (Hz)"]);
+    for (id, q, _, _) in response::FOLD_CLAIMS {
+        for set in ["published", "calibrated"] {
+            let key = response::fold_key(id, q, set).expect("a jump claim");
+            let v = claim_folds.iter().find(|(k, _)| *k == key).map(|x| x.1);
+            t.row([id.to_string(), format!("`{q}`"), set.to_string(), hz(v)]);
+        }
+    }
+    md.push_str(&t.render());
+    exp.write_numbers_md(&md)?;
     for c in &run.cases {
         exp.write_extra_plot(&format!("response_{}", c.setup.case.key()), &curve_plot(c))?;
         if c.basins.is_some() {

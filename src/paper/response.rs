@@ -77,6 +77,89 @@ impl Case {
     }
 }
 
+/// The continuation-only cases behind the scorecard's jump claims of Figure 8 that the
+/// sweep cases above do not cover: prototype 1 at 5.5 g with another end-stop model, under
+/// both parameter sets. Each is `(claim id, quantity, stiffness, b_im)`.
+pub const FOLD_CLAIMS: [(&str, &str, StiffnessModel, f64); 4] = [
+    ("F8-c", "jump_hertz_bim1p5_hz", StiffnessModel::Hertz, 1.5),
+    ("F8-d", "jump_hertz_bim0_hz", StiffnessModel::Hertz, 0.0),
+    ("F8-e", "jump_hertz_bim10_hz", StiffnessModel::Hertz, 10.0),
+    ("F8-f", "jump_linear_bim2_hz", StiffnessModel::Linear, 2.0),
+];
+
+/// The claim of Figure 13's jump (prototype 2, published set), whose fold is
+/// [`Case::Fig13P2`]'s.
+pub const FIG13_JUMP_CLAIM: (&str, &str) = ("F13", "jump_0p31g");
+
+/// Summary key of the fold beside a jump claim under a parameter set (`None`: the row is not a
+/// jump claim).
+pub fn fold_key(claim: &str, quantity: &str, set: &str) -> Option<String> {
+    if (claim, quantity) == FIG13_JUMP_CLAIM && set == ParamSet::Published.label() {
+        return Some(format!("{}_fold_hz", Case::Fig13P2.key()));
+    }
+    FOLD_CLAIMS
+        .iter()
+        .find(|c| c.0 == claim && c.1 == quantity)
+        .map(|c| format!("{}_{set}_fold_hz", fold_case_key(c.0)))
+}
+
+fn fold_case_key(claim: &str) -> String {
+    format!("claim_{}", claim.to_lowercase().replace('-', ""))
+}
+
+/// The upper fold of prototype 1 at 5.5 g for every jump claim of [`FOLD_CLAIMS`] under both
+/// parameter sets, by continuation alone over Figure 8's range (extended to 2000 Hz: without
+/// end-stop damping the branch reaches 1600 Hz). Returns `(summary key, fold)`; a case
+/// without a fold gives no entry.
+pub fn claim_folds(
+    p1: &Device,
+    p1_calibrated: &Device,
+) -> Result<Vec<(String, f64)>, ResponseError> {
+    let jobs: Vec<(String, Device)> = FOLD_CLAIMS
+        .iter()
+        .flat_map(|&(id, _, law, bim)| {
+            [
+                (ParamSet::Published, p1),
+                (ParamSet::Calibrated, p1_calibrated),
+            ]
+            .into_iter()
+            .map(move |(set, d)| {
+                (
+                    format!("{}_{}_fold_hz", fold_case_key(id), set.label()),
+                    prototype1_setup(d).with_endstop(law, bim),
+                )
+            })
+        })
+        .collect();
+    jobs.par_iter()
+        .map(|(key, device)| {
+            let setup = Setup {
+                case: Case::Fig08P1Published,
+                device: device.clone(),
+                accel_rms_g: fig08::P1_HIGH_ACCEL_RMS_G,
+                sweep: fig08::sweep_settings(device),
+                continuation: ContinuationSettings::frequency(
+                    fig08::P1_SWEEP_START_HZ,
+                    2000.0,
+                    fig08::P1_SWEEP_STEP_HZ,
+                ),
+                transient_periods: 200,
+            };
+            let branch = continuation(&setup).map_err(|source| ResponseError::Orbit {
+                case: "claim folds",
+                source,
+            })?;
+            let fold = branch
+                .events_of(EventKind::Fold)
+                .filter(|e| !e.at_grazing && e.stable_before && !e.stable_after)
+                .map(|e| e.param)
+                .fold(None, |m: Option<f64>, p| Some(m.map_or(p, |m| m.max(p))));
+            Ok(fold.map(|f| (key.clone(), f)))
+        })
+        .collect::<Result<Vec<_>, _>>()
+        .map(|v| v.into_iter().flatten().collect())
+}
+
 /// Everything one case computes from.
 #[derive(Debug, Clone)]
 pub struct Setup {

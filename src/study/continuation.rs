@@ -54,6 +54,9 @@ type Matrix5 = SMatrix<f64, 5, 5>;
 /// the step is rejected as having jumped to another branch.
 const MAX_CORRECTION: f64 = 0.5;
 
+/// Largest parameter step across a grazing, as a fraction of the largest step.
+const GRAZING_STEP: f64 = 0.01;
+
 /// Largest factor by which the largest Floquet multiplier's modulus may change in one step.
 const MAX_MULTIPLIER_RATIO: f64 = 2.0;
 
@@ -904,10 +907,16 @@ pub fn continue_branch(
                     p.orbit.max_multiplier_abs(),
                 );
                 let jumped = (mb / ma).max(ma / mb) > MAX_MULTIPLIER_RATIO;
+                // A step that starts or stops touching the stops is kept short: a long one can
+                // leave an impacting branch for the non-impacting one across a narrow loop of
+                // the branch (a fold just past the grazing) without passing the fold.
+                let crossed = p.orbit.is_impacting() != last.orbit.is_impacting();
+                let long_crossing = crossed && dp > GRAZING_STEP * settings.max_param_step;
                 if p.tangent.dot(&last.tangent) < cos_max
                     || dp > settings.max_param_step
                     || moved > MAX_CORRECTION * ds
                     || jumped
+                    || long_crossing
                 {
                     None
                 } else {
