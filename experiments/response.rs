@@ -258,6 +258,10 @@ fn numbers_md(run: &response::Run, fine_shift: &[(Case, f64)]) -> String {
         }
     }
     md.push_str(&t.render());
+    md.push_str("\n### In words\n\n");
+    for c in &run.cases {
+        md.push_str(&in_words(c));
+    }
     md.push_str("\n### Every event on the branches\n\n");
     let mut t = Table::new([
         "case",
@@ -380,6 +384,77 @@ fn numbers_md(run: &response::Run, fine_shift: &[(Case, f64)]) -> String {
     }
     md.push_str(&t.render());
     md
+}
+
+/// Generated sentences on a case: where the sweeps leave the branches relative to the fold and
+/// the lower end, and what the steady-state criterion does with the ghost past the fold.
+fn in_words(c: &CaseRun) -> String {
+    let name = c.setup.case.label();
+    let mut out = format!("- **{name}.** ");
+    match (c.up.branch_end(), c.fold_hz()) {
+        (Some(e), Some(fold)) => {
+            let d = e.transition.value() - fold;
+            out.push_str(&format!(
+                "The up-sweep leaves the upper branch ({}) at {:.2} Hz, {:.2} Hz {} the upper \
+                 fold at {:.2} Hz (the sweep's bracket is {} Hz wide). ",
+                e.kind.label(),
+                e.transition.value(),
+                d.abs(),
+                if d >= 0.0 { "above" } else { "below" },
+                fold,
+                c.setup.sweep.refine_tol_hz
+            ));
+        }
+        _ => out.push_str("The branch has no upper fold in the range. "),
+    }
+    if let (Some((kind, t)), Some(end)) = (c.down.branch_end(), c.lower_end_hz()) {
+        out.push_str(&format!(
+            "The down-sweep leaves the lower branch ({}) at {:.2} Hz, {:.2} Hz from its end at \
+             {:.2} Hz. ",
+            kind.label(),
+            t.value(),
+            (t.value() - end).abs(),
+            end
+        ));
+    }
+    let accepted: Vec<_> = c.ghost.iter().filter(|g| g.accepted_in_contact).collect();
+    if let Some(worst) = accepted
+        .iter()
+        .max_by(|a, b| a.offset_hz.total_cmp(&b.offset_hz))
+    {
+        out.push_str(&format!(
+            "Past the fold the steady-state criterion accepts the dying impacting state as \
+             steady at {} of {} offsets, up to {} Hz above the fold: there it stops after {} \
+             periods, while the state keeps touching the stops for {} periods.",
+            accepted.len(),
+            c.ghost.len(),
+            worst.offset_hz,
+            worst.periods_simulated,
+            worst.last_contact_period
+        ));
+    } else if let Some(first) = c.ghost.first() {
+        out.push_str(&format!(
+            "Past the fold the steady-state criterion never accepts the dying impacting state: \
+             at {} Hz above the fold it simulates {} periods, longer than the {} periods the \
+             state keeps touching the stops.",
+            first.offset_hz, first.periods_simulated, first.last_contact_period
+        ));
+    }
+    if let Some(b) = &c.basins {
+        let shares = b
+            .shares()
+            .iter()
+            .map(|(l, s)| format!("{l} {:.1} %", 100.0 * s))
+            .collect::<Vec<_>>()
+            .join(", ");
+        out.push_str(&format!(
+            " Basins at {} Hz ({} initial states): {shares}.",
+            c.setup.case.basin_freq_hz().unwrap_or(f64::NAN),
+            b.cells.len()
+        ));
+    }
+    out.push('\n');
+    out
 }
 
 fn curve_plot(c: &CaseRun) -> LinePlot {

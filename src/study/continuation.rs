@@ -696,6 +696,7 @@ impl Continuer<'_, '_> {
         Ok(e)
     }
 
+    // ANCHOR: events
     /// The events between points `k` and `k + 1` (at arclength `ds` along point k's
     /// tangent). `b` may have its tangent reversed: where the branch leaves contact at a
     /// corner (the impacting branch meets the non-impacting one at the grazing orbit and the
@@ -770,6 +771,7 @@ impl Continuer<'_, '_> {
         out.sort_by(|x, y| x.s.total_cmp(&y.s));
         Ok(out)
     }
+    // ANCHOR_END: events
 }
 
 fn test_fold(p: &BranchPoint, _: f64) -> f64 {

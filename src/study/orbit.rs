@@ -342,6 +342,7 @@ impl HybridSystem<VARIATIONAL_DIM> for Variational<'_> {
         self.model.guards(mode, t, &state_of(z))
     }
 
+    // ANCHOR: saltation
     fn switch(&self, mode: Mode, index: usize, t: f64, z: &mut Aug) -> Mode {
         let y = state_of(z);
         let f_old = self.model.rhs(mode, t, &y);
@@ -363,6 +364,7 @@ impl HybridSystem<VARIATIONAL_DIM> for Variational<'_> {
         }
         new_mode
     }
+    // ANCHOR_END: saltation
 
     fn next_breakpoint(&self, t: f64) -> f64 {
         self.model.next_breakpoint(t)
