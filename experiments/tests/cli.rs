@@ -176,7 +176,7 @@ fn response_on_a_user_device_writes_branch_sweeps_plot_and_summary() {
     assert!(down > 560.0 && down < 700.0, "down-sweep {down}");
     let o = Command::new(BIN)
         .args(["response", "--device", &example(), "--from", "600"])
-        .args(["--to", "700", "--accel-rms-g", "-1"])
+        .args(["--to", "700", "--accel-rms-g", "0"])
         .output()
         .unwrap();
     assert_eq!(o.status.code(), Some(1));
