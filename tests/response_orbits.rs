@@ -189,3 +189,45 @@ fn branch_residuals_and_fold_convergence() {
         assert!(rel < 5e-4, "fold {} vs {} ({rel:e})", a.param, c.param);
     }
 }
+
+/// Continuation in the RMS acceleration (the parameter of Figure 9) far from the stops: the
+/// branch has no event and the power grows as the square of the acceleration, to 1e-6 (the
+/// model's nonlinearity at |x| of a few nm is (x/x0)^2 ~ 1e-8, the orbits' error ~1e-9).
+#[test]
+fn amplitude_continuation_in_the_linear_regime_scales_the_power_with_the_square() {
+    let d = prototype2();
+    let mut h = Harvester::new(&d, Sine::from_rms_g(1e-3, 600.0));
+    h.xmax = 1.0;
+    let s = ContinuationSettings::amplitude(1e-3, 1e-2, 1e-3);
+    let shooter = Shooter::new(&h, s.shooting);
+    let forcing = Forcing {
+        freq_hz: 600.0,
+        accel_rms_g: 1e-3,
+    };
+    let mut stats = Stats::default();
+    let first = first_orbit(
+        &shooter,
+        &forcing,
+        Parameter::Amplitude,
+        h.rest_state(),
+        0,
+        &mut stats,
+    )
+    .unwrap();
+    let b = continue_branch(&h, first, &s, |_| {}).unwrap();
+    assert!(b.events.is_empty());
+    assert!(b.points.len() >= 9, "{} points", b.points.len());
+    let ref_ratio = {
+        let o = &b.points[0].orbit;
+        o.summary.p_total_w / o.forcing.accel_rms_g.powi(2)
+    };
+    for p in &b.points {
+        let o = &p.orbit;
+        let r = o.summary.p_total_w / o.forcing.accel_rms_g.powi(2);
+        assert!(
+            ((r - ref_ratio) / ref_ratio).abs() < 1e-6,
+            "at {} g: {r:e} vs {ref_ratio:e}",
+            o.forcing.accel_rms_g
+        );
+    }
+}

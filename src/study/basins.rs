@@ -108,6 +108,9 @@ impl Attractor {
     }
 }
 
+/// One cell's attractor (if it settled), the periods it ran and its integrator counters.
+type CellOutcome = (Option<usize>, usize, Stats);
+
 /// The label of cells that did not settle.
 pub const UNSETTLED: &str = "unsettled";
 
@@ -170,7 +173,7 @@ pub fn basins(
     let period = forcing.period_s();
     let opts = model.solver_options(settings.rtol);
     let cells = settings.grid.cells();
-    let results: Vec<Result<(Option<usize>, usize, Stats), OrbitError>> = cells
+    let results: Vec<Result<CellOutcome, OrbitError>> = cells
         .par_iter()
         .map(|&(x, v)| {
             let y0 = model.static_state(x, v);
