@@ -258,6 +258,32 @@ fn numbers_md(run: &response::Run, fine_shift: &[(Case, f64)]) -> String {
         }
     }
     md.push_str(&t.render());
+    md.push_str(&format!(
+        "\nA candidate fix: the same up-sweeps with blocks of at least {} periods.\n\n",
+        response::LONG_BLOCK_PERIODS
+    ));
+    let mut t = Table::new([
+        "case",
+        "figure's blocks (periods)",
+        "up-sweep leaves the upper branch (Hz)",
+        "how",
+        "sweep - fold (Hz)",
+    ]);
+    for c in &run.cases {
+        let Some(r) = &c.up_long_blocks else { continue };
+        let end = r.branch_end();
+        t.row([
+            c.setup.case.key().to_string(),
+            c.setup.sweep.cfg.block_periods.to_string(),
+            hz(end.map(|e| e.transition.value())),
+            end.map_or("-".into(), |e| e.kind.label().to_string()),
+            hz(end
+                .map(|e| e.transition.value())
+                .zip(c.fold_hz())
+                .map(|(a, b)| a - b)),
+        ]);
+    }
+    md.push_str(&t.render());
     md.push_str("\n### In words\n\n");
     for c in &run.cases {
         md.push_str(&in_words(c));

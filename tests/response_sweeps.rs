@@ -44,6 +44,7 @@ fn case_run(case: Case) -> CaseRun {
         attractors: Vec::new(),
         continuation_s: 0.0,
         ghost: Vec::new(),
+        up_long_blocks: None,
     }
 }
 
@@ -144,4 +145,27 @@ fn basin_shares_sum_to_one_and_do_not_depend_on_the_thread_count() {
     assert_eq!(one, two);
     let total: f64 = one.shares().iter().map(|s| s.1).sum();
     assert!((total - 1.0).abs() < 1e-12, "shares sum to {total}");
+}
+
+/// The candidate fix of the criterion: with blocks of at least
+/// [`endstop::paper::response::LONG_BLOCK_PERIODS`] periods (longer than the ghost lives
+/// 0.1 Hz past the fold), the published prototype 1's up-sweep leaves the upper branch at the
+/// fold within the refined bracket.
+#[test]
+fn prototype1_up_sweep_with_long_blocks_leaves_the_upper_branch_at_the_fold() {
+    let s = setup(Case::Fig08P1Published);
+    let mut long = s.sweep.clone();
+    long.cfg.block_periods = endstop::paper::response::LONG_BLOCK_PERIODS;
+    let up = long.run(&s.device, s.accel_rms_g, |_| {}).unwrap();
+    let branch = continuation(&s).unwrap();
+    let fold = branch
+        .events_of(endstop::study::continuation::EventKind::Fold)
+        .filter(|e| !e.at_grazing && e.stable_before && !e.stable_after)
+        .map(|e| e.param)
+        .fold(f64::NEG_INFINITY, f64::max);
+    let end = up.branch_end().expect("a branch end").transition.value();
+    assert!(
+        (end - fold).abs() <= REFINE_TOL_HZ,
+        "up-sweep {end} vs fold {fold}"
+    );
 }

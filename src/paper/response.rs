@@ -298,7 +298,15 @@ pub struct CaseRun {
     pub continuation_s: f64,
     /// The steady-state criterion on the ghost past the upper fold ([`ghost_study`]).
     pub ghost: Vec<GhostRow>,
+    /// The up-sweep again with blocks of at least [`LONG_BLOCK_PERIODS`] periods (a candidate
+    /// fix of the criterion near folds), where the figure's blocks are shorter.
+    pub up_long_blocks: Option<SweepReport>,
 }
+
+/// Shortest block of the steady-state criterion in the candidate fix (periods): longer than
+/// the ghost past the fold lives at 0.1 Hz from it (the ghost study's table), so that a block
+/// and its successor straddle the fall off the branch.
+pub const LONG_BLOCK_PERIODS: usize = 64;
 
 impl CaseRun {
     /// The upper branch's fold: the fold (away from grazing) at the highest frequency at
@@ -401,6 +409,16 @@ impl CaseRun {
                 .map(|(a, b)| a - b),
         );
         put("down_contact_power_ratio", self.down.contact_power_ratio);
+        let long_end = self
+            .up_long_blocks
+            .as_ref()
+            .and_then(|r| r.branch_end())
+            .map(|e| e.transition.value());
+        put("up_end_long_blocks_hz", long_end);
+        put(
+            "up_end_long_blocks_minus_fold_hz",
+            long_end.zip(self.fold_hz()).map(|(a, b)| a - b),
+        );
         put("up_jump_power_ratio", self.up.jump_power_ratio);
         put("max_residual", Some(self.branch.max_residual()));
         put("continuation_s", Some(self.continuation_s));
@@ -606,8 +624,17 @@ pub fn run_case(
         attractors: Vec::new(),
         continuation_s,
         ghost: Vec::new(),
+        up_long_blocks: None,
     };
     run.ghost = ghost_study(&run).map_err(oerr)?;
+    if setup.sweep.cfg.block_periods < LONG_BLOCK_PERIODS {
+        let mut long = setup.sweep.clone();
+        long.cfg.block_periods = LONG_BLOCK_PERIODS;
+        run.up_long_blocks = Some(
+            long.run(&setup.device, setup.accel_rms_g, |_| {})
+                .map_err(serr)?,
+        );
+    }
     if let Some((a, b)) = run.band_hz() {
         let f = 0.5 * (a + b);
         let orbits = run
