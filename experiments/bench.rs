@@ -206,6 +206,8 @@ fn run() -> Result<()> {
     });
     exp.number("contact_step_share_sine_p1", share);
 
+    rows.extend(response_rows(&p2.device)?);
+
     let mut md = format!(
         "Machine: {} logical cores (RAYON_NUM_THREADS unset unless stated). Each case ran {REPEATS} times.\n\n\
          | case | median wall (s) | fastest (s) | simulated s per wall s | steps per simulated s | RHS evals per simulated s | events | notes |\n|---|---|---|---|---|---|---|---|\n",
@@ -395,4 +397,60 @@ fn rk4_equal_accuracy(
     }
     let pick = |tol: f64| 1 << (0..4).find(|&i| worst[i] <= tol).unwrap_or(3);
     Ok(([pick(1e-6), pick(1e-8)], md))
+}
+
+/// The whole Figure 13 curve (prototype 2, 0.31 g, linear law): the continuation of the
+/// periodic orbits with their stability over 600-850 Hz, beside the stepped up- and
+/// down-sweeps of the same curve, each on one thread.
+fn response_rows(p2: &endstop::device::Device) -> Result<Vec<Row>> {
+    use endstop::paper::response::{continuation, setups, Case};
+    let setup = setups(p2, p2, p2)
+        .into_iter()
+        .find(|s| s.case == Case::Fig13P2)
+        .expect("the Figure 13 case");
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build()?;
+    let span = setup.continuation.stop - setup.continuation.start;
+    let (branch, times) = timed(|| pool.install(|| Ok(continuation(&setup)?)))?;
+    let mut rows = vec![Row {
+        case: "Figure 13 whole curve by continuation (both branches, multipliers), 1 thread".into(),
+        median_s: times[REPEATS / 2],
+        min_s: times[0],
+        simulated_s: span,
+        steps: branch.stats.accepted + branch.stats.rejected,
+        rhs_evals: branch.stats.rhs_evals,
+        events: branch.stats.events,
+        note: format!(
+            "{} orbits, {} events; 'simulated s' is the frequency span in Hz",
+            branch.points.len(),
+            branch.events.len()
+        ),
+    }];
+    for (dir, down) in [("up", false), ("down", true)] {
+        let (stats, times) = timed(|| {
+            pool.install(|| {
+                Ok(if down {
+                    setup
+                        .sweep
+                        .run_down(&setup.device, setup.accel_rms_g, |_| {})?
+                        .total_stats()
+                } else {
+                    setup
+                        .sweep
+                        .run(&setup.device, setup.accel_rms_g, |_| {})?
+                        .total_stats()
+                })
+            })
+        })?;
+        rows.push(Row {
+            case: format!("Figure 13 stepped {dir}-sweep of the same curve, 1 thread"),
+            median_s: times[REPEATS / 2],
+            min_s: times[0],
+            simulated_s: span,
+            steps: stats.accepted + stats.rejected,
+            rhs_evals: stats.rhs_evals,
+            events: stats.events,
+            note: "with refinements; 'simulated s' is the frequency span in Hz".into(),
+        });
+    }
+    Ok(rows)
 }

@@ -3,6 +3,7 @@
 //! ```text
 //! endstop sweep  --device my.toml --from 500 --to 900 --accel-rms-g 0.3 [--out DIR]
 //! endstop random --device my.toml --psd 1e-3 [--out DIR]
+//! endstop response --device my.toml --from 600 --to 850 --accel-rms-g 0.31 [--out DIR]
 //! ```
 //!
 //! Both write the same kinds of output as the figure experiments: Parquet data with
@@ -36,7 +37,8 @@ data/prototype1.toml or data/prototype2.toml: copy it, edit the values (SI units
 carry the unit), and pass it with --device. Every value is checked on load; an error names the \
 field and its valid range.\n\nTwo studies:\n  sweep   stepped-sine up-sweep: RMS voltages, power, \
 impact onset and jump\n  random  band-limited white-noise vibration: power, efficiency, \
-output spectrum, bandwidth"
+output spectrum, bandwidth\n  response  the whole frequency response: up- and down-sweeps, periodic orbits continued \
+in frequency with their stability, folds and grazing points"
 )]
 struct Cli {
     #[command(subcommand)]
@@ -51,6 +53,35 @@ enum Study {
     /// Random vibration: an ensemble of band-limited white-noise records (10 kHz band,
     /// 100 kHz sampling), with mean power, efficiency and output power spectrum.
     Random(RandomArgs),
+    /// The whole frequency response: up- and down-sweeps, the periodic orbits continued in
+    /// frequency (pseudo-arclength, through folds) with their Floquet multipliers, and the
+    /// folds and grazing points on the branch.
+    Response(ResponseArgs),
+}
+
+#[derive(Parser, Debug)]
+struct ResponseArgs {
+    /// Device file (TOML), e.g. a copy of data/prototype2.toml.
+    #[arg(long)]
+    device: PathBuf,
+    /// Lowest frequency (Hz).
+    #[arg(long)]
+    from: f64,
+    /// Highest frequency (Hz).
+    #[arg(long)]
+    to: f64,
+    /// Frequency step of the sweeps and largest step of the continuation (Hz).
+    #[arg(long, default_value_t = 2.0)]
+    step: f64,
+    /// RMS base acceleration (g = 9.81 m/s^2).
+    #[arg(long)]
+    accel_rms_g: f64,
+    /// Bias voltage (V); default: the device file's.
+    #[arg(long)]
+    bias_v: Option<f64>,
+    /// Output directory.
+    #[arg(long, default_value = "data/results/endstop-response")]
+    out: PathBuf,
 }
 
 #[derive(Parser, Debug)]
@@ -107,6 +138,7 @@ fn main() {
     common::run_main("endstop", || match Cli::parse().study {
         Study::Sweep(a) => sweep(a),
         Study::Random(a) => random(a),
+        Study::Response(a) => response(a),
     });
 }
 
@@ -349,6 +381,208 @@ fn random(a: RandomArgs) -> Result<()> {
     )
     .log(false, true)
     .y((ymax * 1e-5).max(1e-30), ymax * 2.0);
+    exp.write_plot(&plot)?;
+    exp.finish()
+}
+
+fn response(a: ResponseArgs) -> Result<()> {
+    use common::frame::frame;
+    use common::row;
+    use endstop::drive::Sine;
+    use endstop::ode::Stats;
+    use endstop::physics::harvester::Harvester;
+    use endstop::study::continuation::{
+        continue_branch, first_orbit, ContinuationSettings, EventKind,
+    };
+    use endstop::study::orbit::{Forcing, Parameter, Shooter};
+    use endstop::study::sweep::SweepSettings;
+
+    if !(a.from.is_finite() && a.to.is_finite() && a.from > 0.0 && a.to > a.from) {
+        bail!("--from and --to must be positive frequencies with --to > --from");
+    }
+    if !(a.step > 0.0 && a.step <= a.to - a.from) {
+        bail!("--step must be positive and not larger than the range");
+    }
+    if !(a.accel_rms_g.is_finite() && a.accel_rms_g > 0.0) {
+        bail!("--accel-rms-g must be a finite positive number");
+    }
+    let (mut exp, loaded, device) = start("endstop-response", &a.device, a.bias_v, a.out)?;
+    let freqs = linspace_step(a.from, a.to, a.step);
+    let settings = SweepSettings {
+        freqs_hz: freqs.clone(),
+        extend_to_hz: a.to,
+        cfg: endstop::study::steady::steady_config(&device, 0.5 * (a.from + a.to)),
+        refine_tol_hz: 0.1,
+    };
+    let (up, down) = common::with_progress(2 * freqs.len(), "sweeps", |tick| {
+        rayon::join(
+            || settings.run(&device, a.accel_rms_g, |_| tick()),
+            || settings.run_down(&device, a.accel_rms_g, |_| tick()),
+        )
+    });
+    let (up, down) = (up?, down?);
+    eprintln!(
+        "[endstop-response] continuing the periodic orbits from {} Hz",
+        a.from
+    );
+    let cs = ContinuationSettings::frequency(a.from, a.to, a.step);
+    let h = Harvester::new(&device, Sine::from_rms_g(a.accel_rms_g, a.from));
+    let shooter = Shooter::new(&h, cs.shooting);
+    let forcing = Forcing {
+        freq_hz: a.from,
+        accel_rms_g: a.accel_rms_g,
+    };
+    let mut stats = Stats::default();
+    let first = first_orbit(
+        &shooter,
+        &forcing,
+        Parameter::Frequency,
+        h.rest_state(),
+        200,
+        &mut stats,
+    )?;
+    let branch = continue_branch(&h, first, &cs, |_| {})?;
+
+    let mut rows = Vec::new();
+    for p in &branch.points {
+        let o = &p.orbit;
+        rows.push(row![
+            "freq_hz" => o.forcing.freq_hz,
+            "accel_rms_g" => o.forcing.accel_rms_g,
+            "v1_rms_v" => o.summary.v1_rms_v,
+            "x_max_m" => o.summary.x_max_m,
+            "stable" => o.is_stable(),
+            "multiplier_max_abs" => o.max_multiplier_abs(),
+        ]);
+    }
+    exp.write_parquet("continuation", &mut frame(rows)?, &device.params)?;
+    let mut rows = Vec::new();
+    for (dir, ms) in [
+        ("up", up.measurements().collect::<Vec<_>>()),
+        ("down", down.measurements().collect()),
+    ] {
+        for m in ms {
+            rows.push(row![
+                "direction" => dir,
+                "freq_hz" => m.freq_hz,
+                "v1_rms_v" => m.v1_rms_v,
+                "x_max_m" => m.x_peak_m,
+                "contact_fraction" => m.contact_fraction,
+            ]);
+        }
+    }
+    exp.write_parquet("sweeps", &mut frame(rows)?, &device.params)?;
+
+    let mut md = format!(
+        "Whole response of `{}` ({} set) from {} to {} Hz at {} g rms, Vb = {} V: sweeps in {} Hz \
+         steps (transitions refined to 0.1 Hz), periodic orbits continued in frequency \
+         ({} points, largest residual {:.1e}).\n\n",
+        loaded.file,
+        device.params,
+        a.from,
+        a.to,
+        a.accel_rms_g,
+        device.electrical.bias_v,
+        a.step,
+        branch.points.len(),
+        branch.max_residual()
+    );
+    if let Some(e) = up.branch_end() {
+        exp.number("up_branch_end_hz", e.transition.value());
+        md.push_str(&format!(
+            "- the up-sweep leaves the impacting branch at {} Hz ({})\n",
+            fmt_sig(e.transition.value(), 6),
+            e.kind.label()
+        ));
+    }
+    if let Some((kind, t)) = down.branch_end() {
+        exp.number("down_branch_end_hz", t.value());
+        md.push_str(&format!(
+            "- the down-sweep leaves the lower branch at {} Hz ({})\n",
+            fmt_sig(t.value(), 6),
+            kind.label()
+        ));
+    }
+    for (i, e) in branch.events.iter().enumerate() {
+        let kind = if e.kind == EventKind::Fold && e.at_grazing {
+            "fold at a grazing corner"
+        } else {
+            e.kind.label()
+        };
+        exp.number(&format!("event_{i}_hz"), e.param);
+        md.push_str(&format!(
+            "- {kind} at {} Hz (stable {} -> {})\n",
+            fmt_sig(e.param, 7),
+            e.stable_before,
+            e.stable_after
+        ));
+    }
+    if branch.events.is_empty() {
+        md.push_str("- no fold, bifurcation or grazing in this range\n");
+    }
+    exp.write_numbers_md(&md)?;
+    print!("{md}");
+
+    let mut series = Vec::new();
+    let mut seg: Vec<(f64, f64)> = Vec::new();
+    let mut stable = None;
+    let push = |seg: &mut Vec<(f64, f64)>, st: bool, series: &mut Vec<Series>| {
+        if seg.len() >= 2 {
+            let style = if st { Style::Line } else { Style::Dashed };
+            series.push(Series::new("", std::mem::take(seg), PALETTE[0], style));
+        }
+        seg.clear();
+    };
+    for p in &branch.points {
+        let o = &p.orbit;
+        if stable.is_some_and(|s| s != o.is_stable()) {
+            let last = seg.last().copied();
+            push(&mut seg, stable.unwrap_or(true), &mut series);
+            seg.extend(last);
+        }
+        stable = Some(o.is_stable());
+        seg.push((o.forcing.freq_hz, o.summary.v1_rms_v));
+    }
+    push(&mut seg, stable.unwrap_or(true), &mut series);
+    series.push(Series::new(
+        "up-sweep",
+        up.measurements().map(|m| (m.freq_hz, m.v1_rms_v)).collect(),
+        PALETTE[1],
+        Style::Points,
+    ));
+    series.push(Series::new(
+        "down-sweep",
+        down.measurements()
+            .map(|m| (m.freq_hz, m.v1_rms_v))
+            .collect(),
+        PALETTE[2],
+        Style::Points,
+    ));
+    let marks: Vec<_> = branch
+        .events
+        .iter()
+        .filter(|e| matches!(e.kind, EventKind::Fold | EventKind::Grazing))
+        .map(|e| (e.param, e.orbit.summary.v1_rms_v))
+        .collect();
+    if !marks.is_empty() {
+        series.push(Series::new(
+            "folds and grazing",
+            marks,
+            PALETTE[3],
+            Style::Points,
+        ));
+    }
+    let plot = LinePlot::new(
+        &format!(
+            "Whole response at {} g rms: {} (orbits: solid stable, dashed unstable)",
+            a.accel_rms_g, device.name
+        ),
+        "frequency [Hz]",
+        "RMS output voltage V1 [V]",
+        series,
+    )
+    .x(a.from, a.to)
+    .legend(LegendPos::UpperLeft);
     exp.write_plot(&plot)?;
     exp.finish()
 }

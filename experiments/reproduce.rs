@@ -287,6 +287,8 @@ struct SummaryIn {
     seed: Option<u64>,
     #[serde(default)]
     params: Vec<(String, String)>,
+    #[serde(default)]
+    numbers: std::collections::BTreeMap<String, f64>,
 }
 
 fn read_summary(job: &Job) -> Option<SummaryIn> {
@@ -311,12 +313,21 @@ fn write_scorecard() -> Result<Vec<Row>> {
             r.note = "calibration target: fitted, not a prediction".into();
         }
     }
+    // Beside each jump claim, the upper fold of the continued orbits (the response job).
+    let folds = common::jobs::job("response")
+        .and_then(read_summary)
+        .map(|s| s.numbers)
+        .unwrap_or_default();
+    for r in &mut rows {
+        r.fold_hz = endstop::paper::response::fold_key(&r.claim, &r.quantity, &r.set)
+            .and_then(|k| folds.get(&k).copied());
+    }
     common::write_atomic(
         &common::results_root().join("scorecard.json"),
         serde_json::to_string_pretty(&rows)?.as_bytes(),
     )?;
     let mut md = String::from(
-        "| claim | quantity | set | paper | ours | ± | unit | tolerance | verdict | note |\n|---|---|---|---|---|---|---|---|---|---|\n",
+        "| claim | quantity | set | paper | ours | ± | unit | tolerance | verdict | fold (Hz) | note |\n|---|---|---|---|---|---|---|---|---|---|---|\n",
     );
     for r in &rows {
         let ours = r
@@ -332,8 +343,9 @@ fn write_scorecard() -> Result<Vec<Row>> {
             Verdict::Deviates => "*deviates*",
             Verdict::NotYet => "not yet",
         };
+        let fold = r.fold_hz.map(|v| format!("{v:.2}")).unwrap_or_default();
         md.push_str(&format!(
-            "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |\n",
+            "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |\n",
             r.claim,
             r.quantity,
             r.set,
@@ -343,6 +355,7 @@ fn write_scorecard() -> Result<Vec<Row>> {
             r.unit,
             common::fmt_sig(r.tolerance, 2),
             verdict,
+            fold,
             r.note
         ));
     }

@@ -79,6 +79,15 @@ pub const JOBS: &[Job] = &[
     experiment("fig14", &[P2], false),
     experiment("fig15", &[P2], false),
     Job {
+        name: "response",
+        program: "response",
+        args: &[],
+        reads: &[P1, P2],
+        reads_calibration: true,
+        phase: Phase::Parallel,
+        scored: false,
+    },
+    Job {
         name: "own_device_sweep",
         program: "endstop",
         args: &[

@@ -133,3 +133,53 @@ fn bad_input_is_refused_with_a_message() {
     assert_eq!(o.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&o.stderr).contains("/nonexistent.toml"));
 }
+
+#[test]
+fn response_on_a_user_device_writes_branch_sweeps_plot_and_summary() {
+    let out = tmp("response");
+    let o = Command::new(BIN)
+        .args([
+            "response",
+            "--device",
+            &example(),
+            "--from",
+            "560",
+            "--to",
+            "700",
+        ])
+        .args(["--step", "4", "--accel-rms-g", "0.3", "--out"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    for f in [
+        "continuation.parquet",
+        "sweeps.parquet",
+        "endstop-response.svg",
+        "summary.json",
+        "numbers.md",
+    ] {
+        assert!(out.join(f).exists(), "missing {f}");
+    }
+    let df = read_parquet(&out.join("continuation.parquet"));
+    assert!(df.height() > 10);
+    let f = df.column("freq_hz").unwrap().f64().unwrap();
+    assert!(f.into_no_null_iter().all(|x| (559.0..=710.0).contains(&x)));
+    let sweeps = read_parquet(&out.join("sweeps.parquet"));
+    // Both directions over the same 36-step grid (the up-sweep may extend while in contact).
+    assert!(sweeps.height() >= 72);
+    // This device at 0.3 g reaches its 8 um stops near its 616 Hz resonance: the branch has
+    // a grazing point in the range and the down-sweep leaves the lower branch inside it.
+    let graze = summary_number(&out, "event_0_hz").expect("a grazing point");
+    assert!(graze > 560.0 && graze < 700.0, "grazing {graze}");
+    let down = summary_number(&out, "down_branch_end_hz").expect("a down-sweep transition");
+    assert!(down > 560.0 && down < 700.0, "down-sweep {down}");
+    let o = Command::new(BIN)
+        .args(["response", "--device", &example(), "--from", "600"])
+        .args(["--to", "700", "--accel-rms-g", "0"])
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("--accel-rms-g"));
+    let _ = std::fs::remove_dir_all(out);
+}

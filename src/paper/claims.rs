@@ -400,6 +400,10 @@ pub struct Row {
     /// A remark on the row (e.g. that a value is a calibration target, not a prediction).
     #[serde(default)]
     pub note: String,
+    /// For a jump claim: the upper fold of the continued periodic orbits (Hz), beside the
+    /// sweep's jump (the verdict stays the sweep's); absent for every other row.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub fold_hz: Option<f64>,
 }
 
 /// Joins claims with our values: one row per claim number and per parameter set that has a
@@ -436,6 +440,7 @@ pub fn score(claims: &Claims, values: &[Value]) -> Result<Vec<Row>, ClaimsError>
                 verdict: c.verdict(ours),
                 text: c.text.clone(),
                 note: String::new(),
+                fold_hz: None,
             })
         };
         if mine.is_empty() {

@@ -25,6 +25,7 @@ pub mod fig14;
 pub mod fig15;
 pub mod measured;
 pub mod resolution;
+pub mod response;
 pub mod sensitivity;
 pub mod setups;
 pub mod table3;

@@ -66,6 +66,18 @@ impl ContactLaw {
         }
     }
 
+    /// Spring stiffness dF/d(delta) at penetration delta >= 0 (N/m); zero for delta <= 0.
+    #[inline]
+    pub fn stiffness(&self, delta_m: f64) -> f64 {
+        if delta_m <= 0.0 {
+            return 0.0;
+        }
+        match self {
+            ContactLaw::Hertz(h) => h.stiffness_of_delta(delta_m),
+            ContactLaw::Linear(k) => *k,
+        }
+    }
+
     /// Elastic energy stored at penetration delta (J).
     pub fn energy(&self, delta_m: f64) -> f64 {
         if delta_m <= 0.0 {

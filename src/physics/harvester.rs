@@ -20,7 +20,7 @@
 //! Modes for the integrator ([`crate::physics::contact::Mode`]): `Free`, `Contact(side)` and (tension-free only) `Clipped(side)`,
 //! where the mass is past the stop but the contact force would be tensile.
 
-use nalgebra::{SMatrix, SVector};
+use nalgebra::{Matrix4, SMatrix, SVector};
 
 use crate::device::{Device, StiffnessModel};
 use crate::drive::Excitation;
@@ -124,6 +124,13 @@ impl<E: Excitation> Harvester<E> {
         State::zeros()
     }
 
+    /// The state at position `x` and velocity `v` with the charges at their static
+    /// equilibrium: both node voltages zero (s_i = -+ dC Vb, dC = C0 x / x0).
+    pub fn static_state(&self, x: f64, v: f64) -> State {
+        let dc = self.c0 * x / self.x0;
+        State::new(x, v, -dc * self.vb, dc * self.vb)
+    }
+
     /// Capacitances and node voltages at a state.
     #[inline]
     pub fn electrical(&self, y: &State) -> Electrical {
@@ -171,6 +178,55 @@ impl<E: Excitation> Harvester<E> {
         let u1 = el.v[0] - self.vb;
         let u2 = el.v[1] - self.vb;
         0.5 * dcdx * (u1 * u1 - u2 * u2)
+    }
+
+    /// The Jacobian of the right-hand side with respect to the state, in a mode (the drive
+    /// enters additively and does not appear). Used by the variational equations of periodic
+    /// orbits ([`crate::study::orbit`]).
+    ///
+    /// With a = C0/x0, D_i = C_i + Cp + CL and u_i = V_i - Vb: dV1/dx = a (Vb - V1)/D1,
+    /// dV2/dx = -a (Vb - V2)/D2, dV_i/ds_i = 1/D_i; the electrostatic force 1/2 a (u1^2 - u2^2)
+    /// then differentiates by the chain rule, and in contact the end-stop force adds the
+    /// spring's stiffness to d/dx and b_im to d/dv (a tension-free contact whose force is
+    /// clipped adds nothing).
+    pub fn jacobian(&self, mode: Mode, y: &State) -> Matrix4<f64> {
+        let el = self.electrical(y);
+        let a = self.c0 / self.x0;
+        let d1 = el.c[0] + self.cp + self.cl;
+        let d2 = el.c[1] + self.cp + self.cl;
+        let (u1, u2) = (el.v[0] - self.vb, el.v[1] - self.vb);
+        let dv1_dx = -a * u1 / d1;
+        let dv2_dx = a * u2 / d2;
+        let dfe_dx = a * (u1 * dv1_dx - u2 * dv2_dx);
+        let dfe_ds1 = a * u1 / d1;
+        let dfe_ds2 = -a * u2 / d2;
+        let (mut dfim_dx, mut dfim_dv) = (0.0, 0.0);
+        if let Mode::Contact(side) = mode {
+            if !self.tension_free || self.contact_bracket(side, y) > 0.0 {
+                dfim_dx = self.law.stiffness(self.penetration(side, y[0]));
+                dfim_dv = self.bim;
+            }
+        }
+        let m = self.mass_kg;
+        let g = 1.0 / self.rl;
+        Matrix4::new(
+            0.0,
+            1.0,
+            0.0,
+            0.0,
+            (-self.km + dfe_dx - dfim_dx) / m,
+            (-self.damping - dfim_dv) / m,
+            dfe_ds1 / m,
+            dfe_ds2 / m,
+            -g * dv1_dx,
+            0.0,
+            -g / d1,
+            0.0,
+            -g * dv2_dx,
+            0.0,
+            0.0,
+            -g / d2,
+        )
     }
 
     /// Characteristic scales of (x, v, s1, s2), used for absolute tolerances.
@@ -374,5 +430,55 @@ impl<E: Excitation> HybridSystem<4> for Harvester<E> {
             ));
         }
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::device::StiffnessModel;
+    use crate::drive::Sine;
+    use crate::physics::contact::Side;
+
+    /// The analytic Jacobian equals central differences of the right-hand side, in free
+    /// flight and in contact under both spring laws.
+    #[test]
+    fn jacobian_matches_central_differences_of_the_rhs() {
+        let text = include_str!("../../data/prototype1.toml");
+        let base = Device::from_toml_str(text, "prototype1.toml").unwrap();
+        for law in [StiffnessModel::Hertz, StiffnessModel::Linear] {
+            let h = Harvester::new(&base.with_endstop(law, 1.5), Sine::from_rms_g(5.5, 1300.0));
+            let sc = h.scales();
+            // A state 0.2 um into the upper stop, moving, with charged nodes.
+            let y = State::new(h.xmax + 0.2e-6, 0.3, 0.4 * sc[2], -0.3 * sc[3]);
+            for mode in [Mode::Free, Mode::Contact(Side::Upper)] {
+                let j = h.jacobian(mode, &y);
+                // Columns scaled by the state scales, so that every entry is the change of a
+                // derivative over a typical change of the state; compared per row against the
+                // row's largest entry.
+                let mut fd = Matrix4::zeros();
+                for c in 0..4 {
+                    // Steps of 1e-5 of each scale: truncation ~1e-10 of the row, rounding
+                    // ~1e-11 of it.
+                    let e = 1e-5 * sc[c];
+                    let (mut yp, mut ym) = (y, y);
+                    yp[c] += e;
+                    ym[c] -= e;
+                    let col = (h.rhs(mode, 0.1, &yp) - h.rhs(mode, 0.1, &ym)) * (sc[c] / (2.0 * e));
+                    fd.set_column(c, &col);
+                }
+                for r in 0..4 {
+                    let row_max = (0..4).map(|c| fd[(r, c)].abs()).fold(0.0, f64::max);
+                    for c in 0..4 {
+                        let an = j[(r, c)] * sc[c];
+                        assert!(
+                            (fd[(r, c)] - an).abs() <= 1e-6 * row_max,
+                            "{law:?} {mode:?} d f{r}/d y{c}: {an} vs {}",
+                            fd[(r, c)]
+                        );
+                    }
+                }
+            }
+        }
     }
 }

@@ -79,6 +79,21 @@ impl HertzLine {
         self.force_scale_n() * normalised_force(delta_m / self.delta_scale_m())
     }
 
+    /// Contact stiffness dF/d(delta) at a penetration (N/m); zero for delta <= 0.
+    ///
+    /// From d = f (1 - ln f): dd/df = -ln f, so dF/d(delta) = F0 / (delta0 (-ln f)), which
+    /// tends to zero (logarithmically) as the contact closes.
+    pub fn stiffness_of_delta(&self, delta_m: f64) -> f64 {
+        if delta_m <= 0.0 {
+            return 0.0;
+        }
+        let f = normalised_force(delta_m / self.delta_scale_m());
+        if f <= 0.0 {
+            return 0.0;
+        }
+        self.force_scale_n() / (self.delta_scale_m() * -f.ln())
+    }
+
     /// Elastic energy stored in the contact, U(delta) = integral of F d(delta) (J).
     ///
     /// Integrating eq 6 by parts: U = F delta - (lambda/t) F^2 (3/2 + ln(F0/F)).
@@ -191,5 +206,22 @@ mod tests {
             let back = normalised_force(d);
             assert!((back - f).abs() <= 1e-13 * f, "f={f} back={back}");
         }
+    }
+
+    #[test]
+    fn stiffness_is_the_derivative_of_the_force() {
+        let h = HertzLine {
+            length_m: 60e-6,
+            radius_m: 30e-6,
+            lambda_per_pa: (1.0 - 0.22f64 * 0.22) / (std::f64::consts::PI * 169e9),
+        };
+        for delta in [1e-10, 1e-9, 1e-8, 1e-7, 5e-7] {
+            let eps = 1e-4 * delta;
+            let fd = (h.force_of_delta(delta + eps) - h.force_of_delta(delta - eps)) / (2.0 * eps);
+            let k = h.stiffness_of_delta(delta);
+            // Central difference error ~ (eps/delta)^2 = 1e-8 relative, plus rounding.
+            assert!((k - fd).abs() <= 1e-6 * k, "delta {delta}: {k} vs {fd}");
+        }
+        assert_eq!(h.stiffness_of_delta(0.0), 0.0);
     }
 }

@@ -1,10 +1,15 @@
 //! Studies built on the model and the integrator: steady states under a sine ([`steady`]), the
-//! stepped-drive engine ([`stepped`]) behind frequency sweeps ([`sweep`]) and amplitude sweeps
-//! ([`amplitude`]), and random-vibration records ([`record`]) and their ensembles
-//! ([`ensemble`]).
+//! stepped-drive engine ([`stepped`]) behind frequency sweeps ([`sweep`], up and down) and
+//! amplitude sweeps ([`amplitude`]), periodic orbits by shooting with their Floquet multipliers
+//! ([`orbit`]), their pseudo-arclength continuation with folds, branch points and grazing
+//! ([`continuation`]), basins of attraction ([`basins`]), and random-vibration records
+//! ([`record`]) and their ensembles ([`ensemble`]).
 
 pub mod amplitude;
+pub mod basins;
+pub mod continuation;
 pub mod ensemble;
+pub mod orbit;
 pub mod record;
 pub mod steady;
 pub mod stepped;

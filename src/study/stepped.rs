@@ -64,7 +64,8 @@ impl<D: Drive> SteppedDrive<'_, D> {
         })
     }
 
-    /// Runs the continuation over `values` (increasing for an up-sweep), starting from rest;
+    /// Runs the continuation over `values` (increasing for an up-sweep, decreasing for a
+    /// down-sweep), starting from rest;
     /// `on_step(i)` is called after each step.
     pub fn run(
         &self,
@@ -123,7 +124,9 @@ impl<D: Drive> SteppedDrive<'_, D> {
         let mut before = sweep.steps[k - 1].clone();
         let mut after = sweep.steps[k].clone();
         let mut stats = Stats::default();
-        while hi - lo > tol {
+        // Either direction: `lo` is the value before the transition in the sweep's order
+        // (larger than `hi` in a down-sweep).
+        while (hi - lo).abs() > tol {
             let mid = 0.5 * (lo + hi);
             let step = self.measure(mid, before.state, before.mode)?;
             stats += step.stats;
@@ -176,9 +179,10 @@ impl Transition {
     pub fn value(&self) -> f64 {
         0.5 * (self.before + self.after)
     }
-    /// Half-width of the bracket (the estimate's uncertainty from bracketing alone).
+    /// Half-width of the bracket (the estimate's uncertainty from bracketing alone; positive
+    /// in either sweep direction).
     pub fn half_width(&self) -> f64 {
-        0.5 * (self.after - self.before)
+        0.5 * (self.after - self.before).abs()
     }
 }
 

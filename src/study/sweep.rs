@@ -4,6 +4,9 @@
 //! (each step starts from the previous final state and is measured in steady state), and
 //! [`SteppedDrive::refine_steps`] bisects transitions between two steps.
 //!
+//! Down-sweeps ([`SweepSettings::run_down`], [`DownSweepReport`]) take the same grid from high
+//! to low frequency and report the jump up onto the impacting branch.
+//!
 //! # What an up-sweep report contains
 //! * **Impact onset**: the first step with a non-zero contact fraction, refined by bisection
 //!   with "still before" meaning "no contact in the measured block". This is the kink of
@@ -312,6 +315,137 @@ fn analyse_up_sweep<D: Drive>(
         contact_lost,
         refine_stats,
     })
+}
+
+/// A down-sweep: the stepped sine from high to low frequency, each step from the previous
+/// final state, with its jump up and its first contact refined.
+///
+/// * **Jump up**: a candidate is a step whose total power exceeds the previous step's by more
+///   than a factor 1 / (1 - [`CANDIDATE_DROP`]); it is refined by bisection (trials continue
+///   from the state at the bracket's high-frequency end, "still before" meaning "total power
+///   below the geometric mean of the two coarse steps'"), and confirmed when the power still
+///   rises by more than that factor across the final bracket (a discontinuity keeps its full
+///   rise however narrow the bracket). On an end-stop harvester the lower (non-impacting)
+///   branch ends where the orbit grazes a stop or at a fold, and the response jumps up onto
+///   the impacting branch there.
+/// * **Contact**: the first step in contact, refined with "still before" meaning "no contact".
+#[derive(Debug, Clone)]
+pub struct DownSweepReport {
+    /// The coarse sweep, frequencies decreasing.
+    pub sweep: Sweep,
+    /// The confirmed jump up (`before` is the higher frequency).
+    pub jump: Option<Transition>,
+    /// Total power after / before across the refined jump bracket (above 1).
+    pub jump_power_ratio: Option<f64>,
+    /// First contact with a stop, refined (`None` if the sweep never touches one or is in
+    /// contact from its first step).
+    pub contact: Option<Transition>,
+    /// Total power after / before across the refined contact bracket.
+    pub contact_power_ratio: Option<f64>,
+    /// Integrator counters of every refinement trial.
+    pub refine_stats: Stats,
+}
+
+/// How a down-sweep leaves the lower (non-impacting) branch.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum DownEndKind {
+    /// A confirmed jump up (a discontinuity of the power).
+    Jump,
+    /// The first contact without a confirmed jump: where the lower branch ends at a grazing
+    /// point and the response moves onto the impacting branch with a power change below
+    /// [`JUMP_MIN_DROP`] (at a grazing corner the two orbits nearly coincide).
+    ContactOnset,
+}
+
+impl DownEndKind {
+    /// Label for tables.
+    pub fn label(self) -> &'static str {
+        match self {
+            DownEndKind::Jump => "jump",
+            DownEndKind::ContactOnset => "contact onset, no jump in power",
+        }
+    }
+}
+
+impl DownSweepReport {
+    /// Where the down-sweep leaves the lower branch: the jump if there is one, else the first
+    /// contact (labelled, so that a caller never presents the latter as a jump).
+    pub fn branch_end(&self) -> Option<(DownEndKind, Transition)> {
+        self.jump
+            .map(|t| (DownEndKind::Jump, t))
+            .or(self.contact.map(|t| (DownEndKind::ContactOnset, t)))
+    }
+
+    /// The coarse measurements, in sweep order (frequency decreasing).
+    pub fn measurements(&self) -> impl Iterator<Item = &Measurement> {
+        self.sweep.steps.iter().map(|s| &s.measurement)
+    }
+
+    /// Integrator counters of the sweep and its refinements together.
+    pub fn total_stats(&self) -> Stats {
+        let mut s = self.sweep.stats;
+        s += self.refine_stats;
+        s
+    }
+}
+
+impl SweepSettings {
+    /// Runs the down-sweep of `device` at `accel_rms_g` over the same grid taken from its
+    /// highest to its lowest frequency (no extension), and refines its jump up and first
+    /// contact to brackets narrower than the refinement tolerance. `progress(i)` is called
+    /// after each coarse step.
+    pub fn run_down(
+        &self,
+        device: &Device,
+        accel_rms_g: f64,
+        progress: impl FnMut(usize),
+    ) -> Result<DownSweepReport, SolverError> {
+        let mut freqs = self.freqs_hz.clone();
+        freqs.sort_by(|a, b| b.total_cmp(a));
+        let base = Harvester::new(device, Sine::from_rms_g(accel_rms_g, freqs[0]));
+        let cont = frequency_continuation(&base, accel_rms_g, &self.cfg);
+        let sweep = cont.run(&freqs, progress)?;
+        let tol = self.refine_tol_hz;
+        let mut refine_stats = Stats::default();
+        let steps = &sweep.steps;
+        let rise = 1.0 / (1.0 - CANDIDATE_DROP);
+        let confirm = 1.0 / (1.0 - JUMP_MIN_DROP);
+        let mut jump = None;
+        let mut jump_power_ratio = None;
+        for k in 1..steps.len() {
+            let a = &steps[k - 1].measurement;
+            let b = &steps[k].measurement;
+            if b.p_total_w() <= rise * a.p_total_w() {
+                continue;
+            }
+            let threshold = (a.p_total_w() * b.p_total_w()).sqrt();
+            let r = cont.refine_steps(&sweep, k, |m| m.p_total_w() < threshold, tol)?;
+            refine_stats += r.stats;
+            let ratio = r.after.measurement.p_total_w() / r.before.measurement.p_total_w();
+            if ratio > confirm {
+                jump = Some(r.transition);
+                jump_power_ratio = Some(ratio);
+                break;
+            }
+        }
+        let (contact, contact_power_ratio) = match first_contact(&sweep) {
+            Some(k) if k > 0 => {
+                let r = cont.refine_steps(&sweep, k, |m| !in_contact(m), tol)?;
+                refine_stats += r.stats;
+                let ratio = r.after.measurement.p_total_w() / r.before.measurement.p_total_w();
+                (Some(r.transition), Some(ratio))
+            }
+            _ => (None, None),
+        };
+        Ok(DownSweepReport {
+            sweep,
+            jump,
+            jump_power_ratio,
+            contact,
+            contact_power_ratio,
+            refine_stats,
+        })
+    }
 }
 
 /// Differences between a sweep and its refined repetition ([`SweepSettings::halved`]).

@@ -1,0 +1,596 @@
+//! The whole response curve (the edge; the study itself is `endstop::paper::response`):
+//! Figure 13's prototype 2 and Figure 8's prototype 1 (published and calibrated), with the
+//! continued periodic orbits and their stability, the up- and down-sweeps, folds and grazing
+//! points, the Floquet multipliers of the coexisting orbits in the hysteresis band and the
+//! basins of attraction there. Writes `continuation.parquet`, `sweeps.parquet`,
+//! `basins.parquet`, the plots and the book's tables.
+
+use endstop_experiments as common;
+
+use anyhow::Result;
+use common::md::Table;
+use common::plot::{LegendPos, LinePlot, Series, Style, PALETTE};
+use common::{fmt_sig, frame::frame, row, Experiment};
+use endstop::paper::response::{self, Case, CaseRun, BASIN_CELLS};
+use endstop::study::continuation::EventKind;
+use endstop::study::sweep::DownEndKind;
+
+fn main() {
+    common::run_main("response", run);
+}
+
+fn run() -> Result<()> {
+    let mut exp = Experiment::start("response");
+    let p2 = exp.load_published("prototype2")?;
+    let (p1, cal) = common::prototype1_both_sets(&mut exp)?;
+    let setups = response::setups(&p2.device, &p1.device, &cal.device);
+    let units = response::work_units(&setups, BASIN_CELLS);
+    let run = common::with_progress(units, "response", |tick| {
+        response::run(&setups, BASIN_CELLS, tick)
+    })?;
+    // The basins again on a grid twice as fine, for their convergence.
+    let fine_cells = 2 * BASIN_CELLS - 1;
+    let mut fine_shift = Vec::new();
+    for c in &run.cases {
+        let Some(bs) = c.setup.basin_settings(fine_cells) else {
+            continue;
+        };
+        let f = c.setup.case.basin_freq_hz().expect("basin frequency");
+        let fine = refine_basins(c, f, &bs)?;
+        let coarse = c.basins.as_ref().expect("basins computed").shares();
+        let shift = coarse
+            .iter()
+            .zip(fine.shares())
+            .map(|(a, b)| (a.1 - b.1).abs())
+            .fold(0.0, f64::max);
+        fine_shift.push((c.setup.case, shift));
+        exp.number(
+            &format!("{}_basin_share_change_fine_grid", c.setup.case.key()),
+            shift,
+        );
+    }
+    for c in &run.cases {
+        for (k, v) in c.numbers() {
+            exp.number(&k, v);
+        }
+    }
+    // The folds beside the scorecard's jump claims of Figure 8 (continuation only).
+    let claim_folds = response::claim_folds(&p1.device, &cal.device)?;
+    for (k, v) in &claim_folds {
+        exp.number(k, *v);
+    }
+    write_tables(&exp, &run)?;
+    let mut md = numbers_md(&run, &fine_shift);
+    md.push_str("\n### Folds beside the jump claims of Figure 8\n\n");
+    let mut t = Table::new(["claim", "quantity", "set", "upper fold (Hz)"]);
+    for (id, q, _, _) in response::FOLD_CLAIMS {
+        for set in ["published", "calibrated"] {
+            let key = response::fold_key(id, q, set).expect("a jump claim");
+            let v = claim_folds.iter().find(|(k, _)| *k == key).map(|x| x.1);
+            t.row([id.to_string(), format!("`{q}`"), set.to_string(), hz(v)]);
+        }
+    }
+    md.push_str(&t.render());
+    exp.write_numbers_md(&md)?;
+    for c in &run.cases {
+        exp.write_extra_plot(&format!("response_{}", c.setup.case.key()), &curve_plot(c))?;
+        if c.basins.is_some() {
+            exp.write_extra_plot(&format!("basins_{}", c.setup.case.key()), &basin_plot(c))?;
+        }
+    }
+    exp.write_plot(&curve_plot(run.case(Case::Fig13P2)))?;
+    exp.finish()
+}
+
+fn refine_basins(
+    c: &CaseRun,
+    f: f64,
+    bs: &endstop::study::basins::BasinSettings,
+) -> Result<endstop::study::basins::Basins> {
+    use endstop::drive::Sine;
+    use endstop::physics::harvester::Harvester;
+    use endstop::study::basins::{basins, Attractor};
+    use endstop::study::orbit::{Forcing, Shooter};
+    let h = Harvester::new(&c.setup.device, Sine::from_rms_g(c.setup.accel_rms_g, f));
+    let shooter = Shooter::new(&h, c.setup.continuation.shooting);
+    let catalogue = c
+        .attractors
+        .iter()
+        .map(|(l, o)| Attractor::of_orbit(&shooter, o, l))
+        .collect::<Result<Vec<_>, _>>()?;
+    let forcing = Forcing {
+        freq_hz: f,
+        accel_rms_g: c.setup.accel_rms_g,
+    };
+    Ok(basins(&h, &forcing, &catalogue, bs, &|| {})?)
+}
+
+fn write_tables(exp: &Experiment, run: &response::Run) -> Result<()> {
+    let mut rows = Vec::new();
+    for c in &run.cases {
+        let case = c.setup.case.key();
+        // Branch segments: a new segment starts wherever stability changes.
+        let mut branch = 0u32;
+        let mut prev: Option<bool> = None;
+        for p in &c.branch.points {
+            let o = &p.orbit;
+            if prev.is_some_and(|s| s != o.is_stable()) {
+                branch += 1;
+            }
+            prev = Some(o.is_stable());
+            rows.push(row![
+                "case" => case,
+                "freq_hz" => o.forcing.freq_hz,
+                "accel_rms_g" => o.forcing.accel_rms_g,
+                "v1_rms_v" => o.summary.v1_rms_v,
+                "x_max_m" => o.summary.x_max_m,
+                "stable" => o.is_stable(),
+                "multiplier_max_abs" => o.max_multiplier_abs(),
+                "branch" => branch,
+            ]);
+        }
+    }
+    exp.write_parquet(
+        "continuation",
+        &mut frame(rows)?,
+        "published and calibrated",
+    )?;
+    let mut rows = Vec::new();
+    for c in &run.cases {
+        let case = c.setup.case.key();
+        let up = c.up.measurements().map(|m| ("up", m));
+        let down = c.down.measurements().map(|m| ("down", m));
+        for (dir, m) in up.chain(down) {
+            rows.push(row![
+                "case" => case,
+                "direction" => dir,
+                "freq_hz" => m.freq_hz,
+                "accel_rms_g" => m.accel_rms_g,
+                "v1_rms_v" => m.v1_rms_v,
+                "x_max_m" => m.x_peak_m,
+                "contact_fraction" => m.contact_fraction,
+                "converged" => m.converged,
+            ]);
+        }
+    }
+    exp.write_parquet("sweeps", &mut frame(rows)?, "published and calibrated")?;
+    let mut rows = Vec::new();
+    for c in &run.cases {
+        let Some(b) = &c.basins else { continue };
+        let f = c.setup.case.basin_freq_hz().expect("basin frequency");
+        for (i, &(x, v)) in b.cells.iter().enumerate() {
+            rows.push(row![
+                "case" => c.setup.case.key(),
+                "freq_hz" => f,
+                "x0_m" => x,
+                "v0_m_per_s" => v,
+                "attractor" => b.label(i),
+                "periods" => b.periods[i],
+            ]);
+        }
+    }
+    exp.write_parquet("basins", &mut frame(rows)?, "published and calibrated")?;
+    Ok(())
+}
+
+fn hz(v: Option<f64>) -> String {
+    v.map_or("-".into(), |x| format!("{x:.2}"))
+}
+
+fn numbers_md(run: &response::Run, fine_shift: &[(Case, f64)]) -> String {
+    let mut md = String::from("### Jumps, folds and grazing points\n\n");
+    let mut t = Table::new([
+        "case",
+        "up-sweep leaves the upper branch (Hz)",
+        "how",
+        "upper fold (Hz)",
+        "sweep - fold (Hz)",
+        "down-sweep leaves the lower branch (Hz)",
+        "how",
+        "lower branch end (Hz)",
+        "sweep - end (Hz)",
+        "grazing low (Hz)",
+        "grazing high (Hz)",
+        "hysteresis width (Hz)",
+    ]);
+    for c in &run.cases {
+        let g = c.grazing_hz();
+        let up_how = c.up.branch_end().map_or("-".to_string(), |e| {
+            let r =
+                c.up.jump_power_ratio
+                    .map_or(String::new(), |r| format!(" (power x {})", fmt_sig(r, 3)));
+            format!("{}{r}", e.kind.label())
+        });
+        let down_how = c.down.branch_end().map_or("-".to_string(), |e| {
+            let r = match e.0 {
+                DownEndKind::Jump => c.down.jump_power_ratio,
+                DownEndKind::ContactOnset => c.down.contact_power_ratio,
+            };
+            format!(
+                "{}{}",
+                e.0.label(),
+                r.map_or(String::new(), |r| format!(" (power x {})", fmt_sig(r, 3)))
+            )
+        });
+        t.row([
+            c.setup.case.label().to_string(),
+            hz(c.up_end_hz()),
+            up_how,
+            hz(c.fold_hz()),
+            hz(c.up_end_hz().zip(c.fold_hz()).map(|(a, b)| a - b)),
+            hz(c.down_end_hz()),
+            down_how,
+            hz(c.lower_end_hz()),
+            hz(c.down_end_hz().zip(c.lower_end_hz()).map(|(a, b)| a - b)),
+            hz(g.map(|g| g.0)),
+            hz(g.map(|g| g.1)),
+            hz(c.band_hz().map(|(a, b)| b - a)),
+        ]);
+    }
+    md.push_str(&t.render());
+    md.push_str(
+        "\nThe sweeps' transitions are refined to brackets of 0.1 Hz (the midpoint is shown). \
+         The upper fold and the grazing points are located on the continued branch to 1e-4 Hz.\n",
+    );
+    md.push_str("\n### The stepped sweep's steady-state criterion past the upper fold\n\n");
+    md.push_str(
+        "One step of the sweep's steady-state criterion from the stable impacting orbit 1 Hz \
+         below the upper fold, at frequencies above the fold where no impacting orbit exists; \
+         beside it, how many periods the same start keeps touching the stops (the life of the \
+         saddle-node's ghost).\n\n",
+    );
+    let mut t = Table::new([
+        "case",
+        "above the fold (Hz)",
+        "criterion accepts an impacting state",
+        "periods the criterion simulated",
+        "last period with contact",
+    ]);
+    for c in &run.cases {
+        for g in &c.ghost {
+            t.row([
+                c.setup.case.key().to_string(),
+                format!("{}", g.offset_hz),
+                if g.accepted_in_contact { "yes" } else { "no" }.to_string(),
+                g.periods_simulated.to_string(),
+                g.last_contact_period.to_string(),
+            ]);
+        }
+    }
+    md.push_str(&t.render());
+    md.push_str(&format!(
+        "\nA candidate fix: the same up-sweeps with blocks of at least {} periods.\n\n",
+        response::LONG_BLOCK_PERIODS
+    ));
+    let mut t = Table::new([
+        "case",
+        "figure's blocks (periods)",
+        "up-sweep leaves the upper branch (Hz)",
+        "how",
+        "sweep - fold (Hz)",
+    ]);
+    for c in &run.cases {
+        let Some(r) = &c.up_long_blocks else { continue };
+        let end = r.branch_end();
+        t.row([
+            c.setup.case.key().to_string(),
+            c.setup.sweep.cfg.block_periods.to_string(),
+            hz(end.map(|e| e.transition.value())),
+            end.map_or("-".into(), |e| e.kind.label().to_string()),
+            hz(end
+                .map(|e| e.transition.value())
+                .zip(c.fold_hz())
+                .map(|(a, b)| a - b)),
+        ]);
+    }
+    md.push_str(&t.render());
+    md.push_str("\n### In words\n\n");
+    for c in &run.cases {
+        md.push_str(&in_words(c));
+    }
+    md.push_str("\n### Every event on the branches\n\n");
+    let mut t = Table::new([
+        "case",
+        "event",
+        "frequency (Hz)",
+        "stable before",
+        "stable after",
+    ]);
+    for c in &run.cases {
+        for e in &c.branch.events {
+            let kind = if e.kind == EventKind::Fold && e.at_grazing {
+                "fold at a grazing corner".to_string()
+            } else {
+                e.kind.label().to_string()
+            };
+            t.row([
+                c.setup.case.key().to_string(),
+                kind,
+                format!("{:.4}", e.param),
+                e.stable_before.to_string(),
+                e.stable_after.to_string(),
+            ]);
+        }
+    }
+    md.push_str(&t.render());
+    md.push_str("\n### Floquet multipliers of the coexisting orbits in the hysteresis band\n\n");
+    let mut t = Table::new([
+        "case",
+        "frequency (Hz)",
+        "orbit",
+        "V1 rms (V)",
+        "max |x| (um)",
+        "multipliers",
+        "stable",
+    ]);
+    for c in &run.cases {
+        let Some(p) = &c.probe else { continue };
+        for o in &p.orbits {
+            let mu = o
+                .multipliers
+                .iter()
+                .map(|m| {
+                    if m.im.abs() > 1e-12 {
+                        format!(
+                            "{} {} {}i",
+                            fmt_sig(m.re, 4),
+                            if m.im < 0.0 { "-" } else { "+" },
+                            fmt_sig(m.im.abs(), 4)
+                        )
+                    } else {
+                        fmt_sig(m.re, 4)
+                    }
+                })
+                .collect::<Vec<_>>()
+                .join(", ");
+            let kind = match (o.is_impacting(), o.is_stable()) {
+                (true, true) => "upper (impacting)",
+                (true, false) => "middle (impacting, unstable)",
+                (false, _) => "lower (free flight)",
+            };
+            t.row([
+                c.setup.case.key().to_string(),
+                format!("{:.2}", p.freq_hz),
+                kind.to_string(),
+                fmt_sig(o.summary.v1_rms_v, 4),
+                fmt_sig(o.summary.x_max_m * 1e6, 5),
+                mu,
+                o.is_stable().to_string(),
+            ]);
+        }
+    }
+    md.push_str(&t.render());
+    md.push_str("\n### Basins of attraction\n\n");
+    let mut t = Table::new([
+        "case",
+        "frequency (Hz)",
+        "attractor",
+        "share",
+        "largest change on a grid twice as fine",
+    ]);
+    for c in &run.cases {
+        let Some(b) = &c.basins else { continue };
+        let shift = fine_shift
+            .iter()
+            .find(|(k, _)| *k == c.setup.case)
+            .map_or("-".into(), |s| format!("{:.2} points", 100.0 * s.1));
+        for (label, share) in b.shares() {
+            t.row([
+                c.setup.case.key().to_string(),
+                format!("{:.1}", c.setup.case.basin_freq_hz().unwrap_or(f64::NAN)),
+                label,
+                format!("{:.3}", share),
+                shift.clone(),
+            ]);
+        }
+    }
+    md.push_str(&t.render());
+    md.push_str("\n### Cost\n\n");
+    let mut t = Table::new([
+        "case",
+        "continuation points",
+        "rejected steps",
+        "largest residual",
+        "continuation wall time (s)",
+        "integrator steps (continuation)",
+        "integrator steps (up-sweep)",
+        "integrator steps (down-sweep)",
+    ]);
+    for c in &run.cases {
+        t.row([
+            c.setup.case.key().to_string(),
+            c.branch.points.len().to_string(),
+            c.branch.rejected_steps.to_string(),
+            format!("{:.1e}", c.branch.max_residual()),
+            format!("{:.2}", c.continuation_s),
+            c.branch.stats.accepted.to_string(),
+            c.up.total_stats().accepted.to_string(),
+            c.down.total_stats().accepted.to_string(),
+        ]);
+    }
+    md.push_str(&t.render());
+    md
+}
+
+/// Generated sentences on a case: where the sweeps leave the branches relative to the fold and
+/// the lower end, and what the steady-state criterion does with the ghost past the fold.
+fn in_words(c: &CaseRun) -> String {
+    let name = c.setup.case.label();
+    let mut out = format!("- **{name}.** ");
+    match (c.up.branch_end(), c.fold_hz()) {
+        (Some(e), Some(fold)) => {
+            let d = e.transition.value() - fold;
+            out.push_str(&format!(
+                "The up-sweep leaves the upper branch ({}) at {:.2} Hz, {:.2} Hz {} the upper \
+                 fold at {:.2} Hz (the sweep's bracket is {} Hz wide). ",
+                e.kind.label(),
+                e.transition.value(),
+                d.abs(),
+                if d >= 0.0 { "above" } else { "below" },
+                fold,
+                c.setup.sweep.refine_tol_hz
+            ));
+        }
+        _ => out.push_str("The branch has no upper fold in the range. "),
+    }
+    if let (Some((kind, t)), Some(end)) = (c.down.branch_end(), c.lower_end_hz()) {
+        out.push_str(&format!(
+            "The down-sweep leaves the lower branch ({}) at {:.2} Hz, {:.2} Hz from its end at \
+             {:.2} Hz. ",
+            kind.label(),
+            t.value(),
+            (t.value() - end).abs(),
+            end
+        ));
+    }
+    let accepted: Vec<_> = c.ghost.iter().filter(|g| g.accepted_in_contact).collect();
+    if let Some(worst) = accepted
+        .iter()
+        .max_by(|a, b| a.offset_hz.total_cmp(&b.offset_hz))
+    {
+        out.push_str(&format!(
+            "Past the fold the steady-state criterion accepts the dying impacting state as \
+             steady at {} of {} offsets, up to {} Hz above the fold: there it stops after {} \
+             periods, while the state keeps touching the stops for {} periods.",
+            accepted.len(),
+            c.ghost.len(),
+            worst.offset_hz,
+            worst.periods_simulated,
+            worst.last_contact_period
+        ));
+    } else if let Some(first) = c.ghost.first() {
+        out.push_str(&format!(
+            "Past the fold the steady-state criterion never accepts the dying impacting state: \
+             at {} Hz above the fold it simulates {} periods, longer than the {} periods the \
+             state keeps touching the stops.",
+            first.offset_hz, first.periods_simulated, first.last_contact_period
+        ));
+    }
+    if let Some(b) = &c.basins {
+        let shares = b
+            .shares()
+            .iter()
+            .map(|(l, s)| format!("{l} {:.1} %", 100.0 * s))
+            .collect::<Vec<_>>()
+            .join(", ");
+        out.push_str(&format!(
+            " Basins at {} Hz ({} initial states): {shares}.",
+            c.setup.case.basin_freq_hz().unwrap_or(f64::NAN),
+            b.cells.len()
+        ));
+    }
+    out.push('\n');
+    out
+}
+
+fn curve_plot(c: &CaseRun) -> LinePlot {
+    let mut series = Vec::new();
+    // Continuation segments: solid where stable, dashed where unstable.
+    let mut seg: Vec<(f64, f64)> = Vec::new();
+    let mut stable = None;
+    let mut labelled = [false, false];
+    let mut flush = |seg: &mut Vec<(f64, f64)>, st: bool, series: &mut Vec<Series>| {
+        if seg.len() >= 2 {
+            let k = usize::from(st);
+            let label = if labelled[k] {
+                ""
+            } else if st {
+                "periodic orbits, stable"
+            } else {
+                "periodic orbits, unstable"
+            };
+            labelled[k] = true;
+            let style = if st { Style::Line } else { Style::Dashed };
+            series.push(Series::new(label, std::mem::take(seg), PALETTE[0], style));
+        }
+        seg.clear();
+    };
+    for p in &c.branch.points {
+        let o = &p.orbit;
+        let pt = (o.forcing.freq_hz, o.summary.v1_rms_v);
+        if stable.is_some_and(|s| s != o.is_stable()) {
+            let last = seg.last().copied();
+            flush(&mut seg, stable.unwrap_or(true), &mut series);
+            seg.extend(last);
+        }
+        stable = Some(o.is_stable());
+        seg.push(pt);
+    }
+    flush(&mut seg, stable.unwrap_or(true), &mut series);
+    let up: Vec<_> =
+        c.up.measurements()
+            .map(|m| (m.freq_hz, m.v1_rms_v))
+            .collect();
+    let down: Vec<_> = c
+        .down
+        .measurements()
+        .map(|m| (m.freq_hz, m.v1_rms_v))
+        .collect();
+    series.push(Series::new("up-sweep", up, PALETTE[1], Style::Points));
+    series.push(Series::new("down-sweep", down, PALETTE[2], Style::Points));
+    let folds: Vec<_> = c
+        .branch
+        .events
+        .iter()
+        .filter(|e| e.kind == EventKind::Fold)
+        .map(|e| (e.param, e.orbit.summary.v1_rms_v))
+        .collect();
+    let grazing: Vec<_> = c
+        .branch
+        .events
+        .iter()
+        .filter(|e| e.kind == EventKind::Grazing)
+        .map(|e| (e.param, e.orbit.summary.v1_rms_v))
+        .collect();
+    if !folds.is_empty() {
+        series.push(Series::new("folds", folds, PALETTE[3], Style::Points));
+    }
+    if !grazing.is_empty() {
+        series.push(Series::new("grazing", grazing, PALETTE[4], Style::Points));
+    }
+    let s = &c.setup.continuation;
+    LinePlot::new(
+        &format!("Whole response: {}", c.setup.case.label()),
+        "Frequency [Hz]",
+        "RMS output voltage V1 [V]",
+        series,
+    )
+    .x(s.start.min(s.stop), s.start.max(s.stop))
+    .legend(LegendPos::UpperRight)
+}
+
+fn basin_plot(c: &CaseRun) -> LinePlot {
+    let b = c.basins.as_ref().expect("basins");
+    let shares = b.shares();
+    let series = shares
+        .iter()
+        .enumerate()
+        .filter(|(_, (_, s))| *s > 0.0)
+        .map(|(k, (label, share))| {
+            let pts = b
+                .cells
+                .iter()
+                .enumerate()
+                .filter(|(i, _)| b.label(*i) == label)
+                .map(|(_, &(x, v))| (x * 1e6, v * 1e3))
+                .collect();
+            Series::new(
+                &format!("{label} ({:.1} %)", 100.0 * share),
+                pts,
+                PALETTE[k + 1],
+                Style::Points,
+            )
+        })
+        .collect();
+    LinePlot::new(
+        &format!(
+            "Basins at {} Hz: {}",
+            c.setup.case.basin_freq_hz().unwrap_or(f64::NAN),
+            c.setup.case.label()
+        ),
+        "Initial x [um]",
+        "Initial v [mm/s]",
+        series,
+    )
+    .legend(LegendPos::UpperRight)
+}

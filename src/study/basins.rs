@@ -1,0 +1,220 @@
+//! Basins of attraction at a fixed sinusoidal drive: which initial states end on which of
+//! the coexisting stable periodic orbits.
+//!
+//! Every cell of a grid of initial positions and velocities starts at drive phase zero with
+//! the charges at their static equilibrium (both node voltages zero at that position) and is
+//! integrated period by period; after each period its stroboscopic state is compared (in the
+//! scaled norm of [`crate::study::orbit`]) with the state at drive phase zero of every
+//! attractor of a catalogue of converged stable orbits. A cell belongs to an attractor once it
+//! stays within [`BasinSettings::settle_tol`] of it for two successive periods; a cell that
+//! does not settle within [`BasinSettings::max_periods`] is reported as unsettled (never
+//! dropped). Cells run in parallel (rayon) and are collected in grid order, so the result does
+//! not depend on the number of threads.
+
+use rayon::prelude::*;
+
+use crate::drive::Sine;
+use crate::ode::{Dopri5, Stats};
+use crate::physics::harvester::{Harvester, State};
+use crate::study::orbit::{mode_of, Forcing, Orbit, OrbitError, Shooter};
+
+/// A grid of initial states.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BasinGrid {
+    /// Initial positions from .. to (m), `nx` values, ends included.
+    pub x_m: (f64, f64),
+    /// Initial velocities from .. to (m/s), `nv` values, ends included.
+    pub v_m_per_s: (f64, f64),
+    /// Number of positions.
+    pub nx: usize,
+    /// Number of velocities.
+    pub nv: usize,
+}
+
+impl BasinGrid {
+    /// The same ranges with twice as many intervals in each direction (every cell kept).
+    pub fn refined(&self) -> Self {
+        Self {
+            nx: 2 * self.nx - 1,
+            nv: 2 * self.nv - 1,
+            ..*self
+        }
+    }
+
+    fn value(range: (f64, f64), n: usize, i: usize) -> f64 {
+        if n == 1 {
+            return range.0;
+        }
+        range.0 + (range.1 - range.0) * i as f64 / (n - 1) as f64
+    }
+
+    /// The initial (x, v) of every cell, velocity-major (row by row of velocity).
+    pub fn cells(&self) -> Vec<(f64, f64)> {
+        (0..self.nv)
+            .flat_map(|j| {
+                (0..self.nx).map(move |i| {
+                    (
+                        Self::value(self.x_m, self.nx, i),
+                        Self::value(self.v_m_per_s, self.nv, j),
+                    )
+                })
+            })
+            .collect()
+    }
+}
+
+/// Settings of a basin computation.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BasinSettings {
+    /// The grid.
+    pub grid: BasinGrid,
+    /// Largest number of drive periods per cell.
+    pub max_periods: usize,
+    /// Scaled distance to an attractor's stroboscopic state below which a cell has settled.
+    pub settle_tol: f64,
+    /// Integrator relative tolerance.
+    pub rtol: f64,
+}
+
+/// One attractor of the catalogue: a label and its state at drive phase zero.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Attractor {
+    /// Label (used in column values and summary keys).
+    pub label: String,
+    /// State at drive phase zero.
+    pub state: State,
+}
+
+impl Attractor {
+    /// The attractor of a stable orbit, labelled `label`.
+    pub fn of_orbit(shooter: &Shooter<'_>, orbit: &Orbit, label: &str) -> Result<Self, OrbitError> {
+        if !orbit.is_stable() {
+            return Err(OrbitError::Invalid(format!(
+                "the orbit labelled {label} is unstable (largest multiplier {})",
+                orbit.max_multiplier_abs()
+            )));
+        }
+        let state = shooter
+            .state_at_phase(orbit, 0.0)
+            .map_err(|e| OrbitError::Solver {
+                what: "frequency (Hz)",
+                param: orbit.forcing.freq_hz,
+                source: e,
+            })?;
+        Ok(Self {
+            label: label.to_string(),
+            state,
+        })
+    }
+}
+
+/// One cell's attractor (if it settled), the periods it ran and its integrator counters.
+type CellOutcome = (Option<usize>, usize, Stats);
+
+/// The label of cells that did not settle.
+pub const UNSETTLED: &str = "unsettled";
+
+/// The basins on a grid.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Basins {
+    /// Initial (x, v) of every cell, in grid order ([`BasinGrid::cells`]).
+    pub cells: Vec<(f64, f64)>,
+    /// Index into `labels` of each cell's attractor (`None`: unsettled).
+    pub attractor: Vec<Option<usize>>,
+    /// The catalogue's labels.
+    pub labels: Vec<String>,
+    /// Periods each cell ran.
+    pub periods: Vec<usize>,
+    /// Integrator counters of every cell.
+    pub stats: Stats,
+}
+
+impl Basins {
+    /// Label of a cell's attractor ([`UNSETTLED`] when it did not settle).
+    pub fn label(&self, cell: usize) -> &str {
+        self.attractor[cell].map_or(UNSETTLED, |k| self.labels[k].as_str())
+    }
+
+    /// Share of the cells of each attractor, in catalogue order, then the unsettled share
+    /// (labelled [`UNSETTLED`]); the shares sum to 1.
+    pub fn shares(&self) -> Vec<(String, f64)> {
+        let n = self.cells.len() as f64;
+        let mut out: Vec<(String, f64)> = self
+            .labels
+            .iter()
+            .enumerate()
+            .map(|(k, l)| {
+                let c = self.attractor.iter().filter(|a| **a == Some(k)).count();
+                (l.clone(), c as f64 / n)
+            })
+            .collect();
+        let u = self.attractor.iter().filter(|a| a.is_none()).count();
+        out.push((UNSETTLED.to_string(), u as f64 / n));
+        out
+    }
+}
+
+/// The basins of `attractors` under `forcing` on the grid of `settings` (see the module
+/// docs); `on_cell()` is called after each cell.
+pub fn basins(
+    base: &Harvester<Sine>,
+    forcing: &Forcing,
+    attractors: &[Attractor],
+    settings: &BasinSettings,
+    on_cell: &(dyn Fn() + Sync),
+) -> Result<Basins, OrbitError> {
+    if attractors.is_empty() || settings.grid.nx == 0 || settings.grid.nv == 0 {
+        return Err(OrbitError::Invalid(
+            "basins need at least one attractor and a non-empty grid".into(),
+        ));
+    }
+    let model = base.with_excitation(forcing.sine(0.0));
+    let scales = base.scales();
+    let period = forcing.period_s();
+    let opts = model.solver_options(settings.rtol);
+    let cells = settings.grid.cells();
+    let results: Vec<Result<CellOutcome, OrbitError>> = cells
+        .par_iter()
+        .map(|&(x, v)| {
+            let y0 = model.static_state(x, v);
+            let mut ode = Dopri5::new(0.0, y0, mode_of(&model, &y0), opts.clone());
+            let mut previous: Option<usize> = None;
+            let mut found = None;
+            let mut k = 0;
+            while k < settings.max_periods {
+                k += 1;
+                ode.integrate(&model, k as f64 * period, |_, _| {})
+                    .map_err(|e| OrbitError::Solver {
+                        what: "frequency (Hz)",
+                        param: forcing.freq_hz,
+                        source: e,
+                    })?;
+                let y = ode.y();
+                let near = attractors.iter().position(|a| {
+                    (y - a.state).component_div(&scales).norm() < settings.settle_tol
+                });
+                if near.is_some() && near == previous {
+                    found = near;
+                    break;
+                }
+                previous = near;
+            }
+            on_cell();
+            Ok((found, k, ode.stats()))
+        })
+        .collect();
+    let mut out = Basins {
+        cells,
+        attractor: Vec::with_capacity(results.len()),
+        labels: attractors.iter().map(|a| a.label.clone()).collect(),
+        periods: Vec::with_capacity(results.len()),
+        stats: Stats::default(),
+    };
+    for r in results {
+        let (a, k, st) = r?;
+        out.attractor.push(a);
+        out.periods.push(k);
+        out.stats += st;
+    }
+    Ok(out)
+}
