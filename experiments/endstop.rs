@@ -388,13 +388,7 @@ fn random(a: RandomArgs) -> Result<()> {
 fn response(a: ResponseArgs) -> Result<()> {
     use common::frame::frame;
     use common::row;
-    use endstop::drive::Sine;
-    use endstop::ode::Stats;
-    use endstop::physics::harvester::Harvester;
-    use endstop::study::continuation::{
-        continue_branch, first_orbit, ContinuationSettings, EventKind,
-    };
-    use endstop::study::orbit::{Forcing, Parameter, Shooter};
+    use endstop::study::continuation::{frequency_branch, EventKind};
     use endstop::study::sweep::SweepSettings;
 
     if !(a.from.is_finite() && a.to.is_finite() && a.from > 0.0 && a.to > a.from) {
@@ -425,23 +419,7 @@ fn response(a: ResponseArgs) -> Result<()> {
         "[endstop-response] continuing the periodic orbits from {} Hz",
         a.from
     );
-    let cs = ContinuationSettings::frequency(a.from, a.to, a.step);
-    let h = Harvester::new(&device, Sine::from_rms_g(a.accel_rms_g, a.from));
-    let shooter = Shooter::new(&h, cs.shooting);
-    let forcing = Forcing {
-        freq_hz: a.from,
-        accel_rms_g: a.accel_rms_g,
-    };
-    let mut stats = Stats::default();
-    let first = first_orbit(
-        &shooter,
-        &forcing,
-        Parameter::Frequency,
-        h.rest_state(),
-        200,
-        &mut stats,
-    )?;
-    let branch = continue_branch(&h, first, &cs, |_| {})?;
+    let branch = frequency_branch(&device, a.accel_rms_g, a.from, a.to, a.step, |_| {})?;
 
     let mut rows = Vec::new();
     for p in &branch.points {

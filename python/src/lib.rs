@@ -455,6 +455,132 @@ fn up_sweep<'py>(
     sweep_dict(py, &report)
 }
 
+/// Checks the arguments shared by the frequency studies.
+fn check_range(accel_rms_g: f64, start_hz: f64, stop_hz: f64, step_hz: f64) -> PyResult<()> {
+    if !(start_hz.is_finite() && stop_hz.is_finite() && start_hz > 0.0 && stop_hz > start_hz) {
+        return Err(arg_err(
+            "start_hz and stop_hz must be positive with stop_hz > start_hz",
+        ));
+    }
+    if !(step_hz > 0.0 && step_hz <= stop_hz - start_hz) {
+        return Err(arg_err(
+            "step_hz must be positive and not larger than the range",
+        ));
+    }
+    if !(accel_rms_g.is_finite() && accel_rms_g > 0.0) {
+        return Err(arg_err("accel_rms_g must be a finite positive number"));
+    }
+    Ok(())
+}
+
+/// Stepped-sine down-sweep from `stop_hz` to `start_hz` (each step from the previous steady
+/// state) with the jump up and the first contact refined to brackets narrower than
+/// `refine_tol_hz`: the down-sweep of the `endstop response` command. Keys: the per-step
+/// arrays (frequencies decreasing) as in `up_sweep`, `jump_hz`, `contact_hz` (midpoints of
+/// `*_bracket_hz`, or None), `jump_power_ratio`, `branch_end_hz` and `branch_end_kind`.
+#[pyfunction]
+#[pyo3(signature = (device, accel_rms_g, start_hz, stop_hz, step_hz = 2.0, refine_tol_hz = 0.1))]
+fn down_sweep<'py>(
+    py: Python<'py>,
+    device: &PyDevice,
+    accel_rms_g: f64,
+    start_hz: f64,
+    stop_hz: f64,
+    step_hz: f64,
+    refine_tol_hz: f64,
+) -> PyResult<Bound<'py, PyDict>> {
+    check_range(accel_rms_g, start_hz, stop_hz, step_hz)?;
+    if !(refine_tol_hz.is_finite() && refine_tol_hz > 0.0) {
+        return Err(arg_err("refine_tol_hz must be positive"));
+    }
+    let dev = device.inner.clone();
+    let report = py
+        .detach(move || {
+            let settings = endstop::study::sweep::SweepSettings {
+                freqs_hz: linspace_step(start_hz, stop_hz, step_hz),
+                extend_to_hz: stop_hz,
+                cfg: steady_config(&dev, 0.5 * (start_hz + stop_hz)),
+                refine_tol_hz,
+            };
+            settings.run_down(&dev, accel_rms_g, |_| {})
+        })
+        .map_err(solver_err)?;
+    let all: Vec<&Measurement> = report.measurements().collect();
+    let d = steps_dict(py, &all)?;
+    transition_items(&d, "jump", "hz", report.jump)?;
+    d.set_item("jump_power_ratio", report.jump_power_ratio)?;
+    transition_items(&d, "contact", "hz", report.contact)?;
+    match report.branch_end() {
+        Some((kind, t)) => {
+            d.set_item("branch_end_hz", t.value())?;
+            d.set_item("branch_end_kind", kind.label())?;
+        }
+        None => {
+            d.set_item("branch_end_hz", py.None())?;
+            d.set_item("branch_end_kind", py.None())?;
+        }
+    }
+    Ok(d)
+}
+
+/// The periodic orbits continued in frequency (shooting, Floquet multipliers,
+/// pseudo-arclength continuation through folds) from `start_hz` to `stop_hz` with steps of at
+/// most `step_hz`: the continuation of the `endstop response` command. Keys: per-orbit arrays
+/// `freq_hz`, `v1_rms_v`, `p_total_w`, `x_max_m`, `multiplier_max_abs`, `stable` (bool);
+/// `events`, a list of dicts (`kind`: fold, branch point, period doubling, torus or grazing;
+/// `freq_hz`, `at_grazing`, `stable_before`, `stable_after`); `folds_hz` and `grazing_hz`
+/// (lists); `max_residual`.
+#[pyfunction]
+#[pyo3(signature = (device, accel_rms_g, start_hz, stop_hz, step_hz = 2.0))]
+fn orbits<'py>(
+    py: Python<'py>,
+    device: &PyDevice,
+    accel_rms_g: f64,
+    start_hz: f64,
+    stop_hz: f64,
+    step_hz: f64,
+) -> PyResult<Bound<'py, PyDict>> {
+    use endstop::study::continuation::{frequency_branch, EventKind};
+    check_range(accel_rms_g, start_hz, stop_hz, step_hz)?;
+    let dev = device.inner.clone();
+    let branch = py
+        .detach(move || frequency_branch(&dev, accel_rms_g, start_hz, stop_hz, step_hz, |_| {}))
+        .map_err(solver_err)?;
+    let d = PyDict::new(py);
+    let col = |f: &dyn Fn(&endstop::study::orbit::Orbit) -> f64| {
+        array(py, branch.points.iter().map(|p| f(&p.orbit)).collect())
+    };
+    d.set_item("freq_hz", col(&|o| o.forcing.freq_hz))?;
+    d.set_item("v1_rms_v", col(&|o| o.summary.v1_rms_v))?;
+    d.set_item("p_total_w", col(&|o| o.summary.p_total_w))?;
+    d.set_item("x_max_m", col(&|o| o.summary.x_max_m))?;
+    d.set_item("multiplier_max_abs", col(&|o| o.max_multiplier_abs()))?;
+    d.set_item(
+        "stable",
+        branch
+            .points
+            .iter()
+            .map(|p| p.orbit.is_stable())
+            .collect::<Vec<bool>>(),
+    )?;
+    let events = PyList::empty(py);
+    for e in &branch.events {
+        let ed = PyDict::new(py);
+        ed.set_item("kind", e.kind.label())?;
+        ed.set_item("freq_hz", e.param)?;
+        ed.set_item("at_grazing", e.at_grazing)?;
+        ed.set_item("stable_before", e.stable_before)?;
+        ed.set_item("stable_after", e.stable_after)?;
+        events.append(ed)?;
+    }
+    d.set_item("events", events)?;
+    let of = |k: EventKind| branch.events_of(k).map(|e| e.param).collect::<Vec<f64>>();
+    d.set_item("folds_hz", of(EventKind::Fold))?;
+    d.set_item("grazing_hz", of(EventKind::Grazing))?;
+    d.set_item("max_residual", branch.max_residual())?;
+    Ok(d)
+}
+
 fn amplitude_dict<'py>(py: Python<'py>, r: &AmplitudeReport) -> PyResult<Bound<'py, PyDict>> {
     let all: Vec<&Measurement> = r.sweep.steps.iter().map(|s| &s.measurement).collect();
     let d = steps_dict(py, &all)?;
@@ -848,6 +974,8 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
         wrap_pyfunction!(bias_for_coupling, m)?,
         wrap_pyfunction!(up_sweep, m)?,
         wrap_pyfunction!(amplitude_sweep, m)?,
+        wrap_pyfunction!(down_sweep, m)?,
+        wrap_pyfunction!(orbits, m)?,
         wrap_pyfunction!(record, m)?,
         wrap_pyfunction!(ensemble, m)?,
         wrap_pyfunction!(paper_calibrate_prototype1, m)?,

@@ -45,6 +45,22 @@ def test_ensemble_matches_endstop_random(root, tmp_path):
         assert close(py[key], cli[key]), key
 
 
+def test_response_matches_endstop_response(root, tmp_path):
+    args = ["response", "--device", "data/examples/my_harvester.toml", "--from", "560", "--to",
+            "700", "--step", "4", "--accel-rms-g", "0.3", "--out", str(tmp_path)]
+    cli = summary(run_cli(args, tmp_path) / "summary.json")["numbers"]
+    dev = endstop.Device.from_toml(root / "data/examples/my_harvester.toml")
+    orbits = endstop.study.orbits(dev, 0.3, start_hz=560, stop_hz=700, step_hz=4)
+    events = [k for k in cli if k.startswith("event_")]
+    assert len(orbits["events"]) == len(events)
+    for i, e in enumerate(orbits["events"]):
+        assert close(e["freq_hz"], cli[f"event_{i}_hz"]), i
+    down = endstop.study.down_sweep(dev, 0.3, start_hz=560, stop_hz=700, step_hz=4)
+    assert ("down_branch_end_hz" in cli) == (down["branch_end_hz"] is not None)
+    if down["branch_end_hz"] is not None:
+        assert close(down["branch_end_hz"], cli["down_branch_end_hz"])
+
+
 def test_fig13_matches_the_fig13_program(tmp_path):
     out = run_cli([], tmp_path, program="fig13")
     cli = summary(out / "fig13" / "summary.json")

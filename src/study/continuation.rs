@@ -977,3 +977,38 @@ pub fn continue_branch(
         rejected_steps: rejected,
     })
 }
+
+/// The branch of periodic orbits of `device` driven at `accel_rms_g` (g rms), continued in
+/// frequency from `from_hz` to `to_hz` with parameter steps of at most `max_step_hz`
+/// ([`ContinuationSettings::frequency`]), starting from the orbit reached from rest at
+/// `from_hz` (shooting, after up to 200 periods of transient if Newton does not converge from
+/// rest); `on_point(f)` is called with the frequency of every accepted point.
+pub fn frequency_branch(
+    device: &crate::device::Device,
+    accel_rms_g: f64,
+    from_hz: f64,
+    to_hz: f64,
+    max_step_hz: f64,
+    on_point: impl FnMut(f64),
+) -> Result<Branch, OrbitError> {
+    let settings = ContinuationSettings::frequency(from_hz, to_hz, max_step_hz);
+    settings.validate()?;
+    let h = Harvester::new(device, Sine::from_rms_g(accel_rms_g, from_hz));
+    let shooter = Shooter::new(&h, settings.shooting);
+    let forcing = Forcing {
+        freq_hz: from_hz,
+        accel_rms_g,
+    };
+    let mut stats = Stats::default();
+    let first = first_orbit(
+        &shooter,
+        &forcing,
+        Parameter::Frequency,
+        h.rest_state(),
+        200,
+        &mut stats,
+    )?;
+    let mut branch = continue_branch(&h, first, &settings, on_point)?;
+    branch.stats += stats;
+    Ok(branch)
+}

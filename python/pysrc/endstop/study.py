@@ -9,9 +9,11 @@ arrays, with the GIL released while it runs.
 * :func:`ensemble`: independent records, mean output PSD, power, efficiency and bandwidth (the
   ``endstop random`` command; Figures 11-15).
 
-Down-sweeps and periodic-orbit continuation (the library's ``study::orbit`` and
-``study::continuation``) are not exposed yet; they will join this module as
-``down_sweep`` and ``orbits`` with the same conventions (a Device in, a dict out).
+* :func:`down_sweep`: stepped-sine down-sweep with the jump up and the first contact refined
+  (the ``endstop response`` command's down-sweep);
+* :func:`orbits`: periodic orbits by shooting, continued in frequency through folds, with their
+  Floquet stability and the folds, branch points and grazing points on the way (the
+  ``endstop response`` command's continuation).
 """
 
 import numpy as np
@@ -38,6 +40,25 @@ def amplitude_sweep(device, freq_hz, accels_rms_g, refine_tol_g=0.005):
     return _native.amplitude_sweep(device, float(freq_hz), a, float(refine_tol_g))
 
 
+def down_sweep(device, accel_rms_g, start_hz, stop_hz, step_hz=2.0, refine_tol_hz=0.1):
+    """Down-sweep of ``device`` from ``stop_hz`` to ``start_hz`` in ``step_hz`` steps at
+    ``accel_rms_g`` (g rms): the per-step arrays of :func:`up_sweep` (frequencies
+    decreasing), ``jump_hz`` and ``contact_hz`` (midpoints of ``*_bracket_hz``, or None),
+    ``jump_power_ratio``, ``branch_end_hz`` and ``branch_end_kind``."""
+    return _native.down_sweep(device, float(accel_rms_g), float(start_hz), float(stop_hz),
+                              float(step_hz), float(refine_tol_hz))
+
+
+def orbits(device, accel_rms_g, start_hz, stop_hz, step_hz=2.0):
+    """Periodic orbits of ``device`` at ``accel_rms_g`` continued in frequency from
+    ``start_hz`` to ``stop_hz`` (steps of at most ``step_hz``): per-orbit arrays ``freq_hz``,
+    ``v1_rms_v``, ``p_total_w``, ``x_max_m``, ``multiplier_max_abs`` and the list ``stable``;
+    ``events`` (dicts with ``kind``, ``freq_hz``, ``at_grazing``, ``stable_before``,
+    ``stable_after``), ``folds_hz``, ``grazing_hz`` and ``max_residual``."""
+    return _native.orbits(device, float(accel_rms_g), float(start_hz), float(stop_hz),
+                          float(step_hz))
+
+
 def record(device, psd_g2_per_hz, seed=2012, stream=0, duration_s=10.0):
     """One record at two-sided level ``psd_g2_per_hz`` (g^2/Hz): ``v1_v``, ``v2_v`` (arrays at
     ``sample_rate_hz``), ``p_total_w``, ``x_rms_m``, ``contact_fraction``, ``impacts``, ..."""
@@ -53,4 +74,4 @@ def ensemble(device, psd_g2_per_hz, records=4, duration_s=10.0, seed=2012):
                             int(seed))
 
 
-__all__ = ["up_sweep", "amplitude_sweep", "record", "ensemble"]
+__all__ = ["up_sweep", "down_sweep", "orbits", "amplitude_sweep", "record", "ensemble"]
