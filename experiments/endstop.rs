@@ -18,9 +18,6 @@ use clap::{Parser, Subcommand};
 use common::plot::{LegendPos, LinePlot, Series, Style, PALETTE};
 use common::{fmt_sig, load_device_file, Experiment, LoadedDevice};
 use endstop::device::Device;
-use endstop::physics::two_port::TwoPort;
-use endstop::physics::two_port::EQ21_QM;
-use endstop::signal::WelchConfig;
 use endstop::study::ensemble::EnsembleSpec;
 use endstop::study::record::RecordSpec;
 use endstop::study::stepped::linspace_step;
@@ -266,19 +263,6 @@ fn sweep(a: SweepArgs) -> Result<()> {
     exp.finish()
 }
 
-/// Welch segment for a device: bins of about a tenth of its linear half-power width, a power
-/// of two, at least 2^10 and at most an eighth of the record.
-fn nperseg_for(device: &endstop::device::Device, fs: f64, n: usize) -> usize {
-    let tp = TwoPort::of(device);
-    let width = tp.resonance_hz() / tp.qm(EQ21_QM).max(0.5);
-    let target = fs / (0.1 * width);
-    let mut p = 1usize << 10;
-    while (p as f64) < target && p * 2 <= n / 8 {
-        p *= 2;
-    }
-    p
-}
-
 fn random(a: RandomArgs) -> Result<()> {
     if !(a.psd.is_finite() && a.psd > 0.0) {
         bail!("--psd must be a positive two-sided PSD in g^2/Hz");
@@ -290,19 +274,8 @@ fn random(a: RandomArgs) -> Result<()> {
     exp.seed = Some(a.seed);
     let mut record = RecordSpec::paper(&device, a.psd);
     record.noise.duration_s = a.duration_s;
-    let n = record.analysed_samples();
-    let fs = record.noise.sample_rate_hz;
-    let nperseg = nperseg_for(&device, fs, n);
-    let f0 = TwoPort::of(&device).resonance_hz();
-    let spec = EnsembleSpec {
-        record,
-        welch: WelchConfig::half_overlap(nperseg),
-        alt_welch: None,
-        analysis_band_hz: (0.25 * f0, (4.0 * f0).min(0.45 * fs)),
-        seed: a.seed,
-        first_stream: 0,
-        realisations: a.records,
-    };
+    let spec = EnsembleSpec::for_device(&device, record, a.seed, a.records);
+    let nperseg = spec.welch.nperseg;
     let ens = common::with_progress(a.records, "records", |tick| {
         endstop::study::ensemble::run_ensemble(&device, &spec, tick)
     })?;

@@ -13,7 +13,6 @@ use endstop::paper::claims::{Claims, Value};
 use endstop::paper::setups::ParamSet;
 use endstop::paper::{fig09, fig13};
 use endstop::physics::two_port::{self, QmReading, TwoPort, EQ21_QM};
-use endstop::signal::WelchConfig;
 use endstop::study::amplitude::{amplitude_sweep_report, AmplitudeReport};
 use endstop::study::ensemble::{run_ensemble, EnsembleSpec};
 use endstop::study::record::{simulate_record, RecordSpec, RecordSummary};
@@ -681,20 +680,6 @@ fn record<'py>(
     Ok(d)
 }
 
-/// Welch segment length for a device: bins of about a tenth of its linear half-power width, a
-/// power of two, at least 2^10 and at most an eighth of the record (the `endstop random`
-/// command's rule).
-fn nperseg_for(device: &Device, fs: f64, n: usize) -> usize {
-    let tp = TwoPort::of(device);
-    let width = tp.resonance_hz() / tp.qm(EQ21_QM).max(0.5);
-    let target = fs / (0.1 * width);
-    let mut p = 1usize << 10;
-    while (p as f64) < target && p * 2 <= n / 8 {
-        p *= 2;
-    }
-    p
-}
-
 /// An ensemble of independent random-vibration records (record i uses stream i of `seed`),
 /// with the ensemble-mean output PSD, power, efficiency and bandwidth: the `endstop random`
 /// command's study (same segmenting and analysis band).
@@ -713,19 +698,8 @@ fn ensemble<'py>(
     }
     let record = record_spec(&device.inner, psd_g2_per_hz, duration_s)?;
     let dev = device.inner.clone();
-    let n = record.analysed_samples();
-    let fs = record.noise.sample_rate_hz;
-    let nperseg = nperseg_for(&dev, fs, n);
-    let f0 = TwoPort::of(&dev).resonance_hz();
-    let spec = EnsembleSpec {
-        record,
-        welch: WelchConfig::half_overlap(nperseg),
-        alt_welch: None,
-        analysis_band_hz: (0.25 * f0, (4.0 * f0).min(0.45 * fs)),
-        seed,
-        first_stream: 0,
-        realisations: records,
-    };
+    let spec = EnsembleSpec::for_device(&dev, record, seed, records);
+    let nperseg = spec.welch.nperseg;
     let ens = py
         .detach(move || run_ensemble(&dev, &spec, || {}))
         .map_err(solver_err)?;

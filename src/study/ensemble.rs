@@ -56,6 +56,35 @@ pub struct EnsembleSpec {
     pub realisations: usize,
 }
 
+impl EnsembleSpec {
+    /// The ensemble of `realisations` records for any device (streams `0..realisations` of
+    /// `seed`): Welch segments with bins of about a tenth of the device's linear half-power
+    /// width (a power of two, at least 2^10 and at most an eighth of the record), half
+    /// overlap, and the analysis band from a quarter to four times the open-circuit resonance
+    /// (below 0.45 of the sample rate).
+    pub fn for_device(device: &Device, record: RecordSpec, seed: u64, realisations: usize) -> Self {
+        let tp = crate::physics::two_port::TwoPort::of(device);
+        let f0 = tp.resonance_hz();
+        let fs = record.noise.sample_rate_hz;
+        let n = record.analysed_samples();
+        let width = f0 / tp.qm(crate::physics::two_port::EQ21_QM).max(0.5);
+        let target = fs / (0.1 * width);
+        let mut nperseg = 1usize << 10;
+        while (nperseg as f64) < target && nperseg * 2 <= n / 8 {
+            nperseg *= 2;
+        }
+        Self {
+            record,
+            welch: WelchConfig::half_overlap(nperseg),
+            alt_welch: None,
+            analysis_band_hz: (0.25 * f0, (4.0 * f0).min(0.45 * fs)),
+            seed,
+            first_stream: 0,
+            realisations,
+        }
+    }
+}
+
 /// One record of an ensemble, analysed (the voltages themselves are not kept).
 #[derive(Debug, Clone, PartialEq)]
 pub struct RecordResult {
