@@ -451,13 +451,10 @@ fn in_words(c: &CaseRun) -> String {
         ));
     }
     out.push_str(&ghost_words(&c.ghost, "the sweep's steady-state criterion"));
-    if let Some(g) = c.ghost_ring_up.first() {
+    if !c.ghost_ring_up.is_empty() {
         out.push_str(&ghost_words(
             &c.ghost_ring_up,
-            &format!(
-                "with blocks of the ring-up time alone ({} periods), the criterion",
-                g.block_periods
-            ),
+            "the same criterion with blocks of the ring-up time alone",
         ));
     }
     if let Some(b) = &c.basins {

@@ -35,10 +35,10 @@ pub const MIN_BLOCK_PERIODS: usize = 5;
 
 /// Minimum block length in periods for sweeps that cross a saddle-node fold
 /// ([`steady_config_across_folds`]; see the module docs): the horizon of three such blocks (192
-/// periods) outlasts the ghost of prototype 1's folds 0.1 Hz past them, with room for a
-/// ghost twice as long-lived as measured (the bound halves when the block is halved, and the
-/// convergence study of the response chapter shows half the block moving nothing beyond the
-/// bracket).
+/// periods) outlasts the ghost of prototype 1's folds 0.1 Hz past them (the response
+/// chapter's ghost table: under 100 periods for either parameter set), by nearly a factor of
+/// two; the response chapter's convergence table repeats the sweeps with half the block and
+/// finds the branch end moved by less than the bracket.
 pub const FOLD_BLOCK_PERIODS: usize = 64;
 
 /// Steady-state measurement settings.
