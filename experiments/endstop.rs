@@ -179,7 +179,7 @@ fn sweep(a: SweepArgs) -> Result<()> {
     }
     let (mut exp, loaded, device) = start("endstop-sweep", &a.device, a.bias_v, a.out)?;
     let freqs = linspace_step(a.from, a.to, a.step);
-    let cfg = endstop::study::steady::steady_config(&device, 0.5 * (a.from + a.to));
+    let cfg = endstop::study::steady::steady_config_across_folds(&device, 0.5 * (a.from + a.to));
     let report = common::with_progress(freqs.len(), "sweep", |tick| {
         endstop::study::sweep::up_sweep_report(&device, &freqs, a.accel_rms_g, &cfg, 0.1, |_| {
             tick()
@@ -378,7 +378,7 @@ fn response(a: ResponseArgs) -> Result<()> {
     let settings = SweepSettings {
         freqs_hz: freqs.clone(),
         extend_to_hz: a.to,
-        cfg: endstop::study::steady::steady_config(&device, 0.5 * (a.from + a.to)),
+        cfg: endstop::study::steady::steady_config_across_folds(&device, 0.5 * (a.from + a.to)),
         refine_tol_hz: 0.1,
     };
     let (up, down) = common::with_progress(2 * freqs.len(), "sweeps", |tick| {

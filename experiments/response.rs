@@ -13,6 +13,7 @@ use common::plot::{LegendPos, LinePlot, Series, Style, PALETTE};
 use common::{fmt_sig, frame::frame, row, Experiment};
 use endstop::paper::response::{self, Case, CaseRun, BASIN_CELLS};
 use endstop::study::continuation::EventKind;
+use endstop::study::steady::FOLD_BLOCK_PERIODS;
 use endstop::study::sweep::DownEndKind;
 
 fn main() {
@@ -233,54 +234,60 @@ fn numbers_md(run: &response::Run, fine_shift: &[(Case, f64)]) -> String {
          The upper fold and the grazing points are located on the continued branch to 1e-4 Hz.\n",
     );
     md.push_str("\n### The stepped sweep's steady-state criterion past the upper fold\n\n");
-    md.push_str(
+    md.push_str(&format!(
         "One step of the sweep's steady-state criterion from the stable impacting orbit 1 Hz \
          below the upper fold, at frequencies above the fold where no impacting orbit exists; \
          beside it, how many periods the same start keeps touching the stops (the life of the \
-         saddle-node's ghost).\n\n",
-    );
+         saddle-node's ghost). The sweep's blocks follow the fold rule (at least {} periods); \
+         where the ring-up time alone gives shorter blocks, the criterion with those blocks \
+         (without the rule) is shown too.\n\n",
+        FOLD_BLOCK_PERIODS
+    ));
     let mut t = Table::new([
         "case",
+        "blocks (periods)",
         "above the fold (Hz)",
         "criterion accepts an impacting state",
         "periods the criterion simulated",
         "last period with contact",
     ]);
     for c in &run.cases {
-        for g in &c.ghost {
-            t.row([
-                c.setup.case.key().to_string(),
-                format!("{}", g.offset_hz),
-                if g.accepted_in_contact { "yes" } else { "no" }.to_string(),
-                g.periods_simulated.to_string(),
-                g.last_contact_period.to_string(),
-            ]);
+        for rows in [&c.ghost, &c.ghost_ring_up] {
+            for g in rows {
+                t.row([
+                    c.setup.case.key().to_string(),
+                    g.block_periods.to_string(),
+                    format!("{}", g.offset_hz),
+                    if g.accepted_in_contact { "yes" } else { "no" }.to_string(),
+                    g.periods_simulated.to_string(),
+                    g.last_contact_period.to_string(),
+                ]);
+            }
         }
     }
     md.push_str(&t.render());
-    md.push_str(&format!(
-        "\nA candidate fix: the same up-sweeps with blocks of at least {} periods.\n\n",
-        response::LONG_BLOCK_PERIODS
-    ));
+    md.push_str(
+        "\nThe convergence of the fold rule: the same up-sweeps with half the sweep's blocks.\n\n",
+    );
     let mut t = Table::new([
         "case",
-        "figure's blocks (periods)",
+        "half blocks (periods)",
         "up-sweep leaves the upper branch (Hz)",
         "how",
         "sweep - fold (Hz)",
+        "change from the sweep's (Hz)",
     ]);
     for c in &run.cases {
-        let Some(r) = &c.up_long_blocks else { continue };
-        let end = r.branch_end();
+        let Some(r) = &c.up_half_blocks else { continue };
+        let end = r.branch_end().map(|e| e.transition.value());
         t.row([
             c.setup.case.key().to_string(),
-            c.setup.sweep.cfg.block_periods.to_string(),
-            hz(end.map(|e| e.transition.value())),
-            end.map_or("-".into(), |e| e.kind.label().to_string()),
-            hz(end
-                .map(|e| e.transition.value())
-                .zip(c.fold_hz())
-                .map(|(a, b)| a - b)),
+            (c.setup.sweep.cfg.block_periods / 2).to_string(),
+            hz(end),
+            r.branch_end()
+                .map_or("-".into(), |e| e.kind.label().to_string()),
+            hz(end.zip(c.fold_hz()).map(|(a, b)| a - b)),
+            hz(end.zip(c.up_end_hz()).map(|(a, b)| a - b)),
         ]);
     }
     md.push_str(&t.render());
@@ -443,27 +450,11 @@ fn in_words(c: &CaseRun) -> String {
             end
         ));
     }
-    let accepted: Vec<_> = c.ghost.iter().filter(|g| g.accepted_in_contact).collect();
-    if let Some(worst) = accepted
-        .iter()
-        .max_by(|a, b| a.offset_hz.total_cmp(&b.offset_hz))
-    {
-        out.push_str(&format!(
-            "Past the fold the steady-state criterion accepts the dying impacting state as \
-             steady at {} of {} offsets, up to {} Hz above the fold: there it stops after {} \
-             periods, while the state keeps touching the stops for {} periods.",
-            accepted.len(),
-            c.ghost.len(),
-            worst.offset_hz,
-            worst.periods_simulated,
-            worst.last_contact_period
-        ));
-    } else if let Some(first) = c.ghost.first() {
-        out.push_str(&format!(
-            "Past the fold the steady-state criterion never accepts the dying impacting state: \
-             at {} Hz above the fold it simulates {} periods, longer than the {} periods the \
-             state keeps touching the stops.",
-            first.offset_hz, first.periods_simulated, first.last_contact_period
+    out.push_str(&ghost_words(&c.ghost, "the sweep's steady-state criterion"));
+    if !c.ghost_ring_up.is_empty() {
+        out.push_str(&ghost_words(
+            &c.ghost_ring_up,
+            "the same criterion with blocks of the ring-up time alone",
         ));
     }
     if let Some(b) = &c.basins {
@@ -474,13 +465,47 @@ fn in_words(c: &CaseRun) -> String {
             .collect::<Vec<_>>()
             .join(", ");
         out.push_str(&format!(
-            " Basins at {} Hz ({} initial states): {shares}.",
+            "Basins at {} Hz ({} initial states): {shares}.",
             c.setup.case.basin_freq_hz().unwrap_or(f64::NAN),
             b.cells.len()
         ));
     }
+    out.truncate(out.trim_end().len());
     out.push('\n');
     out
+}
+
+/// A sentence on what a criterion (`who`) does with the ghost past the fold.
+fn ghost_words(ghost: &[response::GhostRow], who: &str) -> String {
+    let accepted: Vec<_> = ghost.iter().filter(|g| g.accepted_in_contact).collect();
+    if let Some(worst) = accepted
+        .iter()
+        .max_by(|a, b| a.offset_hz.total_cmp(&b.offset_hz))
+    {
+        format!(
+            "Past the fold {who} ({} periods a block) accepts the dying impacting state as \
+             steady at {} of {} offsets, up to {} Hz above the fold: there it stops after {} \
+             periods, while the state keeps touching the stops for {} periods. ",
+            worst.block_periods,
+            accepted.len(),
+            ghost.len(),
+            worst.offset_hz,
+            worst.periods_simulated,
+            worst.last_contact_period
+        )
+    } else if let Some(first) = ghost.first() {
+        format!(
+            "Past the fold {who} ({} periods a block) never accepts the dying impacting \
+             state: at {} Hz above the fold it simulates {} periods, longer than the {} \
+             periods the state keeps touching the stops. ",
+            first.block_periods,
+            first.offset_hz,
+            first.periods_simulated,
+            first.last_contact_period
+        )
+    } else {
+        String::new()
+    }
 }
 
 fn curve_plot(c: &CaseRun) -> LinePlot {

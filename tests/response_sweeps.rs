@@ -4,8 +4,11 @@
 //! refined bracket, [`REFINE_TOL_HZ`]).
 
 use endstop::device::Device;
-use endstop::paper::response::{continuation, setups, Case, CaseRun, Setup};
+use endstop::paper::response::{
+    continuation, ghost_study, setups, upper_fold_hz, Case, CaseRun, Setup,
+};
 use endstop::study::basins::{basins, Attractor};
+use endstop::study::steady::{horizon_periods, steady_config, SteadyConfig, FOLD_BLOCK_PERIODS};
 use endstop::study::sweep::REFINE_TOL_HZ;
 
 fn published() -> (Device, Device) {
@@ -44,7 +47,8 @@ fn case_run(case: Case) -> CaseRun {
         attractors: Vec::new(),
         continuation_s: 0.0,
         ghost: Vec::new(),
-        up_long_blocks: None,
+        ghost_ring_up: Vec::new(),
+        up_half_blocks: None,
     }
 }
 
@@ -82,15 +86,12 @@ fn prototype1_down_sweep_leaves_the_lower_branch_at_its_end() {
     );
 }
 
-/// Figure 8's prototype 1 (published, 5.5 g): the up-sweep should leave the upper branch at
-/// its fold within the refined bracket. It does not: the sweep's steady-state criterion (two
-/// successive blocks of 5 periods, the ring-up time 2m/b, agreeing to 1e-3) accepts the
-/// slowly dying impacting state just past the fold (the saddle-node's ghost lives 25-42
-/// periods at 0.1-0.25 Hz past it), so the sweep's branch end lies about 0.5 Hz above the fold
-/// (2 Hz with the calibrated gap). A finding about the criterion, documented in the book's
-/// response chapter; the test is kept as it is and ignored until the criterion is changed.
+/// Figure 8's prototype 1 (published, 5.5 g, 10 Hz steps refined to 0.1 Hz): the up-sweep
+/// leaves the upper branch at its fold within the refined bracket. Its blocks follow the fold
+/// rule ([`FOLD_BLOCK_PERIODS`]): with blocks of the ring-up time alone (5 periods) the
+/// criterion accepted the slowly dying impacting state past the fold and the sweep left the
+/// branch about 0.5 Hz above it.
 #[test]
-#[ignore = "finding: the steady-state criterion accepts the ghost past the fold (see the doc)"]
 fn prototype1_up_sweep_leaves_the_upper_branch_at_the_fold() {
     let r = case_run(Case::Fig08P1Published);
     let fold = r.fold_hz().expect("an upper fold");
@@ -99,6 +100,44 @@ fn prototype1_up_sweep_leaves_the_upper_branch_at_the_fold() {
         (end - fold).abs() <= REFINE_TOL_HZ,
         "up-sweep {end} vs fold {fold}"
     );
+}
+
+/// The fold rule's inequality for the published prototype 1: started from the stable
+/// impacting orbit 1 Hz below the fold, the state at the bracket's width
+/// ([`REFINE_TOL_HZ`]) past the fold stops touching the stops before the horizon of Figure 8's
+/// criterion ([`horizon_periods`]) ends, and the criterion does not accept it; with blocks of
+/// the ring-up time alone (5 periods) it does (the defect the rule removes).
+#[test]
+fn prototype1_ghost_at_the_bracket_dies_within_the_criterions_horizon() {
+    let s = setup(Case::Fig08P1Published);
+    let branch = continuation(&s).unwrap();
+    let cfg = &s.sweep.cfg;
+    let rows = ghost_study(&s, &branch, cfg, &[REFINE_TOL_HZ]).unwrap();
+    let g = rows.first().expect("an upper fold");
+    assert!(
+        g.last_contact_period < horizon_periods(cfg),
+        "ghost lives {} periods, horizon {}",
+        g.last_contact_period,
+        horizon_periods(cfg)
+    );
+    assert!(!g.accepted_in_contact, "{g:?}");
+    let ring_up = SteadyConfig {
+        block_periods: steady_config(&s.device, upper_fold_hz(&branch).unwrap()).block_periods,
+        ..cfg.clone()
+    };
+    let short = ghost_study(&s, &branch, &ring_up, &[REFINE_TOL_HZ]).unwrap();
+    assert!(short[0].accepted_in_contact, "{:?}", short[0]);
+}
+
+/// The fold rule changes nothing where the ring-up time already gives longer blocks:
+/// Figure 13's prototype 2 keeps its blocks of the ring-up time (so its sweeps, pinned in the
+/// regression snapshots, are unchanged).
+#[test]
+fn fold_rule_leaves_prototype2_blocks_at_the_ring_up_time() {
+    let s = setup(Case::Fig13P2);
+    let ring_up = steady_config(&s.device, 700.0);
+    assert!(ring_up.block_periods > FOLD_BLOCK_PERIODS);
+    assert_eq!(s.sweep.cfg, ring_up);
 }
 
 /// Basin shares at Figure 13's 720 Hz sum to 1 and do not depend on the number of threads
@@ -145,27 +184,4 @@ fn basin_shares_sum_to_one_and_do_not_depend_on_the_thread_count() {
     assert_eq!(one, two);
     let total: f64 = one.shares().iter().map(|s| s.1).sum();
     assert!((total - 1.0).abs() < 1e-12, "shares sum to {total}");
-}
-
-/// The candidate fix of the criterion: with blocks of at least
-/// [`endstop::paper::response::LONG_BLOCK_PERIODS`] periods (longer than the ghost lives
-/// 0.1 Hz past the fold), the published prototype 1's up-sweep leaves the upper branch at the
-/// fold within the refined bracket.
-#[test]
-fn prototype1_up_sweep_with_long_blocks_leaves_the_upper_branch_at_the_fold() {
-    let s = setup(Case::Fig08P1Published);
-    let mut long = s.sweep.clone();
-    long.cfg.block_periods = endstop::paper::response::LONG_BLOCK_PERIODS;
-    let up = long.run(&s.device, s.accel_rms_g, |_| {}).unwrap();
-    let branch = continuation(&s).unwrap();
-    let fold = branch
-        .events_of(endstop::study::continuation::EventKind::Fold)
-        .filter(|e| !e.at_grazing && e.stable_before && !e.stable_after)
-        .map(|e| e.param)
-        .fold(f64::NEG_INFINITY, f64::max);
-    let end = up.branch_end().expect("a branch end").transition.value();
-    assert!(
-        (end - fold).abs() <= REFINE_TOL_HZ,
-        "up-sweep {end} vs fold {fold}"
-    );
 }

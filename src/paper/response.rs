@@ -18,6 +18,7 @@ use crate::study::continuation::{
     continue_branch, first_orbit, Branch, ContinuationSettings, EventKind,
 };
 use crate::study::orbit::{Forcing, Orbit, OrbitError, Parameter, Shooter};
+use crate::study::steady::{steady_config, SteadyConfig, FOLD_BLOCK_PERIODS};
 use crate::study::sweep::{DownSweepReport, SweepReport, SweepSettings};
 
 /// The cases, each a device, a drive level and the sweep protocol of its figure.
@@ -296,27 +297,21 @@ pub struct CaseRun {
     pub attractors: Vec<(String, Orbit)>,
     /// Wall-clock time of the continuation alone (s).
     pub continuation_s: f64,
-    /// The steady-state criterion on the ghost past the upper fold ([`ghost_study`]).
+    /// The sweep's steady-state criterion on the ghost past the upper fold ([`ghost_study`]).
     pub ghost: Vec<GhostRow>,
-    /// The up-sweep again with blocks of at least [`LONG_BLOCK_PERIODS`] periods (a candidate
-    /// fix of the criterion near folds), where the figure's blocks are shorter.
-    pub up_long_blocks: Option<SweepReport>,
+    /// The same study with blocks of the ring-up time alone ([`steady_config`]), where the
+    /// sweep's blocks are longer (the criterion without the fold rule).
+    pub ghost_ring_up: Vec<GhostRow>,
+    /// The up-sweep again with half the sweep's blocks, where the fold rule
+    /// ([`FOLD_BLOCK_PERIODS`]) sets them: the convergence of the rule.
+    pub up_half_blocks: Option<SweepReport>,
 }
-
-/// Shortest block of the steady-state criterion in the candidate fix (periods): longer than
-/// the ghost past the fold lives at 0.1 Hz from it (the ghost study's table), so that a block
-/// and its successor straddle the fall off the branch.
-pub const LONG_BLOCK_PERIODS: usize = 64;
 
 impl CaseRun {
     /// The upper branch's fold: the fold (away from grazing) at the highest frequency at
     /// which the branch loses stability.
     pub fn fold_hz(&self) -> Option<f64> {
-        self.branch
-            .events_of(EventKind::Fold)
-            .filter(|e| !e.at_grazing && e.stable_before && !e.stable_after)
-            .map(|e| e.param)
-            .fold(None, |m: Option<f64>, p| Some(m.map_or(p, |m| m.max(p))))
+        upper_fold_hz(&self.branch)
     }
 
     /// Lowest and highest grazing frequencies (Hz).
@@ -409,15 +404,15 @@ impl CaseRun {
                 .map(|(a, b)| a - b),
         );
         put("down_contact_power_ratio", self.down.contact_power_ratio);
-        let long_end = self
-            .up_long_blocks
+        let half_end = self
+            .up_half_blocks
             .as_ref()
             .and_then(|r| r.branch_end())
             .map(|e| e.transition.value());
-        put("up_end_long_blocks_hz", long_end);
+        put("up_end_half_blocks_hz", half_end);
         put(
-            "up_end_long_blocks_minus_fold_hz",
-            long_end.zip(self.fold_hz()).map(|(a, b)| a - b),
+            "up_end_half_blocks_minus_fold_hz",
+            half_end.zip(self.fold_hz()).map(|(a, b)| a - b),
         );
         put("up_jump_power_ratio", self.up.jump_power_ratio);
         put("max_residual", Some(self.branch.max_residual()));
@@ -481,6 +476,16 @@ fn attractor_label(o: &Orbit) -> &'static str {
     }
 }
 
+/// The upper fold of a branch: the fold (away from grazing) at the highest frequency at which
+/// the branch loses stability.
+pub fn upper_fold_hz(branch: &Branch) -> Option<f64> {
+    branch
+        .events_of(EventKind::Fold)
+        .filter(|e| !e.at_grazing && e.stable_before && !e.stable_after)
+        .map(|e| e.param)
+        .fold(None, |m: Option<f64>, p| Some(m.map_or(p, |m| m.max(p))))
+}
+
 /// Offsets above the upper fold at which the stepped sweep's steady-state criterion is
 /// tested on the saddle-node's ghost (Hz).
 pub const GHOST_OFFSETS_HZ: [f64; 7] = [0.1, 0.25, 0.5, 1.0, 1.5, 2.0, 3.0];
@@ -494,6 +499,8 @@ pub const GHOST_MAX_PERIODS: usize = 4000;
 pub struct GhostRow {
     /// Frequency above the fold (Hz).
     pub offset_hz: f64,
+    /// The criterion's block length (periods).
+    pub block_periods: usize,
     /// The criterion's measurement is in contact (it accepts the dying orbit as steady).
     pub accepted_in_contact: bool,
     /// Measured blocks the criterion used.
@@ -505,12 +512,17 @@ pub struct GhostRow {
     pub last_contact_period: usize,
 }
 
-/// The ghost study of a case (empty without an upper fold).
-pub fn ghost_study(run: &CaseRun) -> Result<Vec<GhostRow>, OrbitError> {
-    let Some(fold) = run.fold_hz() else {
+/// The ghost study of a case under the steady-state criterion `cfg`, at `offsets_hz` above
+/// the upper fold of `branch` (empty without an upper fold).
+pub fn ghost_study(
+    setup: &Setup,
+    branch: &Branch,
+    cfg: &SteadyConfig,
+    offsets_hz: &[f64],
+) -> Result<Vec<GhostRow>, OrbitError> {
+    let Some(fold) = upper_fold_hz(branch) else {
         return Ok(Vec::new());
     };
-    let setup = &run.setup;
     let h = Harvester::new(
         &setup.device,
         Sine::from_rms_g(setup.accel_rms_g, setup.continuation.start),
@@ -518,8 +530,7 @@ pub fn ghost_study(run: &CaseRun) -> Result<Vec<GhostRow>, OrbitError> {
     let shooter = Shooter::new(&h, setup.continuation.shooting);
     let mut stats = Stats::default();
     let below = fold - 1.0;
-    let upper = run
-        .branch
+    let upper = branch
         .orbits_at(&shooter, below, &mut stats)?
         .into_iter()
         .find(|o| o.is_stable() && o.is_impacting())
@@ -533,8 +544,7 @@ pub fn ghost_study(run: &CaseRun) -> Result<Vec<GhostRow>, OrbitError> {
             param: below,
             source: e,
         })?;
-    let cfg = &setup.sweep.cfg;
-    GHOST_OFFSETS_HZ
+    offsets_hz
         .iter()
         .map(|&df| {
             let f = fold + df;
@@ -574,6 +584,7 @@ pub fn ghost_study(run: &CaseRun) -> Result<Vec<GhostRow>, OrbitError> {
             }
             Ok(GhostRow {
                 offset_hz: df,
+                block_periods: cfg.block_periods,
                 accepted_in_contact: m.contact_fraction > 0.0,
                 blocks: m.blocks,
                 periods_simulated: (cfg.settle_blocks + m.blocks) * cfg.block_periods,
@@ -624,14 +635,26 @@ pub fn run_case(
         attractors: Vec::new(),
         continuation_s,
         ghost: Vec::new(),
-        up_long_blocks: None,
+        ghost_ring_up: Vec::new(),
+        up_half_blocks: None,
     };
-    run.ghost = ghost_study(&run).map_err(oerr)?;
-    if setup.sweep.cfg.block_periods < LONG_BLOCK_PERIODS {
-        let mut long = setup.sweep.clone();
-        long.cfg.block_periods = LONG_BLOCK_PERIODS;
-        run.up_long_blocks = Some(
-            long.run(&setup.device, setup.accel_rms_g, |_| {})
+    let cfg = &setup.sweep.cfg;
+    run.ghost = ghost_study(setup, &run.branch, cfg, &GHOST_OFFSETS_HZ).map_err(oerr)?;
+    if let Some(fold) = run.fold_hz() {
+        let ring_up = SteadyConfig {
+            block_periods: steady_config(&setup.device, fold).block_periods,
+            ..cfg.clone()
+        };
+        if ring_up.block_periods < cfg.block_periods {
+            run.ghost_ring_up =
+                ghost_study(setup, &run.branch, &ring_up, &GHOST_OFFSETS_HZ).map_err(oerr)?;
+        }
+    }
+    if cfg.block_periods == FOLD_BLOCK_PERIODS {
+        let mut half = setup.sweep.clone();
+        half.cfg.block_periods = FOLD_BLOCK_PERIODS / 2;
+        run.up_half_blocks = Some(
+            half.run(&setup.device, setup.accel_rms_g, |_| {})
                 .map_err(serr)?,
         );
     }

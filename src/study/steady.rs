@@ -7,6 +7,22 @@
 //! successive blocks differ by less than `rel_change_tol` (relative). Blocks of about the
 //! mechanical ring-up time 2m/b ([`steady_config`]) leave a transient of the order of the
 //! tolerance. The last block is the measurement.
+//!
+//! # Near a fold
+//! Past a saddle-node fold of the response there is no orbit on the branch any more, but the
+//! state leaves it slowly: the *ghost* of the two orbits that have just merged holds it for a
+//! passage time that grows like the inverse square root of the distance from the fold. Two
+//! blocks of the ring-up time see a state that barely changes and accept it, so a sweep with
+//! such blocks leaves the branch late. The criterion accepts a state no sooner than
+//! `settle_blocks + 2` blocks (its *horizon*); a state that falls off the branch within the
+//! horizon makes two successive blocks differ by far more than the tolerance and is not
+//! accepted before it has fallen. A sweep that must leave a branch at its fold within its
+//! refinement bracket therefore needs a horizon longer than the ghost's passage time at the
+//! bracket's width from the fold: [`steady_config_across_folds`] gives blocks of at least
+//! [`FOLD_BLOCK_PERIODS`] periods, whose horizon outlasts prototype 1's ghost 0.1 Hz past its
+//! folds (the book's response chapter measures the passage time; a test checks the
+//! inequality). Closer to the fold than that the passage time still grows without bound: no
+//! fixed block resolves a fold better than the bracket it was chosen for.
 
 use crate::device::Device;
 use crate::drive::Sine;
@@ -16,6 +32,14 @@ use crate::physics::harvester::{Harvester, State};
 
 /// Minimum block length in periods for the default steady-state settings.
 pub const MIN_BLOCK_PERIODS: usize = 5;
+
+/// Minimum block length in periods for sweeps that cross a saddle-node fold
+/// ([`steady_config_across_folds`]; see the module docs): the horizon of three such blocks (192
+/// periods) outlasts the ghost of prototype 1's folds 0.1 Hz past them (the response
+/// chapter's ghost table: under 100 periods for either parameter set), by nearly a factor of
+/// two; the response chapter's convergence table repeats the sweeps with half the block and
+/// finds the branch end moved by less than the bracket.
+pub const FOLD_BLOCK_PERIODS: usize = 64;
 
 /// Steady-state measurement settings.
 #[derive(Debug, Clone, PartialEq)]
@@ -63,6 +87,20 @@ impl SteadyConfig {
 pub fn steady_config(device: &Device, freq_hz: f64) -> SteadyConfig {
     let ring_s = 2.0 * device.mechanics.mass_kg / device.mechanics.damping_n_s_per_m;
     SteadyConfig::for_ring_time(ring_s, freq_hz, MIN_BLOCK_PERIODS)
+}
+
+/// Steady-state settings for a sweep that must leave a branch at its saddle-node fold within
+/// its refinement bracket: as [`steady_config`], with blocks of at least
+/// [`FOLD_BLOCK_PERIODS`] periods (see the module docs).
+pub fn steady_config_across_folds(device: &Device, freq_hz: f64) -> SteadyConfig {
+    let ring_s = 2.0 * device.mechanics.mass_kg / device.mechanics.damping_n_s_per_m;
+    SteadyConfig::for_ring_time(ring_s, freq_hz, FOLD_BLOCK_PERIODS)
+}
+
+/// The horizon of a criterion: the fewest periods it simulates before it can accept a state
+/// (the settling blocks and two measured blocks).
+pub fn horizon_periods(cfg: &SteadyConfig) -> usize {
+    (cfg.settle_blocks + 2) * cfg.block_periods
 }
 
 /// Steady-state response at one drive.
