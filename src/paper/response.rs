@@ -14,10 +14,8 @@ use crate::paper::setups::{prototype1_setup, ParamSet, FIG13_BIAS_V};
 use crate::paper::{fig08, fig13};
 use crate::physics::harvester::Harvester;
 use crate::study::basins::{basins, Attractor, BasinGrid, BasinSettings, Basins};
-use crate::study::continuation::{
-    continue_branch, first_orbit, Branch, ContinuationSettings, EventKind,
-};
-use crate::study::orbit::{Forcing, Orbit, OrbitError, Parameter, Shooter};
+use crate::study::continuation::{branch_from_rest, Branch, ContinuationSettings, EventKind};
+use crate::study::orbit::{Forcing, Orbit, OrbitError, Shooter};
 use crate::study::steady::{steady_config, SteadyConfig, FOLD_BLOCK_PERIODS};
 use crate::study::sweep::{DownSweepReport, SweepReport, SweepSettings};
 
@@ -446,24 +444,11 @@ impl Run {
 /// The continuation of a setup from its first frequency.
 pub fn continuation(setup: &Setup) -> Result<Branch, OrbitError> {
     let s = &setup.continuation;
-    let h = Harvester::new(&setup.device, Sine::from_rms_g(setup.accel_rms_g, s.start));
-    let shooter = Shooter::new(&h, s.shooting);
-    let forcing = Forcing {
+    let start = Forcing {
         freq_hz: s.start,
         accel_rms_g: setup.accel_rms_g,
     };
-    let mut stats = Stats::default();
-    let first = first_orbit(
-        &shooter,
-        &forcing,
-        Parameter::Frequency,
-        h.rest_state(),
-        setup.transient_periods,
-        &mut stats,
-    )?;
-    let mut b = continue_branch(&h, first, s, |_| {})?;
-    b.stats += stats;
-    Ok(b)
+    branch_from_rest(&setup.device, start, s, setup.transient_periods, |_| {})
 }
 
 /// Labels of the attractors at a basin frequency: the stable orbits there, the impacting one

@@ -978,11 +978,39 @@ pub fn continue_branch(
     })
 }
 
+/// The branch of periodic orbits of `device` continued by `settings` from the drive `start`
+/// (whose frequency or amplitude is the settings' start value), beginning with the orbit
+/// reached from rest (shooting, after up to `transient_periods` periods of transient if Newton
+/// does not converge from rest); `on_point(p)` is called with the parameter of every accepted
+/// point.
+pub fn branch_from_rest(
+    device: &crate::device::Device,
+    start: Forcing,
+    settings: &ContinuationSettings,
+    transient_periods: usize,
+    on_point: impl FnMut(f64),
+) -> Result<Branch, OrbitError> {
+    settings.validate()?;
+    let h = Harvester::new(device, Sine::from_rms_g(start.accel_rms_g, start.freq_hz));
+    let shooter = Shooter::new(&h, settings.shooting);
+    let mut stats = Stats::default();
+    let first = first_orbit(
+        &shooter,
+        &start,
+        settings.parameter,
+        h.rest_state(),
+        transient_periods,
+        &mut stats,
+    )?;
+    let mut branch = continue_branch(&h, first, settings, on_point)?;
+    branch.stats += stats;
+    Ok(branch)
+}
+
 /// The branch of periodic orbits of `device` driven at `accel_rms_g` (g rms), continued in
 /// frequency from `from_hz` to `to_hz` with parameter steps of at most `max_step_hz`
-/// ([`ContinuationSettings::frequency`]), starting from the orbit reached from rest at
-/// `from_hz` (shooting, after up to 200 periods of transient if Newton does not converge from
-/// rest); `on_point(f)` is called with the frequency of every accepted point.
+/// ([`ContinuationSettings::frequency`]), from the orbit reached from rest at `from_hz`
+/// ([`branch_from_rest`], 200 periods of transient at most).
 pub fn frequency_branch(
     device: &crate::device::Device,
     accel_rms_g: f64,
@@ -991,24 +1019,10 @@ pub fn frequency_branch(
     max_step_hz: f64,
     on_point: impl FnMut(f64),
 ) -> Result<Branch, OrbitError> {
-    let settings = ContinuationSettings::frequency(from_hz, to_hz, max_step_hz);
-    settings.validate()?;
-    let h = Harvester::new(device, Sine::from_rms_g(accel_rms_g, from_hz));
-    let shooter = Shooter::new(&h, settings.shooting);
-    let forcing = Forcing {
+    let start = Forcing {
         freq_hz: from_hz,
         accel_rms_g,
     };
-    let mut stats = Stats::default();
-    let first = first_orbit(
-        &shooter,
-        &forcing,
-        Parameter::Frequency,
-        h.rest_state(),
-        200,
-        &mut stats,
-    )?;
-    let mut branch = continue_branch(&h, first, &settings, on_point)?;
-    branch.stats += stats;
-    Ok(branch)
+    let settings = ContinuationSettings::frequency(from_hz, to_hz, max_step_hz);
+    branch_from_rest(device, start, &settings, 200, on_point)
 }
