@@ -223,6 +223,24 @@ fn record_spec_and_errors() {
 }
 
 #[test]
+fn a_device_faster_than_the_sample_rate_falls_back_to_dormand_prince() {
+    // A suspension 10^4 times stiffer puts prototype 2's resonance near 67 kHz: the 10 us
+    // sample interval does not resolve it (omega h ~ 4 > the exponential step's bound of 2),
+    // so the exponential free flight cannot be built. The record is then integrated by
+    // Dormand-Prince throughout, sample for sample the record of that scheme (it panicked).
+    let mut dev = prototype2_setup(&device("prototype2"));
+    dev.mechanics.stiffness_n_per_m *= 1e4;
+    let mut spec = RecordSpec::paper(&dev, 1e-4);
+    spec.noise.duration_s = 0.01;
+    assert_eq!(spec.scheme, Scheme::Exponential);
+    let fast = simulate_record(&dev, &spec, 7, 3).unwrap();
+    assert_eq!(fast.summary.exponential_steps, 0);
+    spec.scheme = Scheme::Dopri5;
+    let reference = simulate_record(&dev, &spec, 7, 3).unwrap();
+    assert_eq!(fast.v1_v, reference.v1_v);
+}
+
+#[test]
 fn record_converges_and_keeps_its_bookkeeping() {
     // A short record in the linear regime at two tolerances: the trajectory, hence the mean
     // power, agrees to 1e-6 relative (the steps are bounded by the 10 us sample interval).

@@ -109,16 +109,18 @@ impl<const N: usize, const P: usize> History<N, P> {
 impl<const N: usize, const P: usize> ExpAdams<N, P> {
     /// The method for `y' = L y + c a(t) + N(y)` with step `h`; `scale` holds the
     /// characteristic size of each component (it balances the series, see the module docs).
+    /// `None` if the scaled `hL` has a norm above [`MAX_SCALED_NORM`]: the step does not
+    /// resolve the linear dynamics (a device much faster than the sample rate), and the caller
+    /// must integrate otherwise.
     ///
     /// # Panics
-    /// If `P` is 0 or above 8, if a scale is not positive, or if the scaled `hL` has a norm
-    /// above [`MAX_SCALED_NORM`] (the step does not resolve the linear dynamics).
+    /// If `P` is 0 or above 8, or if a scale is not positive (the caller's errors).
     pub fn new(
         l: &SMatrix<f64, N, N>,
         c: &SVector<f64, N>,
         h: f64,
         scale: &SVector<f64, N>,
-    ) -> Self {
+    ) -> Option<Self> {
         assert!((1..=8).contains(&P), "order {P} outside 1..=8");
         assert!(
             scale.iter().all(|s| s.is_finite() && *s > 0.0),
@@ -131,11 +133,9 @@ impl<const N: usize, const P: usize> ExpAdams<N, P> {
                 z[(i, j)] *= scale[j] / scale[i];
             }
         }
-        let norm = z.norm();
-        assert!(
-            norm <= MAX_SCALED_NORM,
-            "scaled hL has norm {norm}: the step h = {h:e} s does not resolve the dynamics"
-        );
+        if z.norm() > MAX_SCALED_NORM {
+            return None;
+        }
         // phi[j] for j = 0..=P, as sums over k of Z^k / (k+j)!.
         let mut phi = vec![SMatrix::<f64, N, N>::zeros(); P + 1];
         let mut power = SMatrix::<f64, N, N>::identity();
@@ -163,13 +163,13 @@ impl<const N: usize, const P: usize> ExpAdams<N, P> {
             }
             b
         });
-        Self {
+        Some(Self {
             h,
             propagator: phi[0],
             input_start,
             input_end,
             remainder,
-        }
+        })
     }
 
     /// One step from the sample where the state is `y` and the input `a0` to the next, where
@@ -249,7 +249,7 @@ mod tests {
         let l = SMatrix::<f64, 2, 2>::new(0.0, 1.0, -w * w, 0.0);
         let c = SVector::<f64, 2>::new(0.0, 1.0);
         let h = 1e-5;
-        let m = ExpAdams::<2, 3>::new(&l, &c, h, &SVector::<f64, 2>::new(1.0, w));
+        let m = ExpAdams::<2, 3>::new(&l, &c, h, &SVector::<f64, 2>::new(1.0, w)).unwrap();
         let (a0, a1) = (2.0, 5.0);
         let y0 = SVector::<f64, 2>::new(1e-3, 0.3);
         let y1 = m.step(&y0, a0, a1, &History::default());
@@ -271,7 +271,7 @@ mod tests {
         let l = SMatrix::<f64, 1, 1>::new(-50.0);
         let c = SVector::<f64, 1>::zeros();
         let h = 1e-3;
-        let m = ExpAdams::<1, 3>::new(&l, &c, h, &SVector::<f64, 1>::new(1.0));
+        let m = ExpAdams::<1, 3>::new(&l, &c, h, &SVector::<f64, 1>::new(1.0)).unwrap();
         let n = |t: f64| 1.0 + 30.0 * t - 400.0 * t * t;
         let mut hist = History::<1, 3>::default();
         for k in [2.0, 1.0, 0.0] {

@@ -391,16 +391,19 @@ struct FastFlight {
 
 impl FastFlight {
     /// None when the free flight could reach an inadmissible state (a capacitance plus Cp
-    /// not positive before the stop), which only [`Dopri5`] checks.
+    /// not positive before the stop), which only [`Dopri5`] checks, or when the sample
+    /// interval does not resolve the device's linear dynamics ([`ExpAdams::new`]): the record
+    /// is then integrated by [`Dopri5`] throughout.
     fn new<E: Excitation>(model: &Harvester<E>, dt: f64) -> Option<Self> {
         if model.c0 * model.xmax / model.x0 >= model.c0 + model.cp {
             return None;
         }
         let flight = model.free_flight();
         let (l, c) = flight.linear();
+        let method = ExpAdams::new(&l, &c, dt, &model.scales())?;
         Some(Self {
             model: flight,
-            method: ExpAdams::new(&l, &c, dt, &model.scales()),
+            method,
             limit: model.xmax * (1.0 - STOP_MARGIN),
         })
     }
