@@ -30,6 +30,15 @@ fn setup(case: Case) -> Setup {
 }
 
 /// Runs the sweeps and the continuation of a case (no basins).
+/// The sweep's transition `sweep_hz` lies within the refinement bracket ([`REFINE_TOL_HZ`])
+/// of the continuation's `branch_hz`: the sweep's resolution, the closest it can say anything.
+fn assert_within_bracket(sweep_hz: f64, branch_hz: f64, what: &str) {
+    assert!(
+        (sweep_hz - branch_hz).abs() <= REFINE_TOL_HZ,
+        "{what}: sweep {sweep_hz} Hz vs branch {branch_hz} Hz"
+    );
+}
+
 fn case_run(case: Case) -> CaseRun {
     let s = setup(case);
     let (up, down) = rayon::join(
@@ -61,16 +70,10 @@ fn prototype2_sweeps_leave_the_branches_at_the_fold_and_the_lower_end() {
     let r = case_run(Case::Fig13P2);
     let fold = r.fold_hz().expect("an upper fold");
     let jump = r.up_jump_hz().expect("an up-sweep jump");
-    assert!(
-        (jump - fold).abs() <= REFINE_TOL_HZ,
-        "up jump {jump} vs fold {fold}"
-    );
+    assert_within_bracket(jump, fold, "up jump vs fold");
     let end = r.lower_end_hz().expect("a lower branch end");
     let down = r.down_end_hz().expect("a down-sweep transition");
-    assert!(
-        (down - end).abs() <= REFINE_TOL_HZ,
-        "down-sweep {down} vs lower end {end}"
-    );
+    assert_within_bracket(down, end, "down-sweep vs lower end");
 }
 
 /// Figure 8's prototype 1 (published, 5.5 g, 10 Hz steps refined to 0.1 Hz): the down-sweep
@@ -80,10 +83,7 @@ fn prototype1_down_sweep_leaves_the_lower_branch_at_its_end() {
     let r = case_run(Case::Fig08P1Published);
     let end = r.lower_end_hz().expect("a lower branch end");
     let down = r.down_end_hz().expect("a down-sweep transition");
-    assert!(
-        (down - end).abs() <= REFINE_TOL_HZ,
-        "down-sweep {down} vs lower end {end}"
-    );
+    assert_within_bracket(down, end, "down-sweep vs lower end");
 }
 
 /// Figure 8's prototype 1 (published, 5.5 g, 10 Hz steps refined to 0.1 Hz): the up-sweep
@@ -96,10 +96,7 @@ fn prototype1_up_sweep_leaves_the_upper_branch_at_the_fold() {
     let r = case_run(Case::Fig08P1Published);
     let fold = r.fold_hz().expect("an upper fold");
     let end = r.up_end_hz().expect("an up-sweep branch end");
-    assert!(
-        (end - fold).abs() <= REFINE_TOL_HZ,
-        "up-sweep {end} vs fold {fold}"
-    );
+    assert_within_bracket(end, fold, "up-sweep vs fold");
 }
 
 /// The fold rule's inequality for the published prototype 1: started from the stable

@@ -32,33 +32,50 @@ fn read_parquet(path: &Path) -> polars::prelude::DataFrame {
     ParquetReader::new(f).finish().unwrap()
 }
 
-#[test]
-fn sweep_on_a_user_device_writes_data_plot_and_summary() {
-    let out = tmp("sweep");
+/// Runs the tool on the example device (`args` follow `<study> --device <example>`) writing
+/// into `out`, and asserts that it succeeded and wrote every one of `files`.
+fn run_ok(study: &str, args: &[&str], out: &Path, files: &[&str]) {
     let o = Command::new(BIN)
-        .args([
-            "sweep",
-            "--device",
-            &example(),
-            "--from",
-            "500",
-            "--to",
-            "700",
-        ])
-        .args(["--step", "4", "--accel-rms-g", "0.3", "--out"])
-        .arg(&out)
+        .args([study, "--device", &example()])
+        .args(args)
+        .arg("--out")
+        .arg(out)
         .output()
         .unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    for f in [
+    for f in files {
+        assert!(out.join(f).exists(), "missing {f}");
+    }
+}
+
+/// Runs the tool with `args`, asserts that it exits with status 1, and returns its stderr.
+fn run_refused(args: &[&str]) -> String {
+    let o = Command::new(BIN).args(args).output().unwrap();
+    assert_eq!(o.status.code(), Some(1));
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+#[test]
+fn sweep_on_a_user_device_writes_data_plot_and_summary() {
+    let out = tmp("sweep");
+    let args = [
+        "--from",
+        "500",
+        "--to",
+        "700",
+        "--step",
+        "4",
+        "--accel-rms-g",
+        "0.3",
+    ];
+    let files = [
         "sweep.parquet",
         "endstop-sweep.svg",
         "endstop-sweep.png",
         "summary.json",
         "numbers.md",
-    ] {
-        assert!(out.join(f).exists(), "missing {f}");
-    }
+    ];
+    run_ok("sweep", &args, &out, &files);
     let df = read_parquet(&out.join("sweep.parquet"));
     assert_eq!(df.height(), 51);
     let v = df.column("v1_rms_v").unwrap().f64().unwrap();
@@ -72,29 +89,14 @@ fn sweep_on_a_user_device_writes_data_plot_and_summary() {
 #[test]
 fn random_on_a_user_device_writes_data_plot_and_summary() {
     let out = tmp("random");
-    let o = Command::new(BIN)
-        .args([
-            "random",
-            "--device",
-            &example(),
-            "--psd",
-            "1e-5",
-            "--records",
-            "2",
-        ])
-        .args(["--duration-s", "2", "--out"])
-        .arg(&out)
-        .output()
-        .unwrap();
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    for f in [
+    let args = ["--psd", "1e-5", "--records", "2", "--duration-s", "2"];
+    let files = [
         "output_psd.parquet",
         "records.parquet",
         "endstop-random.svg",
         "summary.json",
-    ] {
-        assert!(out.join(f).exists(), "missing {f}");
-    }
+    ];
+    run_ok("random", &args, &out, &files);
     let p = summary_number(&out, "power_w").unwrap();
     let p21 = summary_number(&out, "eq21_power_w").unwrap();
     // At 1e-5 g^2/Hz this device stays clear of its stops, so the simulated power must agree
@@ -111,56 +113,44 @@ fn random_on_a_user_device_writes_data_plot_and_summary() {
 
 #[test]
 fn bad_input_is_refused_with_a_message() {
-    let o = Command::new(BIN)
-        .args([
-            "sweep",
-            "--device",
-            &example(),
-            "--from",
-            "900",
-            "--to",
-            "500",
-        ])
-        .args(["--accel-rms-g", "0.3"])
-        .output()
-        .unwrap();
-    assert_eq!(o.status.code(), Some(1));
-    assert!(String::from_utf8_lossy(&o.stderr).contains("--to"));
-    let o = Command::new(BIN)
-        .args(["random", "--device", "/nonexistent.toml", "--psd", "1e-3"])
-        .output()
-        .unwrap();
-    assert_eq!(o.status.code(), Some(1));
-    assert!(String::from_utf8_lossy(&o.stderr).contains("/nonexistent.toml"));
+    let ex = example();
+    let err = run_refused(&[
+        "sweep",
+        "--device",
+        &ex,
+        "--from",
+        "900",
+        "--to",
+        "500",
+        "--accel-rms-g",
+        "0.3",
+    ]);
+    assert!(err.contains("--to"), "{err}");
+    let err = run_refused(&["random", "--device", "/nonexistent.toml", "--psd", "1e-3"]);
+    assert!(err.contains("/nonexistent.toml"), "{err}");
 }
 
 #[test]
 fn response_on_a_user_device_writes_branch_sweeps_plot_and_summary() {
     let out = tmp("response");
-    let o = Command::new(BIN)
-        .args([
-            "response",
-            "--device",
-            &example(),
-            "--from",
-            "560",
-            "--to",
-            "700",
-        ])
-        .args(["--step", "4", "--accel-rms-g", "0.3", "--out"])
-        .arg(&out)
-        .output()
-        .unwrap();
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    for f in [
+    let args = [
+        "--from",
+        "560",
+        "--to",
+        "700",
+        "--step",
+        "4",
+        "--accel-rms-g",
+        "0.3",
+    ];
+    let files = [
         "continuation.parquet",
         "sweeps.parquet",
         "endstop-response.svg",
         "summary.json",
         "numbers.md",
-    ] {
-        assert!(out.join(f).exists(), "missing {f}");
-    }
+    ];
+    run_ok("response", &args, &out, &files);
     let df = read_parquet(&out.join("continuation.parquet"));
     assert!(df.height() > 10);
     let f = df.column("freq_hz").unwrap().f64().unwrap();
@@ -174,12 +164,18 @@ fn response_on_a_user_device_writes_branch_sweeps_plot_and_summary() {
     assert!(graze > 560.0 && graze < 700.0, "grazing {graze}");
     let down = summary_number(&out, "down_branch_end_hz").expect("a down-sweep transition");
     assert!(down > 560.0 && down < 700.0, "down-sweep {down}");
-    let o = Command::new(BIN)
-        .args(["response", "--device", &example(), "--from", "600"])
-        .args(["--to", "700", "--accel-rms-g", "0"])
-        .output()
-        .unwrap();
-    assert_eq!(o.status.code(), Some(1));
-    assert!(String::from_utf8_lossy(&o.stderr).contains("--accel-rms-g"));
+    let ex = example();
+    let err = run_refused(&[
+        "response",
+        "--device",
+        &ex,
+        "--from",
+        "600",
+        "--to",
+        "700",
+        "--accel-rms-g",
+        "0",
+    ]);
+    assert!(err.contains("--accel-rms-g"), "{err}");
     let _ = std::fs::remove_dir_all(out);
 }

@@ -61,27 +61,23 @@ def test_response_matches_endstop_response(root, tmp_path):
         assert close(down["branch_end_hz"], cli["down_branch_end_hz"])
 
 
-def test_fig13_matches_the_fig13_program(tmp_path):
-    out = run_cli([], tmp_path, program="fig13")
-    cli = summary(out / "fig13" / "summary.json")
-    py = endstop.paper.fig13.run()
+def assert_figure_matches_its_program(name, py, tmp_path):
+    """The figure's numbers and claim values from Python equal those of its program."""
+    out = run_cli([], tmp_path, program=name)
+    cli = summary(out / name / "summary.json")
     assert set(py["numbers"]) == set(cli["numbers"])
     for key, value in cli["numbers"].items():
         assert close(py["numbers"][key], value), key
     ours = {(c["claim"], c["quantity"], c["set"]): c["ours"] for c in py["claims"]}
     theirs = {(c["claim"], c["quantity"], c["set"]): c["ours"] for c in cli["values"]}
     assert ours == theirs
+
+
+def test_fig13_matches_the_fig13_program(tmp_path):
+    assert_figure_matches_its_program("fig13", endstop.paper.fig13.run(), tmp_path)
 
 
 def test_fig09_matches_the_fig09_program(tmp_path):
     # The program calibrates prototype 1 into the empty output directory first, as
     # endstop.paper.fig09.run() does when no calibrated device is given.
-    out = run_cli([], tmp_path, program="fig09")
-    cli = summary(out / "fig09" / "summary.json")
-    py = endstop.paper.fig09.run()
-    assert set(py["numbers"]) == set(cli["numbers"])
-    for key, value in cli["numbers"].items():
-        assert close(py["numbers"][key], value), key
-    ours = {(c["claim"], c["quantity"], c["set"]): c["ours"] for c in py["claims"]}
-    theirs = {(c["claim"], c["quantity"], c["set"]): c["ours"] for c in cli["values"]}
-    assert ours == theirs
+    assert_figure_matches_its_program("fig09", endstop.paper.fig09.run(), tmp_path)
