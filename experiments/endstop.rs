@@ -21,6 +21,7 @@ use endstop::device::Device;
 use endstop::study::ensemble::EnsembleSpec;
 use endstop::study::record::RecordSpec;
 use endstop::study::stepped::linspace_step;
+use endstop::study::sweep::{SweepSettings, REFINE_TOL_HZ};
 use polars::prelude::*;
 
 #[derive(Parser, Debug)]
@@ -46,18 +47,19 @@ struct Cli {
 enum Study {
     /// Stepped-sine up-sweep with continuation (each frequency starts from the previous
     /// steady state), with impact onset and jump refined by bisection.
-    Sweep(SweepArgs),
+    Sweep(RangeArgs),
     /// Random vibration: an ensemble of band-limited white-noise records (10 kHz band,
     /// 100 kHz sampling), with mean power, efficiency and output power spectrum.
     Random(RandomArgs),
     /// The whole frequency response: up- and down-sweeps, the periodic orbits continued in
     /// frequency (pseudo-arclength, through folds) with their Floquet multipliers, and the
     /// folds and grazing points on the branch.
-    Response(ResponseArgs),
+    Response(RangeArgs),
 }
 
+/// The arguments of the two frequency studies (`sweep` and `response`).
 #[derive(Parser, Debug)]
-struct ResponseArgs {
+struct RangeArgs {
     /// Device file (TOML), e.g. a copy of data/prototype2.toml.
     #[arg(long)]
     device: PathBuf,
@@ -67,32 +69,7 @@ struct ResponseArgs {
     /// Highest frequency (Hz).
     #[arg(long)]
     to: f64,
-    /// Frequency step of the sweeps and largest step of the continuation (Hz).
-    #[arg(long, default_value_t = 2.0)]
-    step: f64,
-    /// RMS base acceleration (g = 9.81 m/s^2).
-    #[arg(long)]
-    accel_rms_g: f64,
-    /// Bias voltage (V); default: the device file's.
-    #[arg(long)]
-    bias_v: Option<f64>,
-    /// Output directory.
-    #[arg(long, default_value = "data/results/endstop-response")]
-    out: PathBuf,
-}
-
-#[derive(Parser, Debug)]
-struct SweepArgs {
-    /// Device file (TOML), e.g. a copy of data/prototype2.toml.
-    #[arg(long)]
-    device: PathBuf,
-    /// First frequency of the up-sweep (Hz).
-    #[arg(long)]
-    from: f64,
-    /// Last frequency of the up-sweep (Hz).
-    #[arg(long)]
-    to: f64,
-    /// Frequency step (Hz).
+    /// Frequency step of the sweeps, and largest step of the continuation (Hz).
     #[arg(long, default_value_t = 2.0)]
     step: f64,
     /// RMS base acceleration (g = 9.81 m/s^2); the sine's amplitude is sqrt(2) times this.
@@ -101,9 +78,35 @@ struct SweepArgs {
     /// Bias voltage (V); default: the device file's.
     #[arg(long)]
     bias_v: Option<f64>,
-    /// Output directory.
-    #[arg(long, default_value = "data/results/endstop-sweep")]
-    out: PathBuf,
+    /// Output directory; default: data/results/endstop-<study>.
+    #[arg(long)]
+    out: Option<PathBuf>,
+}
+
+impl RangeArgs {
+    /// Refuses a range, step or acceleration that no sweep can use, naming the option.
+    fn check(&self) -> Result<()> {
+        if !(self.from.is_finite() && self.to.is_finite() && self.from > 0.0 && self.to > self.from)
+        {
+            bail!("--from and --to must be positive frequencies with --to > --from");
+        }
+        if !(self.step > 0.0 && self.step <= self.to - self.from) {
+            bail!("--step must be positive and not larger than the range");
+        }
+        if !(self.accel_rms_g.is_finite() && self.accel_rms_g > 0.0) {
+            bail!("--accel-rms-g must be a finite positive number");
+        }
+        Ok(())
+    }
+
+    /// The sweep settings of the range ([`SweepSettings::for_device`]).
+    fn sweep_settings(&self, device: &Device) -> SweepSettings {
+        SweepSettings::for_device(
+            device,
+            linspace_step(self.from, self.to, self.step),
+            REFINE_TOL_HZ,
+        )
+    }
 }
 
 #[derive(Parser, Debug)]
@@ -126,9 +129,9 @@ struct RandomArgs {
     /// Bias voltage (V); default: the device file's.
     #[arg(long)]
     bias_v: Option<f64>,
-    /// Output directory.
-    #[arg(long, default_value = "data/results/endstop-random")]
-    out: PathBuf,
+    /// Output directory; default: data/results/endstop-random.
+    #[arg(long)]
+    out: Option<PathBuf>,
 }
 
 fn main() {
@@ -154,7 +157,7 @@ fn start(
     name: &str,
     path: &Path,
     bias_v: Option<f64>,
-    out: PathBuf,
+    out: Option<PathBuf>,
 ) -> Result<(Experiment, LoadedDevice, Device)> {
     let loaded = load_device_file(path)?;
     let mut device = loaded.device.clone();
@@ -162,28 +165,18 @@ fn start(
         device = device.with_bias(v);
         device.validate("--bias-v")?;
     }
+    let out = out.unwrap_or_else(|| PathBuf::from("data/results").join(name));
     let mut exp = Experiment::start_in(name, out_dir(out));
     exp.uses(&loaded, &device.params);
     Ok((exp, loaded, device))
 }
 
-fn sweep(a: SweepArgs) -> Result<()> {
-    if !(a.from.is_finite() && a.to.is_finite() && a.from > 0.0 && a.to > a.from) {
-        bail!("--from and --to must be positive frequencies with --to > --from");
-    }
-    if !(a.step > 0.0 && a.step <= a.to - a.from) {
-        bail!("--step must be positive and not larger than the range");
-    }
-    if !(a.accel_rms_g.is_finite() && a.accel_rms_g >= 0.0) {
-        bail!("--accel-rms-g must be a finite non-negative number");
-    }
-    let (mut exp, loaded, device) = start("endstop-sweep", &a.device, a.bias_v, a.out)?;
-    let freqs = linspace_step(a.from, a.to, a.step);
-    let cfg = endstop::study::steady::steady_config_across_folds(&device, 0.5 * (a.from + a.to));
-    let report = common::with_progress(freqs.len(), "sweep", |tick| {
-        endstop::study::sweep::up_sweep_report(&device, &freqs, a.accel_rms_g, &cfg, 0.1, |_| {
-            tick()
-        })
+fn sweep(a: RangeArgs) -> Result<()> {
+    a.check()?;
+    let (mut exp, loaded, device) = start("endstop-sweep", &a.device, a.bias_v, a.out.clone())?;
+    let settings = a.sweep_settings(&device);
+    let report = common::with_progress(settings.freqs_hz.len(), "sweep", |tick| {
+        settings.run(&device, a.accel_rms_g, |_| tick())
     })?;
 
     let steps = &report.sweep.steps;
@@ -358,29 +351,16 @@ fn random(a: RandomArgs) -> Result<()> {
     exp.finish()
 }
 
-fn response(a: ResponseArgs) -> Result<()> {
+fn response(a: RangeArgs) -> Result<()> {
     use common::frame::frame;
+    use common::response_io::{branch_series, continuation_rows};
     use common::row;
     use endstop::study::continuation::{frequency_branch, EventKind};
-    use endstop::study::sweep::SweepSettings;
 
-    if !(a.from.is_finite() && a.to.is_finite() && a.from > 0.0 && a.to > a.from) {
-        bail!("--from and --to must be positive frequencies with --to > --from");
-    }
-    if !(a.step > 0.0 && a.step <= a.to - a.from) {
-        bail!("--step must be positive and not larger than the range");
-    }
-    if !(a.accel_rms_g.is_finite() && a.accel_rms_g > 0.0) {
-        bail!("--accel-rms-g must be a finite positive number");
-    }
-    let (mut exp, loaded, device) = start("endstop-response", &a.device, a.bias_v, a.out)?;
-    let freqs = linspace_step(a.from, a.to, a.step);
-    let settings = SweepSettings {
-        freqs_hz: freqs.clone(),
-        extend_to_hz: a.to,
-        cfg: endstop::study::steady::steady_config_across_folds(&device, 0.5 * (a.from + a.to)),
-        refine_tol_hz: 0.1,
-    };
+    a.check()?;
+    let (mut exp, loaded, device) = start("endstop-response", &a.device, a.bias_v, a.out.clone())?;
+    let settings = a.sweep_settings(&device);
+    let freqs = &settings.freqs_hz;
     let (up, down) = common::with_progress(2 * freqs.len(), "sweeps", |tick| {
         rayon::join(
             || settings.run(&device, a.accel_rms_g, |_| tick()),
@@ -394,18 +374,7 @@ fn response(a: ResponseArgs) -> Result<()> {
     );
     let branch = frequency_branch(&device, a.accel_rms_g, a.from, a.to, a.step, |_| {})?;
 
-    let mut rows = Vec::new();
-    for p in &branch.points {
-        let o = &p.orbit;
-        rows.push(row![
-            "freq_hz" => o.forcing.freq_hz,
-            "accel_rms_g" => o.forcing.accel_rms_g,
-            "v1_rms_v" => o.summary.v1_rms_v,
-            "x_max_m" => o.summary.x_max_m,
-            "stable" => o.is_stable(),
-            "multiplier_max_abs" => o.max_multiplier_abs(),
-        ]);
-    }
+    let rows = continuation_rows(&device.name, &branch);
     exp.write_parquet("continuation", &mut frame(rows)?, &device.params)?;
     let mut rows = Vec::new();
     for (dir, ms) in [
@@ -474,27 +443,7 @@ fn response(a: ResponseArgs) -> Result<()> {
     exp.write_numbers_md(&md)?;
     print!("{md}");
 
-    let mut series = Vec::new();
-    let mut seg: Vec<(f64, f64)> = Vec::new();
-    let mut stable = None;
-    let push = |seg: &mut Vec<(f64, f64)>, st: bool, series: &mut Vec<Series>| {
-        if seg.len() >= 2 {
-            let style = if st { Style::Line } else { Style::Dashed };
-            series.push(Series::new("", std::mem::take(seg), PALETTE[0], style));
-        }
-        seg.clear();
-    };
-    for p in &branch.points {
-        let o = &p.orbit;
-        if stable.is_some_and(|s| s != o.is_stable()) {
-            let last = seg.last().copied();
-            push(&mut seg, stable.unwrap_or(true), &mut series);
-            seg.extend(last);
-        }
-        stable = Some(o.is_stable());
-        seg.push((o.forcing.freq_hz, o.summary.v1_rms_v));
-    }
-    push(&mut seg, stable.unwrap_or(true), &mut series);
+    let mut series = branch_series(&branch);
     series.push(Series::new(
         "up-sweep",
         up.measurements().map(|m| (m.freq_hz, m.v1_rms_v)).collect(),

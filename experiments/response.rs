@@ -10,6 +10,7 @@ use endstop_experiments as common;
 use anyhow::Result;
 use common::md::Table;
 use common::plot::{LegendPos, LinePlot, Series, Style, PALETTE};
+use common::response_io::{branch_series, continuation_rows};
 use common::{fmt_sig, frame::frame, row, Experiment};
 use endstop::paper::response::{self, Case, CaseRun, BASIN_CELLS};
 use endstop::study::continuation::EventKind;
@@ -107,30 +108,11 @@ fn refine_basins(
 }
 
 fn write_tables(exp: &Experiment, run: &response::Run) -> Result<()> {
-    let mut rows = Vec::new();
-    for c in &run.cases {
-        let case = c.setup.case.key();
-        // Branch segments: a new segment starts wherever stability changes.
-        let mut branch = 0u32;
-        let mut prev: Option<bool> = None;
-        for p in &c.branch.points {
-            let o = &p.orbit;
-            if prev.is_some_and(|s| s != o.is_stable()) {
-                branch += 1;
-            }
-            prev = Some(o.is_stable());
-            rows.push(row![
-                "case" => case,
-                "freq_hz" => o.forcing.freq_hz,
-                "accel_rms_g" => o.forcing.accel_rms_g,
-                "v1_rms_v" => o.summary.v1_rms_v,
-                "x_max_m" => o.summary.x_max_m,
-                "stable" => o.is_stable(),
-                "multiplier_max_abs" => o.max_multiplier_abs(),
-                "branch" => branch,
-            ]);
-        }
-    }
+    let rows: Vec<_> = run
+        .cases
+        .iter()
+        .flat_map(|c| continuation_rows(c.setup.case.key(), &c.branch))
+        .collect();
     exp.write_parquet(
         "continuation",
         &mut frame(rows)?,
@@ -509,39 +491,7 @@ fn ghost_words(ghost: &[response::GhostRow], who: &str) -> String {
 }
 
 fn curve_plot(c: &CaseRun) -> LinePlot {
-    let mut series = Vec::new();
-    // Continuation segments: solid where stable, dashed where unstable.
-    let mut seg: Vec<(f64, f64)> = Vec::new();
-    let mut stable = None;
-    let mut labelled = [false, false];
-    let mut flush = |seg: &mut Vec<(f64, f64)>, st: bool, series: &mut Vec<Series>| {
-        if seg.len() >= 2 {
-            let k = usize::from(st);
-            let label = if labelled[k] {
-                ""
-            } else if st {
-                "periodic orbits, stable"
-            } else {
-                "periodic orbits, unstable"
-            };
-            labelled[k] = true;
-            let style = if st { Style::Line } else { Style::Dashed };
-            series.push(Series::new(label, std::mem::take(seg), PALETTE[0], style));
-        }
-        seg.clear();
-    };
-    for p in &c.branch.points {
-        let o = &p.orbit;
-        let pt = (o.forcing.freq_hz, o.summary.v1_rms_v);
-        if stable.is_some_and(|s| s != o.is_stable()) {
-            let last = seg.last().copied();
-            flush(&mut seg, stable.unwrap_or(true), &mut series);
-            seg.extend(last);
-        }
-        stable = Some(o.is_stable());
-        seg.push(pt);
-    }
-    flush(&mut seg, stable.unwrap_or(true), &mut series);
+    let mut series = branch_series(&c.branch);
     let up: Vec<_> =
         c.up.measurements()
             .map(|m| (m.freq_hz, m.v1_rms_v))

@@ -14,6 +14,7 @@ pub mod jobs;
 pub mod md;
 pub mod narrowband_io;
 pub mod plot;
+pub mod response_io;
 
 pub use calibration_io::{calibrated_prototype1, prototype1_both_sets};
 

@@ -18,7 +18,7 @@ use endstop::study::ensemble::{run_ensemble, EnsembleSpec};
 use endstop::study::record::{simulate_record, RecordSpec, RecordSummary};
 use endstop::study::steady::{steady_config, Measurement};
 use endstop::study::stepped::{linspace_step, Transition};
-use endstop::study::sweep::{up_sweep_report, SweepReport};
+use endstop::study::sweep::{SweepReport, SweepSettings};
 use numpy::{PyArray1, PyReadonlyArray1};
 use pyo3::create_exception;
 use pyo3::exceptions::{PyRuntimeError, PyValueError};
@@ -427,29 +427,17 @@ fn up_sweep<'py>(
     step_hz: f64,
     refine_tol_hz: f64,
 ) -> PyResult<Bound<'py, PyDict>> {
-    if !(start_hz.is_finite() && stop_hz.is_finite() && start_hz > 0.0 && stop_hz > start_hz) {
-        return Err(arg_err(
-            "start_hz and stop_hz must be positive with stop_hz > start_hz",
-        ));
-    }
-    if !(step_hz > 0.0 && step_hz <= stop_hz - start_hz) {
-        return Err(arg_err(
-            "step_hz must be positive and not larger than the range",
-        ));
-    }
-    if !(accel_rms_g.is_finite() && accel_rms_g >= 0.0) {
-        return Err(arg_err("accel_rms_g must be a finite non-negative number"));
-    }
-    if !(refine_tol_hz.is_finite() && refine_tol_hz > 0.0) {
-        return Err(arg_err("refine_tol_hz must be positive"));
-    }
+    let settings = sweep_settings(
+        &device.inner,
+        accel_rms_g,
+        start_hz,
+        stop_hz,
+        step_hz,
+        refine_tol_hz,
+    )?;
     let dev = device.inner.clone();
     let report = py
-        .detach(move || {
-            let freqs = linspace_step(start_hz, stop_hz, step_hz);
-            let cfg = steady_config(&dev, 0.5 * (start_hz + stop_hz));
-            up_sweep_report(&dev, &freqs, accel_rms_g, &cfg, refine_tol_hz, |_| {})
-        })
+        .detach(move || settings.run(&dev, accel_rms_g, |_| {}))
         .map_err(solver_err)?;
     sweep_dict(py, &report)
 }
@@ -472,6 +460,24 @@ fn check_range(accel_rms_g: f64, start_hz: f64, stop_hz: f64, step_hz: f64) -> P
     Ok(())
 }
 
+/// The sweep settings of a range after its arguments are checked: the library's
+/// [`SweepSettings::for_device`], the settings of the `endstop` command's sweeps.
+fn sweep_settings(
+    device: &Device,
+    accel_rms_g: f64,
+    start_hz: f64,
+    stop_hz: f64,
+    step_hz: f64,
+    refine_tol_hz: f64,
+) -> PyResult<SweepSettings> {
+    check_range(accel_rms_g, start_hz, stop_hz, step_hz)?;
+    if !(refine_tol_hz.is_finite() && refine_tol_hz > 0.0) {
+        return Err(arg_err("refine_tol_hz must be positive"));
+    }
+    let freqs = linspace_step(start_hz, stop_hz, step_hz);
+    Ok(SweepSettings::for_device(device, freqs, refine_tol_hz))
+}
+
 /// Stepped-sine down-sweep from `stop_hz` to `start_hz` (each step from the previous steady
 /// state) with the jump up and the first contact refined to brackets narrower than
 /// `refine_tol_hz`: the down-sweep of the `endstop response` command. Keys: the per-step
@@ -488,21 +494,17 @@ fn down_sweep<'py>(
     step_hz: f64,
     refine_tol_hz: f64,
 ) -> PyResult<Bound<'py, PyDict>> {
-    check_range(accel_rms_g, start_hz, stop_hz, step_hz)?;
-    if !(refine_tol_hz.is_finite() && refine_tol_hz > 0.0) {
-        return Err(arg_err("refine_tol_hz must be positive"));
-    }
+    let settings = sweep_settings(
+        &device.inner,
+        accel_rms_g,
+        start_hz,
+        stop_hz,
+        step_hz,
+        refine_tol_hz,
+    )?;
     let dev = device.inner.clone();
     let report = py
-        .detach(move || {
-            let settings = endstop::study::sweep::SweepSettings {
-                freqs_hz: linspace_step(start_hz, stop_hz, step_hz),
-                extend_to_hz: stop_hz,
-                cfg: steady_config(&dev, 0.5 * (start_hz + stop_hz)),
-                refine_tol_hz,
-            };
-            settings.run_down(&dev, accel_rms_g, |_| {})
-        })
+        .detach(move || settings.run_down(&dev, accel_rms_g, |_| {}))
         .map_err(solver_err)?;
     let all: Vec<&Measurement> = report.measurements().collect();
     let d = steps_dict(py, &all)?;

@@ -37,7 +37,7 @@ use crate::device::Device;
 use crate::drive::Sine;
 use crate::ode::{SolverError, Stats};
 use crate::physics::harvester::Harvester;
-use crate::study::steady::{Measurement, SteadyConfig};
+use crate::study::steady::{steady_config_across_folds, Measurement, SteadyConfig};
 use crate::study::stepped::{
     continue_sweep, first_contact, in_contact, values_beyond, with_midpoints, Drive, SteppedDrive,
     Sweep, Transition,
@@ -170,26 +170,6 @@ pub fn frequency_continuation<'a>(
     }
 }
 
-/// Runs an up-sweep of `device` over `freqs_hz` (increasing) at `accel_rms_g` and refines its
-/// impact onset, jump and loss of contact to brackets narrower than `refine_tol_hz` (see the
-/// module docs; Figures 8 and 13). `progress(i)` is called after each coarse step.
-pub fn up_sweep_report(
-    device: &Device,
-    freqs_hz: &[f64],
-    accel_rms_g: f64,
-    cfg: &SteadyConfig,
-    refine_tol_hz: f64,
-    progress: impl FnMut(usize),
-) -> Result<SweepReport, SolverError> {
-    let settings = SweepSettings {
-        freqs_hz: freqs_hz.to_vec(),
-        extend_to_hz: f64::NEG_INFINITY,
-        cfg: cfg.clone(),
-        refine_tol_hz,
-    };
-    settings.run(device, accel_rms_g, progress)
-}
-
 /// Settings of an up-sweep: the frequency grid, an optional extension, the steady-state
 /// criterion and the refinement tolerance.
 #[derive(Debug, Clone, PartialEq)]
@@ -212,6 +192,24 @@ pub struct SweepSettings {
 pub const REFINE_TOL_HZ: f64 = 0.1;
 
 impl SweepSettings {
+    /// The sweep of the grid `freqs_hz` (up or down) for any device, without extension: the
+    /// steady-state criterion of sweeps that must leave a branch at its fold
+    /// ([`steady_config_across_folds`]) at the grid's middle frequency, and transitions
+    /// refined to `refine_tol_hz`. The `endstop` command's and the Python package's sweeps.
+    pub fn for_device(device: &Device, freqs_hz: Vec<f64>, refine_tol_hz: f64) -> Self {
+        let (lo, hi) = freqs_hz
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &f| {
+                (lo.min(f), hi.max(f))
+            });
+        Self {
+            cfg: steady_config_across_folds(device, 0.5 * (lo + hi)),
+            freqs_hz,
+            extend_to_hz: f64::NEG_INFINITY,
+            refine_tol_hz,
+        }
+    }
+
     /// The convergence check: half the frequency step, half the integrator
     /// tolerance, half the steady-state tolerance and half the refinement bracket.
     pub fn halved(&self) -> Self {
@@ -543,8 +541,13 @@ mod tests {
         // 1210 Hz and the power still rising, so the onset is the only refinement.
         let (accel, tol) = (5.5, 0.1);
         let freqs = linspace_step(1170.0, 1210.0, 10.0);
-        let cfg = steady_config(&device, 1220.0);
-        let r = up_sweep_report(&device, &freqs, accel, &cfg, tol, |_| {}).unwrap();
+        let settings = SweepSettings {
+            freqs_hz: freqs.clone(),
+            extend_to_hz: f64::NEG_INFINITY,
+            cfg: steady_config(&device, 1220.0),
+            refine_tol_hz: tol,
+        };
+        let r = settings.run(&device, accel, |_| {}).unwrap();
         assert!(r.onset.is_some() && r.jump.is_none() && r.contact_lost.is_none());
         let k = first_contact(&r.sweep).unwrap();
         let base = Harvester::new(&device, Sine::from_rms_g(accel, freqs[0]));
@@ -555,7 +558,7 @@ mod tests {
         while hi - lo > tol {
             let mid = 0.5 * (lo + hi);
             let model = base.with_excitation(Sine::from_rms_g(accel, mid));
-            let (m, y1, mode1, st) = steady_state(&model, y, mode, accel, &cfg).unwrap();
+            let (m, y1, mode1, st) = steady_state(&model, y, mode, accel, &settings.cfg).unwrap();
             expected += st;
             trials += 1;
             if in_contact(&m) {
