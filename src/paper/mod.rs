@@ -28,4 +28,5 @@ pub mod resolution;
 pub mod response;
 pub mod sensitivity;
 pub mod setups;
+pub mod study;
 pub mod table3;
