@@ -36,3 +36,7 @@ crosscheck:
 # Run the model on your own device file, e.g. `just own sweep --device my.toml --from 500 --to 900 --accel-rms-g 0.3`.
 own *ARGS:
     cargo run --release --bin endstop -- {{ARGS}}
+
+# Why the paper deviates: Sobol indices and the multi-claim calibration (not part of `reproduce`; extra ARGS, e.g. `--base 16 --force`).
+study *ARGS:
+    cargo run --release --bin study -- {{ARGS}}

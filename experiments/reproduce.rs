@@ -156,6 +156,7 @@ fn run() -> Result<()> {
     publish_own_device()?;
     let rows = write_scorecard()?;
     write_provenance()?;
+    study_placeholder()?;
     eprintln!("[reproduce] building the book");
     common::book::build(&root.join("book"))?;
 
@@ -322,12 +323,21 @@ fn write_scorecard() -> Result<Vec<Row>> {
         r.fold_hz = endstop::paper::response::fold_key(&r.claim, &r.quantity, &r.set)
             .and_then(|k| folds.get(&k).copied());
     }
+    // Beside each claim the study evaluates, its value at the best set of the multi-claim
+    // calibration (the study's summary, if `just study` has been run).
+    let best = read_summary(&common::jobs::STUDY)
+        .map(|s| s.numbers)
+        .unwrap_or_default();
+    for r in rows.iter_mut().filter(|r| r.set == "published") {
+        r.best_calibrated = endstop::paper::study::best_value_key(&r.claim, &r.quantity)
+            .and_then(|k| best.get(&k).copied());
+    }
     common::write_atomic(
         &common::results_root().join("scorecard.json"),
         serde_json::to_string_pretty(&rows)?.as_bytes(),
     )?;
     let mut md = String::from(
-        "| claim | quantity | set | paper | ours | ± | unit | tolerance | verdict | fold (Hz) | note |\n|---|---|---|---|---|---|---|---|---|---|---|\n",
+        "| claim | quantity | set | paper | ours | ± | unit | tolerance | verdict | fold (Hz) | best under calibration | note |\n|---|---|---|---|---|---|---|---|---|---|---|---|\n",
     );
     for r in &rows {
         let ours = r
@@ -344,8 +354,12 @@ fn write_scorecard() -> Result<Vec<Row>> {
             Verdict::NotYet => "not yet",
         };
         let fold = r.fold_hz.map(|v| format!("{v:.2}")).unwrap_or_default();
+        let best = r
+            .best_calibrated
+            .map(|v| common::fmt_sig(v, 4))
+            .unwrap_or_default();
         md.push_str(&format!(
-            "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |\n",
+            "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |\n",
             r.claim,
             r.quantity,
             r.set,
@@ -356,6 +370,7 @@ fn write_scorecard() -> Result<Vec<Row>> {
             common::fmt_sig(r.tolerance, 2),
             verdict,
             fold,
+            best,
             r.note
         ));
     }
@@ -399,4 +414,19 @@ fn write_provenance() -> Result<()> {
         &common::book_generated_root().join("provenance.md"),
         md.as_bytes(),
     )
+}
+
+/// The study is not one of `reproduce`'s jobs: until `just study` has run, its chapter
+/// includes a note in place of its numbers and heat map.
+fn study_placeholder() -> Result<()> {
+    let dir = common::book_generated_root().join(common::jobs::STUDY.name);
+    if !dir.join("numbers.md").exists() {
+        let note = "*Not run in this build: the study is not part of `reproduce`; run \
+                    `just study` (or `cargo run --release --bin study`) and rebuild the book.*\n";
+        common::write_atomic(&dir.join("numbers.md"), note.as_bytes())?;
+    }
+    if !dir.join("study.figure.md").exists() {
+        common::write_atomic(&dir.join("study.figure.md"), b"*(no heat map)*\n")?;
+    }
+    Ok(())
 }

@@ -188,3 +188,15 @@ impl Job {
         }
     }
 }
+
+/// The sensitivity study and multi-claim calibration (`just study`): cached by content hash
+/// like the jobs of [`JOBS`], but not one of them (it does not fit `reproduce`'s budget).
+pub const STUDY: Job = Job {
+    name: "study",
+    program: "study",
+    args: &[],
+    reads: &[P1, P2, "data/sensitivity.toml"],
+    reads_calibration: false,
+    phase: Phase::Last,
+    scored: false,
+};

@@ -404,6 +404,11 @@ pub struct Row {
     /// sweep's jump (the verdict stays the sweep's); absent for every other row.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub fold_hz: Option<f64>,
+    /// Our value at the best set of the multi-claim calibration within the sensitivity ranges
+    /// (the study's summary, when it has been run), on the `published` row of a claim the study
+    /// evaluates; absent otherwise.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub best_calibrated: Option<f64>,
 }
 
 /// Joins claims with our values: one row per claim number and per parameter set that has a
@@ -441,6 +446,7 @@ pub fn score(claims: &Claims, values: &[Value]) -> Result<Vec<Row>, ClaimsError>
                 text: c.text.clone(),
                 note: String::new(),
                 fold_hz: None,
+                best_calibrated: None,
             })
         };
         if mine.is_empty() {

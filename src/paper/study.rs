@@ -21,10 +21,12 @@ use thiserror::Error;
 
 use crate::device::{Device, StiffnessModel};
 use crate::drive::Sine;
+use crate::num::minimax::{minimise_worst, Fit, MinimaxError, MinimaxSettings};
+use crate::num::sensitivity::{Bootstrap, Indices, Saltelli, SensitivityError};
 use crate::ode::Stats;
 use crate::paper::claims::{Claim, Claims, Kind};
 use crate::paper::fig08;
-use crate::paper::sensitivity::Variant;
+use crate::paper::sensitivity::{Factor, Ranges, RangesError, Variant};
 use crate::paper::setups::{FIG13_BIAS_V, P1_BIAS_V, P2_BIAS_V};
 use crate::physics::harvester::Harvester;
 use crate::physics::two_port::{TwoPort, TABLE3_QM};
@@ -91,9 +93,10 @@ pub struct Quantity {
     pub claim: &'static str,
     /// Quantity key.
     pub quantity: &'static str,
-    /// The censored value used where the quantity does not exist (the end of the
-    /// continuation's range in the direction the quantity would lie), `None` for a quantity
-    /// that always exists.
+    /// The value used where the quantity does not exist or its continuation failed: for a
+    /// frequency, the end of the continuation's range (a censored value: the event lies beyond
+    /// it); for a yes/no claim, 0 (not shown); `None` for an analytic quantity, which always
+    /// exists.
     pub substitute: Option<f64>,
 }
 
@@ -111,7 +114,7 @@ pub const P1_QUANTITIES: [Quantity; 9] = [
     q("F8-c", "jump_hertz_bim1p5_hz", Some(P1_STOP_HZ)),
     q("F8-d", "jump_hertz_bim0_hz", Some(P1_STOP_HZ)),
     q("F8-e", "jump_hertz_bim10_hz", Some(P1_STOP_HZ)),
-    q("F8-e", "jump_order_by_bim", None),
+    q("F8-e", "jump_order_by_bim", Some(0.0)),
     q("F8-f", "jump_linear_bim2_hz", Some(P1_STOP_HZ)),
     q("T3-a", "k2_pct_p1", None),
     q("T3-a", "qm_p1", None),
@@ -120,9 +123,9 @@ pub const P1_QUANTITIES: [Quantity; 9] = [
 
 /// Prototype 2's quantities: Figure 13's yes/no claims, Table 3's second column.
 pub const P2_QUANTITIES: [Quantity; 6] = [
-    q("F13", "no_impact_0p12g", None),
-    q("F13", "jump_0p31g", None),
-    q("F13", "hertz_linear_agree", None),
+    q("F13", "no_impact_0p12g", Some(0.0)),
+    q("F13", "jump_0p31g", Some(0.0)),
+    q("F13", "hertz_linear_agree", Some(0.0)),
     q("T3-b", "k2_pct_p2", None),
     q("T3-b", "qm_p2", None),
     q("T3-b", "k2qm_p2", None),
@@ -137,6 +140,8 @@ pub enum Outcome {
     NoFold,
     /// The branch never grazes inside the range: no impacts.
     NoGrazing,
+    /// The continuation failed at this point (Newton or the integrator; counted and reported).
+    Failed,
 }
 
 impl Outcome {
@@ -154,6 +159,7 @@ impl Outcome {
             Outcome::Value(_) => "value",
             Outcome::NoFold => "no fold",
             Outcome::NoGrazing => "no grazing",
+            Outcome::Failed => "continuation failed",
         }
     }
 }
@@ -190,6 +196,15 @@ pub enum StudyError {
     /// A quantity matches no claim of the claims file.
     #[error("no claim ({0}, {1}) in the claims file")]
     UnknownClaim(&'static str, &'static str),
+    /// A point outside the unit cube or a device that fails validation.
+    #[error(transparent)]
+    Ranges(#[from] RangesError),
+    /// The design or the indices failed.
+    #[error(transparent)]
+    Sensitivity(#[from] SensitivityError),
+    /// The minimax search failed.
+    #[error(transparent)]
+    Minimax(#[from] MinimaxError),
     /// A quantity that always exists came out absent.
     #[error("({0}, {1}) has no value and no substitute")]
     NoSubstitute(&'static str, &'static str),
@@ -227,7 +242,10 @@ pub fn frequency_branch(
 
 /// The upper branch's fold: the highest fold (away from grazing) at which the branch loses
 /// stability (the rule of [`crate::paper::response::CaseRun::fold_hz`]).
-pub fn upper_fold(branch: &Branch) -> Outcome {
+pub fn upper_fold(branch: &Result<Branch, StudyError>) -> Outcome {
+    let Ok(branch) = branch else {
+        return Outcome::Failed;
+    };
     branch
         .events_of(EventKind::Fold)
         .filter(|e| !e.at_grazing && e.stable_before && !e.stable_after)
@@ -238,7 +256,10 @@ pub fn upper_fold(branch: &Branch) -> Outcome {
 
 /// The lowest grazing point (a corner at grazing counts, as in
 /// [`crate::paper::response::CaseRun::grazing_hz`]).
-pub fn lowest_grazing(branch: &Branch) -> Outcome {
+pub fn lowest_grazing(branch: &Result<Branch, StudyError>) -> Outcome {
+    let Ok(branch) = branch else {
+        return Outcome::Failed;
+    };
     branch
         .events
         .iter()
@@ -248,10 +269,13 @@ pub fn lowest_grazing(branch: &Branch) -> Outcome {
         .map_or(Outcome::NoGrazing, Outcome::Value)
 }
 
-/// Whether any orbit of the branch reaches the stops.
-pub fn branch_impacts(branch: &Branch) -> bool {
-    branch.events.iter().any(|e| e.kind == EventKind::Grazing)
-        || branch.points.iter().any(|p| p.orbit.is_impacting())
+/// Whether any orbit of the branch reaches the stops (`None`: the continuation failed).
+pub fn branch_impacts(branch: &Result<Branch, StudyError>) -> Option<bool> {
+    let branch = branch.as_ref().ok()?;
+    Some(
+        branch.events.iter().any(|e| e.kind == EventKind::Grazing)
+            || branch.points.iter().any(|p| p.orbit.is_impacting()),
+    )
 }
 
 /// The raw quantities of prototype 1 at a variant (`variant.device` is prototype 1 with the
@@ -283,11 +307,16 @@ pub fn evaluate_p1(variant: &Variant) -> Result<Vec<Outcome>, StudyError> {
                 what,
             )
         })
-        .collect::<Result<Vec<_>, _>>()?;
+        .collect::<Vec<_>>();
     let folds: Vec<Outcome> = branches.iter().map(upper_fold).collect();
-    let order = match (folds[1].value(), folds[0].value(), folds[2].value()) {
-        (Some(b0), Some(b15), Some(b10)) => b0 > b15 && b15 > b10,
-        _ => false,
+    let order = match (folds[1], folds[0], folds[2]) {
+        (Outcome::Value(b0), Outcome::Value(b15), Outcome::Value(b10)) => {
+            Outcome::Value(if b0 > b15 && b15 > b10 { 1.0 } else { 0.0 })
+        }
+        (Outcome::Failed, _, _) | (_, Outcome::Failed, _) | (_, _, Outcome::Failed) => {
+            Outcome::Failed
+        }
+        _ => Outcome::Value(0.0),
     };
     let tp = TwoPort::of(&base);
     let qm = tp.qm(TABLE3_QM);
@@ -296,7 +325,7 @@ pub fn evaluate_p1(variant: &Variant) -> Result<Vec<Outcome>, StudyError> {
         folds[0],
         folds[1],
         folds[2],
-        Outcome::Value(if order { 1.0 } else { 0.0 }),
+        order,
         folds[3],
         Outcome::Value(tp.k2 * 100.0),
         Outcome::Value(qm),
@@ -336,8 +365,13 @@ pub fn evaluate_p2(variant: &Variant, claims: &Claims) -> Result<Vec<Outcome>, S
                 what,
             )
         })
-        .collect::<Result<Vec<_>, _>>()?;
-    let yes = |b: bool| Outcome::Value(if b { 1.0 } else { 0.0 });
+        .collect::<Vec<_>>();
+    let yes = |b: Option<bool>| {
+        b.map_or(Outcome::Failed, |b| {
+            Outcome::Value(if b { 1.0 } else { 0.0 })
+        })
+    };
+    let failed = branches.iter().any(|b| b.is_err());
     let fold_linear = upper_fold(&branches[1]);
     let fold_hertz = upper_fold(&branches[2]);
     // Figure 13's rule: the two jumps agree within the frequency class.
@@ -352,9 +386,9 @@ pub fn evaluate_p2(variant: &Variant, claims: &Claims) -> Result<Vec<Outcome>, S
     let tp = TwoPort::of(&variant.device.with_bias(P2_BIAS_V));
     let qm = tp.qm(TABLE3_QM);
     Ok(vec![
-        yes(!branch_impacts(&branches[0])),
-        yes(branch_impacts(&branches[1]) && fold_linear.value().is_some()),
-        yes(agree),
+        yes(branch_impacts(&branches[0]).map(|b| !b)),
+        yes(branch_impacts(&branches[1]).map(|b| b && fold_linear.value().is_some())),
+        yes((!failed).then_some(agree)),
         Outcome::Value(tp.k2 * 100.0),
         Outcome::Value(qm),
         Outcome::Value(tp.k2 * qm),
@@ -406,5 +440,176 @@ pub fn normalise(
         deviation,
         meets,
         kind: claim.kind,
+    })
+}
+
+/// The unit-cube model of a prototype: the variant of `base` at a point, evaluated.
+pub fn evaluate_at(
+    prototype: Prototype,
+    ranges: &Ranges,
+    base: &Device,
+    point: &[f64],
+    claims: &Claims,
+) -> Result<Vec<Evaluation>, StudyError> {
+    let variant = ranges.variant(base, point)?;
+    evaluate(prototype, &variant, claims)
+}
+
+/// The Sobol indices of one quantity.
+#[derive(Debug, Clone, PartialEq)]
+pub struct QuantityIndices {
+    /// The quantity.
+    pub quantity: Quantity,
+    /// First-order and total indices with their bootstrap intervals, in [`Factor::ALL`] order;
+    /// `None` when the quantity does not vary over the design (every index is 0/0).
+    pub indices: Option<Indices>,
+    /// Share of the design's points where the quantity does not exist (its substitute is used).
+    pub absent_share: f64,
+}
+
+/// A Sobol study of one prototype.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SobolRun {
+    /// The prototype.
+    pub prototype: Prototype,
+    /// The design.
+    pub design: Saltelli,
+    /// The evaluations at every design point, in design order.
+    pub evaluations: Vec<Vec<Evaluation>>,
+    /// One entry per quantity of [`Prototype::quantities`].
+    pub quantities: Vec<QuantityIndices>,
+}
+
+/// The design of a Sobol study.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SobolDesign {
+    /// Base rows of the Saltelli design (a power of two).
+    pub base_rows: usize,
+    /// Scramble of the design.
+    pub seed: u32,
+    /// The bootstrap of the intervals.
+    pub bootstrap: Bootstrap,
+}
+
+/// Sobol first-order and total indices of every quantity of `prototype` over `ranges`, from
+/// the Saltelli design of `d`; `on_point()` after every design point (points run in
+/// parallel, results in design order).
+pub fn sobol(
+    prototype: Prototype,
+    ranges: &Ranges,
+    base: &Device,
+    d: SobolDesign,
+    claims: &Claims,
+    on_point: &(dyn Fn() + Sync),
+) -> Result<SobolRun, StudyError> {
+    let design = Saltelli::new(d.base_rows, Factor::ALL.len(), d.seed)?;
+    let boot = d.bootstrap;
+    let evaluations = design
+        .points()
+        .par_iter()
+        .map(|p| {
+            let e = evaluate_at(prototype, ranges, base, p, claims);
+            on_point();
+            e
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    let quantities = prototype
+        .quantities()
+        .iter()
+        .enumerate()
+        .map(|(j, qty)| {
+            let outputs: Vec<f64> = evaluations.iter().map(|e| e[j].deviation).collect();
+            let absent = evaluations
+                .iter()
+                .filter(|e| e[j].outcome.value().is_none())
+                .count();
+            let indices = match design.indices(&outputs, boot) {
+                Ok(i) => Some(i),
+                Err(SensitivityError::NoVariance) => None,
+                Err(e) => return Err(StudyError::Sensitivity(e)),
+            };
+            Ok(QuantityIndices {
+                quantity: *qty,
+                indices,
+                absent_share: absent as f64 / evaluations.len() as f64,
+            })
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    Ok(SobolRun {
+        prototype,
+        design,
+        evaluations,
+        quantities,
+    })
+}
+
+/// The multi-claim calibration of a prototype: the point of the ranges that minimises the
+/// worst normalised deviation over its quantitative claims (the yes/no claims are reported,
+/// not fitted: a step function gives the simplex no slope), by [`minimise_worst`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct Calibration {
+    /// The prototype.
+    pub prototype: Prototype,
+    /// Every start's fit, best first.
+    pub fits: Vec<Fit>,
+    /// The evaluations at the best point.
+    pub best: Vec<Evaluation>,
+    /// The best variant.
+    pub variant: Variant,
+}
+
+impl Calibration {
+    /// The best fit's worst |normalised deviation| over the quantitative claims.
+    pub fn worst(&self) -> f64 {
+        self.fits[0].worst
+    }
+
+    /// True when the best set meets every claim of the prototype the study evaluates.
+    pub fn meets_all(&self) -> bool {
+        self.best.iter().all(|e| e.meets)
+    }
+}
+
+/// The quantitative deviations of an evaluation (the minimax objective's components).
+pub fn quantitative_deviations(e: &[Evaluation]) -> Vec<f64> {
+    e.iter()
+        .filter(|e| e.kind == Kind::Quantitative)
+        .map(|e| e.deviation)
+        .collect()
+}
+
+/// Runs the multi-claim calibration of `prototype` over `ranges` with `settings`.
+pub fn calibrate(
+    prototype: Prototype,
+    ranges: &Ranges,
+    base: &Device,
+    settings: MinimaxSettings,
+    claims: &Claims,
+    on_eval: &(dyn Fn() + Sync),
+) -> Result<Calibration, StudyError> {
+    let model = |u: &[f64]| -> Result<Vec<f64>, StudyError> {
+        let e = evaluate_at(prototype, ranges, base, u, claims);
+        on_eval();
+        Ok(quantitative_deviations(&e?))
+    };
+    let fits = minimise_worst(Factor::ALL.len(), model, settings)?;
+    let variant = ranges.variant(base, &fits[0].point)?;
+    let best = evaluate(prototype, &variant, claims)?;
+    Ok(Calibration {
+        prototype,
+        fits,
+        best,
+        variant,
+    })
+}
+
+/// Summary key of a quantity's value at the best set of the calibration of its prototype
+/// (`None`: the study does not evaluate the claim).
+pub fn best_value_key(claim: &str, quantity: &str) -> Option<String> {
+    Prototype::BOTH.iter().find_map(|p| {
+        p.quantities()
+            .iter()
+            .any(|q| q.claim == claim && q.quantity == quantity)
+            .then(|| format!("calibration_{}_{claim}_{quantity}_value", p.key()))
     })
 }

@@ -1,0 +1,382 @@
+//! Why the paper deviates (the edge; the study itself is `endstop::paper::study`): Sobol
+//! first-order and total indices of every claim quantity the fast paths evaluate, per
+//! prototype, over the ranges of `data/sensitivity.toml`, and the multi-claim calibration of
+//! each prototype (the set inside the ranges that minimises the worst normalised deviation).
+//! Writes `sobol.parquet`, `calibration.parquet`, the heat map and `summary.json` under
+//! `data/results/study/`, and the book's numbers. Not part of `reproduce` (run `just study`);
+//! skipped when its inputs are unchanged since its last run, unless `--force`.
+
+use endstop_experiments as common;
+
+use anyhow::Result;
+use clap::Parser;
+use common::md::Table;
+use common::plot::Figure;
+use common::{fmt_sig, frame::frame, row, Experiment};
+use endstop::num::minimax::MinimaxSettings;
+use endstop::num::sensitivity::Bootstrap;
+use endstop::paper::claims::{Claims, Kind};
+use endstop::paper::sensitivity::{Factor, RangesFile};
+use endstop::paper::study::{self, Calibration, Prototype, SobolDesign, SobolRun};
+use plotters::coord::Shift;
+use plotters::prelude::*;
+
+/// Sobol indices and the multi-claim calibration of both prototypes.
+#[derive(Parser, Debug)]
+struct Args {
+    /// Base rows of the Saltelli design (a power of two): N (d + 2) = 10 N evaluations each.
+    #[arg(long, default_value_t = 8)]
+    base: usize,
+    /// Starts of the minimax calibration.
+    #[arg(long, default_value_t = 2)]
+    starts: usize,
+    /// Nelder-Mead iterations per start.
+    #[arg(long, default_value_t = 40)]
+    iters: u64,
+    /// Rerun even when the inputs are unchanged.
+    #[arg(long)]
+    force: bool,
+}
+
+/// Scramble of the design and of the calibration's starts.
+const SEED: u32 = 13;
+
+/// Bootstrap resamples of the indices' intervals (95 %).
+const RESAMPLES: usize = 1000;
+
+fn main() {
+    common::run_main("study", run);
+}
+
+fn run() -> Result<()> {
+    let args = Args::parse();
+    let job = &common::jobs::STUDY;
+    let key = common::freshness::key(job)?;
+    if !args.force && common::freshness::is_fresh(job, &key) {
+        eprintln!("[study] skipped: inputs unchanged since its last run (use --force to rerun)");
+        return Ok(());
+    }
+    let mut exp = Experiment::start("study");
+    let p1 = exp.load_published("prototype1")?;
+    let p2 = exp.load_published("prototype2")?;
+    let claims = Claims::bundled()?;
+    let ranges = RangesFile::bundled()?;
+    let boot = Bootstrap {
+        resamples: RESAMPLES,
+        level: 0.95,
+        seed: u64::from(SEED),
+    };
+    let minimax = MinimaxSettings {
+        starts: args.starts,
+        max_iters: args.iters,
+        seed: SEED,
+        ..MinimaxSettings::default()
+    };
+    let cases = [
+        (Prototype::P1, &ranges.prototype1, &p1.device),
+        (Prototype::P2, &ranges.prototype2, &p2.device),
+    ];
+    let mut sobols = Vec::new();
+    let mut cals = Vec::new();
+    for (proto, r, dev) in cases {
+        let t0 = std::time::Instant::now();
+        let points = args.base * (Factor::ALL.len() + 2);
+        let s = common::with_progress(points, &format!("sobol {}", proto.key()), |tick| {
+            let design = SobolDesign {
+                base_rows: args.base,
+                seed: SEED,
+                bootstrap: boot,
+            };
+            study::sobol(proto, r, dev, design, &claims, tick)
+        })?;
+        let sobol_s = t0.elapsed().as_secs_f64();
+        let t0 = std::time::Instant::now();
+        let evals = (args.starts as u64 * (args.iters + 10)) as usize;
+        let c = common::with_progress(evals, &format!("calibrate {}", proto.key()), |tick| {
+            study::calibrate(proto, r, dev, minimax, &claims, tick)
+        })?;
+        let cal_s = t0.elapsed().as_secs_f64();
+        let k = proto.key();
+        exp.number(&format!("sobol_{k}_points"), points as f64);
+        exp.number(&format!("sobol_{k}_seconds"), sobol_s);
+        exp.number(&format!("calibration_{k}_seconds"), cal_s);
+        exp.number(&format!("calibration_{k}_worst"), c.worst());
+        exp.number(
+            &format!("calibration_{k}_meets_all"),
+            f64::from(u8::from(c.meets_all())),
+        );
+        exp.number(
+            &format!("calibration_{k}_met"),
+            c.best.iter().filter(|e| e.meets).count() as f64,
+        );
+        exp.number(&format!("calibration_{k}_claims"), c.best.len() as f64);
+        exp.number(
+            &format!("calibration_{k}_failures"),
+            c.fits.iter().map(|f| f.failures).sum::<usize>() as f64,
+        );
+        for (f, u) in Factor::ALL.iter().zip(&c.fits[0].point) {
+            exp.number(&format!("calibration_{k}_{}_unit", f.key()), *u);
+        }
+        for e in &c.best {
+            exp.number(
+                &format!(
+                    "calibration_{k}_{}_{}_deviation",
+                    e.quantity.claim, e.quantity.quantity
+                ),
+                e.deviation,
+            );
+            if let (Some(key), Some(v)) = (
+                study::best_value_key(e.quantity.claim, e.quantity.quantity),
+                e.outcome.value(),
+            ) {
+                exp.number(&key, v);
+            }
+        }
+        sobols.push(s);
+        cals.push(c);
+    }
+    exp.number("sobol_base_rows", args.base as f64);
+    exp.number("calibration_starts", args.starts as f64);
+    exp.number("calibration_max_iters", args.iters as f64);
+    write_sobol(&exp, &sobols)?;
+    write_calibration(&exp, &cals)?;
+    exp.write_plot(&HeatMap::of(&sobols))?;
+    exp.write_numbers_md(&numbers_md(&args, &sobols, &cals, &claims))?;
+    exp.finish()?;
+    common::freshness::mark_done(job, &key)?;
+    Ok(())
+}
+
+fn write_sobol(exp: &Experiment, runs: &[SobolRun]) -> Result<()> {
+    let mut rows = Vec::new();
+    for r in runs {
+        for q in &r.quantities {
+            for (i, f) in Factor::ALL.iter().enumerate() {
+                let (fi, ti) = match &q.indices {
+                    Some(ix) => (ix.first[i], ix.total[i]),
+                    None => continue,
+                };
+                rows.push(row![
+                    "prototype" => r.prototype.key(),
+                    "claim" => q.quantity.claim,
+                    "quantity" => q.quantity.quantity,
+                    "factor" => f.key(),
+                    "first" => fi.value,
+                    "first_lo" => fi.lo,
+                    "first_hi" => fi.hi,
+                    "total" => ti.value,
+                    "total_lo" => ti.lo,
+                    "total_hi" => ti.hi,
+                    "absent_share" => q.absent_share,
+                ]);
+            }
+        }
+    }
+    exp.write_parquet("sobol", &mut frame(rows)?, "published ranges")?;
+    Ok(())
+}
+
+fn write_calibration(exp: &Experiment, cals: &[Calibration]) -> Result<()> {
+    let mut rows = Vec::new();
+    for c in cals {
+        for e in &c.best {
+            rows.push(row![
+                "prototype" => c.prototype.key(),
+                "claim" => e.quantity.claim,
+                "quantity" => e.quantity.quantity,
+                "outcome" => e.outcome.label(),
+                "ours" => e.value,
+                "deviation" => e.deviation,
+                "meets" => e.meets,
+                "fitted" => e.kind == Kind::Quantitative,
+            ]);
+        }
+    }
+    exp.write_parquet(
+        "calibration",
+        &mut frame(rows)?,
+        "calibrated within the ranges",
+    )?;
+    Ok(())
+}
+
+fn numbers_md(args: &Args, sobols: &[SobolRun], cals: &[Calibration], claims: &Claims) -> String {
+    let mut md = format!(
+        "Saltelli design of N = {} base rows ({} evaluations per prototype), seed {SEED}, \
+         {RESAMPLES} bootstrap resamples (95 % intervals); calibration: {} starts of at most \
+         {} Nelder-Mead iterations each.\n\n",
+        args.base,
+        args.base * (Factor::ALL.len() + 2),
+        args.starts,
+        args.iters
+    );
+    for s in sobols {
+        md.push_str(&format!(
+            "### Total Sobol indices, prototype {}\n\n",
+            &s.prototype.key()[1..]
+        ));
+        let mut t = Table::new([
+            "claim",
+            "quantity",
+            "absent share",
+            "largest total index (factor)",
+            "its 95 % interval",
+        ]);
+        for q in &s.quantities {
+            let (big, ci) = match &q.indices {
+                Some(ix) => {
+                    let (i, ti) = ix
+                        .total
+                        .iter()
+                        .enumerate()
+                        .max_by(|a, b| a.1.value.total_cmp(&b.1.value))
+                        .expect("factors");
+                    (
+                        format!("{} ({})", fmt_sig(ti.value, 2), Factor::ALL[i].key()),
+                        format!("{} to {}", fmt_sig(ti.lo, 2), fmt_sig(ti.hi, 2)),
+                    )
+                }
+                None => ("constant over the design".into(), "-".into()),
+            };
+            t.row([
+                q.quantity.claim.to_string(),
+                format!("`{}`", q.quantity.quantity),
+                fmt_sig(q.absent_share, 2),
+                big,
+                ci,
+            ]);
+        }
+        md.push_str(&t.render());
+        md.push('\n');
+    }
+    for c in cals {
+        md.push_str(&format!(
+            "### Best set of prototype {} within the ranges\n\nWorst normalised deviation over \
+             its quantitative claims: {}; it meets {} of the {} claims evaluated here \
+             (every one: {}).\n\n",
+            &c.prototype.key()[1..],
+            fmt_sig(c.worst(), 3),
+            c.best.iter().filter(|e| e.meets).count(),
+            c.best.len(),
+            if c.meets_all() { "yes" } else { "no" }
+        ));
+        let mut t = Table::new([
+            "claim",
+            "quantity",
+            "paper",
+            "best set",
+            "deviation",
+            "meets",
+        ]);
+        for e in &c.best {
+            let paper = claims
+                .get(e.quantity.claim, e.quantity.quantity)
+                .map_or(f64::NAN, |c| c.paper);
+            t.row([
+                e.quantity.claim.to_string(),
+                format!("`{}`", e.quantity.quantity),
+                fmt_sig(paper, 4),
+                match e.outcome.value() {
+                    Some(v) => fmt_sig(v, 4),
+                    None => format!("{} ({})", e.outcome.label(), fmt_sig(e.value, 4)),
+                },
+                fmt_sig(e.deviation, 3),
+                if e.meets { "yes" } else { "no" }.to_string(),
+            ]);
+        }
+        md.push_str(&t.render());
+        md.push('\n');
+        let mut t = Table::new(["factor", "unit-cube coordinate"]);
+        for (f, u) in Factor::ALL.iter().zip(&c.fits[0].point) {
+            t.row([format!("`{}`", f.key()), fmt_sig(*u, 3)]);
+        }
+        md.push_str(&t.render());
+        md.push('\n');
+    }
+    md
+}
+
+/// Claims x factors, total Sobol index as a grey level (white 0, black 1).
+struct HeatMap {
+    rows: Vec<String>,
+    cells: Vec<Vec<Option<f64>>>,
+}
+
+impl HeatMap {
+    fn of(runs: &[SobolRun]) -> Self {
+        let mut rows = Vec::new();
+        let mut cells = Vec::new();
+        for r in runs {
+            for q in &r.quantities {
+                rows.push(format!(
+                    "{} {} {}",
+                    r.prototype.key(),
+                    q.quantity.claim,
+                    q.quantity.quantity
+                ));
+                cells.push(match &q.indices {
+                    Some(ix) => ix.total.iter().map(|t| Some(t.value)).collect(),
+                    None => vec![None; Factor::ALL.len()],
+                });
+            }
+        }
+        Self { rows, cells }
+    }
+}
+
+impl Figure for HeatMap {
+    fn size(&self) -> (u32, u32) {
+        (1100, 120 + 34 * self.rows.len() as u32)
+    }
+
+    fn title(&self) -> String {
+        "Total Sobol index of each claim quantity (rows) for each factor (columns)".into()
+    }
+
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<()>
+    where
+        DB::ErrorType: 'static,
+    {
+        root.fill(&WHITE)?;
+        let (left, top, cw, ch) = (380i32, 90i32, 88i32, 34i32);
+        let font = ("sans-serif", 15).into_font();
+        for (j, f) in Factor::ALL.iter().enumerate() {
+            let x = left + j as i32 * cw + 4;
+            root.draw(&Text::new(
+                f.key().replace('_', " "),
+                (x, top - 22 - 14 * (j as i32 % 2)),
+                font.clone(),
+            ))?;
+        }
+        for (i, (label, row)) in self.rows.iter().zip(&self.cells).enumerate() {
+            let y = top + i as i32 * ch;
+            root.draw(&Text::new(label.clone(), (8, y + 9), font.clone()))?;
+            for (j, v) in row.iter().enumerate() {
+                let x = left + j as i32 * cw;
+                let fill = match v {
+                    Some(t) => {
+                        let g = (255.0 * (1.0 - t.clamp(0.0, 1.0))).round() as u8;
+                        RGBColor(g, g, 255u8.saturating_sub((255 - g) / 3))
+                    }
+                    None => RGBColor(230, 230, 230),
+                };
+                root.draw(&Rectangle::new(
+                    [(x, y), (x + cw - 2, y + ch - 2)],
+                    fill.filled(),
+                ))?;
+                let text = v.map_or("-".to_string(), |t| format!("{t:.2}"));
+                let colour = if v.is_some_and(|t| t > 0.55) {
+                    WHITE
+                } else {
+                    BLACK
+                };
+                root.draw(&Text::new(
+                    text,
+                    (x + 24, y + 9),
+                    font.clone().color(&colour),
+                ))?;
+            }
+        }
+        Ok(())
+    }
+}
