@@ -57,6 +57,10 @@ const MAX_CORRECTION: f64 = 0.5;
 /// Largest parameter step across a grazing, as a fraction of the largest step.
 const GRAZING_STEP: f64 = 0.01;
 
+/// An orbit is near grazing when its largest displacement is within this fraction of the gap
+/// (where a corner of the branch is looked for).
+const GRAZING_NEAR: f64 = 1e-3;
+
 /// Largest factor by which the largest Floquet multiplier's modulus may change in one step.
 const MAX_MULTIPLIER_RATIO: f64 = 2.0;
 
@@ -517,24 +521,31 @@ impl Continuer<'_, '_> {
         Ok(BranchPoint { orbit: o, tangent })
     }
 
-    /// Hops over a corner of the branch at an impacting orbit `last` that (nearly) grazes a
-    /// stop: shoots at fixed parameter values stepping away from `last` in the direction
-    /// opposite to its tangent's parameter component (the non-impacting branch leaves the
-    /// corner that way), and returns the first non-impacting orbit found, with its tangent
-    /// oriented along that direction. `None` when `last` is not near grazing or nothing is
-    /// found within `max_step`.
+    /// Hops over a corner of the branch at an orbit `last` that (nearly) grazes a stop.
+    /// From an impacting `last`: shoots at fixed parameter values stepping away from `last` in
+    /// the direction opposite to its tangent's parameter component (the non-impacting branch
+    /// leaves the corner that way), then the other way, and returns the first non-impacting
+    /// orbit found. From a non-impacting `last` (the free-flight branch arriving at grazing,
+    /// where a large impact damping makes the impacting branch leave at an angle that no
+    /// arclength step converges across): steps on along its tangent and returns the first
+    /// impacting orbit. The tangent is oriented along the direction stepped. `None` when
+    /// `last` is not near grazing or nothing is found within `max_step`.
     fn corner_hop(&mut self, last: &BranchPoint, max_step: f64) -> Option<BranchPoint> {
         let xmax = self.shooter.base.xmax;
-        let near = (last.orbit.summary.x_max_m - xmax).abs() <= 1e-3 * xmax;
+        let near = (last.orbit.summary.x_max_m - xmax).abs() <= GRAZING_NEAR * xmax;
         if !near {
             return None;
         }
         let param = self.settings.parameter;
         let p0 = last.orbit.param(param);
-        for dir in [
-            -last.param_tangent().signum(),
-            last.param_tangent().signum(),
-        ] {
+        let leaving_contact = last.orbit.is_impacting();
+        let ahead = last.param_tangent().signum();
+        let dirs: &[f64] = if leaving_contact {
+            &[-ahead, ahead]
+        } else {
+            &[ahead]
+        };
+        for &dir in dirs {
             let mut step = 1e-4 * max_step;
             while step <= max_step {
                 let f = last.orbit.forcing.with(param, p0 + dir * step);
@@ -546,7 +557,7 @@ impl Continuer<'_, '_> {
                     &mut self.stats,
                 );
                 if let Ok(o) = solved {
-                    if !o.is_impacting() {
+                    if o.is_impacting() != leaving_contact {
                         let sc = self.shooter.scales();
                         let lin = self
                             .shooter
@@ -914,11 +925,24 @@ pub fn continue_branch(
                 // the branch (a fold just past the grazing) without passing the fold.
                 let crossed = p.orbit.is_impacting() != last.orbit.is_impacting();
                 let long_crossing = crossed && dp > GRAZING_STEP * settings.max_param_step;
+                // A free-flight branch that turns back at grazing with no change of stability
+                // has not folded (a smooth fold moves a multiplier through +1): the corrector
+                // has slid back along the branch it came on, unable to step across a corner
+                // (an impacting branch that leaves at an angle, as with a large impact
+                // damping). Refined, and hopped over below when the step is exhausted.
+                let graze_tol = GRAZING_NEAR * c.shooter.base.xmax;
+                let slid_back = !crossed
+                    && !last.orbit.is_impacting()
+                    && (last.orbit.summary.x_max_m - c.shooter.base.xmax).abs() <= graze_tol
+                    && (p.param_tangent() > 0.0) != (last.param_tangent() > 0.0)
+                    && p.orbit.is_stable() == last.orbit.is_stable()
+                    && (test_plus_one(&p, 0.0) > 0.0) == (test_plus_one(&last, 0.0) > 0.0);
                 if p.tangent.dot(&last.tangent) < cos_max
                     || dp > settings.max_param_step
                     || moved > MAX_CORRECTION * ds
                     || jumped
                     || long_crossing
+                    || slid_back
                 {
                     None
                 } else {
@@ -937,7 +961,9 @@ pub fn continue_branch(
                 if let Some(p) = c.corner_hop(&last, settings.max_param_step) {
                     let k = points.len() - 1;
                     let mut p = p;
-                    let found = c.events_between(k, &last, &mut p, ds)?;
+                    // Events are bracketed over the hop's own length, not the exhausted step.
+                    let hop = (c.u_of(&p.orbit) - c.u_of(&last.orbit)).norm();
+                    let found = c.events_between(k, &last, &mut p, hop)?;
                     events.extend(found);
                     on_point(p.orbit.param(param));
                     points.push(p);
