@@ -91,7 +91,7 @@ fn run() -> Result<()> {
         })?;
         let sobol_s = t0.elapsed().as_secs_f64();
         let t0 = std::time::Instant::now();
-        let evals = (args.starts as u64 * (args.iters + 10)) as usize;
+        let evals = ((args.starts as u64 + 1) * (args.iters + 10)) as usize;
         let c = common::with_progress(evals, &format!("calibrate {}", proto.key()), |tick| {
             study::calibrate(proto, r, dev, minimax, &claims, tick)
         })?;
@@ -168,6 +168,9 @@ fn write_sobol(exp: &Experiment, runs: &[SobolRun]) -> Result<()> {
                     "total_lo" => ti.lo,
                     "total_hi" => ti.hi,
                     "absent_share" => q.absent_share,
+                    "no_fold_share" => q.no_fold_share,
+                    "no_grazing_share" => q.no_grazing_share,
+                    "failed_share" => q.failed_share,
                 ]);
             }
         }
@@ -218,7 +221,7 @@ fn numbers_md(args: &Args, sobols: &[SobolRun], cals: &[Calibration], claims: &C
         let mut t = Table::new([
             "claim",
             "quantity",
-            "absent share",
+            "absent share (no fold / no grazing / failed)",
             "largest total index (factor)",
             "its 95 % interval",
         ]);
@@ -241,7 +244,13 @@ fn numbers_md(args: &Args, sobols: &[SobolRun], cals: &[Calibration], claims: &C
             t.row([
                 q.quantity.claim.to_string(),
                 format!("`{}`", q.quantity.quantity),
-                fmt_sig(q.absent_share, 2),
+                format!(
+                    "{} ({} / {} / {})",
+                    fmt_sig(q.absent_share, 2),
+                    fmt_sig(q.no_fold_share, 2),
+                    fmt_sig(q.no_grazing_share, 2),
+                    fmt_sig(q.failed_share, 2)
+                ),
                 big,
                 ci,
             ]);

@@ -49,7 +49,7 @@ fn linear_claims_generated_at_a_known_set_are_met_and_its_identified_parameters_
             (0..4).map(|j| (ours[j] - target[j]) / tol[j]).collect(),
         )
     };
-    let fits = minimise_worst(Factor::ALL.len(), model, MinimaxSettings::default()).unwrap();
+    let fits = minimise_worst(Factor::ALL.len(), model, MinimaxSettings::default(), &[]).unwrap();
     let best = &fits[0];
     assert!(best.worst <= 1.0, "best fit misses a claim: {best:?}");
 

@@ -3,11 +3,11 @@
 //! claims and Table 3.
 
 use endstop::device::Device;
-use endstop::paper::claims::Claims;
+use endstop::paper::claims::{Claims, Kind};
 use endstop::paper::fig08::{self, Fig8Curve};
 use endstop::paper::sensitivity::Variant;
 use endstop::paper::setups::P1_BIAS_V;
-use endstop::paper::study::{evaluate, Evaluation, Outcome, Prototype};
+use endstop::paper::study::{evaluate, evaluate_quantitative, Evaluation, Outcome, Prototype};
 use endstop::paper::{fig13, table3};
 use rayon::prelude::*;
 
@@ -28,7 +28,7 @@ fn find<'a>(e: &'a [Evaluation], claim: &str, quantity: &str) -> &'a Evaluation 
         .unwrap_or_else(|| panic!("({claim}, {quantity}) is evaluated"))
 }
 
-/// Figure 8 at 5.5 g: the continuation's lowest grazing point is the sweep's refined impact
+/// Figure 8 at 5.5 g: the continuation's first grazing point is the sweep's refined impact
 /// onset, and each upper fold is where the sweep leaves the impacting branch.
 ///
 /// Tolerance: the onset is the same event (first contact) located by two methods, the sweep's
@@ -110,4 +110,11 @@ fn prototype2_fast_path_matches_figure_13_and_table_3() {
         assert!((e.value - v.ours).abs() <= 1e-12 * v.ours.abs());
     }
     assert!(fast.iter().all(|e| matches!(e.outcome, Outcome::Value(_))));
+    // The calibration's objective (no continuations) is exactly the quantitative part.
+    let objective = evaluate_quantitative(Prototype::P2, &published(&p2), &claims).unwrap();
+    let quantitative: Vec<_> = fast
+        .into_iter()
+        .filter(|e| e.kind == Kind::Quantitative)
+        .collect();
+    assert_eq!(objective, quantitative);
 }

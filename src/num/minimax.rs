@@ -111,20 +111,31 @@ where
     }
 }
 
-/// Minimises `max_j |model(u)_j|` over `u` in `[0, 1]^dims` from `settings.starts` starts;
-/// returns every start's fit, best first (ties kept in start order).
+/// Minimises `max_j |model(u)_j|` over `u` in `[0, 1]^dims` from the `given` starts (e.g.
+/// the published point), then `settings.starts` points of the scrambled Sobol sequence;
+/// returns every start's fit, best first (ties kept in start order; start `i < given.len()`
+/// is `given[i]`).
 pub fn minimise_worst<F, E>(
     dims: usize,
     model: F,
     settings: MinimaxSettings,
+    given: &[Vec<f64>],
 ) -> Result<Vec<Fit>, MinimaxError>
 where
     F: Fn(&[f64]) -> Result<Vec<f64>, E> + Sync,
 {
-    if dims == 0 || dims > 256 || settings.starts == 0 || settings.starts > 1 << 16 {
+    if let Some(bad) = given
+        .iter()
+        .find(|g| g.len() != dims || g.iter().any(|u| !(0.0..=1.0).contains(u)))
+    {
         return Err(MinimaxError::Settings(format!(
-            "need 1..=256 dimensions and 1..=65536 starts, got {dims} and {}",
-            settings.starts
+            "a given start must be a point of the unit cube of {dims} dimensions, got {bad:?}"
+        )));
+    }
+    let total = settings.starts + given.len();
+    if dims == 0 || dims > 256 || total == 0 || total > 1 << 16 {
+        return Err(MinimaxError::Settings(format!(
+            "need 1..=256 dimensions and 1..=65536 starts, got {dims} and {total}"
         )));
     }
     if !(settings.simplex_size > 0.0 && settings.simplex_size <= 0.5) {
@@ -133,9 +144,16 @@ where
             settings.simplex_size
         )));
     }
-    let mut fits = (0..settings.starts)
+    let sobol = (0..settings.starts).map(|i| {
+        (0..dims)
+            .map(|d| f64::from(sobol_burley::sample(i as u32, d as u32, settings.seed)))
+            .collect::<Vec<f64>>()
+    });
+    let starts: Vec<Vec<f64>> = given.iter().cloned().chain(sobol).collect();
+    let mut fits = starts
         .into_par_iter()
-        .map(|start| run_start(dims, &model, settings, start))
+        .enumerate()
+        .map(|(start, x0)| run_start(dims, &model, settings, start, x0))
         .collect::<Result<Vec<_>, _>>()?;
     fits.retain(|f| f.worst.is_finite());
     if fits.is_empty() {
@@ -150,6 +168,7 @@ fn run_start<F, E>(
     model: &F,
     s: MinimaxSettings,
     start: usize,
+    x0: Vec<f64>,
 ) -> Result<Fit, MinimaxError>
 where
     F: Fn(&[f64]) -> Result<Vec<f64>, E> + Sync,
@@ -158,9 +177,6 @@ where
         start,
         message: e.to_string(),
     };
-    let x0: Vec<f64> = (0..dims)
-        .map(|d| f64::from(sobol_burley::sample(start as u32, d as u32, s.seed)))
-        .collect();
     // The simplex: the start and one step along each axis, stepping inwards near a face.
     let mut simplex = vec![x0.clone()];
     for d in 0..dims {
@@ -224,7 +240,7 @@ mod tests {
                 (u[2] * u[2] - target[2] * target[2]) / 0.01,
             ])
         };
-        let fits = minimise_worst(3, model, MinimaxSettings::default()).unwrap();
+        let fits = minimise_worst(3, model, MinimaxSettings::default(), &[]).unwrap();
         let best = &fits[0];
         // Every target within its tolerance, and the point within a tolerance's reach of u*
         // (each deviation of 1 is 0.01 in u here).
@@ -241,9 +257,30 @@ mod tests {
             assert!(u.iter().all(|u| (0.0..=1.0).contains(u)));
             Ok(vec![(u[0] - 1.4) / 0.1, (u[1] - 0.5) / 0.1])
         };
-        let best = &minimise_worst(2, model, MinimaxSettings::default()).unwrap()[0];
+        let best = &minimise_worst(2, model, MinimaxSettings::default(), &[]).unwrap()[0];
         assert!((best.point[0] - 1.0).abs() < 1e-3, "{best:?}");
         assert!((best.worst - 4.0).abs() < 1e-2, "{best:?}");
+    }
+
+    #[test]
+    fn a_given_start_comes_first_and_its_fit_is_no_worse_than_the_start() {
+        // A ridge the Sobol starts sit far from: the given start is on it.
+        let model = |u: &[f64]| -> Result<Vec<f64>, ()> {
+            Ok(vec![(u[0] - 0.9) / 0.01, (u[1] - 0.05) / 0.01])
+        };
+        let given = vec![vec![0.91, 0.06]];
+        let settings = MinimaxSettings {
+            starts: 0,
+            max_iters: 50,
+            ..MinimaxSettings::default()
+        };
+        let fits = minimise_worst(2, model, settings, &given).unwrap();
+        assert_eq!(fits.len(), 1);
+        assert_eq!(fits[0].start, 0);
+        // The start's own worst deviation is 1.0; Nelder-Mead keeps its best vertex.
+        assert!(fits[0].worst <= 1.0, "{:?}", fits[0]);
+        let outside = minimise_worst(2, model, settings, &[vec![1.2, 0.0]]);
+        assert!(matches!(outside, Err(MinimaxError::Settings(_))));
     }
 
     #[test]
@@ -255,8 +292,8 @@ mod tests {
             .num_threads(1)
             .build()
             .unwrap()
-            .install(|| minimise_worst(2, model, MinimaxSettings::default()).unwrap());
-        let many = minimise_worst(2, model, MinimaxSettings::default()).unwrap();
+            .install(|| minimise_worst(2, model, MinimaxSettings::default(), &[]).unwrap());
+        let many = minimise_worst(2, model, MinimaxSettings::default(), &[]).unwrap();
         assert_eq!(format!("{one:?}"), format!("{many:?}"));
     }
 
@@ -265,7 +302,7 @@ mod tests {
     {
         let never = |_: &[f64]| -> Result<Vec<f64>, ()> { Err(()) };
         assert_eq!(
-            minimise_worst(2, never, MinimaxSettings::default()),
+            minimise_worst(2, never, MinimaxSettings::default(), &[]),
             Err(MinimaxError::NoEvaluation)
         );
         let half = |u: &[f64]| -> Result<Vec<f64>, ()> {
@@ -275,10 +312,10 @@ mod tests {
                 Ok(vec![(u[0] - 0.5) / 0.1])
             }
         };
-        let fits = minimise_worst(1, half, MinimaxSettings::default()).unwrap();
+        let fits = minimise_worst(1, half, MinimaxSettings::default(), &[]).unwrap();
         assert!(fits[0].worst < 1e-2);
         assert!(matches!(
-            minimise_worst(0, half, MinimaxSettings::default()),
+            minimise_worst(0, half, MinimaxSettings::default(), &[]),
             Err(MinimaxError::Settings(_))
         ));
     }

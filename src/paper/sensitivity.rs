@@ -81,6 +81,15 @@ pub enum RangesError {
     /// The device at a point fails validation.
     #[error(transparent)]
     Device(#[from] ParamError),
+    /// The published value of a factor lies outside its range (no point of the cube is the
+    /// published set).
+    #[error("data/sensitivity.toml: the published {factor} ({value}) lies outside its range")]
+    PublishedOutside {
+        /// The factor's key.
+        factor: &'static str,
+        /// The published value (the factor on it for a relative range).
+        value: f64,
+    },
 }
 
 /// One factor's range as written in the file.
@@ -199,6 +208,43 @@ impl Ranges {
         Ok(())
     }
 
+    /// The point of the unit cube whose variant is `base` itself (the published set): for a
+    /// range, where the device's own value lies in it (the factor 1 of a relative range); for
+    /// the switch, the middle of the half that selects the device's own setting. Its variant
+    /// equals `base` to rounding (a relative factor `lo + u (hi - lo)` is 1 to within 1 ulp).
+    pub fn published_point(&self, base: &Device) -> Result<Vec<f64>, RangesError> {
+        Factor::ALL
+            .iter()
+            .map(|&f| {
+                let s = self.span(f);
+                if let Some([a, _]) = s.discrete {
+                    return Ok(if base.endstop.tension_free == a {
+                        0.25
+                    } else {
+                        0.75
+                    });
+                }
+                let (value, [lo, hi]) = match (s.relative, s.absolute) {
+                    (Some(r), _) => (1.0, r),
+                    (_, Some(r)) => (own_value(base, f), r),
+                    _ => unreachable!("checked on load: a range is relative or absolute"),
+                };
+                let outside = RangesError::PublishedOutside {
+                    factor: f.key(),
+                    value,
+                };
+                if !(lo..=hi).contains(&value) {
+                    return Err(outside);
+                }
+                Ok(if hi > lo {
+                    (value - lo) / (hi - lo)
+                } else {
+                    0.5
+                })
+            })
+            .collect()
+    }
+
     /// The variant of `base` at a point of the unit cube (coordinates in [`Factor::ALL`] order).
     pub fn variant(&self, base: &Device, point: &[f64]) -> Result<Variant, RangesError> {
         if point.len() != Factor::ALL.len() || point.iter().any(|u| !(0.0..=1.0).contains(u)) {
@@ -248,6 +294,20 @@ impl Ranges {
     }
 }
 
+/// The device's own value of a continuous factor (the acceleration's scale is 1).
+fn own_value(d: &Device, f: Factor) -> f64 {
+    match f {
+        Factor::EndstopGap => d.geometry.endstop_gap_m,
+        Factor::MechanicalDamping => d.mechanics.damping_n_s_per_m,
+        Factor::Stiffness => d.mechanics.stiffness_n_per_m,
+        Factor::ParasiticCapacitance => d.electrical.cp_f,
+        Factor::ImpactDamping => d.endstop.damping_n_s_per_m,
+        Factor::YoungsModulus => d.material.youngs_modulus_pa,
+        Factor::AccelScale => 1.0,
+        Factor::TensionFree => f64::from(u8::from(d.endstop.tension_free)),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -267,6 +327,34 @@ mod tests {
                 assert!(v.accel_scale > 0.0);
             }
         }
+    }
+
+    #[test]
+    fn the_published_point_is_the_published_set() {
+        // Tolerance: a relative factor lo + u (hi - lo) with u = (1 - lo) / (hi - lo) is 1 to
+        // a few ulps, so each value is its own to 1e-14 relative.
+        let file = RangesFile::bundled().unwrap();
+        let p1 = prototype(include_str!("../../data/prototype1.toml"));
+        let p2 = prototype(include_str!("../../data/prototype2.toml"));
+        for (ranges, dev) in [(&file.prototype1, &p1), (&file.prototype2, &p2)] {
+            let u = ranges.published_point(dev).unwrap();
+            let v = ranges.variant(dev, &u).unwrap();
+            for f in Factor::ALL {
+                let (a, b) = (own_value(&v.device, f), own_value(dev, f));
+                assert!((a - b).abs() <= 1e-14 * b.abs(), "{f:?}: {a} vs {b}");
+            }
+            assert!((v.accel_scale - 1.0).abs() < 1e-14);
+        }
+        // A device whose b_im lies outside the absolute range has no published point.
+        let mut wild = p1.clone();
+        wild.endstop.damping_n_s_per_m = 50.0;
+        assert!(matches!(
+            file.prototype1.published_point(&wild),
+            Err(RangesError::PublishedOutside {
+                factor: "impact_damping",
+                ..
+            })
+        ));
     }
 
     #[test]

@@ -4,7 +4,7 @@
 //!
 //! The fast path of a narrowband claim is the pseudo-arclength continuation of the periodic
 //! orbits ([`crate::study::continuation`]) instead of the stepped sweep: Figure 8's kink (the
-//! up-sweep's impact onset) is the branch's lowest grazing point, a jump down is the upper
+//! up-sweep's impact onset) is the branch's first grazing point, a jump down is the upper
 //! fold (where the up-sweep leaves the impacting branch when its steady-state blocks are long
 //! enough; the response study's table). Table 3's quantities are analytic (eqs 15-18).
 //!
@@ -20,20 +20,15 @@ use rayon::prelude::*;
 use thiserror::Error;
 
 use crate::device::{Device, StiffnessModel};
-use crate::drive::Sine;
 use crate::num::minimax::{minimise_worst, Fit, MinimaxError, MinimaxSettings};
 use crate::num::sensitivity::{Bootstrap, Indices, Saltelli, SensitivityError};
-use crate::ode::Stats;
 use crate::paper::claims::{Claim, Claims, Kind};
 use crate::paper::fig08;
 use crate::paper::sensitivity::{Factor, Ranges, RangesError, Variant};
 use crate::paper::setups::{FIG13_BIAS_V, P1_BIAS_V, P2_BIAS_V};
-use crate::physics::harvester::Harvester;
 use crate::physics::two_port::{TwoPort, TABLE3_QM};
-use crate::study::continuation::{
-    continue_branch, first_orbit, Branch, ContinuationSettings, EventKind,
-};
-use crate::study::orbit::{Forcing, OrbitError, Parameter, Shooter};
+use crate::study::continuation::{self, Branch, EventKind};
+use crate::study::orbit::OrbitError;
 
 /// Upper end of prototype 1's frequency continuations (Hz): Figure 8's range extended to
 /// 2000 Hz, as the response study's fold claims (without end-stop damping the impacting
@@ -51,9 +46,6 @@ pub const P2_LEVELS_G: (f64, f64) = (0.12, 0.31);
 
 /// Figure 13's alternative Hertz fit of b_im (N s/m), a claim-defined setting.
 pub const P2_HERTZ_BIM: f64 = 0.34;
-
-/// Transient periods before Newton when it fails from rest at the first frequency.
-const TRANSIENT_PERIODS: usize = 200;
 
 /// The prototypes of the study.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -211,7 +203,7 @@ pub enum StudyError {
 }
 
 /// The frequency branch of `device` at `accel_rms_g` from `start` to `stop` (Hz), steps of at
-/// most `step` (Hz).
+/// most `step` (Hz) ([`continuation::frequency_branch`]), its failure named by `what`.
 pub fn frequency_branch(
     device: &Device,
     accel_rms_g: f64,
@@ -219,25 +211,8 @@ pub fn frequency_branch(
     step: f64,
     what: &'static str,
 ) -> Result<Branch, StudyError> {
-    let err = |source| StudyError::Orbit { what, source };
-    let s = ContinuationSettings::frequency(start, stop, step);
-    let h = Harvester::new(device, Sine::from_rms_g(accel_rms_g, start));
-    let shooter = Shooter::new(&h, s.shooting);
-    let forcing = Forcing {
-        freq_hz: start,
-        accel_rms_g,
-    };
-    let mut stats = Stats::default();
-    let first = first_orbit(
-        &shooter,
-        &forcing,
-        Parameter::Frequency,
-        h.rest_state(),
-        TRANSIENT_PERIODS,
-        &mut stats,
-    )
-    .map_err(err)?;
-    continue_branch(&h, first, &s, |_| {}).map_err(err)
+    continuation::frequency_branch(device, accel_rms_g, start, stop, step, |_| {})
+        .map_err(|source| StudyError::Orbit { what, source })
 }
 
 /// The upper branch's fold: the highest fold (away from grazing) at which the branch loses
@@ -254,19 +229,17 @@ pub fn upper_fold(branch: &Result<Branch, StudyError>) -> Outcome {
         .map_or(Outcome::NoFold, Outcome::Value)
 }
 
-/// The lowest grazing point (a corner at grazing counts, as in
-/// [`crate::paper::response::CaseRun::grazing_hz`]).
-pub fn lowest_grazing(branch: &Result<Branch, StudyError>) -> Outcome {
+/// The first grazing point along the branch (a corner at grazing counts): where the
+/// up-sweep's mass first reaches a stop, the branch starting in free flight below it.
+pub fn first_grazing(branch: &Result<Branch, StudyError>) -> Outcome {
     let Ok(branch) = branch else {
         return Outcome::Failed;
     };
     branch
         .events
         .iter()
-        .filter(|e| e.kind == EventKind::Grazing || e.at_grazing)
-        .map(|e| e.param)
-        .fold(None, |m: Option<f64>, p| Some(m.map_or(p, |m| m.min(p))))
-        .map_or(Outcome::NoGrazing, Outcome::Value)
+        .find(|e| e.kind == EventKind::Grazing || e.at_grazing)
+        .map_or(Outcome::NoGrazing, |e| Outcome::Value(e.param))
 }
 
 /// Whether any orbit of the branch reaches the stops (`None`: the continuation failed).
@@ -320,8 +293,15 @@ pub fn evaluate_p1(variant: &Variant) -> Result<Vec<Outcome>, StudyError> {
     };
     let tp = TwoPort::of(&base);
     let qm = tp.qm(TABLE3_QM);
+    // The grazing orbit is a free-flight orbit, the same for every contact law and b_im: the
+    // first branch that reaches it gives the onset when the fitted case's continuation failed.
+    let onset = branches
+        .iter()
+        .map(first_grazing)
+        .find(|o| *o != Outcome::Failed)
+        .unwrap_or(Outcome::Failed);
     Ok(vec![
-        lowest_grazing(&branches[0]),
+        onset,
         folds[0],
         folds[1],
         folds[2],
@@ -383,16 +363,47 @@ pub fn evaluate_p2(variant: &Variant, claims: &Claims) -> Result<Vec<Outcome>, S
         (Some(a), Some(b), Some(class)) => (a - b).abs() <= class.tolerance(a),
         _ => false,
     };
-    let tp = TwoPort::of(&variant.device.with_bias(P2_BIAS_V));
-    let qm = tp.qm(TABLE3_QM);
-    Ok(vec![
+    let mut out = vec![
         yes(branch_impacts(&branches[0]).map(|b| !b)),
         yes(branch_impacts(&branches[1]).map(|b| b && fold_linear.value().is_some())),
         yes((!failed).then_some(agree)),
+    ];
+    out.extend(p2_table3(variant));
+    Ok(out)
+}
+
+/// Table 3's second column at a variant (eqs 15-18 at 15 V), in [`P2_QUANTITIES`] order.
+fn p2_table3(variant: &Variant) -> [Outcome; 3] {
+    let tp = TwoPort::of(&variant.device.with_bias(P2_BIAS_V));
+    let qm = tp.qm(TABLE3_QM);
+    [
         Outcome::Value(tp.k2 * 100.0),
         Outcome::Value(qm),
         Outcome::Value(tp.k2 * qm),
-    ])
+    ]
+}
+
+/// The quantitative claims of a prototype at a variant (the calibration's objective): every
+/// quantitative claim of [`evaluate`], computed without the continuations none of them needs
+/// (prototype 2's are all analytic).
+pub fn evaluate_quantitative(
+    prototype: Prototype,
+    variant: &Variant,
+    claims: &Claims,
+) -> Result<Vec<Evaluation>, StudyError> {
+    let all = match prototype {
+        Prototype::P1 => {
+            return Ok(evaluate(prototype, variant, claims)?
+                .into_iter()
+                .filter(|e| e.kind == Kind::Quantitative)
+                .collect())
+        }
+        Prototype::P2 => &P2_QUANTITIES[3..],
+    };
+    all.iter()
+        .zip(p2_table3(variant))
+        .map(|(qty, outcome)| normalise(qty, outcome, claims))
+        .collect()
 }
 
 /// Every quantity of a prototype at a variant, normalised by the claims file.
@@ -463,8 +474,15 @@ pub struct QuantityIndices {
     /// First-order and total indices with their bootstrap intervals, in [`Factor::ALL`] order;
     /// `None` when the quantity does not vary over the design (every index is 0/0).
     pub indices: Option<Indices>,
-    /// Share of the design's points where the quantity does not exist (its substitute is used).
+    /// Share of the design's points where the quantity does not exist (its substitute is used):
+    /// the sum of the three shares below.
     pub absent_share: f64,
+    /// Share of points whose branch has no upper fold in the range (no jump down).
+    pub no_fold_share: f64,
+    /// Share of points whose branch never grazes in the range (no impacts).
+    pub no_grazing_share: f64,
+    /// Share of points whose continuation failed.
+    pub failed_share: f64,
 }
 
 /// A Sobol study of one prototype.
@@ -519,10 +537,10 @@ pub fn sobol(
         .enumerate()
         .map(|(j, qty)| {
             let outputs: Vec<f64> = evaluations.iter().map(|e| e[j].deviation).collect();
-            let absent = evaluations
-                .iter()
-                .filter(|e| e[j].outcome.value().is_none())
-                .count();
+            let share = |keep: &dyn Fn(Outcome) -> bool| {
+                let n = evaluations.iter().filter(|e| keep(e[j].outcome)).count();
+                n as f64 / evaluations.len() as f64
+            };
             let indices = match design.indices(&outputs, boot) {
                 Ok(i) => Some(i),
                 Err(SensitivityError::NoVariance) => None,
@@ -531,7 +549,10 @@ pub fn sobol(
             Ok(QuantityIndices {
                 quantity: *qty,
                 indices,
-                absent_share: absent as f64 / evaluations.len() as f64,
+                absent_share: share(&|o| o.value().is_none()),
+                no_fold_share: share(&|o| o == Outcome::NoFold),
+                no_grazing_share: share(&|o| o == Outcome::NoGrazing),
+                failed_share: share(&|o| o == Outcome::Failed),
             })
         })
         .collect::<Result<Vec<_>, _>>()?;
@@ -588,11 +609,16 @@ pub fn calibrate(
     on_eval: &(dyn Fn() + Sync),
 ) -> Result<Calibration, StudyError> {
     let model = |u: &[f64]| -> Result<Vec<f64>, StudyError> {
-        let e = evaluate_at(prototype, ranges, base, u, claims);
+        let e = ranges
+            .variant(base, u)
+            .map_err(StudyError::from)
+            .and_then(|v| evaluate_quantitative(prototype, &v, claims));
         on_eval();
         Ok(quantitative_deviations(&e?))
     };
-    let fits = minimise_worst(Factor::ALL.len(), model, settings)?;
+    // The published set is the first start: the search can only improve on it.
+    let published = ranges.published_point(base)?;
+    let fits = minimise_worst(Factor::ALL.len(), model, settings, &[published])?;
     let variant = ranges.variant(base, &fits[0].point)?;
     let best = evaluate(prototype, &variant, claims)?;
     Ok(Calibration {
