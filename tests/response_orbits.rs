@@ -231,3 +231,56 @@ fn amplitude_continuation_in_the_linear_regime_scales_the_power_with_the_square(
         );
     }
 }
+
+/// A free-flight branch arriving at grazing where the impacting orbit leaves at an angle
+/// (a prototype 1 variant of the sensitivity study with a tension-free contact and b_im = 3.8
+/// N s/m, at 5.5 g scaled by 1.2): the continuation records the grazing and goes on past it
+/// onto the impacting orbits. Before the corner hop from the free-flight side it slid back down
+/// the free-flight branch from the grazing frequency and reported a stable-to-stable "fold"
+/// there, with no grazing.
+#[test]
+fn a_grazing_corner_is_crossed_from_the_free_flight_side() {
+    use endstop::paper::sensitivity::RangesFile;
+    use endstop::study::continuation::frequency_branch;
+    let p1 = Device::from_toml_str(include_str!("../data/prototype1.toml"), "test").unwrap();
+    // Point 3 of the scrambled Sobol sequence of seed 99 in the study's unit cube.
+    let u: Vec<f64> = (0..8)
+        .map(|k| f64::from(sobol_burley::sample(3, k, 99)))
+        .collect();
+    let v = RangesFile::bundled()
+        .unwrap()
+        .prototype1
+        .variant(&p1, &u)
+        .unwrap();
+    let d = v.device.with_bias(endstop::paper::setups::P1_BIAS_V);
+    assert!(d.endstop.tension_free && d.endstop.damping_n_s_per_m > 3.0);
+    let g = 5.5 * v.accel_scale;
+    let grazing = |b: &Branch| {
+        b.events
+            .iter()
+            .find(|e| e.kind == EventKind::Grazing)
+            .map(|e| e.param)
+    };
+    let b = frequency_branch(&d, g, 900.0, 2000.0, 10.0, |_| {}).unwrap();
+    // The grazing orbit is a free-flight orbit, independent of b_im: the same device with
+    // b_im = 0 (whose branch crosses grazing smoothly) gives the reference. Tolerance: the
+    // event location (1e-4 Hz) and the hop's first step.
+    let undamped = d.with_endstop(d.endstop.stiffness, 0.0);
+    let reference = grazing(&frequency_branch(&undamped, g, 900.0, 2000.0, 10.0, |_| {}).unwrap())
+        .expect("the undamped branch grazes");
+    let found = grazing(&b).expect("the branch grazes");
+    assert!((found - reference).abs() < 0.01, "{found} vs {reference}");
+    let spurious = b
+        .events
+        .iter()
+        .any(|e| e.kind == EventKind::Fold && e.stable_before && e.stable_after && !e.at_grazing);
+    assert!(
+        !spurious,
+        "{:?}",
+        b.events
+            .iter()
+            .map(|e| (e.kind, e.param))
+            .collect::<Vec<_>>()
+    );
+    assert!(b.points.iter().any(|p| p.orbit.is_impacting()));
+}
