@@ -21,7 +21,7 @@ use endstop::device::Device;
 use endstop::study::ensemble::EnsembleSpec;
 use endstop::study::record::RecordSpec;
 use endstop::study::stepped::linspace_step;
-use endstop::study::sweep::{SweepSettings, REFINE_TOL_HZ};
+use endstop::study::sweep::{self, SweepSettings, REFINE_TOL_HZ};
 use polars::prelude::*;
 
 #[derive(Parser, Debug)]
@@ -84,19 +84,18 @@ struct RangeArgs {
 }
 
 impl RangeArgs {
-    /// Refuses a range, step or acceleration that no sweep can use, naming the option.
+    /// Refuses a range, step or acceleration that no sweep can use
+    /// ([`sweep::check_range`]), naming the option.
     fn check(&self) -> Result<()> {
-        if !(self.from.is_finite() && self.to.is_finite() && self.from > 0.0 && self.to > self.from)
-        {
-            bail!("--from and --to must be positive frequencies with --to > --from");
-        }
-        if !(self.step > 0.0 && self.step <= self.to - self.from) {
-            bail!("--step must be positive and not larger than the range");
-        }
-        if !(self.accel_rms_g.is_finite() && self.accel_rms_g > 0.0) {
-            bail!("--accel-rms-g must be a finite positive number");
-        }
-        Ok(())
+        sweep::check_range(self.accel_rms_g, self.from, self.to, self.step).map_err(|e| {
+            anyhow::anyhow!(match e {
+                sweep::RangeError::Ends => {
+                    "--from and --to must be positive frequencies with --to > --from"
+                }
+                sweep::RangeError::Step => "--step must be positive and not larger than the range",
+                sweep::RangeError::Accel => "--accel-rms-g must be a finite positive number",
+            })
+        })
     }
 
     /// The sweep settings of the range ([`SweepSettings::for_device`]).

@@ -5,7 +5,7 @@
 
 use endstop::device::Device;
 use endstop::paper::response::{
-    continuation, ghost_study, setups, upper_fold_hz, Case, CaseRun, Setup,
+    continuation, ghost_study, setups, sweeps_and_branch, upper_fold_hz, Case, CaseRun, Setup,
 };
 use endstop::study::basins::{basins, Attractor};
 use endstop::study::steady::{horizon_periods, steady_config, SteadyConfig, FOLD_BLOCK_PERIODS};
@@ -29,7 +29,6 @@ fn setup(case: Case) -> Setup {
         .unwrap()
 }
 
-/// Runs the sweeps and the continuation of a case (no basins).
 /// The sweep's transition `sweep_hz` lies within the refinement bracket ([`REFINE_TOL_HZ`])
 /// of the continuation's `branch_hz`: the sweep's resolution, the closest it can say anything.
 fn assert_within_bracket(sweep_hz: f64, branch_hz: f64, what: &str) {
@@ -39,26 +38,9 @@ fn assert_within_bracket(sweep_hz: f64, branch_hz: f64, what: &str) {
     );
 }
 
+/// Runs the sweeps and the continuation of a case (no basins).
 fn case_run(case: Case) -> CaseRun {
-    let s = setup(case);
-    let (up, down) = rayon::join(
-        || s.sweep.run(&s.device, s.accel_rms_g, |_| {}).unwrap(),
-        || s.sweep.run_down(&s.device, s.accel_rms_g, |_| {}).unwrap(),
-    );
-    let branch = continuation(&s).unwrap();
-    CaseRun {
-        setup: s,
-        up,
-        down,
-        branch,
-        probe: None,
-        basins: None,
-        attractors: Vec::new(),
-        continuation_s: 0.0,
-        ghost: Vec::new(),
-        ghost_ring_up: Vec::new(),
-        up_half_blocks: None,
-    }
+    sweeps_and_branch(&setup(case), &|| {}).unwrap()
 }
 
 /// Figure 13 (prototype 2, 0.31 g, 2 Hz steps refined to 0.1 Hz brackets, whose blocks of

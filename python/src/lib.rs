@@ -18,7 +18,7 @@ use endstop::study::ensemble::{run_ensemble, EnsembleSpec};
 use endstop::study::record::{simulate_record, RecordSpec, RecordSummary};
 use endstop::study::steady::{steady_config, Measurement};
 use endstop::study::stepped::{linspace_step, Transition};
-use endstop::study::sweep::{SweepReport, SweepSettings};
+use endstop::study::sweep::{self, SweepReport, SweepSettings};
 use numpy::{PyArray1, PyReadonlyArray1};
 use pyo3::create_exception;
 use pyo3::exceptions::{PyRuntimeError, PyValueError};
@@ -442,22 +442,18 @@ fn up_sweep<'py>(
     sweep_dict(py, &report)
 }
 
-/// Checks the arguments shared by the frequency studies.
+/// Checks the arguments shared by the frequency studies ([`sweep::check_range`]), naming
+/// them as this module does.
 fn check_range(accel_rms_g: f64, start_hz: f64, stop_hz: f64, step_hz: f64) -> PyResult<()> {
-    if !(start_hz.is_finite() && stop_hz.is_finite() && start_hz > 0.0 && stop_hz > start_hz) {
-        return Err(arg_err(
-            "start_hz and stop_hz must be positive with stop_hz > start_hz",
-        ));
-    }
-    if !(step_hz > 0.0 && step_hz <= stop_hz - start_hz) {
-        return Err(arg_err(
-            "step_hz must be positive and not larger than the range",
-        ));
-    }
-    if !(accel_rms_g.is_finite() && accel_rms_g > 0.0) {
-        return Err(arg_err("accel_rms_g must be a finite positive number"));
-    }
-    Ok(())
+    sweep::check_range(accel_rms_g, start_hz, stop_hz, step_hz).map_err(|e| {
+        arg_err(match e {
+            sweep::RangeError::Ends => {
+                "start_hz and stop_hz must be positive with stop_hz > start_hz"
+            }
+            sweep::RangeError::Step => "step_hz must be positive and not larger than the range",
+            sweep::RangeError::Accel => "accel_rms_g must be a finite positive number",
+        })
+    })
 }
 
 /// The sweep settings of a range after its arguments are checked: the library's

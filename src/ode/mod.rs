@@ -168,6 +168,24 @@ impl<const N: usize> Options<N> {
     pub fn min_step(&self, t: f64) -> f64 {
         self.h_min.max(MIN_STEP_REL * t.abs())
     }
+
+    /// The same options for the system augmented to `M` components (variational equations,
+    /// energy accumulators): `atol` gives the added components' tolerances, and its first `N`
+    /// entries are replaced by this system's.
+    pub fn augmented<const M: usize>(&self, mut atol: SVector<f64, M>) -> Options<M> {
+        for i in 0..N.min(M) {
+            atol[i] = self.atol[i];
+        }
+        Options {
+            rtol: self.rtol,
+            atol,
+            h_max: self.h_max,
+            h_min: self.h_min,
+            h_init: self.h_init,
+            max_steps: self.max_steps,
+            event_time_tol: self.event_time_tol,
+        }
+    }
 }
 
 /// The smallest step relative to |t| (16 machine epsilons, see [`Options::min_step`]).

@@ -579,15 +579,14 @@ pub fn ghost_study(
         .collect()
 }
 
-/// Runs one case: both sweeps, the continuation, the probe and the basins.
-pub fn run_case(
+/// The core of a case: both sweeps (in parallel) and the continuation, with nothing else
+/// filled in (no probe, basins or ghost study).
+pub fn sweeps_and_branch(
     setup: &Setup,
-    basin_cells: usize,
     on_step: &(dyn Fn() + Sync),
 ) -> Result<CaseRun, ResponseError> {
     let key = setup.case.key();
     let serr = |source| ResponseError::Sweep { case: key, source };
-    let oerr = |source| ResponseError::Orbit { case: key, source };
     let (up, down) = rayon::join(
         || {
             setup
@@ -602,15 +601,9 @@ pub fn run_case(
     );
     let (up, down) = (up.map_err(serr)?, down.map_err(serr)?);
     let t0 = std::time::Instant::now();
-    let branch = continuation(setup).map_err(oerr)?;
-    let continuation_s = t0.elapsed().as_secs_f64();
-    let h = Harvester::new(
-        &setup.device,
-        Sine::from_rms_g(setup.accel_rms_g, setup.continuation.start),
-    );
-    let shooter = Shooter::new(&h, setup.continuation.shooting);
-    let mut stats = Stats::default();
-    let mut run = CaseRun {
+    let branch =
+        continuation(setup).map_err(|source| ResponseError::Orbit { case: key, source })?;
+    Ok(CaseRun {
         setup: setup.clone(),
         up,
         down,
@@ -618,11 +611,29 @@ pub fn run_case(
         probe: None,
         basins: None,
         attractors: Vec::new(),
-        continuation_s,
+        continuation_s: t0.elapsed().as_secs_f64(),
         ghost: Vec::new(),
         ghost_ring_up: Vec::new(),
         up_half_blocks: None,
-    };
+    })
+}
+
+/// Runs one case: both sweeps, the continuation, the probe and the basins.
+pub fn run_case(
+    setup: &Setup,
+    basin_cells: usize,
+    on_step: &(dyn Fn() + Sync),
+) -> Result<CaseRun, ResponseError> {
+    let key = setup.case.key();
+    let serr = |source| ResponseError::Sweep { case: key, source };
+    let oerr = |source| ResponseError::Orbit { case: key, source };
+    let mut run = sweeps_and_branch(setup, on_step)?;
+    let h = Harvester::new(
+        &setup.device,
+        Sine::from_rms_g(setup.accel_rms_g, setup.continuation.start),
+    );
+    let shooter = Shooter::new(&h, setup.continuation.shooting);
+    let mut stats = Stats::default();
     let cfg = &setup.sweep.cfg;
     run.ghost = ghost_study(setup, &run.branch, cfg, &GHOST_OFFSETS_HZ).map_err(oerr)?;
     if let Some(fold) = run.fold_hz() {

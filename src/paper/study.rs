@@ -391,19 +391,19 @@ pub fn evaluate_quantitative(
     variant: &Variant,
     claims: &Claims,
 ) -> Result<Vec<Evaluation>, StudyError> {
-    let all = match prototype {
-        Prototype::P1 => {
-            return Ok(evaluate(prototype, variant, claims)?
-                .into_iter()
-                .filter(|e| e.kind == Kind::Quantitative)
-                .collect())
-        }
-        Prototype::P2 => &P2_QUANTITIES[3..],
-    };
-    all.iter()
-        .zip(p2_table3(variant))
-        .map(|(qty, outcome)| normalise(qty, outcome, claims))
-        .collect()
+    match prototype {
+        Prototype::P1 => Ok(evaluate(prototype, variant, claims)?
+            .into_iter()
+            .filter(|e| e.kind == Kind::Quantitative)
+            .collect()),
+        // The analytic quantities (no substitute: they always exist), in their order.
+        Prototype::P2 => P2_QUANTITIES
+            .iter()
+            .filter(|q| q.substitute.is_none())
+            .zip(p2_table3(variant))
+            .map(|(qty, outcome)| normalise(qty, outcome, claims))
+            .collect(),
+    }
 }
 
 /// Every quantity of a prototype at a variant, normalised by the claims file.

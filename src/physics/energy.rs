@@ -188,19 +188,7 @@ impl<E: Excitation> EnergyAudit<E> {
     pub fn solver_options(&self, rtol: f64) -> Options<AUDIT_DIM> {
         let base = self.0.solver_options(rtol);
         let e_scale = 0.5 * self.0.km * self.0.xmax * self.0.xmax;
-        let mut atol = AuditState::repeat(e_scale * rtol);
-        for i in 0..4 {
-            atol[i] = base.atol[i];
-        }
-        Options {
-            rtol,
-            atol,
-            h_max: base.h_max,
-            h_min: base.h_min,
-            h_init: base.h_init,
-            max_steps: base.max_steps,
-            event_time_tol: base.event_time_tol,
-        }
+        base.augmented(AuditState::repeat(e_scale * rtol))
     }
 
     /// Every term of the energy balance between the rest state and `y` (in `mode`).

@@ -43,7 +43,7 @@ use thiserror::Error;
 
 use crate::drive::Sine;
 use crate::num::roots::{illinois, RootOptions, Sample};
-use crate::ode::{Dopri5, HybridSystem, Options, SolverError, Stats, Step};
+use crate::ode::{Dopri5, HybridSystem, SolverError, Stats, Step};
 use crate::physics::contact::{Mode, Side};
 use crate::physics::harvester::{Harvester, State};
 
@@ -515,7 +515,6 @@ impl<'a> Shooter<'a> {
         let mut atol = Aug::zeros();
         let mut z0 = Aug::zeros();
         for i in 0..4 {
-            atol[i] = base.atol[i];
             z0[i] = y[i];
             for j in 0..4 {
                 // Phi_ij is of order s_i / s_j.
@@ -524,15 +523,7 @@ impl<'a> Shooter<'a> {
             z0[4 + 5 * i] = 1.0;
             atol[20 + i] = self.cfg.rtol * self.scales[i] / p_ref;
         }
-        let opts = Options {
-            rtol: base.rtol,
-            atol,
-            h_max: base.h_max,
-            h_min: base.h_min,
-            h_init: base.h_init,
-            max_steps: base.max_steps,
-            event_time_tol: base.event_time_tol,
-        };
+        let opts = base.augmented(atol);
         let mut ode = Dopri5::new(0.0, z0, mode_of(&model, &y), opts);
         let period = forcing.period_s();
         ode.integrate(&sys, period, |_, _| {})?;

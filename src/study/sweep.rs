@@ -191,6 +191,40 @@ pub struct SweepSettings {
 /// a jump claim needs.
 pub const REFINE_TOL_HZ: f64 = 0.1;
 
+/// What makes a frequency range and drive unusable for a sweep or a continuation (callers
+/// word it with their own option names).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
+pub enum RangeError {
+    /// The ends are not finite and positive with stop > start.
+    #[error("the range must be positive and finite, with its stop above its start")]
+    Ends,
+    /// The step is not positive or exceeds the range.
+    #[error("the step must be positive and not larger than the range")]
+    Step,
+    /// The acceleration is not finite and positive.
+    #[error("the acceleration must be a finite positive number")]
+    Accel,
+}
+
+/// Checks a frequency range `start_hz..stop_hz` with steps of `step_hz` at `accel_rms_g`.
+pub fn check_range(
+    accel_rms_g: f64,
+    start_hz: f64,
+    stop_hz: f64,
+    step_hz: f64,
+) -> Result<(), RangeError> {
+    if !(start_hz.is_finite() && stop_hz.is_finite() && start_hz > 0.0 && stop_hz > start_hz) {
+        return Err(RangeError::Ends);
+    }
+    if !(step_hz > 0.0 && step_hz <= stop_hz - start_hz) {
+        return Err(RangeError::Step);
+    }
+    if !(accel_rms_g.is_finite() && accel_rms_g > 0.0) {
+        return Err(RangeError::Accel);
+    }
+    Ok(())
+}
+
 impl SweepSettings {
     /// The sweep of the grid `freqs_hz` (up or down) for any device, without extension: the
     /// steady-state criterion of sweeps that must leave a branch at its fold
@@ -523,6 +557,24 @@ mod tests {
     use crate::device::StiffnessModel;
     use crate::study::steady::{steady_config, steady_state};
     use crate::study::stepped::linspace_step;
+
+    #[test]
+    fn a_range_is_refused_with_the_reason_named() {
+        assert_eq!(check_range(0.3, 500.0, 700.0, 2.0), Ok(()));
+        assert_eq!(check_range(0.3, 700.0, 500.0, 2.0), Err(RangeError::Ends));
+        assert_eq!(check_range(0.3, 0.0, 500.0, 2.0), Err(RangeError::Ends));
+        assert_eq!(
+            check_range(0.3, 500.0, f64::NAN, 2.0),
+            Err(RangeError::Ends)
+        );
+        assert_eq!(check_range(0.3, 500.0, 700.0, 0.0), Err(RangeError::Step));
+        assert_eq!(check_range(0.3, 500.0, 700.0, 300.0), Err(RangeError::Step));
+        assert_eq!(check_range(0.0, 500.0, 700.0, 2.0), Err(RangeError::Accel));
+        assert_eq!(
+            check_range(f64::INFINITY, 500.0, 700.0, 2.0),
+            Err(RangeError::Accel)
+        );
+    }
 
     /// The integrator counters of a report count every trial of a refinement exactly once:
     /// here the onset bisection is redone by hand, trial by trial, from the same states, and
