@@ -417,7 +417,7 @@ fn write_provenance() -> Result<()> {
 }
 
 /// The study is not one of `reproduce`'s jobs: until `just study` has run, its chapter
-/// includes a note in place of its numbers and heat map.
+/// includes a note in place of its numbers, heat map and Pareto plots.
 fn study_placeholder() -> Result<()> {
     let dir = common::book_generated_root().join(common::jobs::STUDY.name);
     if !dir.join("numbers.md").exists() {
@@ -425,8 +425,11 @@ fn study_placeholder() -> Result<()> {
                     `just study` (or `cargo run --release --bin study`) and rebuild the book.*\n";
         common::write_atomic(&dir.join("numbers.md"), note.as_bytes())?;
     }
-    if !dir.join("study.figure.md").exists() {
-        common::write_atomic(&dir.join("study.figure.md"), b"*(no heat map)*\n")?;
+    for stem in ["study", "study_pareto_p1", "study_pareto_p2"] {
+        let path = dir.join(format!("{stem}.figure.md"));
+        if !path.exists() {
+            common::write_atomic(&path, b"*(no plot: the study has not run)*\n")?;
+        }
     }
     Ok(())
 }

@@ -1,14 +1,24 @@
 //! The study's fast claim evaluators at the published set against the scorecard's paths on
-//! the same claims: the stepped up-sweeps of Figure 8 (kink and jumps), Figure 13's yes/no
-//! claims and Table 3.
+//! the same claims: the stepped up-sweeps of Figure 8 (kink and jumps), Figure 9's amplitude
+//! sweeps (onsets and powers), Figure 13's yes/no claims, Table 3, and the ensemble claims of
+//! Figures 12, 14 and 15 (the same protocol as the figures').
 
 use endstop::device::Device;
 use endstop::paper::claims::{Claims, Kind};
+use endstop::paper::ensembles::{
+    protocol_spec, run_levels, LevelCase, P1_BAND_HZ, P1_NPERSEG, P2_BAND_HZ, P2_NPERSEG,
+};
 use endstop::paper::fig08::{self, Fig8Curve};
+use endstop::paper::fig09::{self, Fig9Bias};
+use endstop::paper::fig12::FIG12_LEVELS;
+use endstop::paper::fig15::{self, FIG15_LEVELS};
 use endstop::paper::sensitivity::Variant;
-use endstop::paper::setups::P1_BIAS_V;
-use endstop::paper::study::{evaluate, evaluate_quantitative, Evaluation, Outcome, Prototype};
+use endstop::paper::setups::{prototype2_setup, P1_BIAS_V, P2_BIAS_V};
+use endstop::paper::study::{
+    evaluate, evaluate_quantitative, study_ensemble_spec, Evaluation, Outcome, Prototype, Scope,
+};
 use endstop::paper::{fig13, table3};
+use endstop::physics::two_port::linear_widths;
 use rayon::prelude::*;
 
 fn device(text: &str) -> Device {
@@ -42,7 +52,7 @@ fn find<'a>(e: &'a [Evaluation], claim: &str, quantity: &str) -> &'a Evaluation 
 fn prototype1_fast_path_matches_the_figure_8_sweeps_and_table_3() {
     let claims = Claims::bundled().unwrap();
     let p1 = device(include_str!("../data/prototype1.toml"));
-    let fast = evaluate(Prototype::P1, &published(&p1), &claims).unwrap();
+    let fast = evaluate(Prototype::P1, &published(&p1), &claims, Scope::default()).unwrap();
     let base = p1.with_bias(P1_BIAS_V);
     let settings = fig08::sweep_settings(&base);
     let curves = [
@@ -84,6 +94,18 @@ fn prototype1_fast_path_matches_the_figure_8_sweeps_and_table_3() {
             end.value()
         );
     }
+    // The order of the jumps (F8-e): Figure 8's rule on the sweeps (every Hertz sweep jumps,
+    // and the jumps fall as b_im grows) against the fast path's (every upper fold drops the
+    // power by a jump's drop, and the folds fall).
+    let jump = |i: usize| reports[i].jump.map(|t| t.value());
+    let sweep_order = match (jump(1), jump(0), jump(2)) {
+        (Some(j0), Some(j15), Some(j10)) => j0 > j15 && j15 > j10,
+        _ => false,
+    };
+    assert_eq!(
+        find(&fast, "F8-e", "jump_order_by_bim").value,
+        if sweep_order { 1.0 } else { 0.0 }
+    );
     let t3 = table3::claims(&table3::run(&p1, &p1), &claims);
     for v in t3.iter().filter(|v| v.claim == "T3-a") {
         let e = find(&fast, &v.claim, &v.quantity);
@@ -98,7 +120,7 @@ fn prototype1_fast_path_matches_the_figure_8_sweeps_and_table_3() {
 fn prototype2_fast_path_matches_figure_13_and_table_3() {
     let claims = Claims::bundled().unwrap();
     let p2 = device(include_str!("../data/prototype2.toml"));
-    let fast = evaluate(Prototype::P2, &published(&p2), &claims).unwrap();
+    let fast = evaluate(Prototype::P2, &published(&p2), &claims, Scope::default()).unwrap();
     let slow = fig13::claims(&fig13::run(&p2, &|| {}).unwrap(), &claims).unwrap();
     for v in &slow {
         let e = find(&fast, &v.claim, &v.quantity);
@@ -111,10 +133,116 @@ fn prototype2_fast_path_matches_figure_13_and_table_3() {
     }
     assert!(fast.iter().all(|e| matches!(e.outcome, Outcome::Value(_))));
     // The calibration's objective (no continuations) is exactly the quantitative part.
-    let objective = evaluate_quantitative(Prototype::P2, &published(&p2), &claims).unwrap();
+    let objective =
+        evaluate_quantitative(Prototype::P2, &published(&p2), &claims, Scope::default()).unwrap();
     let quantitative: Vec<_> = fast
         .into_iter()
         .filter(|e| e.kind == Kind::Quantitative)
         .collect();
     assert_eq!(objective, quantitative);
+}
+
+/// Figure 9 at 1220 Hz: the amplitude continuation's first grazing point is the amplitude
+/// sweep's refined onset and its orbit at 5.5 g has the sweep's power.
+///
+/// Tolerances: the onset is the same event (first contact) located two ways, the sweep's
+/// bracket to its half-width, the continuation's to 1e-6 g; we allow the half-width plus the
+/// sweep's 0.005 g refinement tolerance. The power of the periodic orbit and of the sweep's
+/// steady state must agree within Figure 9's own convergence limit
+/// ([`fig09::CONV_RMS_REL`]).
+#[test]
+fn prototype1_fast_path_matches_the_figure_9_sweeps() {
+    let claims = Claims::bundled().unwrap();
+    let p1 = device(include_str!("../data/prototype1.toml"));
+    let fast = evaluate(Prototype::P1, &published(&p1), &claims, Scope::default()).unwrap();
+    let protocol = fig09::Protocol::new(&p1);
+    let curves = fig09::run_biases(&p1, &protocol.settings, &|| {}).unwrap();
+    for c in &curves {
+        let onset = c.report.onset.expect("every bias impacts by 8 g");
+        let e = find(&fast, "F9-a", c.bias.onset_quantity());
+        assert!(
+            (e.value - onset.value()).abs() <= onset.half_width() + 0.005,
+            "{:?}: grazing {} g vs onset {} g",
+            c.bias,
+            e.value,
+            onset.value()
+        );
+    }
+    for (bias, quantity) in [
+        (Fig9Bias::V20, "p_sat_20v_nw"),
+        (Fig9Bias::V40, "p_sat_40v_nw"),
+    ] {
+        let curve = curves.iter().find(|c| c.bias == bias).expect("every bias");
+        let sweep = curve.report.at_stop().p1_w * 1e9;
+        let e = find(&fast, "F9-b", quantity);
+        assert!(
+            (e.value / sweep - 1.0).abs() <= fig09::CONV_RMS_REL,
+            "{quantity}: orbit {} nW vs sweep {sweep} nW",
+            e.value
+        );
+    }
+}
+
+/// The study's ensembles are the figures' ensembles: at scale 1 and the figures' 32 records
+/// the settings are Figure 12's and Figure 15's (less Figure 15's second segmenting, which no
+/// study quantity reads), and a drive scale multiplies the level by its square and nothing
+/// else (the streams stay the stated level's). With 4 records the study's prototype 2
+/// quantities are Figure 15's and Figure 14's estimators on the same records: equal to
+/// rounding.
+#[test]
+fn the_study_ensembles_are_the_figures_protocol() {
+    let p1 = device(include_str!("../data/prototype1.toml")).with_bias(P1_BIAS_V);
+    for sa in FIG12_LEVELS {
+        let fig = protocol_spec(&p1, sa, P1_NPERSEG, P1_BAND_HZ, 32, false);
+        assert_eq!(
+            study_ensemble_spec(&p1, sa, (P1_NPERSEG, P1_BAND_HZ), 32, 1.0),
+            fig
+        );
+        let mut scaled = study_ensemble_spec(&p1, sa, (P1_NPERSEG, P1_BAND_HZ), 32, 1.2);
+        assert!((scaled.record.noise.psd_g2_per_hz / (1.44 * sa) - 1.0).abs() < 1e-15);
+        scaled.record.noise.psd_g2_per_hz = sa;
+        assert_eq!(scaled, fig);
+    }
+    let claims = Claims::bundled().unwrap();
+    let p2 = device(include_str!("../data/prototype2.toml"));
+    let dev = prototype2_setup(&p2);
+    assert_eq!(dev, p2.with_bias(P2_BIAS_V));
+    const R: usize = 4;
+    let cases = FIG15_LEVELS
+        .iter()
+        .enumerate()
+        .map(|(index, &sa)| LevelCase {
+            set: "published".into(),
+            index,
+            device: dev.clone(),
+            spec: protocol_spec(&dev, sa, P2_NPERSEG, P2_BAND_HZ, R, true),
+        })
+        .collect();
+    let run = fig15::Run {
+        levels: run_levels(cases, &|| {}).unwrap(),
+        linear: linear_widths(&dev, P2_BAND_HZ.0, P2_BAND_HZ.1),
+        device: dev.clone(),
+    };
+    let f = fig15::findings(&run, &claims);
+    let scope = Scope {
+        ensemble_records: Some(R),
+    };
+    let fast = evaluate_quantitative(Prototype::P2, &published(&p2), &claims, scope).unwrap();
+    let all = evaluate(Prototype::P2, &published(&p2), &claims, scope).unwrap();
+    assert_eq!(find(&fast, "F15-a", "peak_0p34e-3_hz").value, f.peak_hz);
+    assert_eq!(
+        find(&fast, "F15-a", "bw_0p34e-3_hz").value,
+        f.widths[fig15::L034].estimate
+    );
+    assert_eq!(
+        find(&fast, "F15-b", "bw_ratio_0p55e-3_over_0p34e-3").value,
+        f.ratio.0
+    );
+    let widening = find(&all, "F15-c", "widening_up_1p69e-3").value;
+    assert_eq!(widening, if f.widening_up { 1.0 } else { 0.0 });
+    let eff = run.levels[fig15::L169].ens.efficiency.mean * 100.0;
+    let e = find(&fast, "F14-b", "eff_1p69e-3_pct").value;
+    // Mean of the records' efficiencies against the efficiency of the mean power: the same
+    // sum in another order.
+    assert!((e / eff - 1.0).abs() < 1e-12, "{e} vs {eff}");
 }

@@ -5,7 +5,7 @@ use endstop::device::Device;
 use endstop::num::sensitivity::Bootstrap;
 use endstop::paper::claims::Claims;
 use endstop::paper::sensitivity::RangesFile;
-use endstop::paper::study::{sobol, Prototype, SobolDesign, SobolRun};
+use endstop::paper::study::{sobol, Prototype, Scope, SobolDesign, SobolRun};
 
 fn run(threads: usize) -> SobolRun {
     let claims = Claims::bundled().unwrap();
@@ -19,6 +19,7 @@ fn run(threads: usize) -> SobolRun {
             level: 0.95,
             seed: 13,
         },
+        scope: Scope::default(),
     };
     rayon::ThreadPoolBuilder::new()
         .num_threads(threads)

@@ -102,13 +102,22 @@ pub struct AmplitudeCurve {
     pub report: AmplitudeReport,
 }
 
+/// Figure 9's amplitude range (g rms): from 0.5 g to the 5.5 g of the saturated powers (F9-b).
+pub const FIG9_RANGE_G: (f64, f64) = (0.5, 5.5);
+
+/// Figure 9's amplitude step (g rms).
+pub const FIG9_STEP_G: f64 = 0.1;
+
+/// How far an amplitude sweep is extended to find an onset beyond 5.5 g (g rms).
+pub const FIG9_EXTEND_G: f64 = 8.0;
+
 /// Figure 9: prototype 1 at its measured resonance 1220 Hz, 0.5-5.5 g rms in 0.1 g steps
 /// (extended to 8 g if needed), [`steady_config`] at 1220 Hz, onset brackets of 0.005 g.
 pub fn amplitude_settings(device: &Device) -> AmplitudeSettings {
     AmplitudeSettings {
         freq_hz: P1_RESONANCE_HZ,
-        accels_rms_g: stepped::linspace_step(0.5, 5.5, 0.1),
-        extend_to_g: 8.0,
+        accels_rms_g: stepped::linspace_step(FIG9_RANGE_G.0, FIG9_RANGE_G.1, FIG9_STEP_G),
+        extend_to_g: FIG9_EXTEND_G,
         cfg: steady_config(device, P1_RESONANCE_HZ),
         refine_tol_g: 0.005,
     }
