@@ -232,7 +232,8 @@ fn write_pareto(exp: &Experiment, runs: &[SobolRun], paretos: &[Pareto]) -> Resu
         let label = |q: &study::Quantity| format!("{} {}", q.claim, q.quantity);
         let plot = LinePlot::new(
             &format!(
-                "Prototype {}: the most conflicting pair of claims over the design",
+                "Prototype {}: the most conflicting pair of claims over the design \
+                 (deviations above 10 on the edge)",
                 &p.prototype.key()[1..]
             ),
             &format!("|deviation| / tolerance, {}", label(&p.pair.0)),

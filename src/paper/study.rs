@@ -541,24 +541,32 @@ fn ratio(a: Outcome, b: Outcome) -> Outcome {
     }
 }
 
-/// Figure 12 by `records` records at 7.4e-3 and 2.85e-2 g²/Hz: the two half-power widths and
-/// their ratio.
-fn p1_fig12(variant: &Variant, records: usize) -> [Outcome; 3] {
-    let device = variant.device.with_bias(P1_BIAS_V);
-    let cases: Vec<EnsembleCase> = [FIG12_LEVELS[fig12::LOW], FIG12_LEVELS[fig12::HIGH]]
+/// The study's ensembles of `device` at the stated `levels` ([`study_ensemble_spec`]), in
+/// order; `None` if any failed.
+fn study_ensembles(
+    device: &Device,
+    levels: &[f64],
+    welch: (usize, (f64, f64)),
+    records: usize,
+    accel_scale: f64,
+) -> Option<Vec<Ensemble>> {
+    let cases: Vec<EnsembleCase> = levels
         .iter()
         .map(|&sa| EnsembleCase {
             device: device.clone(),
-            spec: study_ensemble_spec(
-                &device,
-                sa,
-                (P1_NPERSEG, P1_BAND_HZ),
-                records,
-                variant.accel_scale,
-            ),
+            spec: study_ensemble_spec(device, sa, welch, records, accel_scale),
         })
         .collect();
-    let Ok(ens) = run_ensembles(&cases, || {}) else {
+    run_ensembles(&cases, || {}).ok()
+}
+
+/// Figure 12 by `records` records at 7.4e-3 and 2.85e-2 g²/Hz: the two half-power widths and
+/// their ratio.
+fn p1_fig12(variant: &Variant, records: usize) -> [Outcome; 3] {
+    let levels = [FIG12_LEVELS[fig12::LOW], FIG12_LEVELS[fig12::HIGH]];
+    let device = variant.device.with_bias(P1_BIAS_V);
+    let welch = (P1_NPERSEG, P1_BAND_HZ);
+    let Some(ens) = study_ensembles(&device, &levels, welch, records, variant.accel_scale) else {
         return [Outcome::Failed; 3];
     };
     let (lo, hi) = (mean_width(&ens[0]), mean_width(&ens[1]));
@@ -571,20 +579,9 @@ fn p1_fig12(variant: &Variant, records: usize) -> [Outcome; 3] {
 /// towards higher frequencies at 1.69e-3 ([`fig15::edge_shifts`]).
 fn p2_ensembles(variant: &Variant, records: usize) -> [Outcome; 5] {
     let device = variant.device.with_bias(P2_BIAS_V);
-    let cases: Vec<EnsembleCase> = FIG15_LEVELS
-        .iter()
-        .map(|&sa| EnsembleCase {
-            device: device.clone(),
-            spec: study_ensemble_spec(
-                &device,
-                sa,
-                (P2_NPERSEG, P2_BAND_HZ),
-                records,
-                variant.accel_scale,
-            ),
-        })
-        .collect();
-    let Ok(ens) = run_ensembles(&cases, || {}) else {
+    let welch = (P2_NPERSEG, P2_BAND_HZ);
+    let Some(ens) = study_ensembles(&device, &FIG15_LEVELS, welch, records, variant.accel_scale)
+    else {
         return [Outcome::Failed; 5];
     };
     let (e34, e55, e169) = (&ens[fig15::L034], &ens[fig15::L055], &ens[fig15::L169]);
