@@ -4,7 +4,7 @@
 
 use crate::device::Device;
 use crate::ode::SolverError;
-use crate::paper::claims::{bool_value, ClaimValue, Claims, ClaimsError, Value};
+use crate::paper::claims::{bool_value, ClaimValue, Claims, ClaimsError, ToleranceClass, Value};
 use crate::paper::measured::P1_RESONANCE_HZ;
 use crate::paper::setups::{prototype1_setup, ParamSet};
 use crate::study::amplitude::{
@@ -257,6 +257,16 @@ pub fn claims(run: &Run, claims: &Claims) -> Result<Vec<Value>, ClaimsError> {
     claims_under(run, DEFAULT_READING, claims)
 }
 
+/// Claim F9-a's "the same for all": the spread of the onsets (g) is within `class`'s tolerance
+/// at their midrange (the claims file's `amplitude_threshold` class); also returns that
+/// tolerance (g).
+pub fn onsets_agree(onsets_g: &[f64], class: &ToleranceClass) -> (bool, f64) {
+    let hi = onsets_g.iter().copied().fold(f64::MIN, f64::max);
+    let lo = onsets_g.iter().copied().fold(f64::MAX, f64::min);
+    let tol = class.tolerance(0.5 * (hi + lo));
+    (hi - lo <= tol, tol)
+}
+
 /// Figure 9's claim values, both sets, under a power reading.
 ///
 /// * F9-a: refined onsets at 20, 30, 40 V (found beyond 5.5 g by the extension if needed;
@@ -277,11 +287,9 @@ pub fn claims_under(
             .collect();
         let same = match onsets.iter().copied().collect::<Option<Vec<f64>>>() {
             Some(v) => {
-                let hi = v.iter().copied().fold(f64::MIN, f64::max);
-                let lo = v.iter().copied().fold(f64::MAX, f64::min);
-                let tol = class.tolerance(0.5 * (hi + lo));
+                let (same, tol) = onsets_agree(&v, class);
                 (
-                    hi - lo <= tol,
+                    same,
                     format!("spread of the three onsets vs {tol} g (amplitude-threshold class)"),
                 )
             }

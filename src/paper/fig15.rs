@@ -49,6 +49,15 @@ pub struct Run {
 /// Runs Figure 15 for prototype 2 (the parameter file's device), calling `progress` after each
 /// record.
 pub fn run(prototype2: &Device, progress: &(dyn Fn() + Sync)) -> Result<Run, BroadbandError> {
+    run_records(prototype2, FIG15_REALISATIONS, progress)
+}
+
+/// [`run`] with `records` records per level (the first of the figure's streams).
+pub fn run_records(
+    prototype2: &Device,
+    records: usize,
+    progress: &(dyn Fn() + Sync),
+) -> Result<Run, BroadbandError> {
     let dev = prototype2_setup(prototype2);
     let cases = FIG15_LEVELS
         .iter()
@@ -57,7 +66,7 @@ pub fn run(prototype2: &Device, progress: &(dyn Fn() + Sync)) -> Result<Run, Bro
             set: "published".to_string(),
             index,
             device: dev.clone(),
-            spec: level_spec(&dev, sa),
+            spec: level_spec(&dev, sa, records),
         })
         .collect();
     Ok(Run {
@@ -71,9 +80,9 @@ pub fn run(prototype2: &Device, progress: &(dyn Fn() + Sync)) -> Result<Run, Bro
 /// [`FIG15_LEVELS`] (a test checks that the levels agree).
 pub const IN_FIG14: [usize; 3] = [5, 6, 8];
 
-/// The ensemble of one of Figure 15's levels.
-fn level_spec(dev: &Device, sa: f64) -> crate::study::ensemble::EnsembleSpec {
-    protocol_spec(dev, sa, P2_NPERSEG, P2_BAND_HZ, FIG15_REALISATIONS, true)
+/// The ensemble of one of Figure 15's levels with `records` records.
+fn level_spec(dev: &Device, sa: f64, records: usize) -> crate::study::ensemble::EnsembleSpec {
+    protocol_spec(dev, sa, P2_NPERSEG, P2_BAND_HZ, records, true)
 }
 
 /// Figure 15 from Figure 14's run, whose published ensembles at [`IN_FIG14`] are Figure 15's
@@ -91,7 +100,8 @@ pub fn from_fig14(fig14: &crate::paper::fig14::Run) -> Run {
         .map(|(index, &j)| {
             let l = &fig14.levels[j];
             assert!(
-                l.set == "published" && l.ens.spec == level_spec(&dev, FIG15_LEVELS[index]),
+                l.set == "published"
+                    && l.ens.spec == level_spec(&dev, FIG15_LEVELS[index], FIG15_REALISATIONS),
                 "Figure 14's ensemble {j} is not Figure 15's level {index}"
             );
             Level { index, ..l.clone() }
@@ -112,6 +122,13 @@ pub fn edge_shifts(low: &Ensemble, high: &Ensemble) -> Option<(f64, f64)> {
     let a = low.mean_widths.half_power?;
     let b = high.mean_widths.half_power?;
     Some((b.f_hi_hz - a.f_hi_hz, a.f_lo_hz - b.f_lo_hz))
+}
+
+/// Whether the response widens towards higher frequencies from `low` to `high` (claim
+/// F15-c): the upper half-power edge moves up, and by more than the lower edge moves down
+/// ([`edge_shifts`]); `None` if either band is undetermined.
+pub fn widens_up(low: &Ensemble, high: &Ensemble) -> Option<bool> {
+    edge_shifts(low, high).map(|(up, down)| up > down && up > 0.0)
 }
 
 /// What Figure 15 shows.
@@ -179,7 +196,7 @@ pub fn findings(run: &Run, claims: &Claims) -> Findings {
         widths,
         upper_shift_hz: up,
         lower_shift_hz: down,
-        widening_up: up > down && up > 0.0,
+        widening_up: widens_up(e34, e169).unwrap_or(false),
         single_ratio: ratio_spread(&w55, &w34),
         single_ratio_169: ratio_spread(&e169.single_bw3db_hz(), &w34),
         single_ratio_half_amplitude: ratio_spread(&ha.single(e55), &ha.single(e34)),

@@ -14,7 +14,7 @@ use crate::paper::setups::{prototype1_setup, ParamSet, FIG13_BIAS_V};
 use crate::paper::{fig08, fig13};
 use crate::physics::harvester::Harvester;
 use crate::study::basins::{basins, Attractor, BasinGrid, BasinSettings, Basins};
-use crate::study::continuation::{branch_from_rest, Branch, ContinuationSettings, EventKind};
+use crate::study::continuation::{branch_from_rest, Branch, ContinuationSettings};
 use crate::study::orbit::{Forcing, Orbit, OrbitError, Shooter};
 use crate::study::steady::{steady_config, SteadyConfig, FOLD_BLOCK_PERIODS};
 use crate::study::sweep::{DownSweepReport, SweepReport, SweepSettings};
@@ -148,12 +148,7 @@ pub fn claim_folds(
                 case: "claim folds",
                 source,
             })?;
-            let fold = branch
-                .events_of(EventKind::Fold)
-                .filter(|e| !e.at_grazing && e.stable_before && !e.stable_after)
-                .map(|e| e.param)
-                .fold(None, |m: Option<f64>, p| Some(m.map_or(p, |m| m.max(p))));
-            Ok(fold.map(|f| (key.clone(), f)))
+            Ok(upper_fold_hz(&branch).map(|f| (key.clone(), f)))
         })
         .collect::<Result<Vec<_>, _>>()
         .map(|v| v.into_iter().flatten().collect())
@@ -316,13 +311,7 @@ impl CaseRun {
     pub fn grazing_hz(&self) -> Option<(f64, f64)> {
         // A corner of the branch at grazing counts as a grazing point (its fold event is
         // located at the grazing orbit).
-        let g: Vec<f64> = self
-            .branch
-            .events
-            .iter()
-            .filter(|e| e.kind == EventKind::Grazing || e.at_grazing)
-            .map(|e| e.param)
-            .collect();
+        let g: Vec<f64> = self.branch.grazing_events().map(|e| e.param).collect();
         if g.is_empty() {
             return None;
         }
@@ -336,9 +325,7 @@ impl CaseRun {
     pub fn lower_end_hz(&self) -> Option<f64> {
         let corner = self
             .branch
-            .events
-            .iter()
-            .filter(|e| e.kind == EventKind::Grazing || e.at_grazing)
+            .grazing_events()
             .filter(|e| !e.stable_before && e.stable_after)
             .map(|e| e.param)
             .fold(None, |m: Option<f64>, p| Some(m.map_or(p, |m| m.max(p))));
@@ -461,14 +448,9 @@ fn attractor_label(o: &Orbit) -> &'static str {
     }
 }
 
-/// The upper fold of a branch: the fold (away from grazing) at the highest frequency at which
-/// the branch loses stability.
+/// The upper fold of a branch ([`Branch::upper_fold`]): its frequency (Hz).
 pub fn upper_fold_hz(branch: &Branch) -> Option<f64> {
-    branch
-        .events_of(EventKind::Fold)
-        .filter(|e| !e.at_grazing && e.stable_before && !e.stable_after)
-        .map(|e| e.param)
-        .fold(None, |m: Option<f64>, p| Some(m.map_or(p, |m| m.max(p))))
+    branch.upper_fold().map(|e| e.param)
 }
 
 /// Offsets above the upper fold at which the stepped sweep's steady-state criterion is

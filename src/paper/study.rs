@@ -28,13 +28,13 @@ use crate::paper::claims::{Claim, Claims, ClaimsError, Kind, ToleranceClass};
 use crate::paper::ensembles::{
     protocol_spec, WidthReading, P1_BAND_HZ, P1_NPERSEG, P2_BAND_HZ, P2_NPERSEG,
 };
-use crate::paper::fig08;
 use crate::paper::fig09::{Fig9Bias, FIG9_EXTEND_G, FIG9_RANGE_G, FIG9_STEP_G};
 use crate::paper::fig12::{self, FIG12_LEVELS};
 use crate::paper::fig15::{self, FIG15_LEVELS};
 use crate::paper::measured::P1_RESONANCE_HZ;
 use crate::paper::sensitivity::{Factor, Ranges, RangesError, Variant};
 use crate::paper::setups::{FIG13_BIAS_V, P1_BIAS_V, P2_BIAS_V};
+use crate::paper::{fig08, fig09};
 use crate::physics::harvester::Harvester;
 use crate::physics::two_port::{efficiency, TwoPort, TABLE3_QM};
 use crate::study::continuation::{self, Branch, ContinuationSettings, EventKind};
@@ -208,6 +208,11 @@ impl Outcome {
         }
     }
 
+    /// A yes/no quantity: 1 for yes, 0 for no.
+    pub fn yes_no(yes: bool) -> Self {
+        Outcome::Value(if yes { 1.0 } else { 0.0 })
+    }
+
     /// Label for tables.
     pub fn label(self) -> &'static str {
         match self {
@@ -281,18 +286,15 @@ pub fn frequency_branch(
         .map_err(|source| StudyError::Orbit { what, source })
 }
 
-/// The upper branch's fold: the highest fold (away from grazing) at which the branch loses
-/// stability (the rule of [`crate::paper::response::CaseRun::fold_hz`]).
+/// The upper branch's fold ([`Branch::upper_fold`], the rule of
+/// [`crate::paper::response::CaseRun::fold_hz`]).
 pub fn upper_fold(branch: &Result<Branch, StudyError>) -> Outcome {
     let Ok(branch) = branch else {
         return Outcome::Failed;
     };
     branch
-        .events_of(EventKind::Fold)
-        .filter(|e| !e.at_grazing && e.stable_before && !e.stable_after)
-        .map(|e| e.param)
-        .fold(None, |m: Option<f64>, p| Some(m.map_or(p, |m| m.max(p))))
-        .map_or(Outcome::NoFold, Outcome::Value)
+        .upper_fold()
+        .map_or(Outcome::NoFold, |e| Outcome::Value(e.param))
 }
 
 /// The relative drop of the total power where an up-sweep leaves the branch at its upper
@@ -300,10 +302,7 @@ pub fn upper_fold(branch: &Result<Branch, StudyError>) -> Outcome {
 /// orbit of the branch beyond the fold at the fold's frequency (linear in the parameter
 /// between the branch's points); `None` without an upper fold or a stable landing orbit.
 pub fn upper_fold_drop(branch: &Branch) -> Option<f64> {
-    let fold = branch
-        .events_of(EventKind::Fold)
-        .filter(|e| !e.at_grazing && e.stable_before && !e.stable_after)
-        .max_by(|a, b| a.param.total_cmp(&b.param))?;
+    let fold = branch.upper_fold()?;
     let f = fold.param;
     let landing = branch.points[fold.after_point + 1..]
         .windows(2)
@@ -326,9 +325,8 @@ pub fn first_grazing(branch: &Result<Branch, StudyError>) -> Outcome {
         return Outcome::Failed;
     };
     branch
-        .events
-        .iter()
-        .find(|e| e.kind == EventKind::Grazing || e.at_grazing)
+        .grazing_events()
+        .next()
         .map_or(Outcome::NoGrazing, |e| Outcome::Value(e.param))
 }
 
@@ -407,12 +405,8 @@ fn p1_fig8(variant: &Variant) -> [Outcome; 6] {
             .is_some_and(|d| d > sweep::JUMP_MIN_DROP)
     };
     let order = match (folds[1], folds[0], folds[2]) {
-        (Outcome::Value(b0), Outcome::Value(b15), Outcome::Value(b10)) => Outcome::Value(
-            if b0 > b15 && b15 > b10 && jumps(0) && jumps(1) && jumps(2) {
-                1.0
-            } else {
-                0.0
-            },
+        (Outcome::Value(b0), Outcome::Value(b15), Outcome::Value(b10)) => Outcome::yes_no(
+            fig08::jumps_fall_as_bim_grows(b0, b15, b10) && jumps(0) && jumps(1) && jumps(2),
         ),
         (Outcome::Failed, _, _) | (_, Outcome::Failed, _) | (_, _, Outcome::Failed) => {
             Outcome::Failed
@@ -445,9 +439,10 @@ fn p1_fig9_bias(variant: &Variant, bias_v: f64) -> (Outcome, Outcome) {
     let Ok(branch) = continuation::branch_from_rest(&device, start, &settings, 200, |_| {}) else {
         return (Outcome::Failed, Outcome::Failed);
     };
-    let onset = first_grazing(&Ok(branch.clone()))
-        .value()
-        .map_or(Outcome::NoGrazing, |g| Outcome::Value(g / s));
+    let onset = branch
+        .grazing_events()
+        .next()
+        .map_or(Outcome::NoGrazing, |e| Outcome::Value(e.param / s));
     let h = Harvester::new(
         &device,
         Sine::from_rms_g(FIG9_RANGE_G.1 * s, P1_RESONANCE_HZ),
@@ -475,25 +470,10 @@ fn p1_fig9(variant: &Variant, class: &ToleranceClass) -> [Outcome; 7] {
     let same = if onsets.contains(&Outcome::Failed) {
         Outcome::Failed
     } else {
-        match onsets
-            .iter()
-            .map(|o| o.value())
-            .collect::<Option<Vec<f64>>>()
-        {
-            Some(v) => {
-                let hi = v.iter().copied().fold(f64::MIN, f64::max);
-                let lo = v.iter().copied().fold(f64::MAX, f64::min);
-                let tol = class.tolerance(0.5 * (hi + lo));
-                Outcome::Value(if hi - lo <= tol { 1.0 } else { 0.0 })
-            }
-            None => Outcome::Value(0.0),
-        }
+        let all: Option<Vec<f64>> = onsets.iter().map(|o| o.value()).collect();
+        Outcome::yes_no(all.is_some_and(|v| fig09::onsets_agree(&v, class).0))
     };
     let (p20, p40) = (runs[0].1, runs[2].1);
-    let ratio = match (p20.value(), p40.value()) {
-        (Some(a), Some(b)) => Outcome::Value(b / a),
-        _ => Outcome::Failed,
-    };
     let nw = |p: Outcome| p.value().map_or(p, |w| Outcome::Value(w * 1e9));
     [
         onsets[0],
@@ -502,7 +482,7 @@ fn p1_fig9(variant: &Variant, class: &ToleranceClass) -> [Outcome; 7] {
         same,
         nw(p20),
         nw(p40),
-        ratio,
+        ratio(p40, p20),
     ]
 }
 
@@ -576,7 +556,7 @@ fn p1_fig12(variant: &Variant, records: usize) -> [Outcome; 3] {
 /// Figures 14 and 15 by `records` records at 0.34e-3, 0.55e-3 and 1.69e-3 g²/Hz
 /// (15 V): the efficiency at 1.69e-3 (%, of the **stated** level, as the paper divides by its
 /// Sa), the peak and width at 0.34e-3, the width ratio 0.55e-3 over 0.34e-3, and the widening
-/// towards higher frequencies at 1.69e-3 ([`fig15::edge_shifts`]).
+/// towards higher frequencies at 1.69e-3 ([`fig15::widens_up`]).
 fn p2_ensembles(variant: &Variant, records: usize) -> [Outcome; 5] {
     let device = variant.device.with_bias(P2_BIAS_V);
     let welch = (P2_NPERSEG, P2_BAND_HZ);
@@ -587,9 +567,7 @@ fn p2_ensembles(variant: &Variant, records: usize) -> [Outcome; 5] {
     let (e34, e55, e169) = (&ens[fig15::L034], &ens[fig15::L055], &ens[fig15::L169]);
     let eff = efficiency(&device, e169.power_w.mean, FIG15_LEVELS[fig15::L169]) * 100.0;
     let w34 = mean_width(e34);
-    let widening = fig15::edge_shifts(e34, e169).map_or(Outcome::Failed, |(up, down)| {
-        Outcome::Value(if up > down && up > 0.0 { 1.0 } else { 0.0 })
-    });
+    let widening = fig15::widens_up(e34, e169).map_or(Outcome::Failed, Outcome::yes_no);
     [
         Outcome::Value(eff),
         Outcome::Value(e34.mean_spectrum.total.peak().0),
@@ -650,11 +628,7 @@ fn p2_fig13(variant: &Variant, claims: &Claims) -> [Outcome; 3] {
             )
         })
         .collect::<Vec<_>>();
-    let yes = |b: Option<bool>| {
-        b.map_or(Outcome::Failed, |b| {
-            Outcome::Value(if b { 1.0 } else { 0.0 })
-        })
-    };
+    let yes = |b: Option<bool>| b.map_or(Outcome::Failed, Outcome::yes_no);
     let failed = branches.iter().any(|b| b.is_err());
     let fold_linear = upper_fold(&branches[1]);
     let fold_hertz = upper_fold(&branches[2]);

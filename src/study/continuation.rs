@@ -270,6 +270,22 @@ impl Branch {
         self.events.iter().filter(move |e| e.kind == kind)
     }
 
+    /// The upper fold: the fold away from grazing at the highest parameter value at which the
+    /// branch loses stability (where an up-sweep leaves the upper branch); `None` without one.
+    pub fn upper_fold(&self) -> Option<&Event> {
+        self.events_of(EventKind::Fold)
+            .filter(|e| !e.at_grazing && e.stable_before && !e.stable_after)
+            .max_by(|a, b| a.param.total_cmp(&b.param))
+    }
+
+    /// The grazing points in branch order: grazing events and corners of the branch at
+    /// grazing (a fold located at the grazing orbit).
+    pub fn grazing_events(&self) -> impl Iterator<Item = &Event> {
+        self.events
+            .iter()
+            .filter(|e| e.kind == EventKind::Grazing || e.at_grazing)
+    }
+
     /// Largest plain-map residual |P(y) - y| / |y| over every point and event.
     pub fn max_residual(&self) -> f64 {
         self.points
