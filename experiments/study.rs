@@ -14,7 +14,6 @@ use common::md::Table;
 use common::plot::{Figure, LinePlot, Series, Style, PALETTE};
 use common::{fmt_sig, frame::frame, row, Experiment};
 use endstop::num::minimax::MinimaxSettings;
-use endstop::num::sensitivity::Bootstrap;
 use endstop::paper::claims::{Claims, Kind};
 use endstop::paper::sensitivity::{Factor, RangesFile};
 use endstop::paper::study::{self, Calibration, Pareto, Prototype, Scope, SobolDesign, SobolRun};
@@ -43,12 +42,6 @@ struct Args {
     force: bool,
 }
 
-/// Scramble of the design and of the calibration's starts.
-const SEED: u32 = 13;
-
-/// Bootstrap resamples of the indices' intervals (95 %).
-const RESAMPLES: usize = 1000;
-
 fn main() {
     common::run_main("study", run);
 }
@@ -66,15 +59,11 @@ fn run() -> Result<()> {
     let p2 = exp.load_published("prototype2")?;
     let claims = Claims::bundled()?;
     let ranges = RangesFile::bundled()?;
-    let boot = Bootstrap {
-        resamples: RESAMPLES,
-        level: 0.95,
-        seed: u64::from(SEED),
-    };
+    let boot = study::STUDY_BOOTSTRAP;
     let minimax = MinimaxSettings {
         starts: args.starts,
         max_iters: args.iters,
-        seed: SEED,
+        seed: study::STUDY_SEED,
         ..MinimaxSettings::default()
     };
     let cases = [
@@ -92,7 +81,7 @@ fn run() -> Result<()> {
         let s = common::with_progress(points, &format!("sobol {}", proto.key()), |tick| {
             let design = SobolDesign {
                 base_rows: args.base,
-                seed: SEED,
+                seed: study::STUDY_SEED,
                 bootstrap: boot,
                 scope,
             };
@@ -288,12 +277,14 @@ fn numbers_md(
     claims: &Claims,
 ) -> String {
     let mut md = format!(
-        "Saltelli design of N = {} base rows ({} evaluations per prototype), seed {SEED}, \
-         {RESAMPLES} bootstrap resamples (95 % intervals); calibration: the published set and \
+        "Saltelli design of N = {} base rows ({} evaluations per prototype), seed {}, \
+         {} bootstrap resamples (95 % intervals); calibration: the published set and \
          {} more starts, at most {} Nelder-Mead iterations each. Ensemble claims (Figures 12, \
          14, 15): {}.\n\n",
         args.base,
         args.base * (Factor::ALL.len() + 2),
+        study::STUDY_SEED,
+        study::STUDY_RESAMPLES,
         args.starts,
         args.iters,
         match args.ensemble_records {

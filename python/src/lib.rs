@@ -25,6 +25,8 @@ use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyDict, PyFloat, PyInt, PyList, PyString};
 
+mod study;
+
 create_exception!(
     _native,
     ParamError,
@@ -54,11 +56,11 @@ fn param_err(e: LibParamError) -> PyErr {
     err
 }
 
-fn solver_err(e: impl std::fmt::Display) -> PyErr {
+pub(crate) fn solver_err(e: impl std::fmt::Display) -> PyErr {
     SolverError::new_err(e.to_string())
 }
 
-fn arg_err(msg: impl Into<String>) -> PyErr {
+pub(crate) fn arg_err(msg: impl Into<String>) -> PyErr {
     PyValueError::new_err(msg.into())
 }
 
@@ -69,7 +71,7 @@ fn arg_err(msg: impl Into<String>) -> PyErr {
 #[pyclass(frozen, name = "Device", module = "endstop")]
 #[derive(Clone)]
 pub struct PyDevice {
-    inner: Device,
+    pub(crate) inner: Device,
 }
 
 fn toml_to_py<'py>(py: Python<'py>, v: &toml::Value) -> PyResult<Bound<'py, PyAny>> {
@@ -164,7 +166,7 @@ impl PyDevice {
 
     /// The published parameters of prototype 1 or 2 (the repository's `data/prototypeN.toml`).
     #[staticmethod]
-    fn prototype(n: u32) -> PyResult<Self> {
+    pub(crate) fn prototype(n: u32) -> PyResult<Self> {
         let (text, name) = match n {
             1 => (PROTOTYPE1_TOML, "data/prototype1.toml"),
             2 => (PROTOTYPE2_TOML, "data/prototype2.toml"),
@@ -956,5 +958,6 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     ] {
         m.add_function(f)?;
     }
+    study::register(m)?;
     Ok(())
 }

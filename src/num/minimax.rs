@@ -111,19 +111,13 @@ where
     }
 }
 
-/// Minimises `max_j |model(u)_j|` over `u` in `[0, 1]^dims` from the `given` starts (e.g.
-/// the published point), then `settings.starts` points of the scrambled Sobol sequence;
-/// returns every start's fit, best first (ties kept in start order; start `i < given.len()`
-/// is `given[i]`).
-pub fn minimise_worst<F, E>(
+/// The starts of [`minimise_worst`], in start order: the `given` points (e.g. the published
+/// point), then `settings.starts` points of the scrambled Sobol sequence. Checks the settings.
+pub fn starts(
     dims: usize,
-    model: F,
     settings: MinimaxSettings,
     given: &[Vec<f64>],
-) -> Result<Vec<Fit>, MinimaxError>
-where
-    F: Fn(&[f64]) -> Result<Vec<f64>, E> + Sync,
-{
+) -> Result<Vec<Vec<f64>>, MinimaxError> {
     if let Some(bad) = given
         .iter()
         .find(|g| g.len() != dims || g.iter().any(|u| !(0.0..=1.0).contains(u)))
@@ -149,12 +143,56 @@ where
             .map(|d| f64::from(sobol_burley::sample(i as u32, d as u32, settings.seed)))
             .collect::<Vec<f64>>()
     });
-    let starts: Vec<Vec<f64>> = given.iter().cloned().chain(sobol).collect();
-    let mut fits = starts
+    Ok(given.iter().cloned().chain(sobol).collect())
+}
+
+/// Minimises `max_j |model(u)_j|` over `u` in `[0, 1]^dims` from the [`starts`] (the `given`
+/// points, then `settings.starts` points of the scrambled Sobol sequence); returns every
+/// start's fit, best first (ties kept in start order; start `i < given.len()` is `given[i]`).
+/// The starts run in parallel; [`minimise_from`] runs one (e.g. as one task of a cluster).
+pub fn minimise_worst<F, E>(
+    dims: usize,
+    model: F,
+    settings: MinimaxSettings,
+    given: &[Vec<f64>],
+) -> Result<Vec<Fit>, MinimaxError>
+where
+    F: Fn(&[f64]) -> Result<Vec<f64>, E> + Sync,
+{
+    let fits = starts(dims, settings, given)?
         .into_par_iter()
         .enumerate()
         .map(|(start, x0)| run_start(dims, &model, settings, start, x0))
         .collect::<Result<Vec<_>, _>>()?;
+    best_first(fits)
+}
+
+/// One start of [`minimise_worst`]: the Nelder-Mead search from `x0` (start number `start`,
+/// a point of [`starts`]) with `settings`' simplex, iterations and tolerance.
+pub fn minimise_from<F, E>(
+    model: F,
+    settings: MinimaxSettings,
+    start: usize,
+    x0: Vec<f64>,
+) -> Result<Fit, MinimaxError>
+where
+    F: Fn(&[f64]) -> Result<Vec<f64>, E> + Sync,
+{
+    let dims = x0.len();
+    starts(
+        dims,
+        MinimaxSettings {
+            starts: 0,
+            ..settings
+        },
+        std::slice::from_ref(&x0),
+    )?;
+    run_start(dims, &model, settings, start, x0)
+}
+
+/// The fits of several starts, best first (ties in start order), without the starts at
+/// which the model never evaluated; the error when no start did.
+pub fn best_first(mut fits: Vec<Fit>) -> Result<Vec<Fit>, MinimaxError> {
     fits.retain(|f| f.worst.is_finite());
     if fits.is_empty() {
         return Err(MinimaxError::NoEvaluation);

@@ -226,6 +226,11 @@ impl Saltelli {
         let n = self.base;
         let m = rows.len() as f64;
         let (fa, fb) = (&y[..n], &y[n..2 * n]);
+        // Equal outputs have no variance, although rounding in the mean can leave a few ulps.
+        let y0 = fa[rows[0]];
+        if rows.iter().all(|&r| fa[r] == y0 && fb[r] == y0) {
+            return None;
+        }
         let mean = rows.iter().map(|&r| fa[r] + fb[r]).sum::<f64>() / (2.0 * m);
         let variance = rows
             .iter()
@@ -366,6 +371,11 @@ mod tests {
         let mut y = vec![1.0; 32];
         assert_eq!(
             design.indices(&y, Bootstrap::default()),
+            Err(SensitivityError::NoVariance)
+        );
+        // A constant whose mean rounds (0.1 summed 16 times is not 1.6): still no variance.
+        assert_eq!(
+            design.indices(&vec![0.1; 32], Bootstrap::default()),
             Err(SensitivityError::NoVariance)
         );
         y[5] = f64::NAN;

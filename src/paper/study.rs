@@ -59,6 +59,19 @@ pub const P2_LEVELS_G: (f64, f64) = (0.12, 0.31);
 /// Figure 13's alternative Hertz fit of b_im (N s/m), a claim-defined setting.
 pub const P2_HERTZ_BIM: f64 = 0.34;
 
+/// Scramble of the study's Saltelli design and of its calibration's Sobol starts.
+pub const STUDY_SEED: u32 = 13;
+
+/// Bootstrap resamples of the indices' 95 % intervals.
+pub const STUDY_RESAMPLES: usize = 1000;
+
+/// The study's bootstrap: [`STUDY_RESAMPLES`] resamples, 95 %, seeded by [`STUDY_SEED`].
+pub const STUDY_BOOTSTRAP: Bootstrap = Bootstrap {
+    resamples: STUDY_RESAMPLES,
+    level: 0.95,
+    seed: STUDY_SEED as u64,
+};
+
 /// The prototypes of the study.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum Prototype {
@@ -86,6 +99,14 @@ impl Prototype {
             Prototype::P1 => &P1_QUANTITIES,
             Prototype::P2 => &P2_QUANTITIES,
         }
+    }
+
+    /// The quantity of claim `claim` keyed `quantity`, if the study evaluates it.
+    pub fn quantity(self, claim: &str, quantity: &str) -> Option<Quantity> {
+        self.all_quantities()
+            .iter()
+            .find(|q| q.claim == claim && q.quantity == quantity)
+            .copied()
     }
 
     /// The quantities an evaluation in `scope` computes, in output order.
@@ -213,6 +234,18 @@ impl Outcome {
         Outcome::Value(if yes { 1.0 } else { 0.0 })
     }
 
+    /// The outcome of a [`Outcome::label`] (and the value, for `"value"`); `None` for an
+    /// unknown label.
+    pub fn from_label(label: &str, value: f64) -> Option<Self> {
+        Some(match label {
+            "value" => Outcome::Value(value),
+            "no fold" => Outcome::NoFold,
+            "no grazing" => Outcome::NoGrazing,
+            "continuation failed" => Outcome::Failed,
+            _ => return None,
+        })
+    }
+
     /// Label for tables.
     pub fn label(self) -> &'static str {
         match self {
@@ -271,6 +304,10 @@ pub enum StudyError {
     /// A quantity that always exists came out absent.
     #[error("({0}, {1}) has no value and no substitute")]
     NoSubstitute(&'static str, &'static str),
+    /// Evaluations or a start that do not belong to the design or the calibration they are
+    /// given to.
+    #[error("study: {0}")]
+    Evaluations(String),
 }
 
 /// The frequency branch of `device` at `accel_rms_g` from `start` to `stop` (Hz), steps of at
@@ -802,7 +839,9 @@ pub struct SobolDesign {
 
 /// Sobol first-order and total indices of every quantity of `prototype` over `ranges`, from
 /// the Saltelli design of `d`; `on_point()` after every design point (points run in
-/// parallel, results in design order).
+/// parallel, results in design order). The same as evaluating every point of
+/// [`SobolDesign::design`] with [`evaluate_at`] (e.g. as tasks of a cluster) and passing the
+/// evaluations to [`sobol_indices`].
 pub fn sobol(
     prototype: Prototype,
     ranges: &Ranges,
@@ -811,8 +850,7 @@ pub fn sobol(
     claims: &Claims,
     on_point: &(dyn Fn() + Sync),
 ) -> Result<SobolRun, StudyError> {
-    let design = Saltelli::new(d.base_rows, Factor::ALL.len(), d.seed)?;
-    let boot = d.bootstrap;
+    let design = d.design()?;
     let evaluations = design
         .points()
         .par_iter()
@@ -822,8 +860,41 @@ pub fn sobol(
             e
         })
         .collect::<Result<Vec<_>, _>>()?;
-    let quantities = prototype
-        .quantities(d.scope)
+    sobol_indices(prototype, d, evaluations)
+}
+
+impl SobolDesign {
+    /// The Saltelli design over [`Factor::ALL`].
+    pub fn design(&self) -> Result<Saltelli, StudyError> {
+        Ok(Saltelli::new(self.base_rows, Factor::ALL.len(), self.seed)?)
+    }
+}
+
+/// The indices of every quantity of `prototype` from its `evaluations` at the points of the
+/// design of `d`, in design order (each one [`evaluate_at`]'s output in `d.scope`).
+pub fn sobol_indices(
+    prototype: Prototype,
+    d: SobolDesign,
+    evaluations: Vec<Vec<Evaluation>>,
+) -> Result<SobolRun, StudyError> {
+    let design = d.design()?;
+    let wanted = prototype.quantities(d.scope);
+    if evaluations.len() != design.len() {
+        return Err(StudyError::Evaluations(format!(
+            "{} evaluations for a design of {} points",
+            evaluations.len(),
+            design.len()
+        )));
+    }
+    if let Some((k, _)) = evaluations.iter().enumerate().find(|(_, e)| {
+        e.len() != wanted.len() || e.iter().zip(&wanted).any(|(e, q)| e.quantity != *q)
+    }) {
+        return Err(StudyError::Evaluations(format!(
+            "the evaluation of point {k} does not hold the quantities of {} in this scope, in order",
+            prototype.key()
+        )));
+    }
+    let quantities = wanted
         .iter()
         .enumerate()
         .map(|(j, qty)| {
@@ -832,7 +903,7 @@ pub fn sobol(
                 let n = evaluations.iter().filter(|e| keep(e[j].outcome)).count();
                 n as f64 / evaluations.len() as f64
             };
-            let indices = match design.indices(&outputs, boot) {
+            let indices = match design.indices(&outputs, d.bootstrap) {
                 Ok(i) => Some(i),
                 Err(SensitivityError::NoVariance) => None,
                 Err(e) => return Err(StudyError::Sensitivity(e)),
@@ -975,7 +1046,62 @@ pub fn quantitative_deviations(e: &[Evaluation]) -> Vec<f64> {
         .collect()
 }
 
-/// Runs the multi-claim calibration of `prototype` over `ranges` with `settings`.
+/// The calibration's objective at a unit-cube point: the quantitative deviations.
+fn calibration_objective(
+    prototype: Prototype,
+    ranges: &Ranges,
+    base: &Device,
+    claims: &Claims,
+    scope: Scope,
+    u: &[f64],
+) -> Result<Vec<f64>, StudyError> {
+    let v = ranges.variant(base, u)?;
+    Ok(quantitative_deviations(&evaluate_quantitative(
+        prototype, &v, claims, scope,
+    )?))
+}
+
+/// The starts of the calibration, in start order: the published set (start 0: the search can
+/// only improve on it), then `settings.starts` points of the scrambled Sobol sequence.
+pub fn calibration_starts(
+    ranges: &Ranges,
+    base: &Device,
+    settings: MinimaxSettings,
+) -> Result<Vec<Vec<f64>>, StudyError> {
+    let published = ranges.published_point(base)?;
+    Ok(crate::num::minimax::starts(
+        Factor::ALL.len(),
+        settings,
+        std::slice::from_ref(&published),
+    )?)
+}
+
+/// One start of [`calibrate`]: the search from start `start` of [`calibration_starts`]
+/// (e.g. as one task of a cluster).
+pub fn calibrate_start(
+    prototype: Prototype,
+    ranges: &Ranges,
+    base: &Device,
+    settings: MinimaxSettings,
+    claims: &Claims,
+    scope: Scope,
+    start: usize,
+) -> Result<Fit, StudyError> {
+    let x0 = calibration_starts(ranges, base, settings)?
+        .into_iter()
+        .nth(start)
+        .ok_or(StudyError::Evaluations(format!(
+            "start {start} is not one of the {} starts",
+            settings.starts + 1
+        )))?;
+    let model = |u: &[f64]| calibration_objective(prototype, ranges, base, claims, scope, u);
+    Ok(crate::num::minimax::minimise_from(
+        model, settings, start, x0,
+    )?)
+}
+
+/// Runs the multi-claim calibration of `prototype` over `ranges` with `settings`: every
+/// start of [`calibration_starts`] in parallel, then [`calibration_of_fits`].
 pub fn calibrate(
     prototype: Prototype,
     ranges: &Ranges,
@@ -985,15 +1111,11 @@ pub fn calibrate(
     scope: Scope,
     on_eval: &(dyn Fn() + Sync),
 ) -> Result<Calibration, StudyError> {
-    let model = |u: &[f64]| -> Result<Vec<f64>, StudyError> {
-        let e = ranges
-            .variant(base, u)
-            .map_err(StudyError::from)
-            .and_then(|v| evaluate_quantitative(prototype, &v, claims, scope));
+    let model = |u: &[f64]| {
+        let d = calibration_objective(prototype, ranges, base, claims, scope, u);
         on_eval();
-        Ok(quantitative_deviations(&e?))
+        d
     };
-    // The published set is the first start: the search can only improve on it.
     let published = ranges.published_point(base)?;
     let fits = minimise_worst(
         Factor::ALL.len(),
@@ -1001,8 +1123,23 @@ pub fn calibrate(
         settings,
         std::slice::from_ref(&published),
     )?;
+    calibration_of_fits(prototype, ranges, base, claims, scope, fits)
+}
+
+/// The calibration from its starts' fits (in any order): the best set, evaluated, beside the
+/// published set.
+pub fn calibration_of_fits(
+    prototype: Prototype,
+    ranges: &Ranges,
+    base: &Device,
+    claims: &Claims,
+    scope: Scope,
+    fits: Vec<Fit>,
+) -> Result<Calibration, StudyError> {
+    let fits = crate::num::minimax::best_first(fits)?;
     let variant = ranges.variant(base, &fits[0].point)?;
     let best = evaluate(prototype, &variant, claims, scope)?;
+    let published = ranges.published_point(base)?;
     let published = evaluate(prototype, &ranges.variant(base, &published)?, claims, scope)?;
     Ok(Calibration {
         prototype,

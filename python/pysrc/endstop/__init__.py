@@ -9,7 +9,8 @@ The model runs in Rust (the repository's `endstop` library); this package is its
   linear output PSD;
 * :mod:`endstop.study`: simulations (frequency up-sweeps, amplitude sweeps, one random record,
   an ensemble), returning dicts of numbers and numpy arrays;
-* :mod:`endstop.paper`: the paper's figure protocols (``endstop.paper.fig13.run()``).
+* :mod:`endstop.paper`: the paper's figure protocols (``endstop.paper.fig13.run()``) and the
+  study of why the paper deviates (:mod:`endstop.paper.study`, ready for a Dask cluster).
 
 Every simulation releases the GIL while it runs.
 """

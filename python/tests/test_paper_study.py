@@ -1,0 +1,90 @@
+"""The study of why the paper deviates, in pieces: the index step on a function whose indices
+are known, the pieces on Dask workers against the same pieces in this process, bad input."""
+
+import math
+
+import numpy as np
+import pytest
+
+import endstop
+from endstop.paper import study
+
+
+def ishigami(u):
+    """Ishigami's function (a = 7, b = 0.1) of the first three coordinates, mapped to
+    [-pi, pi]."""
+    x = [(2.0 * v - 1.0) * math.pi for v in u[:3]]
+    return math.sin(x[0]) + 7.0 * math.sin(x[1]) ** 2 + 0.1 * x[2] ** 4 * math.sin(x[0])
+
+
+def test_indices_of_ishigami_through_the_evaluation_dicts():
+    # Prototype 2's quantities (fast scope) with one of them replaced by Ishigami's function of
+    # the first three factors, the others held constant (no variance: no indices). A claim's
+    # deviation is affine in its value and the indices are invariant under affine maps, so the
+    # indices are Ishigami's, with five factors that do nothing. 2^13 base rows: the
+    # estimators' sampling error is a few thousandths there (the library's own Ishigami test),
+    # so 0.02 tests the estimator, the dict round trip and the design order.
+    base = 1 << 13
+    points = study.design(base)
+    assert points.shape == (base * (len(study.factors()) + 2), len(study.factors()))
+    template = study.evaluate("p2", points[0])
+    target = next(i for i, e in enumerate(template) if e["kind"] == "quantitative")
+    evaluations = []
+    for u in points:
+        es = list(template)
+        es[target] = dict(template[target], outcome="value", value=ishigami(u))
+        evaluations.append(es)
+    rows = study.indices("p2", base, evaluations)
+    assert {(r["claim"], r["quantity"]) for r in rows} == {
+        (template[target]["claim"], template[target]["quantity"])}
+    a, b = 7.0, 0.1
+    v = a * a / 8 + b * math.pi ** 4 / 5 + b * b * math.pi ** 8 / 18 + 0.5
+    v1 = 0.5 * (1 + b * math.pi ** 4 / 5) ** 2
+    v2 = a * a / 8
+    v13 = b * b * math.pi ** 8 * (1 / 18 - 1 / 50)
+    first = [v1 / v, v2 / v, 0.0]
+    total = [(v1 + v13) / v, v2 / v, v13 / v]
+    by_factor = {r["factor"]: r for r in rows}
+    for i, f in enumerate(study.factors()):
+        r = by_factor[f]
+        s, st = (first[i], total[i]) if i < 3 else (0.0, 0.0)
+        assert abs(r["first"] - s) < 0.02, (f, r["first"], s)
+        assert abs(r["total"] - st) < 0.02, (f, r["total"], st)
+        assert r["first_lo"] <= r["first"] <= r["first_hi"]
+        assert r["absent_share"] == 0.0
+
+
+def test_the_pieces_on_dask_workers_are_the_pieces_here():
+    # Other processes, pickled arguments and results: the same numbers, bit for bit.
+    distributed = pytest.importorskip("dask.distributed")
+    points = study.design(2)[:4]
+    here = [study.evaluate("p2", u) for u in points]
+    fits_here = [study.calibrate_start("p2", i, 1, 3) for i in range(2)]
+    cluster = distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                                       dashboard_address=None)
+    with cluster, distributed.Client(cluster) as client:
+        there = client.gather(client.map(study.evaluate, ["p2"] * 4, list(points), pure=False))
+        fits_there = client.gather(client.map(study.calibrate_start, ["p2"] * 2, range(2),
+                                              [1] * 2, [3] * 2, pure=False))
+    assert there == here
+    assert fits_there == fits_here
+    cal = study.calibration("p2", fits_there[::-1])
+    assert cal["fits"][0]["worst"] == min(f["worst"] for f in fits_here)
+    assert cal["worst"] <= cal["published_worst"]
+    assert [e["claim"] for e in cal["best"]] == [e["claim"] for e in here[0]]
+
+
+def test_bad_input_raises_a_named_error():
+    with pytest.raises(ValueError, match="p1"):
+        study.evaluate("p3", np.full(len(study.factors()), 0.5))
+    with pytest.raises(ValueError):
+        study.evaluate("p2", [1.5] * len(study.factors()))
+    with pytest.raises(ValueError, match="power of two|base"):
+        study.design(3)
+    with pytest.raises(ValueError, match="evaluations"):
+        study.indices("p2", 2, [])
+    with pytest.raises(ValueError, match="start 5"):
+        study.calibrate_start("p2", 5, 1, 3)
+    with pytest.raises(ValueError, match="ensemble_records"):
+        study.evaluate("p2", [0.5] * len(study.factors()), ensemble_records=0)
+    assert issubclass(endstop.ParamError, ValueError)
