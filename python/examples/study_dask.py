@@ -13,7 +13,10 @@ Writes, under ``--out-dir``:
   there (outcome, value, normalised deviation, met or not);
 * ``sobol.parquet``: the indices, with the columns of the study's own ``sobol.parquet``;
 * ``calibration.parquet``: every start's fit, and the best and the published set's
-  evaluations.
+  evaluations;
+* ``run.json`` (the command, the settings, the package's version and git commit, the workers
+  and the wall times) and ``report.md`` (the calibration's table and the largest indices, as
+  the book includes a recorded run).
 
     pip install "./python[dask]"
     python python/examples/study_dask.py --prototype p2 --base 4 --ensemble-records 32 \
@@ -26,7 +29,11 @@ for any other scheduler start the workers yourself and pass ``--scheduler``.
 """
 
 import argparse
+import datetime
+import json
 import os
+import subprocess
+import sys
 import time
 
 import pandas as pd
@@ -97,7 +104,75 @@ def run(client, a, proto):
         for r in top.itertuples():
             print(f"  {r.claim} {r.quantity}: largest total index {r.factor} "
                   f"{r.total:.2f} [{r.total_lo:.2f}, {r.total_hi:.2f}]")
-    return evals, rows, fits, cals
+    times = {"design_points": n, "design_s": sobol_s, "calibration_starts": k,
+             "calibration_s": cal_s, "worst": cal["worst"],
+             "published_worst": cal["published_worst"], "meets_all": cal["meets_all"]}
+    return evals, rows, fits, cals, times
+
+
+def git_commit():
+    """The repository's commit (with ``-dirty`` for uncommitted changes), if there is one."""
+    here = os.path.dirname(os.path.abspath(__file__))
+    try:
+        return subprocess.run(["git", "describe", "--always", "--dirty", "--abbrev=12"],
+                              cwd=here, capture_output=True, text=True,
+                              check=True).stdout.strip()
+    except (OSError, subprocess.CalledProcessError):
+        return "unknown"
+
+
+def fmt(x):
+    return "-" if x is None or x != x else f"{x:.4g}"
+
+
+def report(run, evals, rows, cals):
+    """The run's record as Markdown: what ran, the calibration per prototype, the indices."""
+    cmd = " ".join(["python", "python/examples/study_dask.py"] + run["argv"])
+    md = [f"Recorded run: `{cmd}` on {run['workers']} Dask workers, {run['date']}, endstop "
+          f"{run['endstop_version']} at commit `{run['commit']}`; "
+          f"{run['ensemble_records'] or 'no'} records per ensemble level, Saltelli design of "
+          f"{run['base']} base rows, the published set and {run['starts']} Sobol starts of at "
+          f"most {run['iters']} Nelder-Mead iterations. Not rerun by the book's build (a test "
+          f"re-evaluates its published and best sets with the current code).", ""]
+    ev = pd.DataFrame(evals)
+    cal = pd.DataFrame(cals)
+    ix = pd.DataFrame(rows)
+    for proto, t in run["prototypes"].items():
+        met = cal[(cal.prototype == proto) & (cal.set == "best")]
+        md += [f"**Prototype {proto[1:]}.** {t['design_points']} design points in "
+               f"{t['design_s']:.0f} s and {t['calibration_starts']} calibration starts in "
+               f"{t['calibration_s']:.0f} s of wall time. Worst |normalised deviation| over "
+               f"the quantitative claims: {t['worst']:.3g} at the best set found, "
+               f"{t['published_worst']:.3g} at the published set; the best set meets "
+               f"{int(met.meets.sum())} of {len(met)} claims.", ""]
+        md += ["| Claim | Quantity | Unit | Paper | Published set | Deviation | Best set | "
+               "Deviation | Met |", "|---|---|---|---|---|---|---|---|---|"]
+        pub = cal[(cal.prototype == proto) & (cal.set == "published")].set_index(
+            ["claim", "quantity"])
+        for r in met.itertuples():
+            p = pub.loc[(r.claim, r.quantity)]
+            val = lambda e: fmt(e.value) if e.outcome == "value" else e.outcome
+            md.append(f"| {r.claim} | {r.quantity} | {r.unit} | {fmt(r.paper)} | {val(p)} | "
+                      f"{fmt(p.deviation)} | {val(r)} | {fmt(r.deviation)} | "
+                      f"{'yes' if r.meets else 'no'} |")
+        md.append("")
+        sub = ix[ix.prototype == proto] if len(ix) else ix
+        if len(sub):
+            md += ["Largest total Sobol index of each quantity (95 % bootstrap interval), and "
+                   "the share of design points where the quantity is absent:", "",
+                   "| Claim | Quantity | Factor | Total index | Interval | Absent |",
+                   "|---|---|---|---|---|---|"]
+            top = (sub.sort_values("total", ascending=False)
+                   .groupby(["claim", "quantity"], sort=False).head(1)
+                   .sort_values(["claim", "quantity"]))
+            for r in top.itertuples():
+                md.append(f"| {r.claim} | {r.quantity} | {r.factor} | {r.total:.2f} | "
+                          f"[{r.total_lo:.2f}, {r.total_hi:.2f}] | {r.absent_share:.0%} |")
+            md.append("")
+        n = ev[ev.prototype == proto].point.nunique()
+        md += [f"({n} design points in `evaluations.parquet`, the indices of every factor in "
+               f"`sobol.parquet`, every start's fit in `calibration.parquet`.)", ""]
+    return "\n".join(md)
 
 
 def main():
@@ -126,15 +201,29 @@ def main():
     wall = time.perf_counter() - t0
     client.close()
 
+    import endstop
+
     os.makedirs(a.out_dir, exist_ok=True)
     evals, rows, fits, cals = (sum((o[i] for o in out), []) for i in range(4))
+    record = {
+        "argv": sys.argv[1:], "date": datetime.date.today().isoformat(),
+        "endstop_version": endstop.__version__, "commit": git_commit(), "workers": workers,
+        "wall_s": wall, "base": a.base, "starts": a.starts, "iters": a.iters,
+        "ensemble_records": a.ensemble_records,
+        "prototypes": {p: o[4] for p, o in zip(protos, out)},
+    }
+    with open(os.path.join(a.out_dir, "run.json"), "w") as f:
+        json.dump(record, f, indent=1)
+    with open(os.path.join(a.out_dir, "report.md"), "w") as f:
+        f.write(report(record, evals, rows, cals))
     pd.DataFrame(evals).to_parquet(os.path.join(a.out_dir, "evaluations.parquet"), index=False)
     pd.DataFrame(rows).to_parquet(os.path.join(a.out_dir, "sobol.parquet"), index=False)
     fits_df = pd.DataFrame(fits).assign(set="fit")
     pd.concat([fits_df, pd.DataFrame(cals)], ignore_index=True).to_parquet(
         os.path.join(a.out_dir, "calibration.parquet"), index=False)
     print(f"{' and '.join(protos)} on {workers} workers in {wall:.0f} s wall; wrote "
-          f"{a.out_dir}/evaluations.parquet, sobol.parquet, calibration.parquet")
+          f"{a.out_dir}/evaluations.parquet, sobol.parquet, calibration.parquet, run.json, "
+          f"report.md")
 
 
 if __name__ == "__main__":

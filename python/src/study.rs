@@ -4,8 +4,8 @@
 //! library's own function (`sobol` and `calibrate` are the same pieces run in one process), so
 //! a study spread over Dask workers gives the numbers `just study` gives.
 //!
-//! Evaluations travel as plain dicts (`claim`, `quantity`, `outcome`, `value`, `deviation`,
-//! `meets`, `kind`), which pickle; on the way back only `claim`, `quantity`, `outcome` and
+//! Evaluations travel as plain dicts (`claim`, `quantity`, `paper`, `tolerance`, `unit`,
+//! `outcome`, `value`, `deviation`, `meets`, `kind`), which pickle; on the way back only `claim`, `quantity`, `outcome` and
 //! `value` are read and the rest is recomputed from the claims file.
 
 use endstop::device::Device;
@@ -77,10 +77,25 @@ fn kind_label(k: Kind) -> &'static str {
     }
 }
 
-fn evaluation_dict<'py>(py: Python<'py>, e: &Evaluation) -> PyResult<Bound<'py, PyDict>> {
+fn evaluation_dict<'py>(
+    py: Python<'py>,
+    e: &Evaluation,
+    claims: &Claims,
+) -> PyResult<Bound<'py, PyDict>> {
     let d = PyDict::new(py);
     d.set_item("claim", e.quantity.claim)?;
     d.set_item("quantity", e.quantity.quantity)?;
+    let c = claims
+        .get(e.quantity.claim, e.quantity.quantity)
+        .ok_or_else(|| {
+            solver_err(StudyError::UnknownClaim(
+                e.quantity.claim,
+                e.quantity.quantity,
+            ))
+        })?;
+    d.set_item("paper", c.paper)?;
+    d.set_item("tolerance", c.tolerance())?;
+    d.set_item("unit", &c.unit)?;
     d.set_item("outcome", e.outcome.label())?;
     d.set_item("value", e.value)?;
     d.set_item("deviation", e.deviation)?;
@@ -89,10 +104,14 @@ fn evaluation_dict<'py>(py: Python<'py>, e: &Evaluation) -> PyResult<Bound<'py, 
     Ok(d)
 }
 
-fn evaluations_list<'py>(py: Python<'py>, es: &[Evaluation]) -> PyResult<Bound<'py, PyList>> {
+fn evaluations_list<'py>(
+    py: Python<'py>,
+    es: &[Evaluation],
+    claims: &Claims,
+) -> PyResult<Bound<'py, PyList>> {
     let l = PyList::empty(py);
     for e in es {
-        l.append(evaluation_dict(py, e)?)?;
+        l.append(evaluation_dict(py, e, claims)?)?;
     }
     Ok(l)
 }
@@ -153,9 +172,9 @@ fn paper_study_evaluate<'py>(
     let scope = scope(ensemble_records)?;
     let (base, ranges, claims) = inputs(p)?;
     let es = py
-        .detach(move || study::evaluate_at(p, &ranges, &base, &point, &claims, scope))
+        .detach(|| study::evaluate_at(p, &ranges, &base, &point, &claims, scope))
         .map_err(err)?;
-    evaluations_list(py, &es)
+    evaluations_list(py, &es, &claims)
 }
 
 /// The Sobol indices of every quantity from `evaluations` (one list of dicts per design point,
@@ -296,7 +315,7 @@ fn paper_study_calibration<'py>(
         })
         .collect::<PyResult<Vec<Fit>>>()?;
     let cal = py
-        .detach(move || study::calibration_of_fits(p, &ranges, &base, &claims, scope, fits))
+        .detach(|| study::calibration_of_fits(p, &ranges, &base, &claims, scope, fits))
         .map_err(err)?;
     let d = PyDict::new(py);
     let fl = PyList::empty(py);
@@ -307,8 +326,8 @@ fn paper_study_calibration<'py>(
     d.set_item("worst", cal.worst())?;
     d.set_item("published_worst", cal.published_worst())?;
     d.set_item("meets_all", cal.meets_all())?;
-    d.set_item("best", evaluations_list(py, &cal.best)?)?;
-    d.set_item("published", evaluations_list(py, &cal.published)?)?;
+    d.set_item("best", evaluations_list(py, &cal.best, &claims)?)?;
+    d.set_item("published", evaluations_list(py, &cal.published, &claims)?)?;
     Ok(d)
 }
 

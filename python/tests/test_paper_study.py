@@ -88,3 +88,4 @@ def test_bad_input_raises_a_named_error():
     with pytest.raises(ValueError, match="ensemble_records"):
         study.evaluate("p2", [0.5] * len(study.factors()), ensemble_records=0)
     assert issubclass(endstop.ParamError, ValueError)
+

@@ -34,7 +34,8 @@ def design(base_rows, seed=SEED):
 
 def evaluate(prototype, point, ensemble_records=None):
     """The study's quantities of ``prototype`` at ``point`` (unit cube): a list of dicts
-    (``claim``, ``quantity``, ``outcome``, ``value``, ``deviation``, ``meets``, ``kind``).
+    (``claim``, ``quantity``, the claim's ``paper`` value, ``tolerance`` and ``unit``,
+    ``outcome``, ``value``, ``deviation``, ``meets``, ``kind``).
     With ``ensemble_records`` (records per level; the figures use 32) the ensemble claims of
     Figures 12, 14 and 15 are evaluated too, at a cost of tens of 10 s records."""
     records = None if ensemble_records is None else int(ensemble_records)
