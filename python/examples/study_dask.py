@@ -131,8 +131,9 @@ def report(run, evals, rows, cals):
     md = [f"Recorded run: `{cmd}` on {run['workers']} Dask workers, {run['date']}, endstop "
           f"{run['endstop_version']} at commit `{run['commit']}`; "
           f"{run['ensemble_records'] or 'no'} records per ensemble level, Saltelli design of "
-          f"{run['base']} base rows, the published set and {run['starts']} Sobol starts of at "
-          f"most {run['iters']} Nelder-Mead iterations. Not rerun by the book's build (a test "
+          f"{run['base']} base rows, the published set and {run['starts']} Sobol "
+          f"start{'' if run['starts'] == 1 else 's'} (each of at "
+          f"most {run['iters']} Nelder-Mead iterations). Not rerun by the book's build (a test "
           f"re-evaluates its published and best sets with the current code).", ""]
     ev = pd.DataFrame(evals)
     cal = pd.DataFrame(cals)
