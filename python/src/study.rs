@@ -116,16 +116,23 @@ fn evaluations_list<'py>(
     Ok(l)
 }
 
+/// The value of `key` in a dict of kind `what`, extracted; a named error if it is missing.
+fn field<'py, T: FromPyObjectOwned<'py>>(
+    d: &Bound<'py, PyDict>,
+    what: &str,
+    key: &str,
+) -> PyResult<T> {
+    d.get_item(key)?
+        .ok_or_else(|| arg_err(format!("{what} dict lacks the key {key:?}")))?
+        .extract()
+        .map_err(Into::into)
+}
+
 /// An evaluation dict back into the library's evaluation, renormalised by the claims file.
 fn evaluation_of(p: Prototype, d: &Bound<'_, PyDict>, claims: &Claims) -> PyResult<Evaluation> {
-    let get = |k: &str| -> PyResult<Bound<'_, PyAny>> {
-        d.get_item(k)?
-            .ok_or_else(|| arg_err(format!("an evaluation dict lacks the key {k:?}")))
-    };
-    let (claim, quantity): (String, String) =
-        (get("claim")?.extract()?, get("quantity")?.extract()?);
-    let label: String = get("outcome")?.extract()?;
-    let value: f64 = get("value")?.extract()?;
+    let get = |k: &str| field::<String>(d, "an evaluation", k);
+    let (claim, quantity, label) = (get("claim")?, get("quantity")?, get("outcome")?);
+    let value: f64 = field(d, "an evaluation", "value")?;
     let qty = p.quantity(&claim, &quantity).ok_or_else(|| {
         arg_err(format!(
             "({claim}, {quantity}) is not a quantity of the study of {}",
@@ -300,17 +307,13 @@ fn paper_study_calibration<'py>(
     let fits = fits
         .iter()
         .map(|d| {
-            let get = |k: &str| -> PyResult<Bound<'_, PyAny>> {
-                d.get_item(k)?
-                    .ok_or_else(|| arg_err(format!("a fit dict lacks the key {k:?}")))
-            };
             Ok(Fit {
-                start: get("start")?.extract()?,
-                point: get("point")?.extract()?,
-                deviations: get("deviations")?.extract()?,
-                worst: get("worst")?.extract()?,
-                iterations: get("iterations")?.extract()?,
-                failures: get("failures")?.extract()?,
+                start: field(d, "a fit", "start")?,
+                point: field(d, "a fit", "point")?,
+                deviations: field(d, "a fit", "deviations")?,
+                worst: field(d, "a fit", "worst")?,
+                iterations: field(d, "a fit", "iterations")?,
+                failures: field(d, "a fit", "failures")?,
             })
         })
         .collect::<PyResult<Vec<Fit>>>()?;

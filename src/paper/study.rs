@@ -21,7 +21,7 @@ use thiserror::Error;
 
 use crate::device::{Device, StiffnessModel};
 use crate::drive::Sine;
-use crate::num::minimax::{minimise_worst, Fit, MinimaxError, MinimaxSettings};
+use crate::num::minimax::{Fit, MinimaxError, MinimaxSettings};
 use crate::num::sensitivity::{Bootstrap, Indices, Saltelli, SensitivityError};
 use crate::ode::Stats;
 use crate::paper::claims::{Claim, Claims, ClaimsError, Kind, ToleranceClass};
@@ -1004,7 +1004,8 @@ pub fn most_conflicting(run: &SobolRun) -> Option<Pareto> {
 
 /// The multi-claim calibration of a prototype: the point of the ranges that minimises the
 /// worst normalised deviation over its quantitative claims (the yes/no claims are reported,
-/// not fitted: a step function gives the simplex no slope), by [`minimise_worst`].
+/// not fitted: a step function gives the simplex no slope), by the minimax search of
+/// [`crate::num::minimax`] from each of [`calibration_starts`].
 #[derive(Debug, Clone, PartialEq)]
 pub struct Calibration {
     /// The prototype.
@@ -1090,10 +1091,12 @@ pub fn calibrate_start(
     let x0 = calibration_starts(ranges, base, settings)?
         .into_iter()
         .nth(start)
-        .ok_or(StudyError::Evaluations(format!(
-            "start {start} is not one of the {} starts",
-            settings.starts + 1
-        )))?;
+        .ok_or_else(|| {
+            StudyError::Evaluations(format!(
+                "start {start} is not one of the {} starts",
+                settings.starts + 1
+            ))
+        })?;
     let model = |u: &[f64]| calibration_objective(prototype, ranges, base, claims, scope, u);
     Ok(crate::num::minimax::minimise_from(
         model, settings, start, x0,
@@ -1116,13 +1119,11 @@ pub fn calibrate(
         on_eval();
         d
     };
-    let published = ranges.published_point(base)?;
-    let fits = minimise_worst(
-        Factor::ALL.len(),
-        model,
-        settings,
-        std::slice::from_ref(&published),
-    )?;
+    let fits = calibration_starts(ranges, base, settings)?
+        .into_par_iter()
+        .enumerate()
+        .map(|(start, x0)| crate::num::minimax::minimise_from(model, settings, start, x0))
+        .collect::<Result<Vec<_>, _>>()?;
     calibration_of_fits(prototype, ranges, base, claims, scope, fits)
 }
 
