@@ -27,6 +27,9 @@ fn run() -> Result<()> {
     let run = common::with_progress(total, "fig14", |tick| {
         fig14::run(&p2.device, Protocol::FULL, tick)
     })?;
+    // Figure 15's three levels are among these ensembles: hand them over (src/shared_levels.rs).
+    let shared = common::shared_levels::write(&endstop::paper::fig15::levels_in_fig14(&run))?;
+    eprintln!("[fig14] Figure 15's levels -> {}", shared.display());
     exp.claims(fig14::claims(&run, &claims));
     let f = fig14::findings(&run);
     let l_b = &run.levels[F14B_LEVEL];

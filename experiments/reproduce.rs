@@ -12,7 +12,7 @@ use endstop_experiments as common;
 
 use std::path::PathBuf;
 use std::process::Command;
-use std::sync::Mutex;
+use std::sync::{Condvar, Mutex};
 use std::time::Instant;
 
 use anyhow::{bail, Context, Result};
@@ -212,15 +212,38 @@ struct Outcome {
 /// Runs the jobs (each with its freshness key), at most `parallel` at once.
 fn run_jobs(jobs: &[(&'static Job, String)], parallel: usize) -> Result<Outcome> {
     let dir = binary_dir()?;
-    let queue = Mutex::new(jobs.iter().collect::<Vec<_>>());
+    // The jobs not started and the names of those running; a job whose `after` is among
+    // either waits (the condition variable wakes the workers when a job ends).
+    let state = Mutex::new((jobs.iter().collect::<Vec<_>>(), Vec::<&str>::new()));
+    let ended = Condvar::new();
     let results = Mutex::new(Vec::new());
     let pb = common::progress(jobs.len() as u64, "reproduce");
     std::thread::scope(|s| {
         for _ in 0..parallel.min(jobs.len()) {
             s.spawn(|| {
                 let next = || {
-                    let mut q = queue.lock().expect("queue lock");
-                    (!q.is_empty()).then(|| q.remove(0))
+                    let mut st = state.lock().expect("queue lock");
+                    loop {
+                        let (queue, running) = &mut *st;
+                        if queue.is_empty() {
+                            return None;
+                        }
+                        let waits = |j: &Job| {
+                            j.after.is_some_and(|a| {
+                                running.contains(&a) || queue.iter().any(|(q, _)| q.name == a)
+                            })
+                        };
+                        if let Some(i) = queue.iter().position(|(j, _)| !waits(j)) {
+                            let item = queue.remove(i);
+                            running.push(item.0.name);
+                            return Some(item);
+                        }
+                        st = ended.wait(st).expect("queue lock");
+                    }
+                };
+                let done = |name: &str| {
+                    state.lock().expect("queue lock").1.retain(|n| *n != name);
+                    ended.notify_all();
                 };
                 while let Some((job, key)) = next() {
                     let name = job.name;
@@ -259,6 +282,7 @@ fn run_jobs(jobs: &[(&'static Job, String)], parallel: usize) -> Result<Outcome>
                         .lock()
                         .expect("results lock")
                         .push((name.to_string(), secs, ok));
+                    done(name);
                 }
             });
         }

@@ -32,6 +32,9 @@ pub struct Job {
     pub phase: Phase,
     /// True when its numbers feed the scorecard (its `summary.json` holds claim values).
     pub scored: bool,
+    /// A job of the same phase that must have finished before this one starts, when both
+    /// run (`fig15` takes records from `fig14`'s run, see [`crate::shared_levels`]).
+    pub after: Option<&'static str>,
 }
 
 const P1: &str = "data/prototype1.toml";
@@ -47,6 +50,7 @@ const fn experiment(name: &'static str, reads: &'static [&'static str], cal: boo
         reads_calibration: cal,
         phase: Phase::Parallel,
         scored: true,
+        after: None,
     }
 }
 
@@ -67,6 +71,7 @@ pub const JOBS: &[Job] = &[
         reads_calibration: false,
         phase: Phase::First,
         scored: false,
+        after: None,
     },
     experiment("fig05", &[P1, P2], false),
     experiment("table3", &[P1, P2], false),
@@ -77,7 +82,10 @@ pub const JOBS: &[Job] = &[
     experiment("fig12", &[P1], true),
     experiment("fig13", &[P2], false),
     experiment("fig14", &[P2], false),
-    experiment("fig15", &[P2], false),
+    Job {
+        after: Some("fig14"),
+        ..experiment("fig15", &[P2], false)
+    },
     Job {
         name: "response",
         program: "response",
@@ -86,6 +94,7 @@ pub const JOBS: &[Job] = &[
         reads_calibration: true,
         phase: Phase::Parallel,
         scored: false,
+        after: None,
     },
     Job {
         name: "own_device_sweep",
@@ -107,6 +116,7 @@ pub const JOBS: &[Job] = &[
         reads_calibration: false,
         phase: Phase::Parallel,
         scored: false,
+        after: None,
     },
     Job {
         name: "own_device_random",
@@ -124,6 +134,7 @@ pub const JOBS: &[Job] = &[
         reads_calibration: false,
         phase: Phase::Parallel,
         scored: false,
+        after: None,
     },
     Job {
         name: CROSSCHECK,
@@ -133,6 +144,7 @@ pub const JOBS: &[Job] = &[
         reads_calibration: false,
         phase: Phase::Parallel,
         scored: false,
+        after: None,
     },
     Job {
         name: BENCH,
@@ -142,6 +154,7 @@ pub const JOBS: &[Job] = &[
         reads_calibration: true,
         phase: Phase::Last,
         scored: false,
+        after: None,
     },
 ];
 
@@ -199,4 +212,5 @@ pub const STUDY: Job = Job {
     reads_calibration: false,
     phase: Phase::Last,
     scored: false,
+    after: None,
 };

@@ -15,6 +15,7 @@ pub mod md;
 pub mod narrowband_io;
 pub mod plot;
 pub mod response_io;
+pub mod shared_levels;
 
 pub use calibration_io::{calibrated_prototype1, prototype1_both_sets};
 

@@ -6,7 +6,7 @@
 use statrs::distribution::{ContinuousCDF, StudentsT};
 
 /// Mean of a sample with a 95 % confidence interval (Student's t, `n - 1` degrees of freedom).
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct MeanCi {
     /// Sample mean.
     pub mean: f64,

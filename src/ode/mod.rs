@@ -192,7 +192,7 @@ impl<const N: usize> Options<N> {
 pub const MIN_STEP_REL: f64 = 16.0 * f64::EPSILON;
 
 /// Counters, for benchmarks and convergence reports.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub struct Stats {
     /// Accepted steps (including the re-taken steps that land on events).
     pub accepted: u64,

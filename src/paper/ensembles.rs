@@ -91,7 +91,7 @@ pub struct LevelCase {
 /// One analysed level of a figure: the parameter set label, the level's index in the figure's
 /// list (curves and claims find a level by it, never by comparing levels), the device and its
 /// ensemble.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Level {
     /// `published`, `calibrated`, or the label of another reading.
     pub set: String,

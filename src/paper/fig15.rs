@@ -93,25 +93,39 @@ fn level_spec(dev: &Device, sa: f64, records: usize) -> crate::study::ensemble::
 /// If an ensemble of `fig14` is not the one [`run`] would simulate (a protocol constant of
 /// one figure changed without the other).
 pub fn from_fig14(fig14: &crate::paper::fig14::Run) -> Run {
-    let dev = fig14.device.clone();
-    let levels = IN_FIG14
-        .iter()
-        .enumerate()
-        .map(|(index, &j)| {
-            let l = &fig14.levels[j];
-            assert!(
-                l.set == "published"
-                    && l.ens.spec == level_spec(&dev, FIG15_LEVELS[index], FIG15_REALISATIONS),
-                "Figure 14's ensemble {j} is not Figure 15's level {index}"
-            );
-            Level { index, ..l.clone() }
-        })
-        .collect();
-    Run {
-        levels,
+    let levels: Vec<Level> = IN_FIG14.iter().map(|&j| fig14.levels[j].clone()).collect();
+    from_levels(&fig14.device, levels)
+        .unwrap_or_else(|| panic!("Figure 14's ensembles {IN_FIG14:?} are not Figure 15's levels"))
+}
+
+/// The levels of Figure 14's run that are Figure 15's ([`IN_FIG14`], in order), for a caller
+/// that keeps them to build Figure 15 later ([`from_levels`]).
+pub fn levels_in_fig14(fig14: &crate::paper::fig14::Run) -> Vec<Level> {
+    IN_FIG14.iter().map(|&j| fig14.levels[j].clone()).collect()
+}
+
+/// Figure 15 from ensembles simulated elsewhere (Figure 14's levels at [`IN_FIG14`], possibly
+/// read back from a file): `None` unless they are, in order, exactly the ensembles [`run`]
+/// would simulate for `prototype2` (the same device as simulated, parameter set, records and
+/// settings).
+pub fn from_levels(prototype2: &Device, levels: Vec<Level>) -> Option<Run> {
+    let dev = prototype2_setup(prototype2);
+    let same = levels.len() == FIG15_LEVELS.len()
+        && levels.iter().enumerate().all(|(index, l)| {
+            l.set == "published"
+                && l.device == dev
+                && l.ens.spec == level_spec(&dev, FIG15_LEVELS[index], FIG15_REALISATIONS)
+                && l.ens.records.len() == FIG15_REALISATIONS
+        });
+    same.then(|| Run {
+        levels: levels
+            .into_iter()
+            .enumerate()
+            .map(|(index, l)| Level { index, ..l })
+            .collect(),
         linear: linear_widths(&dev, P2_BAND_HZ.0, P2_BAND_HZ.1),
         device: dev,
-    }
+    })
 }
 
 /// Shifts of the half-power band edges of the ensemble-mean PSD from `low` to `high` (Hz):

@@ -7,7 +7,7 @@
 use crate::signal::welch::{peak_index, Psd};
 
 /// A band around a spectral peak, from [`width_at_fraction`].
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Bandwidth {
     /// Lower edge, Hz (interpolated).
     pub f_lo_hz: f64,
@@ -61,7 +61,7 @@ pub fn width_at_fraction(psd: &Psd, fraction: f64) -> Option<Bandwidth> {
 }
 
 /// Widths of an output power PSD around its peak (see the module docs).
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Widths {
     /// Band where the PSD is at least half its peak: the 3 dB (half-power) bandwidth.
     pub half_power: Option<Bandwidth>,

@@ -30,7 +30,7 @@ use rustfft::FftPlannerScalar;
 use thiserror::Error;
 
 /// Segmenting of a Welch estimate: segment length and overlap, in samples.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub struct WelchConfig {
     /// Segment (and DFT) length, samples. Bin spacing is `fs / nperseg`.
     pub nperseg: usize,
@@ -84,7 +84,7 @@ pub enum SpectralError {
 }
 
 /// A one-sided power spectral density on a uniform frequency grid.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Psd {
     /// Bin frequencies, Hz, uniformly spaced and increasing (from 0 for [`welch`]).
     pub freq_hz: Vec<f64>,

@@ -36,7 +36,7 @@ use crate::study::record::{
 };
 
 /// Settings of an ensemble at one excitation level.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct EnsembleSpec {
     /// The record.
     pub record: RecordSpec,
@@ -86,7 +86,7 @@ impl EnsembleSpec {
 }
 
 /// One record of an ensemble, analysed (the voltages themselves are not kept).
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct RecordResult {
     /// Its ChaCha8 stream.
     pub stream: u64,
@@ -102,7 +102,7 @@ pub struct RecordResult {
 }
 
 /// An ensemble at one excitation level, analysed.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Ensemble {
     /// The settings.
     pub spec: EnsembleSpec,

@@ -96,7 +96,7 @@ pub fn transient_s(device: &Device) -> f64 {
 }
 
 /// Settings of one random-vibration record.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct RecordSpec {
     /// The analysed excitation: two-sided level `Sa` (g²/Hz), band, sample rate and the
     /// **analysed** duration (the paper: 10 s).
@@ -112,7 +112,7 @@ pub struct RecordSpec {
 
 /// How a record's free flight is integrated (contacts and their neighbourhood always go to
 /// [`Dopri5`] with event location).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub enum Scheme {
     /// The exponential Adams-Bashforth method of order [`EXPONENTIAL_ORDER`] on the sample
     /// grid ([`crate::ode::exponential`]): the linearised model and the linearly
@@ -190,7 +190,7 @@ impl RecordSpec {
 }
 
 /// Scalar results of one record, over the analysed window (after the pre-roll).
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct RecordSummary {
     /// Mean power in load 1, `<V1²>/RL` over the samples (W).
     pub p1_w: f64,
@@ -469,7 +469,7 @@ fn hermite_max_abs(x0: f64, m0: f64, x1: f64, m1: f64, limit: f64) -> Option<f64
 }
 
 /// Output power spectral density of both loads and of each, one-sided, W/Hz.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct OutputSpectrum {
     /// `(S_V1 + S_V2) / RL`: its integral is the mean power of both loads.
     pub total: Psd,
