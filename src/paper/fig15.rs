@@ -93,8 +93,8 @@ fn level_spec(dev: &Device, sa: f64, records: usize) -> crate::study::ensemble::
 /// If an ensemble of `fig14` is not the one [`run`] would simulate (a protocol constant of
 /// one figure changed without the other).
 pub fn from_fig14(fig14: &crate::paper::fig14::Run) -> Run {
-    let levels: Vec<Level> = IN_FIG14.iter().map(|&j| fig14.levels[j].clone()).collect();
-    from_levels(&fig14.device, levels)
+    // Figure 14's device is already the device as simulated.
+    from_levels_as_simulated(fig14.device.clone(), levels_in_fig14(fig14))
         .unwrap_or_else(|| panic!("Figure 14's ensembles {IN_FIG14:?} are not Figure 15's levels"))
 }
 
@@ -109,7 +109,11 @@ pub fn levels_in_fig14(fig14: &crate::paper::fig14::Run) -> Vec<Level> {
 /// would simulate for `prototype2` (the same device as simulated, parameter set, records and
 /// settings).
 pub fn from_levels(prototype2: &Device, levels: Vec<Level>) -> Option<Run> {
-    let dev = prototype2_setup(prototype2);
+    from_levels_as_simulated(prototype2_setup(prototype2), levels)
+}
+
+/// [`from_levels`] for the device as simulated (`prototype2_setup` applied).
+fn from_levels_as_simulated(dev: Device, levels: Vec<Level>) -> Option<Run> {
     let same = levels.len() == FIG15_LEVELS.len()
         && levels.iter().enumerate().all(|(index, l)| {
             l.set == "published"
