@@ -128,14 +128,13 @@ impl<const N: usize, const P: usize> ExpAdams<N, P> {
         h: f64,
         scale: &SVector<f64, N>,
     ) -> Option<Self> {
-        Self::dense(l, c, h, 1.0, scale)
+        Self::part(l, c, h, 1.0, scale)
     }
 
     /// The method's dense output at `theta` (in (0, 1]) of a step `h`: [`ExpAdams::step`] of
     /// the result gives the state `theta h` into the step, from the same state, input samples
     /// and history (the remainder's polynomial evaluated on `[0, theta h]`; see the module
-    /// docs). Its `h` is `theta h`. `theta = 1` is [`ExpAdams::new`] (every factor `theta` is
-    /// then an exact 1, so the weights are the step's, bit for bit). `None` as there.
+    /// docs). Its `h` is `theta h`. `theta = 1` is [`ExpAdams::new`]. `None` as there.
     ///
     /// # Panics
     /// As [`ExpAdams::new`], and if `theta` is not in (0, 1].
@@ -147,6 +146,18 @@ impl<const N: usize, const P: usize> ExpAdams<N, P> {
         scale: &SVector<f64, N>,
     ) -> Option<Self> {
         assert!(theta > 0.0 && theta <= 1.0, "theta {theta} outside (0, 1]");
+        Self::part(l, c, h, theta, scale)
+    }
+
+    /// The weights over `[0, theta h]` (with `theta = 1` they are computed exactly as the
+    /// step's were before `dense` existed: every factor `theta` is an exact 1).
+    fn part(
+        l: &SMatrix<f64, N, N>,
+        c: &SVector<f64, N>,
+        h: f64,
+        theta: f64,
+        scale: &SVector<f64, N>,
+    ) -> Option<Self> {
         assert!((1..=8).contains(&P), "order {P} outside 1..=8");
         assert!(
             scale.iter().all(|s| s.is_finite() && *s > 0.0),
