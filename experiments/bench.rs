@@ -24,6 +24,7 @@ use endstop::physics::harvester::Harvester;
 use endstop::study::record::simulate_record;
 use endstop::study::record::RecordSpec;
 use polars::prelude::*;
+use rayon::prelude::*;
 
 const REPEATS: usize = 5;
 /// Runs of each scheme in the side-by-side comparison with RK4.
@@ -386,20 +387,37 @@ fn rk4_equal_accuracy(
         ("P2, Sa = 1e-4", prototype2_setup(p2), 1e-4),
         ("P1, Sa = 4.42e-6", prototype1_setup(p1), 4.42e-6),
     ];
+    const SUBSTEPS: [usize; 4] = [1, 2, 4, 8];
+    // Nothing here is timed: every run of every case goes to the thread pool at once (run 0
+    // is ours, 1 the reference, then RK4 with each number of substeps).
+    let jobs: Vec<(usize, usize)> = (0..cases.len())
+        .flat_map(|c| (0..2 + SUBSTEPS.len()).map(move |r| (c, r)))
+        .collect();
+    let powers = jobs
+        .par_iter()
+        .map(|&(c, r)| {
+            let (_, dev, sa) = &cases[c];
+            let mut spec = RecordSpec::paper(dev, *sa);
+            spec.noise.duration_s = 1.0;
+            Ok(match r {
+                0 => simulate_record(dev, &spec, SEED, 0)?.summary.p_total_w(),
+                1 => {
+                    let mut tight = spec;
+                    tight.scheme = Scheme::Dopri5;
+                    tight.rtol = 1e-10;
+                    simulate_record(dev, &tight, SEED, 0)?.summary.p_total_w()
+                }
+                _ => rk4_record(dev, &spec, 0, SUBSTEPS[r - 2])?.0,
+            })
+        })
+        .collect::<Result<Vec<f64>>>()?;
     let mut md = String::from("| record | ours | RK4, 1 step | RK4, 2 steps | RK4, 4 steps | RK4, 8 steps |\n|---|---|---|---|---|---|\n");
     let mut worst = [0.0f64; 4];
-    for (label, dev, sa) in &cases {
-        let mut spec = RecordSpec::paper(dev, *sa);
-        spec.noise.duration_s = 1.0;
-        let ours = simulate_record(dev, &spec, SEED, 0)?.summary.p_total_w();
-        let mut tight = spec;
-        tight.scheme = Scheme::Dopri5;
-        tight.rtol = 1e-10;
-        let reference = simulate_record(dev, &tight, SEED, 0)?.summary.p_total_w();
-        let mut row = format!("| {label} | {:.1e} |", (ours / reference - 1.0).abs());
-        for (i, m) in [1, 2, 4, 8].into_iter().enumerate() {
-            let (p, _, _) = rk4_record(dev, &spec, 0, m)?;
-            let e = (p / reference - 1.0).abs();
+    for ((label, _, _), p) in cases.iter().zip(powers.chunks(2 + SUBSTEPS.len())) {
+        let reference = p[1];
+        let mut row = format!("| {label} | {:.1e} |", (p[0] / reference - 1.0).abs());
+        for (i, rk4) in p[2..].iter().enumerate() {
+            let e = (rk4 / reference - 1.0).abs();
             worst[i] = worst[i].max(e);
             row.push_str(&format!(" {e:.1e} |"));
         }
@@ -435,19 +453,31 @@ fn impact_accuracy(
     let mut md = String::from(
         "| record | run | mean power (W) | relative to rtol 1e-10 | impacts |\n|---|---|---|---|---|\n",
     );
-    let mut out = Vec::new();
-    for (label, dev, sa) in &cases {
-        let base = RecordSpec::paper(dev, *sa);
-        let mut got = Vec::new();
-        for (name, scheme, rtol) in runs {
+    // Nothing here is timed: every run of every case goes to the thread pool at once.
+    let jobs: Vec<(usize, usize)> = (0..cases.len())
+        .flat_map(|c| (0..runs.len()).map(move |r| (c, r)))
+        .collect();
+    let summaries = jobs
+        .par_iter()
+        .map(|&(c, r)| {
+            let (_, dev, sa) = &cases[c];
+            let base = RecordSpec::paper(dev, *sa);
+            let (_, scheme, rtol) = runs[r];
             let spec = RecordSpec {
                 scheme,
                 rtol: rtol.unwrap_or(base.rtol),
                 ..base
             };
-            let s = simulate_record(dev, &spec, SEED, 0)?.summary;
-            got.push((name, s.p_total_w(), s.impacts));
-        }
+            Ok(simulate_record(dev, &spec, SEED, 0)?.summary)
+        })
+        .collect::<Result<Vec<_>>>()?;
+    let mut out = Vec::new();
+    for ((label, _, _), case) in cases.iter().zip(summaries.chunks(runs.len())) {
+        let got: Vec<_> = runs
+            .iter()
+            .zip(case)
+            .map(|((name, _, _), s)| (*name, s.p_total_w(), s.impacts))
+            .collect();
         let reference = got[runs.len() - 1].1;
         let rel = |p: f64| p / reference - 1.0;
         for (name, p, impacts) in &got {

@@ -26,6 +26,10 @@ use endstop_experiments::freshness;
 use endstop_experiments::jobs::{Job, Phase, CROSSCHECK, JOBS};
 use serde::Deserialize;
 
+/// The wall and processor time of the last `reproduce` that ran experiments, in the results
+/// directory.
+const LAST_RUN: &str = "reproduce_timing.json";
+
 fn ngspice_available() -> bool {
     Command::new("ngspice")
         .arg("--version")
@@ -125,6 +129,9 @@ fn run() -> Result<()> {
                 common::write_atomic(&dir.join("crosscheck.figure.md"), b"*(no plot)*\n")?;
             }
         }
+        // The experiments' wall and processor time (ngspice's included), for the provenance
+        // table; the build above is not counted.
+        let (started, cpu_before) = (Instant::now(), common::children_cpu_time_s());
         // Phase by phase: a job's key is computed when its phase starts, after the artefacts
         // of earlier phases (the calibration) are written.
         for (phase, parallel) in [
@@ -151,6 +158,21 @@ fn run() -> Result<()> {
             let out = run_jobs(&to_run, parallel)?;
             timings.extend(out.timings);
             failures.extend(out.failures);
+        }
+        if !timings.is_empty() {
+            let cpu = common::children_cpu_time_s()
+                .zip(cpu_before)
+                .map(|(after, before)| after - before);
+            let total = serde_json::json!({
+                "wall_time_s": started.elapsed().as_secs_f64(),
+                "cpu_time_s": cpu,
+                "experiments": timings.iter().map(|(n, _)| n.as_str()).collect::<Vec<_>>(),
+                "force": args.force,
+            });
+            common::write_atomic(
+                &common::results_root().join(LAST_RUN),
+                serde_json::to_string_pretty(&total)?.as_bytes(),
+            )?;
         }
     }
     publish_own_device()?;
@@ -408,32 +430,73 @@ fn write_scorecard() -> Result<Vec<Row>> {
 /// The provenance table: experiment, parameter files, seed, commit, wall time.
 fn write_provenance() -> Result<()> {
     let mut md = String::from(
-        "| experiment | parameter files (set) | seed | commit | wall time (s) |\n|---|---|---|---|---|\n",
+        "| experiment | parameter files (set) | seed | commit | wall time (s) | CPU time (s) |\n\
+         |---|---|---|---|---|---|\n",
     );
+    let (mut cpu_sum, mut cpu_jobs) = (0.0, 0);
     for job in JOBS {
         let name = job.name;
         let Some(s) = read_summary(job) else {
-            md.push_str(&format!("| {name} | (no results) | | | |\n"));
+            md.push_str(&format!("| {name} | (no results) | | | | |\n"));
             continue;
         };
-        let wall = std::fs::read_to_string(job.dir().join("timing.json"))
+        let timing = std::fs::read_to_string(job.dir().join("timing.json"))
             .ok()
-            .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok())
-            .and_then(|v| v["wall_time_s"].as_f64())
+            .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok());
+        let seconds = |key: &str| timing.as_ref().and_then(|v| v[key].as_f64());
+        let wall = seconds("wall_time_s")
             .map(|t| format!("{t:.2}"))
             .unwrap_or_default();
+        let cpu = seconds("cpu_time_s");
+        if let Some(c) = cpu {
+            cpu_sum += c;
+            cpu_jobs += 1;
+        }
         let params: Vec<String> = s
             .params
             .iter()
             .map(|(f, l)| format!("`{f}` ({l})"))
             .collect();
         md.push_str(&format!(
-            "| {name} | {} | {} | `{}` | {wall} |\n",
+            "| {name} | {} | {} | `{}` | {wall} | {} |\n",
             params.join(", "),
             s.seed.map(|x| x.to_string()).unwrap_or_else(|| "-".into()),
             s.commit,
+            cpu.map(|c| format!("{c:.1}")).unwrap_or_default(),
         ));
     }
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    if cpu_jobs > 0 {
+        md.push_str(&format!(
+            "\nThe CPU times (user and system, ngspice's included) add up to {cpu_sum:.0} s over \
+             {cpu_jobs} experiments: on this machine's {cores} cores no schedule of them can take \
+             less than {:.0} s of wall time.",
+            cpu_sum / cores as f64
+        ));
+    }
+    let last = std::fs::read_to_string(common::results_root().join(LAST_RUN))
+        .ok()
+        .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok());
+    if let Some(v) = last {
+        let (wall, cpu) = (v["wall_time_s"].as_f64(), v["cpu_time_s"].as_f64());
+        let n = v["experiments"].as_array().map_or(0, |a| a.len());
+        if let Some(wall) = wall {
+            md.push_str(&format!(
+                " The last `reproduce{}` ran {n} experiments in {wall:.0} s of wall time{}.",
+                if v["force"].as_bool() == Some(true) {
+                    " --force"
+                } else {
+                    ""
+                },
+                cpu.map(|c| format!(
+                    " and {c:.0} s of CPU time ({:.2} cores busy on average)",
+                    c / wall
+                ))
+                .unwrap_or_default()
+            ));
+        }
+    }
+    md.push('\n');
     common::write_atomic(
         &common::book_generated_root().join("provenance.md"),
         md.as_bytes(),

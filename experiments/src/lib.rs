@@ -443,7 +443,11 @@ impl Experiment {
             ));
             write_atomic(&snippet, md.as_bytes())?;
         }
-        let timing = serde_json::json!({ "experiment": self.name, "wall_time_s": secs });
+        let timing = serde_json::json!({
+            "experiment": self.name,
+            "wall_time_s": secs,
+            "cpu_time_s": cpu_time_s(),
+        });
         write_atomic(
             &self.dir.join("timing.json"),
             serde_json::to_string_pretty(&timing)?.as_bytes(),
@@ -456,6 +460,47 @@ impl Experiment {
         );
         Ok(())
     }
+}
+
+/// Processor time this process has used so far, user and system, its waited-for child
+/// processes (ngspice) included (s); None where `getrusage` is not available.
+///
+/// With the wall time it says how much of the machine an experiment needs: `reproduce` on
+/// `n` cores cannot finish before the sum over its experiments divided by `n`.
+pub fn cpu_time_s() -> Option<f64> {
+    Some(rusage_s(Who::This)? + rusage_s(Who::Children)?)
+}
+
+/// Processor time, user and system, of this process's child processes that have ended and
+/// been waited for (s); None where `getrusage` is not available.
+pub fn children_cpu_time_s() -> Option<f64> {
+    rusage_s(Who::Children)
+}
+
+enum Who {
+    This,
+    Children,
+}
+
+#[cfg(unix)]
+fn rusage_s(who: Who) -> Option<f64> {
+    let who = match who {
+        Who::This => libc::RUSAGE_SELF,
+        Who::Children => libc::RUSAGE_CHILDREN,
+    };
+    // SAFETY: `getrusage` only writes the struct it is handed, plain data that is valid
+    // zeroed.
+    let mut u: libc::rusage = unsafe { std::mem::zeroed() };
+    if unsafe { libc::getrusage(who, &mut u) } != 0 {
+        return None;
+    }
+    let tv = |t: libc::timeval| t.tv_sec as f64 + t.tv_usec as f64 * 1e-6;
+    Some(tv(u.ru_utime) + tv(u.ru_stime))
+}
+
+#[cfg(not(unix))]
+fn rusage_s(_who: Who) -> Option<f64> {
+    None
 }
 
 /// Locks a mutex, also after a panic elsewhere (the data are append-only lists).
