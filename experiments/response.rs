@@ -30,16 +30,17 @@ fn run() -> Result<()> {
     let run = common::with_progress(units, "response", |tick| {
         response::run(&setups, BASIN_CELLS, tick)
     })?;
-    // The basins again on a grid twice as fine, for their convergence.
-    let fine_cells = 2 * BASIN_CELLS - 1;
+    // The basins again on a grid twice as fine, for their convergence (the cells it shares
+    // with the coarse grid are taken from it).
     let mut fine_shift = Vec::new();
     for c in &run.cases {
-        let Some(bs) = c.setup.basin_settings(fine_cells) else {
+        let Some(bs) = c.setup.basin_settings(BASIN_CELLS) else {
             continue;
         };
         let f = c.setup.case.basin_freq_hz().expect("basin frequency");
-        let fine = refine_basins(c, f, &bs)?;
-        let coarse = c.basins.as_ref().expect("basins computed").shares();
+        let coarse = c.basins.as_ref().expect("basins computed");
+        let fine = refine_basins(c, f, &bs, coarse)?;
+        let coarse = coarse.shares();
         let shift = coarse
             .iter()
             .zip(fine.shares())
@@ -84,14 +85,17 @@ fn run() -> Result<()> {
     exp.finish()
 }
 
+/// The basins of case `c` at `f` Hz on the grid twice as fine as `coarse`'s (computed with
+/// `coarse_settings`).
 fn refine_basins(
     c: &CaseRun,
     f: f64,
-    bs: &endstop::study::basins::BasinSettings,
+    coarse_settings: &endstop::study::basins::BasinSettings,
+    coarse: &endstop::study::basins::Basins,
 ) -> Result<endstop::study::basins::Basins> {
     use endstop::drive::Sine;
     use endstop::physics::harvester::Harvester;
-    use endstop::study::basins::{basins, Attractor};
+    use endstop::study::basins::{refine, Attractor};
     use endstop::study::orbit::{Forcing, Shooter};
     let h = Harvester::new(&c.setup.device, Sine::from_rms_g(c.setup.accel_rms_g, f));
     let shooter = Shooter::new(&h, c.setup.continuation.shooting);
@@ -104,7 +108,14 @@ fn refine_basins(
         freq_hz: f,
         accel_rms_g: c.setup.accel_rms_g,
     };
-    Ok(basins(&h, &forcing, &catalogue, bs, &|| {})?)
+    Ok(refine(
+        &h,
+        &forcing,
+        &catalogue,
+        coarse_settings,
+        coarse,
+        &|| {},
+    )?)
 }
 
 fn write_tables(exp: &Experiment, run: &response::Run) -> Result<()> {

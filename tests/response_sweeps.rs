@@ -7,7 +7,7 @@ use endstop::device::Device;
 use endstop::paper::response::{
     continuation, ghost_study, setups, sweeps_and_branch, upper_fold_hz, Case, CaseRun, Setup,
 };
-use endstop::study::basins::{basins, Attractor};
+use endstop::study::basins::{basins, refine, Attractor};
 use endstop::study::steady::{horizon_periods, steady_config, SteadyConfig, FOLD_BLOCK_PERIODS};
 use endstop::study::sweep::REFINE_TOL_HZ;
 
@@ -119,11 +119,14 @@ fn fold_rule_leaves_prototype2_blocks_at_the_ring_up_time() {
     assert_eq!(s.sweep.cfg, ring_up);
 }
 
-/// Basin shares at Figure 13's 720 Hz sum to 1 and do not depend on the number of threads
-/// (cells are collected in grid order): the same grid on a pool of 1 and of 2 threads gives
-/// identical labels, bit for bit.
-#[test]
-fn basin_shares_sum_to_one_and_do_not_depend_on_the_thread_count() {
+/// Figure 13's case at 720 Hz: the model, the catalogue of its two stable orbits, the
+/// forcing and the case's setup (for its basin settings).
+fn fig13_basin_inputs() -> (
+    endstop::physics::harvester::Harvester<endstop::drive::Sine>,
+    Vec<Attractor>,
+    endstop::study::orbit::Forcing,
+    Setup,
+) {
     let s = setup(Case::Fig13P2);
     let branch = continuation(&s).unwrap();
     let h = endstop::physics::harvester::Harvester::new(
@@ -147,11 +150,20 @@ fn basin_shares_sum_to_one_and_do_not_depend_on_the_thread_count() {
         })
         .collect();
     assert_eq!(catalogue.len(), 2, "two stable orbits at 720 Hz");
-    let bs = s.basin_settings(9).unwrap();
     let forcing = endstop::study::orbit::Forcing {
         freq_hz: 720.0,
         accel_rms_g: s.accel_rms_g,
     };
+    (h, catalogue, forcing, s)
+}
+
+/// Basin shares at Figure 13's 720 Hz sum to 1 and do not depend on the number of threads
+/// (cells are collected in grid order): the same grid on a pool of 1 and of 2 threads gives
+/// identical labels, bit for bit.
+#[test]
+fn basin_shares_sum_to_one_and_do_not_depend_on_the_thread_count() {
+    let (h, catalogue, forcing, s) = fig13_basin_inputs();
+    let bs = s.basin_settings(9).unwrap();
     let on = |threads: usize| {
         rayon::ThreadPoolBuilder::new()
             .num_threads(threads)
@@ -163,4 +175,40 @@ fn basin_shares_sum_to_one_and_do_not_depend_on_the_thread_count() {
     assert_eq!(one, two);
     let total: f64 = one.shares().iter().map(|s| s.1).sum();
     assert!((total - 1.0).abs() < 1e-12, "shares sum to {total}");
+}
+
+/// `refine` gives what `basins` gives on the refined grid, cell for cell (attractor and
+/// periods), while integrating only the cells the coarse grid does not have.
+#[test]
+fn refined_basins_equal_the_refined_grid_and_reuse_the_coarse_cells() {
+    let (h, catalogue, forcing, s) = fig13_basin_inputs();
+    let coarse_settings = s.basin_settings(5).unwrap();
+    let coarse = basins(&h, &forcing, &catalogue, &coarse_settings, &|| {}).unwrap();
+    let direct = basins(
+        &h,
+        &forcing,
+        &catalogue,
+        &s.basin_settings(9).unwrap(),
+        &|| {},
+    )
+    .unwrap();
+    let integrated = std::sync::atomic::AtomicUsize::new(0);
+    let count = || {
+        integrated.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    };
+    let refined = refine(&h, &forcing, &catalogue, &coarse_settings, &coarse, &count).unwrap();
+    assert_eq!(refined.cells, direct.cells);
+    assert_eq!(refined.labels, direct.labels);
+    assert_eq!(refined.attractor, direct.attractor);
+    assert_eq!(refined.periods, direct.periods);
+    assert_eq!(
+        integrated.into_inner(),
+        9 * 9 - 5 * 5,
+        "only the new cells integrated"
+    );
+    assert!(refined.stats.accepted < direct.stats.accepted);
+    // Coarse basins of another grid are refused with a named error.
+    let other = s.basin_settings(7).unwrap();
+    let err = refine(&h, &forcing, &catalogue, &other, &coarse, &|| {}).unwrap_err();
+    assert!(err.to_string().contains("refine"), "{err}");
 }

@@ -125,7 +125,8 @@ pub struct Basins {
     pub labels: Vec<String>,
     /// Periods each cell ran.
     pub periods: Vec<usize>,
-    /// Integrator counters of every cell.
+    /// Integrator counters of every cell integrated (a cell [`refine`] takes from the coarse
+    /// grid is not counted again).
     pub stats: Stats,
 }
 
@@ -163,6 +164,77 @@ pub fn basins(
     settings: &BasinSettings,
     on_cell: &(dyn Fn() + Sync),
 ) -> Result<Basins, OrbitError> {
+    let cells = settings.grid.cells();
+    let known = vec![None; cells.len()];
+    settle_cells(base, forcing, attractors, settings, cells, known, on_cell)
+}
+
+/// The basins on `coarse_settings.grid.refined()`, with the other settings of
+/// `coarse_settings`, taking every cell that the refined grid shares with `coarse` (computed
+/// by [`basins`] with `coarse_settings` and the same `attractors`) from it instead of
+/// integrating it again; `on_cell()` is called after each new cell.
+///
+/// A shared cell is taken only when its initial state is the coarse cell's to the bit (it is
+/// for [`BasinGrid::cells`], whose even-indexed refined values repeat the coarse ones exactly),
+/// so the result is the one [`basins`] gives on the refined grid, except that `stats` counts
+/// only the cells integrated here.
+pub fn refine(
+    base: &Harvester<Sine>,
+    forcing: &Forcing,
+    attractors: &[Attractor],
+    coarse_settings: &BasinSettings,
+    coarse: &Basins,
+    on_cell: &(dyn Fn() + Sync),
+) -> Result<Basins, OrbitError> {
+    let g = coarse_settings.grid;
+    let labels: Vec<&str> = attractors.iter().map(|a| a.label.as_str()).collect();
+    if coarse.cells.len() != g.nx * g.nv || coarse.labels != labels {
+        return Err(OrbitError::Invalid(format!(
+            "refine: the coarse basins ({} cells, attractors {:?}) are not those of a {}x{} grid \
+             with attractors {labels:?}",
+            coarse.cells.len(),
+            coarse.labels,
+            g.nx,
+            g.nv
+        )));
+    }
+    let fine = BasinGrid {
+        nx: 2 * g.nx - 1,
+        nv: 2 * g.nv - 1,
+        ..g
+    };
+    let cells = fine.cells();
+    let known = cells
+        .iter()
+        .enumerate()
+        .map(|(k, &cell)| {
+            let (i, j) = (k % fine.nx, k / fine.nx);
+            let c = (j / 2) * g.nx + i / 2;
+            let same = |a: (f64, f64), b: (f64, f64)| {
+                a.0.to_bits() == b.0.to_bits() && a.1.to_bits() == b.1.to_bits()
+            };
+            (i % 2 == 0 && j % 2 == 0 && same(coarse.cells[c], cell))
+                .then(|| (coarse.attractor[c], coarse.periods[c]))
+        })
+        .collect();
+    let settings = BasinSettings {
+        grid: fine,
+        ..*coarse_settings
+    };
+    settle_cells(base, forcing, attractors, &settings, cells, known, on_cell)
+}
+
+/// Integrates every cell of `cells` without a `known` outcome until it settles (see the
+/// module docs) and collects the outcomes in grid order.
+fn settle_cells(
+    base: &Harvester<Sine>,
+    forcing: &Forcing,
+    attractors: &[Attractor],
+    settings: &BasinSettings,
+    cells: Vec<(f64, f64)>,
+    known: Vec<Option<(Option<usize>, usize)>>,
+    on_cell: &(dyn Fn() + Sync),
+) -> Result<Basins, OrbitError> {
     if attractors.is_empty() || settings.grid.nx == 0 || settings.grid.nv == 0 {
         return Err(OrbitError::Invalid(
             "basins need at least one attractor and a non-empty grid".into(),
@@ -172,10 +244,13 @@ pub fn basins(
     let scales = base.scales();
     let period = forcing.period_s();
     let opts = model.solver_options(settings.rtol);
-    let cells = settings.grid.cells();
     let results: Vec<Result<CellOutcome, OrbitError>> = cells
         .par_iter()
-        .map(|&(x, v)| {
+        .zip(&known)
+        .map(|(&(x, v), known)| {
+            if let Some((found, k)) = *known {
+                return Ok((found, k, Stats::default()));
+            }
             let y0 = model.static_state(x, v);
             let mut ode = Dopri5::new(0.0, y0, mode_of(&model, &y0), opts.clone());
             let mut previous: Option<usize> = None;
