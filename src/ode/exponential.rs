@@ -36,6 +36,12 @@
 //! diagonal of the state's characteristic scales, whose norm is well below one for a step
 //! that resolves the dynamics (about 0.1 for the prototypes at 10 us), to 40 terms: the
 //! truncation is far below rounding.
+//!
+//! # Dense output
+//! The same formula over `[0, θh]` (with `Z = θhL` and the input and the remainder's
+//! polynomial read on that span: a factor `θ^i` on the weight of `(s/h)^i`) gives the state
+//! inside a step ([`ExpAdams::dense`]), to the order of the step. An energy ledger uses it to
+//! integrate the power of each force over a step ([`crate::study::record_ledger`]).
 
 use nalgebra::{SMatrix, SVector};
 
@@ -50,7 +56,8 @@ pub const MAX_SCALED_NORM: f64 = 2.0;
 /// module docs).
 #[derive(Debug, Clone, PartialEq)]
 pub struct ExpAdams<const N: usize, const P: usize> {
-    /// Step (s).
+    /// The span one [`ExpAdams::step`] advances (s): the step, or a part of it for the
+    /// dense output ([`ExpAdams::dense`]).
     pub h: f64,
     /// `e^{hL}`.
     pub propagator: SMatrix<f64, N, N>,
@@ -121,13 +128,33 @@ impl<const N: usize, const P: usize> ExpAdams<N, P> {
         h: f64,
         scale: &SVector<f64, N>,
     ) -> Option<Self> {
+        Self::dense(l, c, h, 1.0, scale)
+    }
+
+    /// The method's dense output at `theta` (in (0, 1]) of a step `h`: [`ExpAdams::step`] of
+    /// the result gives the state `theta h` into the step, from the same state, input samples
+    /// and history (the remainder's polynomial evaluated on `[0, theta h]`; see the module
+    /// docs). Its `h` is `theta h`. `theta = 1` is [`ExpAdams::new`] (every factor `theta` is
+    /// then an exact 1, so the weights are the step's, bit for bit). `None` as there.
+    ///
+    /// # Panics
+    /// As [`ExpAdams::new`], and if `theta` is not in (0, 1].
+    pub fn dense(
+        l: &SMatrix<f64, N, N>,
+        c: &SVector<f64, N>,
+        h: f64,
+        theta: f64,
+        scale: &SVector<f64, N>,
+    ) -> Option<Self> {
+        assert!(theta > 0.0 && theta <= 1.0, "theta {theta} outside (0, 1]");
         assert!((1..=8).contains(&P), "order {P} outside 1..=8");
         assert!(
             scale.iter().all(|s| s.is_finite() && *s > 0.0),
             "scales must be positive: {scale:?}"
         );
-        // Z~ = D^-1 (hL) D.
-        let mut z = *l * h;
+        // The span integrated, tau = theta h; Z~ = D^-1 (tau L) D.
+        let tau = theta * h;
+        let mut z = *l * tau;
         for i in 0..N {
             for j in 0..N {
                 z[(i, j)] *= scale[j] / scale[i];
@@ -153,18 +180,20 @@ impl<const N: usize, const P: usize> ExpAdams<N, P> {
                 }
             }
         }
-        let input_start = (phi[1] - phi[2]) * c * h;
-        let input_end = phi[2] * c * h;
+        // Over [0, tau] the input is a_k + (a_{k+1} - a_k) theta s/tau, and (s/h)^i is
+        // theta^i (s/tau)^i.
+        let input_start = (phi[1] - phi[2] * theta) * c * tau;
+        let input_end = phi[2] * theta * c * tau;
         let basis = lagrange_monomials::<P>();
         let remainder = std::array::from_fn(|j| {
             let mut b = SMatrix::<f64, N, N>::zeros();
             for (i, m) in basis[j].iter().enumerate() {
-                b += phi[i + 1] * (m * factorial(i) * h);
+                b += phi[i + 1] * (m * theta.powi(i as i32) * factorial(i) * tau);
             }
             b
         });
         Some(Self {
-            h,
+            h: tau,
             propagator: phi[0],
             input_start,
             input_end,
@@ -174,7 +203,9 @@ impl<const N: usize, const P: usize> ExpAdams<N, P> {
 
     /// One step from the sample where the state is `y` and the input `a0` to the next, where
     /// the input is `a1`; `history` holds the remainder at this sample and the `P - 1` before.
-    #[inline]
+    // Forced inline: it is a record's inner loop (see `FastFlight::step` in
+    // `crate::study::record`).
+    #[inline(always)]
     pub fn step(
         &self,
         y: &SVector<f64, N>,
@@ -308,5 +339,54 @@ mod tests {
             .sum();
         let want = (-50.0 * h).exp() * 0.2 + integral;
         assert!((y1[0] - want).abs() < 1e-13, "{} vs {want}", y1[0]);
+    }
+
+    #[test]
+    fn dense_output_is_the_step_over_part_of_the_interval() {
+        // theta = 1 is the step itself, bit for bit.
+        let l = SMatrix::<f64, 2, 2>::new(0.0, 1.0, -4.0e6, -300.0);
+        let c = SVector::<f64, 2>::new(0.0, 1.0);
+        let scale = SVector::<f64, 2>::new(1e-6, 2e-3);
+        let h = 1e-5;
+        let step = ExpAdams::<2, 3>::new(&l, &c, h, &scale).unwrap();
+        assert_eq!(ExpAdams::dense(&l, &c, h, 1.0, &scale).unwrap(), step);
+        // With N = 0 and a linear input both are exact, so the dense output at theta is the
+        // step of length theta h to the input's value there.
+        let theta = 0.3;
+        let part = ExpAdams::<2, 3>::dense(&l, &c, h, theta, &scale).unwrap();
+        let short = ExpAdams::<2, 3>::new(&l, &c, theta * h, &scale).unwrap();
+        let empty = History::<2, 3>::default();
+        let y0 = SVector::<f64, 2>::new(3e-7, -1e-3);
+        let (a0, a1) = (20.0, -50.0);
+        let got = part.step(&y0, a0, a1, &empty);
+        let want = short.step(&y0, a0, a0 + theta * (a1 - a0), &empty);
+        for i in 0..2 {
+            assert!(
+                (got[i] - want[i]).abs() < 1e-12 * scale[i],
+                "{got:?} vs {want:?}"
+            );
+        }
+        // A remainder that is a polynomial of degree P - 1 in t is extrapolated exactly, so
+        // the dense output is exact inside the interval too.
+        let l1 = SMatrix::<f64, 1, 1>::new(-50.0);
+        let c1 = SVector::<f64, 1>::new(0.0);
+        let h = 1e-3;
+        let part =
+            ExpAdams::<1, 3>::dense(&l1, &c1, h, theta, &SVector::<f64, 1>::new(1.0)).unwrap();
+        let n = |t: f64| 1.0 + 30.0 * t - 400.0 * t * t;
+        let mut hist = History::<1, 3>::default();
+        for k in [2.0, 1.0, 0.0] {
+            hist.push(SVector::<f64, 1>::new(n(-k * h)));
+        }
+        let got = part.step(&SVector::<f64, 1>::new(0.2), 0.0, 0.0, &hist)[0];
+        // The integrand is a polynomial times an exponential that varies by 1.5 % over the
+        // span: 3-point Gauss-Legendre is exact to about 1e-12 of it.
+        let tau = theta * h;
+        let integral: f64 = crate::ode::GAUSS_LEGENDRE_3
+            .iter()
+            .map(|&(x, w)| w * tau * (-50.0 * (tau - x * tau)).exp() * n(x * tau))
+            .sum();
+        let want = (-50.0 * tau).exp() * 0.2 + integral;
+        assert!((got - want).abs() < 1e-12, "{got} vs {want}");
     }
 }

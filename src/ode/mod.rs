@@ -250,12 +250,18 @@ impl<const N: usize> Step<N> {
 
     /// Integral over the step of `f(y(t))` by 3-point Gauss-Legendre on the dense output.
     pub fn integrate<F: Fn(&SVector<f64, N>) -> f64>(&self, f: F) -> f64 {
-        const X: [f64; 3] = [0.112_701_665_379_258_3, 0.5, 0.887_298_334_620_741_7];
-        const W: [f64; 3] = [5.0 / 18.0, 8.0 / 18.0, 5.0 / 18.0];
         let mut s = 0.0;
-        for i in 0..3 {
-            s += W[i] * f(&self.at_theta(X[i]));
+        for (x, w) in GAUSS_LEGENDRE_3 {
+            s += w * f(&self.at_theta(x));
         }
         s * self.h
     }
 }
+
+/// The 3-point Gauss-Legendre rule on [0, 1]: (node, weight) pairs, exact for polynomials of
+/// degree 5.
+pub const GAUSS_LEGENDRE_3: [(f64, f64); 3] = [
+    (0.112_701_665_379_258_3, 5.0 / 18.0),
+    (0.5, 8.0 / 18.0),
+    (0.887_298_334_620_741_7, 5.0 / 18.0),
+];

@@ -125,7 +125,7 @@ pub fn audit_state(y: &AuditState) -> State {
 }
 
 /// The energy balance of an audited run from the rest state (J).
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct EnergyLedger {
     /// Work of the inertial force.
     pub excitation: f64,

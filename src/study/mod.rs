@@ -11,6 +11,7 @@ pub mod continuation;
 pub mod ensemble;
 pub mod orbit;
 pub mod record;
+pub mod record_ledger;
 pub mod steady;
 pub mod stepped;
 pub mod sweep;

@@ -1,0 +1,82 @@
+//! The energy balance of random-vibration records as they are integrated
+//! (`endstop::study::record_ledger`): the exponential free-flight step closes it, and with
+//! impacts the balance is set by Dormand-Prince in contact and tightens with its tolerance.
+//!
+//! The target is the Performance chapter's: the balance closed to 1e-6 of the sum of its
+//! terms' magnitudes ([`EnergyLedger::relative_residual`]). The records are the ones the
+//! bench measures (seed 2012, stream 0, 10 s): about 0.3-1 s each.
+
+use endstop::device::Device;
+use endstop::paper::setups::prototype2_setup;
+use endstop::physics::energy::EnergyLedger;
+use endstop::study::record::{simulate_record, RecordSpec, Scheme};
+use endstop::study::record_ledger::record_ledger;
+
+const SEED: u64 = 2012;
+const TARGET: f64 = 1e-6;
+
+fn device(name: &str) -> Device {
+    let path = format!("{}/data/{name}.toml", env!("CARGO_MANIFEST_DIR"));
+    Device::from_toml_str(&std::fs::read_to_string(&path).unwrap(), &path).unwrap()
+}
+
+fn prototype2() -> Device {
+    prototype2_setup(&device("prototype2"))
+}
+
+fn ledger(dev: &Device, sa: f64, scheme: Scheme, rtol: f64) -> (EnergyLedger, u64) {
+    let mut spec = RecordSpec::paper(dev, sa);
+    spec.scheme = scheme;
+    spec.rtol = rtol;
+    let (rec, l) = record_ledger(dev, &spec, SEED, 0).unwrap();
+    (l, rec.summary.impacts)
+}
+
+#[test]
+fn the_ledger_observes_the_record_simulate_record_computes() {
+    // Watching the integration must not change it: the same samples, bit for bit.
+    let dev = prototype2();
+    let spec = RecordSpec::paper(&dev, 1.69e-3);
+    let plain = simulate_record(&dev, &spec, SEED, 0).unwrap();
+    let (watched, _) = record_ledger(&dev, &spec, SEED, 0).unwrap();
+    assert_eq!(plain.v1_v, watched.v1_v);
+    assert_eq!(plain.v2_v, watched.v2_v);
+}
+
+#[test]
+fn the_exponential_step_closes_the_energy_balance_without_impacts() {
+    // Impact-free records (the bench's accuracy records): all but the first samples are
+    // exponential steps.
+    for (name, dev, sa) in [
+        ("prototype 2", prototype2(), 1e-4),
+        ("prototype 1", device("prototype1"), 4.42e-6),
+    ] {
+        let (l, impacts) = ledger(&dev, sa, Scheme::Exponential, 1e-7);
+        assert_eq!(impacts, 0, "{name}: the record must be impact-free");
+        let r = l.relative_residual();
+        assert!(r.abs() < TARGET, "{name}: relative residual {r:e}");
+        // Not an empty ledger: the loads took energy and the drive put it in.
+        assert!(l.loads > 0.0 && l.excitation > l.loads, "{name}: {l:?}");
+    }
+}
+
+#[test]
+fn with_impacts_the_balance_tightens_with_the_contact_tolerance() {
+    // In and near contact the record is Dormand-Prince's; its energy error is first order in
+    // rtol (as the augmented audit's is). At 100 times the default tolerance the residual
+    // must fall at least tenfold and meet the target.
+    for (name, dev, sa) in [
+        ("prototype 2 (linear k_im)", prototype2(), 1.69e-3),
+        ("prototype 1 (Hertz)", device("prototype1"), 2.85e-2),
+    ] {
+        let (default, impacts) = ledger(&dev, sa, Scheme::Exponential, 1e-7);
+        let (tight, _) = ledger(&dev, sa, Scheme::Exponential, 1e-9);
+        assert!(impacts > 1000, "{name}: {impacts} impacts");
+        let (a, b) = (default.relative_residual(), tight.relative_residual());
+        assert!(
+            b.abs() < 0.1 * a.abs(),
+            "{name}: {a:e} at 1e-7, {b:e} at 1e-9"
+        );
+        assert!(b.abs() < TARGET, "{name}: {b:e} at 1e-9");
+    }
+}
