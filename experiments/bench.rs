@@ -383,6 +383,23 @@ fn rk4_record(
     Ok((p_sum / n as f64, evals.get(), events))
 }
 
+/// `f(case, run)` for every case and run, on every core at once (for the accuracy tables:
+/// nothing here is timed), returned case by case in order.
+fn untimed_grid<T: Send>(
+    cases: usize,
+    runs: usize,
+    f: impl Fn(usize, usize) -> Result<T> + Sync,
+) -> Result<Vec<Vec<T>>> {
+    let all = (0..cases * runs)
+        .into_par_iter()
+        .map(|k| f(k / runs, k % runs))
+        .collect::<Result<Vec<T>>>()?;
+    let mut all = all.into_iter();
+    Ok((0..cases)
+        .map(|_| all.by_ref().take(runs).collect())
+        .collect())
+}
+
 /// The fewest RK4 steps per sample interval (1, 2, 4, 8) with which the power of impact-free
 /// 1 s records of both prototypes is within 1e-6 (the target), and within 1e-8 (ours' accuracy,
 /// at the reference's own error), of Dormand-Prince at rtol 1e-10; and a Markdown table of
@@ -398,32 +415,25 @@ fn rk4_equal_accuracy(
         ("P1, Sa = 4.42e-6", prototype1_setup(p1), 4.42e-6),
     ];
     const SUBSTEPS: [usize; 4] = [1, 2, 4, 8];
-    // Nothing here is timed: every run of every case goes to the thread pool at once (run 0
-    // is ours, 1 the reference, then RK4 with each number of substeps).
-    let jobs: Vec<(usize, usize)> = (0..cases.len())
-        .flat_map(|c| (0..2 + SUBSTEPS.len()).map(move |r| (c, r)))
-        .collect();
-    let powers = jobs
-        .par_iter()
-        .map(|&(c, r)| {
-            let (_, dev, sa) = &cases[c];
-            let mut spec = RecordSpec::paper(dev, *sa);
-            spec.noise.duration_s = 1.0;
-            Ok(match r {
-                0 => simulate_record(dev, &spec, SEED, 0)?.summary.p_total_w(),
-                1 => {
-                    let mut tight = spec;
-                    tight.scheme = Scheme::Dopri5;
-                    tight.rtol = 1e-10;
-                    simulate_record(dev, &tight, SEED, 0)?.summary.p_total_w()
-                }
-                _ => rk4_record(dev, &spec, 0, SUBSTEPS[r - 2])?.0,
-            })
+    // Run 0 is ours, 1 the reference, then RK4 with each number of substeps.
+    let powers = untimed_grid(cases.len(), 2 + SUBSTEPS.len(), |c, r| {
+        let (_, dev, sa) = &cases[c];
+        let mut spec = RecordSpec::paper(dev, *sa);
+        spec.noise.duration_s = 1.0;
+        Ok(match r {
+            0 => simulate_record(dev, &spec, SEED, 0)?.summary.p_total_w(),
+            1 => {
+                let mut tight = spec;
+                tight.scheme = Scheme::Dopri5;
+                tight.rtol = 1e-10;
+                simulate_record(dev, &tight, SEED, 0)?.summary.p_total_w()
+            }
+            _ => rk4_record(dev, &spec, 0, SUBSTEPS[r - 2])?.0,
         })
-        .collect::<Result<Vec<f64>>>()?;
+    })?;
     let mut md = String::from("| record | ours | RK4, 1 step | RK4, 2 steps | RK4, 4 steps | RK4, 8 steps |\n|---|---|---|---|---|---|\n");
     let mut worst = [0.0f64; 4];
-    for ((label, _, _), p) in cases.iter().zip(powers.chunks(2 + SUBSTEPS.len())) {
+    for ((label, _, _), p) in cases.iter().zip(&powers) {
         let reference = p[1];
         let mut row = format!("| {label} | {:.1e} |", (p[0] / reference - 1.0).abs());
         for (i, rk4) in p[2..].iter().enumerate() {
@@ -463,26 +473,19 @@ fn impact_accuracy(
     let mut md = String::from(
         "| record | run | mean power (W) | relative to rtol 1e-10 | impacts |\n|---|---|---|---|---|\n",
     );
-    // Nothing here is timed: every run of every case goes to the thread pool at once.
-    let jobs: Vec<(usize, usize)> = (0..cases.len())
-        .flat_map(|c| (0..runs.len()).map(move |r| (c, r)))
-        .collect();
-    let summaries = jobs
-        .par_iter()
-        .map(|&(c, r)| {
-            let (_, dev, sa) = &cases[c];
-            let base = RecordSpec::paper(dev, *sa);
-            let (_, scheme, rtol) = runs[r];
-            let spec = RecordSpec {
-                scheme,
-                rtol: rtol.unwrap_or(base.rtol),
-                ..base
-            };
-            Ok(simulate_record(dev, &spec, SEED, 0)?.summary)
-        })
-        .collect::<Result<Vec<_>>>()?;
+    let summaries = untimed_grid(cases.len(), runs.len(), |c, r| {
+        let (_, dev, sa) = &cases[c];
+        let base = RecordSpec::paper(dev, *sa);
+        let (_, scheme, rtol) = runs[r];
+        let spec = RecordSpec {
+            scheme,
+            rtol: rtol.unwrap_or(base.rtol),
+            ..base
+        };
+        Ok(simulate_record(dev, &spec, SEED, 0)?.summary)
+    })?;
     let mut out = Vec::new();
-    for ((label, _, _), case) in cases.iter().zip(summaries.chunks(runs.len())) {
+    for ((label, _, _), case) in cases.iter().zip(&summaries) {
         let got: Vec<_> = runs
             .iter()
             .zip(case)
@@ -561,26 +564,19 @@ fn energy_balance(
         "| record | run | relative residual | residual (J) | work of the drive (J) | impacts |\n\
          |---|---|---|---|---|---|\n",
     );
-    // Nothing here is timed: every run of every case goes to the thread pool at once.
-    let jobs: Vec<(usize, usize)> = (0..cases.len())
-        .flat_map(|c| (0..runs.len()).map(move |r| (c, r)))
-        .collect();
-    let books = jobs
-        .par_iter()
-        .map(|&(c, r)| {
-            let (_, _, dev, sa) = &cases[c];
-            let (_, scheme, rtol) = runs[r];
-            let spec = RecordSpec {
-                scheme,
-                rtol,
-                ..RecordSpec::paper(dev, *sa)
-            };
-            let (rec, l) = record_ledger(dev, &spec, SEED, 0)?;
-            Ok((rec.summary.impacts, l))
-        })
-        .collect::<Result<Vec<_>>>()?;
+    let books = untimed_grid(cases.len(), runs.len(), |c, r| {
+        let (_, _, dev, sa) = &cases[c];
+        let (_, scheme, rtol) = runs[r];
+        let spec = RecordSpec {
+            scheme,
+            rtol,
+            ..RecordSpec::paper(dev, *sa)
+        };
+        let (rec, l) = record_ledger(dev, &spec, SEED, 0)?;
+        Ok((rec.summary.impacts, l))
+    })?;
     let mut out = Vec::new();
-    for ((label, key, _, _), case) in cases.iter().zip(books.chunks(runs.len())) {
+    for ((label, key, _, _), case) in cases.iter().zip(&books) {
         for ((name, _, _), (impacts, l)) in runs.iter().zip(case) {
             let r = l.relative_residual();
             md.push_str(&format!(

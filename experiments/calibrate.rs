@@ -24,7 +24,11 @@ fn run() -> Result<()> {
     let cal = calibrate_prototype1(&p1.device)?;
     write_calibration(&p1, &cal)?;
     let secs = started.elapsed().as_secs_f64();
-    let timing = serde_json::json!({ "experiment": "calibrate", "wall_time_s": secs });
+    let timing = serde_json::json!({
+        "experiment": "calibrate",
+        "wall_time_s": secs,
+        "cpu_time_s": common::cpu_time_s(),
+    });
     write_atomic(
         &calibration_dir().join("timing.json"),
         serde_json::to_string_pretty(&timing)?.as_bytes(),
