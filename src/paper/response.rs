@@ -361,7 +361,8 @@ impl CaseRun {
     }
 
     /// The summary numbers of the case, named `<case>_<quantity>`; a quantity that does not
-    /// exist for the case is absent.
+    /// exist for the case is absent. No wall-clock time is among them (the summary is the same
+    /// bytes on every run; the continuation's time is in the chapter's cost table).
     pub fn numbers(&self) -> Vec<(String, f64)> {
         let k = self.setup.case.key();
         let mut out = Vec::new();
@@ -401,7 +402,6 @@ impl CaseRun {
         );
         put("up_jump_power_ratio", self.up.jump_power_ratio);
         put("max_residual", Some(self.branch.max_residual()));
-        put("continuation_s", Some(self.continuation_s));
         if let Some(b) = &self.basins {
             for (label, share) in b.shares() {
                 out.push((format!("{k}_basin_share_{label}"), share));
