@@ -427,7 +427,8 @@ fn write_scorecard() -> Result<Vec<Row>> {
     Ok(rows)
 }
 
-/// The provenance table: experiment, parameter files, seed, commit, wall time.
+/// The provenance table: experiment, parameter files, seed, commit, wall and CPU time; under
+/// it, the CPU sum with the floor it puts on the wall time, and the last run's totals.
 fn write_provenance() -> Result<()> {
     let mut md = String::from(
         "| experiment | parameter files (set) | seed | commit | wall time (s) | CPU time (s) |\n\

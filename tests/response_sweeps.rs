@@ -211,4 +211,9 @@ fn refined_basins_equal_the_refined_grid_and_reuse_the_coarse_cells() {
     let other = s.basin_settings(7).unwrap();
     let err = refine(&h, &forcing, &catalogue, &other, &coarse, &|| {}).unwrap_err();
     assert!(err.to_string().contains("refine"), "{err}");
+    // So is an empty grid (no refined grid exists).
+    let mut empty = coarse_settings;
+    empty.grid.nx = 0;
+    let err = refine(&h, &forcing, &catalogue, &empty, &coarse, &|| {}).unwrap_err();
+    assert!(err.to_string().contains("empty"), "{err}");
 }

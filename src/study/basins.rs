@@ -32,11 +32,12 @@ pub struct BasinGrid {
 }
 
 impl BasinGrid {
-    /// The same ranges with twice as many intervals in each direction (every cell kept).
+    /// The same ranges with twice as many intervals in each direction (every cell kept; an
+    /// empty direction stays empty).
     pub fn refined(&self) -> Self {
         Self {
-            nx: 2 * self.nx - 1,
-            nv: 2 * self.nv - 1,
+            nx: (2 * self.nx).saturating_sub(1),
+            nv: (2 * self.nv).saturating_sub(1),
             ..*self
         }
     }
@@ -187,6 +188,11 @@ pub fn refine(
     on_cell: &(dyn Fn() + Sync),
 ) -> Result<Basins, OrbitError> {
     let g = coarse_settings.grid;
+    if g.nx == 0 || g.nv == 0 {
+        return Err(OrbitError::Invalid(
+            "refine: the coarse grid is empty (basins need a non-empty grid)".into(),
+        ));
+    }
     let labels: Vec<&str> = attractors.iter().map(|a| a.label.as_str()).collect();
     if coarse.cells.len() != g.nx * g.nv || coarse.labels != labels {
         return Err(OrbitError::Invalid(format!(
@@ -198,11 +204,7 @@ pub fn refine(
             g.nv
         )));
     }
-    let fine = BasinGrid {
-        nx: 2 * g.nx - 1,
-        nv: 2 * g.nv - 1,
-        ..g
-    };
+    let fine = g.refined();
     let cells = fine.cells();
     let known = cells
         .iter()
