@@ -383,6 +383,50 @@ fn rk4_record(
     Ok((p_sum / n as f64, evals.get(), events))
 }
 
+/// A record of the accuracy tables: its label, its key in summary numbers, the device as
+/// simulated and the level (g^2/Hz).
+type AccuracyCase = (&'static str, &'static str, endstop::device::Device, f64);
+
+/// The impact-free records of the accuracy tables (the linear regime of Figures 14 and 11).
+fn impact_free_cases(
+    p1: &endstop::device::Device,
+    p2: &endstop::device::Device,
+) -> [AccuracyCase; 2] {
+    use endstop::paper::setups::{prototype1_setup, prototype2_setup};
+    [
+        ("P2, Sa = 1e-4", "p2_1e-4", prototype2_setup(p2), 1e-4),
+        (
+            "P1, Sa = 4.42e-6",
+            "p1_4.42e-6",
+            prototype1_setup(p1),
+            4.42e-6,
+        ),
+    ]
+}
+
+/// The impacting records of the accuracy tables: prototype 1 at 2.85e-2 (Figure 12's setup)
+/// and prototype 2 at 1.69e-3 (Figures 14 and 15's).
+fn impacting_cases(
+    p1: &endstop::device::Device,
+    p2: &endstop::device::Device,
+) -> [AccuracyCase; 2] {
+    use endstop::paper::setups::{prototype1_setup, prototype2_setup};
+    [
+        (
+            "P1, Sa = 2.85e-2",
+            "p1_2.85e-2",
+            prototype1_setup(p1),
+            2.85e-2,
+        ),
+        (
+            "P2, Sa = 1.69e-3",
+            "p2_1.69e-3",
+            prototype2_setup(p2),
+            1.69e-3,
+        ),
+    ]
+}
+
 /// `f(case, run)` for every case and run, on every core at once (for the accuracy tables:
 /// nothing here is timed), returned case by case in order.
 fn untimed_grid<T: Send>(
@@ -408,16 +452,12 @@ fn rk4_equal_accuracy(
     p1: &endstop::device::Device,
     p2: &endstop::device::Device,
 ) -> Result<([usize; 2], String)> {
-    use endstop::paper::setups::{prototype1_setup, prototype2_setup};
     use endstop::study::record::Scheme;
-    let cases = [
-        ("P2, Sa = 1e-4", prototype2_setup(p2), 1e-4),
-        ("P1, Sa = 4.42e-6", prototype1_setup(p1), 4.42e-6),
-    ];
+    let cases = impact_free_cases(p1, p2);
     const SUBSTEPS: [usize; 4] = [1, 2, 4, 8];
     // Run 0 is ours, 1 the reference, then RK4 with each number of substeps.
     let powers = untimed_grid(cases.len(), 2 + SUBSTEPS.len(), |c, r| {
-        let (_, dev, sa) = &cases[c];
+        let (_, _, dev, sa) = &cases[c];
         let mut spec = RecordSpec::paper(dev, *sa);
         spec.noise.duration_s = 1.0;
         Ok(match r {
@@ -433,7 +473,7 @@ fn rk4_equal_accuracy(
     })?;
     let mut md = String::from("| record | ours | RK4, 1 step | RK4, 2 steps | RK4, 4 steps | RK4, 8 steps |\n|---|---|---|---|---|---|\n");
     let mut worst = [0.0f64; 4];
-    for ((label, _, _), p) in cases.iter().zip(&powers) {
+    for ((label, _, _, _), p) in cases.iter().zip(&powers) {
         let reference = p[1];
         let mut row = format!("| {label} | {:.1e} |", (p[0] / reference - 1.0).abs());
         for (i, rk4) in p[2..].iter().enumerate() {
@@ -450,20 +490,14 @@ fn rk4_equal_accuracy(
 
 /// A record's power with impacts, ours against Dormand-Prince everywhere at rtol 1e-7, 1e-9
 /// and 1e-10 (the accuracy the Performance chapter asks of a record: its power within 1e-6 of
-/// a tight-tolerance run): prototype 1 at 2.85e-2
-/// (Figure 12's setup) and prototype 2 at 1.69e-3 (Figures 14 and 15's), one 10 s record
-/// each. Returns the Markdown table and, per case, our relative deviation from rtol 1e-10 and
+/// a tight-tolerance run), one 10 s record of each of [`impacting_cases`]. Returns the Markdown table and, per case, our relative deviation from rtol 1e-10 and
 /// that of rtol 1e-9 (the reference's own reproducibility).
 fn impact_accuracy(
     p1: &endstop::device::Device,
     p2: &endstop::device::Device,
 ) -> Result<(String, Vec<(f64, f64)>)> {
-    use endstop::paper::setups::{prototype1_setup, prototype2_setup};
     use endstop::study::record::Scheme;
-    let cases = [
-        ("P1, Sa = 2.85e-2", prototype1_setup(p1), 2.85e-2),
-        ("P2, Sa = 1.69e-3", prototype2_setup(p2), 1.69e-3),
-    ];
+    let cases = impacting_cases(p1, p2);
     let runs = [
         ("ours", Scheme::Exponential, None),
         ("Dormand-Prince, rtol 1e-7", Scheme::Dopri5, Some(1e-7)),
@@ -474,7 +508,7 @@ fn impact_accuracy(
         "| record | run | mean power (W) | relative to rtol 1e-10 | impacts |\n|---|---|---|---|---|\n",
     );
     let summaries = untimed_grid(cases.len(), runs.len(), |c, r| {
-        let (_, dev, sa) = &cases[c];
+        let (_, _, dev, sa) = &cases[c];
         let base = RecordSpec::paper(dev, *sa);
         let (_, scheme, rtol) = runs[r];
         let spec = RecordSpec {
@@ -485,7 +519,7 @@ fn impact_accuracy(
         Ok(simulate_record(dev, &spec, SEED, 0)?.summary)
     })?;
     let mut out = Vec::new();
-    for ((label, _, _), case) in cases.iter().zip(&summaries) {
+    for ((label, _, _, _), case) in cases.iter().zip(&summaries) {
         let got: Vec<_> = runs
             .iter()
             .zip(case)
@@ -523,38 +557,18 @@ fn impact_accuracy(
 }
 
 /// The energy balance of one 10 s record (stream 0) per case, by our scheme at the default
-/// tolerance and at rtol 1e-9 and by Dormand-Prince everywhere at the default: two
-/// impact-free records (the accuracy records of [`rk4_equal_accuracy`], 10 s long here) and
-/// the impacting ones of [`impact_accuracy`]. Returns the Markdown table with a line per
+/// tolerance and at rtol 1e-9 and by Dormand-Prince everywhere at the default: the records
+/// of [`impact_free_cases`] (10 s long here) and of [`impacting_cases`]. Returns the Markdown table with a line per
 /// record on whether our scheme closes the balance to 1e-6, and (key, our relative residual).
 fn energy_balance(
     p1: &endstop::device::Device,
     p2: &endstop::device::Device,
 ) -> Result<(String, Vec<(String, f64)>)> {
-    use endstop::paper::setups::{prototype1_setup, prototype2_setup};
     use endstop::study::record::{Scheme, DEFAULT_RTOL};
     use endstop::study::record_ledger::record_ledger;
-    let cases = [
-        ("P2, Sa = 1e-4", "p2_1e-4", prototype2_setup(p2), 1e-4),
-        (
-            "P1, Sa = 4.42e-6",
-            "p1_4.42e-6",
-            prototype1_setup(p1),
-            4.42e-6,
-        ),
-        (
-            "P2, Sa = 1.69e-3",
-            "p2_1.69e-3",
-            prototype2_setup(p2),
-            1.69e-3,
-        ),
-        (
-            "P1, Sa = 2.85e-2",
-            "p1_2.85e-2",
-            prototype1_setup(p1),
-            2.85e-2,
-        ),
-    ];
+    let [free_a, free_b] = impact_free_cases(p1, p2);
+    let [hit_a, hit_b] = impacting_cases(p1, p2);
+    let cases = [free_a, free_b, hit_a, hit_b];
     let runs = [
         ("ours", Scheme::Exponential, DEFAULT_RTOL),
         ("ours, rtol 1e-9", Scheme::Exponential, 1e-9),

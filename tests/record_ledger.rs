@@ -9,7 +9,7 @@
 use endstop::device::Device;
 use endstop::paper::setups::prototype2_setup;
 use endstop::physics::energy::EnergyLedger;
-use endstop::study::record::{simulate_record, RecordSpec, Scheme};
+use endstop::study::record::{simulate_record, RecordSpec, Scheme, DEFAULT_RTOL};
 use endstop::study::record_ledger::record_ledger;
 
 const SEED: u64 = 2012;
@@ -51,7 +51,7 @@ fn the_exponential_step_closes_the_energy_balance_without_impacts() {
         ("prototype 2", prototype2(), 1e-4),
         ("prototype 1", device("prototype1"), 4.42e-6),
     ] {
-        let (l, impacts) = ledger(&dev, sa, Scheme::Exponential, 1e-7);
+        let (l, impacts) = ledger(&dev, sa, Scheme::Exponential, DEFAULT_RTOL);
         assert_eq!(impacts, 0, "{name}: the record must be impact-free");
         let r = l.relative_residual();
         assert!(r.abs() < TARGET, "{name}: relative residual {r:e}");
@@ -69,14 +69,17 @@ fn with_impacts_the_balance_tightens_with_the_contact_tolerance() {
         ("prototype 2 (linear k_im)", prototype2(), 1.69e-3),
         ("prototype 1 (Hertz)", device("prototype1"), 2.85e-2),
     ] {
-        let (default, impacts) = ledger(&dev, sa, Scheme::Exponential, 1e-7);
-        let (tight, _) = ledger(&dev, sa, Scheme::Exponential, 1e-9);
+        let (default, impacts) = ledger(&dev, sa, Scheme::Exponential, DEFAULT_RTOL);
+        let (tight, _) = ledger(&dev, sa, Scheme::Exponential, DEFAULT_RTOL / 100.0);
         assert!(impacts > 1000, "{name}: {impacts} impacts");
         let (a, b) = (default.relative_residual(), tight.relative_residual());
         assert!(
             b.abs() < 0.1 * a.abs(),
-            "{name}: {a:e} at 1e-7, {b:e} at 1e-9"
+            "{name}: {a:e} at the default rtol, {b:e} at a hundredth of it"
         );
-        assert!(b.abs() < TARGET, "{name}: {b:e} at 1e-9");
+        assert!(
+            b.abs() < TARGET,
+            "{name}: {b:e} at a hundredth of the default rtol"
+        );
     }
 }

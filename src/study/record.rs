@@ -459,7 +459,7 @@ impl FastFlight {
     ///
     /// Forced inline, with the exponential step and the stop check it calls: this is the
     /// record's inner loop, and once [`simulate_observed`] also served the energy ledger the
-    /// compiler stopped inlining them, which cost about 15 % of a record (measured; the
+    /// compiler stopped inlining them, which cost 14 to 16 % of a record (measured; the
     /// profile then showed them as functions of their own).
     #[inline(always)]
     fn step(

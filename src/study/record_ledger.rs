@@ -49,14 +49,14 @@ type DenseNodes = [ExpAdams<4, EXPONENTIAL_ORDER>; 3];
 /// What the ledger needs of one instant: the mode, the state, the stored energy and the bias
 /// source's charge.
 #[derive(Debug, Clone, Copy)]
-struct Instant {
+struct Moment {
     mode: Mode,
     y: State,
     stored_j: f64,
     charge_c: f64,
 }
 
-impl Instant {
+impl Moment {
     fn of(model: &Harvester<Sampled>, mode: Mode, y: &State) -> Self {
         Self {
             mode,
@@ -71,8 +71,8 @@ impl Instant {
 struct Books {
     dense: Option<DenseNodes>,
     vb: f64,
-    first: Option<Instant>,
-    last: Option<Instant>,
+    first: Option<Moment>,
+    last: Option<Moment>,
     ledger: EnergyLedger,
 }
 
@@ -84,7 +84,7 @@ impl Books {
             Some(last) => last,
             None => {
                 self.vb = model.vb;
-                let start = Instant::of(model, mode, y);
+                let start = Moment::of(model, mode, y);
                 self.first = Some(start);
                 start
             }
@@ -112,7 +112,7 @@ impl Books {
     }
 
     fn close(&mut self, model: &Harvester<Sampled>, mode: Mode, y: &State) {
-        self.last = Some(Instant::of(model, mode, y));
+        self.last = Some(Moment::of(model, mode, y));
     }
 
     /// The balance from the first interval's start to the last one's end.
