@@ -18,7 +18,7 @@ use std::time::Instant;
 use anyhow::Result;
 use common::{fmt_sig, Experiment};
 use endstop::drive::Sine;
-use endstop::ode::Dopri5;
+use endstop::ode::{Dopri5, Stats};
 use endstop::physics::contact::Mode;
 use endstop::physics::harvester::Harvester;
 use endstop::study::record::simulate_record;
@@ -52,9 +52,8 @@ struct Row {
     median_s: f64,
     min_s: f64,
     simulated_s: f64,
-    steps: u64,
-    rhs_evals: u64,
-    events: u64,
+    /// The integrator's counters of one run.
+    stats: Stats,
     note: String,
 }
 
@@ -117,9 +116,7 @@ fn run() -> Result<()> {
             median_s: times[REPEATS / 2],
             min_s: times[0],
             simulated_s: sim,
-            steps: s.stats.accepted + s.stats.rejected,
-            rhs_evals: s.stats.rhs_evals,
-            events: s.stats.events,
+            stats: s.stats,
             note: format!(
                 "{} impacts, {} % of time in contact",
                 s.impacts,
@@ -145,12 +142,9 @@ fn run() -> Result<()> {
                 )?)
             })
         })?;
-        let (mut steps, mut evals, mut events, mut periods) = (0, 0, 0, 0.0);
+        let (mut stats, mut periods) = (Stats::default(), 0.0);
         for c in &res {
-            let st = &c.report.sweep.stats;
-            steps += st.accepted + st.rejected;
-            evals += st.rhs_evals;
-            events += st.events;
+            stats += c.report.sweep.stats;
             for s in &c.report.sweep.steps {
                 periods += (s.measurement.blocks + settings.cfg.settle_blocks) as f64
                     * settings.cfg.block_periods as f64
@@ -165,9 +159,7 @@ fn run() -> Result<()> {
             median_s: times[REPEATS / 2],
             min_s: times[0],
             simulated_s: periods,
-            steps,
-            rhs_evals: evals,
-            events,
+            stats,
             note: "coarse sweeps only (refinements excluded from the counts)".into(),
         });
     }
@@ -197,9 +189,7 @@ fn run() -> Result<()> {
         median_s: times[REPEATS / 2],
         min_s: times[0],
         simulated_s: t_end,
-        steps: stats.accepted + stats.rejected,
-        rhs_evals: stats.rhs_evals,
-        events: stats.events,
+        stats,
         note: format!(
             "{} % of accepted steps are in contact",
             fmt_sig(100.0 * share, 3)
@@ -211,19 +201,24 @@ fn run() -> Result<()> {
 
     let mut md = format!(
         "Machine: {} logical cores (RAYON_NUM_THREADS unset unless stated). Each case ran {REPEATS} times.\n\n\
-         | case | median wall (s) | fastest (s) | simulated s per wall s | steps per simulated s | RHS evals per simulated s | events | notes |\n|---|---|---|---|---|---|---|---|\n",
+         | case | median wall (s) | fastest (s) | simulated s per wall s | steps per simulated s | rejected steps (after an event) | RHS evals per simulated s | events | notes |\n|---|---|---|---|---|---|---|---|---|\n",
         std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1)
     );
     for r in &rows {
         md.push_str(&format!(
-            "| {} | {} | {} | {} | {} | {} | {} | {} |\n",
+            "| {} | {} | {} | {} | {} | {} ({}) | {} | {} | {} |\n",
             r.case,
             fmt_sig(r.median_s, 3),
             fmt_sig(r.min_s, 3),
             fmt_sig(r.simulated_s / r.median_s, 3),
-            fmt_sig(r.steps as f64 / r.simulated_s, 3),
-            fmt_sig(r.rhs_evals as f64 / r.simulated_s, 3),
-            r.events,
+            fmt_sig(
+                (r.stats.accepted + r.stats.rejected) as f64 / r.simulated_s,
+                3
+            ),
+            r.stats.rejected,
+            r.stats.rejected_after_event,
+            fmt_sig(r.stats.rhs_evals as f64 / r.simulated_s, 3),
+            r.stats.events,
             r.note
         ));
     }
@@ -293,9 +288,11 @@ fn run() -> Result<()> {
         "median_wall_s" => rows.iter().map(|r| r.median_s).collect::<Vec<_>>(),
         "min_wall_s" => rows.iter().map(|r| r.min_s).collect::<Vec<_>>(),
         "simulated_s" => rows.iter().map(|r| r.simulated_s).collect::<Vec<_>>(),
-        "steps" => rows.iter().map(|r| r.steps).collect::<Vec<_>>(),
-        "rhs_evals" => rows.iter().map(|r| r.rhs_evals).collect::<Vec<_>>(),
-        "events" => rows.iter().map(|r| r.events).collect::<Vec<_>>(),
+        "steps" => rows.iter().map(|r| r.stats.accepted + r.stats.rejected).collect::<Vec<_>>(),
+        "rejected_steps" => rows.iter().map(|r| r.stats.rejected).collect::<Vec<_>>(),
+        "rejected_after_event" => rows.iter().map(|r| r.stats.rejected_after_event).collect::<Vec<_>>(),
+        "rhs_evals" => rows.iter().map(|r| r.stats.rhs_evals).collect::<Vec<_>>(),
+        "events" => rows.iter().map(|r| r.stats.events).collect::<Vec<_>>(),
         "params" => vec!["published+calibrated"; rows.len()],
     )?;
     exp.write_parquet("bench", &mut df, "published+calibrated")?;
@@ -635,9 +632,7 @@ fn response_rows(p2: &endstop::device::Device) -> Result<Vec<Row>> {
         median_s: times[REPEATS / 2],
         min_s: times[0],
         simulated_s: span,
-        steps: branch.stats.accepted + branch.stats.rejected,
-        rhs_evals: branch.stats.rhs_evals,
-        events: branch.stats.events,
+        stats: branch.stats,
         note: format!(
             "{} orbits, {} events; 'simulated s' is the frequency span in Hz",
             branch.points.len(),
@@ -665,9 +660,7 @@ fn response_rows(p2: &endstop::device::Device) -> Result<Vec<Row>> {
             median_s: times[REPEATS / 2],
             min_s: times[0],
             simulated_s: span,
-            steps: stats.accepted + stats.rejected,
-            rhs_evals: stats.rhs_evals,
-            events: stats.events,
+            stats,
             note: "with refinements; 'simulated s' is the frequency span in Hz".into(),
         });
     }

@@ -427,6 +427,10 @@ fn write_scorecard() -> Result<Vec<Row>> {
     Ok(rows)
 }
 
+/// The jobs that simulate the random-vibration ensembles (the provenance line compares their
+/// processor time with a minute of the machine's cores).
+const ENSEMBLE_JOBS: [&str; 4] = ["fig11", "fig12", "fig14", "fig15"];
+
 /// The provenance table: experiment, parameter files, seed, commit, wall and CPU time; under
 /// it, the CPU sum with the floor it puts on the wall time, and the last run's totals.
 fn write_provenance() -> Result<()> {
@@ -434,7 +438,7 @@ fn write_provenance() -> Result<()> {
         "| experiment | parameter files (set) | seed | commit | wall time (s) | CPU time (s) |\n\
          |---|---|---|---|---|---|\n",
     );
-    let (mut cpu_sum, mut cpu_jobs) = (0.0, 0);
+    let (mut cpu_sum, mut cpu_jobs, mut cpu_ensembles) = (0.0, 0, 0.0);
     for job in JOBS {
         let name = job.name;
         let Some(s) = read_summary(job) else {
@@ -452,6 +456,9 @@ fn write_provenance() -> Result<()> {
         if let Some(c) = cpu {
             cpu_sum += c;
             cpu_jobs += 1;
+            if ENSEMBLE_JOBS.contains(&name) {
+                cpu_ensembles += c;
+            }
         }
         let params: Vec<String> = s
             .params
@@ -473,6 +480,18 @@ fn write_provenance() -> Result<()> {
              {cpu_jobs} experiments: on this machine's {cores} cores no schedule of them can take \
              less than {:.0} s of wall time.",
             cpu_sum / cores as f64
+        ));
+        // What a minute of wall time allows, against the random-vibration ensembles alone.
+        let minute = 60.0 * cores as f64;
+        md.push_str(&format!(
+            " A minute on {cores} cores is {minute:.0} s of CPU time; the random-vibration \
+             ensembles ({}) took {cpu_ensembles:.0} s of CPU time, {} of it.",
+            ENSEMBLE_JOBS.join(", "),
+            if cpu_ensembles > minute {
+                "more than all".to_string()
+            } else {
+                format!("{:.0} %", 100.0 * cpu_ensembles / minute)
+            }
         ));
     }
     let last = std::fs::read_to_string(common::results_root().join(LAST_RUN))
@@ -520,4 +539,16 @@ fn study_placeholder() -> Result<()> {
         }
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_ensemble_jobs_are_jobs() {
+        for name in ENSEMBLE_JOBS {
+            assert!(JOBS.iter().any(|j| j.name == name), "{name} is not a job");
+        }
+    }
 }
