@@ -339,9 +339,12 @@ struct SummaryIn {
 }
 
 fn read_summary(job: &Job) -> Option<SummaryIn> {
-    let path = job.dir().join("summary.json");
-    let text = std::fs::read_to_string(path).ok()?;
-    serde_json::from_str(&text).ok()
+    read_json(&job.dir().join("summary.json"))
+}
+
+/// A JSON file's contents; None when it is missing or does not parse (a job that has not run).
+fn read_json<T: serde::de::DeserializeOwned>(path: &std::path::Path) -> Option<T> {
+    serde_json::from_str(&std::fs::read_to_string(path).ok()?).ok()
 }
 
 /// Joins `data/claims.toml` with every experiment's summary.
@@ -445,9 +448,7 @@ fn write_provenance() -> Result<()> {
             md.push_str(&format!("| {name} | (no results) | | | | |\n"));
             continue;
         };
-        let timing = std::fs::read_to_string(job.dir().join("timing.json"))
-            .ok()
-            .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok());
+        let timing: Option<serde_json::Value> = read_json(&job.dir().join("timing.json"));
         let seconds = |key: &str| timing.as_ref().and_then(|v| v[key].as_f64());
         let wall = seconds("wall_time_s")
             .map(|t| format!("{t:.2}"))
@@ -494,10 +495,7 @@ fn write_provenance() -> Result<()> {
             }
         ));
     }
-    let last = std::fs::read_to_string(common::results_root().join(LAST_RUN))
-        .ok()
-        .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok());
-    if let Some(v) = last {
+    if let Some(v) = read_json::<serde_json::Value>(&common::results_root().join(LAST_RUN)) {
         let (wall, cpu) = (v["wall_time_s"].as_f64(), v["cpu_time_s"].as_f64());
         let n = v["experiments"].as_array().map_or(0, |a| a.len());
         if let Some(wall) = wall {

@@ -206,6 +206,13 @@ pub struct Stats {
     pub events: u64,
 }
 
+impl Stats {
+    /// Steps tried: accepted and rejected.
+    pub fn steps(&self) -> u64 {
+        self.accepted + self.rejected
+    }
+}
+
 impl AddAssign for Stats {
     fn add_assign(&mut self, other: Stats) {
         self.accepted += other.accepted;

@@ -266,7 +266,7 @@ impl Curve {
                 .measurements()
                 .map(|m| (m.blocks + cfg.settle_blocks) * cfg.block_periods)
                 .sum(),
-            integrator_steps: stats.accepted + stats.rejected,
+            integrator_steps: stats.steps(),
             contact_events: stats.events,
         }
     }

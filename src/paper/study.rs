@@ -617,7 +617,7 @@ fn p2_ensembles(variant: &Variant, records: usize) -> [Outcome; 5] {
 /// The raw quantities of prototype 2 at a variant, in the order of [`Prototype::quantities`]
 /// in `scope`: Figure 13 at 10 V with the linear law and the variant's b_im (the paper's fit),
 /// the Hertz alternative with its claim-defined b_im; Figures 14 and 15 at 15 V
-/// ([`p2_ensembles`]); Table 3 at 15 V.
+/// (`p2_ensembles`); Table 3 at 15 V.
 pub fn evaluate_p2(
     variant: &Variant,
     claims: &Claims,

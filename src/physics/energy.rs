@@ -180,6 +180,19 @@ impl EnergyLedger {
     pub fn stop_absorbed(&self) -> f64 {
         self.stop_damping + self.clip_losses - self.reengagement_gains
     }
+
+    /// Books the stored energy `dropped_j` (before minus after) that a switch from `from` to
+    /// `to` makes disappear or appear: a tension-free contact that unloads while still
+    /// pressed drops the spring energy U(delta) (a clip loss), one that re-engages while
+    /// pressed restores it (a re-engagement gain), and the projection onto the stop at entry
+    /// and exit moves the stored energy by the order of the event time tolerance.
+    pub fn book_switch(&mut self, from: Mode, to: Mode, dropped_j: f64) {
+        match (from, to) {
+            (Mode::Contact(_), Mode::Clipped(_)) => self.clip_losses += dropped_j,
+            (Mode::Clipped(_), Mode::Contact(_)) => self.reengagement_gains -= dropped_j,
+            _ => self.projections += dropped_j,
+        }
+    }
 }
 
 impl<E: Excitation> EnergyAudit<E> {
@@ -237,23 +250,19 @@ impl<E: Excitation> HybridSystem<AUDIT_DIM> for EnergyAudit<E> {
         self.0.guards(mode, t, &audit_state(y))
     }
 
-    /// Switches mode and books the stored energy that the switch makes disappear or appear:
-    /// a tension-free contact that unloads while still pressed drops the spring energy
-    /// U(delta) (a clip loss), one that re-engages while pressed restores it (a re-engagement
-    /// gain), and the projection onto the stop at entry and exit moves the stored energy by
-    /// the order of the event time tolerance.
+    /// Switches mode and books the stored energy that the switch makes disappear or appear
+    /// ([`EnergyLedger::book_switch`]).
     fn switch(&self, mode: Mode, i: usize, t: f64, y: &mut AuditState) -> Mode {
         use ledger_index as l;
         let mut s = audit_state(y);
         let before = self.0.stored_energy(mode, &s);
         let m = self.0.switch(mode, i, t, &mut s);
         y[0] = s[0];
-        let dropped = before - self.0.stored_energy(m, &s);
-        match (mode, m) {
-            (Mode::Contact(_), Mode::Clipped(_)) => y[l::CLIP_LOSSES] += dropped,
-            (Mode::Clipped(_), Mode::Contact(_)) => y[l::REENGAGEMENT_GAINS] -= dropped,
-            _ => y[l::PROJECTIONS] += dropped,
-        }
+        let mut booked = EnergyLedger::default();
+        booked.book_switch(mode, m, before - self.0.stored_energy(m, &s));
+        y[l::CLIP_LOSSES] += booked.clip_losses;
+        y[l::REENGAGEMENT_GAINS] += booked.reengagement_gains;
+        y[l::PROJECTIONS] += booked.projections;
         m
     }
 

@@ -1,4 +1,5 @@
-//! The energy balance of a random-vibration record as [`simulate_record`] integrates it.
+//! The energy balance of a random-vibration record as
+//! [`simulate_record`](crate::study::record::simulate_record) integrates it.
 //!
 //! [`crate::physics::energy::EnergyAudit`] checks Dormand-Prince by integrating the work of
 //! every force beside the state. A record is integrated mostly by the exponential
@@ -13,8 +14,8 @@
 //!
 //! The input is read by linear interpolation inside a sample interval, as both schemes read
 //! it. A change of the state between one interval's end and the next one's start (the
-//! projection onto a stop at a mode switch) is booked as the stored energy it moves, in the
-//! terms of [`EnergyAudit`](crate::physics::energy::EnergyAudit)'s switch. The residual of
+//! projection onto a stop at a mode switch) is booked as the stored energy it moves, by
+//! [`EnergyLedger::book_switch`] as the audit books it. The residual of
 //! the [`EnergyLedger`] then measures the integration of the record and the quadrature. The
 //! rule's relative error on a power oscillating at 2f (a motion at f) is about
 //! 5e-7 (4πf h)^6: 1e-11 at prototype 1's 1.3 kHz resonance sampled every 10 us.
@@ -90,13 +91,11 @@ impl Books {
             }
         };
         if last.mode != mode || last.y != *y {
-            let dropped = last.stored_j - model.stored_energy(mode, y);
-            let l = &mut self.ledger;
-            match (last.mode, mode) {
-                (Mode::Contact(_), Mode::Clipped(_)) => l.clip_losses += dropped,
-                (Mode::Clipped(_), Mode::Contact(_)) => l.reengagement_gains -= dropped,
-                _ => l.projections += dropped,
-            }
+            self.ledger.book_switch(
+                last.mode,
+                mode,
+                last.stored_j - model.stored_energy(mode, y),
+            );
         }
     }
 
