@@ -11,6 +11,7 @@
 //! Each case runs `REPEATS` times; the table gives the median and the fastest wall time.
 //! Results go to `data/results/bench/` and the book's Performance page.
 
+use endstop::paper::setups::comb;
 use endstop_experiments as common;
 
 use std::time::Instant;
@@ -338,7 +339,7 @@ fn rk4_record(
         max_iter: 60,
     };
     let (mut y, mut mode, mut events) = (model.rest_state(), Mode::Free, 0u64);
-    let (mut p_sum, rl) = (0.0, dev.electrical.load_resistance_ohm);
+    let (mut p_sum, rl) = (0.0, comb(&dev).load_resistance_ohm);
     for k in 0..n_tr + n {
         if k > 0 {
             for j in 0..substeps {

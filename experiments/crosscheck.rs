@@ -10,6 +10,7 @@
 //! installed or if the documented settings miss the acceptance tolerances (0.1 % without
 //! impacts, 1 % with impacts).
 
+use endstop::paper::setups::{comb, endstop, stiffness_model};
 use endstop_experiments as common;
 
 use std::path::{Path, PathBuf};
@@ -524,9 +525,9 @@ fn run() -> Result<()> {
                 case: case.key.to_string(),
                 case_label: case.label.clone(),
                 device: dev.name.clone(),
-                stiffness: format!("{:?}", dev.endstop.stiffness).to_lowercase(),
-                bim: dev.endstop.damping_n_s_per_m,
-                bias_v: dev.electrical.bias_v,
+                stiffness: format!("{:?}", stiffness_model(&dev)).to_lowercase(),
+                bim: endstop(&dev).damping_n_s_per_m,
+                bias_v: comb(&dev).bias_v,
                 accel_rms_g: a,
                 freq_hz: f,
                 start: start_label.clone(),
@@ -556,7 +557,7 @@ fn run() -> Result<()> {
                 impacting: case.impacting,
                 status: String::new(),
             };
-            match run_ngspice(&cir, &dat, dev.geometry.endstop_gap_m, t0, t1) {
+            match run_ngspice(&cir, &dat, endstop(&dev).gap_m, t0, t1) {
                 Ok(r) => {
                     row.v1_spice = r.v1;
                     row.v2_spice = r.v2;

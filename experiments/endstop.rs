@@ -9,6 +9,7 @@
 //! Both write the same kinds of output as the figure experiments: Parquet data with
 //! provenance metadata, an SVG and a PNG plot, `summary.json`, and `numbers.md`.
 
+use endstop::paper::setups::comb;
 use endstop_experiments as common;
 
 use std::path::{Path, PathBuf};
@@ -193,7 +194,13 @@ fn sweep(a: RangeArgs) -> Result<()> {
 
     let mut md = format!(
         "Up-sweep of `{}` ({} set) from {} to {} Hz in {} Hz steps at {} g rms, Vb = {} V.\n\n",
-        loaded.file, device.params, a.from, a.to, a.step, a.accel_rms_g, device.electrical.bias_v
+        loaded.file,
+        device.params,
+        a.from,
+        a.to,
+        a.step,
+        a.accel_rms_g,
+        comb(&device).bias_v
     );
     let vmax = col(&|m| m.v1_rms_v).into_iter().fold(0.0, f64::max);
     exp.number("v1_rms_max_v", vmax);
@@ -401,7 +408,7 @@ fn response(a: RangeArgs) -> Result<()> {
         a.from,
         a.to,
         a.accel_rms_g,
-        device.electrical.bias_v,
+        comb(&device).bias_v,
         a.step,
         branch.points.len(),
         branch.max_residual()

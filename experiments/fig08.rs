@@ -4,6 +4,7 @@
 //! Writes the per-step sweeps, the convergence and the b_im fits as Parquet, the two plots and
 //! the book's tables.
 
+use endstop::paper::setups::endstop;
 use endstop_experiments as common;
 
 use anyhow::Result;
@@ -365,7 +366,7 @@ fn sweep_plot(r: &SetRun) -> LinePlot {
         &format!(
             "Figure 8: prototype 1, 30 V, up-sweeps ({} parameters, xmax = {} um)",
             r.set.label(),
-            fmt_sig(r.device.geometry.endstop_gap_m * 1e6, 4)
+            fmt_sig(endstop(&r.device).gap_m * 1e6, 4)
         ),
         "Frequency [Hz]",
         "RMS output voltage V1 [V]",

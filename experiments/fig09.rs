@@ -4,6 +4,7 @@
 //! "output power" and the convergence repetition. Writes the continuations as Parquet, the
 //! plot and the book's tables.
 
+use endstop::paper::setups::endstop;
 use endstop_experiments as common;
 
 use anyhow::Result;
@@ -54,7 +55,7 @@ fn run() -> Result<()> {
 
 /// The end-stop damping of the continuations (N s/m; Hertz contact).
 fn bim(r: &fig09::SetRun) -> f64 {
-    prototype1_setup(&r.device).endstop.damping_n_s_per_m
+    endstop(&prototype1_setup(&r.device)).damping_n_s_per_m
 }
 
 fn write_parquet(exp: &Experiment, run: &fig09::Run) -> Result<()> {
@@ -80,7 +81,7 @@ fn write_parquet(exp: &Experiment, run: &fig09::Run) -> Result<()> {
                             "beyond_paper_range" => i >= beyond_from,
                             "series" => series.as_str(),
                             "params" => r.set.label(),
-                            "endstop_gap_m" => r.device.geometry.endstop_gap_m,
+                            "endstop_gap_m" => endstop(&r.device).gap_m,
                         ],
                     ]
                     .concat()
@@ -139,7 +140,7 @@ fn numbers_md(
             let m = c.report.at_stop();
             t.row([
                 r.set.label().into(),
-                fmt_sig(r.device.geometry.endstop_gap_m * 1e6, 4),
+                fmt_sig(endstop(&r.device).gap_m * 1e6, 4),
                 c.bias.volts().to_string(),
                 c.report
                     .onset

@@ -3,6 +3,7 @@
 //! F14-a's linear-theory value). The table is stated in `endstop::paper::table3`; this binary
 //! writes its outputs.
 
+use endstop::paper::setups::comb;
 use endstop_experiments as common;
 
 use anyhow::Result;
@@ -103,7 +104,7 @@ fn run() -> Result<()> {
         }
         tc.row([
             p.label.to_string(),
-            fmt_sig(p.device.electrical.c0_f * 1e12, 3),
+            fmt_sig(comb(&p.device).c0_f * 1e12, 3),
             fmt_sig(p.c0_geometry_f * 1e12, 4),
             fmt_sig(p.k2_c0_geometry * 100.0, 4),
         ]);
@@ -146,7 +147,7 @@ fn run() -> Result<()> {
     exp.write_parquet("table3", &mut frame(rows)?, "published")?;
 
     // Table 3 is a table; its plot is eq 21's efficiency against the load.
-    let marker_rl = q2.device.electrical.load_resistance_ohm;
+    let marker_rl = comb(&q2.device).load_resistance_ohm;
     let plot = LinePlot::new(
         "Eq 21: broadband efficiency of prototype 2 at 15 V against the load",
         "load resistance RL [MOhm]",

@@ -9,6 +9,7 @@ use endstop::paper::claims::Claims;
 use endstop::paper::fig08;
 use endstop::paper::sensitivity::{Factor, RangesFile};
 use endstop::paper::setups::P1_BIAS_V;
+use endstop::paper::setups::{comb, comb_mut, endstop};
 use endstop::paper::study::{self, Outcome};
 use endstop::physics::two_port::{eq21_efficiency, QmReading, TwoPort};
 
@@ -66,7 +67,7 @@ fn linear_claims_generated_at_a_known_set_are_met_and_its_identified_parameters_
         [
             d.mechanics.damping_n_s_per_m,
             d.mechanics.stiffness_n_per_m,
-            d.electrical.cp_f,
+            comb(&d).cp_f,
         ]
     };
     let with = |i: usize, factor: f64| {
@@ -74,7 +75,7 @@ fn linear_claims_generated_at_a_known_set_are_met_and_its_identified_parameters_
         match i {
             0 => d.mechanics.damping_n_s_per_m *= factor,
             1 => d.mechanics.stiffness_n_per_m *= factor,
-            _ => d.electrical.cp_f *= factor,
+            _ => comb_mut(&mut d).cp_f *= factor,
         }
         figures(&d)
     };
@@ -104,7 +105,7 @@ fn linear_claims_generated_at_a_known_set_are_met_and_its_identified_parameters_
 /// case, the study's fast path): the kink (first grazing point) and the jump (upper fold), Hz.
 fn kink_and_jump(device: &Device, gap_m: f64, scale: f64) -> Option<[f64; 2]> {
     let mut d = device.with_bias(P1_BIAS_V);
-    d.geometry.endstop_gap_m = gap_m;
+    d = d.with_stop_gap(gap_m);
     let branch = study::frequency_branch(
         &d,
         fig08::P1_HIGH_ACCEL_RMS_G * scale,
@@ -141,12 +142,12 @@ fn nonlinear_claims_generated_at_a_known_set_are_met_and_its_identified_paramete
         ranges.variant(&base, &p)
     };
     let truth = variant(&[known[gi], known[si]]).unwrap();
-    let (gap, scale) = (truth.device.geometry.endstop_gap_m, truth.accel_scale);
+    let (gap, scale) = (endstop(&truth.device).gap_m, truth.accel_scale);
     let target = kink_and_jump(&truth.device, gap, scale).expect("kink and jump at the truth");
     let tol = target.map(|f| frequency.tolerance(f));
     let model = |u: &[f64]| {
         let v = variant(u).map_err(|e| e.to_string())?;
-        let got = kink_and_jump(&v.device, v.device.geometry.endstop_gap_m, v.accel_scale)
+        let got = kink_and_jump(&v.device, endstop(&v.device).gap_m, v.accel_scale)
             .ok_or("no kink or no jump")?;
         Ok::<_, String>((0..2).map(|j| (got[j] - target[j]) / tol[j]).collect())
     };
@@ -192,7 +193,7 @@ fn nonlinear_claims_generated_at_a_known_set_are_met_and_its_identified_paramete
         .sum();
     let found = variant(&best.point).unwrap();
     let q = |gap: f64, scale: f64| (gap / scale).ln();
-    let dev = (q(found.device.geometry.endstop_gap_m, found.accel_scale) - q(gap, scale)).abs();
+    let dev = (q(endstop(&found.device).gap_m, found.accel_scale) - q(gap, scale)).abs();
     assert!(
         dev <= 1.5 * bound,
         "ln(gap / scale): |d q| = {dev:e} > 1.5 x {bound:e}; {best:?}"

@@ -73,7 +73,7 @@ fn f5b_eq19_coefficient_is_converged_and_the_secant_reading_matches_the_print() 
     let run = fig05::run(&device("prototype1"), &device("prototype2"));
     let fits = run.prototypes[0].fits;
     let c = fits.paper_reading();
-    let h = HertzLine::of(&device("prototype1"));
+    let h = HertzLine::of_device(&device("prototype1")).unwrap();
     // The quadrature is converged: 10x more samples moves it by < 1e-6 relative, 10x fewer by
     // < 1e-5.
     let finer = h
@@ -87,10 +87,12 @@ fn f5b_eq19_coefficient_is_converged_and_the_secant_reading_matches_the_print() 
     let claim = claims.get("F5-b", "eq19_coefficient").unwrap();
     assert_eq!(claim.verdict(Some(fits.secant)), Reproduced);
     // The coefficient does not depend on E or nu.
-    let mut d = device("prototype1");
-    d.material.youngs_modulus_pa = 130e9;
-    d.material.poisson_ratio = 0.28;
-    let c2 = HertzLine::of(&d)
+    let d = endstop::paper::setups::with_hertz(&device("prototype1"), |h| {
+        h.youngs_modulus_pa = 130e9;
+        h.poisson_ratio = 0.28;
+    });
+    let c2 = HertzLine::of_device(&d)
+        .unwrap()
         .linear_fits(EQ19_FIT_RANGE_M, EQ19_FIT_SAMPLES)
         .paper_reading();
     assert!(((c2 - c) / c).abs() < 1e-12);
@@ -168,32 +170,28 @@ fn validation_names_the_field_the_value_and_the_range() {
             "damping_n_s_per_m = nan",
             "mechanics.damping_n_s_per_m",
         ),
-        ("c0_f = 1.6e-12", "c0_f = -1.6e-12", "electrical.c0_f"),
-        ("cp_f = 17.3e-12", "cp_f = -1e-12", "electrical.cp_f"),
-        (
-            "endstop_gap_m = 7e-6",
-            "endstop_gap_m = 12e-6",
-            "geometry.endstop_gap_m",
-        ),
+        ("c0_f = 1.6e-12", "c0_f = -1.6e-12", "transducer.c0_f"),
+        ("cp_f = 17.3e-12", "cp_f = -1e-12", "transducer.cp_f"),
+        ("gap_m = 7e-6", "gap_m = 12e-6", "stops.both.gap_m"),
         (
             "poisson_ratio = 0.22",
             "poisson_ratio = 0.7",
-            "material.poisson_ratio",
+            "stops.both.poisson_ratio",
         ),
         (
             "youngs_modulus_pa = 169e9",
             "youngs_modulus_pa = 0.0",
-            "material.youngs_modulus_pa",
+            "stops.both.youngs_modulus_pa",
         ),
         (
             "load_resistance_ohm = 4.9e6",
             "load_resistance_ohm = inf",
-            "electrical.load_resistance_ohm",
+            "transducer.load_resistance_ohm",
         ),
         (
             "damping_n_s_per_m = 1.5",
             "damping_n_s_per_m = -1.5",
-            "endstop.damping_n_s_per_m",
+            "stops.both.damping_n_s_per_m",
         ),
     ];
     for (from, to, field) in cases {
@@ -223,6 +221,6 @@ fn unknown_and_missing_fields_are_rejected() {
         .unwrap_err()
         .to_string();
     assert!(err.contains("mass_kg"), "{err}");
-    let bad_law = replace(&t, "stiffness = \"hertz\"", "stiffness = \"rubber\"");
+    let bad_law = replace(&t, "law = \"hertz_line\"", "law = \"rubber\"");
     assert!(Device::from_toml_str(&bad_law, "p1.toml").is_err());
 }

@@ -12,6 +12,7 @@ use endstop::ode::Guards;
 use endstop::ode::HybridSystem;
 use endstop::ode::Options;
 use endstop::ode::SolverError;
+use endstop::paper::setups::{comb_mut, endstop};
 use endstop::physics::contact::Mode;
 use endstop::physics::contact::Side;
 use endstop::physics::energy::ledger_index;
@@ -136,10 +137,14 @@ fn elastic_p1(km: f64, kim: f64) -> Harvester<Sine> {
     let mut d = device("prototype1").with_endstop(StiffnessModel::Linear, 0.0);
     d.mechanics.damping_n_s_per_m = 1e-300;
     d.mechanics.stiffness_n_per_m = km;
-    d.electrical.bias_v = 0.0;
+    comb_mut(&mut d).bias_v = 0.0;
+    let d = endstop::paper::setups::with_stops(&d, |s| {
+        s.law = endstop::device::StopLaw::Linear {
+            stiffness_n_per_m: kim,
+        }
+    });
     let mut h = Harvester::new(&d, Sine::from_rms_g(0.0, 1000.0));
     h.damping = 0.0;
-    h.law = endstop::physics::contact::ContactLaw::Linear(kim);
     h
 }
 
@@ -149,7 +154,7 @@ fn piecewise_linear_contact_on_the_harvester_model_matches_the_exact_solution() 
     // free sine until x = xmax and a faster sine about x_c while in contact.
     let (km, kim) = (166.5, 1.94e6);
     let h = elastic_p1(km, kim);
-    let (m, xmax) = (h.mass_kg, h.xmax);
+    let (m, xmax) = (h.mass_kg, h.gap(endstop::physics::contact::Side::Upper));
     let w0 = (km / m).sqrt();
     let w1 = ((km + kim) / m).sqrt();
     let v0 = 1.5 * w0 * xmax;
@@ -227,7 +232,7 @@ fn energy_balance_closes_over_a_run_with_impacts() {
     assert!(residual.abs() < 1e-6, "relative residual {residual:e}");
     // Tension-free contact: the same balance (the clipped phase has no contact force).
     let mut d2 = d.clone();
-    d2.endstop.tension_free = true;
+    d2 = d2.with_tension_free(true);
     let audit2 = EnergyAudit(Harvester::new(&d2, Sine::from_rms_g(8.0, 1300.0)));
     let mut ode2 = Dopri5::new(
         0.0,
@@ -280,7 +285,7 @@ fn tension_free_stop_books_clip_losses_and_reengagement_gains_apart() {
     // negative losses), and clip losses and re-engagement gains are each booked with their
     // sign.
     let mut d = device("prototype1");
-    d.endstop.tension_free = true;
+    d = d.with_tension_free(true);
     let sys = WatchedAudit {
         audit: EnergyAudit(Harvester::new(&d, Sine::from_rms_g(8.0, 1300.0))),
         bookings: Default::default(),
@@ -669,7 +674,7 @@ fn free_flight_split_sums_to_the_right_hand_side() {
         for (i, t) in [0.0, 1.1e-4, 3.7e-4].into_iter().enumerate() {
             for frac in [-0.99, -0.4, 0.0, 0.3, 0.95] {
                 let y = State::new(
-                    frac * d.geometry.endstop_gap_m,
+                    frac * endstop(&d).gap_m,
                     (0.7 - i as f64) * s[1],
                     (0.3 + frac) * s[2],
                     (i as f64 - 1.3) * s[3],

@@ -5,6 +5,7 @@
 use endstop::device::{Device, StiffnessModel};
 use endstop::drive::Sine;
 use endstop::ode::Stats;
+use endstop::paper::setups::{comb, endstop, stiffness_model};
 use endstop::physics::harvester::Harvester;
 use endstop::physics::two_port::linear_output_psd_w_per_hz;
 use endstop::study::continuation::{
@@ -28,9 +29,9 @@ fn linear_eigenvalues(d: &Device) -> Vec<Complex<f64>> {
     let m = d.mechanics.mass_kg;
     let b = d.mechanics.damping_n_s_per_m;
     let km = d.mechanics.stiffness_n_per_m;
-    let e = &d.electrical;
+    let e = comb(d);
     let ct = e.c0_f + e.cp_f + e.load_capacitance_f;
-    let gamma = e.c0_f * e.bias_v / d.geometry.finger_overlap_m;
+    let gamma = e.c0_f * e.bias_v / e.finger_overlap_m;
     let rl = e.load_resistance_ohm;
     let a = Matrix3::new(
         0.0,
@@ -63,8 +64,7 @@ fn sorted(mut v: Vec<Complex<f64>>) -> Vec<Complex<f64>> {
 fn far_from_the_stops_the_orbit_is_the_linear_steady_state() {
     let d = prototype2();
     let (f, a) = (600.0, 1e-3);
-    let mut h = Harvester::new(&d, Sine::from_rms_g(a, f));
-    h.xmax = 1.0;
+    let h = Harvester::new(&d, Sine::from_rms_g(a, f)).without_stops();
     let shooter = Shooter::new(&h, ShootingConfig::default());
     let forcing = Forcing {
         freq_hz: f,
@@ -81,7 +81,7 @@ fn far_from_the_stops_the_orbit_is_the_linear_steady_state() {
     )
     .unwrap();
     assert!(o.residual < 1e-9, "residual {:e}", o.residual);
-    assert!(o.summary.x_max_m < 1e-3 * d.geometry.finger_overlap_m);
+    assert!(o.summary.x_max_m < 1e-3 * comb(&d).finger_overlap_m);
     // A sine of RMS a has the power of a white PSD a^2 / 2 through |H|^2 (see the linear PSD).
     let p_lin = linear_output_psd_w_per_hz(&d, 0.5 * a * a, f);
     let rel = (o.summary.p_total_w - p_lin).abs() / p_lin;
@@ -196,8 +196,7 @@ fn branch_residuals_and_fold_convergence() {
 #[test]
 fn amplitude_continuation_in_the_linear_regime_scales_the_power_with_the_square() {
     let d = prototype2();
-    let mut h = Harvester::new(&d, Sine::from_rms_g(1e-3, 600.0));
-    h.xmax = 1.0;
+    let h = Harvester::new(&d, Sine::from_rms_g(1e-3, 600.0)).without_stops();
     let s = ContinuationSettings::amplitude(1e-3, 1e-2, 1e-3);
     let shooter = Shooter::new(&h, s.shooting);
     let forcing = Forcing {
@@ -253,7 +252,7 @@ fn a_grazing_corner_is_crossed_from_the_free_flight_side() {
         .variant(&p1, &u)
         .unwrap();
     let d = v.device.with_bias(endstop::paper::setups::P1_BIAS_V);
-    assert!(d.endstop.tension_free && d.endstop.damping_n_s_per_m > 3.0);
+    assert!(endstop(&d).tension_free && endstop(&d).damping_n_s_per_m > 3.0);
     let g = 5.5 * v.accel_scale;
     let grazing = |b: &Branch| {
         b.events
@@ -265,7 +264,7 @@ fn a_grazing_corner_is_crossed_from_the_free_flight_side() {
     // The grazing orbit is a free-flight orbit, independent of b_im: the same device with
     // b_im = 0 (whose branch crosses grazing smoothly) gives the reference. Tolerance: the
     // event location (1e-4 Hz) and the hop's first step.
-    let undamped = d.with_endstop(d.endstop.stiffness, 0.0);
+    let undamped = d.with_endstop(stiffness_model(&d), 0.0);
     let reference = grazing(&frequency_branch(&undamped, g, 900.0, 2000.0, 10.0, |_| {}).unwrap())
         .expect("the undamped branch grazes");
     let found = grazing(&b).expect("the branch grazes");

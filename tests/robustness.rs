@@ -11,6 +11,7 @@ use endstop::device::StiffnessModel;
 use endstop::drive::Sine;
 use endstop::ode::Dopri5;
 use endstop::ode::SolverError;
+use endstop::paper::setups::{comb, comb_mut, endstop};
 use endstop::physics::contact::Mode;
 use endstop::physics::energy::AuditState;
 use endstop::physics::energy::EnergyAudit;
@@ -104,8 +105,8 @@ fn loader_rejects_or_accepts_any_number() {
         lines[i] = format!("{key} = {}", toml_float(v));
         if let Ok(d) = Device::from_toml_str(&lines.join("\n"), "fuzz.toml") {
             assert!(d.mechanics.mass_kg.is_finite() && d.mechanics.mass_kg > 0.0);
-            assert!(d.electrical.load_resistance_ohm.is_finite());
-            assert!(d.geometry.endstop_gap_m <= d.geometry.finger_overlap_m);
+            assert!(comb(&d).load_resistance_ohm.is_finite());
+            assert!(endstop(&d).gap_m <= comb(&d).finger_overlap_m);
         }
     }
 }
@@ -161,13 +162,13 @@ fn simulate(c: &Case) -> Result<(f64, u64), SolverError> {
     d.mechanics.mass_kg = c.mass;
     d.mechanics.stiffness_n_per_m = km;
     d.mechanics.damping_n_s_per_m = (km * c.mass).sqrt() / c.q;
-    d.geometry.finger_overlap_m = c.x0_um * 1e-6;
-    d.geometry.endstop_gap_m = c.gap_frac * c.x0_um * 1e-6;
-    d.electrical.c0_f = c.c0_pf * 1e-12;
-    d.electrical.cp_f = c.cp_pf * 1e-12;
-    d.electrical.load_resistance_ohm = c.rl_mohm * 1e6;
-    d.electrical.bias_v = c.vb;
-    d.endstop.tension_free = c.tension_free;
+    comb_mut(&mut d).finger_overlap_m = c.x0_um * 1e-6;
+    d = d.with_stop_gap(c.gap_frac * c.x0_um * 1e-6);
+    comb_mut(&mut d).c0_f = c.c0_pf * 1e-12;
+    comb_mut(&mut d).cp_f = c.cp_pf * 1e-12;
+    comb_mut(&mut d).load_resistance_ohm = c.rl_mohm * 1e6;
+    comb_mut(&mut d).bias_v = c.vb;
+    d = d.with_tension_free(c.tension_free);
     let law = if c.hertz {
         StiffnessModel::Hertz
     } else {
@@ -184,7 +185,7 @@ fn simulate(c: &Case) -> Result<(f64, u64), SolverError> {
     let w0 = 2.0 * std::f64::consts::PI * c.f0;
     let w = c.detune * w0;
     let x_lin = drive.amplitude_m_s2 / ((w0 * w0 - w * w).powi(2) + (w0 * w / c.q).powi(2)).sqrt();
-    let motion = (x_lin / d.geometry.endstop_gap_m).min(1.0);
+    let motion = (x_lin / endstop(&d).gap_m).min(1.0);
     let mut opts = audit.solver_options(1e-10);
     for i in 0..AUDIT_DIM {
         opts.atol[i] *= if i < 4 { motion } else { motion * motion };

@@ -5,6 +5,7 @@
 use endstop::device::Device;
 use endstop::device::StiffnessModel;
 use endstop::drive::Sine;
+use endstop::paper::setups::{comb, endstop, stiffness_model};
 use endstop::physics::contact::Mode;
 use endstop::physics::harvester::Harvester;
 use endstop::physics::harvester::State;
@@ -107,7 +108,7 @@ fn netlist_is_well_formed() {
         assert!(net.contains("V(s1)=") && net.contains("V(s2)="));
         assert!(net.contains("\n.control\n") && net.contains("\nquit\n.endc\n"));
         assert!(net.contains("wrdata out.dat v(n1) v(n2) v(xpos) v(vel)"));
-        match dev.endstop.stiffness {
+        match stiffness_model(&dev) {
             StiffnessModel::Hertz => assert!(net.contains(".func hzf(d)")),
             StiffnessModel::Linear => {
                 assert!(net.contains(".func fk(dl) {kim*dl}") && !net.contains("hzf"))
@@ -150,7 +151,7 @@ fn parameters_carry_the_unit_scaling() {
     let famp = m * std::f64::consts::SQRT_2 * 7.0 * endstop::G * 1e3;
     assert!(close(p["famp"], famp, 1e-14), "{} vs {famp}", p["famp"]);
     // Hertz scales in mN and um.
-    let h = HertzLine::of(&dev);
+    let h = HertzLine::of_device(&dev).unwrap();
     assert!(close(p["hf0"], h.force_scale_n() * 1e3, 1e-14));
     assert!(close(p["hd0"], h.delta_scale_m() * 1e6, 1e-14));
     assert!(
@@ -170,7 +171,7 @@ fn parameters_carry_the_unit_scaling() {
     ));
     assert!(close(
         p["kim"],
-        lin.linear_endstop_stiffness_n_per_m() * 1e-3,
+        endstop::paper::setups::hertz_stop(&lin).linear_stiffness_n_per_m() * 1e-3,
         1e-14
     ));
     assert_eq!(p["bim"], 2.0);
@@ -214,8 +215,8 @@ fn initial_condition_and_settings_are_written_in_netlist_units() {
     assert!(close(get("V(vel)"), 22.0, 1e-14), "v in mm/s");
     assert_eq!(get("V(n1)"), el.v[0]);
     assert_eq!(get("V(n2)"), el.v[1]);
-    assert_eq!(get("V(bias)"), dev.electrical.bias_v);
-    assert_eq!(get("V(s1)"), dev.electrical.bias_v);
+    assert_eq!(get("V(bias)"), comb(&dev).bias_v);
+    assert_eq!(get("V(s1)"), comb(&dev).bias_v);
     assert!(net.contains(
         ".options reltol=1e-6 abstol=1e-15 vntol=1e-9 chgtol=1e-20 trtol=7 method=gear maxord=2"
     ));
@@ -240,7 +241,7 @@ fn initial_condition_and_settings_are_written_in_netlist_units() {
 #[test]
 fn tension_free_variant_clips_the_bracket() {
     let mut dev = p2();
-    dev.endstop.tension_free = true;
+    dev = dev.with_tension_free(true);
     let net = netlist(
         &dev,
         &SpiceDrive {
@@ -262,7 +263,7 @@ fn tension_free_variant_clips_the_bracket() {
         bim.contains("min(-fk(-V(xpos)-xmax) + bim*V(vel), 0)"),
         "{bim}"
     );
-    dev.endstop.tension_free = false;
+    dev = dev.with_tension_free(false);
     let net = netlist(
         &dev,
         &SpiceDrive {
@@ -297,7 +298,7 @@ fn hertz_max_rel_error(h: &HertzLine, steps: usize, d_lo: f64, d_hi: f64) -> f64
 #[test]
 fn hertz_closed_form_matches_the_lambert_w_inverse() {
     for dev in [p1(), p2()] {
-        let h = HertzLine::of(&dev);
+        let h = HertzLine::of_device(&dev).unwrap();
         let errs: Vec<f64> = (0..=5)
             .map(|k| hertz_max_rel_error(&h, k, 1e-12, 0.5))
             .collect();
@@ -321,7 +322,7 @@ fn hertz_closed_form_matches_the_lambert_w_inverse() {
         println!("{}: up to 1 um penetration: {e:.1e}", dev.name);
         assert!(e < 1e-13, "{e}");
     }
-    let h = HertzLine::of(&p1());
+    let h = HertzLine::of_device(&p1()).unwrap();
     assert_eq!(hertz_force_closed_form(&h, 0.0, 4), 0.0);
     assert_eq!(hertz_force_closed_form(&h, -1e-9, 4), 0.0);
 }
@@ -463,7 +464,7 @@ fn ngspice_agrees_with_our_integrator() {
         let v1 = w.rms("v(n1)", t0, t1).unwrap();
         let v2 = w.rms("v(n2)", t0, t1).unwrap();
         let cf = w
-            .fraction_above("v(xpos)", dev.geometry.endstop_gap_m * 1e6, t0, t1)
+            .fraction_above("v(xpos)", endstop(&dev).gap_m * 1e6, t0, t1)
             .unwrap();
         let r1 = (v1 - m.v1_rms_v) / m.v1_rms_v;
         let r2 = (v2 - m.v2_rms_v) / m.v2_rms_v;

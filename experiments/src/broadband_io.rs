@@ -13,6 +13,7 @@ use endstop::device::Device;
 use endstop::num::stats::Spread;
 use endstop::paper::ensembles::Prototype1Run;
 use endstop::paper::ensembles::WidthReading::{HalfAmplitude, HalfPower};
+use endstop::paper::setups::{comb, endstop};
 use endstop::study::record::{ring_up_time_s, TRANSIENT_RING_TIMES};
 
 pub use endstop::paper::ensembles::{level_label as sa_label, Level};
@@ -58,8 +59,8 @@ pub fn summary_rows(levels: &[Level]) -> Vec<Row> {
                 "params" => l.set.as_str(),
                 "psd_g2_per_hz" => l.sa(),
                 "realisations" => e.records.len() as u32,
-                "bias_v" => l.device.electrical.bias_v,
-                "endstop_gap_m" => l.device.geometry.endstop_gap_m,
+                "bias_v" => comb(&l.device).bias_v,
+                "endstop_gap_m" => endstop(&l.device).gap_m,
                 "p_mean_w" => e.power_w.mean,
                 "p_ci95_w" => e.power_w.ci95,
                 "p1_mean_w" => e.p1_w.mean,
@@ -358,7 +359,7 @@ pub fn spectra_plot(
 pub fn prototype1_sets(exp: &mut Experiment) -> Result<(Device, Device)> {
     let (p1, cal) = crate::prototype1_both_sets(exp)?;
     exp.number("calibrated_endstop_gap_m", cal.record.fitted_gap_m);
-    exp.number("published_endstop_gap_m", p1.device.geometry.endstop_gap_m);
+    exp.number("published_endstop_gap_m", endstop(&p1.device).gap_m);
     Ok((p1.device, cal.device))
 }
 
@@ -370,8 +371,8 @@ pub fn p1_tables_md(run: &Prototype1Run, gap_note: &str) -> String {
     md.push_str(&format!(
         "\nEnd-stop gap xmax: published {} um, calibrated {} um{gap_note}.\n\n**Power and \
          contact**\n\n",
-        fmt_sig(run.level(0, 0).device.geometry.endstop_gap_m * 1e6, 3),
-        fmt_sig(run.level(1, 0).device.geometry.endstop_gap_m * 1e6, 3),
+        fmt_sig(endstop(&run.level(0, 0).device).gap_m * 1e6, 3),
+        fmt_sig(endstop(&run.level(1, 0).device).gap_m * 1e6, 3),
     ));
     md.push_str(&power_table(&run.levels).render());
     md.push_str(

@@ -5,6 +5,7 @@
 use endstop::device::Device;
 use endstop::paper::claims::{Claim, Value};
 use endstop::paper::curves::{law_key, Curve, CurveConvergence};
+use endstop::paper::setups::{comb, endstop, stiffness_model};
 use endstop::study::steady::Measurement;
 
 use crate::frame::Row;
@@ -49,11 +50,11 @@ pub fn sweep_rows<'a>(
                     "beyond_paper_range" => i >= beyond_from,
                     "series" => series,
                     "params" => device.params.as_str(),
-                    "stiffness" => law_key(device.endstop.stiffness),
-                    "bim_n_s_per_m" => device.endstop.damping_n_s_per_m,
-                    "tension_free" => device.endstop.tension_free,
-                    "endstop_gap_m" => device.geometry.endstop_gap_m,
-                    "bias_v" => device.electrical.bias_v,
+                    "stiffness" => law_key(stiffness_model(device)),
+                    "bim_n_s_per_m" => endstop(device).damping_n_s_per_m,
+                    "tension_free" => endstop(device).tension_free,
+                    "endstop_gap_m" => endstop(device).gap_m,
+                    "bias_v" => comb(device).bias_v,
                 ],
             ]
             .concat()

@@ -4,6 +4,7 @@
 //! was fitted from another `prototype1.toml` text. Outputs go to a temporary directory
 //! (ENDSTOP_OUTPUT_DIR), never to data/results/.
 
+use endstop::paper::setups::endstop;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
@@ -55,7 +56,7 @@ fn the_calibration_is_computed_once_and_recomputed_only_when_stale() {
     .unwrap();
     assert_eq!(
         summary["fitted_gap_m"].as_f64(),
-        Some(device.geometry.endstop_gap_m)
+        Some(endstop(&device).gap_m)
     );
     assert!(summary["onset_bracket"]["before"].is_f64() && summary["evaluations"].is_u64());
 

@@ -5,6 +5,7 @@
 //! (each parameter set labelled with its own parameter file), so fig11 runs twice, not three
 //! times.
 
+use endstop::paper::setups::endstop;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -118,12 +119,13 @@ fn fig11_parquet_metadata_holds_each_parameter_set_under_its_own_label() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
     let published_text = std::fs::read_to_string(root.join("data/prototype1.toml")).unwrap();
     let published = Device::from_toml_str(&published_text, "prototype1.toml").unwrap();
-    let fitted = endstop::paper::calibration::calibrate_prototype1(&published)
-        .unwrap()
-        .device
-        .geometry
-        .endstop_gap_m;
-    let gap = published.geometry.endstop_gap_m;
+    let fitted = endstop(
+        &endstop::paper::calibration::calibrate_prototype1(&published)
+            .unwrap()
+            .device,
+    )
+    .gap_m;
+    let gap = endstop(&published).gap_m;
     assert!(
         (fitted / gap - 1.0).abs() > 1e-3,
         "the calibration moved the gap"
@@ -155,7 +157,7 @@ fn fig11_parquet_metadata_holds_each_parameter_set_under_its_own_label() {
             "{name}: calibrated holds the published text"
         );
         let d = Device::from_toml_str(calibrated, "calibrated").unwrap();
-        let recorded = d.geometry.endstop_gap_m;
+        let recorded = endstop(&d).gap_m;
         assert!(
             (recorded / fitted - 1.0).abs() < 1e-12,
             "{name}: calibrated gap {recorded} m, fitted {fitted} m"

@@ -10,6 +10,7 @@
 use endstop::device::{Device, ParamError as LibParamError, StiffnessModel};
 use endstop::paper::calibration::{calibrate_prototype1, Calibration};
 use endstop::paper::claims::{Claims, Value};
+use endstop::paper::setups::endstop;
 use endstop::paper::setups::ParamSet;
 use endstop::paper::{fig09, fig13};
 use endstop::physics::two_port::{self, QmReading, TwoPort, EQ21_QM};
@@ -45,10 +46,7 @@ const PROTOTYPE1_TOML: &str = include_str!("../../data/prototype1.toml");
 const PROTOTYPE2_TOML: &str = include_str!("../../data/prototype2.toml");
 
 fn param_err(e: LibParamError) -> PyErr {
-    let field = match &e {
-        LibParamError::OutOfRange { field, .. } => Some(field.clone()),
-        LibParamError::Parse { .. } => None,
-    };
+    let field = e.field().map(str::to_string);
     let err = ParamError::new_err(e.to_string());
     Python::attach(|py| {
         let _ = err.value(py).setattr("field", field);
@@ -177,7 +175,8 @@ impl PyDevice {
 
     /// The parameters as a dict (the layout of a device file).
     fn to_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        let v = toml::Value::try_from(&self.inner).map_err(|e| arg_err(e.to_string()))?;
+        let v: toml::Value =
+            toml::from_str(&self.inner.to_toml_string()).map_err(|e| arg_err(e.to_string()))?;
         toml_to_py(py, &v)
     }
 
@@ -211,7 +210,7 @@ impl PyDevice {
             }
         };
         let mut d = self.inner.with_endstop(law, damping_n_s_per_m);
-        d.endstop.tension_free = tension_free;
+        d = d.with_tension_free(tension_free);
         d.validate("with_endstop").map_err(param_err)?;
         Ok(Self { inner: d })
     }
@@ -219,7 +218,7 @@ impl PyDevice {
     /// A copy with the end-stop gap x_max (m) changed, validated.
     fn with_endstop_gap(&self, endstop_gap_m: f64) -> PyResult<Self> {
         let mut d = self.inner.clone();
-        d.geometry.endstop_gap_m = endstop_gap_m;
+        d = d.with_stop_gap(endstop_gap_m);
         d.validate("with_endstop_gap").map_err(param_err)?;
         Ok(Self { inner: d })
     }
@@ -236,16 +235,18 @@ impl PyDevice {
         self.inner.params.clone()
     }
 
-    /// Bias voltage (V).
+    /// Bias voltage (V) of an electrostatic transducer; None for the others.
     #[getter]
-    fn bias_v(&self) -> f64 {
-        self.inner.electrical.bias_v
+    fn bias_v(&self) -> Option<f64> {
+        self.inner.bias_v()
     }
 
     fn __repr__(&self) -> String {
         format!(
-            "Device(name={:?}, params={:?}, bias_v={})",
-            self.inner.name, self.inner.params, self.inner.electrical.bias_v
+            "Device(name={:?}, params={:?}, transducer={:?})",
+            self.inner.name,
+            self.inner.params,
+            self.inner.transducer.key()
         )
     }
 
@@ -923,7 +924,7 @@ fn paper_fig09_run<'py>(
         sets.append(set)?;
     }
     if let Some(cal) = run.sets.iter().find(|r| r.set == ParamSet::Calibrated) {
-        numbers.set_item("calibrated_gap_m", cal.device.geometry.endstop_gap_m)?;
+        numbers.set_item("calibrated_gap_m", endstop(&cal.device).gap_m)?;
     }
     out.set_item("sets", sets)?;
     out.set_item("numbers", numbers)?;

@@ -30,8 +30,8 @@ def test_out_of_range_value_raises_param_error_naming_field_and_range():
 
 def test_poisson_ratio_range_is_in_the_message():
     d = endstop.Device.prototype(1).to_dict()
-    d["material"]["poisson_ratio"] = 0.7
-    with pytest.raises(endstop.ParamError, match=r"material.poisson_ratio.*between -1 and 0.5"):
+    d["stops"]["both"]["poisson_ratio"] = 0.7
+    with pytest.raises(endstop.ParamError, match=r"stops.both.poisson_ratio.*between -1 and 0.5"):
         endstop.Device.from_dict(d)
 
 
@@ -45,9 +45,9 @@ def test_unknown_key_is_rejected():
 def test_copies_are_validated():
     dev = endstop.Device.prototype(2)
     assert dev.with_bias(10.0).bias_v == 10.0
-    with pytest.raises(endstop.ParamError, match="electrical.bias_v"):
+    with pytest.raises(endstop.ParamError, match="transducer.bias_v"):
         dev.with_bias(-1.0)
-    with pytest.raises(endstop.ParamError, match="geometry.endstop_gap_m"):
+    with pytest.raises(endstop.ParamError, match="stops.both.gap_m"):
         dev.with_endstop_gap(20e-6)  # larger than the finger overlap x0 = 10 um
     with pytest.raises(ValueError, match="linear"):
         dev.with_endstop("cubic", 0.4)

@@ -13,7 +13,7 @@ G = 9.81
 def test_two_port_follows_eqs_15_to_22():
     dev = endstop.Device.prototype(2)
     p = dev.to_dict()
-    e, m, x0 = p["electrical"], p["mechanics"], p["geometry"]["finger_overlap_m"]
+    e, m, x0 = p["transducer"], p["mechanics"], p["transducer"]["finger_overlap_m"]
     ct = e["c0_f"] + e["cp_f"] + e["load_capacitance_f"]
     c = ct / 2
     gamma = e["c0_f"] * e["bias_v"] / x0

@@ -13,7 +13,7 @@ def test_record_voltages_give_its_power():
     r = endstop.study.record(dev, 1e-4, seed=3, stream=1, duration_s=0.5)
     n = round(0.5 * r["sample_rate_hz"])
     assert r["v1_v"].shape == (n,) and r["v2_v"].shape == (n,)
-    rl = dev.to_dict()["electrical"]["load_resistance_ohm"]
+    rl = dev.to_dict()["transducer"]["load_resistance_ohm"]
     # The summary's power is the mean of V^2/R over the same samples (summation order aside).
     assert r["p1_w"] == pytest.approx(float(np.mean(r["v1_v"] ** 2)) / rl, rel=1e-9)
     assert r["p2_w"] == pytest.approx(float(np.mean(r["v2_v"] ** 2)) / rl, rel=1e-9)

@@ -5,7 +5,8 @@ use nalgebra::SVector;
 
 use crate::ode::events;
 use crate::ode::{
-    HybridSystem, Options, SolverError, Stats, Step, MAX_GUARDS, MAX_SWITCHES_AT_ONE_TIME,
+    HybridSystem, Observer, Options, SolverError, Stats, Step, Steps, MAX_GUARDS,
+    MAX_SWITCHES_AT_ONE_TIME,
 };
 
 // Dormand-Prince 5(4) coefficients.
@@ -212,12 +213,19 @@ impl<S: HybridSystem<N>, const N: usize> Dopri5<S, N> {
     /// at the switch does not serve here: at a contact entry the penetration, hence the contact
     /// force, is zero, so a derivative estimate at that point cannot see the stiffness that
     /// builds up within the step.
-    fn switch(&mut self, sys: &S, index: usize) -> Result<(), SolverError> {
+    fn switch<O: Observer<N, S::Mode>>(
+        &mut self,
+        sys: &S,
+        index: usize,
+        observer: &mut O,
+    ) -> Result<(), SolverError> {
         if self.switch_trail.is_empty() {
             self.switch_trail.push(self.mode);
         }
         let mut y = self.y;
+        let from = self.mode;
         self.mode = sys.switch(self.mode, index, self.t, &mut y);
+        observer.switched(self.t, from, self.mode);
         self.y = y;
         self.stats.events += 1;
         self.k1_valid = false;
@@ -262,7 +270,17 @@ impl<S: HybridSystem<N>, const N: usize> Dopri5<S, N> {
         &mut self,
         sys: &S,
         t_end: f64,
-        mut observer: O,
+        observer: O,
+    ) -> Result<(), SolverError> {
+        self.integrate_observed(sys, t_end, &mut Steps(observer))
+    }
+
+    /// Integrates to `t_end`, showing `observer` every accepted step and every mode switch.
+    pub fn integrate_observed<O: Observer<N, S::Mode>>(
+        &mut self,
+        sys: &S,
+        t_end: f64,
+        observer: &mut O,
     ) -> Result<(), SolverError> {
         let mut steps: u64 = 0;
         while self.t < t_end {
@@ -279,7 +297,7 @@ impl<S: HybridSystem<N>, const N: usize> Dopri5<S, N> {
                 // A guard already positive at the start of a step fires at once.
                 let g = sys.guards(self.mode, self.t, &self.y);
                 if let Some(i) = (0..MAX_GUARDS).find(|&i| g[i] > 0.0) {
-                    self.switch(sys, i)?;
+                    self.switch(sys, i, observer)?;
                     continue;
                 }
             }
@@ -353,7 +371,7 @@ impl<S: HybridSystem<N>, const N: usize> Dopri5<S, N> {
             match events::locate(sys, self.mode, &step, self.opts.event_time_tol) {
                 None => {
                     self.stats.accepted += 1;
-                    observer(&step, self.mode);
+                    observer.step(&step, self.mode);
                     self.advance(t_new, tr.y1);
                     self.k1 = tr.k[6];
                     if first_after_event && !clipped {
@@ -376,11 +394,11 @@ impl<S: HybridSystem<N>, const N: usize> Dopri5<S, N> {
                         }
                         let st = self.make_step(h_ev, &tr_ev);
                         self.stats.accepted += 1;
-                        observer(&st, self.mode);
+                        observer.step(&st, self.mode);
                         self.advance(self.t + h_ev, tr_ev.y1);
                     }
                     self.h = h;
-                    self.switch(sys, index)?;
+                    self.switch(sys, index, observer)?;
                 }
             }
             if let Err(message) = sys.check_state(self.mode, self.t, &self.y) {

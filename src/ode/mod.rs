@@ -223,6 +223,26 @@ impl AddAssign for Stats {
     }
 }
 
+/// What an integration shows of itself as it runs: every accepted step, and every mode switch.
+/// [`Dopri5::integrate`] takes a closure for the steps alone; [`Dopri5::integrate_observed`]
+/// takes an observer of both.
+pub trait Observer<const N: usize, M> {
+    /// An accepted step, with the mode that was active over it.
+    fn step(&mut self, step: &Step<N>, mode: M);
+    /// A mode switch at time `t` from `from` to `to` (after the system's reset of the state).
+    fn switched(&mut self, _t: f64, _from: M, _to: M) {}
+}
+
+/// An observer of the steps alone, from a closure.
+pub(crate) struct Steps<F>(pub(crate) F);
+
+impl<const N: usize, M, F: FnMut(&Step<N>, M)> Observer<N, M> for Steps<F> {
+    #[inline(always)]
+    fn step(&mut self, step: &Step<N>, mode: M) {
+        (self.0)(step, mode)
+    }
+}
+
 /// One accepted step, with its dense output, as seen by an observer.
 #[derive(Debug, Clone)]
 pub struct Step<const N: usize> {

@@ -24,7 +24,7 @@ use crate::num::roots::{illinois, RootError, RootOptions, Sample, Stop};
 use crate::ode::{SolverError, Stats};
 use crate::paper::fig08::{self, P1_HIGH_ACCEL_RMS_G};
 use crate::paper::measured::P1_MEASURED_ONSET_HZ;
-use crate::paper::setups::prototype1_setup;
+use crate::paper::setups::{comb, endstop, hertz_stop, prototype1_setup};
 use crate::physics::harvester::Harvester;
 use crate::study::steady::SteadyConfig;
 use crate::study::stepped::{continue_sweep, in_contact, Sweep, Transition};
@@ -181,11 +181,10 @@ pub struct Calibration {
     pub record: CalibrationRecord,
 }
 
-/// The calibrated device for a fitted gap: `published` with only `geometry.endstop_gap_m`
-/// changed, `params = "calibrated"` and a description that says so.
+/// The calibrated device for a fitted gap: `published` with only its stops' gap
+/// (`stops.both.gap_m`) changed, `params = "calibrated"` and a description that says so.
 pub fn calibrated_device(published: &Device, gap_m: f64) -> Device {
-    let mut d = published.clone();
-    d.geometry.endstop_gap_m = gap_m;
+    let mut d = published.with_stop_gap(gap_m);
     d.params = "calibrated".into();
     d.description = format!(
         "{}; calibrated: end-stop gap fitted so the 5.5 g, 30 V up-sweep's impact onset is at \
@@ -210,8 +209,7 @@ pub fn calibrate_prototype1(published: &Device) -> Result<Calibration, Narrowban
     let mut evaluations = 0usize;
     let mut eval = |gap: f64| -> Result<(f64, Option<Transition>), SolverError> {
         evaluations += 1;
-        let mut d = setup.clone();
-        d.geometry.endstop_gap_m = gap;
+        let d = setup.with_stop_gap(gap);
         let found = onset_search(
             &d,
             &settings.freqs_hz,
@@ -227,12 +225,12 @@ pub fn calibrate_prototype1(published: &Device) -> Result<Calibration, Narrowban
     };
     let sample = |eval: &mut dyn FnMut(f64) -> Result<(f64, Option<Transition>), SolverError>,
                   x: f64| { eval(x).map(|(f, t)| Sample::new(x, f, t)) };
-    let published_gap = published.geometry.endstop_gap_m;
+    let published_gap = endstop(published).gap_m;
     let mut a = sample(&mut eval, 0.5 * published_gap)?;
     let mut b = sample(&mut eval, published_gap)?;
     if b.f < 0.0 {
         a = b;
-        b = sample(&mut eval, published.geometry.finger_overlap_m)?;
+        b = sample(&mut eval, comb(published).finger_overlap_m)?;
     }
     if !(a.f < 0.0 && b.f > 0.0) {
         return Err(NarrowbandError::NotBracketed {
@@ -324,7 +322,11 @@ pub fn fit_bim_for_jump(
     settings: &SweepSettings,
     tol_hz: f64,
 ) -> Result<BimFit, NarrowbandError> {
-    let stiffness = device.endstop.stiffness;
+    let stiffness = if hertz_stop(device).linear_fit {
+        StiffnessModel::Linear
+    } else {
+        StiffnessModel::Hertz
+    };
     let what = format!("b_im fit ({stiffness:?}) to the jump");
     let mut samples = Vec::new();
     let mut eval = |bim: f64| -> Result<(f64, Option<BranchEnd>), SolverError> {

@@ -12,6 +12,7 @@ use std::marker::PhantomData;
 use crate::device::{Device, StiffnessModel};
 use crate::ode::SolverError;
 use crate::paper::claims::{bool_value, ClaimValue};
+use crate::paper::setups::endstop;
 use crate::study::steady::SteadyConfig;
 use crate::study::sweep::{compare_sweeps, BranchEnd, SweepComparison, SweepReport, SweepSettings};
 
@@ -95,9 +96,8 @@ impl CurveSpec {
 
     /// The device with this curve's end-stop model.
     pub fn device(&self, base: &Device) -> Device {
-        let mut d = base.with_endstop(self.stiffness, self.bim_n_s_per_m);
-        d.endstop.tension_free = self.tension_free;
-        d
+        base.with_endstop(self.stiffness, self.bim_n_s_per_m)
+            .with_tension_free(self.tension_free)
     }
 }
 
@@ -238,7 +238,7 @@ impl Curve {
     /// and `cfg` the steady-state criterion it used (for the block length).
     pub fn summary(&self, base: &Device, cfg: &SteadyConfig) -> CurveSummary {
         let r = &self.report;
-        let gap = self.spec.device(base).geometry.endstop_gap_m;
+        let gap = endstop(&self.spec.device(base)).gap_m;
         let steps = r.sweep.steps.len();
         let blocks: usize = r.measurements().map(|m| m.blocks).sum();
         let stats = r.total_stats();

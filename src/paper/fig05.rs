@@ -3,6 +3,7 @@
 
 use crate::device::Device;
 use crate::paper::claims::{Claims, Value};
+use crate::paper::setups::{hertz_stop, with_hertz};
 use crate::physics::hertz::{
     normalised_delta, HertzLine, LinearFits, EQ19_FIT_RANGE_M, EQ19_FIT_SAMPLES,
 };
@@ -107,22 +108,23 @@ pub fn run(prototype1: &Device, prototype2: &Device) -> Run {
         })
         .collect();
     let prototype = |label, d: &Device| {
-        let hertz = HertzLine::of(d);
+        let hertz = HertzLine::of_stop(hertz_stop(d));
         Prototype {
             label,
             hertz,
             fits: hertz.linear_fits(EQ19_FIT_RANGE_M, EQ19_FIT_SAMPLES),
-            k_im_n_per_m: d.linear_endstop_stiffness_n_per_m(),
+            k_im_n_per_m: hertz_stop(d).linear_stiffness_n_per_m(),
         }
     };
-    let k_ref = prototype1.linear_endstop_stiffness_n_per_m();
+    let k_ref = hertz_stop(prototype1).linear_stiffness_n_per_m();
     let sensitivity = ELASTIC_CONSTANTS
         .iter()
         .map(|&(e, nu)| {
-            let mut d = prototype1.clone();
-            d.material.youngs_modulus_pa = e;
-            d.material.poisson_ratio = nu;
-            let k = d.linear_endstop_stiffness_n_per_m();
+            let d = with_hertz(prototype1, |h| {
+                h.youngs_modulus_pa = e;
+                h.poisson_ratio = nu;
+            });
+            let k = hertz_stop(&d).linear_stiffness_n_per_m();
             Sensitivity {
                 youngs_modulus_pa: e,
                 poisson_ratio: nu,

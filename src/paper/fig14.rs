@@ -118,8 +118,7 @@ pub fn run(
         .map(|i| case("published", i, &dev))
         .collect();
     if protocol.other_readings {
-        let mut tension_free = dev.clone();
-        tension_free.endstop.tension_free = true;
+        let tension_free = dev.with_tension_free(true);
         let hertz = dev.with_endstop(StiffnessModel::Hertz, 0.34);
         cases.push(case(
             "Hertz contact (eq 6), b_im = 0.34 N s/m",

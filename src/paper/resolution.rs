@@ -90,7 +90,7 @@ pub fn run(
     progress: &(dyn Fn() + Sync),
 ) -> Result<Study, BroadbandError> {
     let dev = prototype1_setup(published);
-    let rl = dev.electrical.load_resistance_ohm;
+    let rl = dev.transducer.load_resistance_ohm();
     let (lo, hi) = P1_BAND_HZ;
     let jobs: Vec<(usize, usize)> = (0..LEVELS.len())
         .flat_map(|l| (0..records).map(move |i| (l, i)))

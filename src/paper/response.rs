@@ -10,7 +10,7 @@ use thiserror::Error;
 use crate::device::{Device, StiffnessModel};
 use crate::drive::Sine;
 use crate::ode::{SolverError, Stats};
-use crate::paper::setups::{prototype1_setup, ParamSet, FIG13_BIAS_V};
+use crate::paper::setups::{endstop, prototype1_setup, ParamSet, FIG13_BIAS_V};
 use crate::paper::{fig08, fig13};
 use crate::physics::harvester::Harvester;
 use crate::study::basins::{basins, Attractor, BasinGrid, BasinSettings, Basins};
@@ -186,7 +186,7 @@ impl Setup {
     /// gap and 1.5 times the gap times the angular drive frequency).
     pub fn basin_settings(&self, cells: usize) -> Option<BasinSettings> {
         let f = self.case.basin_freq_hz()?;
-        let xmax = self.device.geometry.endstop_gap_m;
+        let xmax = endstop(&self.device).gap_m;
         let vmax = 2.0 * std::f64::consts::PI * f * xmax;
         Some(BasinSettings {
             grid: BasinGrid {

@@ -8,6 +8,7 @@
 use serde::Deserialize;
 
 use crate::device::{Device, ParamError};
+use crate::paper::setups::{comb, comb_mut, endstop, hertz_stop, with_hertz, with_stops};
 
 /// The ranges file compiled into the crate.
 pub const SENSITIVITY_TOML: &str = include_str!("../../data/sensitivity.toml");
@@ -218,7 +219,7 @@ impl Ranges {
             .map(|&f| {
                 let s = self.span(f);
                 if let Some([a, _]) = s.discrete {
-                    return Ok(if base.endstop.tension_free == a {
+                    return Ok(if endstop(base).tension_free == a {
                         0.25
                     } else {
                         0.75
@@ -255,7 +256,7 @@ impl Ranges {
         for (&f, &u) in Factor::ALL.iter().zip(point) {
             let s = self.span(f);
             if let Some([a, b]) = s.discrete {
-                device.endstop.tension_free = if u < 0.5 { a } else { b };
+                device = device.with_tension_free(if u < 0.5 { a } else { b });
                 continue;
             }
             let value = |own: f64| match (s.relative, s.absolute) {
@@ -264,9 +265,7 @@ impl Ranges {
                 _ => own,
             };
             match f {
-                Factor::EndstopGap => {
-                    device.geometry.endstop_gap_m = value(device.geometry.endstop_gap_m)
-                }
+                Factor::EndstopGap => device = device.with_stop_gap(value(endstop(&device).gap_m)),
                 Factor::MechanicalDamping => {
                     device.mechanics.damping_n_s_per_m = value(device.mechanics.damping_n_s_per_m)
                 }
@@ -274,13 +273,15 @@ impl Ranges {
                     device.mechanics.stiffness_n_per_m = value(device.mechanics.stiffness_n_per_m)
                 }
                 Factor::ParasiticCapacitance => {
-                    device.electrical.cp_f = value(device.electrical.cp_f)
+                    comb_mut(&mut device).cp_f = value(comb(&device).cp_f)
                 }
                 Factor::ImpactDamping => {
-                    device.endstop.damping_n_s_per_m = value(device.endstop.damping_n_s_per_m)
+                    let b = value(endstop(&device).damping_n_s_per_m);
+                    device = with_stops(&device, |s| s.damping_n_s_per_m = b)
                 }
                 Factor::YoungsModulus => {
-                    device.material.youngs_modulus_pa = value(device.material.youngs_modulus_pa)
+                    let e = value(hertz_stop(&device).youngs_modulus_pa);
+                    device = with_hertz(&device, |h| h.youngs_modulus_pa = e)
                 }
                 Factor::AccelScale => accel_scale = value(1.0),
                 Factor::TensionFree => {}
@@ -297,14 +298,14 @@ impl Ranges {
 /// The device's own value of a continuous factor (the acceleration's scale is 1).
 fn own_value(d: &Device, f: Factor) -> f64 {
     match f {
-        Factor::EndstopGap => d.geometry.endstop_gap_m,
+        Factor::EndstopGap => endstop(d).gap_m,
         Factor::MechanicalDamping => d.mechanics.damping_n_s_per_m,
         Factor::Stiffness => d.mechanics.stiffness_n_per_m,
-        Factor::ParasiticCapacitance => d.electrical.cp_f,
-        Factor::ImpactDamping => d.endstop.damping_n_s_per_m,
-        Factor::YoungsModulus => d.material.youngs_modulus_pa,
+        Factor::ParasiticCapacitance => comb(d).cp_f,
+        Factor::ImpactDamping => endstop(d).damping_n_s_per_m,
+        Factor::YoungsModulus => hertz_stop(d).youngs_modulus_pa,
         Factor::AccelScale => 1.0,
-        Factor::TensionFree => f64::from(u8::from(d.endstop.tension_free)),
+        Factor::TensionFree => f64::from(u8::from(endstop(d).tension_free)),
     }
 }
 
@@ -346,8 +347,7 @@ mod tests {
             assert!((v.accel_scale - 1.0).abs() < 1e-14);
         }
         // A device whose b_im lies outside the absolute range has no published point.
-        let mut wild = p1.clone();
-        wild.endstop.damping_n_s_per_m = 50.0;
+        let wild = with_stops(&p1, |s| s.damping_n_s_per_m = 50.0);
         assert!(matches!(
             file.prototype1.published_point(&wild),
             Err(RangesError::PublishedOutside {
@@ -367,13 +367,13 @@ mod tests {
             .unwrap();
         // Midpoint of a relative [0.8, 1.2] range is the published value itself: exact
         // arithmetic up to one rounding of 7e-6 * 1.0.
-        assert!((v.device.geometry.endstop_gap_m - 7e-6).abs() < 1e-18);
+        assert!((endstop(&v.device).gap_m - 7e-6).abs() < 1e-18);
         assert!((v.device.mechanics.damping_n_s_per_m - 0.7 * 3.75e-3).abs() < 1e-15);
         assert!((v.device.mechanics.stiffness_n_per_m - 1.05 * 166.5).abs() < 1e-12);
-        assert!((v.device.endstop.damping_n_s_per_m - 1.5).abs() < 1e-12);
-        assert_eq!(v.device.material.youngs_modulus_pa, 190e9);
+        assert!((endstop(&v.device).damping_n_s_per_m - 1.5).abs() < 1e-12);
+        assert_eq!(hertz_stop(&v.device).youngs_modulus_pa, 190e9);
         assert_eq!(v.accel_scale, 0.8);
-        assert!(v.device.endstop.tension_free);
+        assert!(endstop(&v.device).tension_free);
     }
 
     #[test]

@@ -1,7 +1,9 @@
 //! The prototypes as the paper simulates them: bias voltage and end-stop model of each figure,
 //! each said once, and the two parameter sets of prototype 1.
 
-use crate::device::{Device, StiffnessModel};
+use crate::device::{
+    AreaOverlapPair, Device, HertzLineStop, StiffnessModel, Stop, StopLaw, Transducer,
+};
 
 /// Prototype 1, Figures 8-12 and Table 3: bias voltage (V).
 pub const P1_BIAS_V: f64 = 30.0;
@@ -47,5 +49,80 @@ impl ParamSet {
             ParamSet::Published => "published",
             ParamSet::Calibrated => "calibrated",
         }
+    }
+}
+
+/// The comb pair of one of the paper's devices (eqs 7-10).
+///
+/// # Panics
+/// When the device is not of the paper's topology (the paper layer only reads
+/// `data/prototype1.toml` and `data/prototype2.toml`).
+pub fn comb(d: &Device) -> &AreaOverlapPair {
+    match &d.transducer {
+        Transducer::AreaOverlapPair(p) => p,
+        other => panic!(
+            "the paper's devices have an area-overlap pair, not `{}`",
+            other.key()
+        ),
+    }
+}
+
+/// The comb pair of one of the paper's devices, to change it (see [`comb`]).
+pub fn comb_mut(d: &mut Device) -> &mut AreaOverlapPair {
+    match &mut d.transducer {
+        Transducer::AreaOverlapPair(p) => p,
+        other => panic!(
+            "the paper's devices have an area-overlap pair, not `{}`",
+            other.key()
+        ),
+    }
+}
+
+/// The end-stop of one of the paper's devices: one stop for both sides (eqs 1-2).
+///
+/// # Panics
+/// When the device's two stops differ or one is missing.
+pub fn endstop(d: &Device) -> &Stop {
+    d.stops
+        .symmetric()
+        .expect("the paper's devices have one end-stop for both sides")
+}
+
+/// The Hertz line law of one of the paper's devices (eq 6, with its fit of eq 19).
+///
+/// # Panics
+/// When the device's stop is not a Hertz line stop.
+pub fn hertz_stop(d: &Device) -> &HertzLineStop {
+    match &endstop(d).law {
+        StopLaw::HertzLine(h) => h,
+        other => panic!(
+            "the paper's end-stops are Hertz line stops, not `{}`",
+            other.key()
+        ),
+    }
+}
+
+/// A copy of one of the paper's devices with both stops changed by `f`.
+pub fn with_stops(d: &Device, f: impl FnMut(&mut Stop)) -> Device {
+    let mut d = d.clone();
+    d.stops.for_each_mut(f);
+    d
+}
+
+/// A copy of one of the paper's devices with both stops' Hertz line law changed by `f`.
+pub fn with_hertz(d: &Device, mut f: impl FnMut(&mut HertzLineStop)) -> Device {
+    with_stops(d, |s| {
+        if let StopLaw::HertzLine(h) = &mut s.law {
+            f(h)
+        }
+    })
+}
+
+/// Which law the Hertz line stops of one of the paper's devices follow: eq 6 or eq 19.
+pub fn stiffness_model(d: &Device) -> StiffnessModel {
+    if hertz_stop(d).linear_fit {
+        StiffnessModel::Linear
+    } else {
+        StiffnessModel::Hertz
     }
 }

@@ -33,7 +33,7 @@ use crate::paper::fig12::{self, FIG12_LEVELS};
 use crate::paper::fig15::{self, FIG15_LEVELS};
 use crate::paper::measured::P1_RESONANCE_HZ;
 use crate::paper::sensitivity::{Factor, Ranges, RangesError, Variant};
-use crate::paper::setups::{FIG13_BIAS_V, P1_BIAS_V, P2_BIAS_V};
+use crate::paper::setups::{endstop, FIG13_BIAS_V, P1_BIAS_V, P2_BIAS_V};
 use crate::paper::{fig08, fig09};
 use crate::physics::harvester::Harvester;
 use crate::physics::two_port::{efficiency, TwoPort, TABLE3_QM};
@@ -407,7 +407,7 @@ pub fn evaluate_p1(
 /// Figure 8 at 5.5 g by frequency continuation: the kink, the four jumps and their order.
 fn p1_fig8(variant: &Variant) -> [Outcome; 6] {
     let base = variant.device.with_bias(P1_BIAS_V);
-    let fitted = base.endstop.damping_n_s_per_m;
+    let fitted = endstop(&base).damping_n_s_per_m;
     let accel = fig08::P1_HIGH_ACCEL_RMS_G * variant.accel_scale;
     let cases: [(StiffnessModel, f64, &'static str); 4] = [
         (
@@ -488,7 +488,7 @@ fn p1_fig9_bias(variant: &Variant, bias_v: f64) -> (Outcome, Outcome) {
     let mut stats = Stats::default();
     let power = match branch.orbits_at(&shooter, FIG9_RANGE_G.1 * s, &mut stats) {
         Ok(orbits) => orbits.first().map_or(Outcome::Failed, |o| {
-            Outcome::Value(o.summary.v1_rms_v.powi(2) / device.electrical.load_resistance_ohm)
+            Outcome::Value(o.summary.v1_rms_v.powi(2) / device.transducer.load_resistance_ohm())
         }),
         Err(_) => Outcome::Failed,
     };
@@ -637,7 +637,7 @@ pub fn evaluate_p2(
 /// Figure 13's yes/no claims by frequency continuation.
 fn p2_fig13(variant: &Variant, claims: &Claims) -> [Outcome; 3] {
     let base = variant.device.with_bias(FIG13_BIAS_V);
-    let fitted = base.endstop.damping_n_s_per_m;
+    let fitted = endstop(&base).damping_n_s_per_m;
     let cases: [(StiffnessModel, f64, f64, &'static str); 3] = [
         (StiffnessModel::Linear, fitted, P2_LEVELS_G.0, "F13 0.12 g"),
         (

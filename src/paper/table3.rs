@@ -4,7 +4,7 @@
 
 use crate::device::Device;
 use crate::paper::claims::{Claims, Value};
-use crate::paper::setups::{P1_BIAS_V, P2_BIAS_V};
+use crate::paper::setups::{comb, comb_mut, P1_BIAS_V, P2_BIAS_V};
 use crate::physics::two_port::{bias_for_coupling, QmReading, TwoPort, EQ21_QM, TABLE3_QM};
 
 /// The abstract's k^2 for prototype 1 (a fraction): 1.44 %.
@@ -70,15 +70,17 @@ pub struct Run {
 fn prototype(label: &'static str, key: &'static str, bias_v: f64, d: &Device) -> Prototype {
     let device = d.with_bias(bias_v);
     let mut geometric = device.clone();
-    geometric.electrical.c0_f = d.c0_from_geometry_f();
+    comb_mut(&mut geometric).c0_f = comb(d)
+        .c0_from_geometry_f()
+        .expect("the paper's device files give the finger geometry");
     let mut no_cl = device.clone();
-    no_cl.electrical.load_capacitance_f = 0.0;
+    comb_mut(&mut no_cl).load_capacitance_f = 0.0;
     Prototype {
         label,
         key,
         bias_v,
         two_port: TwoPort::of(&device),
-        c0_geometry_f: geometric.electrical.c0_f,
+        c0_geometry_f: comb(&geometric).c0_f,
         k2_c0_geometry: TwoPort::of(&geometric).k2,
         k2_without_cl: TwoPort::of(&no_cl).k2,
         device,
@@ -92,7 +94,7 @@ pub fn run(prototype1: &Device, prototype2: &Device) -> Run {
         .into_iter()
         .map(|r_ohm| {
             let mut d = p2.device.clone();
-            d.electrical.load_resistance_ohm = r_ohm;
+            comb_mut(&mut d).load_resistance_ohm = r_ohm;
             let tp = TwoPort::of(&d);
             (r_ohm, tp.broadband_efficiency(tp.qm(EQ21_QM)))
         })

@@ -1,17 +1,30 @@
-//! The end-stop contact of eqs 1-2: which stop, the contact modes the integrator switches
-//! between, and the spring law of the stop (Hertz, eq 6, or linear, eq 19).
+//! The end-stop contact of eqs 1-2, generalised to any stop of [`crate::device::stops`]: which
+//! stop, the contact modes the integrator switches between, and each stop's force law.
 //!
-//! For |x| > xmax the penetration is delta = |x| - xmax (eq 2) and the stop pushes back with
-//! F_im = sign(x) (F_k(delta) + b_im d(delta)/dt) (eq 1).
+//! For a compliant stop on side `s` (`s = +1` upper, `-1` lower) the penetration is
+//! `delta = s x - gap` (eq 2) and, while `delta > 0`, the stop pushes back with
+//! `F_im = s B` (eq 1), where the bracket `B` is the spring force plus the contact damping:
+//!
+//! * eq 1's viscous damper: `B = F_k(delta) + b_im d(delta)/dt`;
+//! * Hunt-Crossley: `B = F_k(delta) (1 + alpha d(delta)/dt)` with `F_k = K delta^n`.
+//!
+//! With a tension-free stop (always for Hunt-Crossley) the bracket is clipped at zero: the
+//! mass is then in the mode [`Mode::Clipped`], past the stop but free of its force.
+//!
+//! A rigid stop (restitution) has no contact phase: when the mass reaches it, its velocity is
+//! reset to `-e` times itself (Newton's law), and where the rebounds would accumulate the mass
+//! sticks to the stop ([`Mode::Stuck`]) until the net force pulls it away (see
+//! [`crate::physics::harvester`]).
 
+use crate::device::{HertzLineStop, Stop, StopLaw, StopSide};
 use crate::physics::hertz::HertzLine;
 
-/// Which stop: +1 the one at x = +xmax, -1 the one at x = -xmax.
+/// Which stop: +1 the one at x = +gap, -1 the one at x = -gap.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Side {
-    /// The stop at x = +xmax.
+    /// The stop at x = +gap.
     Upper,
-    /// The stop at x = -xmax.
+    /// The stop at x = -gap.
     Lower,
 }
 
@@ -24,33 +37,54 @@ impl Side {
             Side::Lower => -1.0,
         }
     }
+
+    /// Both sides, upper first.
+    pub const BOTH: [Side; 2] = [Side::Upper, Side::Lower];
+}
+
+impl From<StopSide> for Side {
+    fn from(s: StopSide) -> Self {
+        match s {
+            StopSide::Upper => Side::Upper,
+            StopSide::Lower => Side::Lower,
+        }
+    }
 }
 
 /// Contact mode of the proof mass.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Mode {
-    /// |x| <= xmax, no contact force.
+    /// Between the stops, no contact force.
     Free,
-    /// In contact with a stop, the contact force acts.
+    /// In contact with a compliant stop, the contact force acts.
     Contact(Side),
-    /// Past the stop but the (tension-free) contact force is clipped to zero.
+    /// Past a tension-free stop, with the contact force clipped to zero.
     Clipped(Side),
+    /// Resting on a rigid stop, held there by the net force (after impacts accumulated).
+    Stuck(Side),
 }
 
 impl Mode {
-    /// True while the mass is past a stop (delta > 0).
+    /// True while the mass touches or is past a stop.
     pub fn in_contact(self) -> bool {
         !matches!(self, Mode::Free)
     }
 }
 
-/// The spring law of the stop, evaluated.
+/// The spring law of a compliant stop, evaluated.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum ContactLaw {
     /// Hertz line contact, eq 6.
     Hertz(HertzLine),
-    /// Linear spring k_im (N/m), eq 19.
+    /// Linear spring k (N/m): eq 19, or a plain spring.
     Linear(f64),
+    /// Power law `K delta^n` (Hertz point contact: n = 3/2).
+    Power {
+        /// K (N/m^n).
+        k: f64,
+        /// The exponent n.
+        n: f64,
+    },
 }
 
 impl ContactLaw {
@@ -63,6 +97,7 @@ impl ContactLaw {
         match self {
             ContactLaw::Hertz(h) => h.force_of_delta(delta_m),
             ContactLaw::Linear(k) => k * delta_m,
+            ContactLaw::Power { k, n } => k * delta_m.powf(*n),
         }
     }
 
@@ -75,6 +110,7 @@ impl ContactLaw {
         match self {
             ContactLaw::Hertz(h) => h.stiffness_of_delta(delta_m),
             ContactLaw::Linear(k) => *k,
+            ContactLaw::Power { k, n } => k * n * delta_m.powf(n - 1.0),
         }
     }
 
@@ -86,6 +122,186 @@ impl ContactLaw {
         match self {
             ContactLaw::Hertz(h) => h.energy_of_delta(delta_m),
             ContactLaw::Linear(k) => 0.5 * k * delta_m * delta_m,
+            ContactLaw::Power { k, n } => k * delta_m.powf(n + 1.0) / (n + 1.0),
+        }
+    }
+
+    /// The law of a Hertz line stop: eq 6, or eq 19's linear fit.
+    pub fn of_hertz_line(h: &HertzLineStop) -> Self {
+        if h.linear_fit {
+            ContactLaw::Linear(h.linear_stiffness_n_per_m())
+        } else {
+            ContactLaw::Hertz(HertzLine::of_stop(h))
+        }
+    }
+}
+
+/// How a compliant stop dissipates while in contact.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum ContactDamping {
+    /// Eq 1's viscous damper b_im (N s/m).
+    Viscous(f64),
+    /// Hunt-Crossley's `alpha` (s/m): the damping force is `alpha F_k d(delta)/dt`.
+    HuntCrossley(f64),
+}
+
+/// One stop of the model, evaluated from its description.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum StopModel {
+    /// A stop with a contact phase.
+    Compliant {
+        /// Gap (m).
+        gap: f64,
+        /// Spring law.
+        law: ContactLaw,
+        /// Contact damping.
+        damping: ContactDamping,
+        /// Clip the bracket at zero.
+        tension_free: bool,
+    },
+    /// An instantaneous impact with restitution.
+    Rigid {
+        /// Gap (m).
+        gap: f64,
+        /// Coefficient of restitution e.
+        restitution: f64,
+    },
+}
+
+impl StopModel {
+    /// The model of a stop description.
+    pub fn of(stop: &Stop) -> Self {
+        let gap = stop.gap_m;
+        let viscous = ContactDamping::Viscous(stop.damping_n_s_per_m);
+        let compliant = |law| StopModel::Compliant {
+            gap,
+            law,
+            damping: viscous,
+            tension_free: stop.tension_free,
+        };
+        match &stop.law {
+            StopLaw::HertzLine(h) => compliant(ContactLaw::of_hertz_line(h)),
+            StopLaw::Linear { stiffness_n_per_m } => {
+                compliant(ContactLaw::Linear(*stiffness_n_per_m))
+            }
+            StopLaw::HertzPoint(k) => compliant(ContactLaw::Power {
+                k: k.value(),
+                n: 1.5,
+            }),
+            StopLaw::HuntCrossley {
+                stiffness_n_per_m_pow_n,
+                exponent,
+                damping_s_per_m,
+            } => StopModel::Compliant {
+                gap,
+                law: ContactLaw::Power {
+                    k: *stiffness_n_per_m_pow_n,
+                    n: *exponent,
+                },
+                damping: ContactDamping::HuntCrossley(*damping_s_per_m),
+                tension_free: true,
+            },
+            StopLaw::Restitution { coefficient } => StopModel::Rigid {
+                gap,
+                restitution: *coefficient,
+            },
+        }
+    }
+
+    /// The gap (m).
+    #[inline(always)]
+    pub fn gap(&self) -> f64 {
+        match *self {
+            StopModel::Compliant { gap, .. } | StopModel::Rigid { gap, .. } => gap,
+        }
+    }
+
+    /// The bracket `B` of eq 1 (see the module docs) at penetration `delta` and penetration
+    /// rate `delta_dot` (N); zero for a rigid stop.
+    #[inline(always)]
+    pub fn bracket(&self, delta: f64, delta_dot: f64) -> f64 {
+        match *self {
+            StopModel::Compliant {
+                law,
+                damping: ContactDamping::Viscous(b),
+                ..
+            } => law.force(delta) + b * delta_dot,
+            StopModel::Compliant {
+                law,
+                damping: ContactDamping::HuntCrossley(alpha),
+                ..
+            } => {
+                let f = law.force(delta);
+                f + alpha * f * delta_dot
+            }
+            StopModel::Rigid { .. } => 0.0,
+        }
+    }
+
+    /// The bracket's derivatives with respect to `delta` and `delta_dot`.
+    #[inline]
+    pub fn bracket_gradient(&self, delta: f64, delta_dot: f64) -> (f64, f64) {
+        match *self {
+            StopModel::Compliant {
+                law,
+                damping: ContactDamping::Viscous(b),
+                ..
+            } => (law.stiffness(delta), b),
+            StopModel::Compliant {
+                law,
+                damping: ContactDamping::HuntCrossley(alpha),
+                ..
+            } => (
+                law.stiffness(delta) * (1.0 + alpha * delta_dot),
+                alpha * law.force(delta),
+            ),
+            StopModel::Rigid { .. } => (0.0, 0.0),
+        }
+    }
+
+    /// Power dissipated by the contact damping at `delta`, `delta_dot` (W).
+    #[inline]
+    pub fn damping_power(&self, delta: f64, delta_dot: f64) -> f64 {
+        match *self {
+            StopModel::Compliant {
+                damping: ContactDamping::Viscous(b),
+                ..
+            } => b * delta_dot * delta_dot,
+            StopModel::Compliant {
+                law,
+                damping: ContactDamping::HuntCrossley(alpha),
+                ..
+            } => alpha * law.force(delta) * delta_dot * delta_dot,
+            StopModel::Rigid { .. } => 0.0,
+        }
+    }
+
+    /// The elastic energy of the contact at `delta` (J).
+    pub fn energy(&self, delta: f64) -> f64 {
+        match self {
+            StopModel::Compliant { law, .. } => law.energy(delta),
+            StopModel::Rigid { .. } => 0.0,
+        }
+    }
+
+    /// True when the bracket is clipped at zero.
+    #[inline(always)]
+    pub fn tension_free(&self) -> bool {
+        matches!(
+            self,
+            StopModel::Compliant {
+                tension_free: true,
+                ..
+            }
+        )
+    }
+
+    /// The largest stiffness of the contact over penetrations up to `delta_max` (N/m), for
+    /// time scales: the spring's stiffness there (the laws stiffen with penetration).
+    pub fn stiffness_at(&self, delta_max: f64) -> f64 {
+        match self {
+            StopModel::Compliant { law, .. } => law.stiffness(delta_max),
+            StopModel::Rigid { .. } => 0.0,
         }
     }
 }

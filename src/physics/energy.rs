@@ -19,49 +19,47 @@ use crate::physics::harvester::{Harvester, State};
 impl<E: Excitation> Harvester<E> {
     /// Instantaneous power terms at a state (W); see [`PowerTerms`].
     pub fn power_terms(&self, mode: Mode, t: f64, y: &State) -> PowerTerms {
-        let el = self.electrical(y);
         let v = y[1];
         let stop_damping = match mode {
-            Mode::Contact(side) => {
-                let bracket = self.contact_bracket(side, y);
-                if self.tension_free && bracket < 0.0 {
-                    0.0
-                } else {
-                    self.bim * v * v
+            Mode::Contact(side) => match self.stop(side) {
+                Some(s) => {
+                    let delta = self.penetration(side, y[0]);
+                    if s.tension_free() && self.contact_bracket(side, y) < 0.0 {
+                        0.0
+                    } else {
+                        s.damping_power(delta, side.sign() * v)
+                    }
                 }
-            }
+                None => 0.0,
+            },
             _ => 0.0,
         };
         PowerTerms {
             excitation: self.mass_kg * self.excitation.accel(t) * v,
             mech_damping: self.damping * v * v,
             stop_damping,
-            load: (el.v[0] * el.v[0] + el.v[1] * el.v[1]) / self.rl,
+            load: self.transducer.load_power(y),
+            internal: self.transducer.internal_loss(y),
         }
     }
 
-    /// Stored energy (J): kinetic, suspension, contact spring, and the capacitors.
+    /// Stored energy (J): kinetic, suspension, contact spring, and the transducer's.
     pub fn stored_energy(&self, mode: Mode, y: &State) -> f64 {
-        let el = self.electrical(y);
         let contact = match mode {
-            Mode::Contact(side) => self.law.energy(self.penetration(side, y[0])),
+            Mode::Contact(side) => self
+                .stop(side)
+                .map_or(0.0, |s| s.energy(self.penetration(side, y[0]))),
             _ => 0.0,
         };
-        let mut e = 0.5 * self.mass_kg * y[1] * y[1] + 0.5 * self.km * y[0] * y[0] + contact;
-        for i in 0..2 {
-            let u = el.v[i] - self.vb;
-            e += 0.5 * (el.c[i] + self.cp) * u * u + 0.5 * self.cl * el.v[i] * el.v[i];
-        }
-        e
+        let e = 0.5 * self.mass_kg * y[1] * y[1] + 0.5 * self.km * y[0] * y[0] + contact;
+        self.transducer.add_stored_energy(e, y)
     }
 
-    /// Charge delivered by the bias source to the proof-mass electrode (C):
-    /// sum_i (C_i + Cp)(Vb - V_i). The source's work is Vb times its change.
+    /// Charge delivered by the bias source of a capacitor pair to the proof-mass electrode
+    /// (C): sum_i (C_i + Cp)(Vb - V_i); zero without a source. The source's work is Vb times
+    /// its change.
     pub fn source_charge(&self, y: &State) -> f64 {
-        let el = self.electrical(y);
-        (0..2)
-            .map(|i| (el.c[i] + self.cp) * (self.vb - el.v[i]))
-            .sum()
+        self.transducer.source_charge(y)
     }
 }
 
@@ -72,14 +70,17 @@ pub struct PowerTerms {
     pub excitation: f64,
     /// Dissipated in the mechanical damper, b v^2.
     pub mech_damping: f64,
-    /// Dissipated in the end-stop damper, b_im v^2 while the contact force acts.
+    /// Dissipated by the contact damping (eq 1's b_im v^2, or Hunt-Crossley's) while the
+    /// contact force acts.
     pub stop_damping: f64,
-    /// Dissipated in both load resistors, (V1^2 + V2^2)/RL.
+    /// Dissipated in the loads: (V1^2 + V2^2)/RL for a pair, V^2/R or I^2 R for one load.
     pub load: f64,
+    /// Dissipated inside the transducer: the coil resistance's I^2 Rc.
+    pub internal: f64,
 }
 
-/// Number of states of the audit: the model's four and seven accumulators ([`ledger_index`]).
-pub const AUDIT_DIM: usize = 11;
+/// Number of states of the audit: the model's four and nine accumulators ([`ledger_index`]).
+pub const AUDIT_DIM: usize = 13;
 
 /// The audit state: (x, v, s1, s2) and the accumulators of [`EnergyAudit`].
 pub type AuditState = SVector<f64, AUDIT_DIM>;
@@ -103,15 +104,21 @@ pub mod ledger_index {
     /// Stored energy removed by the projections onto the stop at entry and exit (signed, of the
     /// order of the event time tolerance).
     pub const PROJECTIONS: usize = 10;
+    /// Kinetic energy lost at impacts on rigid stops, (1 - e^2) m v^2 / 2 each (and all of
+    /// it when the mass sticks).
+    pub const IMPACT_LOSSES: usize = 11;
+    /// Dissipated inside the transducer (a coil's resistance).
+    pub const INTERNAL: usize = 12;
 }
 
 /// The harvester with the work of every force accumulated as extra states (see
 /// [`ledger_index`]): the excitation's work, the mechanical damper, the end-stop damper, the
-/// loads, and, booked at mode switches, the clip losses, the re-engagement gains and the
-/// projections.
+/// loads, the transducer's internal losses, and, booked at mode switches, the clip losses, the
+/// re-engagement gains, the impact losses and the projections.
 ///
 /// Over any run, excitation + source + re-engagement gains = mechanical damping + end-stop
-/// damping + loads + clip losses + projections + change of stored energy, where the source's
+/// damping + loads + internal losses + clip losses + impact losses + projections + change of
+/// stored energy, where the source's
 /// work is Vb times the change of [`Harvester::source_charge`] and the stored energy is
 /// [`Harvester::stored_energy`]; [`EnergyAudit::ledger`] evaluates every term and the tests
 /// use it to check the model and the integrator together. The end stop absorbs
@@ -143,6 +150,10 @@ pub struct EnergyLedger {
     pub reengagement_gains: f64,
     /// Stored energy removed by the projections onto the stop.
     pub projections: f64,
+    /// Kinetic energy lost at impacts on rigid stops.
+    pub impact_losses: f64,
+    /// Dissipated inside the transducer (a coil's resistance).
+    pub internal: f64,
     /// Change of the stored energy.
     pub stored_change: f64,
 }
@@ -156,6 +167,8 @@ impl EnergyLedger {
             - self.loads
             - self.clip_losses
             - self.projections
+            - self.impact_losses
+            - self.internal
             - self.stored_change
     }
 
@@ -171,6 +184,8 @@ impl EnergyLedger {
             + self.loads.abs()
             + self.clip_losses.abs()
             + self.projections.abs()
+            + self.impact_losses.abs()
+            + self.internal.abs()
             + self.stored_change.abs();
         self.residual() / scale
     }
@@ -185,11 +200,15 @@ impl EnergyLedger {
     /// `to` makes disappear or appear: a tension-free contact that unloads while still
     /// pressed drops the spring energy U(delta) (a clip loss), one that re-engages while
     /// pressed restores it (a re-engagement gain), and the projection onto the stop at entry
-    /// and exit moves the stored energy by the order of the event time tolerance.
+    /// and exit moves the stored energy by the order of the event time tolerance; an impact on
+    /// a rigid stop loses kinetic energy (an impact loss).
     pub fn book_switch(&mut self, from: Mode, to: Mode, dropped_j: f64) {
         match (from, to) {
             (Mode::Contact(_), Mode::Clipped(_)) => self.clip_losses += dropped_j,
             (Mode::Clipped(_), Mode::Contact(_)) => self.reengagement_gains -= dropped_j,
+            (Mode::Free, Mode::Free) | (Mode::Free, Mode::Stuck(_)) => {
+                self.impact_losses += dropped_j
+            }
             _ => self.projections += dropped_j,
         }
     }
@@ -197,10 +216,11 @@ impl EnergyLedger {
 
 impl<E: Excitation> EnergyAudit<E> {
     /// Integrator options: the model's, with absolute tolerances for the energy accumulators
-    /// of `rtol` times the suspension energy at the stop, km xmax^2 / 2.
+    /// of `rtol` times the suspension energy at the displacement scale, km x_s^2 / 2.
     pub fn solver_options(&self, rtol: f64) -> Options<AUDIT_DIM> {
         let base = self.0.solver_options(rtol);
-        let e_scale = 0.5 * self.0.km * self.0.xmax * self.0.xmax;
+        let xs = self.0.x_scale();
+        let e_scale = 0.5 * self.0.km * xs * xs;
         base.augmented(AuditState::repeat(e_scale * rtol))
     }
 
@@ -211,13 +231,16 @@ impl<E: Excitation> EnergyAudit<E> {
         let s = audit_state(y);
         EnergyLedger {
             excitation: y[l::EXCITATION],
-            source: h.vb * (h.source_charge(&s) - h.source_charge(&State::zeros())),
+            source: h.transducer.bias_v()
+                * (h.source_charge(&s) - h.source_charge(&State::zeros())),
             mech_damping: y[l::MECH_DAMPING],
             stop_damping: y[l::STOP_DAMPING],
             loads: y[l::LOADS],
             clip_losses: y[l::CLIP_LOSSES],
             reengagement_gains: y[l::REENGAGEMENT_GAINS],
             projections: y[l::PROJECTIONS],
+            impact_losses: y[l::IMPACT_LOSSES],
+            internal: y[l::INTERNAL],
             stored_change: h.stored_energy(mode, &s) - h.stored_energy(Mode::Free, &State::zeros()),
         }
     }
@@ -243,6 +266,7 @@ impl<E: Excitation> HybridSystem<AUDIT_DIM> for EnergyAudit<E> {
         d[l::MECH_DAMPING] = p.mech_damping;
         d[l::STOP_DAMPING] = p.stop_damping;
         d[l::LOADS] = p.load;
+        d[l::INTERNAL] = p.internal;
         d
     }
 
@@ -257,12 +281,13 @@ impl<E: Excitation> HybridSystem<AUDIT_DIM> for EnergyAudit<E> {
         let mut s = audit_state(y);
         let before = self.0.stored_energy(mode, &s);
         let m = self.0.switch(mode, i, t, &mut s);
-        y[0] = s[0];
+        y.fixed_rows_mut::<4>(0).copy_from(&s);
         let mut booked = EnergyLedger::default();
         booked.book_switch(mode, m, before - self.0.stored_energy(m, &s));
         y[l::CLIP_LOSSES] += booked.clip_losses;
         y[l::REENGAGEMENT_GAINS] += booked.reengagement_gains;
         y[l::PROJECTIONS] += booked.projections;
+        y[l::IMPACT_LOSSES] += booked.impact_losses;
         m
     }
 

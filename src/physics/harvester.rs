@@ -1,35 +1,43 @@
-//! The lumped electromechanical model with end-stops (eqs 1-2 and 7-10).
+//! The lumped model of an impact-limited harvester (eqs 1-2 and 7-10, generalised).
 //!
-//! Mechanics (eq 7): m x'' + b x' + km x + F_e + F_im = m a(t).
+//! Mechanics (eq 7): `m x'' + b x' + km x + F_e + F_im = m a(t)`, where `F_e` is the
+//! transducer's reaction ([`crate::physics::transducer`]; for the paper's comb pair, eqs 8-10)
+//! and `F_im` the end-stop force ([`crate::physics::contact`]; eqs 1-2 for the paper's stops).
+//! The state is `(x, v, e1, e2)` for every device; the transducer says which electrical
+//! components are live.
 //!
-//! Transducers (eq 10): C_1,2(x) = C0 (1 +- x/x0), each with Cp in parallel. The bias Vb is on
-//! the proof mass; fixed electrode i is a node with voltage V_i that goes to ground through RL
-//! in parallel with CL. With node charge Q_i = (C_i + Cp)(V_i - Vb) + CL V_i (eq 8 plus the
-//! load capacitor), the explicit state is (x, v, s_1, s_2) where s_i = Q_i + (C0 + Cp) Vb is
-//! the node charge measured from its rest value (so that the state has no large constant
-//! offset, which would spoil the relative error control):
+//! # Modes ([`Mode`])
+//! * `Free`: between the stops. Its guards are the penetrations of the present stops.
+//! * `Contact(side)`: pressed into a compliant stop. It leaves when the penetration returns
+//!   to zero, or (tension-free) when the bracket of eq 1 turns negative (to `Clipped`).
+//! * `Clipped(side)`: past a tension-free stop with its force clipped to zero; it re-engages
+//!   when the bracket turns positive, and leaves when the penetration returns to zero.
+//! * `Stuck(side)`: resting on a rigid stop. It leaves when the force that holds the mass
+//!   there, `F_s = m a - km x + F_e` along the stop's direction, turns away from the stop.
 //!
-//! * V_i = (s_i + (C_i - C0) Vb) / (C_i + Cp + CL),
-//! * ds_i/dt = -V_i / RL,
-//! * electrostatic force on the mass +1/2 sum_i (V_i - Vb)^2 dC_i/dx (eq 9, i.e. -F_e of eq 7).
-//!
-//! End-stop (eqs 1-2): for |x| > xmax, delta = |x| - xmax and
-//! F_im = sign(x) (F_k(delta) + b_im d(delta)/dt) with F_k the Hertz law (eq 6) or the linear
-//! law of eq 19. With `tension_free` the bracket is clipped at zero, so the stop never pulls.
-//!
-//! Modes for the integrator ([`crate::physics::contact::Mode`]): `Free`, `Contact(side)` and (tension-free only) `Clipped(side)`,
-//! where the mass is past the stop but the contact force would be tensile.
+//! # Rigid stops: impacts that accumulate
+//! At a rigid stop the velocity is reset to `v+ = -e v-`. Under a net force `A m` pressing the
+//! mass onto the stop, a rebound of speed `u` flies for `2u/A` and rises `u^2/(2A)`, so the
+//! rebounds shrink geometrically and accumulate in finite time (chattering, `2 u /(A (1-e))`
+//! for a constant force). The model ends such a sequence as the literature does (e.g. Nordmark
+//! and Piiroinen, Nonlinear Dyn. 58, 2009, on complete chattering): when the rebound could rise
+//! no higher than [`Harvester::stick_height_m`], the mass sticks to the stop (`Stuck`) until
+//! the holding force changes sign. The position error of this shortcut is below that height;
+//! the sequence it replaces would have lasted `2u/(A(1 - e))`.
 
-use nalgebra::{Matrix4, SMatrix, SVector};
+use nalgebra::{Matrix4, SVector};
 
-use crate::device::{Device, StiffnessModel};
+use crate::device::Device;
 use crate::drive::Excitation;
 use crate::ode::{Guards, HybridSystem, Options};
-use crate::physics::contact::{ContactLaw, Mode, Side};
-use crate::physics::hertz::HertzLine;
+use crate::physics::contact::{Mode, Side, StopModel};
+pub use crate::physics::free_flight::FreeFlight;
+use crate::physics::transducer::TransducerModel;
+pub use crate::physics::transducer::{Electrical, State};
 
-/// State (x in m, v in m/s, s1 and s2 in C).
-pub type State = SVector<f64, 4>;
+/// The rebound height below which impacts on a rigid stop end in sticking, relative to the
+/// displacement scale ([`Harvester::x_scale`]).
+pub const STICK_HEIGHT_REL: f64 = 1e-9;
 
 /// The harvester driven by an excitation: a [`HybridSystem`] of dimension 4.
 #[derive(Debug, Clone)]
@@ -40,61 +48,77 @@ pub struct Harvester<E: Excitation> {
     pub damping: f64,
     /// Suspension stiffness km (N/m).
     pub km: f64,
-    /// Finger overlap x0 (m).
-    pub x0: f64,
-    /// End-stop position xmax (m).
-    pub xmax: f64,
-    /// C0 (F).
-    pub c0: f64,
-    /// Cp (F).
-    pub cp: f64,
-    /// CL (F).
-    pub cl: f64,
-    /// RL (ohm).
-    pub rl: f64,
-    /// Vb (V).
-    pub vb: f64,
-    /// Spring law of the stop.
-    pub law: ContactLaw,
-    /// End-stop damping b_im (N s/m).
-    pub bim: f64,
-    /// Clip the contact force at zero.
-    pub tension_free: bool,
+    /// The stop at x = +gap, if any.
+    pub upper: Option<StopModel>,
+    /// The stop at x = -gap, if any.
+    pub lower: Option<StopModel>,
+    /// The transducer.
+    pub transducer: TransducerModel,
+    /// Rebounds on a rigid stop that could rise no higher than this end in sticking (m).
+    pub stick_height_m: f64,
+    /// The displacement scale of tolerances and scaled coordinates (m): the smallest gap of
+    /// the device's stops, or without stops the static deflection under 1 g, `g / w0^2`. It
+    /// stays with the model when its stops are removed ([`Harvester::without_stops`]).
+    pub x_scale_m: f64,
     /// The base acceleration.
     pub excitation: E,
 }
 
-/// Derived electrical quantities at one state.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Electrical {
-    /// Node voltages V1, V2 (V).
-    pub v: [f64; 2],
-    /// Transducer capacitances C1, C2 (F).
-    pub c: [f64; 2],
+/// What a mode switch is, for counting impacts and booking energy.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum SwitchKind {
+    /// The mass reaches a compliant stop (an impact begins).
+    Impact,
+    /// The mass bounces off a rigid stop (an impact).
+    Rebound,
+    /// The mass reaches a rigid stop and sticks to it (an impact).
+    Stick,
+    /// A tension-free contact unloads or re-engages.
+    Clip,
+    /// The mass leaves a stop.
+    Release,
+}
+
+impl SwitchKind {
+    /// True for the switches that are impacts.
+    pub fn is_impact(self) -> bool {
+        matches!(
+            self,
+            SwitchKind::Impact | SwitchKind::Rebound | SwitchKind::Stick
+        )
+    }
+
+    /// The kind of a switch from `from` to `to`.
+    pub fn of(from: Mode, to: Mode) -> Self {
+        match (from, to) {
+            (Mode::Free, Mode::Contact(_)) => SwitchKind::Impact,
+            (Mode::Free, Mode::Free) => SwitchKind::Rebound,
+            (Mode::Free, Mode::Stuck(_)) => SwitchKind::Stick,
+            (Mode::Contact(_), Mode::Clipped(_)) | (Mode::Clipped(_), Mode::Contact(_)) => {
+                SwitchKind::Clip
+            }
+            _ => SwitchKind::Release,
+        }
+    }
 }
 
 impl<E: Excitation> Harvester<E> {
     /// Builds the model of a device (at its bias voltage and end-stop options).
     pub fn new(device: &Device, excitation: E) -> Self {
-        let law = match device.endstop.stiffness {
-            StiffnessModel::Hertz => ContactLaw::Hertz(HertzLine::of(device)),
-            StiffnessModel::Linear => ContactLaw::Linear(device.linear_endstop_stiffness_n_per_m()),
-        };
-        let e = &device.electrical;
+        let m = &device.mechanics;
+        let x_scale_m = device
+            .stops
+            .smallest_gap_m()
+            .unwrap_or(crate::G * m.mass_kg / m.stiffness_n_per_m);
         Self {
-            mass_kg: device.mechanics.mass_kg,
-            damping: device.mechanics.damping_n_s_per_m,
-            km: device.mechanics.stiffness_n_per_m,
-            x0: device.geometry.finger_overlap_m,
-            xmax: device.geometry.endstop_gap_m,
-            c0: e.c0_f,
-            cp: e.cp_f,
-            cl: e.load_capacitance_f,
-            rl: e.load_resistance_ohm,
-            vb: e.bias_v,
-            law,
-            bim: device.endstop.damping_n_s_per_m,
-            tension_free: device.endstop.tension_free,
+            mass_kg: m.mass_kg,
+            damping: m.damping_n_s_per_m,
+            km: m.stiffness_n_per_m,
+            upper: device.stops.upper.as_ref().map(StopModel::of),
+            lower: device.stops.lower.as_ref().map(StopModel::of),
+            transducer: TransducerModel::of(&device.transducer),
+            stick_height_m: STICK_HEIGHT_REL * x_scale_m,
+            x_scale_m,
             excitation,
         }
     }
@@ -105,155 +129,222 @@ impl<E: Excitation> Harvester<E> {
             mass_kg: self.mass_kg,
             damping: self.damping,
             km: self.km,
-            x0: self.x0,
-            xmax: self.xmax,
-            c0: self.c0,
-            cp: self.cp,
-            cl: self.cl,
-            rl: self.rl,
-            vb: self.vb,
-            law: self.law,
-            bim: self.bim,
-            tension_free: self.tension_free,
+            upper: self.upper,
+            lower: self.lower,
+            transducer: self.transducer,
+            stick_height_m: self.stick_height_m,
+            x_scale_m: self.x_scale_m,
             excitation,
         }
     }
 
-    /// The rest state: x = v = 0 and both node voltages zero.
+    /// The same model without stops (its scales unchanged).
+    pub fn without_stops(&self) -> Self
+    where
+        E: Clone,
+    {
+        let mut h = self.clone();
+        h.upper = None;
+        h.lower = None;
+        h
+    }
+
+    /// The stop on a side, if any.
+    #[inline(always)]
+    pub fn stop(&self, side: Side) -> Option<&StopModel> {
+        match side {
+            Side::Upper => self.upper.as_ref(),
+            Side::Lower => self.lower.as_ref(),
+        }
+    }
+
+    /// The gap on a side (m); infinite without a stop.
+    #[inline(always)]
+    pub fn gap(&self, side: Side) -> f64 {
+        self.stop(side).map_or(f64::INFINITY, StopModel::gap)
+    }
+
+    /// True when the device has a rigid (restitution) stop.
+    pub fn has_rigid_stop(&self) -> bool {
+        [self.upper, self.lower]
+            .iter()
+            .flatten()
+            .any(|s| matches!(s, StopModel::Rigid { .. }))
+    }
+
+    /// The rest state: x = v = 0 and every electrical component zero.
     pub fn rest_state(&self) -> State {
         State::zeros()
     }
 
-    /// The state at position `x` and velocity `v` with the charges at their static
-    /// equilibrium: both node voltages zero (s_i = -+ dC Vb, dC = C0 x / x0).
+    /// The state at position `x` and velocity `v` with the transducer at its static
+    /// equilibrium: a pair's node voltages zero (s_i = -(C_i - C0) Vb), a piezoelectric
+    /// voltage or a coil current zero.
     pub fn static_state(&self, x: f64, v: f64) -> State {
-        let dc = self.c0 * x / self.x0;
-        State::new(x, v, -dc * self.vb, dc * self.vb)
-    }
-
-    /// Capacitances and node voltages at a state.
-    #[inline]
-    pub fn electrical(&self, y: &State) -> Electrical {
-        let dc = self.c0 * y[0] / self.x0;
-        let c1 = self.c0 + dc;
-        let c2 = self.c0 - dc;
-        let v1 = (y[2] + dc * self.vb) / (c1 + self.cp + self.cl);
-        let v2 = (y[3] - dc * self.vb) / (c2 + self.cp + self.cl);
-        Electrical {
-            v: [v1, v2],
-            c: [c1, c2],
+        match self.transducer {
+            TransducerModel::Pair(p) => {
+                let el = p.electrical(&State::new(x, v, 0.0, 0.0));
+                State::new(x, v, -(el.c[0] - p.c0) * p.vb, -(el.c[1] - p.c0) * p.vb)
+            }
+            _ => State::new(x, v, 0.0, 0.0),
         }
     }
 
-    /// Penetration delta into the stop on `side` (m; negative when not touching).
+    /// Load voltages (and a pair's capacitances) at a state.
     #[inline]
-    pub fn penetration(&self, side: Side, x: f64) -> f64 {
-        side.sign() * x - self.xmax
+    pub fn electrical(&self, y: &State) -> Electrical {
+        self.transducer.electrical(y)
     }
 
-    /// The bracket F_k(delta) + b_im d(delta)/dt of eq 1 for a side (N).
-    #[inline]
+    /// Load resistance (ohm; of each load for a pair).
+    pub fn load_resistance(&self) -> f64 {
+        self.transducer.load_resistance()
+    }
+
+    /// Penetration delta into the stop on `side` (m; negative when not touching, -inf
+    /// without a stop).
+    #[inline(always)]
+    pub fn penetration(&self, side: Side, x: f64) -> f64 {
+        side.sign() * x - self.gap(side)
+    }
+
+    /// The bracket of eq 1 for a side (N): the spring force plus the contact damping.
+    #[inline(always)]
     pub fn contact_bracket(&self, side: Side, y: &State) -> f64 {
-        let delta = self.penetration(side, y[0]);
-        self.law.force(delta) + self.bim * side.sign() * y[1]
+        match self.stop(side) {
+            Some(s) => s.bracket(self.penetration(side, y[0]), side.sign() * y[1]),
+            None => 0.0,
+        }
     }
 
     /// End-stop force F_im of eq 1 in a mode (N, along +x, as in eq 7's left-hand side).
-    #[inline]
+    #[inline(always)]
     pub fn endstop_force(&self, mode: Mode, y: &State) -> f64 {
         match mode {
             Mode::Contact(side) => {
                 let b = self.contact_bracket(side, y);
-                let b = if self.tension_free { b.max(0.0) } else { b };
+                let tension_free = self.stop(side).is_some_and(StopModel::tension_free);
+                let b = if tension_free { b.max(0.0) } else { b };
                 side.sign() * b
             }
             _ => 0.0,
         }
     }
 
-    /// Electrostatic force on the mass, +1/2 sum (V_i - Vb)^2 dC_i/dx (N).
-    #[inline]
-    pub fn electrostatic_force(&self, el: &Electrical) -> f64 {
-        let dcdx = self.c0 / self.x0;
-        let u1 = el.v[0] - self.vb;
-        let u2 = el.v[1] - self.vb;
-        0.5 * dcdx * (u1 * u1 - u2 * u2)
+    /// The force that presses the mass onto the stop on `side` when it rests there (N, along
+    /// the stop's outward direction): the drive, the suspension and the transducer.
+    pub fn holding_force(&self, side: Side, t: f64, y: &State) -> f64 {
+        let (fe, _) = self.transducer.force_and_rates(y);
+        side.sign()
+            * (self.mass_kg * self.excitation.accel(t) - self.damping * y[1] - self.km * y[0] + fe)
     }
 
     /// The Jacobian of the right-hand side with respect to the state, in a mode (the drive
     /// enters additively and does not appear). Used by the variational equations of periodic
     /// orbits ([`crate::study::orbit`]).
     ///
-    /// With a = C0/x0, D_i = C_i + Cp + CL and u_i = V_i - Vb: dV1/dx = a (Vb - V1)/D1,
-    /// dV2/dx = -a (Vb - V2)/D2, dV_i/ds_i = 1/D_i; the electrostatic force 1/2 a (u1^2 - u2^2)
-    /// then differentiates by the chain rule, and in contact the end-stop force adds the
-    /// spring's stiffness to d/dx and b_im to d/dv (a tension-free contact whose force is
-    /// clipped adds nothing).
+    /// The transducer's part is [`crate::physics::transducer::CapacitorPair::gradients`] for a
+    /// pair and the linear coefficients of the other transducers; in contact the end-stop force
+    /// adds the bracket's derivatives (a tension-free contact whose force is clipped adds
+    /// nothing); stuck on a stop, x and v do not move.
     pub fn jacobian(&self, mode: Mode, y: &State) -> Matrix4<f64> {
-        let el = self.electrical(y);
-        let a = self.c0 / self.x0;
-        let d1 = el.c[0] + self.cp + self.cl;
-        let d2 = el.c[1] + self.cp + self.cl;
-        let (u1, u2) = (el.v[0] - self.vb, el.v[1] - self.vb);
-        let dv1_dx = -a * u1 / d1;
-        let dv2_dx = a * u2 / d2;
-        let dfe_dx = a * (u1 * dv1_dx - u2 * dv2_dx);
-        let dfe_ds1 = a * u1 / d1;
-        let dfe_ds2 = -a * u2 / d2;
+        let m = self.mass_kg;
         let (mut dfim_dx, mut dfim_dv) = (0.0, 0.0);
         if let Mode::Contact(side) = mode {
-            if !self.tension_free || self.contact_bracket(side, y) > 0.0 {
-                dfim_dx = self.law.stiffness(self.penetration(side, y[0]));
-                dfim_dv = self.bim;
+            if let Some(s) = self.stop(side) {
+                if !s.tension_free() || self.contact_bracket(side, y) > 0.0 {
+                    (dfim_dx, dfim_dv) =
+                        s.bracket_gradient(self.penetration(side, y[0]), side.sign() * y[1]);
+                }
             }
         }
-        let m = self.mass_kg;
-        let g = 1.0 / self.rl;
-        Matrix4::new(
-            0.0,
-            1.0,
-            0.0,
-            0.0,
-            (-self.km + dfe_dx - dfim_dx) / m,
-            (-self.damping - dfim_dv) / m,
-            dfe_ds1 / m,
-            dfe_ds2 / m,
-            -g * dv1_dx,
-            0.0,
-            -g / d1,
-            0.0,
-            -g * dv2_dx,
-            0.0,
-            0.0,
-            -g / d2,
-        )
+        let mut j = match self.transducer {
+            TransducerModel::Pair(p) => {
+                let el = p.electrical(y);
+                let g = p.gradients(y[0], &el);
+                Matrix4::new(
+                    0.0,
+                    1.0,
+                    0.0,
+                    0.0,
+                    (-self.km + g.df_dx - dfim_dx) / m,
+                    (-self.damping - dfim_dv) / m,
+                    g.df_ds[0] / m,
+                    g.df_ds[1] / m,
+                    g.rate_dx[0],
+                    0.0,
+                    g.rate_ds[0],
+                    0.0,
+                    g.rate_dx[1],
+                    0.0,
+                    0.0,
+                    g.rate_ds[1],
+                )
+            }
+            TransducerModel::None => {
+                let mut j = Matrix4::zeros();
+                j[(0, 1)] = 1.0;
+                j[(1, 0)] = (-self.km - dfim_dx) / m;
+                j[(1, 1)] = (-self.damping - dfim_dv) / m;
+                j
+            }
+            TransducerModel::Piezo { theta, cp, r } => {
+                let mut j = Matrix4::zeros();
+                j[(0, 1)] = 1.0;
+                j[(1, 0)] = (-self.km - dfim_dx) / m;
+                j[(1, 1)] = (-self.damping - dfim_dv) / m;
+                j[(1, 2)] = theta / m;
+                j[(2, 1)] = -theta / cp;
+                j[(2, 2)] = -1.0 / (r * cp);
+                j
+            }
+            TransducerModel::Electromagnetic { phi, rc, l, r } => {
+                let mut j = Matrix4::zeros();
+                j[(0, 1)] = 1.0;
+                j[(1, 0)] = (-self.km - dfim_dx) / m;
+                if l > 0.0 {
+                    j[(1, 1)] = (-self.damping - dfim_dv) / m;
+                    j[(1, 2)] = -phi / m;
+                    j[(2, 1)] = phi / l;
+                    j[(2, 2)] = -(rc + r) / l;
+                } else {
+                    j[(1, 1)] = (-self.damping - phi * phi / (rc + r) - dfim_dv) / m;
+                }
+                j
+            }
+        };
+        if let Mode::Stuck(_) = mode {
+            for c in 0..4 {
+                j[(0, c)] = 0.0;
+                j[(1, c)] = 0.0;
+            }
+        }
+        j
     }
 
-    /// Characteristic scales of (x, v, s1, s2), used for absolute tolerances.
+    /// The displacement scale (m); see [`Harvester::x_scale_m`].
+    pub fn x_scale(&self) -> f64 {
+        self.x_scale_m
+    }
+
+    /// Characteristic scales of (x, v, e1, e2), used for absolute tolerances and Newton's
+    /// scaled coordinates.
     pub fn scales(&self) -> State {
         let w0 = ((self.km) / self.mass_kg).sqrt();
-        let x = self.xmax;
-        let q = self.c0 * self.vb.max(1.0) * x / self.x0;
-        State::new(x, w0 * x, q, q)
+        let x = self.x_scale();
+        let [e1, e2] = self.transducer.scales(x, w0 * x);
+        State::new(x, w0 * x, e1, e2)
+    }
+
+    /// Number of live state components (2 to 4): the rest stay zero.
+    pub fn active_states(&self) -> usize {
+        self.transducer.active_states()
     }
 
     /// The free-flight model split into its linearisation about rest and a small remainder,
     /// for [`crate::ode::exponential`] (see [`FreeFlight`]).
     pub fn free_flight(&self) -> FreeFlight {
-        let ct = self.c0 + self.cp + self.cl;
-        FreeFlight {
-            dcdx: self.c0 / self.x0,
-            vb: self.vb,
-            ct,
-            gamma: self.c0 * self.vb / self.x0,
-            inv_ct: 1.0 / ct,
-            inv_mass: 1.0 / self.mass_kg,
-            inv_rl: 1.0 / self.rl,
-            inv_ct_rl: 1.0 / (ct * self.rl),
-            mass_kg: self.mass_kg,
-            damping: self.damping,
-            km: self.km,
-        }
+        FreeFlight::of(self)
     }
 
     /// Integrator options with relative tolerance `rtol` and absolute tolerances
@@ -271,84 +362,20 @@ impl<E: Excitation> Harvester<E> {
             event_time_tol: 1e-14,
         }
     }
-}
 
-/// The harvester in free flight (no contact force) as `y' = L y + c a(t) + N(y)`: `L` is the
-/// model of eqs 7-10 linearised about rest, `c = (0, 1, 0, 0)` takes the base acceleration,
-/// and `N` is the remainder, which comes only from the capacitances' dependence on x (eq 10):
-/// with `Ct = C0 + Cp + CL`, `Gamma = C0 Vb / x0` and `dC = C0 x / x0`,
-///
-/// * `L`: `x' = v`, `m v' = -(km + 2 Gamma²/Ct) x - b v - Gamma (s1 - s2)/Ct`,
-///   `RL s1' = -(s1 + Gamma x)/Ct`, `RL s2' = -(s2 - Gamma x)/Ct`
-///   (the differential two-port of eqs 11-17, with the common mode beside it);
-/// * `N`: `m N_v = (C0/x0) [ (V1² - V2²)/2 + Vb (dC/Ct) (V1 + V2) ]`,
-///   `RL N_s1 = V1 dC/Ct`, `RL N_s2 = -V2 dC/Ct`, with the exact node voltages of
-///   [`Harvester::electrical`].
-///
-/// `N` is written in closed form (not as the right-hand side minus `L y`) so that it keeps
-/// its relative precision: it is of relative size `dC/Ct`, a few per cent at the stops.
-/// [`FreeFlight::linear`] + [`FreeFlight::remainder`] equals the free-flight right-hand side
-/// to rounding (tested).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct FreeFlight {
-    dcdx: f64,
-    vb: f64,
-    ct: f64,
-    gamma: f64,
-    inv_ct: f64,
-    inv_mass: f64,
-    inv_rl: f64,
-    inv_ct_rl: f64,
-    mass_kg: f64,
-    damping: f64,
-    km: f64,
-}
-
-impl FreeFlight {
-    /// `(L, c)`: the linearised free-flight model and the column of the base acceleration.
-    pub fn linear(&self) -> (SMatrix<f64, 4, 4>, State) {
-        let (m, g, ct) = (self.mass_kg, self.gamma, self.ct);
-        let k_oc = self.km + 2.0 * g * g / ct;
-        let rc = self.inv_ct_rl;
-        #[rustfmt::skip]
-        let l = SMatrix::<f64, 4, 4>::new(
-            0.0, 1.0, 0.0, 0.0,
-            -k_oc / m, -self.damping / m, -g / (m * ct), g / (m * ct),
-            -g * rc, 0.0, -rc, 0.0,
-            g * rc, 0.0, 0.0, -rc,
-        );
-        (l, State::new(0.0, 1.0, 0.0, 0.0))
-    }
-
-    /// The node voltages V1, V2 at a state (V), as [`Harvester::electrical`] computes them.
-    #[inline]
-    pub fn voltages(&self, y: &State) -> [f64; 2] {
-        let dc = self.dcdx * y[0];
-        [
-            (y[2] + dc * self.vb) / (self.ct + dc),
-            (y[3] - dc * self.vb) / (self.ct - dc),
-        ]
-    }
-
-    /// The remainder `N(y)` (see the type's docs).
-    #[inline]
-    pub fn remainder(&self, y: &State) -> State {
-        self.remainder_and_voltages(y).0
-    }
-
-    /// The remainder `N(y)` and the node voltages it is computed from.
-    #[inline]
-    pub fn remainder_and_voltages(&self, y: &State) -> (State, [f64; 2]) {
-        let dc = self.dcdx * y[0];
-        let [v1, v2] = self.voltages(y);
-        let r = dc * self.inv_ct;
-        let n = State::new(
-            0.0,
-            self.dcdx * (0.5 * (v1 * v1 - v2 * v2) + self.vb * r * (v1 + v2)) * self.inv_mass,
-            v1 * r * self.inv_rl,
-            -v2 * r * self.inv_rl,
-        );
-        (n, [v1, v2])
+    /// Where a rebound off the rigid stop on `side` (at the stop, with the velocity before
+    /// the impact `y[1]`) leads: the state after and the new mode.
+    fn rebound(&self, side: Side, restitution: f64, t: f64, y: &mut State) -> Mode {
+        y[1] *= -restitution;
+        let u = y[1].abs();
+        // The acceleration that presses the mass onto the stop.
+        let a = self.holding_force(side, t, y) / self.mass_kg;
+        if a > 0.0 && u * u <= 2.0 * a * self.stick_height_m {
+            y[1] = 0.0;
+            Mode::Stuck(side)
+        } else {
+            Mode::Free
+        }
     }
 }
 
@@ -357,20 +384,17 @@ impl<E: Excitation> HybridSystem<4> for Harvester<E> {
 
     #[inline]
     fn rhs(&self, mode: Mode, t: f64, y: &State) -> State {
-        let el = self.electrical(y);
-        let f = self.mass_kg * self.excitation.accel(t) - self.damping * y[1] - self.km * y[0]
-            + self.electrostatic_force(&el)
+        let (fe, rates) = self.transducer.force_and_rates(y);
+        if let Mode::Stuck(_) = mode {
+            return State::new(0.0, 0.0, rates[0], rates[1]);
+        }
+        let f = self.mass_kg * self.excitation.accel(t) - self.damping * y[1] - self.km * y[0] + fe
             - self.endstop_force(mode, y);
-        State::new(
-            y[1],
-            f / self.mass_kg,
-            -el.v[0] / self.rl,
-            -el.v[1] / self.rl,
-        )
+        State::new(y[1], f / self.mass_kg, rates[0], rates[1])
     }
 
     #[inline]
-    fn guards(&self, mode: Mode, _t: f64, y: &State) -> Guards {
+    fn guards(&self, mode: Mode, t: f64, y: &State) -> Guards {
         const OFF: f64 = f64::NEG_INFINITY;
         match mode {
             Mode::Free => [
@@ -380,7 +404,7 @@ impl<E: Excitation> HybridSystem<4> for Harvester<E> {
             ],
             Mode::Contact(side) => [
                 -self.penetration(side, y[0]),
-                if self.tension_free {
+                if self.stop(side).is_some_and(StopModel::tension_free) {
                     -self.contact_bracket(side, y)
                 } else {
                     OFF
@@ -392,25 +416,29 @@ impl<E: Excitation> HybridSystem<4> for Harvester<E> {
                 self.contact_bracket(side, y),
                 OFF,
             ],
+            Mode::Stuck(side) => [-self.holding_force(side, t, y), OFF, OFF],
         }
     }
 
-    fn switch(&self, mode: Mode, index: usize, _t: f64, y: &mut State) -> Mode {
+    fn switch(&self, mode: Mode, index: usize, t: f64, y: &mut State) -> Mode {
         match (mode, index) {
-            (Mode::Free, 0) => {
-                y[0] = self.xmax;
-                Mode::Contact(Side::Upper)
-            }
-            (Mode::Free, _) => {
-                y[0] = -self.xmax;
-                Mode::Contact(Side::Lower)
+            (Mode::Free, i) => {
+                let side = if i == 0 { Side::Upper } else { Side::Lower };
+                y[0] = side.sign() * self.gap(side);
+                match self.stop(side) {
+                    Some(&StopModel::Rigid { restitution, .. }) => {
+                        self.rebound(side, restitution, t, y)
+                    }
+                    _ => Mode::Contact(side),
+                }
             }
             (Mode::Contact(side), 0) | (Mode::Clipped(side), 0) => {
-                y[0] = side.sign() * self.xmax;
+                y[0] = side.sign() * self.gap(side);
                 Mode::Free
             }
             (Mode::Contact(side), _) => Mode::Clipped(side),
             (Mode::Clipped(side), _) => Mode::Contact(side),
+            (Mode::Stuck(_), _) => Mode::Free,
         }
     }
 
@@ -419,18 +447,41 @@ impl<E: Excitation> HybridSystem<4> for Harvester<E> {
     }
 
     fn check_state(&self, _mode: Mode, t: f64, y: &State) -> Result<(), String> {
-        let el = self.electrical(y);
-        if el.c[0] + self.cp <= 0.0 || el.c[1] + self.cp <= 0.0 {
-            return Err(format!(
-                "a transducer capacitance plus Cp is not positive at t = {t:e} s \
-                 (x = {:e} m): C1+Cp = {:e} F, C2+Cp = {:e} F",
-                y[0],
-                el.c[0] + self.cp,
-                el.c[1] + self.cp
-            ));
-        }
-        Ok(())
+        self.transducer
+            .check(y[0], y)
+            .map_err(|m| format!("at t = {t:e} s: {m}"))
     }
+}
+
+/// The reset Jacobian of a switch, `d y+ / d y-` (the identity but for a rebound's or a
+/// stick's velocity reset; the projections onto the stop are within the event tolerance and
+/// are not differentiated).
+pub fn reset_jacobian(from: Mode, to: Mode, restitution: f64) -> Matrix4<f64> {
+    let mut d = Matrix4::identity();
+    match SwitchKind::of(from, to) {
+        SwitchKind::Rebound => d[(1, 1)] = -restitution,
+        SwitchKind::Stick => d[(1, 1)] = 0.0,
+        _ => {}
+    }
+    d
+}
+
+impl<E: Excitation> Harvester<E> {
+    /// The coefficient of restitution of the stop a switch out of free flight reaches
+    /// through guard `index` (0 upper, 1 lower); zero for a compliant stop.
+    pub fn restitution(&self, index: usize) -> f64 {
+        let side = if index == 0 { Side::Upper } else { Side::Lower };
+        match self.stop(side) {
+            Some(&StopModel::Rigid { restitution, .. }) => restitution,
+            _ => 0.0,
+        }
+    }
+}
+
+/// A state vector of any dimension with the model's state at its head, for the augmented
+/// systems (variational equations, energy accumulators).
+pub fn head<const M: usize>(z: &SVector<f64, M>) -> State {
+    State::new(z[0], z[1], z[2], z[3])
 }
 
 #[cfg(test)]
@@ -450,7 +501,7 @@ mod tests {
             let h = Harvester::new(&base.with_endstop(law, 1.5), Sine::from_rms_g(5.5, 1300.0));
             let sc = h.scales();
             // A state 0.2 um into the upper stop, moving, with charged nodes.
-            let y = State::new(h.xmax + 0.2e-6, 0.3, 0.4 * sc[2], -0.3 * sc[3]);
+            let y = State::new(h.gap(Side::Upper) + 0.2e-6, 0.3, 0.4 * sc[2], -0.3 * sc[3]);
             for mode in [Mode::Free, Mode::Contact(Side::Upper)] {
                 let j = h.jacobian(mode, &y);
                 // Columns scaled by the state scales, so that every entry is the change of a

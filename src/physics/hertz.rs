@@ -10,7 +10,7 @@
 //! d = delta/delta0. On 0 < f < 1 it inverts to f = -d / W_{-1}(-d/e), with W_{-1} the lower
 //! branch of the Lambert W function (the `lambert_w` crate, accurate to 50 bits).
 
-use crate::device::Device;
+use crate::device::{Device, HertzLineStop, StopLaw};
 
 /// Penetration range of the least-squares fit of eq 19 (the paper: 0 to 0.5 um).
 pub const EQ19_FIT_RANGE_M: f64 = 0.5e-6;
@@ -39,6 +39,7 @@ pub fn normalised_delta(f: f64) -> f64 {
 }
 
 /// Inverse of [`normalised_delta`] on 0 <= d < 1: f = -d / W_{-1}(-d/e).
+#[inline]
 pub fn normalised_force(d: f64) -> f64 {
     if d <= 0.0 {
         return 0.0;
@@ -48,15 +49,23 @@ pub fn normalised_force(d: f64) -> f64 {
 }
 
 impl HertzLine {
-    /// The contact law of a device (t, R, E, nu).
-    pub fn of(device: &Device) -> Self {
-        let m = &device.material;
+    /// The contact law of a Hertz line stop (t, R, E, nu).
+    pub fn of_stop(s: &HertzLineStop) -> Self {
         Self {
-            length_m: device.geometry.thickness_m,
-            radius_m: device.geometry.bump_radius_m,
-            lambda_per_pa: (1.0 - m.poisson_ratio * m.poisson_ratio)
-                / (std::f64::consts::PI * m.youngs_modulus_pa),
+            length_m: s.contact_length_m,
+            radius_m: s.bump_radius_m,
+            lambda_per_pa: (1.0 - s.poisson_ratio * s.poisson_ratio)
+                / (std::f64::consts::PI * s.youngs_modulus_pa),
         }
+    }
+
+    /// The Hertz line law of a device's first Hertz line stop (upper, then lower), if it
+    /// has one.
+    pub fn of_device(device: &Device) -> Option<Self> {
+        device.stops.present().find_map(|(_, s)| match &s.law {
+            StopLaw::HertzLine(h) => Some(Self::of_stop(h)),
+            _ => None,
+        })
     }
 
     /// Force scale F0 = t^3 / (2 lambda R) (N).
@@ -75,6 +84,7 @@ impl HertzLine {
     }
 
     /// Force for a penetration, the inverse of eq 6 (N); zero for delta <= 0.
+    #[inline]
     pub fn force_of_delta(&self, delta_m: f64) -> f64 {
         self.force_scale_n() * normalised_force(delta_m / self.delta_scale_m())
     }

@@ -5,6 +5,9 @@
 
 pub mod contact;
 pub mod energy;
+pub mod free_flight;
 pub mod harvester;
 pub mod hertz;
+pub mod linear;
+pub mod transducer;
 pub mod two_port;

@@ -6,7 +6,7 @@
 //! C = (C0 + Cp + CL)/2, Gamma = C0 Vb / x0, K = km + 2 C0^2 Vb^2 / (x0^2 (C0 + Cp + CL)),
 //! and coupling k^2 = Gamma^2 / (K C) (eq 18).
 
-use crate::device::Device;
+use crate::device::{Device, Transducer};
 use crate::signal::{Psd, Widths};
 use crate::G;
 
@@ -65,24 +65,45 @@ pub struct TwoPort {
     pub damping_n_s_per_m: f64,
     /// Suspension stiffness km (N/m).
     pub km_n_per_m: f64,
-    /// Measured resonance used by [`QmReading::MeasuredResonance`] (Hz).
+    /// Measured resonance used by [`QmReading::MeasuredResonance`] (Hz; NaN when the device
+    /// quotes none).
     pub measured_resonance_hz: f64,
     /// Load resistance RL (ohm).
     pub load_resistance_ohm: f64,
 }
 
 impl TwoPort {
-    /// The two-port of a device at its bias voltage.
-    pub fn of(device: &Device) -> Self {
-        let e = &device.electrical;
-        let x0 = device.geometry.finger_overlap_m;
+    /// The two-port of a device with a capacitor pair at its bias voltage (eqs 15-18); `None`
+    /// for other transducers. For a gap-closing pair, `x0` reads `d0` and K includes the
+    /// electrostatic spring at rest, `-2 C0 Vb^2 / d0^2`.
+    pub fn try_of(device: &Device) -> Option<Self> {
+        let (c0, cp, cl, rl, vb, x0, k_es) = match &device.transducer {
+            Transducer::AreaOverlapPair(p) => (
+                p.c0_f,
+                p.cp_f,
+                p.load_capacitance_f,
+                p.load_resistance_ohm,
+                p.bias_v,
+                p.finger_overlap_m,
+                0.0,
+            ),
+            Transducer::GapClosingPair(p) => (
+                p.c0_f,
+                p.cp_f,
+                p.load_capacitance_f,
+                p.load_resistance_ohm,
+                p.bias_v,
+                p.electrode_gap_m,
+                p.electrostatic_stiffness_n_per_m(),
+            ),
+            _ => return None,
+        };
         let m = &device.mechanics;
-        let ctot = e.c0_f + e.cp_f + e.load_capacitance_f;
+        let ctot = c0 + cp + cl;
         let capacitance_f = ctot / 2.0;
-        let gamma = e.c0_f * e.bias_v / x0;
-        let k =
-            m.stiffness_n_per_m + 2.0 * e.c0_f * e.c0_f * e.bias_v * e.bias_v / (x0 * x0 * ctot);
-        Self {
+        let gamma = c0 * vb / x0;
+        let k = m.stiffness_n_per_m + 2.0 * c0 * c0 * vb * vb / (x0 * x0 * ctot) + k_es;
+        Some(Self {
             capacitance_f,
             gamma_n_per_v: gamma,
             stiffness_n_per_m: k,
@@ -90,9 +111,18 @@ impl TwoPort {
             mass_kg: m.mass_kg,
             damping_n_s_per_m: m.damping_n_s_per_m,
             km_n_per_m: m.stiffness_n_per_m,
-            measured_resonance_hz: m.measured_resonance_hz,
-            load_resistance_ohm: e.load_resistance_ohm,
-        }
+            measured_resonance_hz: m.measured_resonance_hz.unwrap_or(f64::NAN),
+            load_resistance_ohm: rl,
+        })
+    }
+
+    /// [`TwoPort::try_of`] for the paper's devices.
+    ///
+    /// # Panics
+    /// When the device's transducer is not a capacitor pair (use [`TwoPort::try_of`] for
+    /// devices from users).
+    pub fn of(device: &Device) -> Self {
+        Self::try_of(device).expect("the two-port of eqs 15-18 needs a capacitor-pair transducer")
     }
 
     /// Mechanical quality factor under a reading.
@@ -140,12 +170,14 @@ impl TwoPort {
 /// `Ct = C0 + Cp + CL`, eq 18 reads `k² = 2 a Vb² / (km Ct + 2 a Vb²)`, so
 /// `Vb² = k² km Ct / (2 a (1 - k²))`. NaN outside `[0, 1)`.
 pub fn bias_for_coupling(device: &Device, k2: f64) -> f64 {
+    let Transducer::AreaOverlapPair(e) = &device.transducer else {
+        return f64::NAN;
+    };
     if !(0.0..1.0).contains(&k2) {
         return f64::NAN;
     }
-    let e = &device.electrical;
     let ct = e.c0_f + e.cp_f + e.load_capacitance_f;
-    let a = (e.c0_f / device.geometry.finger_overlap_m).powi(2);
+    let a = (e.c0_f / e.finger_overlap_m).powi(2);
     (k2 * device.mechanics.stiffness_n_per_m * ct / (2.0 * a * (1.0 - k2))).sqrt()
 }
 
@@ -160,14 +192,22 @@ pub fn bias_for_coupling(device: &Device, k2: f64) -> f64 {
 /// The power of both loads is `2|V|²/RL`, and the one-sided acceleration PSD is `2 Sa`, so
 /// `S_P(f) = 4 Sa |V/a|² / RL`. Its integral over `f > 0` equals eq 21 (tested), and at high
 /// frequency the electrical term tends to the stiffness `K - km` of eq 17.
+///
+/// # Panics
+/// When the device's transducer is not a capacitor pair.
 pub fn linear_output_psd_w_per_hz(device: &Device, psd_g2_per_hz: f64, freq_hz: f64) -> f64 {
+    let tp = TwoPort::of(device);
     let m = device.mechanics.mass_kg;
     let b = device.mechanics.damping_n_s_per_m;
-    let km = device.mechanics.stiffness_n_per_m;
-    let e = &device.electrical;
-    let ct = e.c0_f + e.cp_f + e.load_capacitance_f;
-    let gamma = e.c0_f * e.bias_v / device.geometry.finger_overlap_m;
-    let rl = e.load_resistance_ohm;
+    // The suspension, with a gap-closing pair's electrostatic spring at rest.
+    let k_es = match &device.transducer {
+        Transducer::GapClosingPair(p) => p.electrostatic_stiffness_n_per_m(),
+        _ => 0.0,
+    };
+    let km = device.mechanics.stiffness_n_per_m + k_es;
+    let ct = 2.0 * tp.capacitance_f;
+    let gamma = tp.gamma_n_per_v;
+    let rl = tp.load_resistance_ohm;
     let w = 2.0 * std::f64::consts::PI * freq_hz;
     // z = jw RL / (1 + jw RL Ct) = (jw RL)(1 - jw RL Ct) / (1 + (w RL Ct)^2).
     let wrc = w * rl * ct;

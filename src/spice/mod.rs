@@ -95,7 +95,7 @@ use crate::device::Device;
 use crate::drive::Sine;
 use crate::physics::harvester::{Harvester, State};
 
-pub use netlist::{hertz_force_closed_form, netlist};
+pub use netlist::{hertz_force_closed_form, netlist, supports};
 pub use wrdata::{parse_wrdata, SpiceError, Waveforms};
 
 /// Default number of Newton steps of the closed-form Hertz inverse (relative error < 1e-11 on

@@ -2,7 +2,9 @@
 
 use std::fmt::Write as _;
 
-use crate::device::{Device, StiffnessModel};
+use crate::device::{
+    AreaOverlapPair, Device, HertzLineStop, StiffnessModel, Stop, StopLaw, Transducer,
+};
 use crate::physics::hertz::HertzLine;
 use crate::spice::{units, Method, SpiceDrive, SpiceOptions, WRDATA_VECTORS};
 
@@ -32,13 +34,47 @@ pub fn hertz_force_closed_form(h: &HertzLine, delta_m: f64, newton_steps: usize)
     h.force_scale_n() * f
 }
 
+/// The parts of a device the analogue covers: the paper's topology, an area-overlap pair and
+/// one Hertz line stop for both sides.
+struct PaperParts<'a> {
+    e: &'a AreaOverlapPair,
+    stop: &'a Stop,
+    hertz: &'a HertzLineStop,
+}
+
+impl<'a> PaperParts<'a> {
+    fn of(device: &'a Device) -> Option<Self> {
+        let Transducer::AreaOverlapPair(e) = &device.transducer else {
+            return None;
+        };
+        let stop = device.stops.symmetric()?;
+        let StopLaw::HertzLine(hertz) = &stop.law else {
+            return None;
+        };
+        Some(Self { e, stop, hertz })
+    }
+}
+
+/// True when the analogue covers the device: the paper's topology (an area-overlap pair and
+/// one Hertz line stop, or its eq 19 fit, for both sides).
+pub fn supports(device: &Device) -> bool {
+    PaperParts::of(device).is_some()
+}
+
 /// The ngspice netlist of `device` driven by `drive` (see the module documentation for the
 /// analogue and its units).
+///
+/// # Panics
+/// When the device is not of the paper's topology ([`supports`]).
 pub fn netlist(device: &Device, drive: &SpiceDrive, opts: &SpiceOptions) -> String {
-    let g = &device.geometry;
+    let PaperParts { e, stop: es, hertz: hl } = PaperParts::of(device)
+        .expect("the ngspice analogue covers the paper's topology: an area-overlap pair and one Hertz line stop");
     let mech = &device.mechanics;
-    let e = &device.electrical;
-    let es = &device.endstop;
+    let stiffness = if hl.linear_fit {
+        StiffnessModel::Linear
+    } else {
+        StiffnessModel::Hertz
+    };
     let mut s = String::new();
     let title = opts.title.replace(['\n', '\r'], " ");
     let _ = writeln!(s, "* {title}");
@@ -78,13 +114,13 @@ pub fn netlist(device: &Device, drive: &SpiceDrive, opts: &SpiceOptions) -> Stri
     param(
         &mut s,
         "x0",
-        g.finger_overlap_m * units::X_PER_M,
+        e.finger_overlap_m * units::X_PER_M,
         "finger overlap x0 (um)",
     );
     param(
         &mut s,
         "xmax",
-        g.endstop_gap_m * units::X_PER_M,
+        es.gap_m * units::X_PER_M,
         "end-stop position xmax (um)",
     );
     param(
@@ -120,10 +156,10 @@ pub fn netlist(device: &Device, drive: &SpiceDrive, opts: &SpiceOptions) -> Stri
         "peak inertial force m A (mN)",
     );
     param(&mut s, "freq", drive.freq_hz, "drive frequency (Hz)");
-    let hertz = HertzLine::of(device);
-    match es.stiffness {
+    let hertz = HertzLine::of_stop(hl);
+    match stiffness {
         StiffnessModel::Linear => {
-            let k = device.linear_endstop_stiffness_n_per_m();
+            let k = hl.linear_stiffness_n_per_m();
             let _ = writeln!(s, "* linear end-stop law, eq 19: k_im = {} N/m", num(k));
             param(
                 &mut s,
@@ -154,7 +190,7 @@ pub fn netlist(device: &Device, drive: &SpiceDrive, opts: &SpiceOptions) -> Stri
 
     // The spring law F_k(delta) in mN for delta in um, as a .func.
     s.push_str("\n* --- end-stop spring law F_k(delta): delta in um, force in mN ---\n");
-    match es.stiffness {
+    match stiffness {
         StiffnessModel::Linear => {
             s.push_str(".func fk(dl) {kim*dl}\n");
         }

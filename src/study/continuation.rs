@@ -39,6 +39,7 @@ use nalgebra::{Matrix4, SMatrix, SVector, Vector4};
 use crate::drive::Sine;
 use crate::num::roots::{illinois, RootOptions, Sample};
 use crate::ode::Stats;
+use crate::physics::contact::Side;
 use crate::physics::harvester::{Harvester, State};
 use crate::study::orbit::{
     Forcing, Orbit, OrbitError, Parameter, Shooter, ShootingConfig, CHORD_STEPS,
@@ -46,9 +47,27 @@ use crate::study::orbit::{
 
 type Vector5 = SVector<f64, 5>;
 
-/// The end-stop gap of the model with its stops removed (m): far beyond any orbit.
-const STOPS_REMOVED_M: f64 = 1.0;
 type Matrix5 = SMatrix<f64, 5, 5>;
+
+/// The gaps of a model's two sides (infinite where there is no stop), for the grazing test.
+#[derive(Debug, Clone, Copy)]
+struct Gaps {
+    upper: f64,
+    lower: f64,
+}
+
+impl Gaps {
+    fn of(h: &Harvester<Sine>) -> Self {
+        Self {
+            upper: h.gap(Side::Upper),
+            lower: h.gap(Side::Lower),
+        }
+    }
+
+    fn smallest(self) -> f64 {
+        self.upper.min(self.lower)
+    }
+}
 
 /// Largest distance of a corrected point from its predictor, in arclength steps: beyond it
 /// the step is rejected as having jumped to another branch.
@@ -547,8 +566,8 @@ impl Continuer<'_, '_> {
     /// impacting orbit. The tangent is oriented along the direction stepped. `None` when
     /// `last` is not near grazing or nothing is found within `max_step`.
     fn corner_hop(&mut self, last: &BranchPoint, max_step: f64) -> Option<BranchPoint> {
-        let xmax = self.shooter.base.xmax;
-        let near = (last.orbit.summary.x_max_m - xmax).abs() <= GRAZING_NEAR * xmax;
+        let gaps = Gaps::of(self.shooter.base);
+        let near = test_grazing(last, gaps).abs() <= GRAZING_NEAR * gaps.smallest();
         if !near {
             return None;
         }
@@ -604,8 +623,8 @@ impl Continuer<'_, '_> {
         a: &BranchPoint,
         b: &BranchPoint,
         ds: f64,
-        test: fn(&BranchPoint, f64) -> f64,
-        xmax: f64,
+        test: fn(&BranchPoint, Gaps) -> f64,
+        gaps: Gaps,
     ) -> Result<Event, OrbitError> {
         let tol_s = self.settings.locate_tol / self.settings.param_scale;
         let opts = RootOptions {
@@ -614,7 +633,7 @@ impl Continuer<'_, '_> {
             x_tol_rel: 0.0,
             max_iter: 60,
         };
-        let (fa, fb) = (test(a, xmax), test(b, xmax));
+        let (fa, fb) = (test(a, gaps), test(b, gaps));
         // The best sample so far, kept outside the root finder: a corrector that fails close to
         // the event (at a branch point the bordered Jacobian is singular) ends the search with
         // the bracket reached, not with an error.
@@ -628,7 +647,7 @@ impl Continuer<'_, '_> {
         let root = illinois(
             |s| -> Result<(f64, ()), OrbitError> {
                 let (p, _) = self.point_at(a, s)?;
-                let v = test(&p, xmax);
+                let v = test(&p, gaps);
                 if v.abs() < best.1.abs() {
                     best = (s, v, p);
                 }
@@ -666,16 +685,15 @@ impl Continuer<'_, '_> {
         b: &BranchPoint,
         ds: f64,
     ) -> Result<Event, OrbitError> {
-        let xmax = self.shooter.base.xmax;
-        let mut free_model = self.shooter.base.clone();
-        free_model.xmax = STOPS_REMOVED_M;
+        let gaps = Gaps::of(self.shooter.base);
+        let free_model = self.shooter.base.without_stops();
         let free = Shooter::with_scales(&free_model, self.shooter.cfg, self.shooter.scales());
         let mut c = Continuer {
             shooter: &free,
             settings: self.settings,
             stats: Stats::default(),
         };
-        let from_a = test_grazing(a, xmax) <= 0.0;
+        let from_a = test_grazing(a, gaps) <= 0.0;
         // From the non-touching end towards the other one; from `b` the tangent inherited
         // from `a` may point either way (at a corner it points back into the corner), so both
         // directions are tried.
@@ -697,7 +715,7 @@ impl Continuer<'_, '_> {
             let mut hi = ds;
             for _ in 0..4 {
                 if let Ok((p, _)) = c.point_at(&anchor, hi) {
-                    if test_grazing(&p, xmax) > 0.0 {
+                    if test_grazing(&p, gaps) > 0.0 {
                         found = Some((anchor, p, hi));
                         break 'dirs;
                     }
@@ -713,7 +731,7 @@ impl Continuer<'_, '_> {
                 residual: b.orbit.residual,
             });
         };
-        let mut e = c.locate(EventKind::Grazing, k, &anchor, &end, hi, test_grazing, xmax)?;
+        let mut e = c.locate(EventKind::Grazing, k, &anchor, &end, hi, test_grazing, gaps)?;
         self.stats += c.stats;
         if !from_a {
             e.s = ds - e.s.min(ds);
@@ -736,9 +754,9 @@ impl Continuer<'_, '_> {
         b: &mut BranchPoint,
         ds: f64,
     ) -> Result<Vec<Event>, OrbitError> {
-        let xmax = self.shooter.base.xmax;
+        let gaps = Gaps::of(self.shooter.base);
         let mut out = Vec::new();
-        let graze = (test_grazing(a, xmax) > 0.0) != (test_grazing(b, xmax) > 0.0);
+        let graze = (test_grazing(a, gaps) > 0.0) != (test_grazing(b, gaps) > 0.0);
         let mut corner = false;
         if graze {
             // Located on the stop-free branch; a failure leaves the grazing unlocated (the
@@ -755,15 +773,15 @@ impl Continuer<'_, '_> {
                     let mut fold = g.clone();
                     fold.kind = EventKind::Fold;
                     fold.multiplier_crossing =
-                        (test_plus_one(a, xmax) > 0.0) != (test_plus_one(b, xmax) > 0.0);
+                        (test_plus_one(a, gaps) > 0.0) != (test_plus_one(b, gaps) > 0.0);
                     fold.at_grazing = true;
                     out.push(fold);
                 }
                 out.push(g);
             }
         }
-        let changes = |f: fn(&BranchPoint, f64) -> f64, b: &BranchPoint| {
-            (f(a, xmax) > 0.0) != (f(b, xmax) > 0.0)
+        let changes = |f: fn(&BranchPoint, Gaps) -> f64, b: &BranchPoint| {
+            (f(a, gaps) > 0.0) != (f(b, gaps) > 0.0)
         };
         let turn = changes(test_fold, b);
         let plus1 = changes(test_plus_one, b);
@@ -773,12 +791,12 @@ impl Continuer<'_, '_> {
         if !corner {
             let b = &*b;
             if turn {
-                let mut e = self.locate(EventKind::Fold, k, a, b, ds, test_fold, xmax)?;
+                let mut e = self.locate(EventKind::Fold, k, a, b, ds, test_fold, gaps)?;
                 e.multiplier_crossing = plus1;
                 e.at_grazing = graze;
                 out.push(e);
             } else if plus1 {
-                out.push(self.locate(EventKind::BranchPoint, k, a, b, ds, test_plus_one, xmax)?);
+                out.push(self.locate(EventKind::BranchPoint, k, a, b, ds, test_plus_one, gaps)?);
             }
             if minus1 {
                 out.push(self.locate(
@@ -788,11 +806,11 @@ impl Continuer<'_, '_> {
                     b,
                     ds,
                     test_minus_one,
-                    xmax,
+                    gaps,
                 )?);
             }
             if torus {
-                out.push(self.locate(EventKind::Torus, k, a, b, ds, test_torus, xmax)?);
+                out.push(self.locate(EventKind::Torus, k, a, b, ds, test_torus, gaps)?);
             }
         }
         out.sort_by(|x, y| x.s.total_cmp(&y.s));
@@ -801,20 +819,21 @@ impl Continuer<'_, '_> {
     // ANCHOR_END: events
 }
 
-fn test_fold(p: &BranchPoint, _: f64) -> f64 {
+fn test_fold(p: &BranchPoint, _: Gaps) -> f64 {
     p.param_tangent()
 }
-fn test_plus_one(p: &BranchPoint, _: f64) -> f64 {
+fn test_plus_one(p: &BranchPoint, _: Gaps) -> f64 {
     p.orbit.det_minus_one()
 }
-fn test_minus_one(p: &BranchPoint, _: f64) -> f64 {
+fn test_minus_one(p: &BranchPoint, _: Gaps) -> f64 {
     p.orbit.det_plus_one()
 }
-fn test_torus(p: &BranchPoint, _: f64) -> f64 {
+fn test_torus(p: &BranchPoint, _: Gaps) -> f64 {
     p.orbit.max_multiplier_abs() - 1.0
 }
-fn test_grazing(p: &BranchPoint, xmax: f64) -> f64 {
-    p.orbit.summary.x_max_m - xmax
+fn test_grazing(p: &BranchPoint, gaps: Gaps) -> f64 {
+    let s = &p.orbit.summary;
+    (s.x_upper_m - gaps.upper).max(-s.x_lower_m - gaps.lower)
 }
 
 /// The first orbit of a branch: Newton at `forcing` from `guess` (the state at drive phase
@@ -946,13 +965,14 @@ pub fn continue_branch(
                 // has slid back along the branch it came on, unable to step across a corner
                 // (an impacting branch that leaves at an angle, as with a large impact
                 // damping). Refined, and hopped over below when the step is exhausted.
-                let graze_tol = GRAZING_NEAR * c.shooter.base.xmax;
+                let gaps = Gaps::of(c.shooter.base);
+                let graze_tol = GRAZING_NEAR * gaps.smallest();
                 let slid_back = !crossed
                     && !last.orbit.is_impacting()
-                    && (last.orbit.summary.x_max_m - c.shooter.base.xmax).abs() <= graze_tol
+                    && test_grazing(&last, gaps).abs() <= graze_tol
                     && (p.param_tangent() > 0.0) != (last.param_tangent() > 0.0)
                     && p.orbit.is_stable() == last.orbit.is_stable()
-                    && (test_plus_one(&p, 0.0) > 0.0) == (test_plus_one(&last, 0.0) > 0.0);
+                    && (test_plus_one(&p, gaps) > 0.0) == (test_plus_one(&last, gaps) > 0.0);
                 if p.tangent.dot(&last.tangent) < cos_max
                     || dp > settings.max_param_step
                     || moved > MAX_CORRECTION * ds

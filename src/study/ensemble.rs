@@ -63,11 +63,10 @@ impl EnsembleSpec {
     /// overlap, and the analysis band from a quarter to four times the open-circuit resonance
     /// (below 0.45 of the sample rate).
     pub fn for_device(device: &Device, record: RecordSpec, seed: u64, realisations: usize) -> Self {
-        let tp = crate::physics::two_port::TwoPort::of(device);
-        let f0 = tp.resonance_hz();
+        let f0 = crate::physics::linear::open_circuit_resonance_hz(device);
         let fs = record.noise.sample_rate_hz;
         let n = record.analysed_samples();
-        let width = f0 / tp.qm(crate::physics::two_port::EQ21_QM).max(0.5);
+        let width = f0 / crate::physics::linear::open_circuit_qm(device).max(0.5);
         let target = fs / (0.1 * width);
         let mut nperseg = 1usize << 10;
         while (nperseg as f64) < target && nperseg * 2 <= n / 8 {
@@ -214,7 +213,7 @@ pub fn run_record(
 ) -> Result<RecordResult, BroadbandError> {
     let stream = spec.first_stream + i as u64;
     let rec = simulate_record(device, &spec.record, spec.seed, stream)?;
-    let rl = device.electrical.load_resistance_ohm;
+    let rl = device.transducer.load_resistance_ohm();
     let (lo, hi) = spec.analysis_band_hz;
     let spectrum =
         output_psd(&rec.v1_v, &rec.v2_v, rec.sample_rate_hz, rl, &spec.welch)?.restrict(lo, hi);

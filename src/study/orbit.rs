@@ -43,9 +43,9 @@ use thiserror::Error;
 
 use crate::drive::Sine;
 use crate::num::roots::{illinois, RootOptions, Sample};
-use crate::ode::{Dopri5, HybridSystem, SolverError, Stats, Step};
-use crate::physics::contact::{Mode, Side};
-use crate::physics::harvester::{Harvester, State};
+use crate::ode::{Dopri5, HybridSystem, Observer, SolverError, Stats, Step};
+use crate::physics::contact::{Mode, Side, StopModel};
+use crate::physics::harvester::{reset_jacobian, Harvester, State, SwitchKind};
 
 /// Dimension of the state with its variational equations: 4 + 16 (monodromy) + 4 (dP/dp).
 pub const VARIATIONAL_DIM: usize = 24;
@@ -221,7 +221,7 @@ pub struct OrbitSummary {
     pub x_lower_m: f64,
     /// Fraction of the period past a stop.
     pub contact_fraction: f64,
-    /// Contact entries per period.
+    /// Impacts per period: contact entries and rebounds off rigid stops.
     pub impacts: u32,
     /// Time after the section at which x first crosses zero upwards (s), if it does.
     pub upcrossing_s: Option<f64>,
@@ -238,7 +238,8 @@ pub struct Orbit {
     pub state: State,
     /// Monodromy matrix in scaled coordinates (z = y / scales).
     pub monodromy: Matrix4<f64>,
-    /// Floquet multipliers, largest modulus first.
+    /// Floquet multipliers, largest modulus first (a state component the transducer leaves
+    /// unused contributes a multiplier 0).
     pub multipliers: [Complex<f64>; 4],
     /// |P(y) - y| / |y| of the plain period map (scaled coordinates).
     pub residual: f64,
@@ -346,20 +347,33 @@ impl HybridSystem<VARIATIONAL_DIM> for Variational<'_> {
     fn switch(&self, mode: Mode, index: usize, t: f64, z: &mut Aug) -> Mode {
         let y = state_of(z);
         let f_old = self.model.rhs(mode, t, &y);
-        let n = guard_gradient(self.model, mode, index, t, &y);
+        let (n, g_t) = guard_gradient(self.model, mode, index, t, &y);
         let mut y_new = y;
         let new_mode = self.model.switch(mode, index, t, &mut y_new);
         let f_new = self.model.rhs(new_mode, t, &y_new);
-        let denom = n.dot(&f_old);
+        let denom = n.dot(&f_old) + g_t;
         z.fixed_rows_mut::<4>(0).copy_from(&y_new);
         if denom != 0.0 && denom.is_finite() {
-            // S = I + (f+ - f-) n^T / (n . f-), applied to every sensitivity column.
-            let df = (f_new - f_old) / denom;
-            for c in 0..5 {
-                let base = 4 + 4 * c;
-                let col = Vector4::new(z[base], z[base + 1], z[base + 2], z[base + 3]);
-                let upd = col + df * n.dot(&col);
-                z.fixed_rows_mut::<4>(base).copy_from(&upd);
+            let kind = SwitchKind::of(mode, new_mode);
+            if matches!(kind, SwitchKind::Rebound | SwitchKind::Stick) {
+                // A reset y+ = R(y-) with Jacobian D: S = D + (f+ - D f-) n^T / (dg/dt).
+                let d = reset_jacobian(mode, new_mode, self.model.restitution(index));
+                let df = (f_new - d * f_old) / denom;
+                for c in 0..5 {
+                    let base = 4 + 4 * c;
+                    let col = Vector4::new(z[base], z[base + 1], z[base + 2], z[base + 3]);
+                    let upd = d * col + df * n.dot(&col);
+                    z.fixed_rows_mut::<4>(base).copy_from(&upd);
+                }
+            } else {
+                // S = I + (f+ - f-) n^T / (dg/dt), applied to every sensitivity column.
+                let df = (f_new - f_old) / denom;
+                for c in 0..5 {
+                    let base = 4 + 4 * c;
+                    let col = Vector4::new(z[base], z[base + 1], z[base + 2], z[base + 3]);
+                    let upd = col + df * n.dot(&col);
+                    z.fixed_rows_mut::<4>(base).copy_from(&upd);
+                }
             }
         }
         new_mode
@@ -375,15 +389,18 @@ impl HybridSystem<VARIATIONAL_DIM> for Variational<'_> {
     }
 }
 
-/// Gradient of guard `index` of `mode` in the state, by central differences (the harvester's
-/// guards are linear in the state or smooth, so this is exact to rounding for the stops).
+/// Gradient of guard `index` of `mode` in the state and its explicit time derivative, by
+/// central differences (the stops' guards are linear in the state or smooth and do not depend
+/// on time, so this is exact to rounding there; a stuck mass's guard, the holding force,
+/// follows the drive in time). The saltation's denominator is the guard's total rate,
+/// `n . f + dg/dt`.
 fn guard_gradient(
     model: &Harvester<Sine>,
     mode: Mode,
     index: usize,
     t: f64,
     y: &State,
-) -> Vector4<f64> {
+) -> (Vector4<f64>, f64) {
     let sc = model.scales();
     let mut n = Vector4::zeros();
     for c in 0..4 {
@@ -393,18 +410,26 @@ fn guard_gradient(
         ym[c] -= h;
         n[c] = (model.guards(mode, t, &yp)[index] - model.guards(mode, t, &ym)[index]) / (2.0 * h);
     }
-    n
+    let g_t = if let Mode::Stuck(_) = mode {
+        let ht = 1e-6 / (model.km / model.mass_kg).sqrt();
+        (model.guards(mode, t + ht, y)[index] - model.guards(mode, t - ht, y)[index]) / (2.0 * ht)
+    } else {
+        0.0
+    };
+    (n, g_t)
 }
 
-/// The mode a state is in when an integration starts from it: in contact past a stop.
+/// The mode a state is in when an integration starts from it: in contact past a compliant
+/// stop, else free.
 pub fn mode_of(model: &Harvester<Sine>, y: &State) -> Mode {
-    if y[0] > model.xmax {
-        Mode::Contact(Side::Upper)
-    } else if y[0] < -model.xmax {
-        Mode::Contact(Side::Lower)
-    } else {
-        Mode::Free
+    for side in Side::BOTH {
+        if model.penetration(side, y[0]) > 0.0
+            && matches!(model.stop(side), Some(StopModel::Compliant { .. }))
+        {
+            return Mode::Contact(side);
+        }
     }
+    Mode::Free
 }
 
 /// The period map and its derivatives at one point: P(y), M = dP/dy and dP/dp (physical
@@ -530,7 +555,8 @@ impl<'a> Shooter<'a> {
         *stats += ode.stats();
         let z = ode.y();
         let end = state_of(&z);
-        let monodromy = Matrix4::from_column_slice(&z.as_slice()[4..20]);
+        let mut monodromy = Matrix4::from_column_slice(&z.as_slice()[4..20]);
+        self.drop_unused(&mut monodromy);
         let mut dp = Vector4::new(z[20], z[21], z[22], z[23]);
         if param == Parameter::Frequency {
             // The period T = 1/f moves with the frequency: + f(y(T)) dT/df.
@@ -560,7 +586,18 @@ impl<'a> Shooter<'a> {
             let col = (pp - pm).component_div(&self.scales) / (2.0 * eps);
             m.set_column(c, &col);
         }
+        self.drop_unused(&mut m);
         Ok(m)
+    }
+
+    /// Replaces the trivial multiplier 1 of each state component the transducer leaves unused
+    /// (held at zero; its row and column of the monodromy are those of the identity) by 0, so
+    /// that Newton's matrix M - I is regular and the Floquet tests see only the device's
+    /// multipliers.
+    fn drop_unused(&self, m: &mut Matrix4<f64>) {
+        for i in self.base.active_states()..4 {
+            m[(i, i)] = 0.0;
+        }
     }
 
     /// Scales a physical monodromy to the scaled coordinates: D^-1 M D.
@@ -584,11 +621,19 @@ impl<'a> Shooter<'a> {
         stats: &mut Stats,
     ) -> Result<(State, OrbitSummary), SolverError> {
         let model = self.model(forcing, phase_rad);
-        let xmax = model.xmax;
-        let mut acc = Accumulator::default();
-        let (end, _, st) = self.flow(forcing, phase_rad, y, forcing.period_s(), |step, m| {
-            acc.add(&model, step, m, xmax)
-        })?;
+        let mut acc = Accumulator {
+            model: &model,
+            sums: Sums::default(),
+        };
+        let mut ode = Dopri5::new(
+            0.0,
+            y,
+            mode_of(&model, &y),
+            model.solver_options(self.cfg.rtol),
+        );
+        ode.integrate_observed(&model, forcing.period_s(), &mut acc)?;
+        let (end, st) = (ode.y(), ode.stats());
+        let acc = acc.sums;
         *stats += st;
         let period = forcing.period_s();
         Ok((
@@ -596,7 +641,7 @@ impl<'a> Shooter<'a> {
             OrbitSummary {
                 v1_rms_v: (acc.v1sq / period).sqrt(),
                 v2_rms_v: (acc.v2sq / period).sqrt(),
-                p_total_w: (acc.v1sq + acc.v2sq) / period / model.rl,
+                p_total_w: (acc.v1sq + acc.v2sq) / period / model.load_resistance(),
                 x_max_m: acc.x_upper.max(-acc.x_lower),
                 x_upper_m: acc.x_upper,
                 x_lower_m: acc.x_lower,
@@ -693,9 +738,11 @@ impl<'a> Shooter<'a> {
         })
     }
 
-    /// True when the orbit's section lies well inside free flight (|x| at most half the gap).
+    /// True when the orbit's section lies well inside free flight (at most half the gap from
+    /// rest towards either stop).
     pub fn section_is_free(&self, orbit: &Orbit) -> bool {
-        orbit.state[0].abs() <= 0.5 * self.base.xmax
+        let x = orbit.state[0];
+        x <= 0.5 * self.base.gap(Side::Upper) && -x <= 0.5 * self.base.gap(Side::Lower)
     }
 
     /// The same orbit cut at the drive phase where x crosses zero upwards (see the module
@@ -746,7 +793,7 @@ pub fn multipliers(m: &Matrix4<f64>) -> Option<[Complex<f64>; 4]> {
 
 /// Whole-period sums over the accepted steps of one period.
 #[derive(Debug, Default)]
-struct Accumulator {
+struct Sums {
     v1sq: f64,
     v2sq: f64,
     x_upper: f64,
@@ -757,8 +804,27 @@ struct Accumulator {
     upcrossing: Option<f64>,
 }
 
-impl Accumulator {
-    fn add(&mut self, model: &Harvester<Sine>, st: &Step<4>, mode: Mode, _xmax: f64) {
+/// Observes one period: the sums over its steps, and the rebounds off rigid stops (impacts
+/// without a contact phase, seen only as switches).
+struct Accumulator<'m> {
+    model: &'m Harvester<Sine>,
+    sums: Sums,
+}
+
+impl Observer<4, Mode> for Accumulator<'_> {
+    fn step(&mut self, st: &Step<4>, mode: Mode) {
+        self.sums.add(self.model, st, mode);
+    }
+
+    fn switched(&mut self, _t: f64, from: Mode, to: Mode) {
+        if SwitchKind::of(from, to) == SwitchKind::Rebound {
+            self.sums.impacts += 1;
+        }
+    }
+}
+
+impl Sums {
+    fn add(&mut self, model: &Harvester<Sine>, st: &Step<4>, mode: Mode) {
         let el = |y: &State| model.electrical(y).v;
         self.v1sq += st.integrate(|y| el(y)[0].powi(2));
         self.v2sq += st.integrate(|y| el(y)[1].powi(2));

@@ -44,9 +44,11 @@ use crate::drive::noise::{self, NoiseError, NoiseSpec};
 use crate::drive::Excitation;
 use crate::drive::Sampled;
 use crate::ode::exponential::{ExpAdams, History};
-use crate::ode::{Dopri5, SolverError, Stats, Step};
-use crate::physics::contact::Mode;
-use crate::physics::harvester::{FreeFlight, Harvester, State};
+use crate::ode::{Dopri5, Observer, SolverError, Stats, Step};
+use crate::physics::contact::{Mode, Side};
+use crate::physics::free_flight::{FlightKind, GeneralFlight, Remainder};
+use crate::physics::harvester::{FreeFlight, Harvester, State, SwitchKind};
+use crate::physics::transducer::{PairGeometry, TransducerModel};
 use crate::signal::bandwidth::restrict;
 use crate::signal::{self, Psd, SpectralError, WelchConfig};
 
@@ -213,6 +215,48 @@ pub struct RecordSummary {
     /// Sample intervals advanced by the exponential integrator (the rest went to
     /// [`Dopri5`]).
     pub exponential_steps: u64,
+    /// How the free flight was integrated, with the reason where it fell back to [`Dopri5`].
+    pub free_flight: FreeFlightPath,
+}
+
+/// How a record's free flight was integrated.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub enum FreeFlightPath {
+    /// By the exponential step between contacts ([`Scheme::Exponential`]).
+    Exponential,
+    /// By [`Dopri5`] throughout, for the stated reason.
+    Dopri5(Fallback),
+}
+
+/// Why a record's free flight went to [`Dopri5`] instead of the exponential step.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub enum Fallback {
+    /// The record's scheme asked for it ([`Scheme::Dopri5`]).
+    Requested,
+    /// A capacitor pair has no stop on one side, so its free flight is not bounded and could
+    /// reach a state only [`Dopri5`]'s checks catch (a vanishing capacitance, an electrode).
+    UnboundedPair,
+    /// A capacitance plus Cp of an area-overlap pair vanishes before a stop is reached.
+    CapacitanceVanishes,
+    /// The sample interval does not resolve the device's linearised dynamics (the scaled
+    /// `h L` of [`ExpAdams::new`] exceeds its bound, e.g. a coil whose `L/(R + Rc)` is much
+    /// shorter than the sample interval).
+    Unresolved,
+}
+
+impl std::fmt::Display for Fallback {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Fallback::Requested => "Dormand-Prince was requested",
+            Fallback::UnboundedPair => {
+                "the capacitor pair has no stop on one side, so its free flight is unbounded"
+            }
+            Fallback::CapacitanceVanishes => {
+                "a transducer capacitance plus Cp vanishes before the stop is reached"
+            }
+            Fallback::Unresolved => "the sample interval does not resolve the linearised dynamics",
+        })
+    }
 }
 
 impl RecordSummary {
@@ -287,24 +331,120 @@ pub(crate) fn simulate_observed<O: RecordObserver>(
 ) -> Result<Record, BroadbandError> {
     spec.validate()?;
     let gen = spec.generated_noise();
-    let accel: Arc<[f64]> = noise::generate_shared(&gen, seed, stream)?;
-    let fs = gen.sample_rate_hz;
-    let n_tr = spec.transient_samples();
-    let n = spec.analysed_samples();
-    let excitation = Sampled::new(accel.clone(), fs);
-    let model = Harvester::new(device, excitation);
+    let drive = SampledDrive {
+        accel: noise::generate_shared(&gen, seed, stream)?,
+        sample_rate_hz: gen.sample_rate_hz,
+        transient_samples: spec.transient_samples(),
+    };
+    simulate_drive_observed(device, &drive, spec.rtol, spec.scheme, observer)
+}
+
+/// A sampled base acceleration to drive a record with: a generated noise realisation or a
+/// measured record resampled to the integrator's sample rate, of which the first
+/// `transient_samples` are a discarded pre-roll.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SampledDrive {
+    /// The acceleration at `t = k / fs` (m/s^2), read between samples by linear interpolation.
+    pub accel: Arc<[f64]>,
+    /// The sample rate fs (Hz).
+    pub sample_rate_hz: f64,
+    /// Leading samples simulated and discarded.
+    pub transient_samples: usize,
+}
+
+/// One record of `device` under a sampled drive (see [`simulate_record`], which draws the
+/// drive from band-limited noise); `rtol` and `scheme` as in [`RecordSpec`].
+pub fn simulate_drive(
+    device: &Device,
+    drive: &SampledDrive,
+    rtol: f64,
+    scheme: Scheme,
+) -> Result<Record, BroadbandError> {
+    simulate_drive_observed(device, drive, rtol, scheme, &mut ())
+}
+
+/// [`simulate_drive`], showing every interval to `observer`: builds the model and runs the
+/// record's loop compiled for the device's kind of free flight.
+pub(crate) fn simulate_drive_observed<O: RecordObserver>(
+    device: &Device,
+    drive: &SampledDrive,
+    rtol: f64,
+    scheme: Scheme,
+    observer: &mut O,
+) -> Result<Record, BroadbandError> {
+    if drive.accel.len() <= drive.transient_samples + 1
+        || !(drive.sample_rate_hz.is_finite() && drive.sample_rate_hz > 0.0)
+    {
+        return Err(BroadbandError::InvalidSpec {
+            field: "drive",
+            value: drive.accel.len() as f64,
+            expected: "more samples than the pre-roll and a positive sample rate",
+        });
+    }
+    if !(rtol.is_finite() && rtol > 0.0 && rtol < 1.0) {
+        return Err(BroadbandError::InvalidSpec {
+            field: "rtol",
+            value: rtol,
+            expected: "0 < rtol < 1",
+        });
+    }
+    let model = Harvester::new(
+        device,
+        Sampled::new(drive.accel.clone(), drive.sample_rate_hz),
+    );
+    let dt = model.excitation.dt_s;
+    let ff = model.free_flight();
+    match (scheme, ff.kind()) {
+        (Scheme::Dopri5, _) => run(
+            &model,
+            drive,
+            rtol,
+            Err::<FastFlight<GeneralFlight>, _>(Fallback::Requested),
+            observer,
+        ),
+        (Scheme::Exponential, FlightKind::AreaOverlap(r)) => run(
+            &model,
+            drive,
+            rtol,
+            FastFlight::new(&model, dt, &ff, r),
+            observer,
+        ),
+        (Scheme::Exponential, FlightKind::General(r)) => run(
+            &model,
+            drive,
+            rtol,
+            FastFlight::new(&model, dt, &ff, r),
+            observer,
+        ),
+    }
+}
+
+/// The record's loop for one kind of free flight `R` (monomorphised, so that the paper's pair
+/// runs its own inner loop).
+fn run<O: RecordObserver, R: Remainder>(
+    model: &Harvester<Sampled>,
+    drive: &SampledDrive,
+    rtol: f64,
+    flight: Result<FastFlight<R>, Fallback>,
+    observer: &mut O,
+) -> Result<Record, BroadbandError> {
+    let accel = &drive.accel;
+    let fs = drive.sample_rate_hz;
+    let n_tr = drive.transient_samples;
+    let n = accel.len() - n_tr;
     let dt = model.excitation.dt_s;
     let t_start = model.excitation.time_of(n_tr);
-    let flight = match spec.scheme {
-        Scheme::Exponential => FastFlight::new(&model, dt),
-        Scheme::Dopri5 => None,
+    let free_flight = match &flight {
+        Ok(_) => FreeFlightPath::Exponential,
+        Err(reason) => FreeFlightPath::Dopri5(*reason),
     };
+    let flight = flight.ok();
 
     let mut ode = Dopri5::new(
         0.0,
         model.rest_state(),
         Mode::Free,
-        model.solver_options(spec.rtol),
+        model.solver_options(rtol),
     );
     // The state at the current sample instant, and whether `ode` holds it (it does after a
     // Dormand-Prince interval, not after an exponential step).
@@ -332,7 +472,7 @@ pub(crate) fn simulate_observed<O: RecordObserver>(
             });
             if let (Some(next), Some(f)) = (fast, &flight) {
                 observer.exponential(
-                    &model,
+                    model,
                     model.excitation.time_of(k - 1),
                     &y,
                     &next,
@@ -356,20 +496,16 @@ pub(crate) fn simulate_observed<O: RecordObserver>(
                     ode_current = true;
                 }
                 let events = ode.stats().events;
-                ode.integrate(&model, model.excitation.time_of(k), |step, mode| {
-                    observer.dopri(&model, step, mode);
-                    let now = mode.in_contact();
-                    if step.t0 >= t_start - 0.5 * dt {
-                        if now {
-                            contact_time += step.h;
-                            if !in_contact {
-                                impacts += 1;
-                            }
-                        }
-                        x_peak = x_peak.max(step.y1[0].abs());
-                    }
-                    in_contact = now;
-                })?;
+                let mut watch = Watch {
+                    model,
+                    observer: &mut *observer,
+                    analysed_from: t_start - 0.5 * dt,
+                    contact_time: &mut contact_time,
+                    impacts: &mut impacts,
+                    x_peak: &mut x_peak,
+                    in_contact: &mut in_contact,
+                };
+                ode.integrate_observed(model, model.excitation.time_of(k), &mut watch)?;
                 (y, mode) = (ode.y(), ode.mode());
                 if let Some(f) = &flight {
                     // The remainder is smooth only between mode switches.
@@ -394,7 +530,7 @@ pub(crate) fn simulate_observed<O: RecordObserver>(
     }
 
     let nf = n as f64;
-    let rl = model.rl;
+    let rl = model.load_resistance();
     let p1_w = v1.iter().map(|v| v * v).sum::<f64>() / nf / rl;
     let p2_w = v2.iter().map(|v| v * v).sum::<f64>() / nf / rl;
     let duration = (n.saturating_sub(1)) as f64 * dt;
@@ -418,6 +554,7 @@ pub(crate) fn simulate_observed<O: RecordObserver>(
             st
         },
         exponential_steps,
+        free_flight,
     };
     Ok(Record {
         sample_rate_hz: fs,
@@ -427,31 +564,87 @@ pub(crate) fn simulate_observed<O: RecordObserver>(
     })
 }
 
-/// The exponential free-flight step of [`Scheme::Exponential`] for one device and sample
-/// interval, with its check against the stops.
-struct FastFlight {
-    model: FreeFlight,
-    method: ExpAdams<4, EXPONENTIAL_ORDER>,
-    /// Largest |x| an exponential step may reach: the gap less [`STOP_MARGIN`] of it.
-    limit: f64,
+/// What the Dormand-Prince intervals of a record show: contact time, impacts (contact
+/// entries, and rebounds off rigid stops, which have no contact phase) and the peak
+/// displacement over the analysed window, and every step to the record's observer.
+struct Watch<'a, O> {
+    model: &'a Harvester<Sampled>,
+    observer: &'a mut O,
+    analysed_from: f64,
+    contact_time: &'a mut f64,
+    impacts: &'a mut u64,
+    x_peak: &'a mut f64,
+    in_contact: &'a mut bool,
 }
 
-impl FastFlight {
-    /// None when the free flight could reach an inadmissible state (a capacitance plus Cp
-    /// not positive before the stop), which only [`Dopri5`] checks, or when the sample
-    /// interval does not resolve the device's linear dynamics ([`ExpAdams::new`]): the record
-    /// is then integrated by [`Dopri5`] throughout.
-    fn new<E: Excitation>(model: &Harvester<E>, dt: f64) -> Option<Self> {
-        if model.c0 * model.xmax / model.x0 >= model.c0 + model.cp {
-            return None;
+impl<O: RecordObserver> Observer<4, Mode> for Watch<'_, O> {
+    #[inline(always)]
+    fn step(&mut self, step: &Step<4>, mode: Mode) {
+        self.observer.dopri(self.model, step, mode);
+        let now = mode.in_contact();
+        if step.t0 >= self.analysed_from {
+            if now {
+                *self.contact_time += step.h;
+                if !*self.in_contact {
+                    *self.impacts += 1;
+                }
+            }
+            *self.x_peak = self.x_peak.max(step.y1[0].abs());
         }
-        let flight = model.free_flight();
+        *self.in_contact = now;
+    }
+
+    fn switched(&mut self, t: f64, from: Mode, to: Mode) {
+        if t >= self.analysed_from && SwitchKind::of(from, to) == SwitchKind::Rebound {
+            *self.impacts += 1;
+        }
+    }
+}
+
+/// The exponential free-flight step of [`Scheme::Exponential`] for one device and sample
+/// interval, with its check against the stops.
+struct FastFlight<R: Remainder> {
+    model: R,
+    method: ExpAdams<4, EXPONENTIAL_ORDER>,
+    /// Largest x an exponential step may reach: the upper gap less [`STOP_MARGIN`] of it
+    /// (infinite without a stop).
+    upper: f64,
+    /// Largest -x an exponential step may reach.
+    lower: f64,
+}
+
+impl<R: Remainder> FastFlight<R> {
+    /// The fast path of a device, or why the record goes to [`Dopri5`] throughout: the free
+    /// flight could reach an inadmissible state that only [`Dopri5`] checks (a capacitance
+    /// plus Cp not positive before a stop, or a capacitor pair without a stop on one side),
+    /// or the sample interval does not resolve the device's linear dynamics
+    /// ([`ExpAdams::new`]).
+    fn new<E: Excitation>(
+        model: &Harvester<E>,
+        dt: f64,
+        flight: &FreeFlight,
+        remainder: R,
+    ) -> Result<Self, Fallback> {
+        if let TransducerModel::Pair(p) = model.transducer {
+            for side in Side::BOTH {
+                let gap = model.gap(side);
+                if !gap.is_finite() {
+                    return Err(Fallback::UnboundedPair);
+                }
+                if let PairGeometry::AreaOverlap { x0 } = p.geometry {
+                    if p.c0 * gap / x0 >= p.c0 + p.cp {
+                        return Err(Fallback::CapacitanceVanishes);
+                    }
+                }
+            }
+        }
         let (l, c) = flight.linear();
-        let method = ExpAdams::new(&l, &c, dt, &model.scales())?;
-        Some(Self {
-            model: flight,
+        let method = ExpAdams::new(&l, &c, dt, &model.scales()).ok_or(Fallback::Unresolved)?;
+        Ok(Self {
+            model: remainder,
             method,
-            limit: model.xmax * (1.0 - STOP_MARGIN),
+            upper: model.gap(Side::Upper) * (1.0 - STOP_MARGIN),
+            lower: model.gap(Side::Lower) * (1.0 - STOP_MARGIN),
         })
     }
 
@@ -471,36 +664,36 @@ impl FastFlight {
     ) -> Option<State> {
         let next = self.method.step(y, a0, a1, history);
         let h = self.method.h;
-        hermite_max_abs(y[0], h * y[1], next[0], h * next[1], self.limit)
-            .is_some()
-            .then_some(next)
+        hermite_within(y[0], h * y[1], next[0], h * next[1], self.upper, self.lower).then_some(next)
     }
 }
 
 /// Checks that the cubic Hermite interpolant of x over a step (end values `x0`, `x1`, end
-/// slopes times the step `m0`, `m1`) stays below `limit` in absolute value; returns its
-/// largest |x| bound when it does.
+/// slopes times the step `m0`, `m1`) stays below `upper` and above `-lower`.
 ///
 /// The Hermite basis functions of the slopes are at most 4/27 in absolute value and those of
-/// the values are non-negative and sum to one, so `max(|x0|, |x1|) + 4/27 (|m0| + |m1|)`
-/// bounds the cubic; most steps stop at that test. Otherwise the cubic's interior extrema
-/// (the roots of its derivative) are checked.
+/// the values are non-negative and sum to one, so `max(x0, x1) + 4/27 (|m0| + |m1|)` bounds
+/// the cubic from above (and its mirror from below); most steps stop at that test. Otherwise
+/// the cubic's interior extrema (the roots of its derivative) are checked.
 #[inline(always)]
-fn hermite_max_abs(x0: f64, m0: f64, x1: f64, m1: f64, limit: f64) -> Option<f64> {
-    let quick = x0.abs().max(x1.abs()) + 4.0 / 27.0 * (m0.abs() + m1.abs());
-    if quick < limit {
-        return Some(quick);
+fn hermite_within(x0: f64, m0: f64, x1: f64, m1: f64, upper: f64, lower: f64) -> bool {
+    let slack = 4.0 / 27.0 * (m0.abs() + m1.abs());
+    let (hi, lo) = (max2(x0, x1), -max2(-x0, -x1));
+    if hi + slack < upper && -lo + slack < lower {
+        return true;
     }
     // p(θ) = x0 + m0 θ + b θ² + c θ³.
     let b = 3.0 * (x1 - x0) - 2.0 * m0 - m1;
     let c = 2.0 * (x0 - x1) + m0 + m1;
     let p = |th: f64| x0 + th * (m0 + th * (b + th * c));
-    let mut max = x0.abs().max(x1.abs());
+    let (mut max, mut min) = (hi, lo);
     // p'(θ) = m0 + 2 b θ + 3 c θ².
     let (qa, qb, qc) = (3.0 * c, 2.0 * b, m0);
     let mut consider = |th: f64| {
         if th > 0.0 && th < 1.0 {
-            max = max.max(p(th).abs());
+            let v = p(th);
+            max = max.max(v);
+            min = min.min(v);
         }
     };
     if qa == 0.0 {
@@ -517,7 +710,17 @@ fn hermite_max_abs(x0: f64, m0: f64, x1: f64, m1: f64, limit: f64) -> Option<f64
             }
         }
     }
-    (max < limit).then_some(max)
+    max < upper && -min < lower
+}
+
+/// The larger of two values by plain comparison.
+#[inline(always)]
+fn max2(a: f64, b: f64) -> f64 {
+    if a > b {
+        a
+    } else {
+        b
+    }
 }
 
 /// Output power spectral density of both loads and of each, one-sided, W/Hz.

@@ -84,7 +84,7 @@ impl Books {
         let last = match self.last {
             Some(last) => last,
             None => {
-                self.vb = model.vb;
+                self.vb = model.transducer.bias_v();
                 let start = Moment::of(model, mode, y);
                 self.first = Some(start);
                 start
@@ -107,6 +107,7 @@ impl Books {
             l.mech_damping += w * h * q.mech_damping;
             l.stop_damping += w * h * q.stop_damping;
             l.loads += w * h * q.load;
+            l.internal += w * h * q.internal;
         }
     }
 

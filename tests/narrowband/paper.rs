@@ -11,6 +11,7 @@ use endstop::paper::fig08::{self, Fig8Curve, P1_HIGH_ACCEL_RMS_G};
 use endstop::paper::fig09::{self, Fig9Bias, PowerReading};
 use endstop::paper::fig13::{self, Fig13Curve};
 use endstop::paper::measured::*;
+use endstop::paper::setups::comb;
 use endstop::paper::setups::{prototype1_setup, ParamSet, P1_BIAS_V};
 use endstop::physics::contact::Mode;
 use endstop::physics::harvester::Harvester;
@@ -232,7 +233,7 @@ fn calibration_converges_to_its_target_within_its_tolerance() {
     assert!(c.fitted_gap_m > 0.5 * c.published_gap_m && c.fitted_gap_m < c.published_gap_m);
     // One parameter changed, everything else as published.
     let mut expect = p1();
-    expect.geometry.endstop_gap_m = c.fitted_gap_m;
+    expect = expect.with_stop_gap(c.fitted_gap_m);
     expect.params = "calibrated".into();
     expect.description = cal.device.description.clone();
     assert_eq!(cal.device, expect);
@@ -247,7 +248,7 @@ fn calibrated_gap_equals_the_free_amplitude_at_the_measured_kink() {
     // 0.005 um or 0.1 % of the gap): 0.2 % allows for that and the steady-state tolerance.
     let c = &calibration().record;
     let mut d = p1().with_bias(P1_BIAS_V);
-    d.geometry.endstop_gap_m = d.geometry.finger_overlap_m;
+    d = d.with_stop_gap(comb(&d).finger_overlap_m);
     let model = Harvester::new(
         &d,
         Sine::from_rms_g(P1_HIGH_ACCEL_RMS_G, P1_MEASURED_ONSET_HZ),
@@ -276,7 +277,7 @@ fn calibration_does_not_depend_on_the_starting_gap() {
     // The root find starts from the device's gap; the answer must not, beyond what the
     // 0.25 Hz stopping rule allows (0.005 um of 5.7 um, about 0.1 %).
     let mut d = p1();
-    d.geometry.endstop_gap_m = 6.5e-6;
+    d = d.with_stop_gap(6.5e-6);
     let other = calibrate_prototype1(&d).unwrap().record;
     let c = &calibration().record;
     assert!(

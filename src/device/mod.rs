@@ -1,0 +1,469 @@
+//! The description of a device: its mechanics, each side's end-stop and its transducer.
+//!
+//! A device is a TOML file (see `data/prototype1.toml` for the paper's prototype 1 and
+//! `data/examples/` for devices of other kinds). Every value is in SI units and the key names
+//! carry the unit (`mass_kg`, `gap_m`). Parsing is strict: unknown keys are rejected, every key
+//! is checked against the choice it belongs to (a stop's `law`, the transducer's `kind`), and
+//! every value against its valid range, in a [`ParamError`] that names the file, the field, the
+//! value and the range.
+//!
+//! ```toml
+//! name = "prototype1"
+//! params = "published"
+//! description = "..."
+//!
+//! [mechanics]                  # eq 7: m x'' + b x' + km x + F_e + F_im = m a(t)
+//! mass_kg = 2.8e-6
+//! stiffness_n_per_m = 166.5
+//! damping_n_s_per_m = 3.75e-3
+//!
+//! [stops.both]                 # or [stops.upper] and [stops.lower]; no table, no stop
+//! gap_m = 7e-6
+//! law = "hertz_line"           # see `stops`
+//! # ...
+//!
+//! [transducer]
+//! kind = "area_overlap_pair"   # see `transducer`
+//! # ...
+//! ```
+//!
+//! Files of the earlier format, which had sections `[geometry]`, `[electrical]`, `[material]`
+//! and `[endstop]` for the paper's topology, still load ([`legacy`]).
+//!
+//! Any numeric field can be read and changed by its dotted path ([`Device::param`],
+//! [`Device::with_param`]), which is how studies name the parameters they vary.
+//!
+//! This module parses text it is given; reading the file is the caller's job (no I/O here).
+
+mod legacy;
+mod paths;
+pub mod stops;
+pub mod transducer;
+
+use serde::{Deserialize, Serialize};
+use thiserror::Error;
+
+pub use stops::{HertzLineStop, HertzPointStiffness, Stop, StopLaw, StopSide, Stops};
+pub use transducer::{AreaOverlapPair, Electromagnetic, GapClosingPair, Piezoelectric, Transducer};
+
+/// A parameter that failed to load or validate.
+#[derive(Debug, Error, Clone, PartialEq)]
+pub enum ParamError {
+    /// The text is not valid TOML for a device, or has unknown keys.
+    #[error("{source_name}: {message}")]
+    Parse {
+        /// Where the text came from (a file name).
+        source_name: String,
+        /// The TOML parser's message.
+        message: String,
+    },
+    /// A field is outside its valid range.
+    #[error("{source_name}: field `{field}` = {value:e} is out of range: must be {range}")]
+    OutOfRange {
+        /// Where the text came from (a file name).
+        source_name: String,
+        /// Dotted path of the field, e.g. `mechanics.mass_kg`.
+        field: String,
+        /// The offending value.
+        value: f64,
+        /// Human-readable valid range.
+        range: String,
+    },
+    /// A required field is absent.
+    #[error("{source_name}: field `{field}` is missing: {what}")]
+    Missing {
+        /// Where the text came from (a file name).
+        source_name: String,
+        /// Dotted path of the field.
+        field: String,
+        /// What the field is, or what needs it.
+        what: String,
+    },
+    /// A field is present where it does not belong, or fields contradict each other.
+    #[error("{source_name}: field `{field}`: {message}")]
+    Invalid {
+        /// Where the text came from (a file name).
+        source_name: String,
+        /// Dotted path of the field.
+        field: String,
+        /// What is wrong.
+        message: String,
+    },
+}
+
+impl ParamError {
+    /// The dotted path of the field at fault, where the error names one.
+    pub fn field(&self) -> Option<&str> {
+        match self {
+            ParamError::Parse { .. } => None,
+            ParamError::OutOfRange { field, .. }
+            | ParamError::Missing { field, .. }
+            | ParamError::Invalid { field, .. } => Some(field),
+        }
+    }
+}
+
+/// Which force law a Hertz line stop follows: the paper's eq 6, or its linear fit of eq 19.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum StiffnessModel {
+    /// Hertz line contact, eq 6, inverted with the lower Lambert W branch.
+    Hertz,
+    /// Linear spring with the stiffness of eq 19.
+    Linear,
+}
+
+/// Lumped mechanical parameters (the left-hand side of eq 7 without the transducer and the
+/// stops).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Mechanics {
+    /// Proof mass m (kg).
+    pub mass_kg: f64,
+    /// Suspension stiffness km (N/m).
+    pub stiffness_n_per_m: f64,
+    /// Mechanical damping b (N s/m).
+    pub damping_n_s_per_m: f64,
+    /// A measured resonance frequency (Hz), where one is known; the paper quotes one per
+    /// prototype, used only for the `m w0 / b` reading of Qm in Table 3.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub measured_resonance_hz: Option<f64>,
+}
+
+/// A complete device description.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Device {
+    /// Short name, e.g. `prototype1`.
+    pub name: String,
+    /// Which parameter set this is (`published`, `calibrated`, or a user label).
+    pub params: String,
+    /// One-line description and provenance of the numbers.
+    pub description: String,
+    /// Mass, suspension and its damping.
+    pub mechanics: Mechanics,
+    /// The end-stops.
+    pub stops: Stops,
+    /// The transducer.
+    pub transducer: Transducer,
+}
+
+/// The file form of a device.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawDevice {
+    name: String,
+    params: String,
+    description: String,
+    mechanics: Mechanics,
+    #[serde(default)]
+    stops: stops::RawStops,
+    transducer: Transducer,
+}
+
+/// Builds [`ParamError`]s that name the source and check ranges.
+pub(crate) struct Checker<'a> {
+    pub(crate) source: &'a str,
+}
+
+impl Checker<'_> {
+    pub(crate) fn err(&self, field: &str, value: f64, range: &str) -> ParamError {
+        ParamError::OutOfRange {
+            source_name: self.source.to_string(),
+            field: field.to_string(),
+            value,
+            range: range.to_string(),
+        }
+    }
+    pub(crate) fn missing(&self, field: &str, what: &str) -> ParamError {
+        ParamError::Missing {
+            source_name: self.source.to_string(),
+            field: field.to_string(),
+            what: what.to_string(),
+        }
+    }
+    pub(crate) fn message(&self, field: &str, message: &str) -> ParamError {
+        ParamError::Invalid {
+            source_name: self.source.to_string(),
+            field: field.to_string(),
+            message: message.to_string(),
+        }
+    }
+    pub(crate) fn positive(&self, field: &str, v: f64) -> Result<(), ParamError> {
+        if v.is_finite() && v > 0.0 {
+            Ok(())
+        } else {
+            Err(self.err(field, v, "finite and > 0"))
+        }
+    }
+    pub(crate) fn non_negative(&self, field: &str, v: f64) -> Result<(), ParamError> {
+        if v.is_finite() && v >= 0.0 {
+            Ok(())
+        } else {
+            Err(self.err(field, v, "finite and >= 0"))
+        }
+    }
+    pub(crate) fn within(
+        &self,
+        field: &str,
+        v: f64,
+        lo: f64,
+        hi: f64,
+        range: &str,
+    ) -> Result<(), ParamError> {
+        if v.is_finite() && v > lo && v < hi {
+            Ok(())
+        } else {
+            Err(self.err(field, v, range))
+        }
+    }
+    pub(crate) fn within_closed(
+        &self,
+        field: &str,
+        v: f64,
+        lo: f64,
+        hi: f64,
+        range: &str,
+    ) -> Result<(), ParamError> {
+        if v.is_finite() && v >= lo && v <= hi {
+            Ok(())
+        } else {
+            Err(self.err(field, v, range))
+        }
+    }
+}
+
+impl Device {
+    /// Parses and validates a device from TOML text; `source_name` (a file name) is quoted in
+    /// every error message. Files of the earlier format load too (see the module docs).
+    ///
+    /// ```
+    /// use endstop::device::{Device, StopLaw, Transducer};
+    /// let text = r#"
+    /// name = "cantilever"
+    /// params = "example"
+    /// description = "a piezoelectric cantilever against a one-sided stop"
+    /// [mechanics]
+    /// mass_kg = 1e-3
+    /// stiffness_n_per_m = 400.0
+    /// damping_n_s_per_m = 2e-3
+    /// [stops.upper]
+    /// gap_m = 1e-3
+    /// law = "restitution"
+    /// coefficient = 0.7
+    /// [transducer]
+    /// kind = "piezoelectric"
+    /// coupling_n_per_v = 1e-4
+    /// capacitance_f = 20e-9
+    /// load_resistance_ohm = 100e3
+    /// "#;
+    /// let dev = Device::from_toml_str(text, "cantilever.toml").unwrap();
+    /// assert!(dev.stops.lower.is_none());
+    /// assert!(matches!(dev.stops.upper.unwrap().law, StopLaw::Restitution { .. }));
+    /// assert_eq!(dev.transducer.key(), "piezoelectric");
+    /// ```
+    pub fn from_toml_str(text: &str, source_name: &str) -> Result<Self, ParamError> {
+        let parse_err = |message: String| ParamError::Parse {
+            source_name: source_name.to_string(),
+            message,
+        };
+        let table: toml::Table = toml::from_str(text).map_err(|e| parse_err(e.to_string()))?;
+        let dev = if legacy::LEGACY_SECTIONS
+            .iter()
+            .any(|s| table.contains_key(*s))
+        {
+            let old: legacy::LegacyDevice = toml::from_str(text)
+                .map_err(|e| parse_err(format!("{e}\n({})", legacy::MAPPING)))?;
+            old.convert()
+        } else {
+            let raw: RawDevice = toml::from_str(text).map_err(|e| parse_err(e.to_string()))?;
+            let c = Checker {
+                source: source_name,
+            };
+            Device {
+                stops: raw.stops.parse(&c)?,
+                name: raw.name,
+                params: raw.params,
+                description: raw.description,
+                mechanics: raw.mechanics,
+                transducer: raw.transducer,
+            }
+        };
+        dev.validate(source_name)?;
+        Ok(dev)
+    }
+
+    fn raw(&self) -> RawDevice {
+        RawDevice {
+            name: self.name.clone(),
+            params: self.params.clone(),
+            description: self.description.clone(),
+            mechanics: self.mechanics.clone(),
+            stops: stops::RawStops::of(&self.stops),
+            transducer: self.transducer.clone(),
+        }
+    }
+
+    /// Serialises the device to TOML in the general format (for provenance records and
+    /// fitted devices); [`Device::from_toml_str`] reads it back to an equal device.
+    pub fn to_toml_string(&self) -> String {
+        toml::to_string(&self.raw()).expect("a validated device always serialises")
+    }
+
+    /// Checks every field against its valid range, and the stops against the transducer.
+    pub fn validate(&self, source_name: &str) -> Result<(), ParamError> {
+        let c = Checker {
+            source: source_name,
+        };
+        if self.name.trim().is_empty() {
+            return Err(c.message("name", "must not be empty"));
+        }
+        let m = &self.mechanics;
+        c.positive("mechanics.mass_kg", m.mass_kg)?;
+        c.positive("mechanics.stiffness_n_per_m", m.stiffness_n_per_m)?;
+        c.positive("mechanics.damping_n_s_per_m", m.damping_n_s_per_m)?;
+        if let Some(f) = m.measured_resonance_hz {
+            c.positive("mechanics.measured_resonance_hz", f)?;
+        }
+        self.transducer.validate(&c)?;
+        for (side, stop) in self.stops.present() {
+            let field = |key: &str| format!("{}.{key}", self.stop_path(side));
+            c.positive(&field("gap_m"), stop.gap_m)?;
+            c.non_negative(&field("damping_n_s_per_m"), stop.damping_n_s_per_m)?;
+            if !stop.law.takes_viscous_damper() && stop.damping_n_s_per_m != 0.0 {
+                return Err(c.message(
+                    &field("damping_n_s_per_m"),
+                    &format!("law `{}` takes no viscous damper", stop.law.key()),
+                ));
+            }
+            match &self.transducer {
+                Transducer::AreaOverlapPair(p) if stop.gap_m > p.finger_overlap_m => {
+                    return Err(c.err(
+                        &field("gap_m"),
+                        stop.gap_m,
+                        &format!(
+                            "<= transducer.finger_overlap_m = {:e} (the fingers must not \
+                             disengage)",
+                            p.finger_overlap_m
+                        ),
+                    ));
+                }
+                Transducer::GapClosingPair(p) if stop.gap_m >= p.electrode_gap_m => {
+                    return Err(c.err(
+                        &field("gap_m"),
+                        stop.gap_m,
+                        &format!(
+                            "< transducer.electrode_gap_m = {:e} (the electrodes must not touch)",
+                            p.electrode_gap_m
+                        ),
+                    ));
+                }
+                _ => {}
+            }
+        }
+        if let Transducer::GapClosingPair(p) = &self.transducer {
+            let k = m.stiffness_n_per_m + p.electrostatic_stiffness_n_per_m();
+            if k <= 0.0 {
+                let limit = (m.stiffness_n_per_m * p.electrode_gap_m * p.electrode_gap_m
+                    / (2.0 * p.c0_f))
+                    .sqrt();
+                return Err(c.err(
+                    "transducer.bias_v",
+                    p.bias_v,
+                    &format!(
+                        "< {limit:e} V (pull-in: the electrostatic spring -2 C0 Vb^2/d0^2 \
+                         must not exceed mechanics.stiffness_n_per_m)"
+                    ),
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// The dotted path of a side's stop in this device's file form (`stops.both` for a
+    /// symmetric pair).
+    pub fn stop_path(&self, side: StopSide) -> &'static str {
+        match (self.stops.symmetric().is_some(), side) {
+            (true, _) => "stops.both",
+            (false, StopSide::Upper) => "stops.upper",
+            (false, StopSide::Lower) => "stops.lower",
+        }
+    }
+
+    /// The bias voltage of an electrostatic transducer (V), if it has one.
+    pub fn bias_v(&self) -> Option<f64> {
+        self.transducer.bias_v()
+    }
+
+    /// A copy with another bias voltage (a device without an electrostatic transducer is
+    /// returned unchanged).
+    pub fn with_bias(&self, bias_v: f64) -> Self {
+        let mut d = self.clone();
+        match &mut d.transducer {
+            Transducer::AreaOverlapPair(p) => p.bias_v = bias_v,
+            Transducer::GapClosingPair(p) => p.bias_v = bias_v,
+            _ => {}
+        }
+        d
+    }
+
+    /// A copy whose Hertz line stops follow eq 6 ([`StiffnessModel::Hertz`]) or its linear fit
+    /// of eq 19 ([`StiffnessModel::Linear`]), with end-stop damping `damping_n_s_per_m`; other
+    /// stops get the damping only where their law takes it.
+    pub fn with_endstop(&self, stiffness: StiffnessModel, damping_n_s_per_m: f64) -> Self {
+        let mut d = self.clone();
+        d.stops.for_each_mut(|s| {
+            if let StopLaw::HertzLine(h) = &mut s.law {
+                h.linear_fit = stiffness == StiffnessModel::Linear;
+            }
+            if s.law.takes_viscous_damper() {
+                s.damping_n_s_per_m = damping_n_s_per_m;
+            }
+        });
+        d
+    }
+
+    /// A copy whose stops (those that take eq 1's damper) are tension-free or not.
+    pub fn with_tension_free(&self, tension_free: bool) -> Self {
+        let mut d = self.clone();
+        d.stops.for_each_mut(|s| {
+            if s.law.takes_viscous_damper() {
+                s.tension_free = tension_free;
+            }
+        });
+        d
+    }
+
+    /// A copy with every present stop at `gap_m`.
+    pub fn with_stop_gap(&self, gap_m: f64) -> Self {
+        let mut d = self.clone();
+        d.stops.for_each_mut(|s| s.gap_m = gap_m);
+        d
+    }
+
+    /// A copy without stops.
+    pub fn without_stops(&self) -> Self {
+        let mut d = self.clone();
+        d.stops = Stops::default();
+        d
+    }
+
+    /// The undamped natural frequency of the suspension alone, sqrt(km/m) (rad/s).
+    pub fn suspension_omega_rad_s(&self) -> f64 {
+        (self.mechanics.stiffness_n_per_m / self.mechanics.mass_kg).sqrt()
+    }
+}
+
+/// A device serialises as its TOML text (the file form), so that any serde format can carry
+/// it and reading it back validates it like a file.
+impl Serialize for Device {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.serialize_str(&self.to_toml_string())
+    }
+}
+
+impl<'de> Deserialize<'de> for Device {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let text = String::deserialize(d)?;
+        Device::from_toml_str(&text, "serialised device").map_err(serde::de::Error::custom)
+    }
+}

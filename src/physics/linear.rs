@@ -1,0 +1,144 @@
+//! Linear theory of any device: the model linearised about rest, away from the stops, as a
+//! frequency response.
+//!
+//! Free of the stops, the model is `y' = L y + c a(t) + N(y)` ([`crate::physics::free_flight`]);
+//! for small motion `N` is negligible (for the piezoelectric and electromagnetic transducers
+//! and without one it is zero) and the response to `a(t) = Re(A e^{jwt})` is
+//! `Y = (jw I - L)^{-1} c A`. The load voltages are linear in the state, so each has a
+//! transfer function `V_i / A`, and the mean power of the loads under a sine of amplitude `A`
+//! is `sum_i |V_i/A|^2 |A|^2 / (2 R)`.
+//!
+//! Under white base acceleration of two-sided density `Sa` (m^2 s^-4 / Hz) the one-sided
+//! output power density is `2 Sa sum_i |V_i/A|^2 / R` ([`LinearResponse::output_psd_w_per_hz`]).
+//!
+//! For the paper's comb pair these are eqs 11-17 and their frequency-domain form
+//! ([`crate::physics::two_port`]); for the other transducers they are the textbook closed forms
+//! (the book's "Validation against references" chapter compares the two).
+
+use nalgebra::{Complex, Matrix4, Vector4};
+
+use crate::device::Device;
+use crate::drive::Sine;
+use crate::physics::harvester::Harvester;
+use crate::physics::transducer::TransducerModel;
+
+/// The linearised model of a device.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LinearResponse {
+    l: Matrix4<f64>,
+    transducer: TransducerModel,
+    active: usize,
+}
+
+impl LinearResponse {
+    /// The linearised model of `device` about rest.
+    pub fn of(device: &Device) -> Self {
+        let h = Harvester::new(device, Sine::from_rms_g(0.0, 1.0));
+        let (l, _) = h.free_flight().linear();
+        Self {
+            l,
+            transducer: h.transducer,
+            active: h.active_states(),
+        }
+    }
+
+    /// The state's response per unit base acceleration at `freq_hz`: `(jw I - L)^{-1} c`
+    /// (x in m per m/s^2, ...); components the transducer leaves unused are zero.
+    pub fn state_per_accel(&self, freq_hz: f64) -> Vector4<Complex<f64>> {
+        let w = 2.0 * std::f64::consts::PI * freq_hz;
+        let n = self.active;
+        let mut a = nalgebra::DMatrix::<Complex<f64>>::zeros(n, n);
+        for i in 0..n {
+            for j in 0..n {
+                a[(i, j)] = Complex::new(-self.l[(i, j)], if i == j { w } else { 0.0 });
+            }
+        }
+        let mut rhs = nalgebra::DVector::<Complex<f64>>::zeros(n);
+        rhs[1] = Complex::new(1.0, 0.0);
+        let x = a
+            .lu()
+            .solve(&rhs)
+            .unwrap_or_else(|| nalgebra::DVector::from_element(n, Complex::new(f64::NAN, 0.0)));
+        let mut out = Vector4::from_element(Complex::new(0.0, 0.0));
+        for i in 0..n {
+            out[i] = x[i];
+        }
+        out
+    }
+
+    /// The load voltages per unit base acceleration at `freq_hz` (V per m/s^2): both nodes of
+    /// a pair, `[V, 0]` for one load, zero without a transducer.
+    pub fn voltages_per_accel(&self, freq_hz: f64) -> [Complex<f64>; 2] {
+        let y = self.state_per_accel(freq_hz);
+        let zero = Complex::new(0.0, 0.0);
+        match self.transducer {
+            TransducerModel::None => [zero, zero],
+            TransducerModel::Pair(p) => {
+                // V_i = (s_i + (C_i - C0) Vb) / (C0 + Cp + CL) to first order, with
+                // C_1,2 - C0 = +-(C0 / x0) x (and C0 / d0 for a gap-closing pair).
+                let ct = p.c0 + p.cp + p.cl;
+                let a = p.c0 / p.length_scale();
+                [
+                    (y[2] + y[0] * (a * p.vb)) / ct,
+                    (y[3] - y[0] * (a * p.vb)) / ct,
+                ]
+            }
+            TransducerModel::Piezo { .. } => [y[2], zero],
+            TransducerModel::Electromagnetic { phi, rc, l, r } => {
+                let i = if l > 0.0 {
+                    y[2]
+                } else {
+                    y[1] * (phi / (rc + r))
+                };
+                [i * r, zero]
+            }
+        }
+    }
+
+    /// Mean power of the loads under a sine of RMS acceleration `accel_rms_si` (m/s^2) at
+    /// `freq_hz` (W).
+    pub fn sine_power_w(&self, accel_rms_si: f64, freq_hz: f64) -> f64 {
+        let r = self.transducer.load_resistance();
+        let [v1, v2] = self.voltages_per_accel(freq_hz);
+        (v1.norm_sqr() + v2.norm_sqr()) * accel_rms_si * accel_rms_si / r
+    }
+
+    /// One-sided output power density of the loads under white base acceleration of two-sided
+    /// density `sa_si` ((m/s^2)^2/Hz) at `freq_hz` (W/Hz).
+    pub fn output_psd_w_per_hz(&self, sa_si: f64, freq_hz: f64) -> f64 {
+        let r = self.transducer.load_resistance();
+        let [v1, v2] = self.voltages_per_accel(freq_hz);
+        2.0 * sa_si * (v1.norm_sqr() + v2.norm_sqr()) / r
+    }
+
+    /// The displacement amplitude per unit acceleration amplitude at `freq_hz` (s^2).
+    pub fn displacement_per_accel(&self, freq_hz: f64) -> f64 {
+        self.state_per_accel(freq_hz)[0].norm()
+    }
+}
+
+/// The open-circuit stiffness of a device (N/m): the suspension, stiffened by the
+/// transducer with its loads open (eq 17's K for a pair, `km + theta^2 / Cp` for a
+/// piezoelectric transducer, `km` for the others).
+pub fn open_circuit_stiffness_n_per_m(device: &Device) -> f64 {
+    let km = device.mechanics.stiffness_n_per_m;
+    match TransducerModel::of(&device.transducer) {
+        TransducerModel::Pair(_) => crate::physics::two_port::TwoPort::of(device).stiffness_n_per_m,
+        TransducerModel::Piezo { theta, cp, .. } => km + theta * theta / cp,
+        _ => km,
+    }
+}
+
+/// The open-circuit resonance `sqrt(K/m)/(2 pi)` of a device (Hz), with K of
+/// [`open_circuit_stiffness_n_per_m`].
+pub fn open_circuit_resonance_hz(device: &Device) -> f64 {
+    (open_circuit_stiffness_n_per_m(device) / device.mechanics.mass_kg).sqrt()
+        / (2.0 * std::f64::consts::PI)
+}
+
+/// The mechanical quality factor `sqrt(K m)/b` with the open-circuit stiffness (eq 21's
+/// reading for a pair).
+pub fn open_circuit_qm(device: &Device) -> f64 {
+    (open_circuit_stiffness_n_per_m(device) * device.mechanics.mass_kg).sqrt()
+        / device.mechanics.damping_n_s_per_m
+}
