@@ -20,10 +20,11 @@ fig NAME:
 book:
     cargo run --release --bin reproduce -- --book-only
 
-# Check formatting and lints (warnings are errors).
+# Check formatting, lints and the library's rustdoc (warnings are errors).
 lint:
     cargo fmt --check
     cargo clippy --release --workspace --all-targets -- -D warnings
+    RUSTDOCFLAGS="-D warnings" cargo doc --no-deps -p endstop
 
 # Run the benchmarks.
 bench:
