@@ -39,5 +39,9 @@ own *ARGS:
     cargo run --release --bin endstop -- {{ARGS}}
 
 # Why the paper deviates: Sobol indices and the multi-claim calibration (not part of `reproduce`; extra ARGS, e.g. `--base 16 --force`).
+deviations *ARGS:
+    cargo run --release --bin deviations -- {{ARGS}}
+
+# The same as `just deviations` (its earlier name).
 study *ARGS:
-    cargo run --release --bin study -- {{ARGS}}
+    cargo run --release --bin deviations -- {{ARGS}}
