@@ -1,8 +1,8 @@
-//! "Why the paper deviates" (`endstop::paper::study`) in pieces a cluster can schedule: the
+//! "Why the paper deviates" (`endstop::paper::deviations`) in pieces a cluster can schedule: the
 //! Saltelli design, one point's evaluation, the indices from the evaluations, the calibration's
 //! starts, one start's search, and the calibration from the starts' fits. Each piece is the
 //! library's own function (`sobol` and `calibrate` are the same pieces run in one process), so
-//! a study spread over Dask workers gives the numbers `just study` gives.
+//! a study spread over Dask workers gives the numbers `just deviations` gives.
 //!
 //! Evaluations travel as plain dicts (`claim`, `quantity`, `paper`, `tolerance`, `unit`,
 //! `outcome`, `value`, `deviation`, `meets`, `kind`), which pickle; on the way back only `claim`, `quantity`, `outcome` and
@@ -11,11 +11,11 @@
 use endstop::device::Device;
 use endstop::num::minimax::{Fit, MinimaxSettings};
 use endstop::paper::claims::{Claims, Kind};
-use endstop::paper::sensitivity::{Factor, Ranges, RangesFile};
-use endstop::paper::study::{
-    self, Evaluation, Outcome, Prototype, Scope, SobolDesign, StudyError, STUDY_BOOTSTRAP,
+use endstop::paper::deviations::{
+    self, DeviationsError, Evaluation, Outcome, Prototype, Scope, SobolDesign, STUDY_BOOTSTRAP,
     STUDY_SEED,
 };
+use endstop::paper::deviations::{Factor, Ranges, RangesFile};
 use numpy::PyArray2;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
@@ -61,11 +61,11 @@ fn design(base_rows: usize, seed: u32, scope: Scope) -> SobolDesign {
     }
 }
 
-fn err(e: StudyError) -> PyErr {
+fn err(e: DeviationsError) -> PyErr {
     match e {
-        StudyError::Ranges(_) | StudyError::Evaluations(_) | StudyError::Sensitivity(_) => {
-            arg_err(e.to_string())
-        }
+        DeviationsError::Ranges(_)
+        | DeviationsError::Evaluations(_)
+        | DeviationsError::Sensitivity(_) => arg_err(e.to_string()),
         e => solver_err(e),
     }
 }
@@ -88,7 +88,7 @@ fn evaluation_dict<'py>(
     let c = claims
         .get(e.quantity.claim, e.quantity.quantity)
         .ok_or_else(|| {
-            solver_err(StudyError::UnknownClaim(
+            solver_err(DeviationsError::UnknownClaim(
                 e.quantity.claim,
                 e.quantity.quantity,
             ))
@@ -141,7 +141,7 @@ fn evaluation_of(p: Prototype, d: &Bound<'_, PyDict>, claims: &Claims) -> PyResu
     })?;
     let outcome = Outcome::from_label(&label, value)
         .ok_or_else(|| arg_err(format!("outcome = {label:?} is not an outcome label")))?;
-    study::normalise(&qty, outcome, claims).map_err(err)
+    deviations::normalise(&qty, outcome, claims).map_err(err)
 }
 
 /// The keys of the uncertain factors, in the order of a point's coordinates.
@@ -179,7 +179,7 @@ fn paper_study_evaluate<'py>(
     let scope = scope(ensemble_records)?;
     let (base, ranges, claims) = inputs(p)?;
     let es = py
-        .detach(|| study::evaluate_at(p, &ranges, &base, &point, &claims, scope))
+        .detach(|| deviations::evaluate_at(p, &ranges, &base, &point, &claims, scope))
         .map_err(err)?;
     evaluations_list(py, &es, &claims)
 }
@@ -205,7 +205,7 @@ fn paper_study_indices<'py>(
         .map(|point| point.iter().map(|e| evaluation_of(p, e, &claims)).collect())
         .collect::<PyResult<Vec<Vec<Evaluation>>>>()?;
     let run = py
-        .detach(move || study::sobol_indices(p, d, evals))
+        .detach(move || deviations::sobol_indices(p, d, evals))
         .map_err(err)?;
     let rows = PyList::empty(py);
     for q in &run.quantities {
@@ -262,7 +262,8 @@ fn paper_study_calibration_starts<'py>(
     seed: u32,
 ) -> PyResult<Bound<'py, PyArray2<f64>>> {
     let (base, ranges, _) = inputs(self::prototype(prototype)?)?;
-    let s = study::calibration_starts(&ranges, &base, minimax(starts, 1, seed)).map_err(err)?;
+    let s =
+        deviations::calibration_starts(&ranges, &base, minimax(starts, 1, seed)).map_err(err)?;
     PyArray2::from_vec2(py, &s).map_err(|e| arg_err(e.to_string()))
 }
 
@@ -285,7 +286,9 @@ fn paper_study_calibrate_start<'py>(
     let (base, ranges, claims) = inputs(p)?;
     let settings = minimax(starts, iterations, seed);
     let fit = py
-        .detach(move || study::calibrate_start(p, &ranges, &base, settings, &claims, scope, start))
+        .detach(move || {
+            deviations::calibrate_start(p, &ranges, &base, settings, &claims, scope, start)
+        })
         .map_err(err)?;
     fit_dict(py, &fit)
 }
@@ -318,7 +321,7 @@ fn paper_study_calibration<'py>(
         })
         .collect::<PyResult<Vec<Fit>>>()?;
     let cal = py
-        .detach(|| study::calibration_of_fits(p, &ranges, &base, &claims, scope, fits))
+        .detach(|| deviations::calibration_of_fits(p, &ranges, &base, &claims, scope, fits))
         .map_err(err)?;
     let d = PyDict::new(py);
     let fl = PyList::empty(py);
