@@ -194,10 +194,7 @@ pub fn in_contact(m: &Measurement) -> bool {
 
 /// Index of the first step with contact, if any.
 pub fn first_contact(sweep: &Sweep) -> Option<usize> {
-    sweep
-        .steps
-        .iter()
-        .position(|s| in_contact(&s.measurement))
+    sweep.steps.iter().position(|s| in_contact(&s.measurement))
 }
 
 /// Evenly spaced values from `start` to `stop` inclusive with spacing close to `step`.
