@@ -177,6 +177,7 @@ fn run() -> Result<()> {
     }
     publish_own_device()?;
     let rows = write_scorecard()?;
+    common::answers::write(&rows)?;
     write_provenance()?;
     deviations_placeholder()?;
     eprintln!("[reproduce] building the book");
