@@ -101,6 +101,7 @@ fn evaluation_dict<'py>(
     d.set_item("deviation", e.deviation)?;
     d.set_item("meets", e.meets)?;
     d.set_item("kind", kind_label(e.kind))?;
+    d.set_item("ci95", e.ci95)?;
     Ok(d)
 }
 
@@ -141,7 +142,15 @@ fn evaluation_of(p: Prototype, d: &Bound<'_, PyDict>, claims: &Claims) -> PyResu
     })?;
     let outcome = Outcome::from_label(&label, value)
         .ok_or_else(|| arg_err(format!("outcome = {label:?} is not an outcome label")))?;
-    deviations::normalise(&qty, outcome, claims).map_err(err)
+    // A dict without "ci95" (or with None or NaN there, as a data frame stores it) has no
+    // interval.
+    let ci95: Option<f64> = match d.get_item("ci95")? {
+        Some(v) => v.extract()?,
+        None => None,
+    };
+    Ok(deviations::normalise(&qty, outcome, claims)
+        .map_err(err)?
+        .with_ci95(ci95.filter(|c| c.is_finite())))
 }
 
 /// The keys of the uncertain factors, in the order of a point's coordinates.

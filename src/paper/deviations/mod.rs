@@ -49,8 +49,8 @@ pub use indices::{
     most_conflicting, sobol, sobol_indices, Pareto, QuantityIndices, SobolDesign, SobolRun,
 };
 pub use quantity::{
-    best_value_key, normalise, Evaluation, Outcome, Prototype, Quantity, Scope, P1_QUANTITIES,
-    P2_QUANTITIES,
+    best_value_key, normalise, Estimate, Evaluation, Outcome, Prototype, Quantity, Scope,
+    P1_QUANTITIES, P2_QUANTITIES,
 };
 pub use ranges::{Factor, Ranges, RangesError, RangesFile, Variant};
 

@@ -208,6 +208,17 @@ pub struct Evaluation {
     pub meets: bool,
     /// Quantitative (normalised by a tolerance) or yes/no.
     pub kind: Kind,
+    /// Half-width of the 95 % interval of the value from the sampling error of its records,
+    /// in the value's unit (an ensemble quantity); `None` for a quantity without sampling
+    /// error (a continuation, eqs 15-18) and for a yes/no claim.
+    pub ci95: Option<f64>,
+}
+
+impl Evaluation {
+    /// The same evaluation with the half-width `ci95` of its value's 95 % interval.
+    pub fn with_ci95(self, ci95: Option<f64>) -> Self {
+        Self { ci95, ..self }
+    }
 }
 
 /// A quantity's outcome normalised by its claim.
@@ -236,6 +247,7 @@ pub fn normalise(
         deviation,
         meets,
         kind: claim.kind,
+        ci95: None,
     })
 }
 
@@ -257,3 +269,7 @@ pub(crate) fn ratio(a: Outcome, b: Outcome) -> Outcome {
         _ => Outcome::Failed,
     }
 }
+
+/// An outcome with the half-width of its 95 % interval where it has sampling error (see
+/// [`Evaluation::ci95`]).
+pub type Estimate = (Outcome, Option<f64>);
