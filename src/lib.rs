@@ -25,6 +25,7 @@
 //! | [`physics::two_port`] | linear two-port, coupling, broadband efficiency | eqs 11-18, 21-22 |
 //! | [`drive`] | sine, sampled and band-limited noise accelerations | Figure 10 |
 //! | [`ode`] | Runge-Kutta stepping with dense output and event location | |
+//! | [`fit`] | fitting a device to measured sweeps, with uncertainty | section 3.2 |
 //! | [`num`] | root finding, sample statistics, sensitivity designs | |
 //! | [`signal`] | Welch PSD, bandwidths | |
 //! | [`study`] | steady states, sweeps, periodic orbits and continuation, basins, random records, ensembles | |
@@ -35,6 +36,7 @@
 
 pub mod device;
 pub mod drive;
+pub mod fit;
 pub mod num;
 pub mod ode;
 pub mod paper;

@@ -1,0 +1,286 @@
+//! What a fit is fitted to: measured sweeps (a quantity at measured frequencies, at a stated
+//! RMS acceleration, up or down) with optional frequency features (the impact onset, the end of
+//! the impacting branch), each with its standard deviation, checked before any simulation.
+
+use serde::{Deserialize, Serialize};
+use thiserror::Error;
+
+/// Sweep direction: up (increasing frequency) or down.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Direction {
+    /// Increasing frequency.
+    Up,
+    /// Decreasing frequency.
+    Down,
+}
+
+impl Direction {
+    /// Label for tables.
+    pub fn label(self) -> &'static str {
+        match self {
+            Direction::Up => "up",
+            Direction::Down => "down",
+        }
+    }
+}
+
+/// The measured quantity of a sweep.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Quantity {
+    /// RMS voltage of load 1 (V).
+    V1RmsV,
+    /// Mean power of both loads together (W).
+    PTotalW,
+}
+
+impl Quantity {
+    /// Column name with its unit.
+    pub fn column(self) -> &'static str {
+        match self {
+            Quantity::V1RmsV => "v1_rms_v",
+            Quantity::PTotalW => "p_total_w",
+        }
+    }
+}
+
+/// A frequency feature of a sweep.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum FeatureKind {
+    /// First contact with a stop of an up-sweep (the kink of Figure 8).
+    Onset,
+    /// Where an up-sweep's impacting branch ends: the jump down, or the loss of contact when
+    /// there is no jump ([`crate::study::sweep::SweepReport::branch_end`]); on a down-sweep,
+    /// the jump up or the first contact ([`crate::study::sweep::DownSweepReport::branch_end`]).
+    BranchEnd,
+}
+
+impl FeatureKind {
+    /// Label for tables.
+    pub fn label(self) -> &'static str {
+        match self {
+            FeatureKind::Onset => "onset",
+            FeatureKind::BranchEnd => "branch end (jump)",
+        }
+    }
+}
+
+/// A measured frequency feature with its standard deviation.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Feature {
+    /// Which feature.
+    pub kind: FeatureKind,
+    /// Measured frequency (Hz).
+    pub freq_hz: f64,
+    /// Its standard deviation (Hz).
+    pub sigma_hz: f64,
+}
+
+/// One measured point of a sweep.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Point {
+    /// Drive frequency (Hz).
+    pub freq_hz: f64,
+    /// Measured value, in the sweep's [`Quantity`].
+    pub value: f64,
+    /// Standard deviation of the value (same unit); `None`: unknown, estimated from the
+    /// residuals (see [`crate::fit::Uncertainty`]).
+    pub sigma: Option<f64>,
+}
+
+/// A measured sweep.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SweepData {
+    /// Name for tables and errors (a file name).
+    pub label: String,
+    /// Up or down.
+    pub direction: Direction,
+    /// Stated RMS base acceleration (g).
+    pub accel_rms_g: f64,
+    /// The measured quantity.
+    pub quantity: Quantity,
+    /// Measured points, in sweep order (frequency increasing for up, decreasing for down).
+    pub points: Vec<Point>,
+    /// The stepped sweep's frequency grid (Hz, in sweep order); `None`: the points'
+    /// frequencies. A sweep with features only needs one.
+    pub grid_hz: Option<Vec<f64>>,
+    /// Measured frequency features.
+    pub features: Vec<Feature>,
+}
+
+/// A data set that cannot be fitted.
+#[derive(Debug, Error, Clone, PartialEq)]
+pub enum DataError {
+    /// A value is NaN, infinite, or not positive where it must be.
+    #[error("{label}: {what} = {value} at item {index} must be finite{positive}")]
+    NotFinite {
+        /// The data set.
+        label: String,
+        /// Which value.
+        what: &'static str,
+        /// Index of the point or feature (0-based).
+        index: usize,
+        /// The value.
+        value: f64,
+        /// "" or " and positive".
+        positive: &'static str,
+    },
+    /// The frequencies do not follow the sweep's direction strictly.
+    #[error(
+        "{label}: frequency {freq_hz} Hz at item {index} does not {order} the previous one \
+         ({direction} sweep)"
+    )]
+    NotMonotonic {
+        /// The data set.
+        label: String,
+        /// Index of the offending point (0-based).
+        index: usize,
+        /// Its frequency.
+        freq_hz: f64,
+        /// "exceed" or "stay below".
+        order: &'static str,
+        /// "up" or "down".
+        direction: &'static str,
+    },
+    /// A sweep without points needs a grid, and a grid needs two frequencies.
+    #[error("{label}: no frequency grid (a sweep with features only needs `grid_hz` of two or more frequencies)")]
+    NoGrid {
+        /// The data set.
+        label: String,
+    },
+    /// A measured point or feature lies outside the simulated grid.
+    #[error("{label}: {what} at {freq_hz} Hz lies outside the sweep's grid {lo} .. {hi} Hz")]
+    OutsideGrid {
+        /// The data set.
+        label: String,
+        /// What lies outside.
+        what: &'static str,
+        /// Its frequency.
+        freq_hz: f64,
+        /// Grid's lowest frequency.
+        lo: f64,
+        /// Grid's highest frequency.
+        hi: f64,
+    },
+    /// An onset is only defined for an up-sweep.
+    #[error("{label}: an impact onset feature needs an up-sweep")]
+    OnsetOnDown {
+        /// The data set.
+        label: String,
+    },
+}
+
+fn finite(
+    label: &str,
+    what: &'static str,
+    index: usize,
+    value: f64,
+    positive: bool,
+) -> Result<(), DataError> {
+    if value.is_finite() && (!positive || value > 0.0) {
+        Ok(())
+    } else {
+        Err(DataError::NotFinite {
+            label: label.into(),
+            what,
+            index,
+            value,
+            positive: if positive { " and positive" } else { "" },
+        })
+    }
+}
+
+impl SweepData {
+    /// Measured values that enter the misfit (points and features).
+    pub fn len(&self) -> usize {
+        self.points.len() + self.features.len()
+    }
+
+    /// True if the data set has neither points nor features.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// The stepped sweep's grid, in sweep order.
+    pub fn grid(&self) -> Vec<f64> {
+        self.grid_hz
+            .clone()
+            .unwrap_or_else(|| self.points.iter().map(|p| p.freq_hz).collect())
+    }
+
+    /// Checks every value (finite; frequencies, accelerations and standard deviations
+    /// positive), the order of the frequencies, and that points and features lie on the grid.
+    pub fn validate(&self) -> Result<(), DataError> {
+        let l = &self.label;
+        finite(l, "accel_rms_g", 0, self.accel_rms_g, true)?;
+        let (order, dir) = match self.direction {
+            Direction::Up => ("exceed", "up"),
+            Direction::Down => ("stay below", "down"),
+        };
+        let check_order = |freqs: &[f64]| -> Result<(), DataError> {
+            for (i, w) in freqs.windows(2).enumerate() {
+                let ok = match self.direction {
+                    Direction::Up => w[1] > w[0],
+                    Direction::Down => w[1] < w[0],
+                };
+                if !ok {
+                    return Err(DataError::NotMonotonic {
+                        label: l.clone(),
+                        index: i + 1,
+                        freq_hz: w[1],
+                        order,
+                        direction: dir,
+                    });
+                }
+            }
+            Ok(())
+        };
+        for (i, p) in self.points.iter().enumerate() {
+            finite(l, "freq_hz", i, p.freq_hz, true)?;
+            finite(l, self.quantity.column(), i, p.value, false)?;
+            if let Some(s) = p.sigma {
+                finite(l, "sigma", i, s, true)?;
+            }
+        }
+        check_order(&self.points.iter().map(|p| p.freq_hz).collect::<Vec<_>>())?;
+        for (i, f) in self.features.iter().enumerate() {
+            finite(l, "feature freq_hz", i, f.freq_hz, true)?;
+            finite(l, "feature sigma_hz", i, f.sigma_hz, true)?;
+            if f.kind == FeatureKind::Onset && self.direction == Direction::Down {
+                return Err(DataError::OnsetOnDown { label: l.clone() });
+            }
+        }
+        let grid = self.grid();
+        if grid.len() < 2 {
+            return Err(DataError::NoGrid { label: l.clone() });
+        }
+        for (i, &f) in grid.iter().enumerate() {
+            finite(l, "grid_hz", i, f, true)?;
+        }
+        check_order(&grid)?;
+        let lo = grid.iter().copied().fold(f64::INFINITY, f64::min);
+        let hi = grid.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        let outside = |what, f: f64| {
+            if f < lo || f > hi {
+                Err(DataError::OutsideGrid {
+                    label: l.clone(),
+                    what,
+                    freq_hz: f,
+                    lo,
+                    hi,
+                })
+            } else {
+                Ok(())
+            }
+        };
+        for p in &self.points {
+            outside("a point", p.freq_hz)?;
+        }
+        for f in &self.features {
+            outside("a feature", f.freq_hz)?;
+        }
+        Ok(())
+    }
+}

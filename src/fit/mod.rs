@@ -1,0 +1,731 @@
+//! Fitting a device to measured sweeps: named free parameters with ranges, a weighted
+//! least-squares misfit evaluated by the stepped sweep ([`crate::study::sweep`]), a
+//! Levenberg-Marquardt search ([`lm`]) in bounded-transformed coordinates, and an honest
+//! account of what the data determine.
+//!
+//! # Misfit
+//! Each measured point contributes `(model - measured) / sigma`, each measured feature (impact
+//! onset, end of the impacting branch) `(model - measured) / sigma_hz`. The model of a data set
+//! is the stepped sweep ([`SweepSettings::for_device`]) over the data set's grid (by default its
+//! measured frequencies) at its stated acceleration, with a steady-state criterion tightened to
+//! [`FIT_REL_CHANGE_TOL`] so that the finite-difference Jacobian sees the model and not the
+//! convergence criterion. A feature the model does not show inside the grid is placed at the
+//! grid end it lies beyond, so that the misfit still points towards it.
+//!
+//! # Coordinates
+//! A free parameter with range `lo..hi` is searched as `u = logit((p - lo) / (hi - lo))`, or,
+//! when `lo > 0` and `hi / lo >= 10`, as the logit of `ln p` between `ln lo` and `ln hi`: the
+//! search cannot leave the range, and wide ranges are searched by ratios.
+//!
+//! # Uncertainty
+//! The covariance of the estimates is the Gauss-Newton one, `(J^T J)^-1` in the transformed
+//! coordinates (J of the weighted residuals), scaled by the residual variance
+//! `s^2 = SSR / (n - p)` unless every measured value states its standard deviation
+//! ([`Uncertainty`]). The 95 % interval of a parameter is `u +- q se_u` mapped back through the
+//! transform (q: Student's t with n - p degrees of freedom when scaled, the normal quantile
+//! otherwise), so it stays inside the range; the standard error reported in the parameter's
+//! unit is `|dp/du| se_u`. This is a linearisation at the optimum: it is as good as the model
+//! is nearly linear in the parameters over the interval.
+//!
+//! # What the data do not determine
+//! The Jacobian's columns are scaled to unit length (which makes the test independent of each
+//! parameter's unit and transform) and its singular values computed. A combination whose
+//! singular value is below [`SINGULAR_RATIO_WARN`] times the largest is reported
+//! ([`FitWarning::Undetermined`]) with its direction in relative changes of the parameters.
+
+pub mod data;
+pub mod lm;
+
+use nalgebra::DMatrix;
+use serde::Serialize;
+use thiserror::Error;
+
+pub use data::{DataError, Direction, Feature, FeatureKind, Point, Quantity, SweepData};
+pub use lm::{LmSettings, LmStop};
+
+use crate::device::{Device, ParamError};
+use crate::num::stats::student_t_975;
+use crate::ode::SolverError;
+use crate::study::steady::Measurement;
+use crate::study::sweep::{SweepSettings, REFINE_TOL_HZ};
+
+/// The path of the one free parameter that is not the device's: a factor on every data set's
+/// stated acceleration (an accelerometer's calibration error).
+pub const ACCEL_SCALE_PATH: &str = "drive.accel_scale";
+
+/// Steady-state criterion of the fit's sweeps: the relative change of the RMS voltages between
+/// blocks (the sweeps' default is 1e-3, as large as the forward-difference change of a
+/// measured value for a step of 1e-2 in the transformed coordinates).
+pub const FIT_REL_CHANGE_TOL: f64 = 1e-6;
+
+/// A combination of parameters is reported as not determined by the data when the smallest
+/// singular value of the column-scaled Jacobian is below this fraction of the largest: the
+/// data then determine that combination at least 100 times worse than the best one (a
+/// convention, stated with every warning).
+pub const SINGULAR_RATIO_WARN: f64 = 1e-2;
+
+/// A free parameter: a device parameter by its dotted path ([`Device::param`]) or
+/// [`ACCEL_SCALE_PATH`], searched within `lo..hi`.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct FreeParam {
+    /// Dotted path.
+    pub path: String,
+    /// Lower end of the range.
+    pub lo: f64,
+    /// Upper end of the range.
+    pub hi: f64,
+}
+
+/// Why a fit could not be set up or run.
+#[derive(Debug, Error)]
+pub enum FitError {
+    /// A data set is unusable.
+    #[error(transparent)]
+    Data(#[from] DataError),
+    /// A free parameter does not exist, or an end of its range is not a valid value.
+    #[error("free parameter `{path}`: {source}")]
+    Param {
+        /// The path as given.
+        path: String,
+        /// The device's error, naming the field.
+        source: ParamError,
+    },
+    /// A range is not finite with `lo < hi`, or does not contain the starting value.
+    #[error("free parameter `{path}`: range {lo:e} .. {hi:e} {what}")]
+    Range {
+        /// The path as given.
+        path: String,
+        /// Lower end.
+        lo: f64,
+        /// Upper end.
+        hi: f64,
+        /// What is wrong.
+        what: String,
+    },
+    /// The same parameter is free twice.
+    #[error("free parameter `{path}` is given twice")]
+    Duplicate {
+        /// The path.
+        path: String,
+    },
+    /// Fewer measured values than free parameters.
+    #[error("{n} measured values cannot determine {p} free parameters")]
+    TooFewData {
+        /// Measured values (points and features).
+        n: usize,
+        /// Free parameters.
+        p: usize,
+    },
+    /// No free parameter.
+    #[error("no free parameter")]
+    NoFreeParam,
+    /// The integrator failed on a sweep.
+    #[error("model sweep failed: {0}")]
+    Model(#[from] SolverError),
+}
+
+/// How the covariance is scaled.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+pub enum Uncertainty {
+    /// Every measured value states its standard deviation: covariance `(J^T J)^-1`.
+    Stated,
+    /// Some do not: covariance `s^2 (J^T J)^-1`, `s^2 = SSR / (n - p)`.
+    ResidualScaled,
+}
+
+impl Uncertainty {
+    /// The method, in words, for the output.
+    pub fn describe(self) -> &'static str {
+        match self {
+            Uncertainty::Stated => {
+                "Gauss-Newton covariance (J^T J)^-1 of the residuals weighted by the stated \
+                 standard deviations; 95 % intervals u +- 1.96 se_u in the transformed \
+                 coordinates, mapped back"
+            }
+            Uncertainty::ResidualScaled => {
+                "Gauss-Newton covariance s^2 (J^T J)^-1 scaled by the residual variance \
+                 s^2 = SSR/(n-p); 95 % intervals u +- t(n-p, 0.975) se_u in the transformed \
+                 coordinates, mapped back"
+            }
+        }
+    }
+}
+
+/// Something the caller must know about a fit.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub enum FitWarning {
+    /// A combination of parameters the data do not determine: the smallest singular value of
+    /// the column-scaled Jacobian is `ratio` times the largest (below [`SINGULAR_RATIO_WARN`]).
+    /// `direction` gives the combination as relative changes (d ln p, or dp for a parameter
+    /// whose range includes zero), largest component 1.
+    Undetermined {
+        /// (path, component).
+        direction: Vec<(String, f64)>,
+        /// Smallest over largest singular value.
+        ratio: f64,
+    },
+    /// A fitted value lies within 1e-3 of its range (as a fraction of the range).
+    AtBound {
+        /// The parameter.
+        path: String,
+        /// Its fitted value.
+        value: f64,
+    },
+    /// As many measured values as free parameters and no stated standard deviations: no
+    /// residual variance, hence no uncertainty.
+    NoResidualDof,
+    /// The search stopped without meeting a convergence criterion.
+    NotConverged {
+        /// Why it stopped.
+        stop: String,
+    },
+}
+
+impl std::fmt::Display for FitWarning {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            FitWarning::Undetermined { direction, ratio } => {
+                let combo: Vec<String> = direction
+                    .iter()
+                    .map(|(p, c)| format!("{c:+.3} d({p})"))
+                    .collect();
+                write!(
+                    f,
+                    "undetermined: the data do not determine the combination {} (relative \
+                     changes; smallest/largest singular value of the column-scaled Jacobian \
+                     {ratio:.2e} < {SINGULAR_RATIO_WARN})",
+                    combo.join(" ")
+                )
+            }
+            FitWarning::AtBound { path, value } => write!(
+                f,
+                "at bound: `{path}` = {value:e} is at an end of its range; the optimum may lie \
+                 outside it and the interval is not meaningful"
+            ),
+            FitWarning::NoResidualDof => write!(
+                f,
+                "no residual degrees of freedom: as many measured values as free parameters \
+                 and no stated standard deviations, so no uncertainty can be given"
+            ),
+            FitWarning::NotConverged { stop } => {
+                write!(f, "not converged: the search stopped ({stop})")
+            }
+        }
+    }
+}
+
+/// A fitted parameter.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct FittedParam {
+    /// Dotted path.
+    pub path: String,
+    /// Starting value.
+    pub start: f64,
+    /// Fitted value.
+    pub value: f64,
+    /// Standard error in the parameter's unit (`|dp/du| se_u`).
+    pub std_err: f64,
+    /// 95 % interval (see the module docs).
+    pub interval: (f64, f64),
+    /// The range searched.
+    pub range: (f64, f64),
+}
+
+/// One residual of the fitted model.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Residual {
+    /// Data set label.
+    pub dataset: String,
+    /// "point" or the feature's label.
+    pub what: String,
+    /// Frequency of the measured value (Hz).
+    pub freq_hz: f64,
+    /// Measured value.
+    pub measured: f64,
+    /// Model value.
+    pub model: f64,
+    /// Standard deviation used as weight (1 where none was stated).
+    pub sigma: f64,
+}
+
+/// The result of [`fit`].
+#[derive(Debug, Clone)]
+pub struct FitReport {
+    /// The fitted device (device parameters at their fitted values).
+    pub device: Device,
+    /// The fitted acceleration factor (1 if it was not free).
+    pub accel_scale: f64,
+    /// The fitted parameters, in the order given.
+    pub params: Vec<FittedParam>,
+    /// Correlation matrix of the estimates (transformed coordinates).
+    pub correlation: Vec<Vec<f64>>,
+    /// Warnings.
+    pub warnings: Vec<FitWarning>,
+    /// How the covariance was scaled.
+    pub uncertainty: Uncertainty,
+    /// Residuals at the fitted values, data set by data set.
+    pub residuals: Vec<Residual>,
+    /// Weighted sum of squared residuals.
+    pub ssr: f64,
+    /// n - p.
+    pub dof: usize,
+    /// Smallest over largest singular value of the column-scaled Jacobian.
+    pub singular_ratio: f64,
+    /// Outer iterations of the search.
+    pub iterations: usize,
+    /// Sweep evaluations (each data set's sweep counts once per evaluation).
+    pub evaluations: usize,
+    /// Why the search stopped.
+    pub stop: LmStop,
+}
+
+/// How a free parameter maps to the unbounded coordinate.
+#[derive(Debug, Clone, Copy)]
+struct Transform {
+    a: f64,
+    b: f64,
+    log: bool,
+}
+
+impl Transform {
+    fn new(lo: f64, hi: f64) -> Self {
+        if lo > 0.0 && hi / lo >= 10.0 {
+            Self {
+                a: lo.ln(),
+                b: hi.ln(),
+                log: true,
+            }
+        } else {
+            Self {
+                a: lo,
+                b: hi,
+                log: false,
+            }
+        }
+    }
+    fn to_p(self, u: f64) -> f64 {
+        let s = 1.0 / (1.0 + (-u).exp());
+        let y = self.a + (self.b - self.a) * s;
+        if self.log {
+            y.exp()
+        } else {
+            y
+        }
+    }
+    fn to_u(self, p: f64) -> f64 {
+        let y = if self.log { p.ln() } else { p };
+        let s = (y - self.a) / (self.b - self.a);
+        (s / (1.0 - s)).ln()
+    }
+    /// dp/du.
+    fn dp_du(self, u: f64) -> f64 {
+        let s = 1.0 / (1.0 + (-u).exp());
+        let dy = (self.b - self.a) * s * (1.0 - s);
+        if self.log {
+            dy * self.to_p(u)
+        } else {
+            dy
+        }
+    }
+}
+
+/// The device and acceleration factor at parameter values `p`.
+fn apply(base: &Device, free: &[FreeParam], p: &[f64]) -> Result<(Device, f64), FitError> {
+    let mut d = base.clone();
+    let mut scale = 1.0;
+    for (f, &v) in free.iter().zip(p) {
+        if f.path == ACCEL_SCALE_PATH {
+            scale = v;
+        } else {
+            d = d.with_param(&f.path, v).map_err(|source| FitError::Param {
+                path: f.path.clone(),
+                source,
+            })?;
+        }
+    }
+    Ok((d, scale))
+}
+
+/// The starting value of a free parameter in `device`.
+fn start_value(device: &Device, f: &FreeParam) -> Result<f64, FitError> {
+    if f.path == ACCEL_SCALE_PATH {
+        Ok(1.0)
+    } else {
+        device.param(&f.path).map_err(|source| FitError::Param {
+            path: f.path.clone(),
+            source,
+        })
+    }
+}
+
+/// Checks the free parameters against `device`: each exists, is free once, its range is
+/// finite with `lo < hi`, both ends are valid values of the device, and the device's value
+/// lies strictly inside. Returns the starting values.
+pub fn check_free(device: &Device, free: &[FreeParam]) -> Result<Vec<f64>, FitError> {
+    if free.is_empty() {
+        return Err(FitError::NoFreeParam);
+    }
+    let mut starts = Vec::new();
+    for (i, f) in free.iter().enumerate() {
+        if free[..i].iter().any(|g| g.path == f.path) {
+            return Err(FitError::Duplicate {
+                path: f.path.clone(),
+            });
+        }
+        let range_err = |what: &str| FitError::Range {
+            path: f.path.clone(),
+            lo: f.lo,
+            hi: f.hi,
+            what: what.into(),
+        };
+        let p0 = start_value(device, f)?;
+        if !(f.lo.is_finite() && f.hi.is_finite() && f.lo < f.hi) {
+            return Err(range_err("must be finite with lo < hi"));
+        }
+        if f.path == ACCEL_SCALE_PATH {
+            if f.lo <= 0.0 {
+                return Err(range_err("must be positive (a factor on the acceleration)"));
+            }
+        } else {
+            for end in [f.lo, f.hi] {
+                device
+                    .with_param(&f.path, end)
+                    .map_err(|source| FitError::Param {
+                        path: f.path.clone(),
+                        source,
+                    })?;
+            }
+        }
+        if !(p0 > f.lo && p0 < f.hi) {
+            return Err(range_err(&format!(
+                "must contain the device's value {p0:e} (the starting point) strictly inside"
+            )));
+        }
+        starts.push(p0);
+    }
+    Ok(starts)
+}
+
+/// The value of a measured quantity in a model measurement.
+fn quantity_of(q: Quantity, m: &Measurement) -> f64 {
+    match q {
+        Quantity::V1RmsV => m.v1_rms_v,
+        Quantity::PTotalW => m.p_total_w(),
+    }
+}
+
+/// The model's values for a data set (its points, then its features) on `device` with the
+/// acceleration factor `scale`.
+pub fn model_values(device: &Device, scale: f64, data: &SweepData) -> Result<Vec<f64>, FitError> {
+    let grid = data.grid();
+    let mut settings = SweepSettings::for_device(device, grid.clone(), REFINE_TOL_HZ);
+    settings.cfg.rel_change_tol = FIT_REL_CHANGE_TOL;
+    let accel = data.accel_rms_g * scale;
+    let (lo, hi) = (
+        grid.iter().copied().fold(f64::INFINITY, f64::min),
+        grid.iter().copied().fold(f64::NEG_INFINITY, f64::max),
+    );
+    let (curve, onset, end): (Vec<(f64, f64)>, Option<f64>, Option<f64>) = match data.direction
+    {
+        Direction::Up => {
+            let r = settings.run(device, accel, |_| {})?;
+            let curve = r
+                .measurements()
+                .map(|m| (m.freq_hz, quantity_of(data.quantity, m)))
+                .collect();
+            let onset = match r.onset {
+                Some(t) => t.value(),
+                None if r.contact_at_start => lo,
+                None => hi,
+            };
+            let end = match r.branch_end() {
+                Some(e) => e.transition.value(),
+                None if r.any_contact() => hi,
+                None => lo,
+            };
+            (curve, Some(onset), Some(end))
+        }
+        Direction::Down => {
+            let r = settings.run_down(device, accel, |_| {})?;
+            let curve = r
+                .measurements()
+                .map(|m| (m.freq_hz, quantity_of(data.quantity, m)))
+                .collect();
+            let end = r.branch_end().map_or(lo, |(_, t)| t.value());
+            (curve, None, Some(end))
+        }
+    };
+    let mut sorted = curve;
+    sorted.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let mut out: Vec<f64> = data
+        .points
+        .iter()
+        .map(|p| interpolate(&sorted, p.freq_hz))
+        .collect();
+    for f in &data.features {
+        out.push(match f.kind {
+            FeatureKind::Onset => onset.unwrap_or(hi),
+            FeatureKind::BranchEnd => end.unwrap_or(lo),
+        });
+    }
+    Ok(out)
+}
+
+/// Linear interpolation in a curve sorted by frequency (exact at its frequencies).
+fn interpolate(curve: &[(f64, f64)], f: f64) -> f64 {
+    let k = curve.partition_point(|c| c.0 < f);
+    if k < curve.len() && curve[k].0 == f {
+        return curve[k].1;
+    }
+    if k == 0 {
+        return curve[0].1;
+    }
+    if k == curve.len() {
+        return curve[k - 1].1;
+    }
+    let (a, b) = (curve[k - 1], curve[k]);
+    a.1 + (b.1 - a.1) * (f - a.0) / (b.0 - a.0)
+}
+
+/// The measured values and their weights (standard deviations; 1 where none is stated).
+fn measured(data: &[SweepData]) -> (Vec<f64>, Vec<f64>, bool) {
+    let mut y = Vec::new();
+    let mut s = Vec::new();
+    let mut all_stated = true;
+    for d in data {
+        for p in &d.points {
+            y.push(p.value);
+            s.push(p.sigma.unwrap_or(1.0));
+            all_stated &= p.sigma.is_some();
+        }
+        for f in &d.features {
+            y.push(f.freq_hz);
+            s.push(f.sigma_hz);
+        }
+    }
+    (y, s, all_stated)
+}
+
+/// Fits the free parameters of `device` to the data sets (see the module docs).
+pub fn fit(
+    device: &Device,
+    data: &[SweepData],
+    free: &[FreeParam],
+    settings: &LmSettings,
+) -> Result<FitReport, FitError> {
+    for d in data {
+        d.validate()?;
+    }
+    let starts = check_free(device, free)?;
+    let n: usize = data.iter().map(SweepData::len).sum();
+    let p = free.len();
+    if n < p {
+        return Err(FitError::TooFewData { n, p });
+    }
+    let tr: Vec<Transform> = free.iter().map(|f| Transform::new(f.lo, f.hi)).collect();
+    let u0: Vec<f64> = tr.iter().zip(&starts).map(|(t, &v)| t.to_u(v)).collect();
+    let (y, sigma, all_stated) = measured(data);
+    let to_p = |u: &[f64]| -> Vec<f64> { tr.iter().zip(u).map(|(t, &u)| t.to_p(u)).collect() };
+    let model = |pv: &[f64]| -> Result<Vec<f64>, FitError> {
+        let (d, scale) = apply(device, free, pv)?;
+        let mut out = Vec::with_capacity(n);
+        for ds in data {
+            out.extend(model_values(&d, scale, ds)?);
+        }
+        Ok(out)
+    };
+    let residuals = |u: &[f64]| -> Result<Vec<f64>, FitError> {
+        let m = model(&to_p(u))?;
+        Ok(m.iter()
+            .zip(&y)
+            .zip(&sigma)
+            .map(|((m, y), s)| (m - y) / s)
+            .collect())
+    };
+    let lm = lm::levenberg_marquardt(residuals, &u0, settings)?;
+    let p_fit = to_p(&lm.u);
+    let (fitted_device, accel_scale) = apply(device, free, &p_fit)?;
+    let mut fitted_device = fitted_device;
+    fitted_device.params = "fitted".into();
+
+    let ssr: f64 = lm.residuals.iter().map(|r| r * r).sum();
+    let dof = n - p;
+    let uncertainty = if all_stated {
+        Uncertainty::Stated
+    } else {
+        Uncertainty::ResidualScaled
+    };
+    let mut warnings = Vec::new();
+    let (scale2, q) = match uncertainty {
+        Uncertainty::Stated => (1.0, 1.959_963_984_540_054),
+        Uncertainty::ResidualScaled if dof > 0 => (ssr / dof as f64, student_t_975(dof)),
+        Uncertainty::ResidualScaled => {
+            warnings.push(FitWarning::NoResidualDof);
+            (f64::NAN, f64::NAN)
+        }
+    };
+    let jac = &lm.jacobian;
+    let jtj = jac.transpose() * jac;
+    let cov_u = jtj
+        .clone()
+        .pseudo_inverse(1e-14 * jtj.norm().max(f64::MIN_POSITIVE))
+        .unwrap_or_else(|_| DMatrix::from_element(p, p, f64::NAN))
+        * scale2;
+    let params: Vec<FittedParam> = (0..p)
+        .map(|k| {
+            let se_u = cov_u[(k, k)].max(0.0).sqrt();
+            let (a, b) = (tr[k].to_p(lm.u[k] - q * se_u), tr[k].to_p(lm.u[k] + q * se_u));
+            let interval = if se_u.is_finite() && q.is_finite() {
+                (a.min(b), a.max(b))
+            } else {
+                (f64::NAN, f64::NAN)
+            };
+            FittedParam {
+                path: free[k].path.clone(),
+                start: starts[k],
+                value: p_fit[k],
+                std_err: tr[k].dp_du(lm.u[k]).abs() * se_u,
+                interval,
+                range: (free[k].lo, free[k].hi),
+            }
+        })
+        .collect();
+    let correlation: Vec<Vec<f64>> = (0..p)
+        .map(|i| {
+            (0..p)
+                .map(|j| cov_u[(i, j)] / (cov_u[(i, i)] * cov_u[(j, j)]).sqrt())
+                .collect()
+        })
+        .collect();
+
+    // Identifiability: singular values of the column-scaled Jacobian.
+    let norms: Vec<f64> = (0..p).map(|j| jac.column(j).norm()).collect();
+    let scaled = DMatrix::from_fn(n, p, |i, j| {
+        if norms[j] > 0.0 {
+            jac[(i, j)] / norms[j]
+        } else {
+            0.0
+        }
+    });
+    let svd = scaled.svd(false, true);
+    let sv = &svd.singular_values;
+    let smax = sv.max();
+    let v_t = svd.v_t.as_ref().expect("V^T requested");
+    let mut singular_ratio = 1.0;
+    for (k, &s) in sv.iter().enumerate() {
+        let ratio = if smax > 0.0 { s / smax } else { 0.0 };
+        singular_ratio = f64::min(singular_ratio, ratio);
+        if ratio >= SINGULAR_RATIO_WARN {
+            continue;
+        }
+        // The direction in the scaled coordinates, back to du and then to relative changes.
+        let comps: Vec<f64> = (0..p)
+            .map(|j| {
+                let du = if norms[j] > 0.0 {
+                    v_t[(k, j)] / norms[j]
+                } else {
+                    v_t[(k, j)]
+                };
+                let dp = du * tr[j].dp_du(lm.u[j]);
+                if p_fit[j] != 0.0 && free[j].lo > 0.0 {
+                    dp / p_fit[j]
+                } else {
+                    dp
+                }
+            })
+            .collect();
+        // A parameter pinned at an end of its range has dp/du = 0: its component is 0 here
+        // and it is reported by [`FitWarning::AtBound`].
+        let comps: Vec<f64> = comps
+            .into_iter()
+            .map(|c| if c.is_finite() { c } else { 0.0 })
+            .collect();
+        let big = comps.iter().fold(0.0_f64, |m, c| m.max(c.abs()));
+        let sign = comps
+            .iter()
+            .copied()
+            .find(|c| c.abs() == big)
+            .map_or(1.0, f64::signum);
+        warnings.push(FitWarning::Undetermined {
+            direction: free
+                .iter()
+                .zip(&comps)
+                .filter(|(_, c)| c.abs() >= 1e-3 * big)
+                .map(|(f, c)| (f.path.clone(), sign * c / big))
+                .collect(),
+            ratio,
+        });
+    }
+    for (k, f) in free.iter().enumerate() {
+        let frac = (p_fit[k] - f.lo) / (f.hi - f.lo);
+        if !(1e-3..=1.0 - 1e-3).contains(&frac) {
+            warnings.push(FitWarning::AtBound {
+                path: f.path.clone(),
+                value: p_fit[k],
+            });
+        }
+    }
+    if !lm.stop.converged() {
+        warnings.push(FitWarning::NotConverged {
+            stop: format!("{:?}", lm.stop),
+        });
+    }
+
+    let mut residual_rows = Vec::with_capacity(n);
+    let mut i = 0;
+    for d in data {
+        let items = d
+            .points
+            .iter()
+            .map(|pt| ("point".to_string(), pt.freq_hz))
+            .chain(
+                d.features
+                    .iter()
+                    .map(|f| (f.kind.label().to_string(), f.freq_hz)),
+            );
+        for (what, freq_hz) in items {
+            residual_rows.push(Residual {
+                dataset: d.label.clone(),
+                what,
+                freq_hz,
+                measured: y[i],
+                model: y[i] + lm.residuals[i] * sigma[i],
+                sigma: sigma[i],
+            });
+            i += 1;
+        }
+    }
+    Ok(FitReport {
+        device: fitted_device,
+        accel_scale,
+        params,
+        correlation,
+        warnings,
+        uncertainty,
+        residuals: residual_rows,
+        ssr,
+        dof,
+        singular_ratio,
+        iterations: lm.iterations,
+        evaluations: lm.evaluations,
+        stop: lm.stop,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn transforms_round_trip_inside_the_range() {
+        for (lo, hi, p) in [(4e-6, 8e-6, 5e-6), (0.1, 10.0, 1.5), (-1.0, 1.0, 0.3)] {
+            let t = Transform::new(lo, hi);
+            let u = t.to_u(p);
+            assert!((t.to_p(u) - p).abs() <= 1e-12 * p.abs().max(1.0));
+            let h = 1e-6;
+            let fd = (t.to_p(u + h) - t.to_p(u - h)) / (2.0 * h);
+            assert!((fd - t.dp_du(u)).abs() <= 1e-6 * fd.abs());
+            assert!(t.to_p(40.0) <= hi && t.to_p(-40.0) >= lo);
+        }
+    }
+}
