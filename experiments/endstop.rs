@@ -4,6 +4,8 @@
 //! endstop sweep  --device my.toml --from 500 --to 900 --accel-rms-g 0.3 [--out DIR]
 //! endstop random --device my.toml --psd 1e-3 [--out DIR]
 //! endstop response --device my.toml --from 600 --to 850 --accel-rms-g 0.31 [--out DIR]
+//! endstop fit --device my.toml --up-sweep up.csv [--down-sweep down.csv] \
+//!             --free stops.both.gap_m=7e-6..10e-6 [--free ...] [--out DIR]
 //! ```
 //!
 //! Both write the same kinds of output as the figure experiments: Parquet data with
@@ -56,6 +58,11 @@ enum Study {
     /// frequency (pseudo-arclength, through folds) with their Floquet multipliers, and the
     /// folds and grazing points on the branch.
     Response(RangeArgs),
+    /// Fit free device parameters to measured sweeps (CSV with units in the header): the
+    /// fitted device file with provenance, values with standard errors and 95 % intervals,
+    /// their correlation, warnings for what the data do not determine, and plots of the data
+    /// against the fitted model with residuals.
+    Fit(common::fit_io::FitArgs),
 }
 
 /// The arguments of the two frequency studies (`sweep` and `response`).
@@ -139,6 +146,7 @@ fn main() {
         Study::Sweep(a) => sweep(a),
         Study::Random(a) => random(a),
         Study::Response(a) => response(a),
+        Study::Fit(a) => common::fit_io::run(a),
     });
 }
 

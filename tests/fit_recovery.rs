@@ -152,13 +152,16 @@ fn noisy_sweep_recovers_damping_and_gap_within_the_reported_intervals() {
     assert_eq!(covered(&r, &truth), vec![true, true], "{:?}", r.params);
     // The intervals are informative: narrower than a tenth of the searched range.
     for p in &r.params {
-        assert!(p.interval.1 - p.interval.0 < 0.1 * (p.range.1 - p.range.0), "{p:?}");
+        assert!(
+            p.interval.1 - p.interval.0 < 0.1 * (p.range.1 - p.range.0),
+            "{p:?}"
+        );
     }
 }
 
 /// Coverage of the 95 % intervals over 20 noise seeds (40 intervals). If they were exact the
 /// misses would be binomial(40, 0.05), mean 2; seven or more misses have probability below
-/// 0.5 %, so the test asks for at least 34 covered.
+/// 0.5 %, so the test asks for at least 34 covered. The count is printed (`--nocapture`).
 #[test]
 #[ignore = "about a minute of sweeps; run with: cargo test --release --test fit_recovery -- --ignored"]
 fn intervals_cover_the_truth_about_as_often_as_they_claim_over_20_seeds() {
@@ -201,5 +204,8 @@ fn a_sweep_that_never_reaches_the_stops_leaves_the_gap_undetermined() {
     // The damping, which the data do determine, is still recovered within its interval.
     let damping = &r.params[0];
     let t = truth.param(&damping.path).unwrap();
-    assert!(damping.interval.0 <= t && t <= damping.interval.1, "{damping:?}");
+    assert!(
+        damping.interval.0 <= t && t <= damping.interval.1,
+        "{damping:?}"
+    );
 }

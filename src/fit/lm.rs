@@ -230,6 +230,10 @@ mod tests {
         };
         let r = levenberg_marquardt(res, &[1.0, 0.1], &settings).unwrap();
         assert!(r.stop.converged(), "{:?}", r.stop);
-        assert!((r.u[0] - a).abs() < 1e-5 && (r.u[1] - k).abs() < 1e-5, "{:?}", r.u);
+        assert!(
+            (r.u[0] - a).abs() < 1e-5 && (r.u[1] - k).abs() < 1e-5,
+            "{:?}",
+            r.u
+        );
     }
 }

@@ -83,12 +83,12 @@ pub enum FitError {
     #[error(transparent)]
     Data(#[from] DataError),
     /// A free parameter does not exist, or an end of its range is not a valid value.
-    #[error("free parameter `{path}`: {source}")]
+    #[error("free parameter `{path}`: {error}")]
     Param {
         /// The path as given.
         path: String,
         /// The device's error, naming the field.
-        source: ParamError,
+        error: ParamError,
     },
     /// A range is not finite with `lo < hi`, or does not contain the starting value.
     #[error("free parameter `{path}`: range {lo:e} .. {hi:e} {what}")]
@@ -337,9 +337,9 @@ fn apply(base: &Device, free: &[FreeParam], p: &[f64]) -> Result<(Device, f64), 
         if f.path == ACCEL_SCALE_PATH {
             scale = v;
         } else {
-            d = d.with_param(&f.path, v).map_err(|source| FitError::Param {
+            d = d.with_param(&f.path, v).map_err(|error| FitError::Param {
                 path: f.path.clone(),
-                source,
+                error,
             })?;
         }
     }
@@ -351,9 +351,9 @@ fn start_value(device: &Device, f: &FreeParam) -> Result<f64, FitError> {
     if f.path == ACCEL_SCALE_PATH {
         Ok(1.0)
     } else {
-        device.param(&f.path).map_err(|source| FitError::Param {
+        device.param(&f.path).map_err(|error| FitError::Param {
             path: f.path.clone(),
-            source,
+            error,
         })
     }
 }
@@ -390,9 +390,9 @@ pub fn check_free(device: &Device, free: &[FreeParam]) -> Result<Vec<f64>, FitEr
             for end in [f.lo, f.hi] {
                 device
                     .with_param(&f.path, end)
-                    .map_err(|source| FitError::Param {
+                    .map_err(|error| FitError::Param {
                         path: f.path.clone(),
-                        source,
+                        error,
                     })?;
             }
         }
@@ -425,8 +425,7 @@ pub fn model_values(device: &Device, scale: f64, data: &SweepData) -> Result<Vec
         grid.iter().copied().fold(f64::INFINITY, f64::min),
         grid.iter().copied().fold(f64::NEG_INFINITY, f64::max),
     );
-    let (curve, onset, end): (Vec<(f64, f64)>, Option<f64>, Option<f64>) = match data.direction
-    {
+    let (curve, onset, end): (Vec<(f64, f64)>, Option<f64>, Option<f64>) = match data.direction {
         Direction::Up => {
             let r = settings.run(device, accel, |_| {})?;
             let curve = r
@@ -574,7 +573,10 @@ pub fn fit(
     let params: Vec<FittedParam> = (0..p)
         .map(|k| {
             let se_u = cov_u[(k, k)].max(0.0).sqrt();
-            let (a, b) = (tr[k].to_p(lm.u[k] - q * se_u), tr[k].to_p(lm.u[k] + q * se_u));
+            let (a, b) = (
+                tr[k].to_p(lm.u[k] - q * se_u),
+                tr[k].to_p(lm.u[k] + q * se_u),
+            );
             let interval = if se_u.is_finite() && q.is_finite() {
                 (a.min(b), a.max(b))
             } else {

@@ -1,0 +1,208 @@
+//! `endstop fit` end to end: a measured sweep written as CSV is fitted and every output is
+//! written; a bad measured file or a bad free parameter stops the command with an error that
+//! names the file and line (or the parameter), exit code 1, and nothing written.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use endstop::device::Device;
+use endstop::fit::{model_values, Direction, Feature, FeatureKind, Point, Quantity, SweepData};
+
+fn root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
+}
+
+fn scratch(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("endstop-fit-{name}-{}", std::process::id()));
+    std::fs::remove_dir_all(&d).ok();
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+/// Prototype 2 with a 9 um gap (the truth), and the file text of a start away from it.
+fn devices() -> (Device, String) {
+    let text = std::fs::read_to_string(root().join("data/prototype2.toml")).unwrap();
+    let p2 = Device::from_toml_str(&text, "prototype2").unwrap();
+    let truth = p2.with_param("stops.both.gap_m", 9e-6).unwrap();
+    let start = truth
+        .with_param("stops.both.gap_m", 8.3e-6)
+        .unwrap()
+        .with_param("mechanics.damping_n_s_per_m", 3.2e-5)
+        .unwrap();
+    (truth, start.to_toml_string())
+}
+
+/// The truth's 0.3 g up-sweep 600..760 Hz as a measured file, without noise, with a 2 %
+/// standard deviation column and the jump.
+fn sweep_csv(truth: &Device) -> String {
+    let freqs: Vec<f64> = (0..=16).map(|i| 600.0 + 10.0 * i as f64).collect();
+    let template = SweepData {
+        label: "t".into(),
+        direction: Direction::Up,
+        accel_rms_g: 0.3,
+        quantity: Quantity::V1RmsV,
+        points: freqs
+            .iter()
+            .map(|&f| Point {
+                freq_hz: f,
+                value: 0.0,
+                sigma: None,
+            })
+            .collect(),
+        grid_hz: None,
+        features: vec![Feature {
+            kind: FeatureKind::BranchEnd,
+            freq_hz: 700.0,
+            sigma_hz: 1.0,
+        }],
+    };
+    let v = model_values(truth, 1.0, &template).unwrap();
+    let mut s = format!(
+        "# accel_rms_g = 0.3\n# jump_hz = {}\n# jump_sigma_hz = 1\nfreq_hz,v1_rms_v,sigma_v\n",
+        v[freqs.len()]
+    );
+    for (f, x) in freqs.iter().zip(&v) {
+        s.push_str(&format!("{f},{x},{}\n", 0.02 * x));
+    }
+    s
+}
+
+fn run(dir: &Path, args: &[&str]) -> (bool, Option<i32>, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_endstop"))
+        .arg("fit")
+        .args(args)
+        .current_dir(dir)
+        .output()
+        .unwrap();
+    (
+        out.status.success(),
+        out.status.code(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+#[test]
+fn fit_writes_the_fitted_device_with_provenance_the_table_and_the_plots() {
+    let dir = scratch("ok");
+    let (truth, start) = devices();
+    std::fs::write(dir.join("start.toml"), start).unwrap();
+    std::fs::write(dir.join("up.csv"), sweep_csv(&truth)).unwrap();
+    let (ok, _, stderr) = run(
+        &dir,
+        &[
+            "--device",
+            "start.toml",
+            "--up-sweep",
+            "up.csv",
+            "--free",
+            "mechanics.damping_n_s_per_m=1e-5..1e-4",
+            "--free",
+            "stops.both.gap_m=7e-6..10e-6",
+            "--out",
+            "out",
+        ],
+    );
+    assert!(ok, "{stderr}");
+    let out = dir.join("out");
+    for f in [
+        "fitted.toml",
+        "residuals.parquet",
+        "endstop-fit.svg",
+        "endstop-fit.png",
+        "endstop-fit-residuals.svg",
+        "numbers.md",
+        "summary.json",
+    ] {
+        assert!(out.join(f).exists(), "{f} missing");
+    }
+    let fitted = std::fs::read_to_string(out.join("fitted.toml")).unwrap();
+    let dev = Device::from_toml_str(&fitted, "fitted.toml").unwrap();
+    assert!(fitted.contains("# data: up.csv sha256 "), "{fitted}");
+    assert!(fitted.contains("# command: ") && fitted.contains("# commit: "));
+    // Noise-free data: the fit lands on the truth to well within the data's 2 %.
+    let gap = dev.param("stops.both.gap_m").unwrap();
+    assert!((gap / 9e-6 - 1.0).abs() < 2e-3, "gap {gap:e}");
+    let md = std::fs::read_to_string(out.join("numbers.md")).unwrap();
+    assert!(md.contains("Gauss-Newton covariance") && md.contains("95 % interval"));
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn bad_measured_files_and_free_parameters_are_named_errors_and_write_nothing() {
+    let dir = scratch("bad");
+    let (_, start) = devices();
+    std::fs::write(dir.join("start.toml"), start).unwrap();
+    let head = "# accel_rms_g = 0.3\n";
+    let cases: [(&str, String, &str, &[&str]); 7] = [
+        (
+            "missing column",
+            format!("{head}v1_rms_v\n0.1\n0.2\n0.3\n"),
+            "m.csv:2: missing column: freq_hz",
+            &[],
+        ),
+        (
+            "unknown unit",
+            format!("{head}freq_khz,v1_rms_v\n0.6,0.1\n0.61,0.2\n"),
+            "m.csv:2: unknown column `freq_khz`",
+            &[],
+        ),
+        (
+            "non-monotonic",
+            format!("{head}freq_hz,v1_rms_v\n600,0.1\n610,0.2\n605,0.3\n"),
+            "m.csv:5: frequency 605 Hz",
+            &[],
+        ),
+        (
+            "NaN",
+            format!("{head}freq_hz,v1_rms_v\n600,0.1\n610,NaN\n620,0.3\n"),
+            "m.csv:4: `NaN` is not a finite number",
+            &[],
+        ),
+        (
+            "fewer points than free parameters",
+            format!("{head}freq_hz,v1_rms_v\n600,0.1\n"),
+            "m.csv: 1 measured values (points and features) cannot determine 2 free parameters",
+            &[],
+        ),
+        (
+            "unknown parameter",
+            format!("{head}freq_hz,v1_rms_v\n600,0.1\n610,0.2\n620,0.3\n"),
+            "free parameter `mechanics.no_such_key`",
+            &["--free", "mechanics.no_such_key=1..2"],
+        ),
+        (
+            "range outside the valid range",
+            format!("{head}freq_hz,v1_rms_v\n600,0.1\n610,0.2\n620,0.3\n"),
+            "free parameter `stops.both.gap_m`: parameter `stops.both.gap_m`: field `stops.upper.gap_m` = -1e-6 is out of range",
+            &["--free", "stops.both.gap_m=-1e-6..9.5e-6"],
+        ),
+    ];
+    for (what, csv, expect, extra) in cases {
+        std::fs::write(dir.join("m.csv"), csv).unwrap();
+        let mut args = vec![
+            "--device",
+            "start.toml",
+            "--up-sweep",
+            "m.csv",
+            "--free",
+            "mechanics.damping_n_s_per_m=1e-5..1e-4",
+            "--out",
+            "out",
+        ];
+        if extra.is_empty() {
+            args.extend(["--free", "stops.both.gap_m=7e-6..10e-6"]);
+        } else {
+            args.extend(extra);
+        }
+        let (ok, code, stderr) = run(&dir, &args);
+        assert!(!ok, "{what}: accepted");
+        assert_eq!(code, Some(1), "{what}: {stderr}");
+        assert!(
+            stderr.contains(expect),
+            "{what}: expected `{expect}` in\n{stderr}"
+        );
+        assert!(!stderr.contains("panicked"), "{what}: {stderr}");
+        assert!(!dir.join("out").exists(), "{what}: wrote output");
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
