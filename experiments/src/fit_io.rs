@@ -16,7 +16,7 @@
 //! freq_hz,v1_rms_v,sigma_v     (or p_total_w with sigma_w; the sigma column is optional)
 //! 600,0.1234,0.0025
 //! ```
-//! The CSV is parsed here rather than by a CSV crate because the file is a handful of numeric
+//! Other `#` lines are free comments. The CSV is parsed here rather than by a CSV crate because the file is a handful of numeric
 //! columns plus `# key = value` metadata, and every error must name the file's line: polars'
 //! reader (the workspace's frame library) reports neither, and a new dependency for it would
 //! not remove the line bookkeeping.
@@ -182,7 +182,13 @@ pub fn parse_sweep(
             continue;
         }
         if let Some(c) = l.strip_prefix('#') {
-            if let Some((k, v)) = c.split_once('=') {
+            // A `# key = value` line has a single word before the `=`; other comments are
+            // free text.
+            let kv = c.split_once('=').filter(|(k, _)| {
+                let k = k.trim();
+                !k.is_empty() && k.chars().all(|ch| ch.is_ascii_alphanumeric() || ch == '_')
+            });
+            if let Some((k, v)) = kv {
                 let k = k.trim();
                 let Some(key) = KEYS.iter().find(|&&x| x == k) else {
                     return Err(FitInputError::Metadata {
@@ -416,10 +422,6 @@ pub fn run(a: FitArgs) -> Result<()> {
         d.validate()?;
     }
     endstop::fit::check_free(&loaded.device, &free)?;
-    let report = crate::with_progress(1, "fit", |_| {
-        fit(&loaded.device, &data, &free, &LmSettings::default())
-    })?;
-
     let out = a
         .out
         .clone()
@@ -431,6 +433,9 @@ pub fn run(a: FitArgs) -> Result<()> {
     };
     let mut exp = Experiment::start_in("endstop-fit", out);
     exp.uses(&loaded, &loaded.device.params);
+    let report = crate::with_progress(1, "fit", |_| {
+        fit(&loaded.device, &data, &free, &LmSettings::default())
+    })?;
     let command: Vec<String> = std::env::args().collect();
     write_outputs(&mut exp, &report, &data, &hashes, &command.join(" "))?;
     exp.finish()

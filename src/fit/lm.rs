@@ -31,6 +31,10 @@ pub struct LmSettings {
     /// Gauss-Newton step promises a relative decrease of the cost below this: the cost of a
     /// stepped sweep is smooth only down to its steady-state criterion.
     pub noise_rel_tol: f64,
+    /// Absolute counterpart of `cost_rel_tol` and `noise_rel_tol` (0: none): a fit whose
+    /// residuals are weighted by stated standard deviations converges when the weighted SSR
+    /// changes by less than this, however small the SSR.
+    pub cost_abs_tol: f64,
     /// Longest step (unbounded coordinates, Euclidean norm): a direction the data hardly
     /// constrain would otherwise be thrown to the edge of its range by a tiny gradient.
     pub max_step: f64,
@@ -51,6 +55,7 @@ impl Default for LmSettings {
             lambda_max: 1e8,
             max_step: 2.0,
             noise_rel_tol: 1e-3,
+            cost_abs_tol: 0.0,
         }
     }
 }
@@ -174,7 +179,7 @@ pub fn levenberg_marquardt<E: Send>(
                 .clone()
                 .pseudo_inverse(1e-12 * diag_max)
                 .map_or(f64::INFINITY, |ai| g.dot(&(ai * &g)));
-            stop = if promised < s.noise_rel_tol * c {
+            stop = if promised < (s.noise_rel_tol * c).max(s.cost_abs_tol) {
                 LmStop::Stalled
             } else {
                 LmStop::NoDescent
@@ -182,12 +187,13 @@ pub fn levenberg_marquardt<E: Send>(
             break;
         };
         let drop = (c - ct) / c.max(f64::MIN_POSITIVE);
+        let c_before = c;
         u = trial;
         r = rt;
         c = ct;
         jac = jacobian(&residuals, &u, &r, s.fd_step)?;
         evaluations += p;
-        if drop < s.cost_rel_tol {
+        if drop < s.cost_rel_tol || c_before - c < s.cost_abs_tol {
             stop = LmStop::CostConverged;
             break;
         }

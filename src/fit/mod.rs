@@ -47,7 +47,7 @@ use crate::device::{Device, ParamError};
 use crate::num::stats::student_t_975;
 use crate::ode::SolverError;
 use crate::study::steady::Measurement;
-use crate::study::sweep::{SweepSettings, REFINE_TOL_HZ};
+use crate::study::sweep::SweepSettings;
 
 /// The path of the one free parameter that is not the device's: a factor on every data set's
 /// stated acceleration (an accelerometer's calibration error).
@@ -57,6 +57,17 @@ pub const ACCEL_SCALE_PATH: &str = "drive.accel_scale";
 /// blocks (the sweeps' default is 1e-3, as large as the forward-difference change of a
 /// measured value for a step of 1e-2 in the transformed coordinates).
 pub const FIT_REL_CHANGE_TOL: f64 = 1e-6;
+
+/// Bracket width to which the fit's sweeps refine the onset and the jump (Hz): a refined
+/// feature is the midpoint of its final bracket, a step function of the parameters, so the
+/// bracket must be far narrower than the change a finite-difference step causes (about 1 Hz
+/// for a step of 1e-2 in the transformed coordinates of a gap range of a factor 2).
+pub const FIT_REFINE_TOL_HZ: f64 = 0.01;
+
+/// When every measured value states its standard deviation the search also stops when the
+/// weighted SSR changes by less than this: a change of 1e-3 in chi-square moves no estimate by
+/// more than a few hundredths of its standard error.
+pub const STATED_COST_ABS_TOL: f64 = 1e-3;
 
 /// A combination of parameters is reported as not determined by the data when the smallest
 /// singular value of the column-scaled Jacobian is below this fraction of the largest: the
@@ -418,7 +429,7 @@ fn quantity_of(q: Quantity, m: &Measurement) -> f64 {
 /// acceleration factor `scale`.
 pub fn model_values(device: &Device, scale: f64, data: &SweepData) -> Result<Vec<f64>, FitError> {
     let grid = data.grid();
-    let mut settings = SweepSettings::for_device(device, grid.clone(), REFINE_TOL_HZ);
+    let mut settings = SweepSettings::for_device(device, grid.clone(), FIT_REFINE_TOL_HZ);
     settings.cfg.rel_change_tol = FIT_REL_CHANGE_TOL;
     let accel = data.accel_rms_g * scale;
     let (lo, hi) = (
@@ -541,7 +552,11 @@ pub fn fit(
             .map(|((m, y), s)| (m - y) / s)
             .collect())
     };
-    let lm = lm::levenberg_marquardt(residuals, &u0, settings)?;
+    let mut settings = *settings;
+    if all_stated {
+        settings.cost_abs_tol = settings.cost_abs_tol.max(STATED_COST_ABS_TOL);
+    }
+    let lm = lm::levenberg_marquardt(residuals, &u0, &settings)?;
     let p_fit = to_p(&lm.u);
     let (fitted_device, accel_scale) = apply(device, free, &p_fit)?;
     let mut fitted_device = fitted_device;
