@@ -201,6 +201,9 @@ fn a_sweep_that_never_reaches_the_stops_leaves_the_gap_undetermined() {
     let dir = undetermined[0];
     let gap = dir.iter().find(|(p, _)| p == "stops.both.gap_m").unwrap();
     assert_eq!(gap.1, 1.0, "{dir:?}");
+    // Its interval is the whole range searched, not a spuriously narrow one.
+    let g = &r.params[1];
+    assert_eq!(g.interval, g.range, "{g:?}");
     // The damping, which the data do determine, is still recovered within its interval.
     let damping = &r.params[0];
     let t = truth.param(&damping.path).unwrap();

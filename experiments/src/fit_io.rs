@@ -27,8 +27,8 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, Result};
 use clap::Parser;
 use endstop::fit::{
-    fit, Direction, Feature, FeatureKind, FitReport, FreeParam, LmSettings, Point, Quantity,
-    SweepData, ACCEL_SCALE_PATH,
+    fit, model_sweep, Direction, Feature, FeatureKind, FitReport, FreeParam, LmSettings, Point,
+    Quantity, SweepData, ACCEL_SCALE_PATH,
 };
 use polars::prelude::*;
 use sha2::{Digest, Sha256};
@@ -559,67 +559,87 @@ fn write_outputs(
     exp.number("singular_ratio", report.singular_ratio);
     exp.number("warnings", report.warnings.len() as f64);
 
-    // Data against the model, and the normalised residuals.
+    // Data against the fitted model's sweep over each data set's grid (measured features as
+    // dashed vertical lines, the model's as solid ones), and the normalised residuals.
     let mut series = Vec::new();
     let mut resid = Vec::new();
+    let (mut y0, mut y1) = (f64::INFINITY, f64::NEG_INFINITY);
+    let mut feature_lines = Vec::new();
     for (k, d) in data.iter().enumerate() {
+        let c = PALETTE[k % PALETTE.len()];
+        let name = Path::new(&d.label)
+            .file_name()
+            .map_or(d.label.clone(), |f| f.to_string_lossy().into_owned());
+        let m = model_sweep(&report.device, report.accel_scale, d)?;
+        for &(_, v) in &m.curve {
+            y0 = y0.min(v);
+            y1 = y1.max(v);
+        }
+        series.push(Series::new(
+            &format!("{name}: fitted model ({}-sweep)", d.direction.label()),
+            m.curve.clone(),
+            c,
+            Style::Line,
+        ));
         let rows: Vec<_> = r
             .iter()
             .filter(|x| x.dataset == d.label && x.what == "point")
             .collect();
-        if rows.is_empty() {
-            continue;
+        if !rows.is_empty() {
+            series.push(Series::new(
+                &format!("{name}: measured"),
+                rows.iter().map(|x| (x.freq_hz, x.measured)).collect(),
+                c,
+                Style::Points,
+            ));
         }
-        let c = PALETTE[k % PALETTE.len()];
-        let mut pts: Vec<(f64, f64)> = rows.iter().map(|x| (x.freq_hz, x.measured)).collect();
-        let mut model: Vec<(f64, f64)> = rows.iter().map(|x| (x.freq_hz, x.model)).collect();
-        pts.sort_by(|a, b| a.0.total_cmp(&b.0));
-        model.sort_by(|a, b| a.0.total_cmp(&b.0));
-        let name = Path::new(&d.label)
-            .file_name()
-            .map_or(d.label.clone(), |f| f.to_string_lossy().into_owned());
-        series.push(Series::new(
-            &format!("{name} measured"),
-            pts,
-            c,
-            Style::Points,
-        ));
-        series.push(Series::new(
-            &format!("{name} fitted model ({})", d.direction.label()),
-            model,
-            c,
-            Style::LinePoints,
-        ));
+        for f in &d.features {
+            let model_f = match f.kind {
+                FeatureKind::Onset => m.onset_hz,
+                FeatureKind::BranchEnd => m.branch_end_hz,
+            };
+            feature_lines.push((f.freq_hz, model_f, c, f.kind.label(), name.clone()));
+        }
         resid.push(Series::new(
             &name,
-            rows.iter()
+            r.iter()
+                .filter(|x| x.dataset == d.label)
                 .map(|x| (x.freq_hz, (x.model - x.measured) / x.sigma))
                 .collect(),
             c,
             Style::Points,
         ));
     }
-    if !series.is_empty() {
-        let q = data[0].quantity.column();
-        exp.write_plot(
-            &LinePlot::new(
-                "Measured sweeps and the fitted model",
-                "frequency (Hz)",
-                q,
-                series,
-            )
-            .legend(LegendPos::UpperLeft),
-        )?;
-        exp.write_extra_plot(
-            "endstop-fit-residuals",
-            &LinePlot::new(
-                "Residuals (model - measured) / sigma",
-                "frequency (Hz)",
-                "normalised residual",
-                resid,
-            ),
-        )?;
+    for (f, model_f, c, what, name) in feature_lines {
+        series.push(Series::new(
+            &format!("{name}: measured {what}"),
+            vec![(f, y0), (f, y1)],
+            c,
+            Style::Dashed,
+        ));
+        if let Some(g) = model_f {
+            series.push(Series::new("", vec![(g, y0), (g, y1)], c, Style::Line));
+        }
     }
+    let q = data[0].quantity.column();
+    exp.write_plot(
+        &LinePlot::new(
+            "Measured data and the fitted model",
+            "frequency (Hz)",
+            q,
+            series,
+        )
+        .legend(LegendPos::UpperLeft),
+    )?;
+    exp.write_extra_plot(
+        "endstop-fit-residuals",
+        &LinePlot::new(
+            "Residuals (model - measured) / sigma, points and features",
+            "frequency (Hz)",
+            "normalised residual",
+            resid,
+        ),
+    )?;
     let fitted = fitted_toml(report, hashes, command);
     // The written device must load again: validate before writing.
     endstop::device::Device::from_toml_str(&fitted, "fitted.toml")?;

@@ -40,6 +40,7 @@ pub struct Job {
 const P1: &str = "data/prototype1.toml";
 const P2: &str = "data/prototype2.toml";
 const EXAMPLE: &str = "data/examples/my_harvester.toml";
+const FIG08_MEASURED: &str = "data/measured/fig08_paper.csv";
 
 const fn experiment(name: &'static str, reads: &'static [&'static str], cal: bool) -> Job {
     Job {
@@ -131,6 +132,26 @@ pub const JOBS: &[Job] = &[
             "4",
         ],
         reads: &[EXAMPLE],
+        reads_calibration: false,
+        phase: Phase::Parallel,
+        scored: false,
+        after: None,
+    },
+    Job {
+        name: "own_device_fit",
+        program: "endstop",
+        args: &[
+            "fit",
+            "--device",
+            P1,
+            "--up-sweep",
+            FIG08_MEASURED,
+            "--free",
+            "stops.both.gap_m=4e-6..9.9e-6",
+            "--free",
+            "stops.both.damping_n_s_per_m=0.1..20",
+        ],
+        reads: &[P1, FIG08_MEASURED],
         reads_calibration: false,
         phase: Phase::Parallel,
         scored: false,

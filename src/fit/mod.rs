@@ -64,6 +64,10 @@ pub const FIT_REL_CHANGE_TOL: f64 = 1e-6;
 /// for a step of 1e-2 in the transformed coordinates of a gap range of a factor 2).
 pub const FIT_REFINE_TOL_HZ: f64 = 0.01;
 
+/// A singular value below this fraction of the largest counts as zero (round-off of the
+/// decomposition is about 1e-16).
+pub const NUMERICALLY_ZERO: f64 = 1e-12;
+
 /// When every measured value states its standard deviation the search also stops when the
 /// weighted SSR changes by less than this: a change of 1e-3 in chi-square moves no estimate by
 /// more than a few hundredths of its standard error.
@@ -234,7 +238,8 @@ pub struct FittedParam {
     pub start: f64,
     /// Fitted value.
     pub value: f64,
-    /// Standard error in the parameter's unit (`|dp/du| se_u`).
+    /// Standard error in the parameter's unit (`|dp/du| se_u`); infinite when the data do
+    /// not determine the parameter at all (its interval is then the whole range).
     pub std_err: f64,
     /// 95 % interval (see the module docs).
     pub interval: (f64, f64),
@@ -296,6 +301,8 @@ struct Transform {
     a: f64,
     b: f64,
     log: bool,
+    lo: f64,
+    hi: f64,
 }
 
 impl Transform {
@@ -305,23 +312,26 @@ impl Transform {
                 a: lo.ln(),
                 b: hi.ln(),
                 log: true,
+                lo,
+                hi,
             }
         } else {
             Self {
                 a: lo,
                 b: hi,
                 log: false,
+                lo,
+                hi,
             }
         }
     }
     fn to_p(self, u: f64) -> f64 {
         let s = 1.0 / (1.0 + (-u).exp());
         let y = self.a + (self.b - self.a) * s;
-        if self.log {
-            y.exp()
-        } else {
-            y
-        }
+        // Clamped: rounding must not put a value an ulp outside a range whose ends were
+        // checked (a gap an ulp wider than the finger overlap is refused).
+        let p = if self.log { y.exp() } else { y };
+        p.clamp(self.lo, self.hi)
     }
     fn to_u(self, p: f64) -> f64 {
         let y = if self.log { p.ln() } else { p };
@@ -425,9 +435,20 @@ fn quantity_of(q: Quantity, m: &Measurement) -> f64 {
     }
 }
 
-/// The model's values for a data set (its points, then its features) on `device` with the
-/// acceleration factor `scale`.
-pub fn model_values(device: &Device, scale: f64, data: &SweepData) -> Result<Vec<f64>, FitError> {
+/// The model of a data set: the stepped sweep over its grid, and its features.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ModelSweep {
+    /// (frequency in Hz, value in the data set's quantity), frequency increasing.
+    pub curve: Vec<(f64, f64)>,
+    /// Refined impact onset (Hz; up-sweeps), or the grid end it lies beyond.
+    pub onset_hz: Option<f64>,
+    /// Refined end of the branch (Hz), or the grid end it lies beyond.
+    pub branch_end_hz: Option<f64>,
+}
+
+/// The model of a data set on `device` with the acceleration factor `scale` (the fit's sweep
+/// settings, see the module docs).
+pub fn model_sweep(device: &Device, scale: f64, data: &SweepData) -> Result<ModelSweep, FitError> {
     let grid = data.grid();
     let mut settings = SweepSettings::for_device(device, grid.clone(), FIT_REFINE_TOL_HZ);
     settings.cfg.rel_change_tol = FIT_REL_CHANGE_TOL;
@@ -436,46 +457,60 @@ pub fn model_values(device: &Device, scale: f64, data: &SweepData) -> Result<Vec
         grid.iter().copied().fold(f64::INFINITY, f64::min),
         grid.iter().copied().fold(f64::NEG_INFINITY, f64::max),
     );
-    let (curve, onset, end): (Vec<(f64, f64)>, Option<f64>, Option<f64>) = match data.direction {
-        Direction::Up => {
-            let r = settings.run(device, accel, |_| {})?;
-            let curve = r
-                .measurements()
-                .map(|m| (m.freq_hz, quantity_of(data.quantity, m)))
-                .collect();
-            let onset = match r.onset {
-                Some(t) => t.value(),
-                None if r.contact_at_start => lo,
-                None => hi,
-            };
-            let end = match r.branch_end() {
-                Some(e) => e.transition.value(),
-                None if r.any_contact() => hi,
-                None => lo,
-            };
-            (curve, Some(onset), Some(end))
-        }
-        Direction::Down => {
-            let r = settings.run_down(device, accel, |_| {})?;
-            let curve = r
-                .measurements()
-                .map(|m| (m.freq_hz, quantity_of(data.quantity, m)))
-                .collect();
-            let end = r.branch_end().map_or(lo, |(_, t)| t.value());
-            (curve, None, Some(end))
-        }
-    };
-    let mut sorted = curve;
-    sorted.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let (mut curve, onset_hz, branch_end_hz): (Vec<(f64, f64)>, Option<f64>, Option<f64>) =
+        match data.direction {
+            Direction::Up => {
+                let r = settings.run(device, accel, |_| {})?;
+                let curve = r
+                    .measurements()
+                    .map(|m| (m.freq_hz, quantity_of(data.quantity, m)))
+                    .collect();
+                let onset = match r.onset {
+                    Some(t) => t.value(),
+                    None if r.contact_at_start => lo,
+                    None => hi,
+                };
+                let end = match r.branch_end() {
+                    Some(e) => e.transition.value(),
+                    None if r.any_contact() => hi,
+                    None => lo,
+                };
+                (curve, Some(onset), Some(end))
+            }
+            Direction::Down => {
+                let r = settings.run_down(device, accel, |_| {})?;
+                let curve = r
+                    .measurements()
+                    .map(|m| (m.freq_hz, quantity_of(data.quantity, m)))
+                    .collect();
+                let end = r.branch_end().map_or(lo, |(_, t)| t.value());
+                (curve, None, Some(end))
+            }
+        };
+    curve.sort_by(|a, b| a.0.total_cmp(&b.0));
+    Ok(ModelSweep {
+        curve,
+        onset_hz,
+        branch_end_hz,
+    })
+}
+
+/// The model's values for a data set (its points, then its features) on `device` with the
+/// acceleration factor `scale`.
+pub fn model_values(device: &Device, scale: f64, data: &SweepData) -> Result<Vec<f64>, FitError> {
+    let m = model_sweep(device, scale, data)?;
+    let grid = data.grid();
+    let lo = grid.iter().copied().fold(f64::INFINITY, f64::min);
+    let hi = grid.iter().copied().fold(f64::NEG_INFINITY, f64::max);
     let mut out: Vec<f64> = data
         .points
         .iter()
-        .map(|p| interpolate(&sorted, p.freq_hz))
+        .map(|p| interpolate(&m.curve, p.freq_hz))
         .collect();
     for f in &data.features {
         out.push(match f.kind {
-            FeatureKind::Onset => onset.unwrap_or(hi),
-            FeatureKind::BranchEnd => end.unwrap_or(lo),
+            FeatureKind::Onset => m.onset_hz.unwrap_or(hi),
+            FeatureKind::BranchEnd => m.branch_end_hz.unwrap_or(lo),
         });
     }
     Ok(out)
@@ -579,12 +614,44 @@ pub fn fit(
         }
     };
     let jac = &lm.jacobian;
-    let jtj = jac.transpose() * jac;
-    let cov_u = jtj
-        .clone()
-        .pseudo_inverse(1e-14 * jtj.norm().max(f64::MIN_POSITIVE))
-        .unwrap_or_else(|_| DMatrix::from_element(p, p, f64::NAN))
-        * scale2;
+    // The Jacobian with its columns scaled to unit length, and its singular value
+    // decomposition: the covariance below and the identifiability test after it.
+    let norms: Vec<f64> = (0..p).map(|j| jac.column(j).norm()).collect();
+    let scaled = DMatrix::from_fn(n, p, |i, j| {
+        if norms[j] > 0.0 {
+            jac[(i, j)] / norms[j]
+        } else {
+            0.0
+        }
+    });
+    let svd = scaled.svd(false, true);
+    let sv = &svd.singular_values;
+    let smax = sv.max();
+    let v_t = svd.v_t.as_ref().expect("V^T requested");
+    // (J^T J)^-1 = D^-1 V S^-2 V^T D^-1 (D: the column norms). A direction with a zero
+    // singular value (relative to the largest, below [`NUMERICALLY_ZERO`]) has an infinite
+    // variance, and so has every parameter that takes part in it: its interval is then the
+    // whole range, never a spuriously narrow one.
+    let cov_u = DMatrix::from_fn(p, p, |i, j| {
+        let mut c = 0.0;
+        for k in 0..sv.len() {
+            let w = v_t[(k, i)] * v_t[(k, j)];
+            if sv[k] <= NUMERICALLY_ZERO * smax {
+                if w.abs() > NUMERICALLY_ZERO || (i == j && norms[i] == 0.0) {
+                    c += if i == j { f64::INFINITY } else { f64::NAN };
+                }
+            } else {
+                c += w / (sv[k] * sv[k]);
+            }
+        }
+        if norms[i] > 0.0 && norms[j] > 0.0 {
+            scale2 * c / (norms[i] * norms[j])
+        } else if i == j {
+            f64::INFINITY
+        } else {
+            f64::NAN
+        }
+    });
     let params: Vec<FittedParam> = (0..p)
         .map(|k| {
             let se_u = cov_u[(k, k)].max(0.0).sqrt();
@@ -592,16 +659,18 @@ pub fn fit(
                 tr[k].to_p(lm.u[k] - q * se_u),
                 tr[k].to_p(lm.u[k] + q * se_u),
             );
-            let interval = if se_u.is_finite() && q.is_finite() {
-                (a.min(b), a.max(b))
+            let (interval, std_err) = if !q.is_finite() || se_u.is_nan() {
+                ((f64::NAN, f64::NAN), f64::NAN)
+            } else if se_u.is_infinite() {
+                ((free[k].lo, free[k].hi), f64::INFINITY)
             } else {
-                (f64::NAN, f64::NAN)
+                ((a.min(b), a.max(b)), tr[k].dp_du(lm.u[k]).abs() * se_u)
             };
             FittedParam {
                 path: free[k].path.clone(),
                 start: starts[k],
                 value: p_fit[k],
-                std_err: tr[k].dp_du(lm.u[k]).abs() * se_u,
+                std_err,
                 interval,
                 range: (free[k].lo, free[k].hi),
             }
@@ -615,19 +684,7 @@ pub fn fit(
         })
         .collect();
 
-    // Identifiability: singular values of the column-scaled Jacobian.
-    let norms: Vec<f64> = (0..p).map(|j| jac.column(j).norm()).collect();
-    let scaled = DMatrix::from_fn(n, p, |i, j| {
-        if norms[j] > 0.0 {
-            jac[(i, j)] / norms[j]
-        } else {
-            0.0
-        }
-    });
-    let svd = scaled.svd(false, true);
-    let sv = &svd.singular_values;
-    let smax = sv.max();
-    let v_t = svd.v_t.as_ref().expect("V^T requested");
+    // Identifiability: the singular values of the column-scaled Jacobian.
     let mut singular_ratio = 1.0;
     for (k, &s) in sv.iter().enumerate() {
         let ratio = if smax > 0.0 { s / smax } else { 0.0 };
