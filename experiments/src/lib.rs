@@ -9,6 +9,7 @@ pub mod answers;
 pub mod book;
 pub mod broadband_io;
 pub mod calibration_io;
+pub mod fit_csv;
 pub mod fit_io;
 pub mod frame;
 pub mod freshness;

@@ -206,3 +206,24 @@ fn bad_measured_files_and_free_parameters_are_named_errors_and_write_nothing() {
     }
     std::fs::remove_dir_all(&dir).ok();
 }
+
+#[test]
+fn a_down_sweep_file_in_rising_order_is_read_in_sweep_order_and_free_comments_pass() {
+    use endstop_experiments::fit_csv::parse_sweep;
+    let text = "# measured 2026 = bench B\n# accel_rms_g = 0.3\n# jump_hz = 650\n\
+                # jump_sigma_hz = 2\nfreq_hz,p_total_w\n600,1e-9\n610,2e-9\n620,3e-9\n";
+    let d = parse_sweep(text, "down.csv", Direction::Down).unwrap();
+    let f: Vec<f64> = d.points.iter().map(|p| p.freq_hz).collect();
+    assert_eq!(f, vec![620.0, 610.0, 600.0]);
+    assert_eq!(d.quantity, Quantity::PTotalW);
+    assert_eq!(d.features.len(), 1);
+    d.validate().unwrap();
+    // A feature without its standard deviation is refused, naming the key.
+    let e = parse_sweep(
+        "# accel_rms_g = 0.3\n# onset_hz = 650\nfreq_hz,v1_rms_v\n600,0.1\n",
+        "up.csv",
+        Direction::Up,
+    )
+    .unwrap_err();
+    assert!(e.to_string().contains("onset_sigma_hz"), "{e}");
+}

@@ -1,0 +1,117 @@
+//! The model of a measured data set: the stepped sweep over its grid at its stated
+//! acceleration, with the fit's tighter steady-state criterion and refinement, and the values
+//! it gives at the measured points and features.
+
+use serde::Serialize;
+
+use super::{
+    Direction, FeatureKind, FitError, Quantity, SweepData, FIT_REFINE_TOL_HZ, FIT_REL_CHANGE_TOL,
+};
+use crate::device::Device;
+use crate::study::steady::Measurement;
+use crate::study::sweep::SweepSettings;
+
+/// The value of a measured quantity in a model measurement.
+fn quantity_of(q: Quantity, m: &Measurement) -> f64 {
+    match q {
+        Quantity::V1RmsV => m.v1_rms_v,
+        Quantity::PTotalW => m.p_total_w(),
+    }
+}
+
+/// The model of a data set: the stepped sweep over its grid, and its features.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ModelSweep {
+    /// (frequency in Hz, value in the data set's quantity), frequency increasing.
+    pub curve: Vec<(f64, f64)>,
+    /// Refined impact onset (Hz; up-sweeps), or the grid end it lies beyond.
+    pub onset_hz: Option<f64>,
+    /// Refined end of the branch (Hz), or the grid end it lies beyond.
+    pub branch_end_hz: Option<f64>,
+}
+
+/// The model of a data set on `device` with the acceleration factor `scale` (the fit's sweep
+/// settings, see the module docs).
+pub fn model_sweep(device: &Device, scale: f64, data: &SweepData) -> Result<ModelSweep, FitError> {
+    let grid = data.grid();
+    let mut settings = SweepSettings::for_device(device, grid.clone(), FIT_REFINE_TOL_HZ);
+    settings.cfg.rel_change_tol = FIT_REL_CHANGE_TOL;
+    let accel = data.accel_rms_g * scale;
+    let (lo, hi) = (
+        grid.iter().copied().fold(f64::INFINITY, f64::min),
+        grid.iter().copied().fold(f64::NEG_INFINITY, f64::max),
+    );
+    let (mut curve, onset_hz, branch_end_hz): (Vec<(f64, f64)>, Option<f64>, Option<f64>) =
+        match data.direction {
+            Direction::Up => {
+                let r = settings.run(device, accel, |_| {})?;
+                let curve = r
+                    .measurements()
+                    .map(|m| (m.freq_hz, quantity_of(data.quantity, m)))
+                    .collect();
+                let onset = match r.onset {
+                    Some(t) => t.value(),
+                    None if r.contact_at_start => lo,
+                    None => hi,
+                };
+                let end = match r.branch_end() {
+                    Some(e) => e.transition.value(),
+                    None if r.any_contact() => hi,
+                    None => lo,
+                };
+                (curve, Some(onset), Some(end))
+            }
+            Direction::Down => {
+                let r = settings.run_down(device, accel, |_| {})?;
+                let curve = r
+                    .measurements()
+                    .map(|m| (m.freq_hz, quantity_of(data.quantity, m)))
+                    .collect();
+                let end = r.branch_end().map_or(lo, |(_, t)| t.value());
+                (curve, None, Some(end))
+            }
+        };
+    curve.sort_by(|a, b| a.0.total_cmp(&b.0));
+    Ok(ModelSweep {
+        curve,
+        onset_hz,
+        branch_end_hz,
+    })
+}
+
+/// The model's values for a data set (its points, then its features) on `device` with the
+/// acceleration factor `scale`.
+pub fn model_values(device: &Device, scale: f64, data: &SweepData) -> Result<Vec<f64>, FitError> {
+    let m = model_sweep(device, scale, data)?;
+    let grid = data.grid();
+    let lo = grid.iter().copied().fold(f64::INFINITY, f64::min);
+    let hi = grid.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    let mut out: Vec<f64> = data
+        .points
+        .iter()
+        .map(|p| interpolate(&m.curve, p.freq_hz))
+        .collect();
+    for f in &data.features {
+        out.push(match f.kind {
+            FeatureKind::Onset => m.onset_hz.unwrap_or(hi),
+            FeatureKind::BranchEnd => m.branch_end_hz.unwrap_or(lo),
+        });
+    }
+    Ok(out)
+}
+
+/// Linear interpolation in a curve sorted by frequency (exact at its frequencies).
+fn interpolate(curve: &[(f64, f64)], f: f64) -> f64 {
+    let k = curve.partition_point(|c| c.0 < f);
+    if k < curve.len() && curve[k].0 == f {
+        return curve[k].1;
+    }
+    if k == 0 {
+        return curve[0].1;
+    }
+    if k == curve.len() {
+        return curve[k - 1].1;
+    }
+    let (a, b) = (curve[k - 1], curve[k]);
+    a.1 + (b.1 - a.1) * (f - a.0) / (b.0 - a.0)
+}

@@ -1,0 +1,163 @@
+//! What a fit reports: the fitted values with their uncertainty, the correlations, the
+//! residuals, and the warnings (see the parent module's docs for the method).
+
+use serde::Serialize;
+
+use super::{LmStop, SINGULAR_RATIO_WARN};
+use crate::device::Device;
+
+/// How the covariance is scaled.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+pub enum Uncertainty {
+    /// Every measured value states its standard deviation: covariance `(J^T J)^-1`.
+    Stated,
+    /// Some do not: covariance `s^2 (J^T J)^-1`, `s^2 = SSR / (n - p)`.
+    ResidualScaled,
+}
+
+impl Uncertainty {
+    /// The method, in words, for the output.
+    pub fn describe(self) -> &'static str {
+        match self {
+            Uncertainty::Stated => {
+                "Gauss-Newton covariance (J^T J)^-1 of the residuals weighted by the stated \
+                 standard deviations; 95 % intervals u +- 1.96 se_u in the transformed \
+                 coordinates, mapped back"
+            }
+            Uncertainty::ResidualScaled => {
+                "Gauss-Newton covariance s^2 (J^T J)^-1 scaled by the residual variance \
+                 s^2 = SSR/(n-p); 95 % intervals u +- t(n-p, 0.975) se_u in the transformed \
+                 coordinates, mapped back"
+            }
+        }
+    }
+}
+
+/// Something the caller must know about a fit.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub enum FitWarning {
+    /// A combination of parameters the data do not determine: the smallest singular value of
+    /// the column-scaled Jacobian is `ratio` times the largest (below [`SINGULAR_RATIO_WARN`]).
+    /// `direction` gives the combination as relative changes (d ln p, or dp for a parameter
+    /// whose range includes zero), largest component 1.
+    Undetermined {
+        /// (path, component).
+        direction: Vec<(String, f64)>,
+        /// Smallest over largest singular value.
+        ratio: f64,
+    },
+    /// A fitted value lies within 1e-3 of its range (as a fraction of the range).
+    AtBound {
+        /// The parameter.
+        path: String,
+        /// Its fitted value.
+        value: f64,
+    },
+    /// As many measured values as free parameters and no stated standard deviations: no
+    /// residual variance, hence no uncertainty.
+    NoResidualDof,
+    /// The search stopped without meeting a convergence criterion.
+    NotConverged {
+        /// Why it stopped.
+        stop: String,
+    },
+}
+
+impl std::fmt::Display for FitWarning {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            FitWarning::Undetermined { direction, ratio } => {
+                let combo: Vec<String> = direction
+                    .iter()
+                    .map(|(p, c)| format!("{c:+.3} d({p})"))
+                    .collect();
+                write!(
+                    f,
+                    "undetermined: the data do not determine the combination {} (relative \
+                     changes; smallest/largest singular value of the column-scaled Jacobian \
+                     {ratio:.2e} < {SINGULAR_RATIO_WARN})",
+                    combo.join(" ")
+                )
+            }
+            FitWarning::AtBound { path, value } => write!(
+                f,
+                "at bound: `{path}` = {value:e} is at an end of its range; the optimum may lie \
+                 outside it and the interval is not meaningful"
+            ),
+            FitWarning::NoResidualDof => write!(
+                f,
+                "no residual degrees of freedom: as many measured values as free parameters \
+                 and no stated standard deviations, so no uncertainty can be given"
+            ),
+            FitWarning::NotConverged { stop } => {
+                write!(f, "not converged: the search stopped ({stop})")
+            }
+        }
+    }
+}
+
+/// A fitted parameter.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct FittedParam {
+    /// Dotted path.
+    pub path: String,
+    /// Starting value.
+    pub start: f64,
+    /// Fitted value.
+    pub value: f64,
+    /// Standard error in the parameter's unit (`|dp/du| se_u`); infinite when the data do
+    /// not determine the parameter at all (its interval is then the whole range).
+    pub std_err: f64,
+    /// 95 % interval (see the module docs).
+    pub interval: (f64, f64),
+    /// The range searched.
+    pub range: (f64, f64),
+}
+
+/// One residual of the fitted model.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Residual {
+    /// Data set label.
+    pub dataset: String,
+    /// "point" or the feature's label.
+    pub what: String,
+    /// Frequency of the measured value (Hz).
+    pub freq_hz: f64,
+    /// Measured value.
+    pub measured: f64,
+    /// Model value.
+    pub model: f64,
+    /// Standard deviation used as weight (1 where none was stated).
+    pub sigma: f64,
+}
+
+/// The result of [`fit`].
+#[derive(Debug, Clone)]
+pub struct FitReport {
+    /// The fitted device (device parameters at their fitted values).
+    pub device: Device,
+    /// The fitted acceleration factor (1 if it was not free).
+    pub accel_scale: f64,
+    /// The fitted parameters, in the order given.
+    pub params: Vec<FittedParam>,
+    /// Correlation matrix of the estimates (transformed coordinates).
+    pub correlation: Vec<Vec<f64>>,
+    /// Warnings.
+    pub warnings: Vec<FitWarning>,
+    /// How the covariance was scaled.
+    pub uncertainty: Uncertainty,
+    /// Residuals at the fitted values, data set by data set.
+    pub residuals: Vec<Residual>,
+    /// Weighted sum of squared residuals.
+    pub ssr: f64,
+    /// n - p.
+    pub dof: usize,
+    /// Smallest over largest singular value of the column-scaled Jacobian.
+    pub singular_ratio: f64,
+    /// Outer iterations of the search.
+    pub iterations: usize,
+    /// Sweep evaluations (each data set's sweep counts once per evaluation).
+    pub evaluations: usize,
+    /// Why the search stopped.
+    pub stop: LmStop,
+}
