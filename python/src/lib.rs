@@ -7,7 +7,8 @@
 //! `endstop.ParamError` (a `ValueError`) with the library's message, which names the field and
 //! its valid range; solver failures raise `endstop.SolverError` (a `RuntimeError`).
 //!
-//! The Rust modules mirror the Python package's: [`device`] (`endstop.Device`), [`linear`]
+//! The Rust modules mirror the Python package's: [`device`] (`endstop.Device`), [`fit`]
+//! (`endstop.fit`), [`linear`]
 //! (`endstop.linear`), [`study`] (`endstop.study`) and [`paper`] (`endstop.paper` and its
 //! `fig09`, `fig13` and `study`); each registers its functions in [`_native`].
 
@@ -18,6 +19,7 @@ use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 
 mod device;
+mod fit;
 mod linear;
 mod paper;
 mod study;
@@ -66,6 +68,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("SolverError", py.get_type::<SolverError>())?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     m.add_class::<PyDevice>()?;
+    fit::register(m)?;
     linear::register(m)?;
     study::register(m)?;
     paper::register(m)?;

@@ -9,6 +9,7 @@ The model runs in Rust (the repository's `endstop` library); this package is its
   linear output PSD;
 * :mod:`endstop.study`: simulations (frequency up-sweeps, amplitude sweeps, one random record,
   an ensemble), returning dicts of numbers and numpy arrays;
+* :mod:`endstop.fit`: fitting a device's parameters to measured sweeps, with uncertainty;
 * :mod:`endstop.paper`: the paper's figure protocols (``endstop.paper.fig13.run()``) and the
   study of why the paper deviates (:mod:`endstop.paper.study`, ready for a Dask cluster).
 
@@ -16,6 +17,6 @@ Every simulation releases the GIL while it runs.
 """
 
 from ._native import Device, ParamError, SolverError, __version__
-from . import linear, paper, study
+from . import fit, linear, paper, study
 
-__all__ = ["Device", "ParamError", "SolverError", "linear", "paper", "study", "__version__"]
+__all__ = ["Device", "ParamError", "SolverError", "fit", "linear", "paper", "study", "__version__"]
