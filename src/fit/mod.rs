@@ -5,12 +5,13 @@
 //!
 //! # Misfit
 //! Each measured point contributes `(model - measured) / sigma`, each measured feature (impact
-//! onset, end of the impacting branch) `(model - measured) / sigma_hz`. The model of a data set
-//! is the stepped sweep ([`SweepSettings::for_device`]) over the data set's grid (by default its
-//! measured frequencies) at its stated acceleration, with a steady-state criterion tightened to
-//! [`FIT_REL_CHANGE_TOL`] so that the finite-difference Jacobian sees the model and not the
-//! convergence criterion. A feature the model does not show inside the grid is placed at the
-//! grid end it lies beyond, so that the misfit still points towards it.
+//! onset, end of the impacting branch) `(model - measured) / sigma_hz`. The model of a data
+//! set is the stepped sweep ([`crate::study::sweep::SweepSettings::for_device`]) over the data
+//! set's grid (by default its measured frequencies) at its stated acceleration, with a
+//! steady-state criterion tightened to [`FIT_REL_CHANGE_TOL`] and transitions refined to
+//! [`FIT_REFINE_TOL_HZ`], so that the finite-difference Jacobian sees the model and not the
+//! convergence criterion ([`model`]). A feature the model does not show inside the grid is
+//! placed at the grid end it lies beyond, so that the misfit still points towards it.
 //!
 //! # Coordinates
 //! A free parameter with range `lo..hi` is searched as `u = logit((p - lo) / (hi - lo))`, or,
@@ -31,7 +32,9 @@
 //! The Jacobian's columns are scaled to unit length (which makes the test independent of each
 //! parameter's unit and transform) and its singular values computed. A combination whose
 //! singular value is below [`SINGULAR_RATIO_WARN`] times the largest is reported
-//! ([`FitWarning::Undetermined`]) with its direction in relative changes of the parameters.
+//! ([`FitWarning::Undetermined`]) with its direction in relative changes of the parameters. A
+//! direction whose singular value is zero to round-off ([`NUMERICALLY_ZERO`]) gives every
+//! parameter in it an infinite standard error and its whole range as interval.
 
 pub mod data;
 pub mod lm;

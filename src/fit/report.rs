@@ -131,7 +131,7 @@ pub struct Residual {
     pub sigma: f64,
 }
 
-/// The result of [`fit`].
+/// The result of [`crate::fit::fit()`].
 #[derive(Debug, Clone)]
 pub struct FitReport {
     /// The fitted device (device parameters at their fitted values).
