@@ -2,7 +2,6 @@
 //! piecewise-linear contact on the real harvester model, and the energy balance of a run with
 //! impacts. Tolerances are stated in the integrator's own units (rtol) or derived from them.
 
-use endstop::device::Device;
 use endstop::device::StiffnessModel;
 use endstop::drive::Excitation;
 use endstop::drive::Sampled;
@@ -22,11 +21,8 @@ use endstop::physics::harvester::Harvester;
 use endstop::physics::harvester::State;
 use nalgebra::SVector;
 
-fn device(name: &str) -> Device {
-    let text = std::fs::read_to_string(format!("{}/data/{name}.toml", env!("CARGO_MANIFEST_DIR")))
-        .unwrap();
-    Device::from_toml_str(&text, name).unwrap()
-}
+mod common;
+use common::device;
 
 fn opts<const N: usize>(rtol: f64, atol: f64) -> Options<N> {
     Options {

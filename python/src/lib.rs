@@ -10,8 +10,10 @@
 use endstop::device::{Device, ParamError as LibParamError, StiffnessModel};
 use endstop::paper::calibration::{calibrate_prototype1, Calibration};
 use endstop::paper::claims::{Claims, Value};
-use endstop::paper::setups::ParamSet;
-use endstop::paper::{fig09, fig13};
+use endstop::paper::figures::fig09::{self, Fig09};
+use endstop::paper::figures::fig13::Fig13;
+use endstop::paper::setups::{ParamSet, Prototype1Sets};
+use endstop::paper::Figure;
 use endstop::physics::two_port::{self, QmReading, TwoPort, EQ21_QM};
 use endstop::study::amplitude::{amplitude_sweep_report, AmplitudeReport};
 use endstop::study::ensemble::{run_ensemble, EnsembleSpec};
@@ -760,7 +762,7 @@ fn claims_list<'py>(py: Python<'py>, values: &[Value]) -> PyResult<Bound<'py, Py
         let d = PyDict::new(py);
         d.set_item("claim", &v.claim)?;
         d.set_item("quantity", &v.quantity)?;
-        d.set_item("set", &v.set)?;
+        d.set_item("set", v.set.label())?;
         d.set_item("ours", v.ours)?;
         d.set_item("uncertainty", v.uncertainty)?;
         d.set_item("note", &v.note)?;
@@ -769,7 +771,7 @@ fn claims_list<'py>(py: Python<'py>, values: &[Value]) -> PyResult<Bound<'py, Py
     Ok(l)
 }
 
-/// Figure 13 (`endstop::paper::fig13::run` and `claims`) on `device` (default: the published
+/// Figure 13 (`endstop::paper::figures::fig13`, its `run` and `claims`) on `device` (default: the published
 /// prototype 2): every curve's sweep (the requested range) and refined transitions, the
 /// repetition with halved numerics, the claim values, and the `numbers` of the figure's
 /// `summary.json` (same keys).
@@ -784,10 +786,10 @@ fn paper_fig13_run<'py>(
         None => PyDevice::prototype(2)?.inner,
     };
     let run = py
-        .detach(move || fig13::run(&published, &|| {}))
+        .detach(move || Fig13::run(&published, &|| {}))
         .map_err(solver_err)?;
     let claims = Claims::bundled().map_err(solver_err)?;
-    let values = fig13::claims(&run, &claims).map_err(solver_err)?;
+    let values = Fig13::claims(&run, &claims).map_err(solver_err)?;
     let out = PyDict::new(py);
     out.set_item(
         "device",
@@ -867,7 +869,7 @@ fn paper_calibrate_prototype1<'py>(
     Ok(d)
 }
 
-/// Figure 9 (`endstop::paper::fig09::run` and `claims`): prototype 1 at 1220 Hz, amplitude
+/// Figure 9 (`endstop::paper::figures::fig09`, its `run` and `claims`): prototype 1 at 1220 Hz, amplitude
 /// continuations at 20, 30 and 40 V for the published and the calibrated set (default: the
 /// published prototype 1 and its calibration, computed here), each repeated with halved
 /// numerics; the claim values and the `numbers` of the figure's `summary.json` (same keys).
@@ -888,10 +890,14 @@ fn paper_fig09_run<'py>(
             Some(d) => d,
             None => calibrate_prototype1(&published).map_err(solver_err)?.device,
         };
-        fig09::run(&published, &calibrated, &|| {}).map_err(solver_err)
+        let sets = Prototype1Sets {
+            published,
+            calibrated,
+        };
+        Fig09::run(&sets, &|| {}).map_err(solver_err)
     })?;
     let claims = Claims::bundled().map_err(solver_err)?;
-    let values = fig09::claims(&run, &claims).map_err(solver_err)?;
+    let values = Fig09::claims(&run, &claims).map_err(solver_err)?;
     let out = PyDict::new(py);
     let numbers = PyDict::new(py);
     let sets = PyList::empty(py);
