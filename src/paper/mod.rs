@@ -12,7 +12,7 @@
 //!   [`prototype2_random`] (the ensembles of Figures 14 and 15);
 //! * [`calibration`]: the one-parameter calibration of prototype 1 and the paper's fit of b_im;
 //! * the studies around the figures: [`response`] (the whole response curve),
-//!   [`resolution`] (the width estimator), [`sensitivity`] and
+//!   [`resolution`] (the width estimator), [`crosscheck`] (ngspice), [`sensitivity`] and
 //!   [`study`] (why the paper deviates).
 //!
 //! Nothing in the model modules imports this one; within it, the figures import the shared
@@ -20,6 +20,7 @@
 
 pub mod calibration;
 pub mod claims;
+pub mod crosscheck;
 pub mod curves;
 pub mod ensembles;
 pub mod figure;
