@@ -1,6 +1,6 @@
 //! Figure 5: the Hertz line-contact law (eq 6) in normalised form, delta0 for both prototypes
 //! (claim F5-a), and the linear end-stop stiffness of eq 19 (claim F5-b). The figure is
-//! stated in `endstop::paper::fig05`; this binary writes its outputs.
+//! stated in `endstop::paper::figures::fig05`; this binary writes its outputs.
 
 use endstop_experiments as common;
 

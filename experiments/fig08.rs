@@ -1,4 +1,4 @@
-//! Figure 8 (the edge; the figure itself is `endstop::paper::fig08`): prototype 1 at 30 V,
+//! Figure 8 (the edge; the figure itself is `endstop::paper::figures::fig08`): prototype 1 at 30 V,
 //! up-sweeps at 4.1 and 5.5 g rms under the published and the calibrated parameter set (read
 //! from the calibration artefact), the paper's fit of b_im and the convergence repetition.
 //! Writes the per-step sweeps, the convergence and the b_im fits as Parquet, the two plots and

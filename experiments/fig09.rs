@@ -1,4 +1,4 @@
-//! Figure 9 (the edge; the figure itself is `endstop::paper::fig09`): prototype 1 at 1220 Hz,
+//! Figure 9 (the edge; the figure itself is `endstop::paper::figures::fig09`): prototype 1 at 1220 Hz,
 //! output power against RMS acceleration for 20, 30 and 40 V, under the published and the
 //! calibrated parameter set (read from the calibration artefact), with both readings of
 //! "output power" and the convergence repetition. Writes the continuations as Parquet, the

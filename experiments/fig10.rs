@@ -1,6 +1,6 @@
 //! Figure 10: the random excitation at the paper's example level Sa = 1e-2 g²/Hz and its
 //! Welch PSD against the target (claim F10: level and band). The figure is stated in
-//! `endstop::paper::fig10`; this binary writes its outputs.
+//! `endstop::paper::figures::fig10`; this binary writes its outputs.
 
 use endstop_experiments as common;
 

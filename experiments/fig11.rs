@@ -1,6 +1,6 @@
 //! Figure 11: output power PSDs of prototype 1 at 30 V at the low levels 4.42e-6, 1.12e-4 and
 //! 3.49e-4 g²/Hz under the published and the calibrated parameter sets (claim F11). The
-//! figure is stated in `endstop::paper::fig11`; this binary writes its outputs.
+//! figure is stated in `endstop::paper::figures::fig11`; this binary writes its outputs.
 
 use endstop_experiments as common;
 

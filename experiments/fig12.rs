@@ -1,6 +1,6 @@
 //! Figure 12: output power PSDs of prototype 1 at 30 V at 7.4e-3, 1.31e-2 and 2.85e-2 g²/Hz,
 //! where the mass hits the stops, under the published and the calibrated parameter sets
-//! (claim F12). The figure is stated in `endstop::paper::fig12`; this binary writes its
+//! (claim F12). The figure is stated in `endstop::paper::figures::fig12`; this binary writes its
 //! outputs.
 
 use endstop_experiments as common;

@@ -1,4 +1,4 @@
-//! Figure 13 (the edge; the figure itself is `endstop::paper::fig13`): prototype 2 at 10 V,
+//! Figure 13 (the edge; the figure itself is `endstop::paper::figures::fig13`): prototype 2 at 10 V,
 //! up-sweeps at 0.12 and 0.31 g rms with the linear and the Hertz end-stop law, published
 //! parameters, with the convergence repetition and the cost of the sweeps. Writes the
 //! per-step sweeps as Parquet, the plot and the book's tables.

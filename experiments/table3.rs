@@ -1,6 +1,6 @@
 //! Table 3: electromechanical coupling k^2, quality factor Qm and figure of merit k^2 Qm of
 //! both prototypes (eqs 15-18), with the broadband efficiency of eq 21 (claims T3-a, T3-b,
-//! F14-a's linear-theory value). The table is stated in `endstop::paper::table3`; this binary
+//! F14-a's linear-theory value). The table is stated in `endstop::paper::figures::table3`; this binary
 //! writes its outputs.
 
 use endstop_experiments as common;

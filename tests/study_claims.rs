@@ -5,17 +5,18 @@
 
 use endstop::device::Device;
 use endstop::paper::claims::{Claims, Kind};
-use endstop::paper::ensembles::{protocol_spec, P1_BAND_HZ, P1_NPERSEG};
-use endstop::paper::fig08::{self, Fig8Curve};
-use endstop::paper::fig09::{self, Fig9Bias};
-use endstop::paper::fig12::FIG12_LEVELS;
-use endstop::paper::fig15::{self, Fig15};
-use endstop::paper::figures::{fig13::Fig13, table3::Table3};
-use endstop::paper::sensitivity::Variant;
-use endstop::paper::setups::{prototype2_setup, Prototypes, P1_BIAS_V, P2_BIAS_V};
-use endstop::paper::study::{
-    evaluate, evaluate_quantitative, study_ensemble_spec, Evaluation, Outcome, Prototype, Scope,
+use endstop::paper::deviations::Variant;
+use endstop::paper::deviations::{
+    ensembles::study_ensemble_spec, evaluate, evaluate_quantitative, Evaluation, Outcome,
+    Prototype, Scope,
 };
+use endstop::paper::ensembles::{protocol_spec, P1_BAND_HZ, P1_NPERSEG};
+use endstop::paper::figures::fig08::{self, Fig8Curve};
+use endstop::paper::figures::fig09::{self, Fig9Bias};
+use endstop::paper::figures::fig12::FIG12_LEVELS;
+use endstop::paper::figures::fig15::{self, Fig15};
+use endstop::paper::figures::{fig13::Fig13, table3::Table3};
+use endstop::paper::setups::{prototype2_setup, Prototypes, P1_BIAS_V, P2_BIAS_V};
 use endstop::paper::Figure;
 use rayon::prelude::*;
 

@@ -12,8 +12,9 @@
 //!   [`prototype2_random`] (the ensembles of Figures 14 and 15);
 //! * [`calibration`]: the one-parameter calibration of prototype 1 and the paper's fit of b_im;
 //! * the studies around the figures: [`response`] (the whole response curve),
-//!   [`resolution`] (the width estimator), [`crosscheck`] (ngspice), [`sensitivity`] and
-//!   [`study`] (why the paper deviates).
+//!   [`resolution`] (the width estimator), [`crosscheck`] (ngspice), and [`deviations`] (why
+//!   the paper deviates: the claim quantities by their fast paths, their Sobol indices over
+//!   the uncertain inputs' ranges, and the multi-claim calibration).
 //!
 //! Nothing in the model modules imports this one; within it, the figures import the shared
 //! modules and the studies import the figures, never the other way.
@@ -22,6 +23,7 @@ pub mod calibration;
 pub mod claims;
 pub mod crosscheck;
 pub mod curves;
+pub mod deviations;
 pub mod ensembles;
 pub mod figure;
 pub mod figures;
@@ -29,12 +31,7 @@ pub mod measured;
 pub mod prototype2_random;
 pub mod resolution;
 pub mod response;
-pub mod sensitivity;
 pub mod setups;
-pub mod study;
 pub mod sweeps;
 
 pub use figure::Figure;
-
-// The study of why the paper deviates ([`study`]) names the figures from here.
-pub use figures::{fig08, fig09, fig12, fig15};
