@@ -12,7 +12,7 @@
 //!
 //! This module prepares our side of a case ([`prepare`], [`Prepared::ours`]), writes the
 //! netlist of every setting ([`Prepared::netlist`]), and judges ngspice's `wrdata` output
-//! ([`SpiceRun::of_wrdata`], [`Comparison::of`]); running ngspice is the caller's job (the
+//! ([`SpiceRun::of_wrdata`], [`Difference::of`]); running ngspice is the caller's job (the
 //! `crosscheck` experiment).
 
 use thiserror::Error;
