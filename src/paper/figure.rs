@@ -1,8 +1,8 @@
 //! The one shape of every figure and table of the paper ([`crate::paper::figures`]): what it
 //! runs on, how it runs, and which numbers of the paper's claims it gives.
 //!
-//! The experiment binaries and the tests call a figure only through this trait, so a figure is
-//! run the same way wherever it is run:
+//! The experiment binaries and the tests run a figure and take its claim values through this
+//! trait, so a figure is run the same way wherever it is run:
 //!
 //! ```
 //! use endstop::device::Device;
