@@ -570,10 +570,9 @@ fn f15_prototype2_spectra_widen_upwards() {
     let bin = e34.mean_spectrum.total.df();
     // The peak is not below the linearised resonance by more than a bin: the stops only
     // stiffen. No upper bound is asserted here beyond the claim's own verdict above: the peak
-    // of the mean PSD is the arg-max of a noisy top, and a bound on how far above it may lie
-    // was first +-1 bin, then widened after a 32-record run put it 1.1 bins above; a bound
-    // chosen after seeing the number tests nothing, so the value is pinned in the regression
-    // snapshot (tests/snapshots/broadband_fig15.snap) instead.
+    // of the mean PSD is the arg-max of a noisy top (a 32-record run puts it 1.1 bins above),
+    // and a bound chosen after seeing the number tests nothing, so the value is pinned in the
+    // regression snapshot (tests/snapshots/broadband_fig15.snap) instead.
     let peak = value(&values, keys::F15A_PEAK, published).ours;
     let lin_peak = lin.half_power.unwrap().peak_hz;
     assert!(peak >= lin_peak - bin, "{peak} vs {lin_peak}");

@@ -462,8 +462,8 @@ impl HybridSystem<1> for FastForcing {
 fn a_step_below_the_resolution_of_time_is_a_step_size_error_with_the_time() {
     // At t = 1e7 s doubles are 1.9e-9 s apart, and w = 1e9 rad/s asks for steps of ~1e-11 s:
     // such a step cannot advance t. The absolute floor (1e-14 s) is far below; the relative
-    // floor (16 eps |t| = 3.6e-8 s) stops the run at once, where the integrator used to
-    // accept steps that left t unchanged until the step budget ran out.
+    // floor (16 eps |t| = 3.6e-8 s) stops the run at once, rather than accepting steps that
+    // leave t unchanged until the step budget runs out.
     let t0 = 1e7;
     let mut o = opts::<1>(1e-8, 1e-8);
     o.max_steps = 1_000_000;

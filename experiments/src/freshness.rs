@@ -79,7 +79,7 @@ pub fn key_of(root: &Path, files: &[PathBuf]) -> String {
     format!("{:x}", h.finalize())
 }
 
-/// The freshness key of a job now.
+/// The freshness key of a job from its input files as they are on disk.
 pub fn key(job: &Job) -> Result<String> {
     let root = crate::root();
     Ok(key_of(&root, &input_files(&root, job)?))
