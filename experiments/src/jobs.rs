@@ -154,7 +154,7 @@ pub const JOBS: &[Job] = &[
         reads_calibration: false,
         phase: Phase::Parallel,
         scored: false,
-        after: None,
+        also: &[],
     },
     Job {
         name: CROSSCHECK,
