@@ -37,12 +37,14 @@
 
 mod legacy;
 mod paths;
+mod range;
 pub mod stops;
 pub mod transducer;
 
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
+pub use range::{device_at, ParamRange, Spacing};
 pub use stops::{HertzLineStop, HertzPointStiffness, Stop, StopLaw, StopSide, Stops};
 pub use transducer::{AreaOverlapPair, Electromagnetic, GapClosingPair, Piezoelectric, Transducer};
 
