@@ -28,7 +28,7 @@
 //! | branch point | prod (mu_i - 1) | a real multiplier crosses +1 where the branch does **not** turn (e.g. the symmetric impacting orbit losing stability to a pair of asymmetric ones) |
 //! | period doubling | prod (mu_i + 1) | a real multiplier crosses -1 |
 //! | torus | largest modulus - 1 | a complex pair leaves the unit circle |
-//! | grazing | max |x| - x_max | the orbit starts or stops touching a stop |
+//! | grazing | max |x| - x_max (for a rigid stop it strikes, the impact speed over w0) | the orbit starts or stops touching a stop |
 //!
 //! A +1 crossing is called a fold only where the branch turns: a crossing without a turn is a
 //! branch point and is never presented as a fold. A turn at a grazing point, where the branch
@@ -54,6 +54,8 @@ type Matrix5 = SMatrix<f64, 5, 5>;
 struct Gaps {
     upper: f64,
     lower: f64,
+    /// The suspension's natural frequency (rad/s), which turns an impact speed into a length.
+    w0: f64,
 }
 
 impl Gaps {
@@ -61,6 +63,7 @@ impl Gaps {
         Self {
             upper: h.gap(Side::Upper),
             lower: h.gap(Side::Lower),
+            w0: (h.km / h.mass_kg).sqrt(),
         }
     }
 
@@ -709,18 +712,21 @@ impl Continuer<'_, '_> {
             ]
         };
         // Bracket the crossing on the stop-free branch (it differs from the real one past the
-        // grazing, so the crossing may lie a little beyond `ds`).
+        // grazing, so the crossing may lie a little beyond `ds`). After a hop over a corner
+        // `ds` is the hop's length, which can be far longer than the stop-free branch can be
+        // followed in one step: shorter steps are tried last.
         let mut found = None;
+        let tries = [
+            1.0, 2.0, 4.0, 8.0, 0.5, 0.25, 0.125, 0.0625, 0.03125, 0.015625,
+        ];
         'dirs: for anchor in candidates {
-            let mut hi = ds;
-            for _ in 0..4 {
+            for hi in tries.map(|f| f * ds) {
                 if let Ok((p, _)) = c.point_at(&anchor, hi) {
                     if test_grazing(&p, gaps) > 0.0 {
                         found = Some((anchor, p, hi));
                         break 'dirs;
                     }
                 }
-                hi *= 2.0;
             }
         }
         let Some((anchor, end, hi)) = found else {
@@ -831,9 +837,23 @@ fn test_minus_one(p: &BranchPoint, _: Gaps) -> f64 {
 fn test_torus(p: &BranchPoint, _: Gaps) -> f64 {
     p.orbit.max_multiplier_abs() - 1.0
 }
+/// How far an orbit is past grazing on its deeper side (m): the largest displacement less the
+/// gap, or, once it strikes a rigid stop (which it never penetrates, so that the displacement
+/// stays at the gap), its impact speed over `w0`. Both vanish at grazing.
 fn test_grazing(p: &BranchPoint, gaps: Gaps) -> f64 {
     let s = &p.orbit.summary;
-    (s.x_upper_m - gaps.upper).max(-s.x_lower_m - gaps.lower)
+    let side = |reach: f64, gap: f64, speed: f64| {
+        if speed > 0.0 {
+            speed / gaps.w0
+        } else {
+            reach - gap
+        }
+    };
+    side(s.x_upper_m, gaps.upper, s.impact_speed_m_s[0]).max(side(
+        -s.x_lower_m,
+        gaps.lower,
+        s.impact_speed_m_s[1],
+    ))
 }
 
 /// The first orbit of a branch: Newton at `forcing` from `guess` (the state at drive phase

@@ -223,6 +223,10 @@ pub struct OrbitSummary {
     pub contact_fraction: f64,
     /// Impacts per period: contact entries and rebounds off rigid stops.
     pub impacts: u32,
+    /// The largest speed at which the mass strikes each side's rigid stop (upper, lower; m/s),
+    /// zero where it does not: a rigid stop is never penetrated, so this, not the largest
+    /// displacement, says how deep an orbit is past grazing.
+    pub impact_speed_m_s: [f64; 2],
     /// Time after the section at which x first crosses zero upwards (s), if it does.
     pub upcrossing_s: Option<f64>,
 }
@@ -647,6 +651,7 @@ impl<'a> Shooter<'a> {
                 x_lower_m: acc.x_lower,
                 contact_fraction: acc.contact_time / period,
                 impacts: acc.impacts,
+                impact_speed_m_s: acc.impact_speed,
                 upcrossing_s: acc.upcrossing,
             },
         ))
@@ -802,6 +807,9 @@ struct Sums {
     impacts: u32,
     was_contact: Option<bool>,
     upcrossing: Option<f64>,
+    /// The velocity at the end of the last step (before a switch, the impact velocity).
+    last_v: f64,
+    impact_speed: [f64; 2],
 }
 
 /// Observes one period: the sums over its steps, and the rebounds off rigid stops (impacts
@@ -817,8 +825,14 @@ impl Observer<4, Mode> for Accumulator<'_> {
     }
 
     fn switched(&mut self, _t: f64, from: Mode, to: Mode) {
-        if SwitchKind::of(from, to) == SwitchKind::Rebound {
+        let kind = SwitchKind::of(from, to);
+        if kind == SwitchKind::Rebound {
             self.sums.impacts += 1;
+        }
+        if matches!(kind, SwitchKind::Rebound | SwitchKind::Stick) {
+            let v = self.sums.last_v;
+            let side = usize::from(v < 0.0);
+            self.sums.impact_speed[side] = self.sums.impact_speed[side].max(v.abs());
         }
     }
 }
@@ -843,6 +857,7 @@ impl Sums {
         if self.upcrossing.is_none() && st.y0[0] <= 0.0 && st.y1[0] > 0.0 {
             self.upcrossing = root_on_step(st, 0).map(|th| st.t0 + th * st.h);
         }
+        self.last_v = st.y1[1];
         let contact = mode.in_contact();
         if contact {
             self.contact_time += st.h;
