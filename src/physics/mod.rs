@@ -3,6 +3,7 @@
 //! eqs 7-10), its energy balance ([`energy`]) and the linear two-port theory ([`two_port`],
 //! eqs 11-18 and 21-22).
 
+pub mod closed_forms;
 pub mod contact;
 pub mod energy;
 pub mod free_flight;
