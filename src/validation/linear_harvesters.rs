@@ -392,3 +392,29 @@ pub fn optimal_load_checks(
     }
     Ok(g.into_checks())
 }
+
+/// The load voltage per acceleration of a linear harvester on a frequency grid, closed form
+/// (`V/A`, complex) and, at `time_domain_hz`, the time-domain steady state's: the chapter's
+/// plot of the frequency response.
+pub fn response_curve(
+    device: &Device,
+    accel_rms_g: f64,
+    grid_hz: &[f64],
+    time_domain_hz: &[f64],
+) -> Result<(Vec<(f64, Complex<f64>)>, Vec<(f64, Complex<f64>)>), ValidationError> {
+    let cf = ClosedForm::of(device)?;
+    let closed = grid_hz
+        .iter()
+        .map(|&f| (f, cf.voltage_per_accel(2.0 * std::f64::consts::PI * f)))
+        .collect();
+    let ours = time_domain_hz
+        .iter()
+        .map(|&f| {
+            Ok((
+                f,
+                steady_response(device, accel_rms_g, f)?.voltage_per_accel,
+            ))
+        })
+        .collect::<Result<_, ValidationError>>()?;
+    Ok((closed, ours))
+}

@@ -725,3 +725,39 @@ pub fn hb_checks(hb: &[HbComparison], floor_m: f64, fold_floor_rad_s: f64) -> Ve
     }
     g.into_checks()
 }
+
+/// One point of our branch, as the chapter plots and stores it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BranchSample {
+    /// Omega (rad/s).
+    pub omega_rad_s: f64,
+    /// First-harmonic amplitude of x (m).
+    pub a1_amplitude_m: f64,
+    /// Largest Floquet multiplier modulus.
+    pub max_multiplier: f64,
+    /// Every multiplier inside the unit circle.
+    pub stable: bool,
+    /// The orbit touches the stop.
+    pub impacting: bool,
+}
+
+/// Every point of our branch with its first-harmonic amplitude.
+pub fn branch_samples(
+    ours: &Ours<'_>,
+    branch: &Branch,
+) -> Result<Vec<BranchSample>, ValidationError> {
+    branch
+        .points
+        .iter()
+        .map(|p| {
+            let o = &p.orbit;
+            Ok(BranchSample {
+                omega_rad_s: o.forcing.freq_hz * TWO_PI,
+                a1_amplitude_m: ours.a1(o)?,
+                max_multiplier: o.max_multiplier_abs(),
+                stable: o.is_stable(),
+                impacting: o.is_impacting(),
+            })
+        })
+        .collect()
+}
