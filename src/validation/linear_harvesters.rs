@@ -393,15 +393,18 @@ pub fn optimal_load_checks(
     Ok(g.into_checks())
 }
 
+/// Load voltage per acceleration (`V/A`, complex, V s^2/m) at frequencies (Hz).
+pub type ResponsePoints = Vec<(f64, Complex<f64>)>;
+
 /// The load voltage per acceleration of a linear harvester on a frequency grid, closed form
-/// (`V/A`, complex) and, at `time_domain_hz`, the time-domain steady state's: the chapter's
-/// plot of the frequency response.
+/// and, at `time_domain_hz`, the time-domain steady state's: the chapter's plot of the
+/// frequency response.
 pub fn response_curve(
     device: &Device,
     accel_rms_g: f64,
     grid_hz: &[f64],
     time_domain_hz: &[f64],
-) -> Result<(Vec<(f64, Complex<f64>)>, Vec<(f64, Complex<f64>)>), ValidationError> {
+) -> Result<(ResponsePoints, ResponsePoints), ValidationError> {
     let cf = ClosedForm::of(device)?;
     let closed = grid_hz
         .iter()
