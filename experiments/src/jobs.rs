@@ -163,7 +163,7 @@ pub const JOBS: &[Job] = &[
         reads_calibration: false,
         phase: Phase::Parallel,
         scored: false,
-        after: None,
+        also: &[],
     },
     Job {
         name: CROSSCHECK,
