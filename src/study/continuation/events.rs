@@ -17,6 +17,8 @@ use super::{BranchPoint, Event, EventKind};
 pub(super) struct Gaps {
     upper: f64,
     lower: f64,
+    /// The suspension's natural frequency (rad/s), which turns an impact speed into a length.
+    w0: f64,
 }
 
 impl Gaps {
@@ -24,6 +26,7 @@ impl Gaps {
         Self {
             upper: h.gap(Side::Upper),
             lower: h.gap(Side::Lower),
+            w0: (h.km / h.mass_kg).sqrt(),
         }
     }
 
@@ -132,18 +135,21 @@ impl Continuer<'_, '_> {
             ]
         };
         // Bracket the crossing on the stop-free branch (it differs from the real one past the
-        // grazing, so the crossing may lie a little beyond `ds`).
+        // grazing, so the crossing may lie a little beyond `ds`). After a hop over a corner
+        // `ds` is the hop's length, which can be far longer than the stop-free branch can be
+        // followed in one step: shorter steps are tried last.
         let mut found = None;
+        let tries = [
+            1.0, 2.0, 4.0, 8.0, 0.5, 0.25, 0.125, 0.0625, 0.03125, 0.015625,
+        ];
         'dirs: for anchor in candidates {
-            let mut hi = ds;
-            for _ in 0..4 {
+            for hi in tries.map(|f| f * ds) {
                 if let Ok((p, _)) = c.point_at(&anchor, hi) {
                     if test_grazing(&p, gaps) > 0.0 {
                         found = Some((anchor, p, hi));
                         break 'dirs;
                     }
                 }
-                hi *= 2.0;
             }
         }
         let Some((anchor, end, hi)) = found else {
@@ -254,7 +260,21 @@ pub(super) fn test_minus_one(p: &BranchPoint, _: Gaps) -> f64 {
 pub(super) fn test_torus(p: &BranchPoint, _: Gaps) -> f64 {
     p.orbit.max_multiplier_abs() - 1.0
 }
+/// How far an orbit is past grazing on its deeper side (m): the largest displacement less the
+/// gap, or, once it strikes a rigid stop (which it never penetrates, so that the displacement
+/// stays at the gap), its impact speed over `w0`. Both vanish at grazing.
 pub(super) fn test_grazing(p: &BranchPoint, gaps: Gaps) -> f64 {
     let s = &p.orbit.summary;
-    (s.x_upper_m - gaps.upper).max(-s.x_lower_m - gaps.lower)
+    let side = |reach: f64, gap: f64, speed: f64| {
+        if speed > 0.0 {
+            speed / gaps.w0
+        } else {
+            reach - gap
+        }
+    };
+    side(s.x_upper_m, gaps.upper, s.impact_speed_m_s[0]).max(side(
+        -s.x_lower_m,
+        gaps.lower,
+        s.impact_speed_m_s[1],
+    ))
 }

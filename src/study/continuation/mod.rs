@@ -30,7 +30,7 @@
 //! | branch point | prod (mu_i - 1) | a real multiplier crosses +1 where the branch does **not** turn (e.g. the symmetric impacting orbit losing stability to a pair of asymmetric ones) |
 //! | period doubling | prod (mu_i + 1) | a real multiplier crosses -1 |
 //! | torus | largest modulus - 1 | a complex pair leaves the unit circle |
-//! | grazing | max |x| - x_max | the orbit starts or stops touching a stop |
+//! | grazing | max |x| - x_max (for a rigid stop it strikes, the impact speed over w0) | the orbit starts or stops touching a stop |
 //!
 //! A +1 crossing is called a fold only where the branch turns: a crossing without a turn is a
 //! branch point and is never presented as a fold. A turn at a grazing point, where the branch

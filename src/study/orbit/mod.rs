@@ -237,6 +237,10 @@ pub struct OrbitSummary {
     pub contact_fraction: f64,
     /// Impacts per period: contact entries and rebounds off rigid stops.
     pub impacts: u32,
+    /// The largest speed at which the mass strikes each side's rigid stop (upper, lower; m/s),
+    /// zero where it does not: a rigid stop is never penetrated, so this, not the largest
+    /// displacement, says how deep an orbit is past grazing.
+    pub impact_speed_m_s: [f64; 2],
     /// Time after the section at which x first crosses zero upwards (s), if it does.
     pub upcrossing_s: Option<f64>,
 }

@@ -18,6 +18,9 @@ pub(super) struct Sums {
     pub(super) impacts: u32,
     was_contact: Option<bool>,
     pub(super) upcrossing: Option<f64>,
+    /// The velocity at the end of the last step (before a switch, the impact velocity).
+    last_v: f64,
+    pub(super) impact_speed: [f64; 2],
 }
 
 /// Observes one period: the sums over its steps, and the rebounds off rigid stops (impacts
@@ -33,8 +36,14 @@ impl Observer<4, Mode> for Accumulator<'_> {
     }
 
     fn switched(&mut self, _t: f64, from: Mode, to: Mode) {
-        if SwitchKind::of(from, to) == SwitchKind::Rebound {
+        let kind = SwitchKind::of(from, to);
+        if kind == SwitchKind::Rebound {
             self.sums.impacts += 1;
+        }
+        if matches!(kind, SwitchKind::Rebound | SwitchKind::Stick) {
+            let v = self.sums.last_v;
+            let side = usize::from(v < 0.0);
+            self.sums.impact_speed[side] = self.sums.impact_speed[side].max(v.abs());
         }
     }
 }
@@ -59,6 +68,7 @@ impl Sums {
         if self.upcrossing.is_none() && st.y0[0] <= 0.0 && st.y1[0] > 0.0 {
             self.upcrossing = root_on_step(st, 0).map(|th| st.t0 + th * st.h);
         }
+        self.last_v = st.y1[1];
         let contact = mode.in_contact();
         if contact {
             self.contact_time += st.h;

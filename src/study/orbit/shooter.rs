@@ -241,6 +241,7 @@ impl<'a> Shooter<'a> {
                 x_lower_m: acc.x_lower,
                 contact_fraction: acc.contact_time / period,
                 impacts: acc.impacts,
+                impact_speed_m_s: acc.impact_speed,
                 upcrossing_s: acc.upcrossing,
             },
         ))
