@@ -20,10 +20,11 @@ fig NAME:
 book:
     cargo run --release --bin reproduce -- --book-only
 
-# Check formatting and lints (warnings are errors).
+# Check formatting, lints and the library's rustdoc (warnings are errors).
 lint:
     cargo fmt --check
     cargo clippy --release --workspace --all-targets -- -D warnings
+    RUSTDOCFLAGS="-D warnings" cargo doc --no-deps -p endstop
 
 # Run the benchmarks.
 bench:
@@ -38,5 +39,13 @@ own *ARGS:
     cargo run --release --bin endstop -- {{ARGS}}
 
 # Why the paper deviates: Sobol indices and the multi-claim calibration (not part of `reproduce`; extra ARGS, e.g. `--base 16 --force`).
+deviations *ARGS:
+    cargo run --release --bin deviations -- {{ARGS}}
+
+# The same as `just deviations` (its earlier name).
 study *ARGS:
-    cargo run --release --bin study -- {{ARGS}}
+    cargo run --release --bin deviations -- {{ARGS}}
+
+# Re-record the runs of `data/recorded/` (the deviations chapter's runs with the ensemble claims) with the arguments each run's `run.json` holds: hours on 2 cores; needs the Python package with Dask (`pip install "./python[examples,dask]"`). The Python tests compare a recording with the current code within its sampling error.
+record:
+    for d in data/recorded/*/; do python3 python/examples/study_dask.py $(python3 -c "import json, sys; print(' '.join(json.load(open(sys.argv[1]))['argv']))" "${d}run.json") || exit 1; done

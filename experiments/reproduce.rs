@@ -178,8 +178,9 @@ fn run() -> Result<()> {
     }
     publish_own_device()?;
     let rows = write_scorecard()?;
+    common::answers::write(&rows)?;
     write_provenance()?;
-    study_placeholder()?;
+    deviations_placeholder()?;
     eprintln!("[reproduce] building the book");
     common::book::build(&root.join("book"))?;
 
@@ -374,12 +375,12 @@ fn write_scorecard() -> Result<Vec<Row>> {
             .and_then(|k| folds.get(&k).copied());
     }
     // Beside each claim the study evaluates, its value at the best set of the multi-claim
-    // calibration (the study's summary, if `just study` has been run).
-    let best = read_summary(&common::jobs::STUDY)
+    // calibration (the study's summary, if `just deviations` has been run).
+    let best = read_summary(&common::jobs::DEVIATIONS)
         .map(|s| s.numbers)
         .unwrap_or_default();
     for r in rows.iter_mut().filter(|r| r.set == "published") {
-        r.best_calibrated = endstop::paper::study::best_value_key(&r.claim, &r.quantity)
+        r.best_calibrated = endstop::paper::deviations::best_value_key(&r.claim, &r.quantity)
             .and_then(|k| best.get(&k).copied());
     }
     common::write_atomic(
@@ -522,16 +523,16 @@ fn write_provenance() -> Result<()> {
     )
 }
 
-/// The study is not one of `reproduce`'s jobs: until `just study` has run, its chapter
+/// The study is not one of `reproduce`'s jobs: until `just deviations` has run, its chapter
 /// includes a note in place of its numbers, heat map and Pareto plots.
-fn study_placeholder() -> Result<()> {
-    let dir = common::book_generated_root().join(common::jobs::STUDY.name);
+fn deviations_placeholder() -> Result<()> {
+    let dir = common::book_generated_root().join(common::jobs::DEVIATIONS.name);
     if !dir.join("numbers.md").exists() {
         let note = "*Not run in this build: the study is not part of `reproduce`; run \
-                    `just study` (or `cargo run --release --bin study`) and rebuild the book.*\n";
+                    `just deviations` (or `cargo run --release --bin deviations`) and rebuild the book.*\n";
         common::write_atomic(&dir.join("numbers.md"), note.as_bytes())?;
     }
-    for stem in ["study", "study_pareto_p1", "study_pareto_p2"] {
+    for stem in ["deviations", "deviations_pareto_p1", "deviations_pareto_p2"] {
         let path = dir.join(format!("{stem}.figure.md"));
         if !path.exists() {
             common::write_atomic(&path, b"*(no plot: the study has not run)*\n")?;

@@ -1,9 +1,11 @@
 //! # endstop
 //!
-//! The lumped model of a MEMS electrostatic vibration energy harvester whose proof mass strikes
-//! end-stops, and the numerics to simulate it, after C. P. Le and E. Halvorsen, "MEMS
-//! electrostatic energy harvesters with end-stop effects", J. Micromech. Microeng. 22 (2012)
-//! 074013. Equation numbers are the paper's.
+//! Lumped models of vibration energy harvesters whose proof mass strikes end-stops, and the
+//! numerics to simulate and analyse them. The model began as that of C. P. Le and
+//! E. Halvorsen, "MEMS electrostatic energy harvesters with end-stop effects", J. Micromech.
+//! Microeng. 22 (2012) 074013 (equation numbers are the paper's), and describes any
+//! single-degree-of-freedom impact harvester: each side's stop absent or a gap and a contact
+//! law, and an electrostatic, piezoelectric or electromagnetic transducer or none.
 //!
 //! The crate holds the model and numerics only: it does no file I/O. The reproduction of the
 //! paper's figures is one module apart ([`paper`]), which no model module imports; the
@@ -12,17 +14,20 @@
 //!
 //! | module | what | paper |
 //! |---|---|---|
-//! | [`device`] | validated device parameters | Tables 1 and 2 |
+//! | [`device`] | validated device descriptions: mechanics, stops, transducer | Tables 1 and 2 |
 //! | [`physics::hertz`] | Hertz line contact and its linear fit | eqs 3-6, 19, Figure 5 |
-//! | [`physics::contact`] | end-stop modes and spring laws | eqs 1-2 |
+//! | [`physics::contact`] | contact modes and the stops' force laws | eqs 1-2 |
+//! | [`physics::transducer`] | the transducers' forces, rates and loads | eqs 8-10 |
 //! | [`physics::harvester`] | the lumped time-domain model | eqs 7-10 |
+//! | [`physics::free_flight`] | the free flight split for the exponential integrator | |
 //! | [`physics::energy`] | power terms and the energy audit | |
+//! | [`physics::linear`] | linear frequency response of any device | |
 //! | [`physics::two_port`] | linear two-port, coupling, broadband efficiency | eqs 11-18, 21-22 |
 //! | [`drive`] | sine, sampled and band-limited noise accelerations | Figure 10 |
-//! | [`ode`] | Dormand-Prince 5(4) with dense output and event location | |
-//! | [`num`] | root finding, sample statistics | |
+//! | [`ode`] | Runge-Kutta stepping with dense output and event location | |
+//! | [`num`] | root finding, sample statistics, sensitivity designs | |
 //! | [`signal`] | Welch PSD, bandwidths | |
-//! | [`study`] | steady states, frequency and amplitude sweeps, random records, ensembles | |
+//! | [`study`] | steady states, sweeps, periodic orbits and continuation, basins, random records, ensembles | |
 //! | [`spice`] | ngspice netlist export for cross-validation | section 2.3, Figure 6 |
 //! | [`paper`] | the paper's setups, measurements, calibration, figures and claims | |
 //!

@@ -416,30 +416,42 @@ fn p1_width_estimator_bias_is_measured_on_the_linear_model() {
     let next = s.row(resolution::LINEAR, fig + 1);
     assert!(b(fig + 1).abs() <= next.width.ci95, "{next:?} vs {exact}");
     // Figure 12's verdicts do not rest on the bias: with the measured bias taken off both
-    // widths, each set keeps its verdicts (the widths stay far below the paper's, and the
-    // calibrated ratio stays inside the tolerance at its estimate).
+    // widths, each verdict the ensemble settles (its interval clear of the tolerance's edges)
+    // is kept (the widths stay far below the paper's, the published ratio inside the
+    // tolerance). A verdict the ensemble does not settle (the calibrated ratio, whose interval
+    // reaches past the upper edge) is a verdict at the estimate either way; there the bias
+    // must move the value by less than its interval.
     let values = fig12::claims(fig12_run(), claims());
+    let keeps = |set: &str, q: &str, corrected: f64| {
+        let c = claims().get("F12", q).unwrap();
+        let v = value(&values, "F12", q, set);
+        let ci = v
+            .uncertainty
+            .expect("the ensemble's values carry an interval");
+        let (lo_edge, hi_edge) = (c.paper - c.tolerance(), c.paper + c.tolerance());
+        let interval = v.ours - ci..=v.ours + ci;
+        if interval.contains(&lo_edge) || interval.contains(&hi_edge) {
+            assert!(
+                (corrected - v.ours).abs() <= ci,
+                "{set} {q}: {corrected} against {} ± {ci}",
+                v.ours
+            );
+        } else {
+            assert_eq!(
+                c.verdict(Some(corrected)),
+                c.verdict(Some(v.ours)),
+                "{set} {q}: {corrected}"
+            );
+        }
+    };
     for set in P1_SETS {
         for q in ["bw_7p4e-3_hz", "bw_2p85e-2_hz"] {
-            let v = value(&values, "F12", q, set);
-            let c = claims().get("F12", q).unwrap();
-            assert_eq!(
-                c.verdict(Some(v.ours - b(fig))),
-                c.verdict(Some(v.ours)),
-                "{set} {q}"
-            );
+            keeps(set, q, value(&values, "F12", q, set).ours - b(fig));
         }
         let lo = value(&values, "F12", "bw_7p4e-3_hz", set).ours - b(fig);
         let hi = value(&values, "F12", "bw_2p85e-2_hz", set).ours - b(fig);
         let q = "bw_ratio_2p85e-2_over_7p4e-3";
-        let c = claims().get("F12", q).unwrap();
-        let v = value(&values, "F12", q, set);
-        assert_eq!(
-            c.verdict(Some(hi / lo)),
-            c.verdict(Some(v.ours)),
-            "{set} {q}: {}",
-            hi / lo
-        );
+        keeps(set, q, hi / lo);
     }
 }
 

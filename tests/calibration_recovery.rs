@@ -6,11 +6,11 @@
 use endstop::device::Device;
 use endstop::num::minimax::{minimise_worst, MinimaxSettings};
 use endstop::paper::claims::Claims;
+use endstop::paper::deviations::{narrowband, Outcome};
+use endstop::paper::deviations::{Factor, RangesFile};
 use endstop::paper::fig08;
-use endstop::paper::sensitivity::{Factor, RangesFile};
 use endstop::paper::setups::P1_BIAS_V;
 use endstop::paper::setups::{comb, comb_mut, endstop};
-use endstop::paper::study::{self, Outcome};
 use endstop::physics::two_port::{eq21_efficiency, QmReading, TwoPort};
 
 /// The linear-theory figures of merit a device gives (Table 3's k^2 and Qm, eq 21, and the
@@ -49,7 +49,7 @@ fn linear_claims_generated_at_a_known_set_are_met_and_its_identified_parameters_
     let model = |u: &[f64]| {
         let v = ranges.variant(&base, u)?;
         let ours = figures(&v.device);
-        Ok::<_, endstop::paper::sensitivity::RangesError>(
+        Ok::<_, endstop::paper::deviations::RangesError>(
             (0..4).map(|j| (ours[j] - target[j]) / tol[j]).collect(),
         )
     };
@@ -106,14 +106,17 @@ fn linear_claims_generated_at_a_known_set_are_met_and_its_identified_parameters_
 fn kink_and_jump(device: &Device, gap_m: f64, scale: f64) -> Option<[f64; 2]> {
     let mut d = device.with_bias(P1_BIAS_V);
     d = d.with_stop_gap(gap_m);
-    let branch = study::frequency_branch(
+    let branch = narrowband::frequency_branch(
         &d,
         fig08::P1_HIGH_ACCEL_RMS_G * scale,
-        (fig08::P1_SWEEP_START_HZ, study::P1_STOP_HZ),
+        (fig08::P1_SWEEP_START_HZ, narrowband::P1_STOP_HZ),
         fig08::P1_SWEEP_STEP_HZ,
         "recovery",
     );
-    match (study::first_grazing(&branch), study::upper_fold(&branch)) {
+    match (
+        narrowband::first_grazing(&branch),
+        narrowband::upper_fold(&branch),
+    ) {
         (Outcome::Value(k), Outcome::Value(j)) => Some([k, j]),
         _ => None,
     }

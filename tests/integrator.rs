@@ -11,6 +11,7 @@ use endstop::ode::Dopri5;
 use endstop::ode::Guards;
 use endstop::ode::HybridSystem;
 use endstop::ode::Options;
+use endstop::ode::Rk4;
 use endstop::ode::SolverError;
 use endstop::paper::setups::{comb_mut, endstop};
 use endstop::physics::contact::Mode;
@@ -131,6 +132,51 @@ fn free_flight_hits_the_wall_at_the_exact_time() {
     // the event is located to the root finder's time tolerance (1e-14 s) plus rounding.
     assert!((t_hit - exact).abs() < 1e-12, "{t_hit} vs {exact}");
     assert_eq!(ode.stats().events, 1);
+}
+
+#[test]
+fn fixed_step_classical_rk4_converges_at_fourth_order() {
+    // The tableau-driven engine with the classical RK4 on the free oscillator over 10 periods
+    // (no breakpoints: the span is cut into n equal steps): halving the step must cut the
+    // global error by 2^4 = 16 (to within the next term's share at these steps). The error is
+    // taken on the phase plane (x and v / w): after whole periods x sits at a maximum, where a
+    // phase error shows only to second order.
+    let sys = Oscillator {
+        w: 2.0 * std::f64::consts::PI,
+    };
+    let err = |n: usize| {
+        let mut ode = Rk4::new(0.0, SVector::<f64, 2>::new(1.0, 0.0), (), n, 1e-14);
+        ode.integrate(&sys, 10.0).unwrap();
+        assert_eq!(ode.t(), 10.0);
+        assert_eq!(ode.stats().accepted, n as u64);
+        assert_eq!(ode.stats().rhs_evals, 4 * n as u64);
+        let (x, v) = (ode.y()[0], ode.y()[1] / sys.w);
+        (x - (sys.w * 10.0).cos()).hypot(v + (sys.w * 10.0).sin())
+    };
+    let (coarse, fine) = (err(1000), err(2000));
+    let ratio = coarse / fine;
+    assert!(
+        (14.0..18.0).contains(&ratio),
+        "{coarse:e} / {fine:e} = {ratio}"
+    );
+}
+
+#[test]
+fn fixed_step_rk4_switches_at_the_exact_crossing_time() {
+    // The trajectory is a quadratic, which RK4 integrates exactly, so the crossing located on
+    // shortened steps is exact to the root finder's tolerance; after the switch the state
+    // stays put (mode 1 has no motion), so the velocity tells the switch time.
+    let (v0, a) = (0.3, 0.7);
+    let sys = Flight { a };
+    let mut ode = Rk4::new(0.0, SVector::<f64, 2>::new(0.0, v0), 0u8, 7, 1e-14);
+    ode.integrate(&sys, 5.0).unwrap();
+    assert_eq!(ode.mode(), 1);
+    assert_eq!(ode.stats().events, 1);
+    let t_hit = (ode.y()[1] - v0) / a;
+    let exact = (-v0 + (v0 * v0 + 2.0 * a).sqrt()) / a;
+    assert!((t_hit - exact).abs() < 1e-12, "{t_hit} vs {exact}");
+    assert!((ode.y()[0] - 1.0).abs() < 1e-12);
+    assert_eq!(ode.t(), 5.0);
 }
 
 fn elastic_p1(km: f64, kim: f64) -> Harvester<Sine> {

@@ -239,7 +239,7 @@ fn amplitude_continuation_in_the_linear_regime_scales_the_power_with_the_square(
 /// there, with no grazing.
 #[test]
 fn a_grazing_corner_is_crossed_from_the_free_flight_side() {
-    use endstop::paper::sensitivity::RangesFile;
+    use endstop::paper::deviations::RangesFile;
     use endstop::study::continuation::frequency_branch;
     let p1 = Device::from_toml_str(include_str!("../data/prototype1.toml"), "test").unwrap();
     // Point 3 of the scrambled Sobol sequence of seed 99 in the study's unit cube.

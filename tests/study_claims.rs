@@ -5,16 +5,17 @@
 
 use endstop::device::Device;
 use endstop::paper::claims::{Claims, Kind};
+use endstop::paper::deviations::Variant;
+use endstop::paper::deviations::{
+    ensembles::study_ensemble_spec, evaluate, evaluate_quantitative, Evaluation, Outcome,
+    Prototype, Scope,
+};
 use endstop::paper::ensembles::{protocol_spec, P1_BAND_HZ, P1_NPERSEG};
 use endstop::paper::fig08::{self, Fig8Curve};
 use endstop::paper::fig09::{self, Fig9Bias};
 use endstop::paper::fig12::FIG12_LEVELS;
 use endstop::paper::fig15;
-use endstop::paper::sensitivity::Variant;
 use endstop::paper::setups::{prototype2_setup, P1_BIAS_V, P2_BIAS_V};
-use endstop::paper::study::{
-    evaluate, evaluate_quantitative, study_ensemble_spec, Evaluation, Outcome, Prototype, Scope,
-};
 use endstop::paper::{fig13, table3};
 use rayon::prelude::*;
 

@@ -6,8 +6,8 @@ use endstop::device::Device;
 use endstop::num::minimax::MinimaxSettings;
 use endstop::num::sensitivity::Bootstrap;
 use endstop::paper::claims::Claims;
-use endstop::paper::sensitivity::RangesFile;
-use endstop::paper::study::{
+use endstop::paper::deviations::RangesFile;
+use endstop::paper::deviations::{
     calibrate, calibrate_start, calibration_of_fits, calibration_starts, evaluate_at, sobol,
     sobol_indices, Prototype, Scope, SobolDesign, SobolRun,
 };

@@ -324,11 +324,11 @@ impl Job {
     }
 }
 
-/// The sensitivity study and multi-claim calibration (`just study`): cached by content hash
+/// Why the paper deviates: the sensitivity study and multi-claim calibration (`just deviations`): cached by content hash
 /// like the jobs of [`JOBS`], but not one of them (it does not fit `reproduce`'s budget).
-pub const STUDY: Job = Job {
-    name: "study",
-    program: "study",
+pub const DEVIATIONS: Job = Job {
+    name: "deviations",
+    program: "deviations",
     args: &[],
     reads: &[P1, P2, "data/sensitivity.toml"],
     reads_calibration: false,

@@ -5,6 +5,7 @@
 //!
 //! Every file is written to a temporary name in the same directory and renamed, so a failed
 //! run never leaves a partial output behind.
+pub mod answers;
 pub mod book;
 pub mod broadband_io;
 pub mod calibration_io;

@@ -1,10 +1,10 @@
 """Why the paper deviates, on a Dask cluster: the Sobol indices and the multi-claim calibration
-of ``just study``, with every design point and every calibration start a task of its own.
+of ``just deviations``, with every design point and every calibration start a task of its own.
 
-This is the route for the studies one machine cannot run in the ``just study`` budget, above
+This is the route for the studies one machine cannot run in the ``just deviations`` budget, above
 all those with the ensemble claims of Figures 12, 14 and 15 (``--ensemble-records``: each point
 then simulates tens of 10 s records per level). The pieces are the library's own functions
-(:mod:`endstop.paper.study`), so the numbers are those ``just study`` gives for the same
+(:mod:`endstop.paper.study`), so the numbers are those ``just deviations`` gives for the same
 settings.
 
 Writes, under ``--out-dir``:

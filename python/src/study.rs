@@ -1,349 +1,442 @@
-//! "Why the paper deviates" (`endstop::paper::study`) in pieces a cluster can schedule: the
-//! Saltelli design, one point's evaluation, the indices from the evaluations, the calibration's
-//! starts, one start's search, and the calibration from the starts' fits. Each piece is the
-//! library's own function (`sobol` and `calibrate` are the same pieces run in one process), so
-//! a study spread over Dask workers gives the numbers `just study` gives.
-//!
-//! Evaluations travel as plain dicts (`claim`, `quantity`, `paper`, `tolerance`, `unit`,
-//! `outcome`, `value`, `deviation`, `meets`, `kind`), which pickle; on the way back only `claim`, `quantity`, `outcome` and
-//! `value` are read and the rest is recomputed from the claims file.
+//! `endstop.study`: simulations of the nonlinear model (eqs 1-10): frequency sweeps up and
+//! down, the continuation of periodic orbits, amplitude sweeps, one random record and an
+//! ensemble, each returning a dict of numbers and numpy arrays with the GIL released while it
+//! runs.
 
 use endstop::device::Device;
-use endstop::num::minimax::{Fit, MinimaxSettings};
-use endstop::paper::claims::{Claims, Kind};
-use endstop::paper::sensitivity::{Factor, Ranges, RangesFile};
-use endstop::paper::study::{
-    self, Evaluation, Outcome, Prototype, Scope, SobolDesign, StudyError, STUDY_BOOTSTRAP,
-    STUDY_SEED,
-};
-use numpy::PyArray2;
+use endstop::physics::two_port;
+use endstop::study::amplitude::{amplitude_sweep_report, AmplitudeReport};
+use endstop::study::ensemble::{run_ensemble, EnsembleSpec};
+use endstop::study::record::{simulate_record, RecordSpec, RecordSummary};
+use endstop::study::steady::{steady_config, Measurement};
+use endstop::study::stepped::{linspace_step, Transition};
+use endstop::study::sweep::{self, SweepReport, SweepSettings};
+use numpy::PyReadonlyArray1;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 
-use crate::{arg_err, solver_err, PyDevice};
+use crate::{arg_err, array, solver_err, PyDevice};
 
-fn prototype(key: &str) -> PyResult<Prototype> {
-    Prototype::BOTH
-        .into_iter()
-        .find(|p| p.key() == key)
-        .ok_or_else(|| arg_err(format!("prototype = {key:?}: must be \"p1\" or \"p2\"")))
+// ---------------------------------------------------------------------------------------------
+// Sweeps
+
+/// Per-step columns of a continuation, as numpy arrays.
+pub(crate) fn steps_dict<'py>(
+    py: Python<'py>,
+    steps: &[&Measurement],
+) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    let col = |f: fn(&Measurement) -> f64| array(py, steps.iter().map(|m| f(m)).collect());
+    d.set_item("freq_hz", col(|m| m.freq_hz))?;
+    d.set_item("accel_rms_g", col(|m| m.accel_rms_g))?;
+    d.set_item("v1_rms_v", col(|m| m.v1_rms_v))?;
+    d.set_item("v2_rms_v", col(|m| m.v2_rms_v))?;
+    d.set_item("vdiff_rms_v", col(|m| m.vdiff_rms_v))?;
+    d.set_item("p1_w", col(|m| m.p1_w))?;
+    d.set_item("p2_w", col(|m| m.p2_w))?;
+    d.set_item("p_total_w", col(|m| m.p_total_w()))?;
+    d.set_item("x_peak_m", col(|m| m.x_peak_m))?;
+    d.set_item("contact_fraction", col(|m| m.contact_fraction))?;
+    d.set_item("impacts_per_period", col(|m| m.impacts_per_period))?;
+    d.set_item("blocks", col(|m| m.blocks as f64))?;
+    d.set_item(
+        "converged",
+        steps.iter().map(|m| m.converged).collect::<Vec<bool>>(),
+    )?;
+    Ok(d)
 }
 
-/// The published device of a prototype, its ranges and the claims file.
-fn inputs(p: Prototype) -> PyResult<(Device, Ranges, Claims)> {
-    let ranges = RangesFile::bundled().map_err(solver_err)?;
-    let (n, r) = match p {
-        Prototype::P1 => (1, ranges.prototype1),
-        Prototype::P2 => (2, ranges.prototype2),
+fn transition_items(
+    d: &Bound<'_, PyDict>,
+    name: &str,
+    unit: &str,
+    t: Option<Transition>,
+) -> PyResult<()> {
+    d.set_item(format!("{name}_{unit}"), t.map(|t| t.value()))?;
+    d.set_item(
+        format!("{name}_bracket_{unit}"),
+        t.map(|t| (t.before, t.after)),
+    )?;
+    Ok(())
+}
+
+/// An up-sweep report as a dict: the steps (arrays) and the refined transitions.
+pub(crate) fn sweep_dict<'py>(py: Python<'py>, r: &SweepReport) -> PyResult<Bound<'py, PyDict>> {
+    let all: Vec<&Measurement> = r.measurements().collect();
+    let d = steps_dict(py, &all)?;
+    d.set_item("extended_from", r.extended_from)?;
+    d.set_item("contact_at_start", r.contact_at_start)?;
+    transition_items(&d, "onset", "hz", r.onset)?;
+    transition_items(&d, "jump", "hz", r.jump)?;
+    d.set_item("jump_power_ratio", r.jump_power_ratio)?;
+    transition_items(&d, "contact_lost", "hz", r.contact_lost)?;
+    match r.branch_end() {
+        Some(end) => {
+            d.set_item("branch_end_hz", end.transition.value())?;
+            d.set_item("branch_end_kind", end.kind.label())?;
+        }
+        None => {
+            d.set_item("branch_end_hz", py.None())?;
+            d.set_item("branch_end_kind", py.None())?;
+        }
+    }
+    d.set_item("max_v1_rms_v", r.max_v1_rms_v())?;
+    d.set_item("all_converged", r.all_converged())?;
+    let s = r.total_stats();
+    d.set_item("integrator_steps", s.accepted)?;
+    d.set_item("contact_events", s.events)?;
+    Ok(d)
+}
+
+/// Stepped-sine up-sweep with continuation (each frequency starts from the previous steady
+/// state), the impact onset, jump and loss of contact refined by bisection to brackets
+/// narrower than `refine_tol_hz`: the `endstop sweep` command's study (the same grid
+/// `start_hz..stop_hz` by `step_hz`, steady-state settings for the middle of the range).
+#[pyfunction]
+#[pyo3(signature = (device, accel_rms_g, start_hz, stop_hz, step_hz = 2.0, refine_tol_hz = 0.1))]
+fn up_sweep<'py>(
+    py: Python<'py>,
+    device: &PyDevice,
+    accel_rms_g: f64,
+    start_hz: f64,
+    stop_hz: f64,
+    step_hz: f64,
+    refine_tol_hz: f64,
+) -> PyResult<Bound<'py, PyDict>> {
+    let settings = sweep_settings(
+        &device.inner,
+        accel_rms_g,
+        start_hz,
+        stop_hz,
+        step_hz,
+        refine_tol_hz,
+    )?;
+    let dev = device.inner.clone();
+    let report = py
+        .detach(move || settings.run(&dev, accel_rms_g, |_| {}))
+        .map_err(solver_err)?;
+    sweep_dict(py, &report)
+}
+
+/// Checks the arguments shared by the frequency studies ([`sweep::check_range`]), naming
+/// them as this module does.
+fn check_range(accel_rms_g: f64, start_hz: f64, stop_hz: f64, step_hz: f64) -> PyResult<()> {
+    sweep::check_range(accel_rms_g, start_hz, stop_hz, step_hz).map_err(|e| {
+        arg_err(match e {
+            sweep::RangeError::Ends => {
+                "start_hz and stop_hz must be positive with stop_hz > start_hz"
+            }
+            sweep::RangeError::Step => "step_hz must be positive and not larger than the range",
+            sweep::RangeError::Accel => "accel_rms_g must be a finite positive number",
+        })
+    })
+}
+
+/// The sweep settings of a range after its arguments are checked: the library's
+/// [`SweepSettings::for_device`], the settings of the `endstop` command's sweeps.
+fn sweep_settings(
+    device: &Device,
+    accel_rms_g: f64,
+    start_hz: f64,
+    stop_hz: f64,
+    step_hz: f64,
+    refine_tol_hz: f64,
+) -> PyResult<SweepSettings> {
+    check_range(accel_rms_g, start_hz, stop_hz, step_hz)?;
+    if !(refine_tol_hz.is_finite() && refine_tol_hz > 0.0) {
+        return Err(arg_err("refine_tol_hz must be positive"));
+    }
+    let freqs = linspace_step(start_hz, stop_hz, step_hz);
+    Ok(SweepSettings::for_device(device, freqs, refine_tol_hz))
+}
+
+/// Stepped-sine down-sweep from `stop_hz` to `start_hz` (each step from the previous steady
+/// state) with the jump up and the first contact refined to brackets narrower than
+/// `refine_tol_hz`: the down-sweep of the `endstop response` command. Keys: the per-step
+/// arrays (frequencies decreasing) as in `up_sweep`, `jump_hz`, `contact_hz` (midpoints of
+/// `*_bracket_hz`, or None), `jump_power_ratio`, `branch_end_hz` and `branch_end_kind`.
+#[pyfunction]
+#[pyo3(signature = (device, accel_rms_g, start_hz, stop_hz, step_hz = 2.0, refine_tol_hz = 0.1))]
+fn down_sweep<'py>(
+    py: Python<'py>,
+    device: &PyDevice,
+    accel_rms_g: f64,
+    start_hz: f64,
+    stop_hz: f64,
+    step_hz: f64,
+    refine_tol_hz: f64,
+) -> PyResult<Bound<'py, PyDict>> {
+    let settings = sweep_settings(
+        &device.inner,
+        accel_rms_g,
+        start_hz,
+        stop_hz,
+        step_hz,
+        refine_tol_hz,
+    )?;
+    let dev = device.inner.clone();
+    let report = py
+        .detach(move || settings.run_down(&dev, accel_rms_g, |_| {}))
+        .map_err(solver_err)?;
+    let all: Vec<&Measurement> = report.measurements().collect();
+    let d = steps_dict(py, &all)?;
+    transition_items(&d, "jump", "hz", report.jump)?;
+    d.set_item("jump_power_ratio", report.jump_power_ratio)?;
+    transition_items(&d, "contact", "hz", report.contact)?;
+    match report.branch_end() {
+        Some((kind, t)) => {
+            d.set_item("branch_end_hz", t.value())?;
+            d.set_item("branch_end_kind", kind.label())?;
+        }
+        None => {
+            d.set_item("branch_end_hz", py.None())?;
+            d.set_item("branch_end_kind", py.None())?;
+        }
+    }
+    Ok(d)
+}
+
+/// The periodic orbits continued in frequency (shooting, Floquet multipliers,
+/// pseudo-arclength continuation through folds) from `start_hz` to `stop_hz` with steps of at
+/// most `step_hz`: the continuation of the `endstop response` command. Keys: per-orbit arrays
+/// `freq_hz`, `v1_rms_v`, `p_total_w`, `x_max_m`, `multiplier_max_abs`, `stable` (bool);
+/// `events`, a list of dicts (`kind`: fold, branch point, period doubling, torus or grazing;
+/// `freq_hz`, `at_grazing`, `stable_before`, `stable_after`); `folds_hz` and `grazing_hz`
+/// (lists); `max_residual`.
+#[pyfunction]
+#[pyo3(signature = (device, accel_rms_g, start_hz, stop_hz, step_hz = 2.0))]
+fn orbits<'py>(
+    py: Python<'py>,
+    device: &PyDevice,
+    accel_rms_g: f64,
+    start_hz: f64,
+    stop_hz: f64,
+    step_hz: f64,
+) -> PyResult<Bound<'py, PyDict>> {
+    use endstop::study::continuation::{frequency_branch, EventKind};
+    check_range(accel_rms_g, start_hz, stop_hz, step_hz)?;
+    let dev = device.inner.clone();
+    let branch = py
+        .detach(move || frequency_branch(&dev, accel_rms_g, start_hz, stop_hz, step_hz, |_| {}))
+        .map_err(solver_err)?;
+    let d = PyDict::new(py);
+    let col = |f: &dyn Fn(&endstop::study::orbit::Orbit) -> f64| {
+        array(py, branch.points.iter().map(|p| f(&p.orbit)).collect())
     };
-    Ok((
-        PyDevice::prototype(n)?.inner,
-        r,
-        Claims::bundled().map_err(solver_err)?,
-    ))
+    d.set_item("freq_hz", col(&|o| o.forcing.freq_hz))?;
+    d.set_item("v1_rms_v", col(&|o| o.summary.v1_rms_v))?;
+    d.set_item("p_total_w", col(&|o| o.summary.p_total_w))?;
+    d.set_item("x_max_m", col(&|o| o.summary.x_max_m))?;
+    d.set_item("multiplier_max_abs", col(&|o| o.max_multiplier_abs()))?;
+    d.set_item(
+        "stable",
+        branch
+            .points
+            .iter()
+            .map(|p| p.orbit.is_stable())
+            .collect::<Vec<bool>>(),
+    )?;
+    let events = PyList::empty(py);
+    for e in &branch.events {
+        let ed = PyDict::new(py);
+        ed.set_item("kind", e.kind.label())?;
+        ed.set_item("freq_hz", e.param)?;
+        ed.set_item("at_grazing", e.at_grazing)?;
+        ed.set_item("stable_before", e.stable_before)?;
+        ed.set_item("stable_after", e.stable_after)?;
+        events.append(ed)?;
+    }
+    d.set_item("events", events)?;
+    let of = |k: EventKind| branch.events_of(k).map(|e| e.param).collect::<Vec<f64>>();
+    d.set_item("folds_hz", of(EventKind::Fold))?;
+    d.set_item("grazing_hz", of(EventKind::Grazing))?;
+    d.set_item("max_residual", branch.max_residual())?;
+    Ok(d)
 }
 
-fn scope(ensemble_records: Option<usize>) -> PyResult<Scope> {
-    if ensemble_records == Some(0) {
+pub(crate) fn amplitude_dict<'py>(
+    py: Python<'py>,
+    r: &AmplitudeReport,
+) -> PyResult<Bound<'py, PyDict>> {
+    let all: Vec<&Measurement> = r.sweep.steps.iter().map(|s| &s.measurement).collect();
+    let d = steps_dict(py, &all)?;
+    d.set_item("extended_from", r.extended_from)?;
+    d.set_item("contact_at_start", r.contact_at_start)?;
+    transition_items(&d, "onset", "g", r.onset)?;
+    Ok(d)
+}
+
+/// Amplitude continuation at a fixed frequency over increasing RMS accelerations (g), each
+/// step starting from the previous final state, the impact onset refined by bisection to a
+/// bracket narrower than `refine_tol_g` (the study of Figure 9).
+#[pyfunction]
+#[pyo3(signature = (device, freq_hz, accels_rms_g, refine_tol_g = 0.005))]
+fn amplitude_sweep<'py>(
+    py: Python<'py>,
+    device: &PyDevice,
+    freq_hz: f64,
+    accels_rms_g: PyReadonlyArray1<'py, f64>,
+    refine_tol_g: f64,
+) -> PyResult<Bound<'py, PyDict>> {
+    let acc = accels_rms_g.as_slice()?.to_vec();
+    if acc.len() < 2
+        || acc
+            .windows(2)
+            .any(|w| w[1].partial_cmp(&w[0]) != Some(std::cmp::Ordering::Greater))
+        || acc[0] < 0.0
+    {
         return Err(arg_err(
-            "ensemble_records = 0: must be at least 1 (or None)",
+            "accels_rms_g must hold at least two increasing non-negative values",
         ));
     }
-    Ok(Scope { ensemble_records })
-}
-
-fn design(base_rows: usize, seed: u32, scope: Scope) -> SobolDesign {
-    SobolDesign {
-        base_rows,
-        seed,
-        bootstrap: STUDY_BOOTSTRAP,
-        scope,
+    if !(freq_hz.is_finite() && freq_hz > 0.0) {
+        return Err(arg_err("freq_hz must be positive"));
     }
-}
-
-fn err(e: StudyError) -> PyErr {
-    match e {
-        StudyError::Ranges(_) | StudyError::Evaluations(_) | StudyError::Sensitivity(_) => {
-            arg_err(e.to_string())
-        }
-        e => solver_err(e),
-    }
-}
-
-fn kind_label(k: Kind) -> &'static str {
-    match k {
-        Kind::Quantitative => "quantitative",
-        Kind::Qualitative => "yes/no",
-    }
-}
-
-fn evaluation_dict<'py>(
-    py: Python<'py>,
-    e: &Evaluation,
-    claims: &Claims,
-) -> PyResult<Bound<'py, PyDict>> {
-    let d = PyDict::new(py);
-    d.set_item("claim", e.quantity.claim)?;
-    d.set_item("quantity", e.quantity.quantity)?;
-    let c = claims
-        .get(e.quantity.claim, e.quantity.quantity)
-        .ok_or_else(|| {
-            solver_err(StudyError::UnknownClaim(
-                e.quantity.claim,
-                e.quantity.quantity,
-            ))
-        })?;
-    d.set_item("paper", c.paper)?;
-    d.set_item("tolerance", c.tolerance())?;
-    d.set_item("unit", &c.unit)?;
-    d.set_item("outcome", e.outcome.label())?;
-    d.set_item("value", e.value)?;
-    d.set_item("deviation", e.deviation)?;
-    d.set_item("meets", e.meets)?;
-    d.set_item("kind", kind_label(e.kind))?;
-    Ok(d)
-}
-
-fn evaluations_list<'py>(
-    py: Python<'py>,
-    es: &[Evaluation],
-    claims: &Claims,
-) -> PyResult<Bound<'py, PyList>> {
-    let l = PyList::empty(py);
-    for e in es {
-        l.append(evaluation_dict(py, e, claims)?)?;
-    }
-    Ok(l)
-}
-
-/// The value of `key` in a dict of kind `what`, extracted; a named error if it is missing.
-fn field<'py, T: FromPyObjectOwned<'py>>(
-    d: &Bound<'py, PyDict>,
-    what: &str,
-    key: &str,
-) -> PyResult<T> {
-    d.get_item(key)?
-        .ok_or_else(|| arg_err(format!("{what} dict lacks the key {key:?}")))?
-        .extract()
-        .map_err(Into::into)
-}
-
-/// An evaluation dict back into the library's evaluation, renormalised by the claims file.
-fn evaluation_of(p: Prototype, d: &Bound<'_, PyDict>, claims: &Claims) -> PyResult<Evaluation> {
-    let get = |k: &str| field::<String>(d, "an evaluation", k);
-    let (claim, quantity, label) = (get("claim")?, get("quantity")?, get("outcome")?);
-    let value: f64 = field(d, "an evaluation", "value")?;
-    let qty = p.quantity(&claim, &quantity).ok_or_else(|| {
-        arg_err(format!(
-            "({claim}, {quantity}) is not a quantity of the study of {}",
-            p.key()
-        ))
-    })?;
-    let outcome = Outcome::from_label(&label, value)
-        .ok_or_else(|| arg_err(format!("outcome = {label:?} is not an outcome label")))?;
-    study::normalise(&qty, outcome, claims).map_err(err)
-}
-
-/// The keys of the uncertain factors, in the order of a point's coordinates.
-#[pyfunction]
-fn paper_study_factors() -> Vec<&'static str> {
-    Factor::ALL.iter().map(|f| f.key()).collect()
-}
-
-/// The points of the Saltelli design of `base_rows` base rows (a power of two), one row per
-/// point in unit-cube coordinates (`base_rows * (factors + 2)` rows).
-#[pyfunction]
-#[pyo3(signature = (base_rows, seed = STUDY_SEED))]
-fn paper_study_design<'py>(
-    py: Python<'py>,
-    base_rows: usize,
-    seed: u32,
-) -> PyResult<Bound<'py, PyArray2<f64>>> {
-    let d = design(base_rows, seed, Scope::default())
-        .design()
-        .map_err(err)?;
-    PyArray2::from_vec2(py, &d.points()).map_err(|e| arg_err(e.to_string()))
-}
-
-/// The study's quantities of prototype `prototype` (`"p1"` or `"p2"`) at a unit-cube point,
-/// each a dict; the ensemble claims too when `ensemble_records` is given (records per level).
-#[pyfunction]
-#[pyo3(signature = (prototype, point, ensemble_records = None))]
-fn paper_study_evaluate<'py>(
-    py: Python<'py>,
-    prototype: &str,
-    point: Vec<f64>,
-    ensemble_records: Option<usize>,
-) -> PyResult<Bound<'py, PyList>> {
-    let p = self::prototype(prototype)?;
-    let scope = scope(ensemble_records)?;
-    let (base, ranges, claims) = inputs(p)?;
-    let es = py
-        .detach(|| study::evaluate_at(p, &ranges, &base, &point, &claims, scope))
-        .map_err(err)?;
-    evaluations_list(py, &es, &claims)
-}
-
-/// The Sobol indices of every quantity from `evaluations` (one list of dicts per design point,
-/// in design order): one dict per quantity and factor, with the columns of the study's
-/// `sobol.parquet`.
-#[pyfunction]
-#[pyo3(signature = (prototype, base_rows, evaluations, ensemble_records = None, seed = STUDY_SEED))]
-fn paper_study_indices<'py>(
-    py: Python<'py>,
-    prototype: &str,
-    base_rows: usize,
-    evaluations: Vec<Vec<Bound<'py, PyDict>>>,
-    ensemble_records: Option<usize>,
-    seed: u32,
-) -> PyResult<Bound<'py, PyList>> {
-    let p = self::prototype(prototype)?;
-    let d = design(base_rows, seed, scope(ensemble_records)?);
-    let claims = Claims::bundled().map_err(solver_err)?;
-    let evals = evaluations
-        .iter()
-        .map(|point| point.iter().map(|e| evaluation_of(p, e, &claims)).collect())
-        .collect::<PyResult<Vec<Vec<Evaluation>>>>()?;
-    let run = py
-        .detach(move || study::sobol_indices(p, d, evals))
-        .map_err(err)?;
-    let rows = PyList::empty(py);
-    for q in &run.quantities {
-        let Some(ix) = &q.indices else { continue };
-        for (i, f) in Factor::ALL.iter().enumerate() {
-            let r = PyDict::new(py);
-            r.set_item("prototype", p.key())?;
-            r.set_item("claim", q.quantity.claim)?;
-            r.set_item("quantity", q.quantity.quantity)?;
-            r.set_item("factor", f.key())?;
-            for (k, x) in [("first", ix.first[i]), ("total", ix.total[i])] {
-                r.set_item(k, x.value)?;
-                r.set_item(format!("{k}_lo"), x.lo)?;
-                r.set_item(format!("{k}_hi"), x.hi)?;
-            }
-            r.set_item("absent_share", q.absent_share)?;
-            r.set_item("no_fold_share", q.no_fold_share)?;
-            r.set_item("no_grazing_share", q.no_grazing_share)?;
-            r.set_item("failed_share", q.failed_share)?;
-            rows.append(r)?;
-        }
-    }
-    Ok(rows)
-}
-
-fn minimax(starts: usize, iterations: u64, seed: u32) -> MinimaxSettings {
-    MinimaxSettings {
-        starts,
-        max_iters: iterations,
-        seed,
-        ..MinimaxSettings::default()
-    }
-}
-
-fn fit_dict<'py>(py: Python<'py>, f: &Fit) -> PyResult<Bound<'py, PyDict>> {
-    let d = PyDict::new(py);
-    d.set_item("start", f.start)?;
-    d.set_item("point", f.point.clone())?;
-    d.set_item("deviations", f.deviations.clone())?;
-    d.set_item("worst", f.worst)?;
-    d.set_item("iterations", f.iterations)?;
-    d.set_item("failures", f.failures)?;
-    Ok(d)
-}
-
-/// The calibration's starts of a prototype: the published point, then `starts` points of the
-/// scrambled Sobol sequence (one row each, unit-cube coordinates).
-#[pyfunction]
-#[pyo3(signature = (prototype, starts, seed = STUDY_SEED))]
-fn paper_study_calibration_starts<'py>(
-    py: Python<'py>,
-    prototype: &str,
-    starts: usize,
-    seed: u32,
-) -> PyResult<Bound<'py, PyArray2<f64>>> {
-    let (base, ranges, _) = inputs(self::prototype(prototype)?)?;
-    let s = study::calibration_starts(&ranges, &base, minimax(starts, 1, seed)).map_err(err)?;
-    PyArray2::from_vec2(py, &s).map_err(|e| arg_err(e.to_string()))
-}
-
-/// One start of the calibration (start `start` of `paper_study_calibration_starts` with
-/// `starts` Sobol starts), at most `iterations` Nelder-Mead iterations: a dict with `start`,
-/// `point`, `deviations`, `worst`, `iterations`, `failures`.
-#[pyfunction]
-#[pyo3(signature = (prototype, start, starts, iterations, ensemble_records = None, seed = STUDY_SEED))]
-fn paper_study_calibrate_start<'py>(
-    py: Python<'py>,
-    prototype: &str,
-    start: usize,
-    starts: usize,
-    iterations: u64,
-    ensemble_records: Option<usize>,
-    seed: u32,
-) -> PyResult<Bound<'py, PyDict>> {
-    let p = self::prototype(prototype)?;
-    let scope = scope(ensemble_records)?;
-    let (base, ranges, claims) = inputs(p)?;
-    let settings = minimax(starts, iterations, seed);
-    let fit = py
-        .detach(move || study::calibrate_start(p, &ranges, &base, settings, &claims, scope, start))
-        .map_err(err)?;
-    fit_dict(py, &fit)
-}
-
-/// The calibration from its starts' fits (the dicts of `paper_study_calibrate_start`, in any
-/// order): `fits` best first, `worst`, `published_worst`, `meets_all`, and the evaluations
-/// `best` and `published`.
-#[pyfunction]
-#[pyo3(signature = (prototype, fits, ensemble_records = None))]
-fn paper_study_calibration<'py>(
-    py: Python<'py>,
-    prototype: &str,
-    fits: Vec<Bound<'py, PyDict>>,
-    ensemble_records: Option<usize>,
-) -> PyResult<Bound<'py, PyDict>> {
-    let p = self::prototype(prototype)?;
-    let scope = scope(ensemble_records)?;
-    let (base, ranges, claims) = inputs(p)?;
-    let fits = fits
-        .iter()
-        .map(|d| {
-            Ok(Fit {
-                start: field(d, "a fit", "start")?,
-                point: field(d, "a fit", "point")?,
-                deviations: field(d, "a fit", "deviations")?,
-                worst: field(d, "a fit", "worst")?,
-                iterations: field(d, "a fit", "iterations")?,
-                failures: field(d, "a fit", "failures")?,
-            })
+    let dev = device.inner.clone();
+    let report = py
+        .detach(move || {
+            let cfg = steady_config(&dev, freq_hz);
+            amplitude_sweep_report(&dev, freq_hz, &acc, &cfg, refine_tol_g, |_| {})
         })
-        .collect::<PyResult<Vec<Fit>>>()?;
-    let cal = py
-        .detach(|| study::calibration_of_fits(p, &ranges, &base, &claims, scope, fits))
-        .map_err(err)?;
-    let d = PyDict::new(py);
-    let fl = PyList::empty(py);
-    for f in &cal.fits {
-        fl.append(fit_dict(py, f)?)?;
+        .map_err(solver_err)?;
+    amplitude_dict(py, &report)
+}
+
+// ---------------------------------------------------------------------------------------------
+// Random vibration
+
+fn summary_items(d: &Bound<'_, PyDict>, s: &RecordSummary) -> PyResult<()> {
+    d.set_item("p1_w", s.p1_w)?;
+    d.set_item("p2_w", s.p2_w)?;
+    d.set_item("p_total_w", s.p_total_w())?;
+    d.set_item("x_rms_m", s.x_rms_m)?;
+    d.set_item("x_peak_m", s.x_peak_m)?;
+    d.set_item("contact_fraction", s.contact_fraction)?;
+    d.set_item("impacts", s.impacts)?;
+    d.set_item("accel_mean_square_si", s.accel_mean_square_si)?;
+    Ok(())
+}
+
+fn record_spec(device: &Device, psd_g2_per_hz: f64, duration_s: f64) -> PyResult<RecordSpec> {
+    if !(psd_g2_per_hz.is_finite() && psd_g2_per_hz > 0.0) {
+        return Err(arg_err(
+            "psd_g2_per_hz must be a positive two-sided PSD in g^2/Hz",
+        ));
     }
-    d.set_item("fits", fl)?;
-    d.set_item("worst", cal.worst())?;
-    d.set_item("published_worst", cal.published_worst())?;
-    d.set_item("meets_all", cal.meets_all())?;
-    d.set_item("best", evaluations_list(py, &cal.best, &claims)?)?;
-    d.set_item("published", evaluations_list(py, &cal.published, &claims)?)?;
+    if !(duration_s.is_finite() && duration_s > 0.0) {
+        return Err(arg_err("duration_s must be positive"));
+    }
+    let mut spec = RecordSpec::paper(device, psd_g2_per_hz);
+    spec.noise.duration_s = duration_s;
+    Ok(spec)
+}
+
+/// One random-vibration record: band-limited white noise (10 kHz band, 100 kHz sampling) of
+/// two-sided level `psd_g2_per_hz` (g^2/Hz), realisation `stream` of `seed`, from rest with the
+/// device's pre-roll discarded. Returns the load voltages (arrays) and the record's summary.
+#[pyfunction]
+#[pyo3(signature = (device, psd_g2_per_hz, seed = 2012, stream = 0, duration_s = 10.0))]
+fn record<'py>(
+    py: Python<'py>,
+    device: &PyDevice,
+    psd_g2_per_hz: f64,
+    seed: u64,
+    stream: u64,
+    duration_s: f64,
+) -> PyResult<Bound<'py, PyDict>> {
+    let spec = record_spec(&device.inner, psd_g2_per_hz, duration_s)?;
+    let dev = device.inner.clone();
+    let rec = py
+        .detach(move || simulate_record(&dev, &spec, seed, stream))
+        .map_err(solver_err)?;
+    let d = PyDict::new(py);
+    d.set_item("sample_rate_hz", rec.sample_rate_hz)?;
+    d.set_item("v1_v", array(py, rec.v1_v))?;
+    d.set_item("v2_v", array(py, rec.v2_v))?;
+    summary_items(&d, &rec.summary)?;
     Ok(d)
 }
 
-/// Adds the study's functions to the module.
-pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+/// An ensemble of independent random-vibration records (record i uses stream i of `seed`),
+/// with the ensemble-mean output PSD, power, efficiency and bandwidth: the `endstop random`
+/// command's study (same segmenting and analysis band).
+#[pyfunction]
+#[pyo3(signature = (device, psd_g2_per_hz, records = 4, duration_s = 10.0, seed = 2012))]
+fn ensemble<'py>(
+    py: Python<'py>,
+    device: &PyDevice,
+    psd_g2_per_hz: f64,
+    records: usize,
+    duration_s: f64,
+    seed: u64,
+) -> PyResult<Bound<'py, PyDict>> {
+    if records == 0 {
+        return Err(arg_err("records must be at least 1"));
+    }
+    let record = record_spec(&device.inner, psd_g2_per_hz, duration_s)?;
+    let dev = device.inner.clone();
+    let spec = EnsembleSpec::for_device(&dev, record, seed, records);
+    let nperseg = spec.welch.nperseg;
+    let ens = py
+        .detach(move || run_ensemble(&dev, &spec, || {}))
+        .map_err(solver_err)?;
+    let d = PyDict::new(py);
+    d.set_item("nperseg", nperseg)?;
+    d.set_item("power_w", ens.power_w.mean)?;
+    d.set_item("power_ci95_w", ens.power_w.ci95)?;
+    d.set_item("efficiency", ens.efficiency.mean)?;
+    d.set_item("efficiency_ci95", ens.efficiency.ci95)?;
+    d.set_item("bw3db_hz", ens.mean_widths.bw3db_hz())?;
+    d.set_item("bw6db_hz", ens.mean_widths.bw6db_hz())?;
+    d.set_item("x_rms_m", ens.x_rms_m.mean)?;
+    d.set_item("x_peak_m", ens.x_peak_m)?;
+    d.set_item("contact_fraction", ens.contact_fraction.mean)?;
+    d.set_item("impacts", ens.impacts)?;
+    d.set_item(
+        "eq21_power_w",
+        two_port::eq21_power_w(&device.inner, psd_g2_per_hz),
+    )?;
+    let psd = &ens.mean_spectrum.total;
+    d.set_item("freq_hz", array(py, psd.freq_hz.clone()))?;
+    d.set_item("out_psd_w_per_hz", array(py, psd.density.clone()))?;
+    let per = PyDict::new(py);
+    let recs = &ens.records;
+    per.set_item(
+        "stream",
+        recs.iter().map(|r| r.stream).collect::<Vec<u64>>(),
+    )?;
+    per.set_item(
+        "p_total_w",
+        array(py, recs.iter().map(|r| r.summary.p_total_w()).collect()),
+    )?;
+    per.set_item(
+        "x_rms_m",
+        array(py, recs.iter().map(|r| r.summary.x_rms_m).collect()),
+    )?;
+    per.set_item(
+        "contact_fraction",
+        array(
+            py,
+            recs.iter().map(|r| r.summary.contact_fraction).collect(),
+        ),
+    )?;
+    per.set_item(
+        "bw3db_hz",
+        array(py, recs.iter().map(|r| r.widths.bw3db_hz()).collect()),
+    )?;
+    d.set_item("records", per)?;
+    Ok(d)
+}
+
+/// Adds the module's functions to `_native`.
+pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     for f in [
-        wrap_pyfunction!(paper_study_factors, m)?,
-        wrap_pyfunction!(paper_study_design, m)?,
-        wrap_pyfunction!(paper_study_evaluate, m)?,
-        wrap_pyfunction!(paper_study_indices, m)?,
-        wrap_pyfunction!(paper_study_calibration_starts, m)?,
-        wrap_pyfunction!(paper_study_calibrate_start, m)?,
-        wrap_pyfunction!(paper_study_calibration, m)?,
+        wrap_pyfunction!(up_sweep, m)?,
+        wrap_pyfunction!(amplitude_sweep, m)?,
+        wrap_pyfunction!(down_sweep, m)?,
+        wrap_pyfunction!(orbits, m)?,
+        wrap_pyfunction!(record, m)?,
+        wrap_pyfunction!(ensemble, m)?,
     ] {
         m.add_function(f)?;
     }

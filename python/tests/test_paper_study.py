@@ -96,12 +96,25 @@ def test_bad_input_raises_a_named_error():
 RECORDED = pathlib.Path(__file__).resolve().parents[2] / "data" / "recorded"
 
 
+# Two estimates of one ensemble quantity from independent realisations, each with standard
+# error ci95 / 1.96, differ with standard error sqrt(2) times that. A recorded value is allowed
+# RECORDED_Z of those: a chance of 6e-5 per value, under 1e-3 over the twenty-odd ensemble values
+# of the runs, so that new realisations of the records pass and a shift of the model or of the
+# protocol larger than that fails.
+RECORDED_Z = 4.0
+
+# Quantities without sampling error (continuations, eqs 15-18) are compared to this relative
+# tolerance: a rounding-level change of their arithmetic passes, anything else fails.
+RECORDED_RTOL = 1e-9
+
+
 @pytest.mark.parametrize("name", ["study-p1-ensembles", "study-p2-ensembles"])
 def test_the_recorded_cluster_run_is_what_this_code_computes(name):
     # The book shows recorded Dask runs with the ensemble claims (too long to rerun in a
     # build). Each run's published and best sets, evaluated again now, must give the recorded
-    # outcomes and values exactly: a change of the model or of the protocol that moves them
-    # fails here and asks for the run to be repeated.
+    # outcomes, and the recorded values within their sampling error (see RECORDED_Z): a change
+    # of the model or of the protocol that moves them fails here and asks for the run to be
+    # repeated (`just record`).
     pd = pytest.importorskip("pandas")
     record = RECORDED / name
     run = json.loads((record / "run.json").read_text())
@@ -113,5 +126,12 @@ def test_the_recorded_cluster_run_is_what_this_code_computes(name):
     for which, point in [("published", published), ("best", best)]:
         now = study.evaluate(proto, point, run["ensemble_records"])
         rec = cal[cal["set"] == which]
-        assert [(e["claim"], e["quantity"], e["outcome"], e["value"]) for e in now] == list(
-            zip(rec["claim"], rec["quantity"], rec["outcome"], rec["value"])), which
+        assert [(e["claim"], e["quantity"], e["outcome"]) for e in now] == list(
+            zip(rec["claim"], rec["quantity"], rec["outcome"])), which
+        for e, value in zip(now, rec["value"]):
+            what = (which, e["claim"], e["quantity"], e["value"], value)
+            if e["ci95"] is None:
+                assert e["value"] == pytest.approx(value, rel=RECORDED_RTOL, abs=0.0), what
+            else:
+                allowed = RECORDED_Z * math.sqrt(2.0) * e["ci95"] / 1.96
+                assert abs(e["value"] - value) <= allowed, what + (allowed,)

@@ -11,43 +11,51 @@
 //!   output is therefore `E[x²] = 2 B Sa_SI`, with `Sa_SI = Sa · G²` (m²/s⁴/Hz) and
 //!   [`crate::G`] = 9.81 m/s². A one-sided estimate (e.g. [`crate::signal::welch()`]) reads
 //!   `2 Sa` in the band.
-//! * **Grid.** `N = round(duration_s · sample_rate_hz)` samples, bin spacing `df = fs / N`,
-//!   bin `k` at `f_k = k df`.
+//! * **Grid.** `N = round(duration_s · sample_rate_hz)` samples, read off one period of `M`
+//!   samples of a periodic band-limited signal: `M` is the least even number `>= N` whose half
+//!   factors into 2, 3, 5 and 7 and that is a multiple of `fs / B` when that ratio is an
+//!   integer, so that its FFT has small radices only and the band edge falls on a bin. The
+//!   paper's 10 s record has `M = N = 10^6`; a record with a pre-roll (e.g. 1 000 800 samples)
+//!   is the first `N` samples of a slightly longer period (1 003 520). The bin spacing is
+//!   `df = fs / M`, bin `k` at `f_k = k df`. Any `N` consecutive samples of the periodic
+//!   signal are a stationary Gaussian sequence with the same spectrum, so the truncation
+//!   changes no statistic.
 //! * **Band.** Bins `1 <= k <= K` with `K = floor(B / df)` are filled; the band edge is
 //!   *inclusive* (a bin exactly at `B` is filled; a relative slack of 1e-9 absorbs rounding in
-//!   `B / df`). DC (`k = 0`) is zero, so the record has zero mean (up to rounding). Every other
-//!   bin, including Nyquist, is zero. Since `B < fs/2` is required, `K < N/2`.
+//!   `B / df`). DC (`k = 0`) is zero, so a period has zero mean (up to rounding). Every other
+//!   bin, including Nyquist, is zero. Since `B < fs/2` is required, `K < M/2`.
 //! * **Coefficients.** `X_k = σ (g₁ + i g₂) / √2` with independent standard normals `g₁, g₂`
-//!   and `σ² = E|X_k|² = N · fs · Sa_SI`; `X_{N-k} = conj(X_k)` (Hermitian), so the output is
-//!   real. Each bin pair contributes `2 E|X_k|² / N² = 2 Sa_SI df` to the variance, i.e. `Sa_SI`
+//!   and `σ² = E|X_k|² = M · fs · Sa_SI`; `X_{M-k} = conj(X_k)` (Hermitian), so the output is
+//!   real. Each bin pair contributes `2 E|X_k|² / M² = 2 Sa_SI df` to the variance, i.e. `Sa_SI`
 //!   per Hz on each side. The realised variance is `2 K df Sa_SI` in expectation, which equals
-//!   `2 B Sa_SI` whenever `B / df` is an integer (it is for the paper's values: `K = 100 000`).
-//! * **Normalisation.** RustFFT does not normalise. The inverse transform computes
-//!   `Σ_k X_k e^{+2πikn/N}`; we divide by `N` once, when copying the real part out
-//!   (`x[n] = Re(...) / N`), which makes it the inverse of the un-normalised forward DFT.
-//!   For an even `N` (the paper's records) the real output is computed with one complex
-//!   transform of length `N/2` (the even and odd samples as real and imaginary parts, see
-//!   `synthesize`), which equals the full-length transform to rounding and costs half.
+//!   `2 B Sa_SI` whenever `B / df` is an integer (the choice of `M` makes it one whenever
+//!   `fs / B` is an integer, as for the paper's values: `K = 100 000` at `M = 10^6`).
+//! * **Normalisation.** The inverse transform (`realfft`'s complex-to-real transform over
+//!   RustFFT) does not normalise: it computes `Σ_k X_k e^{+2πikn/M}` over the full Hermitian
+//!   spectrum from the half `X_0..=X_{M/2}`, with one complex FFT of length `M/2`; we divide
+//!   by `M` once, when copying the samples out (`x[n] = (...) / M`), which makes it the
+//!   inverse of the un-normalised forward DFT.
 //! * **Random numbers.** `ChaCha8Rng::seed_from_u64(seed)` then `set_stream(stream)`; one
 //!   stream is one realisation, so parallel realisations do not depend on thread scheduling.
 //!   Gaussians come from Box-Muller on `rng.random::<f64>()` (53-bit uniforms in `[0, 1)`):
 //!   `u₁ = 1 - U` in `(0, 1]`, `r = √(-2 ln u₁)`, `θ = 2π U'`, `(g₁, g₂) = (r cos θ, r sin θ)`,
 //!   one pair per bin, bins drawn in increasing `k`.
-//! * **Determinism.** The FFT uses RustFFT's scalar planner, so the result does not depend on
-//!   which SIMD instructions the CPU offers. Bit-identical output across machines still
+//! * **Determinism.** RustFFT is built without its SIMD features, so its planner is scalar and
+//!   the result does not depend on which SIMD instructions the CPU offers. Bit-identical output across machines still
 //!   assumes the same `ln`/`sin`/`cos` (the platform libm) for Box-Muller and for RustFFT's
 //!   twiddle factors; on one platform the bytes are fixed by `(spec, seed, stream)`.
 //!
-//! Memory: one complex FFT buffer of `N/2` values (plus RustFFT's scratch), kept per thread
-//! with the transform's plan for the next record of the same length, and the output vector.
+//! Memory: the half-spectrum and the transform's output (`M/2 + 1` complex and `M` real values,
+//! plus RustFFT's scratch), kept per thread with the transform's plan for the next record of
+//! the same length, and the output vector.
 
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use std::cell::RefCell;
 use std::sync::Arc;
 
-use rustfft::num_complex::Complex;
-use rustfft::{Fft, FftPlannerScalar};
+use realfft::num_complex::Complex;
+use realfft::{ComplexToReal, RealFftPlanner};
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
@@ -103,7 +111,7 @@ pub enum NoiseError {
     RecordLength {
         /// `duration_s * sample_rate_hz`, before rounding.
         samples: f64,
-        /// Bin spacing `sample_rate_hz / N`, Hz.
+        /// Bin spacing `sample_rate_hz / M` (the synthesis period, see the module docs), Hz.
         df_hz: f64,
         /// Requested band edge, Hz.
         bandwidth_hz: f64,
@@ -168,25 +176,66 @@ impl NoiseSpec {
         2.0 * self.bandwidth_hz * self.psd_g2_per_hz
     }
 
-    /// Validate, then return `(N, K)`: samples and the highest filled bin.
-    fn grid(&self) -> Result<(usize, usize), NoiseError> {
+    /// Validate, then return the record's grid: samples `N`, synthesis period `M` and the
+    /// highest filled bin `K` (see the module docs).
+    fn grid(&self) -> Result<Grid, NoiseError> {
         self.validate()?;
         let samples = self.duration_s * self.sample_rate_hz;
         let n = samples.round();
-        let df_hz = self.sample_rate_hz / n;
-        let k_max = (self.bandwidth_hz / df_hz * (1.0 + BAND_EDGE_SLACK)).floor();
-        if !(2.0..=MAX_SAMPLES).contains(&n) || k_max < 1.0 {
-            return Err(NoiseError::RecordLength {
-                samples,
-                df_hz,
-                bandwidth_hz: self.bandwidth_hz,
-            });
+        let bad = |df_hz: f64| NoiseError::RecordLength {
+            samples,
+            df_hz,
+            bandwidth_hz: self.bandwidth_hz,
+        };
+        if !(2.0..=MAX_SAMPLES).contains(&n) {
+            return Err(bad(self.sample_rate_hz / n));
         }
         let n = n as usize;
-        // B < fs/2 keeps K below N/2; the min only guards the slack at tiny N.
-        let k_max = (k_max as usize).min((n - 1) / 2);
-        Ok((n, k_max))
+        let period = synthesis_period(n, self.sample_rate_hz / self.bandwidth_hz);
+        let df_hz = self.sample_rate_hz / period as f64;
+        let k_max = (self.bandwidth_hz / df_hz * (1.0 + BAND_EDGE_SLACK)).floor();
+        if k_max < 1.0 {
+            return Err(bad(df_hz));
+        }
+        // B < fs/2 keeps K below M/2; the min only guards the slack at tiny M.
+        let k_max = (k_max as usize).min((period - 1) / 2);
+        Ok(Grid { n, period, k_max })
     }
+}
+
+/// The grid of a record: `n` samples, read off one period of `period` samples of a
+/// band-limited periodic signal whose bins `1..=k_max` are filled.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+struct Grid {
+    n: usize,
+    period: usize,
+    k_max: usize,
+}
+
+/// The synthesis period `M` of a record of `n` samples: the least even `M >= n` whose half
+/// factors into 2, 3, 5 and 7 (so that its FFT has only small radices) and which is a
+/// multiple of `fs / B` when that ratio is an integer (so that the band edge falls on a bin,
+/// as it does for the paper's 10 s record, whose `M` is its `N`).
+fn synthesis_period(n: usize, fs_over_b: f64) -> usize {
+    let ratio = fs_over_b.round();
+    let step = if (fs_over_b - ratio).abs() <= BAND_EDGE_SLACK * fs_over_b && ratio >= 1.0 {
+        ratio as usize
+    } else {
+        1
+    };
+    let smooth = |mut m: usize| {
+        for p in [2, 3, 5, 7] {
+            while m.is_multiple_of(p) {
+                m /= p;
+            }
+        }
+        m == 1
+    };
+    let mut m = n.next_multiple_of(2);
+    while !(m.is_multiple_of(step) && smooth(m / 2)) {
+        m += 2;
+    }
+    m
 }
 
 /// RMS acceleration of the ideal band-limited record, `sqrt(2 B Sa) · G`, m/s².
@@ -212,20 +261,18 @@ pub fn generate_shared(spec: &NoiseSpec, seed: u64, stream: u64) -> Result<Arc<[
     synthesize(spec, seed, stream, |n, sample| (0..n).map(sample).collect())
 }
 
-/// The inverse transform of one record length, kept per thread: an ensemble's records all
+/// The inverse transform of one synthesis period, kept per thread: an ensemble's records all
 /// have the same length, so each thread plans (and computes the twiddle factors) once.
 struct Synthesis {
-    n: usize,
+    period: usize,
     k_max: usize,
-    /// Inverse FFT of length `n / 2` (`n` even) or `n`.
-    fft: Arc<dyn Fft<f64>>,
-    /// `e^{2πik/n}` for `k = 0..=K` (`n` even only).
-    twiddle: Vec<Complex<f64>>,
-    /// The transform's buffer and scratch.
-    buf: Vec<Complex<f64>>,
+    /// Inverse real FFT of length `period` (Hermitian half-spectrum in, real samples out).
+    fft: Arc<dyn ComplexToReal<f64>>,
+    /// The half-spectrum `X_0..=X_{period/2}` and the transform's scratch.
+    spectrum: Vec<Complex<f64>>,
     scratch: Vec<Complex<f64>>,
-    /// The drawn coefficients `X_1..=X_K`.
-    coeffs: Vec<Complex<f64>>,
+    /// The transform's output, `period` samples (un-normalised).
+    samples: Vec<f64>,
 }
 
 thread_local! {
@@ -233,123 +280,78 @@ thread_local! {
 }
 
 impl Synthesis {
-    fn new(n: usize, k_max: usize) -> Self {
-        let half = n.is_multiple_of(2);
-        let len = if half { n / 2 } else { n };
-        let fft = FftPlannerScalar::new().plan_fft_inverse(len);
-        let twiddle = if half {
-            (0..=k_max)
-                .map(|k| {
-                    let (s, c) = (std::f64::consts::TAU * k as f64 / n as f64).sin_cos();
-                    Complex::new(c, s)
-                })
-                .collect()
-        } else {
-            Vec::new()
-        };
-        let scratch = vec![Complex::new(0.0, 0.0); fft.get_inplace_scratch_len()];
+    fn new(period: usize, k_max: usize) -> Self {
+        let fft = RealFftPlanner::<f64>::new().plan_fft_inverse(period);
         Self {
-            n,
+            period,
             k_max,
+            spectrum: fft.make_input_vec(),
+            scratch: fft.make_scratch_vec(),
+            samples: fft.make_output_vec(),
             fft,
-            twiddle,
-            buf: vec![Complex::new(0.0, 0.0); len],
-            scratch,
-            coeffs: Vec::with_capacity(k_max),
         }
     }
 }
 
-/// Draws the coefficients of `(spec, seed, stream)`, transforms them, and hands `out` the
-/// record length and the function that reads sample `j` off the transform.
+/// Draws the coefficients of `(spec, seed, stream)`, transforms them over the synthesis
+/// period, and hands `out` the record length and the function that reads sample `j`.
 ///
-/// For an even length `n` the real record is obtained from one complex transform of half the
-/// length: with `X_k` the Hermitian spectrum and `w = e^{2πi/n}`, the sequence
-/// `z_m = x_{2m} + i x_{2m+1}` is the (un-normalised, divided by `n`) inverse transform of
-/// length `n/2` of `Y_k = (X_k + X_{k+n/2}) + i (X_k - X_{k+n/2}) w^k`, where
-/// `X_{k+n/2} = conj(X_{n/2-k})` (split the sum over `k` that defines `x_j` into `k < n/2`
-/// and `k + n/2`, for even and for odd `j`). Only `Y_k` with `1 <= k <= K` or `n/2 - K <= k < n/2` are
-/// non-zero, and `w^{n/2-j} = -conj(w^j)`, so the twiddles of `k <= K` suffice. The result
-/// equals the full-length transform to rounding.
+/// The transform is `realfft`'s complex-to-real inverse: from the half-spectrum
+/// `X_0..=X_{M/2}` of the Hermitian spectrum it computes `Σ_k X_k e^{2πijk/M}` over all `M`
+/// bins, un-normalised, with one complex FFT of half the length for an even `M`.
 fn synthesize<T>(
     spec: &NoiseSpec,
     seed: u64,
     stream: u64,
     out: impl FnOnce(usize, &dyn Fn(usize) -> f64) -> T,
 ) -> Result<T, NoiseError> {
-    let (n, k_max) = spec.grid()?;
+    let grid = spec.grid()?;
     SYNTHESIS.with(|cell| {
         let mut cache = cell.borrow_mut();
-        if cache.as_ref().is_none_or(|c| c.n != n || c.k_max != k_max) {
-            *cache = Some(Synthesis::new(n, k_max));
+        if cache
+            .as_ref()
+            .is_none_or(|c| c.period != grid.period || c.k_max != grid.k_max)
+        {
+            *cache = Some(Synthesis::new(grid.period, grid.k_max));
         }
         let Some(syn) = cache.as_mut() else {
             unreachable!("the cache was just filled")
         };
         let mut rng = stream_rng(seed, stream);
-        let amp = coefficient_scale(spec, n);
-        syn.coeffs.clear();
-        syn.coeffs
-            .extend((1..=k_max).map(|_| draw_coefficient(&mut rng, amp)));
+        let amp = coefficient_scale(spec, grid.period);
         let zero = Complex::new(0.0, 0.0);
-        syn.buf.iter_mut().for_each(|b| *b = zero);
-        // RustFFT's inverse is un-normalised: divide by N when reading the samples, once.
-        let inv_n = 1.0 / n as f64;
-        if n.is_multiple_of(2) {
-            let half = n / 2;
-            // X_j for 1 <= j <= K, zero elsewhere on 0..=n/2.
-            let x = |j: usize| {
-                if (1..=k_max).contains(&j) {
-                    syn.coeffs[j - 1]
-                } else {
-                    zero
-                }
-            };
-            let i = Complex::new(0.0, 1.0);
-            let mut fill = |k: usize, w: Complex<f64>| {
-                let a = x(k);
-                let b = x(half - k).conj();
-                syn.buf[k] = (a + b) + i * (a - b) * w;
-            };
-            for k in 1..=k_max.min(half - 1) {
-                fill(k, syn.twiddle[k]);
-            }
-            for j in 1..=k_max.min(half - 1) {
-                let k = half - j;
-                if k > k_max {
-                    fill(k, -syn.twiddle[j].conj());
-                }
-            }
-            syn.fft.process_with_scratch(&mut syn.buf, &mut syn.scratch);
-            let buf = &syn.buf;
-            Ok(out(n, &|j| {
-                let z = buf[j / 2];
-                (if j % 2 == 0 { z.re } else { z.im }) * inv_n
-            }))
-        } else {
-            for (k, &c) in syn.coeffs.iter().enumerate() {
-                syn.buf[k + 1] = c;
-                syn.buf[n - k - 1] = c.conj();
-            }
-            syn.fft.process_with_scratch(&mut syn.buf, &mut syn.scratch);
-            let buf = &syn.buf;
-            Ok(out(n, &|j| buf[j].re * inv_n))
+        syn.spectrum[0] = zero;
+        for c in &mut syn.spectrum[1..=grid.k_max] {
+            *c = draw_coefficient(&mut rng, amp);
         }
+        syn.spectrum[grid.k_max + 1..].fill(zero);
+        // The buffers come from the plan and DC and Nyquist are zero: nothing to refuse.
+        if let Err(e) =
+            syn.fft
+                .process_with_scratch(&mut syn.spectrum, &mut syn.samples, &mut syn.scratch)
+        {
+            unreachable!("the inverse real FFT refused its own buffers: {e}")
+        }
+        // The inverse is un-normalised: divide by M when reading the samples, once.
+        let inv_m = 1.0 / grid.period as f64;
+        let samples = &syn.samples;
+        Ok(out(grid.n, &|j| samples[j] * inv_m))
     })
 }
 
 /// The Fourier coefficients `X_0..=X_K` that [`generate`] transforms for `(spec, seed, stream)`.
 ///
-/// `X_0 = 0`; bins `K < k <= N/2` are zero and `X_{N-k} = conj(X_k)`, so
-/// `x[n] = (1/N) Σ_k X_k e^{2πikn/N}` is the output of [`generate`], and its mean square is
-/// `(2/N²) Σ_{k=1..K} |X_k|²` (Parseval). Intended for tests and diagnostics.
+/// `X_0 = 0`; bins `K < k <= M/2` are zero and `X_{M-k} = conj(X_k)`, so
+/// `x[n] = (1/M) Σ_k X_k e^{2πikn/M}` is the output of [`generate`] for `n < N`, and the mean
+/// square of a period is `(2/M²) Σ_{k=1..K} |X_k|²` (Parseval; `M = N` for the paper's 10 s
+/// record). Intended for tests and diagnostics.
 pub fn spectrum(spec: &NoiseSpec, seed: u64, stream: u64) -> Result<Vec<Complex<f64>>, NoiseError> {
-    let (n, k_max) = spec.grid()?;
+    let grid = spec.grid()?;
     let mut rng = stream_rng(seed, stream);
-    let amp = coefficient_scale(spec, n);
-    let mut out = Vec::with_capacity(k_max + 1);
+    let amp = coefficient_scale(spec, grid.period);
+    let mut out = Vec::with_capacity(grid.k_max + 1);
     out.push(Complex::new(0.0, 0.0));
-    out.extend((1..=k_max).map(|_| draw_coefficient(&mut rng, amp)));
+    out.extend((1..=grid.k_max).map(|_| draw_coefficient(&mut rng, amp)));
     Ok(out)
 }
 
@@ -360,9 +362,10 @@ fn stream_rng(seed: u64, stream: u64) -> ChaCha8Rng {
     rng
 }
 
-/// `σ / √2` with `σ² = E|X_k|² = N fs Sa_SI`: each of Re, Im carries half the power.
-fn coefficient_scale(spec: &NoiseSpec, n: usize) -> f64 {
-    (0.5 * n as f64 * spec.sample_rate_hz * spec.psd_si()).sqrt()
+/// `σ / √2` with `σ² = E|X_k|² = M fs Sa_SI` over a period of `m` samples: each of Re, Im
+/// carries half the power.
+fn coefficient_scale(spec: &NoiseSpec, m: usize) -> f64 {
+    (0.5 * m as f64 * spec.sample_rate_hz * spec.psd_si()).sqrt()
 }
 
 /// One in-band coefficient `amp (g₁ + i g₂)`.
@@ -421,8 +424,32 @@ mod tests {
     #[test]
     fn paper_grid() {
         let spec = NoiseSpec::paper(1e-2);
-        assert_eq!(spec.grid().unwrap(), (1_000_000, 100_000));
+        let grid = spec.grid().unwrap();
+        assert_eq!(
+            (grid.n, grid.period, grid.k_max),
+            (1_000_000, 1_000_000, 100_000)
+        );
         let rms = rms_si(&spec);
         assert!((rms - (2.0 * 10e3 * 1e-2f64).sqrt() * 9.81).abs() < 1e-12);
+    }
+
+    #[test]
+    fn synthesis_periods_are_smooth_and_put_the_band_edge_on_a_bin() {
+        // Prototype 1's record with its 8 ms pre-roll, prototype 2's with 0.48 s, and the
+        // paper's bare 10 s record, at fs / B = 10.
+        assert_eq!(synthesis_period(1_000_800, 10.0), 1_003_520); // 2^12 x 5 x 7^2
+        assert_eq!(synthesis_period(1_048_000, 10.0), 1_049_760); // 2^5 x 3^8 x 5
+        assert_eq!(synthesis_period(1_000_000, 10.0), 1_000_000);
+        // An odd length rounds up; a ratio that is not an integer asks only for evenness.
+        assert_eq!(synthesis_period(7, 10.0), 10);
+        assert_eq!(synthesis_period(23, 2.5), 24);
+        let mut spec = NoiseSpec::paper(1e-2);
+        spec.duration_s = 10.008;
+        let grid = spec.grid().unwrap();
+        assert_eq!(
+            (grid.n, grid.period, grid.k_max),
+            (1_000_800, 1_003_520, 100_352)
+        );
+        assert_eq!(generate(&spec, 1, 0).unwrap().len(), 1_000_800);
     }
 }

@@ -1,11 +1,14 @@
-//! Adaptive Dormand-Prince 5(4) integrator with dense output and event location for hybrid
-//! (piecewise-smooth) systems.
+//! Explicit Runge-Kutta integration of hybrid (piecewise-smooth) systems: one stepping engine
+//! driven by Butcher tableaus ([`tableau`]; the stages in `runge_kutta.rs`), an adaptive driver with dense
+//! output and event location ([`Adaptive`]; with Dormand-Prince 5(4), [`Dopri5`], the crate's
+//! integrator) and a fixed-step one ([`FixedStep`]; with the classical RK4, the benchmark's
+//! yardstick), beside the exponential free-flight step of sampled inputs ([`exponential`]).
 //!
 //! # Why it is hand-written
 //! The end-stop model switches its right-hand side when the proof mass touches or leaves a
 //! stop. An integrator that steps across such a switch sees a non-smooth right-hand side, its
-//! error estimate breaks down, and the contact time is only known to within one step. At the
-//! time of writing no Rust crate locates events on the dense output and steps onto them
+//! error estimate breaks down, and the contact time is only known to within one step. No Rust
+//! crate we found locates events on the dense output and steps onto them
 //! (`differential-equations` 0.7 misplaces events, `ode_solvers` has none), so this module does.
 //!
 //! # Conventions
@@ -31,21 +34,28 @@
 //!   of whole periods): no step crosses a breakpoint.
 //! * The smallest step at time t is max(h_min, 16 eps |t|) ([`Options::min_step`]): a shorter
 //!   step could not advance t.
-//! * Error norm: RMS over components of err_i / (atol_i + rtol max(|y0_i|, |y1_i|)); a step is
-//!   accepted when the norm is <= 1. Step-size factor 0.9 err^(-1/5), limited to [0.2, 10].
-//! * Dense output: the 4th-order continuous extension of Hairer, Norsett and Wanner (the
-//!   `contd5` of their DOPRI5 code).
+//! * Error norm: RMS over components of err_i / (atol_i + rtol max(|y0_i|, |y1_i|)), with err
+//!   the embedded estimate ([`tableau::Tableau::error`]); a step is accepted when the norm is
+//!   <= 1. Step-size factor 0.9 err^(-1/(q+1)), q the pair's lower order (-1/5 for
+//!   Dormand-Prince), limited to [0.2, 10].
+//! * Dense output: the continuous extension in the form of Hairer, Norsett and Wanner's DOPRI5
+//!   (`contd5`, 4th order for Dormand-Prince), from the tableau's dense coefficients
+//!   ([`tableau::Tableau::dense`]).
 
-mod dopri5;
+mod adaptive;
 pub mod events;
 pub mod exponential;
+mod fixed;
+mod runge_kutta;
+pub mod tableau;
 
 use std::ops::AddAssign;
 
 use nalgebra::SVector;
 use thiserror::Error;
 
-pub use dopri5::Dopri5;
+pub use adaptive::{Adaptive, Dopri5};
+pub use fixed::{FixedStep, Rk4};
 
 /// Maximum number of guard functions of one mode.
 pub const MAX_GUARDS: usize = 3;
@@ -155,7 +165,7 @@ pub struct Options<const N: usize> {
     pub h_min: f64,
     /// First trial step (s).
     pub h_init: f64,
-    /// Maximum number of accepted + rejected steps per [`Dopri5::integrate`] call.
+    /// Maximum number of accepted + rejected steps per [`Adaptive::integrate`] call.
     pub max_steps: u64,
     /// Time tolerance for event location (s).
     pub event_time_tol: f64,

@@ -14,7 +14,8 @@
 //! * **Window.** Periodic Hann, `w[n] = 0.5 - 0.5 cos(2πn / nperseg)` for
 //!   `n = 0..nperseg` (scipy's `get_window('hann', nperseg)`, which is periodic: `fftbins=True`).
 //! * **Transform.** An un-normalised forward DFT of length `nperseg` (no zero padding),
-//!   `X_k = Σ_n w[n] (x[n] - mean) e^{-2πikn/nperseg}`.
+//!   `X_k = Σ_n w[n] (x[n] - mean) e^{-2πikn/nperseg}`, computed for `k = 0..=nperseg/2` by a
+//!   real-input FFT (RustFFT without SIMD, so the bits do not depend on the CPU).
 //! * **Scaling.** Density: `|X_k|² / (fs Σ w²)`, in *units²/Hz* where *units* are those of `x`
 //!   (m²/s⁴/Hz for an acceleration in m/s²). With this scaling the integral of the PSD is the
 //!   variance (Parseval), for any window.
@@ -25,8 +26,7 @@
 //!
 //! Bandwidths ([`crate::signal::width_at_fraction`]) are read from the density as given: no smoothing is
 
-use rustfft::num_complex::Complex;
-use rustfft::FftPlannerScalar;
+use realfft::RealFftPlanner;
 use thiserror::Error;
 
 /// Segmenting of a Welch estimate: segment length and overlap, in samples.
@@ -192,18 +192,23 @@ pub fn welch(x: &[f64], fs: f64, cfg: &WelchConfig) -> Result<Psd, SpectralError
     let window = hann_periodic(nperseg);
     let win_sq_sum: f64 = window.iter().map(|w| w * w).sum();
 
-    let fft = FftPlannerScalar::new().plan_fft_forward(nperseg);
-    let mut buf = vec![Complex::new(0.0, 0.0); nperseg];
-    let mut scratch = vec![Complex::new(0.0, 0.0); fft.get_inplace_scratch_len()];
+    // A real-input FFT (`realfft`'s real-to-complex transform over RustFFT, one complex FFT
+    // of half the length for an even `nperseg`) gives the bins `0..=nperseg/2` directly.
+    let fft = RealFftPlanner::<f64>::new().plan_fft_forward(nperseg);
+    let mut buf = fft.make_input_vec();
+    let mut bins = fft.make_output_vec();
+    let mut scratch = fft.make_scratch_vec();
     let mut acc = vec![0.0; n_bins];
 
     for seg in x.windows(nperseg).step_by(step).take(segments) {
         let mean = seg.iter().sum::<f64>() / nperseg as f64;
         for ((b, &v), &w) in buf.iter_mut().zip(seg).zip(&window) {
-            *b = Complex::new(w * (v - mean), 0.0);
+            *b = w * (v - mean);
         }
-        fft.process_with_scratch(&mut buf, &mut scratch);
-        for (a, c) in acc.iter_mut().zip(&buf) {
+        if let Err(e) = fft.process_with_scratch(&mut buf, &mut bins, &mut scratch) {
+            unreachable!("the real FFT refused its own buffers: {e}")
+        }
+        for (a, c) in acc.iter_mut().zip(&bins) {
             *a += c.norm_sqr();
         }
     }

@@ -3,7 +3,8 @@
 //! amplitude sweeps ([`amplitude`]), periodic orbits by shooting with their Floquet multipliers
 //! ([`orbit`]), their pseudo-arclength continuation with folds, branch points and grazing
 //! ([`continuation`]), basins of attraction ([`basins`]), and random-vibration records
-//! ([`record`]) and their ensembles ([`ensemble`]).
+//! ([`record`]) and their ensembles ([`ensemble`]), with the fixed-step RK4 record that is the
+//! benchmark's yardstick ([`rk4_record`]).
 
 pub mod amplitude;
 pub mod basins;
@@ -12,6 +13,7 @@ pub mod ensemble;
 pub mod orbit;
 pub mod record;
 pub mod record_ledger;
+pub mod rk4_record;
 pub mod steady;
 pub mod stepped;
 pub mod sweep;

@@ -26,9 +26,9 @@
 
 use crate::device::Device;
 use crate::drive::Sine;
-use crate::ode::{Dopri5, SolverError, Stats};
+use crate::ode::{Dopri5, Observer, SolverError, Stats, Step};
 use crate::physics::contact::Mode;
-use crate::physics::harvester::{Harvester, State};
+use crate::physics::harvester::{Harvester, State, SwitchKind};
 
 /// Minimum block length in periods for the default steady-state settings.
 pub const MIN_BLOCK_PERIODS: usize = 5;
@@ -142,8 +142,10 @@ impl Measurement {
 }
 
 /// Accumulates whole-period averages over accepted steps.
-#[derive(Debug, Clone, Copy, Default)]
-struct Block {
+/// The sums of one block of periods: an observer of its steps and of its rebounds off rigid
+/// stops (impacts without a contact phase).
+struct Block<'m> {
+    model: &'m Harvester<Sine>,
     v1sq: f64,
     v2sq: f64,
     vdsq: f64,
@@ -151,6 +153,34 @@ struct Block {
     contact_time: f64,
     impacts: u64,
     prev_mode_free: bool,
+}
+
+impl Observer<4, Mode> for Block<'_> {
+    fn step(&mut self, st: &Step<4>, m: Mode) {
+        let model = self.model;
+        let el = |y: &State| model.electrical(y).v;
+        self.v1sq += st.integrate(|y| el(y)[0].powi(2));
+        self.v2sq += st.integrate(|y| el(y)[1].powi(2));
+        self.vdsq += st.integrate(|y| {
+            let v = el(y);
+            (v[1] - v[0]).powi(2)
+        });
+        let xm = st.at_theta(0.5)[0].abs();
+        self.x_peak = self.x_peak.max(st.y1[0].abs()).max(xm);
+        if m.in_contact() {
+            self.contact_time += st.h;
+            if self.prev_mode_free {
+                self.impacts += 1;
+            }
+        }
+        self.prev_mode_free = !m.in_contact();
+    }
+
+    fn switched(&mut self, _t: f64, from: Mode, to: Mode) {
+        if SwitchKind::of(from, to) == SwitchKind::Rebound {
+            self.impacts += 1;
+        }
+    }
 }
 
 /// Integrates `model` from (y, mode) at phase zero to steady state and measures it.
@@ -177,27 +207,16 @@ pub fn steady_state(
         let t_start = t_end;
         t_end += block_t;
         let mut b = Block {
+            model,
             prev_mode_free: ode.mode() == Mode::Free,
-            ..Block::default()
+            v1sq: 0.0,
+            v2sq: 0.0,
+            vdsq: 0.0,
+            x_peak: 0.0,
+            contact_time: 0.0,
+            impacts: 0,
         };
-        ode.integrate(model, t_end, |st, m| {
-            let el = |y: &State| model.electrical(y).v;
-            b.v1sq += st.integrate(|y| el(y)[0].powi(2));
-            b.v2sq += st.integrate(|y| el(y)[1].powi(2));
-            b.vdsq += st.integrate(|y| {
-                let v = el(y);
-                (v[1] - v[0]).powi(2)
-            });
-            let xm = st.at_theta(0.5)[0].abs();
-            b.x_peak = b.x_peak.max(st.y1[0].abs()).max(xm);
-            if m.in_contact() {
-                b.contact_time += st.h;
-                if b.prev_mode_free {
-                    b.impacts += 1;
-                }
-            }
-            b.prev_mode_free = !m.in_contact();
-        })?;
+        ode.integrate_observed(model, t_end, &mut b)?;
         blocks += 1;
         let dur = t_end - t_start;
         let v1 = (b.v1sq / dur).sqrt();

@@ -186,17 +186,15 @@ impl Transition {
     }
 }
 
-/// Is this measurement in contact with a stop (non-zero contact fraction)?
+/// Is this measurement in contact with a stop (a non-zero contact fraction, or impacts: a
+/// rigid stop's rebounds take no time)?
 pub fn in_contact(m: &Measurement) -> bool {
-    m.contact_fraction > 0.0
+    m.contact_fraction > 0.0 || m.impacts_per_period > 0.0
 }
 
 /// Index of the first step with contact, if any.
 pub fn first_contact(sweep: &Sweep) -> Option<usize> {
-    sweep
-        .steps
-        .iter()
-        .position(|s| s.measurement.contact_fraction > 0.0)
+    sweep.steps.iter().position(|s| in_contact(&s.measurement))
 }
 
 /// Evenly spaced values from `start` to `stop` inclusive with spacing close to `step`.

@@ -1,5 +1,5 @@
 """Why the paper deviates (the library's ``endstop::paper::study``) in pieces a cluster can
-schedule. ``just study`` runs the same pieces in one process; here each is a function whose
+schedule. ``just deviations`` runs the same pieces in one process; here each is a function whose
 arguments and result pickle, so a Dask client can map them over workers:
 
 * :func:`design`: the Saltelli design (unit-cube points, one row each) over :func:`factors`;
@@ -18,7 +18,7 @@ cluster.
 from .. import _native
 
 SEED = 13
-"""The scramble of the study's design and of its calibration's Sobol starts (``just study``'s)."""
+"""The scramble of the study's design and of its calibration's Sobol starts (``just deviations``'s)."""
 
 
 def factors():

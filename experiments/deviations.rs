@@ -1,9 +1,9 @@
-//! Why the paper deviates (the edge; the study itself is `endstop::paper::study`): Sobol
+//! Why the paper deviates (the edge; the study itself is `endstop::paper::deviations`): Sobol
 //! first-order and total indices of every claim quantity the fast paths evaluate, per
 //! prototype, over the ranges of `data/sensitivity.toml`, and the multi-claim calibration of
 //! each prototype (the set inside the ranges that minimises the worst normalised deviation).
 //! Writes `sobol.parquet`, `calibration.parquet`, the heat map and `summary.json` under
-//! `data/results/study/`, and the book's numbers. Not part of `reproduce` (run `just study`);
+//! `data/results/deviations/`, and the book's numbers. Not part of `reproduce` (run `just deviations`);
 //! skipped when its inputs are unchanged since its last run, unless `--force`.
 
 use endstop_experiments as common;
@@ -15,8 +15,10 @@ use common::plot::{Figure, LinePlot, Series, Style, PALETTE};
 use common::{fmt_sig, frame::frame, row, Experiment};
 use endstop::num::minimax::MinimaxSettings;
 use endstop::paper::claims::{Claims, Kind};
-use endstop::paper::sensitivity::{Factor, RangesFile};
-use endstop::paper::study::{self, Calibration, Pareto, Prototype, Scope, SobolDesign, SobolRun};
+use endstop::paper::deviations::{
+    self, MultiClaimCalibration, Pareto, Prototype, Scope, SobolDesign, SobolRun,
+};
+use endstop::paper::deviations::{Factor, RangesFile};
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
@@ -43,27 +45,29 @@ struct Args {
 }
 
 fn main() {
-    common::run_main("study", run);
+    common::run_main("deviations", run);
 }
 
 fn run() -> Result<()> {
     let args = Args::parse();
-    let job = &common::jobs::STUDY;
+    let job = &common::jobs::DEVIATIONS;
     let key = common::freshness::key(job)?;
     if !args.force && common::freshness::is_fresh(job, &key) {
-        eprintln!("[study] skipped: inputs unchanged since its last run (use --force to rerun)");
+        eprintln!(
+            "[deviations] skipped: inputs unchanged since its last run (use --force to rerun)"
+        );
         return Ok(());
     }
-    let mut exp = Experiment::start("study");
+    let mut exp = Experiment::start("deviations");
     let p1 = exp.load_published("prototype1")?;
     let p2 = exp.load_published("prototype2")?;
     let claims = Claims::bundled()?;
     let ranges = RangesFile::bundled()?;
-    let boot = study::STUDY_BOOTSTRAP;
+    let boot = deviations::STUDY_BOOTSTRAP;
     let minimax = MinimaxSettings {
         starts: args.starts,
         max_iters: args.iters,
-        seed: study::STUDY_SEED,
+        seed: deviations::STUDY_SEED,
         ..MinimaxSettings::default()
     };
     let cases = [
@@ -81,17 +85,17 @@ fn run() -> Result<()> {
         let s = common::with_progress(points, &format!("sobol {}", proto.key()), |tick| {
             let design = SobolDesign {
                 base_rows: args.base,
-                seed: study::STUDY_SEED,
+                seed: deviations::STUDY_SEED,
                 bootstrap: boot,
                 scope,
             };
-            study::sobol(proto, r, dev, design, &claims, tick)
+            deviations::sobol(proto, r, dev, design, &claims, tick)
         })?;
         let sobol_s = t0.elapsed().as_secs_f64();
         let t0 = std::time::Instant::now();
         let evals = ((args.starts as u64 + 1) * (args.iters + 10)) as usize;
         let c = common::with_progress(evals, &format!("calibrate {}", proto.key()), |tick| {
-            study::calibrate(proto, r, dev, minimax, &claims, scope, tick)
+            deviations::calibrate(proto, r, dev, minimax, &claims, scope, tick)
         })?;
         let cal_s = t0.elapsed().as_secs_f64();
         let k = proto.key();
@@ -124,7 +128,7 @@ fn run() -> Result<()> {
                 e.deviation,
             );
             if let (Some(key), Some(v)) = (
-                study::best_value_key(e.quantity.claim, e.quantity.quantity),
+                deviations::best_value_key(e.quantity.claim, e.quantity.quantity),
                 e.outcome.value(),
             ) {
                 exp.number(&key, v);
@@ -133,7 +137,10 @@ fn run() -> Result<()> {
         sobols.push(s);
         cals.push(c);
     }
-    let paretos: Vec<Pareto> = sobols.iter().filter_map(study::most_conflicting).collect();
+    let paretos: Vec<Pareto> = sobols
+        .iter()
+        .filter_map(deviations::most_conflicting)
+        .collect();
     for p in &paretos {
         let k = p.prototype.key();
         exp.number(&format!("pareto_{k}_conflict"), p.conflict);
@@ -218,7 +225,7 @@ fn write_pareto(exp: &Experiment, runs: &[SobolRun], paretos: &[Pareto]) -> Resu
     exp.write_parquet("pareto", &mut frame(rows)?, "published ranges")?;
     for p in paretos {
         let front: Vec<(f64, f64)> = p.front.iter().map(|&i| p.points[i]).collect();
-        let label = |q: &study::Quantity| format!("{} {}", q.claim, q.quantity);
+        let label = |q: &deviations::Quantity| format!("{} {}", q.claim, q.quantity);
         let plot = LinePlot::new(
             &format!(
                 "Prototype {}: the most conflicting pair of claims over the design \
@@ -240,12 +247,12 @@ fn write_pareto(exp: &Experiment, runs: &[SobolRun], paretos: &[Pareto]) -> Resu
         )
         .x(0.0, 10.0)
         .y(0.0, 10.0);
-        exp.write_extra_plot(&format!("study_pareto_{}", p.prototype.key()), &plot)?;
+        exp.write_extra_plot(&format!("deviations_pareto_{}", p.prototype.key()), &plot)?;
     }
     Ok(())
 }
 
-fn write_calibration(exp: &Experiment, cals: &[Calibration]) -> Result<()> {
+fn write_calibration(exp: &Experiment, cals: &[MultiClaimCalibration]) -> Result<()> {
     let mut rows = Vec::new();
     for c in cals {
         for e in &c.best {
@@ -272,7 +279,7 @@ fn write_calibration(exp: &Experiment, cals: &[Calibration]) -> Result<()> {
 fn numbers_md(
     args: &Args,
     sobols: &[SobolRun],
-    cals: &[Calibration],
+    cals: &[MultiClaimCalibration],
     paretos: &[Pareto],
     claims: &Claims,
 ) -> String {
@@ -283,8 +290,8 @@ fn numbers_md(
          14, 15): {}.\n\n",
         args.base,
         args.base * (Factor::ALL.len() + 2),
-        study::STUDY_SEED,
-        study::STUDY_RESAMPLES,
+        deviations::STUDY_SEED,
+        deviations::STUDY_RESAMPLES,
         args.starts,
         args.iters,
         match args.ensemble_records {

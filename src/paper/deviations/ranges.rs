@@ -11,7 +11,7 @@ use crate::device::{Device, ParamError};
 use crate::paper::setups::{comb, comb_mut, endstop, hertz_stop, with_hertz, with_stops};
 
 /// The ranges file compiled into the crate.
-pub const SENSITIVITY_TOML: &str = include_str!("../../data/sensitivity.toml");
+pub const SENSITIVITY_TOML: &str = include_str!("../../../data/sensitivity.toml");
 
 /// An uncertain input.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -320,8 +320,8 @@ mod tests {
     #[test]
     fn the_bundled_ranges_load_and_their_corners_are_valid_devices() {
         let file = RangesFile::bundled().unwrap();
-        let p1 = prototype(include_str!("../../data/prototype1.toml"));
-        let p2 = prototype(include_str!("../../data/prototype2.toml"));
+        let p1 = prototype(include_str!("../../../data/prototype1.toml"));
+        let p2 = prototype(include_str!("../../../data/prototype2.toml"));
         for (ranges, dev) in [(&file.prototype1, &p1), (&file.prototype2, &p2)] {
             for corner in [0.0, 1.0] {
                 let v = ranges.variant(dev, &[corner; 8]).unwrap();
@@ -335,8 +335,8 @@ mod tests {
         // Tolerance: a relative factor lo + u (hi - lo) with u = (1 - lo) / (hi - lo) is 1 to
         // a few ulps, so each value is its own to 1e-14 relative.
         let file = RangesFile::bundled().unwrap();
-        let p1 = prototype(include_str!("../../data/prototype1.toml"));
-        let p2 = prototype(include_str!("../../data/prototype2.toml"));
+        let p1 = prototype(include_str!("../../../data/prototype1.toml"));
+        let p2 = prototype(include_str!("../../../data/prototype2.toml"));
         for (ranges, dev) in [(&file.prototype1, &p1), (&file.prototype2, &p2)] {
             let u = ranges.published_point(dev).unwrap();
             let v = ranges.variant(dev, &u).unwrap();
@@ -360,7 +360,7 @@ mod tests {
     #[test]
     fn a_point_sets_each_factor_inside_its_range() {
         let file = RangesFile::bundled().unwrap();
-        let p1 = prototype(include_str!("../../data/prototype1.toml"));
+        let p1 = prototype(include_str!("../../../data/prototype1.toml"));
         let v = file
             .prototype1
             .variant(&p1, &[0.5, 0.0, 1.0, 0.5, 0.15, 1.0, 0.0, 0.9])
@@ -402,7 +402,7 @@ mod tests {
             matches!(RangesFile::parse(&unknown), Err(RangesError::Parse(m)) if m.contains("mass"))
         );
         let file = RangesFile::bundled().unwrap();
-        let p1 = prototype(include_str!("../../data/prototype1.toml"));
+        let p1 = prototype(include_str!("../../../data/prototype1.toml"));
         assert!(matches!(
             file.prototype1.variant(&p1, &[0.5; 7]),
             Err(RangesError::Point(_))

@@ -1,64 +1,55 @@
-//! The Dormand-Prince 5(4) pair with its 4th-order dense output, stepping a
-//! [`HybridSystem`] and locating guard crossings on the dense output (see [`crate::ode`]).
+//! The adaptive driver: an embedded Runge-Kutta pair with dense output ([`Dormand-Prince
+//! 5(4)`](DormandPrince54) is the one the crate uses, [`Dopri5`]) stepping a [`HybridSystem`]
+//! under error control and locating guard crossings on the dense output (see
+//! [`crate::ode`]).
+
+use std::marker::PhantomData;
 
 use nalgebra::SVector;
 
 use crate::ode::events;
+use crate::ode::runge_kutta::{dense_output, error_estimate, stages};
+use crate::ode::tableau::{DormandPrince54, Method};
 use crate::ode::{
     HybridSystem, Observer, Options, SolverError, Stats, Step, Steps, MAX_GUARDS,
     MAX_SWITCHES_AT_ONE_TIME,
 };
 
-// Dormand-Prince 5(4) coefficients.
-const C2: f64 = 1.0 / 5.0;
-const C3: f64 = 3.0 / 10.0;
-const C4: f64 = 4.0 / 5.0;
-const C5: f64 = 8.0 / 9.0;
-const A21: f64 = 1.0 / 5.0;
-const A31: f64 = 3.0 / 40.0;
-const A32: f64 = 9.0 / 40.0;
-const A41: f64 = 44.0 / 45.0;
-const A42: f64 = -56.0 / 15.0;
-const A43: f64 = 32.0 / 9.0;
-const A51: f64 = 19372.0 / 6561.0;
-const A52: f64 = -25360.0 / 2187.0;
-const A53: f64 = 64448.0 / 6561.0;
-const A54: f64 = -212.0 / 729.0;
-const A61: f64 = 9017.0 / 3168.0;
-const A62: f64 = -355.0 / 33.0;
-const A63: f64 = 46732.0 / 5247.0;
-const A64: f64 = 49.0 / 176.0;
-const A65: f64 = -5103.0 / 18656.0;
-const A71: f64 = 35.0 / 384.0;
-const A73: f64 = 500.0 / 1113.0;
-const A74: f64 = 125.0 / 192.0;
-const A75: f64 = -2187.0 / 6784.0;
-const A76: f64 = 11.0 / 84.0;
-const E1: f64 = 71.0 / 57600.0;
-const E3: f64 = -71.0 / 16695.0;
-const E4: f64 = 71.0 / 1920.0;
-const E5: f64 = -17253.0 / 339200.0;
-const E6: f64 = 22.0 / 525.0;
-const E7: f64 = -1.0 / 40.0;
-const D1: f64 = -12715105075.0 / 11282082432.0;
-const D3: f64 = 87487479700.0 / 32700410799.0;
-const D4: f64 = -10690763975.0 / 1880347072.0;
-const D5: f64 = 701980252875.0 / 199316789632.0;
-const D6: f64 = -1453857185.0 / 822651844.0;
-const D7: f64 = 69997945.0 / 29380423.0;
+/// Safety factor of the step-size rule.
+const SAFETY: f64 = 0.9;
 
-/// The error norm below which the step-size factor `0.9 err^(-1/5)` is at least 1:
-/// `0.9^5` (rounded down, so that the skipped factor is always >= 1).
-const MAX_ERR_KEEPING_STEP: f64 = 0.59;
+/// The step-size rule's exponent for a pair whose lower order is `q`: `-1/(q + 1)`.
+const fn step_exponent(q: u32) -> f64 {
+    -1.0 / (q + 1) as f64
+}
 
-/// Integrator state: time, state, mode, FSAL derivative, proposed step and counters.
+/// The error norm at or below which the step-size factor `SAFETY err^(-1/(q + 1))` is at least
+/// 1: `SAFETY^(q + 1)`, rounded down to two decimals so that rounding in the power cannot
+/// bring the factor below 1 (0.59 for Dormand-Prince, q = 4).
+const fn max_err_keeping_step(q: u32) -> f64 {
+    let mut p = 1.0;
+    let mut i = 0;
+    while i <= q {
+        p *= SAFETY;
+        i += 1;
+    }
+    ((p * 100.0) as u64) as f64 / 100.0
+}
+
+/// The adaptive integrator with the Dormand-Prince 5(4) pair, the crate's integrator for
+/// hybrid systems.
+pub type Dopri5<Sys, const N: usize> = Adaptive<Sys, DormandPrince54, N, 7>;
+
+/// Integrator state of the embedded pair `M` (`K` stages) on a system `S` of dimension `N`:
+/// time, state, mode, the derivative at the current point, proposed step and counters.
 ///
-/// The fields are private because the derivative at the current point (`k1`, reused by the
-/// next step) is cached: read them with [`Dopri5::t`], [`Dopri5::y`], [`Dopri5::mode`],
-/// [`Dopri5::stats`] and [`Dopri5::options`], and move the integrator to another state with
-/// [`Dopri5::restart`], which drops the cache.
-#[derive(Debug, Clone)]
-pub struct Dopri5<S: HybridSystem<N>, const N: usize> {
+/// The fields are private because the derivative at the current point (`k1`, the last stage of
+/// the previous step for a first-same-as-last pair) is cached: read them with
+/// [`Adaptive::t`], [`Adaptive::y`], [`Adaptive::mode`], [`Adaptive::stats`] and
+/// [`Adaptive::options`], and move the integrator to another state with [`Adaptive::restart`],
+/// which drops the cache.
+#[derive(Debug)]
+pub struct Adaptive<S: HybridSystem<N>, M: Method<K>, const N: usize, const K: usize> {
     t: f64,
     y: SVector<f64, N>,
     mode: S::Mode,
@@ -72,17 +63,40 @@ pub struct Dopri5<S: HybridSystem<N>, const N: usize> {
     /// No step has been accepted since the last mode switch.
     after_event: bool,
     /// Per mode, the first full step accepted after the last switch into it: the step
-    /// proposed after the next switch into that mode (see [`Dopri5::switch`]).
+    /// proposed after the next switch into that mode (see [`Adaptive::switch`]).
     entry_steps: Vec<(S::Mode, f64)>,
+    method: PhantomData<M>,
 }
 
-struct Trial<const N: usize> {
+// By hand: a derived `Clone` would ask `M: Clone` of the method's marker type.
+impl<S: HybridSystem<N>, M: Method<K>, const N: usize, const K: usize> Clone
+    for Adaptive<S, M, N, K>
+{
+    fn clone(&self) -> Self {
+        Self {
+            t: self.t,
+            y: self.y,
+            mode: self.mode,
+            opts: self.opts.clone(),
+            stats: self.stats,
+            k1: self.k1,
+            h: self.h,
+            k1_valid: self.k1_valid,
+            switch_trail: self.switch_trail.clone(),
+            after_event: self.after_event,
+            entry_steps: self.entry_steps.clone(),
+            method: PhantomData,
+        }
+    }
+}
+
+struct Trial<const N: usize, const K: usize> {
     y1: SVector<f64, N>,
-    k: [SVector<f64, N>; 7],
+    k: [SVector<f64, N>; K],
     err: f64,
 }
 
-impl<S: HybridSystem<N>, const N: usize> Dopri5<S, N> {
+impl<S: HybridSystem<N>, M: Method<K>, const N: usize, const K: usize> Adaptive<S, M, N, K> {
     /// A new integrator at (t0, y0) in `mode`.
     pub fn new(t0: f64, y0: SVector<f64, N>, mode: S::Mode, opts: Options<N>) -> Self {
         let h = opts.h_init;
@@ -98,6 +112,7 @@ impl<S: HybridSystem<N>, const N: usize> Dopri5<S, N> {
             switch_trail: Vec::new(),
             after_event: false,
             entry_steps: Vec::new(),
+            method: PhantomData,
         }
     }
 
@@ -116,7 +131,7 @@ impl<S: HybridSystem<N>, const N: usize> Dopri5<S, N> {
         self.mode
     }
 
-    /// Counters since [`Dopri5::new`].
+    /// Counters since [`Adaptive::new`].
     pub fn stats(&self) -> Stats {
         self.stats
     }
@@ -138,7 +153,7 @@ impl<S: HybridSystem<N>, const N: usize> Dopri5<S, N> {
         self.switch_trail.clear();
     }
 
-    /// [`Dopri5::restart`] with the next trial step `h` instead of [`Options::h_init`] (for a
+    /// [`Adaptive::restart`] with the next trial step `h` instead of [`Options::h_init`] (for a
     /// caller that knows the scale of the motion, e.g. the sample interval of a sampled
     /// input in free flight).
     pub fn restart_with_step(&mut self, t: f64, y: SVector<f64, N>, mode: S::Mode, h: f64) {
@@ -150,29 +165,11 @@ impl<S: HybridSystem<N>, const N: usize> Dopri5<S, N> {
         self.y.iter().copied().collect()
     }
 
-    fn trial(&mut self, sys: &S, h: f64) -> Trial<N> {
-        let (t, y, k1, mode) = (self.t, self.y, self.k1, self.mode);
-        let k2 = sys.rhs(mode, t + C2 * h, &(y + k1 * (A21 * h)));
-        let k3 = sys.rhs(mode, t + C3 * h, &(y + (k1 * A31 + k2 * A32) * h));
-        let k4 = sys.rhs(
-            mode,
-            t + C4 * h,
-            &(y + (k1 * A41 + k2 * A42 + k3 * A43) * h),
-        );
-        let k5 = sys.rhs(
-            mode,
-            t + C5 * h,
-            &(y + (k1 * A51 + k2 * A52 + k3 * A53 + k4 * A54) * h),
-        );
-        let k6 = sys.rhs(
-            mode,
-            t + h,
-            &(y + (k1 * A61 + k2 * A62 + k3 * A63 + k4 * A64 + k5 * A65) * h),
-        );
-        let y1 = y + (k1 * A71 + k3 * A73 + k4 * A74 + k5 * A75 + k6 * A76) * h;
-        let k7 = sys.rhs(mode, t + h, &y1);
-        self.stats.rhs_evals += 6;
-        let e = (k1 * E1 + k3 * E3 + k4 * E4 + k5 * E5 + k6 * E6 + k7 * E7) * h;
+    fn trial(&mut self, sys: &S, h: f64) -> Trial<N, K> {
+        let (k, y1) = stages::<S, M, N, K>(sys, self.mode, self.t, &self.y, self.k1, h);
+        self.stats.rhs_evals += (K - 1) as u64;
+        let e = error_estimate::<M, N, K>(&k, h);
+        let y = &self.y;
         let mut acc = 0.0;
         for i in 0..N {
             let sc = self.opts.atol[i] + self.opts.rtol * y[i].abs().max(y1[i].abs());
@@ -180,26 +177,16 @@ impl<S: HybridSystem<N>, const N: usize> Dopri5<S, N> {
             acc += r * r;
         }
         let err = (acc / N as f64).sqrt();
-        Trial {
-            y1,
-            k: [k1, k2, k3, k4, k5, k6, k7],
-            err,
-        }
+        Trial { y1, k, err }
     }
 
-    fn make_step(&self, h: f64, tr: &Trial<N>) -> Step<N> {
-        let y0 = self.y;
-        let k = &tr.k;
-        let ydiff = tr.y1 - y0;
-        let bspl = k[0] * h - ydiff;
-        let r3 = ydiff - k[6] * h - bspl;
-        let r4 = (k[0] * D1 + k[2] * D3 + k[3] * D4 + k[4] * D5 + k[5] * D6 + k[6] * D7) * h;
+    fn make_step(&self, h: f64, tr: &Trial<N, K>) -> Step<N> {
         Step {
             t0: self.t,
             h,
-            y0,
+            y0: self.y,
             y1: tr.y1,
-            rcont: [y0, ydiff, bspl, r3, r4],
+            rcont: dense_output::<M, N, K>(&self.y, &tr.y1, &tr.k, h),
         }
     }
 
@@ -342,12 +329,16 @@ impl<S: HybridSystem<N>, const N: usize> Dopri5<S, N> {
                 continue;
             }
             // The step-size factor. A step clipped to a breakpoint keeps its proposal unless
-            // the factor is below 1, i.e. err > 0.9^5: skip the power where it cannot matter
-            // (most steps of a sampled input end on a breakpoint).
-            let fac = if clipped && tr.err <= MAX_ERR_KEEPING_STEP {
+            // the factor is below 1: skip the power where it cannot matter (most steps of a
+            // sampled input end on a breakpoint).
+            let (exponent, keep) = const {
+                let q = M::TABLEAU.error_order;
+                (step_exponent(q), max_err_keeping_step(q))
+            };
+            let fac = if clipped && tr.err <= keep {
                 1.0
             } else {
-                (0.9 * tr.err.powf(-0.2)).clamp(0.2, 10.0)
+                (SAFETY * tr.err.powf(exponent)).clamp(0.2, 10.0)
             };
             if tr.err > 1.0 {
                 self.stats.rejected += 1;
@@ -373,7 +364,11 @@ impl<S: HybridSystem<N>, const N: usize> Dopri5<S, N> {
                     self.stats.accepted += 1;
                     observer.step(&step, self.mode);
                     self.advance(t_new, tr.y1);
-                    self.k1 = tr.k[6];
+                    if const { M::TABLEAU.is_fsal() } {
+                        self.k1 = tr.k[K - 1];
+                    } else {
+                        self.k1_valid = false;
+                    }
                     if first_after_event && !clipped {
                         self.remember_entry_step(h);
                     }

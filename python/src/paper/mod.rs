@@ -1,0 +1,35 @@
+//! `endstop.paper`: the paper's figure protocols as the book's chapters run them
+//! ([`fig09`], [`fig13`]) and the study of why the paper deviates in pieces a cluster can
+//! schedule ([`study`]).
+
+use endstop::paper::claims::Value;
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyList};
+
+mod fig09;
+mod fig13;
+mod study;
+
+/// The claim values of a figure as a list of dicts (`claim`, `quantity`, `set`, `ours`,
+/// `uncertainty`, `note`).
+pub(crate) fn claims_list<'py>(py: Python<'py>, values: &[Value]) -> PyResult<Bound<'py, PyList>> {
+    let l = PyList::empty(py);
+    for v in values {
+        let d = PyDict::new(py);
+        d.set_item("claim", &v.claim)?;
+        d.set_item("quantity", &v.quantity)?;
+        d.set_item("set", &v.set)?;
+        d.set_item("ours", v.ours)?;
+        d.set_item("uncertainty", v.uncertainty)?;
+        d.set_item("note", &v.note)?;
+        l.append(d)?;
+    }
+    Ok(l)
+}
+
+/// Adds the package's functions to `_native`.
+pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    fig09::register(m)?;
+    fig13::register(m)?;
+    study::register(m)
+}
