@@ -101,7 +101,7 @@ impl RangeArgs {
                 sweep::RangeError::Ends => {
                     "--from and --to must be positive frequencies with --to > --from"
                 }
-                sweep::RangeError::Step => "--step must be positive and not larger than the range",
+                sweep::RangeError::Step => "--step must be positive, not larger than the range, and give at most 100000 steps",
                 sweep::RangeError::Accel => "--accel-rms-g must be a finite positive number",
             })
         })

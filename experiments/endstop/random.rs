@@ -260,6 +260,9 @@ fn noise(a: &RandomArgs, psd: f64) -> Result<()> {
     exp.finish()
 }
 
+/// The most samples a resampled measured record may have.
+const MAX_RESAMPLED: usize = 1 << 27;
+
 fn measured(a: &RandomArgs, path: PathBuf) -> Result<()> {
     let fs = a.sample_rate_hz;
     if !(fs.is_finite() && fs > 0.0) {
@@ -282,6 +285,17 @@ fn measured(a: &RandomArgs, path: PathBuf) -> Result<()> {
         );
     }
     rec.check_band(lo, hi, preroll_s)?;
+    // The resampled record and the response are held in memory: at most 2^27 samples (1 GiB
+    // per signal).
+    let samples = rec.duration_s() * fs;
+    if samples > MAX_RESAMPLED as f64 {
+        bail!(
+            "{}: --sample-rate-hz = {fs} gives {samples:.0} samples over the record's {} s: must \
+             give at most {MAX_RESAMPLED}",
+            path.display(),
+            fmt_sig(rec.duration_s(), 6)
+        );
+    }
 
     let (mut exp, loaded, device) = start("endstop-random", &a.device, a.bias_v, a.out.clone())?;
     let accel: Arc<[f64]> = rec.resampled(fs).into();
