@@ -525,9 +525,9 @@ fn run() -> Result<()> {
                 case: case.key.to_string(),
                 case_label: case.label.clone(),
                 device: dev.name.clone(),
-                stiffness: format!("{:?}", stiffness_model(&dev)).to_lowercase(),
-                bim: endstop(&dev).damping_n_s_per_m,
-                bias_v: comb(&dev).bias_v,
+                stiffness: format!("{:?}", stiffness_model(dev)).to_lowercase(),
+                bim: endstop(dev).damping_n_s_per_m,
+                bias_v: comb(dev).bias_v,
                 accel_rms_g: a,
                 freq_hz: f,
                 start: start_label.clone(),
@@ -557,7 +557,7 @@ fn run() -> Result<()> {
                 impacting: case.impacting,
                 status: String::new(),
             };
-            match run_ngspice(&cir, &dat, endstop(&dev).gap_m, t0, t1) {
+            match run_ngspice(&cir, &dat, endstop(dev).gap_m, t0, t1) {
                 Ok(r) => {
                     row.v1_spice = r.v1;
                     row.v2_spice = r.v2;

@@ -67,7 +67,7 @@ fn linear_claims_generated_at_a_known_set_are_met_and_its_identified_parameters_
         [
             d.mechanics.damping_n_s_per_m,
             d.mechanics.stiffness_n_per_m,
-            comb(&d).cp_f,
+            comb(d).cp_f,
         ]
     };
     let with = |i: usize, factor: f64| {

@@ -45,12 +45,20 @@ fn the_monodromy_through_rebounds_equals_finite_differences() {
         let mut stats = Stats::default();
         // Settle from rest for 40 periods, then shoot.
         let (y, _, _) = shooter
-            .flow(&forcing, 0.0, h.rest_state(), 40.0 / forcing.freq_hz, |_, _| {})
+            .flow(
+                &forcing,
+                0.0,
+                h.rest_state(),
+                40.0 / forcing.freq_hz,
+                |_, _| {},
+            )
             .unwrap();
         let o = shooter
             .solve(&forcing, Parameter::Frequency, 0.0, y, &mut stats)
             .unwrap();
-        let o = shooter.reanchor(&o, Parameter::Frequency, &mut stats).unwrap();
+        let o = shooter
+            .reanchor(&o, Parameter::Frequency, &mut stats)
+            .unwrap();
         assert!(
             o.summary.impacts >= 1 && o.summary.contact_fraction == 0.0,
             "{}: rebounds only ({} impacts)",
