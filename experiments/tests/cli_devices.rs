@@ -93,12 +93,19 @@ fn a_one_load_device_sweeps_with_zero_second_load_columns() {
     let _ = std::fs::remove_dir_all(out);
 }
 
+/// A bad record: its name, the edit of a good record's lines, and the messages expected.
+type BadRecordCase = (
+    &'static str,
+    Box<dyn Fn(&mut Vec<String>)>,
+    &'static [&'static str],
+);
+
 #[test]
 fn a_bad_record_is_refused_naming_file_line_and_range_and_nothing_is_written() {
     let dir = tmp("bad");
     let out = dir.join("out");
     let piezo = data("examples/piezo_cantilever.toml");
-    let cases: [(&str, Box<dyn Fn(&mut Vec<String>)>, &[&str]); 3] = [
+    let cases: [BadRecordCase; 3] = [
         (
             "gap",
             Box::new(|r: &mut Vec<String>| {
@@ -173,7 +180,7 @@ fn a_measured_record_drives_a_device_with_its_spectrum_beside() {
     let s = df.column("psd_g2_per_hz").unwrap().f64().unwrap().clone();
     let (peak_f, _) = f
         .into_iter()
-        .zip(s.into_iter())
+        .zip(&s)
         .map(|(f, s)| (f.unwrap(), s.unwrap()))
         .fold((0.0, 0.0), |a, b| if b.1 > a.1 { b } else { a });
     assert!(
