@@ -145,8 +145,9 @@ fn run() -> Result<()> {
     }
 
     // A full Figure 8 sweep: every curve of the published set.
-    let settings = endstop::paper::fig08::sweep_settings(&p1.device);
-    let curves = endstop::paper::fig08::Fig8Curve::ALL.map(endstop::paper::fig08::Fig8Curve::spec);
+    let settings = endstop::paper::figures::fig08::sweep_settings(&p1.device);
+    let curves = endstop::paper::figures::fig08::Fig8Curve::ALL
+        .map(endstop::paper::figures::fig08::Fig8Curve::spec);
     for (label, threads) in [("1 thread", 1usize), ("all threads", 0)] {
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(threads)

@@ -1,6 +1,6 @@
 //! Figure 5: the Hertz line-contact law (eq 6) in normalised form, delta0 for both prototypes
 //! (claim F5-a), and the linear end-stop stiffness of eq 19 (claim F5-b). The figure is
-//! stated in `endstop::paper::fig05`; this binary writes its outputs.
+//! stated in `endstop::paper::figures::fig05`; this binary writes its outputs.
 
 use endstop_experiments as common;
 
@@ -9,20 +9,24 @@ use common::frame::frame;
 use common::md::Table;
 use common::plot::{LinePlot, Series, Style, PALETTE};
 use common::{fmt_sig, row, Experiment};
-use endstop::paper::claims::Claims;
-use endstop::paper::fig05::{self, FIT_READINGS};
+use endstop::paper::claims::{keys, Claims};
+use endstop::paper::figures::fig05::{self, Fig05, FIT_READINGS};
+use endstop::paper::setups::{ParamSet, Prototypes};
+use endstop::paper::Figure;
 
 fn main() {
-    common::run_main("fig05", run);
+    common::run_main(Fig05::NAME, run);
 }
 
 fn run() -> Result<()> {
-    let mut exp = Experiment::start("fig05");
+    let mut exp = Experiment::start(Fig05::NAME);
     let claims = Claims::bundled()?;
-    let p1 = exp.load_published("prototype1")?;
-    let p2 = exp.load_published("prototype2")?;
-    let run = fig05::run(&p1.device, &p2.device);
-    exp.claims(fig05::claims(&run, &claims));
+    let setup = Prototypes {
+        prototype1: exp.load_published("prototype1")?.device,
+        prototype2: exp.load_published("prototype2")?.device,
+    };
+    let (run, _) = exp.run_figure::<Fig05>(&setup, &claims)?;
+    let published = ParamSet::Published.label();
     let [q1, q2] = &run.prototypes;
 
     let curve = run.curve.iter().map(|&(d, f)| {
@@ -30,10 +34,10 @@ fn run() -> Result<()> {
             "delta_over_delta0" => d,
             "force_over_f0" => f,
             "series" => "hertz eq 6",
-            "params" => "published",
+            "params" => published,
         ]
     });
-    exp.write_parquet("fig05_curve", &mut frame(curve)?, "published")?;
+    exp.write_parquet("fig05_curve", &mut frame(curve)?, published)?;
 
     let mut md = Table::new([
         "device",
@@ -69,11 +73,11 @@ fn run() -> Result<()> {
                 "fit" => label,
                 "coefficient" => c,
                 "k_im_n_per_m" => k,
-                "params" => "published",
+                "params" => published,
             ]);
         }
     }
-    exp.write_parquet("fig05_fits", &mut frame(fit_rows)?, "published")?;
+    exp.write_parquet("fig05_fits", &mut frame(fit_rows)?, published)?;
     exp.number("eq19_coefficient_p1_through_origin", q1.fits.through_origin);
     exp.number("eq19_coefficient_p1_with_intercept", q1.fits.with_intercept);
     exp.number("eq19_coefficient_p1_secant", q1.fits.secant);
@@ -85,7 +89,7 @@ fn run() -> Result<()> {
     exp.number("k_im_eq19_p2_n_per_m", q2.k_im_n_per_m);
 
     let printed = claims
-        .get("F5-b", "eq19_coefficient")
+        .claim(keys::F5B_EQ19_COEFFICIENT)
         .map_or(f64::NAN, |c| c.paper);
     let mut text = md.render();
     text.push_str(&format!(

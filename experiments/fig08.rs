@@ -1,4 +1,4 @@
-//! Figure 8 (the edge; the figure itself is `endstop::paper::fig08`): prototype 1 at 30 V,
+//! Figure 8 (the edge; the figure itself is `endstop::paper::figures::fig08`): prototype 1 at 30 V,
 //! up-sweeps at 4.1 and 5.5 g rms under the published and the calibrated parameter set (read
 //! from the calibration artefact), the paper's fit of b_im and the convergence repetition.
 //! Writes the per-step sweeps, the convergence and the b_im fits as Parquet, the two plots and
@@ -17,26 +17,21 @@ use common::{fmt_sig, frame::frame, row, Experiment};
 use endstop::paper::calibration::{CalibrationRecord, BIM_FIT_TOL_HZ, CALIBRATION_TOL_HZ};
 use endstop::paper::claims::{Claims, Value};
 use endstop::paper::curves::{law_key, CONV_FREQ_REL, CONV_RMS_REL};
-use endstop::paper::fig08::{self, Fig8Curve, SetRun, BIM_FITS};
+use endstop::paper::figures::fig08::{self, Fig08, Fig8Curve, SetRun, BIM_FITS};
 use endstop::paper::measured::{P1_MEASURED_JUMP_HZ, P1_MEASURED_ONSET_HZ};
 use endstop::paper::setups::ParamSet;
+use endstop::paper::Figure;
 use endstop::study::sweep::BranchEndKind;
 
 fn main() {
-    common::run_main("fig08", run);
+    common::run_main(Fig08::NAME, run);
 }
 
 fn run() -> Result<()> {
-    let mut exp = Experiment::start("fig08");
+    let mut exp = Experiment::start(Fig08::NAME);
     let (p1, cal) = common::prototype1_both_sets(&mut exp)?;
     let claims = Claims::bundled()?;
-
-    let steps = fig08::Protocol::new(&p1.device).coarse_steps();
-    let run = common::with_progress(steps, "fig08", |tick| {
-        fig08::run(&p1.device, &cal.device, tick)
-    })?;
-    let values = fig08::claims(&run, &claims)?;
-    exp.claims(values.clone());
+    let (run, values) = exp.run_figure::<Fig08>(&p1, &claims)?;
 
     record_numbers(&mut exp, &cal.record, &run);
     write_parquet(&exp, &run)?;
@@ -87,7 +82,7 @@ fn record_numbers(exp: &mut Experiment, cal: &CalibrationRecord, run: &fig08::Ru
 }
 
 fn write_parquet(exp: &Experiment, run: &fig08::Run) -> Result<()> {
-    let sets = "published+calibrated";
+    let sets = ParamSet::BOTH_LABEL;
     let rows = run
         .sets
         .iter()
@@ -179,7 +174,7 @@ fn numbers_md(
          tolerance. Where a sweep has no jump, the value given for a jump claim is the frequency \
          at which the impacting branch ends by a gradual loss of contact, and it says so.\n\n",
     );
-    md.push_str(&claims_table_both_sets(claims.of_experiment("fig08"), values, 5).render());
+    md.push_str(&claims_table_both_sets(claims.of_experiment(Fig08::NAME), values, 5).render());
 
     md.push_str(
         "\n### Every sweep\n\nOnset and branch end are refined to brackets of 0.1 Hz (midpoints \

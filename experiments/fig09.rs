@@ -1,4 +1,4 @@
-//! Figure 9 (the edge; the figure itself is `endstop::paper::fig09`): prototype 1 at 1220 Hz,
+//! Figure 9 (the edge; the figure itself is `endstop::paper::figures::fig09`): prototype 1 at 1220 Hz,
 //! output power against RMS acceleration for 20, 30 and 40 V, under the published and the
 //! calibrated parameter set (read from the calibration artefact), with both readings of
 //! "output power" and the convergence repetition. Writes the continuations as Parquet, the
@@ -12,27 +12,24 @@ use common::md::Table;
 use common::narrowband_io::{claims_table_both_sets, measurement_cells};
 use common::plot::{LegendPos, LinePlot, Series, Style, PALETTE};
 use common::{fmt_sig, frame::frame, row, Experiment};
-use endstop::paper::claims::{Claims, Value};
-use endstop::paper::fig09::{self, PowerReading, CONV_ONSET_G, CONV_RMS_REL, DEFAULT_READING};
+use endstop::paper::claims::{keys, Claims, Value};
+use endstop::paper::figures::fig09::{
+    self, Fig09, PowerReading, CONV_ONSET_G, CONV_RMS_REL, DEFAULT_READING,
+};
 use endstop::paper::measured::P1_RESONANCE_HZ;
 use endstop::paper::setups::{prototype1_setup, ParamSet};
+use endstop::paper::Figure;
 
 fn main() {
-    common::run_main("fig09", run);
+    common::run_main(Fig09::NAME, run);
 }
 
 fn run() -> Result<()> {
-    let mut exp = Experiment::start("fig09");
+    let mut exp = Experiment::start(Fig09::NAME);
     let (p1, cal) = common::prototype1_both_sets(&mut exp)?;
     let claims = Claims::bundled()?;
-
-    let steps = fig09::Protocol::new(&p1.device).coarse_steps();
-    let run = common::with_progress(steps, "fig09", |tick| {
-        fig09::run(&p1.device, &cal.device, tick)
-    })?;
-    let values = fig09::claims(&run, &claims)?;
+    let (run, values) = exp.run_figure::<Fig09>(&p1, &claims)?;
     let both_loads = fig09::claims_under(&run, PowerReading::BothLoads, &claims)?;
-    exp.claims(values.clone());
 
     for r in &run.sets {
         for c in &r.curves {
@@ -89,7 +86,7 @@ fn write_parquet(exp: &Experiment, run: &fig09::Run) -> Result<()> {
                 .collect::<Vec<_>>()
         })
     });
-    exp.write_parquet("fig09", &mut frame(rows)?, "published+calibrated")?;
+    exp.write_parquet("fig09", &mut frame(rows)?, ParamSet::BOTH_LABEL)?;
     Ok(())
 }
 
@@ -106,13 +103,15 @@ fn numbers_md(
          for amplitude thresholds.\n\n",
         DEFAULT_READING.label()
     );
-    md.push_str(&claims_table_both_sets(claims.of_experiment("fig09"), values, 4).render());
+    md.push_str(&claims_table_both_sets(claims.of_experiment(Fig09::NAME), values, 4).render());
     md.push_str(&format!(
         "\n### The other reading: power of {}\n\nThe same simulations, with the power of both \
          loads compared with the paper's numbers (not used for the scorecard).\n\n",
         PowerReading::BothLoads.label()
     ));
-    let power_claims = claims.of_experiment("fig09").filter(|c| c.id == "F9-b");
+    let power_claims = claims
+        .of_experiment(Fig09::NAME)
+        .filter(|c| c.id == keys::F9B_P_SAT_20V.id);
     md.push_str(&claims_table_both_sets(power_claims, both_loads, 4).render());
 
     let s = &run.protocol.settings;

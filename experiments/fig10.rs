@@ -1,6 +1,6 @@
 //! Figure 10: the random excitation at the paper's example level Sa = 1e-2 g²/Hz and its
 //! Welch PSD against the target (claim F10: level and band). The figure is stated in
-//! `endstop::paper::fig10`; this binary writes its outputs.
+//! `endstop::paper::figures::fig10`; this binary writes its outputs.
 
 use endstop_experiments as common;
 
@@ -10,22 +10,24 @@ use common::frame::frame;
 use common::md::Table;
 use common::plot::{LegendPos, LinePlot, Series, Style, PALETTE};
 use common::{fmt_sig, row, Experiment};
-use endstop::paper::claims::Claims;
-use endstop::paper::fig10::{self, FIG10_SA, FLAT_BAND_HZ, LEAKAGE_FROM_HZ, NPERSEG, RECORDS};
+use endstop::paper::claims::{keys, Claims};
+use endstop::paper::figures::fig10::{
+    self, Fig10, FIG10_SA, FLAT_BAND_HZ, LEAKAGE_FROM_HZ, NPERSEG, RECORDS,
+};
+use endstop::paper::Figure;
 
 /// Bottom of the plot's y axis (g²/Hz), as in the paper's Figure 10.
 const Y_MIN: f64 = 1e-5;
 
 fn main() {
-    common::run_main("fig10", run);
+    common::run_main(Fig10::NAME, run);
 }
 
 fn run() -> Result<()> {
-    let mut exp = Experiment::start("fig10");
+    let mut exp = Experiment::start(Fig10::NAME);
     let claims = Claims::bundled()?;
-    let run = common::with_progress(RECORDS, "fig10", |tick| fig10::run(tick))?;
+    let (run, _) = exp.run_figure::<Fig10>(&(), &claims)?;
     exp.seed = Some(run.seed);
-    exp.claims(fig10::claims(&run, &claims));
     let f = fig10::findings(&run);
     let spec = &run.spec;
     let first = run.first_stream;
@@ -146,9 +148,7 @@ fn run() -> Result<()> {
         }
         out
     };
-    let paper = claims
-        .get("F10", "excitation_psd_g2_per_hz")
-        .map_or(f64::NAN, |c| c.paper);
+    let paper = claims.claim(keys::F10_LEVEL).map_or(f64::NAN, |c| c.paper);
     let plot = LinePlot::new(
         &format!(
             "Figure 10: generated acceleration, Sa = {} g²/Hz, 10 s at 100 kHz, band 10 kHz",

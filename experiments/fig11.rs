@@ -1,6 +1,6 @@
 //! Figure 11: output power PSDs of prototype 1 at 30 V at the low levels 4.42e-6, 1.12e-4 and
 //! 3.49e-4 g²/Hz under the published and the calibrated parameter sets (claim F11). The
-//! figure is stated in `endstop::paper::fig11`; this binary writes its outputs.
+//! figure is stated in `endstop::paper::figures::fig11`; this binary writes its outputs.
 
 use endstop_experiments as common;
 
@@ -9,24 +9,22 @@ use common::broadband_io::{self as bbio, pm, sa_label, spread_str};
 use common::md::Table;
 use common::Experiment;
 use endstop::paper::claims::Claims;
-use endstop::paper::ensembles::{WidthReading, P1_SETS};
-use endstop::paper::fig11;
+use endstop::paper::ensembles::WidthReading;
+use endstop::paper::figures::fig11::{self, Fig11};
+use endstop::paper::setups::ParamSet;
+use endstop::paper::Figure;
 use endstop::study::ensemble::DEFAULT_SEED;
 
 fn main() {
-    common::run_main("fig11", run);
+    common::run_main(Fig11::NAME, run);
 }
 
 fn run() -> Result<()> {
-    let mut exp = Experiment::start("fig11");
+    let mut exp = Experiment::start(Fig11::NAME);
     exp.seed = Some(DEFAULT_SEED);
     let claims = Claims::bundled()?;
-    let (published, calibrated) = bbio::prototype1_sets(&mut exp)?;
-    let total = 2 * fig11::FIG11_LEVELS.len() * fig11::FIG11_REALISATIONS;
-    let run = common::with_progress(total, "fig11", |tick| {
-        fig11::run(&published, &calibrated, tick)
-    })?;
-    exp.claims(fig11::claims(&run, &claims));
+    let sets = bbio::prototype1_sets(&mut exp)?;
+    let (run, _) = exp.run_figure::<Fig11>(&sets, &claims)?;
 
     let mut md = bbio::p1_tables_md(&run, "");
     md.push_str("**Claims**\n\n");
@@ -39,8 +37,8 @@ fn run() -> Result<()> {
     ]);
     exp.number("linear_theory_bw3db_hz", run.linear.bw3db_hz());
     exp.number("linear_theory_bw6db_hz", run.linear.bw6db_hz());
-    for (s, set) in P1_SETS.iter().enumerate() {
-        let f = fig11::findings(&run, s);
+    for set in ParamSet::BOTH {
+        let f = fig11::findings(&run, set);
         t.row([
             set.to_string(),
             f.impacts.to_string(),
@@ -49,7 +47,7 @@ fn run() -> Result<()> {
             spread_str(&f.single_ratio, 3),
         ]);
         exp.number(&format!("impacts_{set}"), f.impacts as f64);
-        for l in run.set(s) {
+        for l in run.set(set) {
             let tag = sa_label(l.sa());
             for r in WidthReading::ALL {
                 let w = r.mean_width(&l.ens).estimate;

@@ -1,6 +1,6 @@
 //! Figure 12: output power PSDs of prototype 1 at 30 V at 7.4e-3, 1.31e-2 and 2.85e-2 g²/Hz,
 //! where the mass hits the stops, under the published and the calibrated parameter sets
-//! (claim F12). The figure is stated in `endstop::paper::fig12`; this binary writes its
+//! (claim F12). The figure is stated in `endstop::paper::figures::fig12`; this binary writes its
 //! outputs.
 
 use endstop_experiments as common;
@@ -10,25 +10,23 @@ use common::broadband_io::{self as bbio, pm, sa_label, spread_str};
 use common::md::Table;
 use common::{fmt_sig, Experiment};
 use endstop::paper::claims::Claims;
-use endstop::paper::ensembles::{level_key, WidthReading, P1_SETS};
-use endstop::paper::fig12::{self, FIG12_LEVELS, HIGH, LOW};
+use endstop::paper::ensembles::{level_key, WidthReading};
+use endstop::paper::figures::fig12::{self, Fig12, FIG12_LEVELS, HIGH, LOW};
 use endstop::paper::resolution::{self, LEVELS, LINEAR, NPERSEGS};
+use endstop::paper::setups::ParamSet;
+use endstop::paper::Figure;
 use endstop::study::ensemble::DEFAULT_SEED;
 
 fn main() {
-    common::run_main("fig12", run);
+    common::run_main(Fig12::NAME, run);
 }
 
 fn run() -> Result<()> {
-    let mut exp = Experiment::start("fig12");
+    let mut exp = Experiment::start(Fig12::NAME);
     exp.seed = Some(DEFAULT_SEED);
     let claims = Claims::bundled()?;
-    let (published, calibrated) = bbio::prototype1_sets(&mut exp)?;
-    let total = 2 * FIG12_LEVELS.len() * fig12::FIG12_REALISATIONS;
-    let run = common::with_progress(total, "fig12", |tick| {
-        fig12::run(&published, &calibrated, tick)
-    })?;
-    exp.claims(fig12::claims(&run, &claims));
+    let sets = bbio::prototype1_sets(&mut exp)?;
+    let (run, _) = exp.run_figure::<Fig12>(&sets, &claims)?;
 
     let mut md = bbio::p1_tables_md(
         &run,
@@ -46,9 +44,9 @@ fn run() -> Result<()> {
     exp.number("linear_theory_bw3db_hz", run.linear.bw3db_hz());
     exp.number("linear_theory_bw6db_hz", run.linear.bw6db_hz());
     let (lo, hi) = (level_key(FIG12_LEVELS[LOW]), level_key(FIG12_LEVELS[HIGH]));
-    for (s, set) in P1_SETS.iter().enumerate() {
+    for set in ParamSet::BOTH {
         for reading in WidthReading::ALL {
-            let f = fig12::findings(&run, s, reading);
+            let f = fig12::findings(&run, set, reading);
             t.row([
                 set.to_string(),
                 reading.label().to_string(),
@@ -62,7 +60,7 @@ fn run() -> Result<()> {
             exp.number(&format!("{tag}_{hi}_{set}_hz"), f.high.estimate);
             exp.number(&format!("{tag}_ratio_{set}"), f.ratio.0);
         }
-        for l in run.set(s) {
+        for l in run.set(set) {
             let tag = sa_label(l.sa());
             exp.number(&format!("efficiency_{tag}_{set}"), l.ens.efficiency.mean);
             exp.number(
@@ -72,7 +70,7 @@ fn run() -> Result<()> {
         }
     }
     md.push_str(&t.render());
-    md.push_str(&resolution_md(&mut exp, &published)?);
+    md.push_str(&resolution_md(&mut exp, &sets.published)?);
     exp.write_numbers_md(&md)?;
 
     // As the paper: log y over 500-3000 Hz; the calibrated set is dashed.

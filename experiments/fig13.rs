@@ -1,4 +1,4 @@
-//! Figure 13 (the edge; the figure itself is `endstop::paper::fig13`): prototype 2 at 10 V,
+//! Figure 13 (the edge; the figure itself is `endstop::paper::figures::fig13`): prototype 2 at 10 V,
 //! up-sweeps at 0.12 and 0.31 g rms with the linear and the Hertz end-stop law, published
 //! parameters, with the convergence repetition and the cost of the sweeps. Writes the
 //! per-step sweeps as Parquet, the plot and the book's tables.
@@ -13,22 +13,19 @@ use common::{fmt_sig, frame::frame, Experiment};
 use endstop::device::StiffnessModel;
 use endstop::paper::claims::Claims;
 use endstop::paper::curves::{CONV_FREQ_REL, CONV_RMS_REL};
-use endstop::paper::fig13;
-use endstop::paper::setups::FIG13_BIAS_V;
+use endstop::paper::figures::fig13::{self, Fig13};
+use endstop::paper::setups::{ParamSet, FIG13_BIAS_V};
+use endstop::paper::Figure;
 
 fn main() {
-    common::run_main("fig13", run);
+    common::run_main(Fig13::NAME, run);
 }
 
 fn run() -> Result<()> {
-    let mut exp = Experiment::start("fig13");
+    let mut exp = Experiment::start(Fig13::NAME);
     let p2 = exp.load_published("prototype2")?;
     let claims = Claims::bundled()?;
-    let run = common::with_progress(fig13::coarse_steps(&p2.device), "fig13", |tick| {
-        fig13::run(&p2.device, tick)
-    })?;
-    let values = fig13::claims(&run, &claims)?;
-    exp.claims(values.clone());
+    let (run, values) = exp.run_figure::<Fig13>(&p2.device, &claims)?;
     for c in &run.sweeps.curves {
         let k = c.spec.key();
         if let Some(t) = c.report.onset {
@@ -46,13 +43,13 @@ fn run() -> Result<()> {
     exp.write_parquet(
         "fig13",
         &mut frame(curve_rows(&run.device, &run.sweeps.curves))?,
-        "published",
+        ParamSet::Published.label(),
     )?;
 
     let mut md = String::from("### Claims\n\n");
     let mut t = Table::new(["claim", "quantity", "paper", "ours", "what", "verdict"]);
-    for c in claims.of_experiment("fig13") {
-        let [ours, what, verdict] = claim_cells(c, &values, "published", 5);
+    for c in claims.of_experiment(Fig13::NAME) {
+        let [ours, what, verdict] = claim_cells(c, &values, ParamSet::Published, 5);
         t.row([
             c.id.clone(),
             format!("`{}`", c.quantity),

@@ -1,37 +1,47 @@
 //! Figure 14: output power and efficiency 2P/(m Sa) of prototype 2 at 15 V against the
 //! acceleration PSD, with the linear theory of eq 21 (claims F14-a, F14-b). The figure is
-//! stated in `endstop::paper::fig14`; this binary writes its outputs.
+//! stated in `endstop::paper::figures::fig14`; this binary writes its outputs, and Figure 15's,
+//! whose records are among its ensembles (`endstop::paper::prototype2_random`).
 
 use endstop_experiments as common;
 
-use anyhow::Result;
+use anyhow::{Context, Result};
 use common::broadband_io::{self as bbio, pm, sa_label, Level};
 use common::md::Table;
 use common::plot::{error_bars, LegendPos, LinePlot, Series, Style, PALETTE};
 use common::{fmt_sig, Experiment};
-use endstop::paper::claims::Claims;
-use endstop::paper::fig14::{self, Protocol, F14B_LEVEL, FIG14_LEVELS, TIGHT_RTOL};
+use endstop::paper::claims::{keys, Claims};
+use endstop::paper::figures::fig14::{self, Fig14, Setup, F14B_LEVEL, FIG14_LEVELS, TIGHT_RTOL};
+use endstop::paper::figures::fig15::{self, Fig15};
+use endstop::paper::prototype2_random::Extras;
+use endstop::paper::setups::ParamSet;
+use endstop::paper::Figure;
 use endstop::physics::two_port::eq21_power_w;
 use endstop::study::ensemble::DEFAULT_SEED;
 
 fn main() {
-    common::run_main("fig14", run);
+    common::run_main(Fig14::NAME, run);
 }
 
 fn run() -> Result<()> {
-    let mut exp = Experiment::start("fig14");
+    let mut exp = Experiment::start(Fig14::NAME);
     exp.seed = Some(DEFAULT_SEED);
     let claims = Claims::bundled()?;
     let p2 = exp.load_published("prototype2")?;
-    let total = (FIG14_LEVELS.len() + 2) * fig14::FIG14_REALISATIONS;
-    let run = common::with_progress(total, "fig14", |tick| {
-        fig14::run(&p2.device, Protocol::FULL, tick)
-    })?;
-    // Figure 15's three levels are among these ensembles: hand them over (src/shared_levels.rs).
-    let shared = common::shared_levels::write(&endstop::paper::fig15::levels_in_fig14(&run))?;
-    eprintln!("[fig14] Figure 15's levels -> {}", shared.display());
-    exp.claims(fig14::claims(&run, &claims));
-    let f = fig14::findings(&run);
+    let setup = Setup {
+        prototype2: p2.device.clone(),
+        extras: Extras::FULL,
+    };
+    let (run, _) = exp.run_figure::<Fig14>(&setup, &claims)?;
+    write_fig14(exp, &run, &claims)?;
+    // Figure 15's records are among these ensembles: its outputs come from the same run.
+    let fig15 = fig15::Run::of(&run).context("Figure 14's run lacks a level of Figure 15")?;
+    common::fig15_io::write(Experiment::start(Fig15::NAME), &p2, &fig15, &claims)
+}
+
+/// Writes Figure 14's outputs.
+fn write_fig14(mut exp: Experiment, run: &fig14::Run, claims: &Claims) -> Result<()> {
+    let f = fig14::findings(run);
     let l_b = &run.levels[F14B_LEVEL];
     let labels = |idx: &[usize]| -> String {
         let v: Vec<String> = idx.iter().map(|&i| sa_label(FIG14_LEVELS[i])).collect();
@@ -146,7 +156,7 @@ fn run() -> Result<()> {
         l_b,
     ));
     for (i, l) in run.other_readings.iter().enumerate() {
-        t.row(reading_row(l.set.clone(), l));
+        t.row(reading_row(l.variant.clone().unwrap_or_default(), l));
         exp.number(
             &format!("efficiency_1p69e-3_variant_{i}"),
             l.ens.efficiency.mean,
@@ -155,9 +165,15 @@ fn run() -> Result<()> {
     md.push_str(&t.render());
     exp.write_numbers_md(&md)?;
 
-    bbio::write_level_tables(&exp, "fig14", &run.levels, None, "published")?;
-    write_power_plot(&exp, &run)?;
-    write_efficiency_plot(&exp, &run, f.eq21, &claims)?;
+    bbio::write_level_tables(
+        &exp,
+        Fig14::NAME,
+        &run.levels,
+        None,
+        ParamSet::Published.label(),
+    )?;
+    write_power_plot(&exp, run)?;
+    write_efficiency_plot(&exp, run, f.eq21, claims)?;
     exp.finish()
 }
 
@@ -246,7 +262,7 @@ fn write_efficiency_plot(
             Style::LinePoints,
         ),
     ];
-    if let Some(c) = claims.get("F14-b", "eff_1p69e-3_pct") {
+    if let Some(c) = claims.claim(keys::F14B_EFF) {
         let sa = FIG14_LEVELS[F14B_LEVEL];
         series.push(Series::new(
             &format!("paper: {} % at {} g²/Hz", c.paper, sa_label(sa)),

@@ -12,7 +12,7 @@ use endstop_experiments as common;
 
 use std::path::PathBuf;
 use std::process::Command;
-use std::sync::{Condvar, Mutex};
+use std::sync::Mutex;
 use std::time::Instant;
 
 use anyhow::{bail, Context, Result};
@@ -22,8 +22,9 @@ use endstop::paper::claims::Claims;
 use endstop::paper::claims::Row;
 use endstop::paper::claims::Value;
 use endstop::paper::claims::Verdict;
+use endstop::paper::setups::ParamSet;
 use endstop_experiments::freshness;
-use endstop_experiments::jobs::{Job, Phase, CROSSCHECK, JOBS};
+use endstop_experiments::jobs::{experiment_dir, experiment_names, Job, Phase, CROSSCHECK, JOBS};
 use serde::Deserialize;
 
 /// The wall and processor time of the last `reproduce` that ran experiments, in the results
@@ -35,10 +36,6 @@ fn ngspice_available() -> bool {
         .arg("--version")
         .output()
         .is_ok_and(|o| o.status.success())
-}
-
-fn job_names() -> Vec<&'static str> {
-    JOBS.iter().map(|j| j.name).collect()
 }
 
 /// Copies the own-device runs' numbers and plots into the book's generated directory.
@@ -75,7 +72,8 @@ fn publish_own_device() -> Result<()> {
 #[derive(Parser, Debug)]
 #[command(about = "Run every experiment, write the scorecard and build the book")]
 struct Args {
-    /// Run only these experiments (comma separated), e.g. `--only fig08,fig13`.
+    /// Run only these experiments (comma separated), e.g. `--only fig08,fig13` (an experiment
+    /// another job writes runs that job: `fig15` runs `fig14`).
     #[arg(long, value_delimiter = ',')]
     only: Vec<String>,
     /// Do not run experiments: rebuild the scorecard and the book from existing results.
@@ -99,7 +97,7 @@ fn main() {
 fn run() -> Result<()> {
     let args = Args::parse();
     let root = common::root();
-    let names = job_names();
+    let names = experiment_names();
     for name in &args.only {
         if !names.contains(&name.as_str()) {
             bail!("unknown experiment `{name}`; known: {}", names.join(", "));
@@ -107,7 +105,9 @@ fn run() -> Result<()> {
     }
     let selected: Vec<&'static Job> = JOBS
         .iter()
-        .filter(|j| args.only.is_empty() || args.only.iter().any(|o| o == j.name))
+        .filter(|j| {
+            args.only.is_empty() || j.experiments().any(|e| args.only.iter().any(|o| o == e))
+        })
         .collect();
     let mut failures = Vec::new();
     let mut timings: Vec<(String, f64)> = Vec::new();
@@ -236,39 +236,14 @@ struct Outcome {
 /// Runs the jobs (each with its freshness key), at most `parallel` at once.
 fn run_jobs(jobs: &[(&'static Job, String)], parallel: usize) -> Result<Outcome> {
     let dir = binary_dir()?;
-    // The jobs not started and the names of those running; a job whose `after` is among
-    // either waits (the condition variable wakes the workers when a job ends).
-    let state = Mutex::new((jobs.iter().collect::<Vec<_>>(), Vec::<&str>::new()));
-    let ended = Condvar::new();
+    // The jobs not started, taken in order by the workers.
+    let queue = Mutex::new(jobs.iter());
     let results = Mutex::new(Vec::new());
     let pb = common::progress(jobs.len() as u64, "reproduce");
     std::thread::scope(|s| {
         for _ in 0..parallel.min(jobs.len()) {
             s.spawn(|| {
-                let next = || {
-                    let mut st = state.lock().expect("queue lock");
-                    loop {
-                        let (queue, running) = &mut *st;
-                        if queue.is_empty() {
-                            return None;
-                        }
-                        let waits = |j: &Job| {
-                            j.after.is_some_and(|a| {
-                                running.contains(&a) || queue.iter().any(|(q, _)| q.name == a)
-                            })
-                        };
-                        if let Some(i) = queue.iter().position(|(j, _)| !waits(j)) {
-                            let item = queue.remove(i);
-                            running.push(item.0.name);
-                            return Some(item);
-                        }
-                        st = ended.wait(st).expect("queue lock");
-                    }
-                };
-                let done = |name: &str| {
-                    state.lock().expect("queue lock").1.retain(|n| *n != name);
-                    ended.notify_all();
-                };
+                let next = || queue.lock().expect("queue lock").next();
                 while let Some((job, key)) = next() {
                     let name = job.name;
                     pb.set_message(name);
@@ -306,14 +281,13 @@ fn run_jobs(jobs: &[(&'static Job, String)], parallel: usize) -> Result<Outcome>
                         .lock()
                         .expect("results lock")
                         .push((name.to_string(), secs, ok));
-                    done(name);
                 }
             });
         }
     });
     pb.finish_and_clear();
     let mut results = results.into_inner().expect("results");
-    let order = job_names();
+    let order = experiment_names();
     results.sort_by_key(|(n, _, _)| order.iter().position(|e| e == n));
     let failures = results
         .iter()
@@ -344,6 +318,11 @@ fn read_summary(job: &Job) -> Option<SummaryIn> {
     read_json(&job.dir().join("summary.json"))
 }
 
+/// The summary of an experiment that a job writes besides its own.
+fn read_experiment_summary(name: &str) -> Option<SummaryIn> {
+    read_json(&experiment_dir(name).join("summary.json"))
+}
+
 /// A JSON file's contents; None when it is missing or does not parse (a job that has not run).
 fn read_json<T: serde::de::DeserializeOwned>(path: &std::path::Path) -> Option<T> {
     serde_json::from_str(&std::fs::read_to_string(path).ok()?).ok()
@@ -355,13 +334,14 @@ fn write_scorecard() -> Result<Vec<Row>> {
     let values: Vec<Value> = JOBS
         .iter()
         .filter(|j| j.scored)
-        .filter_map(read_summary)
+        .flat_map(Job::experiments)
+        .filter_map(read_experiment_summary)
         .flat_map(|s| s.values)
         .collect();
     let mut rows = score(&claims, &values)?;
-    let (target_id, target_q) = endstop::paper::calibration::CALIBRATION_TARGET;
+    let target = endstop::paper::calibration::CALIBRATION_TARGET;
     for r in &mut rows {
-        if r.set == "calibrated" && r.claim == target_id && r.quantity == target_q {
+        if r.set == ParamSet::Calibrated && r.claim == target.id && r.quantity == target.quantity {
             r.note = "calibration target: fitted, not a prediction".into();
         }
     }
@@ -371,7 +351,7 @@ fn write_scorecard() -> Result<Vec<Row>> {
         .map(|s| s.numbers)
         .unwrap_or_default();
     for r in &mut rows {
-        r.fold_hz = endstop::paper::response::fold_key(&r.claim, &r.quantity, &r.set)
+        r.fold_hz = endstop::paper::response::fold_key(&r.claim, &r.quantity, r.set)
             .and_then(|k| folds.get(&k).copied());
     }
     // Beside each claim the study evaluates, its value at the best set of the multi-claim
@@ -379,7 +359,7 @@ fn write_scorecard() -> Result<Vec<Row>> {
     let best = read_summary(&common::jobs::DEVIATIONS)
         .map(|s| s.numbers)
         .unwrap_or_default();
-    for r in rows.iter_mut().filter(|r| r.set == "published") {
+    for r in rows.iter_mut().filter(|r| r.set == ParamSet::Published) {
         r.best_calibrated = endstop::paper::deviations::best_value_key(&r.claim, &r.quantity)
             .and_then(|k| best.get(&k).copied());
     }
@@ -444,13 +424,12 @@ fn write_provenance() -> Result<()> {
          |---|---|---|---|---|---|\n",
     );
     let (mut cpu_sum, mut cpu_jobs, mut cpu_ensembles) = (0.0, 0, 0.0);
-    for job in JOBS {
-        let name = job.name;
-        let Some(s) = read_summary(job) else {
+    for (name, dir) in JOBS.iter().flat_map(Job::outputs) {
+        let Some(s) = read_json::<SummaryIn>(&dir.join("summary.json")) else {
             md.push_str(&format!("| {name} | (no results) | | | | |\n"));
             continue;
         };
-        let timing: Option<serde_json::Value> = read_json(&job.dir().join("timing.json"));
+        let timing: Option<serde_json::Value> = read_json(&dir.join("timing.json"));
         let seconds = |key: &str| timing.as_ref().and_then(|v| v[key].as_f64());
         let wall = seconds("wall_time_s")
             .map(|t| format!("{t:.2}"))
@@ -546,9 +525,12 @@ mod tests {
     use super::*;
 
     #[test]
-    fn the_ensemble_jobs_are_jobs() {
+    fn the_ensemble_jobs_are_experiments() {
         for name in ENSEMBLE_JOBS {
-            assert!(JOBS.iter().any(|j| j.name == name), "{name} is not a job");
+            assert!(
+                experiment_names().contains(&name),
+                "{name} is not an experiment"
+            );
         }
     }
 }

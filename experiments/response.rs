@@ -9,10 +9,11 @@ use endstop_experiments as common;
 
 use anyhow::Result;
 use common::md::Table;
-use common::plot::{LegendPos, LinePlot, Series, Style, PALETTE};
-use common::response_io::{branch_series, continuation_rows};
+use common::plot::{LegendPos, LinePlot, Panels, Series, Style, PALETTE};
+use common::response_io::{continuation_rows, response_figure};
 use common::{fmt_sig, frame::frame, row, Experiment};
 use endstop::paper::response::{self, Case, CaseRun, BASIN_CELLS};
+use endstop::paper::setups::ParamSet;
 use endstop::study::continuation::EventKind;
 use endstop::study::steady::FOLD_BLOCK_PERIODS;
 use endstop::study::sweep::DownEndKind;
@@ -24,28 +25,19 @@ fn main() {
 fn run() -> Result<()> {
     let mut exp = Experiment::start("response");
     let p2 = exp.load_published("prototype2")?;
-    let (p1, cal) = common::prototype1_both_sets(&mut exp)?;
-    let setups = response::setups(&p2.device, &p1.device, &cal.device);
+    let (p1, _) = common::prototype1_both_sets(&mut exp)?;
+    let setups = response::setups(&p2.device, &p1.published, &p1.calibrated);
     let units = response::work_units(&setups, BASIN_CELLS);
     let run = common::with_progress(units, "response", |tick| {
         response::run(&setups, BASIN_CELLS, tick)
     })?;
-    // The basins again on a grid twice as fine, for their convergence (the cells it shares
-    // with the coarse grid are taken from it).
+    // The basins again on a grid twice as fine, for their convergence.
     let mut fine_shift = Vec::new();
     for c in &run.cases {
-        let Some(bs) = c.setup.basin_settings(BASIN_CELLS) else {
+        let Some(conv) = response::basin_convergence(c, BASIN_CELLS)? else {
             continue;
         };
-        let f = c.setup.case.basin_freq_hz().expect("basin frequency");
-        let coarse = c.basins.as_ref().expect("basins computed");
-        let fine = refine_basins(c, f, &bs, coarse)?;
-        let coarse = coarse.shares();
-        let shift = coarse
-            .iter()
-            .zip(fine.shares())
-            .map(|(a, b)| (a.1 - b.1).abs())
-            .fold(0.0, f64::max);
+        let shift = conv.largest_share_change;
         fine_shift.push((c.setup.case, shift));
         exp.number(
             &format!("{}_basin_share_change_fine_grid", c.setup.case.key()),
@@ -58,7 +50,7 @@ fn run() -> Result<()> {
         }
     }
     // The folds beside the scorecard's jump claims of Figure 8 (continuation only).
-    let claim_folds = response::claim_folds(&p1.device, &cal.device)?;
+    let claim_folds = response::claim_folds(&p1)?;
     for (k, v) in &claim_folds {
         exp.number(k, *v);
     }
@@ -66,11 +58,16 @@ fn run() -> Result<()> {
     let mut md = numbers_md(&run, &fine_shift);
     md.push_str("\n### Folds beside the jump claims of Figure 8\n\n");
     let mut t = Table::new(["claim", "quantity", "set", "upper fold (Hz)"]);
-    for (id, q, _, _) in response::FOLD_CLAIMS {
-        for set in ["published", "calibrated"] {
-            let key = response::fold_key(id, q, set).expect("a jump claim");
+    for (claim, _, _) in response::FOLD_CLAIMS {
+        for set in ParamSet::BOTH {
+            let key = response::fold_key(claim.id, claim.quantity, set).expect("a jump claim");
             let v = claim_folds.iter().find(|(k, _)| *k == key).map(|x| x.1);
-            t.row([id.to_string(), format!("`{q}`"), set.to_string(), hz(v)]);
+            t.row([
+                claim.id.to_string(),
+                format!("`{}`", claim.quantity),
+                set.to_string(),
+                hz(v),
+            ]);
         }
     }
     md.push_str(&t.render());
@@ -83,39 +80,6 @@ fn run() -> Result<()> {
     }
     exp.write_plot(&curve_plot(run.case(Case::Fig13P2)))?;
     exp.finish()
-}
-
-/// The basins of case `c` at `f` Hz on the grid twice as fine as `coarse`'s (computed with
-/// `coarse_settings`).
-fn refine_basins(
-    c: &CaseRun,
-    f: f64,
-    coarse_settings: &endstop::study::basins::BasinSettings,
-    coarse: &endstop::study::basins::Basins,
-) -> Result<endstop::study::basins::Basins> {
-    use endstop::drive::Sine;
-    use endstop::physics::harvester::Harvester;
-    use endstop::study::basins::{refine, Attractor};
-    use endstop::study::orbit::{Forcing, Shooter};
-    let h = Harvester::new(&c.setup.device, Sine::from_rms_g(c.setup.accel_rms_g, f));
-    let shooter = Shooter::new(&h, c.setup.continuation.shooting);
-    let catalogue = c
-        .attractors
-        .iter()
-        .map(|(l, o)| Attractor::of_orbit(&shooter, o, l))
-        .collect::<Result<Vec<_>, _>>()?;
-    let forcing = Forcing {
-        freq_hz: f,
-        accel_rms_g: c.setup.accel_rms_g,
-    };
-    Ok(refine(
-        &h,
-        &forcing,
-        &catalogue,
-        coarse_settings,
-        coarse,
-        &|| {},
-    )?)
 }
 
 fn write_tables(exp: &Experiment, run: &response::Run) -> Result<()> {
@@ -501,48 +465,19 @@ fn ghost_words(ghost: &[response::GhostRow], who: &str) -> String {
     }
 }
 
-fn curve_plot(c: &CaseRun) -> LinePlot {
-    let mut series = branch_series(&c.branch);
-    let up: Vec<_> =
-        c.up.measurements()
-            .map(|m| (m.freq_hz, m.v1_rms_v))
-            .collect();
-    let down: Vec<_> = c
-        .down
-        .measurements()
-        .map(|m| (m.freq_hz, m.v1_rms_v))
-        .collect();
-    series.push(Series::new("up-sweep", up, PALETTE[1], Style::Points));
-    series.push(Series::new("down-sweep", down, PALETTE[2], Style::Points));
-    let folds: Vec<_> = c
-        .branch
-        .events
-        .iter()
-        .filter(|e| e.kind == EventKind::Fold)
-        .map(|e| (e.param, e.orbit.summary.v1_rms_v))
-        .collect();
-    let grazing: Vec<_> = c
-        .branch
-        .events
-        .iter()
-        .filter(|e| e.kind == EventKind::Grazing)
-        .map(|e| (e.param, e.orbit.summary.v1_rms_v))
-        .collect();
-    if !folds.is_empty() {
-        series.push(Series::new("folds", folds, PALETTE[3], Style::Points));
-    }
-    if !grazing.is_empty() {
-        series.push(Series::new("grazing", grazing, PALETTE[4], Style::Points));
-    }
+/// The whole response of a case: its branch with both sweeps, RMS voltage and phase.
+fn curve_plot(c: &CaseRun) -> Panels {
+    let steps = |ms: Vec<&endstop::study::steady::Measurement>| -> Vec<(f64, f64)> {
+        ms.into_iter().map(|m| (m.freq_hz, m.v1_rms_v)).collect()
+    };
     let s = &c.setup.continuation;
-    LinePlot::new(
+    response_figure(
         &format!("Whole response: {}", c.setup.case.label()),
-        "Frequency [Hz]",
-        "RMS output voltage V1 [V]",
-        series,
+        &c.branch,
+        steps(c.up.measurements().collect()),
+        steps(c.down.measurements().collect()),
+        (s.start, s.stop),
     )
-    .x(s.start.min(s.stop), s.start.max(s.stop))
-    .legend(LegendPos::UpperRight)
 }
 
 fn basin_plot(c: &CaseRun) -> LinePlot {

@@ -1,6 +1,6 @@
 //! Table 3: electromechanical coupling k^2, quality factor Qm and figure of merit k^2 Qm of
 //! both prototypes (eqs 15-18), with the broadband efficiency of eq 21 (claims T3-a, T3-b,
-//! F14-a's linear-theory value). The table is stated in `endstop::paper::table3`; this binary
+//! F14-a's linear-theory value). The table is stated in `endstop::paper::figures::table3`; this binary
 //! writes its outputs.
 
 use endstop::paper::setups::comb;
@@ -12,11 +12,13 @@ use common::md::Table;
 use common::plot::{LinePlot, Series, Style, PALETTE};
 use common::{fmt_sig, row, Experiment};
 use endstop::paper::claims::Claims;
-use endstop::paper::table3::{self, ABSTRACT_K2_P1};
+use endstop::paper::figures::table3::{Table3, ABSTRACT_K2_P1};
+use endstop::paper::setups::{ParamSet, Prototypes};
+use endstop::paper::Figure;
 use endstop::physics::two_port::{QmReading, TABLE3_QM};
 
 fn main() {
-    common::run_main("table3", run);
+    common::run_main(Table3::NAME, run);
 }
 
 /// The key of a Qm reading in the summary's numbers.
@@ -29,12 +31,13 @@ fn reading_key(reading: QmReading) -> &'static str {
 }
 
 fn run() -> Result<()> {
-    let mut exp = Experiment::start("table3");
+    let mut exp = Experiment::start(Table3::NAME);
     let claims = Claims::bundled()?;
-    let p1 = exp.load_published("prototype1")?;
-    let p2 = exp.load_published("prototype2")?;
-    let run = table3::run(&p1.device, &p2.device);
-    exp.claims(table3::claims(&run, &claims));
+    let setup = Prototypes {
+        prototype1: exp.load_published("prototype1")?.device,
+        prototype2: exp.load_published("prototype2")?.device,
+    };
+    let (run, _) = exp.run_figure::<Table3>(&setup, &claims)?;
 
     let mut t = Table::new([
         "device",
@@ -98,7 +101,7 @@ fn run() -> Result<()> {
                 "stiffness_k_n_per_m" => tp.stiffness_n_per_m,
                 "r_load" => tp.r_load(),
                 "resonance_oc_hz" => tp.resonance_hz(),
-                "params" => "published",
+                "params" => ParamSet::Published.label(),
             ]);
             exp.number(&format!("qm_{key}_{}", reading_key(reading)), qm);
         }
@@ -144,7 +147,7 @@ fn run() -> Result<()> {
         q2.bias_v,
     ));
     exp.write_numbers_md(&md)?;
-    exp.write_parquet("table3", &mut frame(rows)?, "published")?;
+    exp.write_parquet("table3", &mut frame(rows)?, ParamSet::Published.label())?;
 
     // Table 3 is a table; its plot is eq 21's efficiency against the load.
     let marker_rl = comb(&q2.device).load_resistance_ohm;

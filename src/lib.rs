@@ -32,6 +32,33 @@
 //! | [`paper`] | the paper's setups, measurements, calibration, figures and claims | |
 //!
 //! Units are SI throughout unless a name says otherwise (`accel_rms_g`, `freq_hz`).
+//!
+//! # Start here
+//! A device is a TOML file ([`device`]); the caller reads it, the library parses and validates
+//! it. A stepped-sine sweep ([`study::sweep`]) then gives the steady state at each frequency:
+//!
+//! ```
+//! use endstop::device::Device;
+//! use endstop::study::sweep::SweepSettings;
+//!
+//! let text = include_str!(concat!(env!("CARGO_MANIFEST_DIR"), "/data/prototype1.toml"));
+//! let device = Device::from_toml_str(text, "prototype1.toml")?;
+//!
+//! // Three frequencies below the resonance at 0.02 g rms: the mass stays clear of the stops.
+//! let sweep = SweepSettings::for_device(&device, vec![1000.0, 1100.0, 1200.0], 1.0);
+//! let report = sweep.run(&device, 0.02, |_| {})?;
+//! assert!(!report.any_contact());
+//! let v1: Vec<f64> = report.measurements().map(|m| m.v1_rms_v).collect();
+//! assert!(v1[0] < v1[1] && v1[1] < v1[2], "the response grows towards the resonance");
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+//!
+//! The periodic orbits themselves, stable and unstable, come from continuation
+//! ([`study::continuation::frequency_branch`]); random vibration from records
+//! ([`study::record::simulate_record`]) and ensembles of them
+//! ([`study::ensemble::run_ensemble`]).
+
+#![warn(missing_docs)]
 
 pub mod device;
 pub mod drive;

@@ -15,82 +15,90 @@
 use std::collections::BTreeSet;
 use std::sync::OnceLock;
 
-use endstop::device::Device;
 use endstop::num::stats::MeanCi;
-use endstop::paper::claims::{Claims, Value, Verdict};
-use endstop::paper::ensembles::{protocol_spec, WidthReading, P1_SETS, P2_BAND_HZ, P2_NPERSEG};
-use endstop::paper::setups::prototype2_setup;
-use endstop::paper::{fig10, fig11, fig12, fig14, fig15, resolution};
+use endstop::paper::claims::{keys, ClaimKey, Value, Verdict};
+use endstop::paper::ensembles::{protocol_spec, WidthReading, P2_BAND_HZ, P2_NPERSEG};
+use endstop::paper::figures::fig10::{self, Fig10};
+use endstop::paper::figures::fig11::{self, Fig11};
+use endstop::paper::figures::fig12::{self, Fig12};
+use endstop::paper::figures::fig14::{self, Fig14};
+use endstop::paper::figures::fig15::{self, Fig15};
+use endstop::paper::prototype2_random::Extras;
+use endstop::paper::resolution;
+use endstop::paper::setups::{prototype2_setup, ParamSet};
+use endstop::paper::Figure;
 use endstop::physics::two_port::*;
 use endstop::study::ensemble::run_ensemble;
 use endstop::study::record::*;
 use endstop::G;
 
+mod common;
 #[path = "broadband/regression.rs"]
 mod regression;
 
+use common::{claims, device};
+
 use Verdict::{Deviates, Reproduced};
-
-fn device(name: &str) -> Device {
-    let path = format!("{}/data/{name}.toml", env!("CARGO_MANIFEST_DIR"));
-    Device::from_toml_str(&std::fs::read_to_string(&path).unwrap(), &path).unwrap()
-}
-
-fn claims() -> &'static Claims {
-    static CLAIMS: OnceLock<Claims> = OnceLock::new();
-    CLAIMS.get_or_init(|| Claims::bundled().expect("data/claims.toml parses"))
-}
-
-/// The published and the calibrated prototype 1 (the devices of the parameter files; the
-/// figures apply their setup themselves).
-fn prototype1_sets() -> &'static (Device, Device) {
-    static SETS: OnceLock<(Device, Device)> = OnceLock::new();
-    SETS.get_or_init(|| {
-        let published = device("prototype1");
-        let cal = endstop::paper::calibration::calibrate_prototype1(&published).unwrap();
-        (published, cal.device)
-    })
-}
 
 fn fig10_run() -> &'static fig10::Run {
     static RUN: OnceLock<fig10::Run> = OnceLock::new();
-    RUN.get_or_init(|| fig10::run(&|| {}).unwrap())
+    RUN.get_or_init(|| Fig10::run(&(), &|| {}).unwrap())
+}
+
+/// The published and the calibrated prototype 1 (the devices of the parameter files; the
+/// figures apply their setup themselves), computed once.
+fn prototype1_sets() -> &'static endstop::paper::setups::Prototype1Sets {
+    static SETS: OnceLock<endstop::paper::setups::Prototype1Sets> = OnceLock::new();
+    SETS.get_or_init(common::prototype1_sets)
 }
 
 fn fig11_run() -> &'static fig11::Run {
     static RUN: OnceLock<fig11::Run> = OnceLock::new();
-    RUN.get_or_init(|| {
-        let (p, c) = prototype1_sets();
-        fig11::run(p, c, &|| {}).unwrap()
-    })
+    RUN.get_or_init(|| Fig11::run(prototype1_sets(), &|| {}).unwrap())
 }
 
 fn fig12_run() -> &'static fig12::Run {
     static RUN: OnceLock<fig12::Run> = OnceLock::new();
-    RUN.get_or_init(|| {
-        let (p, c) = prototype1_sets();
-        fig12::run(p, c, &|| {}).unwrap()
-    })
+    RUN.get_or_init(|| Fig12::run(prototype1_sets(), &|| {}).unwrap())
 }
 
 /// Figure 14's levels; the other end-stop readings and the convergence check of the chapter
 /// are not part of any claim and are left out here.
 fn fig14_run() -> &'static fig14::Run {
     static RUN: OnceLock<fig14::Run> = OnceLock::new();
-    RUN.get_or_init(|| fig14::run(&device("prototype2"), fig14::Protocol::CLAIMS, &|| {}).unwrap())
+    RUN.get_or_init(|| {
+        let setup = fig14::Setup {
+            prototype2: device("prototype2"),
+            extras: Extras::NONE,
+        };
+        Fig14::run(&setup, &|| {}).unwrap()
+    })
 }
 
-/// Figure 15's levels are Figure 14's records ([`fig15::from_fig14`], which checks that the
-/// ensembles are the ones `fig15::run` would simulate).
+/// Figure 15 read from Figure 14's run, as the `fig14` binary writes it.
 fn fig15_run() -> &'static fig15::Run {
     static RUN: OnceLock<fig15::Run> = OnceLock::new();
-    RUN.get_or_init(|| fig15::from_fig14(fig14_run()))
+    RUN.get_or_init(|| fig15::Run::of(fig14_run()).expect("Figure 14 runs Figure 15's levels"))
 }
 
 #[test]
-fn figure_15_levels_are_figure_14_levels() {
-    for (i, &j) in fig15::IN_FIG14.iter().enumerate() {
-        assert_eq!(fig15::FIG15_LEVELS[i], fig14::FIG14_LEVELS[j], "level {i}");
+fn figure_15_alone_simulates_the_records_of_figure_14() {
+    // Figure 15 run by itself (two records per level, the first of every level's streams)
+    // gives the first records of Figure 14's ensembles, bit for bit.
+    let setup = fig15::Setup {
+        prototype2: device("prototype2"),
+        records: 2,
+    };
+    let alone = Fig15::run(&setup, &|| {}).unwrap();
+    for (a, b) in alone.levels.iter().zip(&fig15_run().levels) {
+        assert_eq!(a.index, b.index);
+        assert_eq!(a.sa(), b.sa());
+        for (x, y) in a.ens.records.iter().zip(&b.ens.records) {
+            assert_eq!(
+                x.summary.p_total_w().to_bits(),
+                y.summary.p_total_w().to_bits()
+            );
+        }
     }
 }
 
@@ -98,7 +106,7 @@ fn figure_15_levels_are_figure_14_levels() {
 /// missing or repeated, that every claim of `experiment` in the claims file has a row for
 /// every set named, and that each row has the expected verdict over its whole 95 % interval
 /// `ours ± uncertainty`.
-fn assert_verdicts(values: &[Value], experiment: &str, expected: &[(&str, &str, &str, Verdict)]) {
+fn assert_verdicts(values: &[Value], experiment: &str, expected: &[(ClaimKey, ParamSet, Verdict)]) {
     assert_verdicts_straddling(values, experiment, expected, &[]);
 }
 
@@ -109,23 +117,22 @@ fn assert_verdicts(values: &[Value], experiment: &str, expected: &[(&str, &str, 
 fn assert_verdicts_straddling(
     values: &[Value],
     experiment: &str,
-    expected: &[(&str, &str, &str, Verdict)],
-    straddling: &[(&str, &str, &str)],
+    expected: &[(ClaimKey, ParamSet, Verdict)],
+    straddling: &[(ClaimKey, ParamSet)],
 ) {
     let c = claims();
-    let keys: Vec<(&str, &str, &str)> = values
-        .iter()
-        .map(|v| (v.claim.as_str(), v.quantity.as_str(), v.set.as_str()))
-        .collect();
-    let unique: BTreeSet<_> = keys.iter().copied().collect();
-    assert_eq!(unique.len(), keys.len(), "a key appears twice: {keys:?}");
-    let want: BTreeSet<_> = expected.iter().map(|&(i, q, s, _)| (i, q, s)).collect();
+    let row = |v: &'_ Value| (v.claim.clone(), v.quantity.clone(), v.set);
+    let key = |k: ClaimKey, s: ParamSet| (k.id.to_string(), k.quantity.to_string(), s);
+    let rows: Vec<_> = values.iter().map(row).collect();
+    let unique: BTreeSet<_> = rows.iter().cloned().collect();
+    assert_eq!(unique.len(), rows.len(), "a key appears twice: {rows:?}");
+    let want: BTreeSet<_> = expected.iter().map(|&(k, s, _)| key(k, s)).collect();
     assert_eq!(unique, want, "rows of {experiment}");
-    let sets: BTreeSet<&str> = expected.iter().map(|e| e.2).collect();
+    let sets: BTreeSet<ParamSet> = expected.iter().map(|e| e.1).collect();
     for claim in c.of_experiment(experiment) {
-        for set in &sets {
+        for &set in &sets {
             assert!(
-                unique.contains(&(claim.id.as_str(), claim.quantity.as_str(), set)),
+                unique.contains(&(claim.id.clone(), claim.quantity.clone(), set)),
                 "{experiment} gives no value for ({}, {}) under {set}",
                 claim.id,
                 claim.quantity
@@ -136,8 +143,8 @@ fn assert_verdicts_straddling(
         let claim = c.get(&v.claim, &v.quantity).expect("a claim of the file");
         let want = expected
             .iter()
-            .find(|e| (e.0, e.1, e.2) == (v.claim.as_str(), v.quantity.as_str(), v.set.as_str()))
-            .map(|e| e.3)
+            .find(|e| v.is(e.0) && v.set == e.1)
+            .map(|e| e.2)
             .unwrap();
         let ci = v.uncertainty.unwrap_or(0.0);
         println!(
@@ -150,8 +157,8 @@ fn assert_verdicts_straddling(
             claim.tolerance(),
             v.note
         );
-        let key = (v.claim.as_str(), v.quantity.as_str(), v.set.as_str());
-        if straddling.contains(&key) {
+        let key = row(v);
+        if straddling.iter().any(|&(k, s)| v.is(k) && v.set == s) {
             assert_eq!(claim.verdict(Some(v.ours)), want, "{key:?}: {}", v.ours);
             assert!(
                 [v.ours - ci, v.ours + ci]
@@ -176,12 +183,12 @@ fn assert_verdicts_straddling(
     }
 }
 
-/// The value of (claim, quantity, set) in `values`.
-fn value<'a>(values: &'a [Value], claim: &str, quantity: &str, set: &str) -> &'a Value {
+/// The value of a claim number under a set in `values`.
+fn value(values: &[Value], key: ClaimKey, set: ParamSet) -> &Value {
     values
         .iter()
-        .find(|v| v.claim == claim && v.quantity == quantity && v.set == set)
-        .unwrap_or_else(|| panic!("no value ({claim}, {quantity}, {set})"))
+        .find(|v| v.is(key) && v.set == set)
+        .unwrap_or_else(|| panic!("no value {key} under {set}"))
 }
 
 #[test]
@@ -311,18 +318,19 @@ fn exponential_scheme_matches_dormand_prince_on_impact_free_records() {
 #[test]
 fn f10_excitation_level_and_band() {
     let run = fig10_run();
-    let values = fig10::claims(run, claims());
+    let values = Fig10::claims(run, claims()).unwrap();
+    let published = ParamSet::Published;
     assert_verdicts(
         &values,
-        "fig10",
+        Fig10::NAME,
         &[
-            ("F10", "excitation_psd_g2_per_hz", "published", Reproduced),
-            ("F10", "excitation_band_hz", "published", Reproduced),
+            (keys::F10_LEVEL, published, Reproduced),
+            (keys::F10_BAND, published, Reproduced),
         ],
     );
     // Independent expectation: the generator's exact level, within the records' CI (plus
     // 1e-5, a thousandth of the level, for the Hann window's leakage at the band ends).
-    let level = value(&values, "F10", "excitation_psd_g2_per_hz", "published");
+    let level = value(&values, keys::F10_LEVEL, published);
     let ci = level.uncertainty.unwrap();
     assert!(
         (level.ours - run.spec.psd_g2_per_hz).abs() <= ci + 1e-5,
@@ -330,7 +338,7 @@ fn f10_excitation_level_and_band() {
     );
     // A brick-wall band seen through a Hann window falls to half at the edge itself: within
     // one bin (6.1 Hz).
-    let edge = value(&values, "F10", "excitation_band_hz", "published");
+    let edge = value(&values, keys::F10_BAND, published);
     let bin = run.records[0].psd.df();
     assert!((edge.ours - run.spec.bandwidth_hz).abs() < bin, "{edge:?}");
 }
@@ -338,19 +346,19 @@ fn f10_excitation_level_and_band() {
 #[test]
 fn f11_prototype1_stays_linear_at_low_levels() {
     let run = fig11_run();
-    let values = fig11::claims(run, claims());
+    let values = Fig11::claims(run, claims()).unwrap();
     let mut expected = Vec::new();
-    for set in P1_SETS {
-        expected.push(("F11", "bw_ratio_3p49e-4_over_4p42e-6", set, Reproduced));
-        expected.push(("F11", "linear_regime_no_impact", set, Reproduced));
+    for set in ParamSet::BOTH {
+        expected.push((keys::F11_BW_RATIO, set, Reproduced));
+        expected.push((keys::F11_NO_IMPACT, set, Reproduced));
     }
-    assert_verdicts(&values, "fig11", &expected);
+    assert_verdicts(&values, Fig11::NAME, &expected);
     // Our value: the linear width of eqs 11-17 at the ratio's two levels, within the
     // jackknife CI plus one 24 Hz bin.
     let lin = run.linear.bw3db_hz();
-    for (s, set) in P1_SETS.into_iter().enumerate() {
+    for set in ParamSet::BOTH {
         for i in [fig11::LOW, fig11::HIGH] {
-            let w = WidthReading::HalfPower.mean_width(&run.level(s, i).ens);
+            let w = WidthReading::HalfPower.mean_width(&run.level(set, i).ens);
             assert!(
                 (w.estimate - lin).abs() <= w.ci95 + 24.5,
                 "{set}: {w:?} vs {lin}"
@@ -365,8 +373,8 @@ fn f11_prototype1_linear_efficiency_agrees_with_eq21() {
     // 2P/(m Sa) agrees with eq 21 within its 95 % CI (32 records: about 0.6 % of it). With
     // six records the ensembles read 0.6-0.9 % low, about two standard errors: sampling.
     let run = fig11_run();
-    for (s, set) in P1_SETS.into_iter().enumerate() {
-        for l in run.set(s) {
+    for set in ParamSet::BOTH {
+        for l in run.set(set) {
             let e = l.ens.efficiency;
             let want = l.eq21_efficiency();
             println!("{set} {}: {e:?} vs eq 21 {want}", l.sa());
@@ -421,10 +429,10 @@ fn p1_width_estimator_bias_is_measured_on_the_linear_model() {
     // tolerance). A verdict the ensemble does not settle (the calibrated ratio, whose interval
     // reaches past the upper edge) is a verdict at the estimate either way; there the bias
     // must move the value by less than its interval.
-    let values = fig12::claims(fig12_run(), claims());
-    let keeps = |set: &str, q: &str, corrected: f64| {
-        let c = claims().get("F12", q).unwrap();
-        let v = value(&values, "F12", q, set);
+    let values = Fig12::claims(fig12_run(), claims()).unwrap();
+    let keeps = |set: ParamSet, q: ClaimKey, corrected: f64| {
+        let c = claims().claim(q).unwrap();
+        let v = value(&values, q, set);
         let ci = v
             .uncertainty
             .expect("the ensemble's values carry an interval");
@@ -444,49 +452,48 @@ fn p1_width_estimator_bias_is_measured_on_the_linear_model() {
             );
         }
     };
-    for set in P1_SETS {
-        for q in ["bw_7p4e-3_hz", "bw_2p85e-2_hz"] {
-            keeps(set, q, value(&values, "F12", q, set).ours - b(fig));
+    for set in ParamSet::BOTH {
+        for q in [keys::F12_BW_LOW, keys::F12_BW_HIGH] {
+            keeps(set, q, value(&values, q, set).ours - b(fig));
         }
-        let lo = value(&values, "F12", "bw_7p4e-3_hz", set).ours - b(fig);
-        let hi = value(&values, "F12", "bw_2p85e-2_hz", set).ours - b(fig);
-        let q = "bw_ratio_2p85e-2_over_7p4e-3";
-        keeps(set, q, hi / lo);
+        let lo = value(&values, keys::F12_BW_LOW, set).ours - b(fig);
+        let hi = value(&values, keys::F12_BW_HIGH, set).ours - b(fig);
+        keeps(set, keys::F12_BW_RATIO, hi / lo);
     }
 }
 
 #[test]
 fn f12_prototype1_bandwidth_grows_with_impacts() {
     let run = fig12_run();
-    let values = fig12::claims(run, claims());
+    let values = Fig12::claims(run, claims()).unwrap();
     let mut expected = Vec::new();
-    for set in P1_SETS {
+    for set in ParamSet::BOTH {
         // The paper's 380 and 600 Hz are not reached (the half-power widths are far
         // smaller): deviates; the growth ratio is reproduced.
-        expected.push(("F12", "bw_7p4e-3_hz", set, Deviates));
-        expected.push(("F12", "bw_2p85e-2_hz", set, Deviates));
-        expected.push(("F12", "bw_ratio_2p85e-2_over_7p4e-3", set, Reproduced));
+        expected.push((keys::F12_BW_LOW, set, Deviates));
+        expected.push((keys::F12_BW_HIGH, set, Deviates));
+        expected.push((keys::F12_BW_RATIO, set, Reproduced));
     }
     // With 32 records the calibrated set's ratio, 1.86 ± 0.05, lies inside the paper's
     // 1.58 ± 20 % but its interval reaches past the upper edge (1.895): reproduced at the
     // estimate, not settled by the ensemble.
     assert_verdicts_straddling(
         &values,
-        "fig12",
+        Fig12::NAME,
         &expected,
-        &[("F12", "bw_ratio_2p85e-2_over_7p4e-3", "calibrated")],
+        &[(keys::F12_BW_RATIO, ParamSet::Calibrated)],
     );
     // Our values: the impacts widen the band beyond the linear width, and more at the higher
     // level, where the mass hits the stops more often.
     let lin = run.linear.bw3db_hz();
-    for (s, set) in P1_SETS.into_iter().enumerate() {
+    for set in ParamSet::BOTH {
         let (lo, hi) = (
-            &run.level(s, fig12::LOW).ens,
-            &run.level(s, fig12::HIGH).ens,
+            &run.level(set, fig12::LOW).ens,
+            &run.level(set, fig12::HIGH).ens,
         );
         assert!(lo.impacts > 0 && hi.impacts > lo.impacts, "{set}");
-        let w_lo = value(&values, "F12", "bw_7p4e-3_hz", set);
-        let w_hi = value(&values, "F12", "bw_2p85e-2_hz", set);
+        let w_lo = value(&values, keys::F12_BW_LOW, set);
+        let w_hi = value(&values, keys::F12_BW_HIGH, set);
         let (c_lo, c_hi) = (w_lo.uncertainty.unwrap(), w_hi.uncertainty.unwrap());
         assert!(w_hi.ours - c_hi > lin, "{set}: {w_hi:?} vs linear {lin}");
         assert!(
@@ -499,14 +506,15 @@ fn f12_prototype1_bandwidth_grows_with_impacts() {
 #[test]
 fn f14_prototype2_efficiency_follows_eq21_then_falls() {
     let run = fig14_run();
-    let values = fig14::claims(run, claims());
+    let values = Fig14::claims(run, claims()).unwrap();
+    let published = ParamSet::Published;
     assert_verdicts(
         &values,
-        "fig14",
+        Fig14::NAME,
         &[
-            ("F14-a", "eff_sim_linear_pct", "published", Reproduced),
-            ("F14-b", "eff_1p69e-3_pct", "published", Deviates),
-            ("F14-b", "sublinear_power_growth", "published", Reproduced),
+            (keys::F14A_EFF_SIM_LINEAR, published, Reproduced),
+            (keys::F14B_EFF, published, Deviates),
+            (keys::F14B_SUBLINEAR, published, Reproduced),
         ],
     );
     let f = fig14::findings(run);
@@ -544,21 +552,17 @@ fn f14_prototype2_efficiency_follows_eq21_then_falls() {
 #[test]
 fn f15_prototype2_spectra_widen_upwards() {
     let run = fig15_run();
-    let values = fig15::claims(run, claims());
+    let values = Fig15::claims(run, claims()).unwrap();
+    let published = ParamSet::Published;
     assert_verdicts(
         &values,
-        "fig15",
+        Fig15::NAME,
         &[
-            ("F15-a", "peak_0p34e-3_hz", "published", Reproduced),
-            ("F15-a", "bw_0p34e-3_hz", "published", Reproduced),
+            (keys::F15A_PEAK, published, Reproduced),
+            (keys::F15A_BW, published, Reproduced),
             // The width grows, but by much less than the paper's 3.7.
-            (
-                "F15-b",
-                "bw_ratio_0p55e-3_over_0p34e-3",
-                "published",
-                Deviates,
-            ),
-            ("F15-c", "widening_up_1p69e-3", "published", Reproduced),
+            (keys::F15B_BW_RATIO, published, Deviates),
+            (keys::F15C_WIDENING_UP, published, Reproduced),
         ],
     );
     let lin = &run.linear;
@@ -566,23 +570,17 @@ fn f15_prototype2_spectra_widen_upwards() {
     let bin = e34.mean_spectrum.total.df();
     // The peak is not below the linearised resonance by more than a bin: the stops only
     // stiffen. No upper bound is asserted here beyond the claim's own verdict above: the peak
-    // of the mean PSD is the arg-max of a noisy top, and a bound on how far above it may lie
-    // was first +-1 bin, then widened after a 32-record run put it 1.1 bins above; a bound
-    // chosen after seeing the number tests nothing, so the value is pinned in the regression
-    // snapshot (tests/snapshots/broadband_fig15.snap) instead.
-    let peak = value(&values, "F15-a", "peak_0p34e-3_hz", "published").ours;
+    // of the mean PSD is the arg-max of a noisy top (a 32-record run puts it 1.1 bins above),
+    // and a bound chosen after seeing the number tests nothing, so the value is pinned in the
+    // regression snapshot (tests/snapshots/broadband_fig15.snap) instead.
+    let peak = value(&values, keys::F15A_PEAK, published).ours;
     let lin_peak = lin.half_power.unwrap().peak_hz;
     assert!(peak >= lin_peak - bin, "{peak} vs {lin_peak}");
     // The width is at least the linear width (impacts only widen).
-    let w = value(&values, "F15-a", "bw_0p34e-3_hz", "published");
+    let w = value(&values, keys::F15A_BW, published);
     assert!(w.ours + w.uncertainty.unwrap() >= lin.bw3db_hz(), "{w:?}");
     // The ratio is above 1 beyond its CI: the width does grow.
-    let r = value(
-        &values,
-        "F15-b",
-        "bw_ratio_0p55e-3_over_0p34e-3",
-        "published",
-    );
+    let r = value(&values, keys::F15B_BW_RATIO, published);
     assert!(r.ours - r.uncertainty.unwrap() > 1.0, "{r:?}");
     // ... and at 1.69e-3 the peak itself moves up (the stops stiffen the oscillator).
     let e169 = &run.levels[fig15::L169].ens;

@@ -8,7 +8,7 @@ use endstop::num::minimax::{minimise_worst, MinimaxSettings};
 use endstop::paper::claims::Claims;
 use endstop::paper::deviations::{narrowband, Outcome};
 use endstop::paper::deviations::{Factor, RangesFile};
-use endstop::paper::fig08;
+use endstop::paper::figures::fig08;
 use endstop::paper::setups::P1_BIAS_V;
 use endstop::paper::setups::{comb, comb_mut, endstop};
 use endstop::physics::two_port::{eq21_efficiency, QmReading, TwoPort};

@@ -5,8 +5,11 @@
 
 use endstop::device::Device;
 use endstop::device::ParamError;
-use endstop::paper::claims::{Claims, Value, Verdict};
-use endstop::paper::{fig05, table3};
+use endstop::paper::claims::{keys, ClaimKey, Value, Verdict};
+use endstop::paper::figures::fig05::Fig05;
+use endstop::paper::figures::table3::Table3;
+use endstop::paper::setups::ParamSet;
+use endstop::paper::Figure;
 use endstop::physics::hertz::HertzLine;
 use endstop::physics::hertz::EQ19_FIT_RANGE_M;
 use endstop::physics::hertz::EQ19_FIT_SAMPLES;
@@ -15,45 +18,39 @@ use endstop::physics::two_port::EQ21_QM;
 
 use Verdict::{Deviates, Reproduced};
 
-fn text(name: &str) -> String {
-    std::fs::read_to_string(format!("{}/data/{name}.toml", env!("CARGO_MANIFEST_DIR"))).unwrap()
-}
+mod common;
+use common::{claims, device, device_text as text, prototypes};
 
-fn device(name: &str) -> Device {
-    Device::from_toml_str(&text(name), name).unwrap()
-}
-
-/// Asserts that `values` are exactly the rows of `expected` (claim, quantity), all under the
-/// published set, with the expected verdicts, and returns our values in that order.
-fn assert_verdicts(values: &[Value], expected: &[(&str, &str, Verdict)]) -> Vec<f64> {
-    let claims = Claims::bundled().unwrap();
-    let keys: Vec<(&str, &str)> = values
+/// Asserts that `values` are exactly the rows of `expected`, all under the published set,
+/// with the expected verdicts, and returns our values in that order.
+fn assert_verdicts(values: &[Value], expected: &[(ClaimKey, Verdict)]) -> Vec<f64> {
+    let got: Vec<(&str, &str)> = values
         .iter()
         .map(|v| (v.claim.as_str(), v.quantity.as_str()))
         .collect();
-    let want: Vec<(&str, &str)> = expected.iter().map(|e| (e.0, e.1)).collect();
-    assert_eq!(keys, want);
+    let want: Vec<(&str, &str)> = expected.iter().map(|e| (e.0.id, e.0.quantity)).collect();
+    assert_eq!(got, want);
     expected
         .iter()
         .zip(values)
-        .map(|(&(id, q, verdict), v)| {
-            assert_eq!(v.set, "published");
-            let c = claims.get(id, q).unwrap();
+        .map(|(&(key, verdict), v)| {
+            assert_eq!(v.set, ParamSet::Published);
+            let c = claims().claim(key).unwrap();
             println!(
-                "{id} {q}: ours {}, paper {} ± {}",
+                "{key}: ours {}, paper {} ± {}",
                 v.ours,
                 c.paper,
                 c.tolerance()
             );
-            assert_eq!(c.verdict(Some(v.ours)), verdict, "{id} {q}: {}", v.ours);
+            assert_eq!(c.verdict(Some(v.ours)), verdict, "{key}: {}", v.ours);
             v.ours
         })
         .collect()
 }
 
 fn fig05_values() -> Vec<Value> {
-    let run = fig05::run(&device("prototype1"), &device("prototype2"));
-    fig05::claims(&run, &Claims::bundled().unwrap())
+    let run = Fig05::run(&prototypes(), &|| {}).unwrap();
+    Fig05::claims(&run, claims()).unwrap()
 }
 
 #[test]
@@ -61,16 +58,16 @@ fn f5a_delta0_of_both_prototypes_and_f5b_deviates_under_our_reading() {
     assert_verdicts(
         &fig05_values(),
         &[
-            ("F5-a", "delta0_p1_um", Reproduced),
-            ("F5-a", "delta0_p2_um", Reproduced),
-            ("F5-b", "eq19_coefficient", Deviates),
+            (keys::F5A_DELTA0_P1, Reproduced),
+            (keys::F5A_DELTA0_P2, Reproduced),
+            (keys::F5B_EQ19_COEFFICIENT, Deviates),
         ],
     );
 }
 
 #[test]
 fn f5b_eq19_coefficient_is_converged_and_the_secant_reading_matches_the_print() {
-    let run = fig05::run(&device("prototype1"), &device("prototype2"));
+    let run = Fig05::run(&prototypes(), &|| {}).unwrap();
     let fits = run.prototypes[0].fits;
     let c = fits.paper_reading();
     let h = HertzLine::of_device(&device("prototype1")).unwrap();
@@ -83,8 +80,7 @@ fn f5b_eq19_coefficient_is_converged_and_the_secant_reading_matches_the_print() 
     let coarse = h.linear_fits(EQ19_FIT_RANGE_M, 1001).paper_reading();
     assert!(((coarse - c) / c).abs() < 1e-5, "{c} vs {coarse}");
     // The secant reading lands on the printed value within its 1 % tolerance.
-    let claims = Claims::bundled().unwrap();
-    let claim = claims.get("F5-b", "eq19_coefficient").unwrap();
+    let claim = claims().claim(keys::F5B_EQ19_COEFFICIENT).unwrap();
     assert_eq!(claim.verdict(Some(fits.secant)), Reproduced);
     // The coefficient does not depend on E or nu.
     let d = endstop::paper::setups::with_hertz(&device("prototype1"), |h| {
@@ -99,8 +95,8 @@ fn f5b_eq19_coefficient_is_converged_and_the_secant_reading_matches_the_print() 
 }
 
 fn table3_values() -> Vec<Value> {
-    let run = table3::run(&device("prototype1"), &device("prototype2"));
-    table3::claims(&run, &Claims::bundled().unwrap())
+    let run = Table3::run(&prototypes(), &|| {}).unwrap();
+    Table3::claims(&run, claims()).unwrap()
 }
 
 #[test]
@@ -108,21 +104,20 @@ fn t3_coupling_and_quality_factors_with_eq21() {
     let ours = assert_verdicts(
         &table3_values(),
         &[
-            ("T3-a", "k2_pct_p1", Reproduced),
-            ("T3-a", "qm_p1", Reproduced),
-            ("T3-a", "k2qm_p1", Reproduced),
+            (keys::T3A_K2_P1, Reproduced),
+            (keys::T3A_QM_P1, Reproduced),
+            (keys::T3A_K2QM_P1, Reproduced),
             // Eq 18 with Table 2 gives k^2 just outside the 1 % tolerance of the printed 2.52 %,
             // and k^2 Qm inherits the excess.
-            ("T3-b", "k2_pct_p2", Deviates),
-            ("T3-b", "qm_p2", Reproduced),
-            ("T3-b", "k2qm_p2", Deviates),
-            ("F14-a", "eff_eq21_pct", Reproduced),
+            (keys::T3B_K2_P2, Deviates),
+            (keys::T3B_QM_P2, Reproduced),
+            (keys::T3B_K2QM_P2, Deviates),
+            (keys::F14A_EFF_EQ21, Reproduced),
         ],
     );
     // "By a hair": prototype 2's k^2 misses the printed value by less than twice the
     // tolerance (a rounding of the paper's inputs, not a different formula).
-    let claims = Claims::bundled().unwrap();
-    let c = claims.get("T3-b", "k2_pct_p2").unwrap();
+    let c = claims().claim(keys::T3B_K2_P2).unwrap();
     assert!(
         (ours[3] - c.paper).abs() < 2.0 * c.tolerance(),
         "{}",
@@ -133,7 +128,7 @@ fn t3_coupling_and_quality_factors_with_eq21() {
 #[test]
 fn prototype1_eq21_efficiency_is_about_3_percent() {
     // The paper's "about 3 %" for prototype 1 (no tolerance class: "about" read as ± 0.5 %).
-    let run = table3::run(&device("prototype1"), &device("prototype2"));
+    let run = Table3::run(&prototypes(), &|| {}).unwrap();
     let eff1 = run.prototypes[0].eq21_efficiency() * 100.0;
     assert!(
         (eff1 - 3.0).abs() < 0.5,

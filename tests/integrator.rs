@@ -2,7 +2,6 @@
 //! piecewise-linear contact on the real harvester model, and the energy balance of a run with
 //! impacts. Tolerances are stated in the integrator's own units (rtol) or derived from them.
 
-use endstop::device::Device;
 use endstop::device::StiffnessModel;
 use endstop::drive::Excitation;
 use endstop::drive::Sampled;
@@ -24,11 +23,8 @@ use endstop::physics::harvester::Harvester;
 use endstop::physics::harvester::State;
 use nalgebra::SVector;
 
-fn device(name: &str) -> Device {
-    let text = std::fs::read_to_string(format!("{}/data/{name}.toml", env!("CARGO_MANIFEST_DIR")))
-        .unwrap();
-    Device::from_toml_str(&text, name).unwrap()
-}
+mod common;
+use common::device;
 
 fn opts<const N: usize>(rtol: f64, atol: f64) -> Options<N> {
     Options {
@@ -471,8 +467,8 @@ impl HybridSystem<1> for FastForcing {
 fn a_step_below_the_resolution_of_time_is_a_step_size_error_with_the_time() {
     // At t = 1e7 s doubles are 1.9e-9 s apart, and w = 1e9 rad/s asks for steps of ~1e-11 s:
     // such a step cannot advance t. The absolute floor (1e-14 s) is far below; the relative
-    // floor (16 eps |t| = 3.6e-8 s) stops the run at once, where the integrator used to
-    // accept steps that left t unchanged until the step budget ran out.
+    // floor (16 eps |t| = 3.6e-8 s) stops the run at once, rather than accepting steps that
+    // leave t unchanged until the step budget runs out.
     let t0 = 1e7;
     let mut o = opts::<1>(1e-8, 1e-8);
     o.max_steps = 1_000_000;

@@ -15,13 +15,12 @@ use endstop::study::record_ledger::record_ledger;
 const SEED: u64 = 2012;
 const TARGET: f64 = 1e-6;
 
-fn device(name: &str) -> Device {
-    let path = format!("{}/data/{name}.toml", env!("CARGO_MANIFEST_DIR"));
-    Device::from_toml_str(&std::fs::read_to_string(&path).unwrap(), &path).unwrap()
-}
+mod common;
+use common::device;
 
+/// Prototype 2 as Figures 14 and 15 simulate it.
 fn prototype2() -> Device {
-    prototype2_setup(&device("prototype2"))
+    prototype2_setup(&common::prototype2())
 }
 
 fn ledger(dev: &Device, sa: f64, scheme: Scheme, rtol: f64) -> (EnergyLedger, u64) {

@@ -10,15 +10,13 @@
 
 use std::fmt::Write;
 
-use endstop::device::Device;
-use endstop::paper::claims::Claims;
-use endstop::paper::{fig05, table3};
+use endstop::paper::figures::fig05::{self, Fig05};
+use endstop::paper::figures::table3::Table3;
+use endstop::paper::Figure;
 use endstop::physics::two_port::QmReading;
 
-fn device(name: &str) -> Device {
-    let path = format!("{}/data/{name}.toml", env!("CARGO_MANIFEST_DIR"));
-    Device::from_toml_str(&std::fs::read_to_string(&path).unwrap(), &path).unwrap()
-}
+mod common;
+use common::{claims, prototypes};
 
 /// `x` with 6 significant digits, in scientific notation.
 fn sig6(x: f64) -> String {
@@ -33,9 +31,9 @@ fn snapshot(name: &str, text: &str) {
 
 #[test]
 fn regression_fig05_contact_law_and_eq19() {
-    let run = fig05::run(&device("prototype1"), &device("prototype2"));
+    let run = Fig05::run(&prototypes(), &|| {}).unwrap();
     let mut s = String::new();
-    for v in fig05::claims(&run, &Claims::bundled().unwrap()) {
+    for v in Fig05::claims(&run, claims()).unwrap() {
         writeln!(s, "{} {}: {}", v.claim, v.quantity, sig6(v.ours)).unwrap();
     }
     for p in &run.prototypes {
@@ -49,9 +47,9 @@ fn regression_fig05_contact_law_and_eq19() {
 
 #[test]
 fn regression_table3_coupling() {
-    let run = table3::run(&device("prototype1"), &device("prototype2"));
+    let run = Table3::run(&prototypes(), &|| {}).unwrap();
     let mut s = String::new();
-    for v in table3::claims(&run, &Claims::bundled().unwrap()) {
+    for v in Table3::claims(&run, claims()).unwrap() {
         writeln!(s, "{} {}: {}", v.claim, v.quantity, sig6(v.ours)).unwrap();
     }
     for p in &run.prototypes {

@@ -5,16 +5,16 @@
 //! significant digits (the monodromy is accurate to about 1e-7 absolute, so even the
 //! smallest moduli, near 1e-3, keep three digits).
 
-use endstop::device::Device;
 use endstop::ode::Stats;
 use endstop::paper::response::{continuation, setups, Case};
 use endstop::physics::harvester::Harvester;
 use endstop::study::orbit::Shooter;
 
+mod common;
+
 #[test]
 fn figure13_whole_curve_events_and_multipliers() {
-    let p2 =
-        Device::from_toml_str(include_str!("../data/prototype2.toml"), "prototype2.toml").unwrap();
+    let p2 = common::prototype2();
     let s = setups(&p2, &p2, &p2)
         .into_iter()
         .find(|s| s.case == Case::Fig13P2)

@@ -14,9 +14,11 @@ use endstop::study::continuation::{
 use endstop::study::orbit::{Forcing, Parameter, Shooter, ShootingConfig};
 use nalgebra::{Complex, Matrix3};
 
+mod common;
+
+/// Prototype 2 as Figure 13 simulates it at 0.31 g: 10 V, linear k_im, b_im = 0.4 N s/m.
 fn prototype2() -> Device {
-    Device::from_toml_str(include_str!("../data/prototype2.toml"), "prototype2.toml")
-        .unwrap()
+    common::prototype2()
         .with_bias(10.0)
         .with_endstop(StiffnessModel::Linear, 0.4)
 }
@@ -241,7 +243,7 @@ fn amplitude_continuation_in_the_linear_regime_scales_the_power_with_the_square(
 fn a_grazing_corner_is_crossed_from_the_free_flight_side() {
     use endstop::paper::deviations::RangesFile;
     use endstop::study::continuation::frequency_branch;
-    let p1 = Device::from_toml_str(include_str!("../data/prototype1.toml"), "test").unwrap();
+    let p1 = common::prototype1();
     // Point 3 of the scrambled Sobol sequence of seed 99 in the study's unit cube.
     let u: Vec<f64> = (0..8)
         .map(|k| f64::from(sobol_burley::sample(3, k, 99)))

@@ -3,7 +3,6 @@
 //! lower branch where that branch ends, each within the sweep's frequency resolution (the
 //! refined bracket, [`REFINE_TOL_HZ`]).
 
-use endstop::device::Device;
 use endstop::paper::response::{
     continuation, ghost_study, setups, sweeps_and_branch, upper_fold_hz, Case, CaseRun, Setup,
 };
@@ -11,18 +10,12 @@ use endstop::study::basins::{basins, refine, Attractor};
 use endstop::study::steady::{horizon_periods, steady_config, SteadyConfig, FOLD_BLOCK_PERIODS};
 use endstop::study::sweep::REFINE_TOL_HZ;
 
-fn published() -> (Device, Device) {
-    let p1 =
-        Device::from_toml_str(include_str!("../data/prototype1.toml"), "prototype1.toml").unwrap();
-    let p2 =
-        Device::from_toml_str(include_str!("../data/prototype2.toml"), "prototype2.toml").unwrap();
-    (p1, p2)
-}
+mod common;
 
 /// The setup of a case (the calibrated prototype 1 is the experiments' artefact; the published
 /// set stands in for it here, which only the calibrated case would use).
 fn setup(case: Case) -> Setup {
-    let (p1, p2) = published();
+    let (p1, p2) = (common::prototype1(), common::prototype2());
     setups(&p2, &p1, &p1)
         .into_iter()
         .find(|s| s.case == case)

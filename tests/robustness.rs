@@ -25,12 +25,10 @@ const CASES: usize = 256;
 /// Seed of the case generator.
 const SEED: u64 = 2012;
 
+mod common;
+
 fn p1_text() -> String {
-    std::fs::read_to_string(format!(
-        "{}/data/prototype1.toml",
-        env!("CARGO_MANIFEST_DIR")
-    ))
-    .unwrap()
+    common::device_text("prototype1")
 }
 
 fn toml_float(v: f64) -> String {

@@ -2,7 +2,6 @@
 //! except `ngspice_agrees_with_our_integrator`, which prints a skip message and returns when
 //! `ngspice` is not on PATH.
 
-use endstop::device::Device;
 use endstop::device::StiffnessModel;
 use endstop::drive::Sine;
 use endstop::paper::setups::{comb, endstop, stiffness_model};
@@ -16,13 +15,8 @@ use endstop::study::steady::SteadyConfig;
 use std::collections::BTreeMap;
 use std::process::Command;
 
-fn p1() -> Device {
-    Device::from_toml_str(include_str!("../data/prototype1.toml"), "prototype1.toml").unwrap()
-}
-
-fn p2() -> Device {
-    Device::from_toml_str(include_str!("../data/prototype2.toml"), "prototype2.toml").unwrap()
-}
+mod common;
+use common::{prototype1 as p1, prototype2 as p2};
 
 fn options(
     initial: InitialCondition,

@@ -11,12 +11,13 @@ use endstop::paper::deviations::{
     Prototype, Scope,
 };
 use endstop::paper::ensembles::{protocol_spec, P1_BAND_HZ, P1_NPERSEG};
-use endstop::paper::fig08::{self, Fig8Curve};
-use endstop::paper::fig09::{self, Fig9Bias};
-use endstop::paper::fig12::FIG12_LEVELS;
-use endstop::paper::fig15;
-use endstop::paper::setups::{prototype2_setup, P1_BIAS_V, P2_BIAS_V};
-use endstop::paper::{fig13, table3};
+use endstop::paper::figures::fig08::{self, Fig8Curve};
+use endstop::paper::figures::fig09::{self, Fig9Bias};
+use endstop::paper::figures::fig12::FIG12_LEVELS;
+use endstop::paper::figures::fig15::{self, Fig15};
+use endstop::paper::figures::{fig13::Fig13, table3::Table3};
+use endstop::paper::setups::{prototype2_setup, Prototypes, P1_BIAS_V, P2_BIAS_V};
+use endstop::paper::Figure;
 use rayon::prelude::*;
 
 fn device(text: &str) -> Device {
@@ -104,7 +105,11 @@ fn prototype1_fast_path_matches_the_figure_8_sweeps_and_table_3() {
         find(&fast, "F8-e", "jump_order_by_bim").value,
         if sweep_order { 1.0 } else { 0.0 }
     );
-    let t3 = table3::claims(&table3::run(&p1, &p1), &claims);
+    let both = Prototypes {
+        prototype1: p1.clone(),
+        prototype2: p1.clone(),
+    };
+    let t3 = Table3::claims(&Table3::run(&both, &|| {}).unwrap(), &claims).unwrap();
     for v in t3.iter().filter(|v| v.claim == "T3-a") {
         let e = find(&fast, &v.claim, &v.quantity);
         // Same formula (eqs 15-18) on the same device: equal to rounding.
@@ -119,12 +124,16 @@ fn prototype2_fast_path_matches_figure_13_and_table_3() {
     let claims = Claims::bundled().unwrap();
     let p2 = device(include_str!("../data/prototype2.toml"));
     let fast = evaluate(Prototype::P2, &published(&p2), &claims, Scope::default()).unwrap();
-    let slow = fig13::claims(&fig13::run(&p2, &|| {}).unwrap(), &claims).unwrap();
+    let slow = Fig13::claims(&Fig13::run(&p2, &|| {}).unwrap(), &claims).unwrap();
     for v in &slow {
         let e = find(&fast, &v.claim, &v.quantity);
         assert_eq!(e.value, v.ours, "{} {}", v.claim, v.quantity);
     }
-    let t3 = table3::claims(&table3::run(&p2, &p2), &claims);
+    let both = Prototypes {
+        prototype1: p2.clone(),
+        prototype2: p2.clone(),
+    };
+    let t3 = Table3::claims(&Table3::run(&both, &|| {}).unwrap(), &claims).unwrap();
     for v in t3.iter().filter(|v| v.claim == "T3-b") {
         let e = find(&fast, &v.claim, &v.quantity);
         assert!((e.value - v.ours).abs() <= 1e-12 * v.ours.abs());
@@ -157,7 +166,7 @@ fn prototype1_fast_path_matches_the_figure_9_sweeps() {
     let curves = fig09::run_biases(&p1, &protocol.settings, &|| {}).unwrap();
     for c in &curves {
         let onset = c.report.onset.expect("every bias impacts by 8 g");
-        let e = find(&fast, "F9-a", c.bias.onset_quantity());
+        let e = find(&fast, "F9-a", c.bias.onset_key().quantity);
         assert!(
             (e.value - onset.value()).abs() <= onset.half_width() + 0.005,
             "{:?}: grazing {} g vs onset {} g",
@@ -207,7 +216,11 @@ fn the_study_ensembles_are_the_figures_protocol() {
     let dev = prototype2_setup(&p2);
     assert_eq!(dev, p2.with_bias(P2_BIAS_V));
     const R: usize = 4;
-    let run = fig15::run_records(&p2, R, &|| {}).unwrap();
+    let setup = fig15::Setup {
+        prototype2: p2.clone(),
+        records: R,
+    };
+    let run = Fig15::run(&setup, &|| {}).unwrap();
     let f = fig15::findings(&run, &claims);
     let scope = Scope {
         ensemble_records: Some(R),

@@ -262,7 +262,7 @@ fn sweep(a: RangeArgs) -> Result<()> {
 
 fn response(a: RangeArgs) -> Result<()> {
     use common::frame::frame;
-    use common::response_io::{branch_series, continuation_rows};
+    use common::response_io::{continuation_rows, response_figure};
     use common::row;
     use endstop::study::continuation::{frequency_branch, EventKind};
 
@@ -352,50 +352,19 @@ fn response(a: RangeArgs) -> Result<()> {
     exp.write_numbers_md(&md)?;
     print!("{md}");
 
-    let mut series = branch_series(&branch);
-    series.push(Series::new(
-        "up-sweep",
-        up.measurements().map(|m| (m.freq_hz, m.v1_rms_v)).collect(),
-        PALETTE[1],
-        Style::Points,
-    ));
-    series.push(Series::new(
-        "down-sweep",
-        down.measurements()
-            .map(|m| (m.freq_hz, m.v1_rms_v))
-            .collect(),
-        PALETTE[2],
-        Style::Points,
-    ));
-    let marks: Vec<_> = branch
-        .events
-        .iter()
-        .filter(|e| matches!(e.kind, EventKind::Fold | EventKind::Grazing))
-        .map(|e| (e.param, e.orbit.summary.v1_rms_v))
-        .collect();
-    if !marks.is_empty() {
-        series.push(Series::new(
-            "folds and grazing",
-            marks,
-            PALETTE[3],
-            Style::Points,
-        ));
-    }
-    let plot = LinePlot::new(
+    let steps = |ms: Vec<&endstop::study::steady::Measurement>| -> Vec<(f64, f64)> {
+        ms.into_iter().map(|m| (m.freq_hz, m.v1_rms_v)).collect()
+    };
+    let plot = response_figure(
         &format!(
             "Whole response at {} g rms: {} (orbits: solid stable, dashed unstable)",
             a.accel_rms_g, device.name
         ),
-        "frequency [Hz]",
-        if device.transducer.loads() == 2 {
-            "RMS output voltage V1 [V]"
-        } else {
-            "RMS load voltage [V]"
-        },
-        series,
-    )
-    .x(a.from, a.to)
-    .legend(LegendPos::UpperLeft);
+        &branch,
+        steps(up.measurements().collect()),
+        steps(down.measurements().collect()),
+        (a.from, a.to),
+    );
     exp.write_plot(&plot)?;
     exp.finish()
 }

@@ -11,6 +11,7 @@ use std::collections::BTreeMap;
 
 use anyhow::Result;
 use endstop::paper::claims::{Row, Verdict};
+use endstop::paper::setups::ParamSet;
 
 use crate::{book_generated_root, fmt_sig, write_atomic};
 
@@ -66,10 +67,10 @@ fn cell(s: &str) -> String {
 /// The box of one chapter's rows (in the scorecard's order).
 fn chapter_box(rows: &[&Row]) -> String {
     // One line per claim number, a column per parameter set that has values.
-    let mut sets: Vec<&str> = Vec::new();
+    let mut sets: Vec<ParamSet> = Vec::new();
     for r in rows {
-        if !sets.contains(&r.set.as_str()) {
-            sets.push(&r.set);
+        if !sets.contains(&r.set) {
+            sets.push(r.set);
         }
     }
     let mut md = String::from(

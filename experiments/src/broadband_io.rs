@@ -9,11 +9,10 @@ use crate::frame::{frame, Row};
 use crate::md::Table;
 use crate::plot::{LegendPos, LinePlot, Series, Style, PALETTE};
 use crate::{fmt_sig, row, Experiment};
-use endstop::device::Device;
 use endstop::num::stats::Spread;
 use endstop::paper::ensembles::Prototype1Run;
 use endstop::paper::ensembles::WidthReading::{HalfAmplitude, HalfPower};
-use endstop::paper::setups::{comb, endstop};
+use endstop::paper::setups::{comb, endstop, ParamSet, Prototype1Sets};
 use endstop::study::record::{ring_up_time_s, TRANSIENT_RING_TIMES};
 
 pub use endstop::paper::ensembles::{level_label as sa_label, Level};
@@ -56,7 +55,7 @@ pub fn summary_rows(levels: &[Level]) -> Vec<Row> {
             };
             let (s3, s6) = (e.single_bw3db_spread(), e.single_bw6db_spread());
             row![
-                "params" => l.set.as_str(),
+                "params" => l.set.label(),
                 "psd_g2_per_hz" => l.sa(),
                 "realisations" => e.records.len() as u32,
                 "bias_v" => comb(&l.device).bias_v,
@@ -107,7 +106,7 @@ pub fn record_rows(levels: &[Level]) -> Vec<Row> {
         for (i, r) in l.ens.records.iter().enumerate() {
             let s = &r.summary;
             rows.push(row![
-                "params" => l.set.as_str(),
+                "params" => l.set.label(),
                 "psd_g2_per_hz" => l.sa(),
                 "realisation" => i as u32,
                 "stream" => r.stream,
@@ -140,7 +139,7 @@ pub fn spectra_rows(levels: &[Level], f_lo: f64, f_hi: f64) -> Vec<Row> {
                     "out_psd_uw_per_hz" => d * 1e6,
                     "psd_g2_per_hz" => l.sa(),
                     "series" => series,
-                    "params" => l.set.as_str(),
+                    "params" => l.set.label(),
                     "realisation" => real,
                 ]);
             }
@@ -206,7 +205,7 @@ pub fn power_table(levels: &[Level]) -> Table<10> {
     for l in levels {
         let e = &l.ens;
         t.row([
-            l.set.clone(),
+            l.set.label().to_string(),
             sa_label(l.sa()),
             e.records.len().to_string(),
             pm(e.power_w.mean * 1e9, e.power_w.ci95 * 1e9),
@@ -248,7 +247,7 @@ pub fn width_table(levels: &[Level]) -> Table<8> {
                 format!("{} - {}", fmt_sig(b.f_lo_hz, 4), fmt_sig(b.f_hi_hz, 4))
             });
         t.row([
-            l.set.clone(),
+            l.set.label().to_string(),
             sa_label(l.sa()),
             fmt_sig(e.mean_spectrum.total.peak().0, 4),
             band,
@@ -320,7 +319,7 @@ pub fn spectra_plot(
                 l.ens.records.len()
             )
         };
-        let style = if l.set == "calibrated" {
+        let style = if l.set == ParamSet::Calibrated {
             Style::Dashed
         } else {
             Style::Line
@@ -352,27 +351,28 @@ pub fn spectra_plot(
         .legend(LegendPos::UpperRight)
 }
 
-/// Prototype 1's two parameter sets as Figures 11 and 12 take them: `published` (Tables 1 and
-/// 2) and `calibrated` (the end-stop gap fitted to Figure 8's impact onset), as loaded devices.
+/// Prototype 1's two parameter sets as Figures 11 and 12 take them: published (Tables 1 and
+/// 2) and calibrated (the end-stop gap fitted to Figure 8's impact onset), as loaded devices.
 /// Records both parameter files on the experiment ([`crate::prototype1_both_sets`]) and both
 /// gaps as numbers.
-pub fn prototype1_sets(exp: &mut Experiment) -> Result<(Device, Device)> {
+pub fn prototype1_sets(exp: &mut Experiment) -> Result<Prototype1Sets> {
     let (p1, cal) = crate::prototype1_both_sets(exp)?;
     exp.number("calibrated_endstop_gap_m", cal.record.fitted_gap_m);
-    exp.number("published_endstop_gap_m", endstop(&p1.device).gap_m);
-    Ok((p1.device, cal.device))
+    exp.number("published_endstop_gap_m", endstop(&p1.published).gap_m);
+    Ok(p1)
 }
 
 /// The Markdown of a prototype-1 spectra experiment (Figures 11 and 12) up to its claims:
 /// settings, the two gaps (`gap_note` after them), power and width tables, and the linear
 /// theory.
 pub fn p1_tables_md(run: &Prototype1Run, gap_note: &str) -> String {
+    let gap = |set| endstop(&run.level(set, 0).device).gap_m;
     let mut md = settings_md(&run.levels[0]);
     md.push_str(&format!(
         "\nEnd-stop gap xmax: published {} um, calibrated {} um{gap_note}.\n\n**Power and \
          contact**\n\n",
-        fmt_sig(endstop(&run.level(0, 0).device).gap_m * 1e6, 3),
-        fmt_sig(endstop(&run.level(1, 0).device).gap_m * 1e6, 3),
+        fmt_sig(gap(ParamSet::Published) * 1e6, 3),
+        fmt_sig(gap(ParamSet::Calibrated) * 1e6, 3),
     ));
     md.push_str(&power_table(&run.levels).render());
     md.push_str(
@@ -402,13 +402,7 @@ pub fn write_p1_spectra(
     band_hz: (f64, f64),
     theory: bool,
 ) -> Result<()> {
-    write_level_tables(
-        exp,
-        name,
-        &run.levels,
-        Some(band_hz),
-        "published+calibrated",
-    )?;
+    write_level_tables(exp, name, &run.levels, Some(band_hz), ParamSet::BOTH_LABEL)?;
     let top = run
         .levels
         .iter()

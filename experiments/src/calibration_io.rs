@@ -18,6 +18,7 @@ use anyhow::{Context, Result};
 use endstop::paper::calibration::{
     calibrate_prototype1, calibrated_device, Calibration, CalibrationRecord,
 };
+use endstop::paper::setups::{ParamSet, Prototype1Sets};
 use serde::{Deserialize, Serialize};
 use sha2::{Digest, Sha256};
 
@@ -98,7 +99,7 @@ pub fn write_calibration(published: &LoadedDevice, cal: &Calibration) -> Result<
         experiment: "calibrate".into(),
         commit: git_commit(),
         crate_version: env!("CARGO_PKG_VERSION").into(),
-        params: vec![(published.file.clone(), "published".into())],
+        params: vec![(published.file.clone(), ParamSet::Published.label().into())],
         fitted_from: published.file.clone(),
         fitted_from_sha256: sha.clone(),
         record: cal.record,
@@ -192,9 +193,13 @@ pub fn calibrated_prototype1(published: &LoadedDevice) -> Result<(LoadedDevice, 
 /// `prototype1.toml` as loaded and its calibration ([`calibrated_prototype1`]), with both
 /// parameter files recorded on `exp` (published, then calibrated: the artefact's device file
 /// with its own text).
-pub fn prototype1_both_sets(exp: &mut Experiment) -> Result<(LoadedDevice, Calibration)> {
+pub fn prototype1_both_sets(exp: &mut Experiment) -> Result<(Prototype1Sets, Calibration)> {
     let published = exp.load_published("prototype1")?;
     let (calibrated, cal) = calibrated_prototype1(&published)?;
-    exp.uses(&calibrated, "calibrated");
-    Ok((published, cal))
+    exp.uses(&calibrated, ParamSet::Calibrated.label());
+    let sets = Prototype1Sets {
+        published: published.device,
+        calibrated: cal.device.clone(),
+    };
+    Ok((sets, cal))
 }

@@ -79,7 +79,7 @@ pub fn key_of(root: &Path, files: &[PathBuf]) -> String {
     format!("{:x}", h.finalize())
 }
 
-/// The freshness key of a job now.
+/// The freshness key of a job from its input files as they are on disk.
 pub fn key(job: &Job) -> Result<String> {
     let root = crate::root();
     Ok(key_of(&root, &input_files(&root, job)?))
@@ -89,10 +89,15 @@ fn key_path(job: &Job) -> PathBuf {
     job.dir().join("inputs.sha256")
 }
 
-/// True when the job's last successful run had this key and its outputs are still there.
+/// True when the job's last successful run had this key and its outputs (those of every
+/// experiment it writes) are still there.
 pub fn is_fresh(job: &Job, key: &str) -> bool {
     std::fs::read_to_string(key_path(job)).is_ok_and(|k| k.trim() == key)
         && job.dir().join("summary.json").exists()
+        && job
+            .also
+            .iter()
+            .all(|e| crate::jobs::experiment_dir(e).join("summary.json").exists())
         && job.completion_marker().exists()
 }
 

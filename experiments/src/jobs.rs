@@ -32,9 +32,9 @@ pub struct Job {
     pub phase: Phase,
     /// True when its numbers feed the scorecard (its `summary.json` holds claim values).
     pub scored: bool,
-    /// A job of the same phase that must have finished before this one starts, when both
-    /// run (`fig15` takes records from `fig14`'s run, see [`crate::shared_levels`]).
-    pub after: Option<&'static str>,
+    /// The other experiments it writes, each to its own results directory (`fig14` writes
+    /// `fig15` from the same records).
+    pub also: &'static [&'static str],
 }
 
 const P1: &str = "data/prototype1.toml";
@@ -60,7 +60,7 @@ const fn tool_run(
         reads_calibration: false,
         phase: Phase::Parallel,
         scored: false,
-        after: None,
+        also: &[],
     }
 }
 
@@ -73,7 +73,7 @@ const fn experiment(name: &'static str, reads: &'static [&'static str], cal: boo
         reads_calibration: cal,
         phase: Phase::Parallel,
         scored: true,
-        after: None,
+        also: &[],
     }
 }
 
@@ -94,7 +94,7 @@ pub const JOBS: &[Job] = &[
         reads_calibration: false,
         phase: Phase::First,
         scored: false,
-        after: None,
+        also: &[],
     },
     experiment("fig05", &[P1, P2], false),
     experiment("table3", &[P1, P2], false),
@@ -104,10 +104,9 @@ pub const JOBS: &[Job] = &[
     experiment("fig11", &[P1], true),
     experiment("fig12", &[P1], true),
     experiment("fig13", &[P2], false),
-    experiment("fig14", &[P2], false),
     Job {
-        after: Some("fig14"),
-        ..experiment("fig15", &[P2], false)
+        also: &["fig15"],
+        ..experiment("fig14", &[P2], false)
     },
     Job {
         name: "response",
@@ -117,7 +116,7 @@ pub const JOBS: &[Job] = &[
         reads_calibration: true,
         phase: Phase::Parallel,
         scored: false,
-        after: None,
+        also: &[],
     },
     tool_run(
         "own_device_sweep",
@@ -266,7 +265,7 @@ pub const JOBS: &[Job] = &[
         reads_calibration: false,
         phase: Phase::Parallel,
         scored: false,
-        after: None,
+        also: &[],
     },
     Job {
         name: BENCH,
@@ -276,7 +275,7 @@ pub const JOBS: &[Job] = &[
         reads_calibration: true,
         phase: Phase::Last,
         scored: false,
-        after: None,
+        also: &[],
     },
 ];
 
@@ -285,7 +284,33 @@ pub fn job(name: &str) -> Option<&'static Job> {
     JOBS.iter().find(|j| j.name == name)
 }
 
+/// The job that writes the experiment `name` (its own, or one it writes besides).
+pub fn job_writing(name: &str) -> Option<&'static Job> {
+    JOBS.iter().find(|j| j.experiments().any(|e| e == name))
+}
+
+/// Every experiment the jobs write, in the order of [`JOBS`].
+pub fn experiment_names() -> Vec<&'static str> {
+    JOBS.iter().flat_map(Job::experiments).collect()
+}
+
+/// The results directory of an experiment (under the results root).
+pub fn experiment_dir(name: &str) -> PathBuf {
+    crate::results_root().join(name)
+}
+
 impl Job {
+    /// The experiments it writes: its own, then [`Job::also`].
+    pub fn experiments(&self) -> impl Iterator<Item = &'static str> {
+        std::iter::once(self.name).chain(self.also.iter().copied())
+    }
+
+    /// The experiments it writes with their results directories.
+    pub fn outputs(&self) -> impl Iterator<Item = (&'static str, PathBuf)> + '_ {
+        std::iter::once((self.name, self.dir()))
+            .chain(self.also.iter().map(|e| (*e, experiment_dir(e))))
+    }
+
     /// True for a run of the `endstop` tool (its outputs all go to its results directory).
     pub fn is_tool_run(&self) -> bool {
         self.program == "endstop"
@@ -334,5 +359,5 @@ pub const DEVIATIONS: Job = Job {
     reads_calibration: false,
     phase: Phase::Last,
     scored: false,
-    after: None,
+    also: &[],
 };

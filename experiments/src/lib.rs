@@ -9,6 +9,7 @@ pub mod answers;
 pub mod book;
 pub mod broadband_io;
 pub mod calibration_io;
+pub mod fig15_io;
 pub mod frame;
 pub mod freshness;
 pub mod jobs;
@@ -18,7 +19,6 @@ pub mod narrowband_io;
 pub mod panels;
 pub mod plot;
 pub mod response_io;
-pub mod shared_levels;
 
 pub use calibration_io::{calibrated_prototype1, prototype1_both_sets};
 
@@ -37,7 +37,9 @@ use std::time::Instant;
 
 use anyhow::{Context, Result};
 use endstop::device::Device;
-use endstop::paper::claims::Value;
+use endstop::paper::claims::{Claims, Value};
+use endstop::paper::setups::ParamSet;
+use endstop::paper::Figure;
 use indicatif::{ProgressBar, ProgressStyle};
 use polars::prelude::*;
 use serde::Serialize;
@@ -179,6 +181,8 @@ pub struct Experiment {
     /// Plots written: (file stem, title).
     plots: Mutex<Vec<(String, String)>>,
     started: Instant,
+    /// This process's processor time when the experiment started (s).
+    cpu_started: Option<f64>,
 }
 
 #[derive(Serialize)]
@@ -207,6 +211,7 @@ impl Experiment {
             parquet: Mutex::new(Vec::new()),
             plots: Mutex::new(Vec::new()),
             started: Instant::now(),
+            cpu_started: cpu_time_s(),
         }
     }
 
@@ -225,42 +230,31 @@ impl Experiment {
             .push((dev.file.clone(), set.to_string(), dev.text.clone()));
     }
 
-    /// Loads the parameter file of `name` ([`load_device`]) and records it under the set
-    /// `published`.
+    /// Loads the parameter file of `name` ([`load_device`]) and records it under the
+    /// published set.
     pub fn load_published(&mut self, name: &str) -> Result<LoadedDevice> {
         let dev = load_device(name)?;
-        self.uses(&dev, "published");
+        self.uses(&dev, ParamSet::Published.label());
         Ok(dev)
-    }
-
-    /// Records our value for a claim's quantity (scorecard input).
-    pub fn claim(&mut self, claim: &str, quantity: &str, set: &str, ours: f64) {
-        self.claim_with_uncertainty(claim, quantity, set, ours, None);
-    }
-
-    /// Records our value with an uncertainty (same unit).
-    pub fn claim_with_uncertainty(
-        &mut self,
-        claim: &str,
-        quantity: &str,
-        set: &str,
-        ours: f64,
-        uncertainty: Option<f64>,
-    ) {
-        self.values.push(Value {
-            claim: claim.to_string(),
-            quantity: quantity.to_string(),
-            set: set.to_string(),
-            ours,
-            uncertainty,
-            note: String::new(),
-        });
     }
 
     /// Records our values for claims (scorecard input), as the paper layer's `claims`
     /// functions return them.
     pub fn claims(&mut self, values: impl IntoIterator<Item = Value>) {
         self.values.extend(values);
+    }
+
+    /// Runs the figure `F` on `setup` under a progress bar, records its claim values, and
+    /// returns the run with them.
+    pub fn run_figure<F: Figure>(
+        &mut self,
+        setup: &F::Setup,
+        claims: &Claims,
+    ) -> Result<(F::Run, Vec<Value>)> {
+        let run = with_progress(F::work(setup), F::NAME, |tick| F::run(setup, tick))?;
+        let values = F::claims(&run, claims)?;
+        self.claims(values.clone());
+        Ok((run, values))
     }
 
     /// Records a named number for the summary (not a claim).
@@ -329,16 +323,25 @@ impl Experiment {
     /// `book/build/`). Deterministic: the same run gives the same bytes.
     pub fn figure_markdown(&self, stem: &str, title: &str) -> String {
         let link = |rel: &str| format!("[`{rel}`](../../{rel})");
-        let program = std::env::current_exe()
-            .ok()
-            .and_then(|p| p.file_stem().map(|s| s.to_string_lossy().into_owned()))
-            .unwrap_or_else(|| self.name.clone());
+        // The experiment's own binary where it has one (Figure 15's outputs are also written
+        // by Figure 14's), else the program that ran (the `endstop` tool).
+        let program = if root()
+            .join(format!("experiments/{}.rs", self.name))
+            .exists()
+        {
+            self.name.clone()
+        } else {
+            std::env::current_exe()
+                .ok()
+                .and_then(|p| p.file_stem().map(|s| s.to_string_lossy().into_owned()))
+                .unwrap_or_else(|| self.name.clone())
+        };
         let mut made_by = Vec::new();
         let source = format!("experiments/{program}.rs");
         if root().join(&source).exists() {
             made_by.push(link(&source));
         }
-        let paper = format!("src/paper/{program}.rs");
+        let paper = format!("src/paper/figures/{program}.rs");
         if root().join(&paper).exists() {
             made_by.push(format!("the paper layer {}", link(&paper)));
         }
@@ -446,10 +449,13 @@ impl Experiment {
             ));
             write_atomic(&snippet, md.as_bytes())?;
         }
+        // The processor time since the start: a process that writes two experiments (Figure
+        // 14's writes Figure 15's from the same records) counts each second once.
+        let cpu = cpu_time_s().zip(self.cpu_started).map(|(now, t0)| now - t0);
         let timing = serde_json::json!({
             "experiment": self.name,
             "wall_time_s": secs,
-            "cpu_time_s": cpu_time_s(),
+            "cpu_time_s": cpu,
         });
         write_atomic(
             &self.dir.join("timing.json"),
@@ -559,12 +565,12 @@ mod caption_tests {
         let mut exp = Experiment::start("figxx");
         exp.params.push((
             "data/prototype2.toml".into(),
-            "published".into(),
+            ParamSet::Published.label().into(),
             String::new(),
         ));
         lock(&exp.parquet).push((
             root().join("data/results/figxx/figxx.parquet"),
-            "published".into(),
+            ParamSet::Published.label().into(),
         ));
         let md = exp.figure_markdown("figxx", "Figure XX");
         assert!(

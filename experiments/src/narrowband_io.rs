@@ -5,6 +5,7 @@
 use endstop::device::{Device, StiffnessModel, Stop, StopLaw};
 use endstop::paper::claims::{Claim, Value};
 use endstop::paper::curves::{law_key, Curve, CurveConvergence};
+use endstop::paper::setups::ParamSet;
 use endstop::study::steady::Measurement;
 
 use crate::frame::Row;
@@ -112,7 +113,7 @@ pub fn curve_rows(base: &Device, curves: &[Curve]) -> Vec<Row> {
 /// One claim's cells in a generated table under a parameter set: (our value, what it is,
 /// verdict). Qualitative claims read yes/no; numbers get `sig` significant digits and their
 /// bracket half-width.
-pub fn claim_cells(claim: &Claim, values: &[Value], set: &str, sig: usize) -> [String; 3] {
+pub fn claim_cells(claim: &Claim, values: &[Value], set: ParamSet, sig: usize) -> [String; 3] {
     let Some(v) = values
         .iter()
         .find(|v| v.claim == claim.id && v.quantity == claim.quantity && v.set == set)
@@ -165,8 +166,8 @@ pub fn claims_table_both_sets<'a>(
         "verdict",
     ]);
     for c in claims {
-        let [a, b, v] = claim_cells(c, values, "published", sig);
-        let [d, e, w] = claim_cells(c, values, "calibrated", sig);
+        let [a, b, v] = claim_cells(c, values, ParamSet::Published, sig);
+        let [d, e, w] = claim_cells(c, values, ParamSet::Calibrated, sig);
         t.row([
             c.id.clone(),
             format!("`{}`", c.quantity),

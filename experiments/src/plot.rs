@@ -71,12 +71,23 @@ pub enum Style {
     Points,
     /// Solid line with small markers.
     LinePoints,
+    /// Small filled dots, no line (many simulated points that must not hide the curves
+    /// beneath them).
+    Dots,
+    /// Filled triangles, no line (marked events, e.g. folds).
+    Triangles,
+    /// Open circles, no line (marked events of another kind, e.g. grazing points).
+    Circles,
 }
 
 /// Half-size of a [`Style::Points`] cross (pixels).
 const POINT_RADIUS: i32 = 7;
 /// Radius of a [`Style::LinePoints`] marker (pixels).
 const LINE_POINT_RADIUS: i32 = 3;
+/// Radius of a [`Style::Dots`] dot (pixels).
+const DOT_RADIUS: i32 = 2;
+/// Size of a [`Style::Triangles`] or [`Style::Circles`] marker (pixels).
+const MARK_SIZE: i32 = 6;
 
 /// One labelled curve.
 #[derive(Debug, Clone)]
@@ -342,6 +353,24 @@ macro_rules! draw_chart {
                         )
                         .map_err(|e| anyhow!("series: {e}"))?
                 }
+                Style::Dots => chart
+                    .draw_series(
+                        pts.iter()
+                            .map(|&p| Circle::new(p, DOT_RADIUS, color.filled())),
+                    )
+                    .map_err(|e| anyhow!("series: {e}"))?,
+                Style::Triangles => chart
+                    .draw_series(
+                        pts.iter()
+                            .map(|&p| TriangleMarker::new(p, MARK_SIZE, color.filled())),
+                    )
+                    .map_err(|e| anyhow!("series: {e}"))?,
+                Style::Circles => chart
+                    .draw_series(
+                        pts.iter()
+                            .map(|&p| Circle::new(p, MARK_SIZE, color.stroke_width(2))),
+                    )
+                    .map_err(|e| anyhow!("series: {e}"))?,
             };
             if !s.label.is_empty() {
                 any_label = true;
@@ -370,6 +399,21 @@ macro_rules! draw_chart {
                             EmptyElement::at((x, y))
                                 + PathElement::new(vec![(0, 0), (22, 0)], seg)
                                 + Circle::new((11, 0), LINE_POINT_RADIUS + 1, color.filled())
+                        });
+                    }
+                    Style::Dots => {
+                        anno.legend(move |(x, y)| {
+                            Circle::new((x + 11, y), DOT_RADIUS + 1, color.filled())
+                        });
+                    }
+                    Style::Triangles => {
+                        anno.legend(move |(x, y)| {
+                            TriangleMarker::new((x + 11, y), MARK_SIZE, color.filled())
+                        });
+                    }
+                    Style::Circles => {
+                        anno.legend(move |(x, y)| {
+                            Circle::new((x + 11, y), MARK_SIZE, color.stroke_width(2))
                         });
                     }
                 }
@@ -409,6 +453,51 @@ impl Figure for LinePlot {
             (true, false) => draw_chart!(self, root, (x0..x1).log_scale(), y0..y1),
             (false, true) => draw_chart!(self, root, x0..x1, (y0..y1).log_scale()),
             (true, true) => draw_chart!(self, root, (x0..x1).log_scale(), (y0..y1).log_scale()),
+        }
+        Ok(())
+    }
+}
+
+/// Plots stacked in one figure, top to bottom, each with its own axes and legend (e.g. one
+/// curve against two coordinates that share the x axis).
+#[derive(Debug, Clone)]
+pub struct Panels {
+    /// The panels, top first; the first one's title is the figure's.
+    pub plots: Vec<LinePlot>,
+    /// Size in pixels.
+    pub size: (u32, u32),
+}
+
+impl Panels {
+    /// Panels of the usual width, each as tall as two thirds of a single plot.
+    pub fn new(plots: Vec<LinePlot>) -> Self {
+        let height = 430 * plots.len().max(1) as u32;
+        Self {
+            plots,
+            size: (960, height),
+        }
+    }
+}
+
+impl Figure for Panels {
+    fn size(&self) -> (u32, u32) {
+        self.size
+    }
+
+    fn title(&self) -> String {
+        self.plots
+            .first()
+            .map(|p| p.title.clone())
+            .unwrap_or_default()
+    }
+
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<()>
+    where
+        DB::ErrorType: 'static,
+    {
+        let areas = root.split_evenly((self.plots.len().max(1), 1));
+        for (p, area) in self.plots.iter().zip(&areas) {
+            p.draw(area)?;
         }
         Ok(())
     }

@@ -9,6 +9,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 use endstop::device::Device;
+use endstop::paper::setups::ParamSet;
 
 fn run(bin: &str, out: &Path) -> Output {
     let o = Command::new(bin)
@@ -49,7 +50,7 @@ fn the_calibration_is_computed_once_and_recomputed_only_when_stale() {
         assert!(text.contains(key), "{key} missing:\n{text}");
     }
     let device = Device::from_toml_str(&text, "artefact").unwrap();
-    assert_eq!(device.params, "calibrated");
+    assert_eq!(device.params, ParamSet::Calibrated.label());
     let summary: serde_json::Value = serde_json::from_str(
         &std::fs::read_to_string(out.join("calibration/summary.json")).unwrap(),
     )

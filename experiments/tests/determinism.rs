@@ -12,6 +12,7 @@ use std::process::Command;
 use std::sync::OnceLock;
 
 use endstop::device::Device;
+use endstop::paper::setups::ParamSet;
 use polars::prelude::{ParquetReader, SerReader};
 
 fn run(bin: &str, threads: &str, tag: &str) -> PathBuf {
@@ -150,8 +151,12 @@ fn fig11_parquet_metadata_holds_each_parameter_set_under_its_own_label() {
             );
             found[0]
         };
-        assert_eq!(entry("published"), &published_text, "{name}");
-        let calibrated = entry("calibrated");
+        assert_eq!(
+            entry(ParamSet::Published.label()),
+            &published_text,
+            "{name}"
+        );
+        let calibrated = entry(ParamSet::Calibrated.label());
         assert_ne!(
             calibrated, &published_text,
             "{name}: calibrated holds the published text"

@@ -28,7 +28,7 @@
 //! ```
 //!
 //! Files of the earlier format, which had sections `[geometry]`, `[electrical]`, `[material]`
-//! and `[endstop]` for the paper's topology, still load ([`legacy`]).
+//! and `[endstop]` for the paper's topology, still load (converted on load; see the `legacy` module).
 //!
 //! Any numeric field can be read and changed by its dotted path ([`Device::param`],
 //! [`Device::with_param`]), which is how studies name the parameters they vary.
@@ -37,12 +37,14 @@
 
 mod legacy;
 mod paths;
+mod range;
 pub mod stops;
 pub mod transducer;
 
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
+pub use range::{device_at, ParamRange, Spacing};
 pub use stops::{HertzLineStop, HertzPointStiffness, Stop, StopLaw, StopSide, Stops};
 pub use transducer::{AreaOverlapPair, Electromagnetic, GapClosingPair, Piezoelectric, Transducer};
 

@@ -11,10 +11,9 @@
 //! - first order (Saltelli et al. 2010): `S_i = mean(f(B) (f(AB_i) - f(A))) / V`,
 //! - total (Jansen 1999): `ST_i = mean((f(A) - f(AB_i))^2) / (2 V)`.
 //!
-//! Written here rather than taken from a crate: the one Rust crate that estimates Sobol indices
-//! (`salib`, first published in May 2026, one maintainer, a family of sub-crates) is too young
-//! to be called well kept, and the estimators are a few sums, tested on the Ishigami function
-//! against its analytic indices. The sequence itself comes from `sobol_burley`.
+//! Written here rather than taken from a crate: the estimators are a few sums, tested on the
+//! Ishigami function against its analytic indices, while the one Rust crate that estimates
+//! Sobol indices (`salib`) is a family of sub-crates with one maintainer and a short record. The sequence itself comes from `sobol_burley`.
 //! Confidence intervals resample the `N` rows (each row carries `f(A)`, `f(B)` and every
 //! `f(AB_i)` together) with a seeded ChaCha8 stream, so they are the same on every machine.
 

@@ -195,8 +195,8 @@ impl<S: HybridSystem<N>, M: Method<K>, const N: usize, const K: usize> Adaptive<
     ///
     /// The next trial step is the current one capped by the first full step accepted after
     /// the previous switch into the new mode: a mode's own dynamics set its step (the end-stop
-    /// contact rings ~100 times faster than the free motion, and the step from before the
-    /// impact used to be rejected several times). Hairer's starting-step heuristic evaluated
+    /// contact rings ~100 times faster than the free motion, so the step from before the
+    /// impact would be rejected several times). Hairer's starting-step heuristic evaluated
     /// at the switch does not serve here: at a contact entry the penetration, hence the contact
     /// force, is zero, so a derivative estimate at that point cannot see the stiffness that
     /// builds up within the step.

@@ -22,9 +22,10 @@ use crate::device::{Device, StiffnessModel};
 use crate::drive::Sine;
 use crate::num::roots::{illinois, RootError, RootOptions, Sample, Stop};
 use crate::ode::{SolverError, Stats};
-use crate::paper::fig08::{self, P1_HIGH_ACCEL_RMS_G};
+use crate::paper::claims::{keys, ClaimKey};
 use crate::paper::measured::P1_MEASURED_ONSET_HZ;
-use crate::paper::setups::{comb, endstop, hertz_stop, prototype1_setup};
+use crate::paper::setups::{comb, endstop, hertz_stop, prototype1_setup, ParamSet};
+use crate::paper::sweeps::{self, P1_HIGH_ACCEL_RMS_G};
 use crate::physics::harvester::Harvester;
 use crate::study::steady::SteadyConfig;
 use crate::study::stepped::{continue_sweep, in_contact, Sweep, Transition};
@@ -147,9 +148,9 @@ fn onset_search(
     )?))
 }
 
-/// The claim the calibrated set is fitted to, (claim id, quantity): under the calibrated set
-/// its agreement holds by construction and is no evidence.
-pub const CALIBRATION_TARGET: (&str, &str) = ("F8-b", "impact_onset_5p5g_hz");
+/// The claim number the calibrated set is fitted to: under the calibrated set its agreement
+/// holds by construction and is no evidence.
+pub const CALIBRATION_TARGET: ClaimKey = keys::F8B_ONSET;
 
 /// What the calibration found, without the device (the artefact's record; the device is the
 /// published one with [`CalibrationRecord::fitted_gap_m`], see [`calibrated_device`]).
@@ -174,18 +175,19 @@ pub struct CalibrationRecord {
 /// calibrated device and the record of the fit (what the artefact saves next to the device).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Calibration {
-    /// The calibrated device: the published one with the fitted end-stop gap and
-    /// `params = "calibrated"`; everything else unchanged ([`calibrated_device`]).
+    /// The calibrated device: the published one with the fitted end-stop gap and the
+    /// calibrated set's label in `params`; everything else unchanged ([`calibrated_device`]).
     pub device: Device,
     /// What the fit found.
     pub record: CalibrationRecord,
 }
 
 /// The calibrated device for a fitted gap: `published` with only its stops' gap
-/// (`stops.both.gap_m`) changed, `params = "calibrated"` and a description that says so.
+/// (`stops.both.gap_m`) changed, the calibrated set's label in `params` and a description
+/// that says so.
 pub fn calibrated_device(published: &Device, gap_m: f64) -> Device {
     let mut d = published.with_stop_gap(gap_m);
-    d.params = "calibrated".into();
+    d.params = ParamSet::Calibrated.label().into();
     d.description = format!(
         "{}; calibrated: end-stop gap fitted so the 5.5 g, 30 V up-sweep's impact onset is at \
          the measured {P1_MEASURED_ONSET_HZ} Hz (src/paper/calibration.rs, calibrate_prototype1)",
@@ -204,7 +206,7 @@ pub fn calibrated_device(published: &Device, gap_m: f64) -> Device {
 pub fn calibrate_prototype1(published: &Device) -> Result<Calibration, NarrowbandError> {
     const WHAT: &str = "calibration of the end-stop gap to the impact onset";
     let setup = prototype1_setup(published);
-    let settings = fig08::sweep_settings(published);
+    let settings = sweeps::sweep_settings(published);
     let target = P1_MEASURED_ONSET_HZ;
     let mut evaluations = 0usize;
     let mut eval = |gap: f64| -> Result<(f64, Option<Transition>), SolverError> {

@@ -11,7 +11,7 @@ use std::marker::PhantomData;
 
 use crate::device::{Device, StiffnessModel};
 use crate::ode::SolverError;
-use crate::paper::claims::{bool_value, ClaimValue};
+use crate::paper::claims::{bool_value, ClaimKey, ClaimValue};
 use crate::paper::setups::endstop;
 use crate::study::steady::SteadyConfig;
 use crate::study::sweep::{compare_sweeps, BranchEnd, SweepComparison, SweepReport, SweepSettings};
@@ -303,11 +303,10 @@ impl CurveConvergence {
 }
 
 /// The value of a "no impact" claim: 1 if no coarse step of the sweep has contact.
-pub(crate) fn no_impact_value(id: &'static str, quantity: &'static str, c: &Curve) -> ClaimValue {
+pub(crate) fn no_impact_value(key: ClaimKey, c: &Curve) -> ClaimValue {
     let touched = c.report.any_contact();
     bool_value(
-        id,
-        quantity,
+        key,
         !touched,
         if touched {
             "the mass reaches the stops".into()
@@ -319,12 +318,7 @@ pub(crate) fn no_impact_value(id: &'static str, quantity: &'static str, c: &Curv
 
 /// The value of a jump claim: the end of the impacting branch, labelled jump or loss of
 /// contact (a gradual exit is never presented as a jump), `None` if the branch never ends.
-pub(crate) fn branch_end_value(
-    id: &'static str,
-    quantity: &'static str,
-    curve: &Curve,
-    stop_hz: f64,
-) -> Option<ClaimValue> {
+pub(crate) fn branch_end_value(key: ClaimKey, curve: &Curve, stop_hz: f64) -> Option<ClaimValue> {
     let end = curve.report.branch_end()?;
     let v = end.transition.value();
     let mut note = end.kind.label().to_string();
@@ -334,8 +328,7 @@ pub(crate) fn branch_end_value(
         ));
     }
     Some(ClaimValue {
-        id,
-        quantity,
+        key,
         value: v,
         uncertainty: Some(end.transition.half_width()),
         note,

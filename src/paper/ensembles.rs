@@ -6,7 +6,7 @@
 
 use crate::device::Device;
 use crate::num::stats::Jackknife;
-use crate::paper::setups::prototype1_setup;
+use crate::paper::setups::{prototype1_setup, ParamSet, Prototype1Sets};
 use crate::physics::two_port::{eq21_efficiency, eq21_power_w, linear_output_psd, linear_widths};
 use crate::signal::welch::matlab_default_nperseg;
 use crate::signal::{Psd, WelchConfig, Widths};
@@ -31,10 +31,6 @@ pub const P1_BAND_HZ: (f64, f64) = (200.0, 5000.0);
 
 /// Band in which prototype 2's spectra are kept and its bandwidths searched (Hz).
 pub const P2_BAND_HZ: (f64, f64) = (100.0, 3000.0);
-
-/// The parameter sets of Figures 11 and 12, in the order of their runs and tables: the
-/// published Tables 1 and 2, and the calibrated end-stop gap.
-pub const P1_SETS: [&str; 2] = ["published", "calibrated"];
 
 /// The ensemble of one level: the paper's record ([`RecordSpec::paper`]), Welch segments of
 /// `nperseg` with 50 % overlap, MATLAB's default segmenting beside when `matlab_alt`, seed
@@ -74,12 +70,15 @@ pub fn level_key(psd_g2_per_hz: f64) -> String {
     level_label(psd_g2_per_hz).replace('.', "p")
 }
 
-/// One ensemble to run: its parameter set (or reading) label, the index of its level in the
-/// figure's list of levels, the device and the ensemble's settings.
+/// One ensemble to run: its parameter set (and the reading of the end-stop, when it is not
+/// the set's own), the index of its level in the figure's list of levels, the device and the
+/// ensemble's settings.
 #[derive(Debug, Clone, PartialEq)]
 pub struct LevelCase {
-    /// `published`, `calibrated`, or the label of another reading.
-    pub set: String,
+    /// The parameter set.
+    pub set: ParamSet,
+    /// Another reading of the end-stop than the figure's (its label), if any.
+    pub variant: Option<String>,
     /// Index of the level in the figure's list.
     pub index: usize,
     /// The device as simulated.
@@ -88,13 +87,15 @@ pub struct LevelCase {
     pub spec: EnsembleSpec,
 }
 
-/// One analysed level of a figure: the parameter set label, the level's index in the figure's
-/// list (curves and claims find a level by it, never by comparing levels), the device and its
-/// ensemble.
-#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+/// One analysed level of a figure: the parameter set (and reading), the level's index in the
+/// figure's list (curves and claims find a level by it, never by comparing levels), the device
+/// and its ensemble.
+#[derive(Debug, Clone, PartialEq)]
 pub struct Level {
-    /// `published`, `calibrated`, or the label of another reading.
-    pub set: String,
+    /// The parameter set.
+    pub set: ParamSet,
+    /// Another reading of the end-stop than the figure's (its label), if any.
+    pub variant: Option<String>,
     /// Index of the level in the figure's list.
     pub index: usize,
     /// The device as simulated.
@@ -156,6 +157,7 @@ pub fn run_levels(
         .zip(ens)
         .map(|(c, ens)| Level {
             set: c.set,
+            variant: c.variant,
             index: c.index,
             device: c.device,
             ens,
@@ -216,7 +218,7 @@ impl WidthReading {
 }
 
 /// Prototype 1 at 30 V (Hertz contact, b_im = 1.5 N s/m) under both parameter sets
-/// ([`P1_SETS`]) at the levels of one figure (Figures 11 and 12).
+/// ([`ParamSet::BOTH`]) at the levels of one figure (Figures 11 and 12).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Prototype1Run {
     /// The figure's levels (g²/Hz).
@@ -229,33 +231,33 @@ pub struct Prototype1Run {
 }
 
 impl Prototype1Run {
-    /// Level `i` of set `set` (an index into [`P1_SETS`]).
-    pub fn level(&self, set: usize, i: usize) -> &Level {
-        &self.levels[set * self.levels_g2_per_hz.len() + i]
+    /// Level `i` of set `set`.
+    pub fn level(&self, set: ParamSet, i: usize) -> &Level {
+        &self.levels[set.index() * self.levels_g2_per_hz.len() + i]
     }
 
     /// The levels of set `set`, in the figure's order.
-    pub fn set(&self, set: usize) -> &[Level] {
+    pub fn set(&self, set: ParamSet) -> &[Level] {
         let n = self.levels_g2_per_hz.len();
-        &self.levels[set * n..(set + 1) * n]
+        &self.levels[set.index() * n..(set.index() + 1) * n]
     }
 }
 
 /// Runs prototype 1 ([`prototype1_setup`] of the published and of the calibrated device) at
 /// `levels`, `realisations` records each, with [`P1_NPERSEG`] and [`P1_BAND_HZ`].
 pub fn run_prototype1(
-    published: &Device,
-    calibrated: &Device,
+    sets: &Prototype1Sets,
     levels: &[f64],
     realisations: usize,
     progress: &(dyn Fn() + Sync),
 ) -> Result<Prototype1Run, BroadbandError> {
-    let devices = [prototype1_setup(published), prototype1_setup(calibrated)];
+    let devices = sets.each().map(|(set, d)| (set, prototype1_setup(d)));
     let mut cases = Vec::new();
-    for (set, dev) in P1_SETS.iter().zip(&devices) {
+    for (set, dev) in &devices {
         for (index, &sa) in levels.iter().enumerate() {
             cases.push(LevelCase {
-                set: set.to_string(),
+                set: *set,
+                variant: None,
                 index,
                 device: dev.clone(),
                 spec: protocol_spec(dev, sa, P1_NPERSEG, P1_BAND_HZ, realisations, false),
@@ -265,7 +267,7 @@ pub fn run_prototype1(
     Ok(Prototype1Run {
         levels_g2_per_hz: levels.to_vec(),
         levels: run_levels(cases, progress)?,
-        linear: linear_widths(&devices[0], P1_BAND_HZ.0, P1_BAND_HZ.1),
+        linear: linear_widths(&devices[0].1, P1_BAND_HZ.0, P1_BAND_HZ.1),
     })
 }
 

@@ -1,5 +1,9 @@
 //! The prototypes as the paper simulates them: bias voltage and end-stop model of each figure,
-//! each said once, and the two parameter sets of prototype 1.
+//! each said once, the two parameter sets of prototype 1, and the devices a figure runs on.
+
+use std::fmt;
+
+use serde::{Deserialize, Serialize};
 
 use crate::device::{
     AreaOverlapPair, Device, HertzLineStop, StiffnessModel, Stop, StopLaw, Transducer,
@@ -30,8 +34,10 @@ pub fn prototype2_setup(device: &Device) -> Device {
 
 /// The parameter sets of prototype 1 under which its claims are scored: Tables 1 and 2 as
 /// printed, and the set whose end-stop gap is fitted to Figure 8's measured kink
-/// ([`crate::paper::calibration::calibrate_prototype1`]).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+/// ([`crate::paper::calibration::calibrate_prototype1`]). In files it is its
+/// [`label`](ParamSet::label).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
 pub enum ParamSet {
     /// Tables 1 and 2 as printed.
     Published,
@@ -43,12 +49,63 @@ impl ParamSet {
     /// Both sets, published first.
     pub const BOTH: [ParamSet; 2] = [ParamSet::Published, ParamSet::Calibrated];
 
+    /// The label of a file or table that holds both sets.
+    pub const BOTH_LABEL: &'static str = "published+calibrated";
+
     /// The label of the set in files, the scorecard and the book.
     pub fn label(self) -> &'static str {
         match self {
             ParamSet::Published => "published",
             ParamSet::Calibrated => "calibrated",
         }
+    }
+
+    /// The position of the set in [`ParamSet::BOTH`] (runs of both sets keep that order).
+    pub fn index(self) -> usize {
+        match self {
+            ParamSet::Published => 0,
+            ParamSet::Calibrated => 1,
+        }
+    }
+}
+
+impl fmt::Display for ParamSet {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.label())
+    }
+}
+
+/// Both prototypes as their parameter files give them (Figure 5, Table 3).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Prototypes {
+    /// Prototype 1 as published.
+    pub prototype1: Device,
+    /// Prototype 2 as published.
+    pub prototype2: Device,
+}
+
+/// Prototype 1 under both parameter sets, as loaded (the figures set bias and end-stop
+/// model themselves): Figures 8, 9, 11 and 12.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Prototype1Sets {
+    /// Tables 1 and 2 as printed.
+    pub published: Device,
+    /// The end-stop gap fitted to the measured impact onset.
+    pub calibrated: Device,
+}
+
+impl Prototype1Sets {
+    /// The device of a set.
+    pub fn get(&self, set: ParamSet) -> &Device {
+        match set {
+            ParamSet::Published => &self.published,
+            ParamSet::Calibrated => &self.calibrated,
+        }
+    }
+
+    /// Both sets with their devices, in the order of [`ParamSet::BOTH`].
+    pub fn each(&self) -> [(ParamSet, &Device); 2] {
+        ParamSet::BOTH.map(|s| (s, self.get(s)))
     }
 }
 

@@ -1073,6 +1073,20 @@ pub fn branch_from_rest(
 /// frequency from `from_hz` to `to_hz` with parameter steps of at most `max_step_hz`
 /// ([`ContinuationSettings::frequency`]), from the orbit reached from rest at `from_hz`
 /// ([`branch_from_rest`], 200 periods of transient at most).
+///
+/// ```
+/// use endstop::device::Device;
+/// use endstop::study::continuation::frequency_branch;
+///
+/// let text = include_str!(concat!(env!("CARGO_MANIFEST_DIR"), "/data/prototype1.toml"));
+/// let device = Device::from_toml_str(text, "prototype1.toml")?;
+/// // Far below the stops (0.02 g rms): one stable branch, no events.
+/// let branch = frequency_branch(&device, 0.02, 1000.0, 1100.0, 50.0, |_| {})?;
+/// assert!(branch.params().last().unwrap() >= 1100.0);
+/// assert!(branch.points.iter().all(|p| p.orbit.is_stable()));
+/// assert!(branch.events.is_empty());
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
 pub fn frequency_branch(
     device: &crate::device::Device,
     accel_rms_g: f64,

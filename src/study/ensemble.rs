@@ -277,6 +277,24 @@ pub fn run_ensembles<F: Fn() + Sync>(
 }
 
 /// Runs one ensemble (see [`run_ensembles`]).
+///
+/// ```
+/// use endstop::device::Device;
+/// use endstop::study::ensemble::{run_ensemble, EnsembleSpec};
+/// use endstop::study::record::RecordSpec;
+///
+/// let text = include_str!(concat!(env!("CARGO_MANIFEST_DIR"), "/data/prototype1.toml"));
+/// let device = Device::from_toml_str(text, "prototype1.toml")?;
+/// // Two short records (50 ms each) at 1e-6 g^2/Hz, seed 2012.
+/// let mut record = RecordSpec::paper(&device, 1e-6);
+/// record.noise.duration_s = 0.05;
+/// record.transient_s = 0.01;
+/// let spec = EnsembleSpec::for_device(&device, record, 2012, 2);
+/// let ensemble = run_ensemble(&device, &spec, || {})?;
+/// assert_eq!(ensemble.records.len(), 2);
+/// assert!(ensemble.power_w.mean > 0.0);
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
 pub fn run_ensemble<F: Fn() + Sync>(
     device: &Device,
     spec: &EnsembleSpec,

@@ -4,7 +4,8 @@
 //! ([`orbit`]), their pseudo-arclength continuation with folds, branch points and grazing
 //! ([`continuation`]), basins of attraction ([`basins`]), and random-vibration records
 //! ([`record`]) and their ensembles ([`ensemble`]), with the fixed-step RK4 record that is the
-//! benchmark's yardstick ([`rk4_record`]).
+//! benchmark's yardstick ([`rk4_record`]), and Sobol indices of any quantity over device
+//! parameters the user names ([`sensitivity`]).
 
 pub mod amplitude;
 pub mod basins;
@@ -14,6 +15,7 @@ pub mod orbit;
 pub mod record;
 pub mod record_ledger;
 pub mod rk4_record;
+pub mod sensitivity;
 pub mod steady;
 pub mod stepped;
 pub mod sweep;

@@ -286,6 +286,22 @@ pub struct Record {
 /// from one sample instant to the next and stores V1, V2 there: by one step of the
 /// exponential integrator where the mass flies free ([`Scheme::Exponential`]), else by the
 /// Dormand-Prince integrator up to the next sample instant (a breakpoint).
+///
+/// ```
+/// use endstop::device::Device;
+/// use endstop::study::record::{simulate_record, RecordSpec};
+///
+/// let text = include_str!(concat!(env!("CARGO_MANIFEST_DIR"), "/data/prototype1.toml"));
+/// let device = Device::from_toml_str(text, "prototype1.toml")?;
+/// // The paper's excitation at 1e-6 g^2/Hz, shortened to 20 ms after 10 ms of pre-roll.
+/// let mut spec = RecordSpec::paper(&device, 1e-6);
+/// spec.noise.duration_s = 0.02;
+/// spec.transient_s = 0.01;
+/// let record = simulate_record(&device, &spec, 2012, 0)?;
+/// assert_eq!(record.v1_v.len(), spec.analysed_samples());
+/// assert!(record.summary.p_total_w() > 0.0);
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
 pub fn simulate_record(
     device: &Device,
     spec: &RecordSpec,

@@ -32,6 +32,10 @@
 //! until contact is lost, and the extra steps are marked ([`SweepReport::extended_from`]).
 //!
 //! # Steady state
+//! Every step is measured once the model has settled by the criterion of [`SteadyConfig`]
+//! ([`crate::study::steady`]). [`SweepSettings::for_device`] takes the criterion of sweeps
+//! that must leave a branch at its fold ([`steady_config_across_folds`]): blocks long enough
+//! that the ghost of the merged orbits cannot hold the state on a branch that has ended.
 
 use crate::device::Device;
 use crate::drive::Sine;

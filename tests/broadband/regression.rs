@@ -28,9 +28,15 @@
 use std::fmt::Write;
 
 use endstop::num::stats::MeanCi;
-use endstop::paper::claims::Value;
-use endstop::paper::ensembles::{level_label, Level, WidthReading, P1_SETS};
-use endstop::paper::{fig10, fig11, fig12, fig14, fig15};
+use endstop::paper::claims::{keys, Value};
+use endstop::paper::ensembles::{level_label, Level, WidthReading};
+use endstop::paper::figures::fig10::{self, Fig10};
+use endstop::paper::figures::fig11::{self, Fig11};
+use endstop::paper::figures::fig12::{self, Fig12};
+use endstop::paper::figures::fig14::{self, Fig14};
+use endstop::paper::figures::fig15::{self, Fig15};
+use endstop::paper::setups::ParamSet;
+use endstop::paper::Figure;
 
 use super::{claims, fig10_run, fig11_run, fig12_run, fig14_run, fig15_run};
 
@@ -114,7 +120,7 @@ fn regression_fig10_generated_noise() {
     let run = fig10_run();
     let f = fig10::findings(run);
     let mut s = String::new();
-    claim_lines(&mut s, &fig10::claims(run, claims()), |_| true);
+    claim_lines(&mut s, &Fig10::claims(run, claims()).unwrap(), |_| true);
     writeln!(s, "mean square: {} g²", sig(f.mean_square.mean, 4)).unwrap();
     writeln!(s, "example level: {} g²/Hz", sig(f.example_level, 4)).unwrap();
     writeln!(s, "example edge: {} Hz", sig(f.example_edge_hz, 4)).unwrap();
@@ -132,9 +138,9 @@ fn regression_fig11_prototype1_low_levels() {
     let run = fig11_run();
     let mut s = String::new();
     // Every level of Figure 11 is free of impacts (asserted in tests/broadband.rs).
-    claim_lines(&mut s, &fig11::claims(run, claims()), |_| true);
-    for (i, set) in P1_SETS.iter().enumerate() {
-        let f = fig11::findings(run, i);
+    claim_lines(&mut s, &Fig11::claims(run, claims()).unwrap(), |_| true);
+    for set in ParamSet::BOTH {
+        let f = fig11::findings(run, set);
         let r = &f.single_ratio;
         writeln!(
             s,
@@ -155,9 +161,9 @@ fn regression_fig11_prototype1_low_levels() {
 fn regression_fig12_prototype1_high_levels() {
     let run = fig12_run();
     let mut s = String::new();
-    claim_lines(&mut s, &fig12::claims(run, claims()), |_| false);
-    for (i, set) in P1_SETS.iter().enumerate() {
-        let f = fig12::findings(run, i, WidthReading::HalfAmplitude);
+    claim_lines(&mut s, &Fig12::claims(run, claims()).unwrap(), |_| false);
+    for set in ParamSet::BOTH {
+        let f = fig12::findings(run, set, WidthReading::HalfAmplitude);
         writeln!(
             s,
             "{set}: half-amplitude ratio {}",
@@ -176,8 +182,8 @@ fn regression_fig14_prototype2_efficiency() {
     let run = fig14_run();
     let f = fig14::findings(run);
     let mut s = String::new();
-    let pooled = |v: &Value| v.quantity == "eff_sim_linear_pct";
-    claim_lines(&mut s, &fig14::claims(run, claims()), pooled);
+    let pooled = |v: &Value| v.is(keys::F14A_EFF_SIM_LINEAR);
+    claim_lines(&mut s, &Fig14::claims(run, claims()).unwrap(), pooled);
     writeln!(s, "linear levels: {:?}", f.linear_levels).unwrap();
     writeln!(s, "frequent-contact levels: {:?}", f.frequent_levels).unwrap();
     for l in &run.levels {
@@ -191,7 +197,7 @@ fn regression_fig15_prototype2_spectra() {
     let run = fig15_run();
     let f = fig15::findings(run, claims());
     let mut s = String::new();
-    claim_lines(&mut s, &fig15::claims(run, claims()), |_| false);
+    claim_lines(&mut s, &Fig15::claims(run, claims()).unwrap(), |_| false);
     let r = &f.ratio_half_amplitude;
     writeln!(s, "half-amplitude ratio: {}", pin(r.0, r.1, false)).unwrap();
     let r = &f.ratio_169;

@@ -6,60 +6,61 @@
 use endstop::device::StiffnessModel;
 use endstop::drive::Sine;
 use endstop::paper::calibration::*;
-use endstop::paper::claims::{Claims, Value, Verdict, CLAIMS_TOML};
-use endstop::paper::fig08::{self, Fig8Curve, P1_HIGH_ACCEL_RMS_G};
-use endstop::paper::fig09::{self, Fig9Bias, PowerReading};
-use endstop::paper::fig13::{self, Fig13Curve};
+use endstop::paper::claims::{keys, ClaimKey, Claims, Value, Verdict, CLAIMS_TOML};
+use endstop::paper::figures::fig08::{Fig08, Fig8Curve, P1_HIGH_ACCEL_RMS_G};
+use endstop::paper::figures::fig09::{self, Fig09, Fig9Bias, PowerReading};
+use endstop::paper::figures::fig13::{Fig13, Fig13Curve};
 use endstop::paper::measured::*;
 use endstop::paper::setups::comb;
 use endstop::paper::setups::{prototype1_setup, ParamSet, P1_BIAS_V};
+use endstop::paper::Figure;
 use endstop::physics::contact::Mode;
 use endstop::physics::harvester::Harvester;
 use endstop::study::steady::{steady_config, steady_state};
 use endstop::study::sweep::{BranchEndKind, JUMP_MIN_DROP, REFINE_TOL_HZ};
 
-use super::{calibration, claims_file, fig08_run, fig09_run, fig13_run, p1};
+use super::common::{calibration, claims as claims_file, prototype1 as p1};
+use super::{fig08_run, fig09_run, fig13_run};
 
 fn fig08_values() -> Vec<Value> {
-    fig08::claims(fig08_run(), claims_file()).expect("Figure 8's claims")
+    Fig08::claims(fig08_run(), claims_file()).expect("Figure 8's claims")
 }
 
 fn fig09_values() -> Vec<Value> {
-    fig09::claims(fig09_run(), claims_file()).expect("Figure 9's claims")
+    Fig09::claims(fig09_run(), claims_file()).expect("Figure 9's claims")
 }
 
 fn fig13_values() -> Vec<Value> {
-    fig13::claims(fig13_run(), claims_file()).expect("Figure 13's claims")
+    Fig13::claims(fig13_run(), claims_file()).expect("Figure 13's claims")
 }
 
-fn value<'a>(values: &'a [Value], id: &str, quantity: &str, set: ParamSet) -> &'a Value {
+fn value(values: &[Value], key: ClaimKey, set: ParamSet) -> &Value {
     values
         .iter()
-        .find(|v| v.claim == id && v.quantity == quantity && v.set == set.label())
-        .unwrap_or_else(|| panic!("no value for ({id}, {quantity}) under {}", set.label()))
+        .find(|v| v.is(key) && v.set == set)
+        .unwrap_or_else(|| panic!("no value for {key} under {set}"))
 }
 
 /// The verdict of the claims file for our value of a claim under a set.
-fn verdict(values: &[Value], id: &str, quantity: &str, set: ParamSet) -> Verdict {
-    let v = value(values, id, quantity, set);
+fn verdict(values: &[Value], key: ClaimKey, set: ParamSet) -> Verdict {
+    let v = value(values, key, set);
     claims_file()
-        .get(id, quantity)
-        .unwrap_or_else(|| panic!("({id}, {quantity}) is not in data/claims.toml"))
+        .claim(key)
+        .unwrap_or_else(|| panic!("{key} is not in data/claims.toml"))
         .verdict(Some(v.ours))
 }
 
 /// Asserts the verdicts of a claim under the published and the calibrated set.
-fn assert_verdicts(values: &[Value], id: &str, quantity: &str, published: Verdict, cal: Verdict) {
+fn assert_verdicts(values: &[Value], key: ClaimKey, published: Verdict, cal: Verdict) {
     for (set, expected) in [
         (ParamSet::Published, published),
         (ParamSet::Calibrated, cal),
     ] {
-        let v = value(values, id, quantity, set);
+        let v = value(values, key, set);
         assert_eq!(
-            verdict(values, id, quantity, set),
+            verdict(values, key, set),
             expected,
-            "({id}, {quantity}) under {}: ours {} ({})",
-            set.label(),
+            "{key} under {set}: ours {} ({})",
             v.ours,
             v.note
         );
@@ -77,9 +78,9 @@ fn every_narrowband_claim_gets_a_value_under_every_set() {
     let both = [ParamSet::Published, ParamSet::Calibrated];
     let published = [ParamSet::Published];
     let figures: [(&str, Vec<Value>, &[ParamSet]); 3] = [
-        ("fig08", fig08_values(), &both),
-        ("fig09", fig09_values(), &both),
-        ("fig13", fig13_values(), &published),
+        (Fig08::NAME, fig08_values(), &both),
+        (Fig09::NAME, fig09_values(), &both),
+        (Fig13::NAME, fig13_values(), &published),
     ];
     for (experiment, values, sets) in figures {
         let claims: Vec<_> = claims_file().of_experiment(experiment).collect();
@@ -89,7 +90,7 @@ fn every_narrowband_claim_gets_a_value_under_every_set() {
                 let n = values
                     .iter()
                     .filter(|v| v.claim == c.id && v.quantity == c.quantity)
-                    .filter(|v| v.set == set.label())
+                    .filter(|v| v.set == *set)
                     .count();
                 assert_eq!(
                     n, 1,
@@ -117,12 +118,12 @@ fn a_changed_curve_literal_cannot_make_a_claim_vanish() {
             c.spec.accel_rms_g += 1e-9;
         }
     }
-    assert_eq!(fig08::claims(&run, claims_file()).unwrap(), fig08_values());
+    assert_eq!(Fig08::claims(&run, claims_file()).unwrap(), fig08_values());
     let mut run = fig13_run().clone();
     for c in &mut run.sweeps.curves {
         c.spec.bim_n_s_per_m += 1e-9;
     }
-    assert_eq!(fig13::claims(&run, claims_file()).unwrap(), fig13_values());
+    assert_eq!(Fig13::claims(&run, claims_file()).unwrap(), fig13_values());
 }
 
 /// A claims file without the class a rule needs is an error, not a silent verdict.
@@ -131,11 +132,11 @@ fn a_missing_tolerance_class_is_an_error() {
     let text = CLAIMS_TOML.replace("[class.frequency]", "[class.frequencies]");
     let text = text.replace("class = \"frequency\"", "class = \"frequencies\"");
     let claims = Claims::parse(&text).expect("a consistent file");
-    assert!(fig13::claims(fig13_run(), &claims).is_err());
+    assert!(Fig13::claims(fig13_run(), &claims).is_err());
     let text = CLAIMS_TOML.replace("[class.amplitude_threshold]", "[class.amplitude]");
     let text = text.replace("class = \"amplitude_threshold\"", "class = \"amplitude\"");
     let claims = Claims::parse(&text).expect("a consistent file");
-    assert!(fig09::claims(fig09_run(), &claims).is_err());
+    assert!(Fig09::claims(fig09_run(), &claims).is_err());
 }
 
 /// A copy of the claims file with one class's tolerance replaced.
@@ -168,9 +169,8 @@ fn f13_agreement_follows_the_frequency_class_of_the_claims_file() {
     assert!(d > 0.0);
     let agree = |c: &Claims| {
         value(
-            &fig13::claims(fig13_run(), c).unwrap(),
-            "F13",
-            "hertz_linear_agree",
+            &Fig13::claims(fig13_run(), c).unwrap(),
+            keys::F13_HERTZ_LINEAR_AGREE,
             ParamSet::Published,
         )
         .ours
@@ -195,9 +195,8 @@ fn f9_same_onset_follows_the_amplitude_threshold_class_of_the_claims_file() {
     assert!(spread > 0.0);
     let same = |c: &Claims| {
         value(
-            &fig09::claims(fig09_run(), c).unwrap(),
-            "F9-a",
-            "onset_same_all_vb",
+            &Fig09::claims(fig09_run(), c).unwrap(),
+            keys::F9A_ONSET_SAME,
             ParamSet::Calibrated,
         )
         .ours
@@ -234,7 +233,7 @@ fn calibration_converges_to_its_target_within_its_tolerance() {
     // One parameter changed, everything else as published.
     let mut expect = p1();
     expect = expect.with_stop_gap(c.fitted_gap_m);
-    expect.params = "calibrated".into();
+    expect.params = ParamSet::Calibrated.label().into();
     expect.description = cal.device.description.clone();
     assert_eq!(cal.device, expect);
 }
@@ -369,8 +368,7 @@ fn f8a_no_impact_at_4p1g_under_both_sets() {
     let v = fig08_values();
     assert_verdicts(
         &v,
-        "F8-a",
-        "no_impact_4p1g",
+        keys::F8A_NO_IMPACT,
         Verdict::Reproduced,
         Verdict::Reproduced,
     );
@@ -381,15 +379,8 @@ fn f8b_onset_deviates_published_and_is_the_calibration_target() {
     let v = fig08_values();
     // Published: the mass reaches the stops far above the measured kink. Calibrated:
     // reproduced by construction (the calibration's target), so not evidence of anything.
-    assert_verdicts(
-        &v,
-        "F8-b",
-        "impact_onset_5p5g_hz",
-        Verdict::Deviates,
-        Verdict::Reproduced,
-    );
-    let (id, q) = CALIBRATION_TARGET;
-    assert_eq!((id, q), ("F8-b", "impact_onset_5p5g_hz"));
+    assert_verdicts(&v, keys::F8B_ONSET, Verdict::Deviates, Verdict::Reproduced);
+    assert_eq!(CALIBRATION_TARGET, keys::F8B_ONSET);
 }
 
 #[test]
@@ -399,16 +390,13 @@ fn f8c_jump_hertz_bim1p5() {
     // jump. Calibrated: a genuine jump within the frequency class.
     assert_verdicts(
         &v,
-        "F8-c",
-        "jump_hertz_bim1p5_hz",
+        keys::F8C_JUMP_HERTZ_BIM1P5,
         Verdict::Deviates,
         Verdict::Reproduced,
     );
-    let q = "jump_hertz_bim1p5_hz";
-    assert!(value(&v, "F8-c", q, ParamSet::Published)
-        .note
-        .contains("no jump"));
-    assert_eq!(value(&v, "F8-c", q, ParamSet::Calibrated).note, "jump");
+    let q = keys::F8C_JUMP_HERTZ_BIM1P5;
+    assert!(value(&v, q, ParamSet::Published).note.contains("no jump"));
+    assert_eq!(value(&v, q, ParamSet::Calibrated).note, "jump");
 }
 
 #[test]
@@ -418,16 +406,13 @@ fn f8d_jump_hertz_bim0_deviates_under_both_sets() {
     // extended sweep finds the jump far above the paper's.
     assert_verdicts(
         &v,
-        "F8-d",
-        "jump_hertz_bim0_hz",
+        keys::F8D_JUMP_HERTZ_BIM0,
         Verdict::Deviates,
         Verdict::Deviates,
     );
-    assert!(
-        value(&v, "F8-d", "jump_hertz_bim0_hz", ParamSet::Calibrated)
-            .note
-            .contains("beyond")
-    );
+    assert!(value(&v, keys::F8D_JUMP_HERTZ_BIM0, ParamSet::Calibrated)
+        .note
+        .contains("beyond"));
 }
 
 #[test]
@@ -436,24 +421,22 @@ fn f8e_jump_hertz_bim10_and_the_order_by_bim() {
     // Published: a loss of contact far below the paper's jump.
     assert_verdicts(
         &v,
-        "F8-e",
-        "jump_hertz_bim10_hz",
+        keys::F8E_JUMP_HERTZ_BIM10,
         Verdict::Deviates,
         Verdict::Reproduced,
     );
     // Published: only b_im = 0 jumps, so there is no order of jumps to speak of.
     assert_verdicts(
         &v,
-        "F8-e",
-        "jump_order_by_bim",
+        keys::F8E_JUMP_ORDER,
         Verdict::Deviates,
         Verdict::Reproduced,
     );
     // And the order itself, from the calibrated values.
-    let c = |id, q| value(&v, id, q, ParamSet::Calibrated).ours;
-    let j0 = c("F8-d", "jump_hertz_bim0_hz");
-    let j15 = c("F8-c", "jump_hertz_bim1p5_hz");
-    let j10 = c("F8-e", "jump_hertz_bim10_hz");
+    let c = |key| value(&v, key, ParamSet::Calibrated).ours;
+    let j0 = c(keys::F8D_JUMP_HERTZ_BIM0);
+    let j15 = c(keys::F8C_JUMP_HERTZ_BIM1P5);
+    let j10 = c(keys::F8E_JUMP_HERTZ_BIM10);
     assert!(j0 > j15 && j15 > j10, "{j0} > {j15} > {j10}");
 }
 
@@ -463,8 +446,7 @@ fn f8f_linear_bim2_as_hertz_bim1p5() {
     // Published: a loss of contact far below the paper's jump.
     assert_verdicts(
         &v,
-        "F8-f",
-        "jump_linear_bim2_hz",
+        keys::F8F_JUMP_LINEAR_BIM2,
         Verdict::Deviates,
         Verdict::Reproduced,
     );
@@ -477,16 +459,15 @@ fn f9a_onsets_under_both_sets() {
     let v = fig09_values();
     // Published: the mass reaches the stops near 5.3-5.5 g, above the paper's 4.5 g by more
     // than the class's 0.25 g, and the onset rises with the bias by more than 0.25 g.
-    for q in Fig9Bias::ALL.map(Fig9Bias::onset_quantity) {
-        assert_verdicts(&v, "F9-a", q, Verdict::Deviates, Verdict::Reproduced);
+    for q in Fig9Bias::ALL.map(Fig9Bias::onset_key) {
+        assert_verdicts(&v, q, Verdict::Deviates, Verdict::Reproduced);
     }
-    assert!(value(&v, "F9-a", "onset_g_40v", ParamSet::Published)
+    assert!(value(&v, keys::F9A_ONSET_40V, ParamSet::Published)
         .note
         .contains("beyond"));
     assert_verdicts(
         &v,
-        "F9-a",
-        "onset_same_all_vb",
+        keys::F9A_ONSET_SAME,
         Verdict::Deviates,
         Verdict::Reproduced,
     );
@@ -496,13 +477,12 @@ fn f9a_onsets_under_both_sets() {
 fn f9b_saturated_powers_and_their_vb_squared_scaling() {
     let v = fig09_values();
     // The paper's powers lie between our two sets, outside the 10 % class of either.
-    for q in ["p_sat_20v_nw", "p_sat_40v_nw"] {
-        assert_verdicts(&v, "F9-b", q, Verdict::Deviates, Verdict::Deviates);
+    for q in [keys::F9B_P_SAT_20V, keys::F9B_P_SAT_40V] {
+        assert_verdicts(&v, q, Verdict::Deviates, Verdict::Deviates);
     }
     assert_verdicts(
         &v,
-        "F9-b",
-        "p_sat_ratio_40v_20v",
+        keys::F9B_P_SAT_RATIO,
         Verdict::Reproduced,
         Verdict::Reproduced,
     );
@@ -510,8 +490,8 @@ fn f9b_saturated_powers_and_their_vb_squared_scaling() {
     // symmetric transducer carry the same power, to far better than 0.1 %.
     let both = fig09::claims_under(fig09_run(), PowerReading::BothLoads, claims_file()).unwrap();
     for set in [ParamSet::Published, ParamSet::Calibrated] {
-        let a = value(&v, "F9-b", "p_sat_ratio_40v_20v", set).ours;
-        let b = value(&both, "F9-b", "p_sat_ratio_40v_20v", set).ours;
+        let a = value(&v, keys::F9B_P_SAT_RATIO, set).ours;
+        let b = value(&both, keys::F9B_P_SAT_RATIO, set).ours;
         assert!((a - b).abs() <= 1e-3 * a, "{a} vs {b}");
     }
 }
@@ -521,9 +501,13 @@ fn f9b_saturated_powers_and_their_vb_squared_scaling() {
 #[test]
 fn f13_no_impact_low_a_jump_high_and_hertz_agrees_with_linear() {
     let v = fig13_values();
-    for q in ["no_impact_0p12g", "jump_0p31g", "hertz_linear_agree"] {
+    for q in [
+        keys::F13_NO_IMPACT,
+        keys::F13_JUMP,
+        keys::F13_HERTZ_LINEAR_AGREE,
+    ] {
         let set = ParamSet::Published;
-        assert_eq!(verdict(&v, "F13", q, set), Verdict::Reproduced, "{q}");
+        assert_eq!(verdict(&v, q, set), Verdict::Reproduced, "{q}");
     }
     assert!(fig13_run()
         .sweeps

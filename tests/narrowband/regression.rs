@@ -19,12 +19,14 @@
 use std::fmt::Write;
 
 use endstop::paper::claims::Value;
-use endstop::paper::fig08::{self, Fig8Curve};
-use endstop::paper::fig09::{self, Fig9Bias, PowerReading};
-use endstop::paper::fig13::{self, Fig13Curve};
+use endstop::paper::figures::fig08::{Fig08, Fig8Curve};
+use endstop::paper::figures::fig09::{Fig09, Fig9Bias, PowerReading};
+use endstop::paper::figures::fig13::{Fig13, Fig13Curve};
+use endstop::paper::Figure;
 use endstop::study::sweep::BranchEnd;
 
-use super::{calibration, claims_file, fig08_run, fig09_run, fig13_run};
+use super::common::{calibration, claims as claims_file};
+use super::{fig08_run, fig09_run, fig13_run};
 
 /// `x` with `n` significant digits.
 fn sig(x: f64, n: usize) -> String {
@@ -87,7 +89,7 @@ fn calibration_numbers() {
 fn figure8_numbers() {
     let run = fig08_run();
     let mut s = String::new();
-    for v in fig08::claims(run, claims_file()).unwrap() {
+    for v in Fig08::claims(run, claims_file()).unwrap() {
         claim_line(&mut s, &v);
     }
     for r in &run.sets {
@@ -123,7 +125,7 @@ fn figure8_numbers() {
 fn figure9_numbers() {
     let run = fig09_run();
     let mut s = String::new();
-    for v in fig09::claims(run, claims_file()).unwrap() {
+    for v in Fig09::claims(run, claims_file()).unwrap() {
         claim_line(&mut s, &v);
     }
     for r in &run.sets {
@@ -151,7 +153,7 @@ fn figure9_numbers() {
 fn figure13_numbers() {
     let run = fig13_run();
     let mut s = String::new();
-    for v in fig13::claims(run, claims_file()).unwrap() {
+    for v in Fig13::claims(run, claims_file()).unwrap() {
         claim_line(&mut s, &v);
     }
     for c in Fig13Curve::ALL {

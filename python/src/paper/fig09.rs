@@ -4,8 +4,9 @@
 use endstop::device::Device;
 use endstop::paper::calibration::{calibrate_prototype1, Calibration};
 use endstop::paper::claims::Claims;
-use endstop::paper::fig09;
-use endstop::paper::setups::ParamSet;
+use endstop::paper::figures::fig09::{self, Fig09};
+use endstop::paper::setups::{ParamSet, Prototype1Sets};
+use endstop::paper::Figure;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 
@@ -47,7 +48,7 @@ fn paper_calibrate_prototype1<'py>(
     Ok(d)
 }
 
-/// Figure 9 (`endstop::paper::fig09::run` and `claims`): prototype 1 at 1220 Hz, amplitude
+/// Figure 9 (`endstop::paper::figures::fig09`, its `run` and `claims`): prototype 1 at 1220 Hz, amplitude
 /// continuations at 20, 30 and 40 V for the published and the calibrated set (default: the
 /// published prototype 1 and its calibration, computed here), each repeated with halved
 /// numerics; the claim values and the `numbers` of the figure's `summary.json` (same keys).
@@ -68,10 +69,14 @@ fn paper_fig09_run<'py>(
             Some(d) => d,
             None => calibrate_prototype1(&published).map_err(solver_err)?.device,
         };
-        fig09::run(&published, &calibrated, &|| {}).map_err(solver_err)
+        let sets = Prototype1Sets {
+            published,
+            calibrated,
+        };
+        Fig09::run(&sets, &|| {}).map_err(solver_err)
     })?;
     let claims = Claims::bundled().map_err(solver_err)?;
-    let values = fig09::claims(&run, &claims).map_err(solver_err)?;
+    let values = Fig09::claims(&run, &claims).map_err(solver_err)?;
     let out = PyDict::new(py);
     let numbers = PyDict::new(py);
     let sets = PyList::empty(py);

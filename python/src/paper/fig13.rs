@@ -2,7 +2,8 @@
 
 use endstop::device::StiffnessModel;
 use endstop::paper::claims::Claims;
-use endstop::paper::fig13;
+use endstop::paper::figures::fig13::Fig13;
+use endstop::paper::Figure;
 use endstop::study::steady::Measurement;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
@@ -11,7 +12,7 @@ use crate::paper::claims_list;
 use crate::study::{steps_dict, sweep_dict};
 use crate::{solver_err, PyDevice};
 
-/// Figure 13 (`endstop::paper::fig13::run` and `claims`) on `device` (default: the published
+/// Figure 13 (`endstop::paper::figures::fig13`, its `run` and `claims`) on `device` (default: the published
 /// prototype 2): every curve's sweep (the requested range) and refined transitions, the
 /// repetition with halved numerics, the claim values, and the `numbers` of the figure's
 /// `summary.json` (same keys).
@@ -26,10 +27,10 @@ fn paper_fig13_run<'py>(
         None => PyDevice::prototype(2)?.inner,
     };
     let run = py
-        .detach(move || fig13::run(&published, &|| {}))
+        .detach(move || Fig13::run(&published, &|| {}))
         .map_err(solver_err)?;
     let claims = Claims::bundled().map_err(solver_err)?;
-    let values = fig13::claims(&run, &claims).map_err(solver_err)?;
+    let values = Fig13::claims(&run, &claims).map_err(solver_err)?;
     let out = PyDict::new(py);
     out.set_item(
         "device",

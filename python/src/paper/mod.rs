@@ -18,7 +18,7 @@ pub(crate) fn claims_list<'py>(py: Python<'py>, values: &[Value]) -> PyResult<Bo
         let d = PyDict::new(py);
         d.set_item("claim", &v.claim)?;
         d.set_item("quantity", &v.quantity)?;
-        d.set_item("set", &v.set)?;
+        d.set_item("set", v.set.label())?;
         d.set_item("ours", v.ours)?;
         d.set_item("uncertainty", v.uncertainty)?;
         d.set_item("note", &v.note)?;

@@ -9,8 +9,8 @@ use crate::num::stats::Jackknife;
 use crate::paper::ensembles::{
     protocol_spec, WidthReading, P1_BAND_HZ, P1_NPERSEG, P2_BAND_HZ, P2_NPERSEG,
 };
-use crate::paper::fig12::{self, FIG12_LEVELS};
-use crate::paper::fig15::{self, FIG15_LEVELS};
+use crate::paper::figures::fig12::{self, FIG12_LEVELS};
+use crate::paper::figures::fig15::{self, FIG15_LEVELS};
 use crate::paper::setups::{P1_BIAS_V, P2_BIAS_V};
 use crate::physics::two_port::efficiency;
 use crate::study::ensemble::{run_ensembles, Ensemble, EnsembleCase, EnsembleSpec};

@@ -10,10 +10,10 @@ use crate::device::{Device, StiffnessModel};
 use crate::drive::Sine;
 use crate::ode::Stats;
 use crate::paper::claims::{Claims, ToleranceClass};
-use crate::paper::fig09::{Fig9Bias, FIG9_EXTEND_G, FIG9_RANGE_G, FIG9_STEP_G};
+use crate::paper::figures::fig09::{Fig9Bias, FIG9_EXTEND_G, FIG9_RANGE_G, FIG9_STEP_G};
+use crate::paper::figures::{fig08, fig09};
 use crate::paper::measured::P1_RESONANCE_HZ;
 use crate::paper::setups::{endstop, FIG13_BIAS_V, P1_BIAS_V, P2_BIAS_V};
-use crate::paper::{fig08, fig09};
 use crate::physics::harvester::Harvester;
 use crate::physics::two_port::{TwoPort, TABLE3_QM};
 use crate::study::continuation::{self, Branch, ContinuationSettings, EventKind};
@@ -196,7 +196,8 @@ fn p1_fig9_bias(variant: &Variant, bias_v: f64) -> (Outcome, Outcome) {
 
 /// Figure 9 by amplitude continuation ([`p1_fig9_bias`] at 20, 30 and 40 V): the three
 /// onsets, whether they are the same (within the claims' `amplitude_threshold` class, the
-/// rule of [`crate::paper::fig09::claims`]), the powers at 20 and 40 V (nW) and their ratio.
+/// rule of [`crate::paper::figures::fig09::onsets_agree`]), the powers at 20 and 40 V (nW) and
+/// their ratio.
 pub(super) fn p1_fig9(variant: &Variant, class: &ToleranceClass) -> [Outcome; 7] {
     let runs: Vec<(Outcome, Outcome)> = Fig9Bias::ALL
         .par_iter()

@@ -5,7 +5,7 @@
 use super::narrowband::P1_STOP_HZ;
 use super::DeviationsError;
 use crate::paper::claims::{Claim, Claims, Kind, Verdict};
-use crate::paper::fig09::FIG9_EXTEND_G;
+use crate::paper::figures::fig09::FIG9_EXTEND_G;
 
 /// The prototypes of the study.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]

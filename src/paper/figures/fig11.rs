@@ -2,10 +2,11 @@
 //! vibration, published and calibrated parameter sets: the device stays linear and the 3 dB
 //! bandwidth does not change with the level (claim F11).
 
-use crate::device::Device;
 use crate::num::stats::{ratio_spread, Spread};
-use crate::paper::claims::{Claims, Value};
-use crate::paper::ensembles::{run_prototype1, Prototype1Run, WidthReading, P1_SETS};
+use crate::paper::claims::{keys, Claims, ClaimsError, Value};
+use crate::paper::ensembles::{run_prototype1, Prototype1Run, WidthReading};
+use crate::paper::setups::{ParamSet, Prototype1Sets};
+use crate::paper::Figure;
 use crate::study::record::BroadbandError;
 
 /// Figure 11's levels (g²/Hz).
@@ -25,23 +26,6 @@ pub const HIGH: usize = 2;
 /// The ensembles of Figure 11: both parameter sets at every level.
 pub type Run = Prototype1Run;
 
-/// Runs Figure 11 for the published and the calibrated prototype 1 (the parameter files'
-/// devices; [`crate::paper::setups::prototype1_setup`] is applied here), calling `progress`
-/// after each record.
-pub fn run(
-    published: &Device,
-    calibrated: &Device,
-    progress: &(dyn Fn() + Sync),
-) -> Result<Run, BroadbandError> {
-    run_prototype1(
-        published,
-        calibrated,
-        &FIG11_LEVELS,
-        FIG11_REALISATIONS,
-        progress,
-    )
-}
-
 /// What Figure 11 shows for one parameter set.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Findings {
@@ -58,8 +42,8 @@ pub struct Findings {
     pub single_ratio: Spread,
 }
 
-/// Figure 11's findings for set `set` (an index into [`P1_SETS`]).
-pub fn findings(run: &Run, set: usize) -> Findings {
+/// Figure 11's findings for a parameter set.
+pub fn findings(run: &Run, set: ParamSet) -> Findings {
     let (lo, hi) = (&run.level(set, LOW).ens, &run.level(set, HIGH).ens);
     let ratio = |r: WidthReading| r.mean_width(hi).ratio(&r.mean_width(lo));
     Findings {
@@ -71,31 +55,48 @@ pub fn findings(run: &Run, set: usize) -> Findings {
     }
 }
 
-/// Claim F11 for both parameter sets: the 3 dB width ratio of the ensemble-mean PSDs
-/// (3.49e-4 over 4.42e-6) and whether no record at any level touched a stop.
-pub fn claims(run: &Run, _claims: &Claims) -> Vec<Value> {
-    let all: Vec<(&str, Findings)> = P1_SETS
-        .iter()
-        .enumerate()
-        .map(|(s, set)| (*set, findings(run, s)))
-        .collect();
-    let mut out = Vec::new();
-    for (set, f) in &all {
-        out.push(Value::new(
-            "F11",
-            "bw_ratio_3p49e-4_over_4p42e-6",
-            set,
-            f.ratio.0,
-            Some(f.ratio.1),
-            "3 dB widths of the ensemble-mean PSDs; CI: the two jackknife intervals propagated",
-        ));
-        out.push(Value::yes_no(
-            "F11",
-            "linear_regime_no_impact",
-            set,
-            f.impacts == 0,
-            format!("{} impacts in {} records", f.impacts, f.records),
-        ));
+/// Figure 11: prototype 1 under low-level random vibration, both parameter sets.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Fig11;
+
+impl Figure for Fig11 {
+    const NAME: &'static str = "fig11";
+    type Setup = Prototype1Sets;
+    type Run = Run;
+    type Error = BroadbandError;
+
+    fn work(_: &Prototype1Sets) -> usize {
+        ParamSet::BOTH.len() * FIG11_LEVELS.len() * FIG11_REALISATIONS
     }
-    out
+
+    /// Runs Figure 11 for the published and the calibrated prototype 1 (the parameter files'
+    /// devices; [`crate::paper::setups::prototype1_setup`] is applied here), calling
+    /// `progress` after each record.
+    fn run(setup: &Prototype1Sets, progress: &(dyn Fn() + Sync)) -> Result<Run, BroadbandError> {
+        run_prototype1(setup, &FIG11_LEVELS, FIG11_REALISATIONS, progress)
+    }
+
+    /// Claim F11 for both parameter sets: the 3 dB width ratio of the ensemble-mean PSDs
+    /// (3.49e-4 over 4.42e-6) and whether no record at any level touched a stop.
+    fn claims(run: &Run, claims: &Claims) -> Result<Vec<Value>, ClaimsError> {
+        let mut out = Vec::new();
+        for set in ParamSet::BOTH {
+            let f = findings(run, set);
+            out.push(Value::new(
+                keys::F11_BW_RATIO,
+                set,
+                f.ratio.0,
+                Some(f.ratio.1),
+                "3 dB widths of the ensemble-mean PSDs; CI: the two jackknife intervals \
+                 propagated",
+            ));
+            out.push(Value::yes_no(
+                keys::F11_NO_IMPACT,
+                set,
+                f.impacts == 0,
+                format!("{} impacts in {} records", f.impacts, f.records),
+            ));
+        }
+        claims.known(out)
+    }
 }

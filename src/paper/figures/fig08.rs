@@ -5,42 +5,21 @@
 
 use crate::device::{Device, StiffnessModel};
 use crate::paper::calibration::{fit_bim_for_jump, BimFit, NarrowbandError, BIM_FIT_TOL_HZ};
-use crate::paper::claims::{bool_value, ClaimValue, Claims, ClaimsError, Value};
+use crate::paper::claims::{bool_value, keys, ClaimKey, ClaimValue, Claims, ClaimsError, Value};
 use crate::paper::curves::{
     branch_end_value, no_impact_value, CurveSpec, CurveSweeps, FigureCurve,
 };
 use crate::paper::measured::P1_MEASURED_JUMP_HZ;
-use crate::paper::setups::{ParamSet, P1_BIAS_V};
-use crate::study::steady::steady_config_across_folds;
-use crate::study::stepped;
-use crate::study::sweep::{SweepSettings, REFINE_TOL_HZ};
+use crate::paper::setups::{ParamSet, Prototype1Sets, P1_BIAS_V};
+use crate::paper::Figure;
+use crate::study::sweep::SweepSettings;
 
-/// Prototype 1, Figure 8: the low acceleration, no impacts (g rms).
-pub const P1_LOW_ACCEL_RMS_G: f64 = 4.1;
-
-/// Prototype 1, Figure 8: the high acceleration, with impacts (g rms).
-pub const P1_HIGH_ACCEL_RMS_G: f64 = 5.5;
-
-/// Prototype 1, Figure 8: first frequency of the up-sweep (Hz).
-pub const P1_SWEEP_START_HZ: f64 = 900.0;
-
-/// Prototype 1, Figure 8: last frequency of the up-sweep (Hz).
-pub const P1_SWEEP_STOP_HZ: f64 = 1600.0;
-
-/// Prototype 1: default frequency step of the up-sweeps (Hz).
-pub const P1_SWEEP_STEP_HZ: f64 = 10.0;
-
-/// Prototype 1, Figure 8: 900-1600 Hz in 10 Hz steps (extended to 2400 Hz if needed),
-/// [`steady_config_across_folds`] at 1220 Hz (blocks that outlast the ghost of the upper fold
-/// at the bracket's width past it), brackets of [`REFINE_TOL_HZ`].
-pub fn sweep_settings(device: &Device) -> SweepSettings {
-    SweepSettings {
-        freqs_hz: stepped::linspace_step(P1_SWEEP_START_HZ, P1_SWEEP_STOP_HZ, P1_SWEEP_STEP_HZ),
-        extend_to_hz: 2400.0,
-        cfg: steady_config_across_folds(device, 1220.0),
-        refine_tol_hz: REFINE_TOL_HZ,
-    }
-}
+/// Figure 8's drive levels, frequency range and sweep settings, stated in
+/// [`crate::paper::sweeps`] (the calibration fits the gap on the same sweep).
+pub use crate::paper::sweeps::{
+    sweep_settings, P1_HIGH_ACCEL_RMS_G, P1_LOW_ACCEL_RMS_G, P1_SWEEP_START_HZ, P1_SWEEP_STEP_HZ,
+    P1_SWEEP_STOP_HZ,
+};
 
 /// The curves of Figure 8 (prototype 1, 30 V), in the order of [`Fig8Curve::ALL`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -92,6 +71,14 @@ impl FigureCurve for Fig8Curve {
         Fig8Curve::spec(self)
     }
 }
+
+/// The jump claims of Figure 8 and the curve each is read from.
+pub const JUMP_CLAIMS: [(ClaimKey, Fig8Curve); 4] = [
+    (keys::F8C_JUMP_HERTZ_BIM1P5, Fig8Curve::Hertz1p5),
+    (keys::F8D_JUMP_HERTZ_BIM0, Fig8Curve::Hertz0),
+    (keys::F8E_JUMP_HERTZ_BIM10, Fig8Curve::Hertz10),
+    (keys::F8F_JUMP_LINEAR_BIM2, Fig8Curve::Linear2),
+];
 
 /// The paper's two fitted end-stop models, whose b_im is refitted to the measured jump
 /// ([`fit_bim_for_jump`]): the fit starts from each curve's stiffness law.
@@ -167,70 +154,79 @@ impl Run {
     }
 }
 
-/// Runs Figure 8 for both parameter sets of prototype 1 (`published` and `calibrated`, as
-/// loaded; the bias is set here): every curve, its repetition with refined numerics, and the
-/// b_im fits, in parallel. `on_step()` is called after every coarse step of every sweep.
-pub fn run(
-    published: &Device,
-    calibrated: &Device,
-    on_step: &(dyn Fn() + Sync),
-) -> Result<Run, NarrowbandError> {
-    use rayon::prelude::*;
-    let protocol = Protocol::new(published);
-    let sets = [
-        (ParamSet::Published, published),
-        (ParamSet::Calibrated, calibrated),
-    ]
-    .into_iter()
-    .map(|(set, d)| -> Result<SetRun, NarrowbandError> {
-        let device = d.with_bias(P1_BIAS_V);
-        let p = &protocol;
-        let (sweeps, fits) = rayon::join(
-            || CurveSweeps::run(&device, &p.settings, &p.halved, on_step),
-            || {
-                BIM_FITS
-                    .par_iter()
-                    .map(|c| {
-                        fit_bim_for_jump(
-                            &c.spec().device(&device),
-                            P1_MEASURED_JUMP_HZ,
-                            P1_HIGH_ACCEL_RMS_G,
-                            &p.settings,
-                            BIM_FIT_TOL_HZ,
-                        )
-                    })
-                    .collect::<Result<Vec<_>, _>>()
-            },
-        );
-        Ok(SetRun {
-            set,
-            device,
-            sweeps: sweeps?,
-            fits: fits?,
-        })
-    })
-    .collect::<Result<Vec<_>, _>>()?;
-    Ok(Run { protocol, sets })
-}
+/// Figure 8: prototype 1's up-sweeps under both parameter sets, and the b_im fits.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Fig08;
 
-/// Figure 8's claim values, both sets (see [`set_claims`]).
-pub fn claims(run: &Run, claims: &Claims) -> Result<Vec<Value>, ClaimsError> {
-    let stop_hz = *run
-        .protocol
-        .settings
-        .freqs_hz
-        .last()
-        .expect("a sweep has frequencies");
-    claims.known(
-        run.sets
-            .iter()
-            .flat_map(|r| {
-                set_claims(r, stop_hz)
-                    .into_iter()
-                    .map(|v| v.to_value(r.set.label()))
+impl Figure for Fig08 {
+    const NAME: &'static str = "fig08";
+    type Setup = Prototype1Sets;
+    type Run = Run;
+    type Error = NarrowbandError;
+
+    fn work(setup: &Prototype1Sets) -> usize {
+        Protocol::new(&setup.published).coarse_steps()
+    }
+
+    /// Runs Figure 8 for both parameter sets of prototype 1 (as loaded; the bias is set
+    /// here): every curve, its repetition with refined numerics, and the b_im fits, in
+    /// parallel. `progress()` is called after every coarse step of every sweep.
+    fn run(setup: &Prototype1Sets, progress: &(dyn Fn() + Sync)) -> Result<Run, NarrowbandError> {
+        use rayon::prelude::*;
+        let protocol = Protocol::new(&setup.published);
+        let sets = setup
+            .each()
+            .into_iter()
+            .map(|(set, d)| -> Result<SetRun, NarrowbandError> {
+                let device = d.with_bias(P1_BIAS_V);
+                let p = &protocol;
+                let (sweeps, fits) = rayon::join(
+                    || CurveSweeps::run(&device, &p.settings, &p.halved, progress),
+                    || {
+                        BIM_FITS
+                            .par_iter()
+                            .map(|c| {
+                                fit_bim_for_jump(
+                                    &c.spec().device(&device),
+                                    P1_MEASURED_JUMP_HZ,
+                                    P1_HIGH_ACCEL_RMS_G,
+                                    &p.settings,
+                                    BIM_FIT_TOL_HZ,
+                                )
+                            })
+                            .collect::<Result<Vec<_>, _>>()
+                    },
+                );
+                Ok(SetRun {
+                    set,
+                    device,
+                    sweeps: sweeps?,
+                    fits: fits?,
+                })
             })
-            .collect(),
-    )
+            .collect::<Result<Vec<_>, _>>()?;
+        Ok(Run { protocol, sets })
+    }
+
+    /// Figure 8's claim values, both sets (see [`set_claims`]).
+    fn claims(run: &Run, claims: &Claims) -> Result<Vec<Value>, ClaimsError> {
+        let stop_hz = *run
+            .protocol
+            .settings
+            .freqs_hz
+            .last()
+            .expect("a sweep has frequencies");
+        claims.known(
+            run.sets
+                .iter()
+                .flat_map(|r| {
+                    set_claims(r, stop_hz)
+                        .into_iter()
+                        .map(|v| v.to_value(r.set))
+                })
+                .collect(),
+        )
+    }
 }
 
 /// Claim F8-e's order: the jump frequencies (Hz) at b_im = 0, 1.5 and 10 N s/m fall
@@ -248,26 +244,19 @@ pub fn jumps_fall_as_bim_grows(bim0_hz: f64, bim1p5_hz: f64, bim10_hz: f64) -> b
 /// * F8-e order: 1 only if all three Hertz sweeps end with a confirmed jump and the jump
 ///   frequencies fall strictly as b_im grows.
 pub fn set_claims(r: &SetRun, stop_hz: f64) -> Vec<ClaimValue> {
-    use Fig8Curve::{Hertz0, Hertz10, Hertz1p5, Linear2, Low};
+    use Fig8Curve::{Hertz0, Hertz10, Hertz1p5, Low};
     let curve = |c: Fig8Curve| r.sweeps.curve(c);
-    let mut out = vec![no_impact_value("F8-a", "no_impact_4p1g", curve(Low))];
+    let mut out = vec![no_impact_value(keys::F8A_NO_IMPACT, curve(Low))];
     if let Some(t) = curve(Hertz1p5).report.onset {
         out.push(ClaimValue {
-            id: "F8-b",
-            quantity: "impact_onset_5p5g_hz",
+            key: keys::F8B_ONSET,
             value: t.value(),
             uncertainty: Some(t.half_width()),
             note: "first contact, refined".into(),
         });
     }
-    let jump_claims = [
-        ("F8-c", "jump_hertz_bim1p5_hz", Hertz1p5),
-        ("F8-d", "jump_hertz_bim0_hz", Hertz0),
-        ("F8-e", "jump_hertz_bim10_hz", Hertz10),
-        ("F8-f", "jump_linear_bim2_hz", Linear2),
-    ];
-    for (id, q, c) in jump_claims {
-        out.extend(branch_end_value(id, q, curve(c), stop_hz));
+    for (key, c) in JUMP_CLAIMS {
+        out.extend(branch_end_value(key, curve(c), stop_hz));
     }
     let jump = |c: Fig8Curve| curve(c).report.jump.map(|t| t.value());
     let (ordered, note) = match (jump(Hertz0), jump(Hertz1p5), jump(Hertz10)) {
@@ -280,6 +269,6 @@ pub fn set_claims(r: &SetRun, stop_hz: f64) -> Vec<ClaimValue> {
             "not every one of the three sweeps ends with a jump".to_string(),
         ),
     };
-    out.push(bool_value("F8-e", "jump_order_by_bim", ordered, note));
+    out.push(bool_value(keys::F8E_JUMP_ORDER, ordered, note));
     out
 }

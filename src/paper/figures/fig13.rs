@@ -3,9 +3,10 @@
 
 use crate::device::{Device, StiffnessModel};
 use crate::ode::SolverError;
-use crate::paper::claims::{bool_value, Claims, ClaimsError, Value};
+use crate::paper::claims::{bool_value, keys, Claims, ClaimsError, Value};
 use crate::paper::curves::{no_impact_value, CurveSpec, CurveSweeps, FigureCurve};
 use crate::paper::setups::{ParamSet, FIG13_BIAS_V};
+use crate::paper::Figure;
 use crate::study::steady::steady_config_across_folds;
 use crate::study::stepped;
 use crate::study::sweep::{SweepSettings, REFINE_TOL_HZ};
@@ -68,13 +69,6 @@ pub struct Run {
     pub sweeps: CurveSweeps<Fig13Curve>,
 }
 
-/// Coarse steps of a whole run of Figure 13 (every curve, both repetitions), for a progress
-/// bar.
-pub fn coarse_steps(published: &Device) -> usize {
-    let s = sweep_settings(&published.with_bias(FIG13_BIAS_V));
-    CurveSweeps::<Fig13Curve>::coarse_steps(&s, &s.halved())
-}
-
 impl Run {
     /// The jump with the Hertz law relative to the jump with the linear law,
     /// (Hertz - linear) / linear; `None` unless both sweeps jump.
@@ -85,57 +79,77 @@ impl Run {
     }
 }
 
-/// Runs Figure 13 on the published prototype 2 (as loaded; the bias is set here): every
-/// curve and its repetition with refined numerics, in parallel. `on_step()` is called after
-/// every coarse step of every sweep.
-pub fn run(published: &Device, on_step: &(dyn Fn() + Sync)) -> Result<Run, SolverError> {
-    let device = published.with_bias(FIG13_BIAS_V);
-    let settings = sweep_settings(&device);
-    let halved_settings = settings.halved();
-    let sweeps = CurveSweeps::run(&device, &settings, &halved_settings, on_step)?;
-    Ok(Run {
-        device,
-        settings,
-        halved_settings,
-        sweeps,
-    })
-}
+/// Figure 13: prototype 2's up-sweeps at 10 V.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Fig13;
 
-/// Figure 13's claim values (published set).
-///
-/// * no impact at 0.12 g: 1 if no step has contact;
-/// * jump at 0.31 g: 1 if the linear-law sweep has contact and a confirmed jump;
-/// * Hertz and linear agree: 1 if both 0.31 g sweeps jump and their jump frequencies differ
-///   by no more than the claims file's `frequency` class allows about the linear one.
-pub fn claims(run: &Run, claims: &Claims) -> Result<Vec<Value>, ClaimsError> {
-    let class = claims.require_class("frequency")?;
-    let mut out = vec![no_impact_value(
-        "F13",
-        "no_impact_0p12g",
-        run.sweeps.curve(Fig13Curve::Low),
-    )];
-    let lin = &run.sweeps.curve(Fig13Curve::Linear).report;
-    out.push(bool_value(
-        "F13",
-        "jump_0p31g",
-        lin.any_contact() && lin.jump.is_some(),
-        match lin.jump {
-            Some(_) => "impacts and a confirmed jump".into(),
-            None => "no confirmed jump".into(),
-        },
-    ));
-    let her = &run.sweeps.curve(Fig13Curve::Hertz).report;
-    let (agree, note) = match (lin.jump, her.jump) {
-        (Some(jl), Some(jh)) => {
-            let tol = class.tolerance(jl.value());
-            (
-                (jh.value() - jl.value()).abs() <= tol,
-                format!("difference of the jumps vs {tol:.1} Hz (frequency class)"),
-            )
-        }
-        _ => (false, "a sweep has no jump".to_string()),
-    };
-    out.push(bool_value("F13", "hertz_linear_agree", agree, note));
-    let set = ParamSet::Published.label();
-    claims.known(out.into_iter().map(|v| v.to_value(set)).collect())
+impl Figure for Fig13 {
+    const NAME: &'static str = "fig13";
+    /// Prototype 2 as published.
+    type Setup = Device;
+    type Run = Run;
+    type Error = SolverError;
+
+    /// Coarse steps of a whole run (every curve, both repetitions).
+    fn work(published: &Device) -> usize {
+        let s = sweep_settings(&published.with_bias(FIG13_BIAS_V));
+        CurveSweeps::<Fig13Curve>::coarse_steps(&s, &s.halved())
+    }
+
+    /// Runs Figure 13 on the published prototype 2 (as loaded; the bias is set here): every
+    /// curve and its repetition with refined numerics, in parallel. `progress()` is called
+    /// after every coarse step of every sweep.
+    fn run(published: &Device, progress: &(dyn Fn() + Sync)) -> Result<Run, SolverError> {
+        let device = published.with_bias(FIG13_BIAS_V);
+        let settings = sweep_settings(&device);
+        let halved_settings = settings.halved();
+        let sweeps = CurveSweeps::run(&device, &settings, &halved_settings, progress)?;
+        Ok(Run {
+            device,
+            settings,
+            halved_settings,
+            sweeps,
+        })
+    }
+
+    /// Figure 13's claim values (published set).
+    ///
+    /// * no impact at 0.12 g: 1 if no step has contact;
+    /// * jump at 0.31 g: 1 if the linear-law sweep has contact and a confirmed jump;
+    /// * Hertz and linear agree: 1 if both 0.31 g sweeps jump and their jump frequencies
+    ///   differ by no more than the claims file's `frequency` class allows about the linear
+    ///   one.
+    fn claims(run: &Run, claims: &Claims) -> Result<Vec<Value>, ClaimsError> {
+        let class = claims.require_class("frequency")?;
+        let mut out = vec![no_impact_value(
+            keys::F13_NO_IMPACT,
+            run.sweeps.curve(Fig13Curve::Low),
+        )];
+        let lin = &run.sweeps.curve(Fig13Curve::Linear).report;
+        out.push(bool_value(
+            keys::F13_JUMP,
+            lin.any_contact() && lin.jump.is_some(),
+            match lin.jump {
+                Some(_) => "impacts and a confirmed jump".into(),
+                None => "no confirmed jump".into(),
+            },
+        ));
+        let her = &run.sweeps.curve(Fig13Curve::Hertz).report;
+        let (agree, note) = match (lin.jump, her.jump) {
+            (Some(jl), Some(jh)) => {
+                let tol = class.tolerance(jl.value());
+                (
+                    (jh.value() - jl.value()).abs() <= tol,
+                    format!("difference of the jumps vs {tol:.1} Hz (frequency class)"),
+                )
+            }
+            _ => (false, "a sweep has no jump".to_string()),
+        };
+        out.push(bool_value(keys::F13_HERTZ_LINEAR_AGREE, agree, note));
+        claims.known(
+            out.into_iter()
+                .map(|v| v.to_value(ParamSet::Published))
+                .collect(),
+        )
+    }
 }

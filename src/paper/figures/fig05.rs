@@ -1,9 +1,12 @@
 //! Figure 5: the Hertz line-contact law (eq 6) in normalised form, delta0 of both prototypes
 //! (claim F5-a), and the linear end-stop stiffness of eq 19 (claim F5-b).
 
+use std::convert::Infallible;
+
 use crate::device::Device;
-use crate::paper::claims::{Claims, Value};
-use crate::paper::setups::{hertz_stop, with_hertz};
+use crate::paper::claims::{keys, Claims, ClaimsError, Value};
+use crate::paper::setups::{hertz_stop, with_hertz, ParamSet, Prototypes};
+use crate::paper::Figure;
 use crate::physics::hertz::{
     normalised_delta, HertzLine, LinearFits, EQ19_FIT_RANGE_M, EQ19_FIT_SAMPLES,
 };
@@ -100,7 +103,7 @@ pub struct Run {
 }
 
 /// Evaluates Figure 5 for the two prototypes' parameter files.
-pub fn run(prototype1: &Device, prototype2: &Device) -> Run {
+fn evaluate(prototype1: &Device, prototype2: &Device) -> Run {
     let curve = (0..CURVE_SAMPLES)
         .map(|i| {
             let f = CURVE_MAX_FORCE * i as f64 / (CURVE_SAMPLES - 1) as f64;
@@ -143,35 +146,53 @@ pub fn run(prototype1: &Device, prototype2: &Device) -> Run {
     }
 }
 
-/// Claims F5-a (delta0 = t²/R of both prototypes) and F5-b (eq 19's coefficient under our
-/// reading of "least-squares fit": a line through the origin fitted to eq 6 sampled uniformly
-/// in delta over 0-0.5 um, for prototype 1, whose Figure 8 first used it).
-pub fn claims(run: &Run, _claims: &Claims) -> Vec<Value> {
-    let [p1, p2] = &run.prototypes;
-    vec![
-        Value::new(
-            "F5-a",
-            "delta0_p1_um",
-            "published",
-            p1.hertz.delta_scale_m() * 1e6,
-            None,
-            "t^2/R from Table 1",
-        ),
-        Value::new(
-            "F5-a",
-            "delta0_p2_um",
-            "published",
-            p2.hertz.delta_scale_m() * 1e6,
-            None,
-            "t^2/R from Table 1",
-        ),
-        Value::new(
-            "F5-b",
-            "eq19_coefficient",
-            "published",
-            p1.fits.paper_reading(),
-            None,
-            "least squares through the origin, uniform in delta, prototype 1",
-        ),
-    ]
+/// Figure 5: the normalised Hertz law, delta0 of both prototypes and eq 19's coefficient.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Fig05;
+
+impl Figure for Fig05 {
+    const NAME: &'static str = "fig05";
+    type Setup = Prototypes;
+    type Run = Run;
+    type Error = Infallible;
+
+    fn work(_: &Prototypes) -> usize {
+        0
+    }
+
+    /// Evaluates Figure 5 for the two prototypes' parameter files (no simulation).
+    fn run(setup: &Prototypes, _: &(dyn Fn() + Sync)) -> Result<Run, Infallible> {
+        Ok(evaluate(&setup.prototype1, &setup.prototype2))
+    }
+
+    /// Claims F5-a (delta0 = t²/R of both prototypes) and F5-b (eq 19's coefficient under our
+    /// reading of "least-squares fit": a line through the origin fitted to eq 6 sampled
+    /// uniformly in delta over 0-0.5 um, for prototype 1, whose Figure 8 first used it).
+    fn claims(run: &Run, claims: &Claims) -> Result<Vec<Value>, ClaimsError> {
+        let [p1, p2] = &run.prototypes;
+        let set = ParamSet::Published;
+        claims.known(vec![
+            Value::new(
+                keys::F5A_DELTA0_P1,
+                set,
+                p1.hertz.delta_scale_m() * 1e6,
+                None,
+                "t^2/R from Table 1",
+            ),
+            Value::new(
+                keys::F5A_DELTA0_P2,
+                set,
+                p2.hertz.delta_scale_m() * 1e6,
+                None,
+                "t^2/R from Table 1",
+            ),
+            Value::new(
+                keys::F5B_EQ19_COEFFICIENT,
+                set,
+                p1.fits.paper_reading(),
+                None,
+                "least squares through the origin, uniform in delta, prototype 1",
+            ),
+        ])
+    }
 }

@@ -6,7 +6,9 @@ use rayon::prelude::*;
 
 use crate::drive::noise::{generate, NoiseSpec};
 use crate::num::stats::MeanCi;
-use crate::paper::claims::{Claims, Value};
+use crate::paper::claims::{keys, Claims, ClaimsError, Value};
+use crate::paper::setups::ParamSet;
+use crate::paper::Figure;
 use crate::signal::bandwidth::{mean_psd, upper_band_edge_hz};
 use crate::signal::{welch, Psd, WelchConfig};
 use crate::study::ensemble::{first_stream_for_level, DEFAULT_SEED};
@@ -55,34 +57,6 @@ pub struct Run {
     pub welch: WelchConfig,
     /// The records, in stream order.
     pub records: Vec<NoiseRecord>,
-}
-
-/// Generates and analyses the [`RECORDS`] records in parallel, calling `progress` after each.
-pub fn run(progress: &(dyn Fn() + Sync)) -> Result<Run, BroadbandError> {
-    let spec = NoiseSpec::paper(FIG10_SA);
-    let first_stream = first_stream_for_level(FIG10_SA);
-    let cfg = WelchConfig::half_overlap(NPERSEG);
-    let records = (0..RECORDS as u64)
-        .into_par_iter()
-        .map(|i| -> Result<NoiseRecord, BroadbandError> {
-            let a = generate(&spec, DEFAULT_SEED, first_stream + i)?;
-            let g: Vec<f64> = a.iter().map(|x| x / G).collect();
-            let mean_square_g2 = g.iter().map(|x| x * x).sum::<f64>() / g.len() as f64;
-            let psd = welch(&g, spec.sample_rate_hz, &cfg)?;
-            progress();
-            Ok(NoiseRecord {
-                psd,
-                mean_square_g2,
-            })
-        })
-        .collect::<Result<_, _>>()?;
-    Ok(Run {
-        spec,
-        seed: DEFAULT_SEED,
-        first_stream,
-        welch: cfg,
-        records,
-    })
 }
 
 /// Mean two-sided level of a one-sided PSD over [`FLAT_BAND_HZ`] (g²/Hz).
@@ -141,30 +115,73 @@ pub fn findings(run: &Run) -> Findings {
     }
 }
 
-/// Claim F10: the generated level over the flat band and the band edge, means over the
-/// records with their 95 % CIs.
-pub fn claims(run: &Run, _claims: &Claims) -> Vec<Value> {
-    let f = findings(run);
-    let n = run.records.len();
-    vec![
-        Value::new(
-            "F10",
-            "excitation_psd_g2_per_hz",
-            "published",
-            f.level.mean,
-            Some(f.level.ci95),
-            format!(
-                "mean two-sided density over {}-{} Hz, {n} records; CI: Student t",
-                FLAT_BAND_HZ.0, FLAT_BAND_HZ.1
+/// Figure 10: the band-limited white-noise excitation and its PSD.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Fig10;
+
+impl Figure for Fig10 {
+    const NAME: &'static str = "fig10";
+    /// The excitation depends on no device.
+    type Setup = ();
+    type Run = Run;
+    type Error = BroadbandError;
+
+    fn work(_: &()) -> usize {
+        RECORDS
+    }
+
+    /// Generates and analyses the [`RECORDS`] records in parallel, calling `progress` after
+    /// each.
+    fn run(_: &(), progress: &(dyn Fn() + Sync)) -> Result<Run, BroadbandError> {
+        let spec = NoiseSpec::paper(FIG10_SA);
+        let first_stream = first_stream_for_level(FIG10_SA);
+        let cfg = WelchConfig::half_overlap(NPERSEG);
+        let records = (0..RECORDS as u64)
+            .into_par_iter()
+            .map(|i| -> Result<NoiseRecord, BroadbandError> {
+                let a = generate(&spec, DEFAULT_SEED, first_stream + i)?;
+                let g: Vec<f64> = a.iter().map(|x| x / G).collect();
+                let mean_square_g2 = g.iter().map(|x| x * x).sum::<f64>() / g.len() as f64;
+                let psd = welch(&g, spec.sample_rate_hz, &cfg)?;
+                progress();
+                Ok(NoiseRecord {
+                    psd,
+                    mean_square_g2,
+                })
+            })
+            .collect::<Result<_, _>>()?;
+        Ok(Run {
+            spec,
+            seed: DEFAULT_SEED,
+            first_stream,
+            welch: cfg,
+            records,
+        })
+    }
+
+    /// Claim F10: the generated level over the flat band and the band edge, means over the
+    /// records with their 95 % CIs.
+    fn claims(run: &Run, claims: &Claims) -> Result<Vec<Value>, ClaimsError> {
+        let f = findings(run);
+        let n = run.records.len();
+        claims.known(vec![
+            Value::new(
+                keys::F10_LEVEL,
+                ParamSet::Published,
+                f.level.mean,
+                Some(f.level.ci95),
+                format!(
+                    "mean two-sided density over {}-{} Hz, {n} records; CI: Student t",
+                    FLAT_BAND_HZ.0, FLAT_BAND_HZ.1
+                ),
             ),
-        ),
-        Value::new(
-            "F10",
-            "excitation_band_hz",
-            "published",
-            f.edge.mean,
-            Some(f.edge.ci95),
-            format!("-3 dB edge, {n} records; CI: Student t"),
-        ),
-    ]
+            Value::new(
+                keys::F10_BAND,
+                ParamSet::Published,
+                f.edge.mean,
+                Some(f.edge.ci95),
+                format!("-3 dB edge, {n} records; CI: Student t"),
+            ),
+        ])
+    }
 }

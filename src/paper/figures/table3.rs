@@ -2,9 +2,12 @@
 //! both prototypes (eqs 15-18), with the broadband efficiency of eq 21 (claims T3-a, T3-b and
 //! F14-a's linear-theory value).
 
+use std::convert::Infallible;
+
 use crate::device::Device;
-use crate::paper::claims::{Claims, Value};
-use crate::paper::setups::{comb, comb_mut, P1_BIAS_V, P2_BIAS_V};
+use crate::paper::claims::{keys, ClaimKey, Claims, ClaimsError, Value};
+use crate::paper::setups::{comb, comb_mut, ParamSet, Prototypes, P1_BIAS_V, P2_BIAS_V};
+use crate::paper::Figure;
 use crate::physics::two_port::{bias_for_coupling, QmReading, TwoPort, EQ21_QM, TABLE3_QM};
 
 /// The abstract's k^2 for prototype 1 (a fraction): 1.44 %.
@@ -23,8 +26,10 @@ pub fn load_grid_ohm() -> Vec<f64> {
 pub struct Prototype {
     /// `prototype 1` or `prototype 2`.
     pub label: &'static str,
-    /// `p1` or `p2`, the suffix of the claims' quantities.
+    /// `p1` or `p2`, the suffix of its numbers' names.
     pub key: &'static str,
+    /// The claim numbers of this prototype: k^2 (%), Qm, k^2 Qm.
+    pub keys: [ClaimKey; 3],
     /// Table 3's bias voltage (V).
     pub bias_v: f64,
     /// The device at that bias.
@@ -67,7 +72,13 @@ pub struct Run {
     pub efficiency_against_load: Vec<(f64, f64)>,
 }
 
-fn prototype(label: &'static str, key: &'static str, bias_v: f64, d: &Device) -> Prototype {
+fn prototype(
+    label: &'static str,
+    key: &'static str,
+    keys: [ClaimKey; 3],
+    bias_v: f64,
+    d: &Device,
+) -> Prototype {
     let device = d.with_bias(bias_v);
     let mut geometric = device.clone();
     comb_mut(&mut geometric).c0_f = comb(d)
@@ -78,6 +89,7 @@ fn prototype(label: &'static str, key: &'static str, bias_v: f64, d: &Device) ->
     Prototype {
         label,
         key,
+        keys,
         bias_v,
         two_port: TwoPort::of(&device),
         c0_geometry_f: comb(&geometric).c0_f,
@@ -87,9 +99,15 @@ fn prototype(label: &'static str, key: &'static str, bias_v: f64, d: &Device) ->
     }
 }
 
+/// The claim numbers of Table 3 for prototype 1 (T3-a): k^2 (%), Qm, k^2 Qm.
+const P1_KEYS: [ClaimKey; 3] = [keys::T3A_K2_P1, keys::T3A_QM_P1, keys::T3A_K2QM_P1];
+
+/// The claim numbers of Table 3 for prototype 2 (T3-b).
+const P2_KEYS: [ClaimKey; 3] = [keys::T3B_K2_P2, keys::T3B_QM_P2, keys::T3B_K2QM_P2];
+
 /// Evaluates Table 3 for the two prototypes' parameter files.
-pub fn run(prototype1: &Device, prototype2: &Device) -> Run {
-    let p2 = prototype("prototype 2", "p2", P2_BIAS_V, prototype2);
+fn evaluate(prototype1: &Device, prototype2: &Device) -> Run {
+    let p2 = prototype("prototype 2", "p2", P2_KEYS, P2_BIAS_V, prototype2);
     let efficiency_against_load = load_grid_ohm()
         .into_iter()
         .map(|r_ohm| {
@@ -100,52 +118,60 @@ pub fn run(prototype1: &Device, prototype2: &Device) -> Run {
         })
         .collect();
     Run {
-        prototypes: [prototype("prototype 1", "p1", P1_BIAS_V, prototype1), p2],
+        prototypes: [
+            prototype("prototype 1", "p1", P1_KEYS, P1_BIAS_V, prototype1),
+            p2,
+        ],
         bias_for_abstract_k2_p1_v: bias_for_coupling(prototype1, ABSTRACT_K2_P1),
         efficiency_against_load,
     }
 }
 
-/// Claims T3-a and T3-b (k^2, Qm under [`TABLE3_QM`], k^2 Qm of each prototype) and F14-a's
-/// eq 21 efficiency of prototype 2 (Qm under [`EQ21_QM`]).
-pub fn claims(run: &Run, _claims: &Claims) -> Vec<Value> {
-    let mut out = Vec::new();
-    for (id, p) in ["T3-a", "T3-b"].into_iter().zip(&run.prototypes) {
-        let (tp, qm) = (&p.two_port, p.qm(TABLE3_QM));
-        let q = |name: &str| format!("{name}_{}", p.key);
-        let at = format!("eq 18 at {} V", p.bias_v);
-        out.push(Value::new(
-            id,
-            &q("k2_pct"),
-            "published",
-            tp.k2 * 100.0,
-            None,
-            at.clone(),
-        ));
-        out.push(Value::new(
-            id,
-            &q("qm"),
-            "published",
-            qm,
-            None,
-            format!("Qm = {}", TABLE3_QM.label()),
-        ));
-        out.push(Value::new(
-            id,
-            &q("k2qm"),
-            "published",
-            tp.k2 * qm,
-            None,
-            at,
-        ));
+/// Table 3: k^2, Qm and k^2 Qm of both prototypes, and eq 21's efficiency.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Table3;
+
+impl Figure for Table3 {
+    const NAME: &'static str = "table3";
+    type Setup = Prototypes;
+    type Run = Run;
+    type Error = Infallible;
+
+    fn work(_: &Prototypes) -> usize {
+        0
     }
-    out.push(Value::new(
-        "F14-a",
-        "eff_eq21_pct",
-        "published",
-        run.prototypes[1].eq21_efficiency() * 100.0,
-        None,
-        format!("eq 21 with Qm = {}", EQ21_QM.label()),
-    ));
-    out
+
+    /// Evaluates Table 3 for the two prototypes' parameter files (no simulation).
+    fn run(setup: &Prototypes, _: &(dyn Fn() + Sync)) -> Result<Run, Infallible> {
+        Ok(evaluate(&setup.prototype1, &setup.prototype2))
+    }
+
+    /// Claims T3-a and T3-b (k^2, Qm under [`TABLE3_QM`], k^2 Qm of each prototype) and
+    /// F14-a's eq 21 efficiency of prototype 2 (Qm under [`EQ21_QM`]).
+    fn claims(run: &Run, claims: &Claims) -> Result<Vec<Value>, ClaimsError> {
+        let set = ParamSet::Published;
+        let mut out = Vec::new();
+        for p in &run.prototypes {
+            let (tp, qm) = (&p.two_port, p.qm(TABLE3_QM));
+            let [k2, qm_key, k2qm] = p.keys;
+            let at = format!("eq 18 at {} V", p.bias_v);
+            out.push(Value::new(k2, set, tp.k2 * 100.0, None, at.clone()));
+            out.push(Value::new(
+                qm_key,
+                set,
+                qm,
+                None,
+                format!("Qm = {}", TABLE3_QM.label()),
+            ));
+            out.push(Value::new(k2qm, set, tp.k2 * qm, None, at));
+        }
+        out.push(Value::new(
+            keys::F14A_EFF_EQ21,
+            set,
+            run.prototypes[1].eq21_efficiency() * 100.0,
+            None,
+            format!("eq 21 with Qm = {}", EQ21_QM.label()),
+        ));
+        claims.known(out)
+    }
 }

@@ -4,9 +4,12 @@
 
 use crate::device::Device;
 use crate::ode::SolverError;
-use crate::paper::claims::{bool_value, ClaimValue, Claims, ClaimsError, ToleranceClass, Value};
+use crate::paper::claims::{
+    bool_value, keys, ClaimKey, ClaimValue, Claims, ClaimsError, ToleranceClass, Value,
+};
 use crate::paper::measured::P1_RESONANCE_HZ;
-use crate::paper::setups::{prototype1_setup, ParamSet};
+use crate::paper::setups::{prototype1_setup, ParamSet, Prototype1Sets};
+use crate::paper::Figure;
 use crate::study::amplitude::{
     compare_amplitude, AmplitudeComparison, AmplitudeReport, AmplitudeSettings,
 };
@@ -45,12 +48,12 @@ impl Fig9Bias {
         }
     }
 
-    /// The claim quantity of the onset at this bias (F9-a).
-    pub const fn onset_quantity(self) -> &'static str {
+    /// The claim number of the onset at this bias (F9-a).
+    pub const fn onset_key(self) -> ClaimKey {
         match self {
-            Fig9Bias::V20 => "onset_g_20v",
-            Fig9Bias::V30 => "onset_g_30v",
-            Fig9Bias::V40 => "onset_g_40v",
+            Fig9Bias::V20 => keys::F9A_ONSET_20V,
+            Fig9Bias::V30 => keys::F9A_ONSET_30V,
+            Fig9Bias::V40 => keys::F9A_ONSET_40V,
         }
     }
 
@@ -222,39 +225,48 @@ pub struct Run {
     pub sets: Vec<SetRun>,
 }
 
-/// Runs Figure 9 for both parameter sets of prototype 1 (as loaded; bias and end-stop model
-/// are set here), with the convergence repetition. `on_step()` is called after every coarse
-/// step of every continuation.
-pub fn run(
-    published: &Device,
-    calibrated: &Device,
-    on_step: &(dyn Fn() + Sync),
-) -> Result<Run, SolverError> {
-    let protocol = Protocol::new(published);
-    let sets = [
-        (ParamSet::Published, published),
-        (ParamSet::Calibrated, calibrated),
-    ]
-    .into_iter()
-    .map(|(set, device)| -> Result<SetRun, SolverError> {
-        let (curves, halved) = rayon::join(
-            || run_biases(device, &protocol.settings, on_step),
-            || run_biases(device, &protocol.halved, on_step),
-        );
-        Ok(SetRun {
-            set,
-            device: device.clone(),
-            curves: curves?,
-            halved: halved?,
-        })
-    })
-    .collect::<Result<Vec<_>, _>>()?;
-    Ok(Run { protocol, sets })
-}
+/// Figure 9: prototype 1's amplitude sweeps at three biases under both parameter sets.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Fig09;
 
-/// Figure 9's claim values for the scorecard: both sets under [`DEFAULT_READING`].
-pub fn claims(run: &Run, claims: &Claims) -> Result<Vec<Value>, ClaimsError> {
-    claims_under(run, DEFAULT_READING, claims)
+impl Figure for Fig09 {
+    const NAME: &'static str = "fig09";
+    type Setup = Prototype1Sets;
+    type Run = Run;
+    type Error = SolverError;
+
+    fn work(setup: &Prototype1Sets) -> usize {
+        Protocol::new(&setup.published).coarse_steps()
+    }
+
+    /// Runs Figure 9 for both parameter sets of prototype 1 (as loaded; bias and end-stop
+    /// model are set here), with the convergence repetition. `progress()` is called after
+    /// every coarse step of every continuation.
+    fn run(setup: &Prototype1Sets, progress: &(dyn Fn() + Sync)) -> Result<Run, SolverError> {
+        let protocol = Protocol::new(&setup.published);
+        let sets = setup
+            .each()
+            .into_iter()
+            .map(|(set, device)| -> Result<SetRun, SolverError> {
+                let (curves, halved) = rayon::join(
+                    || run_biases(device, &protocol.settings, progress),
+                    || run_biases(device, &protocol.halved, progress),
+                );
+                Ok(SetRun {
+                    set,
+                    device: device.clone(),
+                    curves: curves?,
+                    halved: halved?,
+                })
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        Ok(Run { protocol, sets })
+    }
+
+    /// Figure 9's claim values for the scorecard: both sets under [`DEFAULT_READING`].
+    fn claims(run: &Run, claims: &Claims) -> Result<Vec<Value>, ClaimsError> {
+        claims_under(run, DEFAULT_READING, claims)
+    }
 }
 
 /// Claim F9-a's "the same for all": the spread of the onsets (g) is within `class`'s tolerance
@@ -296,7 +308,7 @@ pub fn claims_under(
             None => (false, "an onset is missing".to_string()),
         };
         let values = set_claims(r, reading, same);
-        out.extend(values.into_iter().map(|v| v.to_value(r.set.label())));
+        out.extend(values.into_iter().map(|v| v.to_value(r.set)));
     }
     claims.known(out)
 }
@@ -307,8 +319,7 @@ fn set_claims(r: &SetRun, reading: PowerReading, same: (bool, String)) -> Vec<Cl
         let c = r.curve(bias);
         if let Some(t) = c.report.onset {
             out.push(ClaimValue {
-                id: "F9-a",
-                quantity: bias.onset_quantity(),
+                key: bias.onset_key(),
                 value: t.value(),
                 uncertainty: Some(t.half_width()),
                 note: if c.report.extended_from.is_some() {
@@ -319,18 +330,17 @@ fn set_claims(r: &SetRun, reading: PowerReading, same: (bool, String)) -> Vec<Cl
             });
         }
     }
-    out.push(bool_value("F9-a", "onset_same_all_vb", same.0, same.1));
+    out.push(bool_value(keys::F9A_ONSET_SAME, same.0, same.1));
     let p20 = reading.of(r.curve(Fig9Bias::V20).report.at_stop());
     let p40 = reading.of(r.curve(Fig9Bias::V40).report.at_stop());
     let note = format!("{} at 5.5 g", reading.label());
-    for (quantity, value) in [
-        ("p_sat_20v_nw", p20 * 1e9),
-        ("p_sat_40v_nw", p40 * 1e9),
-        ("p_sat_ratio_40v_20v", p40 / p20),
+    for (key, value) in [
+        (keys::F9B_P_SAT_20V, p20 * 1e9),
+        (keys::F9B_P_SAT_40V, p40 * 1e9),
+        (keys::F9B_P_SAT_RATIO, p40 / p20),
     ] {
         out.push(ClaimValue {
-            id: "F9-b",
-            quantity,
+            key,
             value,
             uncertainty: None,
             note: note.clone(),

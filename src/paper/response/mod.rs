@@ -2,7 +2,18 @@
 //! between them, their folds and grazing points (by shooting and pseudo-arclength
 //! continuation, [`crate::study::continuation`]), the up- and down-sweeps on top
 //! ([`crate::study::sweep`]), the Floquet multipliers of the coexisting orbits inside the
-//! hysteresis band, and the basins of attraction there ([`crate::study::basins`]).
+//! hysteresis band, and the basins of attraction there ([`crate::study::basins`]). The phase of
+//! each orbit's displacement against the drive ([`phase_lag_deg`]) tells the upper and the
+//! unstable branch apart where the stops hold their RMS voltages together.
+//!
+//! The study is split by job: the cases and their runs here, the folds beside the
+//! scorecard's jump claims (`folds.rs`, [`claim_folds`]), the steady-state criterion on the
+//! ghost past the upper fold (`ghost.rs`, [`ghost_study`]), and the basins with their
+//! convergence (`basins.rs`, [`basin_convergence`]).
+
+mod basins;
+mod folds;
+mod ghost;
 
 use rayon::prelude::*;
 use thiserror::Error;
@@ -10,14 +21,23 @@ use thiserror::Error;
 use crate::device::{Device, StiffnessModel};
 use crate::drive::Sine;
 use crate::ode::{SolverError, Stats};
-use crate::paper::setups::{endstop, prototype1_setup, ParamSet, FIG13_BIAS_V};
-use crate::paper::{fig08, fig13};
+use crate::paper::figures::fig13;
+use crate::paper::setups::{prototype1_setup, ParamSet, FIG13_BIAS_V};
+use crate::paper::sweeps::{self, P1_HIGH_ACCEL_RMS_G, P1_SWEEP_STEP_HZ};
 use crate::physics::harvester::Harvester;
-use crate::study::basins::{basins, Attractor, BasinGrid, BasinSettings, Basins};
+use crate::study::basins::Basins;
 use crate::study::continuation::{branch_from_rest, Branch, ContinuationSettings};
 use crate::study::orbit::{Forcing, Orbit, OrbitError, Shooter};
 use crate::study::steady::{steady_config, SteadyConfig, FOLD_BLOCK_PERIODS};
 use crate::study::sweep::{DownSweepReport, SweepReport, SweepSettings};
+
+pub use basins::{
+    basin_convergence, BasinConvergence, BASIN_CELLS, BASIN_MAX_PERIODS, BASIN_SETTLE_TOL,
+};
+pub use folds::{claim_folds, fold_key, FIG13_JUMP_CLAIM, FOLD_CLAIMS};
+pub use ghost::{ghost_study, GhostRow, GHOST_MAX_PERIODS, GHOST_OFFSETS_HZ};
+
+use basins::case_basins;
 
 /// The cases, each a device, a drive level and the sweep protocol of its figure.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -76,84 +96,6 @@ impl Case {
     }
 }
 
-/// The continuation-only cases behind the scorecard's jump claims of Figure 8 that the
-/// sweep cases above do not cover: prototype 1 at 5.5 g with another end-stop model, under
-/// both parameter sets. Each is `(claim id, quantity, stiffness, b_im)`.
-pub const FOLD_CLAIMS: [(&str, &str, StiffnessModel, f64); 4] = [
-    ("F8-c", "jump_hertz_bim1p5_hz", StiffnessModel::Hertz, 1.5),
-    ("F8-d", "jump_hertz_bim0_hz", StiffnessModel::Hertz, 0.0),
-    ("F8-e", "jump_hertz_bim10_hz", StiffnessModel::Hertz, 10.0),
-    ("F8-f", "jump_linear_bim2_hz", StiffnessModel::Linear, 2.0),
-];
-
-/// The claim of Figure 13's jump (prototype 2, published set), whose fold is
-/// [`Case::Fig13P2`]'s.
-pub const FIG13_JUMP_CLAIM: (&str, &str) = ("F13", "jump_0p31g");
-
-/// Summary key of the fold beside a jump claim under a parameter set (`None`: the row is not a
-/// jump claim).
-pub fn fold_key(claim: &str, quantity: &str, set: &str) -> Option<String> {
-    if (claim, quantity) == FIG13_JUMP_CLAIM && set == ParamSet::Published.label() {
-        return Some(format!("{}_fold_hz", Case::Fig13P2.key()));
-    }
-    FOLD_CLAIMS
-        .iter()
-        .find(|c| c.0 == claim && c.1 == quantity)
-        .map(|c| format!("{}_{set}_fold_hz", fold_case_key(c.0)))
-}
-
-fn fold_case_key(claim: &str) -> String {
-    format!("claim_{}", claim.to_lowercase().replace('-', ""))
-}
-
-/// The upper fold of prototype 1 at 5.5 g for every jump claim of [`FOLD_CLAIMS`] under both
-/// parameter sets, by continuation alone over Figure 8's range (extended to 2000 Hz: without
-/// end-stop damping the branch reaches 1600 Hz). Returns `(summary key, fold)`; a case
-/// without a fold gives no entry.
-pub fn claim_folds(
-    p1: &Device,
-    p1_calibrated: &Device,
-) -> Result<Vec<(String, f64)>, ResponseError> {
-    let jobs: Vec<(String, Device)> = FOLD_CLAIMS
-        .iter()
-        .flat_map(|&(id, _, law, bim)| {
-            [
-                (ParamSet::Published, p1),
-                (ParamSet::Calibrated, p1_calibrated),
-            ]
-            .into_iter()
-            .map(move |(set, d)| {
-                (
-                    format!("{}_{}_fold_hz", fold_case_key(id), set.label()),
-                    prototype1_setup(d).with_endstop(law, bim),
-                )
-            })
-        })
-        .collect();
-    jobs.par_iter()
-        .map(|(key, device)| {
-            let setup = Setup {
-                case: Case::Fig08P1Published,
-                device: device.clone(),
-                accel_rms_g: fig08::P1_HIGH_ACCEL_RMS_G,
-                sweep: fig08::sweep_settings(device),
-                continuation: ContinuationSettings::frequency(
-                    fig08::P1_SWEEP_START_HZ,
-                    2000.0,
-                    fig08::P1_SWEEP_STEP_HZ,
-                ),
-                transient_periods: 200,
-            };
-            let branch = continuation(&setup).map_err(|source| ResponseError::Orbit {
-                case: "claim folds",
-                source,
-            })?;
-            Ok(upper_fold_hz(&branch).map(|f| (key.clone(), f)))
-        })
-        .collect::<Result<Vec<_>, _>>()
-        .map(|v| v.into_iter().flatten().collect())
-}
-
 /// Everything one case computes from.
 #[derive(Debug, Clone)]
 pub struct Setup {
@@ -169,37 +111,6 @@ pub struct Setup {
     pub continuation: ContinuationSettings,
     /// Transient periods before Newton if it fails from rest at the first frequency.
     pub transient_periods: usize,
-}
-
-/// Grid of the basin plots: 41 x 41 initial states over +-1.5 x_max and +-1.5 w x_max.
-pub const BASIN_CELLS: usize = 41;
-
-/// Largest number of drive periods per basin cell (prototype 2's lower orbit has its largest
-/// multiplier at 0.97: some 250 periods to settle to 1e-3 from a distance of order one).
-pub const BASIN_MAX_PERIODS: usize = 4000;
-
-/// Scaled distance at which a basin cell has settled on an attractor.
-pub const BASIN_SETTLE_TOL: f64 = 1e-3;
-
-impl Setup {
-    /// The basin settings of the case at its basin frequency (the grid spans 1.5 times the
-    /// gap and 1.5 times the gap times the angular drive frequency).
-    pub fn basin_settings(&self, cells: usize) -> Option<BasinSettings> {
-        let f = self.case.basin_freq_hz()?;
-        let xmax = endstop(&self.device).gap_m;
-        let vmax = 2.0 * std::f64::consts::PI * f * xmax;
-        Some(BasinSettings {
-            grid: BasinGrid {
-                x_m: (-1.5 * xmax, 1.5 * xmax),
-                v_m_per_s: (-1.5 * vmax, 1.5 * vmax),
-                nx: cells,
-                nv: cells,
-            },
-            max_periods: BASIN_MAX_PERIODS,
-            settle_tol: BASIN_SETTLE_TOL,
-            rtol: self.continuation.shooting.rtol,
-        })
-    }
 }
 
 /// The cases' setups: `p2` and `p1` as published (loaded), `p1_calibrated` the calibration's
@@ -223,8 +134,8 @@ pub fn setups(p2: &Device, p1: &Device, p1_calibrated: &Device) -> Vec<Setup> {
                         p1_calibrated
                     };
                     let d = prototype1_setup(base);
-                    let s = fig08::sweep_settings(&d);
-                    (d, fig08::P1_HIGH_ACCEL_RMS_G, s, fig08::P1_SWEEP_STEP_HZ)
+                    let s = sweeps::sweep_settings(&d);
+                    (d, P1_HIGH_ACCEL_RMS_G, s, P1_SWEEP_STEP_HZ)
                 }
             };
             let f = &sweep.freqs_hz;
@@ -438,127 +349,24 @@ pub fn continuation(setup: &Setup) -> Result<Branch, OrbitError> {
     branch_from_rest(&setup.device, start, s, setup.transient_periods, |_| {})
 }
 
-/// Labels of the attractors at a basin frequency: the stable orbits there, the impacting one
-/// `upper` and the other `lower`.
-fn attractor_label(o: &Orbit) -> &'static str {
-    if o.is_impacting() {
-        "upper"
-    } else {
-        "lower"
-    }
-}
-
 /// The upper fold of a branch ([`Branch::upper_fold`]): its frequency (Hz).
 pub fn upper_fold_hz(branch: &Branch) -> Option<f64> {
     branch.upper_fold().map(|e| e.param)
 }
 
-/// Offsets above the upper fold at which the stepped sweep's steady-state criterion is
-/// tested on the saddle-node's ghost (Hz).
-pub const GHOST_OFFSETS_HZ: [f64; 7] = [0.1, 0.25, 0.5, 1.0, 1.5, 2.0, 3.0];
-
-/// Largest number of periods followed when counting how long the ghost keeps impacting.
-pub const GHOST_MAX_PERIODS: usize = 4000;
-
-/// The stepped sweep's steady-state criterion just past the upper fold, where no impacting
-/// orbit exists: one step from the upper orbit 1 Hz below the fold.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct GhostRow {
-    /// Frequency above the fold (Hz).
-    pub offset_hz: f64,
-    /// The criterion's block length (periods).
-    pub block_periods: usize,
-    /// The criterion's measurement is in contact (it accepts the dying orbit as steady).
-    pub accepted_in_contact: bool,
-    /// Measured blocks the criterion used.
-    pub blocks: usize,
-    /// Periods the criterion simulated (settling and measured blocks).
-    pub periods_simulated: usize,
-    /// The last period with contact when the same start is followed for
-    /// [`GHOST_MAX_PERIODS`] periods (the life of the ghost).
-    pub last_contact_period: usize,
-}
-
-/// The ghost study of a case under the steady-state criterion `cfg`, at `offsets_hz` above
-/// the upper fold of `branch` (empty without an upper fold).
-pub fn ghost_study(
-    setup: &Setup,
-    branch: &Branch,
-    cfg: &SteadyConfig,
-    offsets_hz: &[f64],
-) -> Result<Vec<GhostRow>, OrbitError> {
-    let Some(fold) = upper_fold_hz(branch) else {
-        return Ok(Vec::new());
-    };
-    let h = Harvester::new(
-        &setup.device,
-        Sine::from_rms_g(setup.accel_rms_g, setup.continuation.start),
-    );
-    let shooter = Shooter::new(&h, setup.continuation.shooting);
-    let mut stats = Stats::default();
-    let below = fold - 1.0;
-    let upper = branch
-        .orbits_at(&shooter, below, &mut stats)?
-        .into_iter()
-        .find(|o| o.is_stable() && o.is_impacting())
-        .ok_or(OrbitError::Invalid(format!(
-            "no stable impacting orbit 1 Hz below the fold at {fold} Hz"
-        )))?;
-    let y0 = shooter
-        .state_at_phase(&upper, 0.0)
-        .map_err(|e| OrbitError::Solver {
-            what: "frequency (Hz)",
-            param: below,
-            source: e,
-        })?;
-    offsets_hz
-        .iter()
-        .map(|&df| {
-            let f = fold + df;
-            let serr = |e| OrbitError::Solver {
-                what: "frequency (Hz)",
-                param: f,
-                source: e,
-            };
-            let model = h.with_excitation(Sine::from_rms_g(setup.accel_rms_g, f));
-            let (m, _, _, _) = crate::study::steady::steady_state(
-                &model,
-                y0,
-                crate::study::orbit::mode_of(&h, &y0),
-                setup.accel_rms_g,
-                cfg,
-            )
-            .map_err(serr)?;
-            let forcing = Forcing {
-                freq_hz: f,
-                accel_rms_g: setup.accel_rms_g,
-            };
-            let mut y = y0;
-            let mut last_contact = 0;
-            for k in 1..=GHOST_MAX_PERIODS {
-                let mut contact = false;
-                let (y1, _, _) = shooter
-                    .flow(&forcing, 0.0, y, forcing.period_s(), |_, mode| {
-                        contact |= mode.in_contact()
-                    })
-                    .map_err(serr)?;
-                y = y1;
-                if contact {
-                    last_contact = k;
-                } else if k > last_contact + 50 {
-                    break;
-                }
-            }
-            Ok(GhostRow {
-                offset_hz: df,
-                block_periods: cfg.block_periods,
-                accepted_in_contact: m.contact_fraction > 0.0,
-                blocks: m.blocks,
-                periods_simulated: (cfg.settle_blocks + m.blocks) * cfg.block_periods,
-                last_contact_period: last_contact,
-            })
-        })
-        .collect()
+/// The phase by which an orbit's displacement lags the drive (degrees): the drive's phase at
+/// the displacement's upward zero crossing, in (-90, 270]. The base acceleration drives the
+/// mass in phase well below resonance (0), in quadrature at resonance (90) and in antiphase
+/// well above (180): where the stops hold the RMS voltages of the upper and the unstable
+/// branch to nearly the same value, their phases differ. `None` if the orbit's displacement
+/// does not cross zero.
+pub fn phase_lag_deg(orbit: &Orbit) -> Option<f64> {
+    let t = orbit.summary.upcrossing_s?;
+    let w = 2.0 * std::f64::consts::PI * orbit.forcing.freq_hz;
+    let lag = (orbit.phase_rad + w * t)
+        .rem_euclid(2.0 * std::f64::consts::PI)
+        .to_degrees();
+    Some(if lag > 270.0 { lag - 360.0 } else { lag })
 }
 
 /// The core of a case: both sweeps (in parallel) and the continuation, with nothing else
@@ -644,24 +452,10 @@ pub fn run_case(
             .map_err(oerr)?;
         run.probe = Some(Probe { freq_hz: f, orbits });
     }
-    if let Some(bs) = setup.basin_settings(basin_cells) {
-        let f = setup.case.basin_freq_hz().expect("a basin frequency");
-        let orbits = run
-            .branch
-            .orbits_at(&shooter, f, &mut stats)
-            .map_err(oerr)?;
-        let mut attractors = Vec::new();
-        let mut catalogue = Vec::new();
-        for o in orbits.into_iter().filter(|o| o.is_stable()) {
-            let label = attractor_label(&o);
-            catalogue.push(Attractor::of_orbit(&shooter, &o, label).map_err(oerr)?);
-            attractors.push((label.to_string(), o));
-        }
-        let forcing = Forcing {
-            freq_hz: f,
-            accel_rms_g: setup.accel_rms_g,
-        };
-        run.basins = Some(basins(&h, &forcing, &catalogue, &bs, on_step).map_err(oerr)?);
+    if let Some((b, attractors)) =
+        case_basins(setup, &run.branch, basin_cells, &mut stats, on_step).map_err(oerr)?
+    {
+        run.basins = Some(b);
         run.attractors = attractors;
     }
     Ok(run)

@@ -3,8 +3,9 @@
 //! `data/claims.toml` lists every number the paper claims, each in a tolerance class fixed
 //! before any of our results existed ([`ToleranceClass`]). It is compiled into the crate
 //! ([`Claims::bundled`]) so that the figures' `claims` functions, the tests and the scorecard
-//! read the same file. Experiments emit [`Value`] rows keyed by (claim id, quantity, parameter
-//! set); [`score`] joins them into [`Row`]s with a [`Verdict`]:
+//! read the same file. Every number of a claim has its key in [`keys`] ([`ClaimKey`]), which a
+//! test holds to the file. Experiments emit [`Value`] rows keyed by (claim key, parameter set);
+//! [`score`] joins them into [`Row`]s with a [`Verdict`]:
 //!
 //! * quantitative: `reproduced` iff |ours - paper| <= max(tol_rel |paper|, tol_abs);
 //! * qualitative (paper = 1.0 for "yes"): `reproduced` iff ours == paper;
@@ -13,13 +14,19 @@
 //! A value whose (claim, quantity) matches no claim is an error ([`ClaimsError::Unknown`]): a
 //! typo in a key must not drop a number from the scorecard silently.
 
+pub mod keys;
+
 use std::collections::BTreeMap;
 
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
+pub use keys::ClaimKey;
+
+use crate::paper::setups::ParamSet;
+
 /// The claims file as compiled into the crate.
-pub const CLAIMS_TOML: &str = include_str!("../../data/claims.toml");
+pub const CLAIMS_TOML: &str = include_str!("../../../data/claims.toml");
 
 /// Errors of the claims file and of scoring.
 #[derive(Debug, Clone, PartialEq, Error)]
@@ -61,7 +68,7 @@ pub enum ClaimsError {
         /// Quantity key of the value.
         quantity: String,
         /// Parameter set of the value.
-        set: String,
+        set: ParamSet,
         /// The value.
         ours: f64,
     },
@@ -226,6 +233,11 @@ impl Claims {
             .find(|c| c.id == id && c.quantity == quantity)
     }
 
+    /// The claim of a key.
+    pub fn claim(&self, key: ClaimKey) -> Option<&Claim> {
+        self.get(key.id, key.quantity)
+    }
+
     /// A tolerance class by name.
     pub fn class(&self, name: &str) -> Option<&ToleranceClass> {
         self.classes.get(name)
@@ -249,7 +261,7 @@ impl Claims {
             Some(v) => Err(ClaimsError::Unknown {
                 claim: v.claim.clone(),
                 quantity: v.quantity.clone(),
-                set: v.set.clone(),
+                set: v.set,
                 ours: v.ours,
             }),
             None => Ok(values),
@@ -271,8 +283,8 @@ pub struct Value {
     pub claim: String,
     /// Quantity key.
     pub quantity: String,
-    /// Parameter set (`published`, `calibrated`).
-    pub set: String,
+    /// Parameter set.
+    pub set: ParamSet,
     /// Our value (qualitative: 1.0 yes, 0.0 no).
     pub ours: f64,
     /// Optional uncertainty of our value (same unit), e.g. a bracket half-width or a 95 % CI.
@@ -284,20 +296,19 @@ pub struct Value {
 }
 
 impl Value {
-    /// Our value `ours` of (`claim`, `quantity`) under parameter set `set`, with its
+    /// Our value `ours` of the claim number `key` under parameter set `set`, with its
     /// uncertainty (same unit) and a note for the book.
     pub fn new(
-        claim: &str,
-        quantity: &str,
-        set: &str,
+        key: ClaimKey,
+        set: ParamSet,
         ours: f64,
         uncertainty: Option<f64>,
         note: impl Into<String>,
     ) -> Self {
         Self {
-            claim: claim.to_string(),
-            quantity: quantity.to_string(),
-            set: set.to_string(),
+            claim: key.id.to_string(),
+            quantity: key.quantity.to_string(),
+            set,
             ours,
             uncertainty,
             note: note.into(),
@@ -305,21 +316,13 @@ impl Value {
     }
 
     /// A yes/no value (1 yes, 0 no) with a note.
-    pub fn yes_no(
-        claim: &str,
-        quantity: &str,
-        set: &str,
-        yes: bool,
-        note: impl Into<String>,
-    ) -> Self {
-        Self::new(
-            claim,
-            quantity,
-            set,
-            if yes { 1.0 } else { 0.0 },
-            None,
-            note,
-        )
+    pub fn yes_no(key: ClaimKey, set: ParamSet, yes: bool, note: impl Into<String>) -> Self {
+        Self::new(key, set, if yes { 1.0 } else { 0.0 }, None, note)
+    }
+
+    /// True if this is a value of the claim number `key`.
+    pub fn is(&self, key: ClaimKey) -> bool {
+        self.claim == key.id && self.quantity == key.quantity
     }
 }
 
@@ -382,7 +385,7 @@ pub struct Row {
     /// Quantity key.
     pub quantity: String,
     /// Parameter set.
-    pub set: String,
+    pub set: ParamSet,
     /// The paper's value.
     pub paper: f64,
     /// Our value (None: not yet).
@@ -415,28 +418,18 @@ pub struct Row {
 /// value; a claim with no value at all gets one `not yet` row for the `published` set. A value
 /// that matches no claim is an error naming it.
 pub fn score(claims: &Claims, values: &[Value]) -> Result<Vec<Row>, ClaimsError> {
-    if let Some(v) = values
-        .iter()
-        .find(|v| claims.get(&v.claim, &v.quantity).is_none())
-    {
-        return Err(ClaimsError::Unknown {
-            claim: v.claim.clone(),
-            quantity: v.quantity.clone(),
-            set: v.set.clone(),
-            ours: v.ours,
-        });
-    }
+    let values = claims.known(values.to_vec())?;
     let mut rows = Vec::new();
     for c in &claims.claims {
         let mine: Vec<&Value> = values
             .iter()
             .filter(|v| v.claim == c.id && v.quantity == c.quantity)
             .collect();
-        let mut push = |set: &str, ours: Option<f64>, unc: Option<f64>| {
+        let mut push = |set: ParamSet, ours: Option<f64>, unc: Option<f64>| {
             rows.push(Row {
                 claim: c.id.clone(),
                 quantity: c.quantity.clone(),
-                set: set.to_string(),
+                set,
                 paper: c.paper,
                 ours,
                 uncertainty: unc,
@@ -450,10 +443,10 @@ pub fn score(claims: &Claims, values: &[Value]) -> Result<Vec<Row>, ClaimsError>
             })
         };
         if mine.is_empty() {
-            push("published", None, None);
+            push(ParamSet::Published, None, None);
         }
         for v in mine {
-            push(&v.set, Some(v.ours), v.uncertainty);
+            push(v.set, Some(v.ours), v.uncertainty);
         }
     }
     Ok(rows)
@@ -462,10 +455,8 @@ pub fn score(claims: &Claims, values: &[Value]) -> Result<Vec<Row>, ClaimsError>
 /// Our value for one number of a claim (`data/claims.toml`), with a note for the book.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ClaimValue {
-    /// Claim id, e.g. `F8-c`.
-    pub id: &'static str,
-    /// Quantity key.
-    pub quantity: &'static str,
+    /// The claim number.
+    pub key: ClaimKey,
     /// Our value (qualitative: 1 yes, 0 no).
     pub value: f64,
     /// Uncertainty (bracket half-width), same unit.
@@ -476,27 +467,21 @@ pub struct ClaimValue {
 
 impl ClaimValue {
     /// The scorecard row input of this value under a parameter set.
-    pub fn to_value(&self, set: &str) -> Value {
-        Value {
-            claim: self.id.to_string(),
-            quantity: self.quantity.to_string(),
-            set: set.to_string(),
-            ours: self.value,
-            uncertainty: self.uncertainty,
-            note: self.note.clone(),
-        }
+    pub fn to_value(&self, set: ParamSet) -> Value {
+        Value::new(
+            self.key,
+            set,
+            self.value,
+            self.uncertainty,
+            self.note.clone(),
+        )
     }
 }
 
-pub(crate) fn bool_value(
-    id: &'static str,
-    quantity: &'static str,
-    yes: bool,
-    note: String,
-) -> ClaimValue {
+/// A yes/no value of a claim number (1 yes, 0 no) with a note.
+pub(crate) fn bool_value(key: ClaimKey, yes: bool, note: String) -> ClaimValue {
     ClaimValue {
-        id,
-        quantity,
+        key,
         value: if yes { 1.0 } else { 0.0 },
         uncertainty: None,
         note,
@@ -511,7 +496,7 @@ mod tests {
         Value {
             claim: claim.into(),
             quantity: quantity.into(),
-            set: "published".into(),
+            set: ParamSet::Published,
             ours,
             uncertainty: None,
             note: String::new(),
@@ -521,9 +506,9 @@ mod tests {
     #[test]
     fn the_bundled_file_parses_with_resolved_tolerances() {
         let c = Claims::bundled().expect("data/claims.toml parses");
-        let f = c.get("F8-c", "jump_hertz_bim1p5_hz").expect("F8-c");
+        let f = c.claim(keys::F8C_JUMP_HERTZ_BIM1P5).expect("F8-c");
         assert_eq!(f.tol_rel, c.class("frequency").unwrap().tol_rel);
-        let d = c.get("F5-a", "delta0_p1_um").expect("F5-a");
+        let d = c.claim(keys::F5A_DELTA0_P1).expect("F5-a");
         assert_eq!((d.tol_rel, d.tol_abs), (0.01, 0.5));
     }
 

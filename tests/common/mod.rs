@@ -1,0 +1,63 @@
+//! What the integration tests share: the parameter files as devices, the claims file and the
+//! calibrated prototype 1 (each costly value computed once per test binary), and the setups
+//! the figures run on. Each test binary uses some of them (`mod common;`), hence the
+//! `dead_code` allowance.
+#![allow(dead_code)]
+
+use std::sync::OnceLock;
+
+use endstop::device::Device;
+use endstop::paper::calibration::{calibrate_prototype1, Calibration};
+use endstop::paper::claims::Claims;
+use endstop::paper::setups::{Prototype1Sets, Prototypes};
+
+/// The text of `data/<name>.toml`.
+pub fn device_text(name: &str) -> String {
+    let path = format!("{}/data/{name}.toml", env!("CARGO_MANIFEST_DIR"));
+    std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{path}: {e}"))
+}
+
+/// `data/<name>.toml` as a validated device.
+pub fn device(name: &str) -> Device {
+    Device::from_toml_str(&device_text(name), &format!("data/{name}.toml"))
+        .unwrap_or_else(|e| panic!("data/{name}.toml: {e}"))
+}
+
+/// Prototype 1 as published.
+pub fn prototype1() -> Device {
+    device("prototype1")
+}
+
+/// Prototype 2 as published.
+pub fn prototype2() -> Device {
+    device("prototype2")
+}
+
+/// Both prototypes as published (the setup of Figure 5 and Table 3).
+pub fn prototypes() -> Prototypes {
+    Prototypes {
+        prototype1: prototype1(),
+        prototype2: prototype2(),
+    }
+}
+
+/// The claims file compiled into the crate.
+pub fn claims() -> &'static Claims {
+    static CLAIMS: OnceLock<Claims> = OnceLock::new();
+    CLAIMS.get_or_init(|| Claims::bundled().expect("data/claims.toml parses"))
+}
+
+/// The calibration of prototype 1, computed once per test binary.
+pub fn calibration() -> &'static Calibration {
+    static CAL: OnceLock<Calibration> = OnceLock::new();
+    CAL.get_or_init(|| calibrate_prototype1(&prototype1()).expect("the calibration converges"))
+}
+
+/// Prototype 1 under both parameter sets (the published file and its calibration), as the
+/// figures of prototype 1 take it.
+pub fn prototype1_sets() -> Prototype1Sets {
+    Prototype1Sets {
+        published: prototype1(),
+        calibrated: calibration().device.clone(),
+    }
+}
