@@ -364,7 +364,7 @@ fn numbers_md(run: &response::Run, fine_shift: &[(Case, f64)]) -> String {
         t.row([
             c.setup.case.key().to_string(),
             c.branch.points.len().to_string(),
-            c.branch.rejected_steps.to_string(),
+            c.branch.rejected_steps().to_string(),
             format!("{:.1e}", c.branch.max_residual()),
             format!("{:.2}", c.continuation_s),
             c.branch.stats.accepted.to_string(),

@@ -30,6 +30,7 @@
 //! | [`study`] | steady states, sweeps, periodic orbits and continuation, basins, random records, ensembles | |
 //! | [`spice`] | ngspice netlist export for cross-validation | section 2.3, Figure 6 |
 //! | [`paper`] | the paper's setups, measurements, calibration, figures and claims | |
+//! | [`validation`] | checks against closed forms, an exact law and a peer tool | |
 //!
 //! Units are SI throughout unless a name says otherwise (`accel_rms_g`, `freq_hz`).
 //!
@@ -69,6 +70,7 @@ pub mod physics;
 pub mod signal;
 pub mod spice;
 pub mod study;
+pub mod validation;
 
 /// Standard gravity used to convert accelerations quoted in g (g = 9.81 m/s^2).
 pub const G: f64 = 9.81;

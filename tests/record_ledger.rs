@@ -10,7 +10,7 @@ use endstop::device::Device;
 use endstop::paper::setups::prototype2_setup;
 use endstop::physics::energy::EnergyLedger;
 use endstop::study::record::{simulate_record, RecordSpec, Scheme, DEFAULT_RTOL};
-use endstop::study::record_ledger::record_ledger;
+use endstop::study::record_ledger::{record_ledger, record_ledgers};
 
 const SEED: u64 = 2012;
 const TARGET: f64 = 1e-6;
@@ -80,5 +80,59 @@ fn with_impacts_the_balance_tightens_with_the_contact_tolerance() {
             b.abs() < TARGET,
             "{name}: {b:e} at a hundredth of the default rtol"
         );
+    }
+}
+
+fn validation_device(name: &str) -> Device {
+    let path = format!("{}/data/validation/{name}.toml", env!("CARGO_MANIFEST_DIR"));
+    Device::from_toml_str(&std::fs::read_to_string(&path).unwrap(), &path).unwrap()
+}
+
+#[test]
+fn the_analysed_window_books_impacts_and_coil_losses_and_closes_its_own_balance() {
+    // One second of the Validation chapter's records: rigid stops (impact losses booked at the
+    // rebounds inside Dormand-Prince intervals) and Hertz stops with a coil (its resistance).
+    use endstop::drive::noise::NoiseSpec;
+    use endstop::study::record::transient_s;
+    for name in ["random_restitution", "random_hertz_em"] {
+        let dev = validation_device(name);
+        let spec = RecordSpec {
+            noise: NoiseSpec {
+                duration_s: 1.0,
+                ..NoiseSpec::paper(1e-3)
+            },
+            transient_s: transient_s(&dev),
+            rtol: DEFAULT_RTOL,
+            scheme: Scheme::Exponential,
+        };
+        let (rec, books) = record_ledgers(&dev, &spec, SEED, 0).unwrap();
+        let (_, whole) = record_ledger(&dev, &spec, SEED, 0).unwrap();
+        assert_eq!(
+            books.whole, whole,
+            "{name}: the whole record's ledger is record_ledger's"
+        );
+        let w = books.analysed;
+        assert!(
+            rec.summary.impacts > 10,
+            "{name}: {} impacts",
+            rec.summary.impacts
+        );
+        // The window is part of the record: less drive work than the whole, but most of it.
+        assert!(
+            w.excitation > 0.5 * whole.excitation && w.excitation < whole.excitation,
+            "{name}: {w:?} of {whole:?}"
+        );
+        assert_eq!(
+            books.analysed_s,
+            (rec.v1_v.len() - 1) as f64 / rec.sample_rate_hz
+        );
+        match name {
+            "random_restitution" => assert!(w.impact_losses > 0.0 && w.internal == 0.0),
+            _ => assert!(w.internal > 0.0 && w.stop_damping > 0.0 && w.impact_losses == 0.0),
+        }
+        for (what, l) in [("whole", whole), ("window", w)] {
+            let r = l.relative_residual();
+            assert!(r.abs() < TARGET, "{name} {what}: relative residual {r:e}");
+        }
     }
 }

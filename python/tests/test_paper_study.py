@@ -107,6 +107,21 @@ RECORDED_Z = 4.0
 # tolerance: a rounding-level change of their arithmetic passes, anything else fails.
 RECORDED_RTOL = 1e-9
 
+# Except the events a continuation locates (the grazing onsets of Figures 8 and 9, the folds
+# that end Figure 8's branches): the locator stops within its tolerance of the root (the
+# library's ContinuationSettings: 1e-4 Hz on a frequency branch, 1e-6 g on an amplitude
+# branch), so two correct locations of one event differ by up to twice that.
+LOCATED_EVENTS = {
+    "impact_onset_5p5g_hz": 1e-4,
+    "jump_hertz_bim1p5_hz": 1e-4,
+    "jump_hertz_bim0_hz": 1e-4,
+    "jump_hertz_bim10_hz": 1e-4,
+    "jump_linear_bim2_hz": 1e-4,
+    "onset_g_20v": 1e-6,
+    "onset_g_30v": 1e-6,
+    "onset_g_40v": 1e-6,
+}
+
 
 @pytest.mark.parametrize("name", ["study-p1-ensembles", "study-p2-ensembles"])
 def test_the_recorded_cluster_run_is_what_this_code_computes(name):
@@ -131,7 +146,8 @@ def test_the_recorded_cluster_run_is_what_this_code_computes(name):
         for e, value in zip(now, rec["value"]):
             what = (which, e["claim"], e["quantity"], e["value"], value)
             if e["ci95"] is None:
-                assert e["value"] == pytest.approx(value, rel=RECORDED_RTOL, abs=0.0), what
+                located = 2.0 * LOCATED_EVENTS.get(e["quantity"], 0.0)
+                assert e["value"] == pytest.approx(value, rel=RECORDED_RTOL, abs=located), what
             else:
                 allowed = RECORDED_Z * math.sqrt(2.0) * e["ci95"] / 1.96
                 assert abs(e["value"] - value) <= allowed, what + (allowed,)

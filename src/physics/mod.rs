@@ -5,6 +5,7 @@
 //! response of any device ([`linear`]) and the paper's linear two-port theory ([`two_port`],
 //! eqs 11-18 and 21-22).
 
+pub mod closed_forms;
 pub mod contact;
 pub mod energy;
 pub mod free_flight;

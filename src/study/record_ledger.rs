@@ -44,6 +44,70 @@ pub fn record_ledger(
     Ok((record, books.ledger()))
 }
 
+/// The energy balance of a record from rest to its end ([`record_ledger`]'s) and over its
+/// analysed window alone, from the first analysed sample instant (the end of the pre-roll) to
+/// the end: the window's terms are the whole record's less those booked before the window,
+/// and its stored-energy change and source work are counted from the state at the window's
+/// start. Over a stationary window the drive's work and the dissipation grow with its length
+/// while the stored energy only fluctuates, so the window's mean powers estimate the
+/// stationary ones without the ring-up's bias.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct RecordLedgers {
+    /// From rest to the record's end (pre-roll included).
+    pub whole: EnergyLedger,
+    /// Over the analysed window.
+    pub analysed: EnergyLedger,
+    /// Length of the analysed window (s).
+    pub analysed_s: f64,
+}
+
+/// Simulates a record exactly as [`crate::study::record::simulate_record`] does and books its
+/// energy balance from rest and over its analysed window ([`RecordLedgers`]).
+pub fn record_ledgers(
+    device: &Device,
+    spec: &RecordSpec,
+    seed: u64,
+    stream: u64,
+) -> Result<(Record, RecordLedgers), BroadbandError> {
+    let split_s = spec.transient_samples() as f64 / spec.noise.sample_rate_hz;
+    let mut books = Books {
+        split_s: Some(split_s),
+        ..Books::default()
+    };
+    let record = simulate_observed(device, spec, seed, stream, &mut books)?;
+    let whole = books.ledger();
+    let analysed = match (books.at_split, books.last) {
+        (Some((before, start)), Some(end)) => {
+            let mut l = EnergyLedger {
+                source: books.vb * (end.charge_c - start.charge_c),
+                stored_change: end.stored_j - start.stored_j,
+                ..EnergyLedger::default()
+            };
+            l.excitation = books.ledger.excitation - before.excitation;
+            l.mech_damping = books.ledger.mech_damping - before.mech_damping;
+            l.stop_damping = books.ledger.stop_damping - before.stop_damping;
+            l.loads = books.ledger.loads - before.loads;
+            l.clip_losses = books.ledger.clip_losses - before.clip_losses;
+            l.reengagement_gains = books.ledger.reengagement_gains - before.reengagement_gains;
+            l.projections = books.ledger.projections - before.projections;
+            l.impact_losses = books.ledger.impact_losses - before.impact_losses;
+            l.internal = books.ledger.internal - before.internal;
+            l
+        }
+        // A record without a pre-roll: the window is the whole record.
+        _ => whole,
+    };
+    let analysed_s = (record.v1_v.len().saturating_sub(1)) as f64 / record.sample_rate_hz;
+    Ok((
+        record,
+        RecordLedgers {
+            whole,
+            analysed,
+            analysed_s,
+        },
+    ))
+}
+
 /// The exponential step's dense output at the Gauss nodes.
 type DenseNodes = [ExpAdams<4, EXPONENTIAL_ORDER>; 3];
 
@@ -75,12 +139,16 @@ struct Books {
     first: Option<Moment>,
     last: Option<Moment>,
     ledger: EnergyLedger,
+    /// Where the analysed window starts (s), if it is booked apart.
+    split_s: Option<f64>,
+    /// The terms booked before the window and the state at its start.
+    at_split: Option<(EnergyLedger, Moment)>,
 }
 
 impl Books {
     /// The start of an interval: books the rest state once, and the stored energy a switch
     /// moved since the last interval ended.
-    fn open(&mut self, model: &Harvester<Sampled>, mode: Mode, y: &State) {
+    fn open(&mut self, model: &Harvester<Sampled>, t0: f64, mode: Mode, y: &State) {
         let last = match self.last {
             Some(last) => last,
             None => {
@@ -96,6 +164,14 @@ impl Books {
                 mode,
                 last.stored_j - model.stored_energy(mode, y),
             );
+        }
+        // The first interval that starts at the window's start (a sample instant, which
+        // every interval and every Dormand-Prince step of the record starts from exactly or
+        // after) splits the books.
+        if let Some(split) = self.split_s {
+            if self.at_split.is_none() && t0 >= split - 1e-9 * model.excitation.dt_s {
+                self.at_split = Some((self.ledger, Moment::of(model, mode, y)));
+            }
         }
     }
 
@@ -137,7 +213,7 @@ impl RecordObserver for Books {
         a1: f64,
         history: &History<4, EXPONENTIAL_ORDER>,
     ) {
-        self.open(model, Mode::Free, y0);
+        self.open(model, t0, Mode::Free, y0);
         let h = model.excitation.dt_s;
         let dense = self.dense.get_or_insert_with(|| {
             let (l, c) = model.free_flight().linear();
@@ -156,7 +232,7 @@ impl RecordObserver for Books {
     }
 
     fn dopri(&mut self, model: &Harvester<Sampled>, step: &Step<4>, mode: Mode) {
-        self.open(model, mode, &step.y0);
+        self.open(model, step.t0, mode, &step.y0);
         let work = GAUSS_LEGENDRE_3
             .map(|(x, _)| model.power_terms(mode, step.t0 + x * step.h, &step.at_theta(x)));
         self.add_work(step.h, work);

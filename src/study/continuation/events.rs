@@ -1,0 +1,280 @@
+//! The events between two accepted points of a branch (see the table in the parent module):
+//! their test functions, the location of a sign change by the root finder along the branch,
+//! and the location of grazing on the branch of the same device without stops.
+
+use crate::drive::Sine;
+use crate::num::roots::{illinois, RootOptions, Sample};
+use crate::ode::Stats;
+use crate::physics::contact::Side;
+use crate::physics::harvester::Harvester;
+use crate::study::orbit::{OrbitError, Shooter};
+
+use super::corrector::Continuer;
+use super::{BranchPoint, Event, EventKind};
+
+/// The gaps of a model's two sides (infinite where there is no stop), for the grazing test.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Gaps {
+    upper: f64,
+    lower: f64,
+    /// The suspension's natural frequency (rad/s), which turns an impact speed into a length.
+    w0: f64,
+}
+
+impl Gaps {
+    pub(super) fn of(h: &Harvester<Sine>) -> Self {
+        Self {
+            upper: h.gap(Side::Upper),
+            lower: h.gap(Side::Lower),
+            w0: (h.km / h.mass_kg).sqrt(),
+        }
+    }
+
+    pub(super) fn smallest(self) -> f64 {
+        self.upper.min(self.lower)
+    }
+}
+
+/// An orbit is near grazing when its largest displacement is within this fraction of the gap
+/// (where a corner of the branch is looked for).
+pub(super) const GRAZING_NEAR: f64 = 1e-3;
+
+impl Continuer<'_, '_> {
+    /// Locates a sign change of `test` between `a` (index `k`) and `b`, at arclength `ds`.
+    #[allow(clippy::too_many_arguments)]
+    fn locate(
+        &mut self,
+        kind: EventKind,
+        k: usize,
+        a: &BranchPoint,
+        b: &BranchPoint,
+        ds: f64,
+        test: fn(&BranchPoint, Gaps) -> f64,
+        gaps: Gaps,
+    ) -> Result<Event, OrbitError> {
+        let tol_s = self.settings.locate_tol / self.settings.param_scale;
+        let opts = RootOptions {
+            f_tol: None,
+            x_tol_abs: tol_s,
+            x_tol_rel: 0.0,
+            max_iter: 60,
+        };
+        let (fa, fb) = (test(a, gaps), test(b, gaps));
+        // The best sample so far, kept outside the root finder: a corrector that fails close to
+        // the event (at a branch point the bordered Jacobian is singular) ends the search with
+        // the bracket reached, not with an error.
+        let mut best = if fa.abs() <= fb.abs() {
+            (0.0, fa, a.clone())
+        } else {
+            (ds, fb, b.clone())
+        };
+        let lo = Sample::new(0.0, fa, ());
+        let hi = Sample::new(ds, fb, ());
+        let root = illinois(
+            |s| -> Result<(f64, ()), OrbitError> {
+                let (p, _) = self.point_at(a, s)?;
+                let v = test(&p, gaps);
+                if v.abs() < best.1.abs() {
+                    best = (s, v, p);
+                }
+                Ok((v, ()))
+            },
+            lo,
+            hi,
+            &opts,
+        );
+        if let Err(crate::num::roots::RootError::NotBracketed { .. }) = root {
+            unreachable!("the ends bracket a sign change by construction")
+        }
+        let (s_best, _, best) = best;
+        Ok(Event {
+            kind,
+            param: best.orbit.param(self.settings.parameter),
+            orbit: best.orbit,
+            after_point: k,
+            s: s_best,
+            multiplier_crossing: false,
+            at_grazing: false,
+            stable_before: a.orbit.is_stable(),
+            stable_after: b.orbit.is_stable(),
+        })
+    }
+
+    /// Locates a grazing between `a` and `b` on the branch of the same device with the stops
+    /// removed, followed from whichever end does not touch a stop: that branch is smooth where
+    /// the real one has the grazing singularity, and the orbit at which its largest |x|
+    /// reaches x_max is exactly the grazing orbit (it exerts no contact force).
+    fn locate_grazing(
+        &mut self,
+        k: usize,
+        a: &BranchPoint,
+        b: &BranchPoint,
+        ds: f64,
+    ) -> Result<Event, OrbitError> {
+        let gaps = Gaps::of(self.shooter.base);
+        let free_model = self.shooter.base.without_stops();
+        let free = Shooter::with_scales(&free_model, self.shooter.cfg, self.shooter.scales());
+        let mut c = Continuer {
+            shooter: &free,
+            settings: self.settings,
+            stats: Stats::default(),
+        };
+        let from_a = test_grazing(a, gaps) <= 0.0;
+        // From the non-touching end towards the other one; from `b` the tangent inherited
+        // from `a` may point either way (at a corner it points back into the corner), so both
+        // directions are tried.
+        let candidates: Vec<BranchPoint> = if from_a {
+            vec![a.clone()]
+        } else {
+            vec![
+                BranchPoint {
+                    orbit: b.orbit.clone(),
+                    tangent: -b.tangent,
+                },
+                b.clone(),
+            ]
+        };
+        // Bracket the crossing on the stop-free branch (it differs from the real one past the
+        // grazing, so the crossing may lie a little beyond `ds`). After a hop over a corner
+        // `ds` is the hop's length, which can be far longer than the stop-free branch can be
+        // followed in one step: shorter steps are tried last.
+        let mut found = None;
+        let tries = [
+            1.0, 2.0, 4.0, 8.0, 0.5, 0.25, 0.125, 0.0625, 0.03125, 0.015625,
+        ];
+        'dirs: for anchor in candidates {
+            for hi in tries.map(|f| f * ds) {
+                if let Ok((p, _)) = c.point_at(&anchor, hi) {
+                    if test_grazing(&p, gaps) > 0.0 {
+                        found = Some((anchor, p, hi));
+                        break 'dirs;
+                    }
+                }
+            }
+        }
+        let Some((anchor, end, hi)) = found else {
+            return Err(OrbitError::NoConvergence {
+                what: self.settings.parameter.label(),
+                param: b.orbit.param(self.settings.parameter),
+                iterations: 0,
+                residual: b.orbit.residual,
+            });
+        };
+        let mut e = c.locate(EventKind::Grazing, k, &anchor, &end, hi, test_grazing, gaps)?;
+        self.stats += c.stats;
+        if !from_a {
+            e.s = ds - e.s.min(ds);
+        }
+        e.stable_before = a.orbit.is_stable();
+        e.stable_after = b.orbit.is_stable();
+        Ok(e)
+    }
+
+    // ANCHOR: events
+    /// The events between points `k` and `k + 1` (at arclength `ds` along point k's
+    /// tangent). `b` may have its tangent reversed: where the branch leaves contact at a
+    /// corner (the impacting branch meets the non-impacting one at the grazing orbit and the
+    /// parameter turns there), the tangent inherited from `a` points back into the corner, and
+    /// the branch goes on away from the grazing orbit.
+    pub(super) fn events_between(
+        &mut self,
+        k: usize,
+        a: &BranchPoint,
+        b: &mut BranchPoint,
+        ds: f64,
+    ) -> Result<Vec<Event>, OrbitError> {
+        let gaps = Gaps::of(self.shooter.base);
+        let mut out = Vec::new();
+        let graze = (test_grazing(a, gaps) > 0.0) != (test_grazing(b, gaps) > 0.0);
+        let mut corner = false;
+        if graze {
+            // Located on the stop-free branch; a failure leaves the grazing unlocated (the
+            // branch itself is fine) rather than ending the continuation.
+            if let Ok(g) = self.locate_grazing(k, a, b, ds) {
+                if a.orbit.is_impacting() && !b.orbit.is_impacting() {
+                    let away = self.u_of(&b.orbit) - self.u_of(&g.orbit);
+                    if b.tangent.dot(&away) < 0.0 {
+                        b.tangent = -b.tangent;
+                    }
+                    corner = (a.param_tangent() > 0.0) != (b.param_tangent() > 0.0);
+                }
+                if corner {
+                    let mut fold = g.clone();
+                    fold.kind = EventKind::Fold;
+                    fold.multiplier_crossing =
+                        (test_plus_one(a, gaps) > 0.0) != (test_plus_one(b, gaps) > 0.0);
+                    fold.at_grazing = true;
+                    out.push(fold);
+                }
+                out.push(g);
+            }
+        }
+        let changes = |f: fn(&BranchPoint, Gaps) -> f64, b: &BranchPoint| {
+            (f(a, gaps) > 0.0) != (f(b, gaps) > 0.0)
+        };
+        let turn = changes(test_fold, b);
+        let plus1 = changes(test_plus_one, b);
+        let minus1 = changes(test_minus_one, b);
+        let torus = a.orbit.unstable_count() != b.orbit.unstable_count() && !plus1 && !minus1;
+        // At a corner the changes of stability belong to the corner (the fold above).
+        if !corner {
+            let b = &*b;
+            if turn {
+                let mut e = self.locate(EventKind::Fold, k, a, b, ds, test_fold, gaps)?;
+                e.multiplier_crossing = plus1;
+                e.at_grazing = graze;
+                out.push(e);
+            } else if plus1 {
+                out.push(self.locate(EventKind::BranchPoint, k, a, b, ds, test_plus_one, gaps)?);
+            }
+            if minus1 {
+                out.push(self.locate(
+                    EventKind::PeriodDoubling,
+                    k,
+                    a,
+                    b,
+                    ds,
+                    test_minus_one,
+                    gaps,
+                )?);
+            }
+            if torus {
+                out.push(self.locate(EventKind::Torus, k, a, b, ds, test_torus, gaps)?);
+            }
+        }
+        out.sort_by(|x, y| x.s.total_cmp(&y.s));
+        Ok(out)
+    }
+    // ANCHOR_END: events
+}
+
+pub(super) fn test_fold(p: &BranchPoint, _: Gaps) -> f64 {
+    p.param_tangent()
+}
+pub(super) fn test_plus_one(p: &BranchPoint, _: Gaps) -> f64 {
+    p.orbit.det_minus_one()
+}
+pub(super) fn test_minus_one(p: &BranchPoint, _: Gaps) -> f64 {
+    p.orbit.det_plus_one()
+}
+pub(super) fn test_torus(p: &BranchPoint, _: Gaps) -> f64 {
+    p.orbit.max_multiplier_abs() - 1.0
+}
+/// How far an orbit is past grazing on its deeper side (m): the largest displacement less the
+/// gap, or, once it strikes a rigid stop (which it never penetrates, so that the displacement
+/// stays at the gap), its impact speed over `w0`. Both vanish at grazing.
+pub(super) fn test_grazing(p: &BranchPoint, gaps: Gaps) -> f64 {
+    let s = &p.orbit.summary;
+    let side = |reach: f64, gap: f64, speed: f64| {
+        if speed > 0.0 {
+            speed / gaps.w0
+        } else {
+            reach - gap
+        }
+    };
+    side(s.x_upper_m, gaps.upper, s.impact_speed_m_s[0]).max(side(
+        -s.x_lower_m,
+        gaps.lower,
+        s.impact_speed_m_s[1],
+    ))
+}

@@ -1,0 +1,280 @@
+//! Pseudo-arclength continuation of periodic orbits in a drive parameter (frequency or
+//! amplitude), passing folds, with the detection and location of folds, branch points, period
+//! doublings, torus bifurcations and grazing.
+//!
+//! # The branch
+//! The unknowns are u = (z, q): the orbit's state at its section in scaled coordinates
+//! ([`crate::study::orbit`]) and the parameter in units of [`ContinuationSettings::param_scale`].
+//! From a point u_k with unit tangent t_k, the predictor u_k + ds t_k is corrected by Newton on
+//!
+//! P(z, q) - z = 0,   t_k . (u - u_k) = ds,
+//!
+//! whose Jacobian is the monodromy minus the identity bordered by dP/dq and t_k (Keller's
+//! pseudo-arclength). The new tangent spans the kernel of [M - I | dP/dq], oriented along t_k.
+//! Because the parameter is an unknown, the branch passes folds where a natural-parameter
+//! continuation would stop. A step is rejected (and halved) when Newton fails, when the tangent
+//! turns by more than [`ContinuationSettings::max_turn_rad`], when the parameter moves by more
+//! than [`ContinuationSettings::max_param_step`], or for one of the other reasons of
+//! [`Rejection`] (each rejection is kept in [`Branch::rejections`]); it grows after easy
+//! corrections. A step below
+//! [`ContinuationSettings::ds_min`] is an error naming the last parameter value reached.
+//!
+//! # Events (Seydel; Kuznetsov, chapter 10)
+//! Between two accepted points, sign changes of test functions mark events, each located by the
+//! crate's root finder on the branch (arclength from the earlier point, every evaluation a
+//! corrected orbit):
+//!
+//! | event | test function | |
+//! |---|---|---|
+//! | fold (turning point) | parameter component of the tangent | a real multiplier crosses +1 *and* the branch turns |
+//! | branch point | prod (mu_i - 1) | a real multiplier crosses +1 where the branch does **not** turn (e.g. the symmetric impacting orbit losing stability to a pair of asymmetric ones) |
+//! | period doubling | prod (mu_i + 1) | a real multiplier crosses -1 |
+//! | torus | largest modulus - 1 | a complex pair leaves the unit circle |
+//! | grazing | max |x| - x_max (for a rigid stop it strikes, the impact speed over w0) | the orbit starts or stops touching a stop |
+//!
+//! A +1 crossing is called a fold only where the branch turns: a crossing without a turn is a
+//! branch point and is never presented as a fold. A turn at a grazing point, where the branch
+//! has a corner rather than a smooth maximum, is a fold whose `at_grazing` flag is set.
+
+//!
+//! # Files
+//! `types.rs` holds the settings and what a branch is made of, `corrector.rs` the
+//! predictor-corrector (Newton on the bordered system, tangents, the acceptance of a step,
+//! corner hops), `events.rs` the test functions and the location of events; this file holds the
+//! loop that drives them ([`continue_branch`]) and the entry points.
+
+use nalgebra::{SMatrix, SVector};
+
+use crate::drive::Sine;
+use crate::ode::Stats;
+use crate::physics::harvester::{Harvester, State};
+use crate::study::orbit::{Forcing, Orbit, OrbitError, Parameter, Shooter};
+
+mod corrector;
+mod events;
+mod types;
+
+use corrector::Continuer;
+pub use types::{Branch, BranchPoint, ContinuationSettings, Event, EventKind, Rejection};
+
+type Vector5 = SVector<f64, 5>;
+type Matrix5 = SMatrix<f64, 5, 5>;
+
+/// The first orbit of a branch: Newton at `forcing` from `guess` (the state at drive phase
+/// zero), or, if that fails, from the state after a transient of `transient_periods` periods
+/// from `guess`; its section is then moved into free flight.
+pub fn first_orbit(
+    shooter: &Shooter<'_>,
+    forcing: &Forcing,
+    param: Parameter,
+    guess: State,
+    transient_periods: usize,
+    stats: &mut Stats,
+) -> Result<Orbit, OrbitError> {
+    let o = match shooter.solve(forcing, param, 0.0, guess, stats) {
+        Ok(o) => o,
+        Err(_) => {
+            let (y, _, st) = shooter
+                .flow(
+                    forcing,
+                    0.0,
+                    guess,
+                    transient_periods as f64 * forcing.period_s(),
+                    |_, _| {},
+                )
+                .map_err(|e| OrbitError::Solver {
+                    what: param.label(),
+                    param: forcing.get(param),
+                    source: e,
+                })?;
+            *stats += st;
+            shooter.solve(forcing, param, 0.0, y, stats)?
+        }
+    };
+    if shooter.section_is_free(&o) {
+        Ok(o)
+    } else {
+        shooter.reanchor(&o, param, stats)
+    }
+}
+
+/// Continues the branch of periodic orbits of `base` through `first` (an orbit at the
+/// settings' start value) until the parameter passes `settings.stop`; `on_point(p)` is called
+/// with the parameter of every accepted point.
+pub fn continue_branch(
+    base: &Harvester<Sine>,
+    first: Orbit,
+    settings: &ContinuationSettings,
+    mut on_point: impl FnMut(f64),
+) -> Result<Branch, OrbitError> {
+    settings.validate()?;
+    let shooter = Shooter::new(base, settings.shooting);
+    let mut c = Continuer {
+        shooter: &shooter,
+        settings: *settings,
+        stats: Stats::default(),
+    };
+    let param = settings.parameter;
+    let dir = settings.direction();
+    // The first tangent: the kernel oriented along the parameter's direction.
+    let start_dir = Vector5::new(0.0, 0.0, 0.0, 0.0, dir);
+    let lin = shooter
+        .linearise(
+            &first.forcing,
+            param,
+            first.phase_rad,
+            first.state,
+            &mut c.stats,
+        )
+        .map_err(|e| OrbitError::Solver {
+            what: param.label(),
+            param: first.param(param),
+            source: e,
+        })?;
+    let jac = c.kernel_jacobian(&lin);
+    let tangent = Continuer::tangent(&jac, &start_dir).ok_or(OrbitError::Invalid(
+        "the first orbit is singular (a fold or branch point): start elsewhere".into(),
+    ))?;
+    on_point(first.param(param));
+    let mut points = vec![BranchPoint {
+        orbit: first,
+        tangent,
+    }];
+    let mut events = Vec::new();
+    let mut ds = settings.ds_init;
+    let mut rejections = Vec::new();
+    loop {
+        let last = points.last().expect("a branch has a point").clone();
+        let p_last = last.orbit.param(param);
+        if settings.beyond_stop(p_last) {
+            break;
+        }
+        if points.len() >= settings.max_points {
+            return Err(OrbitError::TooManyPoints {
+                what: param.label(),
+                last_param: p_last,
+                points: settings.max_points,
+            });
+        }
+        let accepted = c
+            .point_at(&last, ds)
+            .map_err(|_| Rejection::Corrector)
+            .and_then(|(p, its)| c.judge(&last, &p, ds).map(|()| (p, its)));
+        let (p, its) = match accepted {
+            Ok(found) => found,
+            Err(why) => {
+                rejections.push(why);
+                ds *= 0.5;
+                if ds < settings.ds_min {
+                    // At a corner of the branch (an impacting orbit grazing a stop, where the
+                    // impacting branch meets the non-impacting one at an angle) no arclength step
+                    // along the old tangent converges: hop over the corner onto the other branch.
+                    if let Some(p) = c.corner_hop(&last, settings.max_param_step) {
+                        let k = points.len() - 1;
+                        let mut p = p;
+                        // Events are bracketed over the hop's own length, not the exhausted step.
+                        let hop = (c.u_of(&p.orbit) - c.u_of(&last.orbit)).norm();
+                        let found = c.events_between(k, &last, &mut p, hop)?;
+                        events.extend(found);
+                        on_point(p.orbit.param(param));
+                        points.push(p);
+                        ds = settings.ds_init;
+                        continue;
+                    }
+                    return Err(OrbitError::Stalled {
+                        what: param.label(),
+                        last_param: p_last,
+                        ds_min: settings.ds_min,
+                    });
+                }
+                continue;
+            }
+        };
+        let k = points.len() - 1;
+        let mut p = p;
+        let found = c.events_between(k, &last, &mut p, ds)?;
+        events.extend(found);
+        on_point(p.orbit.param(param));
+        // A failed move of the section keeps the point at its old one (still a valid orbit).
+        let p = match c.reanchor(p.clone()) {
+            Ok(q) => q,
+            Err(_) => p,
+        };
+        points.push(p);
+        if its <= 2 {
+            ds = (ds * 1.5).min(settings.ds_max);
+        } else if its >= 5 {
+            ds = (ds * 0.6).max(settings.ds_min);
+        }
+    }
+    Ok(Branch {
+        parameter: param,
+        points,
+        events,
+        stats: c.stats,
+        rejections,
+    })
+}
+
+/// The branch of periodic orbits of `device` continued by `settings` from the drive `start`
+/// (whose frequency or amplitude is the settings' start value), beginning with the orbit
+/// reached from rest (shooting, after up to `transient_periods` periods of transient if Newton
+/// does not converge from rest); `on_point(p)` is called with the parameter of every accepted
+/// point.
+pub fn branch_from_rest(
+    device: &crate::device::Device,
+    start: Forcing,
+    settings: &ContinuationSettings,
+    transient_periods: usize,
+    on_point: impl FnMut(f64),
+) -> Result<Branch, OrbitError> {
+    settings.validate()?;
+    let h = Harvester::new(device, Sine::from_rms_g(start.accel_rms_g, start.freq_hz));
+    let shooter = Shooter::new(&h, settings.shooting);
+    let mut stats = Stats::default();
+    let first = first_orbit(
+        &shooter,
+        &start,
+        settings.parameter,
+        h.rest_state(),
+        transient_periods,
+        &mut stats,
+    )?;
+    let mut branch = continue_branch(&h, first, settings, on_point)?;
+    branch.stats += stats;
+    Ok(branch)
+}
+
+/// The branch of periodic orbits of `device` driven at `accel_rms_g` (g rms), continued in
+/// frequency from `from_hz` to `to_hz` with parameter steps of at most `max_step_hz`
+/// ([`ContinuationSettings::frequency`]), from the orbit reached from rest at `from_hz`
+/// ([`branch_from_rest`], 200 periods of transient at most).
+///
+/// ```
+/// use endstop::device::Device;
+/// use endstop::study::continuation::frequency_branch;
+///
+/// let text = include_str!(concat!(env!("CARGO_MANIFEST_DIR"), "/data/prototype1.toml"));
+/// let device = Device::from_toml_str(text, "prototype1.toml")?;
+/// // Far below the stops (0.02 g rms): one stable branch, no events.
+/// let branch = frequency_branch(&device, 0.02, 1000.0, 1100.0, 50.0, |_| {})?;
+/// assert!(branch.params().last().unwrap() >= 1100.0);
+/// assert!(branch.points.iter().all(|p| p.orbit.is_stable()));
+/// assert!(branch.events.is_empty());
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+pub fn frequency_branch(
+    device: &crate::device::Device,
+    accel_rms_g: f64,
+    from_hz: f64,
+    to_hz: f64,
+    max_step_hz: f64,
+    on_point: impl FnMut(f64),
+) -> Result<Branch, OrbitError> {
+    let start = Forcing {
+        freq_hz: from_hz,
+        accel_rms_g,
+    };
+    let settings = ContinuationSettings::frequency(from_hz, to_hz, max_step_hz);
+    branch_from_rest(device, start, &settings, 200, on_point)
+}

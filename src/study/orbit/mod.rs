@@ -1,0 +1,324 @@
+//! Periodic orbits of the harvester under a sinusoidal drive, by shooting on the period map,
+//! with their Floquet multipliers.
+//!
+//! # The period map and its section
+//! For a drive a(t) = sqrt(2) a_rms sin(2 pi f t + phi), the period map P takes the state at
+//! drive phase phi to the state one drive period T = 1/f later, integrated by the
+//! event-locating [`Dopri5`] (through its public API: a new integrator per evaluation, so that
+//! an evaluation never depends on the ones before). A periodic orbit is a fixed point
+//! P(y) = y, found by Newton's method.
+//!
+//! The section (the drive phase phi at which the orbit is cut) must lie in free flight: the
+//! end-stop force switches on at the stop, so a section that cuts the orbit in contact would
+//! make P non-differentiable there and Newton would stall. Each [`Orbit`] therefore carries its
+//! own section phase, and [`Shooter::reanchor`] moves it to the drive phase where x crosses
+//! zero upwards (the orbit's fastest point, as far from both stops as it gets).
+//!
+//! Newton works in scaled coordinates z = y / s with s = [`Harvester::scales`] (x ~ xmax,
+//! v ~ w0 xmax, charges ~ C0 Vb xmax / x0), so that every component is of order one.
+//!
+//! # The monodromy matrix
+//! The monodromy matrix M = dP/dy is computed by the **variational equations** integrated
+//! alongside the state: Phi' = J(y) Phi with Phi(0) = I, J the Jacobian of the mode's
+//! right-hand side ([`Harvester::jacobian`]), and at every contact entry and exit the
+//! saltation matrix
+//!
+//! S = I + (f+ - f-) n^T / (n . f-),
+//!
+//! with f- and f+ the vector fields before and after the switch and n the gradient of the guard
+//! that fired (the end-stop damper switches on at the stop, so the acceleration jumps by
+//! b_im v / m there and S is not the identity). The sensitivity to the continuation parameter,
+//! dP/dp, rides along as a fifth column (with the end-time term f(y(T)) dT/dp for the
+//! frequency). Why this choice rather than finite differences through the event-located
+//! integration: one integration of the 24-dimensional system gives M and dP/dp to the
+//! integrator's tolerance, whereas central differences need eight integrations and are accurate
+//! only to about rtol/eps. Finite differences are kept as the check
+//! ([`Shooter::monodromy_fd`]); the tests compare the two on impacting orbits.
+//!
+//! The Floquet multipliers are the eigenvalues of M; an orbit is stable when every multiplier
+//! lies inside the unit circle.
+//!
+//! # Files
+//! This file holds what an orbit is (its drive, settings, errors and summary); `shooter.rs`
+//! the period map and Newton's method on it, `variational.rs` the variational equations with
+//! their saltation matrices, and `period_sums.rs` the sums over one period behind an
+//! [`OrbitSummary`].
+//!
+//! [`Dopri5`]: crate::ode::Dopri5
+//! [`Harvester::scales`]: crate::physics::harvester::Harvester::scales
+//! [`Harvester::jacobian`]: crate::physics::harvester::Harvester::jacobian
+
+use nalgebra::{Complex, Matrix4};
+use thiserror::Error;
+
+use crate::drive::Sine;
+use crate::ode::SolverError;
+use crate::physics::harvester::State;
+
+mod period_sums;
+mod shooter;
+mod variational;
+
+pub use shooter::{mode_of, Linearised, Shooter};
+
+/// Dimension of the state with its variational equations: 4 + 16 (monodromy) + 4 (dP/dp).
+pub const VARIATIONAL_DIM: usize = 24;
+
+/// The parameter a continuation varies.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Parameter {
+    /// Drive frequency (Hz).
+    Frequency,
+    /// RMS acceleration (g).
+    Amplitude,
+}
+
+impl Parameter {
+    /// Label with unit, for messages.
+    pub fn label(self) -> &'static str {
+        match self {
+            Parameter::Frequency => "frequency (Hz)",
+            Parameter::Amplitude => "RMS acceleration (g)",
+        }
+    }
+}
+
+/// A sinusoidal drive: frequency and RMS acceleration.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Forcing {
+    /// Frequency (Hz).
+    pub freq_hz: f64,
+    /// RMS acceleration (g).
+    pub accel_rms_g: f64,
+}
+
+impl Forcing {
+    /// The value of a parameter.
+    pub fn get(&self, p: Parameter) -> f64 {
+        match p {
+            Parameter::Frequency => self.freq_hz,
+            Parameter::Amplitude => self.accel_rms_g,
+        }
+    }
+
+    /// The same drive with one parameter changed.
+    pub fn with(&self, p: Parameter, value: f64) -> Self {
+        let mut f = *self;
+        match p {
+            Parameter::Frequency => f.freq_hz = value,
+            Parameter::Amplitude => f.accel_rms_g = value,
+        }
+        f
+    }
+
+    /// Drive period (s).
+    pub fn period_s(&self) -> f64 {
+        1.0 / self.freq_hz
+    }
+
+    /// The sine with drive phase `phase_rad` at t = 0.
+    pub fn sine(&self, phase_rad: f64) -> Sine {
+        Sine {
+            phase_rad,
+            ..Sine::from_rms_g(self.accel_rms_g, self.freq_hz)
+        }
+    }
+}
+
+/// Settings of the shooting method.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ShootingConfig {
+    /// Integrator relative tolerance (absolute tolerances are `rtol` times the state scales).
+    pub rtol: f64,
+    /// An orbit is accepted when |P(y) - y| / |y| (scaled, plain period map) is below this.
+    pub residual_tol: f64,
+    /// Largest number of Newton iterations.
+    pub max_newton: usize,
+}
+
+impl Default for ShootingConfig {
+    /// rtol 1e-10: the orbit is then accurate to about 1e-9 (the global error of the
+    /// integration is some 15 rtol relative), and Newton drives the residual of the period map
+    /// itself below 5e-10 (on smooth stretches of a branch it reaches 1e-14; near grazing,
+    /// where the event times make the map less smooth, the noise of the map is near 1e-10).
+    fn default() -> Self {
+        Self {
+            rtol: 1e-10,
+            residual_tol: 5e-10,
+            max_newton: 12,
+        }
+    }
+}
+
+impl ShootingConfig {
+    /// Half the integrator tolerance (for convergence checks).
+    pub fn halved(&self) -> Self {
+        Self {
+            rtol: 0.5 * self.rtol,
+            ..*self
+        }
+    }
+}
+
+/// Failures of shooting and continuation, each with the parameter value last reached.
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum OrbitError {
+    /// The integrator failed.
+    #[error("integration failed at {what} = {param}: {source}")]
+    Solver {
+        /// What the parameter is.
+        what: &'static str,
+        /// Parameter value.
+        param: f64,
+        /// The integrator's error.
+        source: SolverError,
+    },
+    /// Newton's method did not reach the residual tolerance.
+    #[error("Newton did not converge at {what} = {param} after {iterations} iterations (residual {residual:e})")]
+    NoConvergence {
+        /// What the parameter is.
+        what: &'static str,
+        /// Parameter value.
+        param: f64,
+        /// Iterations made.
+        iterations: usize,
+        /// Last scaled residual |P(y) - y| / |y|.
+        residual: f64,
+    },
+    /// The Floquet multipliers could not be computed (the Schur iteration failed).
+    #[error("no eigenvalues of the monodromy matrix at {what} = {param}")]
+    Eigenvalues {
+        /// What the parameter is.
+        what: &'static str,
+        /// Parameter value.
+        param: f64,
+    },
+    /// The continuation's step fell below its minimum: the branch cannot be followed further.
+    #[error("the branch cannot be continued past {what} = {last_param} (step below {ds_min:e})")]
+    Stalled {
+        /// What the parameter is.
+        what: &'static str,
+        /// The last parameter value reached on the branch.
+        last_param: f64,
+        /// The smallest step allowed.
+        ds_min: f64,
+    },
+    /// The continuation used its whole budget of points inside the range.
+    #[error("the continuation used all {points} points and stopped at {what} = {last_param}")]
+    TooManyPoints {
+        /// What the parameter is.
+        what: &'static str,
+        /// The last parameter value reached.
+        last_param: f64,
+        /// The budget.
+        points: usize,
+    },
+    /// Bad input.
+    #[error("invalid input: {0}")]
+    Invalid(String),
+}
+
+/// Whole-period measures of an orbit.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct OrbitSummary {
+    /// RMS voltage of load 1 (V).
+    pub v1_rms_v: f64,
+    /// RMS voltage of load 2 (V).
+    pub v2_rms_v: f64,
+    /// Mean power of both loads (W).
+    pub p_total_w: f64,
+    /// Largest |x| over the period (m), at a zero of v located on the dense output.
+    pub x_max_m: f64,
+    /// Largest x (m).
+    pub x_upper_m: f64,
+    /// Smallest x (m).
+    pub x_lower_m: f64,
+    /// Fraction of the period past a stop.
+    pub contact_fraction: f64,
+    /// Impacts per period: contact entries and rebounds off rigid stops.
+    pub impacts: u32,
+    /// The largest speed at which the mass strikes each side's rigid stop (upper, lower; m/s),
+    /// zero where it does not: a rigid stop is never penetrated, so this, not the largest
+    /// displacement, says how deep an orbit is past grazing.
+    pub impact_speed_m_s: [f64; 2],
+    /// Time after the section at which x first crosses zero upwards (s), if it does.
+    pub upcrossing_s: Option<f64>,
+}
+
+/// A periodic orbit with its stability.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Orbit {
+    /// The drive.
+    pub forcing: Forcing,
+    /// Drive phase at the section (rad).
+    pub phase_rad: f64,
+    /// State at the section.
+    pub state: State,
+    /// Monodromy matrix in scaled coordinates (z = y / scales).
+    pub monodromy: Matrix4<f64>,
+    /// Floquet multipliers, largest modulus first (a state component the transducer leaves
+    /// unused contributes a multiplier 0).
+    pub multipliers: [Complex<f64>; 4],
+    /// |P(y) - y| / |y| of the plain period map (scaled coordinates).
+    pub residual: f64,
+    /// Newton iterations used.
+    pub iterations: usize,
+    /// Whole-period measures.
+    pub summary: OrbitSummary,
+}
+
+impl Orbit {
+    /// Largest modulus of the multipliers.
+    pub fn max_multiplier_abs(&self) -> f64 {
+        self.multipliers[0].norm()
+    }
+
+    /// True when every multiplier lies inside the unit circle.
+    pub fn is_stable(&self) -> bool {
+        self.max_multiplier_abs() < 1.0
+    }
+
+    /// True when the orbit touches a stop.
+    pub fn is_impacting(&self) -> bool {
+        self.summary.impacts > 0
+    }
+
+    /// The parameter's value.
+    pub fn param(&self, p: Parameter) -> f64 {
+        self.forcing.get(p)
+    }
+
+    /// prod (mu_i - 1), real: changes sign where a real multiplier crosses +1.
+    pub fn det_minus_one(&self) -> f64 {
+        self.multipliers
+            .iter()
+            .fold(Complex::new(1.0, 0.0), |acc, &m| acc * (m - 1.0))
+            .re
+    }
+
+    /// prod (mu_i + 1), real: changes sign where a real multiplier crosses -1.
+    pub fn det_plus_one(&self) -> f64 {
+        self.multipliers
+            .iter()
+            .fold(Complex::new(1.0, 0.0), |acc, &m| acc * (m + 1.0))
+            .re
+    }
+
+    /// Number of multipliers outside the unit circle.
+    pub fn unstable_count(&self) -> usize {
+        self.multipliers.iter().filter(|m| m.norm() > 1.0).count()
+    }
+}
+
+/// Chord steps on the plain period map after Newton has converged on the variational one.
+pub const CHORD_STEPS: usize = 4;
+
+/// The eigenvalues of a monodromy matrix, largest modulus first (None if the Schur iteration
+/// fails).
+pub fn multipliers(m: &Matrix4<f64>) -> Option<[Complex<f64>; 4]> {
+    let schur = nalgebra::Schur::try_new(*m, f64::EPSILON, 10_000)?;
+    let ev = schur.complex_eigenvalues();
+    let mut out = [ev[0], ev[1], ev[2], ev[3]];
+    out.sort_by(|a, b| b.norm().total_cmp(&a.norm()));
+    Some(out)
+}

@@ -1,0 +1,139 @@
+//! Validation against references nobody here wrote: every check compares one of our numbers
+//! with a reference value (a closed form, an exact law, a peer tool's output) and carries its
+//! tolerance with the reason for it. The book's "Validation against references" chapter prints
+//! the checks as tables, and `tests/validation.rs` asserts each of them.
+//!
+//! | module | reference |
+//! |---|---|
+//! | [`linear_harvesters`] | the linear piezoelectric and electromagnetic harvesters' closed forms ([`crate::physics::closed_forms`]) against the time-domain steady state and against [`crate::physics::linear`]; their optimal loads against the time-domain power maximised over the load |
+//! | [`random_law`] | the power that white base acceleration delivers to a mass, `m Sa / 2`, against random ensembles' drive power and total dissipation |
+//! | [`grazing`] | where a linear oscillator's amplitude equals the gap of a rigid stop, against the continuation's grazing points |
+//! | [`nlvib`] | NLvib-py's harmonic balance and an exact shooting of a one-sided spring oscillator, against our shooting and continuation |
+//!
+//! This module computes and judges; reading the reference files and writing the tables is the
+//! callers' job (the `validation` experiment and the tests).
+
+pub mod cases;
+pub mod grazing;
+pub mod harmonics;
+pub mod linear_harvesters;
+pub mod nlvib;
+pub mod random_law;
+
+use serde::{Deserialize, Serialize};
+
+/// How a check measures the difference between ours and the reference.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Measure {
+    /// `|ours - reference| / |reference|`.
+    Relative,
+    /// `|ours - reference|`, in the quantity's unit.
+    Absolute,
+    /// `ours - reference`: ours must not exceed the reference (a bound) by more than the
+    /// tolerance.
+    NotAbove,
+}
+
+/// One comparison of our value with a reference value.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Check {
+    /// Which group of the chapter the check belongs to (its table).
+    pub group: String,
+    /// Where the reference value comes from (a closed form and its source, a peer tool).
+    pub reference: String,
+    /// What is compared, with its unit.
+    pub quantity: String,
+    /// The reference value.
+    pub theirs: f64,
+    /// Our value.
+    pub ours: f64,
+    /// How the difference is measured.
+    pub measure: Measure,
+    /// The largest difference accepted.
+    pub tolerance: f64,
+    /// Why the tolerance is what it is.
+    pub reason: String,
+}
+
+impl Check {
+    /// The difference, as [`Check::measure`] says.
+    pub fn difference(&self) -> f64 {
+        let d = (self.ours - self.theirs).abs();
+        match self.measure {
+            Measure::Relative => d / self.theirs.abs(),
+            Measure::Absolute => d,
+            Measure::NotAbove => self.ours - self.theirs,
+        }
+    }
+
+    /// True when the difference is within the tolerance (a NaN on either side fails).
+    pub fn passes(&self) -> bool {
+        self.difference() <= self.tolerance
+    }
+}
+
+/// Builds the checks of one group, with one reference source and reason by default.
+#[derive(Debug, Clone)]
+pub(crate) struct Group {
+    name: String,
+    checks: Vec<Check>,
+}
+
+impl Group {
+    pub(crate) fn new(name: &str) -> Self {
+        Self {
+            name: name.to_string(),
+            checks: Vec::new(),
+        }
+    }
+
+    /// Adds a check.
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn add(
+        &mut self,
+        reference: &str,
+        quantity: &str,
+        theirs: f64,
+        ours: f64,
+        measure: Measure,
+        tolerance: f64,
+        reason: &str,
+    ) {
+        self.checks.push(Check {
+            group: self.name.clone(),
+            reference: reference.to_string(),
+            quantity: quantity.to_string(),
+            theirs,
+            ours,
+            measure,
+            tolerance,
+            reason: reason.to_string(),
+        });
+    }
+
+    pub(crate) fn into_checks(self) -> Vec<Check> {
+        self.checks
+    }
+}
+
+/// Why a validation could not be computed.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum ValidationError {
+    /// The device does not fit the reference (e.g. stops on a closed form's device).
+    #[error("device: {0}")]
+    Device(String),
+    /// Shooting or continuation failed.
+    #[error("orbit: {0}")]
+    Orbit(#[from] crate::study::orbit::OrbitError),
+    /// A random record failed.
+    #[error("record: {0}")]
+    Record(#[from] crate::study::record::BroadbandError),
+    /// A reference file could not be read.
+    #[error("reference {file}: {message}")]
+    Reference {
+        /// The file's name.
+        file: String,
+        /// What is wrong.
+        message: String,
+    },
+}

@@ -1,0 +1,162 @@
+//! Validation against references (the book's chapter of that name): every check of
+//! `endstop::validation` that the chapter prints is asserted here, with the same cases
+//! (`endstop::validation::cases`). Each test prints its checks and fails on the first one
+//! outside its tolerance; the cost of each is in its doc comment (measured on the 2-core
+//! development machine, release build).
+
+use endstop::device::Device;
+use endstop::validation::{cases, Check};
+
+fn root() -> std::path::PathBuf {
+    std::path::Path::new(env!("CARGO_MANIFEST_DIR")).to_path_buf()
+}
+
+fn device(name: &str) -> Device {
+    let rel = format!("data/validation/{name}.toml");
+    let text = std::fs::read_to_string(root().join(&rel)).unwrap();
+    Device::from_toml_str(&text, &rel).unwrap_or_else(|e| panic!("{rel}: {e}"))
+}
+
+fn assert_all(checks: &[Check]) {
+    assert!(!checks.is_empty(), "no checks");
+    for c in checks {
+        eprintln!(
+            "{} | {} | {} | theirs {:e} | ours {:e} | difference {:e} (tolerance {:e})",
+            c.group,
+            c.reference,
+            c.quantity,
+            c.theirs,
+            c.ours,
+            c.difference(),
+            c.tolerance
+        );
+    }
+    for c in checks {
+        assert!(
+            c.passes(),
+            "{}: {} against {}: difference {:e} above {:e} ({})",
+            c.group,
+            c.quantity,
+            c.reference,
+            c.difference(),
+            c.tolerance,
+            c.reason
+        );
+    }
+}
+
+/// The piezoelectric closed form against the time-domain steady state at four frequencies and
+/// against the general linear response.
+#[test]
+fn piezoelectric_frequency_response_matches_erturk_and_inman() {
+    let d = device("piezo_linear");
+    assert_all(&cases::frequency_response(&d).unwrap());
+}
+
+/// The electromagnetic closed form (with coil inductance) likewise.
+#[test]
+fn electromagnetic_frequency_response_matches_williams_and_yates() {
+    let d = device("em_linear");
+    assert_all(&cases::frequency_response(&d).unwrap());
+}
+
+/// The optimal loads: the time-domain power maximised over the load.
+#[test]
+fn optimal_loads_match_the_closed_forms() {
+    for name in ["piezo_linear", "em_linear", "em_linear_no_inductance"] {
+        assert_all(&cases::optimal_load(&device(name)).unwrap());
+    }
+}
+
+/// The continuation's grazing points of a linear oscillator against a rigid stop.
+#[test]
+fn grazing_frequencies_match_the_linear_amplitude() {
+    assert_all(&cases::grazing(&device("grazing_rigid")).unwrap());
+}
+
+/// The exact law of random vibration on three devices: linear (piezoelectric), Hertz stops
+/// with an electromagnetic transducer, rigid stops with a piezoelectric one.
+#[test]
+fn random_drive_power_and_dissipation_obey_the_white_noise_law() {
+    for name in [
+        "random_linear_piezo",
+        "random_hertz_em",
+        "random_restitution",
+    ] {
+        let t = std::time::Instant::now();
+        let e = cases::random_law(&device(name)).unwrap();
+        eprintln!(
+            "{name}: {:?}; impacts/s {:.1}, impact losses {:e} W, internal {:e} W, stop {:e} W",
+            t.elapsed(),
+            e.mean(|r| r.impacts_per_s),
+            e.mean(|r| r.impact_losses_w),
+            e.mean(|r| r.internal_w),
+            e.mean(|r| r.stop_w)
+        );
+        assert_all(&endstop::validation::random_law::checks(&e));
+    }
+}
+
+fn nlvib_reference() -> endstop::validation::nlvib::Reference {
+    let dir = root().join("data/references/nlvib");
+    endstop::validation::nlvib::Reference::parse(|name| {
+        std::fs::read_to_string(dir.join(name)).map_err(|e| {
+            endstop::validation::ValidationError::Reference {
+                file: name.to_string(),
+                message: e.to_string(),
+            }
+        })
+    })
+    .unwrap()
+}
+
+/// The peer tool's problem: our shooting through the exact shooting's orbits, our
+/// continuation's fold and grazing points, and NLvib's harmonic balance converging to ours.
+#[test]
+fn the_one_sided_spring_oscillator_matches_the_peer_references() {
+    use endstop::validation::nlvib;
+    let r = nlvib_reference();
+    let d = device("nlvib_sdof");
+    let ours = nlvib::Ours::new(&d);
+    let t = std::time::Instant::now();
+    let (checks, _) = nlvib::exact_point_checks(&ours, &r, cases::NLVIB_EXACT_STRIDE).unwrap();
+    eprintln!("exact points: {:?}", t.elapsed());
+    assert_all(&checks);
+    let t = std::time::Instant::now();
+    let branch = ours
+        .branch(
+            0.5,
+            2.5,
+            cases::NLVIB_MAX_STEP_RAD_S,
+            cases::NLVIB_LOCATE_TOL_RAD_S,
+        )
+        .unwrap();
+    eprintln!("branch: {:?}, {} points", t.elapsed(), branch.points.len());
+    for e in &branch.events {
+        eprintln!(
+            "event {:?} at Omega {:.9}",
+            e.kind,
+            e.param * 2.0 * std::f64::consts::PI
+        );
+    }
+    assert_all(
+        &nlvib::continuation_checks(&ours, &branch, &r, cases::NLVIB_LOCATE_TOL_RAD_S).unwrap(),
+    );
+    let t = std::time::Instant::now();
+    let hb = nlvib::hb_convergence(&ours, &branch, &r).unwrap();
+    eprintln!("hb: {:?}", t.elapsed());
+    for c in &hb {
+        eprintln!(
+            "H {} fold {:e} a1 {:e} ({} points)",
+            c.harmonics,
+            c.fold_difference(),
+            c.worst_amplitude_difference(),
+            c.amplitudes.len()
+        );
+    }
+    assert_all(&nlvib::hb_checks(
+        &hb,
+        r.aft_floor_m(),
+        r.fold_floor_rad_s(),
+    ));
+}
