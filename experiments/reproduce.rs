@@ -44,7 +44,8 @@ fn publish_own_device() -> Result<()> {
     for job in JOBS.iter().filter(|j| j.is_tool_run()) {
         let src = job.dir();
         let stem = job.name.trim_start_matches("own_device_");
-        let tool = format!("endstop-{stem}");
+        // The tool names its files after its study, the job's first argument.
+        let tool = format!("endstop-{}", job.args.first().copied().unwrap_or(stem));
         for (from, to) in [
             ("numbers.md".to_string(), format!("{stem}.md")),
             (format!("{tool}.svg"), format!("{stem}.svg")),

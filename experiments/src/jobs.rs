@@ -41,6 +41,29 @@ const P1: &str = "data/prototype1.toml";
 const P2: &str = "data/prototype2.toml";
 const EXAMPLE: &str = "data/examples/my_harvester.toml";
 const FIG08_MEASURED: &str = "data/measured/fig08_paper.csv";
+const PIEZO: &str = "data/examples/piezo_cantilever.toml";
+const EM: &str = "data/examples/em_asymmetric.toml";
+const RIGID: &str = "data/examples/rigid_restitution.toml";
+const RECORD: &str = "data/examples/machine_record.wav";
+
+/// A run of the `endstop` tool for the "Model your own harvester" chapter: `own_device_<stem>`,
+/// its arguments, and the files it reads.
+const fn tool_run(
+    name: &'static str,
+    args: &'static [&'static str],
+    reads: &'static [&'static str],
+) -> Job {
+    Job {
+        name,
+        program: "endstop",
+        args,
+        reads,
+        reads_calibration: false,
+        phase: Phase::Parallel,
+        scored: false,
+        also: &[],
+    }
+}
 
 const fn experiment(name: &'static str, reads: &'static [&'static str], cal: bool) -> Job {
     Job {
@@ -96,10 +119,9 @@ pub const JOBS: &[Job] = &[
         scored: false,
         also: &[],
     },
-    Job {
-        name: "own_device_sweep",
-        program: "endstop",
-        args: &[
+    tool_run(
+        "own_device_sweep",
+        &[
             "sweep",
             "--device",
             EXAMPLE,
@@ -112,16 +134,11 @@ pub const JOBS: &[Job] = &[
             "--accel-rms-g",
             "0.3",
         ],
-        reads: &[EXAMPLE],
-        reads_calibration: false,
-        phase: Phase::Parallel,
-        scored: false,
-        also: &[],
-    },
-    Job {
-        name: "own_device_random",
-        program: "endstop",
-        args: &[
+        &[EXAMPLE],
+    ),
+    tool_run(
+        "own_device_random",
+        &[
             "random",
             "--device",
             EXAMPLE,
@@ -130,12 +147,117 @@ pub const JOBS: &[Job] = &[
             "--records",
             "4",
         ],
-        reads: &[EXAMPLE],
-        reads_calibration: false,
-        phase: Phase::Parallel,
-        scored: false,
-        also: &[],
-    },
+        &[EXAMPLE],
+    ),
+    tool_run(
+        "own_device_piezo_response",
+        &[
+            "response",
+            "--device",
+            PIEZO,
+            "--from",
+            "100",
+            "--to",
+            "200",
+            "--step",
+            "1",
+            "--accel-rms-g",
+            "0.5",
+        ],
+        &[PIEZO],
+    ),
+    tool_run(
+        "own_device_piezo_random",
+        &[
+            "random",
+            "--device",
+            PIEZO,
+            "--psd",
+            "1e-3",
+            "--records",
+            "4",
+            "--duration-s",
+            "4",
+        ],
+        &[PIEZO],
+    ),
+    tool_run(
+        "own_device_piezo_measured",
+        &[
+            "random",
+            "--device",
+            PIEZO,
+            "--accel-file",
+            RECORD,
+            "--accel-scale",
+            "20",
+        ],
+        &[PIEZO, RECORD],
+    ),
+    tool_run(
+        "own_device_em_response",
+        &[
+            "response",
+            "--device",
+            EM,
+            "--from",
+            "44",
+            "--to",
+            "60",
+            "--step",
+            "1",
+            "--accel-rms-g",
+            "0.2",
+        ],
+        &[EM],
+    ),
+    tool_run(
+        "own_device_em_random",
+        &[
+            "random",
+            "--device",
+            EM,
+            "--psd",
+            "1e-3",
+            "--records",
+            "4",
+            "--duration-s",
+            "4",
+        ],
+        &[EM],
+    ),
+    tool_run(
+        "own_device_rigid_response",
+        &[
+            "response",
+            "--device",
+            RIGID,
+            "--from",
+            "550",
+            "--to",
+            "750",
+            "--step",
+            "2",
+            "--accel-rms-g",
+            "0.3",
+        ],
+        &[RIGID],
+    ),
+    tool_run(
+        "own_device_rigid_random",
+        &[
+            "random",
+            "--device",
+            RIGID,
+            "--psd",
+            "1e-4",
+            "--records",
+            "4",
+            "--duration-s",
+            "4",
+        ],
+        &[RIGID],
+    ),
     Job {
         name: "own_device_fit",
         program: "endstop",

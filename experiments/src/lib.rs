@@ -16,7 +16,9 @@ pub mod frame;
 pub mod freshness;
 pub mod jobs;
 pub mod md;
+pub mod measured_io;
 pub mod narrowband_io;
+pub mod panels;
 pub mod plot;
 pub mod response_io;
 

@@ -2,10 +2,10 @@
 //! the per-step rows of a sweep in the project's column names (through [`crate::frame`]), and
 //! the cells of the claims and convergence tables of the book.
 
-use endstop::device::Device;
+use endstop::device::{Device, StiffnessModel, Stop, StopLaw};
 use endstop::paper::claims::{Claim, Value};
 use endstop::paper::curves::{law_key, Curve, CurveConvergence};
-use endstop::paper::setups::{comb, endstop, stiffness_model, ParamSet};
+use endstop::paper::setups::ParamSet;
 use endstop::study::steady::Measurement;
 
 use crate::frame::Row;
@@ -31,8 +31,9 @@ pub fn measurement_cells(m: &Measurement) -> Row {
 }
 
 /// One row per step of a sweep of `device` (the device as simulated: its parameter-set label,
-/// end-stop law, damping, gap and bias go into every row), labelled `series`. Steps from index
-/// `extended_from` on lie beyond the requested range. SI units unless the name says otherwise.
+/// end-stop law, damping, gap and bias go into every row, see [`device_cells`]), labelled
+/// `series`. Steps from index `extended_from` on lie beyond the requested range. SI units
+/// unless the name says otherwise.
 pub fn sweep_rows<'a>(
     series: &str,
     device: &Device,
@@ -49,17 +50,49 @@ pub fn sweep_rows<'a>(
                 row![
                     "beyond_paper_range" => i >= beyond_from,
                     "series" => series,
-                    "params" => device.params.as_str(),
-                    "stiffness" => law_key(stiffness_model(device)),
-                    "bim_n_s_per_m" => endstop(device).damping_n_s_per_m,
-                    "tension_free" => endstop(device).tension_free,
-                    "endstop_gap_m" => endstop(device).gap_m,
-                    "bias_v" => comb(device).bias_v,
                 ],
+                device_cells(device),
             ]
             .concat()
         })
         .collect()
+}
+
+/// The columns that say which device was simulated: `params`, `stiffness` (the paper's
+/// `hertz` or `linear` for its Hertz line stops, else the law key of a symmetric pair, or
+/// `upper:<law>/lower:<law>` with `none` for a missing side), `bim_n_s_per_m` and
+/// `endstop_gap_m` (those of a symmetric pair, null otherwise), `tension_free` (of any stop)
+/// and `bias_v` (null without an electrostatic transducer).
+pub fn device_cells(device: &Device) -> Row {
+    let sym = device.stops.symmetric();
+    let law = |s: Option<&Stop>| match s {
+        Some(Stop {
+            law: StopLaw::HertzLine(h),
+            ..
+        }) => law_key(if h.linear_fit {
+            StiffnessModel::Linear
+        } else {
+            StiffnessModel::Hertz
+        }),
+        Some(s) => s.law.key(),
+        None => "none",
+    };
+    let stiffness = match sym {
+        Some(s) => law(Some(s)).to_string(),
+        None => format!(
+            "upper:{}/lower:{}",
+            law(device.stops.upper.as_ref()),
+            law(device.stops.lower.as_ref())
+        ),
+    };
+    row![
+        "params" => device.params.as_str(),
+        "stiffness" => stiffness,
+        "bim_n_s_per_m" => sym.map(|s| s.damping_n_s_per_m),
+        "tension_free" => device.stops.present().any(|(_, s)| s.tension_free),
+        "endstop_gap_m" => sym.map(|s| s.gap_m),
+        "bias_v" => device.bias_v(),
+    ]
 }
 
 /// The rows of every curve of a figure, each with its own end-stop model applied to `base`.

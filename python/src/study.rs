@@ -4,13 +4,15 @@
 //! runs.
 
 use endstop::device::Device;
-use endstop::physics::two_port;
+use endstop::physics::linear::white_noise_power_w;
+use endstop::physics::two_port::{self, TwoPort};
 use endstop::study::amplitude::{amplitude_sweep_report, AmplitudeReport};
 use endstop::study::ensemble::{run_ensemble, EnsembleSpec};
 use endstop::study::record::{simulate_record, RecordSpec, RecordSummary};
 use endstop::study::steady::{steady_config, Measurement};
 use endstop::study::stepped::{linspace_step, Transition};
 use endstop::study::sweep::{self, SweepReport, SweepSettings};
+use endstop::G;
 use numpy::PyReadonlyArray1;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
@@ -126,7 +128,9 @@ fn check_range(accel_rms_g: f64, start_hz: f64, stop_hz: f64, step_hz: f64) -> P
             sweep::RangeError::Ends => {
                 "start_hz and stop_hz must be positive with stop_hz > start_hz"
             }
-            sweep::RangeError::Step => "step_hz must be positive and not larger than the range",
+            sweep::RangeError::Step => {
+                "step_hz must be positive, not larger than the range, and give at most 100000 steps"
+            }
             sweep::RangeError::Accel => "accel_rms_g must be a finite positive number",
         })
     })
@@ -374,6 +378,7 @@ fn ensemble<'py>(
         return Err(arg_err("records must be at least 1"));
     }
     let record = record_spec(&device.inner, psd_g2_per_hz, duration_s)?;
+    let band_hz = record.noise.bandwidth_hz;
     let dev = device.inner.clone();
     let spec = EnsembleSpec::for_device(&dev, record, seed, records);
     let nperseg = spec.welch.nperseg;
@@ -392,9 +397,16 @@ fn ensemble<'py>(
     d.set_item("x_peak_m", ens.x_peak_m)?;
     d.set_item("contact_fraction", ens.contact_fraction.mean)?;
     d.set_item("impacts", ens.impacts)?;
+    // Eq 21 is a capacitor pair's theory (None for another transducer); the linearised
+    // model's power over the record's band is every device's.
     d.set_item(
         "eq21_power_w",
-        two_port::eq21_power_w(&device.inner, psd_g2_per_hz),
+        TwoPort::try_of(&device.inner)
+            .map(|_| two_port::eq21_power_w(&device.inner, psd_g2_per_hz)),
+    )?;
+    d.set_item(
+        "linear_power_w",
+        white_noise_power_w(&device.inner, psd_g2_per_hz * G * G, 1e-3, band_hz),
     )?;
     let psd = &ens.mean_spectrum.total;
     d.set_item("freq_hz", array(py, psd.freq_hz.clone()))?;

@@ -1,7 +1,9 @@
 //! Base accelerations a(t) that drive the harvester: a sine ([`Sine`]), a sampled record read
 //! between samples by linear interpolation ([`Sampled`]), and band-limited white noise to fill
-//! such a record ([`noise`], Figure 10).
+//! such a record ([`noise`], Figure 10), and a measured record checked and resampled to the
+//! integrator's rate ([`measured`]).
 
+pub mod measured;
 pub mod noise;
 mod sampled;
 mod sine;

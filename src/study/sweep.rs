@@ -202,13 +202,17 @@ pub enum RangeError {
     /// The ends are not finite and positive with stop > start.
     #[error("the range must be positive and finite, with its stop above its start")]
     Ends,
-    /// The step is not positive or exceeds the range.
-    #[error("the step must be positive and not larger than the range")]
+    /// The step is not positive, exceeds the range, or gives more than [`MAX_STEPS`] steps.
+    #[error("the step must be positive, not larger than the range, and give at most 100000 steps")]
     Step,
     /// The acceleration is not finite and positive.
     #[error("the acceleration must be a finite positive number")]
     Accel,
 }
+
+/// The most steps a range may hold: each is a steady state of its own, and a grid of more
+/// (a step of 1e-300 Hz, say) would not fit in memory.
+pub const MAX_STEPS: usize = 100_000;
 
 /// Checks a frequency range `start_hz..stop_hz` with steps of `step_hz` at `accel_rms_g`.
 pub fn check_range(
@@ -220,7 +224,10 @@ pub fn check_range(
     if !(start_hz.is_finite() && stop_hz.is_finite() && start_hz > 0.0 && stop_hz > start_hz) {
         return Err(RangeError::Ends);
     }
-    if !(step_hz > 0.0 && step_hz <= stop_hz - start_hz) {
+    if !(step_hz > 0.0
+        && step_hz <= stop_hz - start_hz
+        && (stop_hz - start_hz) / step_hz <= MAX_STEPS as f64)
+    {
         return Err(RangeError::Step);
     }
     if !(accel_rms_g.is_finite() && accel_rms_g > 0.0) {
@@ -573,6 +580,11 @@ mod tests {
         );
         assert_eq!(check_range(0.3, 500.0, 700.0, 0.0), Err(RangeError::Step));
         assert_eq!(check_range(0.3, 500.0, 700.0, 300.0), Err(RangeError::Step));
+        assert_eq!(
+            check_range(0.3, 500.0, 700.0, 1e-300),
+            Err(RangeError::Step)
+        );
+        assert_eq!(check_range(0.3, 500.0, 1e300, 2.0), Err(RangeError::Step));
         assert_eq!(check_range(0.0, 500.0, 700.0, 2.0), Err(RangeError::Accel));
         assert_eq!(
             check_range(f64::INFINITY, 500.0, 700.0, 2.0),

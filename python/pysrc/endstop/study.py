@@ -68,7 +68,9 @@ def record(device, psd_g2_per_hz, seed=2012, stream=0, duration_s=10.0):
 def ensemble(device, psd_g2_per_hz, records=4, duration_s=10.0, seed=2012):
     """``records`` independent records (stream i of ``seed`` for record i): ``power_w`` and
     its ``power_ci95_w``, ``efficiency`` (2P/(m Sa)), ``bw3db_hz`` of the mean PSD
-    (``freq_hz``, ``out_psd_w_per_hz``), ``eq21_power_w``, and per-record arrays in
+    (``freq_hz``, ``out_psd_w_per_hz``), ``eq21_power_w`` (None unless the transducer is a
+    capacitor pair), ``linear_power_w`` (the linearised model's power over the record's band,
+    any device), and per-record arrays in
     ``records``."""
     return _native.ensemble(device, float(psd_g2_per_hz), int(records), float(duration_s),
                             int(seed))

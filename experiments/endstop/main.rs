@@ -1,17 +1,22 @@
-//! `endstop`: run the Le & Halvorsen (2012) harvester model on your own device file.
+//! `endstop`: run the harvester model of Le & Halvorsen (2012), generalised to any
+//! single-degree-of-freedom impact harvester, on your own device file.
 //!
 //! ```text
-//! endstop sweep  --device my.toml --from 500 --to 900 --accel-rms-g 0.3 [--out DIR]
-//! endstop random --device my.toml --psd 1e-3 [--out DIR]
+//! endstop sweep    --device my.toml --from 500 --to 900 --accel-rms-g 0.3 [--out DIR]
+//! endstop random   --device my.toml --psd 1e-3 [--out DIR]
+//! endstop random   --device my.toml --accel-file shaker.csv [--out DIR]
 //! endstop response --device my.toml --from 600 --to 850 --accel-rms-g 0.31 [--out DIR]
 //! endstop fit --device my.toml --up-sweep up.csv [--down-sweep down.csv] \
 //!             --free stops.both.gap_m=7e-6..10e-6 [--free ...] [--out DIR]
 //! ```
 //!
-//! Both write the same kinds of output as the figure experiments: Parquet data with
-//! provenance metadata, an SVG and a PNG plot, `summary.json`, and `numbers.md`.
+//! Each writes the same kinds of output as the figure experiments: Parquet data with
+//! provenance metadata, an SVG and a PNG plot, `summary.json`, and `numbers.md`. Any device
+//! the description allows runs (any stops, any transducer); the column names are the same for
+//! every device, and for a transducer with one load the second load's columns are zero.
 
-use endstop::paper::setups::comb;
+mod random;
+
 use endstop_experiments as common;
 
 use std::path::{Path, PathBuf};
@@ -21,25 +26,25 @@ use clap::{Parser, Subcommand};
 use common::plot::{LegendPos, LinePlot, Series, Style, PALETTE};
 use common::{fmt_sig, load_device_file, Experiment, LoadedDevice};
 use endstop::device::Device;
-use endstop::study::ensemble::EnsembleSpec;
-use endstop::study::record::RecordSpec;
 use endstop::study::stepped::linspace_step;
 use endstop::study::sweep::{self, SweepSettings, REFINE_TOL_HZ};
-use polars::prelude::*;
 
 #[derive(Parser, Debug)]
 #[command(
     name = "endstop",
     version,
-    about = "Simulate a MEMS electrostatic energy harvester with end-stops on your own device",
-    long_about = "Simulate a MEMS electrostatic energy harvester with end-stops (the model of \
-Le & Halvorsen 2012, eqs 1-10) on a device described by a TOML file. Start from \
-data/prototype1.toml or data/prototype2.toml: copy it, edit the values (SI units; the key names \
-carry the unit), and pass it with --device. Every value is checked on load; an error names the \
-field and its valid range.\n\nTwo studies:\n  sweep   stepped-sine up-sweep: RMS voltages, power, \
-impact onset and jump\n  random  band-limited white-noise vibration: power, efficiency, \
-output spectrum, bandwidth\n  response  the whole frequency response: up- and down-sweeps, periodic orbits continued \
-in frequency with their stability, folds and grazing points"
+    about = "Simulate a vibration energy harvester with end-stops on your own device",
+    long_about = "Simulate a vibration energy harvester with end-stops (the model of \
+Le & Halvorsen 2012, eqs 1-10, with any stops and transducer) on a device described by a TOML \
+file. Start from data/prototype1.toml, data/prototype2.toml or a file of data/examples/: copy \
+it, edit the values (SI units; the key names carry the unit), and pass it with --device. Every \
+value is checked on load; an error names the file, the field, the value and its valid \
+range.\n\nThree studies:\n  sweep     stepped-sine up-sweep: RMS voltages, power, impact onset \
+and jump\n  random    band-limited white noise or a measured acceleration record: power, \
+efficiency, output spectrum, bandwidth\n  response  the whole frequency response: up- and \
+down-sweeps, periodic orbits continued in frequency with their stability, folds and grazing \
+points\n\nOutputs keep their column names for every device: v1_rms_v and p1_w are the load of a \
+one-load transducer (piezoelectric, electromagnetic), and v2_rms_v, p2_w are then zero."
 )]
 struct Cli {
     #[command(subcommand)]
@@ -52,8 +57,9 @@ enum Study {
     /// steady state), with impact onset and jump refined by bisection.
     Sweep(RangeArgs),
     /// Random vibration: an ensemble of band-limited white-noise records (10 kHz band,
-    /// 100 kHz sampling), with mean power, efficiency and output power spectrum.
-    Random(RandomArgs),
+    /// 100 kHz sampling), or one measured acceleration record (--accel-file), with mean
+    /// power, output power spectrum and the drive's spectrum.
+    Random(random::RandomArgs),
     /// The whole frequency response: up- and down-sweeps, the periodic orbits continued in
     /// frequency (pseudo-arclength, through folds) with their Floquet multipliers, and the
     /// folds and grazing points on the branch.
@@ -65,7 +71,8 @@ enum Study {
     Fit(common::fit_io::FitArgs),
 }
 
-/// The arguments of the two frequency studies (`sweep` and `response`).
+/// The arguments of the two frequency studies (`sweep` and `response`): a sine drive (a
+/// measured record drives `random` only, whose spectra it is analysed by).
 #[derive(Parser, Debug)]
 struct RangeArgs {
     /// Device file (TOML), e.g. a copy of data/prototype2.toml.
@@ -83,7 +90,8 @@ struct RangeArgs {
     /// RMS base acceleration (g = 9.81 m/s^2); the sine's amplitude is sqrt(2) times this.
     #[arg(long)]
     accel_rms_g: f64,
-    /// Bias voltage (V); default: the device file's.
+    /// Bias voltage (V) of an electrostatic transducer; default: the device file's. Refused
+    /// for a device without a bias (piezoelectric, electromagnetic, none).
     #[arg(long)]
     bias_v: Option<f64>,
     /// Output directory; default: data/results/endstop-<study>.
@@ -100,7 +108,7 @@ impl RangeArgs {
                 sweep::RangeError::Ends => {
                     "--from and --to must be positive frequencies with --to > --from"
                 }
-                sweep::RangeError::Step => "--step must be positive and not larger than the range",
+                sweep::RangeError::Step => "--step must be positive, not larger than the range, and give at most 100000 steps",
                 sweep::RangeError::Accel => "--accel-rms-g must be a finite positive number",
             })
         })
@@ -116,41 +124,16 @@ impl RangeArgs {
     }
 }
 
-#[derive(Parser, Debug)]
-struct RandomArgs {
-    /// Device file (TOML), e.g. a copy of data/prototype2.toml.
-    #[arg(long)]
-    device: PathBuf,
-    /// Two-sided acceleration PSD in the flat band (g^2/Hz).
-    #[arg(long)]
-    psd: f64,
-    /// Number of independent 10 s records (their mean and 95 % interval are reported).
-    #[arg(long, default_value_t = 4)]
-    records: usize,
-    /// Length of each record (s).
-    #[arg(long, default_value_t = 10.0)]
-    duration_s: f64,
-    /// Seed of the random streams (record i uses stream i).
-    #[arg(long, default_value_t = 2012)]
-    seed: u64,
-    /// Bias voltage (V); default: the device file's.
-    #[arg(long)]
-    bias_v: Option<f64>,
-    /// Output directory; default: data/results/endstop-random.
-    #[arg(long)]
-    out: Option<PathBuf>,
-}
-
 fn main() {
     common::run_main("endstop", || match Cli::parse().study {
         Study::Sweep(a) => sweep(a),
-        Study::Random(a) => random(a),
+        Study::Random(a) => random::random(a),
         Study::Response(a) => response(a),
         Study::Fit(a) => common::fit_io::run(a),
     });
 }
 
-fn out_dir(p: PathBuf) -> PathBuf {
+pub(crate) fn out_dir(p: PathBuf) -> PathBuf {
     if p.is_absolute() {
         p
     } else {
@@ -158,10 +141,10 @@ fn out_dir(p: PathBuf) -> PathBuf {
     }
 }
 
-/// Loads the device file `path`, applies `--bias-v` if given (validated), and starts the
-/// experiment `name` writing to `out`, with the device file recorded: the experiment, the file
-/// as loaded, and the device to simulate.
-fn start(
+/// Loads the device file `path`, applies `--bias-v` if given (validated; refused for a
+/// device without a bias voltage), and starts the experiment `name` writing to `out`, with the
+/// device file recorded: the experiment, the file as loaded, and the device to simulate.
+pub(crate) fn start(
     name: &str,
     path: &Path,
     bias_v: Option<f64>,
@@ -170,6 +153,13 @@ fn start(
     let loaded = load_device_file(path)?;
     let mut device = loaded.device.clone();
     if let Some(v) = bias_v {
+        if device.bias_v().is_none() {
+            bail!(
+                "--bias-v: device `{}` has a `{}` transducer, which has no bias voltage",
+                device.name,
+                device.transducer.key()
+            );
+        }
         device = device.with_bias(v);
         device.validate("--bias-v")?;
     }
@@ -201,20 +191,23 @@ fn sweep(a: RangeArgs) -> Result<()> {
     exp.write_parquet("sweep", &mut df, &device.params)?;
 
     let mut md = format!(
-        "Up-sweep of `{}` ({} set) from {} to {} Hz in {} Hz steps at {} g rms, Vb = {} V.\n\n",
+        "Up-sweep of `{}` ({} set; {}) from {} to {} Hz in {} Hz steps at {} g rms.\n\n",
         loaded.file,
         device.params,
+        describe(&device),
         a.from,
         a.to,
         a.step,
         a.accel_rms_g,
-        comb(&device).bias_v
     );
     let vmax = col(&|m| m.v1_rms_v).into_iter().fold(0.0, f64::max);
+    let pmax = col(&|m| m.p_total_w()).into_iter().fold(0.0, f64::max);
     exp.number("v1_rms_max_v", vmax);
+    exp.number("power_max_w", pmax);
     md.push_str(&format!(
-        "- largest RMS voltage of one load: {} V\n",
-        fmt_sig(vmax, 4)
+        "- largest RMS voltage of load 1: {} V; largest power of the loads: {} uW\n",
+        fmt_sig(vmax, 4),
+        fmt_sig(pmax * 1e6, 4)
     ));
     match report.onset {
         Some(t) => {
@@ -246,121 +239,31 @@ fn sweep(a: RangeArgs) -> Result<()> {
             .map(|s| (s.measurement.freq_hz, f(&s.measurement)))
             .collect()
     };
+    let mut series = vec![Series::new(
+        if device.transducer.loads() == 2 {
+            "V1 (one load)"
+        } else {
+            "V (the load)"
+        },
+        pts(&|m| m.v1_rms_v),
+        PALETTE[0],
+        Style::LinePoints,
+    )];
+    if device.transducer.loads() == 2 {
+        series.push(Series::new(
+            "V2 - V1",
+            pts(&|m| m.vdiff_rms_v),
+            PALETTE[1],
+            Style::Dashed,
+        ));
+    }
     let plot = LinePlot::new(
         &format!("Up-sweep at {} g rms: {}", a.accel_rms_g, device.name),
         "frequency [Hz]",
         "RMS output voltage [V]",
-        vec![
-            Series::new(
-                "V1 (one load)",
-                pts(&|m| m.v1_rms_v),
-                PALETTE[0],
-                Style::LinePoints,
-            ),
-            Series::new(
-                "V2 - V1",
-                pts(&|m| m.vdiff_rms_v),
-                PALETTE[1],
-                Style::Dashed,
-            ),
-        ],
+        series,
     )
     .legend(LegendPos::UpperLeft);
-    exp.write_plot(&plot)?;
-    exp.finish()
-}
-
-fn random(a: RandomArgs) -> Result<()> {
-    if !(a.psd.is_finite() && a.psd > 0.0) {
-        bail!("--psd must be a positive two-sided PSD in g^2/Hz");
-    }
-    if a.records == 0 {
-        bail!("--records must be at least 1");
-    }
-    let (mut exp, loaded, device) = start("endstop-random", &a.device, a.bias_v, a.out)?;
-    exp.seed = Some(a.seed);
-    let mut record = RecordSpec::paper(&device, a.psd);
-    record.noise.duration_s = a.duration_s;
-    let spec = EnsembleSpec::for_device(&device, record, a.seed, a.records);
-    let nperseg = spec.welch.nperseg;
-    let ens = common::with_progress(a.records, "records", |tick| {
-        endstop::study::ensemble::run_ensemble(&device, &spec, tick)
-    })?;
-
-    let psd = &ens.mean_spectrum.total;
-    let m = psd.freq_hz.len();
-    let mut df = df!(
-        "freq_hz" => psd.freq_hz.clone(),
-        "out_psd_uw_per_hz" => psd.density.iter().map(|d| d * 1e6).collect::<Vec<_>>(),
-        "psd_g2_per_hz" => vec![a.psd; m],
-        "series" => vec![format!("mean of {} records", a.records); m],
-        "params" => vec![device.params.clone(); m],
-    )?;
-    exp.write_parquet("output_psd", &mut df, &device.params)?;
-    let recs = &ens.records;
-    let mut per = df!(
-        "realisation" => recs.iter().map(|r| r.stream).collect::<Vec<_>>(),
-        "p_w" => recs.iter().map(|r| r.summary.p_total_w()).collect::<Vec<_>>(),
-        "x_rms_m" => recs.iter().map(|r| r.summary.x_rms_m).collect::<Vec<_>>(),
-        "contact_fraction" => recs.iter().map(|r| r.summary.contact_fraction).collect::<Vec<_>>(),
-        "impacts" => recs.iter().map(|r| r.summary.impacts).collect::<Vec<_>>(),
-        "bw3db_hz" => recs.iter().map(|r| r.widths.bw3db_hz()).collect::<Vec<_>>(),
-        "psd_g2_per_hz" => vec![a.psd; recs.len()],
-        "params" => vec![device.params.clone(); recs.len()],
-    )?;
-    exp.write_parquet("records", &mut per, &device.params)?;
-
-    let eq21 = endstop::physics::two_port::eq21_power_w(&device, a.psd);
-    exp.number("power_w", ens.power_w.mean);
-    exp.number("power_ci95_w", ens.power_w.ci95);
-    exp.number("efficiency", ens.efficiency.mean);
-    exp.number("eq21_power_w", eq21);
-    exp.number("bw3db_hz", ens.mean_widths.bw3db_hz());
-    exp.number("contact_fraction", ens.contact_fraction.mean);
-    let md = format!(
-        "Random vibration of `{}` ({} set): two-sided Sa = {} g^2/Hz up to 10 kHz, {} records of {} s, seed {}, Welch segments of {} samples.\n\n\
-         - power of both loads: {} nW ± {} nW (95 %); linear theory (eq 21): {} nW\n\
-         - efficiency 2P/(m Sa): {} %\n\
-         - 3 dB bandwidth of the mean output PSD: {} Hz\n\
-         - RMS displacement: {} um; time in contact: {} %; impacts: {}\n",
-        loaded.file,
-        device.params,
-        a.psd,
-        a.records,
-        a.duration_s,
-        a.seed,
-        nperseg,
-        fmt_sig(ens.power_w.mean * 1e9, 4),
-        fmt_sig(ens.power_w.ci95 * 1e9, 2),
-        fmt_sig(eq21 * 1e9, 4),
-        fmt_sig(ens.efficiency.mean * 100.0, 4),
-        fmt_sig(ens.mean_widths.bw3db_hz(), 4),
-        fmt_sig(ens.x_rms_m.mean * 1e6, 3),
-        fmt_sig(ens.contact_fraction.mean * 100.0, 3),
-        ens.impacts
-    );
-    exp.write_numbers_md(&md)?;
-    print!("{md}");
-    let pts: Vec<(f64, f64)> = psd
-        .freq_hz
-        .iter()
-        .zip(&psd.density)
-        .map(|(&f, &d)| (f, d * 1e6))
-        .collect();
-    let ymax = pts.iter().map(|p| p.1).fold(0.0, f64::max);
-    let plot = LinePlot::new(
-        &format!("Output power PSD at Sa = {} g^2/Hz: {}", a.psd, device.name),
-        "frequency [Hz]",
-        "output power PSD [uW/Hz] (both loads, one-sided)",
-        vec![Series::new(
-            &format!("mean of {} records", a.records),
-            pts,
-            PALETTE[0],
-            Style::Line,
-        )],
-    )
-    .log(false, true)
-    .y((ymax * 1e-5).max(1e-30), ymax * 2.0);
     exp.write_plot(&plot)?;
     exp.finish()
 }
@@ -408,15 +311,15 @@ fn response(a: RangeArgs) -> Result<()> {
     exp.write_parquet("sweeps", &mut frame(rows)?, &device.params)?;
 
     let mut md = format!(
-        "Whole response of `{}` ({} set) from {} to {} Hz at {} g rms, Vb = {} V: sweeps in {} Hz \
+        "Whole response of `{}` ({} set; {}) from {} to {} Hz at {} g rms: sweeps in {} Hz \
          steps (transitions refined to 0.1 Hz), periodic orbits continued in frequency \
          ({} points, largest residual {:.1e}).\n\n",
         loaded.file,
         device.params,
+        describe(&device),
         a.from,
         a.to,
         a.accel_rms_g,
-        comb(&device).bias_v,
         a.step,
         branch.points.len(),
         branch.max_residual()
@@ -472,4 +375,28 @@ fn response(a: RangeArgs) -> Result<()> {
     );
     exp.write_plot(&plot)?;
     exp.finish()
+}
+
+/// One line on what a device is: its transducer (with its bias voltage, and a note where it
+/// has one load) and each side's stop.
+pub(crate) fn describe(device: &Device) -> String {
+    let t = &device.transducer;
+    let transducer = match (t.bias_v(), t.loads()) {
+        (Some(vb), _) => format!("`{}` transducer at Vb = {vb} V", t.key()),
+        (None, 1) => format!("`{}` transducer, one load (v2 is zero)", t.key()),
+        (None, _) => format!("`{}` transducer", t.key()),
+    };
+    let side = |s: Option<&endstop::device::Stop>| match s {
+        Some(s) => format!("`{}` at {} um", s.law.key(), fmt_sig(s.gap_m * 1e6, 4)),
+        None => "none".to_string(),
+    };
+    let stops = match device.stops.symmetric() {
+        Some(s) => format!("stops on both sides: {}", side(Some(s))),
+        None => format!(
+            "upper stop {}, lower stop {}",
+            side(device.stops.upper.as_ref()),
+            side(device.stops.lower.as_ref())
+        ),
+    };
+    format!("{transducer}, {stops}")
 }

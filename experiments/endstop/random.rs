@@ -1,0 +1,421 @@
+//! `endstop random`: random vibration of any device, driven by band-limited white noise (an
+//! ensemble of records) or by one measured acceleration record read from a file.
+
+use std::path::PathBuf;
+use std::sync::Arc;
+
+use anyhow::{bail, Result};
+use clap::Parser;
+use endstop::device::Device;
+use endstop::physics::linear::{white_noise_power_w, LinearResponse};
+use endstop::physics::two_port::TwoPort;
+use endstop::signal::bandwidth::{restrict, Widths};
+use endstop::signal::{welch, Psd};
+use endstop::study::ensemble::EnsembleSpec;
+use endstop::study::record::{
+    output_psd, simulate_drive, transient_s, FreeFlightPath, RecordSpec, SampledDrive, Scheme,
+    DEFAULT_RTOL,
+};
+use endstop::G;
+use endstop_experiments as common;
+use polars::prelude::*;
+
+use common::panels::Panels;
+use common::plot::{LinePlot, Series, Style, PALETTE};
+use common::{fmt_sig, measured_io};
+
+use crate::{describe, start};
+
+/// The arguments of `endstop random`.
+#[derive(Parser, Debug)]
+pub struct RandomArgs {
+    /// Device file (TOML), e.g. a copy of data/prototype2.toml or of a file in data/examples/.
+    #[arg(long)]
+    device: PathBuf,
+    /// Two-sided acceleration PSD of the white noise in its flat band (g^2/Hz); or give
+    /// --accel-file instead.
+    #[arg(
+        long,
+        required_unless_present = "accel_file",
+        conflicts_with = "accel_file"
+    )]
+    psd: Option<f64>,
+    /// A measured acceleration record to drive the device with instead of noise: a CSV file
+    /// whose header names a time column (`time_s` or `time_ms`) and an acceleration column
+    /// (`accel_m_per_s2` or `accel_g`), or a mono WAV file with --accel-scale. It is checked
+    /// (uniform time, finite values, long enough for the band), resampled to
+    /// --sample-rate-hz, and its first pre-roll (five ring-up times 2m/b) is discarded.
+    #[arg(long)]
+    accel_file: Option<PathBuf>,
+    /// The acceleration of a WAV file's full scale (m/s^2); a WAV file carries no unit.
+    #[arg(long)]
+    accel_scale: Option<f64>,
+    /// The integrator's sample rate for a measured record (Hz).
+    #[arg(long, default_value_t = 100e3)]
+    sample_rate_hz: f64,
+    /// The band a measured record must carry, `LO,HI` in Hz (default: the analysis band, a
+    /// quarter to four times the device's open-circuit resonance).
+    #[arg(long, value_delimiter = ',', num_args = 2)]
+    band_hz: Option<Vec<f64>>,
+    /// Number of independent noise records (their mean and 95 % interval are reported).
+    #[arg(long, default_value_t = 4)]
+    records: usize,
+    /// Length of each noise record (s).
+    #[arg(long, default_value_t = 10.0)]
+    duration_s: f64,
+    /// Seed of the random streams (record i uses stream i).
+    #[arg(long, default_value_t = 2012)]
+    seed: u64,
+    /// Bias voltage (V) of an electrostatic transducer; default: the device file's.
+    #[arg(long)]
+    bias_v: Option<f64>,
+    /// Output directory; default: data/results/endstop-random.
+    #[arg(long)]
+    out: Option<PathBuf>,
+}
+
+/// Runs `endstop random`.
+pub fn random(a: RandomArgs) -> Result<()> {
+    match (&a.accel_file, a.psd) {
+        (Some(path), _) => measured(&a, path.clone()),
+        (None, Some(psd)) => noise(&a, psd),
+        (None, None) => bail!("give --psd (white noise) or --accel-file (a measured record)"),
+    }
+}
+
+/// How a record's free flight was integrated, for tables and text.
+fn free_flight_label(p: FreeFlightPath) -> String {
+    match p {
+        FreeFlightPath::Exponential => "exponential".into(),
+        FreeFlightPath::Dopri5(why) => format!("dormand-prince: {why}"),
+    }
+}
+
+/// The linear theory's output PSD (W/Hz, one-sided) at `freq_hz` under a drive of two-sided
+/// density `sa_si(f)` ((m/s^2)^2/Hz).
+fn linear_psd(lin: &LinearResponse, freq_hz: &[f64], sa_si: impl Fn(usize) -> f64) -> Vec<f64> {
+    freq_hz
+        .iter()
+        .enumerate()
+        .map(|(i, &f)| lin.output_psd_w_per_hz(sa_si(i), f))
+        .collect()
+}
+
+/// The two panels: the output power PSD beside its linear theory, and the drive's PSD.
+fn spectra_plot(device: &Device, title: &str, out: &Psd, linear: &[f64], drive: &Psd) -> Panels {
+    let pts = |p: &[f64], f: &[f64], scale: f64| -> Vec<(f64, f64)> {
+        f.iter()
+            .zip(p)
+            .filter(|(_, d)| **d > 0.0)
+            .map(|(&f, &d)| (f, d * scale))
+            .collect()
+    };
+    let out_pts = pts(&out.density, &out.freq_hz, 1e6);
+    let ymax = out_pts.iter().map(|p| p.1).fold(0.0, f64::max);
+    let response = LinePlot::new(
+        &format!("{title}: {}", device.name),
+        "frequency [Hz]",
+        "output power PSD [uW/Hz] (all loads, one-sided)",
+        vec![
+            Series::new("simulated", out_pts, PALETTE[0], Style::Line),
+            Series::new(
+                "linear theory (no stops)",
+                pts(linear, &out.freq_hz, 1e6),
+                PALETTE[1],
+                Style::Dashed,
+            ),
+        ],
+    )
+    .log(false, true)
+    .y((ymax * 1e-5).max(1e-30), ymax * 3.0);
+    let drive_pts = pts(&drive.density, &drive.freq_hz, 1.0);
+    let (dmin, dmax) = drive_pts
+        .iter()
+        .fold((f64::MAX, 0.0f64), |(lo, hi), p| (lo.min(p.1), hi.max(p.1)));
+    let drive_plot = LinePlot::new(
+        "The drive",
+        "frequency [Hz]",
+        "base acceleration PSD [g^2/Hz] (two-sided)",
+        vec![Series::new("drive", drive_pts, PALETTE[2], Style::Line)],
+    )
+    .log(false, true)
+    .y((dmin * 0.3).max(dmax * 1e-6).max(1e-30), dmax * 3.0)
+    .x(out.freq_hz[0], *out.freq_hz.last().unwrap_or(&1.0));
+    Panels::row(vec![response, drive_plot])
+}
+
+fn noise(a: &RandomArgs, psd: f64) -> Result<()> {
+    if !(psd.is_finite() && psd > 0.0) {
+        bail!("--psd = {psd}: must be a finite positive two-sided PSD in g^2/Hz");
+    }
+    if a.records == 0 {
+        bail!("--records = 0: must be at least 1");
+    }
+    if !(a.duration_s.is_finite() && a.duration_s > 0.0) {
+        bail!("--duration-s = {}: must be finite and > 0", a.duration_s);
+    }
+    let (mut exp, loaded, device) = start("endstop-random", &a.device, a.bias_v, a.out.clone())?;
+    exp.seed = Some(a.seed);
+    let mut record = RecordSpec::paper(&device, psd);
+    record.noise.duration_s = a.duration_s;
+    let spec = EnsembleSpec::for_device(&device, record, a.seed, a.records);
+    let nperseg = spec.welch.nperseg;
+    let ens = common::with_progress(a.records, "records", |tick| {
+        endstop::study::ensemble::run_ensemble(&device, &spec, tick)
+    })?;
+
+    let out = &ens.mean_spectrum.total;
+    let m = out.freq_hz.len();
+    let sa_si = psd * G * G;
+    let lin = LinearResponse::of(&device);
+    let linear = linear_psd(&lin, &out.freq_hz, |_| sa_si);
+    let mut df = df!(
+        "freq_hz" => out.freq_hz.clone(),
+        "out_psd_uw_per_hz" => out.density.iter().map(|d| d * 1e6).collect::<Vec<_>>(),
+        "linear_psd_uw_per_hz" => linear.iter().map(|d| d * 1e6).collect::<Vec<_>>(),
+        "psd_g2_per_hz" => vec![psd; m],
+        "series" => vec![format!("mean of {} records", a.records); m],
+        "params" => vec![device.params.clone(); m],
+    )?;
+    exp.write_parquet("output_psd", &mut df, &device.params)?;
+    let recs = &ens.records;
+    let mut per = df!(
+        "realisation" => recs.iter().map(|r| r.stream).collect::<Vec<_>>(),
+        "p_w" => recs.iter().map(|r| r.summary.p_total_w()).collect::<Vec<_>>(),
+        "x_rms_m" => recs.iter().map(|r| r.summary.x_rms_m).collect::<Vec<_>>(),
+        "contact_fraction" => recs.iter().map(|r| r.summary.contact_fraction).collect::<Vec<_>>(),
+        "impacts" => recs.iter().map(|r| r.summary.impacts).collect::<Vec<_>>(),
+        "bw3db_hz" => recs.iter().map(|r| r.widths.bw3db_hz()).collect::<Vec<_>>(),
+        "free_flight" => recs.iter().map(|r| free_flight_label(r.summary.free_flight)).collect::<Vec<_>>(),
+        "psd_g2_per_hz" => vec![psd; recs.len()],
+        "params" => vec![device.params.clone(); recs.len()],
+    )?;
+    exp.write_parquet("records", &mut per, &device.params)?;
+
+    let band_hz = spec.record.noise.bandwidth_hz;
+    let linear_w = white_noise_power_w(&device, sa_si, 1e-3, band_hz);
+    let eq21 =
+        TwoPort::try_of(&device).map(|_| endstop::physics::two_port::eq21_power_w(&device, psd));
+    exp.number("power_w", ens.power_w.mean);
+    exp.number("power_ci95_w", ens.power_w.ci95);
+    exp.number("efficiency", ens.efficiency.mean);
+    exp.number("linear_power_w", linear_w);
+    if let Some(p) = eq21 {
+        exp.number("eq21_power_w", p);
+    }
+    exp.number("bw3db_hz", ens.mean_widths.bw3db_hz());
+    exp.number("contact_fraction", ens.contact_fraction.mean);
+    exp.number("x_rms_m", ens.x_rms_m.mean);
+    let paths: Vec<String> = recs
+        .iter()
+        .map(|r| free_flight_label(r.summary.free_flight))
+        .collect();
+    let mut md = format!(
+        "Random vibration of `{}` ({} set; {}): two-sided Sa = {} g^2/Hz up to {} kHz, {} records \
+         of {} s, seed {}, Welch segments of {} samples.\n\n\
+         - power of the loads: {} nW ± {} nW (95 %); linear theory without stops: {} nW{}\n\
+         - efficiency 2P/(m Sa): {} %\n\
+         - 3 dB bandwidth of the mean output PSD: {} Hz\n\
+         - RMS displacement: {} um; time in contact: {} %; impacts: {}\n\
+         - free flight integrated by: {}\n",
+        loaded.file,
+        device.params,
+        describe(&device),
+        psd,
+        band_hz / 1e3,
+        a.records,
+        a.duration_s,
+        a.seed,
+        nperseg,
+        fmt_sig(ens.power_w.mean * 1e9, 4),
+        fmt_sig(ens.power_w.ci95 * 1e9, 2),
+        fmt_sig(linear_w * 1e9, 4),
+        eq21.map(|p| format!(" (eq 21: {} nW)", fmt_sig(p * 1e9, 4)))
+            .unwrap_or_default(),
+        fmt_sig(ens.efficiency.mean * 100.0, 4),
+        fmt_sig(ens.mean_widths.bw3db_hz(), 4),
+        fmt_sig(ens.x_rms_m.mean * 1e6, 3),
+        fmt_sig(ens.contact_fraction.mean * 100.0, 3),
+        ens.impacts,
+        paths[0],
+    );
+    if paths.iter().any(|p| p != &paths[0]) {
+        md.push_str("- (the records did not all take the same path; see records.parquet)\n");
+    }
+    exp.write_numbers_md(&md)?;
+    print!("{md}");
+    let drive = Psd {
+        freq_hz: out.freq_hz.clone(),
+        density: vec![psd; m],
+        segments: 0,
+    };
+    let plot = spectra_plot(
+        &device,
+        &format!("Output PSD at Sa = {psd} g^2/Hz"),
+        out,
+        &linear,
+        &drive,
+    );
+    exp.write_plot(&plot)?;
+    exp.finish()
+}
+
+/// The most samples a resampled measured record may have.
+const MAX_RESAMPLED: usize = 1 << 27;
+
+fn measured(a: &RandomArgs, path: PathBuf) -> Result<()> {
+    let fs = a.sample_rate_hz;
+    if !(fs.is_finite() && fs > 0.0) {
+        bail!("--sample-rate-hz = {fs}: must be finite and > 0");
+    }
+    // Read and check everything before the experiment starts, so that nothing is written for
+    // a bad record.
+    let loaded = common::load_device_file(&a.device)?;
+    let rec = measured_io::read_record(&path, a.accel_scale)?;
+    let preroll_s = transient_s(&loaded.device);
+    let f0 = endstop::physics::linear::open_circuit_resonance_hz(&loaded.device);
+    let (lo, hi) = match a.band_hz.as_deref() {
+        Some([lo, hi]) => (*lo, *hi),
+        _ => (0.25 * f0, (4.0 * f0).min(0.45 * fs)),
+    };
+    if hi > 0.45 * fs {
+        bail!(
+            "--band-hz upper edge {hi} Hz: must be at most {} Hz (0.45 of --sample-rate-hz)",
+            0.45 * fs
+        );
+    }
+    rec.check_band(lo, hi, preroll_s)?;
+    // The resampled record and the response are held in memory: at most 2^27 samples (1 GiB
+    // per signal).
+    let samples = rec.duration_s() * fs;
+    if samples > MAX_RESAMPLED as f64 {
+        bail!(
+            "{}: --sample-rate-hz = {fs} gives {samples:.0} samples over the record's {} s: must \
+             give at most {MAX_RESAMPLED}",
+            path.display(),
+            fmt_sig(rec.duration_s(), 6)
+        );
+    }
+
+    let (mut exp, loaded, device) = start("endstop-random", &a.device, a.bias_v, a.out.clone())?;
+    let accel: Arc<[f64]> = rec.resampled(fs).into();
+    let n_tr = (preroll_s * fs).round() as usize;
+    let drive = SampledDrive {
+        accel: accel.clone(),
+        sample_rate_hz: fs,
+        transient_samples: n_tr,
+    };
+    eprintln!(
+        "[endstop-random] {}: {} samples at {} Hz resampled to {} Hz ({} s, pre-roll {} s)",
+        rec.source_name,
+        rec.accel_si.len(),
+        fmt_sig(rec.sample_rate_hz, 6),
+        fs,
+        fmt_sig(rec.duration_s(), 4),
+        preroll_s
+    );
+    let out_rec = simulate_drive(&device, &drive, DEFAULT_RTOL, Scheme::Exponential)?;
+
+    // The Welch segmenting and analysis band the noise ensembles use, for this length.
+    let mut spec_rec = RecordSpec::paper(&device, 1.0);
+    spec_rec.noise.sample_rate_hz = fs;
+    spec_rec.noise.duration_s = (accel.len() - n_tr) as f64 / fs;
+    let spec = EnsembleSpec::for_device(&device, spec_rec, 0, 1);
+    let rl = device.transducer.load_resistance_ohm();
+    let full = output_psd(&out_rec.v1_v, &out_rec.v2_v, fs, rl, &spec.welch)?;
+    let out = restrict(&full.total, lo, hi);
+    let drive_full = welch(&accel[n_tr..], fs, &spec.welch)?;
+    // Two-sided, in g^2/Hz, like --psd.
+    let drive_psd = Psd {
+        density: drive_full
+            .density
+            .iter()
+            .map(|d| d / 2.0 / (G * G))
+            .collect(),
+        ..drive_full.clone()
+    };
+    let drive_band = restrict(&drive_psd, lo, hi);
+    let lin = LinearResponse::of(&device);
+    let linear_full = linear_psd(&lin, &drive_psd.freq_hz, |i| drive_psd.density[i] * G * G);
+    let df_hz = drive_psd.df();
+    let linear_w: f64 = linear_full.iter().sum::<f64>() * df_hz;
+    let linear_band: Vec<f64> = drive_psd
+        .freq_hz
+        .iter()
+        .zip(&linear_full)
+        .filter(|(f, _)| (lo..=hi).contains(*f))
+        .map(|(_, p)| *p)
+        .collect();
+
+    let m = out.freq_hz.len();
+    let file = path.display().to_string();
+    let mut df = df!(
+        "freq_hz" => out.freq_hz.clone(),
+        "out_psd_uw_per_hz" => out.density.iter().map(|d| d * 1e6).collect::<Vec<_>>(),
+        "linear_psd_uw_per_hz" => linear_band.iter().map(|d| d * 1e6).collect::<Vec<_>>(),
+        "psd_g2_per_hz" => drive_band.density.clone(),
+        "series" => vec![format!("measured record {file}"); m],
+        "params" => vec![device.params.clone(); m],
+    )?;
+    exp.write_parquet("output_psd", &mut df, &device.params)?;
+    let s = &out_rec.summary;
+    let accel_rms_g = s.accel_mean_square_si.sqrt() / G;
+    let widths = Widths::of(&out);
+    let mut per = df!(
+        "realisation" => [0u64],
+        "p_w" => [s.p_total_w()],
+        "x_rms_m" => [s.x_rms_m],
+        "contact_fraction" => [s.contact_fraction],
+        "impacts" => [s.impacts],
+        "bw3db_hz" => [widths.bw3db_hz()],
+        "free_flight" => [free_flight_label(s.free_flight)],
+        "accel_rms_g" => [accel_rms_g],
+        "params" => [device.params.clone()],
+    )?;
+    exp.write_parquet("records", &mut per, &device.params)?;
+
+    exp.number("power_w", s.p_total_w());
+    exp.number("linear_power_w", linear_w);
+    exp.number("accel_rms_g", accel_rms_g);
+    exp.number("bw3db_hz", widths.bw3db_hz());
+    exp.number("contact_fraction", s.contact_fraction);
+    exp.number("x_rms_m", s.x_rms_m);
+    let md = format!(
+        "Measured drive on `{}` ({} set; {}): record `{file}` ({} samples at {} Hz, {} s), \
+         resampled to {} Hz; the first {} s (five ring-up times) discarded; spectra in the band \
+         {} to {} Hz, Welch segments of {} samples.\n\n\
+         - RMS acceleration of the analysed record: {} g\n\
+         - power of the loads: {} nW; linear theory without stops under the same spectrum: {} nW\n\
+         - RMS displacement: {} um; time in contact: {} %; impacts: {}\n\
+         - free flight integrated by: {}\n",
+        loaded.file,
+        device.params,
+        describe(&device),
+        rec.accel_si.len(),
+        fmt_sig(rec.sample_rate_hz, 6),
+        fmt_sig(rec.duration_s(), 4),
+        fs,
+        preroll_s,
+        fmt_sig(lo, 4),
+        fmt_sig(hi, 4),
+        spec.welch.nperseg,
+        fmt_sig(accel_rms_g, 4),
+        fmt_sig(s.p_total_w() * 1e9, 4),
+        fmt_sig(linear_w * 1e9, 4),
+        fmt_sig(s.x_rms_m * 1e6, 3),
+        fmt_sig(s.contact_fraction * 100.0, 3),
+        s.impacts,
+        free_flight_label(s.free_flight),
+    );
+    exp.write_numbers_md(&md)?;
+    print!("{md}");
+    let plot = spectra_plot(
+        &device,
+        "Output PSD under a measured record",
+        &out,
+        &linear_band,
+        &drive_band,
+    );
+    exp.write_plot(&plot)?;
+    exp.finish()
+}

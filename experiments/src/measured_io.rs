@@ -1,0 +1,305 @@
+//! Reading a measured acceleration record from a file: a CSV of time and acceleration, or a
+//! WAV file with a stated scale. The samples are checked and resampled by the library
+//! ([`endstop::drive::measured`]); this module only reads and converts units.
+//!
+//! **CSV.** Text with a header line naming two columns, a time and an acceleration, each with
+//! its unit: `time_s` or `time_ms`, and `accel_m_per_s2` or `accel_g` (g = 9.81 m/s^2), in
+//! either order, separated by a comma (spaces around fields are ignored). Blank lines and lines
+//! starting with `#` are skipped. Every error names the file and the line.
+//!
+//! **WAV.** One channel, integer or float samples; an integer sample is read as a fraction of
+//! full scale (`sample / 2^(bits-1)`), and `scale_m_per_s2` states the acceleration of full
+//! scale (1.0) in m/s^2: a WAV file carries no unit.
+
+use std::path::Path;
+
+use endstop::drive::measured::{MeasuredError, MeasuredRecord, Position};
+use thiserror::Error;
+
+/// The time columns a CSV header may name, with their factor to seconds.
+pub const TIME_COLUMNS: [(&str, f64); 2] = [("time_s", 1.0), ("time_ms", 1e-3)];
+
+/// The acceleration columns a CSV header may name, with their factor to m/s^2.
+pub const ACCEL_COLUMNS: [(&str, f64); 2] = [("accel_m_per_s2", 1.0), ("accel_g", endstop::G)];
+
+/// A record file that cannot be read.
+#[derive(Debug, Error)]
+pub enum RecordFileError {
+    /// The file cannot be opened or read.
+    #[error("{file}: cannot be read: {message}")]
+    Io {
+        /// The file.
+        file: String,
+        /// The operating system's or the decoder's message.
+        message: String,
+    },
+    /// The file's extension is neither `.csv` nor `.wav`.
+    #[error("{file}: unknown record format: the name must end in .csv or .wav")]
+    Format {
+        /// The file.
+        file: String,
+    },
+    /// The CSV header does not name a time and an acceleration column with units.
+    #[error(
+        "{file}: line {line}: header `{header}` must name two columns, one of {times} and one \
+         of {accels}"
+    )]
+    Header {
+        /// The file.
+        file: String,
+        /// Its line.
+        line: usize,
+        /// The header as read.
+        header: String,
+        /// Valid time columns.
+        times: String,
+        /// Valid acceleration columns.
+        accels: String,
+    },
+    /// A CSV row is not two numbers.
+    #[error("{file}: line {line}: `{text}` is not two numbers separated by a comma")]
+    Row {
+        /// The file.
+        file: String,
+        /// Its line.
+        line: usize,
+        /// The line as read.
+        text: String,
+    },
+    /// A WAV file has more than one channel.
+    #[error("{file}: field `channels` = {channels}: must be 1 (one acceleration)")]
+    Channels {
+        /// The file.
+        file: String,
+        /// Its channel count.
+        channels: u16,
+    },
+    /// A WAV file was given without its scale.
+    #[error(
+        "{file}: a WAV file carries no unit: give --accel-scale, the acceleration of full \
+         scale in m/s^2"
+    )]
+    NoScale {
+        /// The file.
+        file: String,
+    },
+    /// The samples were read but cannot be used.
+    #[error(transparent)]
+    Samples(#[from] MeasuredError),
+}
+
+/// Reads the record at `path`: a CSV (units from its header) or a WAV (`scale_m_per_s2` is the
+/// acceleration of full scale, required for WAV and refused for CSV, whose header carries the
+/// unit).
+pub fn read_record(
+    path: &Path,
+    scale_m_per_s2: Option<f64>,
+) -> Result<MeasuredRecord, RecordFileError> {
+    let file = path.display().to_string();
+    let ext = path
+        .extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase());
+    match ext.as_deref() {
+        Some("csv") => {
+            if let Some(s) = scale_m_per_s2 {
+                return Err(MeasuredError::NotPositive {
+                    source_name: file,
+                    field: "--accel-scale (a CSV header carries its unit; give none)".into(),
+                    value: s,
+                }
+                .into());
+            }
+            let text = std::fs::read_to_string(path).map_err(|e| RecordFileError::Io {
+                file: file.clone(),
+                message: e.to_string(),
+            })?;
+            read_csv(&text, &file)
+        }
+        Some("wav") => {
+            let scale =
+                scale_m_per_s2.ok_or_else(|| RecordFileError::NoScale { file: file.clone() })?;
+            read_wav(path, &file, scale)
+        }
+        _ => Err(RecordFileError::Format { file }),
+    }
+}
+
+/// Reads CSV text (see the module docs); `file` names it in errors.
+pub fn read_csv(text: &str, file: &str) -> Result<MeasuredRecord, RecordFileError> {
+    let mut lines = text
+        .lines()
+        .enumerate()
+        .map(|(i, l)| (i + 1, l.trim()))
+        .filter(|(_, l)| !l.is_empty() && !l.starts_with('#'));
+    let header_err = |line: usize, header: &str| RecordFileError::Header {
+        file: file.to_string(),
+        line,
+        header: header.to_string(),
+        times: names(&TIME_COLUMNS),
+        accels: names(&ACCEL_COLUMNS),
+    };
+    let (hline, header) = lines.next().ok_or_else(|| header_err(1, ""))?;
+    let cols: Vec<&str> = header.split(',').map(str::trim).collect();
+    if cols.len() != 2 {
+        return Err(header_err(hline, header));
+    }
+    let find = |table: &[(&str, f64)], c: &str| table.iter().find(|(n, _)| *n == c).map(|t| t.1);
+    let (time_col, time_factor, accel_factor) = match (
+        find(&TIME_COLUMNS, cols[0]),
+        find(&ACCEL_COLUMNS, cols[1]),
+        find(&ACCEL_COLUMNS, cols[0]),
+        find(&TIME_COLUMNS, cols[1]),
+    ) {
+        (Some(t), Some(a), _, _) => (0, t, a),
+        (_, _, Some(a), Some(t)) => (1, t, a),
+        _ => return Err(header_err(hline, header)),
+    };
+    let mut rows = Vec::new();
+    for (line, text) in lines {
+        let row_err = || RecordFileError::Row {
+            file: file.to_string(),
+            line,
+            text: text.to_string(),
+        };
+        let fields: Vec<&str> = text.split(',').map(str::trim).collect();
+        if fields.len() != 2 {
+            return Err(row_err());
+        }
+        let parse = |s: &str| s.parse::<f64>().map_err(|_| row_err());
+        let (t, a) = (parse(fields[time_col])?, parse(fields[1 - time_col])?);
+        rows.push((Position::Line(line), t * time_factor, a * accel_factor));
+    }
+    Ok(MeasuredRecord::from_times(file, &rows)?)
+}
+
+fn read_wav(path: &Path, file: &str, scale: f64) -> Result<MeasuredRecord, RecordFileError> {
+    if !(scale.is_finite() && scale > 0.0) {
+        return Err(MeasuredError::NotPositive {
+            source_name: file.to_string(),
+            field: "--accel-scale".into(),
+            value: scale,
+        }
+        .into());
+    }
+    let io = |e: hound::Error| RecordFileError::Io {
+        file: file.to_string(),
+        message: e.to_string(),
+    };
+    let mut reader = hound::WavReader::open(path).map_err(io)?;
+    let spec = reader.spec();
+    if spec.channels != 1 {
+        return Err(RecordFileError::Channels {
+            file: file.to_string(),
+            channels: spec.channels,
+        });
+    }
+    let samples: Vec<f64> = match spec.sample_format {
+        hound::SampleFormat::Float => reader
+            .samples::<f32>()
+            .map(|s| s.map(|v| f64::from(v) * scale))
+            .collect::<Result<_, _>>()
+            .map_err(io)?,
+        hound::SampleFormat::Int => {
+            let full = 2f64.powi(i32::from(spec.bits_per_sample) - 1);
+            reader
+                .samples::<i32>()
+                .map(|s| s.map(|v| f64::from(v) / full * scale))
+                .collect::<Result<_, _>>()
+                .map_err(io)?
+        }
+    };
+    Ok(MeasuredRecord::from_uniform(
+        file,
+        f64::from(spec.sample_rate),
+        samples,
+    )?)
+}
+
+fn names(table: &[(&str, f64)]) -> String {
+    table
+        .iter()
+        .map(|(n, _)| format!("`{n}`"))
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A record of `n` rows, time first (or acceleration first when the header names it
+    /// first).
+    fn csv(header: &str, n: usize, dt: f64) -> String {
+        let accel_first = header.starts_with("accel");
+        let mut s = format!("# a test record\n{header}\n");
+        for k in 0..n {
+            let (t, a) = (
+                format!("{:.9}", k as f64 * dt),
+                (k as f64).sin().to_string(),
+            );
+            if accel_first {
+                s.push_str(&format!("{a}, {t}\n"));
+            } else {
+                s.push_str(&format!("{t}, {a}\n"));
+            }
+        }
+        s
+    }
+
+    #[test]
+    fn units_in_the_header_convert() {
+        let r = read_csv(&csv("time_ms,accel_g", 100, 0.1), "a.csv").unwrap();
+        assert!((r.sample_rate_hz - 1e4).abs() < 1e-6);
+        assert!((r.accel_si[1] - 1f64.sin() * endstop::G).abs() < 1e-12);
+        let r = read_csv(&csv("accel_m_per_s2, time_s", 100, 1e-3), "a.csv").unwrap();
+        assert!((r.sample_rate_hz - 1e3).abs() < 1e-6);
+        assert!(
+            (r.accel_si[2] - 2f64.sin()).abs() < 1e-12,
+            "columns read by the header"
+        );
+    }
+
+    #[test]
+    fn a_bad_header_or_row_names_its_line() {
+        let e = read_csv(&csv("t,a", 100, 1e-3), "a.csv").unwrap_err();
+        assert!(
+            e.to_string().starts_with("a.csv: line 2: header `t,a`"),
+            "{e}"
+        );
+        let mut text = csv("time_s,accel_g", 100, 1e-3);
+        text.push_str("0.5, nope\n");
+        let e = read_csv(&text, "a.csv").unwrap_err();
+        assert!(e.to_string().starts_with("a.csv: line 103:"), "{e}");
+        let text = csv("time_s,accel_g", 100, 1e-3).replace("0.050000000,", "0.050000000, NaN,");
+        let e = read_csv(&text, "a.csv").unwrap_err();
+        assert!(e.to_string().contains("line 53"), "{e}");
+    }
+
+    #[test]
+    fn a_wav_needs_a_scale_and_one_channel() {
+        let dir = std::env::temp_dir().join(format!("endstop-wav-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("a.wav");
+        let spec = hound::WavSpec {
+            channels: 1,
+            sample_rate: 8000,
+            bits_per_sample: 16,
+            sample_format: hound::SampleFormat::Int,
+        };
+        let mut w = hound::WavWriter::create(&path, spec).unwrap();
+        for k in 0..800 {
+            w.write_sample(if k % 2 == 0 { 16384i16 } else { -16384 })
+                .unwrap();
+        }
+        w.finalize().unwrap();
+        assert!(matches!(
+            read_record(&path, None),
+            Err(RecordFileError::NoScale { .. })
+        ));
+        let r = read_record(&path, Some(20.0)).unwrap();
+        assert_eq!(r.sample_rate_hz, 8000.0);
+        assert_eq!(r.accel_si[0], 10.0);
+        assert_eq!(r.accel_si[1], -10.0);
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+}

@@ -1,0 +1,219 @@
+//! The `endstop` tool on devices of other kinds than the paper's (the shipped examples of
+//! `data/examples/`) and on measured acceleration records: one-load transducers write zero
+//! second-load columns, a record is refused with the file, the line and the valid range and
+//! nothing written, and a good record is resampled and analysed beside its spectrum.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+const BIN: &str = env!("CARGO_BIN_EXE_endstop");
+
+fn data(rel: &str) -> String {
+    format!("{}/../data/{rel}", env!("CARGO_MANIFEST_DIR"))
+}
+
+fn tmp(tag: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("endstop-clidev-{}-{tag}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    d
+}
+
+fn read_parquet(path: &Path) -> polars::prelude::DataFrame {
+    use polars::prelude::*;
+    ParquetReader::new(std::fs::File::open(path).unwrap())
+        .finish()
+        .unwrap()
+}
+
+fn run(args: &[&str]) -> std::process::Output {
+    Command::new(BIN).args(args).output().unwrap()
+}
+
+/// Writes a CSV record of `n` rows at `dt` with header `time_s,accel_m_per_s2`, with `edit`
+/// applied to the rows (a dropped row, a NaN).
+fn csv(dir: &Path, n: usize, dt: f64, edit: impl Fn(&mut Vec<String>)) -> PathBuf {
+    std::fs::create_dir_all(dir).unwrap();
+    let mut rows: Vec<String> = (0..n)
+        .map(|k| {
+            let t = k as f64 * dt;
+            format!("{t:.7},{}", (2.0 * std::f64::consts::PI * 120.0 * t).sin())
+        })
+        .collect();
+    edit(&mut rows);
+    let p = dir.join("rec.csv");
+    std::fs::write(&p, format!("time_s,accel_m_per_s2\n{}\n", rows.join("\n"))).unwrap();
+    p
+}
+
+#[test]
+fn a_one_load_device_sweeps_with_zero_second_load_columns() {
+    let out = tmp("sweep");
+    let o = run(&[
+        "sweep",
+        "--device",
+        &data("examples/piezo_cantilever.toml"),
+        "--from",
+        "110",
+        "--to",
+        "120",
+        "--step",
+        "5",
+        "--accel-rms-g",
+        "0.1",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let df = read_parquet(&out.join("sweep.parquet"));
+    let v1 = df.column("v1_rms_v").unwrap().f64().unwrap().clone();
+    let v2 = df.column("v2_rms_v").unwrap().f64().unwrap().clone();
+    assert!(v1.into_iter().all(|v| v.unwrap() > 0.0));
+    assert!(v2.into_iter().all(|v| v.unwrap() == 0.0));
+    // No bias voltage, so the column is null; --bias-v is refused for such a device.
+    assert_eq!(df.column("bias_v").unwrap().null_count(), df.height());
+    let o = run(&[
+        "sweep",
+        "--device",
+        &data("examples/piezo_cantilever.toml"),
+        "--from",
+        "110",
+        "--to",
+        "120",
+        "--accel-rms-g",
+        "0.1",
+        "--bias-v",
+        "5",
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(
+        err.contains("--bias-v") && err.contains("piezoelectric"),
+        "{err}"
+    );
+    let _ = std::fs::remove_dir_all(out);
+}
+
+/// A bad record: its name, the edit of a good record's lines, and the messages expected.
+type BadRecordCase = (
+    &'static str,
+    Box<dyn Fn(&mut Vec<String>)>,
+    &'static [&'static str],
+);
+
+#[test]
+fn a_bad_record_is_refused_naming_file_line_and_range_and_nothing_is_written() {
+    let dir = tmp("bad");
+    let out = dir.join("out");
+    let piezo = data("examples/piezo_cantilever.toml");
+    let cases: [BadRecordCase; 3] = [
+        (
+            "gap",
+            Box::new(|r: &mut Vec<String>| {
+                r.remove(1000);
+            }),
+            // Word for word as the book's "Model your own harvester" chapter quotes it.
+            &[
+                "rec.csv: line 1002: time step 2.0000e-4 s is not uniform: must be between \
+               9.9000e-5 and 1.0100e-4 s (the record's median step 1.0000e-4 s within 1 %)",
+            ],
+        ),
+        (
+            "nan",
+            Box::new(|r: &mut Vec<String>| r[500] = "0.0500000,NaN".into()),
+            &["line 502", "accel = NaN", "not a finite number"],
+        ),
+        (
+            "short",
+            Box::new(|r: &mut Vec<String>| r.truncate(2000)),
+            &["too short", "must be at least"],
+        ),
+    ];
+    for (tag, edit, needles) in cases {
+        let rec = csv(&dir.join(tag), 40000, 1e-4, edit);
+        let o = run(&[
+            "random",
+            "--device",
+            &piezo,
+            "--accel-file",
+            rec.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(1), "{tag}: {err}");
+        assert!(err.contains("rec.csv"), "{tag}: {err}");
+        for n in needles {
+            assert!(err.contains(n), "{tag}: `{n}` not in {err}");
+        }
+        assert!(!out.exists(), "{tag}: output written for a refused record");
+    }
+    let _ = std::fs::remove_dir_all(dir);
+}
+
+#[test]
+fn a_measured_record_drives_a_device_with_its_spectrum_beside() {
+    let out = tmp("measured");
+    let o = run(&[
+        "random",
+        "--device",
+        &data("examples/piezo_cantilever.toml"),
+        "--accel-file",
+        &data("examples/machine_record.wav"),
+        "--accel-scale",
+        "20",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let df = read_parquet(&out.join("output_psd.parquet"));
+    for c in [
+        "freq_hz",
+        "out_psd_uw_per_hz",
+        "linear_psd_uw_per_hz",
+        "psd_g2_per_hz",
+    ] {
+        assert!(df.column(c).is_ok(), "missing column {c}");
+    }
+    // The drive's spectrum peaks at the machine's third harmonic, 3 x 39.5 Hz, the
+    // strongest line of the synthetic record (data/examples/make_machine_record.py).
+    let f = df.column("freq_hz").unwrap().f64().unwrap().clone();
+    let s = df.column("psd_g2_per_hz").unwrap().f64().unwrap().clone();
+    let (peak_f, _) = f
+        .into_iter()
+        .zip(&s)
+        .map(|(f, s)| (f.unwrap(), s.unwrap()))
+        .fold((0.0, 0.0), |a, b| if b.1 > a.1 { b } else { a });
+    assert!(
+        (peak_f - 118.5).abs() < 2.0,
+        "drive PSD peaks at {peak_f} Hz"
+    );
+    assert!(out.join("endstop-random.svg").exists());
+    let _ = std::fs::remove_dir_all(out);
+}
+
+/// The book quotes this message word for word.
+#[test]
+fn a_restitution_coefficient_above_one_is_refused_with_the_books_message() {
+    let dir = tmp("coef");
+    std::fs::create_dir_all(&dir).unwrap();
+    let text = std::fs::read_to_string(data("examples/rigid_restitution.toml"))
+        .unwrap()
+        .replace("coefficient = 0.6", "coefficient = 1.2")
+        .replace("[stops.both]", "[stops.upper]");
+    std::fs::write(dir.join("my.toml"), text).unwrap();
+    let o = Command::new(BIN)
+        .current_dir(&dir)
+        .args(["random", "--device", "my.toml", "--psd", "1e-3"])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(
+        err.contains(
+            "my.toml: field `stops.upper.coefficient` = 1.2e0 is out of range: must be between \
+             0 and 1"
+        ),
+        "{err}"
+    );
+    let _ = std::fs::remove_dir_all(dir);
+}
