@@ -232,9 +232,10 @@ fn record_spec_and_errors() {
 #[test]
 fn a_device_faster_than_the_sample_rate_falls_back_to_dormand_prince() {
     // A suspension 10^4 times stiffer puts prototype 2's resonance near 67 kHz: the 10 us
-    // sample interval does not resolve it (omega h ~ 4 > the exponential step's bound of 2),
-    // so the exponential free flight cannot be built. The record is then integrated by
-    // Dormand-Prince throughout, sample for sample the record of that scheme (it panicked).
+    // sample interval does not resolve it (omega h ~ 4 > the bound of 2), and the pair's free
+    // flight is nonlinear, so its remainder cannot be extrapolated from past samples. The
+    // record is then integrated by Dormand-Prince throughout, sample for sample the record of
+    // that scheme (it panicked), and says why.
     let mut dev = prototype2_setup(&device("prototype2"));
     dev.mechanics.stiffness_n_per_m *= 1e4;
     let mut spec = RecordSpec::paper(&dev, 1e-4);
@@ -242,6 +243,10 @@ fn a_device_faster_than_the_sample_rate_falls_back_to_dormand_prince() {
     assert_eq!(spec.scheme, Scheme::Exponential);
     let fast = simulate_record(&dev, &spec, 7, 3).unwrap();
     assert_eq!(fast.summary.exponential_steps, 0);
+    assert_eq!(
+        fast.summary.free_flight,
+        FreeFlightPath::Dopri5(Fallback::Unresolved)
+    );
     spec.scheme = Scheme::Dopri5;
     let reference = simulate_record(&dev, &spec, 7, 3).unwrap();
     assert_eq!(fast.v1_v, reference.v1_v);

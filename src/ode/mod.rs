@@ -46,6 +46,7 @@ mod adaptive;
 pub mod events;
 pub mod exponential;
 mod fixed;
+pub mod phi;
 mod runge_kutta;
 pub mod tableau;
 

@@ -243,9 +243,12 @@ pub enum Fallback {
     UnboundedPair,
     /// A capacitance plus Cp of an area-overlap pair vanishes before a stop is reached.
     CapacitanceVanishes,
-    /// The sample interval does not resolve the device's linearised dynamics (the scaled
-    /// `h L` of [`ExpAdams::new`](crate::ode::exponential::ExpAdams::new) exceeds its bound,
-    /// e.g. a coil whose `L/(R + Rc)` is much shorter than the sample interval).
+    /// The free flight is nonlinear and the sample interval does not resolve the device's
+    /// linearised dynamics (the scaled `h L` exceeds
+    /// [`RESOLVED_NORM`](crate::ode::exponential::RESOLVED_NORM)): the exponential step
+    /// extrapolates the remainder from its values at past samples, which must resolve the
+    /// motion. A linear free flight (piezoelectric, electromagnetic) is exact at any step and
+    /// never falls back for this reason.
     Unresolved,
 }
 
@@ -259,7 +262,9 @@ impl std::fmt::Display for Fallback {
             Fallback::CapacitanceVanishes => {
                 "a transducer capacitance plus Cp vanishes before the stop is reached"
             }
-            Fallback::Unresolved => "the sample interval does not resolve the linearised dynamics",
+            Fallback::Unresolved => {
+                "the sample interval does not resolve the nonlinear free flight's dynamics"
+            }
         })
     }
 }

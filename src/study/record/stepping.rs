@@ -3,7 +3,7 @@
 //! node voltages and the contact statistics (see the parent module).
 
 use crate::drive::{Excitation, Sampled};
-use crate::ode::exponential::{ExpAdams, History};
+use crate::ode::exponential::{resolves, ExpAdams, History};
 use crate::ode::{Dopri5, Observer, Step};
 use crate::physics::contact::{Mode, Side};
 use crate::physics::free_flight::Remainder;
@@ -212,8 +212,9 @@ pub(super) struct FastFlight<R: Remainder> {
 impl<R: Remainder> FastFlight<R> {
     /// The fast path of a device, or why the record goes to [`Dopri5`] throughout: the free
     /// flight could reach an inadmissible state that only [`Dopri5`] checks (a capacitance
-    /// plus Cp not positive before a stop, or a capacitor pair without a stop on one side),
-    /// or the sample interval does not resolve the device's linear dynamics
+    /// plus Cp not positive before a stop, or a capacitor pair without a stop on one side), or
+    /// the free flight is nonlinear and the sample interval does not resolve its dynamics
+    /// ([`resolves`]). A linear free flight is integrated exactly whatever its time constants
     /// ([`ExpAdams::new`]).
     pub(super) fn new<E: Excitation>(
         model: &Harvester<E>,
@@ -235,7 +236,10 @@ impl<R: Remainder> FastFlight<R> {
             }
         }
         let (l, c) = flight.linear();
-        let method = ExpAdams::new(&l, &c, dt, &model.scales()).ok_or(Fallback::Unresolved)?;
+        if !flight.is_linear() && !resolves(&l, dt, &model.scales()) {
+            return Err(Fallback::Unresolved);
+        }
+        let method = ExpAdams::new(&l, &c, dt, &model.scales());
         Ok(Self {
             model: remainder,
             method,
