@@ -269,6 +269,21 @@ impl<S: HybridSystem<N>, M: Method<K>, const N: usize, const K: usize> Adaptive<
         t_end: f64,
         observer: &mut O,
     ) -> Result<(), SolverError> {
+        self.integrate_until(sys, t_end, observer, |_| false)
+            .map(|_| ())
+    }
+
+    /// As [`Adaptive::integrate_observed`], but returns at the first switch into a mode for
+    /// which `stop` holds (at the switch's time, in the new mode), with `true`; `false` when
+    /// `t_end` is reached first. A caller that integrates some modes otherwise (exactly, see
+    /// [`crate::study::flow`]) hands this integrator the others.
+    pub fn integrate_until<O: Observer<N, S::Mode>>(
+        &mut self,
+        sys: &S,
+        t_end: f64,
+        observer: &mut O,
+        stop: impl Fn(S::Mode) -> bool,
+    ) -> Result<bool, SolverError> {
         let mut steps: u64 = 0;
         while self.t < t_end {
             if !self.k1_valid {
@@ -285,6 +300,9 @@ impl<S: HybridSystem<N>, M: Method<K>, const N: usize, const K: usize> Adaptive<
                 let g = sys.guards(self.mode, self.t, &self.y);
                 if let Some(i) = (0..MAX_GUARDS).find(|&i| g[i] > 0.0) {
                     self.switch(sys, i, observer)?;
+                    if stop(self.mode) {
+                        return Ok(true);
+                    }
                     continue;
                 }
             }
@@ -403,7 +421,10 @@ impl<S: HybridSystem<N>, M: Method<K>, const N: usize, const K: usize> Adaptive<
                     state: self.state_vec(),
                 });
             }
+            if !self.switch_trail.is_empty() && stop(self.mode) {
+                return Ok(true);
+            }
         }
-        Ok(())
+        Ok(false)
     }
 }

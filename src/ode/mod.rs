@@ -269,6 +269,29 @@ pub struct Step<const N: usize> {
 }
 
 impl<const N: usize> Step<N> {
+    /// A step of an integrator that knows its solution at the ends and the midpoint (an exact
+    /// propagator): its dense output is the quartic through `y0`, `y_mid` and `y1` with
+    /// derivatives `f0` and `f1` at the ends (the cubic Hermite interpolant plus a multiple of
+    /// `theta^2 (1 - theta)^2`, in the form of the Dormand-Prince dense output).
+    pub fn from_ends_and_midpoint(
+        t0: f64,
+        h: f64,
+        [y0, y_mid, y1]: [SVector<f64, N>; 3],
+        [f0, f1]: [SVector<f64, N>; 2],
+    ) -> Self {
+        let r1 = y1 - y0;
+        let r2 = f0 * h - r1;
+        let r3 = r1 - f1 * h - r2;
+        let r4 = (y_mid - (y0 + r1 * 0.5 + r2 * 0.25 + r3 * 0.125)) * 16.0;
+        Self {
+            t0,
+            h,
+            y0,
+            y1,
+            rcont: [y0, r1, r2, r3, r4],
+        }
+    }
+
     /// End time (s).
     pub fn t1(&self) -> f64 {
         self.t0 + self.h

@@ -1,4 +1,5 @@
-//! Studies built on the model and the integrator: steady states under a sine ([`steady`]), the
+//! Studies built on the model and the integrator: the exact integration of a sine-driven
+//! harvester's affine modes ([`flow`]), steady states under a sine ([`steady`]), the
 //! stepped-drive engine ([`stepped`]) behind frequency sweeps ([`sweep`], up and down) and
 //! amplitude sweeps ([`amplitude`]), periodic orbits by shooting with their Floquet multipliers
 //! ([`orbit`]), their pseudo-arclength continuation with folds, branch points and grazing
@@ -11,6 +12,7 @@ pub mod amplitude;
 pub mod basins;
 pub mod continuation;
 pub mod ensemble;
+pub mod flow;
 pub mod orbit;
 pub mod record;
 pub mod record_ledger;

@@ -4,9 +4,10 @@
 use nalgebra::{Matrix4, Vector4};
 
 use crate::drive::Sine;
-use crate::ode::{Dopri5, HybridSystem, SolverError, Stats, Step};
+use crate::ode::{HybridSystem, SolverError, Stats, Step};
 use crate::physics::contact::{Mode, Side, StopModel};
 use crate::physics::harvester::{Harvester, State};
+use crate::study::flow::{Engine, SineFlow};
 
 use super::period_sums::{Accumulator, Sums};
 use super::variational::{state_of, Aug, Variational};
@@ -93,13 +94,8 @@ impl<'a> Shooter<'a> {
         observer: O,
     ) -> Result<(State, Mode, Stats), SolverError> {
         let model = self.model(forcing, phase_rad);
-        let mut ode = Dopri5::new(
-            0.0,
-            y,
-            mode_of(&model, &y),
-            model.solver_options(self.cfg.rtol),
-        );
-        ode.integrate(&model, duration_s, observer)?;
+        let mut ode = SineFlow::new(&model, 0.0, y, mode_of(&model, &y), self.cfg.rtol);
+        ode.integrate(duration_s, observer)?;
         Ok((ode.y(), ode.mode(), ode.stats()))
     }
 
@@ -143,11 +139,11 @@ impl<'a> Shooter<'a> {
             atol[20 + i] = self.cfg.rtol * self.scales[i] / p_ref;
         }
         let opts = base.augmented(atol);
-        let mut ode = Dopri5::new(0.0, z0, mode_of(&model, &y), opts);
+        let mut ode = Engine::new(&sys, 0.0, z0, mode_of(&model, &y), opts, true);
         let period = forcing.period_s();
-        ode.integrate(&sys, period, |_, _| {})?;
+        ode.integrate_observed(period, &mut crate::ode::Steps(|_: &Step<24>, _| {}))?;
         *stats += ode.stats();
-        let z = ode.y();
+        let z = ode.z();
         let end = state_of(&z);
         let mut monodromy = Matrix4::from_column_slice(&z.as_slice()[4..20]);
         self.drop_unused(&mut monodromy);
@@ -219,13 +215,8 @@ impl<'a> Shooter<'a> {
             model: &model,
             sums: Sums::default(),
         };
-        let mut ode = Dopri5::new(
-            0.0,
-            y,
-            mode_of(&model, &y),
-            model.solver_options(self.cfg.rtol),
-        );
-        ode.integrate_observed(&model, forcing.period_s(), &mut acc)?;
+        let mut ode = SineFlow::new(&model, 0.0, y, mode_of(&model, &y), self.cfg.rtol);
+        ode.integrate_observed(forcing.period_s(), &mut acc)?;
         let (end, st) = (ode.y(), ode.stats());
         let acc = acc.sums;
         *stats += st;

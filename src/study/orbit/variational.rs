@@ -2,12 +2,13 @@
 //! and the parameter sensitivity integrated together, with the saltation matrix applied at
 //! every switch of mode (see the parent module).
 
-use nalgebra::{SVector, Vector4};
+use nalgebra::{Matrix4, SVector, Vector4};
 
 use crate::drive::Sine;
 use crate::ode::HybridSystem;
 use crate::physics::contact::Mode;
 use crate::physics::harvester::{reset_jacobian, Harvester, State, SwitchKind};
+use crate::study::flow::{AffineMode, Carrier};
 
 use super::{Parameter, VARIATIONAL_DIM};
 
@@ -102,6 +103,31 @@ impl HybridSystem<VARIATIONAL_DIM> for Variational<'_> {
 
     fn check_state(&self, mode: Mode, t: f64, z: &Aug) -> Result<(), String> {
         self.model.check_state(mode, t, &state_of(z))
+    }
+}
+
+/// In an affine mode the variational equations are solved exactly too: the monodromy's
+/// columns by `e^{sL}`, the parameter column by `e^{sL}` and the particular solution of its
+/// forcing ([`AffineMode::sensitivity`]); the saltation at every switch is the one above.
+impl Carrier<VARIATIONAL_DIM> for Variational<'_> {
+    fn harvester(&self) -> &Harvester<Sine> {
+        self.model
+    }
+
+    const DENSE: bool = false;
+
+    fn carry(&self, am: &AffineMode, e: &Matrix4<f64>, t: f64, s: f64, z: &Aug, y1: &State) -> Aug {
+        let mut out = *z;
+        out.fixed_rows_mut::<4>(0).copy_from(y1);
+        for c in 0..4 {
+            let base = 4 + 4 * c;
+            let col = e * Vector4::new(z[base], z[base + 1], z[base + 2], z[base + 3]);
+            out.fixed_rows_mut::<4>(base).copy_from(&col);
+        }
+        let w = Vector4::new(z[20], z[21], z[22], z[23]);
+        let w1 = e * (w - am.sensitivity(self.param, t)) + am.sensitivity(self.param, t + s);
+        out.fixed_rows_mut::<4>(20).copy_from(&w1);
+        out
     }
 }
 

@@ -1,0 +1,554 @@
+//! The engine of [`super::SineFlow`]: exact steps on a grid of the drive period in the affine
+//! modes, the events located on the exact solution, and Dormand-Prince in every other mode.
+//! It carries either the state alone or the state with its variational equations
+//! ([`Carrier`]).
+
+use nalgebra::{Matrix4, SVector};
+
+use crate::drive::Sine;
+use crate::ode::phi::expm;
+use crate::ode::{Dopri5, HybridSystem, Observer, Options, SolverError, Stats, Step};
+use crate::ode::{MAX_GUARDS, MAX_SWITCHES_AT_ONE_TIME};
+use crate::physics::contact::Mode;
+use crate::physics::harvester::{Harvester, State};
+
+use super::affine::{AffineMode, AffineModes};
+
+/// Fewest grid steps per drive period.
+pub const MIN_STEPS_PER_PERIOD: usize = 64;
+
+/// Fewest grid steps per period of the fastest oscillation of an affine mode (the imaginary
+/// part of an eigenvalue of its `L`).
+pub const MIN_STEPS_PER_OSCILLATION: usize = 32;
+
+/// A guard whose cubic estimate over a step peaks within this fraction of its scale below zero
+/// is maximised on the exact solution (see the module docs of [`super`]).
+pub const GRAZE_MARGIN: f64 = 1e-3;
+
+/// What the engine integrates: the harvester's state, or the state with its variational
+/// equations. The state is the head of the vector.
+pub(crate) trait Carrier<const N: usize>: HybridSystem<N, Mode = Mode> {
+    /// The harvester under its drive.
+    fn harvester(&self) -> &Harvester<Sine>;
+
+    /// True when the observers are shown every step with its dense output.
+    const DENSE: bool;
+
+    /// The vector over `[t, t + s]` in the affine mode `am`, `e = e^{s L}`, given its value
+    /// `z` at `t` and the state `y1` at `t + s`.
+    fn carry(
+        &self,
+        am: &AffineMode,
+        e: &Matrix4<f64>,
+        t: f64,
+        s: f64,
+        z: &SVector<f64, N>,
+        y1: &State,
+    ) -> SVector<f64, N>;
+}
+
+/// The state at the head of a carried vector.
+#[inline(always)]
+pub(crate) fn head<const N: usize>(z: &SVector<f64, N>) -> State {
+    State::new(z[0], z[1], z[2], z[3])
+}
+
+impl Carrier<4> for Harvester<Sine> {
+    fn harvester(&self) -> &Harvester<Sine> {
+        self
+    }
+
+    const DENSE: bool = true;
+
+    #[inline(always)]
+    fn carry(
+        &self,
+        _: &AffineMode,
+        _: &Matrix4<f64>,
+        _: f64,
+        _: f64,
+        _: &State,
+        y1: &State,
+    ) -> State {
+        *y1
+    }
+}
+
+/// The propagators of one affine mode on the grid: `e^{hL}` and `e^{h L / 2^j}`
+/// (computed when first needed).
+#[derive(Debug, Clone)]
+struct Propagators {
+    step: Matrix4<f64>,
+    /// `dyadic[j - 1] = e^{h L / 2^j}`.
+    dyadic: Vec<Matrix4<f64>>,
+    l: Matrix4<f64>,
+    h: f64,
+}
+
+impl Propagators {
+    fn new(l: &Matrix4<f64>, h: f64) -> Self {
+        Self {
+            step: expm(&(l * h)),
+            dyadic: Vec::new(),
+            l: *l,
+            h,
+        }
+    }
+
+    /// `e^{h L / 2^j}`, `j >= 1`.
+    fn dyadic(&mut self, j: usize) -> &Matrix4<f64> {
+        while self.dyadic.len() < j {
+            let k = self.dyadic.len() + 1;
+            let m = expm(&(self.l * (self.h * 0.5f64.powi(k as i32))));
+            self.dyadic.push(m);
+        }
+        &self.dyadic[j - 1]
+    }
+}
+
+/// The grid step of a model under its drive: [`MIN_STEPS_PER_PERIOD`] per period at least,
+/// and [`MIN_STEPS_PER_OSCILLATION`] per period of the fastest oscillation of its affine
+/// modes, a whole number per drive period.
+fn grid_step(model: &Harvester<Sine>, modes: &AffineModes) -> f64 {
+    let period = model.excitation.period_s();
+    let active = model.active_states();
+    let mut fastest = 0.0f64;
+    for i in 0..modes.len() {
+        let l = modes.at(i).l;
+        let block = l.view((0, 0), (active, active)).clone_owned();
+        for ev in block.complex_eigenvalues().iter() {
+            fastest = fastest.max(ev.im.abs());
+        }
+    }
+    let per_oscillation =
+        (period * fastest / (2.0 * std::f64::consts::PI) * MIN_STEPS_PER_OSCILLATION as f64).ceil();
+    let steps = (MIN_STEPS_PER_PERIOD as f64).max(per_oscillation);
+    period / steps
+}
+
+/// A located event: where in the step (s from its start), which guard, and the state there.
+struct Located {
+    s: f64,
+    index: usize,
+    y: State,
+}
+
+/// The exact-and-Dormand-Prince integration of a [`Carrier`] (see [`super`]).
+pub(crate) struct Engine<'a, S: Carrier<N>, const N: usize> {
+    sys: &'a S,
+    modes: Option<AffineModes>,
+    props: Vec<Propagators>,
+    h: f64,
+    t: f64,
+    z: SVector<f64, N>,
+    mode: Mode,
+    ode: Dopri5<S, N>,
+    /// True when `ode` holds the current point.
+    ode_current: bool,
+    /// Counters of the exact steps and their events.
+    stats: Stats,
+    time_tol: f64,
+    /// Switches made at the current time by the exact path.
+    switches_here: u32,
+    /// The model's state scales (for the guards' scales).
+    scales: State,
+}
+
+impl<'a, S: Carrier<N>, const N: usize> Engine<'a, S, N> {
+    /// An engine at `(t0, z0)` in `mode`; `exact` false sends everything to Dormand-Prince.
+    pub(crate) fn new(
+        sys: &'a S,
+        t0: f64,
+        z0: SVector<f64, N>,
+        mode: Mode,
+        opts: Options<N>,
+        exact: bool,
+    ) -> Self {
+        let time_tol = opts.event_time_tol;
+        let model = sys.harvester();
+        let modes = if exact { AffineModes::of(model) } else { None };
+        let exact_path = modes.is_some();
+        let (h, props) = match &modes {
+            Some(m) => {
+                let h = grid_step(model, m);
+                let props = (0..m.len())
+                    .map(|i| Propagators::new(&m.at(i).l, h))
+                    .collect();
+                (h, props)
+            }
+            None => (0.0, Vec::new()),
+        };
+        Self {
+            sys,
+            modes,
+            props,
+            h,
+            t: t0,
+            z: z0,
+            mode,
+            ode_current: !exact_path,
+            ode: Dopri5::new(t0, z0, mode, opts),
+            stats: Stats::default(),
+            time_tol,
+            switches_here: 0,
+            scales: model.scales(),
+        }
+    }
+
+    /// True when the affine modes are integrated exactly.
+    pub(crate) fn is_exact(&self) -> bool {
+        self.modes.is_some()
+    }
+
+    /// Current time (s).
+    pub(crate) fn t(&self) -> f64 {
+        self.t
+    }
+
+    /// Current vector.
+    pub(crate) fn z(&self) -> SVector<f64, N> {
+        self.z
+    }
+
+    /// Current mode.
+    pub(crate) fn mode(&self) -> Mode {
+        self.mode
+    }
+
+    /// Counters: the exact steps (each an accepted step with one right-hand-side evaluation)
+    /// and their events, and Dormand-Prince's.
+    pub(crate) fn stats(&self) -> Stats {
+        let mut s = self.ode.stats();
+        s += self.stats;
+        s
+    }
+
+    /// Integrates to `t_end`, showing `observer` every step (with [`Carrier::DENSE`]) and
+    /// every mode switch.
+    pub(crate) fn integrate_observed<O: Observer<N, Mode>>(
+        &mut self,
+        t_end: f64,
+        observer: &mut O,
+    ) -> Result<(), SolverError> {
+        while self.t < t_end {
+            if self.ode_current {
+                let modes = &self.modes;
+                let back = self.ode.integrate_until(self.sys, t_end, observer, |m| {
+                    modes.as_ref().is_some_and(|a| a.index(m).is_some())
+                })?;
+                self.t = self.ode.t();
+                self.z = self.ode.y();
+                self.mode = self.ode.mode();
+                if back {
+                    self.ode_current = false;
+                    self.switches_here = 0;
+                }
+            } else {
+                match self.modes.as_ref().and_then(|m| m.index(self.mode)) {
+                    Some(i) => self.exact(i, t_end, observer)?,
+                    None => self.hand_over(self.mode),
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Gives the current point to Dormand-Prince, in `mode`.
+    fn hand_over(&mut self, mode: Mode) {
+        self.ode.restart_with_step(self.t, self.z, mode, self.h);
+        self.ode_current = true;
+    }
+
+    /// The next point of the grid after `t`, or `t_end` (with true when the step from `t` is a
+    /// whole grid step).
+    fn next_point(&self, t_end: f64) -> (f64, bool) {
+        let h = self.h;
+        let idx = self.t / h;
+        let n = idx.round();
+        let on_grid = (idx - n).abs() <= 1e-9;
+        let next = if on_grid { n + 1.0 } else { idx.ceil() };
+        let t_next = next * h;
+        if t_next >= t_end - 1e-9 * h {
+            // The end of the integration: a whole step when it lies on the next grid point.
+            let whole = on_grid && (t_end - t_next).abs() <= 1e-9 * h;
+            (t_end, whole)
+        } else {
+            (t_next, on_grid)
+        }
+    }
+
+    /// Exact steps in the affine mode `i` until `t_end` or a switch out of it.
+    fn exact<O: Observer<N, Mode>>(
+        &mut self,
+        i: usize,
+        t_end: f64,
+        observer: &mut O,
+    ) -> Result<(), SolverError> {
+        let modes = self.modes.as_ref().expect("an affine mode has its modes");
+        let am = modes.at(i).clone();
+        // A guard already positive at the start fires at once (as in Dormand-Prince).
+        let y = head(&self.z);
+        if let Some(g) = am.guards.iter().flatten().find(|g| g.at(&y) > 0.0) {
+            return self.switch(&am, g.index, y, observer);
+        }
+        let t0 = self.t;
+        let (p0, a0) = am.forced(t0);
+        let mut at = Point {
+            t: t0,
+            y,
+            p: p0,
+            f: am.rhs_with(a0, &y),
+        };
+        while self.t < t_end {
+            let (t1, whole) = self.next_point(t_end);
+            let s = t1 - at.t;
+            let e = if whole {
+                self.props[i].step
+            } else {
+                expm(&(am.l * s))
+            };
+            let (p1, a1) = am.forced(t1);
+            let y1 = e * (at.y - at.p) + p1;
+            let next = Point {
+                t: t1,
+                y: y1,
+                p: p1,
+                f: am.rhs_with(a1, &y1),
+            };
+            self.stats.accepted += 1;
+            self.stats.rhs_evals += 1;
+            if let Some(ev) = self.locate(i, &am, &at, &next) {
+                // The step to the event, then the switch.
+                if ev.s > 0.0 {
+                    let e_ev = expm(&(am.l * ev.s));
+                    let (p_ev, a_ev) = am.forced(at.t + ev.s);
+                    let end = Point {
+                        t: at.t + ev.s,
+                        y: ev.y,
+                        p: p_ev,
+                        f: am.rhs_with(a_ev, &ev.y),
+                    };
+                    self.show(&am, observer, &at, &end, None);
+                    self.z = self.sys.carry(&am, &e_ev, at.t, ev.s, &self.z, &ev.y);
+                    self.switches_here = 0;
+                }
+                self.t = at.t + ev.s;
+                return self.switch(&am, ev.index, ev.y, observer);
+            }
+            let half = whole.then(|| *self.props[i].dyadic(1));
+            self.show(&am, observer, &at, &next, half);
+            self.z = self.sys.carry(&am, &e, at.t, s, &self.z, &y1);
+            self.t = t1;
+            self.switches_here = 0;
+            at = next;
+        }
+        Ok(())
+    }
+
+    /// Shows the step from `a` to `b` to the observer, with the quartic dense output through
+    /// the exact midpoint (`half` is `e^{sL/2}` when known).
+    fn show<O: Observer<N, Mode>>(
+        &self,
+        am: &AffineMode,
+        observer: &mut O,
+        a: &Point,
+        b: &Point,
+        half: Option<Matrix4<f64>>,
+    ) {
+        if !S::DENSE {
+            return;
+        }
+        let s = b.t - a.t;
+        let half = half.unwrap_or_else(|| expm(&(am.l * (0.5 * s))));
+        let y_mid = half * (a.y - a.p) + am.particular(a.t + 0.5 * s);
+        let step = Step::from_ends_and_midpoint(
+            a.t,
+            s,
+            [widen(&a.y), widen(&y_mid), widen(&b.y)],
+            [widen(&a.f), widen(&b.f)],
+        );
+        observer.step(&step, self.mode);
+    }
+
+    /// The switch through guard `index` of the affine mode `am` at the current time, where the
+    /// state is `y`: by the carrier's own switch when the new mode is affine, else by handing
+    /// the point to Dormand-Prince, which fires the guard at once.
+    fn switch<O: Observer<N, Mode>>(
+        &mut self,
+        am: &AffineMode,
+        index: usize,
+        y: State,
+        observer: &mut O,
+    ) -> Result<(), SolverError> {
+        let mut z = self.z;
+        for k in 0..4 {
+            z[k] = y[k];
+        }
+        let mut z_new = z;
+        let to = self.sys.switch(am.mode, index, self.t, &mut z_new);
+        let affine = self.modes.as_ref().is_some_and(|m| m.index(to).is_some());
+        if affine {
+            self.switches_here += 1;
+            if self.switches_here > MAX_SWITCHES_AT_ONE_TIME {
+                return Err(SolverError::Chattering {
+                    t: self.t,
+                    switches: self.switches_here,
+                    modes: vec![format!("{:?}", am.mode), format!("{to:?}")],
+                    state: y.iter().copied().collect(),
+                });
+            }
+            observer.switched(self.t, am.mode, to);
+            self.stats.events += 1;
+            self.z = z_new;
+            self.mode = to;
+        } else {
+            // Dormand-Prince takes the point in the old mode, where the guard is positive: it
+            // fires at once, and Dormand-Prince goes on until an affine mode is back.
+            self.z = z;
+            self.hand_over(am.mode);
+        }
+        Ok(())
+    }
+
+    /// The earliest crossing of a guard of `am` within the step from `a` to `b`, on the exact
+    /// solution (see [`super`]).
+    fn locate(&mut self, i: usize, am: &AffineMode, a: &Point, b: &Point) -> Option<Located> {
+        let s = b.t - a.t;
+        let mut best: Option<Located> = None;
+        for g in am.guards.iter().flatten() {
+            let (g0, g1) = (g.at(&a.y), g.at(&b.y));
+            let upper = if g1 > 0.0 {
+                Some((s, b.y))
+            } else {
+                // An interior maximum near zero (a grazing trajectory).
+                let (d0, d1) = (g.n.dot(&a.f) * s, g.n.dot(&b.f) * s);
+                if !(d0 > 0.0 && d1 < 0.0) {
+                    continue;
+                }
+                let scale: f64 =
+                    g.n.iter()
+                        .zip(self.scales.iter())
+                        .map(|(n, c)| (n * c).abs())
+                        .sum();
+                if cubic_max(g0, d0, g1, d1) < -GRAZE_MARGIN * scale {
+                    continue;
+                }
+                let (s_max, y_max) = self.bisect(i, am, a, s, |y, t| g.n.dot(&am.rhs(t, y)) <= 0.0);
+                (g.at(&y_max) > 0.0).then_some((s_max, y_max))
+            };
+            let Some((s_hi, y_hi)) = upper else { continue };
+            if best.as_ref().is_some_and(|b| b.s <= 0.0) {
+                continue;
+            }
+            let (s_ev, y_ev) = self.bisect_with(i, am, a, s_hi, Some(y_hi), |y, _| g.at(y) > 0.0);
+            if best.as_ref().is_none_or(|b| s_ev < b.s) {
+                best = Some(Located {
+                    s: s_ev,
+                    index: g.index,
+                    y: y_ev,
+                });
+            }
+        }
+        best
+    }
+
+    /// The first point of `(0, s]` after `a` where `past(y, t)` holds (it does at `s`, where
+    /// the state is `y_s` if known, and not at 0, and once it holds it keeps holding over the
+    /// step), to the event time tolerance, with the state there: bisection on the exact
+    /// solution through the propagators `e^{h L / 2^j}`.
+    fn bisect_with(
+        &mut self,
+        i: usize,
+        am: &AffineMode,
+        a: &Point,
+        s: f64,
+        y_s: Option<State>,
+        past: impl Fn(&State, f64) -> bool,
+    ) -> (f64, State) {
+        let (mut lo, mut y_lo, mut p_lo) = (0.0, a.y, a.p);
+        let (mut hi, mut y_hi) = (s, y_s);
+        let mut j = 0usize;
+        while hi - lo > self.time_tol && j < 63 {
+            j += 1;
+            let ds = self.h * 0.5f64.powi(j as i32);
+            if lo + ds >= hi {
+                continue;
+            }
+            let d = *self.props[i].dyadic(j);
+            let p_c = am.particular(a.t + lo + ds);
+            let y_c = d * (y_lo - p_lo) + p_c;
+            if past(&y_c, a.t + lo + ds) {
+                (hi, y_hi) = (lo + ds, Some(y_c));
+            } else {
+                (lo, y_lo, p_lo) = (lo + ds, y_c, p_c);
+            }
+        }
+        let y = y_hi.unwrap_or_else(|| expm(&(am.l * hi)) * (a.y - a.p) + am.particular(a.t + hi));
+        (hi, y)
+    }
+
+    /// [`Engine::bisect_with`] without the state at `s`.
+    fn bisect(
+        &mut self,
+        i: usize,
+        am: &AffineMode,
+        a: &Point,
+        s: f64,
+        past: impl Fn(&State, f64) -> bool,
+    ) -> (f64, State) {
+        self.bisect_with(i, am, a, s, None, past)
+    }
+}
+
+/// A point of an exact step: time, state, the particular solution and the right-hand side
+/// there.
+#[derive(Debug, Clone, Copy)]
+struct Point {
+    t: f64,
+    y: State,
+    p: State,
+    f: State,
+}
+
+/// The largest value of the cubic Hermite interpolant with end values `g0`, `g1` and end
+/// slopes times the step `d0`, `d1` on [0, 1].
+fn cubic_max(g0: f64, d0: f64, g1: f64, d1: f64) -> f64 {
+    // p(th) = g0 + d0 th + b th^2 + c th^3.
+    let b = 3.0 * (g1 - g0) - 2.0 * d0 - d1;
+    let c = 2.0 * (g0 - g1) + d0 + d1;
+    let p = |th: f64| g0 + th * (d0 + th * (b + th * c));
+    let mut best = g0.max(g1);
+    // p'(th) = d0 + 2 b th + 3 c th^2.
+    let (qa, qb, qc) = (3.0 * c, 2.0 * b, d0);
+    let mut consider = |th: f64| {
+        if th > 0.0 && th < 1.0 {
+            best = best.max(p(th));
+        }
+    };
+    if qa == 0.0 {
+        if qb != 0.0 {
+            consider(-qc / qb);
+        }
+    } else {
+        let disc = qb * qb - 4.0 * qa * qc;
+        if disc >= 0.0 {
+            let r = disc.sqrt();
+            consider((-qb + r) / (2.0 * qa));
+            consider((-qb - r) / (2.0 * qa));
+        }
+    }
+    best
+}
+
+/// A state as a carried vector's head (zeros elsewhere), for the dense steps of the state.
+#[inline(always)]
+fn widen<const N: usize>(y: &State) -> SVector<f64, N> {
+    let mut z = SVector::<f64, N>::zeros();
+    for k in 0..4.min(N) {
+        z[k] = y[k];
+    }
+    z
+}
+
+/// The guards of a mode are at most [`MAX_GUARDS`]; an affine mode has two.
+const _: () = assert!(MAX_GUARDS >= 2);
