@@ -317,6 +317,23 @@ impl<const N: usize> Step<N> {
         }
         s * self.h
     }
+
+    /// The integrals over the step of each component of `f(y(t))`, as [`Step::integrate`]
+    /// computes each of them (the same operations in the same order, so the same bits), with
+    /// the dense output and `f` evaluated once per node for all of them.
+    pub fn integrate_each<const K: usize, F: Fn(&SVector<f64, N>) -> [f64; K]>(
+        &self,
+        f: F,
+    ) -> [f64; K] {
+        let mut s = [0.0; K];
+        for (x, w) in GAUSS_LEGENDRE_3 {
+            let v = f(&self.at_theta(x));
+            for (sk, vk) in s.iter_mut().zip(v) {
+                *sk += w * vk;
+            }
+        }
+        s.map(|sk| sk * self.h)
+    }
 }
 
 /// The 3-point Gauss-Legendre rule on [0, 1]: (node, weight) pairs, exact for polynomials of

@@ -159,13 +159,13 @@ struct Block<'m> {
 impl Observer<4, Mode> for Block<'_> {
     fn step(&mut self, st: &Step<4>, m: Mode) {
         let model = self.model;
-        let el = |y: &State| model.electrical(y).v;
-        self.v1sq += st.integrate(|y| el(y)[0].powi(2));
-        self.v2sq += st.integrate(|y| el(y)[1].powi(2));
-        self.vdsq += st.integrate(|y| {
-            let v = el(y);
-            (v[1] - v[0]).powi(2)
+        let [v1sq, v2sq, vdsq] = st.integrate_each(|y: &State| {
+            let v = model.electrical(y).v;
+            [v[0].powi(2), v[1].powi(2), (v[1] - v[0]).powi(2)]
         });
+        self.v1sq += v1sq;
+        self.v2sq += v2sq;
+        self.vdsq += vdsq;
         let xm = st.at_theta(0.5)[0].abs();
         self.x_peak = self.x_peak.max(st.y1[0].abs()).max(xm);
         if m.in_contact() {

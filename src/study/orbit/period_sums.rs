@@ -50,9 +50,12 @@ impl Observer<4, Mode> for Accumulator<'_> {
 
 impl Sums {
     fn add(&mut self, model: &Harvester<Sine>, st: &Step<4>, mode: Mode) {
-        let el = |y: &State| model.electrical(y).v;
-        self.v1sq += st.integrate(|y| el(y)[0].powi(2));
-        self.v2sq += st.integrate(|y| el(y)[1].powi(2));
+        let [v1sq, v2sq] = st.integrate_each(|y: &State| {
+            let v = model.electrical(y).v;
+            [v[0].powi(2), v[1].powi(2)]
+        });
+        self.v1sq += v1sq;
+        self.v2sq += v2sq;
         for x in [st.y0[0], st.y1[0]] {
             self.x_upper = self.x_upper.max(x);
             self.x_lower = self.x_lower.min(x);
