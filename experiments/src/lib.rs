@@ -18,6 +18,7 @@ pub mod jobs;
 pub mod md;
 pub mod measured_io;
 pub mod narrowband_io;
+pub mod ngspice;
 pub mod panels;
 pub mod plot;
 pub mod response_io;
