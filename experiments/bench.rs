@@ -1,40 +1,54 @@
 //! `bench`: how fast the model runs, on fixed cases. Speed is measured here, never
 //! asserted by a test.
 //!
-//! * a 10 s prototype-1 record at Sa = 2.85e-2 g^2/Hz (heavy impacts; calibrated set, whose
-//!   stops are closer, and published set);
-//! * a 10 s prototype-2 record at Sa = 1.69e-3 g^2/Hz;
-//! * a full Figure 8 sweep (every curve of the published set, one thread and all threads);
-//! * a steady impacting sine of prototype 1 (calibrated, 5.5 g at 1300 Hz): the share of
-//!   integrator steps and right-hand-side evaluations spent in contact.
+//! Usage: `cargo run --release --bin bench [-- --quick]` (`just bench` runs the whole
+//! benchmark; `reproduce` runs `--quick`, which keeps its last phase short).
 //!
-//! Each case runs `REPEATS` times; the table gives the median and the fastest wall time.
-//! Beside them, the accuracy tables of the Performance page (untimed runs of the library;
-//! `tests/record_accuracy.rs` asserts what they show). Results go to `data/results/bench/` and
-//! the book's Performance page.
+//! * a 10 s prototype-1 record at Sa = 2.85e-2 g^2/Hz (heavy impacts; calibrated set, whose
+//!   stops are closer, and published set), and a 10 s prototype-2 record at 1.69e-3;
+//! * a steady impacting sine of prototype 1 (calibrated, 5.5 g at 1300 Hz): the share of
+//!   integrator steps spent in contact;
+//! * every example device of `data/examples/` (`bench/examples.rs`): its 10 s record, one
+//!   periodic orbit and (not with `--quick`) its whole response over its file's range, with
+//!   the ratio to a fixed-step RK4 at equal accuracy and to ngspice where it exports;
+//! * not with `--quick`: a full Figure 8 sweep (every curve of the published set, one thread
+//!   and all threads), Figure 13's whole curve by continuation and by sweeps, the paper
+//!   records against RK4, and the untimed accuracy tables (`bench/accuracy.rs`;
+//!   `tests/record_accuracy.rs` asserts what they show).
+//!
+//! Each timed case runs [`REPEATS`] times (once with `--quick`); the tables give the median
+//! processor time (user and system, of every thread) beside the median and fastest wall time:
+//! on a machine shared with other work the processor time is the steadier of the two. Results
+//! go to `data/results/bench/` and the book's Performance page.
 
 use endstop_experiments as common;
 
 use std::time::Instant;
 
-use anyhow::Result;
+use anyhow::{bail, Result};
 use common::{fmt_sig, Experiment};
 use endstop::drive::Sine;
-use endstop::ode::{Dopri5, Stats};
+use endstop::ode::Stats;
 use endstop::physics::contact::Mode;
 use endstop::physics::harvester::Harvester;
-use endstop::study::record::simulate_record;
-use endstop::study::record::RecordSpec;
+use endstop::study::flow::SineFlow;
+use endstop::study::record::{simulate_record, BroadbandError, RecordSpec};
 use endstop::study::rk4_record::{
     simulate_rk4_record, RK4_STEPS_AT_OUR_ACCURACY, RK4_STEPS_AT_TARGET,
 };
 use polars::prelude::*;
-use rayon::prelude::*;
 
-const REPEATS: usize = 5;
+#[path = "bench/accuracy.rs"]
+mod accuracy;
+#[path = "bench/examples.rs"]
+mod examples;
+
+/// Runs of each timed case (one with `--quick`).
+pub const REPEATS: usize = 5;
 /// Runs of each scheme in the side-by-side comparison with RK4.
 const RK4_REPEATS: usize = 3;
-const SEED: u64 = 2012;
+/// Seed of every record.
+pub const SEED: u64 = 2012;
 /// The accuracy asked of a record: its power within this of a tight-tolerance run, and its
 /// energy balance closed to this, relatively (`tests/record_accuracy.rs`).
 const ACCURACY_TARGET: f64 = 1e-6;
@@ -43,22 +57,39 @@ fn main() {
     common::run_main("bench", run);
 }
 
-fn timed<T>(mut f: impl FnMut() -> Result<T>) -> Result<(T, Vec<f64>)> {
-    let mut times = Vec::with_capacity(REPEATS);
+/// The wall and processor times of `repeats` runs of `f`, each sorted, with the last result.
+fn timed<T>(repeats: usize, mut f: impl FnMut() -> Result<T>) -> Result<(T, Times)> {
+    let (mut wall, mut cpu) = (Vec::new(), Vec::new());
     let mut last = None;
-    for _ in 0..REPEATS {
-        let t = Instant::now();
+    for _ in 0..repeats.max(1) {
+        let (t, c) = (Instant::now(), common::cpu_time_s());
         last = Some(f()?);
-        times.push(t.elapsed().as_secs_f64());
+        wall.push(t.elapsed().as_secs_f64());
+        cpu.push(common::cpu_time_s().zip(c).map_or(f64::NAN, |(b, a)| b - a));
     }
-    times.sort_by(f64::total_cmp);
-    Ok((last.expect("REPEATS > 0"), times))
+    wall.sort_by(f64::total_cmp);
+    cpu.sort_by(f64::total_cmp);
+    Ok((last.expect("at least one run"), Times { wall, cpu }))
+}
+
+/// Sorted wall and processor times of repeated runs (s).
+struct Times {
+    wall: Vec<f64>,
+    cpu: Vec<f64>,
+}
+
+impl Times {
+    fn median_wall(&self) -> f64 {
+        self.wall[self.wall.len() / 2]
+    }
+    fn median_cpu(&self) -> f64 {
+        self.cpu[self.cpu.len() / 2]
+    }
 }
 
 struct Row {
     case: String,
-    median_s: f64,
-    min_s: f64,
+    times: Times,
     simulated_s: f64,
     /// The integrator's counters of one run.
     stats: Stats,
@@ -66,6 +97,14 @@ struct Row {
 }
 
 fn run() -> Result<()> {
+    let mut quick = false;
+    for a in std::env::args().skip(1) {
+        match a.as_str() {
+            "--quick" => quick = true,
+            other => bail!("unknown argument `{other}`; usage: bench [--quick]"),
+        }
+    }
+    let repeats = if quick { 1 } else { REPEATS };
     let mut exp = Experiment::start("bench");
     exp.seed = Some(SEED);
     let p1 = exp.load_published("prototype1")?;
@@ -90,11 +129,176 @@ fn run() -> Result<()> {
             1.69e-3,
         ),
     ];
+    for (case, dev, sa) in records.clone() {
+        let spec = RecordSpec::paper(&dev, sa);
+        let (rec, times) = timed(repeats, || Ok(simulate_record(&dev, &spec, SEED, 0)?))?;
+        let sim = spec.transient_s + spec.noise.duration_s;
+        let s = rec.summary;
+        rows.push(Row {
+            case: case.to_string(),
+            times,
+            simulated_s: sim,
+            stats: s.stats,
+            note: format!(
+                "{} impacts, {} % of time in contact",
+                s.impacts,
+                fmt_sig(100.0 * s.contact_fraction, 3)
+            ),
+        });
+    }
+    for (i, key) in [
+        "p1_record_calibrated_median_s",
+        "p1_record_published_median_s",
+        "p2_record_median_s",
+    ]
+    .iter()
+    .enumerate()
+    {
+        exp.number(key, rows[i].times.median_cpu());
+    }
+
+    // Steady impacting sine: how much of the work is spent in contact.
+    let h = Harvester::new(&cal, Sine::from_rms_g(5.5, 1300.0));
+    let t_end = 200.0 / 1300.0;
+    let ((contact_steps, free_steps, stats), times) = timed(repeats, || {
+        let mut ode = SineFlow::new(&h, 0.0, h.rest_state(), Mode::Free, 1e-8);
+        let (mut c, mut f) = (0u64, 0u64);
+        ode.integrate(t_end, |_, m| if m.in_contact() { c += 1 } else { f += 1 })?;
+        Ok((c, f, ode.stats()))
+    })?;
+    let share = contact_steps as f64 / (contact_steps + free_steps) as f64;
+    rows.push(Row {
+        case: "P1 calibrated, sine 5.5 g at 1300 Hz, 200 periods".into(),
+        times,
+        simulated_s: t_end,
+        stats,
+        note: format!(
+            "{} % of accepted steps are in contact",
+            fmt_sig(100.0 * share, 3)
+        ),
+    });
+    exp.number("contact_step_share_sine_p1", share);
+
+    if !quick {
+        rows.extend(fig08_rows(&p1.device, repeats)?);
+        exp.number(
+            "fig08_sweeps_1thread_median_s",
+            rows[rows.len() - 2].times.median_cpu(),
+        );
+        exp.number(
+            "fig08_sweeps_all_threads_median_s",
+            rows[rows.len() - 1].times.median_wall(),
+        );
+        rows.extend(response_rows(&p2.device, repeats)?);
+    }
+
+    let mut md = format!(
+        "Machine: {} logical cores (RAYON_NUM_THREADS unset unless stated). Each case ran \
+         {repeats} time(s){}. Processor time is user plus system time of every thread.\n\n\
+         | case | median processor time (s) | median wall (s) | fastest wall (s) | simulated s per processor s | steps per simulated s | rejected steps (after an event) | RHS evals per simulated s | events | notes |\n|---|---|---|---|---|---|---|---|---|---|\n",
+        std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1),
+        if quick {
+            " (`bench --quick`, as `reproduce` runs it; `just bench` adds the sweeps, the \
+             continuation, the comparisons with RK4 and ngspice and the accuracy tables)"
+        } else {
+            ""
+        }
+    );
+    for r in &rows {
+        md.push_str(&format!(
+            "| {} | {} | {} | {} | {} | {} | {} ({}) | {} | {} | {} |\n",
+            r.case,
+            fmt_sig(r.times.median_cpu(), 3),
+            fmt_sig(r.times.median_wall(), 3),
+            fmt_sig(r.times.wall[0], 3),
+            fmt_sig(r.simulated_s / r.times.median_cpu(), 3),
+            fmt_sig(r.stats.steps() as f64 / r.simulated_s, 3),
+            r.stats.rejected,
+            r.stats.rejected_after_event,
+            fmt_sig(r.stats.rhs_evals as f64 / r.simulated_s, 3),
+            r.stats.events,
+            r.note
+        ));
+    }
+    exp.write_numbers_md(&md)?;
+    print!("{md}");
+    // The comparison with RK4 and the accuracy tables: only the whole benchmark measures
+    // them. `--quick` keeps the last whole run's tables (they name their commit), or says
+    // how to make them where there are none.
+    let full_md = common::book_generated_root().join("bench").join("full.md");
+    if !quick {
+        let md = format!(
+            "*Measured by the whole benchmark (`just bench`) at commit `{}`.*\n{}",
+            common::git_commit(),
+            paper_rk4_and_accuracy(&mut exp, &records, &p1, &p2)?
+        );
+        common::write_atomic(&full_md, md.as_bytes())?;
+        print!("{md}");
+    } else if !full_md.exists() {
+        common::write_atomic(
+            &full_md,
+            b"*Not measured in this build: `just bench` (the whole benchmark, about a minute \
+              on 2 cores) writes the comparison with RK4 and the accuracy tables here; \
+              `reproduce` runs `bench --quick`.*\n",
+        )?;
+    }
+
+    // Every example device.
+    let costs = examples::measure(&common::root(), repeats, quick)?;
+    let examples_md = examples::table(&costs, repeats, quick);
+    for c in &costs {
+        exp.number(&format!("{}_record_s", c.name), c.record.0);
+        exp.number(&format!("{}_orbit_s", c.name), c.orbit);
+        if let Some(r) = c.response {
+            exp.number(&format!("{}_response_s", c.name), r);
+        }
+    }
+    common::write_atomic(
+        &common::book_generated_root()
+            .join("bench")
+            .join("examples.md"),
+        examples_md.as_bytes(),
+    )?;
+    print!("{examples_md}");
+
+    let mut df = df!(
+        "case" => rows.iter().map(|r| r.case.clone()).collect::<Vec<_>>(),
+        "median_cpu_s" => rows.iter().map(|r| r.times.median_cpu()).collect::<Vec<_>>(),
+        "median_wall_s" => rows.iter().map(|r| r.times.median_wall()).collect::<Vec<_>>(),
+        "min_wall_s" => rows.iter().map(|r| r.times.wall[0]).collect::<Vec<_>>(),
+        "simulated_s" => rows.iter().map(|r| r.simulated_s).collect::<Vec<_>>(),
+        "steps" => rows.iter().map(|r| r.stats.steps()).collect::<Vec<_>>(),
+        "rejected_steps" => rows.iter().map(|r| r.stats.rejected).collect::<Vec<_>>(),
+        "rejected_after_event" => rows.iter().map(|r| r.stats.rejected_after_event).collect::<Vec<_>>(),
+        "rhs_evals" => rows.iter().map(|r| r.stats.rhs_evals).collect::<Vec<_>>(),
+        "events" => rows.iter().map(|r| r.stats.events).collect::<Vec<_>>(),
+        "params" => vec!["published+calibrated"; rows.len()],
+    )?;
+    exp.write_parquet("bench", &mut df, "published+calibrated")?;
+    let mut df = df!(
+        "device" => costs.iter().map(|c| c.name.clone()).collect::<Vec<_>>(),
+        "record_cpu_s" => costs.iter().map(|c| c.record.0).collect::<Vec<_>>(),
+        "orbit_cpu_s" => costs.iter().map(|c| c.orbit).collect::<Vec<_>>(),
+        "response_cpu_s" => costs.iter().map(|c| c.response).collect::<Vec<_>>(),
+        "params" => vec!["example"; costs.len()],
+    )?;
+    exp.write_parquet("examples", &mut df, "example")?;
+    exp.finish()
+}
+
+/// The paper records against RK4 and the untimed accuracy tables (Markdown), with their
+/// summary numbers.
+fn paper_rk4_and_accuracy(
+    exp: &mut Experiment,
+    records: &[(&str, endstop::device::Device, f64); 3],
+    p1: &common::LoadedDevice,
+    p2: &common::LoadedDevice,
+) -> Result<String> {
     // The RK4 yardstick at the target accuracy and at our measured accuracy.
     let picks = [RK4_STEPS_AT_TARGET, RK4_STEPS_AT_OUR_ACCURACY];
-    let accuracy_md = rk4_accuracy(&p1.device, &p2.device)?;
+    let accuracy_md = accuracy::rk4_accuracy(&p1.device, &p2.device)?;
     let mut ratios = Vec::new();
-    for (case, dev, sa) in records.clone() {
+    for (case, dev, sa) in records.iter().cloned() {
         for substeps in picks {
             let spec = RecordSpec::paper(&dev, sa);
             let mut ours = Vec::new();
@@ -104,14 +308,22 @@ fn run() -> Result<()> {
             let mut failure = None;
             // Side by side, alternating, so that a change of the machine's speed hits both.
             for _ in 0..RK4_REPEATS {
-                let t = Instant::now();
-                simulate_record(&dev, &spec, SEED, 0)?;
-                ours.push(t.elapsed().as_secs_f64());
+                ours.push(
+                    timed(1, || Ok(simulate_record(&dev, &spec, SEED, 0)?))?
+                        .1
+                        .cpu[0],
+                );
                 if failure.is_none() {
-                    let t = Instant::now();
-                    match simulate_rk4_record(&dev, &spec, SEED, 0, substeps) {
-                        Ok(_) => rk4.push(t.elapsed().as_secs_f64()),
-                        Err(e) => failure = Some(divergence(&e)),
+                    match timed(1, || {
+                        Ok(simulate_rk4_record(&dev, &spec, SEED, 0, substeps)?)
+                    }) {
+                        Ok((_, t)) => rk4.push(t.cpu[0]),
+                        Err(e) => {
+                            failure = Some(match e.downcast_ref::<BroadbandError>() {
+                                Some(b) => divergence(b),
+                                None => e.to_string(),
+                            })
+                        }
                     }
                 }
             }
@@ -125,126 +337,7 @@ fn run() -> Result<()> {
             ratios.push((case, substeps, a, b));
         }
     }
-    for (case, dev, sa) in records {
-        let spec = RecordSpec::paper(&dev, sa);
-        let (rec, times) = timed(|| Ok(simulate_record(&dev, &spec, SEED, 0)?))?;
-        let sim = spec.transient_s + spec.noise.duration_s;
-        let s = rec.summary;
-        rows.push(Row {
-            case: case.to_string(),
-            median_s: times[REPEATS / 2],
-            min_s: times[0],
-            simulated_s: sim,
-            stats: s.stats,
-            note: format!(
-                "{} impacts, {} % of time in contact",
-                s.impacts,
-                fmt_sig(100.0 * s.contact_fraction, 3)
-            ),
-        });
-    }
-
-    // A full Figure 8 sweep: every curve of the published set.
-    let settings = endstop::paper::figures::fig08::sweep_settings(&p1.device);
-    let curves = endstop::paper::figures::fig08::Fig8Curve::ALL
-        .map(endstop::paper::figures::fig08::Fig8Curve::spec);
-    for (label, threads) in [("1 thread", 1usize), ("all threads", 0)] {
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()?;
-        let (res, times) = timed(|| {
-            pool.install(|| {
-                Ok(endstop::paper::curves::run_curves(
-                    &p1.device,
-                    &curves,
-                    &settings,
-                    &|| {},
-                )?)
-            })
-        })?;
-        let (mut stats, mut periods) = (Stats::default(), 0.0);
-        for c in &res {
-            stats += c.report.sweep.stats;
-            for s in &c.report.sweep.steps {
-                periods += (s.measurement.blocks + settings.cfg.settle_blocks) as f64
-                    * settings.cfg.block_periods as f64
-                    / s.measurement.freq_hz;
-            }
-        }
-        rows.push(Row {
-            case: format!(
-                "Figure 8 sweeps, published set, {} curves, {label}",
-                curves.len()
-            ),
-            median_s: times[REPEATS / 2],
-            min_s: times[0],
-            simulated_s: periods,
-            stats,
-            note: "coarse sweeps only (refinements excluded from the counts)".into(),
-        });
-    }
-
-    // Steady impacting sine: how much of the work is spent in contact.
-    let h = Harvester::new(&cal, Sine::from_rms_g(5.5, 1300.0));
-    let t_end = 200.0 / 1300.0;
-    let ((contact_steps, free_steps, stats), times) = timed(|| {
-        let mut ode = Dopri5::new(0.0, h.rest_state(), Mode::Free, h.solver_options(1e-8));
-        let (mut c, mut f) = (0u64, 0u64);
-        ode.integrate(
-            &h,
-            t_end,
-            |_, m| {
-                if m.in_contact() {
-                    c += 1
-                } else {
-                    f += 1
-                }
-            },
-        )?;
-        Ok((c, f, ode.stats()))
-    })?;
-    let share = contact_steps as f64 / (contact_steps + free_steps) as f64;
-    rows.push(Row {
-        case: "P1 calibrated, sine 5.5 g at 1300 Hz, 200 periods".into(),
-        median_s: times[REPEATS / 2],
-        min_s: times[0],
-        simulated_s: t_end,
-        stats,
-        note: format!(
-            "{} % of accepted steps are in contact",
-            fmt_sig(100.0 * share, 3)
-        ),
-    });
-    exp.number("contact_step_share_sine_p1", share);
-
-    rows.extend(response_rows(&p2.device)?);
-
     let mut md = format!(
-        "Machine: {} logical cores (RAYON_NUM_THREADS unset unless stated). Each case ran {REPEATS} times.\n\n\
-         | case | median wall (s) | fastest (s) | simulated s per wall s | steps per simulated s | rejected steps (after an event) | RHS evals per simulated s | events | notes |\n|---|---|---|---|---|---|---|---|---|\n",
-        std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1)
-    );
-    for r in &rows {
-        md.push_str(&format!(
-            "| {} | {} | {} | {} | {} | {} ({}) | {} | {} | {} |\n",
-            r.case,
-            fmt_sig(r.median_s, 3),
-            fmt_sig(r.min_s, 3),
-            fmt_sig(r.simulated_s / r.median_s, 3),
-            fmt_sig(r.stats.steps() as f64 / r.simulated_s, 3),
-            r.stats.rejected,
-            r.stats.rejected_after_event,
-            fmt_sig(r.stats.rhs_evals as f64 / r.simulated_s, 3),
-            r.stats.events,
-            r.note
-        ));
-    }
-    exp.number("p1_record_calibrated_median_s", rows[0].median_s);
-    exp.number("p1_record_published_median_s", rows[1].median_s);
-    exp.number("p2_record_median_s", rows[2].median_s);
-    exp.number("fig08_sweeps_1thread_median_s", rows[3].median_s);
-    exp.number("fig08_sweeps_all_threads_median_s", rows[4].median_s);
-    md.push_str(&format!(
         "\n**Against a fixed-step RK4 at equal accuracy.** The yardstick \
          (`study::rk4_record`) is the classical RK4, driven by the same Runge-Kutta engine as \
          Dormand-Prince, with a fixed number of steps per 10 us sample interval and contacts \
@@ -256,11 +349,11 @@ fn run() -> Result<()> {
          4 and 8; `tests/record_accuracy.rs` asserts both). With impacts, too few steps per \
          sample diverge in the contacts (a prototype 1 contact at 2.85e-2 lasts about half a \
          sample interval); the table then gives the integrator's error instead of a time. \
-         Medians of {RK4_REPEATS} runs of each, alternating in the same process:\n\n\
+         Median processor times of {RK4_REPEATS} runs of each, alternating in the same process:\n\n\
          | case | RK4 steps per sample | ours (s) | RK4 (s) | ours / RK4 |\n|---|---|---|---|---|\n",
         picks[0],
         picks[1]
-    ));
+    );
     for (case, substeps, a, b) in &ratios {
         let (rk4, ratio) = match b {
             Ok(b) => (fmt_sig(*b, 3), fmt_sig(a / b, 3)),
@@ -286,7 +379,7 @@ fn run() -> Result<()> {
             exp.number(key, a / b);
         }
     }
-    let (impact_md, impact) = impact_accuracy(&p1.device, &p2.device)?;
+    let (impact_md, impact) = accuracy::impact_accuracy(&p1.device, &p2.device)?;
     md.push_str(&format!(
         "\n**A record's power with impacts.** One 10 s record (stream 0) of each figure's \
          setup, by our scheme (rtol {:e} in and near contacts) and by Dormand-Prince \
@@ -297,7 +390,7 @@ fn run() -> Result<()> {
     exp.number("p1_impacting_record_rel_dev_rtol1e-9", impact[0].1);
     exp.number("p2_impacting_record_rel_dev_ours", impact[1].0);
     exp.number("p2_impacting_record_rel_dev_rtol1e-9", impact[1].1);
-    let (ledger_md, ledger) = energy_balance(&p1.device, &p2.device)?;
+    let (ledger_md, ledger) = accuracy::energy_balance(&p1.device, &p2.device)?;
     md.push_str(&format!(
         "\n**The energy balance of a record.** The same records and two impact-free ones, \
          with the work of every force booked interval by interval on each scheme's own \
@@ -307,29 +400,56 @@ fn run() -> Result<()> {
     for (key, r) in ledger {
         exp.number(&format!("energy_residual_{key}"), r);
     }
-    exp.write_numbers_md(&md)?;
-    print!("{md}");
-    let mut df = df!(
-        "case" => rows.iter().map(|r| r.case.clone()).collect::<Vec<_>>(),
-        "median_wall_s" => rows.iter().map(|r| r.median_s).collect::<Vec<_>>(),
-        "min_wall_s" => rows.iter().map(|r| r.min_s).collect::<Vec<_>>(),
-        "simulated_s" => rows.iter().map(|r| r.simulated_s).collect::<Vec<_>>(),
-        "steps" => rows.iter().map(|r| r.stats.steps()).collect::<Vec<_>>(),
-        "rejected_steps" => rows.iter().map(|r| r.stats.rejected).collect::<Vec<_>>(),
-        "rejected_after_event" => rows.iter().map(|r| r.stats.rejected_after_event).collect::<Vec<_>>(),
-        "rhs_evals" => rows.iter().map(|r| r.stats.rhs_evals).collect::<Vec<_>>(),
-        "events" => rows.iter().map(|r| r.stats.events).collect::<Vec<_>>(),
-        "params" => vec!["published+calibrated"; rows.len()],
-    )?;
-    exp.write_parquet("bench", &mut df, "published+calibrated")?;
-    exp.finish()
+    Ok(md)
+}
+
+/// A full Figure 8 sweep (every curve of the published set), on one thread and on all.
+fn fig08_rows(p1: &endstop::device::Device, repeats: usize) -> Result<Vec<Row>> {
+    let settings = endstop::paper::figures::fig08::sweep_settings(p1);
+    let curves = endstop::paper::figures::fig08::Fig8Curve::ALL
+        .map(endstop::paper::figures::fig08::Fig8Curve::spec);
+    let mut rows = Vec::new();
+    for (label, threads) in [("1 thread", 1usize), ("all threads", 0)] {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()?;
+        let (res, times) = timed(repeats, || {
+            pool.install(|| {
+                Ok(endstop::paper::curves::run_curves(
+                    p1,
+                    &curves,
+                    &settings,
+                    &|| {},
+                )?)
+            })
+        })?;
+        let (mut stats, mut periods) = (Stats::default(), 0.0);
+        for c in &res {
+            stats += c.report.sweep.stats;
+            for s in &c.report.sweep.steps {
+                periods += (s.measurement.blocks + settings.cfg.settle_blocks) as f64
+                    * settings.cfg.block_periods as f64
+                    / s.measurement.freq_hz;
+            }
+        }
+        rows.push(Row {
+            case: format!(
+                "Figure 8 sweeps, published set, {} curves, {label}",
+                curves.len()
+            ),
+            times,
+            simulated_s: periods,
+            stats,
+            note: "coarse sweeps only (refinements excluded from the counts)".into(),
+        });
+    }
+    Ok(rows)
 }
 
 /// A failed RK4 record as a table cell: where its state left the admissible range, or the
 /// error's text.
-fn divergence(e: &endstop::study::record::BroadbandError) -> String {
+fn divergence(e: &BroadbandError) -> String {
     use endstop::ode::SolverError;
-    use endstop::study::record::BroadbandError;
     match e {
         BroadbandError::Solver(SolverError::NonFinite { t, .. }) => {
             format!("diverges (non-finite state at t = {t:.3e} s)")
@@ -341,208 +461,10 @@ fn divergence(e: &endstop::study::record::BroadbandError) -> String {
     }
 }
 
-/// A record of the accuracy tables: its label, its key in summary numbers, the device as
-/// simulated and the level (g^2/Hz).
-type AccuracyCase = (&'static str, &'static str, endstop::device::Device, f64);
-
-/// The impact-free records of the accuracy tables (the linear regime of Figures 14 and 11).
-fn impact_free_cases(
-    p1: &endstop::device::Device,
-    p2: &endstop::device::Device,
-) -> [AccuracyCase; 2] {
-    use endstop::paper::setups::{prototype1_setup, prototype2_setup};
-    [
-        ("P2, Sa = 1e-4", "p2_1e-4", prototype2_setup(p2), 1e-4),
-        (
-            "P1, Sa = 4.42e-6",
-            "p1_4.42e-6",
-            prototype1_setup(p1),
-            4.42e-6,
-        ),
-    ]
-}
-
-/// The impacting records of the accuracy tables: prototype 1 at 2.85e-2 (Figure 12's setup)
-/// and prototype 2 at 1.69e-3 (Figures 14 and 15's).
-fn impacting_cases(
-    p1: &endstop::device::Device,
-    p2: &endstop::device::Device,
-) -> [AccuracyCase; 2] {
-    use endstop::paper::setups::{prototype1_setup, prototype2_setup};
-    [
-        (
-            "P1, Sa = 2.85e-2",
-            "p1_2.85e-2",
-            prototype1_setup(p1),
-            2.85e-2,
-        ),
-        (
-            "P2, Sa = 1.69e-3",
-            "p2_1.69e-3",
-            prototype2_setup(p2),
-            1.69e-3,
-        ),
-    ]
-}
-
-/// `f(case, run)` for every case and run, on every core at once (for the accuracy tables:
-/// nothing here is timed), returned case by case in order.
-fn untimed_grid<T: Send>(
-    cases: usize,
-    runs: usize,
-    f: impl Fn(usize, usize) -> Result<T> + Sync,
-) -> Result<Vec<Vec<T>>> {
-    let all = (0..cases * runs)
-        .into_par_iter()
-        .map(|k| f(k / runs, k % runs))
-        .collect::<Result<Vec<T>>>()?;
-    let mut all = all.into_iter();
-    Ok((0..cases)
-        .map(|_| all.by_ref().take(runs).collect())
-        .collect())
-}
-
-/// The power of impact-free 1 s records of both prototypes by our scheme and by RK4 with 1,
-/// 2, 4 and 8 steps per sample interval, relative to Dormand-Prince at rtol 1e-10, as a
-/// Markdown table.
-fn rk4_accuracy(p1: &endstop::device::Device, p2: &endstop::device::Device) -> Result<String> {
-    use endstop::study::record::Scheme;
-    let cases = impact_free_cases(p1, p2);
-    const SUBSTEPS: [usize; 4] = [1, 2, 4, 8];
-    // Run 0 is ours, 1 the reference, then RK4 with each number of substeps.
-    let powers = untimed_grid(cases.len(), 2 + SUBSTEPS.len(), |c, r| {
-        let (_, _, dev, sa) = &cases[c];
-        let mut spec = RecordSpec::paper(dev, *sa);
-        spec.noise.duration_s = 1.0;
-        Ok(match r {
-            0 => simulate_record(dev, &spec, SEED, 0)?.summary.p_total_w(),
-            1 => {
-                let mut tight = spec;
-                tight.scheme = Scheme::Dopri5;
-                tight.rtol = 1e-10;
-                simulate_record(dev, &tight, SEED, 0)?.summary.p_total_w()
-            }
-            _ => simulate_rk4_record(dev, &spec, SEED, 0, SUBSTEPS[r - 2])?.p_total_w,
-        })
-    })?;
-    let mut md = String::from("| record | ours | RK4, 1 step | RK4, 2 steps | RK4, 4 steps | RK4, 8 steps |\n|---|---|---|---|---|---|\n");
-    for ((label, _, _, _), p) in cases.iter().zip(&powers) {
-        let reference = p[1];
-        let mut row = format!("| {label} | {:.1e} |", (p[0] / reference - 1.0).abs());
-        for rk4 in &p[2..] {
-            row.push_str(&format!(" {:.1e} |", (rk4 / reference - 1.0).abs()));
-        }
-        md.push_str(&row);
-        md.push('\n');
-    }
-    Ok(md)
-}
-
-/// A record's power with impacts, ours against Dormand-Prince everywhere at rtol 1e-7, 1e-9
-/// and 1e-10, one 10 s record of each of [`impacting_cases`]. Returns the Markdown table and,
-/// per case, our relative deviation from rtol 1e-10 and that of rtol 1e-9 (the reference's
-/// own reproducibility).
-fn impact_accuracy(
-    p1: &endstop::device::Device,
-    p2: &endstop::device::Device,
-) -> Result<(String, Vec<(f64, f64)>)> {
-    use endstop::study::record::Scheme;
-    let cases = impacting_cases(p1, p2);
-    let runs = [
-        ("ours", Scheme::Exponential, None),
-        ("Dormand-Prince, rtol 1e-7", Scheme::Dopri5, Some(1e-7)),
-        ("Dormand-Prince, rtol 1e-9", Scheme::Dopri5, Some(1e-9)),
-        ("Dormand-Prince, rtol 1e-10", Scheme::Dopri5, Some(1e-10)),
-    ];
-    let mut md = String::from(
-        "| record | run | mean power (W) | relative to rtol 1e-10 | impacts |\n|---|---|---|---|---|\n",
-    );
-    let summaries = untimed_grid(cases.len(), runs.len(), |c, r| {
-        let (_, _, dev, sa) = &cases[c];
-        let base = RecordSpec::paper(dev, *sa);
-        let (_, scheme, rtol) = runs[r];
-        let spec = RecordSpec {
-            scheme,
-            rtol: rtol.unwrap_or(base.rtol),
-            ..base
-        };
-        Ok(simulate_record(dev, &spec, SEED, 0)?.summary)
-    })?;
-    let mut out = Vec::new();
-    for ((label, _, _, _), case) in cases.iter().zip(&summaries) {
-        let got: Vec<_> = runs
-            .iter()
-            .zip(case)
-            .map(|((name, _, _), s)| (*name, s.p_total_w(), s.impacts))
-            .collect();
-        let reference = got[runs.len() - 1].1;
-        let rel = |p: f64| p / reference - 1.0;
-        for (name, p, impacts) in &got {
-            md.push_str(&format!(
-                "| {label} | {name} | {p:.6e} | {:+.1e} | {impacts} |\n",
-                rel(*p)
-            ));
-        }
-        out.push((rel(got[0].1), rel(got[2].1)));
-    }
-    Ok((md, out))
-}
-
-/// The energy balance of one 10 s record (stream 0) per case, by our scheme at the default
-/// tolerance and at rtol 1e-9 and by Dormand-Prince everywhere at the default: the records
-/// of [`impact_free_cases`] (10 s long here) and of [`impacting_cases`]. Returns the Markdown
-/// table and (key, our relative residual) per record.
-fn energy_balance(
-    p1: &endstop::device::Device,
-    p2: &endstop::device::Device,
-) -> Result<(String, Vec<(String, f64)>)> {
-    use endstop::study::record::{Scheme, DEFAULT_RTOL};
-    use endstop::study::record_ledger::record_ledger;
-    let [free_a, free_b] = impact_free_cases(p1, p2);
-    let [hit_a, hit_b] = impacting_cases(p1, p2);
-    let cases = [free_a, free_b, hit_a, hit_b];
-    let runs = [
-        ("ours", Scheme::Exponential, DEFAULT_RTOL),
-        ("ours, rtol 1e-9", Scheme::Exponential, 1e-9),
-        ("Dormand-Prince everywhere", Scheme::Dopri5, DEFAULT_RTOL),
-    ];
-    let mut md = String::from(
-        "| record | run | relative residual | residual (J) | work of the drive (J) | impacts |\n\
-         |---|---|---|---|---|---|\n",
-    );
-    let books = untimed_grid(cases.len(), runs.len(), |c, r| {
-        let (_, _, dev, sa) = &cases[c];
-        let (_, scheme, rtol) = runs[r];
-        let spec = RecordSpec {
-            scheme,
-            rtol,
-            ..RecordSpec::paper(dev, *sa)
-        };
-        let (rec, l) = record_ledger(dev, &spec, SEED, 0)?;
-        Ok((rec.summary.impacts, l))
-    })?;
-    let mut out = Vec::new();
-    for ((label, key, _, _), case) in cases.iter().zip(&books) {
-        for (run, ((name, _, _), (impacts, l))) in runs.iter().zip(case).enumerate() {
-            let r = l.relative_residual();
-            md.push_str(&format!(
-                "| {label} | {name} | {r:+.1e} | {:+.1e} | {:.3e} | {} |\n",
-                l.residual(),
-                l.excitation,
-                impacts
-            ));
-            if run == 0 {
-                out.push((key.to_string(), r));
-            }
-        }
-    }
-    Ok((md, out))
-}
-
 /// The whole Figure 13 curve (prototype 2, 0.31 g, linear law): the continuation of the
 /// periodic orbits with their stability over 600-850 Hz, beside the stepped up- and
 /// down-sweeps of the same curve, each on one thread.
-fn response_rows(p2: &endstop::device::Device) -> Result<Vec<Row>> {
+fn response_rows(p2: &endstop::device::Device, repeats: usize) -> Result<Vec<Row>> {
     use endstop::paper::response::{continuation, setups, Case};
     let setup = setups(p2, p2, p2)
         .into_iter()
@@ -550,11 +472,10 @@ fn response_rows(p2: &endstop::device::Device) -> Result<Vec<Row>> {
         .expect("the Figure 13 case");
     let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build()?;
     let span = setup.continuation.stop - setup.continuation.start;
-    let (branch, times) = timed(|| pool.install(|| Ok(continuation(&setup)?)))?;
+    let (branch, times) = timed(repeats, || pool.install(|| Ok(continuation(&setup)?)))?;
     let mut rows = vec![Row {
         case: "Figure 13 whole curve by continuation (both branches, multipliers), 1 thread".into(),
-        median_s: times[REPEATS / 2],
-        min_s: times[0],
+        times,
         simulated_s: span,
         stats: branch.stats,
         note: format!(
@@ -564,7 +485,7 @@ fn response_rows(p2: &endstop::device::Device) -> Result<Vec<Row>> {
         ),
     }];
     for (dir, down) in [("up", false), ("down", true)] {
-        let (stats, times) = timed(|| {
+        let (stats, times) = timed(repeats, || {
             pool.install(|| {
                 Ok(if down {
                     setup
@@ -581,8 +502,7 @@ fn response_rows(p2: &endstop::device::Device) -> Result<Vec<Row>> {
         })?;
         rows.push(Row {
             case: format!("Figure 13 stepped {dir}-sweep of the same curve, 1 thread"),
-            median_s: times[REPEATS / 2],
-            min_s: times[0],
+            times,
             simulated_s: span,
             stats,
             note: "with refinements; 'simulated s' is the frequency span in Hz".into(),

@@ -82,7 +82,7 @@ const fn experiment(name: &'static str, reads: &'static [&'static str], cal: boo
 pub const CALIBRATE: &str = "calibrate";
 /// The ngspice cross-check: runs only where `ngspice` is installed.
 pub const CROSSCHECK: &str = "crosscheck";
-/// The benchmark: runs last and alone.
+/// The benchmark (its short form, `bench --quick`): runs last and alone.
 pub const BENCH: &str = "bench";
 
 /// Every job, in the order of the paper and then the extras.
@@ -318,10 +318,11 @@ pub const JOBS: &[Job] = &[
         scored: false,
         also: &[],
     },
+    // The short benchmark: `just bench` runs the whole one.
     Job {
         name: BENCH,
         program: BENCH,
-        args: &[],
+        args: &["--quick"],
         reads: &[P1, P2],
         reads_calibration: true,
         phase: Phase::Last,
