@@ -87,6 +87,16 @@ pub struct GeneralFlight {
     km: f64,
 }
 
+// The method lives beside the split it returns, so that the model's module does not import
+// this one (which builds on it).
+impl<E: Excitation> Harvester<E> {
+    /// The free-flight model split into its linearisation about rest and a small remainder,
+    /// for [`crate::ode::exponential`] (see [`FreeFlight`]).
+    pub fn free_flight(&self) -> FreeFlight {
+        FreeFlight::of(self)
+    }
+}
+
 impl FreeFlight {
     /// The split of a model's free flight.
     pub fn of<E: Excitation>(h: &Harvester<E>) -> Self {

@@ -31,7 +31,6 @@ use crate::device::Device;
 use crate::drive::Excitation;
 use crate::ode::{Guards, HybridSystem, Options};
 use crate::physics::contact::{Mode, Side, StopModel};
-pub use crate::physics::free_flight::FreeFlight;
 use crate::physics::transducer::TransducerModel;
 pub use crate::physics::transducer::{Electrical, State};
 
@@ -339,12 +338,6 @@ impl<E: Excitation> Harvester<E> {
     /// Number of live state components (2 to 4): the rest stay zero.
     pub fn active_states(&self) -> usize {
         self.transducer.active_states()
-    }
-
-    /// The free-flight model split into its linearisation about rest and a small remainder,
-    /// for [`crate::ode::exponential`] (see [`FreeFlight`]).
-    pub fn free_flight(&self) -> FreeFlight {
-        FreeFlight::of(self)
     }
 
     /// Integrator options with relative tolerance `rtol` and absolute tolerances

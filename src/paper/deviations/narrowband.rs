@@ -3,6 +3,7 @@
 
 use rayon::prelude::*;
 
+pub use super::quantity::P1_STOP_HZ;
 use super::quantity::{ratio, Outcome};
 use super::ranges::Variant;
 use super::DeviationsError;
@@ -19,11 +20,6 @@ use crate::physics::two_port::{TwoPort, TABLE3_QM};
 use crate::study::continuation::{self, Branch, ContinuationSettings, EventKind};
 use crate::study::orbit::{Forcing, Shooter};
 use crate::study::sweep;
-
-/// Upper end of prototype 1's frequency continuations (Hz): Figure 8's range extended to
-/// 2000 Hz, as the response study's fold claims (without end-stop damping the impacting
-/// branch reaches 1600 Hz).
-pub const P1_STOP_HZ: f64 = 2000.0;
 
 /// Figure 13's range (Hz) and largest continuation step (Hz): the figure's sweep grid.
 pub const P2_RANGE_HZ: (f64, f64) = (600.0, 850.0);

@@ -6,8 +6,9 @@ use crate::drive::{Excitation, Sampled};
 use crate::ode::exponential::{ExpAdams, History};
 use crate::ode::{Dopri5, Observer, Step};
 use crate::physics::contact::{Mode, Side};
+use crate::physics::free_flight::FreeFlight;
 use crate::physics::free_flight::Remainder;
-use crate::physics::harvester::{FreeFlight, Harvester, State, SwitchKind};
+use crate::physics::harvester::{Harvester, State, SwitchKind};
 use crate::physics::transducer::{PairGeometry, TransducerModel};
 
 use super::{
