@@ -25,7 +25,7 @@ use endstop::paper::figures::fig14::{self, Fig14};
 use endstop::paper::figures::fig15::{self, Fig15};
 use endstop::paper::prototype2_random::Extras;
 use endstop::paper::resolution;
-use endstop::paper::setups::{prototype2_setup, ParamSet};
+use endstop::paper::setups::{paper_record, prototype2_setup, ParamSet};
 use endstop::paper::Figure;
 use endstop::physics::two_port::*;
 use endstop::study::ensemble::run_ensemble;
@@ -211,7 +211,7 @@ fn linear_theory_integrates_to_eq21() {
 #[test]
 fn record_spec_and_errors() {
     let d = prototype2_setup(&device("prototype2"));
-    let spec = RecordSpec::paper(&d, 1e-4);
+    let spec = paper_record(&d, 1e-4);
     // 5 ring-up times 2m/b = 5 x 96 ms, rounded up to whole milliseconds.
     assert!((spec.transient_s - 0.48).abs() < 1e-12);
     assert_eq!(spec.transient_samples(), 48_000);
@@ -237,7 +237,7 @@ fn a_device_faster_than_the_sample_rate_falls_back_to_dormand_prince() {
     // Dormand-Prince throughout, sample for sample the record of that scheme (it panicked).
     let mut dev = prototype2_setup(&device("prototype2"));
     dev.mechanics.stiffness_n_per_m *= 1e4;
-    let mut spec = RecordSpec::paper(&dev, 1e-4);
+    let mut spec = paper_record(&dev, 1e-4);
     spec.noise.duration_s = 0.01;
     assert_eq!(spec.scheme, Scheme::Exponential);
     let fast = simulate_record(&dev, &spec, 7, 3).unwrap();
@@ -252,7 +252,7 @@ fn record_converges_and_keeps_its_bookkeeping() {
     // A short record in the linear regime at two tolerances: the trajectory, hence the mean
     // power, agrees to 1e-6 relative (the steps are bounded by the 10 us sample interval).
     let d = prototype2_setup(&device("prototype2"));
-    let mut spec = RecordSpec::paper(&d, 1e-4);
+    let mut spec = paper_record(&d, 1e-4);
     spec.noise.duration_s = 1.0;
     let a = simulate_record(&d, &spec, 7, 3).unwrap();
     spec.rtol = 1e-10;
@@ -285,7 +285,7 @@ fn exponential_scheme_matches_dormand_prince_on_impact_free_records() {
             4.42e-6,
         ),
     ] {
-        let mut spec = RecordSpec::paper(&dev, sa);
+        let mut spec = paper_record(&dev, sa);
         spec.noise.duration_s = 1.0;
         assert_eq!(spec.scheme, Scheme::Exponential);
         let fast = simulate_record(&dev, &spec, 7, 3).unwrap();

@@ -8,13 +8,13 @@ use endstop::device::ParamError;
 use endstop::paper::claims::{keys, ClaimKey, Value, Verdict};
 use endstop::paper::figures::fig05::Fig05;
 use endstop::paper::figures::table3::Table3;
+use endstop::paper::qm::EQ21_QM;
 use endstop::paper::setups::ParamSet;
 use endstop::paper::Figure;
 use endstop::physics::hertz::HertzLine;
 use endstop::physics::hertz::EQ19_FIT_RANGE_M;
 use endstop::physics::hertz::EQ19_FIT_SAMPLES;
 use endstop::physics::two_port::TwoPort;
-use endstop::physics::two_port::EQ21_QM;
 
 use Verdict::{Deviates, Reproduced};
 
@@ -139,7 +139,7 @@ fn prototype1_eq21_efficiency_is_about_3_percent() {
 #[test]
 fn eq21_power_is_linear_in_the_input_psd() {
     let tp = TwoPort::of(&device("prototype2").with_bias(15.0));
-    let q = tp.qm(EQ21_QM);
+    let q = EQ21_QM.of(&tp);
     let p1 = tp.broadband_power_w(1.0, q);
     let p2 = tp.broadband_power_w(3.0, q);
     assert!((p2 / p1 - 3.0).abs() < 1e-12);

@@ -12,8 +12,8 @@ use std::fmt::Write;
 
 use endstop::paper::figures::fig05::{self, Fig05};
 use endstop::paper::figures::table3::Table3;
+use endstop::paper::qm::QmReading;
 use endstop::paper::Figure;
-use endstop::physics::two_port::QmReading;
 
 mod common;
 use common::{claims, prototypes};

@@ -5,7 +5,7 @@
 use endstop::device::{Device, StiffnessModel};
 use endstop::drive::Sine;
 use endstop::ode::Stats;
-use endstop::paper::setups::{comb, endstop, stiffness_model};
+use endstop::paper::setups::{comb, endstop, stiffness_model, with_endstop};
 use endstop::physics::harvester::Harvester;
 use endstop::physics::two_port::linear_output_psd_w_per_hz;
 use endstop::study::continuation::{
@@ -18,9 +18,11 @@ mod common;
 
 /// Prototype 2 as Figure 13 simulates it at 0.31 g: 10 V, linear k_im, b_im = 0.4 N s/m.
 fn prototype2() -> Device {
-    common::prototype2()
-        .with_bias(10.0)
-        .with_endstop(StiffnessModel::Linear, 0.4)
+    with_endstop(
+        &common::prototype2().with_bias(10.0),
+        StiffnessModel::Linear,
+        0.4,
+    )
 }
 
 /// The eigenvalues of the linear model of eqs 11-17, written from the equations and not from
@@ -266,7 +268,7 @@ fn a_grazing_corner_is_crossed_from_the_free_flight_side() {
     // The grazing orbit is a free-flight orbit, independent of b_im: the same device with
     // b_im = 0 (whose branch crosses grazing smoothly) gives the reference. Tolerance: the
     // event location (1e-4 Hz) and the hop's first step.
-    let undamped = d.with_endstop(stiffness_model(&d), 0.0);
+    let undamped = with_endstop(&d, stiffness_model(&d), 0.0);
     let reference = grazing(&frequency_branch(&undamped, g, 900.0, 2000.0, 10.0, |_| {}).unwrap())
         .expect("the undamped branch grazes");
     let found = grazing(&b).expect("the branch grazes");

@@ -7,14 +7,14 @@ use std::sync::Arc;
 use anyhow::{bail, Result};
 use clap::Parser;
 use endstop::device::Device;
+use endstop::paper::setups::paper_record;
 use endstop::physics::linear::{white_noise_power_w, LinearResponse};
 use endstop::physics::two_port::TwoPort;
 use endstop::signal::bandwidth::{restrict, Widths};
 use endstop::signal::{welch, Psd};
 use endstop::study::ensemble::EnsembleSpec;
 use endstop::study::record::{
-    output_psd, simulate_drive, transient_s, FreeFlightPath, RecordSpec, SampledDrive, Scheme,
-    DEFAULT_RTOL,
+    output_psd, simulate_drive, transient_s, FreeFlightPath, SampledDrive, Scheme, DEFAULT_RTOL,
 };
 use endstop::G;
 use endstop_experiments as common;
@@ -156,7 +156,7 @@ fn noise(a: &RandomArgs, psd: f64) -> Result<()> {
     }
     let (mut exp, loaded, device) = start("endstop-random", &a.device, a.bias_v, a.out.clone())?;
     exp.seed = Some(a.seed);
-    let mut record = RecordSpec::paper(&device, psd);
+    let mut record = paper_record(&device, psd);
     record.noise.duration_s = a.duration_s;
     let spec = EnsembleSpec::for_device(&device, record, a.seed, a.records);
     let nperseg = spec.welch.nperseg;
@@ -317,7 +317,7 @@ fn measured(a: &RandomArgs, path: PathBuf) -> Result<()> {
     let out_rec = simulate_drive(&device, &drive, DEFAULT_RTOL, Scheme::Exponential)?;
 
     // The Welch segmenting and analysis band the noise ensembles use, for this length.
-    let mut spec_rec = RecordSpec::paper(&device, 1.0);
+    let mut spec_rec = paper_record(&device, 1.0);
     spec_rec.noise.sample_rate_hz = fs;
     spec_rec.noise.duration_s = (accel.len() - n_tr) as f64 / fs;
     let spec = EnsembleSpec::for_device(&device, spec_rec, 0, 1);

@@ -408,22 +408,6 @@ impl Device {
         d
     }
 
-    /// A copy whose Hertz line stops follow eq 6 ([`StiffnessModel::Hertz`]) or its linear fit
-    /// of eq 19 ([`StiffnessModel::Linear`]), with end-stop damping `damping_n_s_per_m`; other
-    /// stops get the damping only where their law takes it.
-    pub fn with_endstop(&self, stiffness: StiffnessModel, damping_n_s_per_m: f64) -> Self {
-        let mut d = self.clone();
-        d.stops.for_each_mut(|s| {
-            if let StopLaw::HertzLine(h) = &mut s.law {
-                h.linear_fit = stiffness == StiffnessModel::Linear;
-            }
-            if s.law.takes_viscous_damper() {
-                s.damping_n_s_per_m = damping_n_s_per_m;
-            }
-        });
-        d
-    }
-
     /// A copy whose stops (those that take eq 1's damper) are tension-free or not.
     pub fn with_tension_free(&self, tension_free: bool) -> Self {
         let mut d = self.clone();

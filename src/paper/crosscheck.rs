@@ -20,7 +20,7 @@ use thiserror::Error;
 use crate::device::{Device, StiffnessModel};
 use crate::drive::Sine;
 use crate::ode::{Dopri5, SolverError, Stats};
-use crate::paper::setups::FIG13_BIAS_V;
+use crate::paper::setups::{with_endstop, FIG13_BIAS_V};
 use crate::physics::contact::Mode;
 use crate::physics::harvester::{Harvester, State};
 use crate::spice::{
@@ -134,7 +134,7 @@ pub fn cases(p1: &Device, p2: &Device) -> Vec<Case> {
         Case {
             key: "p1_free",
             label: "P1, 30 V, 4.1 g, 1000 Hz, no impacts (Hertz, b_im = 1.5 N s/m)",
-            device: p1_30.with_endstop(StiffnessModel::Hertz, 1.5),
+            device: with_endstop(&p1_30, StiffnessModel::Hertz, 1.5),
             accel_rms_g: 4.1,
             freq_hz: 1000.0,
             start: Start::Rest,
@@ -143,7 +143,7 @@ pub fn cases(p1: &Device, p2: &Device) -> Vec<Case> {
         Case {
             key: "p1_impacting",
             label: "P1, 30 V, 7 g, 1350 Hz, upper branch (Hertz, b_im = 1.5 N s/m)",
-            device: p1_30.with_endstop(StiffnessModel::Hertz, 1.5),
+            device: with_endstop(&p1_30, StiffnessModel::Hertz, 1.5),
             accel_rms_g: 7.0,
             freq_hz: 1350.0,
             start: upper_p1,
@@ -152,7 +152,7 @@ pub fn cases(p1: &Device, p2: &Device) -> Vec<Case> {
         Case {
             key: "p1_impacting_linear",
             label: "P1, 30 V, 7 g, 1350 Hz, upper branch (linear k_im, b_im = 2 N s/m)",
-            device: p1_30.with_endstop(StiffnessModel::Linear, 2.0),
+            device: with_endstop(&p1_30, StiffnessModel::Linear, 2.0),
             accel_rms_g: 7.0,
             freq_hz: 1350.0,
             start: upper_p1,
@@ -161,7 +161,7 @@ pub fn cases(p1: &Device, p2: &Device) -> Vec<Case> {
         Case {
             key: "p1_grazing",
             label: "P1, 30 V, 5.5 g, 1240 Hz, grazing (Hertz, b_im = 1.5 N s/m)",
-            device: p1_30.with_endstop(StiffnessModel::Hertz, 1.5),
+            device: with_endstop(&p1_30, StiffnessModel::Hertz, 1.5),
             accel_rms_g: 5.5,
             freq_hz: 1240.0,
             start: upper_p1,
@@ -170,7 +170,7 @@ pub fn cases(p1: &Device, p2: &Device) -> Vec<Case> {
         Case {
             key: "p2_upper",
             label: "P2, 10 V, 0.31 g, 720 Hz, upper branch (linear k_im, b_im = 0.4 N s/m)",
-            device: p2_10.with_endstop(StiffnessModel::Linear, 0.4),
+            device: with_endstop(&p2_10, StiffnessModel::Linear, 0.4),
             accel_rms_g: 0.31,
             freq_hz: 720.0,
             start: Start::UpSweep {

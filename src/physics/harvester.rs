@@ -480,7 +480,7 @@ pub fn head<const M: usize>(z: &SVector<f64, M>) -> State {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::device::StiffnessModel;
+    use crate::device::StopLaw;
     use crate::drive::Sine;
     use crate::physics::contact::Side;
 
@@ -490,8 +490,15 @@ mod tests {
     fn jacobian_matches_central_differences_of_the_rhs() {
         let text = include_str!("../../data/prototype1.toml");
         let base = Device::from_toml_str(text, "prototype1.toml").unwrap();
-        for law in [StiffnessModel::Hertz, StiffnessModel::Linear] {
-            let h = Harvester::new(&base.with_endstop(law, 1.5), Sine::from_rms_g(5.5, 1300.0));
+        // The file's Hertz stops (b_im = 1.5 N s/m), then the same with the linear fit of eq 19.
+        for linear_fit in [false, true] {
+            let mut d = base.clone();
+            d.stops.for_each_mut(|s| {
+                if let StopLaw::HertzLine(h) = &mut s.law {
+                    h.linear_fit = linear_fit;
+                }
+            });
+            let h = Harvester::new(&d, Sine::from_rms_g(5.5, 1300.0));
             let sc = h.scales();
             // A state 0.2 um into the upper stop, moving, with charged nodes.
             let y = State::new(h.gap(Side::Upper) + 0.2e-6, 0.3, 0.4 * sc[2], -0.3 * sc[3]);
@@ -517,7 +524,7 @@ mod tests {
                         let an = j[(r, c)] * sc[c];
                         assert!(
                             (fd[(r, c)] - an).abs() <= 1e-6 * row_max,
-                            "{law:?} {mode:?} d f{r}/d y{c}: {an} vs {}",
+                            "linear fit {linear_fit} {mode:?} d f{r}/d y{c}: {an} vs {}",
                             fd[(r, c)]
                         );
                     }

@@ -10,44 +10,6 @@ use crate::device::{Device, Transducer};
 use crate::signal::{Psd, Widths};
 use crate::G;
 
-/// How the mechanical quality factor Qm is read (the paper does not say).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum QmReading {
-    /// Qm = sqrt(km m) / b, with the suspension stiffness alone.
-    Suspension,
-    /// Qm = sqrt(K m) / b, with the open-circuit stiffness K of eq 17.
-    OpenCircuit,
-    /// Qm = m w0 / b with the measured resonance f0 (1220 Hz, 675 Hz).
-    MeasuredResonance,
-}
-
-impl QmReading {
-    /// All readings, default first.
-    pub const ALL: [QmReading; 3] = [
-        QmReading::MeasuredResonance,
-        QmReading::Suspension,
-        QmReading::OpenCircuit,
-    ];
-
-    /// Short label for tables.
-    pub fn label(self) -> &'static str {
-        match self {
-            QmReading::Suspension => "sqrt(km m)/b",
-            QmReading::OpenCircuit => "sqrt(K m)/b",
-            QmReading::MeasuredResonance => "m w0/b (measured f0)",
-        }
-    }
-}
-
-/// The Qm reading used for Table 3's verdicts: m w0/b with the resonance the paper quotes
-/// (1220 Hz with Figure 9, 675 Hz with Figure 15). Of the three readings it is the only one
-/// consistent with both printed Qm values (5.7 and 203.5); the others are shown beside it.
-pub const TABLE3_QM: QmReading = QmReading::MeasuredResonance;
-
-/// The Qm reading used in eq 21: the derivation works with the open-circuit stiffness K
-/// throughout (rL of eq 22 also uses sqrt(K/m)), so Qm = sqrt(K m)/b.
-pub const EQ21_QM: QmReading = QmReading::OpenCircuit;
-
 /// The differential-mode two-port and its figures of merit at one bias voltage.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct TwoPort {
@@ -65,7 +27,7 @@ pub struct TwoPort {
     pub damping_n_s_per_m: f64,
     /// Suspension stiffness km (N/m).
     pub km_n_per_m: f64,
-    /// Measured resonance used by [`QmReading::MeasuredResonance`] (Hz; NaN when the device
+    /// Measured resonance used by [`TwoPort::qm_measured_resonance`] (Hz; NaN when the device
     /// quotes none).
     pub measured_resonance_hz: f64,
     /// Load resistance RL (ohm).
@@ -125,16 +87,22 @@ impl TwoPort {
         Self::try_of(device).expect("the two-port of eqs 15-18 needs a capacitor-pair transducer")
     }
 
-    /// Mechanical quality factor under a reading.
-    pub fn qm(&self, reading: QmReading) -> f64 {
-        let b = self.damping_n_s_per_m;
-        match reading {
-            QmReading::Suspension => (self.km_n_per_m * self.mass_kg).sqrt() / b,
-            QmReading::OpenCircuit => (self.stiffness_n_per_m * self.mass_kg).sqrt() / b,
-            QmReading::MeasuredResonance => {
-                self.mass_kg * 2.0 * std::f64::consts::PI * self.measured_resonance_hz / b
-            }
-        }
+    /// Mechanical quality factor with the suspension stiffness alone, `sqrt(km m) / b`.
+    pub fn qm_suspension(&self) -> f64 {
+        (self.km_n_per_m * self.mass_kg).sqrt() / self.damping_n_s_per_m
+    }
+
+    /// Mechanical quality factor with the open-circuit stiffness K of eq 17, `sqrt(K m) / b`
+    /// (the one eq 21 is derived with).
+    pub fn qm_open_circuit(&self) -> f64 {
+        (self.stiffness_n_per_m * self.mass_kg).sqrt() / self.damping_n_s_per_m
+    }
+
+    /// Mechanical quality factor with the device's measured resonance f0, `m 2 pi f0 / b` (NaN
+    /// when the device quotes none).
+    pub fn qm_measured_resonance(&self) -> f64 {
+        self.mass_kg * 2.0 * std::f64::consts::PI * self.measured_resonance_hz
+            / self.damping_n_s_per_m
     }
 
     /// Open-circuit resonance sqrt(K/m)/(2 pi) (Hz).
@@ -245,13 +213,13 @@ pub fn linear_widths(device: &Device, f_lo: f64, f_hi: f64) -> Widths {
 /// `psd_g2_per_hz` (g²/Hz), with `Qm = sqrt(K m)/b` (the reading eq 21 is derived with).
 pub fn eq21_power_w(device: &Device, psd_g2_per_hz: f64) -> f64 {
     let tp = TwoPort::of(device);
-    tp.broadband_power_w(psd_g2_per_hz * G * G, tp.qm(QmReading::OpenCircuit))
+    tp.broadband_power_w(psd_g2_per_hz * G * G, tp.qm_open_circuit())
 }
 
 /// Linear theory of eq 21: efficiency `2P/(m Sa)` (fraction), `Qm = sqrt(K m)/b`.
 pub fn eq21_efficiency(device: &Device) -> f64 {
     let tp = TwoPort::of(device);
-    tp.broadband_efficiency(tp.qm(QmReading::OpenCircuit))
+    tp.broadband_efficiency(tp.qm_open_circuit())
 }
 
 /// Efficiency `2P/(m Sa)` (fraction) of a mean power `p_w` (both loads) at two-sided level
