@@ -27,6 +27,7 @@ use endstop::paper::prototype2_random::Extras;
 use endstop::paper::resolution;
 use endstop::paper::setups::{paper_record, prototype2_setup, ParamSet};
 use endstop::paper::Figure;
+use endstop::physics::linear::LinearResponse;
 use endstop::physics::two_port::*;
 use endstop::study::ensemble::run_ensemble;
 use endstop::study::record::*;
@@ -199,8 +200,9 @@ fn linear_theory_integrates_to_eq21() {
         let d = device(name);
         let df = 0.01;
         let n = (20_000.0 / df) as usize;
+        let lin = LinearResponse::of(&d);
         let p: f64 = (1..n)
-            .map(|i| linear_output_psd_w_per_hz(&d, 1e-4, i as f64 * df))
+            .map(|i| lin.output_psd_w_per_hz(1e-4 * G * G, i as f64 * df))
             .sum::<f64>()
             * df;
         let e = eq21_power_w(&d, 1e-4);

@@ -7,7 +7,7 @@ use endstop::drive::Sine;
 use endstop::ode::Stats;
 use endstop::paper::setups::{comb, endstop, stiffness_model, with_endstop};
 use endstop::physics::harvester::Harvester;
-use endstop::physics::two_port::linear_output_psd_w_per_hz;
+use endstop::physics::linear::LinearResponse;
 use endstop::study::continuation::{
     continue_branch, first_orbit, Branch, ContinuationSettings, EventKind,
 };
@@ -87,7 +87,8 @@ fn far_from_the_stops_the_orbit_is_the_linear_steady_state() {
     assert!(o.residual < 1e-9, "residual {:e}", o.residual);
     assert!(o.summary.x_max_m < 1e-3 * comb(&d).finger_overlap_m);
     // A sine of RMS a has the power of a white PSD a^2 / 2 through |H|^2 (see the linear PSD).
-    let p_lin = linear_output_psd_w_per_hz(&d, 0.5 * a * a, f);
+    let p_lin =
+        LinearResponse::of(&d).output_psd_w_per_hz(0.5 * a * a * endstop::G * endstop::G, f);
     let rel = (o.summary.p_total_w - p_lin).abs() / p_lin;
     assert!(
         rel < 1e-6,

@@ -91,16 +91,6 @@ fn free_flight_label(p: FreeFlightPath) -> String {
     }
 }
 
-/// The linear theory's output PSD (W/Hz, one-sided) at `freq_hz` under a drive of two-sided
-/// density `sa_si(f)` ((m/s^2)^2/Hz).
-fn linear_psd(lin: &LinearResponse, freq_hz: &[f64], sa_si: impl Fn(usize) -> f64) -> Vec<f64> {
-    freq_hz
-        .iter()
-        .enumerate()
-        .map(|(i, &f)| lin.output_psd_w_per_hz(sa_si(i), f))
-        .collect()
-}
-
 /// The two panels: the output power PSD beside its linear theory, and the drive's PSD.
 fn spectra_plot(device: &Device, title: &str, out: &Psd, linear: &[f64], drive: &Psd) -> Panels {
     let pts = |p: &[f64], f: &[f64], scale: f64| -> Vec<(f64, f64)> {
@@ -168,7 +158,7 @@ fn noise(a: &RandomArgs, psd: f64) -> Result<()> {
     let m = out.freq_hz.len();
     let sa_si = psd * G * G;
     let lin = LinearResponse::of(&device);
-    let linear = linear_psd(&lin, &out.freq_hz, |_| sa_si);
+    let linear = lin.output_psd(sa_si, &out.freq_hz).density;
     let mut df = df!(
         "freq_hz" => out.freq_hz.clone(),
         "out_psd_uw_per_hz" => out.density.iter().map(|d| d * 1e6).collect::<Vec<_>>(),
@@ -336,7 +326,13 @@ fn measured(a: &RandomArgs, path: PathBuf) -> Result<()> {
     };
     let drive_band = restrict(&drive_psd, lo, hi);
     let lin = LinearResponse::of(&device);
-    let linear_full = linear_psd(&lin, &drive_psd.freq_hz, |i| drive_psd.density[i] * G * G);
+    // The drive's own two-sided density at each frequency, through the same linear PSD.
+    let linear_full: Vec<f64> = drive_psd
+        .freq_hz
+        .iter()
+        .zip(&drive_psd.density)
+        .map(|(&f, &sa_g2)| lin.output_psd_w_per_hz(sa_g2 * G * G, f))
+        .collect();
     let df_hz = drive_psd.df();
     let linear_w: f64 = linear_full.iter().sum::<f64>() * df_hz;
     let linear_band: Vec<f64> = drive_psd

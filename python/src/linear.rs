@@ -123,14 +123,9 @@ fn linear_output_psd<'py>(
     freq_hz: PyReadonlyArray1<'py, f64>,
 ) -> PyResult<Bound<'py, PyArray1<f64>>> {
     let f = freq_hz.as_slice()?;
-    let density = if TwoPort::try_of(&device.inner).is_some() {
-        two_port::linear_output_psd(&device.inner, psd_g2_per_hz, f).density
-    } else {
-        let lin = LinearResponse::of(&device.inner);
-        f.iter()
-            .map(|&f| lin.output_psd_w_per_hz(psd_g2_per_hz * G * G, f))
-            .collect()
-    };
+    let density = LinearResponse::of(&device.inner)
+        .output_psd(psd_g2_per_hz * G * G, f)
+        .density;
     Ok(PyArray1::from_vec(py, density))
 }
 

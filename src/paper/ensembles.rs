@@ -7,7 +7,8 @@
 use crate::device::Device;
 use crate::num::stats::Jackknife;
 use crate::paper::setups::{paper_record, prototype1_setup, ParamSet, Prototype1Sets};
-use crate::physics::two_port::{eq21_efficiency, eq21_power_w, linear_output_psd, linear_widths};
+use crate::physics::linear::{linear_widths, LinearResponse};
+use crate::physics::two_port::{eq21_efficiency, eq21_power_w};
 use crate::signal::welch::matlab_default_nperseg;
 use crate::signal::{Psd, WelchConfig, Widths};
 use crate::study::ensemble::{
@@ -127,9 +128,10 @@ impl Level {
         2.0 * r.summary.p_total_w() / (m * self.ens.spec.record.noise.psd_si())
     }
 
-    /// Linearised output power PSD (eqs 11-17, no end-stops) at this level on `freq_hz` (W/Hz).
+    /// Linearised output power PSD (eqs 11-17, no end-stops) at this level on `freq_hz` (W/Hz,
+    /// one-sided).
     pub fn linear_psd(&self, freq_hz: &[f64]) -> Psd {
-        linear_output_psd(&self.device, self.sa(), freq_hz)
+        LinearResponse::of(&self.device).output_psd(self.sa() * crate::G * crate::G, freq_hz)
     }
 
     /// Impacts per record.

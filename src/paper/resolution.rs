@@ -20,7 +20,7 @@ use crate::num::stats::Jackknife;
 use crate::paper::ensembles::P1_BAND_HZ;
 use crate::paper::figures::{fig11, fig12};
 use crate::paper::setups::{paper_record, prototype1_setup};
-use crate::physics::two_port::linear_widths;
+use crate::physics::linear::linear_widths;
 use crate::signal::bandwidth::mean_psd;
 use crate::signal::{self, Psd, WelchConfig};
 use crate::study::ensemble::{first_stream_for_level, DEFAULT_SEED};

@@ -18,11 +18,11 @@
 //! ([`Ensemble::mean_width`], [`Jackknife`]).
 //!
 //! # Linear theory
-//! The ensembles are compared with the linear theory of [`crate::physics::two_port`]:
-//! [`linear_output_psd_w_per_hz`](crate::physics::two_port::linear_output_psd_w_per_hz) is
-//! the small-signal output PSD of the same model (eqs 7-17 in the frequency domain, no
-//! end-stops); it integrates to eq 21 and gives the bandwidth the device has without impacts
-//! ([`linear_widths`](crate::physics::two_port::linear_widths)).
+//! The ensembles are compared with the linear theory of [`crate::physics::linear`]:
+//! [`LinearResponse::output_psd_w_per_hz`](crate::physics::linear::LinearResponse::output_psd_w_per_hz)
+//! is the small-signal output PSD of the same model (for the paper's pair eqs 7-17 in the
+//! frequency domain, no end-stops); it integrates to eq 21 and gives the bandwidth the device
+//! has without impacts ([`linear_widths`](crate::physics::linear::linear_widths)).
 
 use rayon::prelude::*;
 

@@ -9,7 +9,7 @@ use crate::paper::ensembles::{Level, WidthReading, P2_BAND_HZ};
 use crate::paper::prototype2_random::{self, Extras, Fig15Level, Levels, Scope};
 use crate::paper::setups::ParamSet;
 use crate::paper::Figure;
-use crate::physics::two_port::linear_widths;
+use crate::physics::linear::linear_widths;
 use crate::signal::Widths;
 use crate::study::ensemble::Ensemble;
 use crate::study::record::BroadbandError;
