@@ -400,7 +400,7 @@ fn numbers_md(
         for (e, p) in c.best.iter().zip(&c.published) {
             let paper = claims
                 .get(e.quantity.claim, e.quantity.quantity)
-                .map_or(f64::NAN, |c| c.paper);
+                .map_or(f64::NAN, |c| c.paper.to_f64());
             t.row([
                 e.quantity.claim.to_string(),
                 format!("`{}`", e.quantity.quantity),

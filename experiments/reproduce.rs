@@ -373,7 +373,7 @@ fn write_scorecard() -> Result<Vec<Row>> {
     for r in &rows {
         let ours = r
             .ours
-            .map(|v| common::fmt_sig(v, 4))
+            .map(|v| common::fmt_sig(v.to_f64(), 4))
             .unwrap_or_else(|| "-".into());
         let unc = r
             .uncertainty
@@ -394,7 +394,7 @@ fn write_scorecard() -> Result<Vec<Row>> {
             r.claim,
             r.quantity,
             r.set,
-            r.paper,
+            r.paper.to_f64(),
             ours,
             unc,
             r.unit,

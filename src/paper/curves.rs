@@ -11,7 +11,7 @@ use std::marker::PhantomData;
 
 use crate::device::{Device, StiffnessModel};
 use crate::ode::SolverError;
-use crate::paper::claims::{bool_value, ClaimKey, ClaimValue};
+use crate::paper::claims::{bool_value, Answer, ClaimKey, ClaimValue};
 use crate::paper::setups::{endstop, with_endstop};
 use crate::study::steady::SteadyConfig;
 use crate::study::sweep::{compare_sweeps, BranchEnd, SweepComparison, SweepReport, SweepSettings};
@@ -328,7 +328,7 @@ pub(crate) fn branch_end_value(key: ClaimKey, curve: &Curve, stop_hz: f64) -> Op
     }
     Some(ClaimValue {
         key,
-        value: v,
+        value: Answer::Number(v),
         uncertainty: Some(end.transition.half_width()),
         note,
     })

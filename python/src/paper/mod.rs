@@ -11,7 +11,7 @@ mod fig13;
 mod study;
 
 /// The claim values of a figure as a list of dicts (`claim`, `quantity`, `set`, `ours`,
-/// `uncertainty`, `note`).
+/// `uncertainty`, `note`); `ours` is a number as the scorecard writes it (yes 1, no 0).
 pub(crate) fn claims_list<'py>(py: Python<'py>, values: &[Value]) -> PyResult<Bound<'py, PyList>> {
     let l = PyList::empty(py);
     for v in values {
@@ -19,7 +19,7 @@ pub(crate) fn claims_list<'py>(py: Python<'py>, values: &[Value]) -> PyResult<Bo
         d.set_item("claim", &v.claim)?;
         d.set_item("quantity", &v.quantity)?;
         d.set_item("set", v.set.label())?;
-        d.set_item("ours", v.ours)?;
+        d.set_item("ours", v.ours.to_f64())?;
         d.set_item("uncertainty", v.uncertainty)?;
         d.set_item("note", &v.note)?;
         l.append(d)?;

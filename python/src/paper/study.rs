@@ -93,7 +93,7 @@ fn evaluation_dict<'py>(
                 e.quantity.quantity,
             ))
         })?;
-    d.set_item("paper", c.paper)?;
+    d.set_item("paper", c.paper.to_f64())?;
     d.set_item("tolerance", c.tolerance())?;
     d.set_item("unit", &c.unit)?;
     d.set_item("outcome", e.outcome.label())?;

@@ -3,7 +3,7 @@
 //! ([`Evaluation`]).
 
 use super::DeviationsError;
-use crate::paper::claims::{Claim, Claims, Kind, Verdict};
+use crate::paper::claims::{Answer, Claim, Claims, Kind, Verdict};
 use crate::paper::figures::fig09::FIG9_EXTEND_G;
 
 /// Upper end of prototype 1's frequency continuations (Hz): Figure 8's range extended to
@@ -239,11 +239,15 @@ pub fn normalise(
         (None, Some(s)) => s,
         (None, None) => return Err(DeviationsError::NoSubstitute(qty.claim, qty.quantity)),
     };
+    let paper = claim.paper.to_f64();
     let deviation = match claim.kind {
-        Kind::Quantitative => (value - claim.paper) / claim.tolerance(),
-        Kind::Qualitative => value - claim.paper,
+        Kind::Quantitative => (value - paper) / claim.tolerance(),
+        Kind::Qualitative => value - paper,
     };
-    let meets = outcome.value().is_some() && claim.verdict(Some(value)) == Verdict::Reproduced;
+    let meets = outcome.value().is_some()
+        && claim
+            .read(Answer::Number(value))
+            .is_ok_and(|v| claim.verdict(Some(v)) == Verdict::Reproduced);
     Ok(Evaluation {
         quantity: *qty,
         outcome,
