@@ -15,8 +15,8 @@ use anyhow::{bail, Context, Result};
 use common::plot::{LegendPos, LinePlot, Series, Style, PALETTE};
 use common::{fmt_sig, write_atomic, Experiment};
 use endstop::paper::crosscheck::{
-    cases, prepare, Case, Difference, Ours, Prepared, Setting, SpiceRun, Verdict, BOOK_CASE,
-    OUTPUT_STEPS_PER_PERIOD, SETTINGS, TOL_FREE, TOL_IMPACTING,
+    acceptance_failures, cases, prepare, Case, Difference, Ours, Prepared, Setting, SpiceRun,
+    Verdict, BOOK_CASE, OUTPUT_STEPS_PER_PERIOD, SETTINGS, TOL_FREE, TOL_IMPACTING,
 };
 use endstop::paper::setups::{comb, endstop, stiffness_model, ParamSet};
 use polars::prelude::*;
@@ -37,6 +37,7 @@ struct Row {
     freq_hz: f64,
     start: String,
     setting: String,
+    setting_kind: Setting,
     setting_label: String,
     documented: bool,
     settings_text: String,
@@ -90,6 +91,7 @@ impl Row {
             freq_hz: case.freq_hz,
             start: o.prepared.start_label.clone(),
             setting: setting.key().to_string(),
+            setting_kind: setting,
             setting_label: setting.label().to_string(),
             documented: setting.documented(),
             settings_text: setting.text(case.period_s()),
@@ -214,20 +216,15 @@ fn run() -> Result<()> {
         rows.extend(case_rows);
         plot_series.extend(series);
     }
-    let failures: Vec<String> = rows
+    let keys: Vec<&str> = cases(&p1.device, &p2.device)
         .iter()
-        .filter(|r| r.documented && r.verdict != Verdict::Within)
-        .map(|r| {
-            format!(
-                "{} [{}]: relative difference {} > tolerance {} ({})",
-                r.case,
-                r.setting,
-                r.rel_diff,
-                r.tolerance,
-                r.verdict.label()
-            )
-        })
+        .map(|c| c.key)
         .collect();
+    let verdicts: Vec<(&str, Setting, &Verdict)> = rows
+        .iter()
+        .map(|r| (r.case.as_str(), r.setting_kind, &r.verdict))
+        .collect();
+    let failures = acceptance_failures(&keys, &verdicts);
 
     exp.write_numbers_md(&numbers_md(&rows, &version))?;
     let mut df = rows_df(&rows)?;

@@ -555,9 +555,62 @@ impl Difference {
     }
 }
 
+/// The acceptance over the whole cross-check: every case of `case_keys` must have exactly one
+/// verdict under the documented settings ([`Setting::documented`]), and each must be
+/// [`Verdict::Within`]. `verdicts` holds (case key, setting, verdict) of every run. Returns
+/// the failures, one line each: a case without a documented verdict (or with two), and a
+/// documented verdict outside the tolerance or failed; a set with no case fails.
+pub fn acceptance_failures(
+    case_keys: &[&str],
+    verdicts: &[(&str, Setting, &Verdict)],
+) -> Vec<String> {
+    if case_keys.is_empty() {
+        return vec!["no case was compared".into()];
+    }
+    let mut failures = Vec::new();
+    for key in case_keys {
+        let documented: Vec<&Verdict> = verdicts
+            .iter()
+            .filter(|(k, s, _)| k == key && s.documented())
+            .map(|(_, _, v)| *v)
+            .collect();
+        match documented.as_slice() {
+            [Verdict::Within] => {}
+            [v] => failures.push(format!("{key} [documented]: {}", v.label())),
+            vs => failures.push(format!(
+                "{key}: {} verdicts under the documented settings, expected one",
+                vs.len()
+            )),
+        }
+    }
+    failures
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_acceptance_fails_on_a_missing_case_an_outside_verdict_or_no_case() {
+        let within = Verdict::Within;
+        let outside = Verdict::Outside;
+        let all = [
+            ("a", Setting::Defaults, &outside),
+            ("a", Setting::Documented, &within),
+            ("b", Setting::Documented, &within),
+        ];
+        assert!(acceptance_failures(&["a", "b"], &all).is_empty());
+        // Case b was not run under the documented settings: a failure, not a pass.
+        let f = acceptance_failures(&["a", "b"], &all[..2]);
+        assert_eq!(f.len(), 1, "{f:?}");
+        assert!(f[0].starts_with("b: 0 verdicts"), "{f:?}");
+        // Nothing compared at all.
+        assert_eq!(acceptance_failures(&[], &[]).len(), 1);
+        assert_eq!(acceptance_failures(&["a"], &[]).len(), 1);
+        // A documented verdict outside the tolerance.
+        let f = acceptance_failures(&["a"], &[("a", Setting::Documented, &outside)]);
+        assert_eq!(f, ["a [documented]: outside tolerance"]);
+    }
 
     #[test]
     fn only_the_documented_setting_is_held_to_the_tolerance() {
