@@ -6,6 +6,7 @@
 //! Every file is written to a temporary name in the same directory and renamed, so a failed
 //! run never leaves a partial output behind.
 pub mod answers;
+pub mod band_limit_io;
 pub mod book;
 pub mod broadband_io;
 pub mod calibration_io;
