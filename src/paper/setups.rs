@@ -139,6 +139,39 @@ impl Prototype1Sets {
     }
 }
 
+/// A device that cannot stand in for one of the paper's prototypes.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error(
+    "device `{device}`: {what}; the paper's figures and calibration need an area-overlap comb \
+     pair and the same Hertz line stop on both sides"
+)]
+pub struct TopologyError {
+    /// The device's name.
+    pub device: String,
+    /// What it has instead.
+    pub what: String,
+}
+
+/// Checks that a device has the paper's topology, which [`comb`], [`endstop`] and
+/// [`hertz_stop`] assume (and panic without): an area-overlap comb pair, and one Hertz line
+/// stop for both sides. The entry points that take a device from a user call it first.
+pub fn check_topology(d: &Device) -> Result<(), TopologyError> {
+    let err = |what: String| TopologyError {
+        device: d.name.clone(),
+        what,
+    };
+    if !matches!(d.transducer, Transducer::AreaOverlapPair(_)) {
+        return Err(err(format!("its transducer is `{}`", d.transducer.key())));
+    }
+    let Some(stop) = d.stops.symmetric() else {
+        return Err(err("its two stops differ or one is missing".into()));
+    };
+    if !matches!(stop.law, StopLaw::HertzLine(_)) {
+        return Err(err(format!("its stops are `{}`", stop.law.key())));
+    }
+    Ok(())
+}
+
 /// The comb pair of one of the paper's devices (eqs 7-10).
 ///
 /// # Panics
