@@ -133,10 +133,14 @@ impl Run {
         self.lm.residuals.iter().map(|r| r * r).sum()
     }
 
-    /// True when the search converged on a model that needs no warning about its branches.
+    /// True when the search converged, on branches that agree with the ones identified afresh
+    /// or on the stepped sweep (which has nothing to agree with).
     pub(super) fn settled(&self) -> bool {
         self.lm.stop.converged()
-            && matches!(self.used, Used::Branches { disagreement: Some(d), .. } if d <= 1.0)
+            && match self.used {
+                Used::Branches { disagreement, .. } => disagreement.is_some_and(|d| d <= 1.0),
+                Used::SteppedSweep { .. } => true,
+            }
     }
 }
 
