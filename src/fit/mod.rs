@@ -1,6 +1,6 @@
 //! Fitting a device to measured sweeps: named free parameters with ranges, a weighted
 //! least-squares misfit evaluated on the branches of periodic orbits the sweeps follow
-//! ([`branch`]), a Levenberg-Marquardt search ([`lm`]) in bounded-transformed coordinates from
+//! (`branch.rs`), a Levenberg-Marquardt search ([`lm`]) in bounded-transformed coordinates from
 //! one or several starts, and an honest account of what the data determine.
 //!
 //! # Misfit
