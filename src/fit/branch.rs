@@ -29,7 +29,7 @@ use super::{Direction, FeatureKind, SweepData};
 #[derive(Debug, Clone, PartialEq)]
 pub(super) enum PointModel {
     /// The stable orbit at the point's frequency on its branch.
-    Orbit(Orbit),
+    Orbit(Box<Orbit>),
     /// A point of the first branch beyond its fold: the fold's orbit.
     AtFold,
 }
@@ -289,7 +289,7 @@ pub(super) fn identify(device: &Device, scale: f64, data: &SweepData) -> Result<
         let j = path.nearest(f);
         let step_orbit = |j: usize| stable_orbit(&h, f, a, 0.0, path.steps[j].state);
         let (Some(fold), Some(k)) = (&fold, k_jump) else {
-            points.push((true, PointModel::Orbit(step_orbit(j)?)));
+            points.push((true, PointModel::Orbit(Box::new(step_orbit(j)?))));
             continue;
         };
         let first = match measured_end {
@@ -300,13 +300,13 @@ pub(super) fn identify(device: &Device, scale: f64, data: &SweepData) -> Result<
             if fold.beyond(f) {
                 PointModel::AtFold
             } else if j <= k {
-                PointModel::Orbit(step_orbit(j)?)
+                PointModel::Orbit(Box::new(step_orbit(j)?))
             } else {
                 let g = fold.nearest(f);
-                PointModel::Orbit(stable_orbit(&h, f, a, g.phase_rad, g.state)?)
+                PointModel::Orbit(Box::new(stable_orbit(&h, f, a, g.phase_rad, g.state)?))
             }
         } else if j > k {
-            PointModel::Orbit(step_orbit(j)?)
+            PointModel::Orbit(Box::new(step_orbit(j)?))
         } else {
             // A point the data place after the jump but the model before it: the second
             // branch followed back from the first step after the model's jump.
@@ -317,7 +317,7 @@ pub(super) fn identify(device: &Device, scale: f64, data: &SweepData) -> Result<
                 o = stable_orbit(&h, fi, a, o.phase_rad, o.state)
                     .map_err(|e| Lost(format!("second branch below the jump: {}", e.0)))?;
             }
-            PointModel::Orbit(o)
+            PointModel::Orbit(Box::new(o))
         };
         points.push((first, pm));
     }
@@ -374,12 +374,12 @@ pub(super) fn track(
                         (g.phase_rad, g.state)
                     }
                 };
-                PointModel::Orbit(stable_orbit(&h, f, a, ph, y).map_err(ctx)?)
+                PointModel::Orbit(Box::new(stable_orbit(&h, f, a, ph, y).map_err(ctx)?))
             }
             _ => match pm {
-                PointModel::Orbit(o) => {
-                    PointModel::Orbit(stable_orbit(&h, f, a, o.phase_rad, o.state).map_err(ctx)?)
-                }
+                PointModel::Orbit(o) => PointModel::Orbit(Box::new(
+                    stable_orbit(&h, f, a, o.phase_rad, o.state).map_err(ctx)?,
+                )),
                 PointModel::AtFold => return Err(Lost("a point at a fold that vanished".into())),
             },
         };
