@@ -74,3 +74,38 @@ fn escape_over_the_barrier_follows_kramers_law() {
     let (_, checks) = spring_cases::kramers(&device(spring_cases::KRAMERS_DEVICE)).unwrap();
     assert_all(&checks);
 }
+
+/// NLvib's Duffing example: folds, amplitudes and stability of NLvib-py's harmonic balance for
+/// H = 1 to 15 against our shooting continuation.
+#[test]
+fn nlvib_duffing_example_converges_to_our_branch() {
+    use endstop::validation::nlvib_duffing::{self, DuffingReference, Ours};
+    let dir =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("data/references/nlvib_duffing");
+    let reference = DuffingReference::parse(|name| {
+        std::fs::read_to_string(dir.join(name)).map_err(|e| {
+            endstop::validation::ValidationError::Reference {
+                file: name.to_string(),
+                message: e.to_string(),
+            }
+        })
+    })
+    .unwrap();
+    let d = device("nlvib_duffing");
+    let ours = Ours::new(&d);
+    let branch = ours
+        .branch(0.5, 1.6, spring_cases::NLVIB_DUFFING_MAX_STEP_RAD_S)
+        .unwrap();
+    let hb = nlvib_duffing::hb_convergence(&ours, &branch, &reference).unwrap();
+    for c in &hb {
+        eprintln!(
+            "H = {}: folds {:?} ours {:?}, {} points, worst a1 difference {:e}",
+            c.harmonics,
+            c.folds,
+            c.our_folds,
+            c.points.len(),
+            c.worst_amplitude_difference()
+        );
+    }
+    assert_all(&nlvib_duffing::checks(&hb));
+}

@@ -119,7 +119,14 @@ impl FreeFlight {
         }
         Self {
             kind: FlightKind::General(GeneralFlight {
-                l: h.jacobian(Mode::Free, &h.well_state()),
+                l: h.jacobian(
+                    Mode::Free,
+                    &if h.spring.nonlinear {
+                        h.well_state()
+                    } else {
+                        h.rest_state()
+                    },
+                ),
                 transducer: h.transducer,
                 nonlinear: h.spring.nonlinear || matches!(h.transducer, TransducerModel::Pair(_)),
                 inv_mass: 1.0 / h.mass_kg,

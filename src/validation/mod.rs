@@ -9,6 +9,7 @@
 //! | [`random_law`] | the power that white base acceleration delivers to a mass, `m Sa / 2`, against random ensembles' drive power and total dissipation |
 //! | [`grazing`] | where a linear oscillator's amplitude equals the gap of a rigid stop, against the continuation's grazing points |
 //! | [`nlvib`] | NLvib-py's harmonic balance and an exact shooting of a one-sided spring oscillator, against our shooting and continuation |
+//! | [`nlvib_duffing`] | NLvib-py's harmonic balance of NLvib's Duffing example, against our continuation's folds, amplitudes and stability |
 //! | [`stationary_law`] | the exact stationary density `exp(-U/theta)` of white-noise driven devices with viscous damping and any conservative suspension and stops, against random ensembles' histograms, moments, contact and well shares and load power |
 //! | [`kramers`] | Kramers' escape rate over a double well's barrier, against random ensembles' well-to-well rates |
 //!
@@ -21,6 +22,7 @@ pub mod harmonics;
 pub mod kramers;
 pub mod linear_harvesters;
 pub mod nlvib;
+pub mod nlvib_duffing;
 pub mod random_law;
 pub mod spring_cases;
 pub mod stationary_law;

@@ -104,3 +104,6 @@ pub fn kramers(device: &Device) -> Result<(Vec<KramersLevel>, Vec<Check>), Valid
     let checks = kramers::checks(device, &levels);
     Ok((levels, checks))
 }
+
+/// Largest parameter step of our continuation of NLvib's Duffing example (rad/s).
+pub const NLVIB_DUFFING_MAX_STEP_RAD_S: f64 = 0.01;
