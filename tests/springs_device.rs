@@ -2,7 +2,7 @@
 //! file, the field, the value and the valid range; good files load, report their equilibria
 //! and read back equal.
 
-use endstop::device::{Device, ParamError, Suspension};
+use endstop::device::{Device, ParamError};
 use endstop::physics::suspension::Place;
 
 const HEAD: &str = r#"
@@ -174,9 +174,9 @@ fn a_stop_confines_a_softening_suspension_only_when_its_force_grows_faster() {
         with_stop("law = \"hertz_point\"\nstiffness_n_per_m1p5 = 1e12"),
         "mechanics.suspension.k3_n_per_m3",
     );
-    // A Hunt-Crossley stop of exponent 4 and a rigid stop confine it.
+    // A Hunt-Crossley stop of the same exponent but stiffer, and a rigid stop, confine it.
     let hc = with_stop(
-        "law = \"hunt_crossley\"\nstiffness_n_per_m_pow_n = 1e12\nexponent = 4.0\ndamping_s_per_m = 0.1",
+        "law = \"hunt_crossley\"\nstiffness_n_per_m_pow_n = 1e12\nexponent = 3.0\ndamping_s_per_m = 0.1",
     )
     .unwrap();
     let rigid = with_stop("law = \"restitution\"\ncoefficient = 0.8").unwrap();

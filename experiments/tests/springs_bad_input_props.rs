@@ -71,7 +71,7 @@ fn stops() -> impl Strategy<Value = String> {
             "law = \"linear\"\nstiffness_n_per_m = 1e4",
             "law = \"restitution\"\ncoefficient = 0.7",
             "law = \"hertz_point\"\nstiffness_n_per_m1p5 = 1e8",
-            "law = \"hunt_crossley\"\nstiffness_n_per_m_pow_n = 1e12\nexponent = 4.0\ndamping_s_per_m = 0.1",
+            "law = \"hunt_crossley\"\nstiffness_n_per_m_pow_n = 1e12\nexponent = 3.0\ndamping_s_per_m = 0.1",
         ]),
     )
         .prop_map(|(side, gap, law)| {

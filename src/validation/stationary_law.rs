@@ -20,7 +20,7 @@
 //!
 //! **The band.** The records' noise is flat up to `B` (10 kHz) and zero above; the velocity
 //! variance it drives falls short of white noise's by the fraction
-//! [`band_deficit`](crate::validation::random_law::band_deficit) (`c / (m pi^2 B)`, derived
+//! [`crate::validation::random_law::band_deficit`] (`c / (m pi^2 B)`, derived
 //! there), and so does `theta` (applied to both the density and the power here).
 //!
 //! **The checks** ([`checks`]). Every ensemble quantity is a mean over independent records
