@@ -22,19 +22,12 @@ fn value() -> impl Strategy<Value = String> {
     ]
 }
 
-const KEYS: [&str; 11] = [
-    "k1_n_per_m",
-    "k2_n_per_m2",
-    "k3_n_per_m3",
-    "k4_n_per_m4",
-    "k5_n_per_m5",
-    "k6_n_per_m6",
-    "k7_n_per_m7",
-    "well_m",
-    "barrier_j",
-    "stiffness",
-    "form_extra",
-];
+/// The suspension's keys, and two that no form takes.
+fn keys() -> Vec<&'static str> {
+    let mut k = endstop::device::suspension::COEFFICIENT_KEYS.to_vec();
+    k.extend(["well_m", "barrier_j", "stiffness", "form_extra"]);
+    k
+}
 
 fn suspension() -> impl Strategy<Value = String> {
     (
@@ -46,7 +39,7 @@ fn suspension() -> impl Strategy<Value = String> {
             "3",
             "",
         ]),
-        proptest::collection::vec((select(KEYS.to_vec()), value()), 0..6),
+        proptest::collection::vec((select(keys()), value()), 0..6),
     )
         .prop_map(|(form, kv)| {
             let mut s = String::from("[mechanics.suspension]\n");

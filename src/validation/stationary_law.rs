@@ -38,7 +38,7 @@ use statrs::distribution::{ContinuousCDF, FisherSnedecor, StudentsT};
 use crate::device::{Device, StopLaw, Transducer};
 use crate::physics::contact::StopModel;
 use crate::physics::suspension::{potential_j, Polynomial};
-use crate::study::displacement::{DisplacementBins, DisplacementEnsemble};
+use crate::study::displacement::{DisplacementBins, DisplacementEnsemble, RecordDisplacement};
 use crate::study::record::RecordSpec;
 use crate::validation::random_law::band_deficit;
 use crate::validation::{Check, Group, Measure, ValidationError};
@@ -362,20 +362,34 @@ pub fn checks(
         "the records' bin shares are independent vectors: their covariance holds the \
          within-record correlation",
     );
-    let rel = |g: &mut Group,
+    // A mean over records against the law: relative for moments and power, absolute for
+    // shares of time (which may be near zero).
+    let add = |g: &mut Group,
                what: &str,
                theirs: f64,
-               f: &dyn Fn(&crate::study::displacement::RecordDisplacement) -> f64| {
+               measure: Measure,
+               f: &dyn Fn(&RecordDisplacement) -> f64| {
         let ci = ensemble.stat(f);
+        let tol = ci999(ci.std, n);
+        let tol = match measure {
+            Measure::Relative => tol / theirs.abs(),
+            _ => tol,
+        };
         g.add(
             src,
             &format!("{}: {what}", device.name),
             theirs,
             ci.mean,
-            Measure::Relative,
-            ci999(ci.std, n) / theirs.abs(),
+            measure,
+            tol,
             why,
         );
+    };
+    let rel = |g: &mut Group, what: &str, theirs: f64, f: &dyn Fn(&RecordDisplacement) -> f64| {
+        add(g, what, theirs, Measure::Relative, f)
+    };
+    let abs = |g: &mut Group, what: &str, theirs: f64, f: &dyn Fn(&RecordDisplacement) -> f64| {
+        add(g, what, theirs, Measure::Absolute, f)
     };
     rel(&mut g, "E[x^2] (m^2)", law.expect(&|x| x * x), &|r| {
         r.x2_mean_m2
@@ -386,21 +400,6 @@ pub fn checks(
     rel(&mut g, "load power (W)", law.load_power_w(), &|r| {
         r.summary.p_total_w()
     });
-    let abs = |g: &mut Group,
-               what: &str,
-               theirs: f64,
-               f: &dyn Fn(&crate::study::displacement::RecordDisplacement) -> f64| {
-        let ci = ensemble.stat(f);
-        g.add(
-            src,
-            &format!("{}: {what}", device.name),
-            theirs,
-            ci.mean,
-            Measure::Absolute,
-            ci999(ci.std, n),
-            why,
-        );
-    };
     if let Some(s) = &device.stops.upper {
         abs(
             &mut g,
