@@ -208,7 +208,12 @@ impl Polynomial {
             for i in 0..d {
                 c[(i, d - 1)] = -self.0[i] / lead;
             }
-            for z in c.complex_eigenvalues().iter() {
+            // A bounded Schur iteration: coefficients of wildly different sizes may not
+            // converge, and then no root is reported rather than the loop running on.
+            let eig = nalgebra::linalg::Schur::try_new(c, f64::EPSILON, 10_000)
+                .map(|s| s.complex_eigenvalues())
+                .unwrap_or_else(|| nalgebra::DVector::zeros(0));
+            for z in eig.iter() {
                 let scale = z.norm().max(f64::MIN_POSITIVE);
                 if z.im.abs() > 1e-6 * scale {
                     continue;
