@@ -224,6 +224,13 @@ fn run() -> Result<()> {
     let (aft_floor, fold_floor) = (reference.aft_floor_m(), reference.fold_floor_rad_s());
     checks.extend(nlvib::hb_checks(&hb, aft_floor, fold_floor));
     let samples = nlvib::branch_samples(&ours, &branch)?;
+    let springs = common::springs_io::run(&mut exp, load)?;
+    checks.extend(springs.checks.iter().cloned());
+    costs.extend(springs.costs.iter().map(|(c, w, s)| Cost {
+        case: c.clone(),
+        what: w.clone(),
+        wall_s: *s,
+    }));
 
     // Parquet.
     let mut df = frame(checks.iter().map(|c| {
@@ -352,6 +359,15 @@ fn run() -> Result<()> {
     write_atomic(
         &book.join("band_limit.md"),
         band_limit_io::table_md(&band)?.as_bytes(),
+    )?;
+    write_atomic(
+        &book.join("springs.md"),
+        checks_table(
+            in_groups(&checks, "exact stationary law")
+                .chain(in_groups(&checks, "escape over the barrier"))
+                .chain(in_groups(&checks, "peer: NLvib's Duffing")),
+        )
+        .as_bytes(),
     )?;
     write_atomic(&book.join("cost.md"), cost_md(&costs).as_bytes())?;
     exp.number("checks", judged as f64);

@@ -398,5 +398,40 @@ pub(crate) fn describe(device: &Device) -> String {
             side(device.stops.lower.as_ref())
         ),
     };
-    format!("{transducer}, {stops}")
+    format!("{transducer}, {stops}{}", suspension(device))
+}
+
+/// A nonlinear suspension's form and static equilibria, for [`describe`] (empty for a linear
+/// one).
+fn suspension(device: &Device) -> String {
+    use endstop::physics::suspension::Place;
+    if device.mechanics.suspension.is_linear() {
+        return String::new();
+    }
+    let eq: Vec<String> = device
+        .equilibria()
+        .iter()
+        .map(|e| {
+            format!(
+                "{} um {}{}",
+                fmt_sig(e.x_m * 1e6, 4),
+                if e.stable { "stable" } else { "unstable" },
+                match e.place {
+                    Place::Free => "",
+                    Place::UpperStop => " on the upper stop",
+                    Place::LowerStop => " on the lower stop",
+                }
+            )
+        })
+        .collect();
+    format!(
+        ", `{}` suspension (static equilibria: {}; small oscillations at the reference well: \
+         {} Hz)",
+        device.mechanics.suspension.key(),
+        eq.join(", "),
+        fmt_sig(
+            device.suspension_omega_rad_s() / (2.0 * std::f64::consts::PI),
+            4
+        )
+    )
 }

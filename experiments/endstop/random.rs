@@ -182,6 +182,7 @@ fn noise(a: &RandomArgs, psd: f64) -> Result<()> {
     )?;
     exp.write_parquet("records", &mut per, &device.params)?;
 
+    let disp = displacement(&mut exp, &device, &spec.record, &ens, a)?;
     let band_hz = spec.record.noise.bandwidth_hz;
     let linear_w = white_noise_power_w(&device, sa_si, 1e-3, band_hz);
     let eq21 =
@@ -232,6 +233,7 @@ fn noise(a: &RandomArgs, psd: f64) -> Result<()> {
     if paths.iter().any(|p| p != &paths[0]) {
         md.push_str("- (the records did not all take the same path; see records.parquet)\n");
     }
+    md.push_str(&disp.md);
     exp.write_numbers_md(&md)?;
     print!("{md}");
     let drive = Psd {
@@ -239,15 +241,119 @@ fn noise(a: &RandomArgs, psd: f64) -> Result<()> {
         density: vec![psd; m],
         segments: 0,
     };
-    let plot = spectra_plot(
+    let mut panels = spectra_plot(
         &device,
         &format!("Output PSD at Sa = {psd} g^2/Hz"),
         out,
         &linear,
         &drive,
-    );
+    )
+    .panels;
+    panels.push(disp.plot);
+    let plot = Panels::row(panels);
     exp.write_plot(&plot)?;
     exp.finish()
+}
+
+/// Fine bins of the displacement histogram.
+const DISPLACEMENT_BINS: usize = 80;
+
+/// The displacement outputs of an ensemble: its table, its lines in the numbers and its panel.
+struct Displacement {
+    md: String,
+    plot: LinePlot,
+}
+
+/// Reads the ensemble's displacement (a second pass over the same records, streams
+/// `0..records` of the seed): the histogram with its 95 % interval across records, beside the
+/// exact stationary density where it applies (viscous damping only, lossless stops), and for
+/// a device with two wells the rate of well-to-well transitions.
+fn displacement(
+    exp: &mut common::Experiment,
+    device: &Device,
+    record: &RecordSpec,
+    ens: &endstop::study::ensemble::Ensemble,
+    a: &RandomArgs,
+) -> Result<Displacement> {
+    use endstop::study::displacement::{displacement_ensemble, DisplacementBins};
+    use endstop::validation::stationary_law::StationaryLaw;
+    let reach = 1.02 * ens.x_peak_m.max(f64::MIN_POSITIVE);
+    let bins = DisplacementBins::uniform(device, -reach, reach, DISPLACEMENT_BINS);
+    let de = common::with_progress(1, "displacement pass over the records", |tick| {
+        let r = displacement_ensemble(device, record, &bins, a.seed, a.records as u64);
+        tick();
+        r
+    })?;
+    let law = StationaryLaw::of(device, record).ok();
+    let dens = de.density();
+    let n = dens.len();
+    let exact: Vec<f64> = dens
+        .iter()
+        .map(|(x, _, _)| law.as_ref().map_or(f64::NAN, |l| l.density(*x)))
+        .collect();
+    let mut df = df!(
+        "x_m" => dens.iter().map(|d| d.0).collect::<Vec<_>>(),
+        "density_per_m" => dens.iter().map(|d| d.1).collect::<Vec<_>>(),
+        "density_ci95_per_m" => dens.iter().map(|d| d.2).collect::<Vec<_>>(),
+        "exact_density_per_m" => exact.clone(),
+        "params" => vec![device.params.clone(); n],
+    )?;
+    exp.write_parquet("displacement_pdf", &mut df, &device.params)?;
+    let mut md = String::new();
+    let rate = de.transition_rate();
+    if let Some(([lo, hi], _)) = bins.wells {
+        exp.number("transition_rate_per_s", rate.mean);
+        exp.number("transition_rate_ci95_per_s", rate.ci95);
+        md.push_str(&format!(
+            "- well-to-well transitions (wells at {} and {} um): {} per s ± {} (95 %), {} in all\n",
+            fmt_sig(lo * 1e6, 4),
+            fmt_sig(hi * 1e6, 4),
+            fmt_sig(rate.mean, 4),
+            fmt_sig(rate.ci95, 2),
+            de.transitions()
+        ));
+        let share = de.stat(|r| r.upper_well_share);
+        exp.number("upper_well_share", share.mean);
+    }
+    md.push_str(&format!(
+        "- displacement density: {DISPLACEMENT_BINS} bins over ±{} um, with its 95 % interval \
+         across records (displacement_pdf.parquet){}\n",
+        fmt_sig(reach * 1e6, 4),
+        if law.is_some() {
+            "; beside the exact stationary density exp(-U/theta), which applies to this device"
+        } else {
+            ""
+        }
+    ));
+    let um = |x: f64| x * 1e6;
+    let mut series = vec![Series::new(
+        "ensemble (bars: 95 %)",
+        dens.iter().map(|d| (um(d.0), d.1 / 1e6)).collect(),
+        PALETTE[0],
+        Style::LinePoints,
+    )];
+    series.extend(common::plot::error_bars(
+        dens.iter().map(|d| (um(d.0), d.1 / 1e6, d.2 / 1e6)),
+        PALETTE[0],
+    ));
+    if law.is_some() {
+        series.push(Series::new(
+            "exact stationary law",
+            dens.iter()
+                .zip(&exact)
+                .map(|(d, e)| (um(d.0), e / 1e6))
+                .collect(),
+            PALETTE[1],
+            Style::Dashed,
+        ));
+    }
+    let plot = LinePlot::new(
+        "Displacement density",
+        "displacement x [um]",
+        "probability density [1/um]",
+        series,
+    );
+    Ok(Displacement { md, plot })
 }
 
 /// The most samples a resampled measured record may have.

@@ -22,6 +22,7 @@ pub mod narrowband_io;
 pub mod panels;
 pub mod plot;
 pub mod response_io;
+pub mod springs_io;
 
 pub use calibration_io::{calibrated_prototype1, prototype1_both_sets};
 

@@ -22,6 +22,7 @@ mod device;
 mod fit;
 mod linear;
 mod paper;
+mod springs;
 mod study;
 
 pub(crate) use device::PyDevice;
@@ -71,6 +72,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     fit::register(m)?;
     linear::register(m)?;
     study::register(m)?;
+    springs::register(m)?;
     paper::register(m)?;
     Ok(())
 }

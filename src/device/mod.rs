@@ -39,6 +39,7 @@ mod legacy;
 mod paths;
 mod range;
 pub mod stops;
+pub mod suspension;
 pub mod transducer;
 
 use serde::{Deserialize, Serialize};
@@ -46,6 +47,7 @@ use thiserror::Error;
 
 pub use range::{device_at, ParamRange, Spacing};
 pub use stops::{HertzLineStop, HertzPointStiffness, Stop, StopLaw, StopSide, Stops};
+pub use suspension::Suspension;
 pub use transducer::{AreaOverlapPair, Electromagnetic, GapClosingPair, Piezoelectric, Transducer};
 
 /// A parameter that failed to load or validate.
@@ -122,7 +124,8 @@ pub enum StiffnessModel {
 pub struct Mechanics {
     /// Proof mass m (kg).
     pub mass_kg: f64,
-    /// Suspension stiffness km (N/m).
+    /// Suspension stiffness km (N/m). With a nonlinear [`Mechanics::suspension`] it is derived
+    /// on load: the small-oscillation stiffness at the reference well (see [`suspension`]).
     pub stiffness_n_per_m: f64,
     /// Mechanical damping b (N s/m).
     pub damping_n_s_per_m: f64,
@@ -130,6 +133,9 @@ pub struct Mechanics {
     /// prototype, used only for the `m w0 / b` reading of Qm in Table 3.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub measured_resonance_hz: Option<f64>,
+    /// The restoring force: linear (`stiffness_n_per_m`), a polynomial or a double well.
+    #[serde(skip)]
+    pub suspension: Suspension,
 }
 
 /// A complete device description.
@@ -156,7 +162,7 @@ struct RawDevice {
     name: String,
     params: String,
     description: String,
-    mechanics: Mechanics,
+    mechanics: suspension::RawMechanics,
     #[serde(default)]
     stops: stops::RawStops,
     transducer: Transducer,
@@ -281,14 +287,16 @@ impl Device {
             let c = Checker {
                 source: source_name,
             };
-            Device {
+            let mut dev = Device {
                 stops: raw.stops.parse(&c)?,
                 name: raw.name,
                 params: raw.params,
                 description: raw.description,
-                mechanics: raw.mechanics,
+                mechanics: raw.mechanics.parse(&c)?,
                 transducer: raw.transducer,
-            }
+            };
+            dev.derive_well_stiffness();
+            dev
         };
         dev.validate(source_name)?;
         Ok(dev)
@@ -299,7 +307,7 @@ impl Device {
             name: self.name.clone(),
             params: self.params.clone(),
             description: self.description.clone(),
-            mechanics: self.mechanics.clone(),
+            mechanics: suspension::RawMechanics::of(&self.mechanics),
             stops: stops::RawStops::of(&self.stops),
             transducer: self.transducer.clone(),
         }
@@ -321,7 +329,9 @@ impl Device {
         }
         let m = &self.mechanics;
         c.positive("mechanics.mass_kg", m.mass_kg)?;
-        c.positive("mechanics.stiffness_n_per_m", m.stiffness_n_per_m)?;
+        if m.suspension.is_linear() {
+            c.positive("mechanics.stiffness_n_per_m", m.stiffness_n_per_m)?;
+        }
         c.positive("mechanics.damping_n_s_per_m", m.damping_n_s_per_m)?;
         if let Some(f) = m.measured_resonance_hz {
             c.positive("mechanics.measured_resonance_hz", f)?;
@@ -362,6 +372,7 @@ impl Device {
                 _ => {}
             }
         }
+        self.validate_suspension(&c)?;
         if let Transducer::GapClosingPair(p) = &self.transducer {
             let k = m.stiffness_n_per_m + p.electrostatic_stiffness_n_per_m();
             if k <= 0.0 {

@@ -153,14 +153,15 @@ impl Device {
         let c = super::Checker {
             source: &format!("parameter `{path}`"),
         };
-        let dev = Device {
+        let mut dev = Device {
             stops: raw.stops.parse(&c)?,
             name: raw.name,
             params: raw.params,
             description: raw.description,
-            mechanics: raw.mechanics,
+            mechanics: raw.mechanics.parse(&c)?,
             transducer: raw.transducer,
         };
+        dev.derive_well_stiffness();
         dev.validate(&format!("parameter `{path}`"))?;
         Ok(dev)
     }

@@ -44,5 +44,6 @@ pub mod free_flight;
 pub mod harvester;
 pub mod hertz;
 pub mod linear;
+pub mod suspension;
 pub mod transducer;
 pub mod two_port;

@@ -10,6 +10,7 @@
 pub mod amplitude;
 pub mod basins;
 pub mod continuation;
+pub mod displacement;
 pub mod ensemble;
 pub mod orbit;
 pub mod record;

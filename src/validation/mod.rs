@@ -10,6 +10,9 @@
 //! | [`band_limit`] | the band-limited noise's shortfall from that law at several bandwidths, against its first-order estimate (a recorded study) |
 //! | [`grazing`] | where a linear oscillator's amplitude equals the gap of a rigid stop, against the continuation's grazing points |
 //! | [`nlvib`] | NLvib-py's harmonic balance and an exact shooting of a one-sided spring oscillator, against our shooting and continuation |
+//! | [`nlvib_duffing`] | NLvib-py's harmonic balance of NLvib's Duffing example, against our continuation's folds, amplitudes and stability |
+//! | [`stationary_law`] | the exact stationary density `exp(-U/theta)` of white-noise driven devices with viscous damping and any conservative suspension and stops, against random ensembles' histograms, moments, contact and well shares and load power |
+//! | [`kramers`] | Kramers' escape rate over a double well's barrier, against random ensembles' well-to-well rates |
 //!
 //! This module computes and judges; reading the reference files and writing the tables is the
 //! callers' job (the `validation` experiment and the tests).
@@ -18,9 +21,13 @@ pub mod band_limit;
 pub mod cases;
 pub mod grazing;
 pub mod harmonics;
+pub mod kramers;
 pub mod linear_harvesters;
 pub mod nlvib;
+pub mod nlvib_duffing;
 pub mod random_law;
+pub mod spring_cases;
+pub mod stationary_law;
 
 use serde::{Deserialize, Serialize};
 

@@ -247,6 +247,10 @@ pub enum Fallback {
     /// `h L` of [`ExpAdams::new`](crate::ode::exponential::ExpAdams::new) exceeds its bound,
     /// e.g. a coil whose `L/(R + Rc)` is much shorter than the sample interval).
     Unresolved,
+    /// The suspension's stiffness strays so fast from its value at the well that the
+    /// exponential step could not reach the well itself
+    /// ([`Spring::fast_path_reach_m`](crate::physics::suspension::Spring::fast_path_reach_m)).
+    StiffSuspension,
 }
 
 impl std::fmt::Display for Fallback {
@@ -260,6 +264,10 @@ impl std::fmt::Display for Fallback {
                 "a transducer capacitance plus Cp vanishes before the stop is reached"
             }
             Fallback::Unresolved => "the sample interval does not resolve the linearised dynamics",
+            Fallback::StiffSuspension => {
+                "the suspension's stiffness departs from its value at the well within the well's \
+                 distance from rest at this sample interval"
+            }
         })
     }
 }
@@ -344,6 +352,10 @@ pub(crate) trait RecordObserver {
 
     /// An accepted Dormand-Prince step, in its mode.
     fn dopri(&mut self, _model: &Harvester<Sampled>, _step: &Step<4>, _mode: Mode) {}
+
+    /// The state and mode at an analysed sample instant.
+    #[inline(always)]
+    fn sample(&mut self, _y: &State, _mode: Mode) {}
 }
 
 impl RecordObserver for () {}
