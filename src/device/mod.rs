@@ -35,6 +35,7 @@
 //!
 //! This module parses text it is given; reading the file is the caller's job (no I/O here).
 
+pub mod interface;
 mod legacy;
 mod paths;
 mod range;
@@ -44,6 +45,7 @@ pub mod transducer;
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
+pub use interface::{DcLoad, Diode, Interface, Inversion, Rectifier};
 pub use range::{device_at, ParamRange, Spacing};
 pub use stops::{HertzLineStop, HertzPointStiffness, Stop, StopLaw, StopSide, Stops};
 pub use transducer::{AreaOverlapPair, Electromagnetic, GapClosingPair, Piezoelectric, Transducer};
@@ -147,6 +149,9 @@ pub struct Device {
     pub stops: Stops,
     /// The transducer.
     pub transducer: Transducer,
+    /// The interface circuit between a one-load transducer and its load (resistive by
+    /// default; see [`interface`]).
+    pub interface: Interface,
 }
 
 /// The file form of a device.
@@ -160,6 +165,8 @@ struct RawDevice {
     #[serde(default)]
     stops: stops::RawStops,
     transducer: Transducer,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    interface: Option<interface::RawInterface>,
 }
 
 /// Builds [`ParamError`]s that name the source and check ranges.
@@ -282,6 +289,10 @@ impl Device {
                 source: source_name,
             };
             Device {
+                interface: match raw.interface {
+                    Some(i) => i.parse(&c)?,
+                    None => Interface::Resistive,
+                },
                 stops: raw.stops.parse(&c)?,
                 name: raw.name,
                 params: raw.params,
@@ -302,6 +313,7 @@ impl Device {
             mechanics: self.mechanics.clone(),
             stops: stops::RawStops::of(&self.stops),
             transducer: self.transducer.clone(),
+            interface: interface::RawInterface::of(&self.interface),
         }
     }
 
@@ -327,6 +339,14 @@ impl Device {
             c.positive("mechanics.measured_resonance_hz", f)?;
         }
         self.transducer.validate(&c)?;
+        // The interface circuit: which transducers take it, and the resistive load it replaces.
+        self.interface.validate(&self.transducer, &c)?;
+        if self.interface.is_resistive() && self.transducer.load_resistance_ohm().is_nan() {
+            return Err(c.missing(
+                "transducer.load_resistance_ohm",
+                "the resistive load (or an [interface] table with another kind)",
+            ));
+        }
         for (side, stop) in self.stops.present() {
             let field = |key: &str| format!("{}.{key}", self.stop_path(side));
             c.positive(&field("gap_m"), stop.gap_m)?;
