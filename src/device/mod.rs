@@ -341,7 +341,13 @@ impl Device {
         self.transducer.validate(&c)?;
         // The interface circuit: which transducers take it, and the resistive load it replaces.
         self.interface.validate(&self.transducer, &c)?;
-        if self.interface.is_resistive() && self.transducer.load_resistance_ohm().is_nan() {
+        if self.interface.is_resistive()
+            && matches!(
+                self.transducer,
+                Transducer::Piezoelectric(_) | Transducer::Electromagnetic(_)
+            )
+            && self.transducer.load_resistance_ohm() == f64::INFINITY
+        {
             return Err(c.missing(
                 "transducer.load_resistance_ohm",
                 "the resistive load (or an [interface] table with another kind)",

@@ -34,7 +34,8 @@
 //!
 //! # Synchronous switches
 //! The mode also remembers the sign of the velocity ([`Heading`]); an extremum is the guard
-//! `-v` (or `v`) turning positive. There:
+//! `-v` (or `v`) turning positive, where `v` is set to exactly zero (a projection within the
+//! event tolerance, so that the next heading's guard starts at zero). There:
 //!
 //! * parallel SSHI: `Vp -> -gamma Vp` (the LC half-cycle is instantaneous; its loss
 //!   `(1 - gamma^2) Cp Vp^2 / 2` is a switching loss);
@@ -674,6 +675,9 @@ impl<E: Excitation> HybridSystem<4> for Interfaced<E> {
         }
         let [conduction, extremum] = self.circuit_guards(mode, y);
         if extremum >= conduction {
+            // The extremum is located to the event tolerance; v is put at exactly zero so that
+            // the guard of the new heading starts at zero and does not fire again at once.
+            y[1] = 0.0;
             self.circuit.reset(y);
             next.heading = match mode.heading {
                 Heading::Up => Heading::Down,
@@ -715,6 +719,3 @@ impl<E: Excitation> HybridSystem<4> for Interfaced<E> {
         self.h.next_breakpoint(t)
     }
 }
-
-#[cfg(test)]
-mod tests;
