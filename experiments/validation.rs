@@ -210,6 +210,19 @@ fn run() -> Result<()> {
     checks.extend(nlvib::hb_checks(&hb, aft_floor, fold_floor));
     let samples = nlvib::branch_samples(&ours, &branch)?;
 
+    // The interface circuits against their closed forms.
+    let bridge = load(&mut exp, "piezo_bridge")?;
+    checks.extend(timed(
+        &mut costs,
+        &bridge.name,
+        "interface closed forms",
+        || endstop::validation::interfaces::weak_coupling_checks(&bridge),
+    )?);
+    let coupling = timed(&mut costs, &bridge.name, "coupling rows", || {
+        endstop::validation::interfaces::coupling_rows(&bridge)
+    })?;
+    checks.extend(endstop::validation::interfaces::coupling_checks(&coupling));
+
     // Parquet.
     let mut df = frame(checks.iter().map(|c| {
         row![
@@ -322,6 +335,14 @@ fn run() -> Result<()> {
     write_atomic(
         &book.join("nlvib.md"),
         nlvib_md(&checks, &hb, aft_floor, fold_floor, &branch, &samples).as_bytes(),
+    )?;
+    write_atomic(
+        &book.join("interfaces.md"),
+        checks_table(
+            in_groups(&checks, "interface circuits, weak coupling")
+                .chain(in_groups(&checks, "interface circuits, coupling")),
+        )
+        .as_bytes(),
     )?;
     write_atomic(&book.join("cost.md"), cost_md(&costs).as_bytes())?;
     exp.number("checks", checks.len() as f64);

@@ -249,3 +249,26 @@ fn interfaces_round_trip_through_toml() {
         assert_eq!(d, back);
     }
 }
+
+/// An on-resistance that makes conduction far faster than the period ends in a named error at
+/// once (the explicit integrator would otherwise grind through millions of steps).
+#[test]
+fn a_stiff_conduction_mode_is_a_named_error() {
+    let t = text(
+        PIEZO,
+        &bridge("full_bridge", "", &PWL_RON.replace("500.0", "1e-3"), RES),
+    );
+    let d = Device::from_toml_str(&t, "stiff.toml").unwrap();
+    let f = d.suspension_omega_rad_s() / (2.0 * std::f64::consts::PI);
+    let e = endstop::study::interface::steady_state(
+        &d,
+        Sine::from_rms_g(0.1, f),
+        &State::zeros(),
+        &endstop::study::interface::SteadySettings::default(),
+    )
+    .unwrap_err();
+    assert!(
+        matches!(e, endstop::study::interface::InterfaceError::Stiff { .. }),
+        "{e}"
+    );
+}

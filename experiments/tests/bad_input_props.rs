@@ -16,13 +16,15 @@ use proptest::sample::select;
 const BIN: &str = env!("CARGO_BIN_EXE_endstop");
 
 /// The device files a generated file starts from: the paper's two and every example.
-const DEVICE_FILES: [&str; 6] = [
+const DEVICE_FILES: [&str; 8] = [
     "data/prototype1.toml",
     "data/prototype2.toml",
     "data/examples/my_harvester.toml",
     "data/examples/piezo_cantilever.toml",
     "data/examples/em_asymmetric.toml",
     "data/examples/rigid_restitution.toml",
+    "data/examples/piezo_bridge.toml",
+    "data/examples/em_bridge.toml",
 ];
 
 fn repo(rel: &str) -> PathBuf {

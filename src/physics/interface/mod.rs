@@ -481,6 +481,19 @@ impl InterfaceModel {
         }
     }
 
+    /// The fastest time constant of a conduction mode (s): `2 R_on Cp Cs / (Cp + Cs)` for a
+    /// piezoelectric element with an on-resistance, `L / (Rc + 2 R_on)` for a coil; infinite
+    /// where a mode has none.
+    pub fn conduction_time_constant_s(&self) -> f64 {
+        match self.element {
+            Element::Piezo { cp, .. } if self.ron() > 0.0 && self.bridge_between_extrema() => {
+                2.0 * self.ron() * cp * self.cs / (cp + self.cs)
+            }
+            Element::Coil { rc, l, .. } if l > 0.0 => l / (rc + 2.0 * self.ron()),
+            _ => f64::INFINITY,
+        }
+    }
+
     /// The switch's reset at an extremum: changes `y` and says what it lost.
     pub fn reset(&self, y: &mut State) -> ResetLoss {
         let Element::Piezo { cp, .. } = self.element else {
@@ -528,16 +541,17 @@ impl InterfaceModel {
 /// dimension 4 with the modes [`IfMode`].
 #[derive(Debug, Clone)]
 pub struct Interfaced<E: Excitation> {
-    /// The mechanics and stops (its transducer is the open element, used for the stops'
-    /// holding force; the circuit below supplies the element's force).
+    /// The mechanics and stops (its transducer is the open piezoelectric element, or none for
+    /// a coil; the circuit below supplies the element's force). A rebound on a rigid stop
+    /// decides whether the mass sticks from this transducer's force, so for a coil the coil's
+    /// force is left out of that decision (the stuck mode's own guard includes it).
     pub h: Harvester<E>,
     /// The circuit.
     pub circuit: InterfaceModel,
 }
 
-/// The integrator takes at most this many switches at one instant (see
-/// [`crate::ode::SolverError::Chattering`]): a bridge that keeps switching without time
-/// advancing ends in that named error.
+/// An unused guard. (A bridge that keeps switching without time advancing ends in the
+/// integrator's named error, [`crate::ode::SolverError::Chattering`].)
 const OFF: f64 = f64::NEG_INFINITY;
 
 impl<E: Excitation> Interfaced<E> {

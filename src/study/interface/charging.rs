@@ -131,6 +131,9 @@ pub enum ChargeError {
     /// The integrator failed.
     #[error("integration failed: {0}")]
     Solver(#[from] SolverError),
+    /// The circuit cannot be integrated (see [`super::InterfaceError::Stiff`]).
+    #[error("{0}")]
+    Circuit(#[from] super::InterfaceError),
 }
 
 /// Charges the storage of `device` under `drive` (see the module docs); `progress` gets the
@@ -155,6 +158,7 @@ pub fn charge<E: Excitation + Clone>(
         },
     )
     .ok_or_else(|| ChargeError::Resistive(device.name.clone()))?;
+    super::check_stiffness(device, &model)?;
     let y0 = State::new(0.0, 0.0, 0.0, s.start_v);
     let mut ode = Dopri5::new(0.0, y0, model.mode_of(&y0), model.solver_options(s.rtol));
     let (mut t_s, mut vs_v) = (vec![0.0], vec![s.start_v]);

@@ -1,7 +1,8 @@
 //! Studies of a harvester with an interface circuit ([`crate::physics::interface`]): the
 //! periodic steady state under a sine, found by shooting on the period map, with its DC voltage
 //! and power, its stability and its energy ledger ([`steady_state`]); sweeps of it over
-//! frequency or load ([`sweep`]); and the charging of the storage ([`charging`]).
+//! frequency or load ([`sweep`]); the charging of the storage ([`charging`]); and random or
+//! measured records and their ensembles ([`record`]).
 //!
 //! # Why shooting
 //! The storage capacitor and its load have a time constant `R_L C_s` that can be hundreds of
@@ -12,6 +13,7 @@
 //! multipliers are the eigenvalues of that Jacobian. The section is at the drive's phase zero.
 
 pub mod charging;
+pub mod record;
 pub mod sweep;
 
 use nalgebra::{Matrix4, Vector4};
@@ -42,6 +44,25 @@ pub enum InterfaceError {
     /// The integrator failed.
     #[error("integration failed: {0}")]
     Solver(#[from] SolverError),
+    /// A conduction mode is too stiff for the explicit integrator: its time constant is below
+    /// [`STIFF_LIMIT`] of the suspension's period.
+    #[error(
+        "device `{name}`: a conduction mode's time constant {tau_s:e} s is below {STIFF_LIMIT:e} \
+         of the suspension's period {period_s:e} s: the integrator would take more than \
+         1e5 steps a period; use interface.diode.on_resistance_ohm = 0 (ideal with a drop) or \
+         a larger one"
+    )]
+    Stiff {
+        /// The device.
+        name: String,
+        /// The time constant (s).
+        tau_s: f64,
+        /// The suspension's period (s).
+        period_s: f64,
+    },
+    /// The drive could not be made.
+    #[error("drive: {0}")]
+    Drive(String),
     /// Newton's method did not converge.
     #[error(
         "shooting did not converge in {iterations} Newton steps (scaled residual {residual:e}, \
@@ -55,6 +76,26 @@ pub enum InterfaceError {
         /// Tolerance.
         tol: f64,
     },
+}
+
+/// The smallest conduction time constant accepted, relative to the suspension's period.
+pub const STIFF_LIMIT: f64 = 1e-5;
+
+/// Refuses a device whose conduction modes are too stiff (see [`InterfaceError::Stiff`]).
+pub fn check_stiffness<E: crate::drive::Excitation>(
+    device: &Device,
+    model: &Interfaced<E>,
+) -> Result<(), InterfaceError> {
+    let period_s = 2.0 * std::f64::consts::PI / device.suspension_omega_rad_s();
+    let tau_s = model.circuit.conduction_time_constant_s();
+    if tau_s < STIFF_LIMIT * period_s {
+        return Err(InterfaceError::Stiff {
+            name: device.name.clone(),
+            tau_s,
+            period_s,
+        });
+    }
+    Ok(())
 }
 
 /// Settings of the steady-state search.
@@ -180,6 +221,7 @@ pub fn steady_state(
 ) -> Result<IfSteady, InterfaceError> {
     let model = Interfaced::new(device, sine)
         .ok_or_else(|| InterfaceError::Resistive(device.name.clone()))?;
+    check_stiffness(device, &model)?;
     if matches!(model.circuit.sink, crate::physics::interface::Sink::Open) {
         return Err(InterfaceError::OpenLoad(device.name.clone()));
     }
