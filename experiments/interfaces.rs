@@ -21,7 +21,7 @@ use endstop::drive::Sine;
 use endstop::study::interface::charging::{charge, ChargeSettings};
 use endstop::study::interface::record::{noise_ensemble, noise_record};
 use endstop::study::interface::sweep::{frequency_sweep, load_sweep};
-use endstop::study::interface::SteadySettings;
+use endstop::study::interface::{IfSteady, SteadySettings};
 use endstop::study::record::{simulate_record, RecordSpec, Scheme, DEFAULT_RTOL};
 use endstop::study::stepped::linspace_step;
 
@@ -85,6 +85,7 @@ fn run() -> Result<()> {
     let sine = Sine::from_rms_g(ACCEL_RMS_G, f0);
     let mut rows = Vec::new();
     let mut series = Vec::new();
+    let mut missing: Vec<String> = Vec::new();
     let mut best = Table::new([
         "interface",
         "best load (ohm)",
@@ -94,29 +95,36 @@ fn run() -> Result<()> {
     ]);
     for (k, (name, d)) in variants(&piezo.device).into_iter().enumerate() {
         eprintln!("[interfaces] load sweep, {name}");
-        let states = load_sweep(&d, &loads, sine, &settings, |_, _| {})?;
-        for (r, s) in loads.iter().zip(&states) {
+        let found: Vec<(f64, IfSteady)> = loads
+            .iter()
+            .zip(load_sweep(&d, &loads, sine, &settings, |_, _| {}))
+            .filter_map(|(r, s)| match s {
+                Ok(s) => Some((*r, s)),
+                Err(e) => {
+                    missing.push(format!("{name} at {} ohm ({e})", fmt_sig(*r, 3)));
+                    None
+                }
+            })
+            .collect();
+        for (r, s) in &found {
             rows.push(row!["interface" => name, "load_ohm" => *r, "p_dc_w" => s.p_dc_w, "vdc_v" => s.vdc_v, "contact" => s.contact, "stable" => s.is_stable()]);
         }
-        let (i, s) = states
+        let Some((rbest, s)) = found
             .iter()
-            .enumerate()
             .max_by(|a, b| a.1.p_dc_w.total_cmp(&b.1.p_dc_w))
-            .expect("loads");
+        else {
+            continue;
+        };
         best.row([
             name.to_string(),
-            fmt_sig(loads[i], 3),
+            fmt_sig(*rbest, 3),
             fmt_sig(s.p_dc_w * 1e6, 4),
             fmt_sig(s.vdc_v, 4),
             s.contact.to_string(),
         ]);
         series.push(Series::new(
             name,
-            loads
-                .iter()
-                .zip(&states)
-                .map(|(r, s)| (*r, s.p_dc_w * 1e6))
-                .collect(),
+            found.iter().map(|(r, s)| (*r, s.p_dc_w * 1e6)).collect(),
             PALETTE[k],
             Style::LinePoints,
         ));
@@ -170,16 +178,41 @@ fn run() -> Result<()> {
         .log(true, false)
         .legend(LegendPos::UpperRight),
     )?;
-    write_atomic(&book.join("power_vs_load.md"), best.render().as_bytes())?;
+    let mut md = best.render();
+    if !missing.is_empty() {
+        md.push_str(&format!(
+            "\nNo period-one steady state (shooting did not converge; the response there may be \
+             of a longer period or not periodic): {}.\n",
+            missing.join("; ")
+        ));
+    }
+    write_atomic(&book.join("power_vs_load.md"), md.as_bytes())?;
 
     // DC power against frequency with stability, for both examples.
+    let mut missing_f: Vec<String> = Vec::new();
     let mut rows = Vec::new();
     let mut plots = Vec::new();
     for (dev, from, to) in [(&piezo, 110.0, 130.0), (&em, 44.0, 56.0)] {
         let d = &dev.device;
         let freqs = linspace_step(from, to, 0.5);
         eprintln!("[interfaces] frequency sweep, {}", d.name);
-        let states = frequency_sweep(d, &freqs, ACCEL_RMS_G, &settings, |_, _| {})?;
+        let states: Vec<IfSteady> = freqs
+            .iter()
+            .zip(frequency_sweep(
+                d,
+                &freqs,
+                ACCEL_RMS_G,
+                &settings,
+                |_, _| {},
+            ))
+            .filter_map(|(f, s)| match s {
+                Ok(s) => Some(s),
+                Err(e) => {
+                    missing_f.push(format!("{} at {} Hz ({e})", d.name, fmt_sig(*f, 4)));
+                    None
+                }
+            })
+            .collect();
         for s in &states {
             rows.push(row!["device" => d.name.clone(), "freq_hz" => s.freq_hz, "p_dc_w" => s.p_dc_w, "vdc_v" => s.vdc_v, "x_max_m" => s.x_peak_m, "contact" => s.contact, "stable" => s.is_stable(), "max_multiplier" => s.max_multiplier, "ledger_rel_residual" => s.ledger.relative_residual()]);
         }
@@ -207,6 +240,15 @@ fn run() -> Result<()> {
     for (i, p) in plots.iter().enumerate() {
         exp.write_extra_plot(&format!("interfaces_frequency_{i}"), p)?;
     }
+    write_atomic(
+        &book.join("frequency_missing.md"),
+        if missing_f.is_empty() {
+            "Shooting found a period-one steady state at every frequency.\n".to_string()
+        } else {
+            format!("No period-one steady state at: {}.\n", missing_f.join("; "))
+        }
+        .as_bytes(),
+    )?;
 
     // The energy ledger over one steady period, per interface.
     let mut t = Table::new([
@@ -229,7 +271,26 @@ fn run() -> Result<()> {
                 Sine::from_rms_g(ACCEL_RMS_G, f),
                 &endstop::physics::harvester::State::zeros(),
                 &settings,
-            )?;
+            );
+            let s = match s {
+                Ok(s) => s,
+                Err(e) => {
+                    t.row([
+                        d.name.clone(),
+                        name.into(),
+                        format!("no period-one steady state: {e}"),
+                        "".into(),
+                        "".into(),
+                        "".into(),
+                        "".into(),
+                        "".into(),
+                        "".into(),
+                        "".into(),
+                        "".into(),
+                    ]);
+                    continue;
+                }
+            };
             let l = s.ledger;
             let u = |x: f64| fmt_sig(x * 1e6, 4);
             t.row([

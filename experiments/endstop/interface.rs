@@ -144,9 +144,20 @@ pub fn dc_sweep(a: RangeArgs) -> Result<()> {
     let (mut exp, loaded, device) = start("endstop-sweep", &a.device, a.bias_v, a.out.clone())?;
     let freqs = linspace_step(a.from, a.to, a.step);
     let settings = SteadySettings::default();
-    let states = crate::common::with_progress(freqs.len(), "sweep", |tick| {
+    let results = crate::common::with_progress(freqs.len(), "sweep", |tick| {
         frequency_sweep(&device, &freqs, a.accel_rms_g, &settings, |_, _| tick())
-    })?;
+    });
+    let mut states = Vec::new();
+    let mut failed = Vec::new();
+    for (f, r) in freqs.iter().zip(results) {
+        match r {
+            Ok(s) => states.push(s),
+            Err(e) => failed.push(format!("{} Hz: {e}", fmt_sig(*f, 5))),
+        }
+    }
+    if states.is_empty() {
+        anyhow::bail!("no steady state found: {}", failed.join("; "));
+    }
     let rows = states
         .iter()
         .map(|s| {
@@ -184,6 +195,10 @@ pub fn dc_sweep(a: RangeArgs) -> Result<()> {
         fmt_sig(best.freq_hz, 5),
         fmt_sig(best.vdc_v, 4)
     );
+    let mut md = md;
+    for f in &failed {
+        md.push_str(&format!("- no period-one steady state at {f}\n"));
+    }
     exp.write_numbers_md(&md)?;
     print!("{md}");
     let pts = |f: &dyn Fn(&endstop::study::interface::IfSteady) -> f64| {

@@ -593,8 +593,9 @@ impl<E: Excitation> Interfaced<E> {
         o
     }
 
-    /// The mode a state starts in: contact past a compliant stop, the bridge off (a guard
-    /// already positive switches it on at once), the heading from the velocity's sign.
+    /// The mode a state starts in: contact past a compliant stop; the bridge conducting in
+    /// the direction of a coil's current where it has one, else off (a guard already positive
+    /// switches it on at once); the heading from the velocity's sign.
     pub fn mode_of(&self, y: &State) -> IfMode {
         let mut contact = Mode::Free;
         for side in Side::BOTH {
@@ -604,9 +605,14 @@ impl<E: Excitation> Interfaced<E> {
                 contact = Mode::Contact(side);
             }
         }
+        let bridge = match self.circuit.element {
+            Element::Coil { l, .. } if l > 0.0 && y[2] > 0.0 => Bridge::Positive,
+            Element::Coil { l, .. } if l > 0.0 && y[2] < 0.0 => Bridge::Negative,
+            _ => Bridge::Off,
+        };
         IfMode {
             contact,
-            bridge: Bridge::Off,
+            bridge,
             heading: if y[1] >= 0.0 {
                 Heading::Up
             } else {
