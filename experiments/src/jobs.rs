@@ -327,7 +327,12 @@ pub const JOBS: &[Job] = &[
         name: CROSSCHECK,
         program: CROSSCHECK,
         args: &[],
-        reads: &[P1, P2],
+        reads: &[
+            P1,
+            P2,
+            "data/validation/piezo_bridge_spice.toml",
+            "data/validation/piezo_bridge_spice_stop.toml",
+        ],
         reads_calibration: false,
         phase: Phase::Parallel,
         scored: false,

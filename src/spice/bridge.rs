@@ -156,3 +156,72 @@ pub fn bridge_netlist(
     s.push_str("quit\n.endc\n.end\n");
     Ok(s)
 }
+
+/// One case of the bridge cross-check: a device file (relative to the repository), its drive
+/// at the suspension's resonance, and the tolerance on the storage's mean voltage and the
+/// load's mean power.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BridgeCase {
+    /// The device file.
+    pub file: &'static str,
+    /// RMS base acceleration (g).
+    pub accel_rms_g: f64,
+    /// Largest relative difference accepted.
+    pub tolerance: f64,
+    /// Why.
+    pub reason: &'static str,
+}
+
+/// The cases: without stops, and with a linear stop struck every period.
+pub const BRIDGE_CASES: [BridgeCase; 2] = [
+    BridgeCase {
+        file: "data/validation/piezo_bridge_spice.toml",
+        accel_rms_g: 0.1,
+        tolerance: 1e-3,
+        reason: "ngspice's Gear-2 truncation error at 2000 steps a period with reltol 1e-6, and \
+                 the drift of ten periods from our section",
+    },
+    BridgeCase {
+        file: "data/validation/piezo_bridge_spice_stop.toml",
+        accel_rms_g: 0.5,
+        tolerance: 5e-3,
+        reason: "as above, and ngspice steps over the switch of the behavioural stop force, \
+                 which we locate",
+    },
+];
+
+/// Periods ngspice runs from our steady state's section; the last one is compared.
+pub const BRIDGE_PERIODS: f64 = 10.0;
+
+/// The solver settings of the bridge cross-check at drive frequency `freq_hz`.
+pub fn bridge_solver(freq_hz: f64) -> SolverSettings {
+    SolverSettings {
+        reltol: Some(1e-6),
+        abstol: Some(1e-15),
+        vntol: Some(1e-9),
+        chgtol: None,
+        trtol: Some(1.0),
+        method: crate::spice::Method::Gear { maxord: 2 },
+        max_step_s: Some(1.0 / (2000.0 * freq_hz)),
+    }
+}
+
+/// The storage's mean voltage (V) and the load's mean power (W) over `[t0, t1]` from ngspice's
+/// `v(a)` (trapezoidal means).
+pub fn dc_means(
+    w: &crate::spice::Waveforms,
+    load_ohm: f64,
+    t0: f64,
+    t1: f64,
+) -> Result<(f64, f64), crate::spice::SpiceError> {
+    let va = w.column("v(a)")?;
+    let (mut sv, mut sp) = (0.0, 0.0);
+    for i in 1..w.time.len() {
+        let (a, b) = (w.time[i - 1].max(t0), w.time[i].min(t1));
+        if b > a {
+            sv += 0.5 * (va[i] + va[i - 1]) * (b - a);
+            sp += 0.5 * (va[i] * va[i] + va[i - 1] * va[i - 1]) / load_ohm * (b - a);
+        }
+    }
+    Ok((sv / (t1 - t0), sp / (t1 - t0)))
+}
