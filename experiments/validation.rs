@@ -232,6 +232,19 @@ fn run() -> Result<()> {
         wall_s: *s,
     }));
 
+    // The interface circuits against their closed forms.
+    let bridge = load(&mut exp, "piezo_bridge")?;
+    checks.extend(timed(
+        &mut costs,
+        &bridge.name,
+        "interface closed forms",
+        || endstop::validation::interfaces::weak_coupling_checks(&bridge),
+    )?);
+    let coupling = timed(&mut costs, &bridge.name, "coupling rows", || {
+        endstop::validation::interfaces::coupling_rows(&bridge)
+    })?;
+    checks.extend(endstop::validation::interfaces::coupling_checks(&coupling));
+
     // Parquet.
     let mut df = frame(checks.iter().map(|c| {
         row![
@@ -366,6 +379,14 @@ fn run() -> Result<()> {
             in_groups(&checks, "exact stationary law")
                 .chain(in_groups(&checks, "escape over the barrier"))
                 .chain(in_groups(&checks, "peer: NLvib's Duffing")),
+        )
+        .as_bytes(),
+    )?;
+    write_atomic(
+        &book.join("interfaces.md"),
+        checks_table(
+            in_groups(&checks, "interface circuits, weak coupling")
+                .chain(in_groups(&checks, "interface circuits, coupling")),
         )
         .as_bytes(),
     )?;

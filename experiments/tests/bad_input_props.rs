@@ -16,13 +16,15 @@ use proptest::sample::select;
 const BIN: &str = env!("CARGO_BIN_EXE_endstop");
 
 /// The device files a generated file starts from: the paper's two and every example.
-const DEVICE_FILES: [&str; 6] = [
+const DEVICE_FILES: [&str; 8] = [
     "data/prototype1.toml",
     "data/prototype2.toml",
     "data/examples/my_harvester.toml",
     "data/examples/piezo_cantilever.toml",
     "data/examples/em_asymmetric.toml",
     "data/examples/rigid_restitution.toml",
+    "data/examples/piezo_bridge.toml",
+    "data/examples/em_bridge.toml",
 ];
 
 fn repo(rel: &str) -> PathBuf {
@@ -144,6 +146,17 @@ proptest! {
                 let _ = endstop::study::record::transient_s(&d);
                 let lin = endstop::physics::linear::LinearResponse::of(&d);
                 let _ = lin.output_psd_w_per_hz(1.0, f0);
+                // An interface circuit: its model, and its right-hand side and guards at rest.
+                if let Some(m) = endstop::physics::interface::Interfaced::new(
+                    &d,
+                    endstop::drive::Sine::from_rms_g(0.1, f0),
+                ) {
+                    use endstop::ode::HybridSystem;
+                    let y = endstop::physics::harvester::State::zeros();
+                    let mode = m.mode_of(&y);
+                    let _ = m.rhs(mode, 0.0, &y);
+                    let _ = m.guards(mode, 0.0, &y);
+                }
             }
             Err(e) => prop_assert!(e.to_string().contains("gen.toml"), "{e}"),
         }

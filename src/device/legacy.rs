@@ -124,6 +124,7 @@ impl LegacyDevice {
                 finger_gap_m: Some(g.finger_gap_m),
                 fingers_per_electrode: Some(g.fingers_per_electrode),
             }),
+            interface: super::Interface::Resistive,
         }
     }
 }

@@ -35,6 +35,7 @@
 //!
 //! This module parses text it is given; reading the file is the caller's job (no I/O here).
 
+pub mod interface;
 mod legacy;
 mod paths;
 mod range;
@@ -45,6 +46,7 @@ pub mod transducer;
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
+pub use interface::{DcLoad, Diode, Interface, Inversion, Rectifier};
 pub use range::{device_at, ParamRange, Spacing};
 pub use stops::{HertzLineStop, HertzPointStiffness, Stop, StopLaw, StopSide, Stops};
 pub use suspension::Suspension;
@@ -153,6 +155,9 @@ pub struct Device {
     pub stops: Stops,
     /// The transducer.
     pub transducer: Transducer,
+    /// The interface circuit between a one-load transducer and its load (resistive by
+    /// default; see [`interface`]).
+    pub interface: Interface,
 }
 
 /// The file form of a device.
@@ -166,6 +171,8 @@ struct RawDevice {
     #[serde(default)]
     stops: stops::RawStops,
     transducer: Transducer,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    interface: Option<interface::RawInterface>,
 }
 
 /// Builds [`ParamError`]s that name the source and check ranges.
@@ -288,6 +295,10 @@ impl Device {
                 source: source_name,
             };
             let mut dev = Device {
+                interface: match raw.interface {
+                    Some(i) => i.parse(&c)?,
+                    None => Interface::Resistive,
+                },
                 stops: raw.stops.parse(&c)?,
                 name: raw.name,
                 params: raw.params,
@@ -310,6 +321,7 @@ impl Device {
             mechanics: suspension::RawMechanics::of(&self.mechanics),
             stops: stops::RawStops::of(&self.stops),
             transducer: self.transducer.clone(),
+            interface: interface::RawInterface::of(&self.interface),
         }
     }
 
@@ -337,6 +349,20 @@ impl Device {
             c.positive("mechanics.measured_resonance_hz", f)?;
         }
         self.transducer.validate(&c)?;
+        // The interface circuit: which transducers take it, and the resistive load it replaces.
+        self.interface.validate(&self.transducer, &c)?;
+        if self.interface.is_resistive()
+            && matches!(
+                self.transducer,
+                Transducer::Piezoelectric(_) | Transducer::Electromagnetic(_)
+            )
+            && self.transducer.load_resistance_ohm() == f64::INFINITY
+        {
+            return Err(c.missing(
+                "transducer.load_resistance_ohm",
+                "the resistive load (or an [interface] table with another kind)",
+            ));
+        }
         for (side, stop) in self.stops.present() {
             let field = |key: &str| format!("{}.{key}", self.stop_path(side));
             c.positive(&field("gap_m"), stop.gap_m)?;

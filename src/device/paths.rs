@@ -154,6 +154,10 @@ impl Device {
             source: &format!("parameter `{path}`"),
         };
         let mut dev = Device {
+            interface: match raw.interface {
+                Some(i) => i.parse(&c)?,
+                None => super::Interface::Resistive,
+            },
             stops: raw.stops.parse(&c)?,
             name: raw.name,
             params: raw.params,

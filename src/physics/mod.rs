@@ -3,7 +3,8 @@
 //! paper's), the lumped model ([`harvester`], eqs 7-10), its free flight split for the
 //! exponential integrator ([`free_flight`]), its energy balance ([`energy`]), the linear
 //! response of any device ([`linear`]) and the paper's linear two-port theory ([`two_port`],
-//! eqs 11-18 and 21-22).
+//! eqs 11-18 and 21-22), and the interface circuits between a transducer and a DC load
+//! ([`interface`]: diode bridges, SSHI, SECE).
 //!
 //! ```
 //! use endstop::device::Device;
@@ -43,6 +44,7 @@ pub mod energy;
 pub mod free_flight;
 pub mod harvester;
 pub mod hertz;
+pub mod interface;
 pub mod linear;
 pub mod suspension;
 pub mod transducer;

@@ -9,6 +9,7 @@
 //! | [`random_law`] | the power that white base acceleration delivers to a mass, `m Sa / 2`, against random ensembles' drive power, with their energy ledgers' closure |
 //! | [`band_limit`] | the band-limited noise's shortfall from that law at several bandwidths, against its first-order estimate (a recorded study) |
 //! | [`grazing`] | where a linear oscillator's amplitude equals the gap of a rigid stop, against the continuation's grazing points |
+//! | [`interfaces`] | the standard bridge, parallel and series SSHI and SECE closed forms against the steady state behind each interface; the standard bridge with strong coupling against the first-harmonic balance |
 //! | [`nlvib`] | NLvib-py's harmonic balance and an exact shooting of a one-sided spring oscillator, against our shooting and continuation |
 //! | [`nlvib_duffing`] | NLvib-py's harmonic balance of NLvib's Duffing example, against our continuation's folds, amplitudes and stability |
 //! | [`stationary_law`] | the exact stationary density `exp(-U/theta)` of white-noise driven devices with viscous damping and any conservative suspension and stops, against random ensembles' histograms, moments, contact and well shares and load power |
@@ -21,6 +22,7 @@ pub mod band_limit;
 pub mod cases;
 pub mod grazing;
 pub mod harmonics;
+pub mod interfaces;
 pub mod kramers;
 pub mod linear_harvesters;
 pub mod nlvib;
