@@ -1,7 +1,10 @@
 //! Generic numerical helpers: one bracketing root finder ([`roots`]), sample statistics
 //! ([`stats`]), variance-based global sensitivity ([`sensitivity`]), multi-start minimax
-//! fitting ([`minimax`]) and Pareto fronts ([`pareto`]).
+//! fitting ([`minimax`]), Pareto fronts ([`pareto`]), Gaussian-process emulators ([`gp`]) and
+//! history matching in waves ([`history`]).
 
+pub mod gp;
+pub mod history;
 pub mod minimax;
 pub mod pareto;
 pub mod roots;
