@@ -332,6 +332,10 @@ pub struct HistoryMatch {
     pub waves: Vec<Wave>,
     /// Each wave's summary.
     pub summaries: Vec<WaveSummary>,
+    /// Inputs that are switches: the simulator reads only which half of the unit interval
+    /// the coordinate lies in, so the emulators see it at the middle of its half (0.25 or
+    /// 0.75) and do not smooth a step.
+    pub switches: Vec<usize>,
 }
 
 impl HistoryMatch {
@@ -368,7 +372,25 @@ impl HistoryMatch {
             runs: Vec::new(),
             waves: Vec::new(),
             summaries: Vec::new(),
+            switches: Vec::new(),
         })
+    }
+
+    /// The same match with inputs `switches` read as switches ([`HistoryMatch::switches`]).
+    pub fn with_switches(mut self, switches: Vec<usize>) -> Self {
+        self.switches = switches;
+        self
+    }
+
+    /// The input as the emulators see it (switches at the middle of their half).
+    pub fn emulator_input(&self, x: &[f64]) -> Vec<f64> {
+        let mut v = x.to_vec();
+        for &s in &self.switches {
+            if let Some(u) = v.get_mut(s) {
+                *u = if *u < 0.5 { 0.25 } else { 0.75 };
+            }
+        }
+        v
     }
 
     /// Runs of each wave's design: `per_input` times the dimension.
@@ -400,8 +422,9 @@ impl HistoryMatch {
     /// The rank-th largest implausibility of every wave, and the largest, at `x`: each the
     /// largest over the waves.
     fn statistics(&self, x: &[f64]) -> (f64, f64) {
+        let x = self.emulator_input(x);
         self.waves.iter().fold((0.0, 0.0), |(r, m), w| {
-            let i = w.implausibilities(&self.observations, x);
+            let i = w.implausibilities(&self.observations, &x);
             (r.max(ranked(&i, self.settings.rank)), m.max(ranked(&i, 1)))
         })
     }
@@ -520,7 +543,11 @@ impl HistoryMatch {
             .par_iter()
             .map(|x| {
                 let (r, m) = self.statistics(x);
-                (r, m, last.implausibilities(&self.observations, x))
+                (
+                    r,
+                    m,
+                    last.implausibilities(&self.observations, &self.emulator_input(x)),
+                )
             })
             .collect();
         let inside_before: Vec<usize> = (0..pool.len()).filter(|&k| previous[k].0 <= cut).collect();
