@@ -511,7 +511,15 @@ fn deviations_placeholder() -> Result<()> {
                     `just deviations` (or `cargo run --release --bin deviations`) and rebuild the book.*\n";
         common::write_atomic(&dir.join("numbers.md"), note.as_bytes())?;
     }
-    for stem in ["deviations", "deviations_pareto_p1", "deviations_pareto_p2"] {
+    for (file, note) in [
+        ("answer.md", "*The study of why the paper deviates has not run in this build (`just deviations`).*\n"),
+        ("recorded.md", "*(the study has not run in this build)*\n"),
+    ] {
+        if !dir.join(file).exists() {
+            common::write_atomic(&dir.join(file), note.as_bytes())?;
+        }
+    }
+    for stem in ["deviations"] {
         let path = dir.join(format!("{stem}.figure.md"));
         if !path.exists() {
             common::write_atomic(&path, b"*(no plot: the study has not run)*\n")?;

@@ -41,6 +41,7 @@ pub mod lm;
 pub mod model;
 pub mod params;
 pub mod report;
+pub mod spectrum;
 
 use nalgebra::DMatrix;
 use thiserror::Error;

@@ -19,7 +19,11 @@
 //! further, until it is empty, stops shrinking, or the waves run out ([`Stop`]).
 //!
 //! The non-implausible fraction is measured on a scrambled Sobol pool of the whole cube: an
-//! empty pool of `P` points puts the fraction below `3 / P` (95 %). The same pool gives the
+//! empty pool of `P` points puts the fraction below `3 / P` (95 %). Before the space is called
+//! empty the implausibility is also minimised (Nelder-Mead on the emulators, written here in a
+//! few lines: the statistic is a cheap closure over the waves, and argmin's solver would need
+//! a problem type for it) from the pool's ten least implausible points, so that a thin
+//! non-implausible set between the pool's points is not missed. The same pool gives the
 //! 2-D projections: per cell of each pair of inputs, the least implausibility over the pool's
 //! points there and the share of them that are non-implausible (the optical depth).
 
@@ -298,6 +302,8 @@ pub struct WaveSummary {
     pub projections: Vec<Projection>,
     /// Non-implausible points (the pool's, and those found around them).
     pub kept: Vec<Vec<f64>>,
+    /// How many of `kept` have every output's implausibility below the cut at every wave.
+    pub kept_all: usize,
     /// Why the match ended here (`None`: another wave follows).
     pub stop: Option<Stop>,
 }
@@ -568,6 +574,22 @@ impl HistoryMatch {
         let all_within_cut = rows.iter().filter(|r| r.1 <= cut).count();
         let stat: Vec<f64> = rows.iter().map(|r| r.0).collect();
         let projections = projections(&pool, &stat, cut, self.dim, self.settings.cells);
+        // No survivor in the pool: a thin non-implausible set can fall between its points, so
+        // the statistic is minimised (Nelder-Mead on the emulators, cheap) from the pool's ten
+        // least implausible points before the space is called empty.
+        if kept.is_empty() {
+            let mut order: Vec<usize> = (0..pool.len()).collect();
+            order.sort_by(|&a, &b| rows[a].0.total_cmp(&rows[b].0));
+            kept.extend(
+                order
+                    .iter()
+                    .take(10)
+                    .collect::<Vec<_>>()
+                    .par_iter()
+                    .filter_map(|&&k| self.descend(&pool[k]))
+                    .collect::<Vec<_>>(),
+            );
+        }
         // Too few survivors for a design: search around them (boxes of a pool cell's width).
         let want = 4 * self.design_size();
         if !kept.is_empty() && kept.len() < want {
@@ -596,8 +618,13 @@ impl HistoryMatch {
                 }
             }
         }
+        let kept_all = kept
+            .par_iter()
+            .filter(|x| self.statistics(x).1 <= cut)
+            .count();
         (
             WaveSummary {
+                kept_all,
                 wave: 0,
                 new_runs: 0,
                 training_runs: 0,
@@ -612,6 +639,73 @@ impl HistoryMatch {
             },
             kept,
         )
+    }
+}
+
+impl HistoryMatch {
+    /// A non-implausible point found by minimising the statistic from `x0` (at most 400
+    /// Nelder-Mead iterations inside the cube), if any.
+    fn descend(&self, x0: &[f64]) -> Option<Vec<f64>> {
+        let cost = |x: &[f64]| {
+            let inside: Vec<f64> = x.iter().map(|u| u.clamp(0.0, 1.0)).collect();
+            // Outside the cube: the clamped point's statistic plus the distance, so the
+            // simplex turns back.
+            let out: f64 = x.iter().map(|u| (u - u.clamp(0.0, 1.0)).abs()).sum();
+            (self.statistics(&inside).0 + 10.0 * out, inside)
+        };
+        let d = x0.len();
+        let mut simplex: Vec<(f64, Vec<f64>)> = (0..=d)
+            .map(|k| {
+                let mut x = x0.to_vec();
+                if k > 0 {
+                    x[k - 1] += if x[k - 1] < 0.5 { 0.05 } else { -0.05 };
+                }
+                (cost(&x).0, x)
+            })
+            .collect();
+        for _ in 0..400 {
+            simplex.sort_by(|a, b| a.0.total_cmp(&b.0));
+            if simplex[0].0 <= self.settings.cut {
+                return Some(cost(&simplex[0].1).1);
+            }
+            let centroid: Vec<f64> = (0..d)
+                .map(|j| simplex[..d].iter().map(|s| s.1[j]).sum::<f64>() / d as f64)
+                .collect();
+            let along = |t: f64| -> Vec<f64> {
+                centroid
+                    .iter()
+                    .zip(&simplex[d].1)
+                    .map(|(c, w)| c + t * (w - c))
+                    .collect()
+            };
+            let r = along(-1.0);
+            let fr = cost(&r).0;
+            if fr < simplex[0].0 {
+                let e = along(-2.0);
+                let fe = cost(&e).0;
+                simplex[d] = if fe < fr { (fe, e) } else { (fr, r) };
+            } else if fr < simplex[d - 1].0 {
+                simplex[d] = (fr, r);
+            } else {
+                let c = along(0.5);
+                let fc = cost(&c).0;
+                if fc < simplex[d].0 {
+                    simplex[d] = (fc, c);
+                } else {
+                    let best = simplex[0].1.clone();
+                    for s in simplex.iter_mut().skip(1) {
+                        s.1 =
+                            s.1.iter()
+                                .zip(&best)
+                                .map(|(x, b)| b + 0.5 * (x - b))
+                                .collect();
+                        s.0 = cost(&s.1).0;
+                    }
+                }
+            }
+        }
+        simplex.sort_by(|a, b| a.0.total_cmp(&b.0));
+        (simplex[0].0 <= self.settings.cut).then(|| cost(&simplex[0].1).1)
     }
 }
 
