@@ -15,11 +15,11 @@ use common::history_io::{answer_md, observation_md, tables_md, write_history, wr
 use common::md::Table;
 use common::plot::Figure;
 use common::{fmt_sig, Experiment};
-use endstop::num::gp_sensitivity::{EmulatedIndices, EmulatedSobol};
+use endstop::num::gp_sensitivity::EmulatedSobol;
 use endstop::num::history::HistorySettings;
 use endstop::paper::claims::{Claims, Kind};
 use endstop::paper::deviations::{
-    self, Factor, HistoryRun, Prototype, Quantity, RangesFile, Scope,
+    self, ClaimIndices, Factor, HistoryRun, Prototype, RangesFile, Scope,
 };
 use plotters::coord::Shift;
 use plotters::prelude::*;
@@ -218,20 +218,22 @@ fn best_run_numbers(exp: &mut Experiment, h: &HistoryRun) {
     }
 }
 
-fn numbers_md(
-    args: &Args,
-    runs: &[HistoryRun],
-    sobols: &[(&HistoryRun, Vec<(Quantity, Option<EmulatedIndices>)>)],
-) -> String {
+fn numbers_md(args: &Args, runs: &[HistoryRun], sobols: &[(&HistoryRun, ClaimIndices)]) -> String {
     let s = runs.first().map(|h| h.matcher.settings).unwrap_or_default();
     let mut md = format!(
-        "History match of this build: {} runs per input per wave ({} per wave), at most {}          wave{}, cut {} on the {} implausibility, a pool of {} points; {}; ensemble claims          (Figures 12, 14, 15): {}.\n\n",
+        "History match of this build: {} runs per input per wave ({} per wave), at most {} \
+         wave{}, cut {} on the {} implausibility, a pool of {} points; {}; ensemble claims \
+         (Figures 12, 14, 15): {}.\n\n",
         s.per_input,
         s.per_input * Factor::ALL.len(),
         s.max_waves,
         if s.max_waves == 1 { "" } else { "s" },
-        fmt_sig(s.cut, 2),
-        if s.rank == 2 { "second-largest".to_string() } else { format!("{}-th largest", s.rank) },
+        fmt_sig(s.cut, 1),
+        if s.rank == 2 {
+            "second-largest".to_string()
+        } else {
+            format!("{}-th largest", s.rank)
+        },
         s.pool,
         observation_md(),
         match args.ensemble_records {
@@ -314,7 +316,7 @@ struct HeatMap {
 }
 
 impl HeatMap {
-    fn of(runs: &[(&HistoryRun, Vec<(Quantity, Option<EmulatedIndices>)>)]) -> Self {
+    fn of(runs: &[(&HistoryRun, ClaimIndices)]) -> Self {
         let mut rows = Vec::new();
         let mut cells = Vec::new();
         for (h, qs) in runs {

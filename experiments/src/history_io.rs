@@ -3,9 +3,8 @@
 //! projection plots, and the Markdown of the answer.
 
 use anyhow::Result;
-use endstop::num::gp_sensitivity::EmulatedIndices;
 use endstop::num::history::Projection;
-use endstop::paper::deviations::{Factor, HistoryRun, Quantity, TOLERANCE_SIGMAS};
+use endstop::paper::deviations::{ClaimIndices, Factor, HistoryRun, TOLERANCE_SIGMAS};
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
@@ -134,10 +133,7 @@ pub fn loo_shares(e: &[f64]) -> (usize, f64, f64) {
 }
 
 /// `sobol.parquet`: the emulated indices of every claim quantity and factor.
-pub fn write_sobol(
-    exp: &Experiment,
-    sobols: &[(&HistoryRun, Vec<(Quantity, Option<EmulatedIndices>)>)],
-) -> Result<()> {
+pub fn write_sobol(exp: &Experiment, sobols: &[(&HistoryRun, ClaimIndices)]) -> Result<()> {
     let mut rows = Vec::new();
     for (h, qs) in sobols {
         for (q, ix) in qs {
@@ -194,39 +190,38 @@ pub fn answer_md(h: &HistoryRun) -> String {
             pct(f)
         }
     };
+    let cut = fmt_sig(h.matcher.settings.cut, 1);
     let verdict = if a.stop == Some(endstop::num::history::Stop::Empty) {
         "**no set within the ranges is consistent with its quantitative claims**: the \
          non-implausible space emptied"
             .to_string()
     } else if a.none_reproduces() {
         format!(
-            "**no set within the ranges is consistent with all its quantitative claims at \
-             once**: allowing one claim to miss (the second-largest implausibility at {}), {} of \
-             the cube remains, but with every claim's implausibility at most {} {}",
-            fmt_sig(h.matcher.settings.cut, 2),
+            "**no set within the ranges was found consistent with all its quantitative claims \
+             at once**: allowing one claim to miss (the second-largest implausibility at most \
+             {cut}), {} of the cube remains, but with every claim's implausibility at most {cut} \
+             {}, no point found near the survivors and no run",
             share(a.fraction),
-            fmt_sig(h.matcher.settings.cut, 2),
             share(a.fraction_all)
         )
     } else {
         format!(
             "**sets within the ranges remain consistent with its quantitative claims**: {} of \
-             the cube has every claim's implausibility at most {} ({} with one claim allowed to \
-             miss), and {} of the {} runs meet every claim evaluated",
+             the cube ({} of the non-implausible points found, the pool's and those near them) \
+             has every claim's implausibility at most {cut}; {} with one claim allowed to miss",
             share(a.fraction_all),
-            fmt_sig(h.matcher.settings.cut, 2),
+            a.kept_all,
             share(a.fraction),
-            a.runs_meeting_all,
-            a.runs
         )
     };
     format!(
-        "**Prototype {}** ({} waves, {} runs, {}): {}. The claims that rule out most of the cube \
-         at the first wave: {}. After the last wave {} of the cube is non-implausible \
+        "**Prototype {}** ({} wave{}, {} runs, {}): {}. The claims that rule out most of the \
+         cube at the first wave: {}. After the last wave {} of the cube is non-implausible \
          (second-largest implausibility at most {}); {} of the {} runs meet every claim they \
          evaluate directly.\n",
         label(h),
         a.waves,
+        if a.waves == 1 { "" } else { "s" },
         a.runs,
         match h.scope.ensemble_records {
             Some(r) => format!("ensemble claims by {r} records per level"),
@@ -235,7 +230,7 @@ pub fn answer_md(h: &HistoryRun) -> String {
         verdict,
         top.join(", "),
         share(last.fraction()),
-        fmt_sig(h.matcher.settings.cut, 2),
+        fmt_sig(h.matcher.settings.cut, 1),
         a.runs_meeting_all,
         a.runs
     )
@@ -273,7 +268,7 @@ pub fn tables_md(h: &HistoryRun) -> String {
          share of the wave's training runs whose standardised error lies within +-2 and +-3 \
          (a right emulator has about 95 % and 99.7 %).\n\n",
         label(h),
-        fmt_sig(h.matcher.settings.cut, 2)
+        fmt_sig(h.matcher.settings.cut, 1)
     ));
     let mut t = Table::new([
         "wave",
@@ -336,7 +331,7 @@ pub fn tables_md(h: &HistoryRun) -> String {
 pub fn observation_md() -> String {
     format!(
         "each claim's tolerance counts as {} standard deviations of its observation",
-        fmt_sig(TOLERANCE_SIGMAS, 2)
+        fmt_sig(TOLERANCE_SIGMAS, 1)
     )
 }
 
@@ -368,7 +363,6 @@ impl Figure for ProjectionPlot {
         DB::ErrorType: 'static,
     {
         root.fill(&WHITE)?;
-        let d = Factor::ALL.len() as i32;
         let (left, top, panel) = (120i32, 90i32, 120i32);
         let font = ("sans-serif", 14).into_font();
         root.draw(&Text::new(self.title.clone(), (10, 10), font.clone()))?;
@@ -376,8 +370,8 @@ impl Figure for ProjectionPlot {
             format!(
                 "below the diagonal: least implausibility (red from {} up; framed: at most {}); \
                  above: share non-implausible (black 1)",
-                fmt_sig(self.cut, 2),
-                fmt_sig(self.cut, 2)
+                fmt_sig(self.cut, 1),
+                fmt_sig(self.cut, 1)
             ),
             (10, 32),
             font.clone(),
@@ -435,7 +429,6 @@ impl Figure for ProjectionPlot {
                 }
             }
         }
-        let _ = d;
         Ok(())
     }
 }

@@ -44,7 +44,7 @@ pub fn parse_spec(s: &str) -> Result<(PathBuf, f64, usize)> {
     };
     let level: f64 = level.parse().map_err(|_| bad())?;
     let records: usize = records.parse().map_err(|_| bad())?;
-    if !(level > 0.0 && level.is_finite()) || records == 0 {
+    if level.is_nan() || level <= 0.0 || level.is_infinite() || records == 0 {
         return Err(bad());
     }
     Ok((PathBuf::from(path), level, records))
@@ -153,13 +153,10 @@ fn write_outputs(
             "hi95" => p.interval.1,
         ]);
     }
-    for k in 0..3 {
-        exp.number(&format!("{}_measured", FEATURES[k]), est.measured[k]);
-        exp.number(&format!("{}_predicted", FEATURES[k]), est.predicted[k]);
-        exp.number(
-            &format!("{}_implausibility", FEATURES[k]),
-            est.implausibility[k],
-        );
+    for (k, name) in FEATURES.iter().enumerate() {
+        exp.number(&format!("{name}_measured"), est.measured[k]);
+        exp.number(&format!("{name}_predicted"), est.predicted[k]);
+        exp.number(&format!("{name}_implausibility"), est.implausibility[k]);
     }
     exp.number("effective_samples", est.effective_samples);
     exp.write_parquet("spectrum_fit", &mut frame(rows)?, "fitted")?;
@@ -267,10 +264,9 @@ fn write_outputs(
     md.push_str(
         "\n| feature | measured | emulated at the fit | implausibility |\n|---|---|---|---|\n",
     );
-    for k in 0..3 {
+    for (k, name) in FEATURES.iter().enumerate() {
         md.push_str(&format!(
-            "| `{}` | {} | {} | {} |\n",
-            FEATURES[k],
+            "| `{name}` | {} | {} | {} |\n",
             fmt_sig(est.measured[k], 5),
             fmt_sig(est.predicted[k], 5),
             fmt_sig(est.implausibility[k], 3)

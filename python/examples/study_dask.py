@@ -190,17 +190,21 @@ def history_report(run, finals):
             verdict = ("**no set within the ranges is consistent with its quantitative claims**: "
                        "the non-implausible space emptied")
         elif a["none_reproduces"]:
-            verdict = ("**no set within the ranges is consistent with all its quantitative "
-                       "claims at once**: allowing one claim to miss, "
+            verdict = ("**no set within the ranges was found consistent with all its "
+                       "quantitative claims at once**: allowing one claim to miss, "
                        f"{share(a['fraction'])} of the cube remains, but with every claim "
-                       f"within the cut {share(a['fraction_all'])}")
+                       f"within the cut {share(a['fraction_all'])}, no point found near the "
+                       "survivors and no run")
         else:
             verdict = ("**sets within the ranges remain consistent with its quantitative "
-                       f"claims**: {share(a['fraction_all'])} of the cube has every claim "
-                       f"within the cut ({share(a['fraction'])} with one claim allowed to "
-                       f"miss), and {a['runs_meeting_all']} of the {a['runs']} runs meet every "
-                       "claim evaluated")
-        md += [f"**Prototype {proto[1:]}** ({a['waves']} waves, {a['runs']} runs): {verdict}. "
+                       f"claims**: {share(a['fraction_all'])} of the cube ({a['kept_all']} of "
+                       "the non-implausible points found, the pool's and those near them) has "
+                       "every claim within the cut; "
+                       f"{share(a['fraction'])} with one claim allowed to miss")
+        md += [f"**Prototype {proto[1:]}** ({a['waves']} wave{'' if a['waves'] == 1 else 's'}, "
+               f"{a['runs']} runs, ensemble claims by {run['ensemble_records'] or 'no'} records "
+               f"per level): {verdict}; {a['runs_meeting_all']} of the {a['runs']} runs meet "
+               "every claim they evaluate directly. "
                "The claims that rule out most of the cube at the first wave: "
                + ", ".join(f"{c['claim']} `{c['quantity']}` ({pct(c['ruled_out'])})"
                            for c in top) + ".", ""]

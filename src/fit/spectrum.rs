@@ -87,7 +87,12 @@ impl MeasuredSpectrum {
                 self.psd_w_per_hz.len()
             ));
         }
-        if self.freq_hz.windows(2).any(|w| !(w[1] > w[0])) || self.freq_hz[0] <= 0.0 {
+        if self
+            .freq_hz
+            .windows(2)
+            .any(|w| w[1] <= w[0] || w[1].is_nan())
+            || self.freq_hz[0] <= 0.0
+        {
             return e("frequencies must be positive and increasing".into());
         }
         if let Some((i, v)) = self
@@ -101,7 +106,10 @@ impl MeasuredSpectrum {
                 i + 1
             ));
         }
-        if !(self.accel_psd_g2_per_hz > 0.0 && self.accel_psd_g2_per_hz.is_finite()) {
+        if self.accel_psd_g2_per_hz.is_nan()
+            || self.accel_psd_g2_per_hz <= 0.0
+            || self.accel_psd_g2_per_hz.is_infinite()
+        {
             return e(format!(
                 "acceleration PSD {} g²/Hz must be positive",
                 self.accel_psd_g2_per_hz
@@ -142,7 +150,7 @@ pub fn features(freq: &[f64], psd: &[f64], band: (f64, f64)) -> Option<[f64; 3]>
             .sum::<f64>()
     };
     let p = trap(&|_, s| s);
-    if pts.len() < 2 || !(p > 0.0) {
+    if pts.len() < 2 || p.is_nan() || p <= 0.0 {
         return None;
     }
     let fc = trap(&|f, s| f * s) / p;
@@ -169,9 +177,8 @@ pub fn model_features(
     let mean = &e.mean_spectrum.total;
     let all = features(&mean.freq_hz, &mean.density, band).ok_or("no power in the band")?;
     let n = e.records.len();
-    let mut values = [0.0; 3];
     let mut vars = [0.0; 3];
-    for k in 0..3 {
+    for (k, var) in vars.iter_mut().enumerate() {
         let mut d = mean.density.clone();
         let jack = Jackknife::of(n, all[k], |i| {
             let x = &e.records[i].spectrum.total.density;
@@ -180,14 +187,13 @@ pub fn model_features(
             }
             features(&mean.freq_hz, &d, band).map_or(f64::NAN, |f| f[k])
         });
-        values[k] = all[k];
-        vars[k] = if jack.se.is_finite() {
+        *var = if jack.se.is_finite() {
             jack.se * jack.se
         } else {
             0.0
         };
     }
-    Ok((values, vars))
+    Ok((all, vars))
 }
 
 /// The settings of a spectrum fit.
@@ -344,8 +350,8 @@ impl SpectrumEmulator {
         let mut ll = 0.0;
         let mut mu = [0.0; 3];
         let mut var = [0.0; 3];
-        for k in 0..3 {
-            let p = self.emulators[k].predict(u);
+        for (k, e) in self.emulators.iter().enumerate() {
+            let p = e.predict(u);
             let v = p.emulator_var + p.sampling_var * ratio;
             ll -= 0.5 * ((m[k] - p.mean).powi(2) / v + v.ln());
             mu[k] = p.mean;
@@ -432,10 +438,8 @@ impl SpectrumEmulator {
             })
             .collect();
         let (_, predicted, var) = self.log_likelihood(&m, ratio, best_u);
-        let mut implausibility = [0.0; 3];
-        for k in 0..3 {
-            implausibility[k] = (m[k] - predicted[k]).abs() / var[k].sqrt();
-        }
+        let implausibility: [f64; 3] =
+            std::array::from_fn(|k| (m[k] - predicted[k]).abs() / var[k].sqrt());
         Ok(SpectrumEstimate {
             params,
             measured: m,

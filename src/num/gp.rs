@@ -459,6 +459,12 @@ impl Gp {
         &self.hyper
     }
 
+    /// The fitted nugget `t2` in output units: the part of the output the smooth process
+    /// does not follow, beside the training points' own sampling variances.
+    pub fn nugget_var(&self) -> f64 {
+        self.hyper.nugget_var * self.y_scale * self.y_scale
+    }
+
     /// The restricted log-likelihood at the hyperparameters (standardised outputs).
     pub fn log_likelihood(&self) -> f64 {
         self.log_likelihood

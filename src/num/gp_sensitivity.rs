@@ -102,9 +102,11 @@ pub fn emulated_indices(
         }
         let y = &mu + &l * z;
         if let Ok(ix) = small.indices(y.as_slice(), no_boot) {
-            for i in 0..d {
-                first[i].push(ix.first[i].value);
-                total[i].push(ix.total[i].value);
+            for (draws, x) in first.iter_mut().zip(&ix.first) {
+                draws.push(x.value);
+            }
+            for (draws, x) in total.iter_mut().zip(&ix.total) {
+                draws.push(x.value);
             }
         }
     }

@@ -175,7 +175,7 @@ pub struct Emulator {
 pub struct Prediction {
     /// Expected value.
     pub mean: f64,
-    /// The emulator's variance of it.
+    /// The emulator's variance of it (the process's, the mean's and the fitted nugget).
     pub emulator_var: f64,
     /// The simulator's sampling variance there.
     pub sampling_var: f64,
@@ -207,8 +207,13 @@ impl Emulator {
 
     /// The prediction at `x`.
     pub fn predict(&self, x: &[f64]) -> Prediction {
+        // The emulator's variance holds its fitted nugget: what the smooth process does not
+        // follow (a step where a fold appears) is as unknown at a new input as at a run.
         let (mean, emulator_var) = match &self.mean {
-            Mean::Gp(g) => g.predict(x),
+            Mean::Gp(g) => {
+                let (m, v) = g.predict(x);
+                (m, v + g.nugget_var())
+            }
             Mean::Constant(c) => (*c, 0.0),
         };
         let sampling_var = match &self.sampling {
@@ -254,7 +259,8 @@ pub struct Wave {
 }
 
 impl Wave {
-    /// The implausibility of every output at `x`.
+    /// The implausibility of every output at `x`, the input as the emulators see it
+    /// ([`HistoryMatch::emulator_input`]).
     pub fn implausibilities(&self, obs: &[Observation], x: &[f64]) -> Vec<f64> {
         self.emulators
             .iter()
@@ -364,7 +370,7 @@ impl HistoryMatch {
         }
         if let Some(o) = observations
             .iter()
-            .find(|o| !o.value.is_finite() || !(o.variance > 0.0))
+            .find(|o| !o.value.is_finite() || o.variance.is_nan() || o.variance <= 0.0)
         {
             return Err(HistoryError::Input(format!(
                 "observation {}: value {} and variance {} must be finite, the variance positive",

@@ -467,6 +467,7 @@ fn paper_study_history<'py>(
         ad.set_item("fraction_all", a.fraction_all)?;
         ad.set_item("pool", a.pool)?;
         ad.set_item("runs_meeting_all", a.runs_meeting_all)?;
+        ad.set_item("kept_all", a.kept_all)?;
         ad.set_item("none_reproduces", a.none_reproduces())?;
         d.set_item("answer", ad)?;
     }

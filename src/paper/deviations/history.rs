@@ -31,6 +31,9 @@ use crate::num::gp_sensitivity::{emulated_indices, EmulatedIndices, EmulatedSobo
 use crate::num::history::{HistoryMatch, HistorySettings, Mean, Observation, Run, Stop};
 use crate::paper::claims::{Claims, Kind};
 
+/// The emulated Sobol indices of each emulated quantity (`None`: constant over the runs).
+pub type ClaimIndices = Vec<(Quantity, Option<EmulatedIndices>)>;
+
 /// A claim's tolerance in standard deviations of its observation (see the module doc).
 pub const TOLERANCE_SIGMAS: f64 = 3.0;
 
@@ -207,10 +210,7 @@ impl HistoryRun {
 
     /// Sobol indices of every emulated quantity from the first wave's emulators (fitted over
     /// the whole cube), with their intervals from posterior draws.
-    pub fn sobol(
-        &self,
-        s: EmulatedSobol,
-    ) -> Result<Vec<(Quantity, Option<EmulatedIndices>)>, DeviationsError> {
+    pub fn sobol(&self, s: EmulatedSobol) -> Result<ClaimIndices, DeviationsError> {
         let Some(w) = self.matcher.waves.first() else {
             return Ok(Vec::new());
         };

@@ -48,7 +48,7 @@ pub use calibration::{
     MultiClaimCalibration,
 };
 pub use evaluation::{evaluate, evaluate_at, evaluate_p1, evaluate_p2, evaluate_quantitative};
-pub use history::{history_match, Answer, HistoryRun, TOLERANCE_SIGMAS};
+pub use history::{history_match, Answer, ClaimIndices, HistoryRun, TOLERANCE_SIGMAS};
 pub use indices::{
     most_conflicting, sobol, sobol_indices, Pareto, QuantityIndices, SobolDesign, SobolRun,
 };
