@@ -337,7 +337,8 @@ pub fn observation_md() -> String {
 
 /// The pairwise projections of one wave: a `d x d` matrix of panels, the least implausibility
 /// below the diagonal (white at 0, dark red at twice the cut and beyond, a black frame on cells
-/// at most the cut), the optical depth above it (grey level, white 0, black 1).
+/// at most the cut), the optical depth above it (grey level, white 0, black the largest share
+/// of any cell).
 pub struct ProjectionPlot {
     /// Title.
     pub title: String,
@@ -366,12 +367,22 @@ impl Figure for ProjectionPlot {
         let (left, top, panel) = (120i32, 90i32, 120i32);
         let font = ("sans-serif", 14).into_font();
         root.draw(&Text::new(self.title.clone(), (10, 10), font.clone()))?;
+        // The optical depth's grey scale runs to the largest share of any cell (a thin space
+        // would be white at a scale to 1).
+        let depth_max = self
+            .projections
+            .iter()
+            .flat_map(|p| p.optical_depth.iter())
+            .filter(|d| d.is_finite())
+            .fold(0.0f64, |m, d| m.max(*d))
+            .max(1e-12);
         root.draw(&Text::new(
             format!(
                 "below the diagonal: least implausibility (red from {} up; framed: at most {}); \
-                 above: share non-implausible (black 1)",
+                 above: share non-implausible (black: {} %, the largest of any cell)",
                 fmt_sig(self.cut, 1),
-                fmt_sig(self.cut, 1)
+                fmt_sig(self.cut, 1),
+                fmt_sig(100.0 * depth_max, 2)
             ),
             (10, 32),
             font.clone(),
@@ -415,7 +426,7 @@ impl Figure for ProjectionPlot {
                         if !o.is_finite() {
                             RGBColor(230, 230, 230)
                         } else {
-                            let g = (255.0 * (1.0 - o.clamp(0.0, 1.0))) as u8;
+                            let g = (255.0 * (1.0 - (o / depth_max).clamp(0.0, 1.0))) as u8;
                             RGBColor(g, g, g)
                         }
                     };

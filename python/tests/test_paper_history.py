@@ -12,21 +12,10 @@ from endstop.paper import study
 
 RECORDED = pathlib.Path(__file__).resolve().parents[2] / "data" / "recorded" / "history"
 
-# As test_paper_study.py: a recorded ensemble value may differ from today's by RECORDED_Z
-# standard errors of the difference of two independent estimates; values without sampling
-# error to RECORDED_RTOL, located events to twice the locator's tolerance.
-RECORDED_Z = 4.0
-RECORDED_RTOL = 1e-9
-LOCATED_EVENTS = {
-    "impact_onset_5p5g_hz": 1e-4,
-    "jump_hertz_bim1p5_hz": 1e-4,
-    "jump_hertz_bim0_hz": 1e-4,
-    "jump_hertz_bim10_hz": 1e-4,
-    "jump_linear_bim2_hz": 1e-4,
-    "onset_g_20v": 1e-6,
-    "onset_g_30v": 1e-6,
-    "onset_g_40v": 1e-6,
-}
+# The tolerances of the recorded minimax runs' test: a recorded ensemble value may differ from
+# today's by RECORDED_Z standard errors of the difference of two independent estimates; values
+# without sampling error to RECORDED_RTOL, located events to twice the locator's tolerance.
+from test_paper_study import LOCATED_EVENTS, RECORDED_RTOL, RECORDED_Z  # noqa: E402
 
 SMALL = dict(per_input=2, max_waves=1, pool=1 << 10)
 
