@@ -155,17 +155,10 @@ mod tests {
             .unwrap();
         let (v0, v1) = (1.0 / 12.0, 1.0 / 45.0);
         let want = [v0 / (v0 + v1), v1 / (v0 + v1), 0.0];
-        for i in 0..d {
+        for (i, w) in want.iter().enumerate() {
             for x in [ix.first[i], ix.total[i]] {
-                assert!(
-                    (x.value - want[i]).abs() < 0.02,
-                    "{i}: {x:?} vs {}",
-                    want[i]
-                );
-                assert!(
-                    x.lo <= want[i] + 0.02 && want[i] - 0.02 <= x.hi,
-                    "{i}: {x:?}"
-                );
+                assert!((x.value - w).abs() < 0.02, "{i}: {x:?} vs {w}");
+                assert!(x.lo <= w + 0.02 && w - 0.02 <= x.hi, "{i}: {x:?}");
             }
         }
     }

@@ -346,6 +346,9 @@ fn paper_study_calibration<'py>(
     Ok(d)
 }
 
+/// One wave as Python passes it: its points and the evaluation dicts at each.
+type WaveDicts<'py> = (Vec<Vec<f64>>, Vec<Vec<Bound<'py, PyDict>>>);
+
 fn history_settings(
     per_input: usize,
     max_waves: usize,
@@ -374,7 +377,7 @@ fn history_settings(
 fn paper_study_history<'py>(
     py: Python<'py>,
     prototype: &str,
-    waves: Vec<(Vec<Vec<f64>>, Vec<Vec<Bound<'py, PyDict>>>)>,
+    waves: Vec<WaveDicts<'py>>,
     per_input: usize,
     max_waves: usize,
     pool: usize,
