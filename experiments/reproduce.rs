@@ -503,7 +503,7 @@ fn write_provenance() -> Result<()> {
 }
 
 /// The study is not one of `reproduce`'s jobs: until `just deviations` has run, its chapter
-/// includes a note in place of its numbers, heat map and Pareto plots.
+/// includes a note in place of its answer, numbers, recorded match and heat map.
 fn deviations_placeholder() -> Result<()> {
     let dir = common::book_generated_root().join(common::jobs::DEVIATIONS.name);
     if !dir.join("numbers.md").exists() {
@@ -519,11 +519,9 @@ fn deviations_placeholder() -> Result<()> {
             common::write_atomic(&dir.join(file), note.as_bytes())?;
         }
     }
-    for stem in ["deviations"] {
-        let path = dir.join(format!("{stem}.figure.md"));
-        if !path.exists() {
-            common::write_atomic(&path, b"*(no plot: the study has not run)*\n")?;
-        }
+    let path = dir.join("deviations.figure.md");
+    if !path.exists() {
+        common::write_atomic(&path, b"*(no plot: the study has not run)*\n")?;
     }
     Ok(())
 }
