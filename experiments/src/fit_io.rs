@@ -39,6 +39,10 @@ pub struct FitArgs {
     /// Output directory; default: data/results/endstop-fit.
     #[arg(long)]
     pub out: Option<PathBuf>,
+    /// A measured output spectrum instead of sweeps, `PSD.csv:S[:N]` (see
+    /// `crate::spectrum_io`).
+    #[arg(long)]
+    pub spectrum: Option<String>,
 }
 
 fn sha256_hex(bytes: &[u8]) -> String {
@@ -50,6 +54,9 @@ fn sha256_hex(bytes: &[u8]) -> String {
 
 /// Runs `endstop fit`.
 pub fn run(a: FitArgs) -> Result<()> {
+    if let Some(s) = &a.spectrum {
+        return crate::spectrum_io::run(&a.device, s, &a.free, a.out.clone());
+    }
     let loaded = load_device_file(&a.device)?;
     let free: Vec<FreeParam> = a
         .free

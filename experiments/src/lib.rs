@@ -15,6 +15,7 @@ pub mod fit_csv;
 pub mod fit_io;
 pub mod frame;
 pub mod freshness;
+pub mod history_io;
 pub mod jobs;
 pub mod md;
 pub mod measured_io;
@@ -22,6 +23,7 @@ pub mod narrowband_io;
 pub mod panels;
 pub mod plot;
 pub mod response_io;
+pub mod spectrum_io;
 pub mod springs_io;
 
 pub use calibration_io::{calibrated_prototype1, prototype1_both_sets};

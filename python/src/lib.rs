@@ -20,6 +20,7 @@ use pyo3::prelude::*;
 
 mod device;
 mod fit;
+mod fit_spectrum;
 mod linear;
 mod paper;
 mod springs;
@@ -70,6 +71,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     m.add_class::<PyDevice>()?;
     fit::register(m)?;
+    fit_spectrum::register(m)?;
     linear::register(m)?;
     study::register(m)?;
     springs::register(m)?;

@@ -365,7 +365,7 @@ fn draw_coefficient(rng: &mut ChaCha8Rng, amp: f64) -> Complex<f64> {
 }
 
 /// Two independent standard normals from two uniforms (Box-Muller, basic form).
-fn box_muller(rng: &mut ChaCha8Rng) -> (f64, f64) {
+pub(crate) fn box_muller(rng: &mut ChaCha8Rng) -> (f64, f64) {
     // random::<f64>() is in [0, 1); 1 - u is in (0, 1], so ln never sees 0.
     let u1 = 1.0 - rng.random::<f64>();
     let u2 = rng.random::<f64>();

@@ -62,6 +62,7 @@ pub mod model;
 pub mod params;
 pub mod report;
 mod search;
+pub mod spectrum;
 mod track;
 
 use nalgebra::DMatrix;

@@ -1,6 +1,8 @@
 //! Generic numerical helpers: one bracketing root finder ([`roots`]), sample statistics
 //! ([`stats`]), variance-based global sensitivity ([`sensitivity`]), multi-start minimax
-//! fitting ([`minimax`]) and Pareto fronts ([`pareto`]).
+//! fitting ([`minimax`]), Pareto fronts ([`pareto`]), Gaussian-process emulators ([`gp`]) with
+//! their Sobol indices ([`gp_sensitivity`]) and history matching in waves ([`history`]).
+//!
 //!
 //! ```
 //! use endstop::num::roots::{illinois, RootOptions, Sample};
@@ -18,6 +20,9 @@
 //! assert!((m.ci95 - 2.776_445 * 2.5f64.sqrt() / 5f64.sqrt()).abs() < 1e-5);
 //! ```
 
+pub mod gp;
+pub mod gp_sensitivity;
+pub mod history;
 pub mod minimax;
 pub mod pareto;
 pub mod roots;
