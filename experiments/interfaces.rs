@@ -367,7 +367,7 @@ fn run() -> Result<()> {
     let spec = |secs: f64| RecordSpec {
         noise: NoiseSpec {
             duration_s: secs,
-            ..NoiseSpec::paper(1e-4)
+            ..endstop::paper::setups::paper_noise(1e-4)
         },
         transient_s: 1.0,
         rtol: DEFAULT_RTOL,

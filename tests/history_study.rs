@@ -11,7 +11,7 @@
 
 use endstop::device::Device;
 use endstop::num::history::{ranked, HistorySettings, Stop};
-use endstop::paper::claims::Claims;
+use endstop::paper::claims::{Answer, Claims};
 use endstop::paper::deviations::{
     evaluate, evaluate_at, history_match, HistoryRun, Prototype, RangesFile, Scope,
 };
@@ -34,7 +34,7 @@ fn synthetic_paper(values: &[(String, String, f64)]) -> Claims {
             .iter()
             .find(|(id, q, _)| *id == c.id && *q == c.quantity)
         {
-            c.paper = *v;
+            c.paper = Answer::Number(*v);
         }
     }
     claims

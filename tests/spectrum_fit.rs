@@ -7,7 +7,6 @@ use endstop::device::Device;
 use endstop::fit::spectrum::{build_emulator, model_features, MeasuredSpectrum, SpectrumSettings};
 use endstop::fit::{FreeParam, ACCEL_SCALE_PATH};
 use endstop::study::ensemble::{run_ensemble, EnsembleSpec};
-use endstop::study::record::RecordSpec;
 
 /// Figure 15's lowest level (g²/Hz), where prototype 2 at 15 V just reaches its stops.
 const LEVEL: f64 = 0.34e-3;
@@ -57,7 +56,7 @@ fn a_known_device_is_recovered_within_its_intervals() {
         let psd = LEVEL * truth.1 * truth.1;
         let mut spec = EnsembleSpec::for_device(
             &device,
-            RecordSpec::paper(&device, psd),
+            endstop::fit::spectrum::model_record(&device, psd),
             99,
             MEASURED_RECORDS,
         );

@@ -17,7 +17,6 @@ use endstop::fit::spectrum::{
 };
 use endstop::fit::{FreeParam, ACCEL_SCALE_PATH};
 use endstop::study::ensemble::{run_ensemble, EnsembleSpec};
-use endstop::study::record::RecordSpec;
 
 use crate::fit_csv::parse_free;
 use crate::frame::frame;
@@ -196,7 +195,7 @@ fn write_outputs(
     let psd = measured.accel_psd_g2_per_hz * scale * scale;
     let mut spec = EnsembleSpec::for_device(
         &device,
-        RecordSpec::paper(&device, psd),
+        endstop::fit::spectrum::model_record(&device, psd),
         em.settings.seed,
         em.settings.records,
     );

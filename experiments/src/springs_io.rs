@@ -153,11 +153,11 @@ pub fn paired_record_cost(
     psd_g2_per_hz: f64,
     repeats: usize,
 ) -> Result<PairedCost> {
-    use endstop::study::record::{simulate_record, FreeFlightPath, RecordSpec};
+    use endstop::study::record::{simulate_record, FreeFlightPath};
     let mut twin = device.clone();
     twin.mechanics.suspension = endstop::device::Suspension::Linear;
     twin.name = format!("{}_linear_twin", device.name);
-    let spec = RecordSpec::paper(device, psd_g2_per_hz);
+    let spec = endstop::paper::setups::paper_record(device, psd_g2_per_hz);
     let label = |p: FreeFlightPath| match p {
         FreeFlightPath::Exponential => "exponential".to_string(),
         FreeFlightPath::Dopri5(why) => format!("dormand-prince: {why}"),

@@ -35,6 +35,7 @@ use crate::num::gp::GpSettings;
 use crate::num::history::{maximin_lhs, Emulator, HistoryError};
 use crate::num::stats::Jackknife;
 use crate::study::ensemble::{run_ensemble, EnsembleSpec};
+use crate::drive::noise::NoiseSpec;
 use crate::study::record::RecordSpec;
 
 /// The features' names, in order.
@@ -158,6 +159,21 @@ pub fn features(freq: &[f64], psd: &[f64], band: (f64, f64)) -> Option<[f64; 3]>
     Some([p.ln(), fc, spread])
 }
 
+/// The model's record at level `psd_g2_per_hz`: band-limited white noise with a 10 kHz band
+/// sampled at 100 kHz, 10 s analysed after the device's pre-roll, the excitation that a
+/// [`MeasuredSpectrum`]'s records are taken to share.
+pub fn model_record(device: &Device, psd_g2_per_hz: f64) -> RecordSpec {
+    RecordSpec::of(
+        device,
+        NoiseSpec {
+            psd_g2_per_hz,
+            bandwidth_hz: 10e3,
+            sample_rate_hz: 100e3,
+            duration_s: 10.0,
+        },
+    )
+}
+
 /// The model's features and their sampling variances (delete-one jackknife over the records)
 /// for `device` at `accel_psd` (g²/Hz, the drive scaled by `scale`), over `band`, by an ensemble
 /// of `records` records on streams `first_stream..` of `seed`.
@@ -170,7 +186,7 @@ pub fn model_features(
     (seed, first_stream): (u64, u64),
 ) -> Result<([f64; 3], [f64; 3]), String> {
     let psd = accel_psd * scale * scale;
-    let mut spec = EnsembleSpec::for_device(device, RecordSpec::paper(device, psd), seed, records);
+    let mut spec = EnsembleSpec::for_device(device, model_record(device, psd), seed, records);
     spec.analysis_band_hz = band;
     spec.first_stream = first_stream;
     let e = run_ensemble(device, &spec, || {}).map_err(|e| e.to_string())?;

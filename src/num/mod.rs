@@ -3,7 +3,6 @@
 //! fitting ([`minimax`]), Pareto fronts ([`pareto`]), Gaussian-process emulators ([`gp`]) with
 //! their Sobol indices ([`gp_sensitivity`]) and history matching in waves ([`history`]).
 //!
-//!
 //! ```
 //! use endstop::num::roots::{illinois, RootOptions, Sample};
 //! use endstop::num::stats::MeanCi;

@@ -43,8 +43,10 @@ pub const KRAMERS_RECORDS: u64 = 48;
 pub fn spec(device: &Device, psd_g2_per_hz: f64, duration_s: f64) -> RecordSpec {
     RecordSpec {
         noise: NoiseSpec {
+            psd_g2_per_hz,
+            bandwidth_hz: 10e3,
+            sample_rate_hz: 100e3,
             duration_s,
-            ..NoiseSpec::paper(psd_g2_per_hz)
         },
         transient_s: transient_s(device),
         rtol: DEFAULT_RTOL,
