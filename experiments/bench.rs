@@ -11,6 +11,7 @@
 //! * every example device of `data/examples/` (`bench/examples.rs`): its 10 s record, one
 //!   periodic orbit and (not with `--quick`) its whole response over its file's range, with
 //!   the ratio to a fixed-step RK4 at equal accuracy and to ngspice where it exports;
+//! * the bistable example's 10 s record beside its linear twin's, paired;
 //! * not with `--quick`: a full Figure 8 sweep (every curve of the published set, one thread
 //!   and all threads), Figure 13's whole curve by continuation and by sweeps, the paper
 //!   records against RK4, and the untimed accuracy tables (`bench/accuracy.rs`;
@@ -29,10 +30,11 @@ use anyhow::{bail, Result};
 use common::{fmt_sig, Experiment};
 use endstop::drive::Sine;
 use endstop::ode::Stats;
+use endstop::paper::setups::paper_record;
 use endstop::physics::contact::Mode;
 use endstop::physics::harvester::Harvester;
 use endstop::study::flow::SineFlow;
-use endstop::study::record::{simulate_record, BroadbandError, RecordSpec};
+use endstop::study::record::{simulate_record, BroadbandError};
 use endstop::study::rk4_record::{
     simulate_rk4_record, RK4_STEPS_AT_OUR_ACCURACY, RK4_STEPS_AT_TARGET,
 };
@@ -70,6 +72,16 @@ fn timed<T>(repeats: usize, mut f: impl FnMut() -> Result<T>) -> Result<(T, Time
     wall.sort_by(f64::total_cmp);
     cpu.sort_by(f64::total_cmp);
     Ok((last.expect("at least one run"), Times { wall, cpu }))
+}
+
+/// Three significant digits, or a dash where there is no number (a run without its
+/// processor time).
+fn sig_or_dash(x: f64) -> String {
+    if x.is_finite() {
+        fmt_sig(x, 3)
+    } else {
+        "-".to_string()
+    }
 }
 
 /// Sorted wall and processor times of repeated runs (s).
@@ -130,7 +142,7 @@ fn run() -> Result<()> {
         ),
     ];
     for (case, dev, sa) in records.clone() {
-        let spec = RecordSpec::paper(&dev, sa);
+        let spec = paper_record(&dev, sa);
         let (rec, times) = timed(repeats, || Ok(simulate_record(&dev, &spec, SEED, 0)?))?;
         let sim = spec.transient_s + spec.noise.duration_s;
         let s = rec.summary;
@@ -179,6 +191,42 @@ fn run() -> Result<()> {
     });
     exp.number("contact_step_share_sine_p1", share);
 
+    // A bistable example against its linear twin of the same well frequency, paired (wall
+    // times: the pairs alternate in this process).
+    let bistable = common::load_device("examples/bistable_stops_em")?;
+    exp.uses(&bistable, "hypothetical");
+    let pc = common::springs_io::paired_record_cost(&bistable.device, 3e-4, repeats)?;
+    exp.number("bistable_record_cost_ratio_median", pc.ratios[repeats / 2]);
+    for (case, t, path) in [
+        (
+            "bistable_stops_em, 10 s record, Sa = 3e-4",
+            &pc.nonlinear_s,
+            &pc.paths.0,
+        ),
+        (
+            "its linear twin (same well frequency), Sa = 3e-4",
+            &pc.linear_s,
+            &pc.paths.1,
+        ),
+    ] {
+        rows.push(Row {
+            case: case.to_string(),
+            times: Times {
+                wall: t.clone(),
+                cpu: vec![f64::NAN; t.len()],
+            },
+            simulated_s: paper_record(&bistable.device, 3e-4).transient_s + 10.0,
+            stats: pc.summary.stats,
+            note: format!(
+                "paired runs, wall times only, median cost ratio bistable/linear {} (range {} \
+                 to {}); free flight: {path}",
+                fmt_sig(pc.ratios[repeats / 2], 3),
+                fmt_sig(pc.ratios[0], 3),
+                fmt_sig(pc.ratios[repeats - 1], 3)
+            ),
+        });
+    }
+
     if !quick {
         rows.extend(fig08_rows(&p1.device, repeats)?);
         exp.number(
@@ -208,10 +256,10 @@ fn run() -> Result<()> {
         md.push_str(&format!(
             "| {} | {} | {} | {} | {} | {} | {} ({}) | {} | {} | {} |\n",
             r.case,
-            fmt_sig(r.times.median_cpu(), 3),
+            sig_or_dash(r.times.median_cpu()),
             fmt_sig(r.times.median_wall(), 3),
             fmt_sig(r.times.wall[0], 3),
-            fmt_sig(r.simulated_s / r.times.median_cpu(), 3),
+            sig_or_dash(r.simulated_s / r.times.median_cpu()),
             fmt_sig(r.stats.steps() as f64 / r.simulated_s, 3),
             r.stats.rejected,
             r.stats.rejected_after_event,
@@ -300,7 +348,7 @@ fn paper_rk4_and_accuracy(
     let mut ratios = Vec::new();
     for (case, dev, sa) in records.iter().cloned() {
         for substeps in picks {
-            let spec = RecordSpec::paper(&dev, sa);
+            let spec = paper_record(&dev, sa);
             let mut ours = Vec::new();
             let mut rk4 = Vec::new();
             // RK4 with too few steps through a stiff contact diverges: the failure is

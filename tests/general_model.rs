@@ -219,12 +219,10 @@ fn the_exact_sine_flow_matches_dormand_prince_on_every_device() {
 /// reference's own error).
 #[test]
 fn a_coil_faster_than_the_sample_rate_keeps_the_exponential_record() {
-    use endstop::study::record::{
-        simulate_record, FreeFlightPath, RecordSpec, Scheme, EXPONENTIAL_ORDER,
-    };
+    use endstop::study::record::{simulate_record, FreeFlightPath, Scheme, EXPONENTIAL_ORDER};
     let coil = "[transducer]\nkind = \"electromagnetic\"\ntransduction_n_per_a = 2.0\ncoil_resistance_ohm = 50.0\ncoil_inductance_h = 5e-5\nload_resistance_ohm = 200.0";
     let d = device(STOPS[2], coil);
-    let mut spec = RecordSpec::paper(&d, 1e-6);
+    let mut spec = endstop::paper::setups::paper_record(&d, 1e-6);
     spec.transient_s = 0.02;
     spec.noise.duration_s = 0.2;
     let fast = simulate_record(&d, &spec, 7, 3).unwrap();

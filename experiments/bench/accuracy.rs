@@ -3,6 +3,7 @@
 //! balance of records. `tests/record_accuracy.rs` asserts what they show.
 
 use anyhow::Result;
+use endstop::paper::setups::paper_record;
 use endstop::study::record::{simulate_record, RecordSpec};
 use endstop::study::rk4_record::simulate_rk4_record;
 use rayon::prelude::*;
@@ -80,7 +81,7 @@ pub fn rk4_accuracy(p1: &endstop::device::Device, p2: &endstop::device::Device) 
     // Run 0 is ours, 1 the reference, then RK4 with each number of substeps.
     let powers = untimed_grid(cases.len(), 2 + SUBSTEPS.len(), |c, r| {
         let (_, _, dev, sa) = &cases[c];
-        let mut spec = RecordSpec::paper(dev, *sa);
+        let mut spec = paper_record(dev, *sa);
         spec.noise.duration_s = 1.0;
         Ok(match r {
             0 => simulate_record(dev, &spec, SEED, 0)?.summary.p_total_w(),
@@ -127,7 +128,7 @@ pub fn impact_accuracy(
     );
     let summaries = untimed_grid(cases.len(), runs.len(), |c, r| {
         let (_, _, dev, sa) = &cases[c];
-        let base = RecordSpec::paper(dev, *sa);
+        let base = paper_record(dev, *sa);
         let (_, scheme, rtol) = runs[r];
         let spec = RecordSpec {
             scheme,
@@ -184,7 +185,7 @@ pub fn energy_balance(
         let spec = RecordSpec {
             scheme,
             rtol,
-            ..RecordSpec::paper(dev, *sa)
+            ..paper_record(dev, *sa)
         };
         let (rec, l) = record_ledger(dev, &spec, SEED, 0)?;
         Ok((rec.summary.impacts, l))

@@ -11,6 +11,7 @@ use anyhow::{Context, Result};
 use endstop::device::Device;
 use endstop::drive::Sine;
 use endstop::ode::Stats;
+use endstop::paper::setups::paper_record;
 use endstop::physics::harvester::Harvester;
 use endstop::study::continuation::frequency_branch;
 use endstop::study::flow::SineFlow;
@@ -130,7 +131,7 @@ pub fn measure(root: &Path, repeats: usize, quick: bool) -> Result<Vec<Costs>> {
 }
 
 fn measure_one(ex: &Example, device: &Device, repeats: usize, quick: bool) -> Result<Costs> {
-    let spec = RecordSpec::paper(device, ex.psd_g2_per_hz);
+    let spec = paper_record(device, ex.psd_g2_per_hz);
     let mut record_times = Vec::new();
     let mut last = None;
     for _ in 0..repeats {
@@ -306,7 +307,7 @@ fn rk4_ratio(device: &Device, psd: f64) -> Result<Result<(usize, f64), String>> 
     // An impact-free level: the header's, divided by 10 until a 1 s record has no impact.
     let mut level = psd;
     let short = |level: f64| {
-        let mut s = RecordSpec::paper(device, level);
+        let mut s = paper_record(device, level);
         s.noise.duration_s = 1.0;
         s
     };
@@ -348,7 +349,7 @@ fn rk4_ratio(device: &Device, psd: f64) -> Result<Result<(usize, f64), String>> 
             RK4_SUBSTEPS[RK4_SUBSTEPS.len() - 1]
         )));
     };
-    let full = RecordSpec::paper(device, psd);
+    let full = paper_record(device, psd);
     let (mut a, mut b) = (Vec::new(), Vec::new());
     for _ in 0..3 {
         a.push(cpu(|| Ok(simulate_record(device, &full, SEED, 0)?))?.1);
