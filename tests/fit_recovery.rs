@@ -163,7 +163,7 @@ fn noisy_sweep_recovers_damping_and_gap_within_the_reported_intervals() {
 /// misses would be binomial(40, 0.05), mean 2; seven or more misses have probability below
 /// 0.5 %, so the test asks for at least 34 covered. The count is printed (`--nocapture`).
 #[test]
-#[ignore = "a few minutes of sweeps (290 s on 2 shared cores); run with: cargo test --release --test fit_recovery -- --ignored --nocapture"]
+#[ignore = "a few minutes of sweeps (290 s on 2 shared cores); run with: cargo test --release --test all -- fit_recovery:: --ignored --nocapture"]
 fn intervals_cover_the_truth_about_as_often_as_they_claim_over_20_seeds() {
     let truth = truth();
     let freqs = grid(600.0, 760.0, 10.0);

@@ -15,7 +15,7 @@ use endstop::paper::figures::table3::Table3;
 use endstop::paper::Figure;
 use endstop::physics::two_port::QmReading;
 
-mod common;
+use crate::common;
 use common::{claims, prototypes};
 
 /// `x` with 6 significant digits, in scientific notation.

@@ -72,7 +72,7 @@ fn the_kink_alone_fits_the_gap_the_paper_layer_calibrates_within_its_interval() 
 }
 
 #[test]
-#[ignore = "about 90 s of sweeps alone on 2 cores; run with: cargo test --release -p endstop-experiments --test fit_paper -- --ignored --nocapture"]
+#[ignore = "about 90 s of sweeps alone on 2 cores; run with: cargo test --release -p endstop-experiments --test all -- fit_paper:: --ignored --nocapture"]
 fn the_joint_fit_of_kink_and_jump_contains_the_calibrated_gap() {
     let device = published();
     let free = [
