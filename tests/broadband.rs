@@ -33,7 +33,7 @@ use endstop::study::ensemble::run_ensemble;
 use endstop::study::record::*;
 use endstop::G;
 
-mod common;
+use crate::common;
 #[path = "broadband/regression.rs"]
 mod regression;
 
