@@ -21,7 +21,7 @@
 //! [`GRAZE_MARGIN`] of its scale below zero is maximised on the exact solution, and has
 //! crossed if it is positive there (a grazing trajectory). The first crossing is then located
 //! by bisection on the exact solution, through the propagators `e^{h L / 2^j}`, to the event
-//! time tolerance of [`Options`](crate::ode::Options), and the step is cut there, as
+//! time tolerance of [`Options`], and the step is cut there, as
 //! Dormand-Prince cuts its steps; the event lies at the upper end of the final bracket (never
 //! before the crossing). The grid makes each step a small fraction of the fastest
 //! oscillation, so that a guard has at most one maximum in a step.
@@ -34,7 +34,7 @@
 //! this module (the same integrator, the same steps, the same bits).
 //!
 //! # What the observers see
-//! Each exact step is shown to the observer as a [`Step`](crate::ode::Step) whose dense output
+//! Each exact step is shown to the observer as a [`Step`] whose dense output
 //! is the quartic through the exact states at both ends and the midpoint with the exact
 //! derivatives at the ends ([`Step::from_ends_and_midpoint`](crate::ode::Step::from_ends_and_midpoint));
 //! with the grid above its error is about 1e-9 of the motion, below Dormand-Prince's at the
