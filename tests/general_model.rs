@@ -239,3 +239,28 @@ fn a_coil_faster_than_the_sample_rate_keeps_the_exponential_record() {
     let (a, b) = (fast.summary.p_total_w(), reference.summary.p_total_w());
     assert!((a / b - 1.0).abs() < 1e-8, "{a:e} vs {b:e}");
 }
+
+/// A nonlinear suspension makes no mode affine: the sine flow of the hardening and bistable
+/// examples goes to Dormand-Prince throughout, bit for bit the run of that scheme (the exact
+/// scheme once propagated their linearisation at rest as if it were the dynamics).
+#[test]
+fn a_nonlinear_suspension_keeps_the_sine_flow_on_dormand_prince() {
+    use endstop::study::flow::{SineFlow, SineScheme};
+    for file in ["hardening_em.toml", "bistable_stops_em.toml"] {
+        let path = format!("{}/data/examples/{file}", env!("CARGO_MANIFEST_DIR"));
+        let text = std::fs::read_to_string(&path).unwrap();
+        let d = Device::from_toml_str(&text, &path).unwrap();
+        let h = Harvester::new(&d, Sine::from_rms_g(0.5, 40.0));
+        let run = |scheme| {
+            let opts = h.solver_options(1e-8);
+            let mut flow = SineFlow::with(&h, 0.0, h.rest_state(), Mode::Free, opts, scheme);
+            let exact = flow.is_exact();
+            flow.integrate(0.2, |_, _| {}).unwrap();
+            (flow.y(), exact)
+        };
+        let (ye, exact) = run(SineScheme::Exact);
+        let (yd, _) = run(SineScheme::Dopri5);
+        assert!(!exact, "{file}: a nonlinear suspension is not affine");
+        assert_eq!(ye, yd, "{file}");
+    }
+}

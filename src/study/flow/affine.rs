@@ -1,9 +1,10 @@
 //! The modes in which a sine-driven harvester is affine, `y' = L y + c a(t) + d`, with their
 //! closed-form forced response and their guards as affine functions of the state.
 //!
-//! A mode is affine when the transducer is linear (piezoelectric, electromagnetic, or none) and
-//! the mode adds no nonlinear force: free flight, a tension-free stop's clipped phase when its
-//! bracket is linear, and contact with a linear spring and a viscous damper. For
+//! A mode is affine when the transducer is linear (piezoelectric, electromagnetic, or none), the
+//! suspension is linear, and the mode adds no nonlinear force: free flight, a tension-free
+//! stop's clipped phase when its bracket is linear, and contact with a linear spring and a
+//! viscous damper. For
 //! `a(t) = A sin(w t + phi)` the periodic particular solution is
 //!
 //! `p(t) = A Im[z e^{i(w t + phi)}] + y_s`, with `z = (i w - L)^-1 c` and `L y_s + d = 0`,
@@ -67,10 +68,11 @@ pub(crate) struct AffineMode {
 
 impl AffineMode {
     /// The affine dynamics of `mode` under the model's drive, or `None` when the mode is not
-    /// affine (a nonlinear transducer or contact law, a rigid stop's stuck phase) or its static
-    /// solution is not unique.
+    /// affine (a nonlinear transducer, suspension or contact law, a rigid stop's stuck phase)
+    /// or its static solution is not unique.
     pub(crate) fn of(model: &Harvester<Sine>, mode: Mode) -> Option<Self> {
-        if matches!(model.transducer, TransducerModel::Pair(_)) {
+        // The Jacobian at rest below is the dynamics only where no force is nonlinear.
+        if matches!(model.transducer, TransducerModel::Pair(_)) || model.spring.nonlinear {
             return None;
         }
         let m = model.mass_kg;
