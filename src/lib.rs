@@ -31,10 +31,9 @@
 //!   number of threads.
 //!
 //! The model began as that of C. P. Le and E. Halvorsen, "MEMS electrostatic energy
-//! harvesters with end-stop effects", J. Micromech. Microeng. 22 (2012) 074013 (equation
-//! numbers are the paper's), and describes any single-degree-of-freedom impact harvester:
-//! each side's stop absent or a gap and a contact law, and an electrostatic, piezoelectric or
-//! electromagnetic transducer or none.
+//! harvesters with end-stop effects", J. Micromech. Microeng. 22 (2012) 074013 (equation numbers are the paper's), and describes any
+//! single-degree-of-freedom impact harvester: each side's stop absent or a gap and a contact
+//! law, and an electrostatic, piezoelectric or electromagnetic transducer or none.
 //!
 //! The crate holds the model and numerics only: it does no file I/O. The reproduction of the
 //! paper's figures is one module apart ([`paper`]), which no model module imports; the
