@@ -270,9 +270,9 @@ fn sweep(a: RangeArgs) -> Result<()> {
 
 fn response(a: RangeArgs) -> Result<()> {
     use common::frame::frame;
-    use common::response_io::{continuation_rows, response_figure};
+    use common::response_io::{diagram_figure, diagram_rows, diagram_words};
     use common::row;
-    use endstop::study::continuation::{frequency_branch, EventKind};
+    use endstop::study::continuation::frequency_diagram;
 
     a.check()?;
     let (mut exp, loaded, device) = start("endstop-response", &a.device, a.bias_v, a.out.clone())?;
@@ -289,9 +289,11 @@ fn response(a: RangeArgs) -> Result<()> {
         "[endstop-response] continuing the periodic orbits from {} Hz",
         a.from
     );
-    let branch = frequency_branch(&device, a.accel_rms_g, a.from, a.to, a.step, |_| {})?;
+    let diagram = frequency_diagram(&device, a.accel_rms_g, a.from, a.to, a.step, |b| {
+        eprintln!("[endstop-response]   branch: {b}")
+    })?;
 
-    let rows = continuation_rows(&device.name, &branch);
+    let rows = diagram_rows(&device.name, &diagram);
     exp.write_parquet("continuation", &mut frame(rows)?, &device.params)?;
     let mut rows = Vec::new();
     for (dir, ms) in [
@@ -310,10 +312,17 @@ fn response(a: RangeArgs) -> Result<()> {
     }
     exp.write_parquet("sweeps", &mut frame(rows)?, &device.params)?;
 
+    let points: usize = diagram.branches.iter().map(|b| b.points.len()).sum();
+    let residual = diagram
+        .branches
+        .iter()
+        .flat_map(|b| &b.points)
+        .map(|p| p.residual)
+        .fold(0.0, f64::max);
     let mut md = format!(
         "Whole response of `{}` ({} set; {}) from {} to {} Hz at {} g rms: sweeps in {} Hz \
          steps (transitions refined to 0.1 Hz), periodic orbits continued in frequency \
-         ({} points, largest residual {:.1e}).\n\n",
+         ({} branches, {} points, largest residual {:.1e}).\n\n",
         loaded.file,
         device.params,
         describe(&device),
@@ -321,8 +330,9 @@ fn response(a: RangeArgs) -> Result<()> {
         a.to,
         a.accel_rms_g,
         a.step,
-        branch.points.len(),
-        branch.max_residual()
+        diagram.branches.len(),
+        points,
+        residual
     );
     if let Some(e) = up.branch_end() {
         exp.number("up_branch_end_hz", e.transition.value());
@@ -340,35 +350,22 @@ fn response(a: RangeArgs) -> Result<()> {
             kind.label()
         ));
     }
-    for (i, e) in branch.events.iter().enumerate() {
-        let kind = if e.kind == EventKind::Fold && e.at_grazing {
-            "fold at a grazing corner"
-        } else {
-            e.kind.label()
-        };
+    for (i, e) in diagram.events.iter().enumerate() {
         exp.number(&format!("event_{i}_hz"), e.param);
-        md.push_str(&format!(
-            "- {kind} at {} Hz (stable {} -> {})\n",
-            fmt_sig(e.param, 7),
-            e.stable_before,
-            e.stable_after
-        ));
     }
-    if branch.events.is_empty() {
-        md.push_str("- no fold, bifurcation or grazing in this range\n");
-    }
+    md.push_str(&diagram_words(&diagram));
     exp.write_numbers_md(&md)?;
     print!("{md}");
 
     let steps = |ms: Vec<&endstop::study::steady::Measurement>| -> Vec<(f64, f64)> {
         ms.into_iter().map(|m| (m.freq_hz, m.v1_rms_v)).collect()
     };
-    let plot = response_figure(
+    let plot = diagram_figure(
         &format!(
             "Whole response at {} g rms: {} (orbits: solid stable, dashed unstable)",
             a.accel_rms_g, device.name
         ),
-        &branch,
+        &diagram,
         steps(up.measurements().collect()),
         steps(down.measurements().collect()),
         (a.from, a.to),
