@@ -15,7 +15,7 @@ use nalgebra::Complex;
 use crate::device::Device;
 use crate::drive::Sine;
 use crate::ode::Stats;
-use crate::physics::contact::StopModel;
+use crate::physics::contact::{Side, StopModel};
 use crate::physics::harvester::{Harvester, State};
 use crate::study::orbit::{Forcing, Orbit, OrbitError, OrbitSummary, Parameter, Shooter};
 
@@ -41,11 +41,16 @@ pub struct DiagramPoint {
     pub section: Option<(f64, State)>,
     /// The speed of each impact (m/s), in the order of the orbit's impact sequence.
     pub impact_speeds_m_s: Vec<f64>,
+    /// How far the orbit's free flights stay from the stops (m): the smallest distance from
+    /// a stop of an extremum of x between impacts (for an orbit without impacts, of its
+    /// largest excursion to either side); zero at a grazing, negative past a stop.
+    pub clearance_m: f64,
     /// True for a symmetric orbit (y(t + T/2) = S y(t)).
     pub symmetric: bool,
     /// The scaled residual of the orbit's equations.
     pub residual: f64,
-    /// The state at drive phase zero (how two orbits are told apart).
+    /// The mean over the orbit's periods of its states at drive phase zero (how two orbits
+    /// are told apart, whichever period is taken as the first).
     pub fingerprint: State,
 }
 
@@ -97,8 +102,10 @@ pub enum EndKind {
     /// An asymmetric orbit returns to the symmetric orbits (at their pitchfork).
     Symmetric,
     /// The branch begins at a bifurcation of another branch (a pitchfork or a period
-    /// doubling) or at an orbit found from rest.
+    /// doubling).
     Bifurcation,
+    /// The branch begins at the orbit reached from rest (followed one way only).
+    Rest,
     /// The steps fell below their minimum.
     Stalled,
     /// The budget of points ran out.
@@ -114,6 +121,7 @@ impl EndKind {
             EndKind::NewContact => "grazing (a flight reaches a stop)",
             EndKind::Symmetric => "returns to the symmetric orbits",
             EndKind::Bifurcation => "starts at a bifurcation",
+            EndKind::Rest => "the orbit reached from rest",
             EndKind::Stalled => "stalled",
             EndKind::Budget => "point budget",
         }
@@ -411,6 +419,9 @@ pub(crate) fn orbit_point(
             speeds.push(s);
         }
     }
+    let b = shooter.base;
+    let clearance_m =
+        (b.gap(Side::Upper) - o.summary.x_upper_m).min(b.gap(Side::Lower) + o.summary.x_lower_m);
     Ok(DiagramPoint {
         forcing: o.forcing,
         periods: 1,
@@ -419,6 +430,7 @@ pub(crate) fn orbit_point(
         summary: o.summary,
         section,
         impact_speeds_m_s: speeds,
+        clearance_m,
         symmetric: half.is_some(),
         residual: o.residual,
         fingerprint,

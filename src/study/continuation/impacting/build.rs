@@ -3,7 +3,7 @@
 
 use std::collections::VecDeque;
 
-use nalgebra::{DMatrix, DVector};
+use nalgebra::DVector;
 
 use crate::device::Device;
 use crate::drive::Sine;
@@ -11,12 +11,12 @@ use crate::num::roots::{illinois, RootOptions, Sample};
 use crate::ode::Stats;
 use crate::physics::contact::{Side, StopModel};
 use crate::physics::harvester::Harvester;
+use crate::study::continuation::diagram::orbit_point;
 use crate::study::continuation::{continue_branch, first_orbit, ContinuationSettings};
 use crate::study::orbit::{mirror, Forcing, Orbit, OrbitError, Parameter, Shooter};
 
-use super::bvp::{Closure, ImpactSequence, Problem};
-use super::follow::{Follower, Found, Node};
-use super::segment::fly;
+use super::bvp::{ImpactSequence, Problem};
+use super::follow::{test_excursion, test_speed, Followed, Follower, Node};
 use super::{
     BranchEnd, BranchKind, Diagram, DiagramBranch, DiagramEvent, DiagramPoint, EndKind, EventKind,
 };
@@ -42,37 +42,45 @@ impl Default for DiagramOptions {
     }
 }
 
+/// The largest distance (in the continuation's scaled metric: state over its scales, the
+/// parameter over its scale) of an orbit from a branch's polyline for the orbit to lie on it:
+/// the chords' error between points a step apart is far below, and distinct branches of one
+/// impact sequence lie far further apart away from the points where they meet.
+const ON_BRANCH: f64 = 1e-2;
+
 /// A branch to be followed: a solved chain (or close to one) and the directions to take.
-struct Start {
-    seq: ImpactSequence,
-    forcing: Forcing,
-    z: DVector<f64>,
+pub(super) struct Start {
+    pub seq: ImpactSequence,
+    pub forcing: Forcing,
+    pub z: DVector<f64>,
     /// Unit directions in (z, q); `None`: both orientations of the kernel.
-    dirs: Option<Vec<DVector<f64>>>,
+    pub dirs: Option<Vec<DVector<f64>>>,
     /// The grazing node or branch it starts from, for the branches' `meets`.
-    from: From,
+    pub from: From,
     /// How the new branch's first end is described.
-    kind: EndKind,
+    pub kind: EndKind,
 }
 
 #[derive(Debug, Clone, Copy)]
-enum From {
+pub(super) enum From {
     /// A grazing of the non-impacting orbit.
     Grazing(usize),
     /// The end of a branch.
     Branch(usize),
     /// A bifurcation inside a branch.
     Inside(usize),
+    /// The orbit reached from rest: followed both ways into one branch.
+    Rest,
 }
 
 /// A grazing of the non-impacting orbit, where impacting branches begin or end.
-struct GrazingNode {
-    param: f64,
-    point: DiagramPoint,
+pub(super) struct GrazingNode {
+    pub param: f64,
+    pub point: DiagramPoint,
     /// The non-impacting branch whose end it is.
-    branch: usize,
+    pub branch: usize,
     /// The impacting branches that begin or end there.
-    impacting: Vec<usize>,
+    pub impacting: Vec<usize>,
 }
 
 /// The diagram of `device` under the drive `start` (whose parameter value is the settings'
@@ -122,6 +130,7 @@ pub fn rigid_diagram(
         sym,
         settings: *settings,
         options: *options,
+        start,
         lo,
         hi,
         branches: Vec::new(),
@@ -214,69 +223,61 @@ pub fn rigid_diagram(
             b.grazings[n].branch = idx;
         }
     }
-    while let Some(s) = b.queue.pop_front() {
-        if b.branches.len() >= options.max_branches {
-            break;
+    b.drain(&mut progress);
+    // The orbits reached from rest at either end of the range, unless on a branch already
+    // followed (an impacting branch that meets no grazing inside the range).
+    for at in [settings.start, settings.stop] {
+        if let Some(s) = b.seed_from_rest(at) {
+            b.queue.push_back(s);
+            b.drain(&mut progress);
         }
-        progress(&s.seq.describe());
-        b.follow_start(s);
     }
     b.finish(stats)
 }
 
-struct Builder<'a> {
-    h: &'a Harvester<Sine>,
+pub(super) struct Builder<'a> {
+    pub h: &'a Harvester<Sine>,
     /// Shooting on the device without its stops (the non-impacting branch).
-    shooter: &'a Shooter<'a>,
-    sym: Option<nalgebra::Matrix4<f64>>,
-    settings: ContinuationSettings,
-    options: DiagramOptions,
-    lo: f64,
-    hi: f64,
-    branches: Vec<DiagramBranch>,
-    events: Vec<DiagramEvent>,
-    grazings: Vec<GrazingNode>,
-    queue: VecDeque<Start>,
-    stats: Stats,
+    pub shooter: &'a Shooter<'a>,
+    pub sym: Option<nalgebra::Matrix4<f64>>,
+    pub settings: ContinuationSettings,
+    pub options: DiagramOptions,
+    /// The drive at the start of the range.
+    pub start: Forcing,
+    pub lo: f64,
+    pub hi: f64,
+    pub branches: Vec<DiagramBranch>,
+    pub events: Vec<DiagramEvent>,
+    pub grazings: Vec<GrazingNode>,
+    pub queue: VecDeque<Start>,
+    pub stats: Stats,
 }
 
 impl Builder<'_> {
-    fn param(&self) -> Parameter {
+    /// Follows every queued start (and what they lead to) up to the budget of branches.
+    fn drain(&mut self, progress: &mut impl FnMut(&str)) {
+        while let Some(s) = self.queue.pop_front() {
+            if self.branches.len() >= self.options.max_branches {
+                self.queue.clear();
+                break;
+            }
+            progress(&s.seq.describe());
+            self.follow_start(s);
+        }
+    }
+
+    pub(super) fn param(&self) -> Parameter {
         self.settings.parameter
     }
 
-    /// A non-impacting orbit as a point of the diagram.
+    /// A non-impacting orbit as a point of the diagram (with its half-period map on a
+    /// symmetric device).
     fn ni_point(&mut self, o: &Orbit) -> Result<DiagramPoint, OrbitError> {
-        let half = if self.sym.is_some() {
-            self.shooter.half_map(o, &mut self.stats)?
-        } else {
-            None
-        };
-        let fingerprint = self
-            .shooter
-            .state_at_phase(o, 0.0)
-            .map_err(|e| OrbitError::Solver {
-                what: self.param().label(),
-                param: o.param(self.param()),
-                source: e,
-            })?;
-        let w = 2.0 * std::f64::consts::PI * o.forcing.freq_hz;
-        let section = o.summary.upcrossing_s.map(|t| {
-            let phase = (o.phase_rad + w * t).rem_euclid(2.0 * std::f64::consts::PI);
-            (phase, o.state)
-        });
-        Ok(DiagramPoint {
-            forcing: o.forcing,
-            periods: 1,
-            multipliers: o.multipliers,
-            half_multipliers: half.map(|h| h.multipliers),
-            summary: o.summary,
-            section,
-            impact_speeds_m_s: Vec::new(),
-            symmetric: half.is_some(),
-            residual: o.residual,
-            fingerprint,
-        })
+        let mut p = orbit_point(self.shooter, o, self.sym.is_some(), &mut self.stats)?;
+        // Measured from the device's stops (the shooter's model has none).
+        p.clearance_m = (self.h.gap(Side::Upper) - o.summary.x_upper_m)
+            .min(self.h.gap(Side::Lower) + o.summary.x_lower_m);
+        Ok(p)
     }
 
     /// The grazing between two orbits of the non-impacting branch on either side of it, by
@@ -326,87 +327,6 @@ impl Builder<'_> {
             Err(crate::num::roots::RootError::Eval(e)) => Err(e),
             Err(_) => Ok(best),
         }
-    }
-
-    /// The impacting branches that begin at a grazing of the non-impacting orbit: one impact
-    /// at each stop it grazes, and the symmetric orbit where it grazes both of a symmetric
-    /// device.
-    fn grazing_starts(&mut self, node: usize, g: &Orbit) -> Result<(), OrbitError> {
-        let param = self.param();
-        let f = g.forcing;
-        let w = 2.0 * std::f64::consts::PI * f.freq_hz;
-        let model = self.h.without_stops().with_excitation(f.sine(g.phase_rad));
-        let fl = fly(
-            &model,
-            param,
-            g.state,
-            f.period_s(),
-            self.settings.shooting.rtol,
-            &self.h.scales(),
-            &[],
-            &mut self.stats,
-        )
-        .map_err(|e| OrbitError::Solver {
-            what: param.label(),
-            param: g.param(param),
-            source: e,
-        })?;
-        let top = fl
-            .extrema
-            .iter()
-            .filter(|x| x.maximum)
-            .max_by(|a, b| a.state[0].total_cmp(&b.state[0]));
-        let bottom = fl
-            .extrema
-            .iter()
-            .filter(|x| !x.maximum)
-            .min_by(|a, b| a.state[0].total_cmp(&b.state[0]));
-        let tol = 1e-6 * self.h.x_scale();
-        let mut grazed = Vec::new();
-        if let Some(x) = top.filter(|x| (x.state[0] - self.h.gap(Side::Upper)).abs() <= tol) {
-            grazed.push((Side::Upper, *x));
-        }
-        if let Some(x) = bottom.filter(|x| (-x.state[0] - self.h.gap(Side::Lower)).abs() <= tol) {
-            grazed.push((Side::Lower, *x));
-        }
-        for (side, x) in &grazed {
-            let seq = ImpactSequence {
-                sides: vec![*side],
-                closure: Closure::Periodic(1),
-            };
-            let mut z = DVector::zeros(self.h.active_states());
-            let problem = Problem::new(self.h, seq.clone(), param, self.settings.shooting.rtol)
-                .map_err(OrbitError::Invalid)?;
-            problem.pack(&mut z, 0, g.phase_rad + w * x.t, &x.state);
-            self.queue.push_back(Start {
-                seq,
-                forcing: f,
-                z,
-                dirs: None,
-                from: From::Grazing(node),
-                kind: EndKind::Grazing,
-            });
-        }
-        if grazed.len() == 2 && self.sym.is_some() {
-            let (side, x) = grazed[0];
-            let seq = ImpactSequence {
-                sides: vec![side],
-                closure: Closure::Mirror,
-            };
-            let problem = Problem::new(self.h, seq.clone(), param, self.settings.shooting.rtol)
-                .map_err(OrbitError::Invalid)?;
-            let mut z = DVector::zeros(self.h.active_states());
-            problem.pack(&mut z, 0, g.phase_rad + w * x.t, &x.state);
-            self.queue.push_back(Start {
-                seq,
-                forcing: f,
-                z,
-                dirs: None,
-                from: From::Grazing(node),
-                kind: EndKind::Grazing,
-            });
-        }
-        Ok(())
     }
 
     /// The distance, in the continuation's metric (the parameter over its scale and the
@@ -486,6 +406,7 @@ impl Builder<'_> {
             .clone()
             .unwrap_or_else(|| vec![start.t.clone(), -start.t.clone()]);
         let probe_ds = 0.05 * self.settings.ds_init;
+        let mut followed = Vec::new();
         for d in dirs {
             let mut n0 = start.clone();
             n0.t = d.normalize();
@@ -495,30 +416,69 @@ impl Builder<'_> {
             if !Follower::admissible(&probe) {
                 continue;
             }
-            let moved = self.gap_between(&probe.point, &n0.point);
-            // A branch already followed passes here: the same impacts on each side, and
-            // the probe on its polyline (far closer to it than to the start).
-            let sides = s.seq.impacts_per_side();
-            let duplicate = self
-                .branches
-                .iter()
-                .enumerate()
-                .find(|(_, b)| match &b.kind {
-                    BranchKind::Impacting(q) => {
-                        q.impacts_per_side() == sides
-                            && q.periods() == s.seq.periods()
-                            && self.distance_to(b, &probe.point) < 0.05 * moved
-                    }
-                    BranchKind::NonImpacting | BranchKind::Continued => false,
-                });
-            if let Some((k, _)) = duplicate {
+            let on = if matches!(s.from, From::Rest) {
+                // The orbit from rest lies inside a branch already followed, if at all: the
+                // start itself is on its polyline, to the chords' error.
+                self.on_branch(&s.seq, &n0.point)
+            } else {
+                self.duplicate_of(&s.seq, &probe.point, &n0.point)
+            };
+            if let Some(k) = on {
                 self.note_meeting(s.from, k);
+                if matches!(s.from, From::Rest) {
+                    // The orbit from rest lies on a branch already followed.
+                    self.stats += fol.stats;
+                    return;
+                }
                 continue;
             }
-            let followed = fol.follow(n0, self.lo, self.hi);
-            self.add_branch(&s, &problem, followed, watch);
+            let f = fol.follow(n0, self.lo, self.hi);
+            if matches!(s.from, From::Rest) {
+                followed.push(f);
+            } else {
+                self.add_branch(&s, &problem, None, f, watch);
+            }
+        }
+        if matches!(s.from, From::Rest) && !followed.is_empty() {
+            let fwd = followed.remove(0);
+            self.add_branch(&s, &problem, followed.pop(), fwd, watch);
         }
         self.stats += fol.stats;
+    }
+
+    /// The branch already followed that passes through `p` (the same impacts on each side and
+    /// periods, and `p` within [`ON_BRANCH`] of its polyline in the continuation's metric).
+    fn on_branch(&self, seq: &ImpactSequence, p: &DiagramPoint) -> Option<usize> {
+        let sides = seq.impacts_per_side();
+        self.branches.iter().position(|b| match &b.kind {
+            BranchKind::Impacting(q) => {
+                q.impacts_per_side() == sides
+                    && q.periods() == seq.periods()
+                    && self.distance_to(b, p) < ON_BRANCH
+            }
+            BranchKind::NonImpacting | BranchKind::Continued => false,
+        })
+    }
+
+    /// The branch already followed on which `probe` (a small step from `start`) lies: the
+    /// same impacts on each side and periods, and the probe on its polyline (far closer to
+    /// it than to the start).
+    fn duplicate_of(
+        &self,
+        seq: &ImpactSequence,
+        probe: &DiagramPoint,
+        start: &DiagramPoint,
+    ) -> Option<usize> {
+        let moved = self.gap_between(probe, start);
+        let sides = seq.impacts_per_side();
+        self.branches.iter().position(|b| match &b.kind {
+            BranchKind::Impacting(q) => {
+                q.impacts_per_side() == sides
+                    && q.periods() == seq.periods()
+                    && self.distance_to(b, probe) < 0.05 * moved
+            }
+            BranchKind::NonImpacting | BranchKind::Continued => false,
+        })
     }
 
     fn note_meeting(&mut self, from: From, k: usize) {
@@ -534,31 +494,45 @@ impl Builder<'_> {
                     self.branches[j].end.meets.push(k);
                 }
             }
-            From::Inside(_) => {}
+            From::Inside(_) | From::Rest => {}
         }
     }
 
-    /// Adds a followed branch, its events, and the starts its end leads to.
+    /// Adds a followed branch (from a start on the orbit from rest, its two halves, `back`
+    /// reversed before `fwd`), its events, and the starts its ends lead to.
     fn add_branch(
         &mut self,
         s: &Start,
         problem: &Problem<'_>,
-        f: super::follow::Followed,
+        back: Option<Followed>,
+        fwd: Followed,
         watch: bool,
     ) {
         let param = self.param();
         let idx = self.branches.len();
-        let first = &f.nodes[0];
-        let last = f.nodes.last().expect("a followed branch has a node");
-        let mut start_end = BranchEnd {
-            kind: s.kind,
-            param: first.forcing.get(param),
-            residual: match s.kind {
-                EndKind::Grazing => super::follow::test_speed(first),
-                EndKind::NewContact => super::follow::test_excursion(first),
-                _ => 0.0,
+        let first = &fwd.nodes[0];
+        let last = fwd.nodes.last().expect("a followed branch has a node");
+        let end_of = |f: &Followed| {
+            let n = f.nodes.last().expect("a followed branch has a node");
+            BranchEnd {
+                kind: f.ending.kind,
+                param: n.forcing.get(param),
+                residual: f.ending.residual,
+                meets: Vec::new(),
+            }
+        };
+        let mut start_end = match &back {
+            Some(b) => end_of(b),
+            None => BranchEnd {
+                kind: s.kind,
+                param: first.forcing.get(param),
+                residual: match s.kind {
+                    EndKind::Grazing => test_speed(first),
+                    EndKind::NewContact => test_excursion(first),
+                    _ => 0.0,
+                },
+                meets: Vec::new(),
             },
-            meets: Vec::new(),
         };
         match s.from {
             From::Grazing(n) => {
@@ -572,13 +546,8 @@ impl Builder<'_> {
                 }
             }
             From::Inside(j) => start_end.meets.push(j),
+            From::Rest => {}
         }
-        let end = BranchEnd {
-            kind: f.ending.kind,
-            param: last.forcing.get(param),
-            residual: f.ending.residual,
-            meets: Vec::new(),
-        };
         let label = {
             let base = s.seq.describe();
             let base = if watch {
@@ -597,208 +566,36 @@ impl Builder<'_> {
                 format!("{base} #{}", same + 1)
             }
         };
+        let mut nodes: Vec<&Node> = Vec::new();
+        if let Some(b) = &back {
+            nodes.extend(b.nodes.iter().skip(1).rev());
+        }
+        nodes.extend(fwd.nodes.iter());
         self.branches.push(DiagramBranch {
             kind: BranchKind::Impacting(s.seq.clone()),
             label,
-            points: f.nodes.iter().map(|n| n.point.clone()).collect(),
+            points: nodes.iter().map(|n| n.point.clone()).collect(),
             start: start_end,
-            end,
+            end: end_of(&fwd),
         });
-        for e in &f.events {
-            self.events.push(DiagramEvent {
-                kind: e.kind,
-                param: e.node.forcing.get(param),
-                point: e.node.point.clone(),
-                branches: vec![idx],
-                stable: vec![e.stable_before, e.stable_after],
-                corner: false,
-            });
-            self.starts_at_event(idx, problem, e);
+        for f in back.iter().chain(std::iter::once(&fwd)) {
+            for e in &f.events {
+                self.events.push(DiagramEvent {
+                    kind: e.kind,
+                    param: e.node.forcing.get(param),
+                    point: e.node.point.clone(),
+                    branches: vec![idx],
+                    stable: vec![e.stable_before, e.stable_after],
+                    corner: false,
+                });
+                self.starts_at_event(idx, problem, e);
+            }
         }
-        self.starts_at_end(idx, problem, last, f.ending.kind);
-    }
-
-    /// The branch a smooth event leads to: the asymmetric pair at a symmetry-breaking
-    /// pitchfork, the period-two branch at a period doubling.
-    fn starts_at_event(&mut self, idx: usize, problem: &Problem<'_>, e: &Found) {
-        let n = &e.node;
-        let seq = &problem.seq;
-        let (new_seq, z, both) = match (e.kind, seq.closure) {
-            (EventKind::SymmetryBreaking, Closure::Mirror) => {
-                let s = self.sym.expect("a symmetric chain has the mirror");
-                let mut sides = seq.sides.clone();
-                sides.extend(seq.sides.iter().map(|x| match x {
-                    Side::Upper => Side::Lower,
-                    Side::Lower => Side::Upper,
-                }));
-                let new_seq = ImpactSequence {
-                    sides,
-                    closure: Closure::Periodic(1),
-                };
-                let k = seq.len();
-                let mut z = DVector::zeros(2 * n.z.len());
-                let Ok(full) = Problem::new(self.h, new_seq.clone(), self.param(), problem.rtol)
-                else {
-                    return;
-                };
-                for i in 0..k {
-                    let y = problem.pre_state(&n.z, i);
-                    let ph = problem.phase(&n.z, i);
-                    full.pack(&mut z, i, ph, &y);
-                    full.pack(&mut z, i + k, ph + std::f64::consts::PI, &(s * y));
-                }
-                (new_seq, z, true)
-            }
-            (EventKind::PeriodDoubling, Closure::Periodic(1)) if self.options.period_two => {
-                let mut sides = seq.sides.clone();
-                sides.extend(seq.sides.iter().copied());
-                let new_seq = ImpactSequence {
-                    sides,
-                    closure: Closure::Periodic(2),
-                };
-                let k = seq.len();
-                let mut z = DVector::zeros(2 * n.z.len());
-                let Ok(full) = Problem::new(self.h, new_seq.clone(), self.param(), problem.rtol)
-                else {
-                    return;
-                };
-                for i in 0..k {
-                    let y = problem.pre_state(&n.z, i);
-                    let ph = problem.phase(&n.z, i);
-                    full.pack(&mut z, i, ph, &y);
-                    full.pack(&mut z, i + k, ph + 2.0 * std::f64::consts::PI, &y);
-                }
-                (new_seq, z, false)
-            }
-            _ => return,
-        };
-        let Ok(full) = Problem::new(self.h, new_seq.clone(), self.param(), problem.rtol) else {
-            return;
-        };
-        let Ok(ev) = full.evaluate(&n.forcing, &z, &mut self.stats) else {
-            return;
-        };
-        let Some(w) = null_vector(&ev.jz) else { return };
-        let mut d = DVector::zeros(z.len() + 1);
-        d.rows_mut(0, z.len()).copy_from(&w);
-        let dirs = if both { vec![d.clone(), -d] } else { vec![d] };
-        self.queue.push_back(Start {
-            seq: new_seq,
-            forcing: n.forcing,
-            z,
-            dirs: Some(dirs),
-            from: From::Inside(idx),
-            kind: EndKind::Bifurcation,
-        });
-    }
-
-    /// The branch the end of branch `idx` leads to.
-    fn starts_at_end(&mut self, idx: usize, problem: &Problem<'_>, last: &Node, kind: EndKind) {
-        let seq = &problem.seq;
-        let param = self.param();
-        let n = seq.len();
-        let d = problem.d;
-        match kind {
-            EndKind::Grazing if n == 1 => {
-                // The orbit loses its only impact: the non-impacting orbit's grazing.
-                let p = last.forcing.get(param);
-                let near = self
-                    .grazings
-                    .iter()
-                    .enumerate()
-                    .min_by(|a, b| (a.1.param - p).abs().total_cmp(&(b.1.param - p).abs()));
-                if let Some((g, node)) = near {
-                    if (node.param - p).abs() <= self.settings.max_param_step {
-                        self.grazings[g].impacting.push(idx);
-                        let ni = self.grazings[g].branch;
-                        self.branches[idx].end.meets.push(ni);
-                    }
-                }
-            }
-            EndKind::Grazing => {
-                let k = (0..n)
-                    .min_by(|a, b| last.info.speeds_m_s[*a].total_cmp(&last.info.speeds_m_s[*b]))
-                    .expect("a chain has an impact");
-                // Without the impact whose speed vanished: its flight now touches the stop
-                // there, so the new branch starts at a new contact.
-                let mut sides = seq.sides.clone();
-                sides.remove(k);
-                let new_seq = ImpactSequence {
-                    sides,
-                    closure: seq.closure,
-                };
-                let mut z = DVector::zeros((n - 1) * d);
-                let mut j = 0;
-                for i in 0..n {
-                    if i == k {
-                        continue;
-                    }
-                    z.rows_mut(j * d, d).copy_from(&last.z.rows(i * d, d));
-                    j += 1;
-                }
-                self.queue.push_back(Start {
-                    seq: new_seq,
-                    forcing: last.forcing,
-                    z,
-                    dirs: None,
-                    from: From::Branch(idx),
-                    kind: EndKind::NewContact,
-                });
-            }
-            EndKind::NewContact => {
-                let Some((k, t, side, y)) = last.info.excursion_at else {
-                    return;
-                };
-                // With an impact where the flight touches the stop, at zero speed: the new
-                // branch starts at a grazing impact.
-                let w = 2.0 * std::f64::consts::PI * last.forcing.freq_hz;
-                let mut sides = seq.sides.clone();
-                sides.insert(k + 1, side);
-                let new_seq = ImpactSequence {
-                    sides,
-                    closure: seq.closure,
-                };
-                let Ok(p2) = Problem::new(self.h, new_seq.clone(), param, problem.rtol) else {
-                    return;
-                };
-                let mut z = DVector::zeros((n + 1) * d);
-                let mut j = 0;
-                for i in 0..n {
-                    z.rows_mut(j * d, d).copy_from(&last.z.rows(i * d, d));
-                    j += 1;
-                    if i == k {
-                        p2.pack(&mut z, j, problem.phase(&last.z, k) + w * t, &y);
-                        j += 1;
-                    }
-                }
-                self.queue.push_back(Start {
-                    seq: new_seq,
-                    forcing: last.forcing,
-                    z,
-                    dirs: None,
-                    from: From::Branch(idx),
-                    kind: EndKind::Grazing,
-                });
-            }
-            EndKind::Symmetric => {
-                // Back on the symmetric orbits: their branch, if not followed yet.
-                let h = n / 2;
-                let new_seq = ImpactSequence {
-                    sides: seq.sides[..h].to_vec(),
-                    closure: Closure::Mirror,
-                };
-                let z = last.z.rows(0, h * d).into_owned();
-                self.queue.push_back(Start {
-                    seq: new_seq,
-                    forcing: last.forcing,
-                    z,
-                    dirs: None,
-                    from: From::Branch(idx),
-                    kind: EndKind::Bifurcation,
-                });
-            }
-            _ => {}
+        if let Some(b) = &back {
+            let n = b.nodes.last().expect("a followed branch has a node");
+            self.starts_at_end(idx, problem, n, b.ending.kind);
         }
+        self.starts_at_end(idx, problem, last, fwd.ending.kind);
     }
 
     /// The grazing events and the meetings of the branches at them; events sorted.
@@ -864,17 +661,4 @@ impl Builder<'_> {
             stats,
         })
     }
-}
-
-/// The unit vector spanning the (numerical) kernel of a square matrix: the right singular
-/// vector of its smallest singular value.
-fn null_vector(j: &DMatrix<f64>) -> Option<DVector<f64>> {
-    let svd = j.clone().svd(false, true);
-    let v_t = svd.v_t?;
-    let (k, _) = svd
-        .singular_values
-        .iter()
-        .enumerate()
-        .min_by(|a, b| a.1.total_cmp(b.1))?;
-    Some(v_t.row(k).transpose().normalize())
 }

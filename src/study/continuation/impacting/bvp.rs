@@ -423,8 +423,8 @@ impl<'a> Problem<'a> {
     /// The whole orbit's measures from its flights (for the half orbit, the mirror half is
     /// flown as well): RMS voltages and power over the orbit, extreme displacements, impacts
     /// and their speeds; the section is the first upward zero crossing of x, returned as
-    /// (drive phase, state) with the measures, and the state at drive phase zero (the
-    /// orbit's fingerprint) last.
+    /// (drive phase, state) with the measures, and the mean of the states at drive phase zero
+    /// (the orbit's fingerprint) last.
     pub(super) fn measures(
         &self,
         forcing: &Forcing,
@@ -440,7 +440,7 @@ impl<'a> Problem<'a> {
         let mut x_lo = f64::INFINITY;
         let mut speed = [0.0f64; 2];
         let mut section = None;
-        let mut fingerprint = None;
+        let mut zeros: Vec<State> = Vec::new();
         let mirror = self.mirror.unwrap_or_else(Matrix4::identity);
         let halves = if self.seq.closure == Closure::Mirror {
             2
@@ -457,28 +457,17 @@ impl<'a> Problem<'a> {
                 } else {
                     (mirror * pre, p0 + std::f64::consts::PI)
                 };
-                // The first multiple of 2 pi at or after the flight's start, if inside it.
-                let next_zero = (phase0 / two_pi).ceil() * two_pi;
-                let mark = (next_zero - phase0) / w;
-                let fl = if half == 0 {
-                    let mut f = ev.flights[k].clone();
-                    if fingerprint.is_none() && mark <= tau {
-                        // Flown again for the state at phase zero (the evaluation kept none).
-                        let model = self.model(forcing, phase0);
-                        let y0 = self.rebound(k, &pre);
-                        f = fly(
-                            &model,
-                            self.param,
-                            y0,
-                            tau,
-                            self.rtol,
-                            &self.scales,
-                            &[mark],
-                            stats,
-                        )?;
-                    }
-                    f
+                // The multiples of 2 pi inside the flight (the drive's phase zero).
+                let marks: Vec<f64> = (0..)
+                    .map(|j| ((phase0 / two_pi).ceil() + f64::from(j)) * two_pi)
+                    .map(|zero| (zero - phase0) / w)
+                    .take_while(|&t| t < tau)
+                    .collect();
+                let fl = if half == 0 && marks.is_empty() {
+                    ev.flights[k].clone()
                 } else {
+                    // Flown again for the states at phase zero (the evaluation kept none), and
+                    // the mirror half for the first time.
                     let model = self.model(forcing, phase0);
                     let y0 = self.rebound(k, &pre);
                     fly(
@@ -488,15 +477,11 @@ impl<'a> Problem<'a> {
                         tau,
                         self.rtol,
                         &self.scales,
-                        &[mark],
+                        &marks,
                         stats,
                     )?
                 };
-                if fingerprint.is_none() {
-                    if let Some(Some(y)) = fl.marked.first() {
-                        fingerprint = Some(*y);
-                    }
-                }
+                zeros.extend(fl.marked.iter().flatten());
                 v_sq[0] += fl.v_sq[0];
                 v_sq[1] += fl.v_sq[1];
                 let side = if pre[0] > 0.0 { 0 } else { 1 };
@@ -527,7 +512,13 @@ impl<'a> Problem<'a> {
             impact_speed_m_s: speed,
             upcrossing_s: section.map(|_| 0.0),
         };
-        let fingerprint = fingerprint.unwrap_or_else(|| self.pre_state(z, 0));
+        // The mean of the states at phase zero of each period: the same for every choice of
+        // the orbit's first period.
+        let fingerprint = if zeros.is_empty() {
+            self.pre_state(z, 0)
+        } else {
+            zeros.iter().sum::<State>() / zeros.len() as f64
+        };
         Ok((summary, section, fingerprint))
     }
 }

@@ -75,6 +75,10 @@ pub(super) struct Follower<'p, 'a> {
 /// Largest distance of a corrected point from its predictor, in arclength steps.
 const MAX_CORRECTION: f64 = 0.5;
 
+/// Most points of one branch of the diagram (a branch whose steps stay tiny, as where two
+/// impacts merge into a chattering sequence, ends at this budget).
+const MAX_BRANCH_POINTS: usize = 2000;
+
 impl Follower<'_, '_> {
     fn q_of(&self, f: &Forcing) -> f64 {
         f.get(self.settings.parameter) / self.settings.param_scale
@@ -138,6 +142,7 @@ impl Follower<'_, '_> {
             summary,
             section,
             impact_speeds_m_s: info.speeds_m_s.clone(),
+            clearance_m: -info.excursion_m,
             symmetric: self.problem.seq.closure == Closure::Mirror,
             residual,
             fingerprint,
@@ -240,7 +245,7 @@ impl Follower<'_, '_> {
                     residual: 0.0,
                 };
             }
-            if nodes.len() >= s.max_points {
+            if nodes.len() >= s.max_points.min(MAX_BRANCH_POINTS) {
                 break Ending {
                     kind: EndKind::Budget,
                     residual: 0.0,

@@ -41,13 +41,14 @@
 //! # Files
 //! `segment.rs` integrates one flight with its variational equations, `bvp.rs` poses the
 //! boundary-value problem of an impact sequence, `follow.rs` continues one branch with its
-//! events, and `build.rs` builds the whole diagram from the non-impacting branch (its types
-//! are those of [`super::diagram`]).
+//! events, `build.rs` builds the whole diagram from the non-impacting branch (its types are
+//! those of the parent's diagram), and `starts.rs` makes the starts of new branches.
 
 mod build;
 mod bvp;
 mod follow;
 mod segment;
+mod starts;
 
 pub use build::{rigid_diagram, DiagramOptions};
 pub use bvp::{Closure, ImpactSequence};
