@@ -223,7 +223,7 @@ impl Continuer<'_, '_> {
         let torus = a.orbit.unstable_count() != b.orbit.unstable_count() && !plus1 && !minus1;
         // At a corner the changes of stability belong to the corner (the fold above); across
         // a rigid stop's grazing they belong to no smooth event.
-        if !corner && !(graze && rigid) {
+        if !(corner || graze && rigid) {
             let b = &*b;
             if turn {
                 let mut e = self.locate(EventKind::Fold, k, a, b, ds, test_fold, gaps)?;

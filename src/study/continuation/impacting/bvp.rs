@@ -43,6 +43,9 @@ use crate::study::orbit::{mirror, multipliers, Forcing, OrbitSummary, Parameter}
 
 use super::segment::{fly, Flight};
 
+/// An orbit's measures, its section (drive phase, state) if it has one, and its fingerprint.
+type Measures = (OrbitSummary, Option<(f64, State)>, State);
+
 /// How the chain of flights closes.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Closure {
@@ -410,7 +413,7 @@ impl<'a> Problem<'a> {
         let h = n / 2;
         let mirrored = self.mirror.is_some()
             && matches!(self.seq.closure, Closure::Periodic(1))
-            && n % 2 == 0
+            && n.is_multiple_of(2)
             && (0..h).all(|k| self.seq.sides[k + h] != self.seq.sides[k]);
         if !mirrored {
             return f64::NAN;
@@ -431,7 +434,7 @@ impl<'a> Problem<'a> {
         z: &DVector<f64>,
         ev: &Evaluated,
         stats: &mut Stats,
-    ) -> Result<(OrbitSummary, Option<(f64, State)>, State), SolverError> {
+    ) -> Result<Measures, SolverError> {
         let n = self.seq.len();
         let w = 2.0 * std::f64::consts::PI * forcing.freq_hz;
         let two_pi = 2.0 * std::f64::consts::PI;

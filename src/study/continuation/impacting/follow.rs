@@ -22,6 +22,9 @@ use crate::study::orbit::Forcing;
 use super::bvp::{Closure, Evaluated, ImpactOrbitInfo, Problem};
 use super::{DiagramPoint, EndKind, EventKind};
 
+/// A test function on a node whose sign change marks an event.
+type NodeTest = fn(&Node) -> f64;
+
 /// A solved point of the branch.
 #[derive(Debug, Clone)]
 pub(super) struct Node {
@@ -298,8 +301,8 @@ impl Follower<'_, '_> {
         ds: f64,
         first: bool,
     ) -> Option<(EndKind, Node, f64, f64)> {
-        let mut tests: Vec<(EndKind, fn(&Node) -> f64)> = vec![
-            (EndKind::Grazing, test_speed as fn(&Node) -> f64),
+        let mut tests: Vec<(EndKind, NodeTest)> = vec![
+            (EndKind::Grazing, test_speed as NodeTest),
             (EndKind::NewContact, |n| -test_excursion(n)),
         ];
         if self.watch_asymmetry {
@@ -334,7 +337,7 @@ impl Follower<'_, '_> {
 
     /// Locates a sign change of `f` between `a` and `b` (at arclength `ds` along `a`'s
     /// tangent): the arclength and the node with the smallest |f|.
-    fn locate(&mut self, a: &Node, b: &Node, ds: f64, f: fn(&Node) -> f64) -> Option<(f64, Node)> {
+    fn locate(&mut self, a: &Node, b: &Node, ds: f64, f: NodeTest) -> Option<(f64, Node)> {
         let tol_s = self.settings.locate_tol / self.settings.param_scale * 1e-3;
         let opts = RootOptions {
             f_tol: None,
@@ -372,13 +375,13 @@ impl Follower<'_, '_> {
         if !finite(a) || !finite(b) {
             return Vec::new();
         }
-        let changes = |f: fn(&Node) -> f64| (f(a) > 0.0) != (f(b) > 0.0);
+        let changes = |f: NodeTest| (f(a) > 0.0) != (f(b) > 0.0);
         let turn = changes(test_fold);
         let plus1 = changes(test_plus_one);
         let minus1 = changes(test_minus_one);
         let half_minus1 = a.info.half_multipliers.is_some() && changes(test_half_minus_one);
         let torus = !plus1 && !minus1 && !half_minus1 && unstable(a) != unstable(b);
-        let mut found: Vec<(EventKind, fn(&Node) -> f64)> = Vec::new();
+        let mut found: Vec<(EventKind, NodeTest)> = Vec::new();
         if turn {
             found.push((EventKind::Fold, test_fold));
         } else if plus1 && !half_minus1 {
