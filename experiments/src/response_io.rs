@@ -309,10 +309,10 @@ pub fn diagram_figure(
     let mut phase = diagram_series(d, lag);
     phase.extend(diagram_event_series(d, lag));
     let (lo, hi) = (x_hz.0.min(x_hz.1), x_hz.0.max(x_hz.1));
-    Panels::new(vec![
+    let mut panels = vec![
         LinePlot::new(title, "frequency [Hz]", "RMS output voltage V1 [V]", rms)
             .x(lo, hi)
-            .legend(LegendPos::UpperLeft),
+            .legend(LegendPos::LowerRight),
         LinePlot::new(
             "Phase of the displacement behind the drive (periodic orbits)",
             "frequency [Hz]",
@@ -320,8 +320,48 @@ pub fn diagram_figure(
             phase,
         )
         .x(lo, hi)
-        .legend(LegendPos::UpperLeft),
-    ])
+        .legend(LegendPos::LowerRight),
+    ];
+    // Where branches of impacting orbits meet at grazings, they crowd a narrow band: the
+    // phase again, zoomed on the grazings.
+    let grazings: Vec<f64> = d
+        .events_of(DiagramEventKind::Grazing)
+        .map(|e| e.param)
+        .collect();
+    let impacting = d
+        .branches
+        .iter()
+        .filter(|b| matches!(b.kind, BranchKind::Impacting(_)))
+        .count();
+    if grazings.len() >= 2 && impacting >= 2 {
+        let a = grazings.iter().copied().fold(f64::INFINITY, f64::min);
+        let b = grazings.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        let m = 0.1 * (b - a);
+        let (za, zb) = (a - m, b + m);
+        let inside = |s: Series| {
+            let pts: Vec<(f64, f64)> = s
+                .points
+                .iter()
+                .copied()
+                .filter(|p| p.0 >= za && p.0 <= zb)
+                .collect();
+            Series { points: pts, ..s }
+        };
+        let mut zoom: Vec<Series> = diagram_series(d, lag).into_iter().map(inside).collect();
+        zoom.extend(diagram_event_series(d, lag).into_iter().map(inside));
+        zoom.retain(|s| !s.points.is_empty());
+        panels.push(
+            LinePlot::new(
+                "The same, between the grazings",
+                "frequency [Hz]",
+                "phase lag [deg]",
+                zoom,
+            )
+            .x(za, zb)
+            .legend(LegendPos::LowerRight),
+        );
+    }
+    Panels::new(panels)
 }
 
 /// The branches and events of a diagram in words and tables (markdown): each branch with its
