@@ -21,6 +21,7 @@ use anyhow::Result;
 use common::{fmt_sig, Experiment};
 use endstop::drive::Sine;
 use endstop::ode::{Dopri5, Stats};
+use endstop::paper::setups::paper_record;
 use endstop::physics::contact::Mode;
 use endstop::physics::harvester::Harvester;
 use endstop::study::record::simulate_record;
@@ -96,7 +97,7 @@ fn run() -> Result<()> {
     let mut ratios = Vec::new();
     for (case, dev, sa) in records.clone() {
         for substeps in picks {
-            let spec = RecordSpec::paper(&dev, sa);
+            let spec = paper_record(&dev, sa);
             let mut ours = Vec::new();
             let mut rk4 = Vec::new();
             // RK4 with too few steps through a stiff contact diverges: the failure is
@@ -125,8 +126,40 @@ fn run() -> Result<()> {
             ratios.push((case, substeps, a, b));
         }
     }
+    // A bistable example against its linear twin of the same well frequency, paired.
+    let bistable = common::load_device("examples/bistable_stops_em")?;
+    exp.uses(&bistable, "hypothetical");
+    let pc = common::springs_io::paired_record_cost(&bistable.device, 3e-4, REPEATS)?;
+    exp.number("bistable_record_cost_ratio_median", pc.ratios[REPEATS / 2]);
+    for (case, t, path) in [
+        (
+            "bistable_stops_em, 10 s record, Sa = 3e-4",
+            &pc.nonlinear_s,
+            &pc.paths.0,
+        ),
+        (
+            "its linear twin (same well frequency), Sa = 3e-4",
+            &pc.linear_s,
+            &pc.paths.1,
+        ),
+    ] {
+        rows.push(Row {
+            case: case.to_string(),
+            median_s: t[REPEATS / 2],
+            min_s: t[0],
+            simulated_s: endstop::paper::setups::paper_record(&bistable.device, 3e-4).transient_s + 10.0,
+            stats: pc.summary.stats,
+            note: format!(
+                "paired runs, median cost ratio bistable/linear {} (range {} to {}); free \
+                 flight: {path}",
+                fmt_sig(pc.ratios[REPEATS / 2], 3),
+                fmt_sig(pc.ratios[0], 3),
+                fmt_sig(pc.ratios[REPEATS - 1], 3)
+            ),
+        });
+    }
     for (case, dev, sa) in records {
-        let spec = RecordSpec::paper(&dev, sa);
+        let spec = paper_record(&dev, sa);
         let (rec, times) = timed(|| Ok(simulate_record(&dev, &spec, SEED, 0)?))?;
         let sim = spec.transient_s + spec.noise.duration_s;
         let s = rec.summary;
@@ -412,7 +445,7 @@ fn rk4_accuracy(p1: &endstop::device::Device, p2: &endstop::device::Device) -> R
     // Run 0 is ours, 1 the reference, then RK4 with each number of substeps.
     let powers = untimed_grid(cases.len(), 2 + SUBSTEPS.len(), |c, r| {
         let (_, _, dev, sa) = &cases[c];
-        let mut spec = RecordSpec::paper(dev, *sa);
+        let mut spec = paper_record(dev, *sa);
         spec.noise.duration_s = 1.0;
         Ok(match r {
             0 => simulate_record(dev, &spec, SEED, 0)?.summary.p_total_w(),
@@ -459,7 +492,7 @@ fn impact_accuracy(
     );
     let summaries = untimed_grid(cases.len(), runs.len(), |c, r| {
         let (_, _, dev, sa) = &cases[c];
-        let base = RecordSpec::paper(dev, *sa);
+        let base = paper_record(dev, *sa);
         let (_, scheme, rtol) = runs[r];
         let spec = RecordSpec {
             scheme,
@@ -516,7 +549,7 @@ fn energy_balance(
         let spec = RecordSpec {
             scheme,
             rtol,
-            ..RecordSpec::paper(dev, *sa)
+            ..paper_record(dev, *sa)
         };
         let (rec, l) = record_ledger(dev, &spec, SEED, 0)?;
         Ok((rec.summary.impacts, l))

@@ -15,8 +15,8 @@ use anyhow::{bail, Context, Result};
 use common::plot::{LegendPos, LinePlot, Series, Style, PALETTE};
 use common::{fmt_sig, write_atomic, Experiment};
 use endstop::paper::crosscheck::{
-    cases, prepare, Case, Difference, Ours, Prepared, Setting, SpiceRun, Verdict, BOOK_CASE,
-    OUTPUT_STEPS_PER_PERIOD, SETTINGS, TOL_FREE, TOL_IMPACTING,
+    acceptance_failures, cases, prepare, Case, Difference, Ours, Prepared, Setting, SpiceRun,
+    Verdict, BOOK_CASE, OUTPUT_STEPS_PER_PERIOD, SETTINGS, TOL_FREE, TOL_IMPACTING,
 };
 use endstop::paper::setups::{comb, endstop, stiffness_model, ParamSet};
 use polars::prelude::*;
@@ -37,6 +37,7 @@ struct Row {
     freq_hz: f64,
     start: String,
     setting: String,
+    setting_kind: Setting,
     setting_label: String,
     documented: bool,
     settings_text: String,
@@ -90,6 +91,7 @@ impl Row {
             freq_hz: case.freq_hz,
             start: o.prepared.start_label.clone(),
             setting: setting.key().to_string(),
+            setting_kind: setting,
             setting_label: setting.label().to_string(),
             documented: setting.documented(),
             settings_text: setting.text(case.period_s()),
@@ -214,20 +216,20 @@ fn run() -> Result<()> {
         rows.extend(case_rows);
         plot_series.extend(series);
     }
-    let failures: Vec<String> = rows
+    let keys: Vec<&str> = cases(&p1.device, &p2.device)
         .iter()
-        .filter(|r| r.documented && r.verdict != Verdict::Within)
-        .map(|r| {
-            format!(
-                "{} [{}]: relative difference {} > tolerance {} ({})",
-                r.case,
-                r.setting,
-                r.rel_diff,
-                r.tolerance,
-                r.verdict.label()
-            )
-        })
+        .map(|c| c.key)
         .collect();
+    let verdicts: Vec<(&str, Setting, &Verdict)> = rows
+        .iter()
+        .map(|r| (r.case.as_str(), r.setting_kind, &r.verdict))
+        .collect();
+    let failures = acceptance_failures(&keys, &verdicts);
+
+    let (bridge_table, bridge_failures) = bridge_cases(&mut exp, &tmp.0)?;
+    write_atomic(&exp.book_dir.join("bridge.md"), bridge_table.as_bytes())?;
+    let mut failures = failures;
+    failures.extend(bridge_failures);
 
     exp.write_numbers_md(&numbers_md(&rows, &version))?;
     let mut df = rows_df(&rows)?;
@@ -538,4 +540,88 @@ fn rows_df(rows: &[Row]) -> Result<DataFrame> {
         "status" => s(|r| r.verdict.label()),
         "params" => s(|_| ParamSet::Published.label().to_string()),
     )?)
+}
+
+/// The diode-bridge cases (`endstop::spice::bridge::BRIDGE_CASES`): ngspice from our steady
+/// state's section for ten periods, the storage's mean voltage and the load's mean power over
+/// the last one against ours. Returns the book's table and the cases outside tolerance.
+fn bridge_cases(exp: &mut Experiment, tmp: &Path) -> Result<(String, Vec<String>)> {
+    use endstop::drive::Sine;
+    use endstop::physics::harvester::State;
+    use endstop::spice::bridge::{
+        bridge_netlist, bridge_solver, dc_means, BRIDGE_CASES, BRIDGE_PERIODS,
+    };
+    use endstop::study::interface::{steady_state, SteadySettings};
+
+    let mut t = common::md::Table::new([
+        "device",
+        "quantity",
+        "ours",
+        "ngspice",
+        "relative difference",
+        "tolerance",
+    ]);
+    let mut failures = Vec::new();
+    for case in BRIDGE_CASES {
+        let name = case
+            .file
+            .trim_start_matches("data/")
+            .trim_end_matches(".toml");
+        let loaded = common::load_device(name)?;
+        let set = loaded.device.params.clone();
+        exp.uses(&loaded, &set);
+        let d = loaded.device;
+        let f = d.suspension_omega_rad_s() / (2.0 * std::f64::consts::PI);
+        let sine = Sine::from_rms_g(case.accel_rms_g, f);
+        let ours = steady_state(&d, sine, &State::zeros(), &SteadySettings::default())?;
+        let (t0, t1) = ((BRIDGE_PERIODS - 1.0) / f, BRIDGE_PERIODS / f);
+        let dat_name = format!("{}.dat", d.name);
+        let net = bridge_netlist(
+            &d,
+            sine.amplitude_m_s2,
+            f,
+            &State::from(ours.state),
+            t1,
+            t0,
+            &bridge_solver(f),
+            &dat_name,
+        )?;
+        let cir = tmp.join(format!("{}.cir", d.name));
+        std::fs::write(&cir, &net)?;
+        let (text, _) = run_ngspice(&cir, &tmp.join(&dat_name))?;
+        let r = match d.interface.load() {
+            Some(endstop::device::DcLoad::Resistor { resistance_ohm }) => *resistance_ohm,
+            _ => bail!("{name}: the bridge cross-check takes a resistor load"),
+        };
+        let (v, p) = dc_means(&endstop::spice::parse_wrdata(&text)?, r, t0, t1)?;
+        for (q, o, s) in [
+            ("mean V_s (V)", ours.vdc_v, v),
+            ("mean DC power (W)", ours.p_dc_w, p),
+        ] {
+            let rel = (o - s).abs() / o.abs();
+            if rel > case.tolerance {
+                failures.push(format!(
+                    "{name} {q}: relative difference {rel:e} > {}",
+                    case.tolerance
+                ));
+            }
+            t.row([
+                format!(
+                    "`{}`{}",
+                    case.file,
+                    if ours.contact {
+                        " (strikes its stop)"
+                    } else {
+                        ""
+                    }
+                ),
+                q.to_string(),
+                fmt_sig(o, 6),
+                fmt_sig(s, 6),
+                format!("{rel:.1e}"),
+                format!("{:.0e}: {}", case.tolerance, case.reason),
+            ]);
+        }
+    }
+    Ok((t.render(), failures))
 }

@@ -1,44 +1,48 @@
-//! Why the paper deviates (the edge; the study itself is `endstop::paper::deviations`): Sobol
-//! first-order and total indices of every claim quantity the fast paths evaluate, per
-//! prototype, over the ranges of `data/sensitivity.toml`, and the multi-claim calibration of
-//! each prototype (the set inside the ranges that minimises the worst normalised deviation).
-//! Writes `sobol.parquet`, `calibration.parquet`, the heat map and `summary.json` under
-//! `data/results/deviations/`, and the book's numbers. Not part of `reproduce` (run `just deviations`);
-//! skipped when its inputs are unchanged since its last run, unless `--force`.
+//! Why the paper deviates (the edge; the study itself is `endstop::paper::deviations`): the
+//! history match of each prototype's claims over the ranges of `data/sensitivity.toml`, in
+//! waves of runs with Gaussian-process emulators of every quantitative claim, and the Sobol
+//! indices of every claim from the first wave's emulators with their uncertainty. Writes the
+//! runs, waves, claims' diagnostics, projections and indices (Parquet), the projection plots,
+//! the heat map of the indices, `summary.json`, and the book's numbers under
+//! `data/results/deviations/`. Not part of `reproduce` (run `just deviations`); skipped when its
+//! inputs are unchanged since its last run, unless `--force`.
 
 use endstop_experiments as common;
 
 use anyhow::Result;
 use clap::Parser;
+use common::history_io::{answer_md, observation_md, tables_md, write_history, write_sobol};
 use common::md::Table;
-use common::plot::{Figure, LinePlot, Series, Style, PALETTE};
-use common::{fmt_sig, frame::frame, row, Experiment};
-use endstop::num::minimax::MinimaxSettings;
+use common::plot::Figure;
+use common::{fmt_sig, Experiment};
+use endstop::num::gp_sensitivity::EmulatedSobol;
+use endstop::num::history::HistorySettings;
 use endstop::paper::claims::{Claims, Kind};
 use endstop::paper::deviations::{
-    self, MultiClaimCalibration, Pareto, Prototype, Scope, SobolDesign, SobolRun,
+    self, ClaimIndices, Factor, HistoryRun, Prototype, RangesFile, Scope,
 };
-use endstop::paper::deviations::{Factor, RangesFile};
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
-/// Sobol indices and the multi-claim calibration of both prototypes.
+/// The history match of both prototypes and the emulators' Sobol indices.
 #[derive(Parser, Debug)]
 struct Args {
-    /// Base rows of the Saltelli design (a power of two): N (d + 2) = 10 N evaluations each.
-    #[arg(long, default_value_t = 8)]
-    base: usize,
-    /// Starts of the minimax calibration.
-    #[arg(long, default_value_t = 2)]
-    starts: usize,
-    /// Nelder-Mead iterations per start.
-    #[arg(long, default_value_t = 40)]
-    iters: u64,
-    /// Also evaluate the ensemble claims (Figures 12, 14 and 15) with this many records per
-    /// level (the figures use 32); each point then costs tens of 10 s records, beyond the
-    /// default's ten minutes on 2 cores.
+    /// Runs per input in each wave's design (8 inputs; the definitive match uses 10).
+    #[arg(long, default_value_t = 3)]
+    per_input: usize,
+    /// Most waves (the match also ends when the space empties or stops shrinking).
+    #[arg(long, default_value_t = 1)]
+    waves: usize,
+    /// Points of the uniform pool that measures the space (a power of two).
+    #[arg(long, default_value_t = 1 << 13)]
+    pool: usize,
+    /// Also the ensemble claims (Figures 12, 14 and 15) with this many records per level (the
+    /// figures use 32); each run then costs tens of 10 s records.
     #[arg(long)]
     ensemble_records: Option<usize>,
+    /// `p1`, `p2` or `both`.
+    #[arg(long, default_value = "both")]
+    prototype: String,
     /// Rerun even when the inputs are unchanged.
     #[arg(long)]
     force: bool,
@@ -58,367 +62,246 @@ fn run() -> Result<()> {
         );
         return Ok(());
     }
+    let protos: Vec<Prototype> = match args.prototype.as_str() {
+        "p1" => vec![Prototype::P1],
+        "p2" => vec![Prototype::P2],
+        "both" => Prototype::BOTH.to_vec(),
+        other => anyhow::bail!("--prototype {other}: must be p1, p2 or both"),
+    };
     let mut exp = Experiment::start("deviations");
     let p1 = exp.load_published("prototype1")?;
     let p2 = exp.load_published("prototype2")?;
     let claims = Claims::bundled()?;
     let ranges = RangesFile::bundled()?;
-    let boot = deviations::STUDY_BOOTSTRAP;
-    let minimax = MinimaxSettings {
-        starts: args.starts,
-        max_iters: args.iters,
-        seed: deviations::STUDY_SEED,
-        ..MinimaxSettings::default()
-    };
-    let cases = [
-        (Prototype::P1, &ranges.prototype1, &p1.device),
-        (Prototype::P2, &ranges.prototype2, &p2.device),
-    ];
     let scope = Scope {
         ensemble_records: args.ensemble_records,
     };
-    let mut sobols = Vec::new();
-    let mut cals = Vec::new();
-    for (proto, r, dev) in cases {
-        let t0 = std::time::Instant::now();
-        let points = args.base * (Factor::ALL.len() + 2);
-        let s = common::with_progress(points, &format!("sobol {}", proto.key()), |tick| {
-            let design = SobolDesign {
-                base_rows: args.base,
-                seed: deviations::STUDY_SEED,
-                bootstrap: boot,
-                scope,
-            };
-            deviations::sobol(proto, r, dev, design, &claims, tick)
+    let settings = HistorySettings {
+        per_input: args.per_input,
+        max_waves: args.waves,
+        pool: args.pool,
+        seed: deviations::STUDY_SEED,
+        ..HistorySettings::default()
+    };
+    let sobol = EmulatedSobol {
+        seed: deviations::STUDY_SEED,
+        ..EmulatedSobol::default()
+    };
+    let mut runs = Vec::new();
+    for proto in protos {
+        let (r, dev) = match proto {
+            Prototype::P1 => (&ranges.prototype1, &p1.device),
+            Prototype::P2 => (&ranges.prototype2, &p2.device),
+        };
+        let (t0, cpu0) = (std::time::Instant::now(), common::cpu_time_s());
+        let most = settings.per_input * Factor::ALL.len() * settings.max_waves;
+        let h = common::with_progress(most, &format!("history match {}", proto.key()), |tick| {
+            deviations::history_match(proto, r, dev, &claims, scope, settings, tick)
         })?;
-        let sobol_s = t0.elapsed().as_secs_f64();
-        let t0 = std::time::Instant::now();
-        let evals = ((args.starts as u64 + 1) * (args.iters + 10)) as usize;
-        let c = common::with_progress(evals, &format!("calibrate {}", proto.key()), |tick| {
-            deviations::calibrate(proto, r, dev, minimax, &claims, scope, tick)
-        })?;
-        let cal_s = t0.elapsed().as_secs_f64();
         let k = proto.key();
-        exp.number(&format!("sobol_{k}_points"), points as f64);
-        exp.number(&format!("sobol_{k}_seconds"), sobol_s);
-        exp.number(&format!("calibration_{k}_seconds"), cal_s);
-        exp.number(&format!("calibration_{k}_worst"), c.worst());
-        exp.number(
-            &format!("calibration_{k}_meets_all"),
-            f64::from(u8::from(c.meets_all())),
-        );
-        exp.number(
-            &format!("calibration_{k}_met"),
-            c.best.iter().filter(|e| e.meets).count() as f64,
-        );
-        exp.number(&format!("calibration_{k}_claims"), c.best.len() as f64);
-        exp.number(
-            &format!("calibration_{k}_failures"),
-            c.fits.iter().map(|f| f.failures).sum::<usize>() as f64,
-        );
-        for (f, u) in Factor::ALL.iter().zip(&c.fits[0].point) {
-            exp.number(&format!("calibration_{k}_{}_unit", f.key()), *u);
-        }
-        for e in &c.best {
+        let a = h.answer().expect("at least one wave");
+        exp.number(&format!("history_{k}_seconds"), t0.elapsed().as_secs_f64());
+        if let (Some(c0), Some(c1)) = (cpu0, common::cpu_time_s()) {
             exp.number(
-                &format!(
-                    "calibration_{k}_{}_{}_deviation",
-                    e.quantity.claim, e.quantity.quantity
-                ),
-                e.deviation,
+                &format!("history_{k}_cpu_s_per_run"),
+                (c1 - c0) / a.runs as f64,
             );
-            if let (Some(key), Some(v)) = (
-                deviations::best_value_key(e.quantity.claim, e.quantity.quantity),
-                e.outcome.value(),
-            ) {
-                exp.number(&key, v);
-            }
         }
-        sobols.push(s);
-        cals.push(c);
+        exp.number(&format!("history_{k}_waves"), a.waves as f64);
+        exp.number(&format!("history_{k}_runs"), a.runs as f64);
+        exp.number(&format!("history_{k}_fraction"), a.fraction);
+        exp.number(&format!("history_{k}_fraction_all"), a.fraction_all);
+        exp.number(
+            &format!("history_{k}_empty"),
+            f64::from(u8::from(a.stop == Some(endstop::num::history::Stop::Empty))),
+        );
+        exp.number(
+            &format!("history_{k}_runs_meeting_all"),
+            a.runs_meeting_all as f64,
+        );
+        best_run_numbers(&mut exp, &h);
+        runs.push(h);
     }
-    let paretos: Vec<Pareto> = sobols
+    let sobols = runs
         .iter()
-        .filter_map(deviations::most_conflicting)
-        .collect();
-    for p in &paretos {
-        let k = p.prototype.key();
-        exp.number(&format!("pareto_{k}_conflict"), p.conflict);
-        exp.number(&format!("pareto_{k}_front_points"), p.front.len() as f64);
-    }
+        .map(|h| Ok((h, h.sobol(sobol)?)))
+        .collect::<Result<Vec<_>>>()?;
     exp.number(
         "ensemble_records",
         args.ensemble_records.map_or(0.0, |r| r as f64),
     );
-    exp.number("sobol_base_rows", args.base as f64);
-    exp.number("calibration_starts", args.starts as f64);
-    exp.number("calibration_max_iters", args.iters as f64);
+    exp.number("history_per_input", args.per_input as f64);
+    exp.number("history_max_waves", args.waves as f64);
+    write_history(&exp, &runs)?;
     write_sobol(&exp, &sobols)?;
-    write_calibration(&exp, &cals)?;
-    write_pareto(&exp, &sobols, &paretos)?;
     exp.write_plot(&HeatMap::of(&sobols))?;
-    exp.write_numbers_md(&numbers_md(&args, &sobols, &cals, &paretos, &claims))?;
+    exp.write_numbers_md(&numbers_md(&args, &runs, &sobols))?;
+    write_answer(&runs)?;
     exp.finish()?;
     common::freshness::mark_done(job, &key)?;
     Ok(())
 }
 
-fn write_sobol(exp: &Experiment, runs: &[SobolRun]) -> Result<()> {
-    let mut rows = Vec::new();
-    for r in runs {
-        for q in &r.quantities {
-            for (i, f) in Factor::ALL.iter().enumerate() {
-                let (fi, ti) = match &q.indices {
-                    Some(ix) => (ix.first[i], ix.total[i]),
-                    None => continue,
-                };
-                rows.push(row![
-                    "prototype" => r.prototype.key(),
-                    "claim" => q.quantity.claim,
-                    "quantity" => q.quantity.quantity,
-                    "factor" => f.key(),
-                    "first" => fi.value,
-                    "first_lo" => fi.lo,
-                    "first_hi" => fi.hi,
-                    "total" => ti.value,
-                    "total_lo" => ti.lo,
-                    "total_hi" => ti.hi,
-                    "absent_share" => q.absent_share,
-                    "no_fold_share" => q.no_fold_share,
-                    "no_grazing_share" => q.no_grazing_share,
-                    "failed_share" => q.failed_share,
-                ]);
-            }
-        }
-    }
-    exp.write_parquet("sobol", &mut frame(rows)?, "published ranges")?;
-    Ok(())
-}
+/// The recorded definitive match (`data/recorded/history/report.md`, written by
+/// `python/examples/study_dask.py --history`).
+const RECORDED_REPORT: &str = "data/recorded/history/report.md";
 
-/// The Pareto front of each prototype's most conflicting pair: every design point with its
-/// two |deviations| and whether it is on the front (`pareto.parquet`), and a plot of both.
-fn write_pareto(exp: &Experiment, runs: &[SobolRun], paretos: &[Pareto]) -> Result<()> {
-    let mut rows = Vec::new();
-    for p in paretos {
-        let run = runs
-            .iter()
-            .find(|r| r.prototype == p.prototype)
-            .expect("a Pareto front comes from a run");
-        for (i, &(a, b)) in p.points.iter().enumerate() {
-            let mut r = row![
-                "prototype" => p.prototype.key(),
-                "claim_a" => p.pair.0.claim,
-                "quantity_a" => p.pair.0.quantity,
-                "claim_b" => p.pair.1.claim,
-                "quantity_b" => p.pair.1.quantity,
-                "abs_deviation_a" => a,
-                "abs_deviation_b" => b,
-                "on_front" => p.front.contains(&i),
-            ];
-            // One column per factor, named by its key: the point's unit-cube coordinate.
-            for (f, u) in Factor::ALL.iter().zip(&run.design.points()[i]) {
-                r.push((f.key(), (*u).into()));
-            }
-            rows.push(r);
-        }
-    }
-    exp.write_parquet("pareto", &mut frame(rows)?, "published ranges")?;
-    for p in paretos {
-        let front: Vec<(f64, f64)> = p.front.iter().map(|&i| p.points[i]).collect();
-        let label = |q: &deviations::Quantity| format!("{} {}", q.claim, q.quantity);
-        let plot = LinePlot::new(
-            &format!(
-                "Prototype {}: the most conflicting pair of claims over the design \
-                 (deviations above 10 on the edge)",
-                &p.prototype.key()[1..]
-            ),
-            &format!("|deviation| / tolerance, {}", label(&p.pair.0)),
-            &format!("|deviation| / tolerance, {}", label(&p.pair.1)),
-            vec![
-                Series::new("design points", p.points.clone(), PALETTE[0], Style::Points),
-                Series::new("Pareto front", front, PALETTE[3], Style::LinePoints),
-                Series::new(
-                    "tolerance (|deviation| = 1)",
-                    vec![(1.0, 0.0), (1.0, 1.0), (0.0, 1.0)],
-                    PALETTE[2],
-                    Style::Line,
+/// `answer.md` (the chapter's first paragraphs) and `recorded.md`: the recorded definitive
+/// match's answer and report where it exists, else this build's answer, labelled as reduced.
+fn write_answer(runs: &[HistoryRun]) -> Result<()> {
+    let dir = common::book_generated_root().join("deviations");
+    let recorded = std::fs::read_to_string(common::root().join(RECORDED_REPORT)).ok();
+    let (answer, report) = match &recorded {
+        Some(r) => {
+            // The report opens with one answer paragraph per prototype, then the record's
+            // provenance ("Recorded run: ...").
+            let answer: String = r
+                .split("\n\n")
+                .take_while(|p| !p.starts_with("Recorded run:"))
+                .map(|p| format!("{p}\n\n"))
+                .collect();
+            (
+                format!(
+                    "{answer}*The recorded definitive history match ([below](#the-recorded-definitive-match)).*\n"
                 ),
-            ],
-        )
-        .x(0.0, 10.0)
-        .y(0.0, 10.0);
-        exp.write_extra_plot(&format!("deviations_pareto_{}", p.prototype.key()), &plot)?;
-    }
+                r.clone(),
+            )
+        }
+        None => {
+            let mut a = String::from(
+                "*No definitive history match is recorded yet; this build's reduced match (its \
+                 settings in the first line of [its section](#this-builds-history-match)) \
+                 answers provisionally:*\n\n",
+            );
+            for h in runs {
+                a.push_str(&answer_md(h));
+                a.push('\n');
+            }
+            (
+                a,
+                format!("*No definitive match is recorded yet (`{RECORDED_REPORT}`).*\n"),
+            )
+        }
+    };
+    common::write_atomic(&dir.join("answer.md"), answer.as_bytes())?;
+    common::write_atomic(&dir.join("recorded.md"), report.as_bytes())?;
     Ok(())
 }
 
-fn write_calibration(exp: &Experiment, cals: &[MultiClaimCalibration]) -> Result<()> {
-    let mut rows = Vec::new();
-    for c in cals {
-        for e in &c.best {
-            rows.push(row![
-                "prototype" => c.prototype.key(),
-                "claim" => e.quantity.claim,
-                "quantity" => e.quantity.quantity,
-                "outcome" => e.outcome.label(),
-                "ours" => e.value,
-                "deviation" => e.deviation,
-                "meets" => e.meets,
-                "fitted" => e.kind == Kind::Quantitative,
-            ]);
+/// The run of the match with the smallest worst |normalised deviation| over its quantitative
+/// claims: its values under the keys the scorecard reads for "best under calibration"
+/// ([`deviations::best_value_key`]).
+fn best_run_numbers(exp: &mut Experiment, h: &HistoryRun) {
+    let worst = |e: &[deviations::Evaluation]| {
+        e.iter()
+            .filter(|e| e.kind == Kind::Quantitative)
+            .fold(0.0f64, |m, e| m.max(e.deviation.abs()))
+    };
+    let Some(best) = h
+        .evaluations
+        .iter()
+        .min_by(|a, b| worst(a).total_cmp(&worst(b)))
+    else {
+        return;
+    };
+    exp.number(
+        &format!("history_{}_best_run_worst", h.prototype.key()),
+        worst(best),
+    );
+    for e in best {
+        if let (Some(key), Some(v)) = (
+            deviations::best_value_key(e.quantity.claim, e.quantity.quantity),
+            e.outcome.value(),
+        ) {
+            exp.number(&key, v);
         }
     }
-    exp.write_parquet(
-        "calibration",
-        &mut frame(rows)?,
-        "calibrated within the ranges",
-    )?;
-    Ok(())
 }
 
-fn numbers_md(
-    args: &Args,
-    sobols: &[SobolRun],
-    cals: &[MultiClaimCalibration],
-    paretos: &[Pareto],
-    claims: &Claims,
-) -> String {
+fn numbers_md(args: &Args, runs: &[HistoryRun], sobols: &[(&HistoryRun, ClaimIndices)]) -> String {
+    let s = runs.first().map(|h| h.matcher.settings).unwrap_or_default();
     let mut md = format!(
-        "Saltelli design of N = {} base rows ({} evaluations per prototype), seed {}, \
-         {} bootstrap resamples (95 % intervals); calibration: the published set and \
-         {} more starts, at most {} Nelder-Mead iterations each. Ensemble claims (Figures 12, \
-         14, 15): {}.\n\n",
-        args.base,
-        args.base * (Factor::ALL.len() + 2),
-        deviations::STUDY_SEED,
-        deviations::STUDY_RESAMPLES,
-        args.starts,
-        args.iters,
+        "History match of this build: {} runs per input per wave ({} per wave), at most {} \
+         wave{}, cut {} on the {} implausibility, a pool of {} points; {}; ensemble claims \
+         (Figures 12, 14, 15): {}.\n\n",
+        s.per_input,
+        s.per_input * Factor::ALL.len(),
+        s.max_waves,
+        if s.max_waves == 1 { "" } else { "s" },
+        fmt_sig(s.cut, 1),
+        if s.rank == 2 {
+            "second-largest".to_string()
+        } else {
+            format!("{}-th largest", s.rank)
+        },
+        s.pool,
+        observation_md(),
         match args.ensemble_records {
             Some(r) => format!("{r} records per level"),
             None => "not evaluated in this run (`--ensemble-records`)".into(),
         }
     );
-    md.push_str("### In short\n\n");
-    for c in cals {
-        let k = &c.prototype.key()[1..];
-        md.push_str(&format!(
-            "- Prototype {k}: the best set found has a worst normalised deviation of {} over \
-             its quantitative claims ({} at the published set); it meets {} of the {} claims \
-             evaluated here, so within the ranges {} every one of them.\n",
-            fmt_sig(c.worst(), 3),
-            fmt_sig(c.published_worst(), 3),
-            c.best.iter().filter(|e| e.meets).count(),
-            c.best.len(),
-            if c.meets_all() {
-                "this search found a set that meets"
-            } else {
-                "this search found no set that meets"
-            }
-        ));
+    for h in runs {
+        md.push_str(&answer_md(h));
+        md.push('\n');
     }
-    for p in paretos {
-        md.push_str(&format!(
-            "- Prototype {}: the most conflicting pair is {} `{}` against {} `{}`: the best \
-             design point for both has a worst |deviation| {} above the larger of the two best \
-             single ones ({} points on the front).\n",
-            &p.prototype.key()[1..],
-            p.pair.0.claim,
-            p.pair.0.quantity,
-            p.pair.1.claim,
-            p.pair.1.quantity,
-            fmt_sig(p.conflict, 3),
-            p.front.len()
-        ));
+    for h in runs {
+        md.push_str(&tables_md(h));
+        for w in &h.matcher.summaries {
+            md.push_str(&format!(
+                "{{{{#include deviations_history_{}_wave{}.figure.md}}}}\n\n",
+                h.prototype.key(),
+                w.wave
+            ));
+        }
     }
-    md.push('\n');
-    for s in sobols {
+    for (h, qs) in sobols {
         md.push_str(&format!(
-            "### Total Sobol indices, prototype {}\n\n",
-            &s.prototype.key()[1..]
+            "### Total Sobol indices from the emulators, prototype {}\n\nThe indices of the \
+             first wave's emulator mean (a Saltelli design of 4096 base rows), and the 95 % \
+             interval of the indices of its posterior draws: what the runs leave unknown.\n\n",
+            &h.prototype.key()[1..]
         ));
         let mut t = Table::new([
             "claim",
             "quantity",
-            "absent share (no fold / no grazing / failed)",
             "largest total index (factor)",
             "its 95 % interval",
+            "second largest (factor)",
         ]);
-        for q in &s.quantities {
-            let (big, ci) = match &q.indices {
+        for (q, ix) in qs {
+            let (big, ci, second) = match ix {
                 Some(ix) => {
-                    let (i, ti) = ix
-                        .total
-                        .iter()
-                        .enumerate()
-                        .max_by(|a, b| a.1.value.total_cmp(&b.1.value))
-                        .expect("factors");
+                    let mut order: Vec<usize> = (0..Factor::ALL.len()).collect();
+                    order.sort_by(|&a, &b| ix.total[b].value.total_cmp(&ix.total[a].value));
+                    let (i, j) = (order[0], order[1]);
                     (
-                        format!("{} ({})", fmt_sig(ti.value, 2), Factor::ALL[i].key()),
-                        format!("{} to {}", fmt_sig(ti.lo, 2), fmt_sig(ti.hi, 2)),
+                        format!(
+                            "{} ({})",
+                            fmt_sig(ix.total[i].value, 2),
+                            Factor::ALL[i].key()
+                        ),
+                        format!(
+                            "{} to {}",
+                            fmt_sig(ix.total[i].lo, 2),
+                            fmt_sig(ix.total[i].hi, 2)
+                        ),
+                        format!(
+                            "{} ({})",
+                            fmt_sig(ix.total[j].value, 2),
+                            Factor::ALL[j].key()
+                        ),
                     )
                 }
-                None => ("constant over the design".into(), "-".into()),
+                None => ("constant over the runs".into(), "-".into(), "-".into()),
             };
             t.row([
-                q.quantity.claim.to_string(),
-                format!("`{}`", q.quantity.quantity),
-                format!(
-                    "{} ({} / {} / {})",
-                    fmt_sig(q.absent_share, 2),
-                    fmt_sig(q.no_fold_share, 2),
-                    fmt_sig(q.no_grazing_share, 2),
-                    fmt_sig(q.failed_share, 2)
-                ),
+                q.claim.to_string(),
+                format!("`{}`", q.quantity),
                 big,
                 ci,
+                second,
             ]);
-        }
-        md.push_str(&t.render());
-        md.push('\n');
-    }
-    for c in cals {
-        md.push_str(&format!(
-            "### Best set of prototype {} within the ranges\n\nWorst normalised deviation over \
-             its quantitative claims: {}; it meets {} of the {} claims evaluated here \
-             (every one: {}).\n\n",
-            &c.prototype.key()[1..],
-            fmt_sig(c.worst(), 3),
-            c.best.iter().filter(|e| e.meets).count(),
-            c.best.len(),
-            if c.meets_all() { "yes" } else { "no" }
-        ));
-        let mut t = Table::new([
-            "claim",
-            "quantity",
-            "paper",
-            "published set (deviation)",
-            "best set",
-            "deviation",
-            "meets",
-        ]);
-        for (e, p) in c.best.iter().zip(&c.published) {
-            let paper = claims
-                .get(e.quantity.claim, e.quantity.quantity)
-                .map_or(f64::NAN, |c| c.paper);
-            t.row([
-                e.quantity.claim.to_string(),
-                format!("`{}`", e.quantity.quantity),
-                fmt_sig(paper, 4),
-                format!("{} ({})", fmt_sig(p.value, 4), fmt_sig(p.deviation, 3)),
-                match e.outcome.value() {
-                    Some(v) => fmt_sig(v, 4),
-                    None => format!("{} ({})", e.outcome.label(), fmt_sig(e.value, 4)),
-                },
-                fmt_sig(e.deviation, 3),
-                if e.meets { "yes" } else { "no" }.to_string(),
-            ]);
-        }
-        md.push_str(&t.render());
-        md.push('\n');
-        let mut t = Table::new(["factor", "unit-cube coordinate"]);
-        for (f, u) in Factor::ALL.iter().zip(&c.fits[0].point) {
-            t.row([format!("`{}`", f.key()), fmt_sig(*u, 3)]);
         }
         md.push_str(&t.render());
         md.push('\n');
@@ -433,18 +316,13 @@ struct HeatMap {
 }
 
 impl HeatMap {
-    fn of(runs: &[SobolRun]) -> Self {
+    fn of(runs: &[(&HistoryRun, ClaimIndices)]) -> Self {
         let mut rows = Vec::new();
         let mut cells = Vec::new();
-        for r in runs {
-            for q in &r.quantities {
-                rows.push(format!(
-                    "{} {} {}",
-                    r.prototype.key(),
-                    q.quantity.claim,
-                    q.quantity.quantity
-                ));
-                cells.push(match &q.indices {
+        for (h, qs) in runs {
+            for (q, ix) in qs {
+                rows.push(format!("{} {} {}", h.prototype.key(), q.claim, q.quantity));
+                cells.push(match ix {
                     Some(ix) => ix.total.iter().map(|t| Some(t.value)).collect(),
                     None => vec![None; Factor::ALL.len()],
                 });
@@ -460,7 +338,7 @@ impl Figure for HeatMap {
     }
 
     fn title(&self) -> String {
-        "Total Sobol index of each claim quantity (rows) for each factor (columns)".into()
+        "Total Sobol index of each claim quantity (rows) for each factor (columns), from the emulators".into()
     }
 
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<()>

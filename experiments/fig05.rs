@@ -90,7 +90,7 @@ fn run() -> Result<()> {
 
     let printed = claims
         .claim(keys::F5B_EQ19_COEFFICIENT)
-        .map_or(f64::NAN, |c| c.paper);
+        .map_or(f64::NAN, |c| c.paper.to_f64());
     let mut text = md.render();
     text.push_str(&format!(
         "\n**Eq 19 coefficient c** in k_im = c pi E t/(1 - nu^2), from four readings of \

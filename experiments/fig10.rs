@@ -148,7 +148,9 @@ fn run() -> Result<()> {
         }
         out
     };
-    let paper = claims.claim(keys::F10_LEVEL).map_or(f64::NAN, |c| c.paper);
+    let paper = claims
+        .claim(keys::F10_LEVEL)
+        .map_or(f64::NAN, |c| c.paper.to_f64());
     let plot = LinePlot::new(
         &format!(
             "Figure 10: generated acceleration, Sa = {} g²/Hz, 10 s at 100 kHz, band 10 kHz",

@@ -265,8 +265,8 @@ fn write_efficiency_plot(
     if let Some(c) = claims.claim(keys::F14B_EFF) {
         let sa = FIG14_LEVELS[F14B_LEVEL];
         series.push(Series::new(
-            &format!("paper: {} % at {} g²/Hz", c.paper, sa_label(sa)),
-            vec![(sa, c.paper)],
+            &format!("paper: {} % at {} g²/Hz", c.paper.to_f64(), sa_label(sa)),
+            vec![(sa, c.paper.to_f64())],
             PALETTE[3],
             Style::Points,
         ));

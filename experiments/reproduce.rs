@@ -373,7 +373,7 @@ fn write_scorecard() -> Result<Vec<Row>> {
     for r in &rows {
         let ours = r
             .ours
-            .map(|v| common::fmt_sig(v, 4))
+            .map(|v| common::fmt_sig(v.to_f64(), 4))
             .unwrap_or_else(|| "-".into());
         let unc = r
             .uncertainty
@@ -394,7 +394,7 @@ fn write_scorecard() -> Result<Vec<Row>> {
             r.claim,
             r.quantity,
             r.set,
-            r.paper,
+            r.paper.to_f64(),
             ours,
             unc,
             r.unit,
@@ -503,7 +503,7 @@ fn write_provenance() -> Result<()> {
 }
 
 /// The study is not one of `reproduce`'s jobs: until `just deviations` has run, its chapter
-/// includes a note in place of its numbers, heat map and Pareto plots.
+/// includes a note in place of its answer, numbers, recorded match and heat map.
 fn deviations_placeholder() -> Result<()> {
     let dir = common::book_generated_root().join(common::jobs::DEVIATIONS.name);
     if !dir.join("numbers.md").exists() {
@@ -511,11 +511,17 @@ fn deviations_placeholder() -> Result<()> {
                     `just deviations` (or `cargo run --release --bin deviations`) and rebuild the book.*\n";
         common::write_atomic(&dir.join("numbers.md"), note.as_bytes())?;
     }
-    for stem in ["deviations", "deviations_pareto_p1", "deviations_pareto_p2"] {
-        let path = dir.join(format!("{stem}.figure.md"));
-        if !path.exists() {
-            common::write_atomic(&path, b"*(no plot: the study has not run)*\n")?;
+    for (file, note) in [
+        ("answer.md", "*The study of why the paper deviates has not run in this build (`just deviations`).*\n"),
+        ("recorded.md", "*(the study has not run in this build)*\n"),
+    ] {
+        if !dir.join(file).exists() {
+            common::write_atomic(&dir.join(file), note.as_bytes())?;
         }
+    }
+    let path = dir.join("deviations.figure.md");
+    if !path.exists() {
+        common::write_atomic(&path, b"*(no plot: the study has not run)*\n")?;
     }
     Ok(())
 }

@@ -13,9 +13,9 @@ use common::plot::{LinePlot, Series, Style, PALETTE};
 use common::{fmt_sig, row, Experiment};
 use endstop::paper::claims::Claims;
 use endstop::paper::figures::table3::{Table3, ABSTRACT_K2_P1};
+use endstop::paper::qm::{QmReading, TABLE3_QM};
 use endstop::paper::setups::{ParamSet, Prototypes};
 use endstop::paper::Figure;
-use endstop::physics::two_port::{QmReading, TABLE3_QM};
 
 fn main() {
     common::run_main(Table3::NAME, run);

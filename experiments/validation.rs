@@ -3,6 +3,8 @@
 //! and their data as Parquet, two plots, and the book chapter's generated tables
 //! (`book/src/generated/validation/`). A check outside its tolerance is reported as such in the
 //! tables (the tests fail on it); the run itself fails only when a check cannot be computed.
+//! It reads the recorded band-limit study; `--band-study` runs that study instead and records it
+//! (`common::band_limit_io`).
 
 use endstop_experiments as common;
 
@@ -12,15 +14,20 @@ use anyhow::{Context, Result};
 use common::frame::frame;
 use common::md::Table;
 use common::plot::{LegendPos, LinePlot, Series, Style, PALETTE};
-use common::{row, write_atomic, Experiment};
+use common::{band_limit_io, row, write_atomic, Experiment};
 use endstop::device::Device;
+use endstop::validation::band_limit;
 use endstop::validation::linear_harvesters::{response_curve, ClosedForm};
 use endstop::validation::nlvib::{self, Reference};
 use endstop::validation::random_law::{self, LawEnsemble};
 use endstop::validation::{cases, Check, Measure, ValidationError};
 
 fn main() {
-    common::run_main("validation", run);
+    if std::env::args().skip(1).any(|a| a == "--band-study") {
+        common::run_main("validation --band-study", band_limit_io::record_study);
+    } else {
+        common::run_main("validation", run);
+    }
 }
 
 /// The wall time of one case, for the chapter's cost table.
@@ -70,7 +77,9 @@ fn value(x: f64) -> String {
 }
 
 fn verdict(c: &Check) -> &'static str {
-    if c.passes() {
+    if c.is_open() {
+        "*open question*"
+    } else if c.passes() {
         "within"
     } else {
         "**not met**"
@@ -103,7 +112,10 @@ fn checks_table<'a>(checks: impl IntoIterator<Item = &'a Check>) -> String {
             value(c.theirs),
             value(c.ours),
             format!("{} ({})", e(c.difference()), measure_label(c.measure)),
-            format!("{}: {}", e(c.tolerance), c.reason),
+            match &c.open {
+                Some(why) => format!("{} (not applied: {why})", e(c.tolerance)),
+                None => format!("{}: {}", e(c.tolerance), c.reason),
+            },
             verdict(c).to_string(),
         ]);
     }
@@ -144,7 +156,10 @@ fn run() -> Result<()> {
         || cases::grazing(&rigid),
     )?);
 
-    // The white-noise law.
+    // The white-noise law, and the recorded study of its band limit, which decides whether the
+    // rigid stops' impact term is a reference or an open question.
+    let band = band_limit_io::recorded_cells()?;
+    let impact_term_confirmed = band_limit::BandVerdict::of(&band)?.consistent();
     let mut ensembles: Vec<LawEnsemble> = Vec::new();
     for name in [
         "random_linear_piezo",
@@ -162,7 +177,7 @@ fn run() -> Result<()> {
             ),
             || cases::random_law(&d),
         )?;
-        checks.extend(random_law::checks(&ens));
+        checks.extend(random_law::checks(&ens, impact_term_confirmed));
         ensembles.push(ens);
     }
 
@@ -209,6 +224,26 @@ fn run() -> Result<()> {
     let (aft_floor, fold_floor) = (reference.aft_floor_m(), reference.fold_floor_rad_s());
     checks.extend(nlvib::hb_checks(&hb, aft_floor, fold_floor));
     let samples = nlvib::branch_samples(&ours, &branch)?;
+    let springs = common::springs_io::run(&mut exp, load)?;
+    checks.extend(springs.checks.iter().cloned());
+    costs.extend(springs.costs.iter().map(|(c, w, s)| Cost {
+        case: c.clone(),
+        what: w.clone(),
+        wall_s: *s,
+    }));
+
+    // The interface circuits against their closed forms.
+    let bridge = load(&mut exp, "piezo_bridge")?;
+    checks.extend(timed(
+        &mut costs,
+        &bridge.name,
+        "interface closed forms",
+        || endstop::validation::interfaces::weak_coupling_checks(&bridge),
+    )?);
+    let coupling = timed(&mut costs, &bridge.name, "coupling rows", || {
+        endstop::validation::interfaces::coupling_rows(&bridge)
+    })?;
+    checks.extend(endstop::validation::interfaces::coupling_checks(&coupling));
 
     // Parquet.
     let mut df = frame(checks.iter().map(|c| {
@@ -223,6 +258,7 @@ fn run() -> Result<()> {
             "tolerance" => c.tolerance,
             "reason" => c.reason.clone(),
             "within_tolerance" => c.passes(),
+            "open_question" => c.open.clone().unwrap_or_default(),
         ]
     }))?;
     exp.write_parquet("checks", &mut df, "hypothetical+reference")?;
@@ -290,17 +326,27 @@ fn run() -> Result<()> {
     // The chapter's tables.
     let book = &exp.book_dir;
     let within = checks.iter().filter(|c| c.passes()).count();
+    let judged = checks.iter().filter(|c| !c.is_open()).count();
+    let label = |c: &&Check| format!("{}: {}", c.group, c.quantity);
     let not_met: Vec<String> = checks
         .iter()
-        .filter(|c| !c.passes())
-        .map(|c| format!("{}: {}", c.group, c.quantity))
+        .filter(|c| !c.passes() && !c.is_open())
+        .map(|c| label(&c))
         .collect();
-    let mut summary = format!(
-        "**{within} of {} checks are within their tolerances.**",
-        checks.len()
-    );
+    let open: Vec<String> = checks
+        .iter()
+        .filter(|c| c.is_open())
+        .map(|c| label(&c))
+        .collect();
+    let mut summary = format!("**{within} of {judged} checks are within their tolerances.**");
     if !not_met.is_empty() {
         summary.push_str(&format!(" Not met: {}.", not_met.join("; ")));
+    }
+    if !open.is_empty() {
+        summary.push_str(&format!(
+            " Reported as open questions, not judged: {}.",
+            open.join("; ")
+        ));
     }
     summary.push('\n');
     exp.write_numbers_md(&summary)?;
@@ -323,8 +369,30 @@ fn run() -> Result<()> {
         &book.join("nlvib.md"),
         nlvib_md(&checks, &hb, aft_floor, fold_floor, &branch, &samples).as_bytes(),
     )?;
+    write_atomic(
+        &book.join("band_limit.md"),
+        band_limit_io::table_md(&band)?.as_bytes(),
+    )?;
+    write_atomic(
+        &book.join("springs.md"),
+        checks_table(
+            in_groups(&checks, "exact stationary law")
+                .chain(in_groups(&checks, "escape over the barrier"))
+                .chain(in_groups(&checks, "peer: NLvib's Duffing")),
+        )
+        .as_bytes(),
+    )?;
+    write_atomic(
+        &book.join("interfaces.md"),
+        checks_table(
+            in_groups(&checks, "interface circuits, weak coupling")
+                .chain(in_groups(&checks, "interface circuits, coupling")),
+        )
+        .as_bytes(),
+    )?;
     write_atomic(&book.join("cost.md"), cost_md(&costs).as_bytes())?;
-    exp.number("checks", checks.len() as f64);
+    exp.number("checks", judged as f64);
+    exp.number("open_questions", open.len() as f64);
     exp.number("checks_within_tolerance", within as f64);
     exp.finish()
 }

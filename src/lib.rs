@@ -1,7 +1,34 @@
 //! # endstop
 //!
 //! Lumped models of vibration energy harvesters whose proof mass strikes end-stops, and the
-//! numerics to simulate and analyse them. The model began as that of C. P. Le and
+//! numerics to simulate and analyse them.
+//!
+//! # Conventions
+//! Read these first; every function of the crate keeps them.
+//!
+//! * **Units.** SI throughout (m, s, kg, N, V, A, W, ohm, F), except where a name says
+//!   otherwise: `accel_rms_g` is in g, `freq_hz` in Hz (frequencies are in Hz unless a name
+//!   ends in `_rad_s`), `psd_g2_per_hz` in g^2/Hz. One g is [`G`] = 9.81 m/s^2 (not
+//!   9.80665).
+//! * **Axis and stops.** `x` is the proof mass's displacement from rest relative to the frame.
+//!   The upper stop (`stops.upper`) touches at `x = +gap`, the lower one (`stops.lower`) at
+//!   `x = -gap`; a stop's spring pushes the mass back towards rest.
+//! * **The drive's sign.** The base acceleration `a(t)` enters the mechanics as
+//!   `m x'' + b x' + km x + F_e + F_im = m a(t)` (eq 7): a positive `a` pushes the mass towards
+//!   `+x`. It is the frame's own acceleration with the sign reversed (the inertial force
+//!   `-m a_frame`); levels, densities and powers do not depend on the sign, phases do.
+//! * **Sines by RMS.** A sine is given by its RMS acceleration: `a(t) = sqrt(2) a_rms
+//!   sin(2 pi f t + phi)` ([`drive::Sine`]). RMS voltages are RMS too (`v1_rms_v`); powers are
+//!   means over time.
+//! * **Two-sided drive, one-sided outputs.** A random drive's level `Sa` is **two-sided**: the
+//!   density per Hz over `-B..B`, so its mean square is `2 B Sa` ([`drive::noise`]); white
+//!   noise of level `Sa` delivers the power `m Sa / 2` to a mass. Every density the crate
+//!   estimates or predicts from a signal is **one-sided** (Welch's, [`signal::welch()`], and
+//!   the linear theory's output PSD, [`physics::linear`]): over `f > 0`, twice the two-sided
+//!   level, so that its integral is the variance or the mean power.
+//! * **Randomness.** Every random record is a pure function of its settings, a seed and a
+//!   stream ([`drive::noise::generate`]): runs are deterministic and do not depend on the
+//!   number of threads. The model began as that of C. P. Le and
 //! E. Halvorsen, "MEMS electrostatic energy harvesters with end-stop effects", J. Micromech.
 //! Microeng. 22 (2012) 074013 (equation numbers are the paper's), and describes any
 //! single-degree-of-freedom impact harvester: each side's stop absent or a gap and a contact
@@ -32,8 +59,6 @@
 //! | [`spice`] | ngspice netlist export for cross-validation | section 2.3, Figure 6 |
 //! | [`paper`] | the paper's setups, measurements, calibration, figures and claims | |
 //! | [`validation`] | checks against closed forms, an exact law and a peer tool | |
-//!
-//! Units are SI throughout unless a name says otherwise (`accel_rms_g`, `freq_hz`).
 //!
 //! # Start here
 //! A device is a TOML file ([`device`]); the caller reads it, the library parses and validates

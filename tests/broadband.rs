@@ -25,8 +25,9 @@ use endstop::paper::figures::fig14::{self, Fig14};
 use endstop::paper::figures::fig15::{self, Fig15};
 use endstop::paper::prototype2_random::Extras;
 use endstop::paper::resolution;
-use endstop::paper::setups::{prototype2_setup, ParamSet};
+use endstop::paper::setups::{paper_record, prototype2_setup, ParamSet};
 use endstop::paper::Figure;
+use endstop::physics::linear::LinearResponse;
 use endstop::physics::two_port::*;
 use endstop::study::ensemble::run_ensemble;
 use endstop::study::record::*;
@@ -152,32 +153,32 @@ fn assert_verdicts_straddling(
             v.claim,
             v.quantity,
             v.set,
-            v.ours,
-            claim.paper,
+            v.ours.to_f64(),
+            claim.paper.to_f64(),
             claim.tolerance(),
             v.note
         );
         let key = row(v);
         if straddling.iter().any(|&(k, s)| v.is(k) && v.set == s) {
-            assert_eq!(claim.verdict(Some(v.ours)), want, "{key:?}: {}", v.ours);
+            assert_eq!(claim.verdict(Some(v.ours)), want, "{key:?}: {:?}", v.ours);
             assert!(
-                [v.ours - ci, v.ours + ci]
+                [v.ours.to_f64() - ci, v.ours.to_f64() + ci]
                     .iter()
-                    .any(|&x| claim.verdict(Some(x)) != want),
+                    .any(|&x| claim.verdict(Some(x.into())) != want),
                 "{key:?}: {} ± {ci} no longer straddles a tolerance edge",
-                v.ours
+                v.ours.to_f64()
             );
             continue;
         }
-        for x in [v.ours, v.ours - ci, v.ours + ci] {
+        for x in [v.ours.to_f64(), v.ours.to_f64() - ci, v.ours.to_f64() + ci] {
             assert_eq!(
-                claim.verdict(Some(x)),
+                claim.verdict(Some(x.into())),
                 want,
                 "{} {} {}: {x} within {} ± {ci}",
                 v.claim,
                 v.quantity,
                 v.set,
-                v.ours
+                v.ours.to_f64()
             );
         }
     }
@@ -199,8 +200,9 @@ fn linear_theory_integrates_to_eq21() {
         let d = device(name);
         let df = 0.01;
         let n = (20_000.0 / df) as usize;
+        let lin = LinearResponse::of(&d);
         let p: f64 = (1..n)
-            .map(|i| linear_output_psd_w_per_hz(&d, 1e-4, i as f64 * df))
+            .map(|i| lin.output_psd_w_per_hz(1e-4 * G * G, i as f64 * df))
             .sum::<f64>()
             * df;
         let e = eq21_power_w(&d, 1e-4);
@@ -211,7 +213,7 @@ fn linear_theory_integrates_to_eq21() {
 #[test]
 fn record_spec_and_errors() {
     let d = prototype2_setup(&device("prototype2"));
-    let spec = RecordSpec::paper(&d, 1e-4);
+    let spec = paper_record(&d, 1e-4);
     // 5 ring-up times 2m/b = 5 x 96 ms, rounded up to whole milliseconds.
     assert!((spec.transient_s - 0.48).abs() < 1e-12);
     assert_eq!(spec.transient_samples(), 48_000);
@@ -237,7 +239,7 @@ fn a_device_faster_than_the_sample_rate_falls_back_to_dormand_prince() {
     // Dormand-Prince throughout, sample for sample the record of that scheme (it panicked).
     let mut dev = prototype2_setup(&device("prototype2"));
     dev.mechanics.stiffness_n_per_m *= 1e4;
-    let mut spec = RecordSpec::paper(&dev, 1e-4);
+    let mut spec = paper_record(&dev, 1e-4);
     spec.noise.duration_s = 0.01;
     assert_eq!(spec.scheme, Scheme::Exponential);
     let fast = simulate_record(&dev, &spec, 7, 3).unwrap();
@@ -252,7 +254,7 @@ fn record_converges_and_keeps_its_bookkeeping() {
     // A short record in the linear regime at two tolerances: the trajectory, hence the mean
     // power, agrees to 1e-6 relative (the steps are bounded by the 10 us sample interval).
     let d = prototype2_setup(&device("prototype2"));
-    let mut spec = RecordSpec::paper(&d, 1e-4);
+    let mut spec = paper_record(&d, 1e-4);
     spec.noise.duration_s = 1.0;
     let a = simulate_record(&d, &spec, 7, 3).unwrap();
     spec.rtol = 1e-10;
@@ -285,7 +287,7 @@ fn exponential_scheme_matches_dormand_prince_on_impact_free_records() {
             4.42e-6,
         ),
     ] {
-        let mut spec = RecordSpec::paper(&dev, sa);
+        let mut spec = paper_record(&dev, sa);
         spec.noise.duration_s = 1.0;
         assert_eq!(spec.scheme, Scheme::Exponential);
         let fast = simulate_record(&dev, &spec, 7, 3).unwrap();
@@ -333,14 +335,17 @@ fn f10_excitation_level_and_band() {
     let level = value(&values, keys::F10_LEVEL, published);
     let ci = level.uncertainty.unwrap();
     assert!(
-        (level.ours - run.spec.psd_g2_per_hz).abs() <= ci + 1e-5,
+        (level.ours.to_f64() - run.spec.psd_g2_per_hz).abs() <= ci + 1e-5,
         "{level:?}"
     );
     // A brick-wall band seen through a Hann window falls to half at the edge itself: within
     // one bin (6.1 Hz).
     let edge = value(&values, keys::F10_BAND, published);
     let bin = run.records[0].psd.df();
-    assert!((edge.ours - run.spec.bandwidth_hz).abs() < bin, "{edge:?}");
+    assert!(
+        (edge.ours.to_f64() - run.spec.bandwidth_hz).abs() < bin,
+        "{edge:?}"
+    );
 }
 
 #[test]
@@ -436,17 +441,20 @@ fn p1_width_estimator_bias_is_measured_on_the_linear_model() {
         let ci = v
             .uncertainty
             .expect("the ensemble's values carry an interval");
-        let (lo_edge, hi_edge) = (c.paper - c.tolerance(), c.paper + c.tolerance());
-        let interval = v.ours - ci..=v.ours + ci;
+        let (lo_edge, hi_edge) = (
+            c.paper.to_f64() - c.tolerance(),
+            c.paper.to_f64() + c.tolerance(),
+        );
+        let interval = v.ours.to_f64() - ci..=v.ours.to_f64() + ci;
         if interval.contains(&lo_edge) || interval.contains(&hi_edge) {
             assert!(
-                (corrected - v.ours).abs() <= ci,
+                (corrected - v.ours.to_f64()).abs() <= ci,
                 "{set} {q}: {corrected} against {} ± {ci}",
-                v.ours
+                v.ours.to_f64()
             );
         } else {
             assert_eq!(
-                c.verdict(Some(corrected)),
+                c.verdict(Some(corrected.into())),
                 c.verdict(Some(v.ours)),
                 "{set} {q}: {corrected}"
             );
@@ -454,10 +462,10 @@ fn p1_width_estimator_bias_is_measured_on_the_linear_model() {
     };
     for set in ParamSet::BOTH {
         for q in [keys::F12_BW_LOW, keys::F12_BW_HIGH] {
-            keeps(set, q, value(&values, q, set).ours - b(fig));
+            keeps(set, q, value(&values, q, set).ours.to_f64() - b(fig));
         }
-        let lo = value(&values, keys::F12_BW_LOW, set).ours - b(fig);
-        let hi = value(&values, keys::F12_BW_HIGH, set).ours - b(fig);
+        let lo = value(&values, keys::F12_BW_LOW, set).ours.to_f64() - b(fig);
+        let hi = value(&values, keys::F12_BW_HIGH, set).ours.to_f64() - b(fig);
         keeps(set, keys::F12_BW_RATIO, hi / lo);
     }
 }
@@ -495,9 +503,12 @@ fn f12_prototype1_bandwidth_grows_with_impacts() {
         let w_lo = value(&values, keys::F12_BW_LOW, set);
         let w_hi = value(&values, keys::F12_BW_HIGH, set);
         let (c_lo, c_hi) = (w_lo.uncertainty.unwrap(), w_hi.uncertainty.unwrap());
-        assert!(w_hi.ours - c_hi > lin, "{set}: {w_hi:?} vs linear {lin}");
         assert!(
-            w_hi.ours - c_hi > w_lo.ours + c_lo,
+            w_hi.ours.to_f64() - c_hi > lin,
+            "{set}: {w_hi:?} vs linear {lin}"
+        );
+        assert!(
+            w_hi.ours.to_f64() - c_hi > w_lo.ours.to_f64() + c_lo,
             "{set}: {w_lo:?} {w_hi:?}"
         );
     }
@@ -573,15 +584,18 @@ fn f15_prototype2_spectra_widen_upwards() {
     // of the mean PSD is the arg-max of a noisy top (a 32-record run puts it 1.1 bins above),
     // and a bound chosen after seeing the number tests nothing, so the value is pinned in the
     // regression snapshot (tests/snapshots/broadband_fig15.snap) instead.
-    let peak = value(&values, keys::F15A_PEAK, published).ours;
+    let peak = value(&values, keys::F15A_PEAK, published).ours.to_f64();
     let lin_peak = lin.half_power.unwrap().peak_hz;
     assert!(peak >= lin_peak - bin, "{peak} vs {lin_peak}");
     // The width is at least the linear width (impacts only widen).
     let w = value(&values, keys::F15A_BW, published);
-    assert!(w.ours + w.uncertainty.unwrap() >= lin.bw3db_hz(), "{w:?}");
+    assert!(
+        w.ours.to_f64() + w.uncertainty.unwrap() >= lin.bw3db_hz(),
+        "{w:?}"
+    );
     // The ratio is above 1 beyond its CI: the width does grow.
     let r = value(&values, keys::F15B_BW_RATIO, published);
-    assert!(r.ours - r.uncertainty.unwrap() > 1.0, "{r:?}");
+    assert!(r.ours.to_f64() - r.uncertainty.unwrap() > 1.0, "{r:?}");
     // ... and at 1.69e-3 the peak itself moves up (the stops stiffen the oscillator).
     let e169 = &run.levels[fig15::L169].ens;
     assert!(e169.mean_spectrum.total.peak().0 > peak + bin);

@@ -11,7 +11,7 @@ use endstop::paper::deviations::{Factor, RangesFile};
 use endstop::paper::figures::fig08;
 use endstop::paper::setups::P1_BIAS_V;
 use endstop::paper::setups::{comb, comb_mut, endstop};
-use endstop::physics::two_port::{eq21_efficiency, QmReading, TwoPort};
+use endstop::physics::two_port::{eq21_efficiency, TwoPort};
 
 /// The linear-theory figures of merit a device gives (Table 3's k^2 and Qm, eq 21, and the
 /// open-circuit resonance).
@@ -19,7 +19,7 @@ fn figures(device: &Device) -> [f64; 4] {
     let tp = TwoPort::of(device);
     [
         tp.k2,
-        tp.qm(QmReading::OpenCircuit),
+        tp.qm_open_circuit(),
         eq21_efficiency(device),
         tp.resonance_hz(),
     ]

@@ -12,7 +12,7 @@ use endstop::ode::HybridSystem;
 use endstop::ode::Options;
 use endstop::ode::Rk4;
 use endstop::ode::SolverError;
-use endstop::paper::setups::{comb_mut, endstop};
+use endstop::paper::setups::{comb_mut, endstop, with_endstop};
 use endstop::physics::contact::Mode;
 use endstop::physics::contact::Side;
 use endstop::physics::energy::ledger_index;
@@ -176,7 +176,7 @@ fn fixed_step_rk4_switches_at_the_exact_crossing_time() {
 }
 
 fn elastic_p1(km: f64, kim: f64) -> Harvester<Sine> {
-    let mut d = device("prototype1").with_endstop(StiffnessModel::Linear, 0.0);
+    let mut d = with_endstop(&device("prototype1"), StiffnessModel::Linear, 0.0);
     d.mechanics.damping_n_s_per_m = 1e-300;
     d.mechanics.stiffness_n_per_m = km;
     comb_mut(&mut d).bias_v = 0.0;

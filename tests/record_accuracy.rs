@@ -17,7 +17,7 @@
 
 use endstop::device::Device;
 use endstop::ode::SolverError;
-use endstop::paper::setups::{prototype1_setup, prototype2_setup};
+use endstop::paper::setups::{paper_record, prototype1_setup, prototype2_setup};
 use endstop::physics::energy::EnergyLedger;
 use endstop::study::record::{simulate_record, BroadbandError, RecordSpec, Scheme, DEFAULT_RTOL};
 use endstop::study::record_ledger::record_ledger;
@@ -78,7 +78,7 @@ fn impact_free_records_ours_and_the_benchmarks_rk4_steps_meet_their_accuracy() {
     // The worst relative error over both records of RK4 at each number of steps.
     let mut worst = [0.0f64; 4];
     for (label, dev, sa) in impact_free() {
-        let mut spec = RecordSpec::paper(&dev, sa);
+        let mut spec = paper_record(&dev, sa);
         spec.noise.duration_s = 1.0;
         let reference = dopri5_power(&dev, &spec, REFERENCE_RTOL);
         let ours = simulate_record(&dev, &spec, SEED, 0).unwrap().summary;
@@ -109,7 +109,7 @@ fn with_impacts_rk4_at_the_targets_step_diverges_and_at_ours_does_not() {
     // Prototype 1 at 2.85e-2 (the benchmark's record): a Hertz contact lasts about half a
     // sample interval, which one RK4 step per sample cannot resolve.
     let dev = device("prototype1");
-    let spec = RecordSpec::paper(&dev, 2.85e-2);
+    let spec = paper_record(&dev, 2.85e-2);
     let coarse = simulate_rk4_record(&dev, &spec, SEED, 0, RK4_STEPS_AT_TARGET);
     assert!(
         matches!(
@@ -134,7 +134,7 @@ fn with_impacts_rk4_at_the_targets_step_diverges_and_at_ours_does_not() {
 fn prototype1_record_with_impacts_converges_and_ours_is_within_the_target() {
     // Figure 12's setup at its highest level: about 4500 impacts.
     let dev = prototype1_setup(&device("prototype1"));
-    let spec = RecordSpec::paper(&dev, 2.85e-2);
+    let spec = paper_record(&dev, 2.85e-2);
     let reference = dopri5_power(&dev, &spec, REFERENCE_RTOL);
     let tighter = dopri5_power(&dev, &spec, 1e-9);
     let ours = simulate_record(&dev, &spec, SEED, 0).unwrap().summary;
@@ -149,7 +149,7 @@ fn prototype2_record_with_impacts_does_not_converge_to_the_target() {
     // Figures 14 and 15's setup at 1.69e-3: tightening the tolerance from 1e-9 to 1e-10
     // changes the power by more than the target, so one record's power is a sample.
     let dev = prototype2_setup(&device("prototype2"));
-    let spec = RecordSpec::paper(&dev, 1.69e-3);
+    let spec = paper_record(&dev, 1.69e-3);
     let reference = dopri5_power(&dev, &spec, REFERENCE_RTOL);
     let tighter = dopri5_power(&dev, &spec, 1e-9);
     let e = rel(tighter, reference);
@@ -159,7 +159,7 @@ fn prototype2_record_with_impacts_does_not_converge_to_the_target() {
 /// The energy ledger of the benchmark's record of `dev` at `sa` by our scheme at the default
 /// tolerance, and its impacts.
 fn ledger(dev: &Device, sa: f64) -> (EnergyLedger, u64) {
-    let spec = RecordSpec::paper(dev, sa);
+    let spec = paper_record(dev, sa);
     let (rec, l) = record_ledger(dev, &spec, SEED, 0).unwrap();
     assert_eq!(spec.rtol, DEFAULT_RTOL);
     (l, rec.summary.impacts)

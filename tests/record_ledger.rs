@@ -7,7 +7,7 @@
 //! bench measures (seed 2012, stream 0, 10 s): about 0.3-1 s each.
 
 use endstop::device::Device;
-use endstop::paper::setups::prototype2_setup;
+use endstop::paper::setups::{paper_noise, paper_record, prototype2_setup};
 use endstop::physics::energy::EnergyLedger;
 use endstop::study::record::{simulate_record, RecordSpec, Scheme, DEFAULT_RTOL};
 use endstop::study::record_ledger::{record_ledger, record_ledgers};
@@ -24,7 +24,7 @@ fn prototype2() -> Device {
 }
 
 fn ledger(dev: &Device, sa: f64, scheme: Scheme, rtol: f64) -> (EnergyLedger, u64) {
-    let mut spec = RecordSpec::paper(dev, sa);
+    let mut spec = paper_record(dev, sa);
     spec.scheme = scheme;
     spec.rtol = rtol;
     let (rec, l) = record_ledger(dev, &spec, SEED, 0).unwrap();
@@ -35,7 +35,7 @@ fn ledger(dev: &Device, sa: f64, scheme: Scheme, rtol: f64) -> (EnergyLedger, u6
 fn the_ledger_observes_the_record_simulate_record_computes() {
     // Watching the integration must not change it: the same samples, bit for bit.
     let dev = prototype2();
-    let spec = RecordSpec::paper(&dev, 1.69e-3);
+    let spec = paper_record(&dev, 1.69e-3);
     let plain = simulate_record(&dev, &spec, SEED, 0).unwrap();
     let (watched, _) = record_ledger(&dev, &spec, SEED, 0).unwrap();
     assert_eq!(plain.v1_v, watched.v1_v);
@@ -99,7 +99,7 @@ fn the_analysed_window_books_impacts_and_coil_losses_and_closes_its_own_balance(
         let spec = RecordSpec {
             noise: NoiseSpec {
                 duration_s: 1.0,
-                ..NoiseSpec::paper(1e-3)
+                ..paper_noise(1e-3)
             },
             transient_s: transient_s(&dev),
             rtol: DEFAULT_RTOL,

@@ -12,8 +12,8 @@ use std::fmt::Write;
 
 use endstop::paper::figures::fig05::{self, Fig05};
 use endstop::paper::figures::table3::Table3;
+use endstop::paper::qm::QmReading;
 use endstop::paper::Figure;
-use endstop::physics::two_port::QmReading;
 
 mod common;
 use common::{claims, prototypes};
@@ -34,7 +34,7 @@ fn regression_fig05_contact_law_and_eq19() {
     let run = Fig05::run(&prototypes(), &|| {}).unwrap();
     let mut s = String::new();
     for v in Fig05::claims(&run, claims()).unwrap() {
-        writeln!(s, "{} {}: {}", v.claim, v.quantity, sig6(v.ours)).unwrap();
+        writeln!(s, "{} {}: {}", v.claim, v.quantity, sig6(v.ours.to_f64())).unwrap();
     }
     for p in &run.prototypes {
         for (label, c) in fig05::FIT_READINGS {
@@ -50,7 +50,7 @@ fn regression_table3_coupling() {
     let run = Table3::run(&prototypes(), &|| {}).unwrap();
     let mut s = String::new();
     for v in Table3::claims(&run, claims()).unwrap() {
-        writeln!(s, "{} {}: {}", v.claim, v.quantity, sig6(v.ours)).unwrap();
+        writeln!(s, "{} {}: {}", v.claim, v.quantity, sig6(v.ours.to_f64())).unwrap();
     }
     for p in &run.prototypes {
         for r in QmReading::ALL {

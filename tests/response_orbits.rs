@@ -5,9 +5,9 @@
 use endstop::device::{Device, StiffnessModel};
 use endstop::drive::Sine;
 use endstop::ode::Stats;
-use endstop::paper::setups::{comb, endstop, stiffness_model};
+use endstop::paper::setups::{comb, endstop, stiffness_model, with_endstop};
 use endstop::physics::harvester::Harvester;
-use endstop::physics::two_port::linear_output_psd_w_per_hz;
+use endstop::physics::linear::LinearResponse;
 use endstop::study::continuation::{
     continue_branch, first_orbit, Branch, ContinuationSettings, EventKind,
 };
@@ -18,9 +18,11 @@ mod common;
 
 /// Prototype 2 as Figure 13 simulates it at 0.31 g: 10 V, linear k_im, b_im = 0.4 N s/m.
 fn prototype2() -> Device {
-    common::prototype2()
-        .with_bias(10.0)
-        .with_endstop(StiffnessModel::Linear, 0.4)
+    with_endstop(
+        &common::prototype2().with_bias(10.0),
+        StiffnessModel::Linear,
+        0.4,
+    )
 }
 
 /// The eigenvalues of the linear model of eqs 11-17, written from the equations and not from
@@ -85,7 +87,8 @@ fn far_from_the_stops_the_orbit_is_the_linear_steady_state() {
     assert!(o.residual < 1e-9, "residual {:e}", o.residual);
     assert!(o.summary.x_max_m < 1e-3 * comb(&d).finger_overlap_m);
     // A sine of RMS a has the power of a white PSD a^2 / 2 through |H|^2 (see the linear PSD).
-    let p_lin = linear_output_psd_w_per_hz(&d, 0.5 * a * a, f);
+    let p_lin =
+        LinearResponse::of(&d).output_psd_w_per_hz(0.5 * a * a * endstop::G * endstop::G, f);
     let rel = (o.summary.p_total_w - p_lin).abs() / p_lin;
     assert!(
         rel < 1e-6,
@@ -266,7 +269,7 @@ fn a_grazing_corner_is_crossed_from_the_free_flight_side() {
     // The grazing orbit is a free-flight orbit, independent of b_im: the same device with
     // b_im = 0 (whose branch crosses grazing smoothly) gives the reference. Tolerance: the
     // event location (1e-4 Hz) and the hop's first step.
-    let undamped = d.with_endstop(stiffness_model(&d), 0.0);
+    let undamped = with_endstop(&d, stiffness_model(&d), 0.0);
     let reference = grazing(&frequency_branch(&undamped, g, 900.0, 2000.0, 10.0, |_| {}).unwrap())
         .expect("the undamped branch grazes");
     let found = grazing(&b).expect("the branch grazes");

@@ -11,7 +11,7 @@ use endstop::device::StiffnessModel;
 use endstop::drive::Sine;
 use endstop::ode::Dopri5;
 use endstop::ode::SolverError;
-use endstop::paper::setups::{comb, comb_mut, endstop};
+use endstop::paper::setups::{comb, comb_mut, endstop, with_endstop};
 use endstop::physics::contact::Mode;
 use endstop::physics::energy::AuditState;
 use endstop::physics::energy::EnergyAudit;
@@ -172,7 +172,7 @@ fn simulate(c: &Case) -> Result<(f64, u64), SolverError> {
     } else {
         StiffnessModel::Linear
     };
-    let d = d.with_endstop(law, c.bim);
+    let d = with_endstop(&d, law, c.bim);
     d.validate("random").unwrap();
     let drive = Sine::from_rms_g(c.accel_g, c.detune * c.f0);
     let audit = EnergyAudit(Harvester::new(&d, drive));

@@ -2,6 +2,7 @@
 //! (band-limited white noise, Figure 10). Each tolerance is stated with its reason.
 
 use endstop::drive::noise::NoiseSpec;
+use endstop::paper::setups::paper_noise;
 use endstop::signal::hann_periodic;
 use endstop::signal::welch;
 use endstop::signal::Psd;
@@ -294,7 +295,7 @@ fn lorentzian_half_power_width() {
 
 #[test]
 fn noise_zero_mean_and_variance_matches_its_spectrum() {
-    let spec = NoiseSpec::paper(1e-2);
+    let spec = paper_noise(1e-2);
     let x = endstop::drive::noise::generate(&spec, SEED, 3).unwrap();
     let coeffs = endstop::drive::noise::spectrum(&spec, SEED, 3).unwrap();
     let n = x.len();
@@ -345,7 +346,7 @@ fn noise_welch_level_and_stopband() {
     // Tolerance 4 sigma (about 1.3 %). Stop band: the record has no content above 10 kHz,
     // only Hann leakage, which 500 Hz (20 bins) past the edge is far below -40 dB.
     let sa = 1e-2;
-    let spec = NoiseSpec::paper(sa);
+    let spec = paper_noise(sa);
     let x = endstop::drive::noise::generate(&spec, SEED, 0).unwrap();
     let psd = welch(&x, spec.sample_rate_hz, &WelchConfig::half_overlap(4096)).unwrap();
     let (lo, hi) = (100.0, 9.5e3);
@@ -378,7 +379,7 @@ fn noise_welch_level_and_stopband() {
 fn noise_is_deterministic_per_stream() {
     let spec = NoiseSpec {
         duration_s: 0.5,
-        ..NoiseSpec::paper(1e-3)
+        ..paper_noise(1e-3)
     };
     let bits = |v: Vec<f64>| v.into_iter().map(f64::to_bits).collect::<Vec<_>>();
     let a = bits(endstop::drive::noise::generate(&spec, 7, 1).unwrap());
@@ -392,7 +393,7 @@ fn noise_is_deterministic_per_stream() {
 
 #[test]
 fn noise_golden_first_samples() {
-    // Golden values: seed 42, stream 0, NoiseSpec::paper(1e-2) (m/s^2). If this fails, the RNG
+    // Golden values: seed 42, stream 0, paper_noise(1e-2) (m/s^2). If this fails, the RNG
     // stream (rand / rand_chacha version, Box-Muller) or the synthesis (scaling, bin order,
     // normalisation) changed: every published random-excitation result changes with it.
     // Tolerance 1e-12 of the rms (139 m/s^2) rather than bit equality, to allow last-bit
@@ -404,7 +405,7 @@ fn noise_golden_first_samples() {
         147.29970070459112,
         93.15278623360747,
     ];
-    let spec = NoiseSpec::paper(1e-2);
+    let spec = paper_noise(1e-2);
     let x = endstop::drive::noise::generate(&spec, 42, 0).unwrap();
     let rms = endstop::drive::noise::rms_si(&spec);
     println!("golden: {:?}", &x[..5]);
@@ -415,7 +416,7 @@ fn noise_golden_first_samples() {
 
 #[test]
 fn noise_spec_errors() {
-    let mut spec = NoiseSpec::paper(1e-2);
+    let mut spec = paper_noise(1e-2);
     spec.sample_rate_hz = f64::INFINITY;
     let msg = endstop::drive::noise::generate(&spec, 0, 0)
         .unwrap_err()
@@ -423,7 +424,7 @@ fn noise_spec_errors() {
     assert!(msg.contains("sample_rate_hz = inf"), "{msg}");
     let spec = NoiseSpec {
         bandwidth_hz: 60e3,
-        ..NoiseSpec::paper(1e-2)
+        ..paper_noise(1e-2)
     };
     let msg = spec.validate().unwrap_err().to_string();
     assert!(

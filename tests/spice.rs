@@ -4,7 +4,7 @@
 
 use endstop::device::StiffnessModel;
 use endstop::drive::Sine;
-use endstop::paper::setups::{comb, endstop, stiffness_model};
+use endstop::paper::setups::{comb, endstop, stiffness_model, with_endstop};
 use endstop::physics::contact::Mode;
 use endstop::physics::harvester::Harvester;
 use endstop::physics::harvester::State;
@@ -57,9 +57,9 @@ fn close(a: f64, b: f64, rel: f64) -> bool {
 fn netlist_is_well_formed() {
     for dev in [
         p1(),
-        p1().with_endstop(StiffnessModel::Linear, 2.0),
+        with_endstop(&p1(), StiffnessModel::Linear, 2.0),
         p2(),
-        p2().with_endstop(StiffnessModel::Hertz, 0.34),
+        with_endstop(&p2(), StiffnessModel::Hertz, 0.34),
     ] {
         let drive = SpiceDrive {
             accel_rms_g: 5.5,
@@ -153,7 +153,7 @@ fn parameters_carry_the_unit_scaling() {
         "delta0 of prototype 1 is 120 um"
     );
     // Linear law: k_im in mN/um = 1e-3 N/m.
-    let lin = dev.with_endstop(StiffnessModel::Linear, 2.0);
+    let lin = with_endstop(&dev, StiffnessModel::Linear, 2.0);
     let p = params(&netlist(
         &lin,
         &drive,
@@ -406,14 +406,14 @@ fn ngspice_agrees_with_our_integrator() {
     let cases = [
         (
             "free",
-            p1.with_endstop(StiffnessModel::Hertz, 1.5),
+            with_endstop(&p1, StiffnessModel::Hertz, 1.5),
             4.1,
             1000.0,
             1e-4,
         ),
         (
             "impacting",
-            p1.with_endstop(StiffnessModel::Linear, 2.0),
+            with_endstop(&p1, StiffnessModel::Linear, 2.0),
             7.0,
             1300.0,
             1e-3,

@@ -113,7 +113,7 @@ fn prototype1_fast_path_matches_the_figure_8_sweeps_and_table_3() {
     for v in t3.iter().filter(|v| v.claim == "T3-a") {
         let e = find(&fast, &v.claim, &v.quantity);
         // Same formula (eqs 15-18) on the same device: equal to rounding.
-        assert!((e.value - v.ours).abs() <= 1e-12 * v.ours.abs());
+        assert!((e.value - v.ours.to_f64()).abs() <= 1e-12 * v.ours.to_f64().abs());
     }
 }
 
@@ -127,7 +127,7 @@ fn prototype2_fast_path_matches_figure_13_and_table_3() {
     let slow = Fig13::claims(&Fig13::run(&p2, &|| {}).unwrap(), &claims).unwrap();
     for v in &slow {
         let e = find(&fast, &v.claim, &v.quantity);
-        assert_eq!(e.value, v.ours, "{} {}", v.claim, v.quantity);
+        assert_eq!(e.value, v.ours.to_f64(), "{} {}", v.claim, v.quantity);
     }
     let both = Prototypes {
         prototype1: p2.clone(),
@@ -136,7 +136,7 @@ fn prototype2_fast_path_matches_figure_13_and_table_3() {
     let t3 = Table3::claims(&Table3::run(&both, &|| {}).unwrap(), &claims).unwrap();
     for v in t3.iter().filter(|v| v.claim == "T3-b") {
         let e = find(&fast, &v.claim, &v.quantity);
-        assert!((e.value - v.ours).abs() <= 1e-12 * v.ours.abs());
+        assert!((e.value - v.ours.to_f64()).abs() <= 1e-12 * v.ours.to_f64().abs());
     }
     assert!(fast.iter().all(|e| matches!(e.outcome, Outcome::Value(_))));
     // The calibration's objective (no continuations) is exactly the quantitative part.

@@ -17,21 +17,24 @@ fn device(name: &str) -> Device {
     Device::from_toml_str(&text, &rel).unwrap_or_else(|e| panic!("{rel}: {e}"))
 }
 
+/// Prints every check and asserts each one that is judged (an open question is printed, not
+/// judged).
 fn assert_all(checks: &[Check]) {
     assert!(!checks.is_empty(), "no checks");
     for c in checks {
         eprintln!(
-            "{} | {} | {} | theirs {:e} | ours {:e} | difference {:e} (tolerance {:e})",
+            "{} | {} | {} | theirs {:e} | ours {:e} | difference {:e} (tolerance {:e}){}",
             c.group,
             c.reference,
             c.quantity,
             c.theirs,
             c.ours,
             c.difference(),
-            c.tolerance
+            c.tolerance,
+            if c.is_open() { " [open question]" } else { "" }
         );
     }
-    for c in checks {
+    for c in checks.iter().filter(|c| !c.is_open()) {
         assert!(
             c.passes(),
             "{}: {} against {}: difference {:e} above {:e} ({})",
@@ -74,10 +77,43 @@ fn grazing_frequencies_match_the_linear_amplitude() {
     assert_all(&cases::grazing(&device("grazing_rigid")).unwrap());
 }
 
+/// The recorded band-limit study (`data/recorded/band-limit/records.csv`): its records, and
+/// its cells, each of which must hold every record the study states.
+fn band_study() -> (
+    Vec<endstop::validation::band_limit::BandRecord>,
+    Vec<endstop::validation::band_limit::BandCell>,
+) {
+    use endstop::validation::band_limit::{self, BandCell, DEVICES};
+    let text = std::fs::read_to_string(root().join("data/recorded/band-limit/records.csv"));
+    let records = band_limit::parse_records(&text.unwrap()).unwrap();
+    let mut cells = Vec::new();
+    for (i, case) in DEVICES.iter().enumerate() {
+        let d = case.device(&device(case.file)).unwrap();
+        for b in band_limit::BANDWIDTHS_HZ {
+            cells.push(
+                BandCell::of(i, &d, b, &records, band_limit::RECORDS_PER_CELL)
+                    .unwrap_or_else(|e| panic!("{}: {e}", case.label)),
+            );
+        }
+    }
+    (records, cells)
+}
+
+/// Whether the recorded band-limit study confirms the rigid stops' impact term.
+fn impact_term_confirmed() -> bool {
+    endstop::validation::band_limit::BandVerdict::of(&band_study().1)
+        .unwrap()
+        .consistent()
+}
+
 /// The exact law of random vibration on three devices: linear (piezoelectric), Hertz stops
-/// with an electromagnetic transducer, rigid stops with a piezoelectric one.
+/// with an electromagnetic transducer, rigid stops with a piezoelectric one: each ensemble's
+/// drive power, and its ledger's closure. The rigid stops' drive row is judged only if the
+/// band-limit study confirms its impact term; else it is an open question and only its
+/// ledger's closure is asserted.
 #[test]
-fn random_drive_power_and_dissipation_obey_the_white_noise_law() {
+fn random_drive_power_obeys_the_white_noise_law_and_the_ledgers_close() {
+    let confirmed = impact_term_confirmed();
     for name in [
         "random_linear_piezo",
         "random_hertz_em",
@@ -93,8 +129,48 @@ fn random_drive_power_and_dissipation_obey_the_white_noise_law() {
             e.mean(|r| r.internal_w),
             e.mean(|r| r.stop_w)
         );
-        assert_all(&endstop::validation::random_law::checks(&e));
+        let checks = endstop::validation::random_law::checks(&e, confirmed);
+        assert_eq!(checks.len(), 2, "one law row and one ledger row");
+        assert_eq!(
+            checks[0].is_open(),
+            name == "random_restitution" && !confirmed
+        );
+        assert_all(&checks);
     }
+}
+
+/// The recorded band-limit study (`data/recorded/band-limit/`): it holds every record of every
+/// cell the study states, its verdict is computed from them, and it is the current code's
+/// output: its cheapest cell, run again, gives the recorded drive powers record by record
+/// (exactly on a machine that computes as the recording's did; elsewhere the pairs'
+/// differences average to zero within 4 standard errors, a few hundredths of a per cent: a
+/// drive 2 % too strong is 30 standard errors off). About 6 s of processor time.
+#[test]
+fn the_recorded_band_limit_study_is_complete_and_the_current_codes() {
+    use endstop::validation::band_limit::{self, BandVerdict, DEVICES};
+    let (records, cells) = band_study();
+    let verdict = BandVerdict::of(&cells).unwrap();
+    eprintln!("{verdict:?}");
+    for c in &cells {
+        eprintln!(
+            "{} B = {} Hz: shortfall {:.4} +- {:.4} %, estimate {:.4} %, z {:+.2}",
+            DEVICES[c.device].label,
+            c.bandwidth_hz,
+            100.0 * c.shortfall.mean,
+            100.0 * c.shortfall.ci95,
+            100.0 * c.estimate,
+            c.z()
+        );
+    }
+    // The cheapest cell: the chapter's rigid-stop device at the narrowest band.
+    let b = band_limit::BANDWIDTHS_HZ[0];
+    let d = DEVICES[0].device(&device(DEVICES[0].file)).unwrap();
+    let rerun = band_limit::run_cell(0, &d, b, band_limit::RECORDS_PER_CELL).unwrap();
+    let (z, same) = band_limit::rerun_agrees(&rerun, &records, 4.0).unwrap();
+    assert!(
+        same,
+        "the re-run differs from the recording by {z:.2} standard errors"
+    );
 }
 
 fn nlvib_reference() -> endstop::validation::nlvib::Reference {

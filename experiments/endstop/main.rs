@@ -15,6 +15,7 @@
 //! the description allows runs (any stops, any transducer); the column names are the same for
 //! every device, and for a transducer with one load the second load's columns are zero.
 
+mod interface;
 mod random;
 mod response;
 
@@ -68,6 +69,9 @@ enum Study {
     /// frequency (pseudo-arclength, through folds) with their Floquet multipliers, and the
     /// folds and grazing points on the branch.
     Response(response::ResponseArgs),
+    /// Charge the storage of a device with an interface circuit: the time for its voltage to
+    /// go from a start value to a target under a sine, with V_s(t).
+    Charge(interface::ChargeArgs),
     /// Fit free device parameters to measured sweeps (CSV with units in the header): the
     /// fitted device file with provenance, values with standard errors and 95 % intervals,
     /// their correlation, warnings for what the data do not determine, and plots of the data
@@ -237,6 +241,7 @@ pub(crate) fn step_effect(what: &str, at_step: f64, at_quarter: Option<f64>) -> 
 fn main() {
     common::run_main("endstop", || match Cli::parse().study {
         Study::Sweep(a) => sweep(a),
+        Study::Charge(a) => interface::charge(a),
         Study::Random(a) => random::random(a),
         Study::Response(a) => response::response(a),
         Study::Fit(a) => common::fit_io::run(a),
@@ -262,6 +267,14 @@ pub(crate) fn start(
 ) -> Result<(Experiment, LoadedDevice, Device)> {
     let loaded = load_device_file(path)?;
     let mut device = loaded.device.clone();
+    if !device.interface.is_resistive() && !matches!(name, "endstop-sweep" | "endstop-charge") {
+        bail!(
+            "device `{}` has an interface circuit (`{}`): `endstop sweep` and `endstop charge` \
+             take it; this study models resistive loads only",
+            device.name,
+            device.interface.key()
+        );
+    }
     if let Some(v) = bias_v {
         if device.bias_v().is_none() {
             bail!(
@@ -280,6 +293,9 @@ pub(crate) fn start(
 }
 
 fn sweep(a: RangeArgs) -> Result<()> {
+    if !load_device_file(&a.device)?.device.interface.is_resistive() {
+        return interface::dc_sweep(a);
+    }
     a.check()?;
     let (mut exp, loaded, device) = start("endstop-sweep", &a.device, a.bias_v, a.out.clone())?;
     let protocol = a.protocol(&device);
@@ -412,5 +428,40 @@ pub(crate) fn describe(device: &Device) -> String {
             side(device.stops.lower.as_ref())
         ),
     };
-    format!("{transducer}, {stops}")
+    format!("{transducer}, {stops}{}", suspension(device))
+}
+
+/// A nonlinear suspension's form and static equilibria, for [`describe`] (empty for a linear
+/// one).
+fn suspension(device: &Device) -> String {
+    use endstop::physics::suspension::Place;
+    if device.mechanics.suspension.is_linear() {
+        return String::new();
+    }
+    let eq: Vec<String> = device
+        .equilibria()
+        .iter()
+        .map(|e| {
+            format!(
+                "{} um {}{}",
+                fmt_sig(e.x_m * 1e6, 4),
+                if e.stable { "stable" } else { "unstable" },
+                match e.place {
+                    Place::Free => "",
+                    Place::UpperStop => " on the upper stop",
+                    Place::LowerStop => " on the lower stop",
+                }
+            )
+        })
+        .collect();
+    format!(
+        ", `{}` suspension (static equilibria: {}; small oscillations at the reference well: \
+         {} Hz)",
+        device.mechanics.suspension.key(),
+        eq.join(", "),
+        fmt_sig(
+            device.suspension_omega_rad_s() / (2.0 * std::f64::consts::PI),
+            4
+        )
+    )
 }

@@ -7,14 +7,14 @@ use std::sync::Arc;
 use anyhow::{bail, Result};
 use clap::Parser;
 use endstop::device::Device;
+use endstop::paper::setups::paper_record;
 use endstop::physics::linear::{white_noise_power_w, LinearResponse};
 use endstop::physics::two_port::TwoPort;
 use endstop::signal::bandwidth::{restrict, Widths};
 use endstop::signal::{welch, Psd};
 use endstop::study::ensemble::EnsembleSpec;
 use endstop::study::record::{
-    output_psd, simulate_drive, transient_s, FreeFlightPath, RecordSpec, SampledDrive, Scheme,
-    DEFAULT_RTOL,
+    output_psd, simulate_drive, transient_s, FreeFlightPath, RecordSpec, SampledDrive, Scheme, DEFAULT_RTOL,
 };
 use endstop::G;
 use endstop_experiments as common;
@@ -91,16 +91,6 @@ fn free_flight_label(p: FreeFlightPath) -> String {
     }
 }
 
-/// The linear theory's output PSD (W/Hz, one-sided) at `freq_hz` under a drive of two-sided
-/// density `sa_si(f)` ((m/s^2)^2/Hz).
-fn linear_psd(lin: &LinearResponse, freq_hz: &[f64], sa_si: impl Fn(usize) -> f64) -> Vec<f64> {
-    freq_hz
-        .iter()
-        .enumerate()
-        .map(|(i, &f)| lin.output_psd_w_per_hz(sa_si(i), f))
-        .collect()
-}
-
 /// The two panels: the output power PSD beside its linear theory, and the drive's PSD.
 fn spectra_plot(device: &Device, title: &str, out: &Psd, linear: &[f64], drive: &Psd) -> Panels {
     let pts = |p: &[f64], f: &[f64], scale: f64| -> Vec<(f64, f64)> {
@@ -156,7 +146,7 @@ fn noise(a: &RandomArgs, psd: f64) -> Result<()> {
     }
     let (mut exp, loaded, device) = start("endstop-random", &a.device, a.bias_v, a.out.clone())?;
     exp.seed = Some(a.seed);
-    let mut record = RecordSpec::paper(&device, psd);
+    let mut record = paper_record(&device, psd);
     record.noise.duration_s = a.duration_s;
     let spec = EnsembleSpec::for_device(&device, record, a.seed, a.records);
     let nperseg = spec.welch.nperseg;
@@ -168,7 +158,7 @@ fn noise(a: &RandomArgs, psd: f64) -> Result<()> {
     let m = out.freq_hz.len();
     let sa_si = psd * G * G;
     let lin = LinearResponse::of(&device);
-    let linear = linear_psd(&lin, &out.freq_hz, |_| sa_si);
+    let linear = lin.output_psd(sa_si, &out.freq_hz).density;
     let mut df = df!(
         "freq_hz" => out.freq_hz.clone(),
         "out_psd_uw_per_hz" => out.density.iter().map(|d| d * 1e6).collect::<Vec<_>>(),
@@ -192,6 +182,7 @@ fn noise(a: &RandomArgs, psd: f64) -> Result<()> {
     )?;
     exp.write_parquet("records", &mut per, &device.params)?;
 
+    let disp = displacement(&mut exp, &device, &spec.record, &ens, a)?;
     let band_hz = spec.record.noise.bandwidth_hz;
     let linear_w = white_noise_power_w(&device, sa_si, 1e-3, band_hz);
     let eq21 =
@@ -242,6 +233,7 @@ fn noise(a: &RandomArgs, psd: f64) -> Result<()> {
     if paths.iter().any(|p| p != &paths[0]) {
         md.push_str("- (the records did not all take the same path; see records.parquet)\n");
     }
+    md.push_str(&disp.md);
     exp.write_numbers_md(&md)?;
     print!("{md}");
     let drive = Psd {
@@ -249,15 +241,119 @@ fn noise(a: &RandomArgs, psd: f64) -> Result<()> {
         density: vec![psd; m],
         segments: 0,
     };
-    let plot = spectra_plot(
+    let mut panels = spectra_plot(
         &device,
         &format!("Output PSD at Sa = {psd} g^2/Hz"),
         out,
         &linear,
         &drive,
-    );
+    )
+    .panels;
+    panels.push(disp.plot);
+    let plot = Panels::row(panels);
     exp.write_plot(&plot)?;
     exp.finish()
+}
+
+/// Fine bins of the displacement histogram.
+const DISPLACEMENT_BINS: usize = 80;
+
+/// The displacement outputs of an ensemble: its table, its lines in the numbers and its panel.
+struct Displacement {
+    md: String,
+    plot: LinePlot,
+}
+
+/// Reads the ensemble's displacement (a second pass over the same records, streams
+/// `0..records` of the seed): the histogram with its 95 % interval across records, beside the
+/// exact stationary density where it applies (viscous damping only, lossless stops), and for
+/// a device with two wells the rate of well-to-well transitions.
+fn displacement(
+    exp: &mut common::Experiment,
+    device: &Device,
+    record: &RecordSpec,
+    ens: &endstop::study::ensemble::Ensemble,
+    a: &RandomArgs,
+) -> Result<Displacement> {
+    use endstop::study::displacement::{displacement_ensemble, DisplacementBins};
+    use endstop::validation::stationary_law::StationaryLaw;
+    let reach = 1.02 * ens.x_peak_m.max(f64::MIN_POSITIVE);
+    let bins = DisplacementBins::uniform(device, -reach, reach, DISPLACEMENT_BINS);
+    let de = common::with_progress(1, "displacement pass over the records", |tick| {
+        let r = displacement_ensemble(device, record, &bins, a.seed, a.records as u64);
+        tick();
+        r
+    })?;
+    let law = StationaryLaw::of(device, record).ok();
+    let dens = de.density();
+    let n = dens.len();
+    let exact: Vec<f64> = dens
+        .iter()
+        .map(|(x, _, _)| law.as_ref().map_or(f64::NAN, |l| l.density(*x)))
+        .collect();
+    let mut df = df!(
+        "x_m" => dens.iter().map(|d| d.0).collect::<Vec<_>>(),
+        "density_per_m" => dens.iter().map(|d| d.1).collect::<Vec<_>>(),
+        "density_ci95_per_m" => dens.iter().map(|d| d.2).collect::<Vec<_>>(),
+        "exact_density_per_m" => exact.clone(),
+        "params" => vec![device.params.clone(); n],
+    )?;
+    exp.write_parquet("displacement_pdf", &mut df, &device.params)?;
+    let mut md = String::new();
+    let rate = de.transition_rate();
+    if let Some(([lo, hi], _)) = bins.wells {
+        exp.number("transition_rate_per_s", rate.mean);
+        exp.number("transition_rate_ci95_per_s", rate.ci95);
+        md.push_str(&format!(
+            "- well-to-well transitions (wells at {} and {} um): {} per s ± {} (95 %), {} in all\n",
+            fmt_sig(lo * 1e6, 4),
+            fmt_sig(hi * 1e6, 4),
+            fmt_sig(rate.mean, 4),
+            fmt_sig(rate.ci95, 2),
+            de.transitions()
+        ));
+        let share = de.stat(|r| r.upper_well_share);
+        exp.number("upper_well_share", share.mean);
+    }
+    md.push_str(&format!(
+        "- displacement density: {DISPLACEMENT_BINS} bins over ±{} um, with its 95 % interval \
+         across records (displacement_pdf.parquet){}\n",
+        fmt_sig(reach * 1e6, 4),
+        if law.is_some() {
+            "; beside the exact stationary density exp(-U/theta), which applies to this device"
+        } else {
+            ""
+        }
+    ));
+    let um = |x: f64| x * 1e6;
+    let mut series = vec![Series::new(
+        "ensemble (bars: 95 %)",
+        dens.iter().map(|d| (um(d.0), d.1 / 1e6)).collect(),
+        PALETTE[0],
+        Style::LinePoints,
+    )];
+    series.extend(common::plot::error_bars(
+        dens.iter().map(|d| (um(d.0), d.1 / 1e6, d.2 / 1e6)),
+        PALETTE[0],
+    ));
+    if law.is_some() {
+        series.push(Series::new(
+            "exact stationary law",
+            dens.iter()
+                .zip(&exact)
+                .map(|(d, e)| (um(d.0), e / 1e6))
+                .collect(),
+            PALETTE[1],
+            Style::Dashed,
+        ));
+    }
+    let plot = LinePlot::new(
+        "Displacement density",
+        "displacement x [um]",
+        "probability density [1/um]",
+        series,
+    );
+    Ok(Displacement { md, plot })
 }
 
 /// The most samples a resampled measured record may have.
@@ -317,7 +413,7 @@ fn measured(a: &RandomArgs, path: PathBuf) -> Result<()> {
     let out_rec = simulate_drive(&device, &drive, DEFAULT_RTOL, Scheme::Exponential)?;
 
     // The Welch segmenting and analysis band the noise ensembles use, for this length.
-    let mut spec_rec = RecordSpec::paper(&device, 1.0);
+    let mut spec_rec = paper_record(&device, 1.0);
     spec_rec.noise.sample_rate_hz = fs;
     spec_rec.noise.duration_s = (accel.len() - n_tr) as f64 / fs;
     let spec = EnsembleSpec::for_device(&device, spec_rec, 0, 1);
@@ -336,7 +432,13 @@ fn measured(a: &RandomArgs, path: PathBuf) -> Result<()> {
     };
     let drive_band = restrict(&drive_psd, lo, hi);
     let lin = LinearResponse::of(&device);
-    let linear_full = linear_psd(&lin, &drive_psd.freq_hz, |i| drive_psd.density[i] * G * G);
+    // The drive's own two-sided density at each frequency, through the same linear PSD.
+    let linear_full: Vec<f64> = drive_psd
+        .freq_hz
+        .iter()
+        .zip(&drive_psd.density)
+        .map(|(&f, &sa_g2)| lin.output_psd_w_per_hz(sa_g2 * G * G, f))
+        .collect();
     let df_hz = drive_psd.df();
     let linear_w: f64 = linear_full.iter().sum::<f64>() * df_hz;
     let linear_band: Vec<f64> = drive_psd

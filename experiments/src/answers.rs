@@ -10,7 +10,7 @@
 use std::collections::BTreeMap;
 
 use anyhow::Result;
-use endstop::paper::claims::{Row, Verdict};
+use endstop::paper::claims::{Answer, Row, Verdict};
 use endstop::paper::setups::ParamSet;
 
 use crate::{book_generated_root, fmt_sig, write_atomic};
@@ -30,11 +30,11 @@ pub fn chapter_of(claim: &str) -> Option<String> {
 
 /// A value in the row's unit: yes/no for a yes/no claim, else four significant digits with
 /// the unit.
-fn value(v: f64, unit: &str) -> String {
-    match unit {
-        "bool" => (if v == 1.0 { "yes" } else { "no" }).to_string(),
-        "" => fmt_sig(v, 4),
-        _ => format!("{} {unit}", fmt_sig(v, 4)),
+fn value(v: Answer, unit: &str) -> String {
+    match (v, unit) {
+        (Answer::YesNo(yes), _) => (if yes { "yes" } else { "no" }).to_string(),
+        (Answer::Number(v), "") => fmt_sig(v, 4),
+        (Answer::Number(v), _) => format!("{} {unit}", fmt_sig(v, 4)),
     }
 }
 
@@ -43,10 +43,12 @@ fn ours(r: &Row) -> String {
     let Some(v) = r.ours else {
         return "not yet".into();
     };
-    let mut s = match (r.uncertainty, r.unit.as_str()) {
-        (Some(u), "") => format!("{} ± {}", fmt_sig(v, 4), fmt_sig(u, 2)),
-        (Some(u), unit) => format!("{} ± {} {unit}", fmt_sig(v, 4), fmt_sig(u, 2)),
-        (None, unit) => value(v, unit),
+    let mut s = match (v, r.uncertainty, r.unit.as_str()) {
+        (Answer::Number(v), Some(u), "") => format!("{} ± {}", fmt_sig(v, 4), fmt_sig(u, 2)),
+        (Answer::Number(v), Some(u), unit) => {
+            format!("{} ± {} {unit}", fmt_sig(v, 4), fmt_sig(u, 2))
+        }
+        (_, _, unit) => value(v, unit),
     };
     s.push_str(match r.verdict {
         Verdict::Reproduced => ", **reproduced**",
@@ -137,14 +139,14 @@ fn response_box(rows: &[&Row]) -> String {
          > |---|---|---|---|---|---|\n",
     );
     for r in rows {
-        let (Some(jump), Some(fold)) = (r.ours, r.fold_hz) else {
+        let (Some(jump), Some(fold)) = (r.ours.and_then(Answer::number), r.fold_hz) else {
             continue;
         };
         md.push_str(&format!(
             "> | {} | {} | {} | {jump:.2} | {fold:.2} | {:+.2} |\n",
             r.claim,
             r.set,
-            r.paper,
+            r.paper.to_f64(),
             jump - fold
         ));
     }

@@ -28,7 +28,9 @@ pub fn write(
     exp.uses(prototype2, ParamSet::Published.label());
     exp.claims(Fig15::claims(run, claims)?);
     let f = fig15::findings(run, claims);
-    let paper_ratio = claims.claim(RATIO_CLAIM).map_or(f64::NAN, |c| c.paper);
+    let paper_ratio = claims
+        .claim(RATIO_CLAIM)
+        .map_or(f64::NAN, |c| c.paper.to_f64());
     let levels = &run.levels;
     let lin = &run.linear;
 
@@ -93,7 +95,9 @@ pub fn write(
     );
     exp.write_plot(&plot)?;
     write_single_record_plot(&exp, &levels[L034])?;
-    let paper_bw_hz = claims.claim(keys::F15A_BW).map_or(f64::NAN, |c| c.paper);
+    let paper_bw_hz = claims
+        .claim(keys::F15A_BW)
+        .map_or(f64::NAN, |c| c.paper.to_f64());
     write_spread_plots(&exp, run, &f, paper_bw_hz, paper_ratio)?;
     exp.finish()
 }

@@ -10,8 +10,7 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, Result};
 use clap::Parser;
 use endstop::fit::{
-    fit, model_sweep, Direction, FeatureKind, FitReport, FreeParam, LmSettings, SweepData,
-    ACCEL_SCALE_PATH,
+    fit, model_curve, Direction, FitReport, FitSettings, FreeParam, SweepData, ACCEL_SCALE_PATH,
 };
 use polars::prelude::*;
 use sha2::{Digest, Sha256};
@@ -40,6 +39,10 @@ pub struct FitArgs {
     /// Output directory; default: data/results/endstop-fit.
     #[arg(long)]
     pub out: Option<PathBuf>,
+    /// A measured output spectrum instead of sweeps, `PSD.csv:S[:N]` (see
+    /// `crate::spectrum_io`).
+    #[arg(long)]
+    pub spectrum: Option<String>,
 }
 
 fn sha256_hex(bytes: &[u8]) -> String {
@@ -51,6 +54,9 @@ fn sha256_hex(bytes: &[u8]) -> String {
 
 /// Runs `endstop fit`.
 pub fn run(a: FitArgs) -> Result<()> {
+    if let Some(s) = &a.spectrum {
+        return crate::spectrum_io::run(&a.device, s, &a.free, a.out.clone());
+    }
     let loaded = load_device_file(&a.device)?;
     let free: Vec<FreeParam> = a
         .free
@@ -105,7 +111,7 @@ pub fn run(a: FitArgs) -> Result<()> {
     let mut exp = Experiment::start_in("endstop-fit", out);
     exp.uses(&loaded, &loaded.device.params);
     let report = crate::with_progress(1, "fit", |_| {
-        fit(&loaded.device, &data, &free, &LmSettings::default())
+        fit(&loaded.device, &data, &free, &FitSettings::default())
     })?;
     let command: Vec<String> = std::env::args().collect();
     write_outputs(&mut exp, &report, &data, &hashes, &command.join(" "))?;
@@ -125,8 +131,14 @@ pub fn fitted_toml(report: &FitReport, hashes: &[(String, String)], command: &st
     }
     for p in &report.params {
         s.push_str(&format!(
-            "# fitted {} = {:e} (std error {:e}; 95 % {:e} .. {:e})\n",
-            p.path, p.value, p.std_err, p.interval.0, p.interval.1
+            "# fitted {} = {:e} (std error {:e}; 95 % {:e} .. {:e}; chi-square per degree of \
+             freedom {})\n",
+            p.path,
+            p.value,
+            p.std_err,
+            p.interval.0,
+            p.interval.1,
+            fmt_chi2(report.reduced_chi2)
         ));
     }
     if report.params.iter().any(|p| p.path == ACCEL_SCALE_PATH) {
@@ -143,31 +155,56 @@ pub fn fitted_toml(report: &FitReport, hashes: &[(String, String)], command: &st
     s
 }
 
+/// The reduced chi-square for tables ("-" without degrees of freedom).
+fn fmt_chi2(c: f64) -> String {
+    if c.is_finite() {
+        fmt_sig(c, 3)
+    } else {
+        "- (no degrees of freedom)".into()
+    }
+}
+
 /// The results table, correlation and warnings in Markdown.
 pub fn results_markdown(report: &FitReport) -> String {
-    let mut md = String::from("| parameter | start | fitted | std error | 95 % interval | range |\n|---|---|---|---|---|---|\n");
+    let mut md = String::from("| parameter | start | fitted | std error | 95 % interval | chi2/dof | range |\n|---|---|---|---|---|---|---|\n");
     for p in &report.params {
         md.push_str(&format!(
-            "| `{}` | {} | {} | {} | {} .. {} | {} .. {} |\n",
+            "| `{}` | {} | {} | {} | {} .. {} | {} | {} .. {} |\n",
             p.path,
             fmt_sig(p.start, 4),
             fmt_sig(p.value, 5),
             fmt_sig(p.std_err, 3),
             fmt_sig(p.interval.0, 4),
             fmt_sig(p.interval.1, 4),
+            fmt_chi2(report.reduced_chi2),
             fmt_sig(p.range.0, 3),
             fmt_sig(p.range.1, 3),
         ));
     }
+    let p_value = report.chi2_p.map_or(String::new(), |p| {
+        format!(" (probability of a larger chi-square {})", fmt_sig(p, 3))
+    });
     md.push_str(&format!(
-        "\nUncertainty: {}. Weighted SSR {} with {} degrees of freedom; {} sweep evaluations, \
-         {} iterations, stop: {:?}.\n\nCorrelation of the estimates:\n\n|  | {} |\n|---|{}\n",
+        "\nUncertainty: {}. Weighted SSR {} with {} degrees of freedom, chi-square per degree of \
+         freedom {}{}. Model: {}; {} model evaluations ({} trial points could not be \
+         evaluated), {} iterations, stop: {:?}; {} start(s) tried, the reported one {}.\n\n\
+         Correlation of the estimates:\n\n|  | {} |\n|---|{}\n",
         report.uncertainty.describe(),
         fmt_sig(report.ssr, 4),
         report.dof,
+        fmt_chi2(report.reduced_chi2),
+        p_value,
+        report.model,
         report.evaluations,
+        report.failed_trials,
         report.iterations,
         report.stop,
+        report.starts_tried,
+        if report.best_start == 0 {
+            "from the device file's values".to_string()
+        } else {
+            format!("from Sobol start {}", report.best_start)
+        },
         report
             .params
             .iter()
@@ -227,6 +264,8 @@ fn write_outputs(
         exp.number(&format!("{}_hi95", p.path), p.interval.1);
     }
     exp.number("ssr", report.ssr);
+    exp.number("reduced_chi2", report.reduced_chi2);
+    exp.number("starts_tried", report.starts_tried as f64);
     exp.number("singular_ratio", report.singular_ratio);
     exp.number("warnings", report.warnings.len() as f64);
 
@@ -241,7 +280,7 @@ fn write_outputs(
         let name = Path::new(&d.label)
             .file_name()
             .map_or(d.label.clone(), |f| f.to_string_lossy().into_owned());
-        let m = model_sweep(&report.device, report.accel_scale, d)?;
+        let m = model_curve(&report.device, report.accel_scale, d)?;
         for &(_, v) in &m.curve {
             y0 = y0.min(v);
             y1 = y1.max(v);
@@ -264,12 +303,15 @@ fn write_outputs(
                 Style::Points,
             ));
         }
-        for f in &d.features {
-            let model_f = match f.kind {
-                FeatureKind::Onset => m.onset_hz,
-                FeatureKind::BranchEnd => m.branch_end_hz,
-            };
-            feature_lines.push((f.freq_hz, model_f, c, f.kind.label(), name.clone()));
+        // The fitted model's features: those of the residual rows (the located grazing and
+        // fold), in the data set's order of features.
+        let model_features: Vec<f64> = r
+            .iter()
+            .filter(|x| x.dataset == d.label && x.what != "point")
+            .map(|x| x.model)
+            .collect();
+        for (f, &model_f) in d.features.iter().zip(&model_features) {
+            feature_lines.push((f.freq_hz, Some(model_f), c, f.kind.label(), name.clone()));
         }
         resid.push(Series::new(
             &name,

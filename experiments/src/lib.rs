@@ -6,6 +6,7 @@
 //! Every file is written to a temporary name in the same directory and renamed, so a failed
 //! run never leaves a partial output behind.
 pub mod answers;
+pub mod band_limit_io;
 pub mod book;
 pub mod broadband_io;
 pub mod calibration_io;
@@ -14,6 +15,7 @@ pub mod fit_csv;
 pub mod fit_io;
 pub mod frame;
 pub mod freshness;
+pub mod history_io;
 pub mod jobs;
 pub mod md;
 pub mod measured_io;
@@ -21,6 +23,8 @@ pub mod narrowband_io;
 pub mod panels;
 pub mod plot;
 pub mod response_io;
+pub mod spectrum_io;
+pub mod springs_io;
 
 pub use calibration_io::{calibrated_prototype1, prototype1_both_sets};
 

@@ -3,7 +3,7 @@
 //! the cells of the claims and convergence tables of the book.
 
 use endstop::device::{Device, StiffnessModel, Stop, StopLaw};
-use endstop::paper::claims::{Claim, Value};
+use endstop::paper::claims::{Answer, Claim, Value};
 use endstop::paper::curves::{law_key, Curve, CurveConvergence};
 use endstop::paper::setups::ParamSet;
 use endstop::study::steady::Measurement;
@@ -120,16 +120,15 @@ pub fn claim_cells(claim: &Claim, values: &[Value], set: ParamSet, sig: usize) -
     else {
         return ["-".into(), "no value".into(), "not yet".into()];
     };
-    let ours = if claim.unit == "bool" {
-        if v.ours > 0.5 { "yes" } else { "no" }.to_string()
-    } else {
-        format!(
+    let ours = match v.ours {
+        Answer::YesNo(yes) => yes_no(yes).to_string(),
+        Answer::Number(x) => format!(
             "{}{}",
-            crate::fmt_sig(v.ours, sig),
+            crate::fmt_sig(x, sig),
             v.uncertainty
                 .map(|u| format!(" +- {}", crate::fmt_sig(u, 1)))
                 .unwrap_or_default()
-        )
+        ),
     };
     [
         ours,
@@ -138,12 +137,20 @@ pub fn claim_cells(claim: &Claim, values: &[Value], set: ParamSet, sig: usize) -
     ]
 }
 
-/// The paper's value of a claim for a table: "yes" for a qualitative claim.
+/// The paper's value of a claim for a table: yes/no for a qualitative claim.
 pub fn paper_cell(claim: &Claim) -> String {
-    if claim.unit == "bool" {
-        "yes".to_string()
+    match claim.paper {
+        Answer::YesNo(yes) => yes_no(yes).to_string(),
+        Answer::Number(v) => format!("{v} {}", claim.unit),
+    }
+}
+
+/// A yes/no as the tables write it.
+fn yes_no(yes: bool) -> &'static str {
+    if yes {
+        "yes"
     } else {
-        format!("{} {}", claim.paper, claim.unit)
+        "no"
     }
 }
 

@@ -1,5 +1,5 @@
 //! Property tests of bad input: generated device files, measured records and `endstop`
-//! command lines never make the library or the tool panic. A device file or a record either
+//! command lines (every study, `fit` included) never make the library or the tool panic. A device file or a record either
 //! loads or is refused with an error that names its source; a command line either runs or
 //! exits with a message, never a panic, an abort, or a run past its time limit.
 
@@ -16,13 +16,15 @@ use proptest::sample::select;
 const BIN: &str = env!("CARGO_BIN_EXE_endstop");
 
 /// The device files a generated file starts from: the paper's two and every example.
-const DEVICE_FILES: [&str; 6] = [
+const DEVICE_FILES: [&str; 8] = [
     "data/prototype1.toml",
     "data/prototype2.toml",
     "data/examples/my_harvester.toml",
     "data/examples/piezo_cantilever.toml",
     "data/examples/em_asymmetric.toml",
     "data/examples/rigid_restitution.toml",
+    "data/examples/piezo_bridge.toml",
+    "data/examples/em_bridge.toml",
 ];
 
 fn repo(rel: &str) -> PathBuf {
@@ -144,6 +146,17 @@ proptest! {
                 let _ = endstop::study::record::transient_s(&d);
                 let lin = endstop::physics::linear::LinearResponse::of(&d);
                 let _ = lin.output_psd_w_per_hz(1.0, f0);
+                // An interface circuit: its model, and its right-hand side and guards at rest.
+                if let Some(m) = endstop::physics::interface::Interfaced::new(
+                    &d,
+                    endstop::drive::Sine::from_rms_g(0.1, f0),
+                ) {
+                    use endstop::ode::HybridSystem;
+                    let y = endstop::physics::harvester::State::zeros();
+                    let mode = m.mode_of(&y);
+                    let _ = m.rhs(mode, 0.0, &y);
+                    let _ = m.guards(mode, 0.0, &y);
+                }
             }
             Err(e) => prop_assert!(e.to_string().contains("gen.toml"), "{e}"),
         }
@@ -261,16 +274,68 @@ fn command_line() -> impl Strategy<Value = Vec<String>> {
         opt("--accel-scale", vec!["20", "0", "-1", "nan", "1e300"]),
         opt("--sample-rate-hz", vec!["1e5", "1e15", "0", "nan", "10"]),
     );
+    // `fit`: measured files (a small valid one first) and free parameters, valid or not.
+    let fit = (
+        opt(
+            "--up-sweep",
+            vec![
+                "experiments/tests/fixtures/fit_small_up.csv",
+                "data/no_such_sweep.csv",
+                "data",
+                "data/examples/machine_record.wav",
+                "data/examples/piezo_cantilever.toml",
+            ],
+        ),
+        prop::option::weighted(
+            0.2,
+            select(vec![
+                "experiments/tests/fixtures/fit_small_up.csv",
+                "data/no_such_sweep.csv",
+            ]),
+        )
+        .prop_map(|v| v.map_or_else(Vec::new, |v| vec!["--down-sweep".into(), v.into()])),
+        opt(
+            "--free",
+            vec![
+                "mechanics.damping_n_s_per_m=0.01..1",
+                "stops.upper.gap_m=0.05e-3..0.3e-3",
+                "stops.both.gap_m=4e-6..9.9e-6",
+                "mechanics.no_such_key=1..2",
+                "stops.upper.gap_m=0.3e-3..0.05e-3",
+                "stops.upper.gap_m=nan..1",
+                "drive.accel_scale=0..2",
+                "drive.accel_scale=0.5..2",
+                "x",
+                "",
+            ],
+        ),
+        prop::option::weighted(
+            0.3,
+            select(vec![
+                "drive.accel_scale=0.5..2",
+                "mechanics.damping_n_s_per_m=0.01..1",
+                "stops.upper.damping_n_s_per_m=1e300..1e301",
+            ]),
+        )
+        .prop_map(|v| v.map_or_else(Vec::new, |v| vec!["--free".into(), v.into()])),
+    );
     (
-        select(vec!["sweep", "response", "random", "random", "bogus"]),
+        select(vec![
+            "sweep", "response", "random", "random", "fit", "fit", "bogus",
+        ]),
         device,
         range,
         random,
+        fit,
         any::<bool>(),
     )
-        .prop_map(|(study, device, r, x, surplus)| {
+        .prop_map(|(study, device, r, x, f, surplus)| {
             let mut args = vec![study.to_string(), "--device".into(), device.into()];
-            if study == "random" {
+            if study == "fit" {
+                for o in [f.0, f.1, f.2, f.3] {
+                    args.extend(o);
+                }
+            } else if study == "random" {
                 for o in [x.0, x.1, x.2, x.3, x.4, x.5, x.6, r.4] {
                     args.extend(o);
                 }

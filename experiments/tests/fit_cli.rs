@@ -19,23 +19,36 @@ fn scratch(name: &str) -> PathBuf {
     d
 }
 
-/// Prototype 2 with a 9 um gap (the truth), and the file text of a start away from it.
+/// The piezoelectric example with its stop at 0.12 mm and 0.8 N s/m (the truth), and the
+/// example file itself (0.1 mm, 0.5 N s/m) as the start.
 fn devices() -> (Device, String) {
+    let text = std::fs::read_to_string(root().join("data/examples/piezo_cantilever.toml")).unwrap();
+    let start = Device::from_toml_str(&text, "piezo_cantilever").unwrap();
+    let truth = start
+        .with_param("stops.upper.gap_m", 0.12e-3)
+        .unwrap()
+        .with_param("stops.upper.damping_n_s_per_m", 0.8)
+        .unwrap();
+    (truth, text)
+}
+
+/// Prototype 2 with its gap at 8.3 um, the device of the bad-input cases (refused before any
+/// fitting).
+fn p2_start() -> String {
     let text = std::fs::read_to_string(root().join("data/prototype2.toml")).unwrap();
-    let p2 = Device::from_toml_str(&text, "prototype2").unwrap();
-    let truth = p2.with_param("stops.both.gap_m", 9e-6).unwrap();
-    let start = truth
+    Device::from_toml_str(&text, "prototype2")
+        .unwrap()
         .with_param("stops.both.gap_m", 8.3e-6)
         .unwrap()
         .with_param("mechanics.damping_n_s_per_m", 3.2e-5)
-        .unwrap();
-    (truth, start.to_toml_string())
+        .unwrap()
+        .to_toml_string()
 }
 
-/// The truth's 0.3 g up-sweep 600..760 Hz as a measured file, without noise, with a 2 %
-/// standard deviation column and the jump.
+/// The truth's 0.5 g up-sweep 100..160 Hz in 2 Hz steps as a measured file, without noise,
+/// with a 2 % standard deviation column and the jump.
 fn sweep_csv(truth: &Device) -> String {
-    let freqs: Vec<f64> = (0..=16).map(|i| 600.0 + 10.0 * i as f64).collect();
+    let freqs: Vec<f64> = (0..=30).map(|i| 100.0 + 2.0 * i as f64).collect();
     let template = SweepData {
         label: "t".into(),
         direction: Direction::Up,
@@ -52,13 +65,13 @@ fn sweep_csv(truth: &Device) -> String {
         grid_hz: None,
         features: vec![Feature {
             kind: FeatureKind::BranchEnd,
-            freq_hz: 700.0,
+            freq_hz: 130.0,
             sigma_hz: 1.0,
         }],
     };
     let v = model_values(truth, 1.0, &template).unwrap();
     let mut s = format!(
-        "# accel_rms_g = 0.3\n# jump_hz = {}\n# jump_sigma_hz = 1\nfreq_hz,v1_rms_v,sigma_v\n",
+        "# accel_rms_g = 0.5\n# jump_hz = {}\n# jump_sigma_hz = 1\nfreq_hz,v1_rms_v,sigma_v\n",
         v[freqs.len()]
     );
     for (f, x) in freqs.iter().zip(&v) {
@@ -95,9 +108,9 @@ fn fit_writes_the_fitted_device_with_provenance_the_table_and_the_plots() {
             "--up-sweep",
             "up.csv",
             "--free",
-            "mechanics.damping_n_s_per_m=1e-5..1e-4",
+            "stops.upper.gap_m=0.05e-3..0.3e-3",
             "--free",
-            "stops.both.gap_m=7e-6..10e-6",
+            "stops.upper.damping_n_s_per_m=0.05..5",
             "--out",
             "out",
         ],
@@ -120,8 +133,8 @@ fn fit_writes_the_fitted_device_with_provenance_the_table_and_the_plots() {
     assert!(fitted.contains("# data: up.csv sha256 "), "{fitted}");
     assert!(fitted.contains("# command: ") && fitted.contains("# commit: "));
     // Noise-free data: the fit lands on the truth to well within the data's 2 %.
-    let gap = dev.param("stops.both.gap_m").unwrap();
-    assert!((gap / 9e-6 - 1.0).abs() < 2e-3, "gap {gap:e}");
+    let gap = dev.param("stops.upper.gap_m").unwrap();
+    assert!((gap / 0.12e-3 - 1.0).abs() < 2e-3, "gap {gap:e}");
     let md = std::fs::read_to_string(out.join("numbers.md")).unwrap();
     assert!(md.contains("Gauss-Newton covariance") && md.contains("95 % interval"));
     std::fs::remove_dir_all(&dir).ok();
@@ -130,8 +143,7 @@ fn fit_writes_the_fitted_device_with_provenance_the_table_and_the_plots() {
 #[test]
 fn bad_measured_files_and_free_parameters_are_named_errors_and_write_nothing() {
     let dir = scratch("bad");
-    let (_, start) = devices();
-    std::fs::write(dir.join("start.toml"), start).unwrap();
+    std::fs::write(dir.join("start.toml"), p2_start()).unwrap();
     let head = "# accel_rms_g = 0.3\n";
     let cases: [(&str, String, &str, &[&str]); 7] = [
         (

@@ -1,5 +1,7 @@
-"""Why the paper deviates, on a Dask cluster: the Sobol indices and the multi-claim calibration
-of ``just deviations``, with every design point and every calibration start a task of its own.
+"""Why the paper deviates, on a Dask cluster: the history match of ``just deviations`` (with
+``--history``: waves of runs, every run a task of its own, the emulators fitted between waves
+in this process), or the Saltelli Sobol indices and the multi-claim calibration (without it),
+with every design point and every calibration start a task of its own.
 
 This is the route for the studies one machine cannot run in the ``just deviations`` budget, above
 all those with the ensemble claims of Figures 12, 14 and 15 (``--ensemble-records``: each point
@@ -23,6 +25,14 @@ Writes, under ``--out-dir``:
         --out-dir study-p2                          # a LocalCluster on this machine
     python python/examples/study_dask.py --scheduler tcp://host:8786 ...   # a cluster
     python python/examples/study_dask.py --slurm-jobs 64 ...               # Slurm workers
+    python python/examples/study_dask.py --history --prototype both --per-input 10 \
+        --waves 4 --ensemble-records 32 --out-dir history     # the history match
+
+With ``--history`` it writes ``history_runs.parquet`` (every run: wave, point, each quantity),
+``history_waves.parquet``, ``history_claims.parquet`` (each claim at each wave: the share it
+rules out, its emulator's leave-one-out errors), ``history_projections.parquet`` (each wave's
+2-D projections), ``sobol.parquet`` (the emulators' indices), ``run.json`` and ``report.md``
+(the answer first).
 
 With ``--slurm-jobs N`` the script starts N one-core workers as Slurm jobs (dask-jobqueue);
 for any other scheduler start the workers yourself and pass ``--scheduler``.
@@ -110,6 +120,163 @@ def run(client, a, proto):
     return evals, rows, fits, cals, times
 
 
+def run_history(client, a, proto):
+    """The history match of one prototype: each wave's runs on the workers, the emulators here."""
+    from endstop.paper import study
+
+    kw = dict(per_input=a.per_input, max_waves=a.waves, pool=a.pool,
+              ensemble_records=a.ensemble_records)
+    factors = study.factors()
+    waves, summaries, cells = [], [], []
+    t0 = time.perf_counter()
+    cpu = 0.0
+    state = study.history(proto, waves, **kw)
+    while state["next_design"] is not None:
+        design = [[float(u) for u in p] for p in state["next_design"]]
+        n = len(design)
+        print(f"{proto}: wave {len(waves) + 1}, {n} runs", flush=True)
+        futures = client.map(timed_evaluate, [proto] * n, design, [a.ensemble_records] * n,
+                             pure=False)
+        progress(futures, f"wave {len(waves) + 1}")
+        done = client.gather(futures)
+        cpu += sum(c for _, c in done)
+        waves.append((design, [e for e, _ in done]))
+        state = study.history(proto, waves, **kw)
+        w = state["waves"][-1]
+        print(f"  non-implausible {w['non_implausible_fraction']:.4g} of the cube, every claim "
+              f"within the cut {w['all_within_cut_fraction']:.4g}; ended: {w['stop']}",
+              flush=True)
+        cells += [dict(c, prototype=proto) for c in state["projections"]]
+    wall = time.perf_counter() - t0
+    final = study.history(proto, waves, sobol=True, **kw)
+    runs = []
+    k = 0
+    for wave, (design, evals) in enumerate(waves, start=1):
+        for point, es in zip(design, evals):
+            runs += [dict(e, prototype=proto, run=k, wave=wave, **dict(zip(factors, point)))
+                     for e in es]
+            k += 1
+    times = {"runs": k, "wall_s": wall, "cpu_s_per_run": cpu / max(k, 1),
+             "answer": final["answer"]}
+    return runs, final, cells, times
+
+
+def timed_evaluate(proto, point, records):
+    """One run and the processor time it took (for the record's cost per run)."""
+    from endstop.paper import study
+
+    c0 = time.process_time()
+    e = study.evaluate(proto, point, records)
+    return e, time.process_time() - c0
+
+
+def pct(x):
+    return f"{100 * x:.2g} %"
+
+
+def history_report(run, finals):
+    """The record of a history match as Markdown: the answer of each prototype first, then
+    its waves and claims."""
+    cmd = " ".join(["python", "python/examples/study_dask.py"] + run["argv"])
+    md = []
+    for proto, f in finals.items():
+        a = f["answer"]
+        first = f["waves"][0]
+        top = sorted(first["claims"], key=lambda c: -c["ruled_out"])[:3]
+        bound = 3 / a["pool"]
+        share = (lambda x: f"none of the {a['pool']} pool points (below {pct(bound)})"
+                 if x == 0 else pct(x))
+        if a["stop"] == "empty":
+            verdict = ("**no set within the ranges is consistent with its quantitative claims**: "
+                       "the non-implausible space emptied")
+        elif a["none_reproduces"]:
+            verdict = ("**no set within the ranges was found consistent with all its "
+                       "quantitative claims at once**: allowing one claim to miss, "
+                       f"{share(a['fraction'])} of the cube remains, but with every claim "
+                       f"within the cut {share(a['fraction_all'])}, no point found near the "
+                       "survivors and no run")
+        else:
+            verdict = ("**sets within the ranges remain consistent with its quantitative "
+                       f"claims**: {share(a['fraction_all'])} of the cube ({a['kept_all']} of "
+                       "the non-implausible points found, the pool's and those near them) has "
+                       "every claim within the cut; "
+                       f"{share(a['fraction'])} with one claim allowed to miss")
+        md += [f"**Prototype {proto[1:]}** ({a['waves']} wave{'' if a['waves'] == 1 else 's'}, "
+               f"{a['runs']} runs, ensemble claims by {run['ensemble_records'] or 'no'} records "
+               f"per level): {verdict}; {a['runs_meeting_all']} of the {a['runs']} runs meet "
+               "every claim they evaluate directly. "
+               "The claims that rule out most of the cube at the first wave: "
+               + ", ".join(f"{c['claim']} `{c['quantity']}` ({pct(c['ruled_out'])})"
+                           for c in top) + ".", ""]
+    md += [f"Recorded run: `{cmd}` on {run['workers']} Dask workers, {run['date']}, endstop "
+           f"{run['endstop_version']} at commit `{run['commit']}`; "
+           f"{run['ensemble_records'] or 'no'} records per ensemble level, {run['per_input']} "
+           f"runs per input per wave, at most {run['waves']} waves, a pool of {run['pool']} "
+           "points. Not rerun by the book's build (a test re-evaluates runs of it with the "
+           "current code and replays the match from its runs).", ""]
+    for proto, f in finals.items():
+        t = run["prototypes"][proto]
+        md += [f"**Prototype {proto[1:]}: waves** ({t['runs']} runs in {t['wall_s']:.0f} s of "
+               f"wall time, {t['cpu_s_per_run']:.1f} s of processor time per run)", "",
+               "| Wave | Runs | Emulators fitted to | Non-implausible | Every claim within "
+               "the cut | Ended |", "|---|---|---|---|---|---|"]
+        for w in f["waves"]:
+            md.append(f"| {w['wave']} | {w['new_runs']} | {w['training_runs']} | "
+                      f"{pct(w['non_implausible_fraction'])} | "
+                      f"{pct(w['all_within_cut_fraction'])} | {w['stop'] or '-'} |")
+        md += ["", "| Wave | Claim | Quantity | Ruled out | LOO within +-3 |",
+               "|---|---|---|---|---|"]
+        for w in f["waves"]:
+            for c in w["claims"]:
+                loo = c["loo"]
+                within = (f"{sum(abs(e) <= 3 for e in loo) / len(loo):.0%}" if loo
+                          else "constant")
+                md.append(f"| {w['wave']} | {c['claim']} | {c['quantity']} | "
+                          f"{pct(c['ruled_out'])} | {within} |")
+        md.append("")
+    return "\n".join(md)
+
+
+def main_history(a, client, workers, protos):
+    import endstop
+
+    t0 = time.perf_counter()
+    out = {p: run_history(client, a, p) for p in protos}
+    wall = time.perf_counter() - t0
+    client.close()
+    os.makedirs(a.out_dir, exist_ok=True)
+    record = {
+        "argv": sys.argv[1:], "date": datetime.date.today().isoformat(),
+        "endstop_version": endstop.__version__, "commit": git_commit(), "workers": workers,
+        "wall_s": wall, "per_input": a.per_input, "waves": a.waves, "pool": a.pool,
+        "ensemble_records": a.ensemble_records,
+        "prototypes": {p: o[3] for p, o in out.items()},
+    }
+    finals = {p: o[1] for p, o in out.items()}
+    with open(os.path.join(a.out_dir, "run.json"), "w") as f:
+        json.dump(record, f, indent=1)
+    with open(os.path.join(a.out_dir, "report.md"), "w") as f:
+        f.write(history_report(record, finals))
+    pd.DataFrame(sum((o[0] for o in out.values()), [])).to_parquet(
+        os.path.join(a.out_dir, "history_runs.parquet"), index=False)
+    waves = [dict(prototype=p, **{k: v for k, v in w.items() if k not in ("claims", "yes_no_met")})
+             for p, f in finals.items() for w in f["waves"]]
+    pd.DataFrame(waves).to_parquet(os.path.join(a.out_dir, "history_waves.parquet"), index=False)
+    claims = [dict(prototype=p, wave=w["wave"], claim=c["claim"], quantity=c["quantity"],
+                   ruled_out=c["ruled_out"], loo_points=len(c["loo"]),
+                   loo_within_3=(sum(abs(e) <= 3 for e in c["loo"]) / len(c["loo"])
+                                 if c["loo"] else float("nan")))
+              for p, f in finals.items() for w in f["waves"] for c in w["claims"]]
+    pd.DataFrame(claims).to_parquet(os.path.join(a.out_dir, "history_claims.parquet"),
+                                    index=False)
+    pd.DataFrame(sum((o[2] for o in out.values()), [])).to_parquet(
+        os.path.join(a.out_dir, "history_projections.parquet"), index=False)
+    pd.DataFrame(sum((f["indices"] for f in finals.values()), [])).to_parquet(
+        os.path.join(a.out_dir, "sobol.parquet"), index=False)
+    print(f"{' and '.join(protos)} on {workers} workers in {wall:.0f} s wall; wrote "
+          f"{a.out_dir}/history_*.parquet, sobol.parquet, run.json, report.md")
+
+
 def git_commit():
     """The repository's commit (with ``-dirty`` for uncommitted changes), if there is one."""
     here = os.path.dirname(os.path.abspath(__file__))
@@ -191,13 +358,24 @@ def main():
     ap.add_argument("--workers", type=int, default=2, help="LocalCluster workers")
     ap.add_argument("--scheduler", help="address of a running Dask scheduler")
     ap.add_argument("--slurm-jobs", type=int, help="workers to start as Slurm jobs")
+    ap.add_argument("--history", action="store_true",
+                    help="the history match in waves (instead of the Sobol design and the "
+                         "calibration)")
+    ap.add_argument("--per-input", type=int, default=10,
+                    help="history match: runs per input in each wave")
+    ap.add_argument("--waves", type=int, default=4, help="history match: most waves")
+    ap.add_argument("--pool", type=int, default=1 << 14,
+                    help="history match: uniform pool that measures the space (a power of 2)")
     a = ap.parse_args()
 
     client = client_for(a)
     client.wait_for_workers(1)
     workers = len(client.scheduler_info()["workers"])
-    t0 = time.perf_counter()
     protos = ["p1", "p2"] if a.prototype == "both" else [a.prototype]
+    if a.history:
+        main_history(a, client, workers, protos)
+        return
+    t0 = time.perf_counter()
     out = [run(client, a, p) for p in protos]
     wall = time.perf_counter() - t0
     client.close()

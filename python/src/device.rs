@@ -155,9 +155,7 @@ impl PyDevice {
                 )))
             }
         };
-        let d = self
-            .inner
-            .with_endstop(law, damping_n_s_per_m)
+        let d = endstop::paper::setups::with_endstop(&self.inner, law, damping_n_s_per_m)
             .with_tension_free(tension_free);
         d.validate("with_endstop").map_err(param_err)?;
         Ok(Self { inner: d })

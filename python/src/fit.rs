@@ -4,7 +4,7 @@
 //! fit runs.
 
 use endstop::fit::{
-    self, Direction, Feature, FeatureKind, FitError, FitReport, FreeParam, LmSettings, Point,
+    self, Direction, Feature, FeatureKind, FitError, FitReport, FitSettings, FreeParam, Point,
     Quantity, SweepData,
 };
 use pyo3::prelude::*;
@@ -119,6 +119,10 @@ fn report_dict<'py>(py: Python<'py>, r: &FitReport) -> PyResult<Bound<'py, PyDic
     d.set_item("accel_scale", r.accel_scale)?;
     d.set_item("ssr", r.ssr)?;
     d.set_item("dof", r.dof)?;
+    d.set_item("reduced_chi2", r.reduced_chi2)?;
+    d.set_item("chi2_p", r.chi2_p)?;
+    d.set_item("model", &r.model)?;
+    d.set_item("starts_tried", r.starts_tried)?;
     d.set_item("singular_ratio", r.singular_ratio)?;
     d.set_item("evaluations", r.evaluations)?;
     d.set_item("converged", r.stop.converged())?;
@@ -166,7 +170,7 @@ fn fit_py<'py>(
         .collect();
     let dev = device.inner.clone();
     let report = py
-        .detach(move || fit::fit(&dev, &data, &free, &LmSettings::default()))
+        .detach(move || fit::fit(&dev, &data, &free, &FitSettings::default()))
         .map_err(fit_err)?;
     report_dict(py, &report)
 }

@@ -20,8 +20,10 @@ use pyo3::prelude::*;
 
 mod device;
 mod fit;
+mod fit_spectrum;
 mod linear;
 mod paper;
+mod springs;
 mod study;
 
 pub(crate) use device::PyDevice;
@@ -69,8 +71,10 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     m.add_class::<PyDevice>()?;
     fit::register(m)?;
+    fit_spectrum::register(m)?;
     linear::register(m)?;
     study::register(m)?;
+    springs::register(m)?;
     paper::register(m)?;
     Ok(())
 }

@@ -1,7 +1,8 @@
 //! `endstop.linear`: the linear theory of the differential mode (eqs 11-22).
 
+use endstop::paper::qm::{QmReading, EQ21_QM};
 use endstop::physics::linear::{white_noise_power_w, LinearResponse};
-use endstop::physics::two_port::{self, QmReading, TwoPort, EQ21_QM};
+use endstop::physics::two_port::{self, TwoPort};
 use endstop::G;
 use numpy::{PyArray1, PyReadonlyArray1};
 use pyo3::prelude::*;
@@ -46,11 +47,11 @@ fn two_port_dict<'py>(py: Python<'py>, device: &PyDevice) -> PyResult<Bound<'py,
     d.set_item("resonance_hz", tp.resonance_hz())?;
     d.set_item("r_load", tp.r_load())?;
     let qm = PyDict::new(py);
-    qm.set_item("open_circuit", tp.qm(QmReading::OpenCircuit))?;
-    qm.set_item("suspension", tp.qm(QmReading::Suspension))?;
-    qm.set_item("measured_resonance", tp.qm(QmReading::MeasuredResonance))?;
+    qm.set_item("open_circuit", tp.qm_open_circuit())?;
+    qm.set_item("suspension", tp.qm_suspension())?;
+    qm.set_item("measured_resonance", tp.qm_measured_resonance())?;
     d.set_item("qm", qm)?;
-    d.set_item("eq21_efficiency", tp.broadband_efficiency(tp.qm(EQ21_QM)))?;
+    d.set_item("eq21_efficiency", tp.broadband_efficiency(EQ21_QM.of(&tp)))?;
     Ok(d)
 }
 
@@ -65,7 +66,7 @@ fn k2(device: &PyDevice) -> PyResult<f64> {
 #[pyfunction]
 #[pyo3(signature = (device, reading = "open_circuit"))]
 fn qm(device: &PyDevice, reading: &str) -> PyResult<f64> {
-    Ok(pair(device)?.qm(qm_reading(reading)?))
+    Ok(qm_reading(reading)?.of(&pair(device)?))
 }
 
 /// Broadband efficiency 2P/(m Sa) of eq 21 (fraction), with Qm = sqrt(K m)/b, or with the
@@ -74,7 +75,7 @@ fn qm(device: &PyDevice, reading: &str) -> PyResult<f64> {
 #[pyo3(signature = (device, reading = "open_circuit"))]
 fn eq21_efficiency(device: &PyDevice, reading: &str) -> PyResult<f64> {
     let tp = pair(device)?;
-    Ok(tp.broadband_efficiency(tp.qm(qm_reading(reading)?)))
+    Ok(tp.broadband_efficiency(qm_reading(reading)?.of(&tp)))
 }
 
 /// Mean power of both loads (W) by eq 21 at a two-sided acceleration PSD (g^2/Hz).
@@ -122,14 +123,9 @@ fn linear_output_psd<'py>(
     freq_hz: PyReadonlyArray1<'py, f64>,
 ) -> PyResult<Bound<'py, PyArray1<f64>>> {
     let f = freq_hz.as_slice()?;
-    let density = if TwoPort::try_of(&device.inner).is_some() {
-        two_port::linear_output_psd(&device.inner, psd_g2_per_hz, f).density
-    } else {
-        let lin = LinearResponse::of(&device.inner);
-        f.iter()
-            .map(|&f| lin.output_psd_w_per_hz(psd_g2_per_hz * G * G, f))
-            .collect()
-    };
+    let density = LinearResponse::of(&device.inner)
+        .output_psd(psd_g2_per_hz * G * G, f)
+        .density;
     Ok(PyArray1::from_vec(py, density))
 }
 

@@ -4,6 +4,7 @@
 //! runs.
 
 use endstop::device::Device;
+use endstop::paper::setups::paper_record;
 use endstop::physics::linear::white_noise_power_w;
 use endstop::physics::two_port::{self, TwoPort};
 use endstop::study::amplitude::{amplitude_sweep_report, AmplitudeReport};
@@ -330,7 +331,7 @@ fn record_spec(device: &Device, psd_g2_per_hz: f64, duration_s: f64) -> PyResult
     if !(duration_s.is_finite() && duration_s > 0.0) {
         return Err(arg_err("duration_s must be positive"));
     }
-    let mut spec = RecordSpec::paper(device, psd_g2_per_hz);
+    let mut spec = paper_record(device, psd_g2_per_hz);
     spec.noise.duration_s = duration_s;
     Ok(spec)
 }

@@ -105,6 +105,7 @@ impl LegacyDevice {
             mechanics: Mechanics {
                 mass_kg: self.mechanics.mass_kg,
                 stiffness_n_per_m: self.mechanics.stiffness_n_per_m,
+                suspension: super::Suspension::Linear,
                 damping_n_s_per_m: self.mechanics.damping_n_s_per_m,
                 measured_resonance_hz: Some(self.mechanics.measured_resonance_hz),
             },
@@ -123,6 +124,7 @@ impl LegacyDevice {
                 finger_gap_m: Some(g.finger_gap_m),
                 fingers_per_electrode: Some(g.fingers_per_electrode),
             }),
+            interface: super::Interface::Resistive,
         }
     }
 }

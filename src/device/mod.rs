@@ -35,17 +35,21 @@
 //!
 //! This module parses text it is given; reading the file is the caller's job (no I/O here).
 
+pub mod interface;
 mod legacy;
 mod paths;
 mod range;
 pub mod stops;
+pub mod suspension;
 pub mod transducer;
 
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
+pub use interface::{DcLoad, Diode, Interface, Inversion, Rectifier};
 pub use range::{device_at, ParamRange, Spacing};
 pub use stops::{HertzLineStop, HertzPointStiffness, Stop, StopLaw, StopSide, Stops};
+pub use suspension::Suspension;
 pub use transducer::{AreaOverlapPair, Electromagnetic, GapClosingPair, Piezoelectric, Transducer};
 
 /// A parameter that failed to load or validate.
@@ -122,7 +126,8 @@ pub enum StiffnessModel {
 pub struct Mechanics {
     /// Proof mass m (kg).
     pub mass_kg: f64,
-    /// Suspension stiffness km (N/m).
+    /// Suspension stiffness km (N/m). With a nonlinear [`Mechanics::suspension`] it is derived
+    /// on load: the small-oscillation stiffness at the reference well (see [`suspension`]).
     pub stiffness_n_per_m: f64,
     /// Mechanical damping b (N s/m).
     pub damping_n_s_per_m: f64,
@@ -130,6 +135,9 @@ pub struct Mechanics {
     /// prototype, used only for the `m w0 / b` reading of Qm in Table 3.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub measured_resonance_hz: Option<f64>,
+    /// The restoring force: linear (`stiffness_n_per_m`), a polynomial or a double well.
+    #[serde(skip)]
+    pub suspension: Suspension,
 }
 
 /// A complete device description.
@@ -147,6 +155,9 @@ pub struct Device {
     pub stops: Stops,
     /// The transducer.
     pub transducer: Transducer,
+    /// The interface circuit between a one-load transducer and its load (resistive by
+    /// default; see [`interface`]).
+    pub interface: Interface,
 }
 
 /// The file form of a device.
@@ -156,10 +167,12 @@ struct RawDevice {
     name: String,
     params: String,
     description: String,
-    mechanics: Mechanics,
+    mechanics: suspension::RawMechanics,
     #[serde(default)]
     stops: stops::RawStops,
     transducer: Transducer,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    interface: Option<interface::RawInterface>,
 }
 
 /// Builds [`ParamError`]s that name the source and check ranges.
@@ -281,14 +294,20 @@ impl Device {
             let c = Checker {
                 source: source_name,
             };
-            Device {
+            let mut dev = Device {
+                interface: match raw.interface {
+                    Some(i) => i.parse(&c)?,
+                    None => Interface::Resistive,
+                },
                 stops: raw.stops.parse(&c)?,
                 name: raw.name,
                 params: raw.params,
                 description: raw.description,
-                mechanics: raw.mechanics,
+                mechanics: raw.mechanics.parse(&c)?,
                 transducer: raw.transducer,
-            }
+            };
+            dev.derive_well_stiffness();
+            dev
         };
         dev.validate(source_name)?;
         Ok(dev)
@@ -299,9 +318,10 @@ impl Device {
             name: self.name.clone(),
             params: self.params.clone(),
             description: self.description.clone(),
-            mechanics: self.mechanics.clone(),
+            mechanics: suspension::RawMechanics::of(&self.mechanics),
             stops: stops::RawStops::of(&self.stops),
             transducer: self.transducer.clone(),
+            interface: interface::RawInterface::of(&self.interface),
         }
     }
 
@@ -321,12 +341,28 @@ impl Device {
         }
         let m = &self.mechanics;
         c.positive("mechanics.mass_kg", m.mass_kg)?;
-        c.positive("mechanics.stiffness_n_per_m", m.stiffness_n_per_m)?;
+        if m.suspension.is_linear() {
+            c.positive("mechanics.stiffness_n_per_m", m.stiffness_n_per_m)?;
+        }
         c.positive("mechanics.damping_n_s_per_m", m.damping_n_s_per_m)?;
         if let Some(f) = m.measured_resonance_hz {
             c.positive("mechanics.measured_resonance_hz", f)?;
         }
         self.transducer.validate(&c)?;
+        // The interface circuit: which transducers take it, and the resistive load it replaces.
+        self.interface.validate(&self.transducer, &c)?;
+        if self.interface.is_resistive()
+            && matches!(
+                self.transducer,
+                Transducer::Piezoelectric(_) | Transducer::Electromagnetic(_)
+            )
+            && self.transducer.load_resistance_ohm() == f64::INFINITY
+        {
+            return Err(c.missing(
+                "transducer.load_resistance_ohm",
+                "the resistive load (or an [interface] table with another kind)",
+            ));
+        }
         for (side, stop) in self.stops.present() {
             let field = |key: &str| format!("{}.{key}", self.stop_path(side));
             c.positive(&field("gap_m"), stop.gap_m)?;
@@ -362,6 +398,7 @@ impl Device {
                 _ => {}
             }
         }
+        self.validate_suspension(&c)?;
         if let Transducer::GapClosingPair(p) = &self.transducer {
             let k = m.stiffness_n_per_m + p.electrostatic_stiffness_n_per_m();
             if k <= 0.0 {
@@ -405,22 +442,6 @@ impl Device {
             Transducer::GapClosingPair(p) => p.bias_v = bias_v,
             _ => {}
         }
-        d
-    }
-
-    /// A copy whose Hertz line stops follow eq 6 ([`StiffnessModel::Hertz`]) or its linear fit
-    /// of eq 19 ([`StiffnessModel::Linear`]), with end-stop damping `damping_n_s_per_m`; other
-    /// stops get the damping only where their law takes it.
-    pub fn with_endstop(&self, stiffness: StiffnessModel, damping_n_s_per_m: f64) -> Self {
-        let mut d = self.clone();
-        d.stops.for_each_mut(|s| {
-            if let StopLaw::HertzLine(h) = &mut s.law {
-                h.linear_fit = stiffness == StiffnessModel::Linear;
-            }
-            if s.law.takes_viscous_damper() {
-                s.damping_n_s_per_m = damping_n_s_per_m;
-            }
-        });
         d
     }
 

@@ -153,14 +153,19 @@ impl Device {
         let c = super::Checker {
             source: &format!("parameter `{path}`"),
         };
-        let dev = Device {
+        let mut dev = Device {
+            interface: match raw.interface {
+                Some(i) => i.parse(&c)?,
+                None => super::Interface::Resistive,
+            },
             stops: raw.stops.parse(&c)?,
             name: raw.name,
             params: raw.params,
             description: raw.description,
-            mechanics: raw.mechanics,
+            mechanics: raw.mechanics.parse(&c)?,
             transducer: raw.transducer,
         };
+        dev.derive_well_stiffness();
         dev.validate(&format!("parameter `{path}`"))?;
         Ok(dev)
     }

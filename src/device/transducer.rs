@@ -95,8 +95,18 @@ pub struct Piezoelectric {
     pub coupling_n_per_v: f64,
     /// Clamped capacitance of the piezoelectric layer Cp (F).
     pub capacitance_f: f64,
-    /// Load resistance R (ohm).
+    /// Load resistance R (ohm); absent (infinite: no resistive load) when an `[interface]` circuit is the load.
+    #[serde(default = "absent", skip_serializing_if = "is_absent")]
     pub load_resistance_ohm: f64,
+}
+
+/// The value of a resistive load left out because an interface circuit replaces it.
+fn absent() -> f64 {
+    f64::INFINITY
+}
+
+fn is_absent(v: &f64) -> bool {
+    *v == f64::INFINITY
 }
 
 /// A coil moving in a magnet's field, with a resistive load.
@@ -109,7 +119,8 @@ pub struct Electromagnetic {
     pub coil_resistance_ohm: f64,
     /// Coil inductance L (H); zero makes the current follow the velocity at once.
     pub coil_inductance_h: f64,
-    /// Load resistance R (ohm).
+    /// Load resistance R (ohm); absent (infinite: no resistive load) when an `[interface]` circuit is the load.
+    #[serde(default = "absent", skip_serializing_if = "is_absent")]
     pub load_resistance_ohm: f64,
 }
 
@@ -203,12 +214,19 @@ impl Transducer {
             Transducer::Piezoelectric(p) => {
                 c.positive("transducer.coupling_n_per_v", p.coupling_n_per_v)?;
                 c.positive("transducer.capacitance_f", p.capacitance_f)?;
+                // Absent (infinite) with an interface circuit: `Device::validate` checks which.
+                if p.load_resistance_ohm == f64::INFINITY {
+                    return Ok(());
+                }
                 c.positive("transducer.load_resistance_ohm", p.load_resistance_ohm)
             }
             Transducer::Electromagnetic(p) => {
                 c.positive("transducer.transduction_n_per_a", p.transduction_n_per_a)?;
                 c.non_negative("transducer.coil_resistance_ohm", p.coil_resistance_ohm)?;
                 c.non_negative("transducer.coil_inductance_h", p.coil_inductance_h)?;
+                if p.load_resistance_ohm == f64::INFINITY {
+                    return Ok(());
+                }
                 c.positive("transducer.load_resistance_ohm", p.load_resistance_ohm)
             }
         }

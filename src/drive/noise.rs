@@ -119,16 +119,6 @@ pub enum NoiseError {
 }
 
 impl NoiseSpec {
-    /// The paper's excitation: level `psd_g2_per_hz`, 10 kHz band, 100 kHz, 10 s.
-    pub fn paper(psd_g2_per_hz: f64) -> Self {
-        Self {
-            psd_g2_per_hz,
-            bandwidth_hz: 10e3,
-            sample_rate_hz: 100e3,
-            duration_s: 10.0,
-        }
-    }
-
     /// Check every field: positive and finite, and `bandwidth_hz < sample_rate_hz / 2`.
     pub fn validate(&self) -> Result<(), NoiseError> {
         for (field, value) in [
@@ -375,7 +365,7 @@ fn draw_coefficient(rng: &mut ChaCha8Rng, amp: f64) -> Complex<f64> {
 }
 
 /// Two independent standard normals from two uniforms (Box-Muller, basic form).
-fn box_muller(rng: &mut ChaCha8Rng) -> (f64, f64) {
+pub(crate) fn box_muller(rng: &mut ChaCha8Rng) -> (f64, f64) {
     // random::<f64>() is in [0, 1); 1 - u is in (0, 1], so ln never sees 0.
     let u1 = 1.0 - rng.random::<f64>();
     let u2 = rng.random::<f64>();
@@ -388,22 +378,32 @@ fn box_muller(rng: &mut ChaCha8Rng) -> (f64, f64) {
 mod tests {
     use super::*;
 
+    /// The paper's excitation at level `psd`: 10 kHz band, 100 kHz, 10 s.
+    fn ten_khz(psd: f64) -> NoiseSpec {
+        NoiseSpec {
+            psd_g2_per_hz: psd,
+            bandwidth_hz: 10e3,
+            sample_rate_hz: 100e3,
+            duration_s: 10.0,
+        }
+    }
+
     #[test]
     fn validate_names_field_and_range() {
-        let mut spec = NoiseSpec::paper(1e-2);
+        let mut spec = ten_khz(1e-2);
         assert!(spec.validate().is_ok());
         spec.duration_s = -1.0;
         let msg = spec.validate().unwrap_err().to_string();
         assert!(msg.contains("duration_s = -1"), "{msg}");
         assert!(msg.contains("positive finite"), "{msg}");
 
-        let mut spec = NoiseSpec::paper(1e-2);
+        let mut spec = ten_khz(1e-2);
         spec.bandwidth_hz = 50e3;
         let msg = spec.validate().unwrap_err().to_string();
         assert!(msg.contains("bandwidth_hz = 50000"), "{msg}");
         assert!(msg.contains("sample_rate_hz / 2 = 50000"), "{msg}");
 
-        let mut spec = NoiseSpec::paper(f64::NAN);
+        let mut spec = ten_khz(f64::NAN);
         assert!(spec.validate().is_err());
         spec.psd_g2_per_hz = 1.0;
         spec.duration_s = 1e-6;
@@ -413,7 +413,7 @@ mod tests {
 
     #[test]
     fn ideal_level_and_mean_square() {
-        let spec = NoiseSpec::paper(1e-2);
+        let spec = ten_khz(1e-2);
         assert_eq!(spec.ideal_psd_g2_per_hz(0.0), 0.0);
         assert_eq!(spec.ideal_psd_g2_per_hz(10e3), 1e-2);
         assert_eq!(spec.ideal_psd_g2_per_hz(10.001e3), 0.0);
@@ -423,7 +423,7 @@ mod tests {
 
     #[test]
     fn paper_grid() {
-        let spec = NoiseSpec::paper(1e-2);
+        let spec = ten_khz(1e-2);
         let grid = spec.grid().unwrap();
         assert_eq!(
             (grid.n, grid.period, grid.k_max),
@@ -443,7 +443,7 @@ mod tests {
         // An odd length rounds up; a ratio that is not an integer asks only for evenness.
         assert_eq!(synthesis_period(7, 10.0), 10);
         assert_eq!(synthesis_period(23, 2.5), 24);
-        let mut spec = NoiseSpec::paper(1e-2);
+        let mut spec = ten_khz(1e-2);
         spec.duration_s = 10.008;
         let grid = spec.grid().unwrap();
         assert_eq!(

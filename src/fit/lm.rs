@@ -1,13 +1,18 @@
 //! Levenberg-Marquardt for small, expensive least-squares problems in unbounded coordinates,
-//! with a forward-difference Jacobian whose columns are evaluated in parallel.
+//! with a forward-difference Jacobian whose columns are evaluated in parallel, for problems
+//! whose evaluations carry a state from the accepted point to the next ([`Tracked`]: the fit
+//! follows orbits and bifurcations from where they were).
 //!
-//! Written here because argmin (the crate's optimiser library) offers Gauss-Newton with and
-//! without a line search but no Levenberg-Marquardt, and the fit needs the damping: far from
-//! the optimum a stepped sweep's residuals change abruptly (a jump moves past a measured
-//! point) and an undamped Gauss-Newton step overshoots. The method is Marquardt's (the damping
-//! scales the diagonal of J^T J), with the damping divided by 10 after an accepted step and
-//! multiplied by 10 after a rejected one (Nocedal and Wright, Numerical Optimization, 2nd ed.,
-//! section 10.3). Each residual evaluation here is a whole sweep, so the solver counts them.
+//! Written here rather than taken from a crate: argmin (the crate's optimiser library) offers
+//! Gauss-Newton with and without a line search but no Levenberg-Marquardt, and the
+//! `levenberg-marquardt` crate (MINPACK's method on nalgebra) stops the whole search when an
+//! evaluation fails, whereas here a trial point whose model cannot be evaluated (an orbit
+//! that no longer exists, a fold that left the range) is a rejected step like one that raises
+//! the cost, and the evaluations must start from the state of the accepted point. The method
+//! is Marquardt's (the damping scales the diagonal of J^T J), with the damping divided by 10
+//! after an accepted step and multiplied by 10 after a rejected one (Nocedal and Wright,
+//! Numerical Optimization, 2nd ed., section 10.3). Each residual evaluation here costs orbits
+//! or a whole sweep, so the solver counts them.
 
 use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
@@ -15,7 +20,9 @@ use rayon::prelude::*;
 /// Settings of [`levenberg_marquardt`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct LmSettings {
-    /// Forward-difference step in the unbounded coordinates.
+    /// Forward-difference step in the unbounded coordinates (the fit's model on the branches
+    /// is smooth to about 1e-9 relative, so a step of 1e-4 gives derivatives to about 1e-4;
+    /// the stepped-sweep model needs [`STEPPED_FD_STEP`]).
     pub fd_step: f64,
     /// Largest number of Jacobians (outer iterations).
     pub max_iter: usize,
@@ -40,6 +47,10 @@ pub struct LmSettings {
     pub max_step: f64,
 }
 
+/// Forward-difference step of the stepped-sweep model: a steady state converged to a relative
+/// change of 1e-6 changes by about that much for a step of 1e-2 in the transformed coordinates.
+pub const STEPPED_FD_STEP: f64 = 1e-2;
+
 /// The damping scales each diagonal element of J^T J, but at least this fraction of the
 /// largest one, so that a parameter the residuals do not depend on is still damped.
 const DIAG_FLOOR: f64 = 1e-6;
@@ -47,7 +58,7 @@ const DIAG_FLOOR: f64 = 1e-6;
 impl Default for LmSettings {
     fn default() -> Self {
         Self {
-            fd_step: 1e-2,
+            fd_step: 1e-4,
             max_iter: 40,
             cost_rel_tol: 1e-6,
             step_tol: 1e-4,
@@ -101,6 +112,8 @@ pub struct LmResult {
     pub iterations: usize,
     /// Residual evaluations, the Jacobians' included.
     pub evaluations: usize,
+    /// Trial points whose residuals could not be evaluated (rejected steps).
+    pub failed_trials: usize,
     /// Why it stopped.
     pub stop: LmStop,
 }
@@ -109,41 +122,95 @@ fn cost(r: &[f64]) -> f64 {
     r.iter().map(|x| x * x).sum()
 }
 
-/// Forward-difference Jacobian at `u` (residuals `r0` there), columns in parallel.
-pub fn jacobian<E: Send>(
-    residuals: &(impl Fn(&[f64]) -> Result<Vec<f64>, E> + Sync),
+/// A least-squares problem whose evaluations start from the state of an earlier one (the
+/// accepted point's, for trials and Jacobian columns alike).
+pub trait Tracked: Sync {
+    /// What an evaluation carries to the next.
+    type State: Clone + Send + Sync;
+    /// Why an evaluation failed.
+    type Error: Send + std::fmt::Debug;
+    /// The residuals at `u` and the state there, starting from `from`.
+    fn residuals(
+        &self,
+        u: &[f64],
+        from: &Self::State,
+    ) -> Result<(Vec<f64>, Self::State), Self::Error>;
+}
+
+/// A residual function without state as a [`Tracked`] problem.
+struct Plain<F>(F);
+
+impl<E: Send + std::fmt::Debug, F: Fn(&[f64]) -> Result<Vec<f64>, E> + Sync> Tracked for Plain<F> {
+    type State = ();
+    type Error = E;
+    fn residuals(&self, u: &[f64], _: &()) -> Result<(Vec<f64>, ()), E> {
+        Ok(((self.0)(u)?, ()))
+    }
+}
+
+/// Forward-difference Jacobian at `u` (residuals `r0` and state `state` there), columns in
+/// parallel; a column whose forward point cannot be evaluated (a branch that ends just ahead)
+/// is a backward difference.
+pub fn jacobian<P: Tracked>(
+    problem: &P,
     u: &[f64],
     r0: &[f64],
+    state: &P::State,
     h: f64,
-) -> Result<DMatrix<f64>, E> {
+) -> Result<DMatrix<f64>, P::Error> {
     let cols: Vec<Vec<f64>> = (0..u.len())
         .into_par_iter()
         .map(|j| {
             let mut v = u.to_vec();
             v[j] += h;
-            let r = residuals(&v)?;
-            Ok(r.iter().zip(r0).map(|(a, b)| (a - b) / h).collect())
+            let (r, hj) = match problem.residuals(&v, state) {
+                Ok((r, _)) => (r, h),
+                Err(_) => {
+                    v[j] = u[j] - h;
+                    (problem.residuals(&v, state)?.0, -h)
+                }
+            };
+            Ok(r.iter().zip(r0).map(|(a, b)| (a - b) / hj).collect())
         })
-        .collect::<Result<_, E>>()?;
+        .collect::<Result<_, P::Error>>()?;
     Ok(DMatrix::from_fn(r0.len(), u.len(), |i, j| cols[j][i]))
 }
 
 /// Minimises the sum of squared `residuals(u)` from `u0`. Errors of the residual function
-/// are returned as they are.
-pub fn levenberg_marquardt<E: Send>(
+/// at the start and in the Jacobian are returned as they are; at a trial point they reject
+/// the step.
+pub fn levenberg_marquardt<E: Send + std::fmt::Debug>(
     residuals: impl Fn(&[f64]) -> Result<Vec<f64>, E> + Sync,
     u0: &[f64],
     s: &LmSettings,
 ) -> Result<LmResult, E> {
+    levenberg_marquardt_tracked(&Plain(residuals), u0, (), None, s).map(|(r, ())| r)
+}
+
+/// Minimises the sum of squared residuals of `problem` from `u0`, whose evaluation starts from
+/// `state0` (with residuals `r0` there, if known; else they are evaluated); returns the result
+/// and the state at the best point. Errors at the start and in the Jacobian are returned as
+/// they are; at a trial point they reject the step.
+pub fn levenberg_marquardt_tracked<P: Tracked>(
+    problem: &P,
+    u0: &[f64],
+    state0: P::State,
+    r0: Option<Vec<f64>>,
+    s: &LmSettings,
+) -> Result<(LmResult, P::State), P::Error> {
     let p = u0.len();
     let mut u = u0.to_vec();
-    let mut r = residuals(&u)?;
+    let (mut r, mut state) = match r0 {
+        Some(r) => (r, state0),
+        None => problem.residuals(&u, &state0)?,
+    };
     let mut evaluations = 1;
+    let mut failed = 0;
     let mut c = cost(&r);
     let mut lambda = s.lambda0;
     let mut stop = LmStop::MaxIter;
     let mut iterations = 0;
-    let mut jac = jacobian(&residuals, &u, &r, s.fd_step)?;
+    let mut jac = jacobian(problem, &u, &r, &state, s.fd_step)?;
     evaluations += p;
     while iterations < s.max_iter {
         iterations += 1;
@@ -164,17 +231,20 @@ pub fn levenberg_marquardt<E: Send>(
                 step *= s.max_step / step.norm();
             }
             let trial: Vec<f64> = u.iter().zip(step.iter()).map(|(x, d)| x + d).collect();
-            let rt = residuals(&trial)?;
             evaluations += 1;
-            let ct = cost(&rt);
-            if ct.is_finite() && ct < c {
-                accepted = Some((trial, rt, ct, step.norm()));
-                lambda = (lambda / 10.0).max(1e-12);
-                break;
+            match problem.residuals(&trial, &state) {
+                Ok((rt, st)) if cost(&rt).is_finite() && cost(&rt) < c => {
+                    let ct = cost(&rt);
+                    accepted = Some((trial, rt, st, ct, step.norm()));
+                    lambda = (lambda / 10.0).max(1e-12);
+                    break;
+                }
+                Ok(_) => {}
+                Err(_) => failed += 1,
             }
             lambda *= 10.0;
         }
-        let Some((trial, rt, ct, step_norm)) = accepted else {
+        let Some((trial, rt, st, ct, step_norm)) = accepted else {
             let promised = a
                 .clone()
                 .pseudo_inverse(1e-12 * diag_max)
@@ -190,8 +260,9 @@ pub fn levenberg_marquardt<E: Send>(
         let c_before = c;
         u = trial;
         r = rt;
+        state = st;
         c = ct;
-        jac = jacobian(&residuals, &u, &r, s.fd_step)?;
+        jac = jacobian(problem, &u, &r, &state, s.fd_step)?;
         evaluations += p;
         if drop < s.cost_rel_tol || c_before - c < s.cost_abs_tol {
             stop = LmStop::CostConverged;
@@ -202,14 +273,18 @@ pub fn levenberg_marquardt<E: Send>(
             break;
         }
     }
-    Ok(LmResult {
-        u,
-        residuals: r,
-        jacobian: jac,
-        iterations,
-        evaluations,
-        stop,
-    })
+    Ok((
+        LmResult {
+            u,
+            residuals: r,
+            jacobian: jac,
+            iterations,
+            evaluations,
+            failed_trials: failed,
+            stop,
+        },
+        state,
+    ))
 }
 
 #[cfg(test)]

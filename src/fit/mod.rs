@@ -1,17 +1,35 @@
 //! Fitting a device to measured sweeps: named free parameters with ranges, a weighted
-//! least-squares misfit evaluated by the stepped sweep ([`crate::study::sweep`]), a
-//! Levenberg-Marquardt search ([`lm`]) in bounded-transformed coordinates, and an honest
-//! account of what the data determine.
+//! least-squares misfit evaluated on the branches of periodic orbits the sweeps follow
+//! (`branch.rs`), a Levenberg-Marquardt search ([`lm`]) in bounded-transformed coordinates from
+//! one or several starts, and an honest account of what the data determine.
 //!
 //! # Misfit
 //! Each measured point contributes `(model - measured) / sigma`, each measured feature (impact
-//! onset, end of the impacting branch) `(model - measured) / sigma_hz`. The model of a data
-//! set is the stepped sweep ([`crate::study::sweep::SweepSettings::for_device`]) over the data
-//! set's grid (by default its measured frequencies) at its stated acceleration, with a
-//! steady-state criterion tightened to [`FIT_REL_CHANGE_TOL`] and transitions refined to
-//! [`FIT_REFINE_TOL_HZ`], so that the finite-difference Jacobian sees the model and not the
-//! convergence criterion ([`model`]). A feature the model does not show inside the grid is
-//! placed at the grid end it lies beyond, so that the misfit still points towards it.
+//! onset, end of the impacting branch) `(model - measured) / sigma_hz`. A stepped sweep's
+//! value at a fixed frequency jumps when a fold passes that frequency, so a misfit built on
+//! the sweep itself is discontinuous in the parameters and a search stalls at the jump. The
+//! model therefore compares each measured point with the stable periodic orbit of the branch
+//! the point lies on ([`crate::study::orbit`]), which exists past the jump up to its fold; a
+//! point beyond the fold of its branch is compared with the fold's orbit. The onset and a
+//! gradual end of contact are grazing orbits (where the branch of the device without stops
+//! reaches a stop), a jump is the fold ([`crate::study::continuation`]), each located to far
+//! below a measured feature's standard deviation and smooth in the parameters.
+//!
+//! The branches are identified once from the stepped sweep at the starting values
+//! ([`crate::study::sweep::SweepSettings::for_device`]), then followed by Newton's method as
+//! the search moves: an evaluation costs a few periods per measured value. After the search
+//! the model is identified afresh at the fitted values; if it differs from the one followed
+//! (the data assigned to another branch, a feature the sweep now shows elsewhere) the search
+//! is run again from there ([`MAX_ROUNDS`] times at most) and a remaining difference is a
+//! warning ([`FitWarning::BranchChanged`]). Where the branches cannot be identified (a response
+//! that is not periodic, a jump that is not a fold) the model is the stepped sweep itself
+//! ([`model`]), with a warning ([`FitWarning::SteppedSweepModel`]).
+//!
+//! # Several starts
+//! A search from the device's values that does not converge, or whose chi-square (with stated
+//! standard deviations) exceeds its 99.9 % quantile, is followed by searches from the points of
+//! a Sobol sequence in the transformed box ([`FitSettings::starts`] in all); the best
+//! converged one is reported, with the number of starts tried.
 //!
 //! # Coordinates
 //! A free parameter with range `lo..hi` is searched as `u = logit((p - lo) / (hi - lo))`, or,
@@ -29,25 +47,31 @@
 //! is nearly linear in the parameters over the interval.
 //!
 //! # What the data do not determine
-//! The Jacobian's columns are scaled to unit length (which makes the test independent of each
+//! A column below [`COLUMN_NOISE_REL`] of the largest is taken as zero (the model's numerical
+//! noise). The Jacobian's columns are scaled to unit length (which makes the test independent of each
 //! parameter's unit and transform) and its singular values computed. A combination whose
 //! singular value is below [`SINGULAR_RATIO_WARN`] times the largest is reported
 //! ([`FitWarning::Undetermined`]) with its direction in relative changes of the parameters. A
 //! direction whose singular value is zero to round-off ([`NUMERICALLY_ZERO`]) gives every
 //! parameter in it an infinite standard error and its whole range as interval.
 
+mod branch;
 pub mod data;
 pub mod lm;
 pub mod model;
 pub mod params;
 pub mod report;
+mod search;
+pub mod spectrum;
+mod track;
 
 use nalgebra::DMatrix;
+use statrs::distribution::{ChiSquared, ContinuousCDF};
 use thiserror::Error;
 
 pub use data::{DataError, Direction, Feature, FeatureKind, Point, Quantity, SweepData};
 pub use lm::{LmSettings, LmStop};
-pub use model::{model_sweep, model_values, ModelSweep};
+pub use model::{model_curve, model_sweep, model_values, ModelSweep};
 pub use params::{check_free, FreeParam};
 pub use report::{FitReport, FitWarning, FittedParam, Residual, Uncertainty};
 
@@ -61,20 +85,44 @@ use crate::ode::SolverError;
 /// stated acceleration (an accelerometer's calibration error).
 pub const ACCEL_SCALE_PATH: &str = "drive.accel_scale";
 
-/// Steady-state criterion of the fit's sweeps: the relative change of the RMS voltages between
+/// Steady-state criterion of the stepped-sweep model ([`model`]): the relative change of the RMS voltages between
 /// blocks (the sweeps' default is 1e-3, as large as the forward-difference change of a
 /// measured value for a step of 1e-2 in the transformed coordinates).
 pub const FIT_REL_CHANGE_TOL: f64 = 1e-6;
 
-/// Bracket width to which the fit's sweeps refine the onset and the jump (Hz): a refined
+/// Bracket width to which the stepped-sweep model's sweeps refine the onset and the jump (Hz): a refined
 /// feature is the midpoint of its final bracket, a step function of the parameters, so the
 /// bracket must be far narrower than the change a finite-difference step causes (about 1 Hz
 /// for a step of 1e-2 in the transformed coordinates of a gap range of a factor 2).
 pub const FIT_REFINE_TOL_HZ: f64 = 0.01;
 
+/// Most searches of one start: the first from the branches identified at the start, each
+/// further one from those identified afresh at the previous optimum when they differ from the
+/// ones followed (see the module docs).
+pub const MAX_ROUNDS: usize = 3;
+
+/// The branches identified afresh agree with the ones followed when every model value differs
+/// by at most this many standard deviations (where stated; else [`AGREE_REL`] of the value).
+pub const AGREE_SIGMA: f64 = 0.1;
+
+/// The relative agreement of model values without a stated standard deviation.
+pub const AGREE_REL: f64 = 1e-4;
+
+/// A fit with stated standard deviations is accepted from one start unless its chi-square
+/// exceeds this quantile of the chi-square distribution with n - p degrees of freedom.
+pub const CHI2_QUANTILE: f64 = 0.999;
+
 /// A singular value below this fraction of the largest counts as zero (round-off of the
 /// decomposition is about 1e-16).
 pub const NUMERICALLY_ZERO: f64 = 1e-12;
+
+/// A Jacobian column smaller than this fraction of the largest is taken as zero: the orbits
+/// are converged to about 1e-9 of their values and differenced over a step of 1e-4 in the
+/// transformed coordinates, so a column is resolved to about 1e-5 of the values it
+/// differences, and one a million times smaller than the best-determined parameter's is the
+/// model's numerical noise (a parameter that enters it only through its scales, like a gap
+/// the orbits never reach).
+pub const COLUMN_NOISE_REL: f64 = 1e-6;
 
 /// When every measured value states its standard deviation the search also stops when the
 /// weighted SSR changes by less than this: a change of 1e-3 in chi-square moves no estimate by
@@ -133,25 +181,49 @@ pub enum FitError {
     /// The integrator failed on a sweep.
     #[error("model sweep failed: {0}")]
     Model(#[from] SolverError),
+    /// An orbit, grazing or fold of the model could not be followed to new parameter values.
+    #[error("model branch lost: {0}")]
+    Lost(String),
 }
 
-/// The measured values and their weights (standard deviations; 1 where none is stated).
-fn measured(data: &[SweepData]) -> (Vec<f64>, Vec<f64>, bool) {
+/// Settings of [`fit()`]: the search, and how many starts it may take.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FitSettings {
+    /// The Levenberg-Marquardt search.
+    pub lm: LmSettings,
+    /// Most starts: the device's values, then points of a Sobol sequence (see the module
+    /// docs). 1: the device's values only.
+    pub starts: usize,
+}
+
+impl Default for FitSettings {
+    fn default() -> Self {
+        Self {
+            lm: LmSettings::default(),
+            starts: 8,
+        }
+    }
+}
+
+/// The measured values, their weights (standard deviations; 1 where none is stated) and
+/// whether each states its own.
+fn measured(data: &[SweepData]) -> (Vec<f64>, Vec<f64>, Vec<bool>) {
     let mut y = Vec::new();
     let mut s = Vec::new();
-    let mut all_stated = true;
+    let mut stated = Vec::new();
     for d in data {
         for p in &d.points {
             y.push(p.value);
             s.push(p.sigma.unwrap_or(1.0));
-            all_stated &= p.sigma.is_some();
+            stated.push(p.sigma.is_some());
         }
         for f in &d.features {
             y.push(f.freq_hz);
             s.push(f.sigma_hz);
+            stated.push(true);
         }
     }
-    (y, s, all_stated)
+    (y, s, stated)
 }
 
 /// Fits the free parameters of `device` to the data sets (see the module docs).
@@ -159,7 +231,7 @@ pub fn fit(
     device: &Device,
     data: &[SweepData],
     free: &[FreeParam],
-    settings: &LmSettings,
+    settings: &FitSettings,
 ) -> Result<FitReport, FitError> {
     for d in data {
         d.validate()?;
@@ -172,36 +244,36 @@ pub fn fit(
     }
     let tr: Vec<Transform> = free.iter().map(|f| Transform::new(f.lo, f.hi)).collect();
     let u0: Vec<f64> = tr.iter().zip(&starts).map(|(t, &v)| t.to_u(v)).collect();
-    let (y, sigma, all_stated) = measured(data);
-    let to_p = |u: &[f64]| -> Vec<f64> { tr.iter().zip(u).map(|(t, &u)| t.to_p(u)).collect() };
-    let model = |pv: &[f64]| -> Result<Vec<f64>, FitError> {
-        let (d, scale) = apply(device, free, pv)?;
-        let mut out = Vec::with_capacity(n);
-        for ds in data {
-            out.extend(model_values(&d, scale, ds)?);
-        }
-        Ok(out)
+    let (y, sigma, stated) = measured(data);
+    let all_stated = stated.iter().all(|&s| s);
+    let pb = search::Problem {
+        device,
+        data,
+        free,
+        tr: tr.clone(),
+        y: y.clone(),
+        sigma: sigma.clone(),
+        stated,
     };
-    let residuals = |u: &[f64]| -> Result<Vec<f64>, FitError> {
-        let m = model(&to_p(u))?;
-        Ok(m.iter()
-            .zip(&y)
-            .zip(&sigma)
-            .map(|((m, y), s)| (m - y) / s)
-            .collect())
+    let dof = n - p;
+    // With stated standard deviations a fit is accepted from one start unless its
+    // chi-square is improbably large; without, a converged search is accepted.
+    let chi2_limit = if all_stated && dof > 0 {
+        ChiSquared::new(dof as f64)
+            .map(|c| c.inverse_cdf(CHI2_QUANTILE))
+            .unwrap_or(f64::INFINITY)
+    } else {
+        f64::INFINITY
     };
-    let mut settings = *settings;
-    if all_stated {
-        settings.cost_abs_tol = settings.cost_abs_tol.max(STATED_COST_ABS_TOL);
-    }
-    let lm = lm::levenberg_marquardt(residuals, &u0, &settings)?;
-    let p_fit = to_p(&lm.u);
+    let (run, starts_tried, best_start) =
+        search::search(&pb, &u0, settings, all_stated, |ssr| ssr <= chi2_limit)?;
+    let lm = &run.lm;
+    let p_fit = pb.to_p(&lm.u);
     let (fitted_device, accel_scale) = apply(device, free, &p_fit)?;
     let mut fitted_device = fitted_device;
     fitted_device.params = "fitted".into();
 
     let ssr: f64 = lm.residuals.iter().map(|r| r * r).sum();
-    let dof = n - p;
     let uncertainty = if all_stated {
         Uncertainty::Stated
     } else {
@@ -219,7 +291,19 @@ pub fn fit(
     let jac = &lm.jacobian;
     // The Jacobian with its columns scaled to unit length, and its singular value
     // decomposition: the covariance below and the identifiability test after it.
+    // A column below the model's numerical noise is a parameter the model does not depend on.
     let norms: Vec<f64> = (0..p).map(|j| jac.column(j).norm()).collect();
+    let norm_max = norms.iter().copied().fold(0.0, f64::max);
+    let norms: Vec<f64> = norms
+        .into_iter()
+        .map(|n| {
+            if n < COLUMN_NOISE_REL * norm_max {
+                0.0
+            } else {
+                n
+            }
+        })
+        .collect();
     let scaled = DMatrix::from_fn(n, p, |i, j| {
         if norms[j] > 0.0 {
             jac[(i, j)] / norms[j]
@@ -347,6 +431,36 @@ pub fn fit(
             stop: format!("{:?}", lm.stop),
         });
     }
+    let model = match &run.used {
+        search::Used::Branches {
+            disagreement,
+            rounds,
+        } => {
+            match disagreement {
+                Some(d) if *d <= 1.0 => {}
+                d => warnings.push(FitWarning::BranchChanged {
+                    disagreement: d.unwrap_or(f64::NAN),
+                    rounds: *rounds,
+                }),
+            }
+            "branches of periodic orbits".to_string()
+        }
+        search::Used::SteppedSweep { why } => {
+            warnings.push(FitWarning::SteppedSweepModel { why: why.clone() });
+            "stepped sweep".to_string()
+        }
+    };
+    if all_stated && dof > 0 && ssr > chi2_limit {
+        warnings.push(FitWarning::PoorFit {
+            reduced_chi2: ssr / dof as f64,
+            quantile: CHI2_QUANTILE,
+        });
+    }
+    let chi2_p = if all_stated && dof > 0 {
+        ChiSquared::new(dof as f64).ok().map(|c| c.sf(ssr))
+    } else {
+        None
+    };
 
     let mut residual_rows = Vec::with_capacity(n);
     let mut i = 0;
@@ -382,9 +496,15 @@ pub fn fit(
         residuals: residual_rows,
         ssr,
         dof,
+        reduced_chi2: if dof > 0 { ssr / dof as f64 } else { f64::NAN },
+        chi2_p,
         singular_ratio,
-        iterations: lm.iterations,
-        evaluations: lm.evaluations,
+        iterations: run.iterations,
+        evaluations: run.evaluations,
+        failed_trials: lm.failed_trials,
         stop: lm.stop,
+        model,
+        starts_tried,
+        best_start,
     })
 }

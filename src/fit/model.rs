@@ -1,6 +1,8 @@
-//! The model of a measured data set: the stepped sweep over its grid at its stated
-//! acceleration, with the fit's tighter steady-state criterion and refinement, and the values
-//! it gives at the measured points and features.
+//! The stepped-sweep model of a measured data set: the stepped sweep over its grid at its
+//! stated acceleration, with the fit's tighter steady-state criterion and refinement, and the
+//! values it gives at the measured points and features. The fit's model where the branches
+//! cannot be identified, the generator of synthetic data in the tests, and (with a plain
+//! sweep's settings, [`model_curve`]) the curve of the plots.
 
 use serde::Serialize;
 
@@ -9,7 +11,7 @@ use super::{
 };
 use crate::device::Device;
 use crate::study::steady::Measurement;
-use crate::study::sweep::SweepSettings;
+use crate::study::sweep::{SweepSettings, REFINE_TOL_HZ};
 
 /// The value of a measured quantity in a model measurement.
 fn quantity_of(q: Quantity, m: &Measurement) -> f64 {
@@ -34,8 +36,26 @@ pub struct ModelSweep {
 /// settings, see the module docs).
 pub fn model_sweep(device: &Device, scale: f64, data: &SweepData) -> Result<ModelSweep, FitError> {
     let grid = data.grid();
-    let mut settings = SweepSettings::for_device(device, grid.clone(), FIT_REFINE_TOL_HZ);
+    let mut settings = SweepSettings::for_device(device, grid, FIT_REFINE_TOL_HZ);
     settings.cfg.rel_change_tol = FIT_REL_CHANGE_TOL;
+    sweep_with(&settings, device, scale, data)
+}
+
+/// The stepped sweep of a data set with the settings of a plain sweep
+/// ([`SweepSettings::for_device`], transitions refined to [`REFINE_TOL_HZ`]): what the
+/// `endstop sweep` command shows, for plots.
+pub fn model_curve(device: &Device, scale: f64, data: &SweepData) -> Result<ModelSweep, FitError> {
+    let settings = SweepSettings::for_device(device, data.grid(), REFINE_TOL_HZ);
+    sweep_with(&settings, device, scale, data)
+}
+
+fn sweep_with(
+    settings: &SweepSettings,
+    device: &Device,
+    scale: f64,
+    data: &SweepData,
+) -> Result<ModelSweep, FitError> {
+    let grid = data.grid();
     let accel = data.accel_rms_g * scale;
     let (lo, hi) = (
         grid.iter().copied().fold(f64::INFINITY, f64::min),

@@ -61,6 +61,10 @@ impl Transform {
         let s = (y - self.a) / (self.b - self.a);
         (s / (1.0 - s)).ln()
     }
+    /// u at the fraction `s` of the (log-)range.
+    pub(super) fn to_u_frac(self, s: f64) -> f64 {
+        (s / (1.0 - s)).ln()
+    }
     /// dp/du.
     pub(super) fn dp_du(self, u: f64) -> f64 {
         let s = 1.0 / (1.0 + (-u).exp());

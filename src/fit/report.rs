@@ -61,6 +61,31 @@ pub enum FitWarning {
         /// Why it stopped.
         stop: String,
     },
+    /// The branches identified afresh at the fitted values (from the stepped sweep) differ
+    /// from the ones the search followed after every round: by `disagreement` times the
+    /// tolerance ([`crate::fit::AGREE_SIGMA`] standard deviations; NaN: they could not be
+    /// identified).
+    BranchChanged {
+        /// Largest difference over its tolerance.
+        disagreement: f64,
+        /// Rounds of the search.
+        rounds: usize,
+    },
+    /// The branches could not be identified, and the model was the stepped sweep, whose
+    /// misfit jumps where a fold passes a measured frequency.
+    SteppedSweepModel {
+        /// Why the branches could not be identified.
+        why: String,
+    },
+    /// The chi-square of the residuals weighted by the stated standard deviations exceeds its
+    /// `quantile`: the model does not describe the data within their stated uncertainty (or
+    /// the uncertainty is understated).
+    PoorFit {
+        /// Chi-square per degree of freedom.
+        reduced_chi2: f64,
+        /// The quantile exceeded.
+        quantile: f64,
+    },
 }
 
 impl std::fmt::Display for FitWarning {
@@ -92,6 +117,30 @@ impl std::fmt::Display for FitWarning {
             FitWarning::NotConverged { stop } => {
                 write!(f, "not converged: the search stopped ({stop})")
             }
+            FitWarning::BranchChanged {
+                disagreement,
+                rounds,
+            } => write!(
+                f,
+                "branch changed: after {rounds} rounds the branches identified afresh at the \
+                 fitted values still differ from the ones followed ({disagreement:.3} times \
+                 the tolerance); the fit may describe a branch the sweep does not show"
+            ),
+            FitWarning::SteppedSweepModel { why } => write!(
+                f,
+                "stepped-sweep model: the branches could not be identified ({why}); the \
+                 misfit is the stepped sweep's, which jumps where a fold passes a measured \
+                 frequency"
+            ),
+            FitWarning::PoorFit {
+                reduced_chi2,
+                quantile,
+            } => write!(
+                f,
+                "poor fit: chi-square per degree of freedom {reduced_chi2:.3} exceeds the \
+                 {quantile} quantile; the model does not describe the data within their stated \
+                 standard deviations"
+            ),
         }
     }
 }
@@ -152,12 +201,26 @@ pub struct FitReport {
     pub ssr: f64,
     /// n - p.
     pub dof: usize,
+    /// Chi-square per degree of freedom, SSR / (n - p) (NaN without degrees of freedom); about
+    /// 1 when the model describes the data within their stated standard deviations.
+    pub reduced_chi2: f64,
+    /// Probability of a chi-square at least as large, when every value states its standard
+    /// deviation and n > p.
+    pub chi2_p: Option<f64>,
     /// Smallest over largest singular value of the column-scaled Jacobian.
     pub singular_ratio: f64,
     /// Outer iterations of the search.
     pub iterations: usize,
-    /// Sweep evaluations (each data set's sweep counts once per evaluation).
+    /// Model evaluations of the reported start (every data set counts once per evaluation).
     pub evaluations: usize,
+    /// Trial points of the reported search whose model could not be evaluated.
+    pub failed_trials: usize,
     /// Why the search stopped.
     pub stop: LmStop,
+    /// The model the search used, in words.
+    pub model: String,
+    /// Starts tried (see [`crate::fit::FitSettings::starts`]).
+    pub starts_tried: usize,
+    /// The start reported: 0 the device's values, k the k-th Sobol start.
+    pub best_start: usize,
 }

@@ -41,6 +41,51 @@
 //! * Dense output: the continuous extension in the form of Hairer, Norsett and Wanner's DOPRI5
 //!   (`contd5`, 4th order for Dormand-Prince), from the tableau's dense coefficients
 //!   ([`tableau::Tableau::dense`]).
+//!
+//! # Example
+//! A ball dropped from 1 m onto a floor that returns it with half its speed: one guard (the
+//! height below the floor), located on the dense output, and a switch that reverses the
+//! velocity.
+//!
+//! ```
+//! use endstop::ode::{Dopri5, Guards, HybridSystem, Options};
+//! use nalgebra::SVector;
+//!
+//! struct Ball;
+//!
+//! impl HybridSystem<2> for Ball {
+//!     type Mode = ();
+//!     fn rhs(&self, _: (), _t: f64, y: &SVector<f64, 2>) -> SVector<f64, 2> {
+//!         SVector::<f64, 2>::new(y[1], -9.81)
+//!     }
+//!     fn guards(&self, _: (), _t: f64, y: &SVector<f64, 2>) -> Guards {
+//!         [-y[0], f64::NEG_INFINITY, f64::NEG_INFINITY]
+//!     }
+//!     fn switch(&self, _: (), _guard: usize, _t: f64, y: &mut SVector<f64, 2>) {
+//!         y[0] = 0.0;
+//!         y[1] *= -0.5;
+//!     }
+//! }
+//!
+//! let opts = Options {
+//!     rtol: 1e-10,
+//!     atol: SVector::<f64, 2>::repeat(1e-12),
+//!     h_max: 0.01,
+//!     h_min: 1e-16,
+//!     h_init: 1e-4,
+//!     max_steps: 100_000,
+//!     event_time_tol: 1e-14,
+//! };
+//! let mut ode = Dopri5::new(0.0, SVector::<f64, 2>::new(1.0, 0.0), (), opts);
+//! ode.integrate(&Ball, 0.7, |_, _| {})?;
+//! // The floor at t1 = sqrt(2 h / g) with speed g t1; then up at half that speed.
+//! let t1 = (2.0 / 9.81f64).sqrt();
+//! let (t, u) = (0.7 - t1, 0.5 * 9.81 * t1);
+//! assert_eq!(ode.stats().events, 1);
+//! assert!((ode.y()[0] - (u * t - 0.5 * 9.81 * t * t)).abs() < 1e-9);
+//! assert!((ode.y()[1] - (u - 9.81 * t)).abs() < 1e-9);
+//! # Ok::<(), endstop::ode::SolverError>(())
+//! ```
 
 mod adaptive;
 pub mod events;

@@ -24,7 +24,7 @@ use crate::num::roots::{illinois, RootError, RootOptions, Sample, Stop};
 use crate::ode::{SolverError, Stats};
 use crate::paper::claims::{keys, ClaimKey};
 use crate::paper::measured::P1_MEASURED_ONSET_HZ;
-use crate::paper::setups::{comb, endstop, hertz_stop, prototype1_setup, ParamSet};
+use crate::paper::setups::{comb, endstop, hertz_stop, prototype1_setup, with_endstop, ParamSet};
 use crate::paper::sweeps::{self, P1_HIGH_ACCEL_RMS_G};
 use crate::physics::harvester::Harvester;
 use crate::study::steady::SteadyConfig;
@@ -332,7 +332,7 @@ pub fn fit_bim_for_jump(
     let what = format!("b_im fit ({stiffness:?}) to the jump");
     let mut samples = Vec::new();
     let mut eval = |bim: f64| -> Result<(f64, Option<BranchEnd>), SolverError> {
-        let d = device.with_endstop(stiffness, bim);
+        let d = with_endstop(&device, stiffness, bim);
         let r = settings.run(&d, accel_rms_g, |_| {})?;
         let end = r.branch_end();
         samples.push(BimSample {

@@ -20,7 +20,7 @@ use thiserror::Error;
 use crate::device::{Device, StiffnessModel};
 use crate::drive::Sine;
 use crate::ode::{Dopri5, SolverError, Stats};
-use crate::paper::setups::FIG13_BIAS_V;
+use crate::paper::setups::{with_endstop, FIG13_BIAS_V};
 use crate::physics::contact::Mode;
 use crate::physics::harvester::{Harvester, State};
 use crate::spice::{
@@ -134,7 +134,7 @@ pub fn cases(p1: &Device, p2: &Device) -> Vec<Case> {
         Case {
             key: "p1_free",
             label: "P1, 30 V, 4.1 g, 1000 Hz, no impacts (Hertz, b_im = 1.5 N s/m)",
-            device: p1_30.with_endstop(StiffnessModel::Hertz, 1.5),
+            device: with_endstop(&p1_30, StiffnessModel::Hertz, 1.5),
             accel_rms_g: 4.1,
             freq_hz: 1000.0,
             start: Start::Rest,
@@ -143,7 +143,7 @@ pub fn cases(p1: &Device, p2: &Device) -> Vec<Case> {
         Case {
             key: "p1_impacting",
             label: "P1, 30 V, 7 g, 1350 Hz, upper branch (Hertz, b_im = 1.5 N s/m)",
-            device: p1_30.with_endstop(StiffnessModel::Hertz, 1.5),
+            device: with_endstop(&p1_30, StiffnessModel::Hertz, 1.5),
             accel_rms_g: 7.0,
             freq_hz: 1350.0,
             start: upper_p1,
@@ -152,7 +152,7 @@ pub fn cases(p1: &Device, p2: &Device) -> Vec<Case> {
         Case {
             key: "p1_impacting_linear",
             label: "P1, 30 V, 7 g, 1350 Hz, upper branch (linear k_im, b_im = 2 N s/m)",
-            device: p1_30.with_endstop(StiffnessModel::Linear, 2.0),
+            device: with_endstop(&p1_30, StiffnessModel::Linear, 2.0),
             accel_rms_g: 7.0,
             freq_hz: 1350.0,
             start: upper_p1,
@@ -161,7 +161,7 @@ pub fn cases(p1: &Device, p2: &Device) -> Vec<Case> {
         Case {
             key: "p1_grazing",
             label: "P1, 30 V, 5.5 g, 1240 Hz, grazing (Hertz, b_im = 1.5 N s/m)",
-            device: p1_30.with_endstop(StiffnessModel::Hertz, 1.5),
+            device: with_endstop(&p1_30, StiffnessModel::Hertz, 1.5),
             accel_rms_g: 5.5,
             freq_hz: 1240.0,
             start: upper_p1,
@@ -170,7 +170,7 @@ pub fn cases(p1: &Device, p2: &Device) -> Vec<Case> {
         Case {
             key: "p2_upper",
             label: "P2, 10 V, 0.31 g, 720 Hz, upper branch (linear k_im, b_im = 0.4 N s/m)",
-            device: p2_10.with_endstop(StiffnessModel::Linear, 0.4),
+            device: with_endstop(&p2_10, StiffnessModel::Linear, 0.4),
             accel_rms_g: 0.31,
             freq_hz: 720.0,
             start: Start::UpSweep {
@@ -555,9 +555,62 @@ impl Difference {
     }
 }
 
+/// The acceptance over the whole cross-check: every case of `case_keys` must have exactly one
+/// verdict under the documented settings ([`Setting::documented`]), and each must be
+/// [`Verdict::Within`]. `verdicts` holds (case key, setting, verdict) of every run. Returns
+/// the failures, one line each: a case without a documented verdict (or with two), and a
+/// documented verdict outside the tolerance or failed; a set with no case fails.
+pub fn acceptance_failures(
+    case_keys: &[&str],
+    verdicts: &[(&str, Setting, &Verdict)],
+) -> Vec<String> {
+    if case_keys.is_empty() {
+        return vec!["no case was compared".into()];
+    }
+    let mut failures = Vec::new();
+    for key in case_keys {
+        let documented: Vec<&Verdict> = verdicts
+            .iter()
+            .filter(|(k, s, _)| k == key && s.documented())
+            .map(|(_, _, v)| *v)
+            .collect();
+        match documented.as_slice() {
+            [Verdict::Within] => {}
+            [v] => failures.push(format!("{key} [documented]: {}", v.label())),
+            vs => failures.push(format!(
+                "{key}: {} verdicts under the documented settings, expected one",
+                vs.len()
+            )),
+        }
+    }
+    failures
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_acceptance_fails_on_a_missing_case_an_outside_verdict_or_no_case() {
+        let within = Verdict::Within;
+        let outside = Verdict::Outside;
+        let all = [
+            ("a", Setting::Defaults, &outside),
+            ("a", Setting::Documented, &within),
+            ("b", Setting::Documented, &within),
+        ];
+        assert!(acceptance_failures(&["a", "b"], &all).is_empty());
+        // Case b was not run under the documented settings: a failure, not a pass.
+        let f = acceptance_failures(&["a", "b"], &all[..2]);
+        assert_eq!(f.len(), 1, "{f:?}");
+        assert!(f[0].starts_with("b: 0 verdicts"), "{f:?}");
+        // Nothing compared at all.
+        assert_eq!(acceptance_failures(&[], &[]).len(), 1);
+        assert_eq!(acceptance_failures(&["a"], &[]).len(), 1);
+        // A documented verdict outside the tolerance.
+        let f = acceptance_failures(&["a"], &[("a", Setting::Documented, &outside)]);
+        assert_eq!(f, ["a [documented]: outside tolerance"]);
+    }
 
     #[test]
     fn only_the_documented_setting_is_held_to_the_tolerance() {

@@ -11,8 +11,8 @@ use std::marker::PhantomData;
 
 use crate::device::{Device, StiffnessModel};
 use crate::ode::SolverError;
-use crate::paper::claims::{bool_value, ClaimKey, ClaimValue};
-use crate::paper::setups::endstop;
+use crate::paper::claims::{bool_value, Answer, ClaimKey, ClaimValue};
+use crate::paper::setups::{endstop, with_endstop};
 use crate::study::steady::SteadyConfig;
 use crate::study::sweep::{compare_sweeps, BranchEnd, SweepComparison, SweepReport, SweepSettings};
 
@@ -96,8 +96,7 @@ impl CurveSpec {
 
     /// The device with this curve's end-stop model.
     pub fn device(&self, base: &Device) -> Device {
-        base.with_endstop(self.stiffness, self.bim_n_s_per_m)
-            .with_tension_free(self.tension_free)
+        with_endstop(&base, self.stiffness, self.bim_n_s_per_m).with_tension_free(self.tension_free)
     }
 }
 
@@ -329,7 +328,7 @@ pub(crate) fn branch_end_value(key: ClaimKey, curve: &Curve, stop_hz: f64) -> Op
     }
     Some(ClaimValue {
         key,
-        value: v,
+        value: Answer::Number(v),
         uncertainty: Some(end.transition.half_width()),
         note,
     })

@@ -6,15 +6,16 @@
 
 use crate::device::Device;
 use crate::num::stats::Jackknife;
-use crate::paper::setups::{prototype1_setup, ParamSet, Prototype1Sets};
-use crate::physics::two_port::{eq21_efficiency, eq21_power_w, linear_output_psd, linear_widths};
+use crate::paper::setups::{paper_record, prototype1_setup, ParamSet, Prototype1Sets};
+use crate::physics::linear::{linear_widths, LinearResponse};
+use crate::physics::two_port::{eq21_efficiency, eq21_power_w};
 use crate::signal::welch::matlab_default_nperseg;
 use crate::signal::{Psd, WelchConfig, Widths};
 use crate::study::ensemble::{
     first_stream_for_level, run_ensembles, Ensemble, EnsembleCase, EnsembleSpec, RecordResult,
     DEFAULT_SEED,
 };
-use crate::study::record::{BroadbandError, RecordSpec};
+use crate::study::record::BroadbandError;
 
 /// Welch segment of prototype 1: 2^12 samples, 24.4 Hz bins at 100 kHz. Its responses are
 /// broad (a linear half-power width of about 220 Hz, 9 bins, growing to some 600 Hz with
@@ -32,7 +33,7 @@ pub const P1_BAND_HZ: (f64, f64) = (200.0, 5000.0);
 /// Band in which prototype 2's spectra are kept and its bandwidths searched (Hz).
 pub const P2_BAND_HZ: (f64, f64) = (100.0, 3000.0);
 
-/// The ensemble of one level: the paper's record ([`RecordSpec::paper`]), Welch segments of
+/// The ensemble of one level: the paper's record ([`paper_record`]), Welch segments of
 /// `nperseg` with 50 % overlap, MATLAB's default segmenting beside when `matlab_alt`, seed
 /// [`DEFAULT_SEED`] and streams keyed by the level ([`first_stream_for_level`]).
 pub fn protocol_spec(
@@ -43,7 +44,7 @@ pub fn protocol_spec(
     realisations: usize,
     matlab_alt: bool,
 ) -> EnsembleSpec {
-    let record = RecordSpec::paper(device, psd_g2_per_hz);
+    let record = paper_record(device, psd_g2_per_hz);
     let alt_welch = matlab_alt
         .then(|| WelchConfig::half_overlap(matlab_default_nperseg(record.analysed_samples())));
     EnsembleSpec {
@@ -127,9 +128,10 @@ impl Level {
         2.0 * r.summary.p_total_w() / (m * self.ens.spec.record.noise.psd_si())
     }
 
-    /// Linearised output power PSD (eqs 11-17, no end-stops) at this level on `freq_hz` (W/Hz).
+    /// Linearised output power PSD (eqs 11-17, no end-stops) at this level on `freq_hz` (W/Hz,
+    /// one-sided).
     pub fn linear_psd(&self, freq_hz: &[f64]) -> Psd {
-        linear_output_psd(&self.device, self.sa(), freq_hz)
+        LinearResponse::of(&self.device).output_psd(self.sa() * crate::G * crate::G, freq_hz)
     }
 
     /// Impacts per record.

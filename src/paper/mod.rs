@@ -7,6 +7,7 @@
 //! * [`setups`]: the prototypes as each figure simulates them (bias, contact law, b_im), the
 //!   parameter sets, and the devices a figure runs on;
 //! * [`measured`]: what the paper measured and the simulations use as targets;
+//! * [`qm`]: the readings of the paper's quality factor Qm (Table 3, eq 21);
 //! * the protocols that several figures share: [`sweeps`] (prototype 1's stepped sine),
 //!   [`curves`] (the curves of an up-sweep figure), [`ensembles`] (random vibration),
 //!   [`prototype2_random`] (the ensembles of Figures 14 and 15);
@@ -29,6 +30,7 @@ pub mod figure;
 pub mod figures;
 pub mod measured;
 pub mod prototype2_random;
+pub mod qm;
 pub mod resolution;
 pub mod response;
 pub mod setups;

@@ -16,7 +16,7 @@ use crate::device::{Device, StiffnessModel};
 use crate::paper::ensembles::{
     protocol_spec, run_levels, Level, LevelCase, P2_BAND_HZ, P2_NPERSEG,
 };
-use crate::paper::setups::{prototype2_setup, ParamSet};
+use crate::paper::setups::{prototype2_setup, with_endstop, ParamSet};
 use crate::study::record::{simulate_record, BroadbandError, Scheme};
 
 /// One of Figure 15's three levels.
@@ -245,7 +245,7 @@ pub fn run(
     let f14b = Fig15Level::L169.in_levels();
     if scope.extras.other_readings {
         let tension_free = dev.with_tension_free(true);
-        let hertz = dev.with_endstop(StiffnessModel::Hertz, 0.34);
+        let hertz = with_endstop(&dev, StiffnessModel::Hertz, 0.34);
         cases.push(case(
             &hertz,
             f14b,

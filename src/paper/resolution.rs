@@ -19,12 +19,12 @@ use crate::device::Device;
 use crate::num::stats::Jackknife;
 use crate::paper::ensembles::P1_BAND_HZ;
 use crate::paper::figures::{fig11, fig12};
-use crate::paper::setups::prototype1_setup;
-use crate::physics::two_port::linear_widths;
+use crate::paper::setups::{paper_record, prototype1_setup};
+use crate::physics::linear::linear_widths;
 use crate::signal::bandwidth::mean_psd;
 use crate::signal::{self, Psd, WelchConfig};
 use crate::study::ensemble::{first_stream_for_level, DEFAULT_SEED};
-use crate::study::record::{output_psd, simulate_record, BroadbandError, RecordSpec};
+use crate::study::record::{output_psd, simulate_record, BroadbandError};
 
 /// Segment lengths of the study (samples; 2^10 to 2^15, bins of 97.7 Hz down to 3.05 Hz).
 pub const NPERSEGS: [usize; 6] = [1 << 10, 1 << 11, 1 << 12, 1 << 13, 1 << 14, 1 << 15];
@@ -100,7 +100,7 @@ pub fn run(
         .par_iter()
         .map(|&(l, i)| {
             let sa = LEVELS[l];
-            let spec = RecordSpec::paper(&dev, sa);
+            let spec = paper_record(&dev, sa);
             let stream = first_stream_for_level(sa) + i as u64;
             let rec = simulate_record(&dev, &spec, DEFAULT_SEED, stream)?;
             let out = NPERSEGS

@@ -8,6 +8,8 @@ use serde::{Deserialize, Serialize};
 use crate::device::{
     AreaOverlapPair, Device, HertzLineStop, StiffnessModel, Stop, StopLaw, Transducer,
 };
+use crate::drive::noise::NoiseSpec;
+use crate::study::record::RecordSpec;
 
 /// Prototype 1, Figures 8-12 and Table 3: bias voltage (V).
 pub const P1_BIAS_V: f64 = 30.0;
@@ -20,16 +22,44 @@ pub const FIG13_BIAS_V: f64 = 10.0;
 
 /// Prototype 1 as Figures 8-12 simulate it: 30 V, Hertz contact (eq 6), b_im = 1.5 N s/m.
 pub fn prototype1_setup(device: &Device) -> Device {
-    device
-        .with_bias(P1_BIAS_V)
-        .with_endstop(StiffnessModel::Hertz, 1.5)
+    with_endstop(&device.with_bias(P1_BIAS_V), StiffnessModel::Hertz, 1.5)
 }
 
 /// Prototype 2 as Figures 14 and 15 simulate it: 15 V, linear k_im (eq 19), b_im = 0.4 N s/m.
 pub fn prototype2_setup(device: &Device) -> Device {
-    device
-        .with_bias(P2_BIAS_V)
-        .with_endstop(StiffnessModel::Linear, 0.4)
+    with_endstop(&device.with_bias(P2_BIAS_V), StiffnessModel::Linear, 0.4)
+}
+
+/// A copy of one of the paper's devices whose Hertz line stops follow eq 6
+/// ([`StiffnessModel::Hertz`]) or its linear fit of eq 19 ([`StiffnessModel::Linear`]), with
+/// end-stop damping b_im = `damping_n_s_per_m`; other stops get the damping only where their
+/// law takes it.
+pub fn with_endstop(device: &Device, stiffness: StiffnessModel, damping_n_s_per_m: f64) -> Device {
+    with_stops(device, |s| {
+        if let StopLaw::HertzLine(h) = &mut s.law {
+            h.linear_fit = stiffness == StiffnessModel::Linear;
+        }
+        if s.law.takes_viscous_damper() {
+            s.damping_n_s_per_m = damping_n_s_per_m;
+        }
+    })
+}
+
+/// The paper's random excitation (section 4): band-limited white noise of two-sided level
+/// `psd_g2_per_hz` (g²/Hz), 10 kHz band, sampled at 100 kHz, 10 s.
+pub fn paper_noise(psd_g2_per_hz: f64) -> NoiseSpec {
+    NoiseSpec {
+        psd_g2_per_hz,
+        bandwidth_hz: 10e3,
+        sample_rate_hz: 100e3,
+        duration_s: 10.0,
+    }
+}
+
+/// The paper's record: [`paper_noise`] at `psd_g2_per_hz`, 10 s analysed after the device's
+/// pre-roll ([`RecordSpec::of`]).
+pub fn paper_record(device: &Device, psd_g2_per_hz: f64) -> RecordSpec {
+    RecordSpec::of(device, paper_noise(psd_g2_per_hz))
 }
 
 /// The parameter sets of prototype 1 under which its claims are scored: Tables 1 and 2 as
@@ -107,6 +137,39 @@ impl Prototype1Sets {
     pub fn each(&self) -> [(ParamSet, &Device); 2] {
         ParamSet::BOTH.map(|s| (s, self.get(s)))
     }
+}
+
+/// A device that cannot stand in for one of the paper's prototypes.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error(
+    "device `{device}`: {what}; the paper's figures and calibration need an area-overlap comb \
+     pair and the same Hertz line stop on both sides"
+)]
+pub struct TopologyError {
+    /// The device's name.
+    pub device: String,
+    /// What it has instead.
+    pub what: String,
+}
+
+/// Checks that a device has the paper's topology, which [`comb`], [`endstop`] and
+/// [`hertz_stop`] assume (and panic without): an area-overlap comb pair, and one Hertz line
+/// stop for both sides. The entry points that take a device from a user call it first.
+pub fn check_topology(d: &Device) -> Result<(), TopologyError> {
+    let err = |what: String| TopologyError {
+        device: d.name.clone(),
+        what,
+    };
+    if !matches!(d.transducer, Transducer::AreaOverlapPair(_)) {
+        return Err(err(format!("its transducer is `{}`", d.transducer.key())));
+    }
+    let Some(stop) = d.stops.symmetric() else {
+        return Err(err("its two stops differ or one is missing".into()));
+    };
+    if !matches!(stop.law, StopLaw::HertzLine(_)) {
+        return Err(err(format!("its stops are `{}`", stop.law.key())));
+    }
+    Ok(())
 }
 
 /// The comb pair of one of the paper's devices (eqs 7-10).

@@ -51,7 +51,7 @@ impl<E: Excitation> Harvester<E> {
                 .map_or(0.0, |s| s.energy(self.penetration(side, y[0]))),
             _ => 0.0,
         };
-        let e = 0.5 * self.mass_kg * y[1] * y[1] + 0.5 * self.km * y[0] * y[0] + contact;
+        let e = 0.5 * self.mass_kg * y[1] * y[1] + self.suspension_energy(y[0]) + contact;
         self.transducer.add_stored_energy(e, y)
     }
 
@@ -220,7 +220,7 @@ impl<E: Excitation> EnergyAudit<E> {
     pub fn solver_options(&self, rtol: f64) -> Options<AUDIT_DIM> {
         let base = self.0.solver_options(rtol);
         let xs = self.0.x_scale();
-        let e_scale = 0.5 * self.0.km * xs * xs;
+        let e_scale = 0.5 * self.0.well_stiffness() * xs * xs;
         base.augmented(AuditState::repeat(e_scale * rtol))
     }
 

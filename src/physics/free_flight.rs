@@ -8,6 +8,10 @@
 //! * A gap-closing pair: `N` is the right-hand side minus `L y`.
 //! * Piezoelectric, electromagnetic, or no transducer: the free flight is linear and `N` is
 //!   zero, so the exponential step is exact for the linearly interpolated input.
+//! * A nonlinear suspension ([`crate::physics::suspension`]), with any transducer: `L` is the
+//!   Jacobian at the reference well (not at rest, which may be a barrier's top) and `N` the
+//!   right-hand side minus `L y`, which is constant at the well and grows with the distance
+//!   from it.
 //!
 //! For the area-overlap pair, with `Ct = C0 + Cp + CL`, `Gamma = C0 Vb / x0` and
 //! `dC = C0 x / x0`:
@@ -29,6 +33,7 @@ use nalgebra::SMatrix;
 use crate::drive::Excitation;
 use crate::physics::contact::Mode;
 use crate::physics::harvester::Harvester;
+use crate::physics::suspension::Spring;
 use crate::physics::transducer::{PairGeometry, State, TransducerModel};
 
 /// The free-flight split of one device (see the module docs).
@@ -76,7 +81,8 @@ pub struct AreaOverlapFlight {
     km: f64,
 }
 
-/// Any other device: `L` is the Jacobian at rest; `N` is zero for a linear transducer.
+/// Any other device: `L` is the Jacobian at the reference well (at rest for a linear
+/// suspension); `N` is zero for a linear transducer on a linear suspension.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct GeneralFlight {
     l: SMatrix<f64, 4, 4>,
@@ -85,12 +91,23 @@ pub struct GeneralFlight {
     inv_mass: f64,
     damping: f64,
     km: f64,
+    spring: Spring,
+}
+
+// The method lives beside the split it returns, so that the model's module does not import
+// this one (which builds on it).
+impl<E: Excitation> Harvester<E> {
+    /// The free-flight model split into its linearisation about rest and a small remainder,
+    /// for [`crate::ode::exponential`] (see [`FreeFlight`]).
+    pub fn free_flight(&self) -> FreeFlight {
+        FreeFlight::of(self)
+    }
 }
 
 impl FreeFlight {
     /// The split of a model's free flight.
     pub fn of<E: Excitation>(h: &Harvester<E>) -> Self {
-        if let TransducerModel::Pair(p) = h.transducer {
+        if let (TransducerModel::Pair(p), false) = (h.transducer, h.spring.nonlinear) {
             if let PairGeometry::AreaOverlap { x0 } = p.geometry {
                 let ct = p.c0 + p.cp + p.cl;
                 return Self {
@@ -112,12 +129,20 @@ impl FreeFlight {
         }
         Self {
             kind: FlightKind::General(GeneralFlight {
-                l: h.jacobian(Mode::Free, &h.rest_state()),
+                l: h.jacobian(
+                    Mode::Free,
+                    &if h.spring.nonlinear {
+                        h.well_state()
+                    } else {
+                        h.rest_state()
+                    },
+                ),
                 transducer: h.transducer,
-                nonlinear: matches!(h.transducer, TransducerModel::Pair(_)),
+                nonlinear: h.spring.nonlinear || matches!(h.transducer, TransducerModel::Pair(_)),
                 inv_mass: 1.0 / h.mass_kg,
                 damping: h.damping,
                 km: h.km,
+                spring: h.spring,
             }),
         }
     }
@@ -188,7 +213,7 @@ impl Remainder for GeneralFlight {
         let (fe, rates) = self.transducer.force_and_rates(y);
         let f = State::new(
             y[1],
-            (-self.damping * y[1] - self.km * y[0] + fe) * self.inv_mass,
+            (-self.damping * y[1] - self.km * y[0] - self.spring.force(y[0]) + fe) * self.inv_mass,
             rates[0],
             rates[1],
         );

@@ -31,7 +31,7 @@ use crate::device::Device;
 use crate::drive::Excitation;
 use crate::ode::{Guards, HybridSystem, Options};
 use crate::physics::contact::{Mode, Side, StopModel};
-pub use crate::physics::free_flight::FreeFlight;
+use crate::physics::suspension::{self, Spring};
 use crate::physics::transducer::TransducerModel;
 pub use crate::physics::transducer::{Electrical, State};
 
@@ -46,8 +46,12 @@ pub struct Harvester<E: Excitation> {
     pub mass_kg: f64,
     /// Mechanical damping b (N s/m).
     pub damping: f64,
-    /// Suspension stiffness km (N/m).
+    /// Suspension stiffness km (N/m): the linear term `k1` of the restoring force (negative
+    /// for a double well).
     pub km: f64,
+    /// The restoring force's terms beyond `km x` and the reference well
+    /// ([`crate::physics::suspension`]).
+    pub spring: Spring,
     /// The stop at x = +gap, if any.
     pub upper: Option<StopModel>,
     /// The stop at x = -gap, if any.
@@ -106,14 +110,31 @@ impl<E: Excitation> Harvester<E> {
     /// Builds the model of a device (at its bias voltage and end-stop options).
     pub fn new(device: &Device, excitation: E) -> Self {
         let m = &device.mechanics;
+        let (km, spring) = if m.suspension.is_linear() {
+            (m.stiffness_n_per_m, Spring::linear(m.stiffness_n_per_m))
+        } else {
+            let k = device.restoring_polynomial().0;
+            let mut higher = [0.0; suspension::MAX_ORDER - 1];
+            higher.copy_from_slice(&k[1..]);
+            let well = device.reference_well().map_or(0.0, |w| w.x_m);
+            let s = Spring {
+                higher,
+                nonlinear: true,
+                well_m: well,
+                well_stiffness_n_per_m: m.stiffness_n_per_m,
+            };
+            (k[0], s)
+        };
+        // Without stops: the static deflection under 1 g, or a well's distance from rest.
         let x_scale_m = device
             .stops
             .smallest_gap_m()
-            .unwrap_or(crate::G * m.mass_kg / m.stiffness_n_per_m);
+            .unwrap_or((crate::G * m.mass_kg / m.stiffness_n_per_m).max(spring.well_m.abs()));
         Self {
             mass_kg: m.mass_kg,
             damping: m.damping_n_s_per_m,
-            km: m.stiffness_n_per_m,
+            km,
+            spring,
             upper: device.stops.upper.as_ref().map(StopModel::of),
             lower: device.stops.lower.as_ref().map(StopModel::of),
             transducer: TransducerModel::of(&device.transducer),
@@ -129,6 +150,7 @@ impl<E: Excitation> Harvester<E> {
             mass_kg: self.mass_kg,
             damping: self.damping,
             km: self.km,
+            spring: self.spring,
             upper: self.upper,
             lower: self.lower,
             transducer: self.transducer,
@@ -236,7 +258,52 @@ impl<E: Excitation> Harvester<E> {
     pub fn holding_force(&self, side: Side, t: f64, y: &State) -> f64 {
         let (fe, _) = self.transducer.force_and_rates(y);
         side.sign()
-            * (self.mass_kg * self.excitation.accel(t) - self.damping * y[1] - self.km * y[0] + fe)
+            * (self.mass_kg * self.excitation.accel(t)
+                - self.damping * y[1]
+                - self.restoring_force(y[0])
+                + fe)
+    }
+
+    /// The suspension's restoring force `km x + F_higher(x)` (N, along +x on eq 7's left).
+    #[inline(always)]
+    pub fn restoring_force(&self, x: f64) -> f64 {
+        self.km * x + self.spring.force(x)
+    }
+
+    /// The suspension's stiffness at `x` (N/m).
+    #[inline(always)]
+    pub fn restoring_stiffness(&self, x: f64) -> f64 {
+        self.km + self.spring.stiffness(x)
+    }
+
+    /// The suspension's potential energy at `x` (J), zero at rest.
+    #[inline]
+    pub fn suspension_energy(&self, x: f64) -> f64 {
+        0.5 * self.km * x * x + self.spring.energy(x)
+    }
+
+    /// The small-oscillation angular frequency at the reference well, `sqrt(k_well / m)`
+    /// (rad/s): `sqrt(km / m)` for a linear suspension. It sets the model's time scales.
+    #[inline]
+    pub fn well_omega_rad_s(&self) -> f64 {
+        (self.well_stiffness() / self.mass_kg).sqrt()
+    }
+
+    /// The small-oscillation stiffness at the reference well (N/m): `km` for a linear
+    /// suspension.
+    #[inline]
+    pub fn well_stiffness(&self) -> f64 {
+        if self.spring.nonlinear {
+            self.spring.well_stiffness_n_per_m
+        } else {
+            self.km
+        }
+    }
+
+    /// The state at rest in the reference well (the transducer at its static equilibrium
+    /// there): the point the free flight is linearised about.
+    pub fn well_state(&self) -> State {
+        self.static_state(self.spring.well_m, 0.0)
     }
 
     /// The Jacobian of the right-hand side with respect to the state, in a mode (the drive
@@ -249,6 +316,7 @@ impl<E: Excitation> Harvester<E> {
     /// nothing); stuck on a stop, x and v do not move.
     pub fn jacobian(&self, mode: Mode, y: &State) -> Matrix4<f64> {
         let m = self.mass_kg;
+        let km = self.restoring_stiffness(y[0]);
         let (mut dfim_dx, mut dfim_dv) = (0.0, 0.0);
         if let Mode::Contact(side) = mode {
             if let Some(s) = self.stop(side) {
@@ -267,7 +335,7 @@ impl<E: Excitation> Harvester<E> {
                     1.0,
                     0.0,
                     0.0,
-                    (-self.km + g.df_dx - dfim_dx) / m,
+                    (-km + g.df_dx - dfim_dx) / m,
                     (-self.damping - dfim_dv) / m,
                     g.df_ds[0] / m,
                     g.df_ds[1] / m,
@@ -284,14 +352,14 @@ impl<E: Excitation> Harvester<E> {
             TransducerModel::None => {
                 let mut j = Matrix4::zeros();
                 j[(0, 1)] = 1.0;
-                j[(1, 0)] = (-self.km - dfim_dx) / m;
+                j[(1, 0)] = (-km - dfim_dx) / m;
                 j[(1, 1)] = (-self.damping - dfim_dv) / m;
                 j
             }
             TransducerModel::Piezo { theta, cp, r } => {
                 let mut j = Matrix4::zeros();
                 j[(0, 1)] = 1.0;
-                j[(1, 0)] = (-self.km - dfim_dx) / m;
+                j[(1, 0)] = (-km - dfim_dx) / m;
                 j[(1, 1)] = (-self.damping - dfim_dv) / m;
                 j[(1, 2)] = theta / m;
                 j[(2, 1)] = -theta / cp;
@@ -301,7 +369,7 @@ impl<E: Excitation> Harvester<E> {
             TransducerModel::Electromagnetic { phi, rc, l, r } => {
                 let mut j = Matrix4::zeros();
                 j[(0, 1)] = 1.0;
-                j[(1, 0)] = (-self.km - dfim_dx) / m;
+                j[(1, 0)] = (-km - dfim_dx) / m;
                 if l > 0.0 {
                     j[(1, 1)] = (-self.damping - dfim_dv) / m;
                     j[(1, 2)] = -phi / m;
@@ -330,7 +398,7 @@ impl<E: Excitation> Harvester<E> {
     /// Characteristic scales of (x, v, e1, e2), used for absolute tolerances and Newton's
     /// scaled coordinates.
     pub fn scales(&self) -> State {
-        let w0 = ((self.km) / self.mass_kg).sqrt();
+        let w0 = self.well_omega_rad_s();
         let x = self.x_scale();
         let [e1, e2] = self.transducer.scales(x, w0 * x);
         State::new(x, w0 * x, e1, e2)
@@ -341,16 +409,10 @@ impl<E: Excitation> Harvester<E> {
         self.transducer.active_states()
     }
 
-    /// The free-flight model split into its linearisation about rest and a small remainder,
-    /// for [`crate::ode::exponential`] (see [`FreeFlight`]).
-    pub fn free_flight(&self) -> FreeFlight {
-        FreeFlight::of(self)
-    }
-
     /// Integrator options with relative tolerance `rtol` and absolute tolerances
     /// `rtol` times [`Harvester::scales`].
     pub fn solver_options(&self, rtol: f64) -> Options<4> {
-        let w0 = (self.km / self.mass_kg).sqrt();
+        let w0 = self.well_omega_rad_s();
         Options {
             rtol,
             atol: self.scales() * rtol,
@@ -388,7 +450,10 @@ impl<E: Excitation> HybridSystem<4> for Harvester<E> {
         if let Mode::Stuck(_) = mode {
             return State::new(0.0, 0.0, rates[0], rates[1]);
         }
-        let f = self.mass_kg * self.excitation.accel(t) - self.damping * y[1] - self.km * y[0] + fe
+        let f = self.mass_kg * self.excitation.accel(t)
+            - self.damping * y[1]
+            - self.restoring_force(y[0])
+            + fe
             - self.endstop_force(mode, y);
         State::new(y[1], f / self.mass_kg, rates[0], rates[1])
     }
@@ -487,7 +552,7 @@ pub fn head<const M: usize>(z: &SVector<f64, M>) -> State {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::device::StiffnessModel;
+    use crate::device::StopLaw;
     use crate::drive::Sine;
     use crate::physics::contact::Side;
 
@@ -497,8 +562,15 @@ mod tests {
     fn jacobian_matches_central_differences_of_the_rhs() {
         let text = include_str!("../../data/prototype1.toml");
         let base = Device::from_toml_str(text, "prototype1.toml").unwrap();
-        for law in [StiffnessModel::Hertz, StiffnessModel::Linear] {
-            let h = Harvester::new(&base.with_endstop(law, 1.5), Sine::from_rms_g(5.5, 1300.0));
+        // The file's Hertz stops (b_im = 1.5 N s/m), then the same with the linear fit of eq 19.
+        for linear_fit in [false, true] {
+            let mut d = base.clone();
+            d.stops.for_each_mut(|s| {
+                if let StopLaw::HertzLine(h) = &mut s.law {
+                    h.linear_fit = linear_fit;
+                }
+            });
+            let h = Harvester::new(&d, Sine::from_rms_g(5.5, 1300.0));
             let sc = h.scales();
             // A state 0.2 um into the upper stop, moving, with charged nodes.
             let y = State::new(h.gap(Side::Upper) + 0.2e-6, 0.3, 0.4 * sc[2], -0.3 * sc[3]);
@@ -524,7 +596,7 @@ mod tests {
                         let an = j[(r, c)] * sc[c];
                         assert!(
                             (fd[(r, c)] - an).abs() <= 1e-6 * row_max,
-                            "{law:?} {mode:?} d f{r}/d y{c}: {an} vs {}",
+                            "linear fit {linear_fit} {mode:?} d f{r}/d y{c}: {an} vs {}",
                             fd[(r, c)]
                         );
                     }

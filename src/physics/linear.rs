@@ -9,7 +9,9 @@
 //! is `sum_i |V_i/A|^2 |A|^2 / (2 R)`.
 //!
 //! Under white base acceleration of two-sided density `Sa` (m^2 s^-4 / Hz) the one-sided
-//! output power density is `2 Sa sum_i |V_i/A|^2 / R` ([`LinearResponse::output_psd_w_per_hz`]).
+//! output power density is `2 Sa sum_i |V_i/A|^2 / R` ([`LinearResponse::output_psd_w_per_hz`],
+//! on a grid [`LinearResponse::output_psd`], its widths [`linear_widths`]): the one linear
+//! output PSD of the crate, for every transducer.
 //!
 //! For the paper's comb pair these are eqs 11-17 and their frequency-domain form
 //! ([`crate::physics::two_port`]); for the other transducers they are the textbook closed forms
@@ -21,6 +23,7 @@ use crate::device::Device;
 use crate::drive::Sine;
 use crate::physics::harvester::Harvester;
 use crate::physics::transducer::TransducerModel;
+use crate::signal::{Psd, Widths};
 
 /// The linearised model of a device.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -111,6 +114,19 @@ impl LinearResponse {
         2.0 * sa_si * (v1.norm_sqr() + v2.norm_sqr()) / r
     }
 
+    /// [`LinearResponse::output_psd_w_per_hz`] on a grid of frequencies, as a [`Psd`] (W/Hz,
+    /// one-sided; `segments` is zero: nothing is averaged).
+    pub fn output_psd(&self, sa_si: f64, freq_hz: &[f64]) -> Psd {
+        Psd {
+            freq_hz: freq_hz.to_vec(),
+            density: freq_hz
+                .iter()
+                .map(|&f| self.output_psd_w_per_hz(sa_si, f))
+                .collect(),
+            segments: 0,
+        }
+    }
+
     /// The displacement amplitude per unit acceleration amplitude at `freq_hz` (s^2).
     pub fn displacement_per_accel(&self, freq_hz: f64) -> f64 {
         self.state_per_accel(freq_hz)[0].norm()
@@ -141,6 +157,14 @@ pub fn open_circuit_resonance_hz(device: &Device) -> f64 {
 pub fn open_circuit_qm(device: &Device) -> f64 {
     (open_circuit_stiffness_n_per_m(device) * device.mechanics.mass_kg).sqrt()
         / device.mechanics.damping_n_s_per_m
+}
+
+/// Widths of a device's linear output PSD ([`LinearResponse::output_psd_w_per_hz`]),
+/// evaluated on a grid of 0.01 Hz over `f_lo..f_hi` (the true widths, free of any estimator).
+pub fn linear_widths(device: &Device, f_lo: f64, f_hi: f64) -> Widths {
+    let n = ((f_hi - f_lo) / 0.01).ceil() as usize + 1;
+    let f: Vec<f64> = (0..n).map(|i| f_lo + 0.01 * i as f64).collect();
+    Widths::of(&LinearResponse::of(device).output_psd(1.0, &f))
 }
 
 /// Mean power of the loads under white base acceleration of two-sided density `sa_si`

@@ -5,48 +5,12 @@
 //! mode. The differential two-port has (eqs 15-17)
 //! C = (C0 + Cp + CL)/2, Gamma = C0 Vb / x0, K = km + 2 C0^2 Vb^2 / (x0^2 (C0 + Cp + CL)),
 //! and coupling k^2 = Gamma^2 / (K C) (eq 18).
+//!
+//! The output PSD of this linear theory is the general one of [`crate::physics::linear`] (any
+//! transducer), which a test holds to the pair's closed form of eqs 11-17.
 
 use crate::device::{Device, Transducer};
-use crate::signal::{Psd, Widths};
 use crate::G;
-
-/// How the mechanical quality factor Qm is read (the paper does not say).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum QmReading {
-    /// Qm = sqrt(km m) / b, with the suspension stiffness alone.
-    Suspension,
-    /// Qm = sqrt(K m) / b, with the open-circuit stiffness K of eq 17.
-    OpenCircuit,
-    /// Qm = m w0 / b with the measured resonance f0 (1220 Hz, 675 Hz).
-    MeasuredResonance,
-}
-
-impl QmReading {
-    /// All readings, default first.
-    pub const ALL: [QmReading; 3] = [
-        QmReading::MeasuredResonance,
-        QmReading::Suspension,
-        QmReading::OpenCircuit,
-    ];
-
-    /// Short label for tables.
-    pub fn label(self) -> &'static str {
-        match self {
-            QmReading::Suspension => "sqrt(km m)/b",
-            QmReading::OpenCircuit => "sqrt(K m)/b",
-            QmReading::MeasuredResonance => "m w0/b (measured f0)",
-        }
-    }
-}
-
-/// The Qm reading used for Table 3's verdicts: m w0/b with the resonance the paper quotes
-/// (1220 Hz with Figure 9, 675 Hz with Figure 15). Of the three readings it is the only one
-/// consistent with both printed Qm values (5.7 and 203.5); the others are shown beside it.
-pub const TABLE3_QM: QmReading = QmReading::MeasuredResonance;
-
-/// The Qm reading used in eq 21: the derivation works with the open-circuit stiffness K
-/// throughout (rL of eq 22 also uses sqrt(K/m)), so Qm = sqrt(K m)/b.
-pub const EQ21_QM: QmReading = QmReading::OpenCircuit;
 
 /// The differential-mode two-port and its figures of merit at one bias voltage.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -65,7 +29,7 @@ pub struct TwoPort {
     pub damping_n_s_per_m: f64,
     /// Suspension stiffness km (N/m).
     pub km_n_per_m: f64,
-    /// Measured resonance used by [`QmReading::MeasuredResonance`] (Hz; NaN when the device
+    /// Measured resonance used by [`TwoPort::qm_measured_resonance`] (Hz; NaN when the device
     /// quotes none).
     pub measured_resonance_hz: f64,
     /// Load resistance RL (ohm).
@@ -125,16 +89,22 @@ impl TwoPort {
         Self::try_of(device).expect("the two-port of eqs 15-18 needs a capacitor-pair transducer")
     }
 
-    /// Mechanical quality factor under a reading.
-    pub fn qm(&self, reading: QmReading) -> f64 {
-        let b = self.damping_n_s_per_m;
-        match reading {
-            QmReading::Suspension => (self.km_n_per_m * self.mass_kg).sqrt() / b,
-            QmReading::OpenCircuit => (self.stiffness_n_per_m * self.mass_kg).sqrt() / b,
-            QmReading::MeasuredResonance => {
-                self.mass_kg * 2.0 * std::f64::consts::PI * self.measured_resonance_hz / b
-            }
-        }
+    /// Mechanical quality factor with the suspension stiffness alone, `sqrt(km m) / b`.
+    pub fn qm_suspension(&self) -> f64 {
+        (self.km_n_per_m * self.mass_kg).sqrt() / self.damping_n_s_per_m
+    }
+
+    /// Mechanical quality factor with the open-circuit stiffness K of eq 17, `sqrt(K m) / b`
+    /// (the one eq 21 is derived with).
+    pub fn qm_open_circuit(&self) -> f64 {
+        (self.stiffness_n_per_m * self.mass_kg).sqrt() / self.damping_n_s_per_m
+    }
+
+    /// Mechanical quality factor with the device's measured resonance f0, `m 2 pi f0 / b` (NaN
+    /// when the device quotes none).
+    pub fn qm_measured_resonance(&self) -> f64 {
+        self.mass_kg * 2.0 * std::f64::consts::PI * self.measured_resonance_hz
+            / self.damping_n_s_per_m
     }
 
     /// Open-circuit resonance sqrt(K/m)/(2 pi) (Hz).
@@ -181,77 +151,17 @@ pub fn bias_for_coupling(device: &Device, k2: f64) -> f64 {
     (k2 * device.mechanics.stiffness_n_per_m * ct / (2.0 * a * (1.0 - k2))).sqrt()
 }
 
-/// Linearised small-signal response of the harvester (eqs 11-17 in the frequency domain): the
-/// output power PSD of both loads under white acceleration, one-sided, W/Hz.
-///
-/// In the differential mode (V1 = -V2 = V, which the symmetric start from rest preserves to
-/// first order) the linearised model of eqs 7-10 reads, with `Ct = C0 + Cp + CL` and
-/// `Gamma = C0 Vb / x0`:
-/// `V = Gamma x jw RL / (1 + jw RL Ct)`, and
-/// `(km - w² m + jw b + 2 Gamma² jw RL / (1 + jw RL Ct)) x = m a`.
-/// The power of both loads is `2|V|²/RL`, and the one-sided acceleration PSD is `2 Sa`, so
-/// `S_P(f) = 4 Sa |V/a|² / RL`. Its integral over `f > 0` equals eq 21 (tested), and at high
-/// frequency the electrical term tends to the stiffness `K - km` of eq 17.
-///
-/// # Panics
-/// When the device's transducer is not a capacitor pair.
-pub fn linear_output_psd_w_per_hz(device: &Device, psd_g2_per_hz: f64, freq_hz: f64) -> f64 {
-    let tp = TwoPort::of(device);
-    let m = device.mechanics.mass_kg;
-    let b = device.mechanics.damping_n_s_per_m;
-    // The suspension, with a gap-closing pair's electrostatic spring at rest.
-    let k_es = match &device.transducer {
-        Transducer::GapClosingPair(p) => p.electrostatic_stiffness_n_per_m(),
-        _ => 0.0,
-    };
-    let km = device.mechanics.stiffness_n_per_m + k_es;
-    let ct = 2.0 * tp.capacitance_f;
-    let gamma = tp.gamma_n_per_v;
-    let rl = tp.load_resistance_ohm;
-    let w = 2.0 * std::f64::consts::PI * freq_hz;
-    // z = jw RL / (1 + jw RL Ct) = (jw RL)(1 - jw RL Ct) / (1 + (w RL Ct)^2).
-    let wrc = w * rl * ct;
-    let den = 1.0 + wrc * wrc;
-    let (z_re, z_im) = (w * rl * wrc / den, w * rl / den);
-    // Mechanical impedance plus 2 Gamma^2 z.
-    let d_re = km - w * w * m + 2.0 * gamma * gamma * z_re;
-    let d_im = w * b + 2.0 * gamma * gamma * z_im;
-    let x_over_a_sq = m * m / (d_re * d_re + d_im * d_im);
-    let v_over_a_sq = gamma * gamma * (z_re * z_re + z_im * z_im) * x_over_a_sq;
-    4.0 * psd_g2_per_hz * G * G * v_over_a_sq / rl
-}
-
-/// [`linear_output_psd_w_per_hz`] on a grid of frequencies, as a [`Psd`] (W/Hz).
-pub fn linear_output_psd(device: &Device, psd_g2_per_hz: f64, freq_hz: &[f64]) -> Psd {
-    Psd {
-        freq_hz: freq_hz.to_vec(),
-        density: freq_hz
-            .iter()
-            .map(|&f| linear_output_psd_w_per_hz(device, psd_g2_per_hz, f))
-            .collect(),
-        segments: 0,
-    }
-}
-
-/// Widths of the linearised output PSD ([`linear_output_psd_w_per_hz`]), evaluated on a grid
-/// of 0.01 Hz over `f_lo..f_hi` (the true widths, free of any estimator).
-pub fn linear_widths(device: &Device, f_lo: f64, f_hi: f64) -> Widths {
-    let n = ((f_hi - f_lo) / 0.01).ceil() as usize + 1;
-    let f: Vec<f64> = (0..n).map(|i| f_lo + 0.01 * i as f64).collect();
-    Widths::of(&linear_output_psd(device, 1.0, &f))
-}
-
 /// Linear theory of eq 21: mean power of both loads (W) at a two-sided acceleration PSD
 /// `psd_g2_per_hz` (g²/Hz), with `Qm = sqrt(K m)/b` (the reading eq 21 is derived with).
 pub fn eq21_power_w(device: &Device, psd_g2_per_hz: f64) -> f64 {
     let tp = TwoPort::of(device);
-    tp.broadband_power_w(psd_g2_per_hz * G * G, tp.qm(QmReading::OpenCircuit))
+    tp.broadband_power_w(psd_g2_per_hz * G * G, tp.qm_open_circuit())
 }
 
 /// Linear theory of eq 21: efficiency `2P/(m Sa)` (fraction), `Qm = sqrt(K m)/b`.
 pub fn eq21_efficiency(device: &Device) -> f64 {
     let tp = TwoPort::of(device);
-    tp.broadband_efficiency(tp.qm(QmReading::OpenCircuit))
+    tp.broadband_efficiency(tp.qm_open_circuit())
 }
 
 /// Efficiency `2P/(m Sa)` (fraction) of a mean power `p_w` (both loads) at two-sided level
@@ -275,5 +185,62 @@ mod tests {
         }
         assert_eq!(bias_for_coupling(&d, 0.0), 0.0);
         assert!(bias_for_coupling(&d, 1.0).is_nan());
+    }
+
+    /// The pair's output PSD in closed form (eqs 11-17 in the frequency domain), one-sided,
+    /// W/Hz, both loads. In the differential mode (V1 = -V2 = V, which the symmetric start
+    /// from rest preserves to first order) the linearised model of eqs 7-10 reads, with
+    /// `Ct = C0 + Cp + CL` and `Gamma = C0 Vb / x0`: `V = Gamma x jw RL / (1 + jw RL Ct)`, and
+    /// `(km - w² m + jw b + 2 Gamma² jw RL / (1 + jw RL Ct)) x = m a`. The power of both loads
+    /// is `2|V|²/RL`, and the one-sided acceleration PSD is `2 Sa`, so
+    /// `S_P(f) = 4 Sa |V/a|² / RL`.
+    fn closed_form_psd_w_per_hz(device: &Device, psd_g2_per_hz: f64, freq_hz: f64) -> f64 {
+        let tp = TwoPort::of(device);
+        let m = device.mechanics.mass_kg;
+        let b = device.mechanics.damping_n_s_per_m;
+        // The suspension, with a gap-closing pair's electrostatic spring at rest.
+        let k_es = match &device.transducer {
+            Transducer::GapClosingPair(p) => p.electrostatic_stiffness_n_per_m(),
+            _ => 0.0,
+        };
+        let km = device.mechanics.stiffness_n_per_m + k_es;
+        let ct = 2.0 * tp.capacitance_f;
+        let gamma = tp.gamma_n_per_v;
+        let rl = tp.load_resistance_ohm;
+        let w = 2.0 * std::f64::consts::PI * freq_hz;
+        // z = jw RL / (1 + jw RL Ct) = (jw RL)(1 - jw RL Ct) / (1 + (w RL Ct)^2).
+        let wrc = w * rl * ct;
+        let den = 1.0 + wrc * wrc;
+        let (z_re, z_im) = (w * rl * wrc / den, w * rl / den);
+        // Mechanical impedance plus 2 Gamma^2 z.
+        let d_re = km - w * w * m + 2.0 * gamma * gamma * z_re;
+        let d_im = w * b + 2.0 * gamma * gamma * z_im;
+        let x_over_a_sq = m * m / (d_re * d_re + d_im * d_im);
+        let v_over_a_sq = gamma * gamma * (z_re * z_re + z_im * z_im) * x_over_a_sq;
+        4.0 * psd_g2_per_hz * G * G * v_over_a_sq / rl
+    }
+
+    /// The crate's one linear output PSD ([`crate::physics::linear::LinearResponse`], the
+    /// model linearised about rest and solved as a linear system) is, for the paper's pair,
+    /// the closed form of eqs 11-17: two solutions of the same equations, equal to rounding.
+    #[test]
+    fn the_linear_response_of_a_pair_is_the_closed_form_of_eqs_11_to_17() {
+        for name in ["prototype1", "prototype2"] {
+            let text = match name {
+                "prototype1" => include_str!("../../data/prototype1.toml"),
+                _ => include_str!("../../data/prototype2.toml"),
+            };
+            let d = Device::from_toml_str(text, name).unwrap();
+            let lin = crate::physics::linear::LinearResponse::of(&d);
+            let f0 = TwoPort::of(&d).resonance_hz();
+            for f in [0.1 * f0, 0.9 * f0, f0, 1.1 * f0, 10.0 * f0] {
+                let closed = closed_form_psd_w_per_hz(&d, 1e-3, f);
+                let ours = lin.output_psd_w_per_hz(1e-3 * G * G, f);
+                assert!(
+                    ((ours - closed) / closed).abs() < 1e-10,
+                    "{name} at {f} Hz: {ours:e} vs {closed:e}"
+                );
+            }
+        }
     }
 }

@@ -88,6 +88,7 @@
 //! are momenta (kg mm/s) and 1e-3 x (um). The `crosscheck` experiment documents the settings
 //! that make ngspice agree with our integrator, and what ngspice's defaults do.
 
+pub mod bridge;
 mod netlist;
 mod wrdata;
 

@@ -18,11 +18,11 @@
 //! ([`Ensemble::mean_width`], [`Jackknife`]).
 //!
 //! # Linear theory
-//! The ensembles are compared with the linear theory of [`crate::physics::two_port`]:
-//! [`linear_output_psd_w_per_hz`](crate::physics::two_port::linear_output_psd_w_per_hz) is
-//! the small-signal output PSD of the same model (eqs 7-17 in the frequency domain, no
-//! end-stops); it integrates to eq 21 and gives the bandwidth the device has without impacts
-//! ([`linear_widths`](crate::physics::two_port::linear_widths)).
+//! The ensembles are compared with the linear theory of [`crate::physics::linear`]:
+//! [`LinearResponse::output_psd_w_per_hz`](crate::physics::linear::LinearResponse::output_psd_w_per_hz)
+//! is the small-signal output PSD of the same model (for the paper's pair eqs 7-17 in the
+//! frequency domain, no end-stops); it integrates to eq 21 and gives the bandwidth the device
+//! has without impacts ([`linear_widths`](crate::physics::linear::linear_widths)).
 
 use rayon::prelude::*;
 
@@ -281,13 +281,19 @@ pub fn run_ensembles<F: Fn() + Sync>(
 /// ```
 /// use endstop::device::Device;
 /// use endstop::study::ensemble::{run_ensemble, EnsembleSpec};
+/// use endstop::drive::noise::NoiseSpec;
 /// use endstop::study::record::RecordSpec;
 ///
 /// let text = include_str!(concat!(env!("CARGO_MANIFEST_DIR"), "/data/prototype1.toml"));
 /// let device = Device::from_toml_str(text, "prototype1.toml")?;
-/// // Two short records (50 ms each) at 1e-6 g^2/Hz, seed 2012.
-/// let mut record = RecordSpec::paper(&device, 1e-6);
-/// record.noise.duration_s = 0.05;
+/// // Two short records (50 ms each) of noise at 1e-6 g^2/Hz flat to 10 kHz, seed 2012.
+/// let noise = NoiseSpec {
+///     psd_g2_per_hz: 1e-6,
+///     bandwidth_hz: 10e3,
+///     sample_rate_hz: 100e3,
+///     duration_s: 0.05,
+/// };
+/// let mut record = RecordSpec::of(&device, noise);
 /// record.transient_s = 0.01;
 /// let spec = EnsembleSpec::for_device(&device, record, 2012, 2);
 /// let ensemble = run_ensemble(&device, &spec, || {})?;

@@ -6,13 +6,16 @@
 //! ([`continuation`]), basins of attraction ([`basins`]), and random-vibration records
 //! ([`record`]) and their ensembles ([`ensemble`]), with the fixed-step RK4 record that is the
 //! benchmark's yardstick ([`rk4_record`]), and Sobol indices of any quantity over device
-//! parameters the user names ([`sensitivity`]).
+//! parameters the user names ([`sensitivity`]). A device with an interface circuit (a diode
+//! bridge, SSHI, SECE) has its own steady states, sweeps and charging runs ([`interface`]).
 
 pub mod amplitude;
 pub mod basins;
 pub mod chirp;
 pub mod continuation;
+pub mod displacement;
 pub mod ensemble;
+pub mod interface;
 pub mod orbit;
 pub mod record;
 pub mod record_ledger;

@@ -5,7 +5,7 @@
 
 use crate::device::{Device, Transducer};
 use crate::drive::noise::NoiseSpec;
-use crate::study::record::{transient_s, RecordSpec, Scheme, DEFAULT_RTOL};
+use crate::study::record::RecordSpec;
 use crate::validation::linear_harvesters::{
     frequency_response_checks, optimal_load_checks, ClosedForm,
 };
@@ -28,6 +28,10 @@ pub const LOAD_SCAN_PER_DECADE: usize = 5;
 pub const RANDOM_PSD_G2_PER_HZ: f64 = 1e-3;
 /// Analysed length of one record (s).
 pub const RANDOM_RECORD_S: f64 = 5.0;
+/// The band of the records' noise (Hz): the paper's.
+pub const RANDOM_BANDWIDTH_HZ: f64 = 10e3;
+/// The records' sample rate (Hz): the paper's.
+pub const RANDOM_SAMPLE_RATE_HZ: f64 = 100e3;
 /// Records per ensemble.
 pub const RANDOM_RECORDS: u64 = 32;
 /// Seed of the ensembles' noise (stream i is record i).
@@ -109,18 +113,18 @@ pub fn grazing(device: &Device) -> Result<Vec<Check>, ValidationError> {
 }
 
 /// The random records of the law's ensembles for a device: the project's band-limited noise
-/// (10 kHz band at 100 kHz) at [`RANDOM_PSD_G2_PER_HZ`], [`RANDOM_RECORD_S`] analysed after the
-/// device's pre-roll of five ring-up times.
+/// ([`RANDOM_BANDWIDTH_HZ`] sampled at [`RANDOM_SAMPLE_RATE_HZ`]) at [`RANDOM_PSD_G2_PER_HZ`],
+/// [`RANDOM_RECORD_S`] analysed after the device's pre-roll of five ring-up times.
 pub fn random_spec(device: &Device) -> RecordSpec {
-    RecordSpec {
-        noise: NoiseSpec {
+    RecordSpec::of(
+        device,
+        NoiseSpec {
+            psd_g2_per_hz: RANDOM_PSD_G2_PER_HZ,
+            bandwidth_hz: RANDOM_BANDWIDTH_HZ,
+            sample_rate_hz: RANDOM_SAMPLE_RATE_HZ,
             duration_s: RANDOM_RECORD_S,
-            ..NoiseSpec::paper(RANDOM_PSD_G2_PER_HZ)
         },
-        transient_s: transient_s(device),
-        rtol: DEFAULT_RTOL,
-        scheme: Scheme::Exponential,
-    }
+    )
 }
 
 /// The law's ensemble of a device ([`RANDOM_RECORDS`] records).

@@ -189,12 +189,19 @@ fn solver(freq_hz: f64, e: crate::ode::SolverError) -> OrbitError {
 }
 
 /// The frequency-response checks of `device` (no stops; piezoelectric or electromagnetic)
-/// under `accel_rms_g` at each of `freqs_hz`.
+/// under `accel_rms_g` at each of `freqs_hz`; an error for no frequency (nothing would be
+/// checked).
 pub fn frequency_response_checks(
     device: &Device,
     accel_rms_g: f64,
     freqs_hz: &[f64],
 ) -> Result<Vec<Check>, ValidationError> {
+    if freqs_hz.is_empty() {
+        return Err(ValidationError::Device(format!(
+            "{}: no frequency to compare the response at",
+            device.name
+        )));
+    }
     let cf = ClosedForm::of(device)?;
     let src = cf.source();
     let lin = LinearResponse::of(device);

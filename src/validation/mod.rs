@@ -6,19 +6,30 @@
 //! | module | reference |
 //! |---|---|
 //! | [`linear_harvesters`] | the linear piezoelectric and electromagnetic harvesters' closed forms ([`crate::physics::closed_forms`]) against the time-domain steady state and against [`crate::physics::linear`]; their optimal loads against the time-domain power maximised over the load |
-//! | [`random_law`] | the power that white base acceleration delivers to a mass, `m Sa / 2`, against random ensembles' drive power and total dissipation |
+//! | [`random_law`] | the power that white base acceleration delivers to a mass, `m Sa / 2`, against random ensembles' drive power, with their energy ledgers' closure |
+//! | [`band_limit`] | the band-limited noise's shortfall from that law at several bandwidths, against its first-order estimate (a recorded study) |
 //! | [`grazing`] | where a linear oscillator's amplitude equals the gap of a rigid stop, against the continuation's grazing points |
+//! | [`interfaces`] | the standard bridge, parallel and series SSHI and SECE closed forms against the steady state behind each interface; the standard bridge with strong coupling against the first-harmonic balance |
 //! | [`nlvib`] | NLvib-py's harmonic balance and an exact shooting of a one-sided spring oscillator, against our shooting and continuation |
+//! | [`nlvib_duffing`] | NLvib-py's harmonic balance of NLvib's Duffing example, against our continuation's folds, amplitudes and stability |
+//! | [`stationary_law`] | the exact stationary density `exp(-U/theta)` of white-noise driven devices with viscous damping and any conservative suspension and stops, against random ensembles' histograms, moments, contact and well shares and load power |
+//! | [`kramers`] | Kramers' escape rate over a double well's barrier, against random ensembles' well-to-well rates |
 //!
 //! This module computes and judges; reading the reference files and writing the tables is the
 //! callers' job (the `validation` experiment and the tests).
 
+pub mod band_limit;
 pub mod cases;
 pub mod grazing;
 pub mod harmonics;
+pub mod interfaces;
+pub mod kramers;
 pub mod linear_harvesters;
 pub mod nlvib;
+pub mod nlvib_duffing;
 pub mod random_law;
+pub mod spring_cases;
+pub mod stationary_law;
 
 use serde::{Deserialize, Serialize};
 
@@ -53,6 +64,11 @@ pub struct Check {
     pub tolerance: f64,
     /// Why the tolerance is what it is.
     pub reason: String,
+    /// `Some(why)` for a row reported as an open question: its reference is a hypothesis that
+    /// a study did not confirm, so the row shows our value and its difference but is neither
+    /// within nor outside a tolerance ([`Check::passes`] is false, [`Check::is_open`] true).
+    #[serde(default)]
+    pub open: Option<String>,
 }
 
 impl Check {
@@ -66,9 +82,15 @@ impl Check {
         }
     }
 
-    /// True when the difference is within the tolerance (a NaN on either side fails).
+    /// True when the difference is within the tolerance (a NaN on either side fails); false
+    /// for an open question.
     pub fn passes(&self) -> bool {
-        self.difference() <= self.tolerance
+        self.open.is_none() && self.difference() <= self.tolerance
+    }
+
+    /// True for a row reported as an open question (see [`Check::open`]).
+    pub fn is_open(&self) -> bool {
+        self.open.is_some()
     }
 }
 
@@ -108,7 +130,15 @@ impl Group {
             measure,
             tolerance,
             reason: reason.to_string(),
+            open: None,
         });
+    }
+
+    /// Marks the last check added as an open question (see [`Check::open`]).
+    pub(crate) fn open_last(&mut self, why: &str) {
+        if let Some(c) = self.checks.last_mut() {
+            c.open = Some(why.to_string());
+        }
     }
 
     pub(crate) fn into_checks(self) -> Vec<Check> {

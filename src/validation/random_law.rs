@@ -6,9 +6,10 @@
 //!
 //! An ensemble of records of band-limited noise (the project's records: flat two-sided density
 //! `Sa` up to `B`, sampled at `fs`, read between samples linearly) measures both over each
-//! record's analysed window ([`record_ledgers`]); each mean carries the ensemble's 95 % interval
-//! (Student's t, [`MeanCi`]), and the check is that the law, less the band's deficit below, lies
-//! inside it.
+//! record's analysed window ([`record_ledgers`]). The checks ([`checks`]) are that the law,
+//! less the band's deficit below, lies inside the 95 % interval (Student's t, [`MeanCi`]) of the
+//! mean drive power, and that every record's ledger closes, so that the dissipation takes the
+//! same power.
 //!
 //! Band-limited noise falls short of white noise by the part of the velocity's response beyond
 //! the band. The drive's power is `E[a v] = int_0^inf R(s) g(s) ds` (Novikov's formula for a
@@ -23,7 +24,11 @@
 //! in Hz, the rates in 1/s; [`band_deficit`]). A compliant stop turns the velocity over its
 //! contact time, for the chapter's Hertz stops far longer than `1/B`, and adds only its contact
 //! damping, as a transducer adds its electrical damping; both are left out of the estimate.
-//! The checks compare each ensemble with the law less this estimate.
+//!
+//! The estimate is a hypothesis made after a miss: the rigid-stop ensemble first fell short of
+//! the bare law by more than its interval, and the deficit was derived to explain it.
+//! [`super::band_limit`] tests it on cases it was not derived from: the damper's term on the
+//! linear device, the impact term `(1 + e) nu` at other bandwidths, restitutions and gaps.
 //!
 //! Cost: one record of `T` seconds is `T fs` samples, mostly exponential steps (about a
 //! microsecond each with the ledger) and Dormand-Prince steps around every impact.
@@ -64,6 +69,8 @@ pub struct RecordPowers {
     pub internal_w: f64,
     /// Impacts per second.
     pub impacts_per_s: f64,
+    /// Fraction of the window in contact (on a rigid stop: resting on it).
+    pub contact_fraction: f64,
     /// The window's energy-balance residual over the sum of its terms' magnitudes.
     pub relative_residual: f64,
     /// True when the free flight went by the exponential step.
@@ -90,9 +97,18 @@ pub struct LawEnsemble {
     pub band_deficit: f64,
     /// Each record's powers.
     pub records: Vec<RecordPowers>,
+    /// The number of records the ensemble was asked for: a check over fewer fails.
+    pub stated_records: u64,
+    /// The device has a rigid (restitution) stop: its deficit carries the impact term.
+    pub rigid_stops: bool,
 }
 
 impl LawEnsemble {
+    /// True when the ensemble holds every record it was asked for (and at least two).
+    pub fn complete(&self) -> bool {
+        self.records.len() as u64 == self.stated_records && self.records.len() >= 2
+    }
+
     /// Mean drive power with its 95 % interval.
     pub fn drive(&self) -> MeanCi {
         MeanCi::of(&self.records.iter().map(|r| r.drive_w).collect::<Vec<_>>())
@@ -119,8 +135,12 @@ impl LawEnsemble {
         self.law_w * (1.0 - self.band_deficit)
     }
 
-    /// The largest relative residual of the records' balances.
+    /// The largest relative residual of the records' balances; NaN for an ensemble short of
+    /// its records ([`LawEnsemble::complete`]), so that a check on it fails.
     pub fn worst_residual(&self) -> f64 {
+        if !self.complete() {
+            return f64::NAN;
+        }
         self.records
             .iter()
             .map(|r| r.relative_residual.abs())
@@ -183,6 +203,7 @@ pub fn law_ensemble(
                 loads_w: l.loads / t,
                 internal_w: l.internal / t,
                 impacts_per_s: rec.summary.impacts as f64 / t,
+                contact_fraction: rec.summary.contact_fraction,
                 relative_residual: l.relative_residual(),
                 exponential: rec.summary.free_flight == FreeFlightPath::Exponential,
             })
@@ -208,34 +229,47 @@ pub fn law_ensemble(
             spec.noise.bandwidth_hz,
         ),
         records: powers,
+        stated_records: records,
+        rigid_stops: rigid_one_plus_e(device).is_some(),
     })
 }
 
-/// The checks of an ensemble: its mean drive power and mean dissipation against the law less
-/// the band's deficit (within the ensemble's 95 % interval), and every record's energy balance.
-pub fn checks(e: &LawEnsemble) -> Vec<Check> {
+/// The checks of an ensemble: its mean drive power against the law less the band's deficit
+/// (within the ensemble's 95 % interval), and the energy ledger's closure over its records.
+///
+/// The dissipation is not held to the law beside the drive: the ledger closes (the second
+/// check), so their means are the same number to its residual, and a second row would count
+/// one check twice. An ensemble short of the records it was asked for fails both checks.
+///
+/// The band's deficit, derived after this check first missed on a device with rigid stops,
+/// carries for such a device the impact term `(1 + e) nu`; [`super::band_limit`] tests it on
+/// cases it was not derived from. Unless that study confirmed it (`impact_term_confirmed`),
+/// the drive row of such a device is reported as an open question ([`Check::open`]), not
+/// passed by it.
+pub fn checks(e: &LawEnsemble, impact_term_confirmed: bool) -> Vec<Check> {
     let mut g = Group::new(&format!("random vibration: {}", e.device));
-    let src = "m Sa / 2 (white base acceleration), less the band's deficit";
-    let why = "the ensemble's 95 % interval (Student's t)";
     let theirs = e.band_law_w();
-    for (what, ci) in [
-        ("mean drive power m<a v> (W)", e.drive()),
-        ("mean total dissipation (W)", e.dissipation()),
-    ] {
-        g.add(
-            src,
-            &format!("{}: {what}", e.device),
-            theirs,
-            ci.mean,
-            Measure::Relative,
-            ci.ci95 / theirs,
-            why,
+    let d = e.drive();
+    let n = format!("{} of {} records", e.records.len(), e.stated_records);
+    g.add(
+        "m Sa / 2 (white base acceleration), less the band's deficit",
+        &format!("{}: mean drive power m<a v> (W), {n}", e.device),
+        theirs,
+        if e.complete() { d.mean } else { f64::NAN },
+        Measure::Relative,
+        d.ci95 / theirs,
+        "the ensemble's 95 % interval (Student's t)",
+    );
+    if e.rigid_stops && !impact_term_confirmed {
+        g.open_last(
+            "the band's deficit of rigid stops: it was derived after this row missed, and the \
+             band-limit study does not confirm its impact term",
         );
     }
     g.add(
         "energy balance of each record",
         &format!(
-            "{}: largest relative residual of the window's ledger",
+            "{}: largest relative residual of the window's ledger, {n}",
             e.device
         ),
         0.0,

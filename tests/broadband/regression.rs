@@ -82,7 +82,7 @@ fn claim_lines(out: &mut String, values: &[Value], converged: impl Fn(&Value) ->
             v.claim,
             v.quantity,
             v.set,
-            pin(v.ours, ci, converged(v))
+            pin(v.ours.to_f64(), ci, converged(v))
         )
         .unwrap();
     }

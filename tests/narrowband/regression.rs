@@ -18,7 +18,7 @@
 
 use std::fmt::Write;
 
-use endstop::paper::claims::Value;
+use endstop::paper::claims::{Answer, Value};
 use endstop::paper::figures::fig08::{Fig08, Fig8Curve};
 use endstop::paper::figures::fig09::{Fig09, Fig9Bias, PowerReading};
 use endstop::paper::figures::fig13::{Fig13, Fig13Curve};
@@ -54,12 +54,12 @@ fn claim_line(out: &mut String, v: &Value) {
         .get(&v.claim, &v.quantity)
         .expect("a known claim")
         .unit;
-    let ours = match unit.as_str() {
-        "bool" => if v.ours > 0.5 { "yes" } else { "no" }.to_string(),
-        "Hz" => format!("{:.0} Hz", v.ours),
-        "g" => format!("{:.2} g", v.ours),
-        "" => sig(v.ours, 3),
-        u => format!("{} {u}", sig(v.ours, 3)),
+    let ours = match (v.ours, unit.as_str()) {
+        (Answer::YesNo(yes), _) => if yes { "yes" } else { "no" }.to_string(),
+        (Answer::Number(x), "Hz") => format!("{x:.0} Hz"),
+        (Answer::Number(x), "g") => format!("{x:.2} g"),
+        (Answer::Number(x), "") => sig(x, 3),
+        (Answer::Number(x), u) => format!("{} {u}", sig(x, 3)),
     };
     writeln!(out, "{} {} {}: {ours}", v.set, v.claim, v.quantity).unwrap();
 }

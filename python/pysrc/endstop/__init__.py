@@ -17,6 +17,6 @@ Every simulation releases the GIL while it runs.
 """
 
 from ._native import Device, ParamError, SolverError, __version__
-from . import fit, linear, paper, study
+from . import fit, linear, paper, spectrum, springs, study
 
-__all__ = ["Device", "ParamError", "SolverError", "fit", "linear", "paper", "study", "__version__"]
+__all__ = ["Device", "ParamError", "SolverError", "fit", "linear", "paper", "spectrum", "springs", "study", "__version__"]

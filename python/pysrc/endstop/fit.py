@@ -3,7 +3,7 @@
 * :func:`sweep_data`: one measured sweep (frequencies, values, their standard deviations, the
   stated acceleration, and optionally the measured onset and jump);
 * :func:`fit`: the free parameters (dotted paths with ranges) fitted by Levenberg-Marquardt
-  over the stepped sweep, with standard errors, 95 % intervals, correlations and a warning for
+  on the branches of periodic orbits the sweeps follow, with standard errors, 95 % intervals, correlations and a warning for
   each combination the data do not determine (the method is the library's ``endstop::fit``,
   described in the book chapter "Fit your measurements").
 """
@@ -40,7 +40,9 @@ def fit(device, sweeps, free):
     Returns a dict: ``params`` (one dict per free parameter: ``path``, ``start``, ``value``,
     ``std_err``, ``interval`` (95 %), ``range``), ``correlation``, ``warnings`` (strings),
     ``uncertainty`` (the method, in words), ``device`` (the fitted :class:`endstop.Device`),
-    ``ssr``, ``dof``, ``singular_ratio``, ``evaluations``, ``converged`` and ``residuals``
+    ``ssr``, ``dof``, ``reduced_chi2`` (chi-square per degree of freedom, beside every
+    interval), ``chi2_p``, ``model`` (in words), ``starts_tried``, ``singular_ratio``,
+    ``evaluations``, ``converged`` and ``residuals``
     (arrays ``freq_hz``, ``measured``, ``model``, ``sigma`` and lists ``dataset``, ``what``).
     A bad path or range raises :class:`endstop.ParamError` naming the field; bad data raise
     ``ValueError``."""

@@ -10,7 +10,7 @@ use endstop::paper::Figure;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 
-use crate::paper::claims_list;
+use crate::paper::{claims_list, paper_device};
 use crate::study::amplitude_dict;
 use crate::{solver_err, PyDevice};
 
@@ -19,7 +19,7 @@ use crate::{solver_err, PyDevice};
 /// (default: the published prototype 1).
 fn calibration(published: Option<&PyDevice>) -> PyResult<(Device, Calibration)> {
     let published = match published {
-        Some(d) => d.inner.clone(),
+        Some(d) => paper_device(d)?,
         None => PyDevice::prototype(1)?.inner,
     };
     let cal = calibrate_prototype1(&published).map_err(solver_err)?;
@@ -60,10 +60,10 @@ fn paper_fig09_run<'py>(
     calibrated: Option<&PyDevice>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let published = match published {
-        Some(d) => d.inner.clone(),
+        Some(d) => paper_device(d)?,
         None => PyDevice::prototype(1)?.inner,
     };
-    let calibrated = calibrated.map(|d| d.inner.clone());
+    let calibrated = calibrated.map(paper_device).transpose()?;
     let run = py.detach(move || -> PyResult<fig09::Run> {
         let calibrated = match calibrated {
             Some(d) => d,

@@ -8,7 +8,7 @@ use endstop::study::steady::Measurement;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 
-use crate::paper::claims_list;
+use crate::paper::{claims_list, paper_device};
 use crate::study::{steps_dict, sweep_dict};
 use crate::{solver_err, PyDevice};
 
@@ -23,7 +23,7 @@ fn paper_fig13_run<'py>(
     device: Option<&PyDevice>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let published = match device {
-        Some(d) => d.inner.clone(),
+        Some(d) => paper_device(d)?,
         None => PyDevice::prototype(2)?.inner,
     };
     let run = py

@@ -93,7 +93,7 @@ fn evaluation_dict<'py>(
                 e.quantity.quantity,
             ))
         })?;
-    d.set_item("paper", c.paper)?;
+    d.set_item("paper", c.paper.to_f64())?;
     d.set_item("tolerance", c.tolerance())?;
     d.set_item("unit", &c.unit)?;
     d.set_item("outcome", e.outcome.label())?;
@@ -346,6 +346,178 @@ fn paper_study_calibration<'py>(
     Ok(d)
 }
 
+/// One wave as Python passes it: its points and the evaluation dicts at each.
+type WaveDicts<'py> = (Vec<Vec<f64>>, Vec<Vec<Bound<'py, PyDict>>>);
+
+fn history_settings(
+    per_input: usize,
+    max_waves: usize,
+    pool: usize,
+    seed: u32,
+) -> endstop::num::history::HistorySettings {
+    endstop::num::history::HistorySettings {
+        per_input,
+        max_waves,
+        pool,
+        seed,
+        ..Default::default()
+    }
+}
+
+/// The history match of `prototype` replayed from its waves so far: `waves` is a list of
+/// `(points, evaluations)` (each wave's design as `paper_study_history` gave it and the
+/// `paper_study_evaluate` dicts at its points, in order). Returns a dict: `next_design` (the
+/// points to evaluate next, or None once the match has ended), `outputs` (the emulated
+/// claims), `waves` (one summary dict per wave), `answer`, `projections` (one dict per cell of
+/// the last wave), and with `sobol=True` the emulators' Sobol indices (`indices`).
+#[pyfunction]
+#[pyo3(signature = (prototype, waves, per_input = 10, max_waves = 4, pool = 1 << 14,
+                    ensemble_records = None, seed = STUDY_SEED, sobol = false))]
+#[allow(clippy::too_many_arguments)]
+fn paper_study_history<'py>(
+    py: Python<'py>,
+    prototype: &str,
+    waves: Vec<WaveDicts<'py>>,
+    per_input: usize,
+    max_waves: usize,
+    pool: usize,
+    ensemble_records: Option<usize>,
+    seed: u32,
+    sobol: bool,
+) -> PyResult<Bound<'py, PyDict>> {
+    let p = self::prototype(prototype)?;
+    let scope = scope(ensemble_records)?;
+    let claims = Claims::bundled().map_err(solver_err)?;
+    let waves = waves
+        .iter()
+        .map(|(pts, evals)| {
+            let e = evals
+                .iter()
+                .map(|point| point.iter().map(|e| evaluation_of(p, e, &claims)).collect())
+                .collect::<PyResult<Vec<Vec<Evaluation>>>>()?;
+            Ok((pts.clone(), e))
+        })
+        .collect::<PyResult<Vec<_>>>()?;
+    let settings = history_settings(per_input, max_waves, pool, seed);
+    let (run, indices) = py
+        .detach(move || -> Result<_, DeviationsError> {
+            let mut run = deviations::HistoryRun::new(p, scope, &claims, settings)?;
+            for (pts, e) in waves {
+                run.add_wave(&pts, e)?;
+            }
+            let indices = if sobol {
+                run.sobol(endstop::num::gp_sensitivity::EmulatedSobol {
+                    seed,
+                    ..Default::default()
+                })?
+            } else {
+                Vec::new()
+            };
+            Ok((run, indices))
+        })
+        .map_err(err)?;
+    let d = PyDict::new(py);
+    match run.next_design() {
+        Some(x) => d.set_item(
+            "next_design",
+            PyArray2::from_vec2(py, &x).map_err(|e| arg_err(e.to_string()))?,
+        )?,
+        None => d.set_item("next_design", py.None())?,
+    }
+    let names: Vec<(String, String)> = run
+        .outputs()
+        .iter()
+        .map(|q| (q.claim.to_string(), q.quantity.to_string()))
+        .collect();
+    d.set_item("outputs", names.clone())?;
+    let ws = PyList::empty(py);
+    for s in &run.matcher.summaries {
+        let w = PyDict::new(py);
+        w.set_item("wave", s.wave)?;
+        w.set_item("new_runs", s.new_runs)?;
+        w.set_item("training_runs", s.training_runs)?;
+        w.set_item("pool", s.pool)?;
+        w.set_item("non_implausible_fraction", s.fraction())?;
+        w.set_item("all_within_cut_fraction", s.fraction_all())?;
+        w.set_item("stop", s.stop.map(|s| s.label()))?;
+        let claims_rows = PyList::empty(py);
+        for (j, (c, q)) in names.iter().enumerate() {
+            let r = PyDict::new(py);
+            r.set_item("claim", c)?;
+            r.set_item("quantity", q)?;
+            r.set_item("ruled_out", s.ruled_out[j])?;
+            r.set_item("loo", s.loo[j].clone())?;
+            claims_rows.append(r)?;
+        }
+        w.set_item("claims", claims_rows)?;
+        let met = run.met_in_wave(s.wave);
+        let yes_no = PyList::empty(py);
+        for (k, q) in run.quantities.iter().enumerate() {
+            if !run.emulated.contains(&k) {
+                yes_no.append((q.claim, q.quantity, met[k]))?;
+            }
+        }
+        w.set_item("yes_no_met", yes_no)?;
+        ws.append(w)?;
+    }
+    d.set_item("waves", ws)?;
+    if let Some(a) = run.answer() {
+        let ad = PyDict::new(py);
+        ad.set_item("stop", a.stop.map(|s| s.label()))?;
+        ad.set_item("waves", a.waves)?;
+        ad.set_item("runs", a.runs)?;
+        ad.set_item("fraction", a.fraction)?;
+        ad.set_item("fraction_all", a.fraction_all)?;
+        ad.set_item("pool", a.pool)?;
+        ad.set_item("runs_meeting_all", a.runs_meeting_all)?;
+        ad.set_item("kept_all", a.kept_all)?;
+        ad.set_item("none_reproduces", a.none_reproduces())?;
+        d.set_item("answer", ad)?;
+    }
+    let cells = PyList::empty(py);
+    if let Some(s) = run.matcher.summaries.last() {
+        let n = run.matcher.settings.cells;
+        for pr in &s.projections {
+            for (c, (m, o)) in pr
+                .min_implausibility
+                .iter()
+                .zip(&pr.optical_depth)
+                .enumerate()
+            {
+                let r = PyDict::new(py);
+                r.set_item("wave", s.wave)?;
+                r.set_item("factor_x", Factor::ALL[pr.i].key())?;
+                r.set_item("factor_y", Factor::ALL[pr.j].key())?;
+                r.set_item("cell_x", c / n)?;
+                r.set_item("cell_y", c % n)?;
+                r.set_item("min_implausibility", *m)?;
+                r.set_item("optical_depth", *o)?;
+                cells.append(r)?;
+            }
+        }
+    }
+    d.set_item("projections", cells)?;
+    let rows = PyList::empty(py);
+    for (q, ix) in &indices {
+        let Some(ix) = ix else { continue };
+        for (i, f) in Factor::ALL.iter().enumerate() {
+            let r = PyDict::new(py);
+            r.set_item("prototype", p.key())?;
+            r.set_item("claim", q.claim)?;
+            r.set_item("quantity", q.quantity)?;
+            r.set_item("factor", f.key())?;
+            for (k, x) in [("first", ix.first[i]), ("total", ix.total[i])] {
+                r.set_item(k, x.value)?;
+                r.set_item(format!("{k}_lo"), x.lo)?;
+                r.set_item(format!("{k}_hi"), x.hi)?;
+            }
+            rows.append(r)?;
+        }
+    }
+    d.set_item("indices", rows)?;
+    Ok(d)
+}
+
 /// Adds the study's functions to the module.
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     for f in [
@@ -356,6 +528,7 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
         wrap_pyfunction!(paper_study_calibration_starts, m)?,
         wrap_pyfunction!(paper_study_calibrate_start, m)?,
         wrap_pyfunction!(paper_study_calibration, m)?,
+        wrap_pyfunction!(paper_study_history, m)?,
     ] {
         m.add_function(f)?;
     }

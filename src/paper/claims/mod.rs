@@ -8,12 +8,17 @@
 //! [`score`] joins them into [`Row`]s with a [`Verdict`]:
 //!
 //! * quantitative: `reproduced` iff |ours - paper| <= max(tol_rel |paper|, tol_abs);
-//! * qualitative (paper = 1.0 for "yes"): `reproduced` iff ours == paper;
+//! * qualitative: `reproduced` iff ours and the paper say the same, yes or no;
 //! * no value from us yet: `not yet`.
+//!
+//! A claim's value, the paper's and ours, is an [`Answer`]: a number, or yes/no by type. Files
+//! carry it as a number (the scorecard's contract: yes is 1, no is 0); [`Claim::read`] is the
+//! one place that turns such a number back into a yes/no, strictly, by the claim's kind.
 //!
 //! A value whose (claim, quantity) matches no claim is an error ([`ClaimsError::Unknown`]): a
 //! typo in a key must not drop a number from the scorecard silently.
 
+mod answer;
 pub mod keys;
 
 use std::collections::BTreeMap;
@@ -21,6 +26,7 @@ use std::collections::BTreeMap;
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
+pub use answer::Answer;
 pub use keys::ClaimKey;
 
 use crate::paper::setups::ParamSet;
@@ -57,6 +63,19 @@ pub enum ClaimsError {
     MissingClass {
         /// The class needed.
         class: String,
+    },
+    /// A value is not of its claim's kind (a number for a yes/no claim other than 0 or 1, a
+    /// yes/no for a quantitative claim).
+    #[error("claim ({claim}, {quantity}) is {kind}: {value} is not such a value")]
+    Kind {
+        /// Claim id.
+        claim: String,
+        /// Quantity key.
+        quantity: String,
+        /// What the claim takes (`a number` or `yes/no`).
+        kind: &'static str,
+        /// The value given, as the files write it.
+        value: f64,
     },
     /// A value matches no claim.
     #[error(
@@ -102,8 +121,18 @@ impl ToleranceClass {
 pub enum Kind {
     /// A number with a tolerance.
     Quantitative,
-    /// A yes/no statement (1.0 = yes).
+    /// A yes/no statement.
     Qualitative,
+}
+
+impl Kind {
+    /// What a value of this kind is, for messages.
+    pub fn label(self) -> &'static str {
+        match self {
+            Kind::Quantitative => "a number",
+            Kind::Qualitative => "yes/no",
+        }
+    }
 }
 
 /// One number claimed by the paper, with its tolerance resolved from its class.
@@ -119,10 +148,10 @@ pub struct Claim {
     pub text: String,
     /// Experiment that produces our value.
     pub experiment: String,
-    /// Unit of `paper` and our value.
+    /// Unit of `paper` and our value (`bool` for a yes/no claim).
     pub unit: String,
     /// The paper's value.
-    pub paper: f64,
+    pub paper: Answer,
     /// Quantitative, or qualitative (the class `qualitative`).
     pub kind: Kind,
     /// Name of the tolerance class.
@@ -195,12 +224,14 @@ impl Claims {
                     quantity: e.quantity,
                 });
             }
+            let kind = if e.class == "qualitative" {
+                Kind::Qualitative
+            } else {
+                Kind::Quantitative
+            };
+            let paper = read(kind, &e.id, &e.quantity, e.paper)?;
             claims.push(Claim {
-                kind: if e.class == "qualitative" {
-                    Kind::Qualitative
-                } else {
-                    Kind::Quantitative
-                },
+                kind,
                 tol_rel: class.tol_rel,
                 tol_abs: e.printed_half_unit.unwrap_or(class.tol_abs),
                 why: class.why.clone(),
@@ -210,7 +241,7 @@ impl Claims {
                 text: e.text,
                 experiment: e.experiment,
                 unit: e.unit,
-                paper: e.paper,
+                paper,
                 class: e.class,
                 note: e.note,
             });
@@ -251,21 +282,25 @@ impl Claims {
         })
     }
 
-    /// `values` unchanged if every one matches a claim of this file, else the error naming
-    /// the first that does not (a typo in a key must not drop a number silently).
+    /// `values`, each typed by its claim ([`Claim::read`]), if every one matches a claim of
+    /// this file and is of its kind; else the error naming the first that does not (a typo in
+    /// a key must not drop a number silently).
     pub fn known(&self, values: Vec<Value>) -> Result<Vec<Value>, ClaimsError> {
-        match values
-            .iter()
-            .find(|v| self.get(&v.claim, &v.quantity).is_none())
-        {
-            Some(v) => Err(ClaimsError::Unknown {
-                claim: v.claim.clone(),
-                quantity: v.quantity.clone(),
-                set: v.set,
-                ours: v.ours,
-            }),
-            None => Ok(values),
-        }
+        values
+            .into_iter()
+            .map(|v| match self.get(&v.claim, &v.quantity) {
+                None => Err(ClaimsError::Unknown {
+                    claim: v.claim.clone(),
+                    quantity: v.quantity.clone(),
+                    set: v.set,
+                    ours: v.ours.to_f64(),
+                }),
+                Some(c) => Ok(Value {
+                    ours: c.read(v.ours)?,
+                    ..v
+                }),
+            })
+            .collect()
     }
 
     /// The claims an experiment produces, in file order.
@@ -285,8 +320,8 @@ pub struct Value {
     pub quantity: String,
     /// Parameter set.
     pub set: ParamSet,
-    /// Our value (qualitative: 1.0 yes, 0.0 no).
-    pub ours: f64,
+    /// Our value.
+    pub ours: Answer,
     /// Optional uncertainty of our value (same unit), e.g. a bracket half-width or a 95 % CI.
     #[serde(default)]
     pub uncertainty: Option<f64>,
@@ -309,15 +344,18 @@ impl Value {
             claim: key.id.to_string(),
             quantity: key.quantity.to_string(),
             set,
-            ours,
+            ours: Answer::Number(ours),
             uncertainty,
             note: note.into(),
         }
     }
 
-    /// A yes/no value (1 yes, 0 no) with a note.
+    /// A yes/no value with a note.
     pub fn yes_no(key: ClaimKey, set: ParamSet, yes: bool, note: impl Into<String>) -> Self {
-        Self::new(key, set, if yes { 1.0 } else { 0.0 }, None, note)
+        Self {
+            ours: Answer::YesNo(yes),
+            ..Self::new(key, set, f64::NAN, None, note)
+        }
     }
 
     /// True if this is a value of the claim number `key`.
@@ -351,28 +389,58 @@ impl Verdict {
     }
 }
 
+/// `x` as a value of a claim of `kind` (see [`Claim::read`]).
+fn read(kind: Kind, claim: &str, quantity: &str, x: f64) -> Result<Answer, ClaimsError> {
+    match kind {
+        Kind::Quantitative => Ok(Answer::Number(x)),
+        Kind::Qualitative if x == 1.0 => Ok(Answer::YesNo(true)),
+        Kind::Qualitative if x == 0.0 => Ok(Answer::YesNo(false)),
+        Kind::Qualitative => Err(ClaimsError::Kind {
+            claim: claim.to_string(),
+            quantity: quantity.to_string(),
+            kind: kind.label(),
+            value: x,
+        }),
+    }
+}
+
 impl Claim {
-    /// Effective absolute tolerance max(tol_rel |paper|, tol_abs).
+    /// Effective absolute tolerance max(tol_rel |paper|, tol_abs) (a yes/no claim's is 0).
     pub fn tolerance(&self) -> f64 {
-        (self.tol_rel * self.paper.abs()).max(self.tol_abs)
+        (self.tol_rel * self.paper.to_f64().abs()).max(self.tol_abs)
     }
 
-    /// Verdict for our value.
-    pub fn verdict(&self, ours: Option<f64>) -> Verdict {
-        match ours {
-            None => Verdict::NotYet,
-            Some(v) if !v.is_finite() => Verdict::Deviates,
-            Some(v) => {
-                let within = match self.kind {
-                    Kind::Qualitative => (v - self.paper).abs() < 0.5,
-                    Kind::Quantitative => (v - self.paper).abs() <= self.tolerance(),
-                };
-                if within {
-                    Verdict::Reproduced
-                } else {
-                    Verdict::Deviates
-                }
+    /// The value `answer` typed by this claim's kind: a number as read from a file becomes
+    /// a yes/no for a yes/no claim when it is exactly 1 (yes) or 0 (no); any other number, or
+    /// a yes/no for a quantitative claim, is an error naming the claim.
+    pub fn read(&self, answer: Answer) -> Result<Answer, ClaimsError> {
+        match (self.kind, answer) {
+            (Kind::Qualitative, Answer::YesNo(_)) => Ok(answer),
+            (_, Answer::Number(x)) => read(self.kind, &self.id, &self.quantity, x),
+            (Kind::Quantitative, Answer::YesNo(_)) => Err(ClaimsError::Kind {
+                claim: self.id.clone(),
+                quantity: self.quantity.clone(),
+                kind: self.kind.label(),
+                value: answer.to_f64(),
+            }),
+        }
+    }
+
+    /// Verdict for our value: a number within the tolerance, or the paper's yes/no; a value
+    /// that is not a finite number of this claim's kind deviates.
+    pub fn verdict(&self, ours: Option<Answer>) -> Verdict {
+        let within = match (ours, self.paper) {
+            (None, _) => return Verdict::NotYet,
+            (Some(Answer::Number(v)), Answer::Number(p)) => {
+                v.is_finite() && (v - p).abs() <= self.tolerance()
             }
+            (Some(Answer::YesNo(v)), Answer::YesNo(p)) => v == p,
+            (Some(_), _) => false,
+        };
+        if within {
+            Verdict::Reproduced
+        } else {
+            Verdict::Deviates
         }
     }
 }
@@ -387,9 +455,9 @@ pub struct Row {
     /// Parameter set.
     pub set: ParamSet,
     /// The paper's value.
-    pub paper: f64,
+    pub paper: Answer,
     /// Our value (None: not yet).
-    pub ours: Option<f64>,
+    pub ours: Option<Answer>,
     /// Uncertainty of our value, if known.
     pub uncertainty: Option<f64>,
     /// Unit.
@@ -425,7 +493,7 @@ pub fn score(claims: &Claims, values: &[Value]) -> Result<Vec<Row>, ClaimsError>
             .iter()
             .filter(|v| v.claim == c.id && v.quantity == c.quantity)
             .collect();
-        let mut push = |set: ParamSet, ours: Option<f64>, unc: Option<f64>| {
+        let mut push = |set: ParamSet, ours: Option<Answer>, unc: Option<f64>| {
             rows.push(Row {
                 claim: c.id.clone(),
                 quantity: c.quantity.clone(),
@@ -457,8 +525,8 @@ pub fn score(claims: &Claims, values: &[Value]) -> Result<Vec<Row>, ClaimsError>
 pub struct ClaimValue {
     /// The claim number.
     pub key: ClaimKey,
-    /// Our value (qualitative: 1 yes, 0 no).
-    pub value: f64,
+    /// Our value.
+    pub value: Answer,
     /// Uncertainty (bracket half-width), same unit.
     pub uncertainty: Option<f64>,
     /// What the value is (e.g. "loss of contact, no jump").
@@ -468,21 +536,18 @@ pub struct ClaimValue {
 impl ClaimValue {
     /// The scorecard row input of this value under a parameter set.
     pub fn to_value(&self, set: ParamSet) -> Value {
-        Value::new(
-            self.key,
-            set,
-            self.value,
-            self.uncertainty,
-            self.note.clone(),
-        )
+        Value {
+            ours: self.value,
+            ..Value::new(self.key, set, f64::NAN, self.uncertainty, self.note.clone())
+        }
     }
 }
 
-/// A yes/no value of a claim number (1 yes, 0 no) with a note.
+/// A yes/no value of a claim number with a note.
 pub(crate) fn bool_value(key: ClaimKey, yes: bool, note: String) -> ClaimValue {
     ClaimValue {
         key,
-        value: if yes { 1.0 } else { 0.0 },
+        value: Answer::YesNo(yes),
         uncertainty: None,
         note,
     }
@@ -497,7 +562,7 @@ mod tests {
             claim: claim.into(),
             quantity: quantity.into(),
             set: ParamSet::Published,
-            ours,
+            ours: Answer::Number(ours),
             uncertainty: None,
             note: String::new(),
         }

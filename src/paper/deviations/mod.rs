@@ -9,7 +9,9 @@
 //!   and by ensembles of random-vibration records;
 //! * [`evaluation`]: every quantity of a prototype at a variant;
 //! * [`indices`]: Sobol indices over a Saltelli design and the most conflicting pair of claims;
-//! * [`calibration`]: the minimax search for a set that meets every quantitative claim.
+//! * [`calibration`]: the minimax search for a set that meets every quantitative claim;
+//! * [`history`]: the history match of every quantitative claim with Gaussian-process
+//!   emulators, in waves: which sets, if any, are consistent with all claims at once.
 //!
 //! The fast path of a narrowband claim is the pseudo-arclength continuation of the periodic
 //! orbits ([`crate::study::continuation`]) instead of the stepped sweep: Figure 8's kink (the
@@ -35,6 +37,7 @@ use crate::study::orbit::OrbitError;
 pub mod calibration;
 pub mod ensembles;
 pub mod evaluation;
+pub mod history;
 pub mod indices;
 pub mod narrowband;
 pub mod quantity;
@@ -45,6 +48,7 @@ pub use calibration::{
     MultiClaimCalibration,
 };
 pub use evaluation::{evaluate, evaluate_at, evaluate_p1, evaluate_p2, evaluate_quantitative};
+pub use history::{history_match, Answer, ClaimIndices, HistoryRun, TOLERANCE_SIGMAS};
 pub use indices::{
     most_conflicting, sobol, sobol_indices, Pareto, QuantityIndices, SobolDesign, SobolRun,
 };

@@ -3,6 +3,7 @@
 
 use rayon::prelude::*;
 
+pub use super::quantity::P1_STOP_HZ;
 use super::quantity::{ratio, Outcome};
 use super::ranges::Variant;
 use super::DeviationsError;
@@ -13,17 +14,13 @@ use crate::paper::claims::{Claims, ToleranceClass};
 use crate::paper::figures::fig09::{Fig9Bias, FIG9_EXTEND_G, FIG9_RANGE_G, FIG9_STEP_G};
 use crate::paper::figures::{fig08, fig09};
 use crate::paper::measured::P1_RESONANCE_HZ;
-use crate::paper::setups::{endstop, FIG13_BIAS_V, P1_BIAS_V, P2_BIAS_V};
+use crate::paper::qm::TABLE3_QM;
+use crate::paper::setups::{endstop, with_endstop, FIG13_BIAS_V, P1_BIAS_V, P2_BIAS_V};
 use crate::physics::harvester::Harvester;
-use crate::physics::two_port::{TwoPort, TABLE3_QM};
+use crate::physics::two_port::TwoPort;
 use crate::study::continuation::{self, Branch, ContinuationSettings, EventKind};
 use crate::study::orbit::{Forcing, Shooter};
 use crate::study::sweep;
-
-/// Upper end of prototype 1's frequency continuations (Hz): Figure 8's range extended to
-/// 2000 Hz, as the response study's fold claims (without end-stop damping the impacting
-/// branch reaches 1600 Hz).
-pub const P1_STOP_HZ: f64 = 2000.0;
 
 /// Figure 13's range (Hz) and largest continuation step (Hz): the figure's sweep grid.
 pub const P2_RANGE_HZ: (f64, f64) = (600.0, 850.0);
@@ -122,7 +119,7 @@ pub(super) fn p1_fig8(variant: &Variant) -> [Outcome; 6] {
         .par_iter()
         .map(|&(law, bim, what)| {
             frequency_branch(
-                &base.with_endstop(law, bim),
+                &with_endstop(&base, law, bim),
                 accel,
                 (fig08::P1_SWEEP_START_HZ, P1_STOP_HZ),
                 fig08::P1_SWEEP_STEP_HZ,
@@ -246,7 +243,7 @@ pub(super) fn p2_fig13(variant: &Variant, claims: &Claims) -> [Outcome; 3] {
         .par_iter()
         .map(|&(law, bim, g, what)| {
             frequency_branch(
-                &base.with_endstop(law, bim),
+                &with_endstop(&base, law, bim),
                 g * variant.accel_scale,
                 P2_RANGE_HZ,
                 P2_STEP_HZ,
@@ -277,7 +274,7 @@ pub(super) fn p2_fig13(variant: &Variant, claims: &Claims) -> [Outcome; 3] {
 /// Table 3's second column at a variant (eqs 15-18 at 15 V), in [`P2_QUANTITIES`] order.
 pub(super) fn p2_table3(variant: &Variant) -> [Outcome; 3] {
     let tp = TwoPort::of(&variant.device.with_bias(P2_BIAS_V));
-    let qm = tp.qm(TABLE3_QM);
+    let qm = TABLE3_QM.of(&tp);
     [
         Outcome::Value(tp.k2 * 100.0),
         Outcome::Value(qm),
@@ -289,7 +286,7 @@ pub(super) fn p2_table3(variant: &Variant) -> [Outcome; 3] {
 /// order.
 pub(super) fn p1_table3(variant: &Variant) -> [Outcome; 3] {
     let tp = TwoPort::of(&variant.device.with_bias(P1_BIAS_V));
-    let qm = tp.qm(TABLE3_QM);
+    let qm = TABLE3_QM.of(&tp);
     [
         Outcome::Value(tp.k2 * 100.0),
         Outcome::Value(qm),

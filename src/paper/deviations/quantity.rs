@@ -2,10 +2,14 @@
 //! or named absence of one at a point ([`Outcome`]), and that value normalised by its claim
 //! ([`Evaluation`]).
 
-use super::narrowband::P1_STOP_HZ;
 use super::DeviationsError;
-use crate::paper::claims::{Claim, Claims, Kind, Verdict};
+use crate::paper::claims::{Answer, Claim, Claims, Kind, Verdict};
 use crate::paper::figures::fig09::FIG9_EXTEND_G;
+
+/// Upper end of prototype 1's frequency continuations (Hz): Figure 8's range extended to
+/// 2000 Hz, as the response study's fold claims (without end-stop damping the impacting
+/// branch reaches 1600 Hz).
+pub const P1_STOP_HZ: f64 = 2000.0;
 
 /// The prototypes of the study.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -235,11 +239,15 @@ pub fn normalise(
         (None, Some(s)) => s,
         (None, None) => return Err(DeviationsError::NoSubstitute(qty.claim, qty.quantity)),
     };
+    let paper = claim.paper.to_f64();
     let deviation = match claim.kind {
-        Kind::Quantitative => (value - claim.paper) / claim.tolerance(),
-        Kind::Qualitative => value - claim.paper,
+        Kind::Quantitative => (value - paper) / claim.tolerance(),
+        Kind::Qualitative => value - paper,
     };
-    let meets = outcome.value().is_some() && claim.verdict(Some(value)) == Verdict::Reproduced;
+    let meets = outcome.value().is_some()
+        && claim
+            .read(Answer::Number(value))
+            .is_ok_and(|v| claim.verdict(Some(v)) == Verdict::Reproduced);
     Ok(Evaluation {
         quantity: *qty,
         outcome,

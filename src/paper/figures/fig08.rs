@@ -5,7 +5,9 @@
 
 use crate::device::{Device, StiffnessModel};
 use crate::paper::calibration::{fit_bim_for_jump, BimFit, NarrowbandError, BIM_FIT_TOL_HZ};
-use crate::paper::claims::{bool_value, keys, ClaimKey, ClaimValue, Claims, ClaimsError, Value};
+use crate::paper::claims::{
+    bool_value, keys, Answer, ClaimKey, ClaimValue, Claims, ClaimsError, Value,
+};
 use crate::paper::curves::{
     branch_end_value, no_impact_value, CurveSpec, CurveSweeps, FigureCurve,
 };
@@ -250,7 +252,7 @@ pub fn set_claims(r: &SetRun, stop_hz: f64) -> Vec<ClaimValue> {
     if let Some(t) = curve(Hertz1p5).report.onset {
         out.push(ClaimValue {
             key: keys::F8B_ONSET,
-            value: t.value(),
+            value: Answer::Number(t.value()),
             uncertainty: Some(t.half_width()),
             note: "first contact, refined".into(),
         });

@@ -5,7 +5,7 @@
 use crate::device::Device;
 use crate::ode::SolverError;
 use crate::paper::claims::{
-    bool_value, keys, ClaimKey, ClaimValue, Claims, ClaimsError, ToleranceClass, Value,
+    bool_value, keys, Answer, ClaimKey, ClaimValue, Claims, ClaimsError, ToleranceClass, Value,
 };
 use crate::paper::measured::P1_RESONANCE_HZ;
 use crate::paper::setups::{prototype1_setup, ParamSet, Prototype1Sets};
@@ -320,7 +320,7 @@ fn set_claims(r: &SetRun, reading: PowerReading, same: (bool, String)) -> Vec<Cl
         if let Some(t) = c.report.onset {
             out.push(ClaimValue {
                 key: bias.onset_key(),
-                value: t.value(),
+                value: Answer::Number(t.value()),
                 uncertainty: Some(t.half_width()),
                 note: if c.report.extended_from.is_some() {
                     "first contact, beyond the paper's 5.5 g (extended continuation)".into()
@@ -341,7 +341,7 @@ fn set_claims(r: &SetRun, reading: PowerReading, same: (bool, String)) -> Vec<Cl
     ] {
         out.push(ClaimValue {
             key,
-            value,
+            value: Answer::Number(value),
             uncertainty: None,
             note: note.clone(),
         });

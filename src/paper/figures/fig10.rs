@@ -7,7 +7,7 @@ use rayon::prelude::*;
 use crate::drive::noise::{generate, NoiseSpec};
 use crate::num::stats::MeanCi;
 use crate::paper::claims::{keys, Claims, ClaimsError, Value};
-use crate::paper::setups::ParamSet;
+use crate::paper::setups::{paper_noise, ParamSet};
 use crate::paper::Figure;
 use crate::signal::bandwidth::{mean_psd, upper_band_edge_hz};
 use crate::signal::{welch, Psd, WelchConfig};
@@ -47,7 +47,7 @@ pub struct NoiseRecord {
 /// The records of Figure 10.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Run {
-    /// The excitation ([`NoiseSpec::paper`] at [`FIG10_SA`]).
+    /// The excitation ([`paper_noise`] at [`FIG10_SA`]).
     pub spec: NoiseSpec,
     /// ChaCha8 seed.
     pub seed: u64,
@@ -133,7 +133,7 @@ impl Figure for Fig10 {
     /// Generates and analyses the [`RECORDS`] records in parallel, calling `progress` after
     /// each.
     fn run(_: &(), progress: &(dyn Fn() + Sync)) -> Result<Run, BroadbandError> {
-        let spec = NoiseSpec::paper(FIG10_SA);
+        let spec = paper_noise(FIG10_SA);
         let first_stream = first_stream_for_level(FIG10_SA);
         let cfg = WelchConfig::half_overlap(NPERSEG);
         let records = (0..RECORDS as u64)

@@ -9,7 +9,7 @@ use crate::paper::ensembles::{Level, WidthReading, P2_BAND_HZ};
 use crate::paper::prototype2_random::{self, Extras, Fig15Level, Levels, Scope};
 use crate::paper::setups::ParamSet;
 use crate::paper::Figure;
-use crate::physics::two_port::linear_widths;
+use crate::physics::linear::linear_widths;
 use crate::signal::Widths;
 use crate::study::ensemble::Ensemble;
 use crate::study::record::BroadbandError;
@@ -172,7 +172,7 @@ pub fn findings(run: &Run, claims: &Claims) -> Findings {
     let (up, down) = edge_shifts(e34, e169).unwrap_or((f64::NAN, f64::NAN));
     let (paper, tol_rel) = claims
         .claim(RATIO_CLAIM)
-        .map_or((f64::NAN, f64::NAN), |c| (c.paper, c.tol_rel));
+        .map_or((f64::NAN, f64::NAN), |c| (c.paper.to_f64(), c.tol_rel));
     let (w55, w34) = (e55.single_bw3db_hz(), e34.single_bw3db_hz());
     let (m55, m34) = (e55.single_alt_bw3db_hz(), e34.single_alt_bw3db_hz());
     Findings {

@@ -6,9 +6,10 @@ use std::convert::Infallible;
 
 use crate::device::Device;
 use crate::paper::claims::{keys, ClaimKey, Claims, ClaimsError, Value};
+use crate::paper::qm::{QmReading, EQ21_QM, TABLE3_QM};
 use crate::paper::setups::{comb, comb_mut, ParamSet, Prototypes, P1_BIAS_V, P2_BIAS_V};
 use crate::paper::Figure;
-use crate::physics::two_port::{bias_for_coupling, QmReading, TwoPort, EQ21_QM, TABLE3_QM};
+use crate::physics::two_port::{bias_for_coupling, TwoPort};
 
 /// The abstract's k^2 for prototype 1 (a fraction): 1.44 %.
 pub const ABSTRACT_K2_P1: f64 = 0.0144;
@@ -47,7 +48,7 @@ pub struct Prototype {
 impl Prototype {
     /// Qm under a reading.
     pub fn qm(&self, reading: QmReading) -> f64 {
-        self.two_port.qm(reading)
+        reading.of(&self.two_port)
     }
 
     /// Eq 21's efficiency 2P/(m Sa) with Qm under a reading (fraction).
@@ -114,7 +115,7 @@ fn evaluate(prototype1: &Device, prototype2: &Device) -> Run {
             let mut d = p2.device.clone();
             comb_mut(&mut d).load_resistance_ohm = r_ohm;
             let tp = TwoPort::of(&d);
-            (r_ohm, tp.broadband_efficiency(tp.qm(EQ21_QM)))
+            (r_ohm, tp.broadband_efficiency(EQ21_QM.of(&tp)))
         })
         .collect();
     Run {

@@ -7,7 +7,7 @@ use rayon::prelude::*;
 
 use crate::device::{Device, StiffnessModel};
 use crate::paper::claims::{keys, ClaimKey};
-use crate::paper::setups::{prototype1_setup, ParamSet, Prototype1Sets};
+use crate::paper::setups::{prototype1_setup, with_endstop, ParamSet, Prototype1Sets};
 use crate::paper::sweeps::{self, P1_HIGH_ACCEL_RMS_G, P1_SWEEP_START_HZ, P1_SWEEP_STEP_HZ};
 use crate::study::continuation::ContinuationSettings;
 
@@ -59,7 +59,7 @@ pub fn claim_folds(p1: &Prototype1Sets) -> Result<Vec<(String, f64)>, ResponseEr
             p1.each().into_iter().map(move |(set, d)| {
                 (
                     fold_summary_key(key, set),
-                    prototype1_setup(d).with_endstop(law, bim),
+                    with_endstop(&prototype1_setup(d), law, bim),
                 )
             })
         })

@@ -22,7 +22,7 @@ use crate::device::{Device, StiffnessModel};
 use crate::drive::Sine;
 use crate::ode::{SolverError, Stats};
 use crate::paper::figures::fig13;
-use crate::paper::setups::{prototype1_setup, ParamSet, FIG13_BIAS_V};
+use crate::paper::setups::{prototype1_setup, with_endstop, ParamSet, FIG13_BIAS_V};
 use crate::paper::sweeps::{self, P1_HIGH_ACCEL_RMS_G, P1_SWEEP_STEP_HZ};
 use crate::physics::harvester::Harvester;
 use crate::study::basins::Basins;
@@ -123,9 +123,7 @@ pub fn setups(p2: &Device, p1: &Device, p1_calibrated: &Device) -> Vec<Setup> {
         .map(|&case| {
             let (device, accel, sweep, step) = match case {
                 Case::Fig13P2 => {
-                    let d = p2
-                        .with_bias(FIG13_BIAS_V)
-                        .with_endstop(StiffnessModel::Linear, 0.4);
+                    let d = with_endstop(&p2.with_bias(FIG13_BIAS_V), StiffnessModel::Linear, 0.4);
                     let s = fig13::sweep_settings(&d);
                     (d, 0.31, s, 2.0)
                 }

@@ -26,7 +26,7 @@ impl Gaps {
         Self {
             upper: h.gap(Side::Upper),
             lower: h.gap(Side::Lower),
-            w0: (h.km / h.mass_kg).sqrt(),
+            w0: h.well_omega_rad_s(),
         }
     }
 

@@ -127,7 +127,7 @@ fn guard_gradient(
         n[c] = (model.guards(mode, t, &yp)[index] - model.guards(mode, t, &ym)[index]) / (2.0 * h);
     }
     let g_t = if let Mode::Stuck(_) = mode {
-        let ht = 1e-6 / (model.km / model.mass_kg).sqrt();
+        let ht = 1e-6 / model.well_omega_rad_s();
         (model.guards(mode, t + ht, y)[index] - model.guards(mode, t - ht, y)[index]) / (2.0 * ht)
     } else {
         0.0

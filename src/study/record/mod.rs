@@ -31,7 +31,7 @@
 //! `2P/(m Sa)` with `P` the mean power of both loads and `Sa` the **two-sided** acceleration PSD
 //! in SI units (`Sa_g2 * 9.81^2`), the input power being `m Sa / 2` (eq 21 and its reference).
 //! [`eq21_power_w`](crate::physics::two_port::eq21_power_w) gives the linear theory with
-//! `Qm = sqrt(K m)/b` ([`crate::physics::two_port::QmReading::OpenCircuit`]), the reading
+//! `Qm = sqrt(K m)/b` ([`crate::physics::two_port::TwoPort::qm_open_circuit`]), the reading
 //! eq 21 is derived with.
 //!
 
@@ -143,11 +143,11 @@ pub const EXPONENTIAL_ORDER: usize = 5;
 pub const STOP_MARGIN: f64 = 1e-4;
 
 impl RecordSpec {
-    /// The paper's record (10 kHz band, 100 kHz, 10 s analysed) at level
-    /// `psd_g2_per_hz`, with the device's pre-roll ([`transient_s`]) and [`DEFAULT_RTOL`].
-    pub fn paper(device: &Device, psd_g2_per_hz: f64) -> Self {
+    /// A record of `noise` analysed after the device's pre-roll ([`transient_s`]), with
+    /// [`DEFAULT_RTOL`] and the exponential free flight.
+    pub fn of(device: &Device, noise: NoiseSpec) -> Self {
         Self {
-            noise: NoiseSpec::paper(psd_g2_per_hz),
+            noise,
             transient_s: transient_s(device),
             rtol: DEFAULT_RTOL,
             scheme: Scheme::Exponential,
@@ -247,6 +247,10 @@ pub enum Fallback {
     /// `h L` of [`ExpAdams::new`](crate::ode::exponential::ExpAdams::new) exceeds its bound,
     /// e.g. a coil whose `L/(R + Rc)` is much shorter than the sample interval).
     Unresolved,
+    /// The suspension's stiffness strays so fast from its value at the well that the
+    /// exponential step could not reach the well itself
+    /// ([`Spring::fast_path_reach_m`](crate::physics::suspension::Spring::fast_path_reach_m)).
+    StiffSuspension,
 }
 
 impl std::fmt::Display for Fallback {
@@ -260,6 +264,10 @@ impl std::fmt::Display for Fallback {
                 "a transducer capacitance plus Cp vanishes before the stop is reached"
             }
             Fallback::Unresolved => "the sample interval does not resolve the linearised dynamics",
+            Fallback::StiffSuspension => {
+                "the suspension's stiffness departs from its value at the well within the well's \
+                 distance from rest at this sample interval"
+            }
         })
     }
 }
@@ -294,13 +302,19 @@ pub struct Record {
 ///
 /// ```
 /// use endstop::device::Device;
+/// use endstop::drive::noise::NoiseSpec;
 /// use endstop::study::record::{simulate_record, RecordSpec};
 ///
 /// let text = include_str!(concat!(env!("CARGO_MANIFEST_DIR"), "/data/prototype1.toml"));
 /// let device = Device::from_toml_str(text, "prototype1.toml")?;
-/// // The paper's excitation at 1e-6 g^2/Hz, shortened to 20 ms after 10 ms of pre-roll.
-/// let mut spec = RecordSpec::paper(&device, 1e-6);
-/// spec.noise.duration_s = 0.02;
+/// // Noise at 1e-6 g^2/Hz flat to 10 kHz, sampled at 100 kHz: 20 ms after 10 ms of pre-roll.
+/// let noise = NoiseSpec {
+///     psd_g2_per_hz: 1e-6,
+///     bandwidth_hz: 10e3,
+///     sample_rate_hz: 100e3,
+///     duration_s: 0.02,
+/// };
+/// let mut spec = RecordSpec::of(&device, noise);
 /// spec.transient_s = 0.01;
 /// let record = simulate_record(&device, &spec, 2012, 0)?;
 /// assert_eq!(record.v1_v.len(), spec.analysed_samples());
@@ -338,6 +352,10 @@ pub(crate) trait RecordObserver {
 
     /// An accepted Dormand-Prince step, in its mode.
     fn dopri(&mut self, _model: &Harvester<Sampled>, _step: &Step<4>, _mode: Mode) {}
+
+    /// The state and mode at an analysed sample instant.
+    #[inline(always)]
+    fn sample(&mut self, _y: &State, _mode: Mode) {}
 }
 
 impl RecordObserver for () {}

@@ -6,8 +6,9 @@ use crate::drive::{Excitation, Sampled};
 use crate::ode::exponential::{ExpAdams, History};
 use crate::ode::{Dopri5, Observer, Step};
 use crate::physics::contact::{Mode, Side};
+use crate::physics::free_flight::FreeFlight;
 use crate::physics::free_flight::Remainder;
-use crate::physics::harvester::{FreeFlight, Harvester, State, SwitchKind};
+use crate::physics::harvester::{Harvester, State, SwitchKind};
 use crate::physics::transducer::{PairGeometry, TransducerModel};
 
 use super::{
@@ -117,6 +118,7 @@ pub(super) fn run<O: RecordObserver, R: Remainder>(
             }
         }
         if k >= n_tr {
+            observer.sample(&y, mode);
             let [a, b] = volts.unwrap_or_else(|| model.electrical(&y).v);
             v1.push(a);
             v2.push(b);
@@ -236,11 +238,16 @@ impl<R: Remainder> FastFlight<R> {
         }
         let (l, c) = flight.linear();
         let method = ExpAdams::new(&l, &c, dt, &model.scales()).ok_or(Fallback::Unresolved)?;
+        // A nonlinear suspension bounds the step's reach like a stop (see `Spring`).
+        let reach = model.spring.fast_path_reach_m(model.km, model.mass_kg, dt);
+        if reach <= model.spring.well_m.abs() {
+            return Err(Fallback::StiffSuspension);
+        }
         Ok(Self {
             model: remainder,
             method,
-            upper: model.gap(Side::Upper) * (1.0 - STOP_MARGIN),
-            lower: model.gap(Side::Lower) * (1.0 - STOP_MARGIN),
+            upper: (model.gap(Side::Upper) * (1.0 - STOP_MARGIN)).min(reach),
+            lower: (model.gap(Side::Lower) * (1.0 - STOP_MARGIN)).min(reach),
         })
     }
 

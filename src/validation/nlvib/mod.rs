@@ -49,6 +49,12 @@ pub const HARMONICS: [usize; 6] = [1, 3, 5, 10, 20, 40];
 /// The frequencies (rad/s) near which the harmonic-balance amplitudes are compared.
 pub const OMEGAS_RAD_S: [f64; 5] = [1.1, 1.2, 1.3, 1.4, 1.5];
 
+/// The amplitude points compared at each H ([`hb_convergence`]): both parts of the branch at
+/// each of [`OMEGAS_RAD_S`], except at H = 1, whose branch folds at 1.42 rad/s and so has no
+/// point within 0.05 rad/s of 1.5 rad/s on either part. A comparison with fewer points at any H
+/// fails ([`hb_checks`]).
+pub const HB_POINTS: [(usize, usize); 6] = [(1, 8), (3, 10), (5, 10), (10, 10), (20, 10), (40, 10)];
+
 mod reference;
 
 pub use reference::*;
@@ -167,14 +173,27 @@ pub const MULTIPLIER_TOL: f64 = 1e-5;
 /// here good to about 1e-9.
 pub const EXACT_A1_TOL: f64 = 1e-6;
 
-/// The point-by-point comparison with the exact shooting, over every `stride`-th stored orbit.
+/// The number of orbits the exact shooting stored (`shooting_branch.csv`, `PROVENANCE.md`):
+/// the comparison must see every one of them (every `stride`-th, with a stride).
+pub const EXACT_ORBITS: usize = 1161;
+
+/// The point-by-point comparison with the exact shooting, over every `stride`-th stored orbit;
+/// an error when the reference holds no orbit. A reference holding fewer than
+/// [`EXACT_ORBITS`] fails its count check.
 pub fn exact_point_checks(
     ours: &Ours<'_>,
     reference: &Reference,
     stride: usize,
 ) -> Result<(Vec<Check>, Vec<PointComparison>), ValidationError> {
+    let stride = stride.max(1);
+    if reference.exact.is_empty() {
+        return Err(reference::missing(
+            "shooting_branch.csv",
+            "no orbit to compare",
+        ));
+    }
     let mut rows = Vec::new();
-    for p in reference.exact.iter().step_by(stride.max(1)) {
+    for p in reference.exact.iter().step_by(stride) {
         let o = ours.through(p)?;
         rows.push(PointComparison {
             exact: *p,
@@ -185,10 +204,23 @@ pub fn exact_point_checks(
     }
     let src = "exact shooting (scipy, shooting_branch.csv)";
     let mut g = Group::new("peer: exact shooting");
+    g.add(
+        src,
+        &if stride == 1 {
+            format!("orbits compared (all {EXACT_ORBITS} stored)")
+        } else {
+            format!("orbits compared (every {stride}th of the {EXACT_ORBITS} stored)")
+        },
+        EXACT_ORBITS.div_ceil(stride) as f64,
+        rows.len() as f64,
+        Measure::Absolute,
+        0.0,
+        "a count: every stored orbit is compared",
+    );
     let worst_a1 = rows
         .iter()
         .max_by(|a, b| a.a1_relative().total_cmp(&b.a1_relative()))
-        .expect("at least one point");
+        .ok_or_else(|| reference::missing("shooting_branch.csv", "no orbit to compare"))?;
     g.add(
         src,
         &format!(
@@ -205,7 +237,7 @@ pub fn exact_point_checks(
     let worst_mu = rows
         .iter()
         .max_by(|a, b| a.mu_difference().total_cmp(&b.mu_difference()))
-        .expect("at least one point");
+        .ok_or_else(|| reference::missing("shooting_branch.csv", "no orbit to compare"))?;
     g.add(
         src,
         &format!(
@@ -220,10 +252,15 @@ pub fn exact_point_checks(
         "the reference's two monodromies agree to a few 1e-6",
     );
     let decisive: Vec<&PointComparison> = rows.iter().filter(|r| r.decisive()).collect();
-    let disagree = decisive
-        .iter()
-        .filter(|r| r.stable != r.exact.stable)
-        .count();
+    // No decisive orbit would leave nothing to disagree: that fails rather than passes.
+    let disagree = if decisive.is_empty() {
+        f64::NAN
+    } else {
+        decisive
+            .iter()
+            .filter(|r| r.stable != r.exact.stable)
+            .count() as f64
+    };
     g.add(
         src,
         &format!(
@@ -232,7 +269,7 @@ pub fn exact_point_checks(
             decisive.len()
         ),
         0.0,
-        disagree as f64,
+        disagree,
         Measure::Absolute,
         0.0,
         "a verdict is exact away from the unit circle",
@@ -314,6 +351,12 @@ pub fn continuation_checks(
         .ok_or_else(|| ValidationError::Device("the problem has an upper stop".into()))?
         .gap_m;
     let analytic = osc.grazing_rad_s(0.1 / m.mass_kg, gap);
+    if analytic.len() != 2 {
+        return Err(ValidationError::Device(format!(
+            "the linear response reaches the gap at {} frequencies, not the two compared",
+            analytic.len()
+        )));
+    }
     let grazing: Vec<f64> = branch.grazing_events().map(|e| e.param * TWO_PI).collect();
     for (i, w) in analytic.iter().enumerate() {
         let nearest = grazing
@@ -356,12 +399,14 @@ impl HbComparison {
         (self.fold_rad_s - self.our_fold_rad_s).abs()
     }
 
-    /// The largest `|NLvib - ours|` of the amplitudes (m).
+    /// The largest `|NLvib - ours|` of the amplitudes (m); NaN without a point (a largest
+    /// difference of nothing would pass as zero).
     pub fn worst_amplitude_difference(&self) -> f64 {
         self.amplitudes
             .iter()
             .map(|(_, _, a, b)| (a - b).abs())
-            .fold(0.0, f64::max)
+            .reduce(f64::max)
+            .unwrap_or(f64::NAN)
     }
 }
 
@@ -388,6 +433,8 @@ impl Part {
 /// point nearest each of [`OMEGAS_RAD_S`] on the resonant and the overhanging part, its
 /// first-harmonic amplitude against ours at the same frequency on the same part (our branch
 /// crosses such a frequency three times: resonant, overhang, then the non-impacting orbits).
+/// A target without a point of NLvib's within 0.05 rad/s on the part, or beyond our fold, is
+/// left out; [`hb_checks`] holds the points compared to [`HB_POINTS`].
 pub fn hb_convergence(
     ours: &Ours<'_>,
     branch: &Branch,
@@ -450,6 +497,32 @@ pub fn hb_convergence(
 pub fn hb_checks(hb: &[HbComparison], floor_m: f64, fold_floor_rad_s: f64) -> Vec<Check> {
     let mut g = Group::new("peer: harmonic balance");
     let src = "NLvib-py harmonic balance";
+    // Every truncation of HB_POINTS, with every point it states: a comparison that skipped
+    // points (or a whole H) would judge a smaller set than the table says.
+    let short = HB_POINTS
+        .iter()
+        .filter(|(h, n)| {
+            hb.iter()
+                .find(|c| c.harmonics == *h)
+                .is_none_or(|c| c.amplitudes.len() < *n)
+        })
+        .count();
+    let stated: Vec<String> = HB_POINTS
+        .iter()
+        .map(|(h, n)| format!("{n} at H = {h}"))
+        .collect();
+    g.add(
+        src,
+        &format!(
+            "truncations H compared at fewer amplitude points than stated ({})",
+            stated.join(", ")
+        ),
+        0.0,
+        short as f64,
+        Measure::Absolute,
+        0.0,
+        "a count: every stated point is compared",
+    );
     for w in hb.windows(2) {
         let (a, b) = (&w[0], &w[1]);
         g.add(

@@ -196,20 +196,23 @@ impl Reference {
     }
 
     /// The AFT sampling floor: the largest change of a stored H = 40 amplitude with four
-    /// times finer sampling (m).
+    /// times finer sampling (m); NaN without a stored point (a floor of nothing would pass
+    /// as zero).
     pub fn aft_floor_m(&self) -> f64 {
         self.aft
             .iter()
             .map(|a| (a.a1_amplitude_m - a.a1_amplitude_m_fine).abs())
-            .fold(0.0, f64::max)
+            .reduce(f64::max)
+            .unwrap_or(f64::NAN)
     }
 }
 
 impl Reference {
     /// The floor of a harmonic-balance fold frequency set by the sampled contact force: the
     /// deepest micro turning point (a turning point of largest frequency and the next one of
-    /// smallest) of the fine-step H = 5 branch below its fold (rad/s). The branch of the sampled
-    /// force is piecewise smooth and zigzags in frequency at that scale for every H.
+    /// smallest) of the fine-step H = 5 branch below its fold (rad/s); NaN without one. The
+    /// branch of the sampled force is piecewise smooth and zigzags in frequency at that scale
+    /// for every H.
     pub fn fold_floor_rad_s(&self) -> f64 {
         let mut turns: Vec<&HbFold> = self.fine_h05_folds.iter().collect();
         turns.sort_by_key(|f| f.point);
@@ -224,11 +227,12 @@ impl Reference {
             // Near the fold only (the lower turning point ends the overhang far below).
             .filter(|w| top - w[1].omega_rad_s < 0.01)
             .map(|w| w[0].omega_rad_s - w[1].omega_rad_s)
-            .fold(0.0, f64::max)
+            .reduce(f64::max)
+            .unwrap_or(f64::NAN)
     }
 }
 
-fn missing(file: &str, message: &str) -> ValidationError {
+pub(super) fn missing(file: &str, message: &str) -> ValidationError {
     ValidationError::Reference {
         file: file.to_string(),
         message: message.to_string(),

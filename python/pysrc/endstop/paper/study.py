@@ -8,7 +8,9 @@ arguments and result pickle, so a Dask client can map them over workers:
 * :func:`indices`: the Sobol indices from the evaluations of every design point, with the
   columns of the study's ``sobol.parquet``;
 * :func:`calibration_starts`, :func:`calibrate_start`, :func:`calibration`: the multi-claim
-  calibration, one task per start, then the best set beside the published one.
+  calibration, one task per start, then the best set beside the published one;
+* :func:`history`: the history match in waves, replayed from the waves so far: the next
+  wave's design (whose points are then evaluated anywhere), each wave's summary, the answer.
 
 A prototype is ``"p1"`` or ``"p2"``; its base is the published device and its ranges those of
 ``data/sensitivity.toml``. ``python/examples/study_dask.py`` runs the whole study on a Dask
@@ -75,5 +77,28 @@ def calibration(prototype, fits, ensemble_records=None):
     return _native.paper_study_calibration(prototype, list(fits), records)
 
 
+def history(prototype, waves, per_input=10, max_waves=4, pool=1 << 14, ensemble_records=None,
+            seed=SEED, sobol=False):
+    """The history match of ``prototype`` from its waves so far. ``waves`` is a list of
+    ``(points, evaluations)``: each wave's design as the previous call returned it in
+    ``next_design`` and the :func:`evaluate` results at its points, in order (start with
+    ``[]``). The emulators are refitted from the runs at every call (deterministic: the same
+    waves give the same match), so only the runs need to travel.
+
+    Returns a dict: ``next_design`` (an array of points, or None once the match has ended:
+    the space emptied, stopped shrinking, or ``max_waves`` ran), ``outputs`` (the emulated
+    claims), ``waves`` (per wave: the non-implausible share of the cube, the share with every
+    claim within the cut, each claim's share ruled out and its emulator's leave-one-out
+    standardised errors, the yes/no claims met at its runs, why it ended), ``answer``,
+    ``projections`` (the last wave's 2-D projections, one dict per cell) and, with
+    ``sobol=True``, ``indices`` (the first wave's emulators' Sobol indices with the 95 %
+    interval of their posterior draws)."""
+    records = None if ensemble_records is None else int(ensemble_records)
+    ws = [([[float(u) for u in p] for p in points], [list(e) for e in evals])
+          for points, evals in waves]
+    return _native.paper_study_history(prototype, ws, int(per_input), int(max_waves), int(pool),
+                                       records, int(seed), bool(sobol))
+
+
 __all__ = ["SEED", "factors", "design", "evaluate", "indices", "calibration_starts",
-           "calibrate_start", "calibration"]
+           "calibrate_start", "calibration", "history"]

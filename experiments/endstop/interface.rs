@@ -1,0 +1,226 @@
+//! The studies of a device with an interface circuit (`[interface]`: a diode bridge, SSHI,
+//! SECE): `endstop charge`, and `endstop sweep` on such a device (DC voltage and DC power
+//! against frequency, each point a steady state found by shooting).
+
+use std::path::PathBuf;
+
+use anyhow::Result;
+use clap::Parser;
+use endstop::drive::Sine;
+use endstop::study::interface::charging::{charge as run_charge, ChargeSettings};
+use endstop::study::interface::sweep::frequency_sweep;
+use endstop::study::interface::SteadySettings;
+use endstop::study::stepped::linspace_step;
+
+use crate::common::fmt_sig;
+use crate::common::frame::frame;
+use crate::common::plot::{LegendPos, LinePlot, Series, Style, PALETTE};
+use crate::{start, RangeArgs};
+use endstop_experiments::row;
+
+/// The arguments of `endstop charge`.
+#[derive(Parser, Debug)]
+pub struct ChargeArgs {
+    /// Device file (TOML) with an `[interface]` table, e.g. a copy of
+    /// data/examples/piezo_bridge.toml.
+    #[arg(long)]
+    device: PathBuf,
+    /// Drive frequency (Hz).
+    #[arg(long)]
+    freq_hz: f64,
+    /// RMS base acceleration (g).
+    #[arg(long)]
+    accel_rms_g: f64,
+    /// Storage voltage at the start (V).
+    #[arg(long, default_value_t = 0.0)]
+    start_v: f64,
+    /// Target storage voltage (V).
+    #[arg(long)]
+    target_v: f64,
+    /// Periods over which the drive ramps up from zero (0: it starts at once, from rest at
+    /// phase zero).
+    #[arg(long, default_value_t = 0.0)]
+    ramp_periods: f64,
+    /// Longest simulated time (s).
+    #[arg(long, default_value_t = 600.0)]
+    t_max_s: f64,
+    /// Output directory; default: data/results/endstop-charge.
+    #[arg(long)]
+    out: Option<PathBuf>,
+}
+
+/// `endstop charge`: the time for the storage to reach a target under a sine.
+pub fn charge(a: ChargeArgs) -> Result<()> {
+    for (name, v) in [
+        ("--freq-hz", a.freq_hz),
+        ("--accel-rms-g", a.accel_rms_g),
+        ("--t-max-s", a.t_max_s),
+    ] {
+        if !(v.is_finite() && v > 0.0) {
+            anyhow::bail!("{name} must be a finite positive number, not {v}");
+        }
+    }
+    if !(a.ramp_periods.is_finite() && a.ramp_periods >= 0.0) {
+        anyhow::bail!(
+            "--ramp-periods must be a finite number >= 0, not {}",
+            a.ramp_periods
+        );
+    }
+    let (mut exp, loaded, device) = start("endstop-charge", &a.device, None, a.out.clone())?;
+    if device.interface.is_resistive() {
+        anyhow::bail!(
+            "device `{}` has no [interface] table: charging needs a storage capacitor",
+            device.name
+        );
+    }
+    let period = 1.0 / a.freq_hz;
+    let settings = ChargeSettings {
+        start_v: a.start_v,
+        target_v: a.target_v,
+        ramp_s: a.ramp_periods * period,
+        t_max_s: a.t_max_s,
+        sample_s: (a.t_max_s / 20_000.0).max(period / 8.0),
+        block_s: (200.0 * period).min(a.t_max_s / 10.0),
+        rtol: 1e-8,
+    };
+    let bar = crate::common::progress(100, "charging (% of the target)");
+    let run = run_charge(
+        &device,
+        Sine::from_rms_g(a.accel_rms_g, a.freq_hz),
+        &settings,
+        |_, v| bar.set_position((100.0 * (v - a.start_v) / (a.target_v - a.start_v)) as u64),
+    );
+    bar.finish_and_clear();
+    let run = run?;
+    let rows = run
+        .t_s
+        .iter()
+        .zip(&run.vs_v)
+        .map(|(&t, &v)| row!["t_s" => t, "vs_v" => v])
+        .collect::<Vec<_>>();
+    exp.write_parquet("charge", &mut frame(rows)?, &device.params)?;
+    exp.number("time_to_target_s", run.time_to_target_s);
+    exp.number("stored_j", run.stored_j);
+    let md = format!(
+        "Charging of `{}` ({} interface) at {} Hz, {} g rms, from {} V to {} V; the drive \
+         starts at t = 0 from rest at phase zero{}.\n\n- time to the target: {} s\n- energy \
+         stored on the way: {} uJ\n",
+        loaded.file,
+        device.interface.key(),
+        a.freq_hz,
+        a.accel_rms_g,
+        a.start_v,
+        a.target_v,
+        if a.ramp_periods > 0.0 {
+            format!(", ramped up over {} periods", a.ramp_periods)
+        } else {
+            ", at full amplitude at once".to_string()
+        },
+        fmt_sig(run.time_to_target_s, 4),
+        fmt_sig(run.stored_j * 1e6, 4)
+    );
+    exp.write_numbers_md(&md)?;
+    print!("{md}");
+    let pts = run
+        .t_s
+        .iter()
+        .copied()
+        .zip(run.vs_v.iter().copied())
+        .collect();
+    let plot = LinePlot::new(
+        &format!("Charging the storage: {}", device.name),
+        "time [s]",
+        "storage voltage V_s [V]",
+        vec![Series::new("V_s", pts, PALETTE[0], Style::Line)],
+    )
+    .legend(LegendPos::LowerRight);
+    exp.write_plot(&plot)?;
+    exp.finish()
+}
+
+/// `endstop sweep` on a device with an interface: the steady state at each frequency.
+pub fn dc_sweep(a: RangeArgs) -> Result<()> {
+    a.check()?;
+    let (mut exp, loaded, device) = start("endstop-sweep", &a.device, a.bias_v, a.out.clone())?;
+    let step_hz = a.protocol(&device).step_hz;
+    let freqs = linspace_step(a.from, a.to, step_hz);
+    let settings = SteadySettings::default();
+    let results = crate::common::with_progress(freqs.len(), "sweep", |tick| {
+        frequency_sweep(&device, &freqs, a.accel_rms_g, &settings, |_, _| tick())
+    });
+    let mut states = Vec::new();
+    let mut failed = Vec::new();
+    for (f, r) in freqs.iter().zip(results) {
+        match r {
+            Ok(s) => states.push(s),
+            Err(e) => failed.push(format!("{} Hz: {e}", fmt_sig(*f, 5))),
+        }
+    }
+    if states.is_empty() {
+        anyhow::bail!("no steady state found: {}", failed.join("; "));
+    }
+    let rows = states
+        .iter()
+        .map(|s| {
+            row![
+                "freq_hz" => s.freq_hz,
+                "vdc_v" => s.vdc_v,
+                "p_dc_w" => s.p_dc_w,
+                "ripple_v" => s.ripple_v,
+                "x_max_m" => s.x_peak_m,
+                "contact" => s.contact,
+                "stable" => s.is_stable(),
+                "max_multiplier" => s.max_multiplier,
+                "ledger_rel_residual" => s.ledger.relative_residual(),
+            ]
+        })
+        .collect::<Vec<_>>();
+    exp.write_parquet("sweep", &mut frame(rows)?, &device.params)?;
+    let best = states
+        .iter()
+        .max_by(|a, b| a.p_dc_w.total_cmp(&b.p_dc_w))
+        .expect("a sweep has at least one point");
+    exp.number("p_dc_max_w", best.p_dc_w);
+    exp.number("p_dc_max_freq_hz", best.freq_hz);
+    let md = format!(
+        "Up-sweep of `{}` ({} interface) from {} to {} Hz in {} Hz steps at {} g rms; each point \
+         is the periodic steady state found by shooting from the previous one.\n\n- largest DC \
+         power: {} uW at {} Hz (V_DC = {} V)\n",
+        loaded.file,
+        device.interface.key(),
+        a.from,
+        a.to,
+        fmt_sig(step_hz, 3),
+        a.accel_rms_g,
+        fmt_sig(best.p_dc_w * 1e6, 4),
+        fmt_sig(best.freq_hz, 5),
+        fmt_sig(best.vdc_v, 4)
+    );
+    let mut md = md;
+    for f in &failed {
+        md.push_str(&format!("- no period-one steady state at {f}\n"));
+    }
+    exp.write_numbers_md(&md)?;
+    print!("{md}");
+    let pts = |f: &dyn Fn(&endstop::study::interface::IfSteady) -> f64| {
+        states.iter().map(|s| (s.freq_hz, f(s))).collect::<Vec<_>>()
+    };
+    let plot = LinePlot::new(
+        &format!(
+            "DC power, {} interface: {}",
+            device.interface.key(),
+            device.name
+        ),
+        "frequency [Hz]",
+        "DC power [uW]",
+        vec![Series::new(
+            "P_DC",
+            pts(&|s| s.p_dc_w * 1e6),
+            PALETTE[0],
+            Style::LinePoints,
+        )],
+    )
+    .legend(LegendPos::UpperLeft);
+    exp.write_plot(&plot)?;
+    exp.finish()
+}

@@ -1,0 +1,30 @@
+"""Nonlinear suspensions (the device file's ``[mechanics.suspension]``: ``polynomial`` or
+``bistable``; see the book's chapter "Nonlinear springs").
+
+* :func:`equilibria`: the static equilibria of the suspension with the stops' springs (the
+  wells, the barriers between them, any rest on a stop) and their stability;
+* :func:`displacement`: the displacement of a random ensemble, its density with its 95 %
+  interval across records, beside the exact stationary density where it applies (viscous
+  damping only, lossless stops), and for two wells the rate of well-to-well transitions.
+"""
+
+from . import _native
+
+
+def equilibria(device):
+    """The static equilibria of ``device``: a list of dicts with ``x_m``,
+    ``stiffness_n_per_m``, ``stable``, ``energy_j`` and ``place`` (``free``, ``upper_stop``,
+    ``lower_stop``), sorted by position."""
+    return _native.equilibria(device)
+
+
+def displacement(device, psd_g2_per_hz, reach_m, bins=80, records=8, duration_s=10.0,
+                 seed=2012):
+    """The displacement of ``records`` white-noise records of two-sided level
+    ``psd_g2_per_hz`` (g^2/Hz), read into ``bins`` bins over ``[-reach_m, reach_m]``. Keys:
+    ``x_m``, ``density_per_m``, ``density_ci95_per_m`` (arrays), ``exact_density_per_m``
+    (an array, or None where the exact law does not apply), ``x2_mean_m2``, ``transitions``,
+    ``transition_rate_per_s`` and its ``..._ci95_per_s`` (None without two wells),
+    ``wells_m``."""
+    return _native.displacement(device, float(psd_g2_per_hz), float(reach_m), int(bins),
+                                int(records), float(duration_s), int(seed))

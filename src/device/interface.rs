@@ -1,0 +1,527 @@
+//! The interface circuit between a one-load transducer (piezoelectric or electromagnetic) and
+//! what it powers: the optional `[interface]` table of a device file.
+//!
+//! | `kind` | circuit | transducer |
+//! |---|---|---|
+//! | `resistive` (the default, and the meaning of a file without the table) | the transducer's own `load_resistance_ohm` | any |
+//! | `full_bridge` | a full-wave diode bridge into a storage capacitor `storage_capacitance_f` with a DC load | piezoelectric, electromagnetic |
+//! | `parallel_sshi` | the bridge, plus an inductive switch across the piezoelectric element that inverts its voltage, `V -> -gamma V`, at each displacement extremum | piezoelectric |
+//! | `series_sshi` | the switch in series with the bridge: the element is open but at each displacement extremum, when it discharges through the inductor and the bridge into the storage | piezoelectric |
+//! | `sece` | synchronous electric charge extraction: the element is open but at each displacement extremum, when the energy on its clamped capacitance moves to the storage with an efficiency | piezoelectric |
+//!
+//! The bridge's diodes (`[interface.diode]`) are either piecewise linear, a forward drop
+//! `forward_drop_v` and an on-resistance `on_resistance_ohm` **per diode** (two conduct in
+//! series, so the conducting path has `2 V_F` and `2 R_on`), or follow the Shockley law
+//! `I = I_s (exp(V / (n V_T)) - 1)` (for comparison with a circuit simulator). The DC load
+//! (`[interface.load]`) is a resistor, a battery (a constant voltage with a series resistance),
+//! or `open` (nothing: for charging a capacitor).
+//!
+//! The switch's inversion factor is given either as `inversion_factor` (gamma in [0, 1)) or
+//! as the inductor branch's `quality_factor` Q, gamma = exp(-pi / (2 Q)) (Guyomar et al.,
+//! IEEE Trans. Ultrason. Ferroelectr. Freq. Control 52 (2005) 584). The inversion is
+//! instantaneous: the LC half-cycle, pi sqrt(L Cp), is taken as short beside the vibration's
+//! period, and its losses are what gamma says.
+//!
+//! ```toml
+//! [interface]
+//! kind = "parallel_sshi"
+//! storage_capacitance_f = 10e-6
+//! quality_factor = 3.0
+//! [interface.diode]
+//! law = "piecewise_linear"
+//! forward_drop_v = 0.2
+//! on_resistance_ohm = 0.0
+//! [interface.load]
+//! kind = "resistor"
+//! resistance_ohm = 100e3
+//! ```
+//!
+//! The electrostatic pairs have two loads with a bias between them; a bridge on each is a
+//! different circuit, which this description refuses with a named error.
+
+use serde::{Deserialize, Serialize};
+
+use super::{Checker, ParamError, Transducer};
+
+/// The bridge's diodes.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "law", rename_all = "snake_case", deny_unknown_fields)]
+pub enum Diode {
+    /// A forward drop and an on-resistance (per diode); conduction starts and stops at
+    /// located events.
+    PiecewiseLinear {
+        /// Forward drop V_F of one diode (V).
+        forward_drop_v: f64,
+        /// On-resistance of one diode (ohm); zero: ideal with a drop.
+        on_resistance_ohm: f64,
+    },
+    /// The Shockley law `I = I_s (exp(V / (n V_T)) - 1)`, smooth (no events).
+    Shockley {
+        /// Saturation current I_s (A).
+        saturation_current_a: f64,
+        /// Ideality factor n.
+        ideality: f64,
+        /// Thermal voltage V_T (V); 25.85 mV (300.15 K) when not given.
+        #[serde(default = "thermal_voltage_default")]
+        thermal_voltage_v: f64,
+    },
+}
+
+fn thermal_voltage_default() -> f64 {
+    THERMAL_VOLTAGE_V
+}
+
+/// k T / q at 27 degrees C (300.15 K), ngspice's default temperature (V).
+pub const THERMAL_VOLTAGE_V: f64 = 1.380_649e-23 * 300.15 / 1.602_176_634e-19;
+
+impl Default for Diode {
+    fn default() -> Self {
+        Diode::PiecewiseLinear {
+            forward_drop_v: 0.0,
+            on_resistance_ohm: 0.0,
+        }
+    }
+}
+
+/// What the storage capacitor feeds.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
+pub enum DcLoad {
+    /// A resistor.
+    Resistor {
+        /// Resistance (ohm).
+        resistance_ohm: f64,
+    },
+    /// A battery: a constant voltage behind a series resistance.
+    Battery {
+        /// Its voltage (V).
+        voltage_v: f64,
+        /// Its series resistance (ohm).
+        series_resistance_ohm: f64,
+    },
+    /// Nothing: the storage only charges.
+    Open,
+}
+
+/// The switch's inversion: a factor, or the quality factor of the inductor branch.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Inversion {
+    /// gamma, in [0, 1).
+    Factor(f64),
+    /// Q > 0: gamma = exp(-pi / (2 Q)).
+    QualityFactor(f64),
+}
+
+impl Inversion {
+    /// The inversion factor gamma.
+    pub fn gamma(self) -> f64 {
+        match self {
+            Inversion::Factor(g) => g,
+            Inversion::QualityFactor(q) => (-std::f64::consts::PI / (2.0 * q)).exp(),
+        }
+    }
+}
+
+/// The interface circuit (see the module docs).
+#[derive(Debug, Clone, PartialEq, Default)]
+pub enum Interface {
+    /// The transducer's own resistive load.
+    #[default]
+    Resistive,
+    /// A full-wave diode bridge into a storage capacitor and a DC load.
+    FullBridge(Rectifier),
+    /// The bridge with a parallel inverting switch.
+    ParallelSshi(Rectifier, Inversion),
+    /// The bridge behind a series inverting switch.
+    SeriesSshi(Rectifier, Inversion),
+    /// Synchronous electric charge extraction.
+    Sece {
+        /// Storage capacitance (F).
+        storage_capacitance_f: f64,
+        /// The DC load.
+        load: DcLoad,
+        /// Fraction of the extracted energy that reaches the storage.
+        efficiency: f64,
+    },
+}
+
+/// A diode bridge into a storage capacitor with a DC load.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Rectifier {
+    /// Storage capacitance C_s (F).
+    pub storage_capacitance_f: f64,
+    /// The diodes.
+    pub diode: Diode,
+    /// The DC load.
+    pub load: DcLoad,
+}
+
+/// The file form of `[interface]`: every key any kind takes, checked against the kind on
+/// conversion, so that a key of another kind is named in the error.
+#[derive(Debug, Clone, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct RawInterface {
+    kind: String,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    storage_capacitance_f: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    inversion_factor: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    quality_factor: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    efficiency: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    diode: Option<Diode>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    load: Option<DcLoad>,
+}
+
+/// The kinds, in the order of the module docs.
+pub const INTERFACE_KINDS: [&str; 5] = [
+    "resistive",
+    "full_bridge",
+    "parallel_sshi",
+    "series_sshi",
+    "sece",
+];
+
+impl RawInterface {
+    /// The file form of an interface (`None` for the default, resistive).
+    pub(crate) fn of(i: &Interface) -> Option<Self> {
+        let mut raw = RawInterface {
+            kind: i.key().to_string(),
+            ..Default::default()
+        };
+        let rect = |raw: &mut RawInterface, r: &Rectifier| {
+            raw.storage_capacitance_f = Some(r.storage_capacitance_f);
+            raw.diode = Some(r.diode.clone());
+            raw.load = Some(r.load.clone());
+        };
+        let inv = |raw: &mut RawInterface, v: &Inversion| match *v {
+            Inversion::Factor(g) => raw.inversion_factor = Some(g),
+            Inversion::QualityFactor(q) => raw.quality_factor = Some(q),
+        };
+        match i {
+            Interface::Resistive => return None,
+            Interface::FullBridge(r) => rect(&mut raw, r),
+            Interface::ParallelSshi(r, v) | Interface::SeriesSshi(r, v) => {
+                rect(&mut raw, r);
+                inv(&mut raw, v);
+            }
+            Interface::Sece {
+                storage_capacitance_f,
+                load,
+                efficiency,
+            } => {
+                raw.storage_capacitance_f = Some(*storage_capacitance_f);
+                raw.load = Some(load.clone());
+                raw.efficiency = Some(*efficiency);
+            }
+        }
+        Some(raw)
+    }
+
+    /// Converts the file form, naming any key that does not belong to the kind.
+    pub(crate) fn parse(self, c: &Checker) -> Result<Interface, ParamError> {
+        let kind = self.kind.as_str();
+        if !INTERFACE_KINDS.contains(&kind) {
+            return Err(c.message(
+                "interface.kind",
+                &format!(
+                    "unknown kind `{kind}`; the kinds are: {}",
+                    INTERFACE_KINDS.join(", ")
+                ),
+            ));
+        }
+        let takes_switch = matches!(kind, "parallel_sshi" | "series_sshi");
+        let not_taken = |field: &str| {
+            c.message(
+                &format!("interface.{field}"),
+                &format!("interface kind `{kind}` takes no `{field}`"),
+            )
+        };
+        if kind == "resistive" {
+            for (present, f) in [
+                (
+                    self.storage_capacitance_f.is_some(),
+                    "storage_capacitance_f",
+                ),
+                (self.diode.is_some(), "diode"),
+                (self.load.is_some(), "load"),
+            ] {
+                if present {
+                    return Err(not_taken(f));
+                }
+            }
+        }
+        if !takes_switch {
+            if self.inversion_factor.is_some() {
+                return Err(not_taken("inversion_factor"));
+            }
+            if self.quality_factor.is_some() {
+                return Err(not_taken("quality_factor"));
+            }
+        }
+        if kind != "sece" && self.efficiency.is_some() {
+            return Err(not_taken("efficiency"));
+        }
+        if kind == "sece" && self.diode.is_some() {
+            return Err(c.message(
+                "interface.diode",
+                "interface kind `sece` takes no `diode`: its `efficiency` covers the converter's \
+                 rectifier",
+            ));
+        }
+        if kind == "resistive" {
+            return Ok(Interface::Resistive);
+        }
+        let cs = self
+            .storage_capacitance_f
+            .ok_or_else(|| c.missing("interface.storage_capacitance_f", "the storage capacitor"))?;
+        let load = self.load.ok_or_else(|| {
+            c.missing("interface.load", "the DC load (resistor, battery or open)")
+        })?;
+        if kind == "sece" {
+            let efficiency = self.efficiency.ok_or_else(|| {
+                c.missing(
+                    "interface.efficiency",
+                    "the fraction of the extracted energy that reaches the storage",
+                )
+            })?;
+            return Ok(Interface::Sece {
+                storage_capacitance_f: cs,
+                load,
+                efficiency,
+            });
+        }
+        let rect = Rectifier {
+            storage_capacitance_f: cs,
+            diode: self.diode.unwrap_or_default(),
+            load,
+        };
+        if kind == "full_bridge" {
+            return Ok(Interface::FullBridge(rect));
+        }
+        let inversion = match (self.inversion_factor, self.quality_factor) {
+            (Some(g), None) => Inversion::Factor(g),
+            (None, Some(q)) => Inversion::QualityFactor(q),
+            (Some(_), Some(_)) => {
+                return Err(c.message(
+                    "interface.quality_factor",
+                    "give `inversion_factor` or `quality_factor`, not both",
+                ))
+            }
+            (None, None) => {
+                return Err(c.missing(
+                    "interface.inversion_factor",
+                    "the switch's inversion factor gamma (or `quality_factor`)",
+                ))
+            }
+        };
+        Ok(if kind == "parallel_sshi" {
+            Interface::ParallelSshi(rect, inversion)
+        } else {
+            Interface::SeriesSshi(rect, inversion)
+        })
+    }
+}
+
+impl Interface {
+    /// The `kind` key.
+    pub fn key(&self) -> &'static str {
+        match self {
+            Interface::Resistive => "resistive",
+            Interface::FullBridge(_) => "full_bridge",
+            Interface::ParallelSshi(..) => "parallel_sshi",
+            Interface::SeriesSshi(..) => "series_sshi",
+            Interface::Sece { .. } => "sece",
+        }
+    }
+
+    /// True for the default, the transducer's own resistive load.
+    pub fn is_resistive(&self) -> bool {
+        matches!(self, Interface::Resistive)
+    }
+
+    /// The storage capacitance (F), for every kind but `resistive`.
+    pub fn storage_capacitance_f(&self) -> Option<f64> {
+        match self {
+            Interface::Resistive => None,
+            Interface::FullBridge(r)
+            | Interface::ParallelSshi(r, _)
+            | Interface::SeriesSshi(r, _) => Some(r.storage_capacitance_f),
+            Interface::Sece {
+                storage_capacitance_f,
+                ..
+            } => Some(*storage_capacitance_f),
+        }
+    }
+
+    /// The DC load, for every kind but `resistive`.
+    pub fn load(&self) -> Option<&DcLoad> {
+        match self {
+            Interface::Resistive => None,
+            Interface::FullBridge(r)
+            | Interface::ParallelSshi(r, _)
+            | Interface::SeriesSshi(r, _) => Some(&r.load),
+            Interface::Sece { load, .. } => Some(load),
+        }
+    }
+
+    /// A copy with another DC load resistance (a battery or open load becomes a resistor);
+    /// the resistive interface is returned unchanged.
+    pub fn with_load_resistance(&self, resistance_ohm: f64) -> Self {
+        let mut i = self.clone();
+        let load = DcLoad::Resistor { resistance_ohm };
+        match &mut i {
+            Interface::Resistive => {}
+            Interface::FullBridge(r)
+            | Interface::ParallelSshi(r, _)
+            | Interface::SeriesSshi(r, _) => r.load = load,
+            Interface::Sece { load: l, .. } => *l = load,
+        }
+        i
+    }
+
+    /// Checks the values and that the transducer takes this interface.
+    pub(crate) fn validate(&self, transducer: &Transducer, c: &Checker) -> Result<(), ParamError> {
+        let rect = match self {
+            Interface::Resistive => return Ok(()),
+            Interface::FullBridge(r)
+            | Interface::ParallelSshi(r, _)
+            | Interface::SeriesSshi(r, _) => Some(r),
+            Interface::Sece { .. } => None,
+        };
+        match transducer {
+            Transducer::Piezoelectric(_) => {}
+            Transducer::Electromagnetic(em) => {
+                if !matches!(self, Interface::FullBridge(_)) {
+                    return Err(c.message(
+                        "interface.kind",
+                        &format!(
+                            "interface kind `{}` takes a piezoelectric transducer (its switch acts \
+                             on the clamped capacitance, which a coil does not have); an \
+                             electromagnetic transducer takes `resistive` or `full_bridge`",
+                            self.key()
+                        ),
+                    ));
+                }
+                let ron = match rect.map(|r| &r.diode) {
+                    Some(Diode::PiecewiseLinear {
+                        on_resistance_ohm, ..
+                    }) => *on_resistance_ohm,
+                    _ => 0.0,
+                };
+                if em.coil_inductance_h == 0.0 && em.coil_resistance_ohm + 2.0 * ron <= 0.0 {
+                    return Err(c.message(
+                        "transducer.coil_resistance_ohm",
+                        "a coil without inductance needs a resistance (or diodes with an \
+                         on-resistance) in front of a bridge: the current would be unbounded",
+                    ));
+                }
+            }
+            other => {
+                return Err(c.message(
+                    "interface.kind",
+                    &format!(
+                        "interface kind `{}` takes a one-load transducer (piezoelectric or \
+                         electromagnetic); transducer kind `{}` has two loads with a bias \
+                         between them, and a bridge on each is not modelled",
+                        self.key(),
+                        other.key()
+                    ),
+                ))
+            }
+        }
+        if transducer.load_resistance_ohm().is_finite() {
+            return Err(c.message(
+                "transducer.load_resistance_ohm",
+                &format!(
+                    "with interface kind `{}` the DC load is `interface.load`; remove the \
+                     transducer's resistive load",
+                    self.key()
+                ),
+            ));
+        }
+        c.positive(
+            "interface.storage_capacitance_f",
+            self.storage_capacitance_f().unwrap_or(f64::NAN),
+        )?;
+        match self.load() {
+            Some(DcLoad::Resistor { resistance_ohm }) => {
+                c.positive("interface.load.resistance_ohm", *resistance_ohm)?
+            }
+            Some(DcLoad::Battery {
+                voltage_v,
+                series_resistance_ohm,
+            }) => {
+                c.positive("interface.load.voltage_v", *voltage_v)?;
+                c.positive(
+                    "interface.load.series_resistance_ohm",
+                    *series_resistance_ohm,
+                )?;
+            }
+            _ => {}
+        }
+        match self {
+            Interface::ParallelSshi(_, inv) | Interface::SeriesSshi(_, inv) => match *inv {
+                Inversion::Factor(g) => c.within_closed(
+                    "interface.inversion_factor",
+                    g,
+                    0.0,
+                    1.0 - f64::EPSILON,
+                    "in [0, 1)",
+                )?,
+                Inversion::QualityFactor(q) => c.positive("interface.quality_factor", q)?,
+            },
+            Interface::Sece { efficiency, .. } => {
+                c.within_closed("interface.efficiency", *efficiency, 0.0, 1.0, "in [0, 1]")?
+            }
+            _ => {}
+        }
+        if let Some(r) = rect {
+            match r.diode {
+                Diode::PiecewiseLinear {
+                    forward_drop_v,
+                    on_resistance_ohm,
+                } => {
+                    c.non_negative("interface.diode.forward_drop_v", forward_drop_v)?;
+                    c.non_negative("interface.diode.on_resistance_ohm", on_resistance_ohm)?;
+                    if matches!(self, Interface::SeriesSshi(..)) && on_resistance_ohm != 0.0 {
+                        return Err(c.err(
+                            "interface.diode.on_resistance_ohm",
+                            on_resistance_ohm,
+                            "0 for `series_sshi` (its diodes conduct only during the \
+                             inversion, whose losses the inversion factor covers)",
+                        ));
+                    }
+                }
+                Diode::Shockley {
+                    saturation_current_a,
+                    ideality,
+                    thermal_voltage_v,
+                } => {
+                    c.positive("interface.diode.saturation_current_a", saturation_current_a)?;
+                    c.within_closed(
+                        "interface.diode.ideality",
+                        ideality,
+                        0.5,
+                        10.0,
+                        "in [0.5, 10]",
+                    )?;
+                    c.positive("interface.diode.thermal_voltage_v", thermal_voltage_v)?;
+                    if !matches!(transducer, Transducer::Piezoelectric(_))
+                        || matches!(self, Interface::SeriesSshi(..))
+                    {
+                        return Err(c.message(
+                            "interface.diode.law",
+                            "the `shockley` law is modelled for a piezoelectric element with \
+                             `full_bridge` or `parallel_sshi`; use `piecewise_linear`",
+                        ));
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+}

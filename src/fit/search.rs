@@ -1,0 +1,268 @@
+//! The search of a fit: the misfit on the branches ([`super::branch`]) or, where they cannot
+//! be identified, on the stepped sweep ([`super::model`]); the rounds of one start; and the
+//! several starts (see the parent module's docs).
+
+use super::branch::{self, SetModel};
+use super::lm::{self, levenberg_marquardt_tracked, LmResult, LmSettings, Tracked};
+use super::params::{apply, Transform};
+use super::{
+    model_values, FitError, FitSettings, FreeParam, SweepData, AGREE_REL, AGREE_SIGMA, MAX_ROUNDS,
+    STATED_COST_ABS_TOL,
+};
+use crate::device::Device;
+
+/// What every evaluation needs: the device, the data, the free parameters with their
+/// transforms, and the measured values with their weights.
+pub(super) struct Problem<'a> {
+    pub(super) device: &'a Device,
+    pub(super) data: &'a [SweepData],
+    pub(super) free: &'a [FreeParam],
+    pub(super) tr: Vec<Transform>,
+    pub(super) y: Vec<f64>,
+    pub(super) sigma: Vec<f64>,
+    /// Which measured values state their standard deviation (features always do).
+    pub(super) stated: Vec<bool>,
+}
+
+impl Problem<'_> {
+    pub(super) fn to_p(&self, u: &[f64]) -> Vec<f64> {
+        self.tr.iter().zip(u).map(|(t, &u)| t.to_p(u)).collect()
+    }
+
+    fn weighted(&self, m: &[f64]) -> Vec<f64> {
+        m.iter()
+            .zip(&self.y)
+            .zip(&self.sigma)
+            .map(|((m, y), s)| (m - y) / s)
+            .collect()
+    }
+
+    /// The branches of every data set identified afresh at `u`.
+    fn identify(&self, u: &[f64]) -> Result<Vec<SetModel>, FitError> {
+        let (d, scale) = apply(self.device, self.free, &self.to_p(u))?;
+        self.data
+            .iter()
+            .map(|ds| branch::identify(&d, scale, ds).map_err(|l| FitError::Lost(l.0)))
+            .collect()
+    }
+
+    /// The weighted residuals of the models `states` (without following them).
+    fn residuals_of(&self, states: &[SetModel]) -> Vec<f64> {
+        let m: Vec<f64> = self
+            .data
+            .iter()
+            .zip(states)
+            .flat_map(|(ds, s)| s.values(ds))
+            .collect();
+        self.weighted(&m)
+    }
+
+    /// The largest difference between two sets of weighted residuals in units of its
+    /// tolerance ([`AGREE_SIGMA`] standard deviations, or [`AGREE_REL`] of the value); at most
+    /// 1 when they agree.
+    fn disagreement(&self, a: &[f64], b: &[f64]) -> f64 {
+        a.iter()
+            .zip(b)
+            .enumerate()
+            .map(|(i, (a, b))| {
+                let tol = if self.stated[i] {
+                    AGREE_SIGMA
+                } else {
+                    AGREE_REL * self.y[i].abs() / self.sigma[i]
+                };
+                let d = (a - b).abs() / tol;
+                if d.is_nan() {
+                    f64::INFINITY
+                } else {
+                    d
+                }
+            })
+            .fold(0.0, f64::max)
+    }
+}
+
+/// The misfit on the branches, followed from the accepted point's.
+struct OnBranches<'a, 'b>(&'a Problem<'b>);
+
+impl Tracked for OnBranches<'_, '_> {
+    type State = Vec<SetModel>;
+    type Error = FitError;
+
+    fn residuals(
+        &self,
+        u: &[f64],
+        from: &Vec<SetModel>,
+    ) -> Result<(Vec<f64>, Vec<SetModel>), FitError> {
+        let pb = self.0;
+        let (d, scale) = apply(pb.device, pb.free, &pb.to_p(u))?;
+        let states = pb
+            .data
+            .iter()
+            .zip(from)
+            .map(|(ds, prev)| branch::track(&d, scale, ds, prev).map_err(|l| FitError::Lost(l.0)))
+            .collect::<Result<Vec<_>, _>>()?;
+        Ok((pb.residuals_of(&states), states))
+    }
+}
+
+/// Which model a search used.
+#[derive(Debug, Clone, PartialEq)]
+pub(super) enum Used {
+    /// The branches; `disagreement` is that of the last fresh identification (at most 1: they
+    /// agree), `None` when it failed.
+    Branches {
+        disagreement: Option<f64>,
+        rounds: usize,
+    },
+    /// The stepped sweep, because the branches could not be identified.
+    SteppedSweep { why: String },
+}
+
+/// The outcome of the search from one start.
+pub(super) struct Run {
+    pub(super) lm: LmResult,
+    pub(super) used: Used,
+    /// Evaluations of every round (the fresh identifications not counted).
+    pub(super) evaluations: usize,
+    /// Iterations of every round.
+    pub(super) iterations: usize,
+}
+
+impl Run {
+    pub(super) fn ssr(&self) -> f64 {
+        self.lm.residuals.iter().map(|r| r * r).sum()
+    }
+
+    /// True when the search converged, on branches that agree with the ones identified afresh
+    /// or on the stepped sweep (which has nothing to agree with).
+    pub(super) fn settled(&self) -> bool {
+        self.lm.stop.converged()
+            && match self.used {
+                Used::Branches { disagreement, .. } => disagreement.is_some_and(|d| d <= 1.0),
+                Used::SteppedSweep { .. } => true,
+            }
+    }
+}
+
+/// The search from `u0`: on the branches, identified there and afresh after each round while
+/// they differ; on the stepped sweep where they cannot be identified.
+pub(super) fn search_from(
+    pb: &Problem<'_>,
+    u0: &[f64],
+    settings: &LmSettings,
+) -> Result<Run, FitError> {
+    let states = match pb.identify(u0) {
+        Ok(s) => s,
+        Err(e) => return stepped(pb, u0, settings, e.to_string()),
+    };
+    let mut states = states;
+    let mut u = u0.to_vec();
+    let (mut evaluations, mut iterations) = (0, 0);
+    for round in 1..=MAX_ROUNDS {
+        let r0 = pb.residuals_of(&states);
+        let (lm, followed) =
+            levenberg_marquardt_tracked(&OnBranches(pb), &u, states, Some(r0), settings)?;
+        evaluations += lm.evaluations;
+        iterations += lm.iterations;
+        let fresh = pb.identify(&lm.u);
+        let disagreement = fresh
+            .as_ref()
+            .ok()
+            .map(|f| pb.disagreement(&pb.residuals_of(f), &pb.residuals_of(&followed)));
+        let done = disagreement.is_none_or(|d| d <= 1.0) || round == MAX_ROUNDS;
+        if done {
+            return Ok(Run {
+                lm,
+                used: Used::Branches {
+                    disagreement,
+                    rounds: round,
+                },
+                evaluations,
+                iterations,
+            });
+        }
+        states = fresh.expect("checked above");
+        u = lm.u;
+    }
+    unreachable!("the last round returns")
+}
+
+/// The search on the stepped sweep (the model of [`super::model`]).
+fn stepped(
+    pb: &Problem<'_>,
+    u0: &[f64],
+    settings: &LmSettings,
+    why: String,
+) -> Result<Run, FitError> {
+    let residuals = |u: &[f64]| -> Result<Vec<f64>, FitError> {
+        let (d, scale) = apply(pb.device, pb.free, &pb.to_p(u))?;
+        let mut m = Vec::with_capacity(pb.y.len());
+        for ds in pb.data {
+            m.extend(model_values(&d, scale, ds)?);
+        }
+        Ok(pb.weighted(&m))
+    };
+    let settings = LmSettings {
+        fd_step: settings.fd_step.max(lm::STEPPED_FD_STEP),
+        ..*settings
+    };
+    let lm = lm::levenberg_marquardt(residuals, u0, &settings)?;
+    Ok(Run {
+        evaluations: lm.evaluations,
+        iterations: lm.iterations,
+        lm,
+        used: Used::SteppedSweep { why },
+    })
+}
+
+/// The start `k` (from 1) of the Sobol sequence in the transformed box: each parameter's
+/// range with a tenth cut off at either end (a start at an end would sit where the transform
+/// is flat).
+fn sobol_start(tr: &[Transform], k: usize) -> Vec<f64> {
+    tr.iter()
+        .enumerate()
+        .map(|(d, t)| {
+            let s = f64::from(sobol_burley::sample(k as u32, d as u32, 0x5eed));
+            t.to_u_frac(0.1 + 0.8 * s)
+        })
+        .collect()
+}
+
+/// The searches of a fit: from `u0`, then, unless that one converged and fits (`fits`), from
+/// Sobol starts; the best one (converged first, then the smallest SSR) and the number of
+/// starts tried and the index of the best (0: `u0`).
+pub(super) fn search(
+    pb: &Problem<'_>,
+    u0: &[f64],
+    settings: &FitSettings,
+    all_stated: bool,
+    fits: impl Fn(f64) -> bool,
+) -> Result<(Run, usize, usize), FitError> {
+    let mut lm = settings.lm;
+    if all_stated {
+        lm.cost_abs_tol = lm.cost_abs_tol.max(STATED_COST_ABS_TOL);
+    }
+    let good = |r: &Run| r.settled() && fits(r.ssr());
+    let first = search_from(pb, u0, &lm)?;
+    if good(&first) || settings.starts <= 1 {
+        return Ok((first, 1, 0));
+    }
+    let mut best = (first, 0);
+    let mut tried = 1;
+    for k in 1..settings.starts {
+        tried += 1;
+        // A start whose model cannot be evaluated at all is skipped.
+        let Ok(run) = search_from(pb, &sobol_start(&pb.tr, k), &lm) else {
+            continue;
+        };
+        let better = (run.settled(), -run.ssr()) > (best.0.settled(), -best.0.ssr());
+        let stop = good(&run);
+        if better {
+            best = (run, k);
+        }
+        if stop {
+            break;
+        }
+    }
+    Ok((best.0, tried, best.1))
+}

@@ -1,0 +1,355 @@
+//! The objects the fit's model follows as the parameters move (see the parent module's
+//! "Misfit"): a periodic orbit at a measured frequency, the grazing orbit where a branch
+//! starts or stops touching a stop, and the fold where a branch ends. Each is found again at
+//! new parameter values by Newton's method from where it was, so that an evaluation of the
+//! misfit costs a few periods of integration per measured value instead of a sweep.
+
+use crate::drive::Sine;
+use crate::ode::Stats;
+use crate::physics::harvester::{Harvester, State};
+use crate::study::continuation::{continue_branch, ContinuationSettings, EventKind};
+use crate::study::orbit::{Forcing, Orbit, Parameter, Shooter, ShootingConfig};
+
+use super::Quantity;
+
+/// Why an object could not be followed to new parameter values (a trial of the search is then
+/// rejected, or the model falls back to the stepped sweep).
+#[derive(Debug, Clone, PartialEq)]
+pub(super) struct Lost(pub(super) String);
+
+impl<E: std::error::Error> From<E> for Lost {
+    fn from(e: E) -> Self {
+        Lost(e.to_string())
+    }
+}
+
+/// A located grazing frequency is converged when a secant step is below this (Hz, relative):
+/// far below the change a finite-difference step of the parameters causes (1e-6 to 1e-3).
+const GRAZING_REL_TOL: f64 = 1e-10;
+
+/// Tolerance of a located fold (Hz, as arclength along the branch): the fold's frequency is
+/// stationary along the branch, so its error is of the order of this squared.
+const FOLD_LOCATE_TOL_HZ: f64 = 1e-5;
+
+/// Newton iterations for an orbit followed from nearby parameter values (the default
+/// shooting settings otherwise): from a good guess Newton converges in three or four, and a
+/// branch that has ended is given up early.
+const TRACK_MAX_NEWTON: usize = 8;
+
+fn shooting() -> ShootingConfig {
+    ShootingConfig {
+        max_newton: TRACK_MAX_NEWTON,
+        ..ShootingConfig::default()
+    }
+}
+
+/// The value of a measured quantity on an orbit.
+pub(super) fn quantity_of(q: Quantity, o: &Orbit) -> f64 {
+    match q {
+        Quantity::V1RmsV => o.summary.v1_rms_v,
+        Quantity::PTotalW => o.summary.p_total_w,
+    }
+}
+
+fn forcing(freq_hz: f64, accel_rms_g: f64) -> Forcing {
+    Forcing {
+        freq_hz,
+        accel_rms_g,
+    }
+}
+
+/// The periodic orbit of `h` at `freq_hz` by Newton from `guess` (the state at drive phase
+/// `phase_rad`), with its section moved into free flight; refused unless stable (a measured
+/// steady state is stable).
+pub(super) fn stable_orbit(
+    h: &Harvester<Sine>,
+    freq_hz: f64,
+    accel_rms_g: f64,
+    phase_rad: f64,
+    guess: State,
+) -> Result<Orbit, Lost> {
+    let o = orbit(h, freq_hz, accel_rms_g, phase_rad, guess)?;
+    if !o.is_stable() {
+        return Err(Lost(format!(
+            "the orbit at {freq_hz} Hz is unstable (largest multiplier {:.4})",
+            o.max_multiplier_abs()
+        )));
+    }
+    Ok(o)
+}
+
+fn orbit(
+    h: &Harvester<Sine>,
+    freq_hz: f64,
+    accel_rms_g: f64,
+    phase_rad: f64,
+    guess: State,
+) -> Result<Orbit, Lost> {
+    let shooter = Shooter::new(h, shooting());
+    let mut stats = Stats::default();
+    let f = forcing(freq_hz, accel_rms_g);
+    let o = shooter.solve(&f, Parameter::Frequency, phase_rad, guess, &mut stats)?;
+    if shooter.section_is_free(&o) {
+        Ok(o)
+    } else {
+        Ok(shooter.reanchor(&o, Parameter::Frequency, &mut stats)?)
+    }
+}
+
+/// A grazing orbit: where the branch of the device without its stops reaches a stop. Before
+/// the first contact (and after the last) the device's orbit is that orbit, so the frequency
+/// at which its largest excursion equals the gap is where contact starts (or ends), and it
+/// moves smoothly with the parameters.
+#[derive(Debug, Clone, PartialEq)]
+pub(super) struct Grazing {
+    /// Frequency (Hz).
+    pub(super) freq_hz: f64,
+    /// The stop-free orbit's state at drive phase zero.
+    pub(super) state: State,
+    /// Slope of the grazing test (m per Hz) there, for the next secant step.
+    pub(super) slope: f64,
+}
+
+/// How far the stop-free orbit `o` reaches past the nearer stop of `h` (m; zero at grazing).
+fn past_stop(h: &Harvester<Sine>, o: &Orbit) -> f64 {
+    use crate::physics::contact::Side;
+    let s = &o.summary;
+    (s.x_upper_m - h.gap(Side::Upper)).max(-s.x_lower_m - h.gap(Side::Lower))
+}
+
+/// The stop-free orbit at `freq_hz` from `guess` (phase zero) and how far it reaches past the
+/// stop.
+fn free_test(
+    h: &Harvester<Sine>,
+    free: &Harvester<Sine>,
+    freq_hz: f64,
+    accel_rms_g: f64,
+    guess: State,
+) -> Result<(f64, State), Lost> {
+    // Without stops the section at phase zero is always in free flight: no re-anchoring.
+    let shooter = Shooter::new(free, shooting());
+    let mut stats = Stats::default();
+    let o = shooter.solve(
+        &forcing(freq_hz, accel_rms_g),
+        Parameter::Frequency,
+        0.0,
+        guess,
+        &mut stats,
+    )?;
+    Ok((past_stop(h, &o), o.state))
+}
+
+/// Secant iteration on the grazing test from (f0, g0) with slope `slope`, the stop-free orbit
+/// at f0 being `y0`; each step at most `max_step_hz`.
+fn secant(
+    h: &Harvester<Sine>,
+    accel_rms_g: f64,
+    (mut f0, mut g0, mut y0): (f64, f64, State),
+    mut slope: f64,
+    max_step_hz: f64,
+) -> Result<Grazing, Lost> {
+    let free = h.without_stops();
+    for _ in 0..40 {
+        if !(slope.is_finite() && slope != 0.0) {
+            return Err(Lost(format!("grazing near {f0} Hz: flat test")));
+        }
+        let df = (-g0 / slope).clamp(-max_step_hz, max_step_hz);
+        let f1 = f0 + df;
+        if f1 <= 0.0 {
+            return Err(Lost("grazing: frequency left the positive axis".into()));
+        }
+        let (g1, y1) = free_test(h, &free, f1, accel_rms_g, y0)
+            .map_err(|e| Lost(format!("grazing near {f0} Hz: {}", e.0)))?;
+        if g1 != g0 {
+            slope = (g1 - g0) / (f1 - f0);
+        }
+        (f0, g0, y0) = (f1, g1, y1);
+        if df.abs() <= GRAZING_REL_TOL * f1 {
+            return Ok(Grazing {
+                freq_hz: f1,
+                state: y1,
+                slope,
+            });
+        }
+    }
+    Err(Lost(format!("grazing near {f0} Hz: no convergence")))
+}
+
+/// Locates the grazing between `f_free` (where the device's orbit, from `y_free` at phase
+/// zero, does not touch a stop) and `f_other` (where it does).
+pub(super) fn locate_grazing(
+    h: &Harvester<Sine>,
+    accel_rms_g: f64,
+    f_free: f64,
+    y_free: State,
+    f_other: f64,
+) -> Result<Grazing, Lost> {
+    let free = h.without_stops();
+    let ctx = |e: Lost| {
+        Lost(format!(
+            "grazing between {f_free} and {f_other} Hz: {}",
+            e.0
+        ))
+    };
+    let (g0, y0) = free_test(h, &free, f_free, accel_rms_g, y_free).map_err(ctx)?;
+    let (g1, y1) = free_test(h, &free, f_other, accel_rms_g, y0).map_err(ctx)?;
+    let slope = (g1 - g0) / (f_other - f_free);
+    let span = (f_other - f_free).abs();
+    // Start from the end nearer the root.
+    let start = if g0.abs() <= g1.abs() {
+        (f_free, g0, y0)
+    } else {
+        (f_other, g1, y1)
+    };
+    secant(h, accel_rms_g, start, slope, span)
+}
+
+/// The grazing of `h` near `from` (its frequency at the parameters before).
+pub(super) fn track_grazing(
+    h: &Harvester<Sine>,
+    accel_rms_g: f64,
+    from: &Grazing,
+) -> Result<Grazing, Lost> {
+    let free = h.without_stops();
+    let (g0, y0) = free_test(h, &free, from.freq_hz, accel_rms_g, from.state)?;
+    secant(
+        h,
+        accel_rms_g,
+        (from.freq_hz, g0, y0),
+        from.slope,
+        0.05 * from.freq_hz,
+    )
+}
+
+/// A state from which Newton's method may find the orbit at a frequency.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) struct Guess {
+    /// Frequency (Hz).
+    pub(super) freq_hz: f64,
+    /// Drive phase of the state (rad).
+    pub(super) phase_rad: f64,
+    /// The state.
+    pub(super) state: State,
+}
+
+impl Guess {
+    pub(super) fn of(o: &Orbit) -> Self {
+        Self {
+            freq_hz: o.forcing.freq_hz,
+            phase_rad: o.phase_rad,
+            state: o.state,
+        }
+    }
+}
+
+/// A fold that ends a branch in the sweep's direction: the fold orbit, and states of the
+/// branch before it (in the sweep's order) from which the next location starts.
+#[derive(Debug, Clone, PartialEq)]
+pub(super) struct Fold {
+    /// The orbit at the fold.
+    pub(super) orbit: Orbit,
+    /// States of the branch before the fold, in the sweep's order.
+    pub(super) before: Vec<Guess>,
+    /// +1: the fold ends an up-sweep's branch; -1: a down-sweep's.
+    pub(super) dir: f64,
+}
+
+impl Fold {
+    /// Frequency (Hz).
+    pub(super) fn freq_hz(&self) -> f64 {
+        self.orbit.forcing.freq_hz
+    }
+
+    /// True when `freq_hz` lies beyond the fold in the sweep's direction (where the branch
+    /// before it does not exist).
+    pub(super) fn beyond(&self, freq_hz: f64) -> bool {
+        (freq_hz - self.freq_hz()) * self.dir >= 0.0
+    }
+
+    /// The state before the fold nearest `freq_hz` (a Newton guess).
+    pub(super) fn nearest(&self, freq_hz: f64) -> Guess {
+        self.before
+            .iter()
+            .copied()
+            .min_by(|a, b| {
+                (a.freq_hz - freq_hz)
+                    .abs()
+                    .total_cmp(&(b.freq_hz - freq_hz).abs())
+            })
+            .unwrap_or(Guess::of(&self.orbit))
+    }
+}
+
+/// Starts tried, each further from the old fold, before a fold is given up as lost.
+const FOLD_TRIES: usize = 4;
+
+/// Follows the branch of `h` in the direction `dir` until it folds back, no further than
+/// `limit_hz`, with parameter steps of at most `max_step_hz`, from the first of the states
+/// `before` (in the sweep's order) at least `max_step_hz` short of `near_hz` whose stable
+/// orbit Newton finds (trying earlier ones while it does not); returns the first fold at
+/// which the branch loses stability (away from a grazing corner).
+pub(super) fn locate_fold(
+    h: &Harvester<Sine>,
+    accel_rms_g: f64,
+    before: &[Guess],
+    near_hz: f64,
+    dir: f64,
+    limit_hz: f64,
+    max_step_hz: f64,
+) -> Result<Fold, Lost> {
+    let candidates: Vec<usize> = (0..before.len())
+        .rev()
+        .filter(|&i| (near_hz - before[i].freq_hz) * dir >= max_step_hz)
+        .take(FOLD_TRIES)
+        .collect();
+    let mut last_err = Lost(format!("fold: no state a step before {near_hz} Hz"));
+    for i in candidates {
+        let g = &before[i];
+        match fold_from(h, accel_rms_g, g, limit_hz, max_step_hz) {
+            Ok((orbit, points)) => {
+                let mut kept: Vec<Guess> = before[..i].to_vec();
+                kept.extend(points);
+                return Ok(Fold {
+                    orbit,
+                    before: kept,
+                    dir,
+                });
+            }
+            Err(e) => last_err = e,
+        }
+    }
+    Err(last_err)
+}
+
+/// The fold ahead of the stable orbit Newton finds from `g`, and the branch's stable states
+/// before it.
+fn fold_from(
+    h: &Harvester<Sine>,
+    accel_rms_g: f64,
+    g: &Guess,
+    limit_hz: f64,
+    max_step_hz: f64,
+) -> Result<(Orbit, Vec<Guess>), Lost> {
+    let f_start = g.freq_hz;
+    let ctx = |e: Lost| Lost(format!("fold from {f_start} Hz: {}", e.0));
+    let first = stable_orbit(h, f_start, accel_rms_g, g.phase_rad, g.state).map_err(ctx)?;
+    let mut settings = ContinuationSettings::frequency(f_start, limit_hz, max_step_hz);
+    settings.locate_tol = FOLD_LOCATE_TOL_HZ;
+    let branch = continue_branch(h, first, &settings, |_| {}).map_err(|e| ctx(e.into()))?;
+    let Some(fold) = branch
+        .events
+        .iter()
+        .find(|e| e.kind == EventKind::Fold && !e.at_grazing && e.stable_before)
+    else {
+        return Err(Lost(format!(
+            "no fold between {f_start} and {limit_hz} Hz on the branch"
+        )));
+    };
+    let points = branch.points[..=fold.after_point]
+        .iter()
+        .map(|p| &p.orbit)
+        .filter(|o| o.is_stable())
+        .map(Guess::of)
+        .collect();
+    Ok((fold.orbit.clone(), points))
+}

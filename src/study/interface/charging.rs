@@ -1,0 +1,233 @@
+//! Charging the storage: the time for its voltage to go from a start value to a target under a
+//! drive (a sine, a noise record, a measured record), with the voltage sampled on the way.
+//!
+//! # How the drive starts
+//! The harvester starts at rest (x = v = 0, the element discharged) with the storage at the
+//! start voltage, and the drive starts at t = 0 at its phase zero, multiplied by a linear
+//! ramp from 0 to 1 over `ramp_s` seconds (zero: the drive starts at once). A drive that starts
+//! at once excites a transient whose first peaks can exceed the steady response; without a
+//! load the storage keeps the highest voltage a peak charged it to, so the reachable voltage
+//! and the time to a target depend on the ramp, and every result states it.
+//!
+//! # Out of reach
+//! Without a load the storage approaches a limit (the element's open-circuit peak less the
+//! diodes' drop, for a plain bridge). The charging integrates in blocks and, once the rise per
+//! block shrinks geometrically, extrapolates the limit from the last three block ends
+//! (Aitken's delta-squared); a target above it ends in [`ChargeError::OutOfReach`] with the
+//! estimate, and a run that has not reached the target by `t_max_s` ends in
+//! [`ChargeError::NotReached`]. Neither hangs.
+
+use thiserror::Error;
+
+use crate::device::Device;
+use crate::drive::Excitation;
+use crate::ode::{Dopri5, SolverError};
+use crate::physics::harvester::State;
+use crate::physics::interface::Interfaced;
+
+/// A drive multiplied by a linear ramp from 0 at t = 0 to 1 at `ramp_s`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Ramped<E> {
+    /// The drive.
+    pub inner: E,
+    /// Ramp duration (s); zero: none.
+    pub ramp_s: f64,
+}
+
+impl<E: Excitation> Excitation for Ramped<E> {
+    #[inline]
+    fn accel(&self, t: f64) -> f64 {
+        let k = if self.ramp_s > 0.0 {
+            (t / self.ramp_s).min(1.0)
+        } else {
+            1.0
+        };
+        k * self.inner.accel(t)
+    }
+
+    fn next_breakpoint(&self, t: f64) -> f64 {
+        let b = self.inner.next_breakpoint(t);
+        if self.ramp_s > t {
+            b.min(self.ramp_s)
+        } else {
+            b
+        }
+    }
+}
+
+/// Settings of a charging run.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ChargeSettings {
+    /// Storage voltage at the start (V).
+    pub start_v: f64,
+    /// Target storage voltage (V).
+    pub target_v: f64,
+    /// The drive's ramp (s); see the module docs.
+    pub ramp_s: f64,
+    /// Longest simulated time (s).
+    pub t_max_s: f64,
+    /// Interval of the sampled storage voltage (s).
+    pub sample_s: f64,
+    /// Length of a block, between progress reports and reach checks (s).
+    pub block_s: f64,
+    /// Integrator relative tolerance.
+    pub rtol: f64,
+}
+
+/// A charging run's result.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ChargeRun {
+    /// Time at which the storage reached the target (s).
+    pub time_to_target_s: f64,
+    /// Sample times (s).
+    pub t_s: Vec<f64>,
+    /// Storage voltage at the sample times (V).
+    pub vs_v: Vec<f64>,
+    /// Energy in the storage at the target minus at the start (J).
+    pub stored_j: f64,
+}
+
+/// A charging run that failed.
+#[derive(Debug, Error, Clone, PartialEq)]
+pub enum ChargeError {
+    /// The device has no interface circuit.
+    #[error("device `{0}` has a resistive load, not an interface circuit with a storage")]
+    Resistive(String),
+    /// The target is at or below the start.
+    #[error("charging target {target_v} V is not above the start voltage {start_v} V")]
+    TargetBelowStart {
+        /// Target (V).
+        target_v: f64,
+        /// Start (V).
+        start_v: f64,
+    },
+    /// The storage approaches a limit below the target.
+    #[error(
+        "charging target {target_v} V is out of reach: the storage approaches {limit_v:.4} V \
+         under this drive (reached {reached_v:.4} V after {t_s:.3} s)"
+    )]
+    OutOfReach {
+        /// Target (V).
+        target_v: f64,
+        /// Extrapolated limit (V).
+        limit_v: f64,
+        /// Reached (V).
+        reached_v: f64,
+        /// Time simulated (s).
+        t_s: f64,
+    },
+    /// The target was not reached within the longest time.
+    #[error(
+        "charging target {target_v} V not reached within {t_max_s} s (reached {reached_v:.4} V)"
+    )]
+    NotReached {
+        /// Target (V).
+        target_v: f64,
+        /// Longest time (s).
+        t_max_s: f64,
+        /// Reached (V).
+        reached_v: f64,
+    },
+    /// The integrator failed.
+    #[error("integration failed: {0}")]
+    Solver(#[from] SolverError),
+    /// The circuit cannot be integrated (see [`super::InterfaceError::Stiff`]).
+    #[error("{0}")]
+    Circuit(#[from] super::InterfaceError),
+}
+
+/// Charges the storage of `device` under `drive` (see the module docs); `progress` gets the
+/// time and storage voltage at the end of each block.
+pub fn charge<E: Excitation + Clone>(
+    device: &Device,
+    drive: E,
+    s: &ChargeSettings,
+    mut progress: impl FnMut(f64, f64),
+) -> Result<ChargeRun, ChargeError> {
+    if s.target_v <= s.start_v {
+        return Err(ChargeError::TargetBelowStart {
+            target_v: s.target_v,
+            start_v: s.start_v,
+        });
+    }
+    let model = Interfaced::new(
+        device,
+        Ramped {
+            inner: drive,
+            ramp_s: s.ramp_s,
+        },
+    )
+    .ok_or_else(|| ChargeError::Resistive(device.name.clone()))?;
+    super::check_stiffness(device, &model)?;
+    let y0 = State::new(0.0, 0.0, 0.0, s.start_v);
+    let mut ode = Dopri5::new(0.0, y0, model.mode_of(&y0), model.solver_options(s.rtol));
+    let (mut t_s, mut vs_v) = (vec![0.0], vec![s.start_v]);
+    let mut next_sample = s.sample_s;
+    let mut hit: Option<f64> = None;
+    let mut ends: Vec<f64> = Vec::new();
+    let mut t_end = 0.0;
+    while hit.is_none() {
+        if t_end >= s.t_max_s {
+            return Err(ChargeError::NotReached {
+                target_v: s.target_v,
+                t_max_s: s.t_max_s,
+                reached_v: ode.y()[3],
+            });
+        }
+        t_end = (t_end + s.block_s).min(s.t_max_s);
+        let target = s.target_v;
+        // Stops at the end of the step that reaches the target; the crossing is found on the
+        // step's dense output.
+        let mut stop_at: Option<f64> = None;
+        let sample = s.sample_s;
+        ode.integrate(&model, t_end, |st, _| {
+            while next_sample <= st.t1() {
+                t_s.push(next_sample);
+                vs_v.push(st.at(next_sample)[3]);
+                next_sample += sample;
+            }
+            if stop_at.is_none() && st.y1[3] >= target {
+                let (mut a, mut b) = (st.t0, st.t1());
+                for _ in 0..60 {
+                    let m = 0.5 * (a + b);
+                    if st.at(m)[3] >= target {
+                        b = m;
+                    } else {
+                        a = m;
+                    }
+                }
+                stop_at = Some(b);
+            }
+        })?;
+        if let Some(t) = stop_at {
+            hit = Some(t);
+            break;
+        }
+        let v = ode.y()[3];
+        progress(t_end, v);
+        ends.push(v);
+        if let [.., a, b, c] = ends[..] {
+            let (d1, d2) = (b - a, c - b);
+            // Past the ramp, with the rise shrinking geometrically: extrapolate the limit.
+            if t_end > s.ramp_s + 3.0 * s.block_s && d1 > 0.0 && d2 > 0.0 && d2 < 0.9 * d1 {
+                let limit = c + d2 * d2 / (d1 - d2);
+                if limit < target {
+                    return Err(ChargeError::OutOfReach {
+                        target_v: target,
+                        limit_v: limit,
+                        reached_v: c,
+                        t_s: t_end,
+                    });
+                }
+            }
+        }
+    }
+    let t_hit = hit.unwrap_or(t_end);
+    let cs = model.circuit.cs;
+    Ok(ChargeRun {
+        time_to_target_s: t_hit,
+        t_s,
+        vs_v,
+        stored_j: 0.5 * cs * (s.target_v * s.target_v - s.start_v * s.start_v),
+    })
+}

@@ -1,0 +1,332 @@
+//! Studies of a harvester with an interface circuit ([`crate::physics::interface`]): the
+//! periodic steady state under a sine, found by shooting on the period map, with its DC voltage
+//! and power, its stability and its energy ledger ([`steady_state`]); sweeps of it over
+//! frequency or load ([`sweep`]); the charging of the storage ([`charging`]); and random or
+//! measured records and their ensembles ([`record`]).
+//!
+//! # Why shooting
+//! The storage capacitor and its load have a time constant `R_L C_s` that can be hundreds of
+//! the drive's periods. Integrating until two successive periods differ by little stops far
+//! from the steady state when the approach is that slow; Newton's method on the period map
+//! `P(y) - y = 0` does not care how slow the approach is. The map's Jacobian is taken by
+//! forward differences (one period per state component), and the converged orbit's Floquet
+//! multipliers are the eigenvalues of that Jacobian. The section is at the drive's phase zero.
+
+pub mod charging;
+pub mod record;
+pub mod sweep;
+
+use nalgebra::{Matrix4, Vector4};
+use thiserror::Error;
+
+use crate::device::Device;
+use crate::drive::Sine;
+use crate::ode::{Dopri5, Observer, SolverError, Stats, Step};
+use crate::physics::harvester::State;
+use crate::physics::interface::{
+    audit_start, IfMode, InterfaceAudit, InterfaceLedger, Interfaced, IF_AUDIT_DIM,
+};
+use crate::study::orbit::multipliers;
+
+/// A failed study of a device with an interface.
+#[derive(Debug, Error, Clone, PartialEq)]
+pub enum InterfaceError {
+    /// The device's interface is resistive: the resistive studies apply.
+    #[error("device `{0}` has a resistive load, not an interface circuit")]
+    Resistive(String),
+    /// The storage has no load: it only charges, and there is no periodic steady state.
+    #[error(
+        "device `{0}`: the storage has an open load (interface.load.kind = \"open\"), so it \
+         charges towards the open-circuit limit and has no periodic steady state; use the \
+         charging study"
+    )]
+    OpenLoad(String),
+    /// The integrator failed.
+    #[error("integration failed: {0}")]
+    Solver(#[from] SolverError),
+    /// A conduction mode is too stiff for the explicit integrator: its time constant is below
+    /// [`STIFF_LIMIT`] of the suspension's period.
+    #[error(
+        "device `{name}`: a conduction mode's time constant {tau_s:e} s is below {STIFF_LIMIT:e} \
+         of the suspension's period {period_s:e} s: the integrator would take more than \
+         1e5 steps a period; use interface.diode.on_resistance_ohm = 0 (ideal with a drop) or \
+         a larger one"
+    )]
+    Stiff {
+        /// The device.
+        name: String,
+        /// The time constant (s).
+        tau_s: f64,
+        /// The suspension's period (s).
+        period_s: f64,
+    },
+    /// The drive could not be made.
+    #[error("drive: {0}")]
+    Drive(String),
+    /// Newton's method did not converge.
+    #[error(
+        "shooting did not converge in {iterations} Newton steps (scaled residual {residual:e}, \
+         tolerance {tol:e})"
+    )]
+    NoConvergence {
+        /// Newton steps taken.
+        iterations: usize,
+        /// Last scaled residual.
+        residual: f64,
+        /// Tolerance.
+        tol: f64,
+    },
+}
+
+/// The smallest conduction time constant accepted, relative to the suspension's period.
+pub const STIFF_LIMIT: f64 = 1e-5;
+
+/// Refuses a device whose conduction modes are too stiff (see [`InterfaceError::Stiff`]).
+pub fn check_stiffness<E: crate::drive::Excitation>(
+    device: &Device,
+    model: &Interfaced<E>,
+) -> Result<(), InterfaceError> {
+    let period_s = 2.0 * std::f64::consts::PI / device.suspension_omega_rad_s();
+    let tau_s = model.circuit.conduction_time_constant_s();
+    if tau_s < STIFF_LIMIT * period_s {
+        return Err(InterfaceError::Stiff {
+            name: device.name.clone(),
+            tau_s,
+            period_s,
+        });
+    }
+    Ok(())
+}
+
+/// Settings of the steady-state search.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SteadySettings {
+    /// Integrator relative tolerance.
+    pub rtol: f64,
+    /// Periods integrated from the start before Newton's method.
+    pub transient_periods: usize,
+    /// Most Newton steps.
+    pub max_newton: usize,
+    /// Convergence: the largest scaled component of `P(y) - y`.
+    pub tol: f64,
+}
+
+impl Default for SteadySettings {
+    fn default() -> Self {
+        Self {
+            rtol: 1e-9,
+            transient_periods: 30,
+            max_newton: 12,
+            tol: 1e-7,
+        }
+    }
+}
+
+/// The periodic steady state of a device with an interface, measured over one period.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct IfSteady {
+    /// Drive frequency (Hz).
+    pub freq_hz: f64,
+    /// State at the section (phase zero).
+    pub state: [f64; 4],
+    /// Mean storage voltage over the period (V).
+    pub vdc_v: f64,
+    /// Mean power into the DC load or battery (W).
+    pub p_dc_w: f64,
+    /// Peak-to-peak storage voltage ripple (V).
+    pub ripple_v: f64,
+    /// Amplitude of the displacement's fundamental (m).
+    pub x1_m: f64,
+    /// Largest |x| (m).
+    pub x_peak_m: f64,
+    /// Relative RMS of the displacement's harmonics beyond the fundamental: its distortion.
+    pub x_distortion: f64,
+    /// True when the mass touched a stop.
+    pub contact: bool,
+    /// Largest Floquet multiplier modulus.
+    pub max_multiplier: f64,
+    /// Newton steps taken.
+    pub newton_steps: usize,
+    /// Final scaled residual of `P(y) - y`.
+    pub residual: f64,
+    /// The energy ledger over the measured period (J).
+    pub ledger: InterfaceLedger,
+}
+
+impl IfSteady {
+    /// True when every Floquet multiplier is inside the unit circle (to 1e-6).
+    pub fn is_stable(&self) -> bool {
+        self.max_multiplier < 1.0 + 1e-6
+    }
+}
+
+/// Integrates one period from (y, its start mode) at t0.
+fn period_map(
+    model: &Interfaced<Sine>,
+    y: &State,
+    t0: f64,
+    period: f64,
+    rtol: f64,
+) -> Result<(State, IfMode, Stats), SolverError> {
+    let mut ode = Dopri5::new(t0, *y, model.mode_of(y), model.solver_options(rtol));
+    ode.integrate(model, t0 + period, |_, _| {})?;
+    Ok((ode.y(), ode.mode(), ode.stats()))
+}
+
+/// Observes a measured period.
+struct Meter {
+    t0: f64,
+    w: f64,
+    vs: f64,
+    vs_min: f64,
+    vs_max: f64,
+    c1: f64,
+    s1: f64,
+    x0: f64,
+    x2: f64,
+    x_peak: f64,
+    contact: bool,
+}
+
+impl Observer<IF_AUDIT_DIM, IfMode> for Meter {
+    fn step(&mut self, st: &Step<IF_AUDIT_DIM>, m: IfMode) {
+        let (t0, w) = (self.t0, self.w);
+        self.vs += st.integrate(|z| z[3]);
+        self.x0 += st.integrate(|z| z[0]);
+        self.x2 += st.integrate(|z| z[0] * z[0]);
+        // Fundamental by Gauss-Legendre on the dense output, the phase at the nodes.
+        for (th, wt) in crate::ode::GAUSS_LEGENDRE_3 {
+            let t = st.t0 + th * st.h;
+            let x = st.at_theta(th)[0];
+            self.c1 += wt * st.h * x * (w * (t - t0)).cos();
+            self.s1 += wt * st.h * x * (w * (t - t0)).sin();
+        }
+        for z in [st.y1, st.at_theta(0.5)] {
+            self.x_peak = self.x_peak.max(z[0].abs());
+            self.vs_min = self.vs_min.min(z[3]);
+            self.vs_max = self.vs_max.max(z[3]);
+        }
+        self.contact |= m.contact.in_contact();
+    }
+}
+
+/// The steady state of `device` under `sine`, starting from `start` at phase zero (rest, with
+/// the storage at some voltage, or a neighbouring steady state); see the module docs for the
+/// method.
+pub fn steady_state(
+    device: &Device,
+    sine: Sine,
+    start: &State,
+    settings: &SteadySettings,
+) -> Result<IfSteady, InterfaceError> {
+    let model = Interfaced::new(device, sine)
+        .ok_or_else(|| InterfaceError::Resistive(device.name.clone()))?;
+    check_stiffness(device, &model)?;
+    if matches!(model.circuit.sink, crate::physics::interface::Sink::Open) {
+        return Err(InterfaceError::OpenLoad(device.name.clone()));
+    }
+    let period = sine.period_s();
+    let sc = model.scales();
+    let mut y = *start;
+    let mut ode = Dopri5::new(
+        0.0,
+        y,
+        model.mode_of(&y),
+        model.solver_options(settings.rtol),
+    );
+    ode.integrate(
+        &model,
+        settings.transient_periods as f64 * period,
+        |_, _| {},
+    )?;
+    y = ode.y();
+    let scaled = |d: &State| d.component_div(&sc);
+    let mut newton_steps = 0;
+    let (mut residual, mut jac);
+    loop {
+        let (p, _, _) = period_map(&model, &y, 0.0, period, settings.rtol)?;
+        let f = scaled(&(p - y));
+        residual = f.amax();
+        // The Jacobian of the scaled map, by forward differences.
+        jac = Matrix4::<f64>::zeros();
+        for c in 0..4 {
+            let e = 1e-6 * sc[c];
+            let mut yp = y;
+            yp[c] += e;
+            let (pp, _, _) = period_map(&model, &yp, 0.0, period, settings.rtol)?;
+            jac.set_column(c, &(scaled(&(pp - p)) / 1e-6));
+        }
+        if residual < settings.tol {
+            break;
+        }
+        if newton_steps >= settings.max_newton {
+            return Err(InterfaceError::NoConvergence {
+                iterations: newton_steps,
+                residual,
+                tol: settings.tol,
+            });
+        }
+        let a = jac - Matrix4::identity();
+        let dy: Vector4<f64> = match a.lu().solve(&(-f)) {
+            Some(d) => d,
+            None => -f,
+        };
+        // A damped step: halve until the residual falls (at most 6 halvings).
+        let mut lambda = 1.0;
+        let mut next = y + dy.component_mul(&sc) * lambda;
+        for _ in 0..6 {
+            let (pn, _, _) = period_map(&model, &next, 0.0, period, settings.rtol)?;
+            if scaled(&(pn - next)).amax() < residual {
+                break;
+            }
+            lambda *= 0.5;
+            next = y + dy.component_mul(&sc) * lambda;
+        }
+        y = next;
+        newton_steps += 1;
+    }
+    let max_multiplier = multipliers(&jac)
+        .map(|m| m.iter().map(|c| c.norm()).fold(0.0, f64::max))
+        .unwrap_or(f64::NAN);
+    // Measure one period with the audit.
+    let audit = InterfaceAudit(model.clone());
+    let z0 = audit_start(&y);
+    let mode0 = model.mode_of(&y);
+    let mut ode = Dopri5::new(0.0, z0, mode0, audit.solver_options(settings.rtol));
+    let mut m = Meter {
+        t0: 0.0,
+        w: 2.0 * std::f64::consts::PI / period,
+        vs: 0.0,
+        vs_min: f64::INFINITY,
+        vs_max: f64::NEG_INFINITY,
+        c1: 0.0,
+        s1: 0.0,
+        x0: 0.0,
+        x2: 0.0,
+        x_peak: y[0].abs(),
+        contact: mode0.contact.in_contact(),
+    };
+    ode.integrate_observed(&audit, period, &mut m)?;
+    let ledger = audit.ledger(mode0, &z0, ode.mode(), &ode.y());
+    let x1 = 2.0 / period * m.c1.hypot(m.s1);
+    let x_rms2 = m.x2 / period - (m.x0 / period).powi(2);
+    let harmonics = (x_rms2 - 0.5 * x1 * x1).max(0.0);
+    Ok(IfSteady {
+        freq_hz: sine.freq_hz,
+        state: [y[0], y[1], y[2], y[3]],
+        vdc_v: m.vs / period,
+        p_dc_w: ledger.dc_load / period,
+        ripple_v: m.vs_max - m.vs_min,
+        x1_m: x1,
+        x_peak_m: m.x_peak,
+        x_distortion: (harmonics / (0.5 * x1 * x1)).sqrt(),
+        contact: m.contact,
+        max_multiplier,
+        newton_steps,
+        residual,
+        ledger,
+    })
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,274 @@
+//! The interface circuits: their checks against the closed forms (the validation chapter's
+//! rows), the energy ledger of every interface, and bad input. Release build, 2-core machine:
+//! about 2 s in all.
+
+use endstop::device::{Device, ParamError};
+use endstop::drive::Sine;
+use endstop::ode::Dopri5;
+use endstop::physics::harvester::State;
+use endstop::physics::interface::{audit_start, InterfaceAudit, Interfaced};
+use endstop::validation::interfaces::{coupling_checks, coupling_rows, weak_coupling_checks};
+use endstop::validation::Check;
+
+fn root() -> std::path::PathBuf {
+    std::path::Path::new(env!("CARGO_MANIFEST_DIR")).to_path_buf()
+}
+
+fn load(rel: &str) -> Device {
+    let text = std::fs::read_to_string(root().join(rel)).unwrap();
+    Device::from_toml_str(&text, rel).unwrap_or_else(|e| panic!("{rel}: {e}"))
+}
+
+fn assert_all(checks: &[Check]) {
+    assert!(!checks.is_empty(), "no checks");
+    for c in checks {
+        eprintln!(
+            "{} | {} | theirs {:e} | ours {:e} | difference {:e} (tolerance {:e})",
+            c.reference,
+            c.quantity,
+            c.theirs,
+            c.ours,
+            c.difference(),
+            c.tolerance
+        );
+    }
+    for c in checks {
+        assert!(
+            c.passes(),
+            "{}: {} outside {}",
+            c.quantity,
+            c.difference(),
+            c.tolerance
+        );
+    }
+}
+
+/// Standard bridge, parallel and series SSHI and SECE against their closed forms.
+#[test]
+fn closed_forms_in_the_weakly_coupled_limit() {
+    let d = load("data/validation/piezo_bridge.toml");
+    assert_all(&weak_coupling_checks(&d).unwrap());
+}
+
+/// The uncoupled closed form's difference shrinks with the coupling; the first-harmonic
+/// balance holds at every coupling.
+#[test]
+fn coupling_shrinks_the_difference_and_the_balance_holds() {
+    let d = load("data/validation/piezo_bridge.toml");
+    let rows = coupling_rows(&d).unwrap();
+    for r in &rows {
+        eprintln!("{r:?}");
+    }
+    assert_all(&coupling_checks(&rows));
+}
+
+/// A device text: the example cantilever's mechanics with a stop, and the given transducer and
+/// interface tables.
+fn text(transducer: &str, interface: &str) -> String {
+    format!(
+        r#"
+name = "t"
+params = "test"
+description = "test"
+[mechanics]
+mass_kg = 5e-3
+stiffness_n_per_m = 2842.0
+damping_n_s_per_m = 0.0754
+[stops.upper]
+gap_m = 0.1e-3
+law = "linear"
+stiffness_n_per_m = 28420.0
+damping_n_s_per_m = 0.5
+{transducer}
+{interface}
+"#
+    )
+}
+
+const PIEZO: &str = r#"[transducer]
+kind = "piezoelectric"
+coupling_n_per_v = 2.67e-3
+capacitance_f = 50e-9"#;
+
+const COIL: &str = r#"[transducer]
+kind = "electromagnetic"
+transduction_n_per_a = 5.0
+coil_resistance_ohm = 400.0
+coil_inductance_h = 1e-3"#;
+
+fn bridge(kind: &str, extra: &str, diode: &str, load: &str) -> String {
+    format!(
+        "[interface]\nkind = \"{kind}\"\nstorage_capacitance_f = 1e-6\n{extra}\n{diode}\n{load}\n"
+    )
+}
+
+const PWL: &str =
+    "[interface.diode]\nlaw = \"piecewise_linear\"\nforward_drop_v = 0.2\non_resistance_ohm = 0.0";
+const PWL_RON: &str = "[interface.diode]\nlaw = \"piecewise_linear\"\nforward_drop_v = 0.2\non_resistance_ohm = 500.0";
+const SHOCKLEY: &str =
+    "[interface.diode]\nlaw = \"shockley\"\nsaturation_current_a = 1e-9\nideality = 1.5";
+const RES: &str = "[interface.load]\nkind = \"resistor\"\nresistance_ohm = 50e3";
+const BAT: &str =
+    "[interface.load]\nkind = \"battery\"\nvoltage_v = 3.0\nseries_resistance_ohm = 1e3";
+
+/// Over 20 periods from rest, at a drive that strikes the stop, the ledger of every interface
+/// closes to the integrator's tolerance: drive = damping + contact + coil + diodes + switch +
+/// DC load + stored.
+#[test]
+fn the_energy_ledger_closes_for_every_interface() {
+    let cases = [
+        (
+            "full bridge",
+            text(PIEZO, &bridge("full_bridge", "", PWL, RES)),
+        ),
+        (
+            "full bridge, R_on",
+            text(PIEZO, &bridge("full_bridge", "", PWL_RON, RES)),
+        ),
+        (
+            "full bridge, Shockley",
+            text(PIEZO, &bridge("full_bridge", "", SHOCKLEY, RES)),
+        ),
+        (
+            "full bridge, battery",
+            text(PIEZO, &bridge("full_bridge", "", PWL, BAT)),
+        ),
+        (
+            "parallel SSHI",
+            text(
+                PIEZO,
+                &bridge("parallel_sshi", "quality_factor = 3.0", PWL, RES),
+            ),
+        ),
+        (
+            "series SSHI",
+            text(
+                PIEZO,
+                &bridge("series_sshi", "inversion_factor = 0.6", PWL, RES),
+            ),
+        ),
+        (
+            "SECE",
+            text(PIEZO, &bridge("sece", "efficiency = 0.8", "", RES)),
+        ),
+        (
+            "coil, full bridge",
+            text(COIL, &bridge("full_bridge", "", PWL, RES)),
+        ),
+        (
+            "coil without inductance, full bridge",
+            text(
+                &COIL.replace("1e-3", "0.0"),
+                &bridge("full_bridge", "", PWL, RES),
+            ),
+        ),
+    ];
+    for (name, t) in cases {
+        let d = Device::from_toml_str(&t, name).unwrap_or_else(|e| panic!("{name}: {e}"));
+        let f = d.suspension_omega_rad_s() / (2.0 * std::f64::consts::PI);
+        let model = Interfaced::new(&d, Sine::from_rms_g(1.0, f)).unwrap();
+        let audit = InterfaceAudit(model.clone());
+        let y0 = State::zeros();
+        let z0 = audit_start(&y0);
+        let mode0 = model.mode_of(&y0);
+        let mut ode = Dopri5::new(0.0, z0, mode0, audit.solver_options(1e-9));
+        ode.integrate(&audit, 20.0 / f, |_, _| {}).unwrap();
+        let l = audit.ledger(mode0, &z0, ode.mode(), &ode.y());
+        eprintln!(
+            "{name}: {l:?} relative residual {:e}",
+            l.relative_residual()
+        );
+        assert!(l.contact > 0.0, "{name}: the drive must strike the stop");
+        assert!(l.dc_load.abs() > 0.0, "{name}: nothing reached the load");
+        // rtol 1e-9 over 20 periods with events: 1e-6 leaves room for the error's growth.
+        assert!(l.relative_residual().abs() < 1e-6, "{name}: {l:?}");
+    }
+}
+
+fn bad(t: &str) -> ParamError {
+    Device::from_toml_str(t, "bad.toml").unwrap_err()
+}
+
+/// Bad interfaces end in errors naming the file, the field and the valid range.
+#[test]
+fn bad_interfaces_are_named_errors() {
+    let cases: [(String, &str); 8] = [
+        (
+            text(PIEZO, &bridge("full_bridge", "", &PWL.replace("0.2", "-0.2"), RES)),
+            "interface.diode.forward_drop_v",
+        ),
+        (
+            text(PIEZO, &bridge("parallel_sshi", "inversion_factor = 1.0", PWL, RES)),
+            "interface.inversion_factor",
+        ),
+        (
+            text(PIEZO, &bridge("full_bridge", "", PWL, RES).replace("1e-6", "0.0")),
+            "interface.storage_capacitance_f",
+        ),
+        (
+            text(PIEZO, &bridge("full_bridge", "", PWL, &BAT.replace("3.0", "-1.0"))),
+            "interface.load.voltage_v",
+        ),
+        (
+            text(COIL, &bridge("parallel_sshi", "quality_factor = 3.0", PWL, RES)),
+            "interface.kind",
+        ),
+        (
+            text(
+                "[transducer]\nkind = \"gap_closing_pair\"\nc0_f = 1e-12\nelectrode_gap_m = 1e-3\ncp_f = 0.0\nload_resistance_ohm = 1e6\nload_capacitance_f = 0.0\nbias_v = 1.0",
+                &bridge("full_bridge", "", PWL, RES),
+            ),
+            "interface.kind",
+        ),
+        (
+            text(&format!("{PIEZO}\nload_resistance_ohm = 1e3"), &bridge("full_bridge", "", PWL, RES)),
+            "transducer.load_resistance_ohm",
+        ),
+        (text(PIEZO, ""), "transducer.load_resistance_ohm"),
+    ];
+    for (t, field) in cases {
+        let e = bad(&t);
+        eprintln!("{e}");
+        assert_eq!(e.field(), Some(field), "{e}");
+        assert!(e.to_string().starts_with("bad.toml"), "{e}");
+    }
+}
+
+/// A device with an interface writes itself back to an equal device.
+#[test]
+fn interfaces_round_trip_through_toml() {
+    for t in [
+        text(
+            PIEZO,
+            &bridge("parallel_sshi", "quality_factor = 3.0", SHOCKLEY, BAT),
+        ),
+        text(PIEZO, &bridge("sece", "efficiency = 0.8", "", RES)),
+    ] {
+        let d = Device::from_toml_str(&t, "a.toml").unwrap();
+        let back = Device::from_toml_str(&d.to_toml_string(), "b.toml").unwrap();
+        assert_eq!(d, back);
+    }
+}
+
+/// An on-resistance that makes conduction far faster than the period ends in a named error at
+/// once (the explicit integrator would otherwise grind through millions of steps).
+#[test]
+fn a_stiff_conduction_mode_is_a_named_error() {
+    let t = text(
+        PIEZO,
+        &bridge("full_bridge", "", &PWL_RON.replace("500.0", "1e-3"), RES),
+    );
+    let d = Device::from_toml_str(&t, "stiff.toml").unwrap();
+    let f = d.suspension_omega_rad_s() / (2.0 * std::f64::consts::PI);
+    let e = endstop::study::interface::steady_state(
+        &d,
+        Sine::from_rms_g(0.1, f),
+        &State::zeros(),
+        &endstop::study::interface::SteadySettings::default(),
+    )
+    .unwrap_err();
+    assert!(
+        matches!(e, endstop::study::interface::InterfaceError::Stiff { .. }),
+        "{e}"
+    );
+}
