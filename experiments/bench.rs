@@ -147,7 +147,8 @@ fn run() -> Result<()> {
             case: case.to_string(),
             median_s: t[REPEATS / 2],
             min_s: t[0],
-            simulated_s: endstop::paper::setups::paper_record(&bistable.device, 3e-4).transient_s + 10.0,
+            simulated_s: endstop::paper::setups::paper_record(&bistable.device, 3e-4).transient_s
+                + 10.0,
             stats: pc.summary.stats,
             note: format!(
                 "paired runs, median cost ratio bistable/linear {} (range {} to {}); free \

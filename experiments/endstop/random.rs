@@ -14,7 +14,8 @@ use endstop::signal::bandwidth::{restrict, Widths};
 use endstop::signal::{welch, Psd};
 use endstop::study::ensemble::EnsembleSpec;
 use endstop::study::record::{
-    output_psd, simulate_drive, transient_s, FreeFlightPath, RecordSpec, SampledDrive, Scheme, DEFAULT_RTOL,
+    output_psd, simulate_drive, transient_s, FreeFlightPath, RecordSpec, SampledDrive, Scheme,
+    DEFAULT_RTOL,
 };
 use endstop::G;
 use endstop_experiments as common;

@@ -4,7 +4,6 @@
 
 use endstop::physics::suspension::Place;
 use endstop::study::displacement::{displacement_ensemble, DisplacementBins};
-use endstop::study::record::RecordSpec;
 use endstop::validation::stationary_law::StationaryLaw;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
@@ -56,14 +55,14 @@ fn displacement<'py>(
             "psd_g2_per_hz must be a positive two-sided PSD in g^2/Hz",
         ));
     }
-    if !(duration_s.is_finite() && duration_s > 0.0) || !(reach_m.is_finite() && reach_m > 0.0) {
+    if !(duration_s.is_finite() && duration_s > 0.0 && reach_m.is_finite() && reach_m > 0.0) {
         return Err(arg_err("duration_s and reach_m must be positive"));
     }
     if records < 2 || bins == 0 {
         return Err(arg_err("records must be at least 2 and bins at least 1"));
     }
     let dev = device.inner.clone();
-    let mut spec = RecordSpec::paper(&dev, psd_g2_per_hz);
+    let mut spec = endstop::paper::setups::paper_record(&dev, psd_g2_per_hz);
     spec.noise.duration_s = duration_s;
     let b = DisplacementBins::uniform(&dev, -reach_m, reach_m, bins);
     let wells = b.wells;

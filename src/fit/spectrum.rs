@@ -31,11 +31,11 @@ use thiserror::Error;
 use super::params::{apply, check_free};
 use super::{FitError, FreeParam};
 use crate::device::Device;
+use crate::drive::noise::NoiseSpec;
 use crate::num::gp::GpSettings;
 use crate::num::history::{maximin_lhs, Emulator, HistoryError};
 use crate::num::stats::Jackknife;
 use crate::study::ensemble::{run_ensemble, EnsembleSpec};
-use crate::drive::noise::NoiseSpec;
 use crate::study::record::RecordSpec;
 
 /// The features' names, in order.

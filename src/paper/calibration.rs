@@ -332,7 +332,7 @@ pub fn fit_bim_for_jump(
     let what = format!("b_im fit ({stiffness:?}) to the jump");
     let mut samples = Vec::new();
     let mut eval = |bim: f64| -> Result<(f64, Option<BranchEnd>), SolverError> {
-        let d = with_endstop(&device, stiffness, bim);
+        let d = with_endstop(device, stiffness, bim);
         let r = settings.run(&d, accel_rms_g, |_| {})?;
         let end = r.branch_end();
         samples.push(BimSample {

@@ -96,7 +96,7 @@ impl CurveSpec {
 
     /// The device with this curve's end-stop model.
     pub fn device(&self, base: &Device) -> Device {
-        with_endstop(&base, self.stiffness, self.bim_n_s_per_m).with_tension_free(self.tension_free)
+        with_endstop(base, self.stiffness, self.bim_n_s_per_m).with_tension_free(self.tension_free)
     }
 }
 
