@@ -10,7 +10,7 @@ use endstop_experiments as common;
 use anyhow::Result;
 use common::md::Table;
 use common::plot::{LegendPos, LinePlot, Panels, Series, Style, PALETTE};
-use common::response_io::{continuation_rows, response_figure};
+use common::response_io::{continuation_rows, event_words, response_figure};
 use common::{fmt_sig, frame::frame, row, Experiment};
 use endstop::paper::response::{self, Case, CaseRun, BASIN_CELLS};
 use endstop::paper::setups::ParamSet;
@@ -261,14 +261,7 @@ fn numbers_md(run: &response::Run, fine_shift: &[(Case, f64)]) -> String {
     ]);
     for c in &run.cases {
         for e in &c.named_events {
-            let kind = if e.corner {
-                format!(
-                    "{} (non-smooth fold: the branch turns there)",
-                    e.kind.label()
-                )
-            } else {
-                e.kind.label().to_string()
-            };
+            let kind = event_words(e);
             t.row([
                 c.setup.case.key().to_string(),
                 kind,

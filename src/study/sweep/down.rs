@@ -154,22 +154,13 @@ impl SweepSettings {
         let Some((_, t)) = report.branch_end() else {
             return Ok(None);
         };
-        let sweep = &report.sweep;
-        let Some((start, values)) = local_grid(&sweep.values, t, divisor) else {
+        let Some(local) =
+            self.rerun_around(device, accel_rms_g, approach, &report.sweep, t, divisor)?
+        else {
             return Ok(None);
         };
-        let base = Harvester::new(device, Sine::from_rms_g(accel_rms_g, values[0]));
+        let base = Harvester::new(device, Sine::from_rms_g(accel_rms_g, local.values[0]));
         let cont = frequency_continuation(&base, accel_rms_g, &self.cfg);
-        let s0 = &sweep.steps[start];
-        let local = cont.run_from(
-            s0.state,
-            s0.mode,
-            Some(sweep.values[start]),
-            &values,
-            approach,
-            |_| {},
-        )?;
-        let local = with_history(sweep, start, local);
         let r = analyse_down_sweep(&cont, local, self.refine_tol_hz, approach)?;
         Ok(r.branch_end())
     }
@@ -187,8 +178,31 @@ impl SweepSettings {
         let Some(end) = report.branch_end() else {
             return Ok(None);
         };
-        let sweep = &report.sweep;
-        let Some((start, values)) = local_grid(&sweep.values, end.transition, divisor) else {
+        let t = end.transition;
+        let Some(local) =
+            self.rerun_around(device, accel_rms_g, approach, &report.sweep, t, divisor)?
+        else {
+            return Ok(None);
+        };
+        let base = Harvester::new(device, Sine::from_rms_g(accel_rms_g, local.values[0]));
+        let cont = frequency_continuation(&base, accel_rms_g, &self.cfg);
+        let r = analyse_up_sweep(&cont, local, self.refine_tol_hz, approach)?;
+        Ok(r.branch_end())
+    }
+
+    /// The steps of `sweep` rerun around its transition `t` with the step divided by
+    /// `divisor` ([`local_grid`]), from the coarse state where the rerun starts, after the
+    /// coarse steps before it ([`with_history`]). `None` for a sweep of fewer than two steps.
+    fn rerun_around(
+        &self,
+        device: &Device,
+        accel_rms_g: f64,
+        approach: Approach,
+        sweep: &Sweep,
+        t: Transition,
+        divisor: f64,
+    ) -> Result<Option<Sweep>, SolverError> {
+        let Some((start, values)) = local_grid(&sweep.values, t, divisor) else {
             return Ok(None);
         };
         let base = Harvester::new(device, Sine::from_rms_g(accel_rms_g, values[0]));
@@ -202,9 +216,7 @@ impl SweepSettings {
             approach,
             |_| {},
         )?;
-        let local = with_history(sweep, start, local);
-        let r = analyse_up_sweep(&cont, local, self.refine_tol_hz, approach)?;
-        Ok(r.branch_end())
+        Ok(Some(with_history(sweep, start, local)))
     }
 }
 
