@@ -30,8 +30,8 @@
 //!   stream ([`drive::noise::generate`]): runs are deterministic and do not depend on the
 //!   number of threads.
 //!
-//! The model began as that of C. P. Le and E. Halvorsen, "MEMS electrostatic energy harvesters with end-stop effects", J. Micromech.
-//! Microeng. 22 (2012) 074013 (equation numbers are the paper's), and describes any
+//! The model began as that of C. P. Le and E. Halvorsen, "MEMS electrostatic energy
+//! harvesters with end-stop effects", J. Micromech. Microeng. 22 (2012) 074013 (equation numbers are the paper's), and describes any
 //! single-degree-of-freedom impact harvester: each side's stop absent or a gap and a contact
 //! law, and an electrostatic, piezoelectric or electromagnetic transducer or none.
 //!

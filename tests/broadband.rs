@@ -16,7 +16,7 @@ use std::collections::BTreeSet;
 use std::sync::OnceLock;
 
 use endstop::num::stats::MeanCi;
-use endstop::paper::claims::{keys, ClaimKey, Value, Verdict};
+use endstop::paper::claims::{keys, Answer, ClaimKey, Value, Verdict};
 use endstop::paper::ensembles::{protocol_spec, WidthReading, P2_BAND_HZ, P2_NPERSEG};
 use endstop::paper::figures::fig10::{self, Fig10};
 use endstop::paper::figures::fig11::{self, Fig11};
@@ -33,7 +33,7 @@ use endstop::study::ensemble::run_ensemble;
 use endstop::study::record::*;
 use endstop::G;
 
-mod common;
+use crate::common;
 #[path = "broadband/regression.rs"]
 mod regression;
 
@@ -159,26 +159,30 @@ fn assert_verdicts_straddling(
             v.note
         );
         let key = row(v);
+        // A number is judged across its interval; a yes/no has no interval.
+        let spread = |x: f64| -> Vec<Answer> {
+            match v.ours {
+                Answer::Number(_) => vec![(x - ci).into(), (x + ci).into()],
+                Answer::YesNo(_) => Vec::new(),
+            }
+        };
+        let ours = v.ours.to_f64();
         if straddling.iter().any(|&(k, s)| v.is(k) && v.set == s) {
             assert_eq!(claim.verdict(Some(v.ours)), want, "{key:?}: {:?}", v.ours);
             assert!(
-                [v.ours.to_f64() - ci, v.ours.to_f64() + ci]
-                    .iter()
-                    .any(|&x| claim.verdict(Some(x.into())) != want),
-                "{key:?}: {} ± {ci} no longer straddles a tolerance edge",
-                v.ours.to_f64()
+                spread(ours).iter().any(|&x| claim.verdict(Some(x)) != want),
+                "{key:?}: {ours} ± {ci} no longer straddles a tolerance edge"
             );
             continue;
         }
-        for x in [v.ours.to_f64(), v.ours.to_f64() - ci, v.ours.to_f64() + ci] {
+        for x in std::iter::once(v.ours).chain(spread(ours)) {
             assert_eq!(
-                claim.verdict(Some(x.into())),
+                claim.verdict(Some(x)),
                 want,
-                "{} {} {}: {x} within {} ± {ci}",
+                "{} {} {}: {x:?} within {ours} ± {ci}",
                 v.claim,
                 v.quantity,
                 v.set,
-                v.ours.to_f64()
             );
         }
     }

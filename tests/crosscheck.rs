@@ -15,7 +15,7 @@ use endstop::paper::crosscheck::{
 };
 use endstop::paper::setups::endstop;
 
-mod common;
+use crate::common;
 
 /// The stored runs: (case key, setting).
 const FIXTURES: [(&str, Setting); 2] = [
@@ -112,7 +112,7 @@ fn a_window_the_output_does_not_cover_is_an_error() {
 }
 
 /// Needs ngspice: runs it on the stored netlists and compares its waveforms with the stored
-/// ones, byte for byte (`cargo test --release --test crosscheck -- --ignored`).
+/// ones, byte for byte (`cargo test --release --test all -- crosscheck:: --ignored`).
 #[test]
 #[ignore]
 fn ngspice_writes_the_stored_output() {

@@ -18,7 +18,7 @@ use endstop::physics::two_port::TwoPort;
 
 use Verdict::{Deviates, Reproduced};
 
-mod common;
+use crate::common;
 use common::{claims, device, device_text as text, prototypes};
 
 /// Asserts that `values` are exactly the rows of `expected`, all under the published set,

@@ -64,6 +64,7 @@ fn run(claims: &Claims) -> HistoryRun {
 }
 
 #[test]
+#[ignore = "about 3 minutes of ensembles on 2 cores; CI runs it: cargo test --release --test all -- history_study:: --ignored"]
 fn a_paper_made_by_the_model_keeps_its_set_and_one_made_by_another_device_empties_it() {
     let bundled = Claims::bundled().unwrap();
     let ranges = RangesFile::bundled().unwrap();

@@ -23,7 +23,7 @@ use endstop::physics::harvester::Harvester;
 use endstop::physics::harvester::State;
 use nalgebra::SVector;
 
-mod common;
+use crate::common;
 use common::device;
 
 fn opts<const N: usize>(rtol: f64, atol: f64) -> Options<N> {

@@ -8,7 +8,7 @@
 //! * [`regression`] (`tests/narrowband/regression.rs`): snapshots of our own characterisation
 //!   numbers (onsets, jumps, fitted gap and dampings, powers), so that a change shows.
 
-mod common;
+use crate::common;
 #[path = "narrowband/paper.rs"]
 mod paper;
 #[path = "narrowband/regression.rs"]

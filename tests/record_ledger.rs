@@ -15,7 +15,7 @@ use endstop::study::record_ledger::{record_ledger, record_ledgers};
 const SEED: u64 = 2012;
 const TARGET: f64 = 1e-6;
 
-mod common;
+use crate::common;
 use common::device;
 
 /// Prototype 2 as Figures 14 and 15 simulate it.

@@ -15,7 +15,7 @@ use endstop::paper::figures::table3::Table3;
 use endstop::paper::qm::QmReading;
 use endstop::paper::Figure;
 
-mod common;
+use crate::common;
 use common::{claims, prototypes};
 
 /// `x` with 6 significant digits, in scientific notation.

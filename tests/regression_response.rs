@@ -10,7 +10,7 @@ use endstop::paper::response::{continuation, setups, Case};
 use endstop::physics::harvester::Harvester;
 use endstop::study::orbit::Shooter;
 
-mod common;
+use crate::common;
 
 #[test]
 fn figure13_whole_curve_events_and_multipliers() {

@@ -14,7 +14,7 @@ use endstop::study::continuation::{
 use endstop::study::orbit::{Forcing, Parameter, Shooter, ShootingConfig};
 use nalgebra::{Complex, Matrix3};
 
-mod common;
+use crate::common;
 
 /// Prototype 2 as Figure 13 simulates it at 0.31 g: 10 V, linear k_im, b_im = 0.4 N s/m.
 fn prototype2() -> Device {

@@ -10,7 +10,7 @@ use endstop::study::basins::{basins, refine, Attractor};
 use endstop::study::steady::{horizon_periods, steady_config, SteadyConfig, FOLD_BLOCK_PERIODS};
 use endstop::study::sweep::REFINE_TOL_HZ;
 
-mod common;
+use crate::common;
 
 /// The setup of a case (the calibrated prototype 1 is the experiments' artefact; the published
 /// set stands in for it here, which only the calibrated case would use).

@@ -25,7 +25,7 @@ const CASES: usize = 256;
 /// Seed of the case generator.
 const SEED: u64 = 2012;
 
-mod common;
+use crate::common;
 
 fn p1_text() -> String {
     common::device_text("prototype1")

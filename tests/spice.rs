@@ -15,7 +15,7 @@ use endstop::study::steady::SteadyConfig;
 use std::collections::BTreeMap;
 use std::process::Command;
 
-mod common;
+use crate::common;
 use common::{prototype1 as p1, prototype2 as p2};
 
 fn options(
@@ -393,7 +393,7 @@ fn run_ngspice(tag: &str, make: impl Fn(&str) -> String) -> Waveforms {
 /// that the test takes seconds): prototype 1 without impacts, and with impacts on both stops.
 ///
 /// It needs ngspice, so it is ignored by default; CI installs ngspice and runs it with
-/// `cargo test --release -p endstop --test spice -- --ignored`. Run without ngspice, it fails
+/// `cargo test --release --test all -- spice:: --ignored`. Run without ngspice, it fails
 /// with a message saying so.
 #[test]
 #[ignore = "needs ngspice (apt-get install ngspice); run with --ignored"]

@@ -52,7 +52,7 @@ fn sweep_csv(truth: &Device) -> String {
     let template = SweepData {
         label: "t".into(),
         direction: Direction::Up,
-        accel_rms_g: 0.3,
+        accel_rms_g: 0.5,
         quantity: Quantity::V1RmsV,
         points: freqs
             .iter()

@@ -1,7 +1,7 @@
 """Figure 13 from Python: prototype 2 at 10 V, up-sweeps at 0.12 and 0.31 g rms with the linear
 and the Hertz end-stop laws (published parameters), drawn with matplotlib.
 
-    pip install ./python matplotlib
+    pip install "./python[examples]"
     python python/examples/fig13.py [--out fig13.png]
 """
 

@@ -327,13 +327,24 @@ impl RawStops {
     }
 }
 
+/// The largest gap a stop may have (m).
+pub const MAX_GAP_M: f64 = 1e3;
+
 impl RawStop {
     fn parse(&self, c: &Checker, path: &str) -> Result<Stop, ParamError> {
         let f = |key: &str| format!("{path}.{key}");
         let gap_m = self
             .gap_m
             .ok_or_else(|| c.missing(&f("gap_m"), "the distance from rest to the stop (m)"))?;
-        c.positive(&f("gap_m"), gap_m)?;
+        // A bound far above any harvester (and the unit gaps of nondimensional models) that
+        // keeps the integrator's scales (the gap times the natural frequency) finite.
+        c.within_closed(
+            &f("gap_m"),
+            gap_m,
+            f64::MIN_POSITIVE,
+            MAX_GAP_M,
+            "finite, > 0 and at most 1000 m (a stop farther away is no stop: remove it)",
+        )?;
         let law_key = self.law.ok_or_else(|| {
             c.missing(
                 &f("law"),

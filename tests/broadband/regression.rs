@@ -20,7 +20,7 @@
 //! So a change that leaves every trajectory alone keeps every snapshot, and a legitimate
 //! change of the integrator or of the model's arithmetic, which changes the impacting
 //! trajectories, can move those numbers by a fraction of their CI and flip their last pinned
-//! digit: review it (`INSTA_UPDATE=always cargo test --release --test broadband regression`,
+//! digit: review it (`INSTA_UPDATE=always cargo test --release --test all -- broadband::regression`,
 //! then `git diff tests/snapshots`) and accept it when every move is within the CI. A change
 //! that draws other realisations of the records (the excitation's synthesis) moves every
 //! number, with or without impacts, and is reviewed the same way.

@@ -1,8 +1,10 @@
 //! What the integration tests share: the parameter files as devices, the claims file and the
 //! calibrated prototype 1 (each costly value computed once per test binary), and the setups
-//! the figures run on. Each test binary uses some of them (`mod common;`), hence the
-//! `dead_code` allowance.
+//! the figures run on. The test binary (`tests/all.rs`) holds one copy, which each test file
+//! reaches with `use crate::common;`.
 #![allow(dead_code)]
+
+pub mod layout;
 
 use std::sync::OnceLock;
 

@@ -2,7 +2,7 @@
 //! and the b_im fits): not checks against the paper (see `paper.rs`), but a record of what the
 //! reproduction computes today, so that any change shows in review. Stored in
 //! `tests/snapshots/`; after a deliberate change, review the new numbers and accept them with
-//! `INSTA_UPDATE=always cargo test --release --test narrowband` (or `cargo insta review`).
+//! `INSTA_UPDATE=always cargo test --release --test all -- narrowband::` (or `cargo insta review`).
 //!
 //! Rounding, chosen from the convergence study (every sweep repeated with half the step and
 //! half the tolerances) so that a legitimate numerical change inside the convergence limits

@@ -9,7 +9,7 @@ use super::Kind;
 ///
 /// In files it is a number, as the scorecard's rows have always carried it: the number itself,
 /// or 1 for yes and 0 for no ([`Answer::to_f64`]). A number read back is an
-/// [`Answer::Number`] until [`Claim::read`](super::Claim::read) types it by its claim.
+/// [`Answer::Number`] until [`super::Claim::read`] types it by its claim.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Answer {
     /// A quantity, in its claim's unit.

@@ -1,0 +1,56 @@
+//! The library's integration tests, compiled into ONE test binary: every file of `tests/` is a
+//! module of this crate root. One binary links the library and its dependencies once, where a
+//! binary per file linked them some twenty times over (most of `cargo test`'s compile time
+//! after a release build); it also computes each shared value of `common` (the calibration of
+//! prototype 1, the claims file) once for all the tests.
+//!
+//! A new test file goes in `tests/` beside the others, gets a `mod` line below (in alphabetical
+//! order), and reaches the shared helpers with `use crate::common;` (not `mod common;`, which
+//! would look for `tests/<file>/common.rs`). `every_test_file_is_a_module_here` fails while a
+//! file of `tests/` has no `mod` line, so that no test file is silently left out.
+//!
+//! Run one file's tests with a filter on its module: `cargo test --release --test all --
+//! broadband::`. Slow characterisation runs are `#[ignore]`d with their reason and run by
+//! `cargo test --release -- --include-ignored` (CI runs that; see the README).
+
+mod common;
+
+mod broadband;
+mod calibration_recovery;
+mod crosscheck;
+mod device_description;
+mod fit_recovery;
+mod foundation;
+mod general_model;
+mod history_matching;
+mod history_study;
+mod impacting_orbits;
+mod integrator;
+mod interfaces;
+mod interfaces_spice;
+mod narrowband;
+mod record_accuracy;
+mod record_ledger;
+mod regression_analytic;
+mod regression_response;
+mod response_orbits;
+mod response_sweeps;
+mod restitution;
+mod restitution_orbits;
+mod robustness;
+mod spectral_noise;
+mod spectrum_fit;
+mod spice;
+mod springs_device;
+mod springs_validation;
+mod study_claims;
+mod study_determinism;
+mod sweep_steps;
+mod validation;
+
+/// Every file of `tests/` is a module here.
+#[test]
+fn every_test_file_is_a_module_here() {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests");
+    common::layout::assert_every_test_file_is_a_module(&dir, "all.rs", include_str!("all.rs"));
+}
