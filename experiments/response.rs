@@ -10,11 +10,10 @@ use endstop_experiments as common;
 use anyhow::Result;
 use common::md::Table;
 use common::plot::{LegendPos, LinePlot, Panels, Series, Style, PALETTE};
-use common::response_io::{continuation_rows, response_figure};
+use common::response_io::{continuation_rows, event_words, response_figure};
 use common::{fmt_sig, frame::frame, row, Experiment};
 use endstop::paper::response::{self, Case, CaseRun, BASIN_CELLS};
 use endstop::paper::setups::ParamSet;
-use endstop::study::continuation::EventKind;
 use endstop::study::steady::FOLD_BLOCK_PERIODS;
 use endstop::study::sweep::DownEndKind;
 
@@ -261,18 +260,14 @@ fn numbers_md(run: &response::Run, fine_shift: &[(Case, f64)]) -> String {
         "stable after",
     ]);
     for c in &run.cases {
-        for e in &c.branch.events {
-            let kind = if e.kind == EventKind::Fold && e.at_grazing {
-                "fold at a grazing corner".to_string()
-            } else {
-                e.kind.label().to_string()
-            };
+        for e in &c.named_events {
+            let kind = event_words(e);
             t.row([
                 c.setup.case.key().to_string(),
                 kind,
                 format!("{:.4}", e.param),
-                e.stable_before.to_string(),
-                e.stable_after.to_string(),
+                e.stable.first().copied().unwrap_or(false).to_string(),
+                e.stable.get(1).copied().unwrap_or(false).to_string(),
             ]);
         }
     }

@@ -24,6 +24,7 @@ mod foundation;
 mod general_model;
 mod history_matching;
 mod history_study;
+mod impacting_orbits;
 mod integrator;
 mod interfaces;
 mod interfaces_spice;
@@ -44,6 +45,7 @@ mod springs_device;
 mod springs_validation;
 mod study_claims;
 mod study_determinism;
+mod sweep_steps;
 mod validation;
 
 /// Every file of `tests/` is a module here.

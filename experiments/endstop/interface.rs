@@ -142,7 +142,8 @@ pub fn charge(a: ChargeArgs) -> Result<()> {
 pub fn dc_sweep(a: RangeArgs) -> Result<()> {
     a.check()?;
     let (mut exp, loaded, device) = start("endstop-sweep", &a.device, a.bias_v, a.out.clone())?;
-    let freqs = linspace_step(a.from, a.to, a.step);
+    let step_hz = a.protocol(&device).step_hz;
+    let freqs = linspace_step(a.from, a.to, step_hz);
     let settings = SteadySettings::default();
     let results = crate::common::with_progress(freqs.len(), "sweep", |tick| {
         frequency_sweep(&device, &freqs, a.accel_rms_g, &settings, |_, _| tick())
@@ -189,7 +190,7 @@ pub fn dc_sweep(a: RangeArgs) -> Result<()> {
         device.interface.key(),
         a.from,
         a.to,
-        a.step,
+        fmt_sig(step_hz, 3),
         a.accel_rms_g,
         fmt_sig(best.p_dc_w * 1e6, 4),
         fmt_sig(best.freq_hz, 5),

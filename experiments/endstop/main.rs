@@ -17,6 +17,7 @@
 
 mod interface;
 mod random;
+mod response;
 
 use endstop_experiments as common;
 
@@ -27,7 +28,10 @@ use clap::{Parser, Subcommand};
 use common::plot::{LegendPos, LinePlot, Series, Style, PALETTE};
 use common::{fmt_sig, load_device_file, Experiment, LoadedDevice};
 use endstop::device::Device;
-use endstop::study::stepped::linspace_step;
+use endstop::study::chirp::{
+    default_ramp_rate_hz_per_s, default_step_hz, half_power_band, HalfPowerBand,
+};
+use endstop::study::stepped::{linspace_step, Approach};
 use endstop::study::sweep::{self, SweepSettings, REFINE_TOL_HZ};
 
 #[derive(Parser, Debug)]
@@ -64,7 +68,7 @@ enum Study {
     /// The whole frequency response: up- and down-sweeps, the periodic orbits continued in
     /// frequency (pseudo-arclength, through folds) with their Floquet multipliers, and the
     /// folds and grazing points on the branch.
-    Response(RangeArgs),
+    Response(response::ResponseArgs),
     /// Charge the storage of a device with an interface circuit: the time for its voltage to
     /// go from a start value to a target under a sine, with V_s(t).
     Charge(interface::ChargeArgs),
@@ -78,7 +82,7 @@ enum Study {
 /// The arguments of the two frequency studies (`sweep` and `response`): a sine drive (a
 /// measured record drives `random` only, whose spectra it is analysed by).
 #[derive(Parser, Debug)]
-struct RangeArgs {
+pub(crate) struct RangeArgs {
     /// Device file (TOML), e.g. a copy of data/prototype2.toml.
     #[arg(long)]
     device: PathBuf,
@@ -88,9 +92,19 @@ struct RangeArgs {
     /// Highest frequency (Hz).
     #[arg(long)]
     to: f64,
-    /// Frequency step of the sweeps, and largest step of the continuation (Hz).
-    #[arg(long, default_value_t = 2.0)]
-    step: f64,
+    /// Frequency step of the sweeps (Hz), and largest step of the continuation; default: a
+    /// quarter of the device's linear half-power width rounded down to 1, 2 or 5 times a power
+    /// of ten (the continuation's largest step is then a hundredth of the range).
+    #[arg(long)]
+    step: Option<f64>,
+    /// Take each step of the sweeps at once (the drive's frequency jumps), as the paper's
+    /// figures do, instead of by a phase-continuous ramp.
+    #[arg(long)]
+    steps_at_once: bool,
+    /// The rate of the ramps between steps (Hz/s); default: pi w^2 / 10 for the linear
+    /// half-power width w (the frequency moves a tenth of w per ring-up time 1/(pi w)).
+    #[arg(long)]
+    ramp_rate: Option<f64>,
     /// RMS base acceleration (g = 9.81 m/s^2); the sine's amplitude is sqrt(2) times this.
     #[arg(long)]
     accel_rms_g: f64,
@@ -103,11 +117,56 @@ struct RangeArgs {
     out: Option<PathBuf>,
 }
 
+/// How the sweeps of a range are run: the step and how each step is reached.
+pub(crate) struct Protocol {
+    /// The step (Hz).
+    pub step_hz: f64,
+    /// The continuation's largest step (Hz).
+    pub max_step_hz: f64,
+    /// The step was chosen from the half-power band.
+    pub default_step: bool,
+    /// The device's linear half-power band.
+    pub band: Option<HalfPowerBand>,
+    /// How each step is reached.
+    pub approach: Approach,
+}
+
+impl Protocol {
+    /// One sentence on the protocol, for the numbers.
+    pub fn words(&self) -> String {
+        let band = self.band.map_or(String::new(), |b| {
+            format!(
+                " (linear resonance {} Hz, half-power width {} Hz)",
+                fmt_sig(b.peak_hz, 5),
+                fmt_sig(b.width_hz, 3)
+            )
+        });
+        let step = if self.default_step {
+            format!(
+                "steps of {} Hz, a quarter of the half-power width rounded down{band}",
+                fmt_sig(self.step_hz, 3)
+            )
+        } else {
+            format!("steps of {} Hz{band}", fmt_sig(self.step_hz, 3))
+        };
+        let how = match self.approach {
+            Approach::Jump => "each taken at once (the drive's frequency jumps)".to_string(),
+            Approach::Ramp { rate_per_s } => format!(
+                "each reached by a phase-continuous ramp at {} Hz/s",
+                fmt_sig(rate_per_s, 3)
+            ),
+        };
+        format!("{step}, {how}")
+    }
+}
+
 impl RangeArgs {
     /// Refuses a range, step or acceleration that no sweep can use
-    /// ([`sweep::check_range`]), naming the option.
+    /// ([`sweep::check_range`]), naming the option (without `--step`, a tenth of the range
+    /// stands for the default step, which is never larger).
     fn check(&self) -> Result<()> {
-        sweep::check_range(self.accel_rms_g, self.from, self.to, self.step).map_err(|e| {
+        let step = self.step.unwrap_or(0.1 * (self.to - self.from).abs());
+        sweep::check_range(self.accel_rms_g, self.from, self.to, step).map_err(|e| {
             anyhow::anyhow!(match e {
                 sweep::RangeError::Ends => {
                     "--from and --to must be positive frequencies with --to > --from"
@@ -115,16 +174,67 @@ impl RangeArgs {
                 sweep::RangeError::Step => "--step must be positive, not larger than the range, and give at most 100000 steps",
                 sweep::RangeError::Accel => "--accel-rms-g must be a finite positive number",
             })
-        })
+        })?;
+        if let Some(r) = self.ramp_rate {
+            if !(r.is_finite() && r > 0.0) {
+                bail!("--ramp-rate must be a finite positive rate in Hz/s, not {r}");
+            }
+        }
+        Ok(())
+    }
+
+    /// The step and approach of the sweeps of `device`.
+    fn protocol(&self, device: &Device) -> Protocol {
+        let band = half_power_band(device);
+        let step_hz = self
+            .step
+            .unwrap_or_else(|| default_step_hz(device, self.from, self.to));
+        let rate = self
+            .ramp_rate
+            .or_else(|| default_ramp_rate_hz_per_s(device))
+            .unwrap_or(step_hz);
+        Protocol {
+            step_hz,
+            max_step_hz: self.step.unwrap_or(0.01 * (self.to - self.from)),
+            default_step: self.step.is_none(),
+            band,
+            approach: if self.steps_at_once {
+                Approach::Jump
+            } else {
+                Approach::Ramp { rate_per_s: rate }
+            },
+        }
     }
 
     /// The sweep settings of the range ([`SweepSettings::for_device`]).
-    fn sweep_settings(&self, device: &Device) -> SweepSettings {
+    fn sweep_settings(&self, device: &Device, p: &Protocol) -> SweepSettings {
         SweepSettings::for_device(
             device,
-            linspace_step(self.from, self.to, self.step),
+            linspace_step(self.from, self.to, p.step_hz),
             REFINE_TOL_HZ,
         )
+    }
+}
+
+/// A sentence on the step's effect on where a sweep leaves a branch: the end at the sweep's
+/// step and at a quarter of it, and a warning when they differ by more than the refinement
+/// tolerance.
+pub(crate) fn step_effect(what: &str, at_step: f64, at_quarter: Option<f64>) -> String {
+    match at_quarter {
+        Some(q) if (q - at_step).abs() > REFINE_TOL_HZ => format!(
+            "- **warning**: {what} moves from {} Hz to {} Hz with a quarter of the step, more \
+             than the refinement tolerance of {REFINE_TOL_HZ} Hz: the step decides it; use a \
+             smaller step or a slower ramp\n",
+            fmt_sig(at_step, 6),
+            fmt_sig(q, 6)
+        ),
+        Some(q) => format!(
+            "- with a quarter of the step {what} is at {} Hz ({:.3} Hz from the step's, within \
+             the refinement tolerance of {REFINE_TOL_HZ} Hz)\n",
+            fmt_sig(q, 6),
+            (q - at_step).abs()
+        ),
+        None => format!("- with a quarter of the step {what} is not found\n"),
     }
 }
 
@@ -133,7 +243,7 @@ fn main() {
         Study::Sweep(a) => sweep(a),
         Study::Charge(a) => interface::charge(a),
         Study::Random(a) => random::random(a),
-        Study::Response(a) => response(a),
+        Study::Response(a) => response::response(a),
         Study::Fit(a) => common::fit_io::run(a),
     });
 }
@@ -188,9 +298,10 @@ fn sweep(a: RangeArgs) -> Result<()> {
     }
     a.check()?;
     let (mut exp, loaded, device) = start("endstop-sweep", &a.device, a.bias_v, a.out.clone())?;
-    let settings = a.sweep_settings(&device);
+    let protocol = a.protocol(&device);
+    let settings = a.sweep_settings(&device, &protocol);
     let report = common::with_progress(settings.freqs_hz.len(), "sweep", |tick| {
-        settings.run(&device, a.accel_rms_g, |_| tick())
+        settings.run_with(&device, a.accel_rms_g, protocol.approach, |_| tick())
     })?;
 
     let steps = &report.sweep.steps;
@@ -207,15 +318,16 @@ fn sweep(a: RangeArgs) -> Result<()> {
     exp.write_parquet("sweep", &mut df, &device.params)?;
 
     let mut md = format!(
-        "Up-sweep of `{}` ({} set; {}) from {} to {} Hz in {} Hz steps at {} g rms.\n\n",
+        "Up-sweep of `{}` ({} set; {}) from {} to {} Hz at {} g rms: {}.\n\n",
         loaded.file,
         device.params,
         describe(&device),
         a.from,
         a.to,
-        a.step,
         a.accel_rms_g,
+        protocol.words(),
     );
+    exp.number("step_hz", protocol.step_hz);
     let vmax = col(&|m| m.v1_rms_v).into_iter().fold(0.0, f64::max);
     let pmax = col(&|m| m.p_total_w()).into_iter().fold(0.0, f64::max);
     exp.number("v1_rms_max_v", vmax);
@@ -244,6 +356,17 @@ fn sweep(a: RangeArgs) -> Result<()> {
             "- the impacting branch ends at {} Hz ({})\n",
             fmt_sig(end.transition.value(), 5),
             end.kind.label()
+        ));
+        let quarter = settings
+            .up_end_with_step_divided(&device, a.accel_rms_g, protocol.approach, &report, 4.0)?
+            .map(|e| e.transition.value());
+        if let Some(q) = quarter {
+            exp.number("branch_end_quarter_step_hz", q);
+        }
+        md.push_str(&step_effect(
+            "the end of the impacting branch",
+            end.transition.value(),
+            quarter,
         ));
     }
     exp.write_numbers_md(&md)?;
@@ -280,115 +403,6 @@ fn sweep(a: RangeArgs) -> Result<()> {
         series,
     )
     .legend(LegendPos::UpperLeft);
-    exp.write_plot(&plot)?;
-    exp.finish()
-}
-
-fn response(a: RangeArgs) -> Result<()> {
-    use common::frame::frame;
-    use common::response_io::{continuation_rows, response_figure};
-    use common::row;
-    use endstop::study::continuation::{frequency_branch, EventKind};
-
-    a.check()?;
-    let (mut exp, loaded, device) = start("endstop-response", &a.device, a.bias_v, a.out.clone())?;
-    let settings = a.sweep_settings(&device);
-    let freqs = &settings.freqs_hz;
-    let (up, down) = common::with_progress(2 * freqs.len(), "sweeps", |tick| {
-        rayon::join(
-            || settings.run(&device, a.accel_rms_g, |_| tick()),
-            || settings.run_down(&device, a.accel_rms_g, |_| tick()),
-        )
-    });
-    let (up, down) = (up?, down?);
-    eprintln!(
-        "[endstop-response] continuing the periodic orbits from {} Hz",
-        a.from
-    );
-    let branch = frequency_branch(&device, a.accel_rms_g, a.from, a.to, a.step, |_| {})?;
-
-    let rows = continuation_rows(&device.name, &branch);
-    exp.write_parquet("continuation", &mut frame(rows)?, &device.params)?;
-    let mut rows = Vec::new();
-    for (dir, ms) in [
-        ("up", up.measurements().collect::<Vec<_>>()),
-        ("down", down.measurements().collect()),
-    ] {
-        for m in ms {
-            rows.push(row![
-                "direction" => dir,
-                "freq_hz" => m.freq_hz,
-                "v1_rms_v" => m.v1_rms_v,
-                "x_max_m" => m.x_peak_m,
-                "contact_fraction" => m.contact_fraction,
-            ]);
-        }
-    }
-    exp.write_parquet("sweeps", &mut frame(rows)?, &device.params)?;
-
-    let mut md = format!(
-        "Whole response of `{}` ({} set; {}) from {} to {} Hz at {} g rms: sweeps in {} Hz \
-         steps (transitions refined to 0.1 Hz), periodic orbits continued in frequency \
-         ({} points, largest residual {:.1e}).\n\n",
-        loaded.file,
-        device.params,
-        describe(&device),
-        a.from,
-        a.to,
-        a.accel_rms_g,
-        a.step,
-        branch.points.len(),
-        branch.max_residual()
-    );
-    if let Some(e) = up.branch_end() {
-        exp.number("up_branch_end_hz", e.transition.value());
-        md.push_str(&format!(
-            "- the up-sweep leaves the impacting branch at {} Hz ({})\n",
-            fmt_sig(e.transition.value(), 6),
-            e.kind.label()
-        ));
-    }
-    if let Some((kind, t)) = down.branch_end() {
-        exp.number("down_branch_end_hz", t.value());
-        md.push_str(&format!(
-            "- the down-sweep leaves the lower branch at {} Hz ({})\n",
-            fmt_sig(t.value(), 6),
-            kind.label()
-        ));
-    }
-    for (i, e) in branch.events.iter().enumerate() {
-        let kind = if e.kind == EventKind::Fold && e.at_grazing {
-            "fold at a grazing corner"
-        } else {
-            e.kind.label()
-        };
-        exp.number(&format!("event_{i}_hz"), e.param);
-        md.push_str(&format!(
-            "- {kind} at {} Hz (stable {} -> {})\n",
-            fmt_sig(e.param, 7),
-            e.stable_before,
-            e.stable_after
-        ));
-    }
-    if branch.events.is_empty() {
-        md.push_str("- no fold, bifurcation or grazing in this range\n");
-    }
-    exp.write_numbers_md(&md)?;
-    print!("{md}");
-
-    let steps = |ms: Vec<&endstop::study::steady::Measurement>| -> Vec<(f64, f64)> {
-        ms.into_iter().map(|m| (m.freq_hz, m.v1_rms_v)).collect()
-    };
-    let plot = response_figure(
-        &format!(
-            "Whole response at {} g rms: {} (orbits: solid stable, dashed unstable)",
-            a.accel_rms_g, device.name
-        ),
-        &branch,
-        steps(up.measurements().collect()),
-        steps(down.measurements().collect()),
-        (a.from, a.to),
-    );
     exp.write_plot(&plot)?;
     exp.finish()
 }

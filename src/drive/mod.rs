@@ -1,4 +1,5 @@
-//! Base accelerations a(t) that drive the harvester: a sine ([`Sine`]), a sampled record read
+//! Base accelerations a(t) that drive the harvester: a sine ([`Sine`]) and one swept in
+//! frequency and amplitude at a continuous phase ([`Chirp`]), a sampled record read
 //! between samples by linear interpolation ([`Sampled`]), and band-limited white noise to fill
 //! such a record ([`noise`], Figure 10), and a measured record checked and resampled to the
 //! integrator's rate ([`measured`]).
@@ -32,11 +33,13 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
+mod chirp;
 pub mod measured;
 pub mod noise;
 mod sampled;
 mod sine;
 
+pub use chirp::{Chirp, Profile};
 pub use sampled::Sampled;
 pub use sine::Sine;
 

@@ -1,7 +1,8 @@
 //! Studies built on the model and the integrator: the exact integration of a sine-driven
 //! harvester's affine modes ([`flow`]), steady states under a sine ([`steady`]), the
 //! stepped-drive engine ([`stepped`]) behind frequency sweeps ([`sweep`], up and down) and
-//! amplitude sweeps ([`amplitude`]), periodic orbits by shooting with their Floquet multipliers
+//! amplitude sweeps ([`amplitude`]), the ramps and swept sines that make sweeps independent of
+//! their step ([`chirp`]), periodic orbits by shooting with their Floquet multipliers
 //! ([`orbit`]), their pseudo-arclength continuation with folds, branch points and grazing
 //! ([`continuation`]), basins of attraction ([`basins`]), and random-vibration records
 //! ([`record`]) and their ensembles ([`ensemble`]), with the fixed-step RK4 record that is the
@@ -11,6 +12,7 @@
 
 pub mod amplitude;
 pub mod basins;
+pub mod chirp;
 pub mod continuation;
 pub mod displacement;
 pub mod ensemble;

@@ -2,7 +2,9 @@
 //! amplitudes), each measured in steady state starting from the final state of the previous
 //! one ([`SteppedDrive::run`]), and the bisection of a transition between two steps
 //! ([`SteppedDrive::refine_steps`]), each trial continuing from the state at the bracket's
-//! lower end.
+//! lower end. A step is taken at once, or by a phase-continuous ramp of the drive
+//! ([`Approach`], [`crate::study::chirp`]) that keeps the transient of the step from carrying
+//! the state off its branch.
 
 use serde::{Deserialize, Serialize};
 
@@ -10,6 +12,7 @@ use crate::drive::Sine;
 use crate::ode::{SolverError, Stats};
 use crate::physics::contact::Mode;
 use crate::physics::harvester::{Harvester, State};
+use crate::study::chirp::ramp;
 use crate::study::steady::{steady_state, Measurement, SteadyConfig};
 
 /// One step of a continuation: the measurement and the state it ended in.
@@ -34,6 +37,20 @@ pub struct Sweep {
     pub steps: Vec<SweepStep>,
     /// Integrator counters summed over the sweep.
     pub stats: Stats,
+}
+
+/// How a stepped sweep moves its drive from one value to the next.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Approach {
+    /// At once: the new drive starts from the last state at drive phase zero (the drive's
+    /// phase is continuous, its frequency jumps).
+    Jump,
+    /// By a phase-continuous ramp at this rate (parameter units, Hz or g, per second), over
+    /// a whole number of cycles ([`crate::study::chirp::ramp`]).
+    Ramp {
+        /// The rate (per second).
+        rate_per_s: f64,
+    },
 }
 
 /// The drive of a continuation at parameter value p: (frequency Hz, RMS acceleration g).
@@ -64,20 +81,88 @@ impl<D: Drive> SteppedDrive<'_, D> {
         })
     }
 
+    /// The step at `p` reached from the state `y` in `mode` at the value `from` (`None`: at
+    /// once, as from rest) by `approach`; the ramp's counters are the step's.
+    fn measure_after(
+        &self,
+        from: Option<f64>,
+        p: f64,
+        y: State,
+        mode: Mode,
+        approach: Approach,
+    ) -> Result<SweepStep, SolverError> {
+        match (approach, from) {
+            (Approach::Ramp { rate_per_s }, Some(q)) if q != p => {
+                let (y1, mode1, st) = ramp(
+                    self.base,
+                    (self.drive)(q),
+                    (self.drive)(p),
+                    (p - q).abs() / rate_per_s,
+                    y,
+                    mode,
+                    self.cfg.rtol,
+                )?;
+                let mut step = self.measure(p, y1, mode1)?;
+                step.stats += st;
+                Ok(step)
+            }
+            _ => self.measure(p, y, mode),
+        }
+    }
+
+    /// The steady state at `p` reached by `approach` from `step`, measured at the value
+    /// `from`.
+    pub fn step_to(
+        &self,
+        from: f64,
+        p: f64,
+        step: &SweepStep,
+        approach: Approach,
+    ) -> Result<SweepStep, SolverError> {
+        self.measure_after(Some(from), p, step.state, step.mode, approach)
+    }
+
     /// Runs the continuation over `values` (increasing for an up-sweep, decreasing for a
     /// down-sweep), starting from rest;
     /// `on_step(i)` is called after each step.
-    pub fn run(
+    pub fn run(&self, values: &[f64], on_step: impl FnMut(usize)) -> Result<Sweep, SolverError> {
+        self.run_with(values, Approach::Jump, on_step)
+    }
+
+    /// As [`SteppedDrive::run`], each step reached by `approach`.
+    pub fn run_with(
         &self,
         values: &[f64],
+        approach: Approach,
+        on_step: impl FnMut(usize),
+    ) -> Result<Sweep, SolverError> {
+        self.run_from(
+            self.base.rest_state(),
+            Mode::Free,
+            None,
+            values,
+            approach,
+            on_step,
+        )
+    }
+
+    /// As [`SteppedDrive::run_with`] from the state `y` in `mode` at the value `from`
+    /// (`None`: the first step starts from `y` at once).
+    pub fn run_from(
+        &self,
+        y: State,
+        mode: Mode,
+        from: Option<f64>,
+        values: &[f64],
+        approach: Approach,
         mut on_step: impl FnMut(usize),
     ) -> Result<Sweep, SolverError> {
-        let mut y = self.base.rest_state();
-        let mut mode = Mode::Free;
+        let (mut y, mut mode, mut prev) = (y, mode, from);
         let mut steps = Vec::with_capacity(values.len());
         let mut stats = Stats::default();
         for (i, &p) in values.iter().enumerate() {
-            let step = self.measure(p, y, mode)?;
+            let step = self.measure_after(prev, p, y, mode, approach)?;
+            prev = Some(p);
             stats += step.stats;
             y = step.state;
             mode = step.mode;
@@ -115,6 +200,19 @@ impl<D: Drive> SteppedDrive<'_, D> {
         still_before: P,
         tol: f64,
     ) -> Result<RefinedTransition, SolverError> {
+        self.refine_steps_with(sweep, k, still_before, tol, Approach::Jump)
+    }
+
+    /// As [`SteppedDrive::refine_steps`], each trial reached from the bracket's lower end by
+    /// `approach`.
+    pub fn refine_steps_with<P: Fn(&Measurement) -> bool>(
+        &self,
+        sweep: &Sweep,
+        k: usize,
+        still_before: P,
+        tol: f64,
+        approach: Approach,
+    ) -> Result<RefinedTransition, SolverError> {
         assert!(
             k >= 1 && k < sweep.steps.len(),
             "transition index out of range"
@@ -128,7 +226,7 @@ impl<D: Drive> SteppedDrive<'_, D> {
         // (larger than `hi` in a down-sweep).
         while (hi - lo).abs() > tol {
             let mid = 0.5 * (lo + hi);
-            let step = self.measure(mid, before.state, before.mode)?;
+            let step = self.measure_after(Some(lo), mid, before.state, before.mode, approach)?;
             stats += step.stats;
             if still_before(&step.measurement) {
                 lo = mid;

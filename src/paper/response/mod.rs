@@ -26,7 +26,9 @@ use crate::paper::setups::{prototype1_setup, with_endstop, ParamSet, FIG13_BIAS_
 use crate::paper::sweeps::{self, P1_HIGH_ACCEL_RMS_G, P1_SWEEP_STEP_HZ};
 use crate::physics::harvester::Harvester;
 use crate::study::basins::Basins;
-use crate::study::continuation::{branch_from_rest, Branch, ContinuationSettings};
+use crate::study::continuation::{
+    branch_from_rest, Branch, ContinuationSettings, Diagram, DiagramEvent,
+};
 use crate::study::orbit::{Forcing, Orbit, OrbitError, Shooter};
 use crate::study::steady::{steady_config, SteadyConfig, FOLD_BLOCK_PERIODS};
 use crate::study::sweep::{DownSweepReport, SweepReport, SweepSettings};
@@ -207,6 +209,11 @@ pub struct CaseRun {
     /// The up-sweep again with half the sweep's blocks, where the fold rule
     /// ([`FOLD_BLOCK_PERIODS`]) sets them: the convergence of the rule.
     pub up_half_blocks: Option<SweepReport>,
+    /// The branch's events as the bifurcation diagram names them ([`Diagram::from_branch`]:
+    /// a corner at grazing is a grazing that turns; a branch point of a symmetric orbit whose
+    /// half-period map has a multiplier at -1 is a symmetry-breaking pitchfork). Filled in by
+    /// [`run_case`].
+    pub named_events: Vec<DiagramEvent>,
 }
 
 impl CaseRun {
@@ -403,6 +410,7 @@ pub fn sweeps_and_branch(
         ghost: Vec::new(),
         ghost_ring_up: Vec::new(),
         up_half_blocks: None,
+        named_events: Vec::new(),
     })
 }
 
@@ -422,6 +430,9 @@ pub fn run_case(
     );
     let shooter = Shooter::new(&h, setup.continuation.shooting);
     let mut stats = Stats::default();
+    run.named_events = Diagram::from_branch(&shooter, &run.branch)
+        .map_err(oerr)?
+        .events;
     let cfg = &setup.sweep.cfg;
     run.ghost = ghost_study(setup, &run.branch, cfg, &GHOST_OFFSETS_HZ).map_err(oerr)?;
     if let Some(fold) = run.fold_hz() {

@@ -186,6 +186,11 @@ impl Continuer<'_, '_> {
         let gaps = Gaps::of(self.shooter.base);
         let mut out = Vec::new();
         let graze = (test_grazing(a, gaps) > 0.0) != (test_grazing(b, gaps) > 0.0);
+        // At a rigid stop the multipliers diverge at grazing (the saltation matrix grows like
+        // the inverse impact speed): the interval holds a non-smooth point, across which no
+        // smooth event is tested for, and a turn there is not a fold. The branches that meet
+        // at such a point are the business of `impacting`.
+        let rigid = self.shooter.base.has_rigid_stop();
         let mut corner = false;
         if graze {
             // Located on the stop-free branch; a failure leaves the grazing unlocated (the
@@ -198,7 +203,7 @@ impl Continuer<'_, '_> {
                     }
                     corner = (a.param_tangent() > 0.0) != (b.param_tangent() > 0.0);
                 }
-                if corner {
+                if corner && !rigid {
                     let mut fold = g.clone();
                     fold.kind = EventKind::Fold;
                     fold.multiplier_crossing =
@@ -216,8 +221,9 @@ impl Continuer<'_, '_> {
         let plus1 = changes(test_plus_one, b);
         let minus1 = changes(test_minus_one, b);
         let torus = a.orbit.unstable_count() != b.orbit.unstable_count() && !plus1 && !minus1;
-        // At a corner the changes of stability belong to the corner (the fold above).
-        if !corner {
+        // At a corner the changes of stability belong to the corner (the fold above); across
+        // a rigid stop's grazing they belong to no smooth event.
+        if !(corner || graze && rigid) {
             let b = &*b;
             if turn {
                 let mut e = self.locate(EventKind::Fold, k, a, b, ds, test_fold, gaps)?;

@@ -51,10 +51,16 @@ use crate::physics::harvester::{Harvester, State};
 use crate::study::orbit::{Forcing, Orbit, OrbitError, Parameter, Shooter};
 
 mod corrector;
+mod diagram;
 mod events;
+pub mod impacting;
 mod types;
 
 use corrector::Continuer;
+pub use diagram::{
+    all_stops_rigid, diagram, frequency_diagram, BranchEnd, BranchKind, Diagram, DiagramBranch,
+    DiagramEvent, DiagramPoint, EndKind, EventKind as DiagramEventKind,
+};
 pub use types::{Branch, BranchPoint, ContinuationSettings, Event, EventKind, Rejection};
 
 type Vector5 = SVector<f64, 5>;

@@ -41,8 +41,9 @@
 //! # Files
 //! This file holds what an orbit is (its drive, settings, errors and summary); `shooter.rs`
 //! the period map and Newton's method on it, `variational.rs` the variational equations with
-//! their saltation matrices, and `period_sums.rs` the sums over one period behind an
-//! [`OrbitSummary`].
+//! their saltation matrices, `period_sums.rs` the sums over one period behind an
+//! [`OrbitSummary`], and `symmetry.rs` the mirror symmetry x -> -x with the half-period map
+//! of symmetric orbits.
 //!
 //! [`Dopri5`]: crate::ode::Dopri5
 //! [`Harvester::scales`]: crate::physics::harvester::Harvester::scales
@@ -57,9 +58,11 @@ use crate::physics::harvester::State;
 
 mod period_sums;
 mod shooter;
+mod symmetry;
 mod variational;
 
 pub use shooter::{mode_of, Linearised, Shooter};
+pub use symmetry::{mirror, HalfMap, SYMMETRY_TOL};
 
 /// Dimension of the state with its variational equations: 4 + 16 (monodromy) + 4 (dP/dp).
 pub const VARIATIONAL_DIM: usize = 24;

@@ -120,6 +120,22 @@ impl<'a> Shooter<'a> {
         y: State,
         stats: &mut Stats,
     ) -> Result<Linearised, SolverError> {
+        self.linearise_over(forcing, param, phase_rad, y, forcing.period_s(), stats)
+    }
+
+    /// As [`Shooter::linearise`] for the flow over `duration_s` instead of one period (the
+    /// half-period map of a symmetric orbit): the end state, its derivative with respect to
+    /// the start state, and with respect to the parameter (for the frequency at a fixed
+    /// fraction of the period, `duration_s * f` fixed).
+    pub fn linearise_over(
+        &self,
+        forcing: &Forcing,
+        param: Parameter,
+        phase_rad: f64,
+        y: State,
+        duration_s: f64,
+        stats: &mut Stats,
+    ) -> Result<Linearised, SolverError> {
         let model = self.model(forcing, phase_rad);
         let sys = Variational {
             model: &model,
@@ -141,7 +157,7 @@ impl<'a> Shooter<'a> {
         let opts = base.augmented(atol);
         let mut ode = Engine::new(&sys, 0.0, z0, mode_of(&model, &y), opts, true);
         let period = forcing.period_s();
-        ode.integrate_observed(period, &mut crate::ode::Steps(|_: &Step<24>, _| {}))?;
+        ode.integrate_observed(duration_s, &mut crate::ode::Steps(|_: &Step<24>, _| {}))?;
         *stats += ode.stats();
         let z = ode.z();
         let end = state_of(&z);
@@ -149,9 +165,9 @@ impl<'a> Shooter<'a> {
         self.drop_unused(&mut monodromy);
         let mut dp = Vector4::new(z[20], z[21], z[22], z[23]);
         if param == Parameter::Frequency {
-            // The period T = 1/f moves with the frequency: + f(y(T)) dT/df.
-            let f_end = model.rhs(ode.mode(), period, &end);
-            dp -= f_end * (period * period);
+            // The end time t = c/f moves with the frequency: + f(y(t)) dt/df, dt/df = -t T.
+            let f_end = model.rhs(ode.mode(), duration_s, &end);
+            dp -= f_end * (duration_s * period);
         }
         Ok(Linearised { end, monodromy, dp })
     }

@@ -43,9 +43,13 @@ use crate::ode::{SolverError, Stats};
 use crate::physics::harvester::Harvester;
 use crate::study::steady::{steady_config_across_folds, Measurement, SteadyConfig};
 use crate::study::stepped::{
-    continue_sweep, first_contact, in_contact, values_beyond, with_midpoints, Drive, SteppedDrive,
-    Sweep, Transition,
+    continue_sweep, first_contact, in_contact, values_beyond, with_midpoints, Approach, Drive,
+    SteppedDrive, Sweep, Transition,
 };
+
+mod down;
+
+pub use down::{DownEndKind, DownSweepReport};
 
 /// A coarse step is a jump candidate when the total power falls by more than this fraction
 /// relative to the previous step (which must be in contact).
@@ -274,10 +278,22 @@ impl SweepSettings {
         accel_rms_g: f64,
         progress: impl FnMut(usize),
     ) -> Result<SweepReport, SolverError> {
+        self.run_with(device, accel_rms_g, Approach::Jump, progress)
+    }
+
+    /// As [`SweepSettings::run`], each step and each refinement trial reached by `approach`
+    /// (the extension beyond the range, where there is one, steps at once).
+    pub fn run_with(
+        &self,
+        device: &Device,
+        accel_rms_g: f64,
+        approach: Approach,
+        progress: impl FnMut(usize),
+    ) -> Result<SweepReport, SolverError> {
         let freqs = &self.freqs_hz;
         let base = Harvester::new(device, Sine::from_rms_g(accel_rms_g, freqs[0]));
         let cont = frequency_continuation(&base, accel_rms_g, &self.cfg);
-        let mut sweep = cont.run(freqs, progress)?;
+        let mut sweep = cont.run_with(freqs, approach, progress)?;
         let n = sweep.steps.len();
         let mut extended_from = None;
         let last_in_contact = sweep
@@ -299,7 +315,7 @@ impl SweepSettings {
                 extended_from = Some(n);
             }
         }
-        let mut report = analyse_up_sweep(&cont, sweep, self.refine_tol_hz)?;
+        let mut report = analyse_up_sweep(&cont, sweep, self.refine_tol_hz, approach)?;
         report.extended_from = extended_from;
         Ok(report)
     }
@@ -309,6 +325,7 @@ fn analyse_up_sweep<D: Drive>(
     cont: &SteppedDrive<'_, D>,
     sweep: Sweep,
     tol: f64,
+    approach: Approach,
 ) -> Result<SweepReport, SolverError> {
     let mut refine_stats = Stats::default();
     let steps = &sweep.steps;
@@ -316,7 +333,7 @@ fn analyse_up_sweep<D: Drive>(
     let contact_at_start = k_on == Some(0);
     let onset = match k_on {
         Some(k) if k > 0 => {
-            let r = cont.refine_steps(&sweep, k, |m| !in_contact(m), tol)?;
+            let r = cont.refine_steps_with(&sweep, k, |m| !in_contact(m), tol, approach)?;
             refine_stats += r.stats;
             Some(r.transition)
         }
@@ -333,7 +350,8 @@ fn analyse_up_sweep<D: Drive>(
                 continue;
             }
             let threshold = (a.p_total_w() * b.p_total_w()).sqrt();
-            let r = cont.refine_steps(&sweep, k, |m| m.p_total_w() > threshold, tol)?;
+            let r =
+                cont.refine_steps_with(&sweep, k, |m| m.p_total_w() > threshold, tol, approach)?;
             refine_stats += r.stats;
             let ratio = r.after.measurement.p_total_w() / r.before.measurement.p_total_w();
             if ratio < 1.0 - JUMP_MIN_DROP {
@@ -343,7 +361,7 @@ fn analyse_up_sweep<D: Drive>(
             }
         }
         if let Some(k) = ((k0 + 1)..steps.len()).find(|&k| !in_contact(&steps[k].measurement)) {
-            let r = cont.refine_steps(&sweep, k, in_contact, tol)?;
+            let r = cont.refine_steps_with(&sweep, k, in_contact, tol, approach)?;
             refine_stats += r.stats;
             contact_lost = Some(r.transition);
         }
@@ -358,137 +376,6 @@ fn analyse_up_sweep<D: Drive>(
         contact_lost,
         refine_stats,
     })
-}
-
-/// A down-sweep: the stepped sine from high to low frequency, each step from the previous
-/// final state, with its jump up and its first contact refined.
-///
-/// * **Jump up**: a candidate is a step whose total power exceeds the previous step's by more
-///   than a factor 1 / (1 - [`CANDIDATE_DROP`]); it is refined by bisection (trials continue
-///   from the state at the bracket's high-frequency end, "still before" meaning "total power
-///   below the geometric mean of the two coarse steps'"), and confirmed when the power still
-///   rises by more than that factor across the final bracket (a discontinuity keeps its full
-///   rise however narrow the bracket). On an end-stop harvester the lower (non-impacting)
-///   branch ends where the orbit grazes a stop or at a fold, and the response jumps up onto
-///   the impacting branch there.
-/// * **Contact**: the first step in contact, refined with "still before" meaning "no contact".
-#[derive(Debug, Clone)]
-pub struct DownSweepReport {
-    /// The coarse sweep, frequencies decreasing.
-    pub sweep: Sweep,
-    /// The confirmed jump up (`before` is the higher frequency).
-    pub jump: Option<Transition>,
-    /// Total power after / before across the refined jump bracket (above 1).
-    pub jump_power_ratio: Option<f64>,
-    /// First contact with a stop, refined (`None` if the sweep never touches one or is in
-    /// contact from its first step).
-    pub contact: Option<Transition>,
-    /// Total power after / before across the refined contact bracket.
-    pub contact_power_ratio: Option<f64>,
-    /// Integrator counters of every refinement trial.
-    pub refine_stats: Stats,
-}
-
-/// How a down-sweep leaves the lower (non-impacting) branch.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum DownEndKind {
-    /// A confirmed jump up (a discontinuity of the power).
-    Jump,
-    /// The first contact without a confirmed jump: where the lower branch ends at a grazing
-    /// point and the response moves onto the impacting branch with a power change below
-    /// [`JUMP_MIN_DROP`] (at a grazing corner the two orbits nearly coincide).
-    ContactOnset,
-}
-
-impl DownEndKind {
-    /// Label for tables.
-    pub fn label(self) -> &'static str {
-        match self {
-            DownEndKind::Jump => "jump",
-            DownEndKind::ContactOnset => "contact onset, no jump in power",
-        }
-    }
-}
-
-impl DownSweepReport {
-    /// Where the down-sweep leaves the lower branch: the jump if there is one, else the first
-    /// contact (labelled, so that a caller never presents the latter as a jump).
-    pub fn branch_end(&self) -> Option<(DownEndKind, Transition)> {
-        self.jump
-            .map(|t| (DownEndKind::Jump, t))
-            .or(self.contact.map(|t| (DownEndKind::ContactOnset, t)))
-    }
-
-    /// The coarse measurements, in sweep order (frequency decreasing).
-    pub fn measurements(&self) -> impl Iterator<Item = &Measurement> {
-        self.sweep.steps.iter().map(|s| &s.measurement)
-    }
-
-    /// Integrator counters of the sweep and its refinements together.
-    pub fn total_stats(&self) -> Stats {
-        let mut s = self.sweep.stats;
-        s += self.refine_stats;
-        s
-    }
-}
-
-impl SweepSettings {
-    /// Runs the down-sweep of `device` at `accel_rms_g` over the same grid taken from its
-    /// highest to its lowest frequency (no extension), and refines its jump up and first
-    /// contact to brackets narrower than the refinement tolerance. `progress(i)` is called
-    /// after each coarse step.
-    pub fn run_down(
-        &self,
-        device: &Device,
-        accel_rms_g: f64,
-        progress: impl FnMut(usize),
-    ) -> Result<DownSweepReport, SolverError> {
-        let mut freqs = self.freqs_hz.clone();
-        freqs.sort_by(|a, b| b.total_cmp(a));
-        let base = Harvester::new(device, Sine::from_rms_g(accel_rms_g, freqs[0]));
-        let cont = frequency_continuation(&base, accel_rms_g, &self.cfg);
-        let sweep = cont.run(&freqs, progress)?;
-        let tol = self.refine_tol_hz;
-        let mut refine_stats = Stats::default();
-        let steps = &sweep.steps;
-        let rise = 1.0 / (1.0 - CANDIDATE_DROP);
-        let confirm = 1.0 / (1.0 - JUMP_MIN_DROP);
-        let mut jump = None;
-        let mut jump_power_ratio = None;
-        for k in 1..steps.len() {
-            let a = &steps[k - 1].measurement;
-            let b = &steps[k].measurement;
-            if b.p_total_w() <= rise * a.p_total_w() {
-                continue;
-            }
-            let threshold = (a.p_total_w() * b.p_total_w()).sqrt();
-            let r = cont.refine_steps(&sweep, k, |m| m.p_total_w() < threshold, tol)?;
-            refine_stats += r.stats;
-            let ratio = r.after.measurement.p_total_w() / r.before.measurement.p_total_w();
-            if ratio > confirm {
-                jump = Some(r.transition);
-                jump_power_ratio = Some(ratio);
-                break;
-            }
-        }
-        let (contact, contact_power_ratio) = match first_contact(&sweep) {
-            Some(k) if k > 0 => {
-                let r = cont.refine_steps(&sweep, k, |m| !in_contact(m), tol)?;
-                refine_stats += r.stats;
-                let ratio = r.after.measurement.p_total_w() / r.before.measurement.p_total_w();
-                (Some(r.transition), Some(ratio))
-            }
-            _ => (None, None),
-        };
-        Ok(DownSweepReport {
-            sweep,
-            jump,
-            jump_power_ratio,
-            contact,
-            contact_power_ratio,
-            refine_stats,
-        })
-    }
 }
 
 /// Differences between a sweep and its refined repetition ([`SweepSettings::halved`]).
@@ -598,7 +485,7 @@ mod tests {
     #[test]
     fn refinement_stats_count_every_trial_exactly_once() {
         let device = Device::from_toml_str(
-            include_str!("../../data/prototype1.toml"),
+            include_str!("../../../data/prototype1.toml"),
             "data/prototype1.toml",
         )
         .unwrap()

@@ -1,0 +1,343 @@
+//! Sweeps whose answer does not depend on their step: the device's half-power band that sets
+//! the default step, the phase-continuous ramp that joins two steps of a stepped sweep, and the
+//! swept sine at a stated rate (a chirp, as a lab sweeps).
+//!
+//! # Why a frequency step kicks the response
+//! Near a resonance of quality factor Q the steady response's phase moves by about
+//! 2 Q df / f0 per step df: a step taken at once leaves the state of the old frequency as the
+//! initial condition at the new one, and the transient that follows overshoots the new steady
+//! response by a fraction of order df / w (w = f0 / Q the half-power width). Next to the end of
+//! a branch (a fold, or the grazing of the non-impacting orbit) that overshoot is enough to
+//! carry the state across to the other branch, so that a stepped sweep leaves the branch early,
+//! by an amount that depends on the step rather than on the device.
+//!
+//! # The ramp
+//! Here a step is instead reached by a ramp: frequency and amplitude move in time at a
+//! continuous phase ([`crate::drive::Chirp`]) over a whole number of cycles, at a rate that
+//! rises from zero and falls back to zero ([`crate::drive::Profile::Smooth`]) and on average
+//! moves the frequency by a tenth of the half-power width per ring-up time 1/(pi w)
+//! ([`default_ramp_rate_hz_per_s`]): the response follows the branch adiabatically, and the
+//! sweep leaves it where it ends. The ramp ends at drive phase zero, where the next step's
+//! steady state starts, so that the drive's phase is continuous across the whole sweep.
+//!
+//! # The default step
+//! [`default_step_hz`] is a quarter of the linear half-power width ([`half_power_band`]),
+//! rounded down to 1, 2 or 5 times a power of ten: the steps resolve the resonance, and the
+//! ramps make the transitions independent of them.
+
+use crate::device::Device;
+use crate::drive::{Chirp, Profile, Sine};
+use crate::num::roots::{illinois, RootOptions, Sample};
+use crate::ode::{Dopri5, Observer, SolverError, Stats, Step};
+use crate::physics::contact::Mode;
+use crate::physics::harvester::{Harvester, State, SwitchKind};
+use crate::physics::linear::{open_circuit_resonance_hz, LinearResponse};
+use crate::study::steady::{steady_state, SteadyConfig};
+
+/// The resonance and half-power width of a device's linear response (the displacement per
+/// unit base acceleration of the model linearised about rest, transducer and loads included).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct HalfPowerBand {
+    /// The frequency of the largest displacement (Hz).
+    pub peak_hz: f64,
+    /// The width between the frequencies where the displacement is 1/sqrt(2) of its peak (Hz).
+    pub width_hz: f64,
+}
+
+/// Default steps per half-power width.
+pub const STEPS_PER_BAND: f64 = 4.0;
+
+/// How far the frequency moves per ring-up time 1/(pi w) during a ramp, in half-power widths.
+pub const RAMP_BANDS_PER_RING: f64 = 0.02;
+
+/// The linear half-power band of `device`: the displacement's peak searched from a tenth to
+/// ten times the open-circuit resonance on a grid of 0.1 % steps and refined by golden
+/// section, the half-power frequencies on either side by the root finder to 1e-9 of the peak
+/// frequency. `None` when either half-power frequency lies outside the searched range (an
+/// overdamped device).
+pub fn half_power_band(device: &Device) -> Option<HalfPowerBand> {
+    let lin = LinearResponse::of(device);
+    let x = |f: f64| lin.displacement_per_accel(f);
+    let f_oc = open_circuit_resonance_hz(device);
+    let (lo, hi) = (0.1 * f_oc, 10.0 * f_oc);
+    let ratio: f64 = 1.001;
+    let n = ((hi / lo).ln() / ratio.ln()).ceil() as usize;
+    let grid = |i: usize| lo * ratio.powi(i as i32);
+    let k = (0..=n).max_by(|&a, &b| x(grid(a)).total_cmp(&x(grid(b))))?;
+    if k == 0 || k == n {
+        return None;
+    }
+    // Golden section on the bracket around the grid's peak.
+    let (mut a, mut b) = (grid(k - 1), grid(k + 1));
+    let g = 0.5 * (5f64.sqrt() - 1.0);
+    for _ in 0..100 {
+        let (c, d) = (b - g * (b - a), a + g * (b - a));
+        if x(c) > x(d) {
+            b = d;
+        } else {
+            a = c;
+        }
+    }
+    let peak_hz = 0.5 * (a + b);
+    let half = x(peak_hz) / std::f64::consts::SQRT_2;
+    let h = |f: f64| x(f) - half;
+    let opts = RootOptions {
+        f_tol: None,
+        x_tol_abs: 1e-9 * peak_hz,
+        x_tol_rel: 0.0,
+        max_iter: 200,
+    };
+    let root = |a: f64, b: f64| -> Option<f64> {
+        if (h(a) > 0.0) == (h(b) > 0.0) {
+            return None;
+        }
+        let r = illinois(
+            |f| -> Result<(f64, ()), ()> { Ok((h(f), ())) },
+            Sample::new(a, h(a), ()),
+            Sample::new(b, h(b), ()),
+            &opts,
+        )
+        .ok()?;
+        Some(0.5 * (r.positive.x + r.non_positive.x))
+    };
+    let f_lo = root(lo, peak_hz)?;
+    let f_hi = root(peak_hz, hi)?;
+    Some(HalfPowerBand {
+        peak_hz,
+        width_hz: f_hi - f_lo,
+    })
+}
+
+/// The largest of 1, 2 and 5 times a power of ten not above `x` (> 0).
+fn round_down_nice(x: f64) -> f64 {
+    let p = 10f64.powf(x.log10().floor());
+    [5.0, 2.0, 1.0]
+        .into_iter()
+        .map(|m| m * p)
+        .find(|&v| v <= x * (1.0 + 1e-12))
+        .unwrap_or(p)
+}
+
+/// The default frequency step of a sweep of `device` over `from_hz..to_hz` (Hz): a quarter of
+/// its half-power width rounded down to 1, 2 or 5 times a power of ten, at most a tenth of
+/// the range, and at least the range over [`crate::study::sweep::MAX_STEPS`] steps; a
+/// hundredth of the range for a device without a half-power band.
+pub fn default_step_hz(device: &Device, from_hz: f64, to_hz: f64) -> f64 {
+    let span = (to_hz - from_hz).abs();
+    let step = half_power_band(device).map_or(0.01 * span, |b| {
+        round_down_nice(b.width_hz / STEPS_PER_BAND)
+    });
+    step.min(0.1 * span)
+        .max(span / crate::study::sweep::MAX_STEPS as f64)
+}
+
+/// The default ramp rate of `device` (Hz/s): [`RAMP_BANDS_PER_RING`] half-power widths per
+/// ring-up time 1/(pi w), that is pi w^2 / 10; `None` without a half-power band.
+pub fn default_ramp_rate_hz_per_s(device: &Device) -> Option<f64> {
+    half_power_band(device)
+        .map(|b| RAMP_BANDS_PER_RING * std::f64::consts::PI * b.width_hz * b.width_hz)
+}
+
+/// Moves the drive of `base` from (frequency, RMS acceleration) `from` to `to` by a smooth ramp
+/// of at least `min_duration_s` (rounded up to a whole number of cycles at the mean frequency, so
+/// that it ends at drive phase zero), from the state `y` in `mode` at drive phase zero, with
+/// relative tolerance `rtol`. Returns the state and mode at the end and the counters.
+pub fn ramp(
+    base: &Harvester<Sine>,
+    from: (f64, f64),
+    to: (f64, f64),
+    min_duration_s: f64,
+    y: State,
+    mode: Mode,
+    rtol: f64,
+) -> Result<(State, Mode, Stats), SolverError> {
+    let f_mean = 0.5 * (from.0 + to.0);
+    let cycles = (min_duration_s * f_mean).ceil().max(1.0);
+    let duration_s = cycles / f_mean;
+    let amp = |g: f64| std::f64::consts::SQRT_2 * g * crate::G;
+    let model = base.with_excitation(Chirp {
+        f0_hz: from.0,
+        f1_hz: to.0,
+        a0_m_s2: amp(from.1),
+        a1_m_s2: amp(to.1),
+        duration_s,
+        phase_rad: 0.0,
+        profile: Profile::Smooth,
+    });
+    let mut ode = Dopri5::new(0.0, y, mode, model.solver_options(rtol));
+    ode.integrate(&model, duration_s, |_, _| {})?;
+    Ok((ode.y(), ode.mode(), ode.stats()))
+}
+
+/// A swept sine: the drive's frequency moves linearly at `rate_hz_per_s` from `from_hz` to
+/// `to_hz` (either way), at a continuous phase, from the steady state at `from_hz`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ChirpSweep {
+    /// First frequency (Hz).
+    pub from_hz: f64,
+    /// Last frequency (Hz).
+    pub to_hz: f64,
+    /// The sweep rate (Hz/s, positive).
+    pub rate_hz_per_s: f64,
+    /// Cycles per reported window.
+    pub window_cycles: usize,
+    /// The steady state at the first frequency, and the integrator's tolerance.
+    pub cfg: SteadyConfig,
+}
+
+/// One window of a swept sine.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ChirpWindow {
+    /// The drive's frequency at the window's middle (Hz).
+    pub freq_hz: f64,
+    /// RMS voltage of load 1 over the window (V).
+    pub v1_rms_v: f64,
+    /// RMS voltage of load 2 over the window (V).
+    pub v2_rms_v: f64,
+    /// Mean power of the loads over the window (W).
+    pub p_total_w: f64,
+    /// Largest |x| (m).
+    pub x_peak_m: f64,
+    /// True when the mass touched a stop in the window.
+    pub contact: bool,
+}
+
+/// A swept sine's windows and where it starts and stops touching the stops.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ChirpReport {
+    /// The sweep.
+    pub sweep: ChirpSweep,
+    /// The windows in time order.
+    pub windows: Vec<ChirpWindow>,
+    /// The frequency of the first window in contact after one without (Hz).
+    pub first_contact_hz: Option<f64>,
+    /// The frequency of the window in contact before the last one without (Hz): where a
+    /// sweep up leaves the impacting orbits for good.
+    pub last_contact_hz: Option<f64>,
+    /// Integrator counters.
+    pub stats: Stats,
+}
+
+/// Sums over the windows of a swept sine.
+struct Windows<'m> {
+    model: &'m Harvester<Chirp>,
+    cycles: f64,
+    current: Option<i64>,
+    acc: [f64; 5],
+    t0: f64,
+    out: Vec<ChirpWindow>,
+}
+
+impl Windows<'_> {
+    fn close(&mut self, t1: f64) {
+        let dur = t1 - self.t0;
+        if self.current.is_some() && dur > 0.0 {
+            let [v1sq, v2sq, x_peak, contact, _] = self.acc;
+            self.out.push(ChirpWindow {
+                freq_hz: self.model.excitation.freq_hz(0.5 * (self.t0 + t1)),
+                v1_rms_v: (v1sq / dur).sqrt(),
+                v2_rms_v: (v2sq / dur).sqrt(),
+                p_total_w: (v1sq + v2sq) / dur / self.model.load_resistance(),
+                x_peak_m: x_peak,
+                contact: contact > 0.0,
+            });
+        }
+        self.acc = [0.0; 5];
+        self.t0 = t1;
+    }
+}
+
+impl Observer<4, Mode> for Windows<'_> {
+    fn step(&mut self, st: &Step<4>, mode: Mode) {
+        let two_pi = 2.0 * std::f64::consts::PI;
+        let mid = st.t0 + 0.5 * st.h;
+        let k = (self.model.excitation.phase(mid) / (two_pi * self.cycles)).floor() as i64;
+        if self.current != Some(k) {
+            self.close(st.t0);
+            self.current = Some(k);
+        }
+        let model = self.model;
+        let el = |y: &State| model.electrical(y).v;
+        self.acc[0] += st.integrate(|y| el(y)[0].powi(2));
+        self.acc[1] += st.integrate(|y| el(y)[1].powi(2));
+        self.acc[2] = self.acc[2]
+            .max(st.y1[0].abs())
+            .max(st.at_theta(0.5)[0].abs());
+        if mode.in_contact() {
+            self.acc[3] += 1.0;
+        }
+    }
+
+    fn switched(&mut self, _t: f64, from: Mode, to: Mode) {
+        if SwitchKind::of(from, to).is_impact() {
+            self.acc[3] += 1.0;
+        }
+    }
+}
+
+impl ChirpSweep {
+    /// Runs the swept sine on `device` at `accel_rms_g` (g rms).
+    pub fn run(&self, device: &Device, accel_rms_g: f64) -> Result<ChirpReport, SolverError> {
+        let base = Harvester::new(device, Sine::from_rms_g(accel_rms_g, self.from_hz));
+        let (_, y, mode, mut stats) =
+            steady_state(&base, base.rest_state(), Mode::Free, accel_rms_g, &self.cfg)?;
+        let duration_s = (self.to_hz - self.from_hz).abs() / self.rate_hz_per_s;
+        let amp = std::f64::consts::SQRT_2 * accel_rms_g * crate::G;
+        let model = base.with_excitation(Chirp {
+            f0_hz: self.from_hz,
+            f1_hz: self.to_hz,
+            a0_m_s2: amp,
+            a1_m_s2: amp,
+            duration_s,
+            phase_rad: 0.0,
+            profile: Profile::Linear,
+        });
+        let mut w = Windows {
+            model: &model,
+            cycles: self.window_cycles.max(1) as f64,
+            current: None,
+            acc: [0.0; 5],
+            t0: 0.0,
+            out: Vec::new(),
+        };
+        let mut ode = Dopri5::new(0.0, y, mode, model.solver_options(self.cfg.rtol));
+        // In pieces of a second: the integrator's budget of steps is per call, and a stiff
+        // contact can take many steps per period over a long sweep.
+        let mut t = 0.0;
+        while t < duration_s {
+            t = (t + 1.0).min(duration_s);
+            ode.integrate_observed(&model, t, &mut w)?;
+        }
+        w.close(duration_s);
+        stats += ode.stats();
+        let windows = w.out;
+        let first_contact_hz = windows
+            .windows(2)
+            .find(|p| !p[0].contact && p[1].contact)
+            .map(|p| p[1].freq_hz);
+        let last_contact_hz = windows
+            .windows(2)
+            .rfind(|p| p[0].contact && !p[1].contact)
+            .map(|p| p[0].freq_hz);
+        Ok(ChirpReport {
+            sweep: self.clone(),
+            windows,
+            first_contact_hz,
+            last_contact_hz,
+            stats,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn nice_rounding_keeps_1_2_5() {
+        assert_eq!(round_down_nice(0.37), 0.2);
+        assert_eq!(round_down_nice(1.0), 1.0);
+        assert_eq!(round_down_nice(7.3), 5.0);
+        assert_eq!(round_down_nice(0.019), 0.01);
+    }
+}
