@@ -3,6 +3,9 @@
 //! and synchronous switches (SSHI, SECE) whose resets happen at the displacement extrema, the
 //! `v = 0` events.
 //!
+//! The module reads better whole: the modes' equations, their guards and the resets at the
+//! switches are one state machine, each part written against the others.
+//!
 //! # State and conventions
 //! The state stays `(x, v, e1, e2)`: `e1` is the transducer's (the piezoelectric element's
 //! voltage `Vp`, or the coil current `I`), `e2` the storage capacitor's voltage `Vs`. The
