@@ -345,6 +345,18 @@ impl Device {
             c.positive("mechanics.stiffness_n_per_m", m.stiffness_n_per_m)?;
         }
         c.positive("mechanics.damping_n_s_per_m", m.damping_n_s_per_m)?;
+        // The natural frequency sqrt(k/m) sets the integrator's scales and largest step: it
+        // must be a normal positive number, not an overflow or an underflow of k/m.
+        let w2 = m.stiffness_n_per_m / m.mass_kg;
+        if m.stiffness_n_per_m.is_finite() && !(w2.is_normal() && w2 > 0.0) {
+            return Err(c.message(
+                "mechanics.stiffness_n_per_m",
+                &format!(
+                    "over mechanics.mass_kg gives k/m = {w2:e} (1/s^2): the natural frequency \
+                     sqrt(k/m) must be a finite positive number"
+                ),
+            ));
+        }
         if let Some(f) = m.measured_resonance_hz {
             c.positive("mechanics.measured_resonance_hz", f)?;
         }
