@@ -2,13 +2,13 @@
 //! rows), the energy ledger of every interface, and bad input. Release build, 2-core machine:
 //! about 2 s in all.
 
+use crate::common::validation::assert_all;
 use endstop::device::{Device, ParamError};
 use endstop::drive::Sine;
 use endstop::ode::Dopri5;
 use endstop::physics::harvester::State;
 use endstop::physics::interface::{audit_start, InterfaceAudit, Interfaced};
 use endstop::validation::interfaces::{coupling_checks, coupling_rows, weak_coupling_checks};
-use endstop::validation::Check;
 
 fn root() -> std::path::PathBuf {
     std::path::Path::new(env!("CARGO_MANIFEST_DIR")).to_path_buf()
@@ -17,30 +17,6 @@ fn root() -> std::path::PathBuf {
 fn load(rel: &str) -> Device {
     let text = std::fs::read_to_string(root().join(rel)).unwrap();
     Device::from_toml_str(&text, rel).unwrap_or_else(|e| panic!("{rel}: {e}"))
-}
-
-fn assert_all(checks: &[Check]) {
-    assert!(!checks.is_empty(), "no checks");
-    for c in checks {
-        eprintln!(
-            "{} | {} | theirs {:e} | ours {:e} | difference {:e} (tolerance {:e})",
-            c.reference,
-            c.quantity,
-            c.theirs,
-            c.ours,
-            c.difference(),
-            c.tolerance
-        );
-    }
-    for c in checks {
-        assert!(
-            c.passes(),
-            "{}: {} outside {}",
-            c.quantity,
-            c.difference(),
-            c.tolerance
-        );
-    }
 }
 
 /// Standard bridge, parallel and series SSHI and SECE against their closed forms.

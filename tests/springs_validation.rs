@@ -4,42 +4,9 @@
 //! barrier; NLvib's Duffing example. Cases in `endstop::validation::spring_cases`; each test
 //! prints its checks and fails on the first one outside its tolerance.
 
-use endstop::device::Device;
-use endstop::validation::{spring_cases, Check};
+use endstop::validation::spring_cases;
 
-fn device(name: &str) -> Device {
-    let rel = format!("data/validation/{name}.toml");
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(&rel);
-    let text = std::fs::read_to_string(path).unwrap();
-    Device::from_toml_str(&text, &rel).unwrap_or_else(|e| panic!("{rel}: {e}"))
-}
-
-fn assert_all(checks: &[Check]) {
-    assert!(!checks.is_empty(), "no checks");
-    for c in checks {
-        eprintln!(
-            "{} | {} | theirs {:e} | ours {:e} | difference {:e} (tolerance {:e})",
-            c.group,
-            c.quantity,
-            c.theirs,
-            c.ours,
-            c.difference(),
-            c.tolerance
-        );
-    }
-    for c in checks {
-        assert!(
-            c.passes(),
-            "{}: {} against {}: difference {:e} above {:e} ({})",
-            c.group,
-            c.quantity,
-            c.reference,
-            c.difference(),
-            c.tolerance,
-            c.reason
-        );
-    }
-}
+use crate::common::validation::{assert_all, device};
 
 fn stationary(i: usize) {
     let (name, psd) = spring_cases::STATIONARY_CASES[i];

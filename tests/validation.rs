@@ -4,49 +4,9 @@
 //! outside its tolerance; the cost of each is in its doc comment (measured on the 2-core
 //! development machine, release build).
 
-use endstop::device::Device;
-use endstop::validation::{cases, Check};
+use endstop::validation::cases;
 
-fn root() -> std::path::PathBuf {
-    std::path::Path::new(env!("CARGO_MANIFEST_DIR")).to_path_buf()
-}
-
-fn device(name: &str) -> Device {
-    let rel = format!("data/validation/{name}.toml");
-    let text = std::fs::read_to_string(root().join(&rel)).unwrap();
-    Device::from_toml_str(&text, &rel).unwrap_or_else(|e| panic!("{rel}: {e}"))
-}
-
-/// Prints every check and asserts each one that is judged (an open question is printed, not
-/// judged).
-fn assert_all(checks: &[Check]) {
-    assert!(!checks.is_empty(), "no checks");
-    for c in checks {
-        eprintln!(
-            "{} | {} | {} | theirs {:e} | ours {:e} | difference {:e} (tolerance {:e}){}",
-            c.group,
-            c.reference,
-            c.quantity,
-            c.theirs,
-            c.ours,
-            c.difference(),
-            c.tolerance,
-            if c.is_open() { " [open question]" } else { "" }
-        );
-    }
-    for c in checks.iter().filter(|c| !c.is_open()) {
-        assert!(
-            c.passes(),
-            "{}: {} against {}: difference {:e} above {:e} ({})",
-            c.group,
-            c.quantity,
-            c.reference,
-            c.difference(),
-            c.tolerance,
-            c.reason
-        );
-    }
-}
+use crate::common::validation::{assert_all, device, root};
 
 /// The piezoelectric closed form against the time-domain steady state at four frequencies and
 /// against the general linear response.

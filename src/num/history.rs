@@ -26,6 +26,10 @@
 //! non-implausible set between the pool's points is not missed. The same pool gives the
 //! 2-D projections: per cell of each pair of inputs, the least implausibility over the pool's
 //! points there and the share of them that are non-implausible (the optical depth).
+//!
+//! The module reads better whole: a wave's design, its emulators, the cut and the pool that
+//! measures what is left are one loop over shared state (the runs so far, the waves' emulators,
+//! the pool's implausibilities), and each step is written against the others.
 
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;

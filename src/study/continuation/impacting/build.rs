@@ -1,5 +1,9 @@
 //! The whole diagram of a rigid-stop device: the non-impacting branch, its grazings, and the
 //! impacting branches started from them and from one another (see the parent module).
+//!
+//! The module reads better whole: it is one worklist ([`rigid_diagram`] and its builder), in
+//! which the end of each branch queues the branches that start there, so every case reads
+//! beside the others it hands work to.
 
 use std::collections::VecDeque;
 

@@ -1,0 +1,48 @@
+//! What the validation tests share: the validation devices and the assertion of a set of
+//! checks.
+
+use endstop::device::Device;
+use endstop::validation::Check;
+
+/// The repository's root.
+pub fn root() -> std::path::PathBuf {
+    std::path::Path::new(env!("CARGO_MANIFEST_DIR")).to_path_buf()
+}
+
+/// The validation device `data/validation/<name>.toml`.
+pub fn device(name: &str) -> Device {
+    let rel = format!("data/validation/{name}.toml");
+    let text = std::fs::read_to_string(root().join(&rel)).unwrap();
+    Device::from_toml_str(&text, &rel).unwrap_or_else(|e| panic!("{rel}: {e}"))
+}
+
+/// Prints every check and asserts each one that is judged (an open question is printed, not
+/// judged).
+pub fn assert_all(checks: &[Check]) {
+    assert!(!checks.is_empty(), "no checks");
+    for c in checks {
+        eprintln!(
+            "{} | {} | {} | theirs {:e} | ours {:e} | difference {:e} (tolerance {:e}){}",
+            c.group,
+            c.reference,
+            c.quantity,
+            c.theirs,
+            c.ours,
+            c.difference(),
+            c.tolerance,
+            if c.is_open() { " [open question]" } else { "" }
+        );
+    }
+    for c in checks.iter().filter(|c| !c.is_open()) {
+        assert!(
+            c.passes(),
+            "{}: {} against {}: difference {:e} above {:e} ({})",
+            c.group,
+            c.quantity,
+            c.reference,
+            c.difference(),
+            c.tolerance,
+            c.reason
+        );
+    }
+}
