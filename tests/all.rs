@@ -41,6 +41,7 @@ mod robustness;
 mod spectral_noise;
 mod spectrum_fit;
 mod spice;
+mod springs_basins;
 mod springs_device;
 mod springs_validation;
 mod study_claims;
