@@ -302,6 +302,21 @@ pub const JOBS: &[Job] = &[
         &[BISTABLE],
     ),
     tool_run(
+        "own_device_springs_bistable_basins",
+        &[
+            "basins",
+            "--device",
+            BISTABLE,
+            "--freq",
+            "55",
+            "--accel-rms-g",
+            "0.5",
+            "--cells",
+            "31",
+        ],
+        &[BISTABLE],
+    ),
+    tool_run(
         "own_device_springs_bistable_random_low",
         &[
             "random",
