@@ -4,7 +4,7 @@
 use endstop::device::Device;
 use endstop::drive::Sine;
 use endstop::physics::harvester::Harvester;
-use endstop::study::attractors::{find_attractors, seeds, AttractorSearch, Place};
+use endstop::study::attractors::{find_attractors, seeds, AttractorSearch, Attractors, Place};
 use endstop::study::basins::{basins, BasinGrid, BasinSettings};
 use endstop::study::continuation::frequency_branch;
 use endstop::study::orbit::{Forcing, Shooter, ShootingConfig};
@@ -13,6 +13,24 @@ fn example(name: &str) -> Device {
     let path = format!("{}/data/examples/{name}.toml", env!("CARGO_MANIFEST_DIR"));
     let text = std::fs::read_to_string(&path).unwrap();
     Device::from_toml_str(&text, &path).unwrap()
+}
+
+/// The attractors of `device` under `forcing` from its wells at rest and 3 x 3 states over
+/// `grid`, with the default search.
+fn search(device: &Device, forcing: &Forcing, grid: &BasinGrid) -> Attractors {
+    let h = Harvester::new(
+        device,
+        Sine::from_rms_g(forcing.accel_rms_g, forcing.freq_hz),
+    );
+    find_attractors(
+        &h,
+        device,
+        forcing,
+        ShootingConfig::default(),
+        &seeds(device, grid, 3),
+        &AttractorSearch::default(),
+    )
+    .unwrap()
 }
 
 /// A bistable device under a weak drive (0.05 g rms at 30 Hz, below the wells' 40 Hz, far
@@ -40,15 +58,7 @@ fn each_well_keeps_its_orbit_and_its_bottom_at_low_drive() {
         nx: 7,
         nv: 5,
     };
-    let found = find_attractors(
-        &h,
-        &device,
-        &forcing,
-        ShootingConfig::default(),
-        &seeds(&device, &grid, 3),
-        &AttractorSearch::default(),
-    )
-    .unwrap();
+    let found = search(&device, &forcing, &grid);
     let places: Vec<Place> = found.found.iter().map(|f| f.place).collect();
     let left = places.iter().filter(|p| **p == Place::LeftWell).count();
     let right = places.iter().filter(|p| **p == Place::RightWell).count();
@@ -122,25 +132,13 @@ fn the_hardening_device_has_the_branch_s_two_stable_orbits_between_its_folds() {
         freq_hz: 110.0,
         accel_rms_g: 0.1,
     };
-    let h = Harvester::new(
-        &device,
-        Sine::from_rms_g(forcing.accel_rms_g, forcing.freq_hz),
-    );
     let grid = BasinGrid {
         x_m: (-4e-4, 4e-4),
         v_m_per_s: (-0.25, 0.25),
         nx: 3,
         nv: 3,
     };
-    let found = find_attractors(
-        &h,
-        &device,
-        &forcing,
-        ShootingConfig::default(),
-        &seeds(&device, &grid, 3),
-        &AttractorSearch::default(),
-    )
-    .unwrap();
+    let found = search(&device, &forcing, &grid);
     let labels: Vec<&str> = found.found.iter().map(|f| f.label.as_str()).collect();
     assert_eq!(labels, ["orbit, small", "orbit, large"], "{found:?}");
     let (small, large) = (&found.found[0].orbit, &found.found[1].orbit);

@@ -21,7 +21,6 @@ mod determinism;
 mod fit_cli;
 mod fit_paper;
 mod springs_bad_input_props;
-mod springs_basins_cli;
 mod springs_cli;
 
 /// Every file of `experiments/tests/` is a module here.
