@@ -47,6 +47,7 @@ mod springs_validation;
 mod study_claims;
 mod study_determinism;
 mod sweep_steps;
+mod swept_sine;
 mod validation;
 
 /// Every file of `tests/` is a module here.

@@ -109,8 +109,8 @@ pub(crate) struct RangeArgs {
     /// figures do, instead of by a phase-continuous ramp.
     #[arg(long)]
     steps_at_once: bool,
-    /// The rate of the ramps between steps (Hz/s); default: pi w^2 / 10 for the linear
-    /// half-power width w (the frequency moves a tenth of w per ring-up time 1/(pi w)).
+    /// The rate of the ramps between steps (Hz/s); default: pi w^2 / 50 for the linear
+    /// half-power width w (the frequency moves a fiftieth of w per ring-up time 1/(pi w)).
     #[arg(long)]
     ramp_rate: Option<f64>,
     /// RMS base acceleration (g = 9.81 m/s^2); the sine's amplitude is sqrt(2) times this.
