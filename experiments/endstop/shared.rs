@@ -13,7 +13,7 @@ use endstop::study::chirp::{
 use endstop::study::stepped::{linspace_step, Approach};
 use endstop::study::sweep::{self, SweepSettings, REFINE_TOL_HZ};
 
-use crate::common::{self, fmt_sig, load_device_file, Experiment, LoadedDevice};
+use crate::common::{fmt_sig, load_device_file, Experiment, LoadedDevice};
 
 /// The arguments of the two frequency studies (`sweep` and `response`): a sine drive (a
 /// measured record drives `random` only, whose spectra it is analysed by).
@@ -37,8 +37,8 @@ pub(crate) struct RangeArgs {
     /// figures do, instead of by a phase-continuous ramp.
     #[arg(long)]
     pub(crate) steps_at_once: bool,
-    /// The rate of the ramps between steps (Hz/s); default: pi w^2 / 10 for the linear
-    /// half-power width w (the frequency moves a tenth of w per ring-up time 1/(pi w)).
+    /// The rate of the ramps between steps (Hz/s); default: pi w^2 / 50 for the linear
+    /// half-power width w (the frequency moves a fiftieth of w per ring-up time 1/(pi w)).
     #[arg(long)]
     pub(crate) ramp_rate: Option<f64>,
     /// RMS base acceleration (g = 9.81 m/s^2); the sine's amplitude is sqrt(2) times this.
