@@ -242,7 +242,7 @@ impl Cont<'_> {
         let model = steady_model(self.device, Sine::from_rms_g(self.set.accel_rms_g, f))?;
         let y = self.state(u);
         let mut steady = measure(&model, &y, self.set.rtol)?;
-        let mu = multipliers(&lin.monodromy).ok_or_else(|| InterfaceError::NoConvergence {
+        let mu = multipliers(&lin.monodromy).ok_or(InterfaceError::NoConvergence {
             iterations,
             residual: f64::NAN,
             tol: self.set.tol,
