@@ -38,7 +38,8 @@ fn ngspice_available() -> bool {
         .is_ok_and(|o| o.status.success())
 }
 
-/// Copies the own-device runs' numbers and plots into the book's generated directory.
+/// Copies the own-device runs' numbers and plots into the book's generated directory, with
+/// the curve drawn from several of them ([`common::noise_curve`]).
 fn publish_own_device() -> Result<()> {
     let dst = common::book_generated_root().join("own_device");
     for job in JOBS.iter().filter(|j| j.is_tool_run()) {
@@ -66,7 +67,9 @@ fn publish_own_device() -> Result<()> {
             common::write_atomic(&dst.join(format!("{stem}.figure.md")), md.as_bytes())?;
         }
     }
-    Ok(())
+    // The bistable example's power and transition rate against the noise level, from its
+    // random jobs' summaries.
+    common::noise_curve::publish(&common::results_root(), &dst)
 }
 
 #[derive(Parser, Debug)]

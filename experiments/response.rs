@@ -9,7 +9,7 @@ use endstop_experiments as common;
 
 use anyhow::Result;
 use common::md::Table;
-use common::plot::{LegendPos, LinePlot, Panels, Series, Style, PALETTE};
+use common::plot::{LinePlot, Panels};
 use common::response_io::{continuation_rows, event_words, response_figure};
 use common::{fmt_sig, frame::frame, row, Experiment};
 use endstop::paper::response::{self, Case, CaseRun, BASIN_CELLS};
@@ -477,36 +477,10 @@ fn curve_plot(c: &CaseRun) -> Panels {
 
 fn basin_plot(c: &CaseRun) -> LinePlot {
     let b = c.basins.as_ref().expect("basins");
-    let shares = b.shares();
-    let series = shares
-        .iter()
-        .enumerate()
-        .filter(|(_, (_, s))| *s > 0.0)
-        .map(|(k, (label, share))| {
-            let pts = b
-                .cells
-                .iter()
-                .enumerate()
-                .filter(|(i, _)| b.label(*i) == label)
-                .map(|(_, &(x, v))| (x * 1e6, v * 1e3))
-                .collect();
-            Series::new(
-                &format!("{label} ({:.1} %)", 100.0 * share),
-                pts,
-                PALETTE[k + 1],
-                Style::Points,
-            )
-        })
-        .collect();
-    LinePlot::new(
-        &format!(
-            "Basins at {} Hz: {}",
-            c.setup.case.basin_freq_hz().unwrap_or(f64::NAN),
-            c.setup.case.label()
-        ),
-        "Initial x [um]",
-        "Initial v [mm/s]",
-        series,
-    )
-    .legend(LegendPos::UpperRight)
+    let title = format!(
+        "Basins at {} Hz: {}",
+        c.setup.case.basin_freq_hz().unwrap_or(f64::NAN),
+        c.setup.case.label()
+    );
+    common::basins_io::basin_map(&title, b, &[])
 }

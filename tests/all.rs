@@ -42,11 +42,13 @@ mod robustness;
 mod spectral_noise;
 mod spectrum_fit;
 mod spice;
+mod springs_basins;
 mod springs_device;
 mod springs_validation;
 mod study_claims;
 mod study_determinism;
 mod sweep_steps;
+mod swept_sine;
 mod validation;
 
 /// Every file of `tests/` is a module here.

@@ -6,6 +6,7 @@
 //! endstop random   --device my.toml --psd 1e-3 [--out DIR]
 //! endstop random   --device my.toml --accel-file shaker.csv [--out DIR]
 //! endstop response --device my.toml --from 600 --to 850 --accel-rms-g 0.31 [--out DIR]
+//! endstop basins   --device my.toml --freq 30 --accel-rms-g 0.5 [--cells 41] [--out DIR]
 //! endstop fit --device my.toml --up-sweep up.csv [--down-sweep down.csv] \
 //!             --free stops.both.gap_m=7e-6..10e-6 [--free ...] [--out DIR]
 //! ```
@@ -15,6 +16,7 @@
 //! the description allows runs (any stops, any transducer); the column names are the same for
 //! every device, and for a transducer with one load the second load's columns are zero.
 
+mod basins;
 mod interface;
 mod random;
 mod response;
@@ -44,12 +46,14 @@ Le & Halvorsen 2012, eqs 1-10, with any stops and transducer) on a device descri
 file. Start from data/prototype1.toml, data/prototype2.toml or a file of data/examples/: copy \
 it, edit the values (SI units; the key names carry the unit), and pass it with --device. Every \
 value is checked on load; an error names the file, the field, the value and its valid \
-range.\n\nThree studies:\n  sweep     stepped-sine up-sweep: RMS voltages, power, impact onset \
-and jump\n  random    band-limited white noise or a measured acceleration record: power, \
-efficiency, output spectrum, bandwidth\n  response  the whole frequency response: up- and \
-down-sweeps, periodic orbits continued in frequency with their stability, folds and grazing \
-points\n\nOutputs keep their column names for every device: v1_rms_v and p1_w are the load of a \
-one-load transducer (piezoelectric, electromagnetic), and v2_rms_v, p2_w are then zero."
+range.\n\nThe studies (besides charge and fit):\n  sweep     stepped-sine up-sweep: RMS \
+voltages, power, impact onset and jump\n  random    band-limited white noise or a measured \
+acceleration record: power, efficiency, output spectrum, bandwidth\n  response  the whole \
+frequency response: up- and down-sweeps, periodic orbits continued in frequency with their \
+stability, folds and grazing points\n  basins    which of the coexisting stable orbits each \
+initial state ends on under a fixed sine (for a double well: in which well)\n\nOutputs keep \
+their column names for every device: v1_rms_v and p1_w are the load of a one-load transducer \
+(piezoelectric, electromagnetic), and v2_rms_v, p2_w are then zero."
 )]
 struct Cli {
     #[command(subcommand)]
@@ -69,6 +73,10 @@ enum Study {
     /// frequency (pseudo-arclength, through folds) with their Floquet multipliers, and the
     /// folds and grazing points on the branch.
     Response(response::ResponseArgs),
+    /// Basins of attraction under a fixed sine: the stable periodic orbits reached from a set
+    /// of seeds (for a device with two wells, each placed in its well or across the barrier),
+    /// and which of them each initial state of a grid ends on.
+    Basins(basins::BasinArgs),
     /// Charge the storage of a device with an interface circuit: the time for its voltage to
     /// go from a start value to a target under a sine, with V_s(t).
     Charge(interface::ChargeArgs),
@@ -101,8 +109,8 @@ pub(crate) struct RangeArgs {
     /// figures do, instead of by a phase-continuous ramp.
     #[arg(long)]
     steps_at_once: bool,
-    /// The rate of the ramps between steps (Hz/s); default: pi w^2 / 10 for the linear
-    /// half-power width w (the frequency moves a tenth of w per ring-up time 1/(pi w)).
+    /// The rate of the ramps between steps (Hz/s); default: pi w^2 / 50 for the linear
+    /// half-power width w (the frequency moves a fiftieth of w per ring-up time 1/(pi w)).
     #[arg(long)]
     ramp_rate: Option<f64>,
     /// RMS base acceleration (g = 9.81 m/s^2); the sine's amplitude is sqrt(2) times this.
@@ -244,6 +252,7 @@ fn main() {
         Study::Charge(a) => interface::charge(a),
         Study::Random(a) => random::random(a),
         Study::Response(a) => response::response(a),
+        Study::Basins(a) => basins::basins_study(a),
         Study::Fit(a) => common::fit_io::run(a),
     });
 }

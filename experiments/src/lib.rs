@@ -7,6 +7,7 @@
 //! run never leaves a partial output behind.
 pub mod answers;
 pub mod band_limit_io;
+pub mod basins_io;
 pub mod book;
 pub mod broadband_io;
 pub mod calibration_io;
@@ -21,6 +22,7 @@ pub mod md;
 pub mod measured_io;
 pub mod narrowband_io;
 pub mod ngspice;
+pub mod noise_curve;
 pub mod panels;
 pub mod plot;
 pub mod response_io;

@@ -1,9 +1,15 @@
 //! Nonlinear suspensions from Python: a device's static equilibria, and the displacement of a
 //! random ensemble (histogram with its interval across records, well shares, well-to-well
-//! transitions, and the exact stationary density where it applies).
+//! transitions, and the exact stationary density where it applies), and the basins of the
+//! stable orbits under a sine, each orbit placed by well.
 
+use endstop::drive::Sine;
+use endstop::physics::harvester::Harvester;
 use endstop::physics::suspension::Place;
+use endstop::study::attractors::{find_attractors, seeds, AttractorSearch};
+use endstop::study::basins::{basins as basin_map, BasinGrid, BasinSettings, UNSETTLED};
 use endstop::study::displacement::{displacement_ensemble, DisplacementBins};
+use endstop::study::orbit::{Forcing, ShootingConfig};
 use endstop::validation::stationary_law::StationaryLaw;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
@@ -96,8 +102,120 @@ fn displacement<'py>(
     Ok(d)
 }
 
+/// The basins under a sine of ``freq_hz`` at ``accel_rms_g`` (g rms) on a grid of ``cells``
+/// by ``cells`` initial states over ``x_range_m`` and ``v_range_m_per_s``, the attractors found
+/// from the wells at rest and ``seeds_per_side`` squared states over the grid (as ``endstop
+/// basins``).
+#[pyfunction]
+#[pyo3(signature = (device, freq_hz, accel_rms_g, x_range_m, v_range_m_per_s, cells = 21, max_periods = 1000, settle_tol = 1e-3, seeds_per_side = 5))]
+#[allow(clippy::too_many_arguments)]
+fn basins<'py>(
+    py: Python<'py>,
+    device: &PyDevice,
+    freq_hz: f64,
+    accel_rms_g: f64,
+    x_range_m: (f64, f64),
+    v_range_m_per_s: (f64, f64),
+    cells: usize,
+    max_periods: usize,
+    settle_tol: f64,
+    seeds_per_side: usize,
+) -> PyResult<Bound<'py, PyDict>> {
+    let positive = |v: f64| v.is_finite() && v > 0.0;
+    if !(positive(freq_hz) && positive(accel_rms_g)) {
+        return Err(arg_err(
+            "freq_hz and accel_rms_g must be finite and positive",
+        ));
+    }
+    let range = |r: (f64, f64)| r.0.is_finite() && r.1.is_finite() && r.0 < r.1;
+    if !(range(x_range_m) && range(v_range_m_per_s)) {
+        return Err(arg_err(
+            "x_range_m and v_range_m_per_s must be (lo, hi) with lo < hi",
+        ));
+    }
+    if cells < 2
+        || max_periods == 0
+        || seeds_per_side > cells
+        || !(positive(settle_tol) && settle_tol < 1.0)
+    {
+        return Err(arg_err(
+            "cells must be at least 2, max_periods at least 1, seeds_per_side at most cells, \
+             and settle_tol in (0, 1)",
+        ));
+    }
+    let dev = device.inner.clone();
+    let grid = BasinGrid {
+        x_m: x_range_m,
+        v_m_per_s: v_range_m_per_s,
+        nx: cells,
+        nv: cells,
+    };
+    let forcing = Forcing {
+        freq_hz,
+        accel_rms_g,
+    };
+    let (found, b) = py
+        .detach(move || {
+            let h = Harvester::new(&dev, Sine::from_rms_g(accel_rms_g, freq_hz));
+            let shooting = ShootingConfig::default();
+            let found = find_attractors(
+                &h,
+                &dev,
+                &forcing,
+                shooting,
+                &seeds(&dev, &grid, seeds_per_side),
+                &AttractorSearch::default(),
+            )?;
+            if found.found.is_empty() {
+                return Err(endstop::study::orbit::OrbitError::Invalid(
+                    "no stable orbit of one drive period found: the basins need an attractor"
+                        .into(),
+                ));
+            }
+            let settings = BasinSettings {
+                grid,
+                max_periods,
+                settle_tol,
+                rtol: shooting.rtol,
+            };
+            let b = basin_map(&h, &forcing, &found.catalogue(), &settings, &|| {})?;
+            Ok((found, b))
+        })
+        .map_err(solver_err)?;
+    let d = PyDict::new(py);
+    d.set_item("x0_m", array(py, b.cells.iter().map(|c| c.0).collect()))?;
+    d.set_item(
+        "v0_m_per_s",
+        array(py, b.cells.iter().map(|c| c.1).collect()),
+    )?;
+    let labels: Vec<&str> = (0..b.cells.len()).map(|i| b.label(i)).collect();
+    d.set_item("attractor", labels)?;
+    let places: Vec<&str> = b
+        .attractor
+        .iter()
+        .map(|a| a.map_or(UNSETTLED, |k| found.found[k].place.label()))
+        .collect();
+    d.set_item("place", places)?;
+    d.set_item("periods", b.periods.clone())?;
+    let shares = b.shares();
+    let table = PyList::empty(py);
+    for (f, (_, share)) in found.found.iter().zip(&shares) {
+        let a = PyDict::new(py);
+        a.set_item("label", f.label.as_str())?;
+        a.set_item("place", f.place.label())?;
+        a.set_item("x_lower_m", f.orbit.summary.x_lower_m)?;
+        a.set_item("x_upper_m", f.orbit.summary.x_upper_m)?;
+        a.set_item("p_w", f.orbit.summary.p_total_w)?;
+        a.set_item("share", *share)?;
+        table.append(a)?;
+    }
+    d.set_item("attractors", table)?;
+    Ok(d)
+}
+
 pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(equilibria, m)?)?;
     m.add_function(wrap_pyfunction!(displacement, m)?)?;
+    m.add_function(wrap_pyfunction!(basins, m)?)?;
     Ok(())
 }

@@ -11,7 +11,7 @@ use endstop::study::amplitude::{amplitude_sweep_report, AmplitudeReport};
 use endstop::study::ensemble::{run_ensemble, EnsembleSpec};
 use endstop::study::record::{simulate_record, RecordSpec, RecordSummary};
 use endstop::study::steady::{steady_config, Measurement};
-use endstop::study::stepped::{linspace_step, Transition};
+use endstop::study::stepped::{linspace_step, Approach, Transition};
 use endstop::study::sweep::{self, SweepReport, SweepSettings};
 use endstop::G;
 use numpy::PyReadonlyArray1;
@@ -96,7 +96,8 @@ pub(crate) fn sweep_dict<'py>(py: Python<'py>, r: &SweepReport) -> PyResult<Boun
 /// narrower than `refine_tol_hz`: the `endstop sweep` command's study (the same grid
 /// `start_hz..stop_hz` by `step_hz`, steady-state settings for the middle of the range).
 #[pyfunction]
-#[pyo3(signature = (device, accel_rms_g, start_hz, stop_hz, step_hz = 2.0, refine_tol_hz = 0.1))]
+#[pyo3(signature = (device, accel_rms_g, start_hz, stop_hz, step_hz = 2.0, refine_tol_hz = 0.1, ramp_rate_hz_per_s = None))]
+#[allow(clippy::too_many_arguments)]
 fn up_sweep<'py>(
     py: Python<'py>,
     device: &PyDevice,
@@ -105,6 +106,7 @@ fn up_sweep<'py>(
     stop_hz: f64,
     step_hz: f64,
     refine_tol_hz: f64,
+    ramp_rate_hz_per_s: Option<f64>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let settings = sweep_settings(
         &device.inner,
@@ -114,11 +116,25 @@ fn up_sweep<'py>(
         step_hz,
         refine_tol_hz,
     )?;
+    let approach = approach(ramp_rate_hz_per_s)?;
     let dev = device.inner.clone();
     let report = py
-        .detach(move || settings.run(&dev, accel_rms_g, |_| {}))
+        .detach(move || settings.run_with(&dev, accel_rms_g, approach, |_| {}))
         .map_err(solver_err)?;
     sweep_dict(py, &report)
+}
+
+/// How a sweep's steps are reached: at once (`None`, as the paper's figures and the
+/// `endstop` command's `--steps-at-once`), or by a phase-continuous ramp at this rate (Hz/s,
+/// as its `--ramp-rate`).
+fn approach(ramp_rate_hz_per_s: Option<f64>) -> PyResult<Approach> {
+    match ramp_rate_hz_per_s {
+        None => Ok(Approach::Jump),
+        Some(r) if r.is_finite() && r > 0.0 => Ok(Approach::Ramp { rate_per_s: r }),
+        Some(r) => Err(arg_err(format!(
+            "ramp_rate_hz_per_s must be a finite positive rate in Hz/s, not {r}"
+        ))),
+    }
 }
 
 /// Checks the arguments shared by the frequency studies ([`sweep::check_range`]), naming
@@ -161,7 +177,8 @@ fn sweep_settings(
 /// arrays (frequencies decreasing) as in `up_sweep`, `jump_hz`, `contact_hz` (midpoints of
 /// `*_bracket_hz`, or None), `jump_power_ratio`, `branch_end_hz` and `branch_end_kind`.
 #[pyfunction]
-#[pyo3(signature = (device, accel_rms_g, start_hz, stop_hz, step_hz = 2.0, refine_tol_hz = 0.1))]
+#[pyo3(signature = (device, accel_rms_g, start_hz, stop_hz, step_hz = 2.0, refine_tol_hz = 0.1, ramp_rate_hz_per_s = None))]
+#[allow(clippy::too_many_arguments)]
 fn down_sweep<'py>(
     py: Python<'py>,
     device: &PyDevice,
@@ -170,6 +187,7 @@ fn down_sweep<'py>(
     stop_hz: f64,
     step_hz: f64,
     refine_tol_hz: f64,
+    ramp_rate_hz_per_s: Option<f64>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let settings = sweep_settings(
         &device.inner,
@@ -179,9 +197,10 @@ fn down_sweep<'py>(
         step_hz,
         refine_tol_hz,
     )?;
+    let approach = approach(ramp_rate_hz_per_s)?;
     let dev = device.inner.clone();
     let report = py
-        .detach(move || settings.run_down(&dev, accel_rms_g, |_| {}))
+        .detach(move || settings.run_down_with(&dev, accel_rms_g, approach, |_| {}))
         .map_err(solver_err)?;
     let all: Vec<&Measurement> = report.measurements().collect();
     let d = steps_dict(py, &all)?;

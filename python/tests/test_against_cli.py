@@ -3,10 +3,13 @@
 Both run the same library code, so the numbers agree far beyond the digits the programs print
 (4 to 5 significant digits): the tolerance is a relative 1e-9, which only floating-point
 differences between two builds of the same code could use. The programs' sweeps take each
-step at once (`--steps-at-once`), as the Python sweeps do; by default the programs reach
-each step by a phase-continuous ramp."""
+step at once (`--steps-at-once`), as the Python sweeps do by default; by default the programs
+reach each step by a phase-continuous ramp, which the Python sweeps take with
+`ramp_rate_hz_per_s` (the programs' `--ramp-rate`)."""
 
 import math
+
+import pytest
 
 import endstop
 from conftest import run_cli, summary
@@ -34,6 +37,32 @@ def test_up_sweep_matches_endstop_sweep(root, tmp_path):
     assert ("branch_end_hz" in cli) == (py["branch_end_hz"] is not None)
     if py["branch_end_hz"] is not None:
         assert close(py["branch_end_hz"], cli["branch_end_hz"])
+
+
+def test_ramped_up_sweep_matches_endstop_sweep(root, tmp_path):
+    # The piezoelectric example (one-sided stopper) through its impacting branch and its jump,
+    # each step reached by a ramp at 2 Hz/s.
+    out = run_cli(["sweep", "--device", "data/examples/piezo_cantilever.toml", "--from", "110",
+                   "--to", "170", "--step", "2", "--ramp-rate", "2", "--accel-rms-g", "0.5",
+                   "--out", str(tmp_path)],
+                  tmp_path)
+    cli = summary(out / "summary.json")["numbers"]
+    dev = endstop.Device.from_toml(root / "data/examples/piezo_cantilever.toml")
+    py = endstop.study.up_sweep(dev, 0.5, start_hz=110, stop_hz=170, step_hz=2,
+                                ramp_rate_hz_per_s=2.0)
+    at_once = endstop.study.up_sweep(dev, 0.5, start_hz=110, stop_hz=170, step_hz=2)
+    assert py["branch_end_hz"] is not None and "branch_end_hz" in cli
+    assert close(py["branch_end_hz"], cli["branch_end_hz"])
+    assert close(py["max_v1_rms_v"], cli["v1_rms_max_v"])
+    # The ramps run: the counters of the two sweeps differ.
+    assert py["integrator_steps"] != at_once["integrator_steps"]
+
+
+def test_a_ramp_rate_must_be_a_positive_rate(root):
+    dev = endstop.Device.from_toml(root / "data/examples/piezo_cantilever.toml")
+    for bad in [0.0, -1.0, float("nan")]:
+        with pytest.raises(ValueError, match="ramp_rate_hz_per_s"):
+            endstop.study.up_sweep(dev, 0.5, 110, 170, step_hz=2, ramp_rate_hz_per_s=bad)
 
 
 def test_ensemble_matches_endstop_random(root, tmp_path):

@@ -1,5 +1,5 @@
-"""Nonlinear suspensions from Python: the equilibria of a double well, and a short
-displacement ensemble beside the exact stationary density."""
+"""Nonlinear suspensions from Python: the equilibria of a double well, a short
+displacement ensemble beside the exact stationary density, and basins placed by well."""
 
 from pathlib import Path
 
@@ -25,3 +25,20 @@ def test_displacement_density_integrates_to_its_share_and_has_the_exact_law():
     assert 0.99 < float(np.sum(r["density_per_m"]) * width) <= 1.0 + 1e-12
     assert r["exact_density_per_m"] is not None
     assert r["transition_rate_per_s"] is None
+
+
+def test_basins_of_a_weakly_driven_double_well_keep_each_bottom_in_its_own_well():
+    d = endstop.Device.from_toml(ROOT / "data/examples/bistable_stops_em.toml")
+    # 0.05 g rms at 30 Hz cannot carry the mass over the barrier from a well's bottom; the
+    # grid's positions step by 250 um, so the wells at +-500 um are cells (v = 0 too).
+    r = endstop.springs.basins(d, 30.0, 0.05, (-7.5e-4, 7.5e-4), (-0.1, 0.1), cells=7,
+                               seeds_per_side=3)
+    assert len(r["x0_m"]) == len(r["attractor"]) == len(r["place"]) == 49
+    places = {a["place"] for a in r["attractors"]}
+    assert places == {"left well", "right well"}
+    for x, place in ((-5e-4, "left well"), (5e-4, "right well")):
+        i = next(i for i in range(49)
+                 if abs(r["x0_m"][i] - x) < 1e-12 and r["v0_m_per_s"][i] == 0.0)
+        assert r["place"][i] == place
+    unsettled = sum(a == "unsettled" for a in r["attractor"]) / 49
+    assert abs(sum(a["share"] for a in r["attractors"]) + unsettled - 1.0) < 1e-12

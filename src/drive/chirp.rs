@@ -17,7 +17,7 @@ pub enum Profile {
 
 impl Profile {
     /// The fraction of the way at u in [0, 1].
-    fn s(self, u: f64) -> f64 {
+    pub fn s(self, u: f64) -> f64 {
         match self {
             Profile::Linear => u,
             Profile::Smooth => {

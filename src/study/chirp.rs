@@ -12,13 +12,21 @@
 //! by an amount that depends on the step rather than on the device.
 //!
 //! # The ramp
-//! Here a step is instead reached by a ramp: frequency and amplitude move in time at a
-//! continuous phase ([`crate::drive::Chirp`]) over a whole number of cycles, at a rate that
-//! rises from zero and falls back to zero ([`crate::drive::Profile::Smooth`]) and on average
-//! moves the frequency by a tenth of the half-power width per ring-up time 1/(pi w)
-//! ([`default_ramp_rate_hz_per_s`]): the response follows the branch adiabatically, and the
-//! sweep leaves it where it ends. The ramp ends at drive phase zero, where the next step's
-//! steady state starts, so that the drive's phase is continuous across the whole sweep.
+//! Here a step is instead reached by a ramp: frequency and amplitude move at a continuous
+//! phase over a whole number of cycles, at a rate that rises from zero and falls back to zero
+//! ([`crate::drive::Profile::Smooth`]) and on average moves the frequency by a fiftieth of
+//! the half-power width per ring-up time 1/(pi w) ([`default_ramp_rate_hz_per_s`]): the
+//! response follows the branch adiabatically, and the sweep leaves it where it ends. The ramp
+//! ends at drive phase zero, where the next step's steady state starts, so that the drive's
+//! phase is continuous across the whole sweep.
+//!
+//! The ramp moves in stairs of one cycle: each cycle is a whole sine period at the profile's
+//! frequency and amplitude at the cycle's middle, so that it starts and ends at phase zero and
+//! is integrated by [`SineFlow`], exactly where the device is affine (a coil whose time
+//! constant is far below the drive's period costs what its slow modes cost) and by
+//! Dormand-Prince elsewhere. A stair moves the frequency by at most twice the rate times
+//! the period, whatever the step: at the default rate 0.04 pi w / f0 = 0.13 w / Q at the
+//! resonance f0 of quality factor Q, a kick far below the step's w / 4.
 //!
 //! # The default step
 //! [`default_step_hz`] is a quarter of the linear half-power width ([`half_power_band`]),
@@ -32,6 +40,7 @@ use crate::ode::{Dopri5, Observer, SolverError, Stats, Step};
 use crate::physics::contact::Mode;
 use crate::physics::harvester::{Harvester, State, SwitchKind};
 use crate::physics::linear::{open_circuit_resonance_hz, LinearResponse};
+use crate::study::flow::SineFlow;
 use crate::study::steady::{steady_state, SteadyConfig};
 
 /// The resonance and half-power width of a device's linear response (the displacement per
@@ -132,16 +141,17 @@ pub fn default_step_hz(device: &Device, from_hz: f64, to_hz: f64) -> f64 {
 }
 
 /// The default ramp rate of `device` (Hz/s): [`RAMP_BANDS_PER_RING`] half-power widths per
-/// ring-up time 1/(pi w), that is pi w^2 / 10; `None` without a half-power band.
+/// ring-up time 1/(pi w), that is pi w^2 / 50; `None` without a half-power band.
 pub fn default_ramp_rate_hz_per_s(device: &Device) -> Option<f64> {
     half_power_band(device)
         .map(|b| RAMP_BANDS_PER_RING * std::f64::consts::PI * b.width_hz * b.width_hz)
 }
 
 /// Moves the drive of `base` from (frequency, RMS acceleration) `from` to `to` by a smooth ramp
-/// of at least `min_duration_s` (rounded up to a whole number of cycles at the mean frequency, so
-/// that it ends at drive phase zero), from the state `y` in `mode` at drive phase zero, with
-/// relative tolerance `rtol`. Returns the state and mode at the end and the counters.
+/// of at least `min_duration_s` (as many whole cycles as the mean frequency makes in it, at
+/// least one), in stairs of one cycle (see the module docs), from the state `y` in `mode` at
+/// drive phase zero, with relative tolerance `rtol`. Returns the state and mode at the end
+/// (at drive phase zero) and the counters.
 pub fn ramp(
     base: &Harvester<Sine>,
     from: (f64, f64),
@@ -152,21 +162,19 @@ pub fn ramp(
     rtol: f64,
 ) -> Result<(State, Mode, Stats), SolverError> {
     let f_mean = 0.5 * (from.0 + to.0);
-    let cycles = (min_duration_s * f_mean).ceil().max(1.0);
-    let duration_s = cycles / f_mean;
-    let amp = |g: f64| std::f64::consts::SQRT_2 * g * crate::G;
-    let model = base.with_excitation(Chirp {
-        f0_hz: from.0,
-        f1_hz: to.0,
-        a0_m_s2: amp(from.1),
-        a1_m_s2: amp(to.1),
-        duration_s,
-        phase_rad: 0.0,
-        profile: Profile::Smooth,
-    });
-    let mut ode = Dopri5::new(0.0, y, mode, model.solver_options(rtol));
-    ode.integrate(&model, duration_s, |_, _| {})?;
-    Ok((ode.y(), ode.mode(), ode.stats()))
+    let cycles = (min_duration_s * f_mean).ceil().max(1.0) as usize;
+    let (mut y, mut mode, mut stats) = (y, mode, Stats::default());
+    for k in 0..cycles {
+        let s = Profile::Smooth.s((k as f64 + 0.5) / cycles as f64);
+        let f = from.0 + (to.0 - from.0) * s;
+        let g = from.1 + (to.1 - from.1) * s;
+        let model = base.with_excitation(Sine::from_rms_g(g, f));
+        let mut flow = SineFlow::new(&model, 0.0, y, mode, rtol);
+        flow.integrate(1.0 / f, |_, _| {})?;
+        (y, mode) = (flow.y(), flow.mode());
+        stats += flow.stats();
+    }
+    Ok((y, mode, stats))
 }
 
 /// A swept sine: the drive's frequency moves linearly at `rate_hz_per_s` from `from_hz` to

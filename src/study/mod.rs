@@ -4,13 +4,15 @@
 //! amplitude sweeps ([`amplitude`]), the ramps and swept sines that make sweeps independent of
 //! their step ([`chirp`]), periodic orbits by shooting with their Floquet multipliers
 //! ([`orbit`]), their pseudo-arclength continuation with folds, branch points and grazing
-//! ([`continuation`]), basins of attraction ([`basins`]), and random-vibration records
-//! ([`record`]) and their ensembles ([`ensemble`]), with the fixed-step RK4 record that is the
-//! benchmark's yardstick ([`rk4_record`]), and Sobol indices of any quantity over device
-//! parameters the user names ([`sensitivity`]). A device with an interface circuit (a diode
+//! ([`continuation`]), basins of attraction ([`basins`]) with the attractors found by settling
+//! seeds and placed by well ([`attractors`]), and random-vibration records ([`record`]) and
+//! their ensembles ([`ensemble`]), with the fixed-step RK4 record that is the benchmark's
+//! yardstick ([`rk4_record`]), and Sobol indices of any quantity over device parameters the
+//! user names ([`sensitivity`]). A device with an interface circuit (a diode
 //! bridge, SSHI, SECE) has its own steady states, sweeps and charging runs ([`interface`]).
 
 pub mod amplitude;
+pub mod attractors;
 pub mod basins;
 pub mod chirp;
 pub mod continuation;

@@ -5,6 +5,16 @@
 //! lower end. A step is taken at once, or by a phase-continuous ramp of the drive
 //! ([`Approach`], [`crate::study::chirp`]) that keeps the transient of the step from carrying
 //! the state off its branch.
+//!
+//! # Where a ramp is not needed
+//! A ramp matters only where the path can decide the branch. A device whose free flight is
+//! linear (a piezoelectric, electromagnetic or no transducer on a linear spring) has, off the
+//! stops, a single periodic orbit at each drive, which attracts every state: a step from a
+//! steady state that touched no stop, taken at once, whose whole transient touches none either
+//! (no mode switch from its start to its measurement), ends on the orbit the ramp would reach,
+//! to the steady-state tolerance. Such a step is kept and the ramp skipped; a step whose
+//! transient touches a stop is taken again from the same state by the ramp. Far from the
+//! stops (most of a wide sweep) the sweep then costs what steps taken at once cost.
 
 use serde::{Deserialize, Serialize};
 
@@ -82,10 +92,14 @@ impl<D: Drive> SteppedDrive<'_, D> {
     }
 
     /// The step at `p` reached from the state `y` in `mode` at the value `from` (`None`: at
-    /// once, as from rest) by `approach`; the ramp's counters are the step's.
+    /// once, as from rest) by `approach`; the ramp's counters are the step's. `off_stops`: the
+    /// steady state at `from` touched no stop, so that with a linear free flight the ramp may
+    /// be skipped (see the module docs); the counters of a step taken at once and then again by
+    /// the ramp include both.
     fn measure_after(
         &self,
         from: Option<f64>,
+        off_stops: bool,
         p: f64,
         y: State,
         mode: Mode,
@@ -93,6 +107,14 @@ impl<D: Drive> SteppedDrive<'_, D> {
     ) -> Result<SweepStep, SolverError> {
         match (approach, from) {
             (Approach::Ramp { rate_per_s }, Some(q)) if q != p => {
+                let mut tried = Stats::default();
+                if off_stops && mode == Mode::Free && self.base.free_flight().is_linear() {
+                    let step = self.measure(p, y, mode)?;
+                    if step.stats.events == 0 {
+                        return Ok(step);
+                    }
+                    tried = step.stats;
+                }
                 let (y1, mode1, st) = ramp(
                     self.base,
                     (self.drive)(q),
@@ -104,6 +126,7 @@ impl<D: Drive> SteppedDrive<'_, D> {
                 )?;
                 let mut step = self.measure(p, y1, mode1)?;
                 step.stats += st;
+                step.stats += tried;
                 Ok(step)
             }
             _ => self.measure(p, y, mode),
@@ -119,7 +142,14 @@ impl<D: Drive> SteppedDrive<'_, D> {
         step: &SweepStep,
         approach: Approach,
     ) -> Result<SweepStep, SolverError> {
-        self.measure_after(Some(from), p, step.state, step.mode, approach)
+        self.measure_after(
+            Some(from),
+            !in_contact(&step.measurement),
+            p,
+            step.state,
+            step.mode,
+            approach,
+        )
     }
 
     /// Runs the continuation over `values` (increasing for an up-sweep, decreasing for a
@@ -158,11 +188,14 @@ impl<D: Drive> SteppedDrive<'_, D> {
         mut on_step: impl FnMut(usize),
     ) -> Result<Sweep, SolverError> {
         let (mut y, mut mode, mut prev) = (y, mode, from);
+        // Nothing is known of the state given: the first step off it keeps its ramp.
+        let mut off_stops = false;
         let mut steps = Vec::with_capacity(values.len());
         let mut stats = Stats::default();
         for (i, &p) in values.iter().enumerate() {
-            let step = self.measure_after(prev, p, y, mode, approach)?;
+            let step = self.measure_after(prev, off_stops, p, y, mode, approach)?;
             prev = Some(p);
+            off_stops = !in_contact(&step.measurement);
             stats += step.stats;
             y = step.state;
             mode = step.mode;
@@ -226,7 +259,14 @@ impl<D: Drive> SteppedDrive<'_, D> {
         // (larger than `hi` in a down-sweep).
         while (hi - lo).abs() > tol {
             let mid = 0.5 * (lo + hi);
-            let step = self.measure_after(Some(lo), mid, before.state, before.mode, approach)?;
+            let step = self.measure_after(
+                Some(lo),
+                !in_contact(&before.measurement),
+                mid,
+                before.state,
+                before.mode,
+                approach,
+            )?;
             stats += step.stats;
             if still_before(&step.measurement) {
                 lo = mid;

@@ -28,16 +28,24 @@ import numpy as np
 from . import _native
 
 
-def up_sweep(device, accel_rms_g, start_hz, stop_hz, step_hz=2.0, refine_tol_hz=0.1):
+def up_sweep(device, accel_rms_g, start_hz, stop_hz, step_hz=2.0, refine_tol_hz=0.1,
+             ramp_rate_hz_per_s=None):
     """Up-sweep of ``device`` from ``start_hz`` to ``stop_hz`` in ``step_hz`` steps at
     ``accel_rms_g`` (g rms). Keys: the per-step arrays ``freq_hz``, ``v1_rms_v``,
     ``v2_rms_v``, ``vdiff_rms_v``, ``p1_w``, ``p2_w``, ``p_total_w``, ``x_peak_m``,
     ``contact_fraction``, ... (every step, including an extension past ``stop_hz`` while the
     mass is still in contact, from index ``extended_from``), and ``onset_hz``, ``jump_hz``,
     ``contact_lost_hz`` (midpoints of brackets ``*_bracket_hz``, or None), ``branch_end_hz``,
-    ``jump_power_ratio``, ``max_v1_rms_v``."""
+    ``jump_power_ratio``, ``max_v1_rms_v``. Each step is taken at once (the drive's
+    frequency jumps, as the paper's figures and ``endstop sweep --steps-at-once`` do), or,
+    with ``ramp_rate_hz_per_s``, reached by a phase-continuous ramp at that rate (Hz/s, as
+    ``--ramp-rate``)."""
     return _native.up_sweep(device, float(accel_rms_g), float(start_hz), float(stop_hz),
-                            float(step_hz), float(refine_tol_hz))
+                            float(step_hz), float(refine_tol_hz), _rate(ramp_rate_hz_per_s))
+
+
+def _rate(ramp_rate_hz_per_s):
+    return None if ramp_rate_hz_per_s is None else float(ramp_rate_hz_per_s)
 
 
 def amplitude_sweep(device, freq_hz, accels_rms_g, refine_tol_g=0.005):
@@ -47,13 +55,15 @@ def amplitude_sweep(device, freq_hz, accels_rms_g, refine_tol_g=0.005):
     return _native.amplitude_sweep(device, float(freq_hz), a, float(refine_tol_g))
 
 
-def down_sweep(device, accel_rms_g, start_hz, stop_hz, step_hz=2.0, refine_tol_hz=0.1):
+def down_sweep(device, accel_rms_g, start_hz, stop_hz, step_hz=2.0, refine_tol_hz=0.1,
+               ramp_rate_hz_per_s=None):
     """Down-sweep of ``device`` from ``stop_hz`` to ``start_hz`` in ``step_hz`` steps at
     ``accel_rms_g`` (g rms): the per-step arrays of :func:`up_sweep` (frequencies
     decreasing), ``jump_hz`` and ``contact_hz`` (midpoints of ``*_bracket_hz``, or None),
-    ``jump_power_ratio``, ``branch_end_hz`` and ``branch_end_kind``."""
+    ``jump_power_ratio``, ``branch_end_hz`` and ``branch_end_kind``. The steps are taken
+    at once or ramped as in :func:`up_sweep`."""
     return _native.down_sweep(device, float(accel_rms_g), float(start_hz), float(stop_hz),
-                              float(step_hz), float(refine_tol_hz))
+                              float(step_hz), float(refine_tol_hz), _rate(ramp_rate_hz_per_s))
 
 
 def orbits(device, accel_rms_g, start_hz, stop_hz, step_hz=2.0):

@@ -8,7 +8,7 @@ use crate::physics::contact::Mode;
 use crate::physics::harvester::{Harvester, State, SwitchKind};
 
 /// Whole-period sums over the accepted steps of one period.
-#[derive(Debug, Default)]
+#[derive(Debug)]
 pub(super) struct Sums {
     pub(super) v1sq: f64,
     pub(super) v2sq: f64,
@@ -21,6 +21,25 @@ pub(super) struct Sums {
     /// The velocity at the end of the last step (before a switch, the impact velocity).
     last_v: f64,
     pub(super) impact_speed: [f64; 2],
+}
+
+impl Default for Sums {
+    /// Nothing summed; the extremes start empty (an orbit in a well off x = 0 never reaches
+    /// zero, so zero is no bound on its extremes).
+    fn default() -> Self {
+        Self {
+            v1sq: 0.0,
+            v2sq: 0.0,
+            x_upper: f64::NEG_INFINITY,
+            x_lower: f64::INFINITY,
+            contact_time: 0.0,
+            impacts: 0,
+            was_contact: None,
+            upcrossing: None,
+            last_v: 0.0,
+            impact_speed: [0.0; 2],
+        }
+    }
 }
 
 /// Observes one period: the sums over its steps, and the rebounds off rigid stops (impacts
