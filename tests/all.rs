@@ -26,6 +26,7 @@ mod history_matching;
 mod history_study;
 mod impacting_orbits;
 mod integrator;
+mod interface_orbits;
 mod interfaces;
 mod interfaces_spice;
 mod narrowband;

@@ -21,6 +21,7 @@ use pyo3::prelude::*;
 mod device;
 mod fit;
 mod fit_spectrum;
+mod interface;
 mod linear;
 mod paper;
 mod springs;
@@ -72,6 +73,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<PyDevice>()?;
     fit::register(m)?;
     fit_spectrum::register(m)?;
+    interface::register(m)?;
     linear::register(m)?;
     study::register(m)?;
     springs::register(m)?;

@@ -14,6 +14,13 @@ arrays, with the GIL released while it runs.
 * :func:`orbits`: periodic orbits by shooting, continued in frequency through folds, with their
   Floquet stability and the folds, branch points and grazing points on the way (the
   ``endstop response`` command's continuation).
+
+For a device with an ``[interface]`` table (a bridge, SSHI or SECE into a storage capacitor):
+
+* :func:`interface_response`: the steady state's DC voltage and power continued in frequency
+  through folds, with its stability from the monodromy through saltation matrices;
+* :func:`charge`: the time for the storage to reach a target voltage under a sine (the
+  ``endstop charge`` command's study).
 """
 
 import numpy as np
@@ -87,3 +94,23 @@ def ensemble(device, psd_g2_per_hz, records=4, duration_s=10.0, seed=2012):
 
 
 __all__ = ["up_sweep", "down_sweep", "orbits", "amplitude_sweep", "record", "ensemble"]
+
+
+def interface_response(device, accel_rms_g, start_hz, stop_hz, max_step_hz=0.5):
+    """The steady state of ``device`` (with an interface circuit and a DC load) at
+    ``accel_rms_g`` continued in frequency from ``start_hz`` to ``stop_hz`` through folds
+    (frequency steps of at most ``max_step_hz``): per-point arrays ``freq_hz``, ``vdc_v``,
+    ``p_dc_w``, ``x_peak_m``, ``multiplier_max_abs``, the list ``stable``; ``folds_hz`` and
+    ``end``."""
+    return _native.interface_response(device, float(accel_rms_g), float(start_hz),
+                                      float(stop_hz), float(max_step_hz))
+
+
+def charge(device, freq_hz, accel_rms_g, target_v, start_v=0.0, ramp_periods=0.0,
+           t_max_s=600.0):
+    """Charges the storage of ``device`` (with an interface circuit) from ``start_v`` to
+    ``target_v`` under a sine at ``freq_hz``, ``accel_rms_g``, from rest at phase zero, ramped
+    up over ``ramp_periods`` periods: ``time_to_target_s``, ``stored_j`` and the arrays
+    ``t_s``, ``vs_v``. A target out of reach raises :class:`endstop.SolverError`."""
+    return _native.charge_storage(device, float(freq_hz), float(accel_rms_g), float(target_v),
+                                  float(start_v), float(ramp_periods), float(t_max_s))

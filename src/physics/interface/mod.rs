@@ -58,6 +58,7 @@
 //! fired.
 
 pub mod closed_forms;
+mod jacobian;
 mod ledger;
 
 pub use ledger::{audit_start, InterfaceAudit, InterfaceLedger, IF_AUDIT_DIM};

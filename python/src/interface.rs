@@ -1,0 +1,151 @@
+//! `endstop.study` for a device with an interface circuit (a bridge, SSHI or SECE into a
+//! storage capacitor): the steady state's DC voltage and power continued in frequency through
+//! folds with its stability, and the charging of the storage. Each returns a dict of numbers
+//! and numpy arrays with the GIL released while it runs.
+
+use endstop::drive::Sine;
+use endstop::study::interface::charging::{charge, ChargeSettings};
+use endstop::study::interface::continuation::{
+    continue_frequency, IfBranchEnd, IfContinuationSettings,
+};
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+
+use crate::{arg_err, array, solver_err, PyDevice};
+
+fn positive(name: &str, v: f64) -> PyResult<()> {
+    if v.is_finite() && v > 0.0 {
+        Ok(())
+    } else {
+        Err(arg_err(format!(
+            "{name} must be a finite positive number, not {v}"
+        )))
+    }
+}
+
+/// The steady state of a device with an interface continued in frequency from `start_hz` to
+/// `stop_hz` through folds (the library's `continue_frequency`, steps of at most
+/// `max_step_hz`). Keys: per-point arrays `freq_hz`, `vdc_v`, `p_dc_w`, `x_peak_m`,
+/// `multiplier_max_abs`, the list `stable`; `folds_hz` and `end` ("reached", "stalled at
+/// <f> Hz" or "max points").
+#[pyfunction]
+#[pyo3(signature = (device, accel_rms_g, start_hz, stop_hz, max_step_hz = 0.5))]
+fn interface_response<'py>(
+    py: Python<'py>,
+    device: &PyDevice,
+    accel_rms_g: f64,
+    start_hz: f64,
+    stop_hz: f64,
+    max_step_hz: f64,
+) -> PyResult<Bound<'py, PyDict>> {
+    for (n, v) in [
+        ("accel_rms_g", accel_rms_g),
+        ("start_hz", start_hz),
+        ("stop_hz", stop_hz),
+        ("max_step_hz", max_step_hz),
+    ] {
+        positive(n, v)?;
+    }
+    let mut set = IfContinuationSettings::new(start_hz, stop_hz, accel_rms_g);
+    set.max_freq_step_hz = max_step_hz;
+    set.ds_max = max_step_hz / set.freq_scale_hz;
+    let dev = device.inner.clone();
+    let branch = py
+        .detach(move || continue_frequency(&dev, &set, |_| {}))
+        .map_err(solver_err)?;
+    let d = PyDict::new(py);
+    let col = |f: &dyn Fn(&endstop::study::interface::IfSteady) -> f64| {
+        array(py, branch.points.iter().map(|p| f(&p.steady)).collect())
+    };
+    d.set_item("freq_hz", col(&|s| s.freq_hz))?;
+    d.set_item("vdc_v", col(&|s| s.vdc_v))?;
+    d.set_item("p_dc_w", col(&|s| s.p_dc_w))?;
+    d.set_item("x_peak_m", col(&|s| s.x_peak_m))?;
+    d.set_item("multiplier_max_abs", col(&|s| s.max_multiplier))?;
+    d.set_item(
+        "stable",
+        branch
+            .points
+            .iter()
+            .map(|p| p.is_stable())
+            .collect::<Vec<bool>>(),
+    )?;
+    d.set_item(
+        "folds_hz",
+        branch.folds.iter().map(|f| f.0).collect::<Vec<f64>>(),
+    )?;
+    d.set_item(
+        "end",
+        match branch.end {
+            IfBranchEnd::Reached => "reached".to_string(),
+            IfBranchEnd::Stalled(f) => format!("stalled at {f} Hz"),
+            IfBranchEnd::MaxPoints => "max points".to_string(),
+        },
+    )?;
+    Ok(d)
+}
+
+/// Charges the storage of a device with an interface from `start_v` to `target_v` under a
+/// sine at `freq_hz`, `accel_rms_g`, from rest at phase zero, ramped up over `ramp_periods`
+/// periods (0: at once): the `endstop charge` command's study with its settings (blocks of
+/// 200 periods, samples every `max(t_max_s / 20000, period / 8)`). Keys: `time_to_target_s`,
+/// `stored_j`, arrays `t_s` and `vs_v`. A target out of reach raises `SolverError`.
+#[pyfunction]
+#[pyo3(signature = (device, freq_hz, accel_rms_g, target_v, start_v = 0.0, ramp_periods = 0.0, t_max_s = 600.0))]
+#[allow(clippy::too_many_arguments)]
+fn charge_storage<'py>(
+    py: Python<'py>,
+    device: &PyDevice,
+    freq_hz: f64,
+    accel_rms_g: f64,
+    target_v: f64,
+    start_v: f64,
+    ramp_periods: f64,
+    t_max_s: f64,
+) -> PyResult<Bound<'py, PyDict>> {
+    for (n, v) in [
+        ("freq_hz", freq_hz),
+        ("accel_rms_g", accel_rms_g),
+        ("target_v", target_v),
+        ("t_max_s", t_max_s),
+    ] {
+        positive(n, v)?;
+    }
+    if !(start_v.is_finite() && start_v >= 0.0 && ramp_periods.is_finite() && ramp_periods >= 0.0) {
+        return Err(arg_err("start_v and ramp_periods must be finite and >= 0"));
+    }
+    let period = 1.0 / freq_hz;
+    let settings = ChargeSettings {
+        start_v,
+        target_v,
+        ramp_s: ramp_periods * period,
+        t_max_s,
+        sample_s: (t_max_s / 20_000.0).max(period / 8.0),
+        block_s: (200.0 * period).min(t_max_s / 10.0),
+        rtol: 1e-8,
+    };
+    let dev = device.inner.clone();
+    let run = py
+        .detach(move || {
+            charge(
+                &dev,
+                Sine::from_rms_g(accel_rms_g, freq_hz),
+                &settings,
+                |_, _| {},
+            )
+        })
+        .map_err(solver_err)?;
+    let d = PyDict::new(py);
+    d.set_item("time_to_target_s", run.time_to_target_s)?;
+    d.set_item("stored_j", run.stored_j)?;
+    d.set_item("t_s", array(py, run.t_s))?;
+    d.set_item("vs_v", array(py, run.vs_v))?;
+    Ok(d)
+}
+
+/// Adds the module's functions to `_native`.
+pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(interface_response, m)?)?;
+    m.add_function(wrap_pyfunction!(charge_storage, m)?)?;
+    Ok(())
+}

@@ -1,0 +1,50 @@
+"""Devices with an interface circuit from Python: the continued steady state and the charging
+of the storage, against the `endstop charge` command on the same arguments."""
+
+import numpy as np
+import pytest
+
+import endstop
+from conftest import run_cli, summary
+
+
+def bridge(root):
+    return endstop.Device.from_toml(root / "data/examples/piezo_bridge.toml")
+
+
+def test_interface_response_runs_and_reports_dc_power(root):
+    r = endstop.study.interface_response(bridge(root), 0.3, 118.0, 121.0)
+    assert r["end"] == "reached"
+    assert len(r["freq_hz"]) == len(r["stable"]) == len(r["p_dc_w"]) > 3
+    assert np.all(r["p_dc_w"] > 0.0) and np.all(r["vdc_v"] > 0.0)
+    # The power is the mean of V^2 / R, the voltage the mean of V: they differ by the ripple's
+    # variance, about (ripple / V)^2 / 12 ~ 1e-5 relative (ripple T / (2 R Cs), 1 %); 1e-3.
+    rl = bridge(root).to_dict()["interface"]["load"]["resistance_ohm"]
+    assert np.allclose(r["p_dc_w"], r["vdc_v"] ** 2 / rl, rtol=1e-3)
+    assert np.all(np.isfinite(r["multiplier_max_abs"]))
+
+
+def test_charge_matches_the_command(root, tmp_path):
+    d = bridge(root).to_dict()
+    d["interface"]["load"] = {"kind": "open"}
+    d["interface"]["storage_capacitance_f"] = 1e-6
+    dev = endstop.Device.from_dict(d, "piezo_bridge_open")
+    ours = endstop.study.charge(dev, 120.0, 0.3, 1.0, ramp_periods=20.0, t_max_s=20.0)
+    assert 0.0 < ours["time_to_target_s"] < 20.0
+    assert ours["t_s"].shape == ours["vs_v"].shape
+    path = tmp_path / "open.toml"
+    path.write_text(dev.to_toml())
+    out = run_cli(["charge", "--device", str(path), "--freq-hz", "120", "--accel-rms-g", "0.3",
+                   "--target-v", "1", "--ramp-periods", "20", "--t-max-s", "20",
+                   "--out", str(tmp_path)], tmp_path)
+    cli = summary(out / "summary.json")["numbers"]
+    assert ours["time_to_target_s"] == pytest.approx(cli["time_to_target_s"], rel=1e-9)
+
+
+def test_out_of_reach_is_a_solver_error(root):
+    d = bridge(root).to_dict()
+    d["interface"]["load"] = {"kind": "open"}
+    d["interface"]["storage_capacitance_f"] = 1e-6
+    dev = endstop.Device.from_dict(d, "piezo_bridge_open")
+    with pytest.raises(endstop.SolverError, match="out of reach|not reached"):
+        endstop.study.charge(dev, 120.0, 0.3, 500.0, t_max_s=20.0)
