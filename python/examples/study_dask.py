@@ -266,8 +266,12 @@ def history_report(run, finals):
            "current code and replays the match from its runs).", ""]
     for proto, f in finals.items():
         t = run["prototypes"][proto]
-        md += [f"**Prototype {proto[1:]}: waves** ({t['runs']} runs in {t['wall_s']:.0f} s of "
-               f"wall time, {t['cpu_s_per_run']:.1f} s of processor time per run)", "",
+        hits = run.get("runs_from_cache", {}).get(proto, 0)
+        where = (f", {hits} of them from `runs-cache.jsonl` of earlier invocations with the "
+                 "same settings (a study resumed)" if hits else "")
+        md += [f"**Prototype {proto[1:]}: waves** ({t['runs']} runs{where}; {t['wall_s']:.0f} s "
+               f"of wall time in this invocation, {t['cpu_s_per_run']:.1f} s of processor time "
+               "per run as measured when each ran)", "",
                "| Wave | Runs | Emulators fitted to | Non-implausible | Every claim within "
                "the cut | Ended |", "|---|---|---|---|---|---|"]
         for w in f["waves"]:
