@@ -130,13 +130,16 @@ fn a_paper_made_by_a_different_model_empties_the_space() {
 
 #[test]
 fn a_space_thinner_than_a_design_ends_the_match_without_another_wave() {
-    // Eight outputs that are the eight inputs, observed at the cube's centre to +-1e-5 (3 sd):
-    // the non-implausible set is a box of side 6e-5, a 1e-34 share of the cube, so no point of
-    // the pool lands in it, and the searches find at most their ten descents, fewer than the
-    // 11 points (8 inputs + 3) an emulator of the next wave needs. The match ends there,
-    // after one wave, instead of running a design no emulator could be fitted to.
+    // Eight outputs that are the eight inputs, observed at the cube's centre to +-0.025
+    // (3 sd): the non-implausible set (seven of the eight within the cut; the match allows
+    // one to miss) is thin, about 8 x 0.05^7 = 6e-9 of the cube, so no point of a 1024-point
+    // pool lands in it and random tries around a survivor (boxes of half-width 0.21) hit it
+    // with probability about (0.05 / 0.42)^7 = 3e-7; the descents from the pool's least
+    // implausible points find it, at most ten of them, fewer than the 11 points (8 inputs + 3)
+    // an emulator of the next wave needs. The match ends there, after one wave, instead of
+    // running a design no emulator could be fitted to.
     let dim = 8;
-    let sd = 1e-5 / 3.0;
+    let sd = 0.025 / 3.0;
     let obs = (0..dim)
         .map(|j| Observation {
             name: format!("x{j}"),
