@@ -18,6 +18,7 @@
 
 mod basins;
 mod interface;
+mod interface_response;
 mod random;
 mod response;
 
@@ -71,7 +72,8 @@ enum Study {
     Random(random::RandomArgs),
     /// The whole frequency response: up- and down-sweeps, the periodic orbits continued in
     /// frequency (pseudo-arclength, through folds) with their Floquet multipliers, and the
-    /// folds and grazing points on the branch.
+    /// folds and grazing points on the branch. On a device with an interface circuit: the DC
+    /// up- and down-sweeps and the steady state continued through its folds, with stability.
     Response(response::ResponseArgs),
     /// Basins of attraction under a fixed sine: the stable periodic orbits reached from a set
     /// of seeds (for a device with two wells, each placed in its well or across the barrier),
@@ -276,10 +278,15 @@ pub(crate) fn start(
 ) -> Result<(Experiment, LoadedDevice, Device)> {
     let loaded = load_device_file(path)?;
     let mut device = loaded.device.clone();
-    if !device.interface.is_resistive() && !matches!(name, "endstop-sweep" | "endstop-charge") {
+    if !device.interface.is_resistive()
+        && !matches!(
+            name,
+            "endstop-sweep" | "endstop-charge" | "endstop-response"
+        )
+    {
         bail!(
-            "device `{}` has an interface circuit (`{}`): `endstop sweep` and `endstop charge` \
-             take it; this study models resistive loads only",
+            "device `{}` has an interface circuit (`{}`): `endstop sweep`, `endstop response` \
+             and `endstop charge` take it; this study models resistive loads only",
             device.name,
             device.interface.key()
         );

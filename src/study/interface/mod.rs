@@ -334,18 +334,24 @@ pub fn steady_state(
             Some(d) => d,
             None => -f,
         };
-        // A damped step: halve until the residual falls (at most 6 halvings).
+        // A damped step: halve until the residual falls (at most 6 halvings). A trial state
+        // the integrator cannot carry through a period (a wild step near a fold, where M - I
+        // is nearly singular) counts as no decrease. When no halving lowers the residual, the
+        // step is one period of the map instead, y -> P(y), which is defined everywhere and
+        // moves towards a stable orbit.
         let mut lambda = 1.0;
-        let mut next = y + dy.component_mul(&sc) * lambda;
-        for _ in 0..6 {
-            let (pn, _, _) = period_map(&model, &next, 0.0, period, settings.rtol)?;
-            if scaled(&(pn - next)).amax() < residual {
-                break;
+        let mut next = None;
+        for _ in 0..=6 {
+            let trial = y + dy.component_mul(&sc) * lambda;
+            if let Ok((pn, _, _)) = period_map(&model, &trial, 0.0, period, settings.rtol) {
+                if scaled(&(pn - trial)).amax() < residual {
+                    next = Some(trial);
+                    break;
+                }
             }
             lambda *= 0.5;
-            next = y + dy.component_mul(&sc) * lambda;
         }
-        y = next;
+        y = next.unwrap_or(p);
         newton_steps += 1;
     }
     let max_multiplier = multipliers(&jac)
