@@ -272,3 +272,40 @@ fn continuation_passes_the_folds_of_the_stop() {
         }
     }
 }
+
+/// Shooting from rest finds the steady state of the example cantilever with parallel SSHI at
+/// 50 kohm and series SSHI at 100 kohm (where a Newton search that asked the residual to fall
+/// at each step stalled near 1e-2), and it is the orbit the period map iterated from rest
+/// reaches: 1500 periods contract the distance by the largest multiplier's modulus to the
+/// 1500th power (below 1e-29 for both), so the iterate is the orbit to rounding; the two agree
+/// within 1e-6 of each state scale (the shooting's tolerance of 1e-7 on the residual, over a
+/// gap 1 - |mu| of 0.05 and 0.08, allows 2e-6) and the DC power within 1e-6 relative.
+#[test]
+fn shooting_finds_the_sshi_orbits_at_large_loads() {
+    for (kind, load_ohm) in [("parallel_sshi", 50e3), ("series_sshi", 100e3)] {
+        let mut d = with_interface(&example(), kind);
+        d.interface = d.interface.with_load_resistance(load_ohm);
+        let sine = Sine::from_rms_g(0.3, 120.0);
+        let set = SteadySettings::default();
+        let s = steady_state(&d, sine, &State::zeros(), &set).unwrap();
+        let model = steady_model(&d, sine).unwrap();
+        let sc = model.scales();
+        let mut y = State::zeros();
+        for _ in 0..1500 {
+            y = period_map_of(&model, &y, set.rtol).unwrap();
+        }
+        let dist = (State::from(s.state) - y).component_div(&sc).amax();
+        let iterated = measure(&model, &y, set.rtol).unwrap();
+        eprintln!(
+            "{kind} at {load_ohm} ohm: {} Newton steps, max |mu| {:.5}, distance to the \
+             iterated orbit {dist:.1e}, P_DC {:.6e} W vs {:.6e} W",
+            s.newton_steps, s.max_multiplier, s.p_dc_w, iterated.p_dc_w
+        );
+        assert!(s.max_multiplier.powi(1500) < 1e-29, "{kind}");
+        assert!(dist < 1e-6, "{kind}: {dist}");
+        assert!(
+            (s.p_dc_w - iterated.p_dc_w).abs() < 1e-6 * iterated.p_dc_w,
+            "{kind}"
+        );
+    }
+}
