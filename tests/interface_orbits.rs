@@ -309,3 +309,45 @@ fn shooting_finds_the_sshi_orbits_at_large_loads() {
         );
     }
 }
+
+/// An up-sweep of the example at 1 g in steps of 2 Hz jumps off the upper branch after the fold
+/// at 168.46 Hz: at 170 Hz Newton's method from the upper orbit does not converge, and the
+/// period map iterated from the transient's end finds the lower orbit. It is the orbit: 1500
+/// further periods (a contraction by its largest multiplier, about 0.97, to the 1500th power,
+/// below 1e-15) move it by less than 1e-6 of each state scale (its residual is below the
+/// tolerance of 1e-7 over a gap 1 - |mu| of 0.03, so about 3e-6 at most), and its DC power is
+/// on the lower branch, below a tenth of the upper orbit's at 168 Hz.
+#[test]
+fn the_period_map_finds_the_orbit_past_a_fold() {
+    let d = example();
+    let set = SteadySettings::default();
+    let freqs: Vec<f64> = (0..=30).map(|i| 110.0 + 2.0 * f64::from(i)).collect();
+    let states: Vec<_> =
+        endstop::study::interface::sweep::frequency_sweep(&d, &freqs, 1.0, &set, |_, _| {})
+            .into_iter()
+            .map(|s| s.unwrap())
+            .collect();
+    let (upper, past) = (&states[29], &states[30]);
+    eprintln!(
+        "168 Hz: {:?}, P_DC {:.4e} W; 170 Hz: {:?}, max |mu| {:.5}, residual {:.1e}, P_DC \
+         {:.4e} W",
+        upper.method, upper.p_dc_w, past.method, past.max_multiplier, past.residual, past.p_dc_w
+    );
+    assert!(matches!(
+        past.method,
+        endstop::study::interface::SteadyMethod::PeriodMap { .. }
+    ));
+    assert!(past.residual < set.tol);
+    assert!(past.max_multiplier.powi(1500) < 1e-15);
+    let model = steady_model(&d, Sine::from_rms_g(1.0, 170.0)).unwrap();
+    let mut y = State::from(past.state);
+    for _ in 0..1500 {
+        y = period_map_of(&model, &y, set.rtol).unwrap();
+    }
+    let moved = (y - State::from(past.state))
+        .component_div(&model.scales())
+        .amax();
+    eprintln!("moved by {moved:.1e} in 1500 periods");
+    assert!(moved < 1e-6);
+    assert!(past.p_dc_w < 0.1 * upper.p_dc_w);
+}

@@ -8,7 +8,7 @@ use endstop::study::interface::continuation::{
     continue_frequency, IfBranch, IfBranchEnd, IfContinuationSettings,
 };
 use endstop::study::interface::sweep::frequency_sweep;
-use endstop::study::interface::{IfSteady, SteadySettings};
+use endstop::study::interface::{IfSteady, SteadyMethod, SteadySettings};
 use endstop::study::stepped::linspace_step;
 
 use crate::common::fmt_sig;
@@ -75,6 +75,7 @@ pub fn response(a: &RangeArgs) -> Result<()> {
                 "contact" => s.contact,
                 "stable" => s.is_stable(),
                 "max_multiplier" => s.max_multiplier,
+                "method" => s.method.label(),
             ]);
         }
     }
@@ -252,6 +253,18 @@ fn words(
             fmt_sig(f, 6)
         )),
         IfBranchEnd::MaxPoints => md.push_str("- the continuation ran out of points\n"),
+    }
+    let by_map = up
+        .iter()
+        .chain(down)
+        .filter(|s| s.method != SteadyMethod::Newton)
+        .count();
+    if by_map > 0 {
+        md.push_str(&format!(
+            "- {by_map} of the sweeps' {} steady states found by iterating the period map \
+             (Newton's method did not converge there)\n",
+            up.len() + down.len()
+        ));
     }
     for f in failed {
         md.push_str(&format!("- no period-one steady state: {f}\n"));

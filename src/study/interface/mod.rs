@@ -22,6 +22,17 @@
 //! monodromy) and undamped Newton converges in 7 steps. The steps are damped instead by the
 //! natural monotonicity test, which measures the distance by the Newton correction (see
 //! [`steady_state`]).
+//!
+//! Where Newton's method still does not converge, the period map is iterated from the
+//! transient's end until the change per period, divided by `1 - |mu|` for the slowest
+//! multiplier estimated from the contraction of the changes, is below the tolerance: the
+//! estimate of the distance to the orbit that accounts for the slow approach. On the example
+//! cantilever at 1 g this finds the first point of an up-sweep past the upper fold, where the
+//! start (the orbit on the upper branch) is far from the orbit, and points far above resonance
+//! where the bridge no longer conducts and the largest multiplier is 1 to six digits (a
+//! neutral direction along which `M - I` is singular; why the multiplier is 1 there is not
+//! analysed). The fallback reaches only orbits the map contracts to from the start (stable
+//! ones). Each steady state says which method found it ([`SteadyMethod`]).
 
 pub mod charging;
 pub mod continuation;
@@ -124,6 +135,9 @@ pub struct SteadySettings {
     pub tol: f64,
     /// How Newton's method takes the period map's Jacobian.
     pub jacobian: JacobianKind,
+    /// Most periods of the period map iterated when Newton's method does not converge
+    /// ([`SteadyMethod::PeriodMap`]).
+    pub max_map_periods: usize,
 }
 
 /// How the period map's Jacobian is taken.
@@ -146,6 +160,7 @@ impl Default for SteadySettings {
             max_newton: 12,
             tol: 1e-7,
             jacobian: JacobianKind::Saltation,
+            max_map_periods: 20_000,
         }
     }
 }
@@ -179,7 +194,37 @@ pub struct IfSteady {
     pub residual: f64,
     /// The energy ledger over the measured period (J).
     pub ledger: InterfaceLedger,
+    /// How the steady state was found.
+    pub method: SteadyMethod,
 }
+
+/// How a steady state was found.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+pub enum SteadyMethod {
+    /// Newton's method on the period map converged.
+    Newton,
+    /// Newton's method did not converge, and the period map iterated from the transient's end
+    /// did, in this many periods: the change per period divided by `1 - |mu|`, for the slowest
+    /// multiplier estimated by the mean contraction over the last [`MAP_WINDOW`] periods, fell
+    /// below the tolerance (the distance to the orbit of a linear contraction by `|mu|`).
+    PeriodMap {
+        /// Periods iterated.
+        periods: usize,
+    },
+}
+
+impl SteadyMethod {
+    /// A short name: `newton` or `period map`.
+    pub fn label(&self) -> &'static str {
+        match self {
+            Self::Newton => "newton",
+            Self::PeriodMap { .. } => "period map",
+        }
+    }
+}
+
+/// Periods over which [`SteadyMethod::PeriodMap`] estimates the slowest multiplier.
+pub const MAP_WINDOW: usize = 20;
 
 impl IfSteady {
     /// True when every Floquet multiplier is inside the unit circle (to 1e-6).
@@ -302,6 +347,7 @@ pub fn steady_state(
         |_, _| {},
     )?;
     y = ode.y();
+    let after_transient = y;
     let scaled = |d: &State| d.component_div(&sc);
     let mut newton_steps = 0;
     let (mut residual, mut jac);
@@ -326,11 +372,7 @@ pub fn steady_state(
             break;
         }
         if newton_steps >= settings.max_newton {
-            return Err(InterfaceError::NoConvergence {
-                iterations: newton_steps,
-                residual,
-                tol: settings.tol,
-            });
+            return iterate_map(&model, &after_transient, settings, newton_steps, residual);
         }
         let lu = (jac - Matrix4::identity()).lu();
         let newton = |f: &Vector4<f64>| -> Vector4<f64> { lu.solve(&(-f)).unwrap_or(-f) };
@@ -370,6 +412,47 @@ pub fn steady_state(
     s.newton_steps = newton_steps;
     s.residual = residual;
     Ok(s)
+}
+
+/// The fallback of [`steady_state`] when Newton's method stalls after `newton_steps` at
+/// `newton_residual`: the period map iterated from `y` ([`SteadyMethod::PeriodMap`]), its
+/// multipliers from the exact monodromy at the end.
+fn iterate_map(
+    model: &Interfaced<Sine>,
+    y: &State,
+    settings: &SteadySettings,
+    newton_steps: usize,
+    newton_residual: f64,
+) -> Result<IfSteady, InterfaceError> {
+    let sc = model.scales();
+    let mut y = *y;
+    let mut changes = Vec::with_capacity(settings.max_map_periods);
+    for k in 1..=settings.max_map_periods {
+        let p = period_map_of(model, &y, settings.rtol)?;
+        let change = (p - y).component_div(&sc).amax();
+        y = p;
+        changes.push(change);
+        if k <= MAP_WINDOW {
+            continue;
+        }
+        let mu = (change / changes[k - 1 - MAP_WINDOW]).powf(1.0 / MAP_WINDOW as f64);
+        if mu < 1.0 && change / (1.0 - mu) < settings.tol {
+            let lin = monodromy::linearise(model, &y, settings.rtol)?;
+            let mut s = measure(model, &y, settings.rtol)?;
+            s.max_multiplier = multipliers(&lin.monodromy)
+                .map(|m| m[0].norm())
+                .unwrap_or(f64::NAN);
+            s.newton_steps = newton_steps;
+            s.residual = (lin.end - y).component_div(&sc).amax();
+            s.method = SteadyMethod::PeriodMap { periods: k };
+            return Ok(s);
+        }
+    }
+    Err(InterfaceError::NoConvergence {
+        iterations: newton_steps,
+        residual: newton_residual,
+        tol: settings.tol,
+    })
 }
 
 /// The measures of the period from `y` at phase zero (an orbit's section state), with the
@@ -412,6 +495,7 @@ pub fn measure(model: &Interfaced<Sine>, y: &State, rtol: f64) -> Result<IfStead
         newton_steps: 0,
         residual: f64::NAN,
         ledger,
+        method: SteadyMethod::Newton,
     })
 }
 
