@@ -13,7 +13,7 @@ use anyhow::Result;
 use clap::Parser;
 use common::history_io::{answer_md, observation_md, tables_md, write_history, write_sobol};
 use common::md::Table;
-use common::plot::Figure;
+use common::plot::Chart;
 use common::{fmt_sig, Experiment};
 use endstop::num::gp_sensitivity::EmulatedSobol;
 use endstop::num::history::HistorySettings;
@@ -113,7 +113,9 @@ fn run() -> Result<()> {
         exp.number(&format!("history_{k}_fraction_all"), a.fraction_all);
         exp.number(
             &format!("history_{k}_empty"),
-            f64::from(u8::from(a.stop == Some(endstop::num::history::Stop::Empty))),
+            f64::from(u8::from(
+                a.stop == Some(endstop::num::history::Termination::Empty),
+            )),
         );
         exp.number(
             &format!("history_{k}_runs_meeting_all"),
@@ -332,7 +334,7 @@ impl HeatMap {
     }
 }
 
-impl Figure for HeatMap {
+impl Chart for HeatMap {
     fn size(&self) -> (u32, u32) {
         (1100, 120 + 34 * self.rows.len() as u32)
     }

@@ -356,8 +356,9 @@ struct SummaryIn {
     seed: Option<u64>,
     #[serde(default)]
     params: Vec<(String, String)>,
+    /// A number that is not finite (a reduced chi-square without a noise level) is `null`.
     #[serde(default)]
-    numbers: std::collections::BTreeMap<String, f64>,
+    numbers: std::collections::BTreeMap<String, Option<f64>>,
 }
 
 fn read_summary(job: &Job) -> Option<SummaryIn> {
@@ -398,7 +399,7 @@ fn write_scorecard() -> Result<Vec<Row>> {
         .unwrap_or_default();
     for r in &mut rows {
         r.fold_hz = endstop::paper::response::fold_key(&r.claim, &r.quantity, r.set)
-            .and_then(|k| folds.get(&k).copied());
+            .and_then(|k| folds.get(&k).copied().flatten());
     }
     // Beside each claim the study evaluates, its value at the best set of the multi-claim
     // calibration (the study's summary, if `just deviations` has been run).
@@ -407,7 +408,7 @@ fn write_scorecard() -> Result<Vec<Row>> {
         .unwrap_or_default();
     for r in rows.iter_mut().filter(|r| r.set == ParamSet::Published) {
         r.best_calibrated = endstop::paper::deviations::best_value_key(&r.claim, &r.quantity)
-            .and_then(|k| best.get(&k).copied());
+            .and_then(|k| best.get(&k).copied().flatten());
     }
     common::write_atomic(
         &common::results_root().join("scorecard.json"),

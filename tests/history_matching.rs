@@ -3,7 +3,7 @@
 //! input in every wave; observations made by a different model (one the simulator cannot
 //! produce at any input) empty the space.
 
-use endstop::num::history::{HistoryMatch, HistorySettings, Observation, Run, Stop};
+use endstop::num::history::{HistoryMatch, HistorySettings, Observation, Run, Termination};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
@@ -74,7 +74,7 @@ fn a_paper_made_by_the_simulator_keeps_its_input() {
     let last = hm.summaries.last().unwrap();
     // The space shrinks (to well under a tenth of the cube: five outputs at +-0.15 each
     // (3 sd) constrain three inputs) and is not empty.
-    assert_ne!(last.stop, Some(Stop::Empty));
+    assert_ne!(last.stop, Some(Termination::Empty));
     assert!(last.fraction() < 0.1, "{}", last.fraction());
     assert!(last.fraction() <= first.fraction());
     // The planted input is non-implausible at every wave: each output's implausibility there
@@ -116,9 +116,67 @@ fn a_paper_made_by_a_different_model_empties_the_space() {
     // implausibility exceeds 3 everywhere.
     let hm = history_match([1.9, 0.6, -0.5, 0.8, 0.3], 0.05);
     let last = hm.summaries.last().unwrap();
-    assert_eq!(last.stop, Some(Stop::Empty), "fraction {}", last.fraction());
+    assert_eq!(
+        last.stop,
+        Some(Termination::Empty),
+        "fraction {}",
+        last.fraction()
+    );
     assert_eq!(last.non_implausible, 0);
     // The outputs that rule the space out are the conflicting ones.
     let first = &hm.summaries[0];
     assert!(first.ruled_out[2] > 0.99, "{:?}", first.ruled_out);
+}
+
+#[test]
+fn a_space_thinner_than_a_design_ends_the_match_without_another_wave() {
+    // Eight outputs that are the eight inputs, observed at the cube's centre to +-0.025
+    // (3 sd): the non-implausible set (seven of the eight within the cut; the match allows
+    // one to miss) is thin, about 8 x 0.05^7 = 6e-9 of the cube, so no point of a 1024-point
+    // pool lands in it and random tries around a survivor (boxes of half-width 0.21) hit it
+    // with probability about (0.05 / 0.42)^7 = 3e-7; the descents from the pool's least
+    // implausible points find it, at most ten of them, fewer than the 11 points (8 inputs + 3)
+    // an emulator of the next wave needs. The match ends there, after one wave, instead of
+    // running a design no emulator could be fitted to.
+    let dim = 8;
+    let sd = 0.025 / 3.0;
+    let obs = (0..dim)
+        .map(|j| Observation {
+            name: format!("x{j}"),
+            value: 0.5,
+            variance: sd * sd,
+        })
+        .collect();
+    let settings = HistorySettings {
+        per_input: 2,
+        pool: 1 << 10,
+        max_waves: 4,
+        ..HistorySettings::default()
+    };
+    let mut hm = HistoryMatch::new(dim, obs, settings).unwrap();
+    let mut waves = 0;
+    while let Some(design) = hm.next_design() {
+        let runs = design
+            .iter()
+            .map(|x| Run {
+                point: x.clone(),
+                values: x.clone(),
+                variances: vec![0.0; dim],
+            })
+            .collect();
+        hm.add_wave(runs).unwrap();
+        waves += 1;
+    }
+    let last = hm.summaries.last().unwrap();
+    assert_eq!(waves, 1);
+    assert_eq!(last.non_implausible, 0);
+    assert!(
+        last.kept.len() < dim + 3,
+        "{} points found",
+        last.kept.len()
+    );
+    // Not empty: the descents find the box (an emulator of linear outputs is exact there).
+    assert!(!last.kept.is_empty());
+    assert_eq!(last.stop, Some(Termination::TooFewRuns));
+    assert_eq!(Termination::TooFewRuns.label(), "too few runs to emulate");
 }

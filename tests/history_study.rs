@@ -10,7 +10,7 @@
 //! match's design, and its leave-one-out diagnostics say how well it does there.
 
 use endstop::device::Device;
-use endstop::num::history::{ranked, HistorySettings, Stop};
+use endstop::num::history::{ranked, HistorySettings, Termination};
 use endstop::paper::claims::{Answer, Claims};
 use endstop::paper::deviations::{
     evaluate, evaluate_at, history_match, HistoryRun, Prototype, RangesFile, Scope,
@@ -104,7 +104,7 @@ fn a_paper_made_by_the_model_keeps_its_set_and_one_made_by_another_device_emptie
         assert!(ranked(&i, 2) <= 3.0, "{i:?}");
     }
     let last = kept.matcher.summaries.last().unwrap();
-    assert_ne!(last.stop, Some(Stop::Empty));
+    assert_ne!(last.stop, Some(Termination::Empty));
     // And the claims do constrain: the space shrinks below half the cube.
     assert!(last.fraction() < 0.5, "{}", last.fraction());
 
@@ -124,6 +124,6 @@ fn a_paper_made_by_the_model_keeps_its_set_and_one_made_by_another_device_emptie
         last.fraction(),
         last.ruled_out
     );
-    assert_eq!(last.stop, Some(Stop::Empty));
+    assert_eq!(last.stop, Some(Termination::Empty));
     assert!(emptied.answer().unwrap().none_reproduces());
 }

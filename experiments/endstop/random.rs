@@ -21,7 +21,7 @@ use endstop::G;
 use endstop_experiments as common;
 use polars::prelude::*;
 
-use common::panels::Panels;
+use common::plot::Panels;
 use common::plot::{LinePlot, Series, Style, PALETTE};
 use common::{fmt_sig, measured_io};
 
@@ -249,7 +249,7 @@ fn noise(a: &RandomArgs, psd: f64) -> Result<()> {
         &linear,
         &drive,
     )
-    .panels;
+    .plots;
     panels.push(disp.plot);
     let plot = Panels::row(panels);
     exp.write_plot(&plot)?;

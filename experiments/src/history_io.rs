@@ -10,7 +10,7 @@ use plotters::prelude::*;
 
 use crate::frame::{frame, Cell};
 use crate::md::Table;
-use crate::plot::Figure;
+use crate::plot::Chart;
 use crate::{fmt_sig, row, Experiment};
 
 /// Label of a prototype (`1`, `2`).
@@ -191,10 +191,21 @@ pub fn answer_md(h: &HistoryRun) -> String {
         }
     };
     let cut = fmt_sig(h.matcher.settings.cut, 1);
-    let verdict = if a.stop == Some(endstop::num::history::Stop::Empty) {
+    let verdict = if a.stop == Some(endstop::num::history::Termination::Empty) {
         "**no set within the ranges is consistent with its quantitative claims**: the \
          non-implausible space emptied"
             .to_string()
+    } else if a.stop == Some(endstop::num::history::Termination::TooFewRuns) {
+        format!(
+            "**the waves shrank the non-implausible space below what a design placed in it \
+             resolves**: {} of the cube with one claim allowed to miss, {} with every claim's \
+             implausibility at most {cut}; the searches around the survivors found {} points \
+             with every claim within the cut, fewer than the next wave's emulators need, so \
+             the match ends there",
+            share(a.fraction),
+            share(a.fraction_all),
+            a.kept_all
+        )
     } else if a.none_reproduces() {
         format!(
             "**no set within the ranges was found consistent with all its quantitative claims \
@@ -350,7 +361,7 @@ pub struct ProjectionPlot {
     pub cut: f64,
 }
 
-impl Figure for ProjectionPlot {
+impl Chart for ProjectionPlot {
     fn size(&self) -> (u32, u32) {
         (1100, 1140)
     }

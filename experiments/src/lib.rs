@@ -23,7 +23,6 @@ pub mod measured_io;
 pub mod narrowband_io;
 pub mod ngspice;
 pub mod noise_curve;
-pub mod panels;
 pub mod plot;
 pub mod response_io;
 pub mod spectrum_io;
@@ -309,14 +308,14 @@ impl Experiment {
 
     /// Renders a figure as `<dir>/<name>.svg` and `.png`, and copies both for the book;
     /// [`Experiment::finish`] writes its caption (`<name>.figure.md`).
-    pub fn write_plot<F: plot::Figure>(&self, fig: &F) -> Result<()> {
+    pub fn write_plot<F: plot::Chart>(&self, fig: &F) -> Result<()> {
         let stem = self.name.clone();
         self.write_extra_plot(&stem, fig)
     }
 
     /// Renders an extra figure under another file stem (e.g. `fig08_convergence`), with its
     /// caption as [`Experiment::write_plot`].
-    pub fn write_extra_plot<F: plot::Figure>(&self, stem: &str, fig: &F) -> Result<()> {
+    pub fn write_extra_plot<F: plot::Chart>(&self, stem: &str, fig: &F) -> Result<()> {
         let (svg, png) = plot::render(fig)?;
         for dir in [&self.dir, &self.book_dir] {
             write_atomic(&dir.join(format!("{stem}.svg")), svg.as_bytes())?;

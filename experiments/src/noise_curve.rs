@@ -115,7 +115,7 @@ pub fn table(levels: &[Level]) -> String {
 
 /// The two panels: power (with the linear theory) and the transition rate against the level,
 /// on logarithmic axes, each point with its 95 % interval.
-pub fn figure(levels: &[Level]) -> Result<crate::panels::Panels> {
+pub fn figure(levels: &[Level]) -> Result<crate::plot::Panels> {
     if levels.is_empty() {
         bail!("no noise level to plot");
     }
@@ -163,7 +163,7 @@ pub fn figure(levels: &[Level]) -> Result<crate::panels::Panels> {
             .collect(),
         Vec::new(),
     );
-    Ok(crate::panels::Panels::row(vec![power, rate]))
+    Ok(crate::plot::Panels::row(vec![power, rate]))
 }
 
 /// Writes the table (`<STEM>.md`), the plot (`<STEM>.svg`, `.png`) and its caption

@@ -18,8 +18,8 @@ fn register_font() {
     });
 }
 
-/// Something that can draw itself on any plotters backend.
-pub trait Figure {
+/// A chart: something that draws itself on any plotters backend (one plot, or panels of them).
+pub trait Chart {
     /// Pixel size (width, height).
     fn size(&self) -> (u32, u32) {
         (960, 640)
@@ -35,7 +35,7 @@ pub trait Figure {
 }
 
 /// Renders a figure to (SVG text, PNG bytes).
-pub fn render<F: Figure>(fig: &F) -> Result<(String, Vec<u8>)> {
+pub fn render<F: Chart>(fig: &F) -> Result<(String, Vec<u8>)> {
     register_font();
     let (w, h) = fig.size();
     let mut svg = String::new();
@@ -432,7 +432,7 @@ macro_rules! draw_chart {
     }};
 }
 
-impl Figure for LinePlot {
+impl Chart for LinePlot {
     fn size(&self) -> (u32, u32) {
         self.size
     }
@@ -458,45 +458,81 @@ impl Figure for LinePlot {
     }
 }
 
-/// Plots stacked in one figure, top to bottom, each with its own axes and legend (e.g. one
-/// curve against two coordinates that share the x axis).
+/// How [`Panels`] are laid out.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Arrangement {
+    /// Top to bottom, each with its own axes and legend (one curve against two coordinates
+    /// that share the x axis); the figure's title is the first panel's.
+    Stacked,
+    /// Left to right (e.g. a response spectrum beside its drive's); the figure's title joins
+    /// the panels' titles.
+    SideBySide,
+}
+
+/// Several plots in one figure, each with its own axes and legend.
 #[derive(Debug, Clone)]
 pub struct Panels {
-    /// The panels, top first; the first one's title is the figure's.
+    /// The panels, top first or left first.
     pub plots: Vec<LinePlot>,
     /// Size in pixels.
     pub size: (u32, u32),
+    /// Their layout.
+    pub arrangement: Arrangement,
 }
 
 impl Panels {
-    /// Panels of the usual width, each as tall as two thirds of a single plot.
+    /// Panels stacked at the usual width, each as tall as two thirds of a single plot.
     pub fn new(plots: Vec<LinePlot>) -> Self {
         let height = 430 * plots.len().max(1) as u32;
         Self {
             plots,
             size: (960, height),
+            arrangement: Arrangement::Stacked,
+        }
+    }
+
+    /// Panels in a row, each about as large as a single plot's width share.
+    pub fn row(plots: Vec<LinePlot>) -> Self {
+        let n = plots.len().max(1) as u32;
+        Self {
+            plots,
+            size: (720 * n, 600),
+            arrangement: Arrangement::SideBySide,
         }
     }
 }
 
-impl Figure for Panels {
+impl Chart for Panels {
     fn size(&self) -> (u32, u32) {
         self.size
     }
 
     fn title(&self) -> String {
-        self.plots
-            .first()
-            .map(|p| p.title.clone())
-            .unwrap_or_default()
+        match self.arrangement {
+            Arrangement::Stacked => self
+                .plots
+                .first()
+                .map(|p| p.title.clone())
+                .unwrap_or_default(),
+            Arrangement::SideBySide => self
+                .plots
+                .iter()
+                .map(|p| p.title.as_str())
+                .collect::<Vec<_>>()
+                .join("; "),
+        }
     }
 
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<()>
     where
         DB::ErrorType: 'static,
     {
-        let areas = root.split_evenly((self.plots.len().max(1), 1));
-        for (p, area) in self.plots.iter().zip(&areas) {
+        let n = self.plots.len().max(1);
+        let grid = match self.arrangement {
+            Arrangement::Stacked => (n, 1),
+            Arrangement::SideBySide => (1, n),
+        };
+        for (p, area) in self.plots.iter().zip(&root.split_evenly(grid)) {
             p.draw(area)?;
         }
         Ok(())

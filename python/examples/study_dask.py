@@ -135,10 +135,7 @@ def run_history(client, a, proto):
         design = [[float(u) for u in p] for p in state["next_design"]]
         n = len(design)
         print(f"{proto}: wave {len(waves) + 1}, {n} runs", flush=True)
-        futures = client.map(timed_evaluate, [proto] * n, design, [a.ensemble_records] * n,
-                             pure=False)
-        progress(futures, f"wave {len(waves) + 1}")
-        done = client.gather(futures)
+        done = evaluate_cached(client, a, proto, design, f"wave {len(waves) + 1}")
         cpu += sum(c for _, c in done)
         waves.append((design, [e for e, _ in done]))
         state = study.history(proto, waves, **kw)
@@ -159,6 +156,52 @@ def run_history(client, a, proto):
     times = {"runs": k, "wall_s": wall, "cpu_s_per_run": cpu / max(k, 1),
              "answer": final["answer"]}
     return runs, final, cells, times
+
+
+def cache_key(proto, point, records):
+    """A run's key in the cache: the prototype, the point's coordinates exactly, the records."""
+    return json.dumps([proto, [float.hex(u) for u in point], records])
+
+
+def evaluate_cached(client, a, proto, design, what):
+    """The runs of a design, each with its processor time: those of an earlier invocation
+    with the same settings from ``--out-dir``'s ``runs-cache.jsonl`` (a study that was stopped
+    resumes where it stopped), the others on the workers, appended to the cache as they
+    finish."""
+    from dask.distributed import as_completed
+
+    path = os.path.join(a.out_dir, "runs-cache.jsonl")
+    cached = {}
+    if os.path.exists(path):
+        with open(path) as f:
+            for line in f:
+                r = json.loads(line)
+                cached[r["key"]] = (r["evaluation"], r["cpu_s"])
+    keys = [cache_key(proto, p, a.ensemble_records) for p in design]
+    todo = [i for i, k in enumerate(keys) if k not in cached]
+    if len(todo) < len(keys):
+        print(f"  {what}: {len(keys) - len(todo)} of {len(keys)} runs from {path}", flush=True)
+        CACHE_HITS[proto] = CACHE_HITS.get(proto, 0) + len(keys) - len(todo)
+    os.makedirs(a.out_dir, exist_ok=True)
+    futures = client.map(timed_evaluate, [proto] * len(todo), [design[i] for i in todo],
+                         [a.ensemble_records] * len(todo), pure=False)
+    index = {f.key: i for f, i in zip(futures, todo)}
+    n, done, t0 = len(futures), 0, time.perf_counter()
+    with open(path, "a") as f:
+        for fut in as_completed(futures):
+            e, c = fut.result()
+            i = index[fut.key]
+            cached[keys[i]] = (e, c)
+            f.write(json.dumps({"key": keys[i], "evaluation": e, "cpu_s": c}) + "\n")
+            f.flush()
+            done += 1
+            if done == n or done % max(1, n // 10) == 0:
+                print(f"  {what}: {done}/{n} in {time.perf_counter() - t0:.0f} s", flush=True)
+    return [cached[k] for k in keys]
+
+
+# Runs taken from the cache, per prototype (recorded in run.json).
+CACHE_HITS = {}
 
 
 def timed_evaluate(proto, point, records):
@@ -189,6 +232,13 @@ def history_report(run, finals):
         if a["stop"] == "empty":
             verdict = ("**no set within the ranges is consistent with its quantitative claims**: "
                        "the non-implausible space emptied")
+        elif a["stop"] == "too few runs to emulate":
+            verdict = ("**the waves shrank the non-implausible space below what a design placed "
+                       f"in it resolves**: {share(a['fraction'])} of the cube with one claim "
+                       f"allowed to miss, {share(a['fraction_all'])} with every claim within "
+                       f"the cut; the searches around the survivors found {a['kept_all']} "
+                       "points with every claim within the cut, fewer than the next wave's "
+                       "emulators need, so the match ends there")
         elif a["none_reproduces"]:
             verdict = ("**no set within the ranges was found consistent with all its "
                        "quantitative claims at once**: allowing one claim to miss, "
@@ -216,8 +266,12 @@ def history_report(run, finals):
            "current code and replays the match from its runs).", ""]
     for proto, f in finals.items():
         t = run["prototypes"][proto]
-        md += [f"**Prototype {proto[1:]}: waves** ({t['runs']} runs in {t['wall_s']:.0f} s of "
-               f"wall time, {t['cpu_s_per_run']:.1f} s of processor time per run)", "",
+        hits = run.get("runs_from_cache", {}).get(proto, 0)
+        where = (f", {hits} of them from `runs-cache.jsonl` of earlier invocations with the "
+                 "same settings (a study resumed)" if hits else "")
+        md += [f"**Prototype {proto[1:]}: waves** ({t['runs']} runs{where}; {t['wall_s']:.0f} s "
+               f"of wall time in this invocation, {t['cpu_s_per_run']:.1f} s of processor time "
+               "per run as measured when each ran)", "",
                "| Wave | Runs | Emulators fitted to | Non-implausible | Every claim within "
                "the cut | Ended |", "|---|---|---|---|---|---|"]
         for w in f["waves"]:
@@ -251,6 +305,7 @@ def main_history(a, client, workers, protos):
         "wall_s": wall, "per_input": a.per_input, "waves": a.waves, "pool": a.pool,
         "ensemble_records": a.ensemble_records,
         "prototypes": {p: o[3] for p, o in out.items()},
+        "runs_from_cache": {p: CACHE_HITS.get(p, 0) for p in out},
     }
     finals = {p: o[1] for p, o in out.items()}
     with open(os.path.join(a.out_dir, "run.json"), "w") as f:

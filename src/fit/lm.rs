@@ -34,7 +34,7 @@ pub struct LmSettings {
     pub lambda0: f64,
     /// Give up on an iteration (and stop) when the damping exceeds this.
     pub lambda_max: f64,
-    /// A stop without descent counts as converged ([`LmStop::Stalled`]) when the undamped
+    /// A stop without descent counts as converged ([`Termination::Stalled`]) when the undamped
     /// Gauss-Newton step promises a relative decrease of the cost below this: the cost of a
     /// stepped sweep is smooth only down to its steady-state criterion.
     pub noise_rel_tol: f64,
@@ -73,7 +73,7 @@ impl Default for LmSettings {
 
 /// Why the solver stopped.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum LmStop {
+pub enum Termination {
     /// The cost no longer fell by [`LmSettings::cost_rel_tol`].
     CostConverged,
     /// The step became shorter than [`LmSettings::step_tol`].
@@ -89,12 +89,12 @@ pub enum LmStop {
     MaxIter,
 }
 
-impl LmStop {
+impl Termination {
     /// True when the stop is a convergence criterion.
     pub fn converged(self) -> bool {
         matches!(
             self,
-            LmStop::CostConverged | LmStop::StepConverged | LmStop::Stalled
+            Termination::CostConverged | Termination::StepConverged | Termination::Stalled
         )
     }
 }
@@ -115,7 +115,7 @@ pub struct LmResult {
     /// Trial points whose residuals could not be evaluated (rejected steps).
     pub failed_trials: usize,
     /// Why it stopped.
-    pub stop: LmStop,
+    pub stop: Termination,
 }
 
 fn cost(r: &[f64]) -> f64 {
@@ -208,7 +208,7 @@ pub fn levenberg_marquardt_tracked<P: Tracked>(
     let mut failed = 0;
     let mut c = cost(&r);
     let mut lambda = s.lambda0;
-    let mut stop = LmStop::MaxIter;
+    let mut stop = Termination::MaxIter;
     let mut iterations = 0;
     let mut jac = jacobian(problem, &u, &r, &state, s.fd_step)?;
     evaluations += p;
@@ -250,9 +250,9 @@ pub fn levenberg_marquardt_tracked<P: Tracked>(
                 .pseudo_inverse(1e-12 * diag_max)
                 .map_or(f64::INFINITY, |ai| g.dot(&(ai * &g)));
             stop = if promised < (s.noise_rel_tol * c).max(s.cost_abs_tol) {
-                LmStop::Stalled
+                Termination::Stalled
             } else {
-                LmStop::NoDescent
+                Termination::NoDescent
             };
             break;
         };
@@ -265,11 +265,11 @@ pub fn levenberg_marquardt_tracked<P: Tracked>(
         jac = jacobian(problem, &u, &r, &state, s.fd_step)?;
         evaluations += p;
         if drop < s.cost_rel_tol || c_before - c < s.cost_abs_tol {
-            stop = LmStop::CostConverged;
+            stop = Termination::CostConverged;
             break;
         }
         if step_norm < s.step_tol {
-            stop = LmStop::StepConverged;
+            stop = Termination::StepConverged;
             break;
         }
     }

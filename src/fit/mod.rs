@@ -70,7 +70,7 @@ use statrs::distribution::{ChiSquared, ContinuousCDF};
 use thiserror::Error;
 
 pub use data::{DataError, Direction, Feature, FeatureKind, Point, Quantity, SweepData};
-pub use lm::{LmSettings, LmStop};
+pub use lm::{LmSettings, Termination};
 pub use model::{model_curve, model_sweep, model_values, ModelSweep};
 pub use params::{check_free, FreeParam};
 pub use report::{FitReport, FitWarning, FittedParam, Residual, Uncertainty};

@@ -3,7 +3,7 @@
 
 use serde::Serialize;
 
-use super::{LmStop, SINGULAR_RATIO_WARN};
+use super::{Termination, SINGULAR_RATIO_WARN};
 use crate::device::Device;
 
 /// How the covariance is scaled.
@@ -216,7 +216,7 @@ pub struct FitReport {
     /// Trial points of the reported search whose model could not be evaluated.
     pub failed_trials: usize,
     /// Why the search stopped.
-    pub stop: LmStop,
+    pub stop: Termination,
     /// The model the search used, in words.
     pub model: String,
     /// Starts tried (see [`crate::fit::FitSettings::starts`]).

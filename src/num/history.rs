@@ -16,7 +16,7 @@
 //! maximin Latin hypercube over the unit cube; each later wave runs a maximin subset of the
 //! non-implausible inputs of a uniform pool (topped up around them where the pool holds too
 //! few), fits new emulators on every run inside the space so far, and shrinks the space
-//! further, until it is empty, stops shrinking, or the waves run out ([`Stop`]).
+//! further, until it is empty, stops shrinking, or the waves run out ([`Termination`]).
 //!
 //! The non-implausible fraction is measured on a scrambled Sobol pool of the whole cube: an
 //! empty pool of `P` points puts the fraction below `3 / P` (95 %). Before the space is called
@@ -108,22 +108,27 @@ impl Default for HistorySettings {
 
 /// Why a history match ended.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Stop {
+pub enum Termination {
     /// No point of the pool (nor of the search around the last survivors) is non-implausible.
     Empty,
     /// The last wave kept more than [`HistorySettings::shrink`] of the previous space.
     NotShrinking,
     /// [`HistorySettings::max_waves`] waves ran.
     MaxWaves,
+    /// The non-implausible points found (the pool's and the searches' around them) are fewer
+    /// than the next wave's emulators need (the input dimension plus 3, for their linear
+    /// mean): the space has shrunk below what a design placed in it resolves.
+    TooFewRuns,
 }
 
-impl Stop {
+impl Termination {
     /// Label for tables.
     pub fn label(self) -> &'static str {
         match self {
-            Stop::Empty => "empty",
-            Stop::NotShrinking => "not shrinking",
-            Stop::MaxWaves => "last wave",
+            Termination::Empty => "empty",
+            Termination::NotShrinking => "not shrinking",
+            Termination::MaxWaves => "last wave",
+            Termination::TooFewRuns => "too few runs to emulate",
         }
     }
 }
@@ -315,7 +320,7 @@ pub struct WaveSummary {
     /// How many of `kept` have every output's implausibility below the cut at every wave.
     pub kept_all: usize,
     /// Why the match ended here (`None`: another wave follows).
-    pub stop: Option<Stop>,
+    pub stop: Option<Termination>,
 }
 
 impl WaveSummary {
@@ -415,7 +420,7 @@ impl HistoryMatch {
     }
 
     /// Whether the match has ended.
-    pub fn stopped(&self) -> Option<Stop> {
+    pub fn stopped(&self) -> Option<Termination> {
         self.summaries.last().and_then(|s| s.stop)
     }
 
@@ -515,13 +520,15 @@ impl HistoryMatch {
             ..summary
         };
         summary.stop = if summary.kept.is_empty() {
-            Some(Stop::Empty)
+            Some(Termination::Empty)
         } else if before
             .is_some_and(|b| summary.non_implausible as f64 > self.settings.shrink * b as f64)
         {
-            Some(Stop::NotShrinking)
+            Some(Termination::NotShrinking)
         } else if wave >= self.settings.max_waves {
-            Some(Stop::MaxWaves)
+            Some(Termination::MaxWaves)
+        } else if summary.kept.len() < self.dim + 3 {
+            Some(Termination::TooFewRuns)
         } else {
             None
         };

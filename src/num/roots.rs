@@ -12,9 +12,9 @@
 //! end is halved (the Illinois modification, which restores superlinear convergence where plain
 //! regula falsi stalls).
 //!
-//! The search stops at the first of: a sample with `|f| <= f_tol` ([`Stop::Value`]), a bracket
-//! narrower than `x_tol_abs + x_tol_rel max(|a|, |b|)` ([`Stop::Bracket`]), or `max_iter`
-//! evaluations ([`Stop::MaxIter`]). Each evaluation may carry a payload (whatever the
+//! The search stops at the first of: a sample with `|f| <= f_tol` ([`Termination::Value`]), a bracket
+//! narrower than `x_tol_abs + x_tol_rel max(|a|, |b|)` ([`Termination::Bracket`]), or `max_iter`
+//! evaluations ([`Termination::MaxIter`]). Each evaluation may carry a payload (whatever the
 //! evaluation computed beside the value: a refined transition, a sweep end) that the result
 //! keeps with its sample. Why hand-written: the root-finding crates we looked at (`roots`,
 //! argmin's Brent) evaluate plain `f64 -> f64` closures without a payload or a fallible
@@ -57,7 +57,7 @@ pub struct RootOptions {
 
 /// Why [`illinois`] stopped.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Stop {
+pub enum Termination {
     /// A sample met the value tolerance.
     Value,
     /// The bracket became narrower than the argument tolerance.
@@ -78,7 +78,7 @@ pub struct Root<T> {
     /// Evaluations made (the initial ends not counted).
     pub evaluations: usize,
     /// Why the search stopped.
-    pub stop: Stop,
+    pub stop: Termination,
 }
 
 /// Errors of [`illinois`]: the ends do not bracket a sign change, or an evaluation failed.
@@ -123,14 +123,14 @@ pub fn illinois<T: Clone, E>(
     let mut evaluations = 0;
     let stop = loop {
         if met(&best) {
-            break Stop::Value;
+            break Termination::Value;
         }
         let (lo, hi) = (neg.x.min(pos.x), neg.x.max(pos.x));
         if hi - lo <= opts.x_tol_abs + opts.x_tol_rel * lo.abs().max(hi.abs()) {
-            break Stop::Bracket;
+            break Termination::Bracket;
         }
         if evaluations >= opts.max_iter {
-            break Stop::MaxIter;
+            break Termination::MaxIter;
         }
         let mut c = if f_neg.is_finite() && f_pos.is_finite() {
             (neg.x * f_pos - pos.x * f_neg) / (f_pos - f_neg)
@@ -198,7 +198,7 @@ mod tests {
             &opts(1e-14),
         )
         .unwrap();
-        assert_eq!(r.stop, Stop::Bracket);
+        assert_eq!(r.stop, Termination::Bracket);
         assert!((r.positive.x - 2f64.cbrt()).abs() < 1e-13);
         assert!(r.positive.f > 0.0 && r.non_positive.f <= 0.0);
         let h = |x: f64| 2.0 - x.exp();
@@ -228,7 +228,7 @@ mod tests {
             &o,
         )
         .unwrap();
-        assert_eq!(r.stop, Stop::Value);
+        assert_eq!(r.stop, Termination::Value);
         assert!((r.best.x - 1.5).abs() <= 1e-3);
         let e = illinois(
             eval(g),

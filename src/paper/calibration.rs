@@ -20,7 +20,7 @@ use thiserror::Error;
 
 use crate::device::{Device, StiffnessModel};
 use crate::drive::Sine;
-use crate::num::roots::{illinois, RootError, RootOptions, Sample, Stop};
+use crate::num::roots::{illinois, RootError, RootOptions, Sample, Termination};
 use crate::ode::{SolverError, Stats};
 use crate::paper::claims::{keys, ClaimKey};
 use crate::paper::measured::P1_MEASURED_ONSET_HZ;
@@ -252,7 +252,7 @@ pub fn calibrate_prototype1(published: &Device) -> Result<Calibration, Narrowban
     };
     let root = illinois(&mut eval, a, b, &opts)
         .map_err(|e| NarrowbandError::from_root(e, WHAT, target))?;
-    if root.stop != Stop::Value {
+    if root.stop != Termination::Value {
         return Err(NarrowbandError::NotConverged {
             what: WHAT.into(),
             iterations: evaluations,

@@ -28,7 +28,7 @@ use super::ranges::{Factor, Ranges};
 use super::DeviationsError;
 use crate::device::Device;
 use crate::num::gp_sensitivity::{emulated_indices, EmulatedIndices, EmulatedSobol};
-use crate::num::history::{HistoryMatch, HistorySettings, Mean, Observation, Run, Stop};
+use crate::num::history::{HistoryMatch, HistorySettings, Mean, Observation, Run, Termination};
 use crate::paper::claims::{Claims, Kind};
 
 /// The emulated Sobol indices of each emulated quantity (`None`: constant over the runs).
@@ -230,7 +230,7 @@ impl HistoryRun {
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Answer {
     /// Why it ended.
-    pub stop: Option<Stop>,
+    pub stop: Option<Termination>,
     /// Waves run.
     pub waves: usize,
     /// Non-implausible share of the cube (second-largest implausibility, or the match's rank).

@@ -8,7 +8,7 @@ use crate::ode::Stats;
 use crate::physics::harvester::State;
 use crate::study::orbit::{Forcing, Linearised, Orbit, OrbitError, Shooter, CHORD_STEPS};
 
-use super::events::{test_grazing, test_plus_one, Gaps, GRAZING_NEAR};
+use super::test_functions::{test_grazing, test_plus_one, Gaps, GRAZING_NEAR};
 use super::{BranchPoint, ContinuationSettings, Matrix5, Rejection, Vector5};
 
 /// Largest distance of a corrected point from its predictor, in arclength steps: beyond it

@@ -1,43 +1,17 @@
 //! The events between two accepted points of a branch (see the table in the parent module):
-//! their test functions, the location of a sign change by the root finder along the branch,
-//! and the location of grazing on the branch of the same device without stops.
+//! the location of a sign change of a test function (in [`super::test_functions`]) by the
+//! root finder along the branch, and the location of grazing on the branch of the same device
+//! without stops.
 
-use crate::drive::Sine;
 use crate::num::roots::{illinois, RootOptions, Sample};
 use crate::ode::Stats;
-use crate::physics::contact::Side;
-use crate::physics::harvester::Harvester;
 use crate::study::orbit::{OrbitError, Shooter};
 
 use super::corrector::Continuer;
+use super::test_functions::{
+    test_fold, test_grazing, test_minus_one, test_plus_one, test_torus, Gaps,
+};
 use super::{BranchPoint, Event, EventKind};
-
-/// The gaps of a model's two sides (infinite where there is no stop), for the grazing test.
-#[derive(Debug, Clone, Copy)]
-pub(super) struct Gaps {
-    upper: f64,
-    lower: f64,
-    /// The suspension's natural frequency (rad/s), which turns an impact speed into a length.
-    w0: f64,
-}
-
-impl Gaps {
-    pub(super) fn of(h: &Harvester<Sine>) -> Self {
-        Self {
-            upper: h.gap(Side::Upper),
-            lower: h.gap(Side::Lower),
-            w0: h.well_omega_rad_s(),
-        }
-    }
-
-    pub(super) fn smallest(self) -> f64 {
-        self.upper.min(self.lower)
-    }
-}
-
-/// An orbit is near grazing when its largest displacement is within this fraction of the gap
-/// (where a corner of the branch is looked for).
-pub(super) const GRAZING_NEAR: f64 = 1e-3;
 
 impl Continuer<'_, '_> {
     /// Locates a sign change of `test` between `a` (index `k`) and `b`, at arclength `ds`.
@@ -252,35 +226,4 @@ impl Continuer<'_, '_> {
         Ok(out)
     }
     // ANCHOR_END: events
-}
-
-pub(super) fn test_fold(p: &BranchPoint, _: Gaps) -> f64 {
-    p.param_tangent()
-}
-pub(super) fn test_plus_one(p: &BranchPoint, _: Gaps) -> f64 {
-    p.orbit.det_minus_one()
-}
-pub(super) fn test_minus_one(p: &BranchPoint, _: Gaps) -> f64 {
-    p.orbit.det_plus_one()
-}
-pub(super) fn test_torus(p: &BranchPoint, _: Gaps) -> f64 {
-    p.orbit.max_multiplier_abs() - 1.0
-}
-/// How far an orbit is past grazing on its deeper side (m): the largest displacement less the
-/// gap, or, once it strikes a rigid stop (which it never penetrates, so that the displacement
-/// stays at the gap), its impact speed over `w0`. Both vanish at grazing.
-pub(super) fn test_grazing(p: &BranchPoint, gaps: Gaps) -> f64 {
-    let s = &p.orbit.summary;
-    let side = |reach: f64, gap: f64, speed: f64| {
-        if speed > 0.0 {
-            speed / gaps.w0
-        } else {
-            reach - gap
-        }
-    };
-    side(s.x_upper_m, gaps.upper, s.impact_speed_m_s[0]).max(side(
-        -s.x_lower_m,
-        gaps.lower,
-        s.impact_speed_m_s[1],
-    ))
 }

@@ -54,6 +54,7 @@ mod corrector;
 mod diagram;
 mod events;
 pub mod impacting;
+mod test_functions;
 mod types;
 
 use corrector::Continuer;

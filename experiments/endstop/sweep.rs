@@ -1,0 +1,124 @@
+//! `endstop sweep`: a stepped-sine up-sweep on a device file, with the impact onset and the
+//! end of the impacting branch refined, and the step's effect on that end.
+
+use anyhow::Result;
+
+use crate::common::plot::{LegendPos, LinePlot, Series, Style, PALETTE};
+use crate::common::{self, fmt_sig, load_device_file};
+use crate::{describe, interface, start, step_effect, RangeArgs};
+
+/// Runs `endstop sweep`.
+pub(crate) fn sweep(a: RangeArgs) -> Result<()> {
+    if !load_device_file(&a.device)?.device.interface.is_resistive() {
+        return interface::dc_sweep(a);
+    }
+    a.check()?;
+    let (mut exp, loaded, device) = start("endstop-sweep", &a.device, a.bias_v, a.out.clone())?;
+    let protocol = a.protocol(&device);
+    let settings = a.sweep_settings(&device, &protocol);
+    let report = common::with_progress(settings.freqs_hz.len(), "sweep", |tick| {
+        settings.run_with(&device, a.accel_rms_g, protocol.approach, |_| tick())
+    })?;
+
+    let steps = &report.sweep.steps;
+    let col = |f: &dyn Fn(&endstop::study::steady::Measurement) -> f64| -> Vec<f64> {
+        steps.iter().map(|s| f(&s.measurement)).collect()
+    };
+    let rows = common::narrowband_io::sweep_rows(
+        &format!("{} g rms up-sweep", a.accel_rms_g),
+        &device,
+        report.measurements(),
+        report.extended_from,
+    );
+    let mut df = common::frame::frame(rows)?;
+    exp.write_parquet("sweep", &mut df, &device.params)?;
+
+    let mut md = format!(
+        "Up-sweep of `{}` ({} set; {}) from {} to {} Hz at {} g rms: {}.\n\n",
+        loaded.file,
+        device.params,
+        describe(&device),
+        a.from,
+        a.to,
+        a.accel_rms_g,
+        protocol.words(),
+    );
+    exp.number("step_hz", protocol.step_hz);
+    let vmax = col(&|m| m.v1_rms_v).into_iter().fold(0.0, f64::max);
+    let pmax = col(&|m| m.p_total_w()).into_iter().fold(0.0, f64::max);
+    exp.number("v1_rms_max_v", vmax);
+    exp.number("power_max_w", pmax);
+    md.push_str(&format!(
+        "- largest RMS voltage of load 1: {} V; largest power of the loads: {} uW\n",
+        fmt_sig(vmax, 4),
+        fmt_sig(pmax * 1e6, 4)
+    ));
+    match report.onset {
+        Some(t) => {
+            exp.number("impact_onset_hz", t.value());
+            md.push_str(&format!(
+                "- impacts begin at {} Hz (bracket {}-{} Hz)\n",
+                fmt_sig(t.value(), 5),
+                fmt_sig(t.before, 5),
+                fmt_sig(t.after, 5)
+            ));
+        }
+        None if report.contact_at_start => md.push_str("- in contact from the first step\n"),
+        None => md.push_str("- no impact in this range\n"),
+    }
+    if let Some(end) = report.branch_end() {
+        exp.number("branch_end_hz", end.transition.value());
+        md.push_str(&format!(
+            "- the impacting branch ends at {} Hz ({})\n",
+            fmt_sig(end.transition.value(), 5),
+            end.kind.label()
+        ));
+        let quarter = settings
+            .up_end_with_step_divided(&device, a.accel_rms_g, protocol.approach, &report, 4.0)?
+            .map(|e| e.transition.value());
+        if let Some(q) = quarter {
+            exp.number("branch_end_quarter_step_hz", q);
+        }
+        md.push_str(&step_effect(
+            "the end of the impacting branch",
+            end.transition.value(),
+            quarter,
+        ));
+    }
+    exp.write_numbers_md(&md)?;
+    print!("{md}");
+
+    let pts = |f: &dyn Fn(&endstop::study::steady::Measurement) -> f64| -> Vec<(f64, f64)> {
+        steps
+            .iter()
+            .map(|s| (s.measurement.freq_hz, f(&s.measurement)))
+            .collect()
+    };
+    let mut series = vec![Series::new(
+        if device.transducer.loads() == 2 {
+            "V1 (one load)"
+        } else {
+            "V (the load)"
+        },
+        pts(&|m| m.v1_rms_v),
+        PALETTE[0],
+        Style::LinePoints,
+    )];
+    if device.transducer.loads() == 2 {
+        series.push(Series::new(
+            "V2 - V1",
+            pts(&|m| m.vdiff_rms_v),
+            PALETTE[1],
+            Style::Dashed,
+        ));
+    }
+    let plot = LinePlot::new(
+        &format!("Up-sweep at {} g rms: {}", a.accel_rms_g, device.name),
+        "frequency [Hz]",
+        "RMS output voltage [V]",
+        series,
+    )
+    .legend(LegendPos::UpperLeft);
+    exp.write_plot(&plot)?;
+    exp.finish()
+}
