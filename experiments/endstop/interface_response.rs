@@ -14,6 +14,7 @@ use endstop::study::stepped::linspace_step;
 use crate::common::fmt_sig;
 use crate::common::frame::frame;
 use crate::common::plot::{LegendPos, LinePlot, Series, Style, PALETTE};
+use crate::common::response_io::stability_series;
 use crate::{start, RangeArgs};
 use endstop_experiments::row;
 
@@ -281,34 +282,13 @@ fn figure(
     down: &[IfSteady],
 ) -> LinePlot {
     let uw = |s: &IfSteady| (s.freq_hz, s.p_dc_w * 1e6);
-    let mut series = Vec::new();
-    let mut labelled = [false, false];
-    let mut seg: Vec<(f64, f64)> = Vec::new();
-    let mut stable: Option<bool> = None;
-    let mut flush = |seg: &mut Vec<(f64, f64)>, st: bool, series: &mut Vec<Series>| {
-        if seg.len() >= 2 {
-            let k = usize::from(st);
-            let label = match (labelled[k], st) {
-                (true, _) => "",
-                (false, true) => "continued, stable",
-                (false, false) => "continued, unstable",
-            };
-            labelled[k] = true;
-            let style = if st { Style::Line } else { Style::Dashed };
-            series.push(Series::new(label, std::mem::take(seg), PALETTE[0], style));
-        }
-        seg.clear();
-    };
-    for p in &branch.points {
-        if stable.is_some_and(|s| s != p.is_stable()) {
-            let last = seg.last().copied();
-            flush(&mut seg, stable.unwrap_or(true), &mut series);
-            seg.extend(last);
-        }
-        stable = Some(p.is_stable());
-        seg.push(uw(&p.steady));
-    }
-    flush(&mut seg, stable.unwrap_or(true), &mut series);
+    let mut series = stability_series(
+        branch
+            .points
+            .iter()
+            .map(|p| (p.steady.freq_hz, p.steady.p_dc_w * 1e6, p.is_stable())),
+        ["continued, stable", "continued, unstable"],
+    );
     series.push(Series::new(
         "down-sweep",
         down.iter().map(uw).collect(),
