@@ -21,7 +21,7 @@ use endstop::drive::Sine;
 use endstop::study::interface::charging::{charge, ChargeSettings};
 use endstop::study::interface::record::{noise_ensemble, noise_record};
 use endstop::study::interface::sweep::{frequency_sweep, load_sweep};
-use endstop::study::interface::{IfSteady, SteadySettings};
+use endstop::study::interface::{IfSteady, SteadyMethod, SteadySettings};
 use endstop::study::record::{simulate_record, RecordSpec, Scheme, DEFAULT_RTOL};
 use endstop::study::stepped::linspace_step;
 
@@ -190,6 +190,7 @@ fn run() -> Result<()> {
 
     // DC power against frequency with stability, for both examples.
     let mut missing_f: Vec<String> = Vec::new();
+    let mut by_map: Vec<String> = Vec::new();
     let mut rows = Vec::new();
     let mut plots = Vec::new();
     for (dev, from, to) in [(&piezo, 110.0, 130.0), (&em, 44.0, 56.0)] {
@@ -214,7 +215,14 @@ fn run() -> Result<()> {
             })
             .collect();
         for s in &states {
-            rows.push(row!["device" => d.name.clone(), "freq_hz" => s.freq_hz, "p_dc_w" => s.p_dc_w, "vdc_v" => s.vdc_v, "x_max_m" => s.x_peak_m, "contact" => s.contact, "stable" => s.is_stable(), "max_multiplier" => s.max_multiplier, "ledger_rel_residual" => s.ledger.relative_residual()]);
+            rows.push(row!["device" => d.name.clone(), "freq_hz" => s.freq_hz, "p_dc_w" => s.p_dc_w, "vdc_v" => s.vdc_v, "x_max_m" => s.x_peak_m, "contact" => s.contact, "stable" => s.is_stable(), "max_multiplier" => s.max_multiplier, "method" => s.method.label(), "ledger_rel_residual" => s.ledger.relative_residual()]);
+            if let SteadyMethod::PeriodMap { periods } = s.method {
+                by_map.push(format!(
+                    "{} at {} Hz ({periods} periods)",
+                    d.name,
+                    fmt_sig(s.freq_hz, 4)
+                ));
+            }
         }
         let pts = |stable: bool| {
             states
@@ -242,10 +250,20 @@ fn run() -> Result<()> {
     }
     write_atomic(
         &book.join("frequency_missing.md"),
-        if missing_f.is_empty() {
-            "Shooting found a period-one steady state at every frequency.\n".to_string()
-        } else {
-            format!("No period-one steady state at: {}.\n", missing_f.join("; "))
+        {
+            let mut md = if missing_f.is_empty() {
+                "A period-one steady state was found at every frequency.\n".to_string()
+            } else {
+                format!("No period-one steady state at: {}.\n", missing_f.join("; "))
+            };
+            if !by_map.is_empty() {
+                md.push_str(&format!(
+                    "\nNewton's method did not converge, and the period map iterated from the \
+                     transient's end did, at: {}.\n",
+                    by_map.join("; ")
+                ));
+            }
+            md
         }
         .as_bytes(),
     )?;

@@ -272,3 +272,82 @@ fn continuation_passes_the_folds_of_the_stop() {
         }
     }
 }
+
+/// Shooting from rest finds the steady state of the example cantilever with parallel SSHI at
+/// 50 kohm and series SSHI at 100 kohm (where a Newton search that asked the residual to fall
+/// at each step stalled near 1e-2), and it is the orbit the period map iterated from rest
+/// reaches: 1500 periods contract the distance by the largest multiplier's modulus to the
+/// 1500th power (below 1e-29 for both), so the iterate is the orbit to rounding; the two agree
+/// within 1e-6 of each state scale (the shooting's tolerance of 1e-7 on the residual, over a
+/// gap 1 - |mu| of 0.05 and 0.08, allows 2e-6) and the DC power within 1e-6 relative.
+#[test]
+fn shooting_finds_the_sshi_orbits_at_large_loads() {
+    for (kind, load_ohm) in [("parallel_sshi", 50e3), ("series_sshi", 100e3)] {
+        let mut d = with_interface(&example(), kind);
+        d.interface = d.interface.with_load_resistance(load_ohm);
+        let sine = Sine::from_rms_g(0.3, 120.0);
+        let set = SteadySettings::default();
+        let s = steady_state(&d, sine, &State::zeros(), &set).unwrap();
+        let model = steady_model(&d, sine).unwrap();
+        let sc = model.scales();
+        let mut y = State::zeros();
+        for _ in 0..1500 {
+            y = period_map_of(&model, &y, set.rtol).unwrap();
+        }
+        let dist = (State::from(s.state) - y).component_div(&sc).amax();
+        let iterated = measure(&model, &y, set.rtol).unwrap();
+        eprintln!(
+            "{kind} at {load_ohm} ohm: {} Newton steps, max |mu| {:.5}, distance to the \
+             iterated orbit {dist:.1e}, P_DC {:.6e} W vs {:.6e} W",
+            s.newton_steps, s.max_multiplier, s.p_dc_w, iterated.p_dc_w
+        );
+        assert!(s.max_multiplier.powi(1500) < 1e-29, "{kind}");
+        assert!(dist < 1e-6, "{kind}: {dist}");
+        assert!(
+            (s.p_dc_w - iterated.p_dc_w).abs() < 1e-6 * iterated.p_dc_w,
+            "{kind}"
+        );
+    }
+}
+
+/// An up-sweep of the example at 1 g in steps of 2 Hz jumps off the upper branch after the fold
+/// at 168.46 Hz: at 170 Hz Newton's method from the upper orbit does not converge, and the
+/// period map iterated from the transient's end finds the lower orbit. It is the orbit: 1500
+/// further periods (a contraction by its largest multiplier, about 0.97, to the 1500th power,
+/// below 1e-15) move it by less than 1e-6 of each state scale (its residual is below the
+/// tolerance of 1e-7 over a gap 1 - |mu| of 0.03, so about 3e-6 at most), and its DC power is
+/// on the lower branch, below a tenth of the upper orbit's at 168 Hz.
+#[test]
+fn the_period_map_finds_the_orbit_past_a_fold() {
+    let d = example();
+    let set = SteadySettings::default();
+    let freqs: Vec<f64> = (0..=30).map(|i| 110.0 + 2.0 * f64::from(i)).collect();
+    let states: Vec<_> =
+        endstop::study::interface::sweep::frequency_sweep(&d, &freqs, 1.0, &set, |_, _| {})
+            .into_iter()
+            .map(|s| s.unwrap())
+            .collect();
+    let (upper, past) = (&states[29], &states[30]);
+    eprintln!(
+        "168 Hz: {:?}, P_DC {:.4e} W; 170 Hz: {:?}, max |mu| {:.5}, residual {:.1e}, P_DC \
+         {:.4e} W",
+        upper.method, upper.p_dc_w, past.method, past.max_multiplier, past.residual, past.p_dc_w
+    );
+    assert!(matches!(
+        past.method,
+        endstop::study::interface::SteadyMethod::PeriodMap { .. }
+    ));
+    assert!(past.residual < set.tol);
+    assert!(past.max_multiplier.powi(1500) < 1e-15);
+    let model = steady_model(&d, Sine::from_rms_g(1.0, 170.0)).unwrap();
+    let mut y = State::from(past.state);
+    for _ in 0..1500 {
+        y = period_map_of(&model, &y, set.rtol).unwrap();
+    }
+    let moved = (y - State::from(past.state))
+        .component_div(&model.scales())
+        .amax();
+    eprintln!("moved by {moved:.1e} in 1500 periods");
+    assert!(moved < 1e-6);
+    assert!(past.p_dc_w < 0.1 * upper.p_dc_w);
+}

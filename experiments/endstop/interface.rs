@@ -171,6 +171,7 @@ pub fn dc_sweep(a: RangeArgs) -> Result<()> {
                 "contact" => s.contact,
                 "stable" => s.is_stable(),
                 "max_multiplier" => s.max_multiplier,
+                "method" => s.method.label(),
                 "ledger_rel_residual" => s.ledger.relative_residual(),
             ]
         })

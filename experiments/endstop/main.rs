@@ -18,6 +18,7 @@
 
 mod basins;
 mod interface;
+mod interface_response;
 mod random;
 mod response;
 mod shared;
@@ -64,7 +65,8 @@ enum Study {
     Random(random::RandomArgs),
     /// The whole frequency response: up- and down-sweeps, the periodic orbits continued in
     /// frequency (pseudo-arclength, through folds) with their Floquet multipliers, and the
-    /// folds and grazing points on the branch.
+    /// folds and grazing points on the branch. On a device with an interface circuit: the DC
+    /// up- and down-sweeps and the steady state continued through its folds, with stability.
     Response(response::ResponseArgs),
     /// Basins of attraction under a fixed sine: the stable periodic orbits reached from a set
     /// of seeds (for a device with two wells, each placed in its well or across the barrier),

@@ -193,10 +193,15 @@ pub(crate) fn start(
 ) -> Result<(Experiment, LoadedDevice, Device)> {
     let loaded = load_device_file(path)?;
     let mut device = loaded.device.clone();
-    if !device.interface.is_resistive() && !matches!(name, "endstop-sweep" | "endstop-charge") {
+    if !device.interface.is_resistive()
+        && !matches!(
+            name,
+            "endstop-sweep" | "endstop-charge" | "endstop-response"
+        )
+    {
         bail!(
-            "device `{}` has an interface circuit (`{}`): `endstop sweep` and `endstop charge` \
-             take it; this study models resistive loads only",
+            "device `{}` has an interface circuit (`{}`): `endstop sweep`, `endstop response` \
+             and `endstop charge` take it; this study models resistive loads only",
             device.name,
             device.interface.key()
         );

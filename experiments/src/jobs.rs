@@ -42,6 +42,7 @@ const P2: &str = "data/prototype2.toml";
 const EXAMPLE: &str = "data/examples/my_harvester.toml";
 const FIG08_MEASURED: &str = "data/measured/fig08_paper.csv";
 const PIEZO: &str = "data/examples/piezo_cantilever.toml";
+const PIEZO_BRIDGE: &str = "data/examples/piezo_bridge.toml";
 const EM: &str = "data/examples/em_asymmetric.toml";
 const RIGID: &str = "data/examples/rigid_restitution.toml";
 const RECORD: &str = "data/examples/machine_record.wav";
@@ -165,6 +166,23 @@ pub const JOBS: &[Job] = &[
             "5",
         ],
         &[PIEZO],
+    ),
+    tool_run(
+        "own_device_piezo_bridge_response",
+        &[
+            "response",
+            "--device",
+            PIEZO_BRIDGE,
+            "--from",
+            "110",
+            "--to",
+            "300",
+            "--step",
+            "2",
+            "--accel-rms-g",
+            "1",
+        ],
+        &[PIEZO_BRIDGE],
     ),
     tool_run(
         "own_device_piezo_random",

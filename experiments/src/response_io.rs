@@ -46,34 +46,44 @@ pub fn continuation_rows(case: &str, branch: &Branch) -> Vec<Row> {
 /// dashed where they are not (neighbouring segments share their end point), each kind
 /// labelled once; orbits where `value` is `None` are left out.
 fn branch_series(branch: &Branch, value: impl Fn(&Orbit) -> Option<f64>) -> Vec<Series> {
+    stability_series(
+        branch.points.iter().filter_map(|p| {
+            let o = &p.orbit;
+            value(o).map(|y| (o.forcing.freq_hz, y, o.is_stable()))
+        }),
+        ["periodic orbits, stable", "periodic orbits, unstable"],
+    )
+}
+
+/// A branch's points `(x, y, stable)` in order along it as lines: solid where stable and
+/// dashed where not (neighbouring stretches share their end point), each kind labelled once
+/// with `labels` = [stable, unstable].
+pub fn stability_series(
+    points: impl IntoIterator<Item = (f64, f64, bool)>,
+    labels: [&str; 2],
+) -> Vec<Series> {
     let mut series = Vec::new();
     let mut seg: Vec<(f64, f64)> = Vec::new();
     let mut stable = None;
     let mut labelled = [false, false];
     let mut flush = |seg: &mut Vec<(f64, f64)>, st: bool, series: &mut Vec<Series>| {
         if seg.len() >= 2 {
-            let k = usize::from(st);
-            let label = match (labelled[k], st) {
-                (true, _) => "",
-                (false, true) => "periodic orbits, stable",
-                (false, false) => "periodic orbits, unstable",
-            };
+            let k = usize::from(!st);
+            let label = if labelled[k] { "" } else { labels[k] };
             labelled[k] = true;
             let style = if st { Style::Line } else { Style::Dashed };
             series.push(Series::new(label, std::mem::take(seg), PALETTE[0], style));
         }
         seg.clear();
     };
-    for p in &branch.points {
-        let o = &p.orbit;
-        let Some(y) = value(o) else { continue };
-        if stable.is_some_and(|s| s != o.is_stable()) {
+    for (x, y, st) in points {
+        if stable.is_some_and(|s| s != st) {
             let last = seg.last().copied();
             flush(&mut seg, stable.unwrap_or(true), &mut series);
             seg.extend(last);
         }
-        stable = Some(o.is_stable());
-        seg.push((o.forcing.freq_hz, y));
+        stable = Some(st);
+        seg.push((x, y));
     }
     flush(&mut seg, stable.unwrap_or(true), &mut series);
     series
