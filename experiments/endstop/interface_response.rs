@@ -14,7 +14,7 @@ use endstop::study::stepped::linspace_step;
 use crate::common::fmt_sig;
 use crate::common::frame::frame;
 use crate::common::plot::{LegendPos, LinePlot, Series, Style, PALETTE};
-use crate::common::response_io::stability_series;
+use crate::common::response_io::{stability_segments, stability_series};
 use crate::{start, RangeArgs};
 use endstop_experiments::row;
 
@@ -81,7 +81,7 @@ pub fn response(a: &RangeArgs) -> Result<()> {
         }
     }
     exp.write_parquet("sweeps", &mut frame(rows)?, &device.params)?;
-    let segments = stability_segments(&branch);
+    let segments = stability_segments(branch.points.iter().map(|p| p.is_stable()));
     let rows = branch
         .points
         .iter()
@@ -138,24 +138,6 @@ pub fn response(a: &RangeArgs) -> Result<()> {
     print!("{md}");
     exp.write_plot(&figure(a, &device, &branch, &up, &down))?;
     exp.finish()
-}
-
-/// The index of each point's stretch of equal stability along the branch (a new stretch
-/// starts wherever the stability changes).
-fn stability_segments(branch: &IfBranch) -> Vec<u32> {
-    let mut seg = 0u32;
-    let mut prev: Option<bool> = None;
-    branch
-        .points
-        .iter()
-        .map(|p| {
-            if prev.is_some_and(|s| s != p.is_stable()) {
-                seg += 1;
-            }
-            prev = Some(p.is_stable());
-            seg
-        })
-        .collect()
 }
 
 /// Of the two points around the fold at `f` (Hz) before point `k`, the one nearer in frequency.

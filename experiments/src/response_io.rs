@@ -14,20 +14,33 @@ use crate::md::Table;
 use crate::plot::{LegendPos, LinePlot, Panels, Series, Style, PALETTE};
 use crate::row;
 
-/// One row per orbit of `branch`, labelled `case`; `branch` numbers the segments of equal
-/// stability (a new segment starts wherever the stability changes).
-pub fn continuation_rows(case: &str, branch: &Branch) -> Vec<Row> {
+/// The index of each point's stretch of equal stability along a branch, from the points'
+/// stability in order (a new stretch starts wherever the stability changes).
+pub fn stability_segments(stable: impl IntoIterator<Item = bool>) -> Vec<u32> {
     let mut segment = 0u32;
     let mut prev: Option<bool> = None;
+    stable
+        .into_iter()
+        .map(|s| {
+            if prev.is_some_and(|p| p != s) {
+                segment += 1;
+            }
+            prev = Some(s);
+            segment
+        })
+        .collect()
+}
+
+/// One row per orbit of `branch`, labelled `case`; `branch` numbers the segments of equal
+/// stability ([`stability_segments`]).
+pub fn continuation_rows(case: &str, branch: &Branch) -> Vec<Row> {
+    let segments = stability_segments(branch.points.iter().map(|p| p.orbit.is_stable()));
     branch
         .points
         .iter()
-        .map(|p| {
+        .zip(segments)
+        .map(|(p, segment)| {
             let o = &p.orbit;
-            if prev.is_some_and(|s| s != o.is_stable()) {
-                segment += 1;
-            }
-            prev = Some(o.is_stable());
             row![
                 "case" => case,
                 "freq_hz" => o.forcing.freq_hz,

@@ -304,7 +304,24 @@ pub fn continue_frequency(
     let (lo, hi) = (set.start_hz.min(set.stop_hz), set.start_hz.max(set.stop_hz));
     let mut ds = set.ds;
     while branch.points.len() < set.max_points {
-        let Some(cor) = c.correct(&u, &t, ds) else {
+        // A step is accepted when the corrector converges, the tangent turns by at most
+        // MAX_TURN_RAD and the frequency moves by at most the largest step; otherwise it is
+        // halved, down to ds_min.
+        let accepted = match c.correct(&u, &t, ds) {
+            Some(cor) => {
+                branch.newton_iterations += cor.iterations;
+                let (_, a, _) = c.evaluate(&cor.u)?;
+                let df = (c.freq(&cor.u) - c.freq(&u)).abs();
+                Cont::tangent(&a, &t)
+                    .filter(|tn| {
+                        tn.dot(&t).clamp(-1.0, 1.0).acos() <= MAX_TURN_RAD
+                            && df <= set.max_freq_step_hz
+                    })
+                    .map(|tn| (cor, tn))
+            }
+            None => None,
+        };
+        let Some((cor, tn)) = accepted else {
             branch.rejected_steps += 1;
             ds *= 0.5;
             if ds < set.ds_min {
@@ -313,24 +330,6 @@ pub fn continue_frequency(
             }
             continue;
         };
-        branch.newton_iterations += cor.iterations;
-        let (_, a, _) = c.evaluate(&cor.u)?;
-        let t_new = Cont::tangent(&a, &t);
-        let df = (c.freq(&cor.u) - c.freq(&u)).abs();
-        let ok = match t_new {
-            Some(tn) => tn.dot(&t).clamp(-1.0, 1.0).acos() <= MAX_TURN_RAD,
-            None => false,
-        } && df <= set.max_freq_step_hz;
-        if !ok {
-            branch.rejected_steps += 1;
-            ds *= 0.5;
-            if ds < set.ds_min {
-                branch.end = IfBranchEnd::Stalled(c.freq(&u));
-                return Ok(branch);
-            }
-            continue;
-        }
-        let tn = t_new.expect("checked above");
         if tn[4] * t[4] < 0.0 {
             // Linear interpolation of the tangent's frequency component to zero.
             let (f0, f1) = (c.freq(&u), c.freq(&cor.u));
