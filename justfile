@@ -30,9 +30,14 @@ lint:
 bench:
     cargo run --release --bin bench
 
-# Cross-check our integrator against ngspice (needs `apt-get install ngspice`).
+# Cross-check our integrator against ngspice (its numbers from the recording).
 crosscheck:
     cargo run --release --bin crosscheck
+
+# The same with ngspice run again on every netlist, checked against the recording (needs
+# `apt-get install ngspice`).
+crosscheck-fresh:
+    cargo run --release --bin crosscheck -- --fresh-ngspice
 
 # Run the model on your own device file, e.g. `just own sweep --device my.toml --from 500 --to 900 --accel-rms-g 0.3`.
 own *ARGS:

@@ -1,16 +1,20 @@
 //! Cross-check with ngspice (the edge; the comparison itself is `endstop::paper::crosscheck`):
-//! for every case and ngspice setting, writes the netlist, runs ngspice in batch mode, reads
-//! its waveforms back and has the paper layer judge them against our integrator; writes the
-//! table, the portable netlists, the plot and the book's numbers. The run fails (non-zero
-//! exit) if ngspice is not installed or if the documented settings miss the acceptance
-//! tolerances (0.1 % without impacts, 1 % with impacts).
+//! for every case and ngspice setting, writes the netlist, takes ngspice's numbers for it (from
+//! the recording `data/recorded/ngspice/crosscheck.json` where it holds that netlist, else from
+//! a run of ngspice in batch mode; `--fresh-ngspice` runs ngspice for every netlist and checks
+//! the recording, `--record-ngspice` rewrites it) and has the paper layer judge them against
+//! our integrator; writes the table, the portable netlists, the plot and the book's numbers.
+//! The run fails (non-zero exit) if a netlist has neither a recording nor ngspice to run it,
+//! if a fresh run disagrees with the recording, or if the documented settings miss the
+//! acceptance tolerances (0.1 % without impacts, 1 % with impacts).
 
 use endstop_experiments as common;
 
-use std::path::Path;
+use std::collections::BTreeMap;
 use std::time::Instant;
 
-use anyhow::{bail, Context, Result};
+use anyhow::{bail, Result};
+use common::ngspice::{Reading, Reduced, Runner, Source};
 use common::plot::{LegendPos, LinePlot, Series, Style, PALETTE};
 use common::{fmt_sig, write_atomic, Experiment};
 use endstop::paper::crosscheck::{
@@ -57,6 +61,7 @@ struct Row {
     ours_s: f64,
     ours_steps: u64,
     spice_s: f64,
+    spice_recorded: bool,
     spice_points: usize,
     tolerance: f64,
     impacting: bool,
@@ -111,6 +116,7 @@ impl Row {
             ours_s: o.seconds,
             ours_steps: o.ours.stats.accepted,
             spice_s: f64::NAN,
+            spice_recorded: false,
             spice_points: 0,
             tolerance: case.tolerance(),
             impacting: case.impacting,
@@ -119,7 +125,7 @@ impl Row {
     }
 
     /// Fills in ngspice's run and the verdict.
-    fn judge(&mut self, spice: &SpiceRun, ours: &Ours, seconds: f64) {
+    fn judge(&mut self, spice: &SpiceRun, ours: &Ours, reading: &Reading) {
         let d = Difference::of(&ours.measurement, spice);
         self.v1_spice = spice.v1_rms_v;
         self.v2_spice = spice.v2_rms_v;
@@ -128,29 +134,36 @@ impl Row {
         self.rel_diff = d.rel;
         self.x_peak_spice_m = spice.x_peak_m;
         self.cf_spice = spice.contact_fraction;
-        self.spice_s = seconds;
+        self.spice_s = reading.run.wall_s;
+        self.spice_recorded = reading.recorded;
         self.spice_points = spice.points;
         self.verdict = d.verdict(self.tolerance);
     }
 }
 
+/// Where ngspice's numbers for the cross-check are recorded.
+const RECORDING: &str = "data/recorded/ngspice/crosscheck.json";
+
 fn run() -> Result<()> {
-    let version = common::ngspice::version()?;
+    let source = Source::from_args("crosscheck")?;
     let mut exp = Experiment::start("crosscheck");
-    eprintln!("[crosscheck] using {version}");
     let p1 = exp.load_published("prototype1")?;
     let p2 = exp.load_published("prototype2")?;
-
-    let tmp = common::ngspice::TempDir(
-        std::env::temp_dir().join(format!("endstop-crosscheck-{}", std::process::id())),
-    );
-    std::fs::create_dir_all(&tmp.0)
-        .with_context(|| format!("cannot create {}", tmp.0.display()))?;
+    let mut spice = Runner::new(
+        source,
+        RECORDING,
+        "ngspice's numbers for the cross-check: for each netlist (its name: case and \
+         setting; the netlist itself is the one `crosscheck` writes, identified by its \
+         SHA-256), the RMS voltages, peak displacement, time in contact and points over the \
+         comparison window, or the storage's mean voltage and DC power of a bridge case, as \
+         `crosscheck` reads them off the waveforms ngspice writes, and the wall time of the run",
+        "cargo run --release --bin crosscheck -- --record-ngspice",
+    )?;
 
     let mut rows: Vec<Row> = Vec::new();
     let mut plot_series: Vec<Series> = Vec::new();
     for case in cases(&p1.device, &p2.device) {
-        let (case_rows, series) = run_case(&mut exp, &tmp.0, &case)?;
+        let (case_rows, series) = run_case(&mut exp, &mut spice, &case)?;
         rows.extend(case_rows);
         plot_series.extend(series);
     }
@@ -164,11 +177,14 @@ fn run() -> Result<()> {
         .collect();
     let failures = acceptance_failures(&keys, &verdicts);
 
-    let (bridge_table, bridge_failures) = bridge_cases(&mut exp, &tmp.0)?;
+    let (bridge_table, bridge_failures) = bridge_cases(&mut exp, &mut spice)?;
     write_atomic(&exp.book_dir.join("bridge.md"), bridge_table.as_bytes())?;
     let mut failures = failures;
     failures.extend(bridge_failures);
 
+    let version = spice.version()?;
+    eprintln!("[crosscheck] ngspice: {version}");
+    spice.finish()?;
     exp.write_numbers_md(&numbers_md(&rows, &version))?;
     let mut df = rows_df(&rows)?;
     exp.write_parquet("crosscheck", &mut df, ParamSet::Published.label())?;
@@ -185,7 +201,11 @@ fn run() -> Result<()> {
 
 /// Runs one case under every setting: its rows, and for the book's case the plot's series
 /// (ours first, then ngspice's defaults and documented settings).
-fn run_case(exp: &mut Experiment, tmp: &Path, case: &Case) -> Result<(Vec<Row>, Vec<Series>)> {
+fn run_case(
+    exp: &mut Experiment,
+    spice: &mut Runner,
+    case: &Case,
+) -> Result<(Vec<Row>, Vec<Series>)> {
     let prepared = prepare(case)?;
     let started = Instant::now();
     let ours = prepared.ours()?;
@@ -208,7 +228,7 @@ fn run_case(exp: &mut Experiment, tmp: &Path, case: &Case) -> Result<(Vec<Row>, 
     let mut rows = Vec::new();
     let mut series = Vec::new();
     for setting in SETTINGS {
-        let (row, spice) = run_setting(exp, tmp, &o, setting)?;
+        let (row, reading) = run_setting(exp, spice, &o, setting)?;
         eprintln!(
             "[crosscheck]   {:<24} V1 {:>10} V  rel diff {:>10}  ngspice {:.2} s  ({})",
             row.setting,
@@ -225,8 +245,8 @@ fn run_case(exp: &mut Experiment, tmp: &Path, case: &Case) -> Result<(Vec<Row>, 
             &format!("v1_rms_spice_{}_{}_v", case.key, setting.key()),
             row.v1_spice,
         );
-        if let (Some(spice), true) = (spice, case.key == BOOK_CASE) {
-            series.extend(spice_series(&o, setting, &spice)?);
+        if let (Some((spice, reading)), true) = (reading, case.key == BOOK_CASE) {
+            series.extend(spice_series(&o, setting, &spice, &reading));
         }
         rows.push(row);
     }
@@ -250,22 +270,17 @@ fn run_case(exp: &mut Experiment, tmp: &Path, case: &Case) -> Result<(Vec<Row>, 
     Ok((rows, series))
 }
 
-/// Runs one setting of a case: writes its netlist (and, for the documented settings, the
-/// portable netlist a user would run), runs ngspice and judges its output.
+/// Runs one setting of a case: writes, for the documented settings, the portable netlist a
+/// user would run, takes ngspice's numbers for the setting's netlist and judges them.
 fn run_setting(
     exp: &Experiment,
-    tmp: &Path,
+    spice: &mut Runner,
     o: &OursRun,
     setting: Setting,
-) -> Result<(Row, Option<SpiceRun>)> {
+) -> Result<(Row, Option<(SpiceRun, Reading)>)> {
     let case = &o.prepared.case;
     let stem = format!("{}_{}", case.key, setting.key());
-    let dat = tmp.join(format!("{stem}.dat"));
-    let cir = tmp.join(format!("{stem}.cir"));
-    let text = o
-        .prepared
-        .netlist(o.ours, setting, dat.display().to_string());
-    std::fs::write(&cir, &text).with_context(|| format!("cannot write {}", cir.display()))?;
+    let text = o.prepared.netlist(o.ours, setting, format!("{stem}.dat"));
     if setting.documented() {
         // The netlist as a user would run it (`ngspice -b <case>.cir`), writing `<case>.dat`
         // beside it.
@@ -285,13 +300,29 @@ fn run_setting(
     }
     let mut row = Row::new(o, setting);
     let gap = endstop(&case.device).gap_m;
-    let spice = common::ngspice::run(&cir, &dat).and_then(|(text, seconds)| {
-        Ok((SpiceRun::of_wrdata(&text, gap, o.ours.window_s)?, seconds))
+    let plotted =
+        case.key == BOOK_CASE && matches!(setting, Setting::Documented | Setting::Defaults);
+    let (period, t1) = (case.period_s(), o.ours.window_s.1);
+    let reading = spice.run(&stem, &text, &format!("{stem}.dat"), |text| {
+        let run = SpiceRun::of_wrdata(text, gap, o.ours.window_s)?;
+        let series = if plotted {
+            let w = &run.waveforms;
+            w.time
+                .iter()
+                .zip(w.column("v(n1)")?)
+                .filter(|(t, _)| **t >= t1 - period && **t <= t1)
+                .map(|(t, v)| (*t, *v))
+                .collect()
+        } else {
+            Vec::new()
+        };
+        Ok(reduce(&run, series))
     });
-    match spice {
-        Ok((spice, seconds)) => {
-            row.judge(&spice, o.ours, seconds);
-            Ok((row, Some(spice)))
+    match reading {
+        Ok(reading) => {
+            let run = spice_run(&reading)?;
+            row.judge(&run, o.ours, &reading);
+            Ok((row, Some((run, reading))))
         }
         Err(e) => {
             row.verdict = Verdict::Failed(format!("{e:#}"));
@@ -300,9 +331,46 @@ fn run_setting(
     }
 }
 
+/// The numbers the cross-check reads off one ngspice run (what the recording keeps).
+fn reduce(run: &SpiceRun, series: Vec<(f64, f64)>) -> Reduced {
+    let values = BTreeMap::from([
+        ("v1_rms_v".to_string(), run.v1_rms_v),
+        ("v2_rms_v".to_string(), run.v2_rms_v),
+        ("x_peak_m".to_string(), run.x_peak_m),
+        ("contact_fraction".to_string(), run.contact_fraction),
+        ("points_in_window".to_string(), run.points as f64),
+    ]);
+    (values, series)
+}
+
+/// The run [`reduce`] kept, as the paper layer judges it (without its waveforms).
+fn spice_run(reading: &Reading) -> Result<SpiceRun> {
+    let v = |k: &str| {
+        reading
+            .run
+            .values
+            .get(k)
+            .copied()
+            .ok_or_else(|| anyhow::anyhow!("ngspice's numbers lack `{k}`"))
+    };
+    Ok(SpiceRun {
+        v1_rms_v: v("v1_rms_v")?,
+        v2_rms_v: v("v2_rms_v")?,
+        x_peak_m: v("x_peak_m")?,
+        contact_fraction: v("contact_fraction")?,
+        points: v("points_in_window")? as usize,
+        waveforms: Default::default(),
+    })
+}
+
 /// ngspice's V1 over the last period of the book's case, for the defaults and the documented
 /// settings (none for the others).
-fn spice_series(o: &OursRun, setting: Setting, spice: &SpiceRun) -> Result<Option<Series>> {
+fn spice_series(
+    o: &OursRun,
+    setting: Setting,
+    spice: &SpiceRun,
+    reading: &Reading,
+) -> Option<Series> {
     let (color, style, label) = match setting {
         Setting::Documented => (PALETTE[1], Style::Dashed, "ngspice, documented settings"),
         Setting::Defaults => {
@@ -314,20 +382,17 @@ fn spice_series(o: &OursRun, setting: Setting, spice: &SpiceRun) -> Result<Optio
             };
             (PALETTE[2], Style::Line, label)
         }
-        _ => return Ok(None),
+        _ => return None,
     };
     let period = o.prepared.case.period_s();
     let t1 = o.ours.window_s.1;
-    let w = &spice.waveforms;
-    let v1 = w.column("v(n1)")?;
-    let pts: Vec<(f64, f64)> = w
-        .time
+    let pts: Vec<(f64, f64)> = reading
+        .run
+        .series
         .iter()
-        .zip(v1)
-        .filter(|(t, _)| **t >= t1 - period && **t <= t1)
         .map(|(t, v)| ((t - (t1 - period)) / period, *v))
         .collect();
-    Ok(Some(Series::new(label, pts, color, style)))
+    Some(Series::new(label, pts, color, style))
 }
 
 /// The book case's V1 over the last period: ours and ngspice's.
@@ -355,10 +420,19 @@ fn numbers_md(rows: &[Row], version: &str) -> String {
          {} % with impacts, applied to the documented settings. Settings marked * \
          are ngspice's defaults; T is the drive period; the output step of `.tran` is \
          T/{OUTPUT_STEPS_PER_PERIOD}. The verdict applies the tolerance to every row; only the \
-         documented settings (in bold) are required to meet it. Run times are wall-clock seconds on the machine that \
-         generated this page (ngspice's include starting the process and writing its output).\n\n",
+         documented settings (in bold) are required to meet it. Run times are wall-clock seconds \
+         (ngspice's include starting the process and writing its output); {}.\n\n",
         TOL_FREE * 100.0,
         TOL_IMPACTING * 100.0,
+        if rows.iter().all(|r| r.spice_recorded) {
+            "ours were measured on the machine that generated this page, ngspice's where its \
+             runs were recorded"
+        } else if rows.iter().any(|r| r.spice_recorded) {
+            "ours were measured on the machine that generated this page, ngspice's there or, \
+             for runs taken from the recording, where they were recorded"
+        } else {
+            "both were measured on the machine that generated this page"
+        },
     );
     let mut last_case = String::new();
     for r in rows {
@@ -410,8 +484,8 @@ fn numbers_md(rows: &[Row], version: &str) -> String {
             verdict,
         ));
     }
-    // Speed: ngspice at the documented settings against ours over the same span, measured in
-    // this run (ngspice's time includes starting the process and writing its output).
+    // Speed: ngspice at the documented settings against ours over the same span (ngspice's
+    // time includes starting the process and writing its output).
     let mut ratios: Vec<f64> = rows
         .iter()
         .filter(|r| r.documented && r.spice_s.is_finite() && r.ours_s > 0.0)
@@ -483,7 +557,7 @@ fn rows_df(rows: &[Row]) -> Result<DataFrame> {
 /// The diode-bridge cases (`endstop::spice::bridge::BRIDGE_CASES`): ngspice from our steady
 /// state's section for ten periods, the storage's mean voltage and the load's mean power over
 /// the last one against ours. Returns the book's table and the cases outside tolerance.
-fn bridge_cases(exp: &mut Experiment, tmp: &Path) -> Result<(String, Vec<String>)> {
+fn bridge_cases(exp: &mut Experiment, spice: &mut Runner) -> Result<(String, Vec<String>)> {
     use endstop::drive::Sine;
     use endstop::physics::harvester::State;
     use endstop::spice::bridge::{
@@ -524,14 +598,16 @@ fn bridge_cases(exp: &mut Experiment, tmp: &Path) -> Result<(String, Vec<String>
             &bridge_solver(f),
             &dat_name,
         )?;
-        let cir = tmp.join(format!("{}.cir", d.name));
-        std::fs::write(&cir, &net)?;
-        let (text, _) = common::ngspice::run(&cir, &tmp.join(&dat_name))?;
         let r = match d.interface.load() {
             Some(endstop::device::DcLoad::Resistor { resistance_ohm }) => *resistance_ohm,
             _ => bail!("{name}: the bridge cross-check takes a resistor load"),
         };
-        let (v, p) = dc_means(&endstop::spice::parse_wrdata(&text)?, r, t0, t1)?;
+        let reading = spice.run(&d.name, &net, &dat_name, |text| {
+            let (v, p) = dc_means(&endstop::spice::parse_wrdata(text)?, r, t0, t1)?;
+            let values = BTreeMap::from([("vdc_v".to_string(), v), ("p_dc_w".to_string(), p)]);
+            Ok((values, Vec::new()))
+        })?;
+        let (v, p) = (reading.run.values["vdc_v"], reading.run.values["p_dc_w"]);
         for (q, o, s) in [
             ("mean V_s (V)", ours.vdc_v, v),
             ("mean DC power (W)", ours.p_dc_w, p),

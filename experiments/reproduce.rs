@@ -24,19 +24,12 @@ use endstop::paper::claims::Value;
 use endstop::paper::claims::Verdict;
 use endstop::paper::setups::ParamSet;
 use endstop_experiments::freshness;
-use endstop_experiments::jobs::{experiment_dir, experiment_names, Job, Phase, CROSSCHECK, JOBS};
+use endstop_experiments::jobs::{experiment_dir, experiment_names, Job, Phase, JOBS};
 use serde::Deserialize;
 
 /// The wall and processor time of the last `reproduce` that ran experiments, in the results
 /// directory.
 const LAST_RUN: &str = "reproduce_timing.json";
-
-fn ngspice_available() -> bool {
-    Command::new("ngspice")
-        .arg("--version")
-        .output()
-        .is_ok_and(|o| o.status.success())
-}
 
 /// Copies the own-device runs' numbers and plots into the book's generated directory, with
 /// the curve drawn from several of them ([`common::noise_curve`]).
@@ -118,21 +111,6 @@ fn run() -> Result<()> {
         if !args.no_build {
             build_binaries()?;
         }
-        let mut selected = selected;
-        if selected.iter().any(|j| j.name == CROSSCHECK) && !ngspice_available() {
-            eprintln!("[{CROSSCHECK}] not run: ngspice is not installed (apt-get install ngspice)");
-            selected.retain(|j| j.name != CROSSCHECK);
-            let note = "*Not run in this build: `ngspice` was not installed. Install it \
-                        (`apt-get install ngspice`) and rerun `reproduce`.*\n";
-            let dir = common::book_generated_root().join(CROSSCHECK);
-            common::write_atomic(&dir.join("numbers.md"), note.as_bytes())?;
-            if !dir.join("p1_impacting.cir").exists() {
-                common::write_atomic(&dir.join("p1_impacting.cir"), b"* not generated\n")?;
-            }
-            if !dir.join("crosscheck.figure.md").exists() {
-                common::write_atomic(&dir.join("crosscheck.figure.md"), b"*(no plot)*\n")?;
-            }
-        }
         // The experiments' wall and processor time (ngspice's included), for the provenance
         // table; the build above is not counted.
         let (started, cpu_before) = (Instant::now(), common::children_cpu_time_s());
@@ -209,9 +187,6 @@ fn run() -> Result<()> {
 
 /// The jobs whose last run was longest, in that order, before the others: when a job has
 /// no timing of its own yet (a fresh clone), its place in [`LONG_JOBS`] stands for it.
-///
-/// The ngspice cross-check comes first on a fresh clone: it mostly waits on single-threaded
-/// ngspice runs, so it overlaps the ensembles instead of running alone at the end.
 fn longest_first(jobs: &mut [(&'static Job, String)]) {
     let last_cpu = |job: &Job| -> Option<f64> {
         let t: serde_json::Value = read_json(&job.dir().join("timing.json"))?;
@@ -240,8 +215,7 @@ fn longest_first(jobs: &mut [(&'static Job, String)]) {
 /// The parallel phase's longest jobs, longest first, as measured by `reproduce --force` on
 /// 2 cores (the Performance chapter's table of each job's time): the order of a run without
 /// earlier timings.
-const LONG_JOBS: [&str; 8] = [
-    CROSSCHECK,
+const LONG_JOBS: [&str; 7] = [
     "response",
     "fig14",
     "fig12",

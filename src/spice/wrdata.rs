@@ -37,7 +37,7 @@ pub enum SpiceError {
 
 /// A table read from ngspice's `wrdata` with `wr_singlescale` and `wr_vecnames`: a header of
 /// vector names (the first is `time`) and one row per time point.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, Default, PartialEq)]
 pub struct Waveforms {
     /// Column names (lower case), `time` first.
     pub names: Vec<String>,
