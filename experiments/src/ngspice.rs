@@ -166,6 +166,8 @@ pub struct Runner {
     written: Recording,
     tmp: TempDir,
     mismatches: Vec<String>,
+    /// Netlists neither recorded nor runnable (no ngspice).
+    missing: Vec<String>,
     fresh: usize,
 }
 
@@ -211,6 +213,7 @@ impl Runner {
             written,
             tmp,
             mismatches: Vec::new(),
+            missing: Vec::new(),
             fresh: 0,
         })
     }
@@ -258,6 +261,7 @@ impl Runner {
                 });
             }
             if version().is_err() {
+                self.missing.push(name.to_string());
                 bail!(
                     "{name}: {} holds no ngspice run of this netlist (it changed since the \
                      recording) and ngspice is not installed; rerun `{}` where it is",
@@ -296,11 +300,20 @@ impl Runner {
         })
     }
 
-    /// Ends the runs: writes the recording ([`Source::Record`]) or fails when a fresh run
-    /// disagreed with it ([`Source::Fresh`]).
+    /// Ends the runs: writes the recording ([`Source::Record`]), or fails when a fresh run
+    /// disagreed with it ([`Source::Fresh`]) or a netlist had neither a recording nor
+    /// ngspice to run it ([`Source::Recorded`]).
     pub fn finish(mut self) -> Result<()> {
         match self.source {
-            Source::Recorded => Ok(()),
+            Source::Recorded if self.missing.is_empty() => Ok(()),
+            Source::Recorded => bail!(
+                "{} holds no ngspice run of {} netlist(s) and ngspice is not installed: {} \
+                 (rerun `{}` where it is)",
+                self.path.display(),
+                self.missing.len(),
+                self.missing.join(", "),
+                self.recording.command
+            ),
             Source::Fresh if self.mismatches.is_empty() => {
                 eprintln!(
                     "[ngspice] {} fresh runs agree with {}",
@@ -362,4 +375,48 @@ fn disagreement(recorded: &RecordedRun, fresh: &RecordedRun) -> Option<String> {
 
 fn short(commit: &str) -> &str {
     &commit[..commit.len().min(10)]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn run(v1: f64) -> RecordedRun {
+        RecordedRun {
+            netlist_sha256: "ab".into(),
+            wall_s: 1.0,
+            values: BTreeMap::from([("v1_rms_v".to_string(), v1)]),
+            series: vec![(0.0, v1)],
+        }
+    }
+
+    #[test]
+    fn a_run_agrees_with_its_recording_and_not_with_a_changed_number() {
+        let recorded = run(0.220445379);
+        let mut again = run(0.220445379);
+        again.wall_s = 2.0;
+        assert_eq!(
+            disagreement(&recorded, &again),
+            None,
+            "wall times are not compared"
+        );
+        let changed = run(0.220445379 * (1.0 + 1e-9));
+        assert!(disagreement(&recorded, &changed).is_some_and(|w| w.starts_with("v1_rms_v")));
+        let mut other = run(0.220445379);
+        other.values.insert("v2_rms_v".into(), 0.1);
+        assert_eq!(
+            disagreement(&recorded, &other).as_deref(),
+            Some("different quantities")
+        );
+    }
+
+    #[test]
+    fn a_recorded_number_reads_back_bit_for_bit() {
+        // serde_json parses floats exactly only with `float_roundtrip`; without it this
+        // number reads back one unit in the last place off.
+        let x = 0.22044537924619706_f64;
+        let text = serde_json::to_string(&run(x)).unwrap();
+        let back: RecordedRun = serde_json::from_str(&text).unwrap();
+        assert_eq!(back.values["v1_rms_v"].to_bits(), x.to_bits());
+    }
 }
