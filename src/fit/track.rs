@@ -7,7 +7,7 @@
 use crate::drive::Sine;
 use crate::ode::Stats;
 use crate::physics::harvester::{Harvester, State};
-use crate::study::continuation::{continue_branch, ContinuationSettings, EventKind};
+use crate::study::continuation::{continue_branch_until, ContinuationSettings, Event, EventKind};
 use crate::study::orbit::{Forcing, Orbit, Parameter, Shooter, ShootingConfig};
 
 use super::Quantity;
@@ -335,12 +335,11 @@ fn fold_from(
     let first = stable_orbit(h, f_start, accel_rms_g, g.phase_rad, g.state).map_err(ctx)?;
     let mut settings = ContinuationSettings::frequency(f_start, limit_hz, max_step_hz);
     settings.locate_tol = FOLD_LOCATE_TOL_HZ;
-    let branch = continue_branch(h, first, &settings, |_| {}).map_err(|e| ctx(e.into()))?;
-    let Some(fold) = branch
-        .events
-        .iter()
-        .find(|e| e.kind == EventKind::Fold && !e.at_grazing && e.stable_before)
-    else {
+    let jump = |e: &Event| e.kind == EventKind::Fold && !e.at_grazing && e.stable_before;
+    // The branch ends at that fold: what lies beyond it is not needed.
+    let branch =
+        continue_branch_until(h, first, &settings, |_| {}, jump).map_err(|e| ctx(e.into()))?;
+    let Some(fold) = branch.events.iter().find(|e| jump(e)) else {
         return Err(Lost(format!(
             "no fold between {f_start} and {limit_hz} Hz on the branch"
         )));

@@ -112,7 +112,20 @@ pub fn continue_branch(
     base: &Harvester<Sine>,
     first: Orbit,
     settings: &ContinuationSettings,
+    on_point: impl FnMut(f64),
+) -> Result<Branch, OrbitError> {
+    continue_branch_until(base, first, settings, on_point, |_| false)
+}
+
+/// [`continue_branch`], ending early at the point after the first event for which
+/// `until(event)` is true (the branch then ends with that event, located as always): a caller
+/// that wants only the first fold need not follow the branch back from it.
+pub fn continue_branch_until(
+    base: &Harvester<Sine>,
+    first: Orbit,
+    settings: &ContinuationSettings,
     mut on_point: impl FnMut(f64),
+    mut until: impl FnMut(&Event) -> bool,
 ) -> Result<Branch, OrbitError> {
     settings.validate()?;
     let shooter = Shooter::new(base, settings.shooting);
@@ -182,9 +195,13 @@ pub fn continue_branch(
                         // Events are bracketed over the hop's own length, not the exhausted step.
                         let hop = (c.u_of(&p.orbit) - c.u_of(&last.orbit)).norm();
                         let found = c.events_between(k, &last, &mut p, hop)?;
+                        let done = found.iter().any(&mut until);
                         events.extend(found);
                         on_point(p.orbit.param(param));
                         points.push(p);
+                        if done {
+                            break;
+                        }
                         ds = settings.ds_init;
                         continue;
                     }
@@ -200,6 +217,7 @@ pub fn continue_branch(
         let k = points.len() - 1;
         let mut p = p;
         let found = c.events_between(k, &last, &mut p, ds)?;
+        let done = found.iter().any(&mut until);
         events.extend(found);
         on_point(p.orbit.param(param));
         // A failed move of the section keeps the point at its old one (still a valid orbit).
@@ -208,6 +226,9 @@ pub fn continue_branch(
             Err(_) => p,
         };
         points.push(p);
+        if done {
+            break;
+        }
         if its <= 2 {
             ds = (ds * 1.5).min(settings.ds_max);
         } else if its >= 5 {
