@@ -44,6 +44,8 @@ use polars::prelude::*;
 mod accuracy;
 #[path = "bench/examples.rs"]
 mod examples;
+#[path = "bench/interfaces.rs"]
+mod interfaces;
 
 /// Runs of each timed case (one with `--quick`).
 pub const REPEATS: usize = 5;
@@ -288,6 +290,31 @@ fn run() -> Result<()> {
             b"*Not measured in this build: `just bench` (the whole benchmark, about a minute \
               on 2 cores) writes the comparison with RK4 and the accuracy tables here; \
               `reproduce` runs `bench --quick`.*\n",
+        )?;
+    }
+    // Records behind an interface circuit against the resistive load: only the whole
+    // benchmark measures them, in alternated rounds.
+    let interfaces_md = common::book_generated_root()
+        .join("bench")
+        .join("interfaces.md");
+    if !quick {
+        let costs = interfaces::measure(repeats)?;
+        for c in &costs.interfaces {
+            let key = c.name.split(' ').next().unwrap_or(c.name);
+            exp.number(
+                &format!("interface_record_cost_ratio_median_{key}"),
+                c.ratios[c.ratios.len() / 2],
+            );
+        }
+        let md = interfaces::table(&costs, repeats);
+        common::write_atomic(&interfaces_md, md.as_bytes())?;
+        print!("{md}");
+    } else if !interfaces_md.exists() {
+        common::write_atomic(
+            &interfaces_md,
+            b"*Not measured in this build: `just bench` (the whole benchmark) writes the \
+              paired cost of records behind an interface here; `reproduce` runs `bench \
+              --quick`.*\n",
         )?;
     }
 

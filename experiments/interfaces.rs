@@ -2,13 +2,12 @@
 //! (a piezoelectric cantilever with a stop) and `data/examples/em_bridge.toml` (an
 //! electromagnetic harvester with stops) behind each interface circuit. Writes the DC power
 //! against the load for every interface, the DC power against frequency with each steady
-//! state's stability, random ensembles, a charging curve, the energy ledger of each interface,
-//! and the paired cost of 10 s records against the resistive load, as Parquet, plots and the
-//! chapter's generated tables (`book/src/generated/interfaces/`).
+//! state's stability, random ensembles, a charging curve and the energy ledger of each
+//! interface, as Parquet, plots and the chapter's generated tables
+//! (`book/src/generated/interfaces/`). The cost of a record behind an interface against the
+//! resistive load is measured by the benchmark (`bench`, `experiments/bench/interfaces.rs`).
 
 use endstop_experiments as common;
-
-use std::time::Instant;
 
 use anyhow::Result;
 use common::frame::frame;
@@ -19,10 +18,10 @@ use endstop::device::{Device, Interface, Inversion, Rectifier};
 use endstop::drive::noise::NoiseSpec;
 use endstop::drive::Sine;
 use endstop::study::interface::charging::{charge, ChargeSettings};
-use endstop::study::interface::record::{noise_ensemble, noise_record};
+use endstop::study::interface::record::noise_ensemble;
 use endstop::study::interface::sweep::{frequency_sweep, load_sweep};
 use endstop::study::interface::{IfSteady, SteadyMethod, SteadySettings};
-use endstop::study::record::{simulate_record, RecordSpec, Scheme, DEFAULT_RTOL};
+use endstop::study::record::{RecordSpec, Scheme, DEFAULT_RTOL};
 use endstop::study::stepped::linspace_step;
 
 fn main() {
@@ -381,7 +380,7 @@ fn run() -> Result<()> {
     )?;
     write_atomic(&book.join("charging.md"), format!("With the drive ramped up over 20 periods from rest at phase zero, the 10 uF storage of `piezo_bridge.toml` (load removed) reaches 5 V after **{} s** at {} Hz, {ACCEL_RMS_G} g rms.\n", fmt_sig(run.time_to_target_s, 4), fmt_sig(f0, 4)).as_bytes())?;
 
-    // Random ensembles, and the paired cost of 10 s records against the resistive load.
+    // Random ensembles (the cost of a record against the resistive load is the benchmark's).
     let spec = |secs: f64| RecordSpec {
         noise: NoiseSpec {
             duration_s: secs,
@@ -422,27 +421,6 @@ fn run() -> Result<()> {
     exp.write_parquet("ensembles", &mut frame(rows)?, "hypothetical")?;
     write_atomic(&book.join("ensembles.md"), t.render().as_bytes())?;
 
-    let mut t = Table::new([
-        "record (10 s + 1 s pre-roll)",
-        "wall time (s)",
-        "over the resistive",
-    ]);
-    let t0 = Instant::now();
-    simulate_record(&resistive.device, &spec(10.0), SEED, 0)?;
-    let base = t0.elapsed().as_secs_f64();
-    t.row([
-        "resistive (exponential free flight)".into(),
-        fmt_sig(base, 3),
-        "1".into(),
-    ]);
-    for (name, d) in variants(&piezo.device).into_iter().take(2) {
-        let t1 = Instant::now();
-        noise_record(&d, &spec(10.0), SEED, 0)?;
-        let w = t1.elapsed().as_secs_f64();
-        exp.number(&format!("record_cost_ratio_{name}"), w / base);
-        t.row([name.into(), fmt_sig(w, 3), fmt_sig(w / base, 3)]);
-    }
-    write_atomic(&book.join("cost.md"), t.render().as_bytes())?;
     exp.write_numbers_md("The interface circuits' chapter data.\n")?;
     exp.finish()
 }

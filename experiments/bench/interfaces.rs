@@ -1,0 +1,133 @@
+//! The cost of a record behind an interface circuit against the same record on a resistive
+//! load: the cantilever of `data/examples/piezo_bridge.toml` behind its full bridge and behind
+//! a parallel SSHI, and `data/examples/piezo_cantilever.toml` on its resistor (whose free
+//! flight is propagated exactly), each a 10 s record of the same noise after a 1 s pre-roll.
+//! The runs alternate (resistive, bridge, SSHI, resistive, ...) so that a drift of the
+//! machine's speed shifts each round's runs alike; the table gives each one's median
+//! processor time and the median of the per-round ratios with their range.
+
+use anyhow::{Context, Result};
+use endstop::device::{Device, Interface, Inversion};
+use endstop::drive::noise::NoiseSpec;
+use endstop::study::interface::record::noise_record;
+use endstop::study::record::{simulate_record, RecordSpec, Scheme, DEFAULT_RTOL};
+use endstop_experiments as common;
+
+use common::fmt_sig;
+
+/// Seed of the records.
+const SEED: u64 = 2012;
+
+/// The level of the records (g^2/Hz): the example cantilever's.
+const PSD_G2_PER_HZ: f64 = 1e-4;
+
+/// One interface's runs against the resistive ones of the same rounds.
+pub struct InterfaceCost {
+    /// The interface.
+    pub name: &'static str,
+    /// Its runs' processor times (s), sorted.
+    pub times_s: Vec<f64>,
+    /// Per-round ratios to the resistive run, sorted.
+    pub ratios: Vec<f64>,
+}
+
+/// The resistive runs and each interface's.
+pub struct Costs {
+    /// The resistive runs' processor times (s), sorted.
+    pub resistive_s: Vec<f64>,
+    /// Each interface.
+    pub interfaces: Vec<InterfaceCost>,
+}
+
+fn spec() -> RecordSpec {
+    RecordSpec {
+        noise: NoiseSpec {
+            duration_s: 10.0,
+            ..endstop::paper::setups::paper_noise(PSD_G2_PER_HZ)
+        },
+        transient_s: 1.0,
+        rtol: DEFAULT_RTOL,
+        scheme: Scheme::Exponential,
+    }
+}
+
+fn cpu_s<T>(f: impl FnOnce() -> Result<T>) -> Result<f64> {
+    let t0 = common::cpu_time_s().context("processor time is not available")?;
+    f()?;
+    Ok(common::cpu_time_s().context("processor time is not available")? - t0)
+}
+
+fn median(v: &[f64]) -> f64 {
+    v[v.len() / 2]
+}
+
+/// Runs `rounds` alternated rounds on the calling thread.
+pub fn measure(rounds: usize) -> Result<Costs> {
+    let bridge = common::load_device("examples/piezo_bridge")?.device;
+    let resistive = common::load_device("examples/piezo_cantilever")?.device;
+    let Interface::FullBridge(r) = &bridge.interface else {
+        anyhow::bail!("examples/piezo_bridge.toml: expected a full bridge");
+    };
+    let mut sshi = bridge.clone();
+    sshi.interface = Interface::ParallelSshi(r.clone(), Inversion::QualityFactor(3.0));
+    let variants: [(&'static str, &Device); 2] =
+        [("full bridge", &bridge), ("parallel SSHI (Q = 3)", &sshi)];
+    let spec = spec();
+    let mut resistive_s = Vec::new();
+    let mut per: Vec<(Vec<f64>, Vec<f64>)> = vec![(Vec::new(), Vec::new()); variants.len()];
+    for _ in 0..rounds {
+        let base = cpu_s(|| Ok(simulate_record(&resistive, &spec, SEED, 0)?))?;
+        resistive_s.push(base);
+        for ((_, d), (times, ratios)) in variants.iter().zip(per.iter_mut()) {
+            let t = cpu_s(|| Ok(noise_record(d, &spec, SEED, 0)?))?;
+            times.push(t);
+            ratios.push(t / base);
+        }
+    }
+    resistive_s.sort_by(f64::total_cmp);
+    let interfaces = variants
+        .iter()
+        .zip(per)
+        .map(|((name, _), (mut times_s, mut ratios))| {
+            times_s.sort_by(f64::total_cmp);
+            ratios.sort_by(f64::total_cmp);
+            InterfaceCost {
+                name,
+                times_s,
+                ratios,
+            }
+        })
+        .collect();
+    Ok(Costs {
+        resistive_s,
+        interfaces,
+    })
+}
+
+/// The book's table of `costs` over `rounds` rounds.
+pub fn table(costs: &Costs, rounds: usize) -> String {
+    let mut md = format!(
+        "Processor time of a 10 s record (1 s pre-roll, Sa = {PSD_G2_PER_HZ:e} g^2/Hz, seed \
+         {SEED}, stream 0) on one thread, median of {rounds} alternated rounds (resistive, \
+         full bridge, parallel SSHI, then again), measured by the whole benchmark (`just \
+         bench`) at commit `{}`. The ratio is taken within each round.\n\n\
+         | record | median processor time (s) | median ratio to the resistive (range) |\n\
+         |---|---|---|\n",
+        common::git_commit()
+    );
+    md.push_str(&format!(
+        "| `piezo_cantilever` on its resistor (exponential free flight) | {} | 1 |\n",
+        fmt_sig(median(&costs.resistive_s), 3)
+    ));
+    for c in &costs.interfaces {
+        md.push_str(&format!(
+            "| `piezo_bridge`, {} | {} | {} ({} to {}) |\n",
+            c.name,
+            fmt_sig(median(&c.times_s), 3),
+            fmt_sig(median(&c.ratios), 3),
+            fmt_sig(c.ratios[0], 3),
+            fmt_sig(c.ratios[c.ratios.len() - 1], 3),
+        ));
+    }
+    md
+}
