@@ -7,7 +7,7 @@
 //! (eq 21, the linearised theory, the generator's exact level).
 //!
 //! The runs are shared (each is computed once per test process) with the snapshot regression
-//! suite of our own numbers, `broadband/regression.rs`, which this file includes so that the
+//! suite of our own numbers, `record_figures/regression.rs`, which this file includes so that the
 //! ensembles are not simulated twice.
 //!
 //! Run time: about 230 ten-second records (a few tenths of a second each) on all cores.
@@ -23,7 +23,7 @@ use endstop::paper::figures::fig11::{self, Fig11};
 use endstop::paper::figures::fig12::{self, Fig12};
 use endstop::paper::figures::fig14::{self, Fig14};
 use endstop::paper::figures::fig15::{self, Fig15};
-use endstop::paper::prototype2_random::Extras;
+use endstop::paper::prototype2_records::Extras;
 use endstop::paper::resolution;
 use endstop::paper::setups::{paper_record, prototype2_setup, ParamSet};
 use endstop::paper::Figure;
@@ -34,7 +34,7 @@ use endstop::study::record::*;
 use endstop::G;
 
 use crate::common;
-#[path = "broadband/regression.rs"]
+#[path = "record_figures/regression.rs"]
 mod regression;
 
 use common::{claims, device};
@@ -592,7 +592,7 @@ fn f15_prototype2_spectra_widen_upwards() {
     // stiffen. No upper bound is asserted here beyond the claim's own verdict above: the peak
     // of the mean PSD is the arg-max of a noisy top (a 32-record run puts it 1.1 bins above),
     // and a bound chosen after seeing the number tests nothing, so the value is pinned in the
-    // regression snapshot (tests/snapshots/broadband_fig15.snap) instead.
+    // regression snapshot (tests/snapshots/record_fig15.snap) instead.
     let peak = value(&values, keys::F15A_PEAK, published).ours.to_f64();
     let lin_peak = lin.half_power.unwrap().peak_hz;
     assert!(peak >= lin_peak - bin, "{peak} vs {lin_peak}");

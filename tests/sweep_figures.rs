@@ -1,17 +1,17 @@
-//! The narrowband tests (Figures 8, 9 and 13, the calibration of prototype 1 and the fit of
+//! The sine-sweep tests (Figures 8, 9 and 13, the calibration of prototype 1 and the fit of
 //! b_im) in ONE test binary, so that the calibration and each figure's run are computed once
 //! (one `OnceLock` each) and shared:
 //!
-//! * [`paper`] (`tests/narrowband/paper.rs`): correctness, i.e. the claims against the paper
+//! * [`paper`] (`tests/sweep_figures/paper.rs`): correctness, i.e. the claims against the paper
 //!   through the paper layer's `claims` functions and the claims file's own verdicts, the jump
 //!   criterion, the b_im fit and the calibration against their definitions;
-//! * [`regression`] (`tests/narrowband/regression.rs`): snapshots of our own characterisation
+//! * [`regression`] (`tests/sweep_figures/regression.rs`): snapshots of our own characterisation
 //!   numbers (onsets, jumps, fitted gap and dampings, powers), so that a change shows.
 
 use crate::common;
-#[path = "narrowband/paper.rs"]
+#[path = "sweep_figures/paper.rs"]
 mod paper;
-#[path = "narrowband/regression.rs"]
+#[path = "sweep_figures/regression.rs"]
 mod regression;
 
 use std::sync::OnceLock;

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 import endstop
-from endstop.paper import study
+from endstop.paper import deviations
 
 
 def ishigami(u):
@@ -27,16 +27,16 @@ def test_indices_of_ishigami_through_the_evaluation_dicts():
     # estimators' sampling error is a few thousandths there (the library's own Ishigami test),
     # so 0.02 tests the estimator, the dict round trip and the design order.
     base = 1 << 13
-    points = study.design(base)
-    assert points.shape == (base * (len(study.factors()) + 2), len(study.factors()))
-    template = study.evaluate("p2", points[0])
+    points = deviations.design(base)
+    assert points.shape == (base * (len(deviations.factors()) + 2), len(deviations.factors()))
+    template = deviations.evaluate("p2", points[0])
     target = next(i for i, e in enumerate(template) if e["kind"] == "quantitative")
     evaluations = []
     for u in points:
         es = list(template)
         es[target] = dict(template[target], outcome="value", value=ishigami(u))
         evaluations.append(es)
-    rows = study.indices("p2", base, evaluations)
+    rows = deviations.indices("p2", base, evaluations)
     assert {(r["claim"], r["quantity"]) for r in rows} == {
         (template[target]["claim"], template[target]["quantity"])}
     a, b = 7.0, 0.1
@@ -47,7 +47,7 @@ def test_indices_of_ishigami_through_the_evaluation_dicts():
     first = [v1 / v, v2 / v, 0.0]
     total = [(v1 + v13) / v, v2 / v, v13 / v]
     by_factor = {r["factor"]: r for r in rows}
-    for i, f in enumerate(study.factors()):
+    for i, f in enumerate(deviations.factors()):
         r = by_factor[f]
         s, st = (first[i], total[i]) if i < 3 else (0.0, 0.0)
         assert abs(r["first"] - s) < 0.02, (f, r["first"], s)
@@ -59,18 +59,18 @@ def test_indices_of_ishigami_through_the_evaluation_dicts():
 def test_the_pieces_on_dask_workers_are_the_pieces_here():
     # Other processes, pickled arguments and results: the same numbers, bit for bit.
     distributed = pytest.importorskip("dask.distributed")
-    points = study.design(2)[:4]
-    here = [study.evaluate("p2", u) for u in points]
-    fits_here = [study.calibrate_start("p2", i, 1, 3) for i in range(2)]
+    points = deviations.design(2)[:4]
+    here = [deviations.evaluate("p2", u) for u in points]
+    fits_here = [deviations.calibrate_start("p2", i, 1, 3) for i in range(2)]
     cluster = distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
                                        dashboard_address=None)
     with cluster, distributed.Client(cluster) as client:
-        there = client.gather(client.map(study.evaluate, ["p2"] * 4, list(points), pure=False))
-        fits_there = client.gather(client.map(study.calibrate_start, ["p2"] * 2, range(2),
+        there = client.gather(client.map(deviations.evaluate, ["p2"] * 4, list(points), pure=False))
+        fits_there = client.gather(client.map(deviations.calibrate_start, ["p2"] * 2, range(2),
                                               [1] * 2, [3] * 2, pure=False))
     assert there == here
     assert fits_there == fits_here
-    cal = study.calibration("p2", fits_there[::-1])
+    cal = deviations.calibration("p2", fits_there[::-1])
     assert cal["fits"][0]["worst"] == min(f["worst"] for f in fits_here)
     assert cal["worst"] <= cal["published_worst"]
     assert [e["claim"] for e in cal["best"]] == [e["claim"] for e in here[0]]
@@ -78,17 +78,17 @@ def test_the_pieces_on_dask_workers_are_the_pieces_here():
 
 def test_bad_input_raises_a_named_error():
     with pytest.raises(ValueError, match="p1"):
-        study.evaluate("p3", np.full(len(study.factors()), 0.5))
+        deviations.evaluate("p3", np.full(len(deviations.factors()), 0.5))
     with pytest.raises(ValueError):
-        study.evaluate("p2", [1.5] * len(study.factors()))
+        deviations.evaluate("p2", [1.5] * len(deviations.factors()))
     with pytest.raises(ValueError, match="power of two|base"):
-        study.design(3)
+        deviations.design(3)
     with pytest.raises(ValueError, match="evaluations"):
-        study.indices("p2", 2, [])
+        deviations.indices("p2", 2, [])
     with pytest.raises(ValueError, match="start 5"):
-        study.calibrate_start("p2", 5, 1, 3)
+        deviations.calibrate_start("p2", 5, 1, 3)
     with pytest.raises(ValueError, match="ensemble_records"):
-        study.evaluate("p2", [0.5] * len(study.factors()), ensemble_records=0)
+        deviations.evaluate("p2", [0.5] * len(deviations.factors()), ensemble_records=0)
     assert issubclass(endstop.ParamError, ValueError)
 
 
@@ -136,10 +136,10 @@ def test_the_recorded_cluster_run_is_what_this_code_computes(name):
     cal = pd.read_parquet(record / "calibration.parquet")
     (proto,) = run["prototypes"]
     fits = cal[cal["set"] == "fit"].sort_values(["worst", "start"])
-    best = fits.iloc[0][study.factors()].to_numpy(dtype=float)
-    published = study.calibration_starts(proto, 0)[0]
+    best = fits.iloc[0][deviations.factors()].to_numpy(dtype=float)
+    published = deviations.calibration_starts(proto, 0)[0]
     for which, point in [("published", published), ("best", best)]:
-        now = study.evaluate(proto, point, run["ensemble_records"])
+        now = deviations.evaluate(proto, point, run["ensemble_records"])
         rec = cal[cal["set"] == which]
         assert [(e["claim"], e["quantity"], e["outcome"]) for e in now] == list(
             zip(rec["claim"], rec["quantity"], rec["outcome"])), which

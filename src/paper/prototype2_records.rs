@@ -17,7 +17,7 @@ use crate::paper::ensembles::{
     protocol_spec, run_levels, Level, LevelCase, P2_BAND_HZ, P2_NPERSEG,
 };
 use crate::paper::setups::{prototype2_setup, with_endstop, ParamSet};
-use crate::study::record::{simulate_record, BroadbandError, Scheme};
+use crate::study::record::{simulate_record, RecordError, Scheme};
 
 /// One of Figure 15's three levels.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -232,7 +232,7 @@ pub fn run(
     prototype2: &Device,
     scope: Scope,
     progress: &(dyn Fn() + Sync),
-) -> Result<Run, BroadbandError> {
+) -> Result<Run, RecordError> {
     let dev = prototype2_setup(prototype2);
     let indices: Vec<usize> = match scope.levels {
         Levels::All => (0..LEVELS.len()).collect(),
@@ -283,7 +283,7 @@ fn convergence_check(
     dev: &Device,
     levels: &[Level],
     checked: &[usize],
-) -> Result<Vec<Convergence>, BroadbandError> {
+) -> Result<Vec<Convergence>, RecordError> {
     let jobs: Vec<(&Level, usize)> = checked
         .iter()
         .filter_map(|&i| levels.iter().find(|l| l.index == i))

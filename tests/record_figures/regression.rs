@@ -1,7 +1,7 @@
-//! Snapshot regression suite of our own broadband numbers (Figures 10, 11, 12, 14, 15): the
+//! Snapshot regression suite of our own random-vibration numbers (Figures 10, 11, 12, 14, 15): the
 //! widths, efficiencies and contact statistics of the figures' ensembles, pinned with `insta`
 //! under `tests/snapshots/` so that a change in any of them shows. These are characterisation
-//! numbers, not claims; the claims' verdicts are asserted in `tests/broadband.rs`, which
+//! numbers, not claims; the claims' verdicts are asserted in `tests/record_figures.rs`, which
 //! includes this module so that both share one simulation of each figure.
 //!
 //! Rounding (the records are seeded, so the numbers are deterministic; the rounding decides
@@ -20,7 +20,7 @@
 //! So a change that leaves every trajectory alone keeps every snapshot, and a legitimate
 //! change of the integrator or of the model's arithmetic, which changes the impacting
 //! trajectories, can move those numbers by a fraction of their CI and flip their last pinned
-//! digit: review it (`INSTA_UPDATE=always cargo test --release --test all -- broadband::regression`,
+//! digit: review it (`INSTA_UPDATE=always cargo test --release --test all -- record_figures::regression`,
 //! then `git diff tests/snapshots`) and accept it when every move is within the CI. A change
 //! that draws other realisations of the records (the excitation's synthesis) moves every
 //! number, with or without impacts, and is reviewed the same way.
@@ -111,7 +111,7 @@ fn level_line(out: &mut String, l: &Level) {
 
 fn snapshot(name: &str, text: &str) {
     insta::with_settings!({ snapshot_path => "../snapshots", prepend_module_to_snapshot => false }, {
-        insta::assert_snapshot!(format!("broadband_{name}"), text);
+        insta::assert_snapshot!(format!("record_{name}"), text);
     });
 }
 
@@ -137,7 +137,7 @@ fn regression_fig10_generated_noise() {
 fn regression_fig11_prototype1_low_levels() {
     let run = fig11_run();
     let mut s = String::new();
-    // Every level of Figure 11 is free of impacts (asserted in tests/broadband.rs).
+    // Every level of Figure 11 is free of impacts (asserted in tests/record_figures.rs).
     claim_lines(&mut s, &Fig11::claims(run, claims()).unwrap(), |_| true);
     for set in ParamSet::BOTH {
         let f = fig11::findings(run, set);

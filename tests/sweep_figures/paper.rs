@@ -1,4 +1,4 @@
-//! Correctness of the narrowband reproduction: every claim of Figures 8, 9 and 13 through the
+//! Correctness of the sine-sweep reproduction: every claim of Figures 8, 9 and 13 through the
 //! paper layer's `claims` functions (the ones the binaries call) and the claims file's own
 //! verdicts; the calibration, the jump criterion and the b_im fit against their definitions;
 //! and the convergence limits. Our own numbers are not pinned here (see `regression.rs`).
@@ -69,12 +69,12 @@ fn assert_verdicts(values: &[Value], key: ClaimKey, published: Verdict, cal: Ver
 
 // ------------------------------------------------------------------ every claim has a value
 
-/// Every narrowband claim of `data/claims.toml` gets a value from its figure's `claims`
+/// Every sine-sweep claim of `data/claims.toml` gets a value from its figure's `claims`
 /// function under every set the figure runs: a claim cannot drop out of the scorecard
 /// silently (the curves and biases are found by enum, and a value with an unknown key is an
 /// error of `claims`).
 #[test]
-fn every_narrowband_claim_gets_a_value_under_every_set() {
+fn every_sweep_claim_gets_a_value_under_every_set() {
     let both = [ParamSet::Published, ParamSet::Calibrated];
     let published = [ParamSet::Published];
     let figures: [(&str, Vec<Value>, &[ParamSet]); 3] = [
@@ -535,7 +535,7 @@ fn f13_no_impact_low_a_jump_high_and_hertz_agrees_with_linear() {
 /// sweep and continuation meets the convergence limits of the paper layer when the numerics
 /// are refined.
 #[test]
-fn every_narrowband_sweep_meets_the_convergence_limits() {
+fn every_sweep_meets_the_convergence_limits() {
     for r in &fig08_run().sets {
         for (c, conv) in Fig8Curve::ALL.iter().zip(r.sweeps.convergence()) {
             assert!(conv.within_limits, "{:?} {c:?}: {conv:?}", r.set);

@@ -1,8 +1,8 @@
-//! Regression snapshots of our own narrowband numbers (Figures 8, 9 and 13, the calibration
+//! Regression snapshots of our own sine-sweep numbers (Figures 8, 9 and 13, the calibration
 //! and the b_im fits): not checks against the paper (see `paper.rs`), but a record of what the
 //! reproduction computes today, so that any change shows in review. Stored in
 //! `tests/snapshots/`; after a deliberate change, review the new numbers and accept them with
-//! `INSTA_UPDATE=always cargo test --release --test all -- narrowband::` (or `cargo insta review`).
+//! `INSTA_UPDATE=always cargo test --release --test all -- sweep_figures::` (or `cargo insta review`).
 //!
 //! Rounding, chosen from the convergence study (every sweep repeated with half the step and
 //! half the tolerances) so that a legitimate numerical change inside the convergence limits
@@ -82,7 +82,7 @@ fn calibration_numbers() {
     writeln!(s, "fitted gap: {:.2} um", c.fitted_gap_m * 1e6).unwrap();
     writeln!(s, "achieved onset: {:.0} Hz", c.achieved_onset_hz).unwrap();
     writeln!(s, "evaluations: {}", c.evaluations).unwrap();
-    snapshot("narrowband_calibration", &s);
+    snapshot("sweep_calibration", &s);
 }
 
 #[test]
@@ -118,7 +118,7 @@ fn figure8_numbers() {
             .unwrap();
         }
     }
-    snapshot("narrowband_fig08", &s);
+    snapshot("sweep_fig08", &s);
 }
 
 #[test]
@@ -146,7 +146,7 @@ fn figure9_numbers() {
             .unwrap();
         }
     }
-    snapshot("narrowband_fig09", &s);
+    snapshot("sweep_fig09", &s);
 }
 
 #[test]
@@ -169,5 +169,5 @@ fn figure13_numbers() {
         )
         .unwrap();
     }
-    snapshot("narrowband_fig13", &s);
+    snapshot("sweep_fig13", &s);
 }

@@ -155,7 +155,7 @@ fn evaluation_of(p: Prototype, d: &Bound<'_, PyDict>, claims: &Claims) -> PyResu
 
 /// The keys of the uncertain factors, in the order of a point's coordinates.
 #[pyfunction]
-fn paper_study_factors() -> Vec<&'static str> {
+fn paper_deviations_factors() -> Vec<&'static str> {
     Factor::ALL.iter().map(|f| f.key()).collect()
 }
 
@@ -163,7 +163,7 @@ fn paper_study_factors() -> Vec<&'static str> {
 /// point in unit-cube coordinates (`base_rows * (factors + 2)` rows).
 #[pyfunction]
 #[pyo3(signature = (base_rows, seed = STUDY_SEED))]
-fn paper_study_design<'py>(
+fn paper_deviations_design<'py>(
     py: Python<'py>,
     base_rows: usize,
     seed: u32,
@@ -178,7 +178,7 @@ fn paper_study_design<'py>(
 /// each a dict; the ensemble claims too when `ensemble_records` is given (records per level).
 #[pyfunction]
 #[pyo3(signature = (prototype, point, ensemble_records = None))]
-fn paper_study_evaluate<'py>(
+fn paper_deviations_evaluate<'py>(
     py: Python<'py>,
     prototype: &str,
     point: Vec<f64>,
@@ -198,7 +198,7 @@ fn paper_study_evaluate<'py>(
 /// `sobol.parquet`.
 #[pyfunction]
 #[pyo3(signature = (prototype, base_rows, evaluations, ensemble_records = None, seed = STUDY_SEED))]
-fn paper_study_indices<'py>(
+fn paper_deviations_indices<'py>(
     py: Python<'py>,
     prototype: &str,
     base_rows: usize,
@@ -264,7 +264,7 @@ fn fit_dict<'py>(py: Python<'py>, f: &Fit) -> PyResult<Bound<'py, PyDict>> {
 /// scrambled Sobol sequence (one row each, unit-cube coordinates).
 #[pyfunction]
 #[pyo3(signature = (prototype, starts, seed = STUDY_SEED))]
-fn paper_study_calibration_starts<'py>(
+fn paper_deviations_calibration_starts<'py>(
     py: Python<'py>,
     prototype: &str,
     starts: usize,
@@ -276,12 +276,12 @@ fn paper_study_calibration_starts<'py>(
     PyArray2::from_vec2(py, &s).map_err(|e| arg_err(e.to_string()))
 }
 
-/// One start of the calibration (start `start` of `paper_study_calibration_starts` with
+/// One start of the calibration (start `start` of `paper_deviations_calibration_starts` with
 /// `starts` Sobol starts), at most `iterations` Nelder-Mead iterations: a dict with `start`,
 /// `point`, `deviations`, `worst`, `iterations`, `failures`.
 #[pyfunction]
 #[pyo3(signature = (prototype, start, starts, iterations, ensemble_records = None, seed = STUDY_SEED))]
-fn paper_study_calibrate_start<'py>(
+fn paper_deviations_calibrate_start<'py>(
     py: Python<'py>,
     prototype: &str,
     start: usize,
@@ -302,12 +302,12 @@ fn paper_study_calibrate_start<'py>(
     fit_dict(py, &fit)
 }
 
-/// The calibration from its starts' fits (the dicts of `paper_study_calibrate_start`, in any
+/// The calibration from its starts' fits (the dicts of `paper_deviations_calibrate_start`, in any
 /// order): `fits` best first, `worst`, `published_worst`, `meets_all`, and the evaluations
 /// `best` and `published`.
 #[pyfunction]
 #[pyo3(signature = (prototype, fits, ensemble_records = None))]
-fn paper_study_calibration<'py>(
+fn paper_deviations_calibration<'py>(
     py: Python<'py>,
     prototype: &str,
     fits: Vec<Bound<'py, PyDict>>,
@@ -365,8 +365,8 @@ fn history_settings(
 }
 
 /// The history match of `prototype` replayed from its waves so far: `waves` is a list of
-/// `(points, evaluations)` (each wave's design as `paper_study_history` gave it and the
-/// `paper_study_evaluate` dicts at its points, in order). Returns a dict: `next_design` (the
+/// `(points, evaluations)` (each wave's design as `paper_deviations_history` gave it and the
+/// `paper_deviations_evaluate` dicts at its points, in order). Returns a dict: `next_design` (the
 /// points to evaluate next, or None once the match has ended), `outputs` (the emulated
 /// claims), `waves` (one summary dict per wave), `answer`, `projections` (one dict per cell of
 /// the last wave), and with `sobol=True` the emulators' Sobol indices (`indices`).
@@ -374,7 +374,7 @@ fn history_settings(
 #[pyo3(signature = (prototype, waves, per_input = 10, max_waves = 4, pool = 1 << 14,
                     ensemble_records = None, seed = STUDY_SEED, sobol = false))]
 #[allow(clippy::too_many_arguments)]
-fn paper_study_history<'py>(
+fn paper_deviations_history<'py>(
     py: Python<'py>,
     prototype: &str,
     waves: Vec<WaveDicts<'py>>,
@@ -521,14 +521,14 @@ fn paper_study_history<'py>(
 /// Adds the study's functions to the module.
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     for f in [
-        wrap_pyfunction!(paper_study_factors, m)?,
-        wrap_pyfunction!(paper_study_design, m)?,
-        wrap_pyfunction!(paper_study_evaluate, m)?,
-        wrap_pyfunction!(paper_study_indices, m)?,
-        wrap_pyfunction!(paper_study_calibration_starts, m)?,
-        wrap_pyfunction!(paper_study_calibrate_start, m)?,
-        wrap_pyfunction!(paper_study_calibration, m)?,
-        wrap_pyfunction!(paper_study_history, m)?,
+        wrap_pyfunction!(paper_deviations_factors, m)?,
+        wrap_pyfunction!(paper_deviations_design, m)?,
+        wrap_pyfunction!(paper_deviations_evaluate, m)?,
+        wrap_pyfunction!(paper_deviations_indices, m)?,
+        wrap_pyfunction!(paper_deviations_calibration_starts, m)?,
+        wrap_pyfunction!(paper_deviations_calibrate_start, m)?,
+        wrap_pyfunction!(paper_deviations_calibration, m)?,
+        wrap_pyfunction!(paper_deviations_history, m)?,
     ] {
         m.add_function(f)?;
     }

@@ -1,4 +1,4 @@
-//! The narrowband and analytic claims of the study by their fast paths: Figures 8, 9 and 13
+//! The sine-sweep and analytic claims of the deviations study by their fast paths: Figures 8, 9 and 13
 //! by continuation of the periodic orbits, Table 3 by eqs 15-18.
 
 use rayon::prelude::*;

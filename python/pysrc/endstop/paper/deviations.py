@@ -1,4 +1,4 @@
-"""Why the paper deviates (the library's ``endstop::paper::study``) in pieces a cluster can
+"""Why the paper deviates (the library's ``endstop::paper::deviations``) in pieces a cluster can
 schedule. ``just deviations`` runs the same pieces in one process; here each is a function whose
 arguments and result pickle, so a Dask client can map them over workers:
 
@@ -25,13 +25,13 @@ SEED = 13
 
 def factors():
     """The uncertain factors' keys, in the order of a point's coordinates."""
-    return _native.paper_study_factors()
+    return _native.paper_deviations_factors()
 
 
 def design(base_rows, seed=SEED):
     """The Saltelli design of ``base_rows`` base rows (a power of two): a numpy array of
     ``base_rows * (len(factors()) + 2)`` points in unit-cube coordinates."""
-    return _native.paper_study_design(int(base_rows), int(seed))
+    return _native.paper_deviations_design(int(base_rows), int(seed))
 
 
 def evaluate(prototype, point, ensemble_records=None):
@@ -41,7 +41,7 @@ def evaluate(prototype, point, ensemble_records=None):
     With ``ensemble_records`` (records per level; the figures use 32) the ensemble claims of
     Figures 12, 14 and 15 are evaluated too, at a cost of tens of 10 s records."""
     records = None if ensemble_records is None else int(ensemble_records)
-    return _native.paper_study_evaluate(prototype, [float(u) for u in point], records)
+    return _native.paper_deviations_evaluate(prototype, [float(u) for u in point], records)
 
 
 def indices(prototype, base_rows, evaluations, ensemble_records=None, seed=SEED):
@@ -51,12 +51,12 @@ def indices(prototype, base_rows, evaluations, ensemble_records=None, seed=SEED)
     ``claim``, ``quantity``, ``factor``, ``first``, ``first_lo``, ``first_hi``, ``total``,
     ``total_lo``, ``total_hi``, and the shares of points where the quantity is absent)."""
     records = None if ensemble_records is None else int(ensemble_records)
-    return _native.paper_study_indices(prototype, int(base_rows), evaluations, records, int(seed))
+    return _native.paper_deviations_indices(prototype, int(base_rows), evaluations, records, int(seed))
 
 
 def calibration_starts(prototype, starts, seed=SEED):
     """The calibration's starts: the published point, then ``starts`` Sobol points (rows)."""
-    return _native.paper_study_calibration_starts(prototype, int(starts), int(seed))
+    return _native.paper_deviations_calibration_starts(prototype, int(starts), int(seed))
 
 
 def calibrate_start(prototype, start, starts, iterations, ensemble_records=None, seed=SEED):
@@ -64,7 +64,7 @@ def calibrate_start(prototype, start, starts, iterations, ensemble_records=None,
     ``calibration_starts(prototype, starts, seed)``, at most ``iterations`` iterations: a dict
     (``start``, ``point``, ``deviations``, ``worst``, ``iterations``, ``failures``)."""
     records = None if ensemble_records is None else int(ensemble_records)
-    return _native.paper_study_calibrate_start(prototype, int(start), int(starts),
+    return _native.paper_deviations_calibrate_start(prototype, int(start), int(starts),
                                                int(iterations), records, int(seed))
 
 
@@ -74,7 +74,7 @@ def calibration(prototype, fits, ensemble_records=None):
     the best and the published set), ``meets_all``, and the evaluations ``best`` and
     ``published``."""
     records = None if ensemble_records is None else int(ensemble_records)
-    return _native.paper_study_calibration(prototype, list(fits), records)
+    return _native.paper_deviations_calibration(prototype, list(fits), records)
 
 
 def history(prototype, waves, per_input=10, max_waves=4, pool=1 << 14, ensemble_records=None,
@@ -96,7 +96,7 @@ def history(prototype, waves, per_input=10, max_waves=4, pool=1 << 14, ensemble_
     records = None if ensemble_records is None else int(ensemble_records)
     ws = [([[float(u) for u in p] for p in points], [list(e) for e in evals])
           for points, evals in waves]
-    return _native.paper_study_history(prototype, ws, int(per_input), int(max_waves), int(pool),
+    return _native.paper_deviations_history(prototype, ws, int(per_input), int(max_waves), int(pool),
                                        records, int(seed), bool(sobol))
 
 
