@@ -77,7 +77,7 @@ pub type Row = Vec<(&'static str, Cell)>;
 #[macro_export]
 macro_rules! row {
     ($($name:expr => $value:expr),* $(,)?) => {
-        vec![$(($name, $crate::frame::Cell::from($value))),*]
+        vec![$(($name, $crate::io::frame::Cell::from($value))),*]
     };
 }
 

@@ -10,7 +10,7 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, Result};
 use sha2::{Digest, Sha256};
 
-use crate::jobs::Job;
+use crate::pipeline::jobs::Job;
 
 /// Directories and files whose content every job depends on, relative to the project root.
 pub const CODE_INPUTS: &[&str] = &[
@@ -47,7 +47,8 @@ pub fn input_files(root: &Path, job: &Job) -> Result<Vec<PathBuf>> {
     }
     if job.reads_calibration {
         files.push(
-            crate::calibration_io::calibration_dir().join(crate::calibration_io::DEVICE_FILE),
+            crate::reports::calibration_io::calibration_dir()
+                .join(crate::reports::calibration_io::DEVICE_FILE),
         );
     }
     files.sort();
@@ -94,10 +95,11 @@ fn key_path(job: &Job) -> PathBuf {
 pub fn is_fresh(job: &Job, key: &str) -> bool {
     std::fs::read_to_string(key_path(job)).is_ok_and(|k| k.trim() == key)
         && job.dir().join("summary.json").exists()
-        && job
-            .also
-            .iter()
-            .all(|e| crate::jobs::experiment_dir(e).join("summary.json").exists())
+        && job.also.iter().all(|e| {
+            crate::pipeline::jobs::experiment_dir(e)
+                .join("summary.json")
+                .exists()
+        })
         && job.completion_marker().exists()
 }
 
@@ -114,7 +116,7 @@ pub fn forget(job: &Job) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::jobs::{job, JOBS};
+    use crate::pipeline::jobs::{job, JOBS};
 
     #[test]
     fn every_job_key_holds_the_claims_file_and_the_files_it_reads() {
@@ -141,7 +143,7 @@ mod tests {
         assert!(input_files(&root, fig08)
             .unwrap()
             .iter()
-            .any(|f| f.ends_with(crate::calibration_io::DEVICE_FILE)));
+            .any(|f| f.ends_with(crate::reports::calibration_io::DEVICE_FILE)));
     }
 
     #[test]

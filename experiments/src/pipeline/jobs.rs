@@ -1,5 +1,5 @@
 //! The jobs `reproduce` runs: what each one executes, which data files it reads (for its
-//! freshness key, see [`crate::freshness`]), and when it runs.
+//! freshness key, see [`crate::pipeline::freshness`]), and when it runs.
 
 use std::path::PathBuf;
 
@@ -526,7 +526,7 @@ impl Job {
     /// Its results directory (the calibration's is its artefact's directory).
     pub fn dir(&self) -> PathBuf {
         if self.name == CALIBRATE {
-            crate::calibration_io::calibration_dir()
+            crate::reports::calibration_io::calibration_dir()
         } else {
             crate::results_root().join(self.name)
         }
@@ -545,7 +545,7 @@ impl Job {
     /// The output whose presence (with `summary.json`) says a past run completed.
     pub fn completion_marker(&self) -> PathBuf {
         if self.name == CALIBRATE {
-            self.dir().join(crate::calibration_io::DEVICE_FILE)
+            self.dir().join(crate::reports::calibration_io::DEVICE_FILE)
         } else if self.is_tool_run() {
             self.dir().join("numbers.md")
         } else {

@@ -8,9 +8,9 @@ use std::path::Path;
 use anyhow::{bail, Context, Result};
 use serde::Deserialize;
 
-use crate::jobs::{job, Job};
-use crate::md::Table;
-use crate::plot::{error_bars, LinePlot, Series, Style, PALETTE};
+use crate::io::md::Table;
+use crate::io::plot::{error_bars, LinePlot, Series, Style, PALETTE};
+use crate::pipeline::jobs::{job, Job};
 use crate::{fmt_sig, write_atomic};
 
 /// The jobs of the bistable example at increasing noise levels.
@@ -115,7 +115,7 @@ pub fn table(levels: &[Level]) -> String {
 
 /// The two panels: power (with the linear theory) and the transition rate against the level,
 /// on logarithmic axes, each point with its 95 % interval.
-pub fn figure(levels: &[Level]) -> Result<crate::plot::Panels> {
+pub fn figure(levels: &[Level]) -> Result<crate::io::plot::Panels> {
     if levels.is_empty() {
         bail!("no noise level to plot");
     }
@@ -163,7 +163,7 @@ pub fn figure(levels: &[Level]) -> Result<crate::plot::Panels> {
             .collect(),
         Vec::new(),
     );
-    Ok(crate::plot::Panels::row(vec![power, rate]))
+    Ok(crate::io::plot::Panels::row(vec![power, rate]))
 }
 
 /// Writes the table (`<STEM>.md`), the plot (`<STEM>.svg`, `.png`) and its caption
@@ -181,7 +181,7 @@ pub fn publish(results: &Path, dst: &Path) -> Result<()> {
             return Ok(());
         }
     };
-    let (svg, png) = crate::plot::render(&figure(&levels)?)?;
+    let (svg, png) = crate::io::plot::render(&figure(&levels)?)?;
     write_atomic(&dst.join(format!("{STEM}.svg")), svg.as_bytes())?;
     write_atomic(&dst.join(format!("{STEM}.png")), &png)?;
     let jobs: Vec<String> = levels.iter().map(|l| format!("`{}`", l.job)).collect();
@@ -189,7 +189,7 @@ pub fn publish(results: &Path, dst: &Path) -> Result<()> {
         &caption,
         format!(
             "![Power and well-to-well transitions against the noise level](generated/own_device/{STEM}.svg)\n\n\
-             *Made by `reproduce` ([`experiments/src/noise_curve.rs`](../../experiments/src/noise_curve.rs)) \
+             *Made by `reproduce` ([`experiments/src/pipeline/noise_curve.rs`](../../experiments/src/pipeline/noise_curve.rs)) \
              from the summaries of the jobs {}.*\n",
             jobs.join(", ")
         )

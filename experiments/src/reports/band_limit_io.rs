@@ -8,7 +8,7 @@ use anyhow::{Context, Result};
 use endstop::device::Device;
 use endstop::validation::band_limit;
 
-use crate::md::Table;
+use crate::io::md::Table;
 use crate::write_atomic;
 
 /// Where the band-limit study is recorded.

@@ -4,7 +4,7 @@
 
 use endstop::study::basins::Basins;
 
-use crate::plot::{LegendPos, LinePlot, Series, Style, PALETTE};
+use crate::io::plot::{LegendPos, LinePlot, Series, Style, PALETTE};
 
 /// The basin map of `b` titled `title` (x in um, v in mm/s); `marks` are (label, x, v) of the
 /// attractors at drive phase zero (none to mark nothing).

@@ -4,14 +4,14 @@
 use endstop::paper::response::phase_lag_deg;
 use endstop::study::continuation::impacting::Closure;
 use endstop::study::continuation::{
-    Branch, BranchEnd, BranchKind, Diagram, DiagramBranch, DiagramEvent, DiagramEventKind,
-    DiagramPoint, EndKind, EventKind,
+    Branch, BranchEnd, BranchKind, Diagram, DiagramBranch, DiagramEventKind, DiagramPoint, EndKind,
+    EventKind,
 };
 use endstop::study::orbit::Orbit;
 
-use crate::frame::Row;
-use crate::md::Table;
-use crate::plot::{LegendPos, LinePlot, Panels, Series, Style, PALETTE};
+use crate::io::frame::Row;
+use crate::io::md::Table;
+use crate::io::plot::{LegendPos, LinePlot, Panels, Series, Style, PALETTE};
 use crate::row;
 
 /// The index of each point's stretch of equal stability along a branch, from the points'
@@ -464,7 +464,7 @@ pub fn diagram_words(d: &Diagram) -> String {
     }
     let mut t = Table::new(["event", "frequency (Hz)", "branches", "stability beside it"]);
     for e in &d.events {
-        let kind = event_words(e);
+        let kind = e.label();
         let st = |s: bool| if s { "stable" } else { "unstable" };
         let stability = if e.kind == DiagramEventKind::Grazing {
             e.branches
@@ -493,17 +493,4 @@ pub fn diagram_words(d: &Diagram) -> String {
     }
     md.push_str(&t.render());
     md
-}
-
-/// An event's name for tables: its kind, and at a corner (a grazing where the branch turns)
-/// that the fold there is non-smooth.
-pub fn event_words(e: &DiagramEvent) -> String {
-    if e.corner {
-        format!(
-            "{} (non-smooth fold: the branch turns there)",
-            e.kind.label()
-        )
-    } else {
-        e.kind.label().to_string()
-    }
 }

@@ -1,5 +1,5 @@
 //! Figure 15's outputs, written by its binary and by Figure 14's (whose run holds the same
-//! records: `endstop::paper::prototype2_random`): the parquet files, plots, summary and the
+//! records: `endstop::paper::prototype2_records`): the parquet files, plots, summary and the
 //! book's numbers of one run of `endstop::paper::figures::fig15`.
 
 use anyhow::Result;
@@ -11,9 +11,9 @@ use endstop::paper::setups::ParamSet;
 use endstop::paper::Figure;
 use endstop::study::ensemble::DEFAULT_SEED;
 
-use crate::broadband_io::{self as bbio, pm, sa_label, spread_str, Level};
-use crate::md::Table;
-use crate::plot::{LegendPos, LinePlot, Series, Style, PALETTE};
+use crate::io::md::Table;
+use crate::io::plot::{LegendPos, LinePlot, Series, Style, PALETTE};
+use crate::reports::record_io::{self, pm, sa_label, spread_str, Level};
 use crate::{fmt_sig, Experiment, LoadedDevice};
 
 /// Writes Figure 15's outputs for `run`, made from the parameter file `prototype2`, as the
@@ -77,7 +77,7 @@ pub fn write(
     );
 
     exp.write_numbers_md(&numbers_md(run, &f, paper_ratio))?;
-    bbio::write_level_tables(
+    record_io::write_level_tables(
         &exp,
         Fig15::NAME,
         levels,
@@ -86,7 +86,7 @@ pub fn write(
     )?;
 
     // Figure 15 as in the paper: 500-1000 Hz, log y.
-    let plot = bbio::spectra_plot(
+    let plot = record_io::spectra_plot(
         "Figure 15: prototype 2 at 15 V, output power PSD (both loads, one-sided)",
         levels,
         (500.0, 1000.0),
@@ -107,7 +107,7 @@ fn numbers_md(run: &fig15::Run, f: &Findings, paper_ratio: f64) -> String {
     let levels = &run.levels;
     let l34 = &levels[L034];
     let lin = &run.linear;
-    let mut md = bbio::settings_md(l34);
+    let mut md = record_io::settings_md(l34);
     md.push_str(&format!(
         "The alternative segmenting (MATLAB's `pwelch` default) uses {} samples per segment \
          ({} Hz bins), 8 segments per record.\n\n",
@@ -121,9 +121,9 @@ fn numbers_md(run: &fig15::Run, f: &Findings, paper_ratio: f64) -> String {
         ),
     ));
     md.push_str("**Power and contact**\n\n");
-    md.push_str(&bbio::power_table(levels).render());
+    md.push_str(&record_io::power_table(levels).render());
     md.push_str("\n**Peak and widths of the ensemble-mean output PSD** (CI: delete-one jackknife over the records, 95 %), and the spread of the same widths read from single records\n\n");
-    md.push_str(&bbio::width_table(levels).render());
+    md.push_str(&record_io::width_table(levels).render());
     md.push_str(&format!(
         "\nLinearised theory (eqs 11-17, no end-stops; the same at every level): peak {} Hz, \
          3 dB width {} Hz, half-amplitude width {} Hz. Peak of single records at 0.34e-3: mean \

@@ -1,4 +1,4 @@
-//! The measured data of `endstop fit` ([`crate::fit_io`]): the measured-sweep CSV file and the
+//! The measured data of `endstop fit` ([`crate::reports::fit_io`]): the measured-sweep CSV file and the
 //! `--free PATH=LO..HI` option, read with errors that name the file and line.
 //!
 //! # The measured-sweep file

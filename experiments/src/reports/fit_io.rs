@@ -3,7 +3,7 @@
 //! line, and writing the fitted device with its provenance, the results table, the residuals
 //! and the plots. Nothing is written unless the whole fit succeeds.
 //!
-//! The measured files' format is in [`crate::fit_csv`].
+//! The measured files' format is in [`crate::reports::fit_csv`].
 
 use std::path::{Path, PathBuf};
 
@@ -15,8 +15,8 @@ use endstop::fit::{
 use polars::prelude::*;
 use sha2::{Digest, Sha256};
 
-use crate::fit_csv::{parse_free, parse_sweep, FitInputError};
-use crate::plot::{LegendPos, LinePlot, Series, Style, PALETTE};
+use crate::io::plot::{LegendPos, LinePlot, Series, Style, PALETTE};
+use crate::reports::fit_csv::{parse_free, parse_sweep, FitInputError};
 use crate::{fmt_sig, git_commit, load_device_file, write_atomic, Experiment};
 
 /// Arguments of `endstop fit`.
@@ -40,7 +40,7 @@ pub struct FitArgs {
     #[arg(long)]
     pub out: Option<PathBuf>,
     /// A measured output spectrum instead of sweeps, `PSD.csv:S[:N]` (see
-    /// `crate::spectrum_io`).
+    /// `crate::reports::spectrum_io`).
     #[arg(long)]
     pub spectrum: Option<String>,
 }
@@ -55,7 +55,7 @@ fn sha256_hex(bytes: &[u8]) -> String {
 /// Runs `endstop fit`.
 pub fn run(a: FitArgs) -> Result<()> {
     if let Some(s) = &a.spectrum {
-        return crate::spectrum_io::run(&a.device, s, &a.free, a.out.clone());
+        return crate::reports::spectrum_io::run(&a.device, s, &a.free, a.out.clone());
     }
     let loaded = load_device_file(&a.device)?;
     let free: Vec<FreeParam> = a

@@ -8,9 +8,9 @@ use endstop::paper::deviations::{ClaimIndices, Factor, HistoryRun, TOLERANCE_SIG
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
-use crate::frame::{frame, Cell};
-use crate::md::Table;
-use crate::plot::Chart;
+use crate::io::frame::{frame, Cell};
+use crate::io::md::Table;
+use crate::io::plot::Chart;
 use crate::{fmt_sig, row, Experiment};
 
 /// Label of a prototype (`1`, `2`).

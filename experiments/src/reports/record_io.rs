@@ -1,13 +1,13 @@
-//! Shared edge of the broadband experiments (Figures 11, 12, 14, 15): the parameter sets of
+//! Shared edge of the random-vibration (record) experiments (Figures 11, 12, 14, 15): the parameter sets of
 //! prototype 1, Parquet rows, Markdown tables and spectra plots of analysed levels. Nothing
 //! here computes a result: the ensembles and everything read from them come from
 //! `endstop::paper` (`ensembles`, `fig11` ... `fig15`).
 
 use anyhow::Result;
 
-use crate::frame::{frame, Row};
-use crate::md::Table;
-use crate::plot::{LegendPos, LinePlot, Series, Style, PALETTE};
+use crate::io::frame::{frame, Row};
+use crate::io::md::Table;
+use crate::io::plot::{LegendPos, LinePlot, Series, Style, PALETTE};
 use crate::{fmt_sig, row, Experiment};
 use endstop::num::stats::Spread;
 use endstop::paper::ensembles::Prototype1Run;

@@ -18,9 +18,9 @@ use endstop::fit::spectrum::{
 use endstop::fit::{FreeParam, ACCEL_SCALE_PATH};
 use endstop::study::ensemble::{run_ensemble, EnsembleSpec};
 
-use crate::fit_csv::parse_free;
-use crate::frame::frame;
-use crate::plot::{LinePlot, Series, Style, PALETTE};
+use crate::io::frame::frame;
+use crate::io::plot::{LinePlot, Series, Style, PALETTE};
+use crate::reports::fit_csv::parse_free;
 use crate::{fmt_sig, load_device_file, row, write_atomic, Experiment};
 
 /// A `--spectrum` argument: the file, the stated level and the measured record count.

@@ -9,7 +9,7 @@ use endstop::validation::nlvib_duffing::{self, DuffingComparison, DuffingReferen
 use endstop::validation::stationary_law::StationaryLaw;
 use endstop::validation::{spring_cases, Check, ValidationError};
 
-use crate::frame::frame;
+use crate::io::frame::frame;
 use crate::{row, Experiment};
 
 /// What the rows computed, for the chapter's text.

@@ -1,5 +1,5 @@
-//! The I/O shared by the narrowband experiments (Figures 8, 9 and 13, and `endstop sweep`):
-//! the per-step rows of a sweep in the project's column names (through [`crate::frame`]), and
+//! The I/O shared by the sine-sweep experiments (Figures 8, 9 and 13, and `endstop sweep`):
+//! the per-step rows of a sweep in the project's column names (through [`crate::io::frame`]), and
 //! the cells of the claims and convergence tables of the book.
 
 use endstop::device::{Device, StiffnessModel, Stop, StopLaw};
@@ -8,8 +8,8 @@ use endstop::paper::curves::{law_key, Curve, CurveConvergence};
 use endstop::paper::setups::ParamSet;
 use endstop::study::steady::Measurement;
 
-use crate::frame::Row;
-use crate::md::Table;
+use crate::io::frame::Row;
+use crate::io::md::Table;
 use crate::row;
 
 /// The columns of one steady-state measurement, between the columns that say where it was
