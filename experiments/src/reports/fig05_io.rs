@@ -2,14 +2,15 @@
 //! Hertz law and the eq 19 fits as Parquet, the numbers of the summary, the book's tables
 //! (scales, fits, sensitivity to the elastic constants) and the plot of one run.
 
-use crate::io::frame::frame;
-use crate::io::md::Table;
-use crate::io::plot::{LinePlot, Series, Style, PALETTE};
-use crate::{fmt_sig, row, Experiment};
 use anyhow::Result;
 use endstop::paper::claims::{keys, Claims};
 use endstop::paper::figures::fig05::{self, FIT_READINGS};
 use endstop::paper::setups::ParamSet;
+
+use crate::io::frame::frame;
+use crate::io::md::Table;
+use crate::io::plot::{LinePlot, Series, Style, PALETTE};
+use crate::{fmt_sig, row, Experiment};
 
 /// Writes everything of one run of Figure 5: the Parquet tables, the numbers of the summary,
 /// the book's tables and the plot.

@@ -2,11 +2,6 @@
 //! the summary, the continuations as Parquet, the book's tables (claims under both readings of
 //! "output power", every curve, convergence) and the plot of one run.
 
-use crate::io::frame::frame;
-use crate::io::md::Table;
-use crate::io::plot::{LegendPos, LinePlot, Series, Style, PALETTE};
-use crate::reports::sweep_io::{claims_table_both_sets, measurement_cells};
-use crate::{fmt_sig, row, Experiment};
 use anyhow::Result;
 use endstop::paper::calibration::CalibrationRecord;
 use endstop::paper::claims::{keys, Claims, Value};
@@ -17,6 +12,12 @@ use endstop::paper::measured::P1_RESONANCE_HZ;
 use endstop::paper::setups::endstop;
 use endstop::paper::setups::{prototype1_setup, ParamSet};
 use endstop::paper::Figure;
+
+use crate::io::frame::frame;
+use crate::io::md::Table;
+use crate::io::plot::{LegendPos, LinePlot, Series, Style, PALETTE};
+use crate::reports::sweep_io::{claims_table_both_sets, measurement_cells};
+use crate::{fmt_sig, row, Experiment};
 
 /// Writes everything of one run of Figure 9 with its claim `values` (under the figure's
 /// reading of "output power") and `both_loads` (under the other reading): the numbers of the

@@ -2,16 +2,17 @@
 //! the summary, the book's table of the generator's level, edge and mean square, the spectra
 //! as Parquet and the plot of one run.
 
-use crate::io::frame::frame;
-use crate::io::md::Table;
-use crate::io::plot::{LegendPos, LinePlot, Series, Style, PALETTE};
-use crate::reports::record_io::{pm, sa_label};
-use crate::{fmt_sig, row, Experiment};
 use anyhow::Result;
 use endstop::paper::claims::{keys, Claims};
 use endstop::paper::figures::fig10::{
     self, FIG10_SA, FLAT_BAND_HZ, LEAKAGE_FROM_HZ, NPERSEG, RECORDS,
 };
+
+use crate::io::frame::frame;
+use crate::io::md::Table;
+use crate::io::plot::{LegendPos, LinePlot, Series, Style, PALETTE};
+use crate::reports::record_io::{pm, sa_label};
+use crate::{fmt_sig, row, Experiment};
 
 /// Bottom of the plot's y axis (g²/Hz), as in the paper's Figure 10.
 const Y_MIN: f64 = 1e-5;

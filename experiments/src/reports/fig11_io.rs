@@ -1,13 +1,14 @@
 //! Figure 11's outputs (the figure itself is `endstop::paper::figures::fig11`): the numbers of
 //! the summary, the book's tables (the levels, the claims) and the spectra of one run.
 
+use anyhow::Result;
+use endstop::paper::ensembles::WidthReading;
+use endstop::paper::figures::fig11;
+use endstop::paper::setups::ParamSet;
+
 use crate::io::md::Table;
 use crate::reports::record_io::{self, pm, sa_label, spread_str};
 use crate::Experiment;
-use anyhow::Result;
-use endstop::paper::ensembles::WidthReading;
-use endstop::paper::figures::fig11::{self};
-use endstop::paper::setups::ParamSet;
 
 /// Writes everything of one run of Figure 11: the numbers of the summary, the book's tables
 /// and the spectra (Parquet and plot).

@@ -2,14 +2,15 @@
 //! the summary, the book's tables (the levels, the claims under both readings of "3 dB", the
 //! width against the Welch segment length) and the spectra of one run.
 
-use crate::io::md::Table;
-use crate::reports::record_io::{self, pm, sa_label, spread_str};
-use crate::{fmt_sig, Experiment};
 use anyhow::Result;
 use endstop::paper::ensembles::{level_key, WidthReading};
 use endstop::paper::figures::fig12::{self, FIG12_LEVELS, HIGH, LOW};
 use endstop::paper::resolution::{self, LEVELS, LINEAR, NPERSEGS};
 use endstop::paper::setups::ParamSet;
+
+use crate::io::md::Table;
+use crate::reports::record_io::{self, pm, sa_label, spread_str};
+use crate::{fmt_sig, Experiment};
 
 /// Writes everything of one run of Figure 12 with the width-resolution study of its published
 /// set (`study`): the numbers of the summary, the book's tables and the spectra (Parquet and

@@ -2,13 +2,6 @@
 //! the summary, the per-step sweeps as Parquet, the book's tables (claims, every sweep,
 //! convergence) and the plot of one run.
 
-use crate::io::frame::frame;
-use crate::io::md::{self, Table};
-use crate::io::plot::{LegendPos, LinePlot, Series, Style, PALETTE};
-use crate::reports::sweep_io::{
-    claim_cells, convergence_cells, curve_rows, hz, CONVERGENCE_COLUMNS,
-};
-use crate::{fmt_sig, Experiment};
 use anyhow::Result;
 use endstop::device::StiffnessModel;
 use endstop::paper::claims::{Claims, Value};
@@ -16,6 +9,14 @@ use endstop::paper::curves::{CONV_FREQ_REL, CONV_RMS_REL};
 use endstop::paper::figures::fig13::{self, Fig13};
 use endstop::paper::setups::{ParamSet, FIG13_BIAS_V};
 use endstop::paper::Figure;
+
+use crate::io::frame::frame;
+use crate::io::md::{self, Table};
+use crate::io::plot::{LegendPos, LinePlot, Series, Style, PALETTE};
+use crate::reports::sweep_io::{
+    claim_cells, convergence_cells, curve_rows, hz, CONVERGENCE_COLUMNS,
+};
+use crate::{fmt_sig, Experiment};
 
 /// Writes everything of one run of Figure 13 with its claim `values`: the numbers of the
 /// summary, the Parquet table, the book's tables and the plot.

@@ -2,16 +2,17 @@
 //! the summary, the Parquet tables, the book's tables (settings, powers, convergence, slopes,
 //! claims, the end-stop readings) and the plots of one run.
 
-use crate::io::md::Table;
-use crate::io::plot::{error_bars, LegendPos, LinePlot, Series, Style, PALETTE};
-use crate::reports::record_io::{self, pm, sa_label, Level};
-use crate::{fmt_sig, Experiment};
 use anyhow::Result;
 use endstop::paper::claims::{keys, Claims};
 use endstop::paper::figures::fig14::{self, Fig14, F14B_LEVEL, FIG14_LEVELS, TIGHT_RTOL};
 use endstop::paper::setups::ParamSet;
 use endstop::paper::Figure;
 use endstop::physics::two_port::eq21_power_w;
+
+use crate::io::md::Table;
+use crate::io::plot::{error_bars, LegendPos, LinePlot, Series, Style, PALETTE};
+use crate::reports::record_io::{self, pm, sa_label, Level};
+use crate::{fmt_sig, Experiment};
 
 /// Writes Figure 14's outputs.
 pub fn write(mut exp: Experiment, run: &fig14::Run, claims: &Claims) -> Result<()> {

@@ -2,15 +2,16 @@
 //! the summary, the book's tables (the two-port of each prototype, the readings of Qm, C0 from
 //! the geometry), the Parquet table and the plot of eq 21's efficiency against the load.
 
-use crate::io::frame::frame;
-use crate::io::md::Table;
-use crate::io::plot::{LinePlot, Series, Style, PALETTE};
-use crate::{fmt_sig, row, Experiment};
 use anyhow::Result;
 use endstop::paper::figures::table3::{self, ABSTRACT_K2_P1};
 use endstop::paper::qm::{QmReading, TABLE3_QM};
 use endstop::paper::setups::comb;
 use endstop::paper::setups::ParamSet;
+
+use crate::io::frame::frame;
+use crate::io::md::Table;
+use crate::io::plot::{LinePlot, Series, Style, PALETTE};
+use crate::{fmt_sig, row, Experiment};
 
 /// The key of a Qm reading in the summary's numbers.
 fn reading_key(reading: QmReading) -> &'static str {
