@@ -14,8 +14,8 @@ use std::collections::BTreeMap;
 use std::time::Instant;
 
 use anyhow::{bail, Result};
+use common::io::plot::{LegendPos, LinePlot, Series, Style, PALETTE};
 use common::ngspice::{Reading, Reduced, Runner, Source};
-use common::plot::{LegendPos, LinePlot, Series, Style, PALETTE};
 use common::{fmt_sig, write_atomic, Experiment};
 use endstop::paper::crosscheck::{
     acceptance_failures, cases, prepare, Case, Difference, Ours, Prepared, Setting, SpiceRun,
@@ -565,7 +565,7 @@ fn bridge_cases(exp: &mut Experiment, spice: &mut Runner) -> Result<(String, Vec
     };
     use endstop::study::interface::{steady_state, SteadySettings};
 
-    let mut t = common::md::Table::new([
+    let mut t = common::io::md::Table::new([
         "device",
         "quantity",
         "ours",
