@@ -12,10 +12,11 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
+use endstop::device::ParamRange;
 use endstop::fit::spectrum::{
-    build_emulator, param_at, MeasuredSpectrum, SpectrumEstimate, SpectrumSettings, FEATURES,
+    build_emulator, MeasuredSpectrum, SpectrumEstimate, SpectrumSettings, FEATURES,
 };
-use endstop::fit::{FreeParam, ACCEL_SCALE_PATH};
+use endstop::fit::ACCEL_SCALE_PATH;
 use endstop::study::ensemble::{run_ensemble, EnsembleSpec};
 
 use crate::fit_csv::parse_free;
@@ -99,7 +100,7 @@ pub fn read_spectrum(path: &Path, level: f64, records: usize) -> Result<Measured
 /// Runs `endstop fit --spectrum` (one spectrum; its free parameters from `--free`).
 pub fn run(device: &Path, spectrum: &str, free: &[String], out: Option<PathBuf>) -> Result<()> {
     let loaded = load_device_file(device)?;
-    let free: Vec<FreeParam> = free
+    let free: Vec<ParamRange> = free
         .iter()
         .map(|s| parse_free(s))
         .collect::<Result<_, _>>()?;
@@ -171,7 +172,7 @@ fn write_outputs(
             design.push(row![
                 "point" => k as u64,
                 "parameter" => f.path.as_str(),
-                "value" => param_at(f, *s),
+                "value" => f.at(*s),
                 "ln_band_power" => v[0],
                 "centroid_hz" => v[1],
                 "spread_hz" => v[2],

@@ -29,8 +29,8 @@ use rayon::prelude::*;
 use thiserror::Error;
 
 use super::params::{apply, check_free};
-use super::{FitError, FreeParam};
-use crate::device::Device;
+use super::FitError;
+use crate::device::{Device, ParamRange};
 use crate::drive::noise::NoiseSpec;
 use crate::num::gp::GpSettings;
 use crate::num::history::{maximin_lhs, Emulator, HistoryError};
@@ -244,7 +244,7 @@ impl Default for SpectrumSettings {
 #[derive(Debug, Clone)]
 pub struct SpectrumEmulator {
     /// The free parameters.
-    pub free: Vec<FreeParam>,
+    pub free: Vec<ParamRange>,
     /// The settings.
     pub settings: SpectrumSettings,
     /// The design (unit cube of the free parameters).
@@ -257,19 +257,9 @@ pub struct SpectrumEmulator {
     pub emulators: Vec<Emulator>,
 }
 
-/// A free parameter's value at unit coordinate `s` (logarithmic for ranges of a decade or
-/// more with a positive lower end, as the sweep fit's transform).
-pub fn param_at(f: &FreeParam, s: f64) -> f64 {
-    if f.lo > 0.0 && f.hi / f.lo >= 10.0 {
-        (f.lo.ln() + s * (f.hi.ln() - f.lo.ln())).exp()
-    } else {
-        f.lo + s * (f.hi - f.lo)
-    }
-}
-
 /// The device and the drive's scale at a unit-cube point.
-fn at(base: &Device, free: &[FreeParam], u: &[f64]) -> Result<(Device, f64), FitError> {
-    let p: Vec<f64> = free.iter().zip(u).map(|(f, s)| param_at(f, *s)).collect();
+fn at(base: &Device, free: &[ParamRange], u: &[f64]) -> Result<(Device, f64), FitError> {
+    let p: Vec<f64> = free.iter().zip(u).map(|(f, s)| f.at(*s)).collect();
     apply(base, free, &p)
 }
 
@@ -277,7 +267,7 @@ fn at(base: &Device, free: &[FreeParam], u: &[f64]) -> Result<(Device, f64), Fit
 /// the emulators; `on_point()` after each design point.
 pub fn build_emulator(
     base: &Device,
-    free: &[FreeParam],
+    free: &[ParamRange],
     accel_psd: f64,
     band: (f64, f64),
     settings: SpectrumSettings,
@@ -432,8 +422,7 @@ impl SpectrumEmulator {
             .iter()
             .enumerate()
             .map(|(j, f)| {
-                let mut v: Vec<(f64, f64)> =
-                    last.iter().map(|(u, w)| (param_at(f, u[j]), *w)).collect();
+                let mut v: Vec<(f64, f64)> = last.iter().map(|(u, w)| (f.at(u[j]), *w)).collect();
                 v.sort_by(|a, b| a.0.total_cmp(&b.0));
                 let q = |p: f64| {
                     let mut acc = 0.0;
@@ -448,7 +437,7 @@ impl SpectrumEmulator {
                 SpectrumParam {
                     path: f.path.clone(),
                     mean: v.iter().map(|(x, w)| x * w).sum::<f64>() / total,
-                    best: param_at(f, best_u[j]),
+                    best: f.at(best_u[j]),
                     interval: (q(0.025), q(0.975)),
                 }
             })

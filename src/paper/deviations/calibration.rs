@@ -6,7 +6,7 @@ use rayon::prelude::*;
 
 use super::evaluation::{evaluate, evaluate_quantitative};
 use super::quantity::{Evaluation, Prototype, Scope};
-use super::ranges::{Factor, Ranges, Variant};
+use super::ranges::{Ranges, Variant};
 use super::DeviationsError;
 use crate::device::Device;
 use crate::num::minimax::{Fit, MinimaxSettings};
@@ -81,7 +81,7 @@ pub fn calibration_starts(
 ) -> Result<Vec<Vec<f64>>, DeviationsError> {
     let published = ranges.published_point(base)?;
     Ok(crate::num::minimax::starts(
-        Factor::ALL.len(),
+        ranges.len(),
         settings,
         std::slice::from_ref(&published),
     )?)

@@ -6,7 +6,7 @@ use rayon::prelude::*;
 
 use super::evaluation::evaluate_at;
 use super::quantity::{Evaluation, Outcome, Prototype, Quantity, Scope};
-use super::ranges::{Factor, Ranges};
+use super::ranges::Ranges;
 use super::DeviationsError;
 use crate::device::Device;
 use crate::num::pareto::pareto_front;
@@ -18,7 +18,7 @@ use crate::paper::claims::{Claims, Kind};
 pub struct QuantityIndices {
     /// The quantity.
     pub quantity: Quantity,
-    /// First-order and total indices with their bootstrap intervals, in [`Factor::ALL`] order;
+    /// First-order and total indices with their bootstrap intervals, in the factors' order;
     /// `None` when the quantity does not vary over the design (every index is 0/0).
     pub indices: Option<Indices>,
     /// Share of the design's points where the quantity does not exist (its substitute is used):
@@ -48,6 +48,8 @@ pub struct SobolRun {
 /// The design of a Sobol study.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SobolDesign {
+    /// How many factors: the dimension of the unit cube ([`Ranges::len`]).
+    pub factors: usize,
     /// Base rows of the Saltelli design (a power of two).
     pub base_rows: usize,
     /// Scramble of the design.
@@ -71,6 +73,13 @@ pub fn sobol(
     claims: &Claims,
     on_point: &(dyn Fn() + Sync),
 ) -> Result<SobolRun, DeviationsError> {
+    if d.factors != ranges.len() {
+        return Err(DeviationsError::Evaluations(format!(
+            "a design over {} factors for ranges of {}",
+            d.factors,
+            ranges.len()
+        )));
+    }
     let design = d.design()?;
     let evaluations = design
         .points()
@@ -85,9 +94,9 @@ pub fn sobol(
 }
 
 impl SobolDesign {
-    /// The Saltelli design over [`Factor::ALL`].
+    /// The Saltelli design over the unit cube of the factors.
     pub fn design(&self) -> Result<Saltelli, DeviationsError> {
-        Ok(Saltelli::new(self.base_rows, Factor::ALL.len(), self.seed)?)
+        Ok(Saltelli::new(self.base_rows, self.factors, self.seed)?)
     }
 }
 
