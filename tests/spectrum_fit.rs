@@ -6,6 +6,7 @@
 use endstop::device::{Device, ParamRange};
 use endstop::fit::spectrum::{build_emulator, model_features, MeasuredSpectrum, SpectrumSettings};
 use endstop::fit::ACCEL_SCALE_PATH;
+use endstop::progress::Silent;
 use endstop::study::ensemble::{run_ensemble, EnsembleSpec};
 
 /// Figure 15's lowest level (g²/Hz), where prototype 2 at 15 V just reaches its stops.
@@ -54,7 +55,7 @@ fn a_known_device_is_recovered_within_its_intervals() {
         );
         spec.analysis_band_hz = BAND;
         spec.first_stream = 1000 + 100 * k as u64;
-        let e = run_ensemble(&device, &spec, || {}).unwrap();
+        let e = run_ensemble(&device, &spec, &Silent).unwrap();
         let m = MeasuredSpectrum {
             freq_hz: e.mean_spectrum.total.freq_hz.clone(),
             psd_w_per_hz: e.mean_spectrum.total.density.clone(),

@@ -537,12 +537,37 @@ pub fn progress(len: u64, what: &str) -> ProgressBar {
     pb
 }
 
+/// The library's progress reports ([`endstop::progress::Progress`]) shown on a progress bar: a
+/// unit of work advances it by one, a share of the work sets its position, a stage is its
+/// message.
+pub struct Bar(pub ProgressBar);
+
+impl endstop::progress::Progress for Bar {
+    fn tick(&self) {
+        self.0.inc(1);
+    }
+
+    fn fraction(&self, done: f64) {
+        let len = self.0.length().unwrap_or(0) as f64;
+        self.0
+            .set_position((done.clamp(0.0, 1.0) * len).round() as u64);
+    }
+
+    fn stage(&self, what: &str) {
+        self.0.set_message(what.to_string());
+    }
+}
+
 /// Runs `work` under a progress bar of `len` steps labelled `what` (cleared when `work`
-/// returns); `work` gets the callback that advances the bar by one step.
-pub fn with_progress<T>(len: usize, what: &str, work: impl FnOnce(&(dyn Fn() + Sync)) -> T) -> T {
-    let pb = progress(len as u64, what);
-    let out = work(&|| pb.inc(1));
-    pb.finish_and_clear();
+/// returns); `work` reports to the bar through the [`endstop::progress::Progress`] it gets.
+pub fn with_progress<T>(
+    len: usize,
+    what: &str,
+    work: impl FnOnce(&dyn endstop::progress::Progress) -> T,
+) -> T {
+    let bar = Bar(progress(len as u64, what));
+    let out = work(&bar);
+    bar.0.finish_and_clear();
     out
 }
 

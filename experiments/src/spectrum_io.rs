@@ -17,6 +17,7 @@ use endstop::fit::spectrum::{
     build_emulator, MeasuredSpectrum, SpectrumEstimate, SpectrumSettings, FEATURES,
 };
 use endstop::fit::ACCEL_SCALE_PATH;
+use endstop::progress::Silent;
 use endstop::study::ensemble::{run_ensemble, EnsembleSpec};
 
 use crate::fit_csv::parse_free;
@@ -201,7 +202,7 @@ fn write_outputs(
         em.settings.records,
     );
     spec.analysis_band_hz = measured.band();
-    let e = run_ensemble(&device, &spec, || {})?;
+    let e = run_ensemble(&device, &spec, &Silent)?;
     let model = &e.mean_spectrum.total;
     exp.write_plot(&LinePlot::new(
         "Measured output spectrum and the model at the fit",

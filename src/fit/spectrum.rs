@@ -35,6 +35,7 @@ use crate::drive::noise::NoiseSpec;
 use crate::num::gp::GpSettings;
 use crate::num::history::{maximin_lhs, Emulator, HistoryError};
 use crate::num::stats::Jackknife;
+use crate::progress::{Progress, Silent};
 use crate::study::ensemble::{run_ensemble, EnsembleSpec};
 use crate::study::record::RecordSpec;
 
@@ -189,7 +190,7 @@ pub fn model_features(
     let mut spec = EnsembleSpec::for_device(device, model_record(device, psd), seed, records);
     spec.analysis_band_hz = band;
     spec.first_stream = first_stream;
-    let e = run_ensemble(device, &spec, || {}).map_err(|e| e.to_string())?;
+    let e = run_ensemble(device, &spec, &Silent).map_err(|e| e.to_string())?;
     let mean = &e.mean_spectrum.total;
     let all = features(&mean.freq_hz, &mean.density, band).ok_or("no power in the band")?;
     let n = e.records.len();
@@ -264,14 +265,14 @@ fn at(base: &Device, free: &[ParamRange], u: &[f64]) -> Result<(Device, f64), Fi
 }
 
 /// Runs the design of ensembles of `base` with `free` over `band` at the stated level and fits
-/// the emulators; `on_point()` after each design point.
+/// the emulators; `on_point.tick()` after each design point.
 pub fn build_emulator(
     base: &Device,
     free: &[ParamRange],
     accel_psd: f64,
     band: (f64, f64),
     settings: SpectrumSettings,
-    on_point: &(dyn Fn() + Sync),
+    on_point: &dyn Progress,
 ) -> Result<SpectrumEmulator, SpectrumFitError> {
     check_free(base, free)?;
     let n = settings.per_param * free.len();
@@ -292,7 +293,7 @@ pub fn build_emulator(
                 (settings.seed, 0),
             )
             .map_err(|why| SpectrumFitError::Ensemble { point: k, why });
-            on_point();
+            on_point.tick();
             r
         })
         .collect::<Result<Vec<_>, _>>()?;

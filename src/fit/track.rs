@@ -7,6 +7,7 @@
 use crate::drive::Sine;
 use crate::ode::Stats;
 use crate::physics::harvester::{Harvester, State};
+use crate::progress::Silent;
 use crate::study::continuation::{continue_branch, ContinuationSettings, EventKind};
 use crate::study::orbit::{Forcing, Orbit, Parameter, Shooter, ShootingConfig};
 
@@ -335,7 +336,7 @@ fn fold_from(
     let first = stable_orbit(h, f_start, accel_rms_g, g.phase_rad, g.state).map_err(ctx)?;
     let mut settings = ContinuationSettings::frequency(f_start, limit_hz, max_step_hz);
     settings.locate_tol = FOLD_LOCATE_TOL_HZ;
-    let branch = continue_branch(h, first, &settings, |_| {}).map_err(|e| ctx(e.into()))?;
+    let branch = continue_branch(h, first, &settings, &Silent).map_err(|e| ctx(e.into()))?;
     let Some(fold) = branch
         .events
         .iter()

@@ -25,6 +25,7 @@ use crate::ode::{Dopri5, SolverError, Stats};
 use crate::paper::setups::{with_endstop, FIG13_BIAS_V};
 use crate::physics::contact::Mode;
 use crate::physics::harvester::{Harvester, State};
+use crate::progress::Silent;
 use crate::spice::{
     netlist, parse_wrdata, InitialCondition, Method, SolverSettings, SpiceDrive, SpiceError,
     SpiceOptions, Transient, Waveforms, DOCUMENTED_STEPS_PER_PERIOD, HERTZ_NEWTON_STEPS,
@@ -315,7 +316,7 @@ pub fn prepare(case: &Case) -> Result<Prepared, SolverError> {
                 drive: move |ff: f64| (ff, a),
                 cfg: cfg.clone(),
             };
-            let sweep = c.run(&linspace_step(from_hz, f, step_hz), |_| {})?;
+            let sweep = c.run(&linspace_step(from_hz, f, step_hz), &Silent)?;
             let last = sweep
                 .steps
                 .last()

@@ -17,6 +17,7 @@ use crate::paper::ensembles::{
     protocol_spec, run_levels, Level, LevelCase, P2_BAND_HZ, P2_NPERSEG,
 };
 use crate::paper::setups::{prototype2_setup, with_endstop, ParamSet};
+use crate::progress::Progress;
 use crate::study::record::{simulate_record, BroadbandError, Scheme};
 
 /// One of Figure 15's three levels.
@@ -231,7 +232,7 @@ fn case(device: &Device, index: usize, records: usize, variant: Option<&str>) ->
 pub fn run(
     prototype2: &Device,
     scope: Scope,
-    progress: &(dyn Fn() + Sync),
+    progress: &dyn Progress,
 ) -> Result<Run, BroadbandError> {
     let dev = prototype2_setup(prototype2);
     let indices: Vec<usize> = match scope.levels {

@@ -11,6 +11,7 @@ use super::DeviationsError;
 use crate::device::Device;
 use crate::num::minimax::{Fit, MinimaxSettings};
 use crate::paper::claims::{Claims, Kind};
+use crate::progress::Progress;
 
 /// The multi-claim calibration of a prototype: the point of the ranges that minimises the
 /// worst normalised deviation over its quantitative claims (the yes/no claims are reported,
@@ -122,11 +123,11 @@ pub fn calibrate(
     settings: MinimaxSettings,
     claims: &Claims,
     scope: Scope,
-    on_eval: &(dyn Fn() + Sync),
+    on_eval: &dyn Progress,
 ) -> Result<MultiClaimCalibration, DeviationsError> {
     let model = |u: &[f64]| {
         let d = calibration_objective(prototype, ranges, base, claims, scope, u);
-        on_eval();
+        on_eval.tick();
         d
     };
     let fits = calibration_starts(ranges, base, settings)?

@@ -30,6 +30,7 @@ use crate::device::Device;
 use crate::num::gp_sensitivity::{emulated_indices, EmulatedIndices, EmulatedSobol};
 use crate::num::history::{HistoryMatch, HistorySettings, Mean, Observation, Run, Termination};
 use crate::paper::claims::{Claims, Kind};
+use crate::progress::Progress;
 
 /// The emulated Sobol indices of each emulated quantity (`None`: constant over the runs).
 pub type ClaimIndices = Vec<(Quantity, Option<EmulatedIndices>)>;
@@ -258,7 +259,7 @@ impl Answer {
 }
 
 /// The history match of `prototype` over `ranges` on this machine: each wave's runs in
-/// parallel (`on_run()` after each), until the match ends.
+/// parallel (`on_run.tick()` after each), until the match ends.
 pub fn history_match(
     prototype: Prototype,
     ranges: &Ranges,
@@ -266,7 +267,7 @@ pub fn history_match(
     claims: &Claims,
     scope: Scope,
     settings: HistorySettings,
-    on_run: &(dyn Fn() + Sync),
+    on_run: &dyn Progress,
 ) -> Result<HistoryRun, DeviationsError> {
     let mut run = HistoryRun::new(prototype, ranges, scope, claims, settings)?;
     while let Some(design) = run.next_design() {
@@ -274,7 +275,7 @@ pub fn history_match(
             .par_iter()
             .map(|p| {
                 let e = evaluate_at(prototype, ranges, base, p, claims, scope);
-                on_run();
+                on_run.tick();
                 e
             })
             .collect::<Result<Vec<_>, _>>()?;

@@ -12,6 +12,7 @@ use crate::device::Device;
 use crate::num::pareto::pareto_front;
 use crate::num::sensitivity::{Bootstrap, Indices, Saltelli, SensitivityError};
 use crate::paper::claims::{Claims, Kind};
+use crate::progress::Progress;
 
 /// The Sobol indices of one quantity.
 #[derive(Debug, Clone, PartialEq)]
@@ -61,7 +62,7 @@ pub struct SobolDesign {
 }
 
 /// Sobol first-order and total indices of every quantity of `prototype` over `ranges`, from
-/// the Saltelli design of `d`; `on_point()` after every design point (points run in
+/// the Saltelli design of `d`; `on_point.tick()` after every design point (points run in
 /// parallel, results in design order). The same as evaluating every point of
 /// [`SobolDesign::design`] with [`evaluate_at`] (e.g. as tasks of a cluster) and passing the
 /// evaluations to [`sobol_indices`].
@@ -71,7 +72,7 @@ pub fn sobol(
     base: &Device,
     d: SobolDesign,
     claims: &Claims,
-    on_point: &(dyn Fn() + Sync),
+    on_point: &dyn Progress,
 ) -> Result<SobolRun, DeviationsError> {
     if d.factors != ranges.len() {
         return Err(DeviationsError::Evaluations(format!(
@@ -86,7 +87,7 @@ pub fn sobol(
         .par_iter()
         .map(|p| {
             let e = evaluate_at(prototype, ranges, base, p, claims, d.scope);
-            on_point();
+            on_point.tick();
             e
         })
         .collect::<Result<Vec<_>, _>>()?;
