@@ -42,10 +42,6 @@ own *ARGS:
 deviations *ARGS:
     cargo run --release --bin deviations -- {{ARGS}}
 
-# The same as `just deviations` (its earlier name).
-study *ARGS:
-    cargo run --release --bin deviations -- {{ARGS}}
-
 # Re-record the runs of `data/recorded/` (the deviations chapter's runs with the ensemble claims) with the arguments each run's `run.json` holds: hours on 2 cores; needs the Python package with Dask (`pip install "./python[examples,dask]"`). The Python tests compare a recording with the current code within its sampling error.
 record:
     for d in data/recorded/*/; do python3 python/examples/study_dask.py $(python3 -c "import json, sys; print(' '.join(json.load(open(sys.argv[1]))['argv']))" "${d}run.json") || exit 1; done

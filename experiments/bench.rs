@@ -35,7 +35,7 @@ use endstop::physics::contact::Mode;
 use endstop::physics::harvester::Harvester;
 use endstop::progress::Silent;
 use endstop::study::flow::SineFlow;
-use endstop::study::record::{simulate_record, BroadbandError};
+use endstop::study::record::{simulate_record, RecordError};
 use endstop::study::rk4_record::{
     simulate_rk4_record, RK4_STEPS_AT_OUR_ACCURACY, RK4_STEPS_AT_TARGET,
 };
@@ -98,6 +98,9 @@ impl Times {
     fn median_cpu(&self) -> f64 {
         self.cpu[self.cpu.len() / 2]
     }
+    fn fastest_wall(&self) -> f64 {
+        self.wall[0]
+    }
 }
 
 struct Row {
@@ -125,28 +128,33 @@ fn run() -> Result<()> {
     let cal = common::calibrated_prototype1(&p1)?.0.device;
     let mut rows = Vec::new();
 
+    // (case, the key its summary numbers start with, device, Sa).
     let records = [
         (
             "P1 calibrated, 10 s record, Sa = 2.85e-2",
+            "p1_record_calibrated",
             cal.clone(),
             2.85e-2,
         ),
         (
             "P1 published, 10 s record, Sa = 2.85e-2",
+            "p1_record_published",
             p1.device.clone(),
             2.85e-2,
         ),
         (
             "P2 published, 10 s record, Sa = 1.69e-3",
+            "p2_record",
             p2.device.clone(),
             1.69e-3,
         ),
     ];
-    for (case, dev, sa) in records.clone() {
+    for (case, key, dev, sa) in records.clone() {
         let spec = paper_record(&dev, sa);
         let (rec, times) = timed(repeats, || Ok(simulate_record(&dev, &spec, SEED, 0)?))?;
         let sim = spec.transient_s + spec.noise.duration_s;
         let s = rec.summary;
+        exp.number(&format!("{key}_median_s"), times.median_cpu());
         rows.push(Row {
             case: case.to_string(),
             times,
@@ -159,17 +167,6 @@ fn run() -> Result<()> {
             ),
         });
     }
-    for (i, key) in [
-        "p1_record_calibrated_median_s",
-        "p1_record_published_median_s",
-        "p2_record_median_s",
-    ]
-    .iter()
-    .enumerate()
-    {
-        exp.number(key, rows[i].times.median_cpu());
-    }
-
     // Steady impacting sine: how much of the work is spent in contact.
     let h = Harvester::new(&cal, Sine::from_rms_g(5.5, 1300.0));
     let t_end = 200.0 / 1300.0;
@@ -196,7 +193,7 @@ fn run() -> Result<()> {
     // times: the pairs alternate in this process).
     let bistable = common::load_device("examples/bistable_stops_em")?;
     exp.uses(&bistable, "hypothetical");
-    let pc = common::springs_io::paired_record_cost(&bistable.device, 3e-4, repeats)?;
+    let pc = common::reports::springs_io::paired_record_cost(&bistable.device, 3e-4, repeats)?;
     exp.number("bistable_record_cost_ratio_median", pc.ratios[repeats / 2]);
     for (case, t, path) in [
         (
@@ -229,15 +226,7 @@ fn run() -> Result<()> {
     }
 
     if !quick {
-        rows.extend(fig08_rows(&p1.device, repeats)?);
-        exp.number(
-            "fig08_sweeps_1thread_median_s",
-            rows[rows.len() - 2].times.median_cpu(),
-        );
-        exp.number(
-            "fig08_sweeps_all_threads_median_s",
-            rows[rows.len() - 1].times.median_wall(),
-        );
+        rows.extend(fig08_rows(&mut exp, &p1.device, repeats)?);
         rows.extend(response_rows(&p2.device, repeats)?);
     }
 
@@ -259,7 +248,7 @@ fn run() -> Result<()> {
             r.case,
             sig_or_dash(r.times.median_cpu()),
             fmt_sig(r.times.median_wall(), 3),
-            fmt_sig(r.times.wall[0], 3),
+            fmt_sig(r.times.fastest_wall(), 3),
             sig_or_dash(r.simulated_s / r.times.median_cpu()),
             fmt_sig(r.stats.steps() as f64 / r.simulated_s, 3),
             r.stats.rejected,
@@ -314,7 +303,7 @@ fn run() -> Result<()> {
         "case" => rows.iter().map(|r| r.case.clone()).collect::<Vec<_>>(),
         "median_cpu_s" => rows.iter().map(|r| r.times.median_cpu()).collect::<Vec<_>>(),
         "median_wall_s" => rows.iter().map(|r| r.times.median_wall()).collect::<Vec<_>>(),
-        "min_wall_s" => rows.iter().map(|r| r.times.wall[0]).collect::<Vec<_>>(),
+        "min_wall_s" => rows.iter().map(|r| r.times.fastest_wall()).collect::<Vec<_>>(),
         "simulated_s" => rows.iter().map(|r| r.simulated_s).collect::<Vec<_>>(),
         "steps" => rows.iter().map(|r| r.stats.steps()).collect::<Vec<_>>(),
         "rejected_steps" => rows.iter().map(|r| r.stats.rejected).collect::<Vec<_>>(),
@@ -339,16 +328,20 @@ fn run() -> Result<()> {
 /// summary numbers.
 fn paper_rk4_and_accuracy(
     exp: &mut Experiment,
-    records: &[(&str, endstop::device::Device, f64); 3],
+    records: &[(&str, &str, endstop::device::Device, f64); 3],
     p1: &common::LoadedDevice,
     p2: &common::LoadedDevice,
 ) -> Result<String> {
     // The RK4 yardstick at the target accuracy and at our measured accuracy.
-    let picks = [RK4_STEPS_AT_TARGET, RK4_STEPS_AT_OUR_ACCURACY];
+    // (RK4 steps per sample, the end of its summary key).
+    let picks = [
+        (RK4_STEPS_AT_TARGET, "target"),
+        (RK4_STEPS_AT_OUR_ACCURACY, "equal"),
+    ];
     let accuracy_md = accuracy::rk4_accuracy(&p1.device, &p2.device)?;
     let mut ratios = Vec::new();
-    for (case, dev, sa) in records.iter().cloned() {
-        for substeps in picks {
+    for (case, key, dev, sa) in records.iter().cloned() {
+        for (substeps, pick) in picks {
             let spec = paper_record(&dev, sa);
             let mut ours = Vec::new();
             let mut rk4 = Vec::new();
@@ -368,7 +361,7 @@ fn paper_rk4_and_accuracy(
                     }) {
                         Ok((_, t)) => rk4.push(t.cpu[0]),
                         Err(e) => {
-                            failure = Some(match e.downcast_ref::<BroadbandError>() {
+                            failure = Some(match e.downcast_ref::<RecordError>() {
                                 Some(b) => divergence(b),
                                 None => e.to_string(),
                             })
@@ -383,7 +376,7 @@ fn paper_rk4_and_accuracy(
                 None => Ok(rk4[RK4_REPEATS / 2]),
                 Some(e) => Err(e),
             };
-            ratios.push((case, substeps, a, b));
+            ratios.push((case, format!("{key}_over_rk4_{pick}"), substeps, a, b));
         }
     }
     let mut md = format!(
@@ -400,10 +393,10 @@ fn paper_rk4_and_accuracy(
          sample interval); the table then gives the integrator's error instead of a time. \
          Median processor times of {RK4_REPEATS} runs of each, alternating in the same process:\n\n\
          | case | RK4 steps per sample | ours (s) | RK4 (s) | ours / RK4 |\n|---|---|---|---|---|\n",
-        picks[0],
-        picks[1]
+        RK4_STEPS_AT_TARGET,
+        RK4_STEPS_AT_OUR_ACCURACY
     );
-    for (case, substeps, a, b) in &ratios {
+    for (case, _, substeps, a, b) in &ratios {
         let (rk4, ratio) = match b {
             Ok(b) => (fmt_sig(*b, 3), fmt_sig(a / b, 3)),
             Err(e) => (e.clone(), "-".to_string()),
@@ -413,17 +406,11 @@ fn paper_rk4_and_accuracy(
             fmt_sig(*a, 3),
         ));
     }
-    exp.number("rk4_substeps_target", picks[0] as f64);
-    exp.number("rk4_substeps_equal", picks[1] as f64);
+    for (substeps, pick) in picks {
+        exp.number(&format!("rk4_substeps_{pick}"), substeps as f64);
+    }
     // Ratios of the timed pairs only (a diverged RK4 run has none).
-    for ((_, _, a, b), key) in ratios.iter().zip([
-        "p1_record_calibrated_over_rk4_target",
-        "p1_record_calibrated_over_rk4_equal",
-        "p1_record_published_over_rk4_target",
-        "p1_record_published_over_rk4_equal",
-        "p2_record_over_rk4_target",
-        "p2_record_over_rk4_equal",
-    ]) {
+    for (_, key, _, a, b) in &ratios {
         if let Ok(b) = b {
             exp.number(key, a / b);
         }
@@ -435,10 +422,9 @@ fn paper_rk4_and_accuracy(
          everywhere:\n\n{impact_md}\n",
         endstop::study::record::DEFAULT_RTOL
     ));
-    exp.number("p1_impacting_record_rel_dev_ours", impact[0].0);
-    exp.number("p1_impacting_record_rel_dev_rtol1e-9", impact[0].1);
-    exp.number("p2_impacting_record_rel_dev_ours", impact[1].0);
-    exp.number("p2_impacting_record_rel_dev_rtol1e-9", impact[1].1);
+    for (key, rel) in impact {
+        exp.number(&key, rel);
+    }
     let (ledger_md, ledger) = accuracy::energy_balance(&p1.device, &p2.device)?;
     md.push_str(&format!(
         "\n**The energy balance of a record.** The same records and two impact-free ones, \
@@ -452,8 +438,13 @@ fn paper_rk4_and_accuracy(
     Ok(md)
 }
 
-/// A full Figure 8 sweep (every curve of the published set), on one thread and on all.
-fn fig08_rows(p1: &endstop::device::Device, repeats: usize) -> Result<Vec<Row>> {
+/// A full Figure 8 sweep (every curve of the published set), on one thread and on all, with
+/// its summary numbers (the processor time on one thread, the wall time on all).
+fn fig08_rows(
+    exp: &mut Experiment,
+    p1: &endstop::device::Device,
+    repeats: usize,
+) -> Result<Vec<Row>> {
     let settings = endstop::paper::figures::fig08::sweep_settings(p1);
     let curves = endstop::paper::figures::fig08::Fig8Curve::ALL
         .map(endstop::paper::figures::fig08::Fig8Curve::spec);
@@ -481,6 +472,11 @@ fn fig08_rows(p1: &endstop::device::Device, repeats: usize) -> Result<Vec<Row>> 
                     / s.measurement.freq_hz;
             }
         }
+        if threads == 1 {
+            exp.number("fig08_sweeps_1thread_median_s", times.median_cpu());
+        } else {
+            exp.number("fig08_sweeps_all_threads_median_s", times.median_wall());
+        }
         rows.push(Row {
             case: format!(
                 "Figure 8 sweeps, published set, {} curves, {label}",
@@ -497,13 +493,13 @@ fn fig08_rows(p1: &endstop::device::Device, repeats: usize) -> Result<Vec<Row>> 
 
 /// A failed RK4 record as a table cell: where its state left the admissible range, or the
 /// error's text.
-fn divergence(e: &BroadbandError) -> String {
+fn divergence(e: &RecordError) -> String {
     use endstop::ode::SolverError;
     match e {
-        BroadbandError::Solver(SolverError::NonFinite { t, .. }) => {
+        RecordError::Solver(SolverError::NonFinite { t, .. }) => {
             format!("diverges (non-finite state at t = {t:.3e} s)")
         }
-        BroadbandError::Solver(SolverError::InvalidState { t, .. }) => {
+        RecordError::Solver(SolverError::InvalidState { t, .. }) => {
             format!("diverges (inadmissible state at t = {t:.3e} s)")
         }
         other => format!("fails ({other})"),

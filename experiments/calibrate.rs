@@ -1,7 +1,7 @@
 //! `calibrate`: fits the end-stop gap of prototype 1 to the measured impact onset of Figure 8
 //! (`endstop::paper::calibration::calibrate_prototype1`) and saves the calibrated device and
 //! the calibration's record as the artefact every experiment of the calibrated set reads
-//! (`data/results/calibration/`, see `endstop_experiments::calibration_io`). `reproduce` runs it
+//! (`data/results/calibration/`, see `endstop_experiments::reports::calibration_io`). `reproduce` runs it
 //! before every other job.
 
 use endstop_experiments as common;
@@ -9,7 +9,7 @@ use endstop_experiments as common;
 use std::time::Instant;
 
 use anyhow::Result;
-use common::calibration_io::{calibration_dir, write_calibration};
+use common::reports::calibration_io::{calibration_dir, write_calibration};
 use common::{fmt_sig, git_commit, load_device, write_atomic};
 use endstop::paper::calibration::calibrate_prototype1;
 

@@ -11,7 +11,7 @@ use std::path::Path;
 use std::time::Instant;
 
 use anyhow::{bail, Context, Result};
-use common::plot::{LegendPos, LinePlot, Series, Style, PALETTE};
+use common::io::plot::{LegendPos, LinePlot, Series, Style, PALETTE};
 use common::{fmt_sig, write_atomic, Experiment};
 use endstop::paper::crosscheck::{
     acceptance_failures, cases, prepare, verdict_label, Case, Difference, Ours, Prepared, Setting,
@@ -502,7 +502,7 @@ fn bridge_cases(exp: &mut Experiment, tmp: &Path) -> Result<(String, Vec<String>
     };
     use endstop::study::interface::{steady_state, SteadySettings};
 
-    let mut t = common::md::Table::new([
+    let mut t = common::io::md::Table::new([
         "device",
         "quantity",
         "ours",

@@ -1,7 +1,7 @@
 //! Figure 15: output power PSDs of prototype 2 at 15 V at 0.34e-3, 0.55e-3 and 1.69e-3 g²/Hz
 //! (claims F15-a, F15-b, F15-c), and the sampling distribution of the bandwidths and of their
 //! ratio when each is read from one 10 s record. The figure is stated in
-//! `endstop::paper::figures::fig15`; its outputs are written by `src/fig15_io.rs`, which
+//! `endstop::paper::figures::fig15`; its outputs are written by `src/reports/fig15_io.rs`, which
 //! Figure 14's binary calls too (its run holds the same records).
 
 use endstop_experiments as common;
@@ -24,5 +24,5 @@ fn run() -> Result<()> {
     let run = common::with_progress(Fig15::work(&setup), Fig15::NAME, |tick| {
         Fig15::run(&setup, tick)
     })?;
-    common::fig15_io::write(exp, &p2, &run, &claims)
+    common::reports::fig15_io::write(exp, &p2, &run, &claims)
 }

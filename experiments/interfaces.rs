@@ -11,9 +11,9 @@ use endstop_experiments as common;
 use std::time::Instant;
 
 use anyhow::Result;
-use common::frame::frame;
-use common::md::Table;
-use common::plot::{LegendPos, LinePlot, Series, Style, PALETTE};
+use common::io::frame::frame;
+use common::io::md::Table;
+use common::io::plot::{LegendPos, LinePlot, Series, Style, PALETTE};
 use common::{fmt_sig, row, write_atomic, Experiment};
 use endstop::device::{Device, Interface, Inversion, Rectifier};
 use endstop::drive::noise::NoiseSpec;

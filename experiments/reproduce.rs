@@ -23,8 +23,10 @@ use endstop::paper::claims::Row;
 use endstop::paper::claims::Value;
 use endstop::paper::claims::Verdict;
 use endstop::paper::setups::ParamSet;
-use endstop_experiments::freshness;
-use endstop_experiments::jobs::{experiment_dir, experiment_names, Job, Phase, CROSSCHECK, JOBS};
+use endstop_experiments::pipeline::freshness;
+use endstop_experiments::pipeline::jobs::{
+    experiment_dir, experiment_names, Job, Phase, CROSSCHECK, JOBS,
+};
 use serde::Deserialize;
 
 /// The wall and processor time of the last `reproduce` that ran experiments, in the results
@@ -39,7 +41,7 @@ fn ngspice_available() -> bool {
 }
 
 /// Copies the own-device runs' numbers and plots into the book's generated directory, with
-/// the curve drawn from several of them ([`common::noise_curve`]).
+/// the curve drawn from several of them ([`common::pipeline::noise_curve`]).
 fn publish_own_device() -> Result<()> {
     let dst = common::book_generated_root().join("own_device");
     for job in JOBS.iter().filter(|j| j.is_tool_run()) {
@@ -69,7 +71,7 @@ fn publish_own_device() -> Result<()> {
     }
     // The bistable example's power and transition rate against the noise level, from its
     // random jobs' summaries.
-    common::noise_curve::publish(&common::results_root(), &dst)
+    common::pipeline::noise_curve::publish(&common::results_root(), &dst)
 }
 
 #[derive(Parser, Debug)]
@@ -180,11 +182,11 @@ fn run() -> Result<()> {
     }
     publish_own_device()?;
     let rows = write_scorecard()?;
-    common::answers::write(&rows)?;
+    common::pipeline::answers::write(&rows)?;
     write_provenance()?;
     deviations_placeholder()?;
     eprintln!("[reproduce] building the book");
-    common::book::build(&root.join("book"))?;
+    common::pipeline::book::build(&root.join("book"))?;
 
     let count = |v: Verdict| rows.iter().filter(|r| r.verdict == v).count();
     if !timings.is_empty() {
@@ -393,7 +395,7 @@ fn write_scorecard() -> Result<Vec<Row>> {
         }
     }
     // Beside each jump claim, the upper fold of the continued orbits (the response job).
-    let folds = common::jobs::job("response")
+    let folds = common::pipeline::jobs::job("response")
         .and_then(read_summary)
         .map(|s| s.numbers)
         .unwrap_or_default();
@@ -403,7 +405,7 @@ fn write_scorecard() -> Result<Vec<Row>> {
     }
     // Beside each claim the study evaluates, its value at the best set of the multi-claim
     // calibration (the study's summary, if `just deviations` has been run).
-    let best = read_summary(&common::jobs::DEVIATIONS)
+    let best = read_summary(&common::pipeline::jobs::DEVIATIONS)
         .map(|s| s.numbers)
         .unwrap_or_default();
     for r in rows.iter_mut().filter(|r| r.set == ParamSet::Published) {
@@ -553,7 +555,7 @@ fn write_provenance() -> Result<()> {
 /// The study is not one of `reproduce`'s jobs: until `just deviations` has run, its chapter
 /// includes a note in place of its answer, numbers, recorded match and heat map.
 fn deviations_placeholder() -> Result<()> {
-    let dir = common::book_generated_root().join(common::jobs::DEVIATIONS.name);
+    let dir = common::book_generated_root().join(common::pipeline::jobs::DEVIATIONS.name);
     if !dir.join("numbers.md").exists() {
         let note = "*Not run in this build: the study is not part of `reproduce`; run \
                     `just deviations` (or `cargo run --release --bin deviations`) and rebuild the book.*\n";

@@ -4,17 +4,18 @@
 //! (`book/src/generated/validation/`). A check outside its tolerance is reported as such in the
 //! tables (the tests fail on it); the run itself fails only when a check cannot be computed.
 //! It reads the recorded band-limit study; `--band-study` runs that study instead and records it
-//! (`common::band_limit_io`).
+//! (`common::reports::band_limit_io`).
 
 use endstop_experiments as common;
 
 use std::time::Instant;
 
 use anyhow::{Context, Result};
-use common::frame::frame;
-use common::md::Table;
-use common::plot::{LegendPos, LinePlot, Series, Style, PALETTE};
-use common::{band_limit_io, row, write_atomic, Experiment};
+use common::io::frame::frame;
+use common::io::md::Table;
+use common::io::plot::{LegendPos, LinePlot, Series, Style, PALETTE};
+use common::reports::band_limit_io;
+use common::{row, write_atomic, Experiment};
 use endstop::device::Device;
 use endstop::validation::band_limit;
 use endstop::validation::linear_harvesters::{response_curve, ClosedForm};
@@ -228,7 +229,7 @@ fn run() -> Result<()> {
     let (aft_floor, fold_floor) = (reference.aft_floor_m(), reference.fold_floor_rad_s());
     checks.extend(nlvib::hb_checks(&hb, aft_floor, fold_floor));
     let samples = nlvib::branch_samples(&ours, &branch)?;
-    let springs = common::springs_io::run(&mut exp, load)?;
+    let springs = common::reports::springs_io::run(&mut exp, load)?;
     checks.extend(springs.checks.iter().cloned());
     costs.extend(springs.costs.iter().map(|(c, w, s)| Cost {
         case: c.clone(),
@@ -485,9 +486,8 @@ fn nlvib_md(
         .iter()
         .map(|ev| {
             format!(
-                "{}{} at Omega = {:.9} rad/s",
-                ev.kind.label(),
-                if ev.at_grazing { " (at grazing)" } else { "" },
+                "{} at Omega = {:.9} rad/s",
+                ev.label(),
                 ev.param * 2.0 * std::f64::consts::PI
             )
         })

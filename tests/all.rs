@@ -10,12 +10,11 @@
 //! file of `tests/` has no `mod` line, so that no test file is silently left out.
 //!
 //! Run one file's tests with a filter on its module: `cargo test --release --test all --
-//! broadband::`. Slow characterisation runs are `#[ignore]`d with their reason and run by
+//! record_figures::`. Slow characterisation runs are `#[ignore]`d with their reason and run by
 //! `cargo test --release -- --include-ignored` (CI runs that; see the README).
 
 mod common;
 
-mod broadband;
 mod calibration_recovery;
 mod crosscheck;
 mod device_description;
@@ -29,8 +28,8 @@ mod integrator;
 mod interface_orbits;
 mod interfaces;
 mod interfaces_spice;
-mod narrowband;
 mod record_accuracy;
+mod record_figures;
 mod record_ledger;
 mod regression_analytic;
 mod regression_response;
@@ -47,6 +46,7 @@ mod springs_device;
 mod springs_validation;
 mod study_claims;
 mod study_determinism;
+mod sweep_figures;
 mod sweep_steps;
 mod swept_sine;
 mod validation;

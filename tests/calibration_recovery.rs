@@ -7,7 +7,7 @@ use endstop::device::Device;
 use endstop::num::minimax::{minimise_worst, MinimaxSettings};
 use endstop::paper::claims::Claims;
 use endstop::paper::deviations::RangesFile;
-use endstop::paper::deviations::{narrowband, Outcome};
+use endstop::paper::deviations::{sweeps, Outcome};
 use endstop::paper::figures::fig08;
 use endstop::paper::setups::P1_BIAS_V;
 use endstop::paper::setups::{comb, comb_mut, endstop};
@@ -106,17 +106,14 @@ fn linear_claims_generated_at_a_known_set_are_met_and_its_identified_parameters_
 fn kink_and_jump(device: &Device, gap_m: f64, scale: f64) -> Option<[f64; 2]> {
     let mut d = device.with_bias(P1_BIAS_V);
     d = d.with_stop_gap(gap_m);
-    let branch = narrowband::frequency_branch(
+    let branch = sweeps::frequency_branch(
         &d,
         fig08::P1_HIGH_ACCEL_RMS_G * scale,
-        (fig08::P1_SWEEP_START_HZ, narrowband::P1_STOP_HZ),
+        (fig08::P1_SWEEP_START_HZ, sweeps::P1_STOP_HZ),
         fig08::P1_SWEEP_STEP_HZ,
         "recovery",
     );
-    match (
-        narrowband::first_grazing(&branch),
-        narrowband::upper_fold(&branch),
-    ) {
+    match (sweeps::first_grazing(&branch), sweeps::upper_fold(&branch)) {
         (Outcome::Value(k), Outcome::Value(j)) => Some([k, j]),
         _ => None,
     }

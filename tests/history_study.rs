@@ -5,7 +5,7 @@
 //! Prototype 2 without the ensemble claims: its quantitative claims are then Table 3's (eqs
 //! 15-18, smooth in the inputs), its yes/no claims Figure 13's (evaluated at every run by
 //! continuation), a small design (three runs per input, two waves). The test checks the
-//! machinery on the real model and claims file; the emulation of the narrowband claims
+//! machinery on the real model and claims file; the emulation of the sine-sweep claims
 //! (folds and grazing points that appear and vanish across the cube) needs the definitive
 //! match's design, and its leave-one-out diagnostics say how well it does there.
 

@@ -11,7 +11,7 @@
 //! * Records with impacts (10 s, Figure 12's and Figures 14-15's setups): prototype 1's power
 //!   converges with the tolerance and ours is within the target; prototype 2's does not
 //!   converge (the trajectories part after some impacts), so a single record's power is a
-//!   sample, and accuracy is the ensemble's (`tests/broadband.rs`).
+//!   sample, and accuracy is the ensemble's (`tests/record_figures.rs`).
 //!
 //! Run time: about ten 10 s records at tight tolerances, a few seconds each.
 
@@ -19,7 +19,7 @@ use endstop::device::Device;
 use endstop::ode::SolverError;
 use endstop::paper::setups::{paper_record, prototype1_setup, prototype2_setup};
 use endstop::physics::energy::EnergyLedger;
-use endstop::study::record::{simulate_record, BroadbandError, RecordSpec, Scheme, DEFAULT_RTOL};
+use endstop::study::record::{simulate_record, RecordError, RecordSpec, Scheme, DEFAULT_RTOL};
 use endstop::study::record_ledger::record_ledger;
 use endstop::study::rk4_record::{
     simulate_rk4_record, RK4_STEPS_AT_OUR_ACCURACY, RK4_STEPS_AT_TARGET,
@@ -114,7 +114,7 @@ fn with_impacts_rk4_at_the_targets_step_diverges_and_at_ours_does_not() {
     assert!(
         matches!(
             coarse,
-            Err(BroadbandError::Solver(
+            Err(RecordError::Solver(
                 SolverError::NonFinite { .. } | SolverError::InvalidState { .. }
             ))
         ),

@@ -23,13 +23,8 @@ fn figure13_whole_curve_events_and_multipliers() {
     let mut out = String::from("event | frequency (Hz) | stable before | stable after\n");
     for e in &b.events {
         out.push_str(&format!(
-            "{}{} | {:.2} | {} | {}\n",
-            e.kind.label(),
-            if e.at_grazing {
-                " (grazing corner)"
-            } else {
-                ""
-            },
+            "{} | {:.2} | {} | {}\n",
+            e.label(),
             e.param,
             e.stable_before,
             e.stable_after

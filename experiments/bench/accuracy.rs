@@ -78,27 +78,30 @@ pub fn rk4_accuracy(p1: &endstop::device::Device, p2: &endstop::device::Device) 
     use endstop::study::record::Scheme;
     let cases = impact_free_cases(p1, p2);
     const SUBSTEPS: [usize; 4] = [1, 2, 4, 8];
-    // Run 0 is ours, 1 the reference, then RK4 with each number of substeps.
-    let powers = untimed_grid(cases.len(), 2 + SUBSTEPS.len(), |c, r| {
+    // The runs of a case: ours, the reference, then RK4 with each number of substeps.
+    const OURS: usize = 0;
+    const REFERENCE: usize = 1;
+    const FIRST_RK4: usize = 2;
+    let powers = untimed_grid(cases.len(), FIRST_RK4 + SUBSTEPS.len(), |c, r| {
         let (_, _, dev, sa) = &cases[c];
         let mut spec = paper_record(dev, *sa);
         spec.noise.duration_s = 1.0;
         Ok(match r {
-            0 => simulate_record(dev, &spec, SEED, 0)?.summary.p_total_w(),
-            1 => {
+            OURS => simulate_record(dev, &spec, SEED, 0)?.summary.p_total_w(),
+            REFERENCE => {
                 let mut tight = spec;
                 tight.scheme = Scheme::Dopri5;
                 tight.rtol = 1e-10;
                 simulate_record(dev, &tight, SEED, 0)?.summary.p_total_w()
             }
-            _ => simulate_rk4_record(dev, &spec, SEED, 0, SUBSTEPS[r - 2])?.p_total_w,
+            _ => simulate_rk4_record(dev, &spec, SEED, 0, SUBSTEPS[r - FIRST_RK4])?.p_total_w,
         })
     })?;
     let mut md = String::from("| record | ours | RK4, 1 step | RK4, 2 steps | RK4, 4 steps | RK4, 8 steps |\n|---|---|---|---|---|---|\n");
     for ((label, _, _, _), p) in cases.iter().zip(&powers) {
-        let reference = p[1];
-        let mut row = format!("| {label} | {:.1e} |", (p[0] / reference - 1.0).abs());
-        for rk4 in &p[2..] {
+        let reference = p[REFERENCE];
+        let mut row = format!("| {label} | {:.1e} |", (p[OURS] / reference - 1.0).abs());
+        for rk4 in &p[FIRST_RK4..] {
             row.push_str(&format!(" {:.1e} |", (rk4 / reference - 1.0).abs()));
         }
         md.push_str(&row);
@@ -110,18 +113,35 @@ pub fn rk4_accuracy(p1: &endstop::device::Device, p2: &endstop::device::Device) 
 /// A record's power with impacts, ours against Dormand-Prince everywhere at rtol 1e-7, 1e-9
 /// and 1e-10, one 10 s record of each of [`impacting_cases`]. Returns the Markdown table and,
 /// per case, our relative deviation from rtol 1e-10 and that of rtol 1e-9 (the reference's
-/// own reproducibility).
+/// own reproducibility), each under its summary key
+/// (`p1_impacting_record_rel_dev_ours`, ..._rtol1e-9).
 pub fn impact_accuracy(
     p1: &endstop::device::Device,
     p2: &endstop::device::Device,
-) -> Result<(String, Vec<(f64, f64)>)> {
+) -> Result<(String, Vec<(String, f64)>)> {
     use endstop::study::record::Scheme;
     let cases = impacting_cases(p1, p2);
+    // (label, scheme, rtol, the key of its summary number), the reference last.
     let runs = [
-        ("ours", Scheme::Exponential, None),
-        ("Dormand-Prince, rtol 1e-7", Scheme::Dopri5, Some(1e-7)),
-        ("Dormand-Prince, rtol 1e-9", Scheme::Dopri5, Some(1e-9)),
-        ("Dormand-Prince, rtol 1e-10", Scheme::Dopri5, Some(1e-10)),
+        ("ours", Scheme::Exponential, None, Some("ours")),
+        (
+            "Dormand-Prince, rtol 1e-7",
+            Scheme::Dopri5,
+            Some(1e-7),
+            None,
+        ),
+        (
+            "Dormand-Prince, rtol 1e-9",
+            Scheme::Dopri5,
+            Some(1e-9),
+            Some("rtol1e-9"),
+        ),
+        (
+            "Dormand-Prince, rtol 1e-10",
+            Scheme::Dopri5,
+            Some(1e-10),
+            None,
+        ),
     ];
     let mut md = String::from(
         "| record | run | mean power (W) | relative to rtol 1e-10 | impacts |\n|---|---|---|---|---|\n",
@@ -129,7 +149,7 @@ pub fn impact_accuracy(
     let summaries = untimed_grid(cases.len(), runs.len(), |c, r| {
         let (_, _, dev, sa) = &cases[c];
         let base = paper_record(dev, *sa);
-        let (_, scheme, rtol) = runs[r];
+        let (_, scheme, rtol, _) = runs[r];
         let spec = RecordSpec {
             scheme,
             rtol: rtol.unwrap_or(base.rtol),
@@ -138,21 +158,21 @@ pub fn impact_accuracy(
         Ok(simulate_record(dev, &spec, SEED, 0)?.summary)
     })?;
     let mut out = Vec::new();
-    for ((label, _, _, _), case) in cases.iter().zip(&summaries) {
-        let got: Vec<_> = runs
-            .iter()
-            .zip(case)
-            .map(|((name, _, _), s)| (*name, s.p_total_w(), s.impacts))
-            .collect();
-        let reference = got[runs.len() - 1].1;
+    for ((label, key, _, _), case) in cases.iter().zip(&summaries) {
+        let reference = case.last().expect("a reference run").p_total_w();
         let rel = |p: f64| p / reference - 1.0;
-        for (name, p, impacts) in &got {
+        // The case key starts with its prototype (`p1_2.85e-2`).
+        let prototype = key.split('_').next().unwrap_or(key);
+        for ((name, _, _, number), s) in runs.iter().zip(case) {
+            let (p, impacts) = (s.p_total_w(), s.impacts);
             md.push_str(&format!(
                 "| {label} | {name} | {p:.6e} | {:+.1e} | {impacts} |\n",
-                rel(*p)
+                rel(p)
             ));
+            if let Some(n) = number {
+                out.push((format!("{prototype}_impacting_record_rel_dev_{n}"), rel(p)));
+            }
         }
-        out.push((rel(got[0].1), rel(got[2].1)));
     }
     Ok((md, out))
 }

@@ -7,9 +7,9 @@ use std::path::PathBuf;
 
 use anyhow::{bail, Result};
 use clap::Parser;
-use common::basins_io::basin_map;
-use common::frame::frame;
-use common::md::Table;
+use common::io::frame::frame;
+use common::io::md::Table;
+use common::reports::basins_io::basin_map;
 use common::{fmt_sig, row};
 use endstop::drive::Sine;
 use endstop::physics::harvester::Harvester;
@@ -19,7 +19,7 @@ use endstop::study::displacement::two_wells;
 use endstop::study::orbit::{Forcing, ShootingConfig};
 use endstop_experiments as common;
 
-use super::{describe, start};
+use crate::shared::{describe, start};
 
 /// The arguments of `endstop basins`.
 #[derive(Parser, Debug)]

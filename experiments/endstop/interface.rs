@@ -12,10 +12,10 @@ use endstop::study::interface::sweep::frequency_sweep;
 use endstop::study::interface::SteadySettings;
 use endstop::study::stepped::linspace_step;
 
-use crate::common::fmt_sig;
-use crate::common::frame::frame;
-use crate::common::plot::{LegendPos, LinePlot, Series, Style, PALETTE};
-use crate::{start, RangeArgs};
+use crate::shared::{start, RangeArgs};
+use endstop_experiments::fmt_sig;
+use endstop_experiments::io::frame::frame;
+use endstop_experiments::io::plot::{LegendPos, LinePlot, Series, Style, PALETTE};
 use endstop_experiments::row;
 
 /// The arguments of `endstop charge`.
@@ -83,7 +83,7 @@ pub fn charge(a: ChargeArgs) -> Result<()> {
         block_s: (200.0 * period).min(a.t_max_s / 10.0),
         rtol: 1e-8,
     };
-    let run = crate::common::with_progress(100, "charging (% of the target)", |p| {
+    let run = endstop_experiments::with_progress(100, "charging (% of the target)", |p| {
         run_charge(
             &device,
             Sine::from_rms_g(a.accel_rms_g, a.freq_hz),
@@ -144,7 +144,7 @@ pub fn dc_sweep(a: RangeArgs) -> Result<()> {
     let step_hz = a.protocol(&device).step_hz;
     let freqs = linspace_step(a.from, a.to, step_hz);
     let settings = SteadySettings::default();
-    let results = crate::common::with_progress(freqs.len(), "sweep", |tick| {
+    let results = endstop_experiments::with_progress(freqs.len(), "sweep", |tick| {
         frequency_sweep(&device, &freqs, a.accel_rms_g, &settings, tick)
     });
     let mut states = Vec::new();

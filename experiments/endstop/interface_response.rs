@@ -11,11 +11,11 @@ use endstop::study::interface::sweep::frequency_sweep;
 use endstop::study::interface::{IfSteady, SteadyMethod, SteadySettings};
 use endstop::study::stepped::linspace_step;
 
-use crate::common::fmt_sig;
-use crate::common::frame::frame;
-use crate::common::plot::{LegendPos, LinePlot, Series, Style, PALETTE};
-use crate::common::response_io::{stability_segments, stability_series};
-use crate::{start, RangeArgs};
+use crate::shared::{start, Protocol, RangeArgs};
+use endstop_experiments::fmt_sig;
+use endstop_experiments::io::frame::frame;
+use endstop_experiments::io::plot::{LegendPos, LinePlot, Series, Style, PALETTE};
+use endstop_experiments::reports::branch_io::{stability_segments, stability_series};
 use endstop_experiments::row;
 
 /// The sweeps and the continued branch of a device with an interface over `a`'s range.
@@ -25,7 +25,7 @@ pub fn response(a: &RangeArgs) -> Result<()> {
     let up_freqs = linspace_step(a.from, a.to, protocol.step_hz);
     let down_freqs: Vec<f64> = up_freqs.iter().rev().copied().collect();
     let settings = SteadySettings::default();
-    let (up, down) = crate::common::with_progress(2 * up_freqs.len(), "sweeps", |tick| {
+    let (up, down) = endstop_experiments::with_progress(2 * up_freqs.len(), "sweeps", |tick| {
         rayon::join(
             || frequency_sweep(&device, &up_freqs, a.accel_rms_g, &settings, tick),
             || frequency_sweep(&device, &down_freqs, a.accel_rms_g, &settings, tick),
@@ -52,7 +52,7 @@ pub fn response(a: &RangeArgs) -> Result<()> {
     let mut cont = IfContinuationSettings::new(a.from, a.to, a.accel_rms_g);
     cont.max_freq_step_hz = protocol.max_step_hz;
     cont.ds_max = protocol.max_step_hz / cont.freq_scale_hz;
-    let branch = crate::common::with_progress(100, "continuation (% of the range)", |p| {
+    let branch = endstop_experiments::with_progress(100, "continuation (% of the range)", |p| {
         continue_frequency(&device, &cont, p)
     })?;
 
@@ -147,7 +147,7 @@ fn words(
     a: &RangeArgs,
     file: &str,
     device: &endstop::device::Device,
-    protocol: &crate::Protocol,
+    protocol: &Protocol,
     branch: &IfBranch,
     up: &[IfSteady],
     down: &[IfSteady],

@@ -28,7 +28,7 @@ use endstop_experiments as common;
 
 use clap::{Parser, Subcommand};
 
-pub(crate) use shared::{describe, start, step_effect, Protocol, RangeArgs};
+use shared::RangeArgs;
 
 #[derive(Parser, Debug)]
 #[command(
@@ -79,7 +79,7 @@ enum Study {
     /// fitted device file with provenance, values with standard errors and 95 % intervals,
     /// their correlation, warnings for what the data do not determine, and plots of the data
     /// against the fitted model with residuals.
-    Fit(common::fit_io::FitArgs),
+    Fit(common::reports::fit_io::FitArgs),
 }
 
 fn main() {
@@ -89,6 +89,6 @@ fn main() {
         Study::Random(a) => random::random(a),
         Study::Response(a) => response::response(a),
         Study::Basins(a) => basins::basins_study(a),
-        Study::Fit(a) => common::fit_io::run(a),
+        Study::Fit(a) => common::reports::fit_io::run(a),
     });
 }

@@ -21,11 +21,12 @@ use endstop::G;
 use endstop_experiments as common;
 use polars::prelude::*;
 
-use common::plot::Panels;
-use common::plot::{LinePlot, Series, Style, PALETTE};
-use common::{fmt_sig, measured_io};
+use common::fmt_sig;
+use common::io::plot::Panels;
+use common::io::plot::{LinePlot, Series, Style, PALETTE};
+use common::reports::measured_io;
 
-use crate::{describe, start};
+use crate::shared::{describe, start};
 
 /// The arguments of `endstop random`.
 #[derive(Parser, Debug)]
@@ -333,7 +334,7 @@ fn displacement(
         PALETTE[0],
         Style::LinePoints,
     )];
-    series.extend(common::plot::error_bars(
+    series.extend(common::io::plot::error_bars(
         dens.iter().map(|d| (um(d.0), d.1 / 1e6, d.2 / 1e6)),
         PALETTE[0],
     ));

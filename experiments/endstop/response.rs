@@ -4,9 +4,9 @@
 
 use anyhow::Result;
 use clap::Parser;
-use common::frame::frame;
-use common::md::Table;
-use common::response_io::{diagram_figure, diagram_rows, diagram_words};
+use common::io::frame::frame;
+use common::io::md::Table;
+use common::reports::branch_io::{diagram_figure, diagram_rows, diagram_words};
 use common::{fmt_sig, row};
 use endstop::study::chirp::{ChirpReport, ChirpSweep};
 use endstop::study::continuation::impacting::DiagramOptions;
@@ -15,7 +15,7 @@ use endstop::study::orbit::Forcing;
 use endstop::study::stepped::Approach;
 use endstop_experiments as common;
 
-use super::{describe, start, step_effect, RangeArgs};
+use crate::shared::{describe, start, step_effect, Protocol, RangeArgs};
 
 /// The arguments of `endstop response`.
 #[derive(Parser, Debug)]
@@ -54,7 +54,7 @@ pub(crate) fn response(args: ResponseArgs) -> Result<()> {
                  interface circuit gets its sweeps and continued steady state without them"
             );
         }
-        return super::interface_response::response(a);
+        return crate::interface_response::response(a);
     }
     let (mut exp, loaded, device) = start("endstop-response", &a.device, a.bias_v, a.out.clone())?;
     let protocol = a.protocol(&device);
@@ -259,7 +259,7 @@ fn step_study(
     settings: &endstop::study::sweep::SweepSettings,
     device: &endstop::device::Device,
     accel_rms_g: f64,
-    protocol: &super::Protocol,
+    protocol: &Protocol,
     down: &endstop::study::sweep::DownSweepReport,
     d: &Diagram,
     exp: &mut common::Experiment,

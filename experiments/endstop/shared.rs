@@ -13,7 +13,7 @@ use endstop::study::chirp::{
 use endstop::study::stepped::{linspace_step, Approach};
 use endstop::study::sweep::{self, SweepSettings, REFINE_TOL_HZ};
 
-use crate::common::{fmt_sig, load_device_file, Experiment, LoadedDevice};
+use endstop_experiments::{fmt_sig, load_device_file, Experiment, LoadedDevice};
 
 /// The arguments of the two frequency studies (`sweep` and `response`): a sine drive (a
 /// measured record drives `random` only, whose spectra it is analysed by).

@@ -3,9 +3,10 @@
 
 use anyhow::Result;
 
-use crate::common::plot::{LegendPos, LinePlot, Series, Style, PALETTE};
-use crate::common::{self, fmt_sig, load_device_file};
-use crate::{describe, interface, start, step_effect, RangeArgs};
+use crate::interface;
+use crate::shared::{describe, start, step_effect, RangeArgs};
+use endstop_experiments::io::plot::{LegendPos, LinePlot, Series, Style, PALETTE};
+use endstop_experiments::{self as common, fmt_sig, load_device_file};
 
 /// Runs `endstop sweep`.
 pub(crate) fn sweep(a: RangeArgs) -> Result<()> {
@@ -24,13 +25,13 @@ pub(crate) fn sweep(a: RangeArgs) -> Result<()> {
     let col = |f: &dyn Fn(&endstop::study::steady::Measurement) -> f64| -> Vec<f64> {
         steps.iter().map(|s| f(&s.measurement)).collect()
     };
-    let rows = common::narrowband_io::sweep_rows(
+    let rows = common::reports::sweep_io::sweep_rows(
         &format!("{} g rms up-sweep", a.accel_rms_g),
         &device,
         report.measurements(),
         report.extended_from,
     );
-    let mut df = common::frame::frame(rows)?;
+    let mut df = common::io::frame::frame(rows)?;
     exp.write_parquet("sweep", &mut df, &device.params)?;
 
     let mut md = format!(

@@ -5,30 +5,23 @@
 //!
 //! Every file is written to a temporary name in the same directory and renamed, so a failed
 //! run never leaves a partial output behind.
-pub mod answers;
-pub mod band_limit_io;
-pub mod basins_io;
-pub mod book;
-pub mod broadband_io;
-pub mod calibration_io;
-pub mod fig15_io;
-pub mod fit_csv;
-pub mod fit_io;
-pub mod frame;
-pub mod freshness;
-pub mod history_io;
-pub mod jobs;
-pub mod md;
-pub mod measured_io;
-pub mod narrowband_io;
+//!
+//! The modules are in three rooms by job, each using only the rooms listed after it and this
+//! crate root:
+//!
+//! * [`pipeline`]: what the `reproduce` driver alone uses (its jobs, when a job may be
+//!   skipped, the answer boxes, the book's build);
+//! * [`reports`]: the outputs of each figure, study and `endstop` command (Parquet rows,
+//!   plots, the book's tables and sentences), and the readers of measured files;
+//! * [`io`]: the helpers every report uses (plots, data frames, Markdown tables);
+//!
+//! and [`ngspice`], the runner of the external circuit simulator.
+pub mod io;
 pub mod ngspice;
-pub mod noise_curve;
-pub mod plot;
-pub mod response_io;
-pub mod spectrum_io;
-pub mod springs_io;
+pub mod pipeline;
+pub mod reports;
 
-pub use calibration_io::{calibrated_prototype1, prototype1_both_sets};
+pub use reports::calibration_io::{calibrated_prototype1, prototype1_both_sets};
 
 /// Every experiment binary allocates through mimalloc: a record's 10^6-sample vectors are
 /// freed and allocated again record after record, and the system allocator returns them to
@@ -308,15 +301,15 @@ impl Experiment {
 
     /// Renders a figure as `<dir>/<name>.svg` and `.png`, and copies both for the book;
     /// [`Experiment::finish`] writes its caption (`<name>.figure.md`).
-    pub fn write_plot<F: plot::Chart>(&self, fig: &F) -> Result<()> {
+    pub fn write_plot<F: io::plot::Chart>(&self, fig: &F) -> Result<()> {
         let stem = self.name.clone();
         self.write_extra_plot(&stem, fig)
     }
 
     /// Renders an extra figure under another file stem (e.g. `fig08_convergence`), with its
     /// caption as [`Experiment::write_plot`].
-    pub fn write_extra_plot<F: plot::Chart>(&self, stem: &str, fig: &F) -> Result<()> {
-        let (svg, png) = plot::render(fig)?;
+    pub fn write_extra_plot<F: io::plot::Chart>(&self, stem: &str, fig: &F) -> Result<()> {
+        let (svg, png) = io::plot::render(fig)?;
         for dir in [&self.dir, &self.book_dir] {
             write_atomic(&dir.join(format!("{stem}.svg")), svg.as_bytes())?;
             write_atomic(&dir.join(format!("{stem}.png")), &png)?;

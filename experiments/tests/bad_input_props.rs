@@ -9,7 +9,7 @@ use std::time::{Duration, Instant};
 
 use endstop::device::Device;
 use endstop::drive::measured::{MeasuredRecord, Position};
-use endstop_experiments::measured_io::read_csv;
+use endstop_experiments::reports::measured_io::read_csv;
 use proptest::prelude::*;
 use proptest::sample::select;
 

@@ -41,7 +41,7 @@ fn the_calibration_is_computed_once_and_recomputed_only_when_stale() {
     // A device file with its provenance, loadable as any parameter file.
     let text = std::fs::read_to_string(artefact(&out)).unwrap();
     let published = include_str!("../../data/prototype1.toml");
-    let sha = endstop_experiments::calibration_io::sha256_hex(published);
+    let sha = endstop_experiments::reports::calibration_io::sha256_hex(published);
     assert!(
         text.contains(&format!("# fitted_from_sha256: {sha}\n")),
         "{text}"

@@ -1,7 +1,7 @@
 //! The same experiment gives byte-identical Parquet, summary and plot (SVG, PNG) files on every
-//! run and for any thread count (RAYON_NUM_THREADS = 1 versus 2): one narrowband and one broadband
+//! run and for any thread count (RAYON_NUM_THREADS = 1 versus 2): one sine-sweep and one random-vibration
 //! experiment. Outputs go to temporary directories (ENDSTOP_OUTPUT_DIR), never to
-//! data/results/. The broadband run also serves the provenance check of its Parquet metadata
+//! data/results/. The random-vibration run also serves the provenance check of its Parquet metadata
 //! (each parameter set labelled with its own parameter file), so fig11 runs twice, not three
 //! times.
 
@@ -90,13 +90,13 @@ fn assert_identical(bin: &str, [oa, ob]: &[BTreeMap<String, Vec<u8>>; 2]) {
 }
 
 #[test]
-fn narrowband_fig08_is_byte_identical_for_1_and_2_threads() {
+fn sweep_fig08_is_byte_identical_for_1_and_2_threads() {
     let bin = env!("CARGO_BIN_EXE_fig08");
     assert_identical(bin, &outputs_1_and_2_threads(bin));
 }
 
 #[test]
-fn broadband_fig11_is_byte_identical_for_1_and_2_threads() {
+fn record_fig11_is_byte_identical_for_1_and_2_threads() {
     assert_identical(env!("CARGO_BIN_EXE_fig11"), fig11_outputs());
 }
 

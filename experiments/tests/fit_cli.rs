@@ -221,7 +221,7 @@ fn bad_measured_files_and_free_parameters_are_named_errors_and_write_nothing() {
 
 #[test]
 fn a_down_sweep_file_in_rising_order_is_read_in_sweep_order_and_free_comments_pass() {
-    use endstop_experiments::fit_csv::parse_sweep;
+    use endstop_experiments::reports::fit_csv::parse_sweep;
     let text = "# measured 2026 = bench B\n# accel_rms_g = 0.3\n# jump_hz = 615\n\
                 # jump_sigma_hz = 2\nfreq_hz,p_total_w\n600,1e-9\n610,2e-9\n620,3e-9\n";
     let d = parse_sweep(text, "down.csv", Direction::Down).unwrap();

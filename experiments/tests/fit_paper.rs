@@ -8,7 +8,7 @@ use std::path::Path;
 use endstop::device::{Device, ParamRange};
 use endstop::fit::{fit, Direction, FeatureKind, FitReport, FitSettings, SweepData};
 use endstop::paper::calibration::calibrate_prototype1;
-use endstop_experiments::fit_csv::parse_sweep;
+use endstop_experiments::reports::fit_csv::parse_sweep;
 
 fn root() -> &'static Path {
     Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/.."))

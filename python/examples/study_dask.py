@@ -6,7 +6,7 @@ with every design point and every calibration start a task of its own.
 This is the route for the studies one machine cannot run in the ``just deviations`` budget, above
 all those with the ensemble claims of Figures 12, 14 and 15 (``--ensemble-records``: each point
 then simulates tens of 10 s records per level). The pieces are the library's own functions
-(:mod:`endstop.paper.study`), so the numbers are those ``just deviations`` gives for the same
+(:mod:`endstop.paper.deviations`), so the numbers are those ``just deviations`` gives for the same
 settings.
 
 Writes, under ``--out-dir``:
@@ -77,26 +77,26 @@ def progress(futures, what):
 
 
 def run(client, a, proto):
-    from endstop.paper import study
+    from endstop.paper import deviations
 
-    factors = study.factors()
-    points = study.design(a.base)
+    factors = deviations.factors()
+    points = deviations.design(a.base)
     n = len(points)
     print(f"{proto}: {n} design points, {a.starts + 1} calibration starts", flush=True)
     t0 = time.perf_counter()
-    futures = client.map(study.evaluate, [proto] * n, list(points), [a.ensemble_records] * n,
+    futures = client.map(deviations.evaluate, [proto] * n, list(points), [a.ensemble_records] * n,
                          pure=False)
     progress(futures, "design points")
     evaluations = client.gather(futures)
     sobol_s = time.perf_counter() - t0
-    rows = study.indices(proto, a.base, evaluations, a.ensemble_records)
+    rows = deviations.indices(proto, a.base, evaluations, a.ensemble_records)
 
     t0 = time.perf_counter()
     k = a.starts + 1
-    futures = client.map(study.calibrate_start, [proto] * k, range(k), [a.starts] * k,
+    futures = client.map(deviations.calibrate_start, [proto] * k, range(k), [a.starts] * k,
                          [a.iters] * k, [a.ensemble_records] * k, pure=False)
     progress(futures, "calibration starts")
-    cal = study.calibration(proto, client.gather(futures), a.ensemble_records)
+    cal = deviations.calibration(proto, client.gather(futures), a.ensemble_records)
     cal_s = time.perf_counter() - t0
 
     evals = [dict(e, prototype=proto, point=i, **dict(zip(factors, map(float, points[i]))))
@@ -122,15 +122,15 @@ def run(client, a, proto):
 
 def run_history(client, a, proto):
     """The history match of one prototype: each wave's runs on the workers, the emulators here."""
-    from endstop.paper import study
+    from endstop.paper import deviations
 
     kw = dict(per_input=a.per_input, max_waves=a.waves, pool=a.pool,
               ensemble_records=a.ensemble_records)
-    factors = study.factors()
+    factors = deviations.factors()
     waves, summaries, cells = [], [], []
     t0 = time.perf_counter()
     cpu = 0.0
-    state = study.history(proto, waves, **kw)
+    state = deviations.history(proto, waves, **kw)
     while state["next_design"] is not None:
         design = [[float(u) for u in p] for p in state["next_design"]]
         n = len(design)
@@ -138,14 +138,14 @@ def run_history(client, a, proto):
         done = evaluate_cached(client, a, proto, design, f"wave {len(waves) + 1}")
         cpu += sum(c for _, c in done)
         waves.append((design, [e for e, _ in done]))
-        state = study.history(proto, waves, **kw)
+        state = deviations.history(proto, waves, **kw)
         w = state["waves"][-1]
         print(f"  non-implausible {w['non_implausible_fraction']:.4g} of the cube, every claim "
               f"within the cut {w['all_within_cut_fraction']:.4g}; ended: {w['stop']}",
               flush=True)
         cells += [dict(c, prototype=proto) for c in state["projections"]]
     wall = time.perf_counter() - t0
-    final = study.history(proto, waves, sobol=True, **kw)
+    final = deviations.history(proto, waves, sobol=True, **kw)
     runs = []
     k = 0
     for wave, (design, evals) in enumerate(waves, start=1):
@@ -206,10 +206,10 @@ CACHE_HITS = {}
 
 def timed_evaluate(proto, point, records):
     """One run and the processor time it took (for the record's cost per run)."""
-    from endstop.paper import study
+    from endstop.paper import deviations
 
     c0 = time.process_time()
-    e = study.evaluate(proto, point, records)
+    e = deviations.evaluate(proto, point, records)
     return e, time.process_time() - c0
 
 

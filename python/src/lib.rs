@@ -10,7 +10,7 @@
 //! The Rust modules mirror the Python package's: [`device`] (`endstop.Device`), [`fit`]
 //! (`endstop.fit`), [`linear`]
 //! (`endstop.linear`), [`study`] (`endstop.study`) and [`paper`] (`endstop.paper` and its
-//! `fig09`, `fig13` and `study`); each registers its functions in [`_native`].
+//! `fig09`, `fig13` and `deviations`); each registers its functions in [`_native`].
 
 use endstop::device::ParamError as LibParamError;
 use numpy::PyArray1;

@@ -8,31 +8,31 @@ import pathlib
 
 import pytest
 
-from endstop.paper import study
+from endstop.paper import deviations
 
 RECORDED = pathlib.Path(__file__).resolve().parents[2] / "data" / "recorded" / "history"
 
 # The tolerances of the recorded minimax runs' test: a recorded ensemble value may differ from
 # today's by RECORDED_Z standard errors of the difference of two independent estimates; values
 # without sampling error to RECORDED_RTOL, located events to twice the locator's tolerance.
-from test_paper_study import LOCATED_EVENTS, RECORDED_RTOL, RECORDED_Z  # noqa: E402
+from test_paper_deviations import LOCATED_EVENTS, RECORDED_RTOL, RECORDED_Z  # noqa: E402
 
 SMALL = dict(per_input=2, max_waves=1, pool=1 << 10)
 
 
 def test_a_wave_on_dask_workers_is_the_wave_here_and_the_replay_is_deterministic():
     distributed = pytest.importorskip("dask.distributed")
-    first = study.history("p2", [], **SMALL)
+    first = deviations.history("p2", [], **SMALL)
     design = [[float(u) for u in p] for p in first["next_design"]]
-    assert len(design) == SMALL["per_input"] * len(study.factors())
-    here = [study.evaluate("p2", p) for p in design]
+    assert len(design) == SMALL["per_input"] * len(deviations.factors())
+    here = [deviations.evaluate("p2", p) for p in design]
     cluster = distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
                                        dashboard_address=None)
     with cluster, distributed.Client(cluster) as client:
-        there = client.gather(client.map(study.evaluate, ["p2"] * 4, design[:4], pure=False))
+        there = client.gather(client.map(deviations.evaluate, ["p2"] * 4, design[:4], pure=False))
     assert there == here[:4]
-    a = study.history("p2", [(design, here)], **SMALL)
-    b = study.history("p2", [(design, here)], **SMALL)
+    a = deviations.history("p2", [(design, here)], **SMALL)
+    b = deviations.history("p2", [(design, here)], **SMALL)
     assert a["waves"] == b["waves"] and a["projections"] == b["projections"]
     (w,) = a["waves"]
     assert w["stop"] == "last wave" and a["next_design"] is None
@@ -43,12 +43,12 @@ def test_a_wave_on_dask_workers_is_the_wave_here_and_the_replay_is_deterministic
 
 
 def test_points_that_are_not_the_waves_design_are_refused():
-    first = study.history("p2", [], **SMALL)
+    first = deviations.history("p2", [], **SMALL)
     design = [[float(u) for u in p] for p in first["next_design"]]
     fake = [list(reversed(p)) for p in design]
-    evals = [study.evaluate("p2", design[0])] * len(design)
+    evals = [deviations.evaluate("p2", design[0])] * len(design)
     with pytest.raises(ValueError, match="design"):
-        study.history("p2", [(fake, evals)], **SMALL)
+        deviations.history("p2", [(fake, evals)], **SMALL)
 
 
 def recorded_runs(pd, proto):
@@ -64,7 +64,7 @@ def test_the_recorded_history_match_is_what_this_code_computes():
     waves_rec = pd.read_parquet(RECORDED / "history_waves.parquet")
     kw = dict(per_input=run["per_input"], max_waves=run["waves"], pool=run["pool"],
               ensemble_records=run["ensemble_records"])
-    factors = study.factors()
+    factors = deviations.factors()
     for proto in run["prototypes"]:
         rows = recorded_runs(pd, proto)
         waves = []
@@ -79,7 +79,7 @@ def test_the_recorded_history_match_is_what_this_code_computes():
             waves.append((design, evals))
         # The match replayed from the recorded runs gives the recorded shares, exactly (the
         # emulators' fit is deterministic).
-        replay = study.history(proto, waves, **kw)
+        replay = deviations.history(proto, waves, **kw)
         rec = waves_rec[waves_rec["prototype"] == proto].sort_values("wave")
         assert [w["non_implausible_fraction"] for w in replay["waves"]] == list(
             rec["non_implausible_fraction"]), proto
@@ -87,7 +87,7 @@ def test_the_recorded_history_match_is_what_this_code_computes():
             rec["all_within_cut_fraction"]), proto
         # The first two runs of the first wave, evaluated again now.
         for point, then in list(zip(*waves[0]))[:2]:
-            now = study.evaluate(proto, point, run["ensemble_records"])
+            now = deviations.evaluate(proto, point, run["ensemble_records"])
             assert [(e["claim"], e["quantity"], e["outcome"]) for e in now] == [
                 (e["claim"], e["quantity"], e["outcome"]) for e in then]
             for e, t in zip(now, then):

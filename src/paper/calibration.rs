@@ -40,9 +40,10 @@ pub const CALIBRATION_TOL_HZ: f64 = 0.25;
 /// Bracket width to which the calibration refines each onset (Hz).
 pub const CALIBRATION_REFINE_TOL_HZ: f64 = 0.05;
 
-/// Failure of a narrowband study.
+/// Failure of a sine-sweep study of prototype 1: Figure 8's sweeps, the calibration of its
+/// gap or the fit of its end-stop damping.
 #[derive(Debug, Error, Clone, PartialEq)]
-pub enum NarrowbandError {
+pub enum CalibrationError {
     /// The integrator failed.
     #[error(transparent)]
     Solver(#[from] SolverError),
@@ -81,13 +82,13 @@ pub enum NarrowbandError {
     },
 }
 
-impl NarrowbandError {
+impl CalibrationError {
     fn from_root(e: RootError<SolverError>, what: &str, target: f64) -> Self {
         match e {
-            RootError::Eval(e) => NarrowbandError::Solver(e),
+            RootError::Eval(e) => CalibrationError::Solver(e),
             RootError::NotBracketed { a, b } => {
                 let ((lo, f_lo), (hi, f_hi)) = if a.0 <= b.0 { (a, b) } else { (b, a) };
-                NarrowbandError::NotBracketed {
+                CalibrationError::NotBracketed {
                     what: what.to_string(),
                     target,
                     lo,
@@ -204,7 +205,7 @@ pub fn calibrated_device(published: &Device, gap_m: f64) -> Device {
 /// between it and the finger overlap x0, which xmax must not exceed), stopped when the refined
 /// onset is within [`CALIBRATION_TOL_HZ`] of the target. The returned device is
 /// [`calibrated_device`].
-pub fn calibrate_prototype1(published: &Device) -> Result<Calibration, NarrowbandError> {
+pub fn calibrate_prototype1(published: &Device) -> Result<Calibration, CalibrationError> {
     const WHAT: &str = "calibration of the end-stop gap to the impact onset";
     let setup = prototype1_setup(published);
     let settings = sweeps::sweep_settings(published);
@@ -236,7 +237,7 @@ pub fn calibrate_prototype1(published: &Device) -> Result<Calibration, Narrowban
         b = sample(&mut eval, comb(published).finger_overlap_m)?;
     }
     if !(a.f < 0.0 && b.f > 0.0) {
-        return Err(NarrowbandError::NotBracketed {
+        return Err(CalibrationError::NotBracketed {
             what: WHAT.into(),
             target,
             lo: a.x,
@@ -252,9 +253,9 @@ pub fn calibrate_prototype1(published: &Device) -> Result<Calibration, Narrowban
         max_iter: 60,
     };
     let root = illinois(&mut eval, a, b, &opts)
-        .map_err(|e| NarrowbandError::from_root(e, WHAT, target))?;
+        .map_err(|e| CalibrationError::from_root(e, WHAT, target))?;
     if root.stop != Termination::Value {
-        return Err(NarrowbandError::NotConverged {
+        return Err(CalibrationError::NotConverged {
             what: WHAT.into(),
             iterations: evaluations,
             lo: root.non_positive.x.min(root.positive.x),
@@ -324,7 +325,7 @@ pub fn fit_bim_for_jump(
     accel_rms_g: f64,
     settings: &SweepSettings,
     tol_hz: f64,
-) -> Result<BimFit, NarrowbandError> {
+) -> Result<BimFit, CalibrationError> {
     let stiffness = if hertz_stop(device).linear_fit {
         StiffnessModel::Linear
     } else {
@@ -358,7 +359,7 @@ pub fn fit_bim_for_jump(
         let (mut fb, mut eb) = eval(b)?;
         while fb > 0.0 {
             if b > 1e4 {
-                return Err(NarrowbandError::NotBracketed {
+                return Err(CalibrationError::NotBracketed {
                     what,
                     target: target_hz,
                     lo: 0.0,
@@ -378,7 +379,7 @@ pub fn fit_bim_for_jump(
             max_iter: 100,
         };
         let root = illinois(&mut eval, a, Sample::new(b, fb, eb), &opts)
-            .map_err(|e| NarrowbandError::from_root(e, &what, target_hz))?;
+            .map_err(|e| CalibrationError::from_root(e, &what, target_hz))?;
         Some((root.best.x, root.best.payload))
     };
     Ok(BimFit {

@@ -16,7 +16,7 @@ use crate::study::ensemble::{
     first_stream_for_level, run_ensembles, Ensemble, EnsembleCase, EnsembleSpec, RecordResult,
     DEFAULT_SEED,
 };
-use crate::study::record::BroadbandError;
+use crate::study::record::RecordError;
 
 /// Welch segment of prototype 1: 2^12 samples, 24.4 Hz bins at 100 kHz. Its responses are
 /// broad (a linear half-power width of about 220 Hz, 9 bins, growing to some 600 Hz with
@@ -146,7 +146,7 @@ impl Level {
 pub fn run_levels(
     cases: Vec<LevelCase>,
     progress: &dyn Progress,
-) -> Result<Vec<Level>, BroadbandError> {
+) -> Result<Vec<Level>, RecordError> {
     let ec: Vec<EnsembleCase> = cases
         .iter()
         .map(|c| EnsembleCase {
@@ -253,7 +253,7 @@ pub fn run_prototype1(
     levels: &[f64],
     realisations: usize,
     progress: &dyn Progress,
-) -> Result<Prototype1Run, BroadbandError> {
+) -> Result<Prototype1Run, RecordError> {
     let devices = sets.each().map(|(set, d)| (set, prototype1_setup(d)));
     let mut cases = Vec::new();
     for (set, dev) in &devices {

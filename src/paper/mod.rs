@@ -10,7 +10,7 @@
 //! * [`qm`]: the readings of the paper's quality factor Qm (Table 3, eq 21);
 //! * the protocols that several figures share: [`sweeps`] (prototype 1's stepped sine),
 //!   [`curves`] (the curves of an up-sweep figure), [`ensembles`] (random vibration),
-//!   [`prototype2_random`] (the ensembles of Figures 14 and 15);
+//!   [`prototype2_records`] (the ensembles of Figures 14 and 15);
 //! * [`calibration`]: the one-parameter calibration of prototype 1 and the paper's fit of b_im;
 //! * the studies around the figures: [`response`] (the whole response curve),
 //!   [`resolution`] (the width estimator), [`crosscheck`] (ngspice), and [`deviations`] (why
@@ -29,7 +29,7 @@ pub mod ensembles;
 pub mod figure;
 pub mod figures;
 pub mod measured;
-pub mod prototype2_random;
+pub mod prototype2_records;
 pub mod qm;
 pub mod resolution;
 pub mod response;

@@ -25,7 +25,7 @@ use crate::progress::Progress;
 use crate::signal::bandwidth::mean_psd;
 use crate::signal::{self, Psd, WelchConfig};
 use crate::study::ensemble::{first_stream_for_level, DEFAULT_SEED};
-use crate::study::record::{output_psd, simulate_record, BroadbandError};
+use crate::study::record::{output_psd, simulate_record, RecordError};
 
 /// Segment lengths of the study (samples; 2^10 to 2^15, bins of 97.7 Hz down to 3.05 Hz).
 pub const NPERSEGS: [usize; 6] = [1 << 10, 1 << 11, 1 << 12, 1 << 13, 1 << 14, 1 << 15];
@@ -89,7 +89,7 @@ pub fn run(
     published: &Device,
     records: usize,
     progress: &dyn Progress,
-) -> Result<Study, BroadbandError> {
+) -> Result<Study, RecordError> {
     let dev = prototype1_setup(published);
     let rl = dev.transducer.load_resistance_ohm();
     let (lo, hi) = P1_BAND_HZ;
@@ -114,7 +114,7 @@ pub fn run(
                             .total,
                     )
                 })
-                .collect::<Result<Vec<_>, BroadbandError>>();
+                .collect::<Result<Vec<_>, RecordError>>();
             progress.tick();
             out
         })

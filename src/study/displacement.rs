@@ -24,7 +24,7 @@ use crate::physics::contact::Mode;
 use crate::physics::harvester::State;
 use crate::physics::suspension::Place;
 use crate::study::record::{
-    simulate_observed, BroadbandError, RecordObserver, RecordSpec, RecordSummary,
+    simulate_observed, RecordError, RecordObserver, RecordSpec, RecordSummary,
 };
 
 /// The wells of a device for the transition count: positions (m) and the barrier between
@@ -167,7 +167,7 @@ pub fn record_displacement(
     bins: &DisplacementBins,
     seed: u64,
     stream: u64,
-) -> Result<RecordDisplacement, BroadbandError> {
+) -> Result<RecordDisplacement, RecordError> {
     let mut r = Reader {
         bins,
         counts: vec![0; bins.edges_m.len().saturating_sub(1)],
@@ -217,7 +217,7 @@ pub fn displacement_ensemble(
     bins: &DisplacementBins,
     seed: u64,
     records: u64,
-) -> Result<DisplacementEnsemble, BroadbandError> {
+) -> Result<DisplacementEnsemble, RecordError> {
     let recs = (0..records)
         .into_par_iter()
         .map(|s| record_displacement(device, spec, bins, seed, s))

@@ -33,7 +33,7 @@ use crate::progress::Progress;
 use crate::signal::bandwidth::{mean_psd, restrict, Widths};
 use crate::signal::{self, Psd, WelchConfig};
 use crate::study::record::{
-    output_psd, simulate_record, BroadbandError, OutputSpectrum, RecordSpec, RecordSummary,
+    output_psd, simulate_record, OutputSpectrum, RecordError, RecordSpec, RecordSummary,
 };
 
 /// Settings of an ensemble at one excitation level.
@@ -211,7 +211,7 @@ pub fn run_record(
     device: &Device,
     spec: &EnsembleSpec,
     i: usize,
-) -> Result<RecordResult, BroadbandError> {
+) -> Result<RecordResult, RecordError> {
     let stream = spec.first_stream + i as u64;
     let rec = simulate_record(device, &spec.record, spec.seed, stream)?;
     let rl = device.transducer.load_resistance_ohm();
@@ -243,10 +243,10 @@ pub fn run_record(
 pub fn run_ensembles(
     cases: &[EnsembleCase],
     on_record: &dyn Progress,
-) -> Result<Vec<Ensemble>, BroadbandError> {
+) -> Result<Vec<Ensemble>, RecordError> {
     for c in cases {
         if c.spec.realisations == 0 {
-            return Err(BroadbandError::InvalidSpec {
+            return Err(RecordError::InvalidSpec {
                 field: "realisations",
                 value: 0.0,
                 expected: "at least 1",
@@ -307,7 +307,7 @@ pub fn run_ensemble(
     device: &Device,
     spec: &EnsembleSpec,
     on_record: &dyn Progress,
-) -> Result<Ensemble, BroadbandError> {
+) -> Result<Ensemble, RecordError> {
     let case = EnsembleCase {
         device: device.clone(),
         spec: spec.clone(),
@@ -351,7 +351,7 @@ fn analyse(case: &EnsembleCase, records: Vec<RecordResult>) -> Ensemble {
     }
 }
 
-/// Seed of the ChaCha8 streams of every broadband experiment (a named constant, so that runs
+/// Seed of the ChaCha8 streams of every random-vibration (record) experiment (a named constant, so that runs
 /// are deterministic).
 pub const DEFAULT_SEED: u64 = 20_120_704;
 

@@ -28,7 +28,7 @@ use crate::physics::contact::Mode;
 use crate::physics::energy::{EnergyLedger, PowerTerms};
 use crate::physics::harvester::{Harvester, State};
 use crate::study::record::{
-    simulate_observed, BroadbandError, Record, RecordObserver, RecordSpec, EXPONENTIAL_ORDER,
+    simulate_observed, Record, RecordError, RecordObserver, RecordSpec, EXPONENTIAL_ORDER,
 };
 
 /// Simulates a record exactly as [`crate::study::record::simulate_record`] does (the same
@@ -38,7 +38,7 @@ pub fn record_ledger(
     spec: &RecordSpec,
     seed: u64,
     stream: u64,
-) -> Result<(Record, EnergyLedger), BroadbandError> {
+) -> Result<(Record, EnergyLedger), RecordError> {
     let mut books = Books::default();
     let record = simulate_observed(device, spec, seed, stream, &mut books)?;
     Ok((record, books.ledger()))
@@ -68,7 +68,7 @@ pub fn record_ledgers(
     spec: &RecordSpec,
     seed: u64,
     stream: u64,
-) -> Result<(Record, RecordLedgers), BroadbandError> {
+) -> Result<(Record, RecordLedgers), RecordError> {
     let split_s = spec.transient_samples() as f64 / spec.noise.sample_rate_hz;
     let mut books = Books {
         split_s: Some(split_s),

@@ -16,7 +16,7 @@ use crate::drive::Sampled;
 use crate::ode::{Rk4, Stats};
 use crate::physics::contact::Mode;
 use crate::physics::harvester::Harvester;
-use crate::study::record::{BroadbandError, RecordSpec};
+use crate::study::record::{RecordError, RecordSpec};
 
 /// RK4 steps per sample interval at which the power of the prototypes' impact-free records is
 /// within 1e-6 of Dormand-Prince at rtol 1e-10, the accuracy asked of a record (the fewest of
@@ -49,7 +49,7 @@ pub fn simulate_rk4_record(
     seed: u64,
     stream: u64,
     steps_per_sample: usize,
-) -> Result<Rk4Record, BroadbandError> {
+) -> Result<Rk4Record, RecordError> {
     spec.validate()?;
     let gen = spec.generated_noise();
     let accel = noise::generate_shared(&gen, seed, stream)?;

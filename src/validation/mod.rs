@@ -149,7 +149,7 @@ pub enum ValidationError {
     Orbit(#[from] crate::study::orbit::OrbitError),
     /// A random record failed.
     #[error("record: {0}")]
-    Record(#[from] crate::study::record::BroadbandError),
+    Record(#[from] crate::study::record::RecordError),
     /// A reference file could not be read.
     #[error("reference {file}: {message}")]
     Reference {

@@ -11,7 +11,7 @@ The model runs in Rust (the repository's `endstop` library); this package is its
   an ensemble), returning dicts of numbers and numpy arrays;
 * :mod:`endstop.fit`: fitting a device's parameters to measured sweeps, with uncertainty;
 * :mod:`endstop.paper`: the paper's figure protocols (``endstop.paper.fig13.run()``) and the
-  study of why the paper deviates (:mod:`endstop.paper.study`, ready for a Dask cluster).
+  study of why the paper deviates (:mod:`endstop.paper.deviations`, ready for a Dask cluster).
 
 Every simulation releases the GIL while it runs.
 """

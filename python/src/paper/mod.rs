@@ -1,6 +1,6 @@
 //! `endstop.paper`: the paper's figure protocols as the book's chapters run them
 //! ([`fig09`], [`fig13`]) and the study of why the paper deviates in pieces a cluster can
-//! schedule ([`study`]).
+//! schedule ([`deviations`]).
 
 use endstop::device::Device;
 use endstop::paper::claims::Value;
@@ -10,9 +10,9 @@ use pyo3::types::{PyDict, PyList};
 
 use crate::{arg_err, PyDevice};
 
+mod deviations;
 mod fig09;
 mod fig13;
-mod study;
 
 /// The claim values of a figure as a list of dicts (`claim`, `quantity`, `set`, `ours`,
 /// `uncertainty`, `note`); `ours` is a number as the scorecard writes it (yes 1, no 0).
@@ -43,5 +43,5 @@ pub(crate) fn paper_device(device: &PyDevice) -> PyResult<Device> {
 pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     fig09::register(m)?;
     fig13::register(m)?;
-    study::register(m)
+    deviations::register(m)
 }

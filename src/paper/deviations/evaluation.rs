@@ -1,11 +1,11 @@
-//! Every quantity of a prototype at a variant: the fast paths of [`super::narrowband`] and
+//! Every quantity of a prototype at a variant: the fast paths of [`super::sweeps`] and
 //! [`super::ensembles`] in the order of [`Prototype::quantities`], normalised by the claims.
 
 use super::ensembles::{p1_fig12, p2_ensembles};
-use super::narrowband::{p1_fig8, p1_fig9, p1_table3, p2_fig13, p2_table3};
 use super::quantity::{normalise, Estimate, Evaluation, Outcome, Prototype, Quantity, Scope};
 use super::quantity::{P1_QUANTITIES, P2_QUANTITIES};
 use super::ranges::{Ranges, Variant};
+use super::sweeps::{p1_fig8, p1_fig9, p1_table3, p2_fig13, p2_table3};
 use super::DeviationsError;
 use crate::device::Device;
 use crate::paper::claims::{Claims, Kind};

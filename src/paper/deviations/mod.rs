@@ -5,7 +5,7 @@
 //! * [`ranges`]: the uncertain inputs, their ranges and the unit-cube point of a variant;
 //! * [`quantity`]: what is evaluated (the [`Quantity`] of each claim, its [`Outcome`] and its
 //!   normalised [`Evaluation`]);
-//! * [`narrowband`] and [`ensembles`]: the fast paths, by continuation of the periodic orbits
+//! * [`sweeps`] and [`ensembles`]: the fast paths, by continuation of the periodic orbits
 //!   and by ensembles of random-vibration records;
 //! * [`evaluation`]: every quantity of a prototype at a variant;
 //! * [`indices`]: Sobol indices over a Saltelli design and the most conflicting pair of claims;
@@ -13,7 +13,7 @@
 //! * [`history`]: the history match of every quantitative claim with Gaussian-process
 //!   emulators, in waves: which sets, if any, are consistent with all claims at once.
 //!
-//! The fast path of a narrowband claim is the pseudo-arclength continuation of the periodic
+//! The fast path of a sine-sweep claim is the pseudo-arclength continuation of the periodic
 //! orbits ([`crate::study::continuation`]) instead of the stepped sweep: Figure 8's kink (the
 //! up-sweep's impact onset) is the branch's first grazing point, a jump down is the upper
 //! fold (where the up-sweep leaves the impacting branch when its steady-state blocks are long
@@ -39,9 +39,9 @@ pub mod ensembles;
 pub mod evaluation;
 pub mod history;
 pub mod indices;
-pub mod narrowband;
 pub mod quantity;
 pub mod ranges;
+pub mod sweeps;
 
 pub use calibration::{
     calibrate, calibrate_start, calibration_of_fits, calibration_starts, quantitative_deviations,

@@ -58,7 +58,7 @@ impl Prototype {
     }
 }
 
-/// What an evaluation computes: the narrowband and analytic claims by their fast paths
+/// What an evaluation computes: the sine-sweep and analytic claims by their fast paths
 /// always; the ensemble claims (Figures 12, 14 and 15) only when given a number of records
 /// per level (each costs tens of records of 10 s).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]

@@ -4,7 +4,7 @@
 //! convergence repetition of every sweep with refined numerics.
 
 use crate::device::{Device, StiffnessModel};
-use crate::paper::calibration::{fit_bim_for_jump, BimFit, NarrowbandError, BIM_FIT_TOL_HZ};
+use crate::paper::calibration::{fit_bim_for_jump, BimFit, CalibrationError, BIM_FIT_TOL_HZ};
 use crate::paper::claims::{
     bool_value, keys, Answer, ClaimKey, ClaimValue, Claims, ClaimsError, Value,
 };
@@ -165,7 +165,7 @@ impl Figure for Fig08 {
     const NAME: &'static str = "fig08";
     type Setup = Prototype1Sets;
     type Run = Run;
-    type Error = NarrowbandError;
+    type Error = CalibrationError;
 
     fn work(setup: &Prototype1Sets) -> usize {
         Protocol::new(&setup.published).coarse_steps()
@@ -174,13 +174,13 @@ impl Figure for Fig08 {
     /// Runs Figure 8 for both parameter sets of prototype 1 (as loaded; the bias is set
     /// here): every curve, its repetition with refined numerics, and the b_im fits, in
     /// parallel. `progress.tick()` is called after every coarse step of every sweep.
-    fn run(setup: &Prototype1Sets, progress: &dyn Progress) -> Result<Run, NarrowbandError> {
+    fn run(setup: &Prototype1Sets, progress: &dyn Progress) -> Result<Run, CalibrationError> {
         use rayon::prelude::*;
         let protocol = Protocol::new(&setup.published);
         let sets = setup
             .each()
             .into_iter()
-            .map(|(set, d)| -> Result<SetRun, NarrowbandError> {
+            .map(|(set, d)| -> Result<SetRun, CalibrationError> {
                 let device = d.with_bias(P1_BIAS_V);
                 let p = &protocol;
                 let (sweeps, fits) = rayon::join(

@@ -13,7 +13,7 @@ use crate::progress::Progress;
 use crate::signal::bandwidth::{mean_psd, upper_band_edge_hz};
 use crate::signal::{welch, Psd, WelchConfig};
 use crate::study::ensemble::{first_stream_for_level, DEFAULT_SEED};
-use crate::study::record::BroadbandError;
+use crate::study::record::RecordError;
 use crate::G;
 
 /// The paper's example level (g²/Hz, two-sided).
@@ -125,7 +125,7 @@ impl Figure for Fig10 {
     /// The excitation depends on no device.
     type Setup = ();
     type Run = Run;
-    type Error = BroadbandError;
+    type Error = RecordError;
 
     fn work(_: &()) -> usize {
         RECORDS
@@ -133,13 +133,13 @@ impl Figure for Fig10 {
 
     /// Generates and analyses the [`RECORDS`] records in parallel, calling `progress` after
     /// each.
-    fn run(_: &(), progress: &dyn Progress) -> Result<Run, BroadbandError> {
+    fn run(_: &(), progress: &dyn Progress) -> Result<Run, RecordError> {
         let spec = paper_noise(FIG10_SA);
         let first_stream = first_stream_for_level(FIG10_SA);
         let cfg = WelchConfig::half_overlap(NPERSEG);
         let records = (0..RECORDS as u64)
             .into_par_iter()
-            .map(|i| -> Result<NoiseRecord, BroadbandError> {
+            .map(|i| -> Result<NoiseRecord, RecordError> {
                 let a = generate(&spec, DEFAULT_SEED, first_stream + i)?;
                 let g: Vec<f64> = a.iter().map(|x| x / G).collect();
                 let mean_square_g2 = g.iter().map(|x| x * x).sum::<f64>() / g.len() as f64;

@@ -8,7 +8,7 @@ use crate::paper::ensembles::{run_prototype1, Prototype1Run, WidthReading};
 use crate::paper::setups::{ParamSet, Prototype1Sets};
 use crate::paper::Figure;
 use crate::progress::Progress;
-use crate::study::record::BroadbandError;
+use crate::study::record::RecordError;
 
 /// Figure 11's levels (g²/Hz).
 pub const FIG11_LEVELS: [f64; 3] = [4.42e-6, 1.12e-4, 3.49e-4];
@@ -64,7 +64,7 @@ impl Figure for Fig11 {
     const NAME: &'static str = "fig11";
     type Setup = Prototype1Sets;
     type Run = Run;
-    type Error = BroadbandError;
+    type Error = RecordError;
 
     fn work(_: &Prototype1Sets) -> usize {
         ParamSet::BOTH.len() * FIG11_LEVELS.len() * FIG11_REALISATIONS
@@ -73,7 +73,7 @@ impl Figure for Fig11 {
     /// Runs Figure 11 for the published and the calibrated prototype 1 (the parameter files'
     /// devices; [`crate::paper::setups::prototype1_setup`] is applied here), calling
     /// `progress` after each record.
-    fn run(setup: &Prototype1Sets, progress: &dyn Progress) -> Result<Run, BroadbandError> {
+    fn run(setup: &Prototype1Sets, progress: &dyn Progress) -> Result<Run, RecordError> {
         run_prototype1(setup, &FIG11_LEVELS, FIG11_REALISATIONS, progress)
     }
 

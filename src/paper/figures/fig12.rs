@@ -8,7 +8,7 @@ use crate::paper::ensembles::{run_prototype1, Prototype1Run, WidthReading};
 use crate::paper::setups::{ParamSet, Prototype1Sets};
 use crate::paper::Figure;
 use crate::progress::Progress;
-use crate::study::record::BroadbandError;
+use crate::study::record::RecordError;
 
 /// Figure 12's levels (g²/Hz).
 pub const FIG12_LEVELS: [f64; 3] = [7.4e-3, 1.31e-2, 2.85e-2];
@@ -62,7 +62,7 @@ impl Figure for Fig12 {
     const NAME: &'static str = "fig12";
     type Setup = Prototype1Sets;
     type Run = Run;
-    type Error = BroadbandError;
+    type Error = RecordError;
 
     fn work(_: &Prototype1Sets) -> usize {
         ParamSet::BOTH.len() * FIG12_LEVELS.len() * FIG12_REALISATIONS
@@ -71,7 +71,7 @@ impl Figure for Fig12 {
     /// Runs Figure 12 for the published and the calibrated prototype 1 (the parameter files'
     /// devices; [`crate::paper::setups::prototype1_setup`] is applied here), calling
     /// `progress` after each record.
-    fn run(setup: &Prototype1Sets, progress: &dyn Progress) -> Result<Run, BroadbandError> {
+    fn run(setup: &Prototype1Sets, progress: &dyn Progress) -> Result<Run, RecordError> {
         run_prototype1(setup, &FIG12_LEVELS, FIG12_REALISATIONS, progress)
     }
 

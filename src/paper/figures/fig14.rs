@@ -6,15 +6,15 @@ use crate::device::Device;
 use crate::num::stats::MeanCi;
 use crate::paper::claims::{keys, Claims, ClaimsError, Value};
 use crate::paper::ensembles::level_label;
-use crate::paper::prototype2_random::{self, Extras, Fig15Level, Levels, Scope, LEVELS};
+use crate::paper::prototype2_records::{self, Extras, Fig15Level, Levels, Scope, LEVELS};
 use crate::paper::setups::ParamSet;
 use crate::paper::Figure;
 use crate::physics::two_port::{efficiency, eq21_efficiency};
 use crate::progress::Progress;
 use crate::study::ensemble::Ensemble;
-use crate::study::record::BroadbandError;
+use crate::study::record::RecordError;
 
-pub use crate::paper::prototype2_random::{Convergence, TIGHT_RTOL};
+pub use crate::paper::prototype2_records::{Convergence, TIGHT_RTOL};
 
 /// Figure 14's levels (g²/Hz): the protocol's ([`LEVELS`]), a logarithmic grid from 1e-5 to
 /// 2e-3 that includes the paper's 0.34e-3, 0.55e-3 and 1.69e-3.
@@ -31,15 +31,15 @@ pub const FIG14_LEVELS: [f64; LEVELS.len()] = {
 /// Index in [`FIG14_LEVELS`] of claim F14-b's level, 1.69e-3 g²/Hz (Figure 15's highest).
 pub const F14B_LEVEL: usize = Fig15Level::L169.in_levels();
 
-/// Records per level in Figure 14 ([`prototype2_random::REALISATIONS`]).
-pub const FIG14_REALISATIONS: usize = prototype2_random::REALISATIONS;
+/// Records per level in Figure 14 ([`prototype2_records::REALISATIONS`]).
+pub const FIG14_REALISATIONS: usize = prototype2_records::REALISATIONS;
 
 /// "Impacts are frequent" (the paper's wording for the sublinear regime of Figure 14): the
 /// mass spends at least this fraction of the time in contact.
 pub const FREQUENT_CONTACT: f64 = 1e-5;
 
 /// The simulations of Figure 14: the protocol run at every level ([`Levels::All`]).
-pub type Run = prototype2_random::Run;
+pub type Run = prototype2_records::Run;
 
 /// What Figure 14 runs on.
 #[derive(Debug, Clone, PartialEq)]
@@ -166,7 +166,7 @@ impl Figure for Fig14 {
     const NAME: &'static str = "fig14";
     type Setup = Setup;
     type Run = Run;
-    type Error = BroadbandError;
+    type Error = RecordError;
 
     fn work(setup: &Setup) -> usize {
         setup.scope().records_simulated()
@@ -174,8 +174,8 @@ impl Figure for Fig14 {
 
     /// Runs the protocol at every level for prototype 2, calling `progress` after each record
     /// of the ensembles.
-    fn run(setup: &Setup, progress: &dyn Progress) -> Result<Run, BroadbandError> {
-        prototype2_random::run(&setup.prototype2, setup.scope(), progress)
+    fn run(setup: &Setup, progress: &dyn Progress) -> Result<Run, RecordError> {
+        prototype2_records::run(&setup.prototype2, setup.scope(), progress)
     }
 
     /// Claims F14-a (simulated efficiency in the linear regime) and F14-b (efficiency at

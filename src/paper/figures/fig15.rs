@@ -6,14 +6,14 @@ use crate::device::Device;
 use crate::num::stats::{pair_fraction, ratio_spread, Jackknife, MeanCi, Spread};
 use crate::paper::claims::{keys, ClaimKey, Claims, ClaimsError, Value};
 use crate::paper::ensembles::{Level, WidthReading, P2_BAND_HZ};
-use crate::paper::prototype2_random::{self, Extras, Fig15Level, Levels, Scope};
+use crate::paper::prototype2_records::{self, Extras, Fig15Level, Levels, Scope};
 use crate::paper::setups::ParamSet;
 use crate::paper::Figure;
 use crate::physics::linear::linear_widths;
 use crate::progress::Progress;
 use crate::signal::Widths;
 use crate::study::ensemble::Ensemble;
-use crate::study::record::BroadbandError;
+use crate::study::record::RecordError;
 
 /// Figure 15's levels (g²/Hz), in the order of [`Fig15Level::ALL`].
 pub const FIG15_LEVELS: [f64; 3] = [
@@ -22,9 +22,9 @@ pub const FIG15_LEVELS: [f64; 3] = [
     Fig15Level::L169.psd_g2_per_hz(),
 ];
 
-/// Records per level in Figure 15 ([`prototype2_random::REALISATIONS`]): Figure 14's records
+/// Records per level in Figure 15 ([`prototype2_records::REALISATIONS`]): Figure 14's records
 /// at the same levels.
-pub const FIG15_REALISATIONS: usize = prototype2_random::REALISATIONS;
+pub const FIG15_REALISATIONS: usize = prototype2_records::REALISATIONS;
 
 /// Index in [`FIG15_LEVELS`] of 0.34e-3 g²/Hz (claim F15-a, and the base of every ratio).
 pub const L034: usize = Fig15Level::L034.index();
@@ -52,10 +52,10 @@ pub struct Run {
 }
 
 impl Run {
-    /// Figure 15 read from a run of the shared protocol ([`prototype2_random::run`]), whose
+    /// Figure 15 read from a run of the shared protocol ([`prototype2_records::run`]), whose
     /// ensembles at Figure 15's levels are the figure's records: Figure 14's run gives it
     /// without another simulation. `None` if the run lacks one of the levels.
-    pub fn of(protocol: &prototype2_random::Run) -> Option<Run> {
+    pub fn of(protocol: &prototype2_records::Run) -> Option<Run> {
         let levels = Fig15Level::ALL
             .iter()
             .map(|&l| {
@@ -205,7 +205,7 @@ impl Figure for Fig15 {
     const NAME: &'static str = "fig15";
     type Setup = Setup;
     type Run = Run;
-    type Error = BroadbandError;
+    type Error = RecordError;
 
     fn work(setup: &Setup) -> usize {
         setup.scope().records_simulated()
@@ -213,8 +213,8 @@ impl Figure for Fig15 {
 
     /// Runs the protocol at Figure 15's levels for prototype 2, calling `progress` after each
     /// record.
-    fn run(setup: &Setup, progress: &dyn Progress) -> Result<Run, BroadbandError> {
-        let protocol = prototype2_random::run(&setup.prototype2, setup.scope(), progress)?;
+    fn run(setup: &Setup, progress: &dyn Progress) -> Result<Run, RecordError> {
+        let protocol = prototype2_records::run(&setup.prototype2, setup.scope(), progress)?;
         Ok(Run::of(&protocol).expect("a run of Figure 15's levels has them all"))
     }
 

@@ -183,6 +183,18 @@ pub struct Probe {
     pub orbits: Vec<Orbit>,
 }
 
+impl Probe {
+    /// Which of the coexisting orbits `o` is, for tables: the upper (impacting, stable), the
+    /// middle (impacting, unstable) or the lower (free flight) branch's.
+    pub fn orbit_label(o: &Orbit) -> &'static str {
+        match (o.is_impacting(), o.is_stable()) {
+            (true, true) => "upper (impacting)",
+            (true, false) => "middle (impacting, unstable)",
+            (false, _) => "lower (free flight)",
+        }
+    }
+}
+
 /// One case's results.
 #[derive(Debug, Clone)]
 pub struct CaseRun {

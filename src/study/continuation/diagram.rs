@@ -213,6 +213,21 @@ pub struct DiagramEvent {
     pub corner: bool,
 }
 
+impl DiagramEvent {
+    /// Label for tables: the kind, and at a corner (a grazing where the branch turns) that the
+    /// fold there is non-smooth.
+    pub fn label(&self) -> String {
+        if self.corner {
+            format!(
+                "{} (non-smooth fold: the branch turns there)",
+                self.kind.label()
+            )
+        } else {
+            self.kind.label().to_string()
+        }
+    }
+}
+
 /// The bifurcation diagram of a device in one parameter.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Diagram {

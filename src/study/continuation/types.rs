@@ -191,6 +191,18 @@ pub struct Event {
     pub stable_after: bool,
 }
 
+impl Event {
+    /// Label for tables: the kind, and for a fold where the orbit grazes a stop (a corner of
+    /// the branch) that it is at grazing.
+    pub fn label(&self) -> String {
+        if self.at_grazing {
+            format!("{} (at grazing)", self.kind.label())
+        } else {
+            self.kind.label().to_string()
+        }
+    }
+}
+
 /// A continued branch of periodic orbits.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Branch {

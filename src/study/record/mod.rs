@@ -63,9 +63,9 @@ pub const TRANSIENT_RING_TIMES: f64 = 5.0;
 /// than the ensemble error when it is tightened.
 pub const DEFAULT_RTOL: f64 = 1e-7;
 
-/// Errors of a broadband simulation.
+/// Errors of a record (a random-vibration simulation).
 #[derive(Debug, Clone, PartialEq, Error)]
-pub enum BroadbandError {
+pub enum RecordError {
     /// The excitation could not be generated.
     #[error("excitation: {0}")]
     Noise(#[from] NoiseError),
@@ -76,7 +76,7 @@ pub enum BroadbandError {
     #[error("spectrum: {0}")]
     Spectral(#[from] SpectralError),
     /// A setting is out of range.
-    #[error("broadband spec: {field} = {value} is invalid; expected {expected}")]
+    #[error("record spec: {field} = {value} is invalid; expected {expected}")]
     InvalidSpec {
         /// Name of the setting.
         field: &'static str,
@@ -173,17 +173,17 @@ impl RecordSpec {
         }
     }
 
-    pub(crate) fn validate(&self) -> Result<(), BroadbandError> {
+    pub(crate) fn validate(&self) -> Result<(), RecordError> {
         self.noise.validate()?;
         if !(self.transient_s.is_finite() && self.transient_s >= 0.0) {
-            return Err(BroadbandError::InvalidSpec {
+            return Err(RecordError::InvalidSpec {
                 field: "transient_s",
                 value: self.transient_s,
                 expected: "a finite number >= 0",
             });
         }
         if !(self.rtol.is_finite() && self.rtol > 0.0 && self.rtol < 1.0) {
-            return Err(BroadbandError::InvalidSpec {
+            return Err(RecordError::InvalidSpec {
                 field: "rtol",
                 value: self.rtol,
                 expected: "0 < rtol < 1",
@@ -331,7 +331,7 @@ pub fn simulate_record(
     spec: &RecordSpec,
     seed: u64,
     stream: u64,
-) -> Result<Record, BroadbandError> {
+) -> Result<Record, RecordError> {
     simulate_observed(device, spec, seed, stream, &mut ())
 }
 
@@ -372,7 +372,7 @@ pub(crate) fn simulate_observed<O: RecordObserver>(
     seed: u64,
     stream: u64,
     observer: &mut O,
-) -> Result<Record, BroadbandError> {
+) -> Result<Record, RecordError> {
     spec.validate()?;
     let gen = spec.generated_noise();
     let drive = SampledDrive {
@@ -403,7 +403,7 @@ pub fn simulate_drive(
     drive: &SampledDrive,
     rtol: f64,
     scheme: Scheme,
-) -> Result<Record, BroadbandError> {
+) -> Result<Record, RecordError> {
     simulate_drive_observed(device, drive, rtol, scheme, &mut ())
 }
 
@@ -415,18 +415,18 @@ pub(crate) fn simulate_drive_observed<O: RecordObserver>(
     rtol: f64,
     scheme: Scheme,
     observer: &mut O,
-) -> Result<Record, BroadbandError> {
+) -> Result<Record, RecordError> {
     if drive.accel.len() <= drive.transient_samples + 1
         || !(drive.sample_rate_hz.is_finite() && drive.sample_rate_hz > 0.0)
     {
-        return Err(BroadbandError::InvalidSpec {
+        return Err(RecordError::InvalidSpec {
             field: "drive",
             value: drive.accel.len() as f64,
             expected: "more samples than the pre-roll and a positive sample rate",
         });
     }
     if !(rtol.is_finite() && rtol > 0.0 && rtol < 1.0) {
-        return Err(BroadbandError::InvalidSpec {
+        return Err(RecordError::InvalidSpec {
             field: "rtol",
             value: rtol,
             expected: "0 < rtol < 1",

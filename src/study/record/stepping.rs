@@ -12,7 +12,7 @@ use crate::physics::harvester::{Harvester, State, SwitchKind};
 use crate::physics::transducer::{PairGeometry, TransducerModel};
 
 use super::{
-    BroadbandError, Fallback, FreeFlightPath, Record, RecordObserver, RecordSummary, SampledDrive,
+    Fallback, FreeFlightPath, Record, RecordError, RecordObserver, RecordSummary, SampledDrive,
     EXPONENTIAL_ORDER, STOP_MARGIN,
 };
 
@@ -24,7 +24,7 @@ pub(super) fn run<O: RecordObserver, R: Remainder>(
     rtol: f64,
     flight: Result<FastFlight<R>, Fallback>,
     observer: &mut O,
-) -> Result<Record, BroadbandError> {
+) -> Result<Record, RecordError> {
     let accel = &drive.accel;
     let fs = drive.sample_rate_hz;
     let n_tr = drive.transient_samples;

@@ -1,0 +1,6 @@
+//! The helpers every report uses: plots drawn once into SVG and PNG ([`plot`]), rows turned
+//! into typed data frames ([`frame`]) and Markdown tables ([`md`]). Nothing here knows a figure.
+
+pub mod frame;
+pub mod md;
+pub mod plot;
