@@ -13,7 +13,7 @@
 //!   skipped, the answer boxes, the book's build);
 //! * [`reports`]: the outputs of each figure, study and `endstop` command (Parquet rows,
 //!   plots, the book's tables and sentences), and the readers of measured files;
-//! * [`io`]: the helpers every report uses (plots, data frames, Markdown tables);
+//! * [`io`]: the helpers every report uses (plots, data frames, Markdown tables, progress bars);
 //!
 //! and [`ngspice`], the runner of the external circuit simulator.
 pub mod io;
@@ -21,6 +21,7 @@ pub mod ngspice;
 pub mod pipeline;
 pub mod reports;
 
+pub use io::progress::{progress, with_progress, Bar};
 pub use reports::calibration_io::{calibrated_prototype1, prototype1_both_sets};
 
 /// Every experiment binary allocates through mimalloc: a record's 10^6-sample vectors are
@@ -41,7 +42,6 @@ use endstop::device::Device;
 use endstop::paper::claims::{Claims, Value};
 use endstop::paper::setups::ParamSet;
 use endstop::paper::Figure;
-use indicatif::{ProgressBar, ProgressStyle};
 use polars::prelude::*;
 use serde::Serialize;
 
@@ -516,52 +516,6 @@ fn rusage_s(_who: Who) -> Option<f64> {
 /// Locks a mutex, also after a panic elsewhere (the data are append-only lists).
 fn lock<T>(m: &Mutex<T>) -> MutexGuard<'_, T> {
     m.lock().unwrap_or_else(|e| e.into_inner())
-}
-
-/// A progress bar on stderr (hidden when stderr is not a terminal).
-pub fn progress(len: u64, what: &str) -> ProgressBar {
-    let pb = ProgressBar::new(len);
-    pb.set_style(
-        ProgressStyle::with_template("{prefix:>10} [{bar:30}] {pos}/{len} {msg} ({elapsed})")
-            .unwrap_or_else(|_| ProgressStyle::default_bar())
-            .progress_chars("=> "),
-    );
-    pb.set_prefix(what.to_string());
-    pb
-}
-
-/// The library's progress reports ([`endstop::progress::Progress`]) shown on a progress bar: a
-/// unit of work advances it by one, a share of the work sets its position, a stage is its
-/// message.
-pub struct Bar(pub ProgressBar);
-
-impl endstop::progress::Progress for Bar {
-    fn tick(&self) {
-        self.0.inc(1);
-    }
-
-    fn fraction(&self, done: f64) {
-        let len = self.0.length().unwrap_or(0) as f64;
-        self.0
-            .set_position((done.clamp(0.0, 1.0) * len).round() as u64);
-    }
-
-    fn stage(&self, what: &str) {
-        self.0.set_message(what.to_string());
-    }
-}
-
-/// Runs `work` under a progress bar of `len` steps labelled `what` (cleared when `work`
-/// returns); `work` reports to the bar through the [`endstop::progress::Progress`] it gets.
-pub fn with_progress<T>(
-    len: usize,
-    what: &str,
-    work: impl FnOnce(&dyn endstop::progress::Progress) -> T,
-) -> T {
-    let bar = Bar(progress(len as u64, what));
-    let out = work(&bar);
-    bar.0.finish_and_clear();
-    out
 }
 
 /// Formats a number with `sig` significant digits for generated prose.
