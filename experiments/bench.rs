@@ -33,6 +33,7 @@ use endstop::ode::Stats;
 use endstop::paper::setups::paper_record;
 use endstop::physics::contact::Mode;
 use endstop::physics::harvester::Harvester;
+use endstop::progress::Silent;
 use endstop::study::flow::SineFlow;
 use endstop::study::record::{simulate_record, RecordError};
 use endstop::study::rk4_record::{
@@ -561,12 +562,12 @@ fn response_rows(p2: &endstop::device::Device, repeats: usize) -> Result<Vec<Row
                 Ok(if down {
                     setup
                         .sweep
-                        .run_down(&setup.device, setup.accel_rms_g, |_| {})?
+                        .run_down(&setup.device, setup.accel_rms_g, &Silent)?
                         .total_stats()
                 } else {
                     setup
                         .sweep
-                        .run(&setup.device, setup.accel_rms_g, |_| {})?
+                        .run(&setup.device, setup.accel_rms_g, &Silent)?
                         .total_stats()
                 })
             })

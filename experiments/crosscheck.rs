@@ -18,8 +18,8 @@ use common::io::plot::{LegendPos, LinePlot, Series, Style, PALETTE};
 use common::ngspice::{Reading, Reduced, Runner, Source};
 use common::{fmt_sig, write_atomic, Experiment};
 use endstop::paper::crosscheck::{
-    acceptance_failures, cases, prepare, Case, Difference, Ours, Prepared, Setting, SpiceRun,
-    Verdict, BOOK_CASE, OUTPUT_STEPS_PER_PERIOD, SETTINGS, TOL_FREE, TOL_IMPACTING,
+    acceptance_failures, cases, prepare, verdict_label, Case, Difference, Ours, Prepared, Setting,
+    SpiceRun, Verdict, BOOK_CASE, OUTPUT_STEPS_PER_PERIOD, SETTINGS, TOL_FREE, TOL_IMPACTING,
 };
 use endstop::paper::setups::{comb, endstop, stiffness_model, ParamSet};
 use polars::prelude::*;
@@ -66,6 +66,8 @@ struct Row {
     tolerance: f64,
     impacting: bool,
     verdict: Verdict,
+    /// Why ngspice gave no result (with [`Verdict::NotYet`]).
+    failure: Option<String>,
 }
 
 /// Our side of a case as the rows report it.
@@ -120,7 +122,8 @@ impl Row {
             spice_points: 0,
             tolerance: case.tolerance(),
             impacting: case.impacting,
-            verdict: Verdict::Failed("not run".into()),
+            verdict: Verdict::NotYet,
+            failure: Some("not run".into()),
         }
     }
 
@@ -138,6 +141,12 @@ impl Row {
         self.spice_recorded = reading.recorded;
         self.spice_points = spice.points;
         self.verdict = d.verdict(self.tolerance);
+        self.failure = None;
+    }
+
+    /// The verdict as the tables write it.
+    fn verdict_label(&self) -> String {
+        verdict_label(self.verdict, self.failure.as_deref())
     }
 }
 
@@ -171,9 +180,9 @@ fn run() -> Result<()> {
         .iter()
         .map(|c| c.key)
         .collect();
-    let verdicts: Vec<(&str, Setting, &Verdict)> = rows
+    let verdicts: Vec<(&str, Setting, Verdict)> = rows
         .iter()
-        .map(|r| (r.case.as_str(), r.setting_kind, &r.verdict))
+        .map(|r| (r.case.as_str(), r.setting_kind, r.verdict))
         .collect();
     let failures = acceptance_failures(&keys, &verdicts);
 
@@ -235,7 +244,7 @@ fn run_case(
             fmt_sig(row.v1_spice, 7),
             fmt_sig(row.rel_diff, 2),
             row.spice_s,
-            row.verdict.label()
+            row.verdict_label()
         );
         exp.number(
             &format!("rel_diff_{}_{}", case.key, setting.key()),
@@ -325,7 +334,8 @@ fn run_setting(
             Ok((row, Some((run, reading))))
         }
         Err(e) => {
-            row.verdict = Verdict::Failed(format!("{e:#}"));
+            row.verdict = Verdict::NotYet;
+            row.failure = Some(format!("{e:#}"));
             Ok((row, None))
         }
     }
@@ -466,9 +476,9 @@ fn numbers_md(rows: &[Row], version: &str) -> String {
             ));
         }
         let verdict = if r.documented {
-            format!("**{}**", r.verdict.label())
+            format!("**{}**", r.verdict_label())
         } else {
-            r.verdict.label()
+            r.verdict_label()
         };
         md.push_str(&format!(
             "| {}: `{}` | {} | {} | {} | {} | {} | {} | {} | {} |\n",
@@ -549,7 +559,7 @@ fn rows_df(rows: &[Row]) -> Result<DataFrame> {
         "spice_s" => x(|r| r.spice_s),
         "spice_points_in_window" => rows.iter().map(|r| r.spice_points as u64).collect::<Vec<u64>>(),
         "tolerance" => x(|r| r.tolerance),
-        "status" => s(|r| r.verdict.label()),
+        "status" => s(|r| r.verdict_label()),
         "params" => s(|_| ParamSet::Published.label().to_string()),
     )?)
 }
@@ -559,6 +569,7 @@ fn rows_df(rows: &[Row]) -> Result<DataFrame> {
 /// the last one against ours. Returns the book's table and the cases outside tolerance.
 fn bridge_cases(exp: &mut Experiment, spice: &mut Runner) -> Result<(String, Vec<String>)> {
     use endstop::drive::Sine;
+    use endstop::num::compare::{Comparison, Measure};
     use endstop::physics::harvester::State;
     use endstop::spice::bridge::{
         bridge_netlist, bridge_solver, dc_means, BRIDGE_CASES, BRIDGE_PERIODS,
@@ -612,8 +623,14 @@ fn bridge_cases(exp: &mut Experiment, spice: &mut Runner) -> Result<(String, Vec
             ("mean V_s (V)", ours.vdc_v, v),
             ("mean DC power (W)", ours.p_dc_w, p),
         ] {
-            let rel = (o - s).abs() / o.abs();
-            if rel > case.tolerance {
+            let c = Comparison {
+                ours: o,
+                reference: s,
+                measure: Measure::RelativeToOurs,
+                tolerance: case.tolerance,
+            };
+            let rel = c.difference();
+            if !c.within() {
                 failures.push(format!(
                     "{name} {q}: relative difference {rel:e} > {}",
                     case.tolerance

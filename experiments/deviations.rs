@@ -16,7 +16,7 @@ use common::Experiment;
 use endstop::num::gp_sensitivity::EmulatedSobol;
 use endstop::num::history::HistorySettings;
 use endstop::paper::claims::Claims;
-use endstop::paper::deviations::{self, Factor, Prototype, RangesFile, Scope};
+use endstop::paper::deviations::{self, Prototype, RangesFile, Scope};
 
 #[derive(Parser, Debug)]
 struct Args {
@@ -87,7 +87,7 @@ fn run() -> Result<()> {
             Prototype::P2 => (&ranges.prototype2, &p2.device),
         };
         let (t0, cpu0) = (std::time::Instant::now(), common::cpu_time_s());
-        let most = settings.per_input * Factor::ALL.len() * settings.max_waves;
+        let most = settings.per_input * r.len() * settings.max_waves;
         let h = common::with_progress(most, &format!("history match {}", proto.key()), |tick| {
             deviations::history_match(proto, r, dev, &claims, scope, settings, tick)
         })?;

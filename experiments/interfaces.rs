@@ -17,6 +17,7 @@ use common::{fmt_sig, row, write_atomic, Experiment};
 use endstop::device::{Device, Interface, Inversion, Rectifier};
 use endstop::drive::noise::NoiseSpec;
 use endstop::drive::Sine;
+use endstop::progress::Silent;
 use endstop::study::interface::charging::{charge, ChargeSettings};
 use endstop::study::interface::record::noise_ensemble;
 use endstop::study::interface::sweep::{frequency_sweep, load_sweep};
@@ -96,7 +97,7 @@ fn run() -> Result<()> {
         eprintln!("[interfaces] load sweep, {name}");
         let found: Vec<(f64, IfSteady)> = loads
             .iter()
-            .zip(load_sweep(&d, &loads, sine, &settings, |_, _| {}))
+            .zip(load_sweep(&d, &loads, sine, &settings, &Silent))
             .filter_map(|(r, s)| match s {
                 Ok(s) => Some((*r, s)),
                 Err(e) => {
@@ -137,7 +138,7 @@ fn run() -> Result<()> {
         let st = endstop::study::sweep::SweepSettings::for_device(&d, vec![f0], 0.1).run(
             &d,
             ACCEL_RMS_G,
-            |_| {},
+            &Silent,
         )?;
         let m = st.measurements().next().expect("one frequency");
         rows.push(row!["interface" => "resistive", "load_ohm" => r, "p_dc_w" => m.p1_w, "vdc_v" => m.v1_rms_v, "contact" => m.contact_fraction > 0.0, "stable" => true]);
@@ -198,13 +199,7 @@ fn run() -> Result<()> {
         eprintln!("[interfaces] frequency sweep, {}", d.name);
         let states: Vec<IfSteady> = freqs
             .iter()
-            .zip(frequency_sweep(
-                d,
-                &freqs,
-                ACCEL_RMS_G,
-                &settings,
-                |_, _| {},
-            ))
+            .zip(frequency_sweep(d, &freqs, ACCEL_RMS_G, &settings, &Silent))
             .filter_map(|(f, s)| match s {
                 Ok(s) => Some(s),
                 Err(e) => {
@@ -344,9 +339,8 @@ fn run() -> Result<()> {
         block_s: 0.5,
         rtol: 1e-8,
     };
-    eprintln!("[interfaces] charging");
-    let run = charge(&open, Sine::from_rms_g(ACCEL_RMS_G, f0), &cs, |t, v| {
-        eprintln!("[interfaces] charging: t = {t:.1} s, V_s = {v:.3} V")
+    let run = common::with_progress(100, "charging (% of 5 V)", |p| {
+        charge(&open, Sine::from_rms_g(ACCEL_RMS_G, f0), &cs, p)
     })?;
     exp.number("charge_time_to_5v_s", run.time_to_target_s);
     exp.write_parquet(

@@ -404,6 +404,7 @@ fn write_scorecard() -> Result<Vec<Row>> {
             Verdict::Reproduced => "**reproduced**",
             Verdict::Deviates => "*deviates*",
             Verdict::NotYet => "not yet",
+            Verdict::Open => "*open question*",
         };
         let fold = r.fold_hz.map(|v| format!("{v:.2}")).unwrap_or_default();
         let best = r

@@ -21,7 +21,7 @@ use endstop::validation::band_limit;
 use endstop::validation::linear_harvesters::{response_curve, ClosedForm};
 use endstop::validation::nlvib::{self, Reference};
 use endstop::validation::random_law::{self, LawEnsemble};
-use endstop::validation::{cases, Check, Measure, ValidationError};
+use endstop::validation::{cases, Check, Measure, ValidationError, Verdict};
 
 fn main() {
     if std::env::args().skip(1).any(|a| a == "--band-study") {
@@ -77,19 +77,19 @@ fn value(x: f64) -> String {
     }
 }
 
-fn verdict(c: &Check) -> &'static str {
-    if c.is_open() {
-        "*open question*"
-    } else if c.passes() {
-        "within"
-    } else {
-        "**not met**"
+/// The verdict as the chapter's tables write it.
+fn verdict_label(v: Verdict) -> &'static str {
+    match v {
+        Verdict::Open => "*open question*",
+        Verdict::Reproduced => "within",
+        Verdict::Deviates | Verdict::NotYet => "**not met**",
     }
 }
 
 fn measure_label(m: Measure) -> &'static str {
     match m {
         Measure::Relative => "relative",
+        Measure::RelativeToOurs => "relative to ours",
         Measure::Absolute => "absolute",
         Measure::NotAbove => "ours - theirs",
     }
@@ -108,16 +108,20 @@ fn checks_table<'a>(checks: impl IntoIterator<Item = &'a Check>) -> String {
     ]);
     for c in checks {
         t.row([
-            c.reference.clone(),
+            c.source.clone(),
             c.quantity.clone(),
-            value(c.theirs),
-            value(c.ours),
-            format!("{} ({})", e(c.difference()), measure_label(c.measure)),
+            value(c.compared.reference),
+            value(c.compared.ours),
+            format!(
+                "{} ({})",
+                e(c.difference()),
+                measure_label(c.compared.measure)
+            ),
             match &c.open {
-                Some(why) => format!("{} (not applied: {why})", e(c.tolerance)),
-                None => format!("{}: {}", e(c.tolerance), c.reason),
+                Some(why) => format!("{} (not applied: {why})", e(c.compared.tolerance)),
+                None => format!("{}: {}", e(c.compared.tolerance), c.reason),
             },
-            verdict(c).to_string(),
+            verdict_label(c.verdict()).to_string(),
         ]);
     }
     t.render()
@@ -250,13 +254,13 @@ fn run() -> Result<()> {
     let mut df = frame(checks.iter().map(|c| {
         row![
             "group" => c.group.clone(),
-            "reference" => c.reference.clone(),
+            "reference" => c.source.clone(),
             "quantity" => c.quantity.clone(),
-            "theirs" => c.theirs,
-            "ours" => c.ours,
-            "measure" => measure_label(c.measure),
+            "theirs" => c.compared.reference,
+            "ours" => c.compared.ours,
+            "measure" => measure_label(c.compared.measure),
             "difference" => c.difference(),
-            "tolerance" => c.tolerance,
+            "tolerance" => c.compared.tolerance,
             "reason" => c.reason.clone(),
             "within_tolerance" => c.passes(),
             "open_question" => c.open.clone().unwrap_or_default(),

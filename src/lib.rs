@@ -54,7 +54,8 @@
 //! | [`drive`] | sine, sampled and band-limited noise accelerations | Figure 10 |
 //! | [`ode`] | Runge-Kutta stepping with dense output and event location | |
 //! | [`fit`] | fitting a device to measured sweeps, with uncertainty | section 3.2 |
-//! | [`num`] | root finding, sample statistics, sensitivity designs | |
+//! | [`num`] | root finding, sample statistics, comparisons with their verdicts, sensitivity designs | |
+//! | [`progress`] | how far a long computation has come (shown as a bar by the binaries) | |
 //! | [`signal`] | Welch PSD, bandwidths | |
 //! | [`study`] | steady states, sweeps, periodic orbits and continuation, basins, random records, ensembles | |
 //! | [`spice`] | ngspice netlist export for cross-validation | section 2.3, Figure 6 |
@@ -67,6 +68,7 @@
 //!
 //! ```
 //! use endstop::device::Device;
+//! use endstop::progress::Silent;
 //! use endstop::study::sweep::SweepSettings;
 //!
 //! let text = include_str!(concat!(env!("CARGO_MANIFEST_DIR"), "/data/prototype1.toml"));
@@ -74,7 +76,7 @@
 //!
 //! // Three frequencies below the resonance at 0.02 g rms: the mass stays clear of the stops.
 //! let sweep = SweepSettings::for_device(&device, vec![1000.0, 1100.0, 1200.0], 1.0);
-//! let report = sweep.run(&device, 0.02, |_| {})?;
+//! let report = sweep.run(&device, 0.02, &Silent)?;
 //! assert!(!report.any_contact());
 //! let v1: Vec<f64> = report.measurements().map(|m| m.v1_rms_v).collect();
 //! assert!(v1[0] < v1[1] && v1[1] < v1[2], "the response grows towards the resonance");
@@ -95,6 +97,7 @@ pub mod num;
 pub mod ode;
 pub mod paper;
 pub mod physics;
+pub mod progress;
 pub mod signal;
 pub mod spice;
 pub mod study;

@@ -6,8 +6,8 @@
 use endstop::device::Device;
 use endstop::num::minimax::{minimise_worst, MinimaxSettings};
 use endstop::paper::claims::Claims;
+use endstop::paper::deviations::RangesFile;
 use endstop::paper::deviations::{sweeps, Outcome};
-use endstop::paper::deviations::{Factor, RangesFile};
 use endstop::paper::figures::fig08;
 use endstop::paper::setups::P1_BIAS_V;
 use endstop::paper::setups::{comb, comb_mut, endstop};
@@ -53,7 +53,7 @@ fn linear_claims_generated_at_a_known_set_are_met_and_its_identified_parameters_
             (0..4).map(|j| (ours[j] - target[j]) / tol[j]).collect(),
         )
     };
-    let fits = minimise_worst(Factor::ALL.len(), model, MinimaxSettings::default(), &[]).unwrap();
+    let fits = minimise_worst(ranges.len(), model, MinimaxSettings::default(), &[]).unwrap();
     let best = &fits[0];
     assert!(best.worst <= 1.0, "best fit misses a claim: {best:?}");
 
@@ -133,8 +133,8 @@ fn nonlinear_claims_generated_at_a_known_set_are_met_and_its_identified_paramete
     let known = [0.35, 0.8, 0.25, 0.65, 0.4, 0.5, 0.6, 0.2];
     let (gi, si) = (0, 6);
     assert_eq!(
-        (Factor::ALL[gi], Factor::ALL[si]),
-        (Factor::EndstopGap, Factor::AccelScale)
+        (ranges.names()[gi], ranges.names()[si]),
+        ("endstop_gap", "accel_scale")
     );
     let variant = |u: &[f64]| {
         let mut p = known;

@@ -75,7 +75,7 @@ fn stored_ngspice_output_is_judged_by_the_case_tolerance() {
     let d = Difference::of(&free.measurement, &spice);
     assert_eq!(
         d.verdict(prepared.case.tolerance()),
-        Verdict::Within,
+        Verdict::Reproduced,
         "{d:?}"
     );
     assert!(d.rel > 0.0 && spice.contact_fraction == 0.0, "{d:?}");
@@ -91,7 +91,7 @@ fn stored_ngspice_output_is_judged_by_the_case_tolerance() {
     let d = Difference::of(&upper.measurement, &spice);
     assert_eq!(
         d.verdict(prepared.case.tolerance()),
-        Verdict::Outside,
+        Verdict::Deviates,
         "{d:?}"
     );
     assert!(upper.measurement.contact_fraction > 0.0);

@@ -9,10 +9,10 @@
 //! onset and jump with standard deviation 0.5 Hz. Each case is cheap (seconds), so that the
 //! whole set runs in `cargo test --release`.
 
-use endstop::device::Device;
+use endstop::device::{Device, ParamRange};
 use endstop::fit::{
-    fit, model_values, Direction, Feature, FeatureKind, FitReport, FitSettings, FitWarning,
-    FreeParam, Point, Quantity, SweepData,
+    fit, model_values, Direction, Feature, FeatureKind, FitReport, FitSettings, FitWarning, Point,
+    Quantity, SweepData,
 };
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -91,7 +91,7 @@ fn synthetic(
 struct Case {
     name: &'static str,
     file: &'static str,
-    free: Vec<FreeParam>,
+    free: Vec<ParamRange>,
     truth: Vec<f64>,
     start: Vec<f64>,
     accel_rms_g: f64,
@@ -99,15 +99,11 @@ struct Case {
     seed: u64,
 }
 
-fn free(path: &str, lo: f64, hi: f64) -> FreeParam {
-    FreeParam {
-        path: path.into(),
-        lo,
-        hi,
-    }
+fn free(path: &str, lo: f64, hi: f64) -> ParamRange {
+    ParamRange::auto(path, lo, hi)
 }
 
-fn with(d: &Device, free: &[FreeParam], values: &[f64]) -> Device {
+fn with(d: &Device, free: &[ParamRange], values: &[f64]) -> Device {
     free.iter()
         .zip(values)
         .fold(d.clone(), |d, (f, &v)| d.with_param(&f.path, v).unwrap())

@@ -20,7 +20,7 @@ fn p2() -> Device {
     Device::from_toml_str(include_str!("../data/prototype2.toml"), "prototype2").unwrap()
 }
 
-/// A known set inside the ranges (unit-cube coordinates, `Factor::ALL` order): gap 0.86 of
+/// A known set inside the ranges (unit-cube coordinates, in the ranges file's order): gap 0.86 of
 /// the published, b 1.06, km 0.99, Cp 1.08, b_im 3.5 N s/m, E 160 GPa, drive 1.05, the
 /// damper pulling.
 const PLANTED: [f64; 8] = [0.3, 0.6, 0.4, 0.7, 0.35, 0.5, 0.5, 0.25];

@@ -11,6 +11,7 @@ use endstop::ode::{Dopri5, Observer, Step};
 use endstop::physics::contact::Mode;
 use endstop::physics::harvester::{Harvester, State, SwitchKind};
 use endstop::physics::linear::LinearResponse;
+use endstop::progress::Silent;
 use endstop::study::continuation::impacting::{rigid_diagram, Closure, DiagramOptions};
 use endstop::study::continuation::{
     frequency_diagram, BranchKind, ContinuationSettings, Diagram, DiagramEventKind, DiagramPoint,
@@ -155,7 +156,7 @@ fn check_multipliers(device: &Device, d: &Diagram, every: usize) -> (usize, f64)
 fn symmetric_rigid_stops_grazing_pitchfork_and_no_period_doubling() {
     let device = example("rigid_restitution");
     let (g, gap) = (0.3, 8e-6);
-    let d = frequency_diagram(&device, g, 550.0, 750.0, 2.0, |_| {}).unwrap();
+    let d = frequency_diagram(&device, g, 550.0, 750.0, 2.0, &Silent).unwrap();
     let linear = linear_grazings(&device, g, gap, 580.0, 660.0);
     assert_eq!(linear.len(), 2, "{linear:?}");
     // The locations are the continuation's to 1e-4 Hz at most (its event tolerance); the
@@ -261,7 +262,7 @@ fn impact_oscillator_period_doubling_and_its_period_two_branch() {
         period_two: true,
         ..DiagramOptions::default()
     };
-    let d = rigid_diagram(&device, start, &settings, &options, |_| {}).unwrap();
+    let d = rigid_diagram(&device, start, &settings, &options, &Silent).unwrap();
     let one = d.branch("1 impact a period (upper)").expect("period one");
     let pds: Vec<_> = d
         .events_of(DiagramEventKind::PeriodDoubling)

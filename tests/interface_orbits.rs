@@ -9,6 +9,7 @@ use endstop::ode::HybridSystem;
 use endstop::physics::contact::{Mode, Side};
 use endstop::physics::harvester::State;
 use endstop::physics::interface::{Bridge, Heading, IfMode, Interfaced};
+use endstop::progress::Silent;
 use endstop::study::interface::continuation::{continue_frequency, IfContinuationSettings};
 use endstop::study::interface::monodromy::linearise;
 use endstop::study::interface::{
@@ -231,7 +232,8 @@ fn continuation_passes_the_folds_of_the_stop() {
     set.max_points = 1000;
     set.max_freq_step_hz = 2.0;
     set.ds_max = 2.0;
-    let branch = continue_frequency(&d, &set, |p| {
+    let branch = continue_frequency(&d, &set, &Silent).unwrap();
+    for p in &branch.points {
         eprintln!(
             "pt {:.4} Hz: P_DC {:.4e} W, V_DC {:.4} V, x_peak {:.3e} m, max |mu| {:.6}, t_f {:+.3}",
             p.steady.freq_hz,
@@ -240,9 +242,8 @@ fn continuation_passes_the_folds_of_the_stop() {
             p.steady.x_peak_m,
             p.steady.max_multiplier,
             p.tangent_freq
-        )
-    })
-    .unwrap();
+        );
+    }
     eprintln!(
         "{} points, folds {:?}, end {:?}, Newton {}, rejected {}",
         branch.points.len(),
@@ -323,7 +324,7 @@ fn the_period_map_finds_the_orbit_past_a_fold() {
     let set = SteadySettings::default();
     let freqs: Vec<f64> = (0..=30).map(|i| 110.0 + 2.0 * f64::from(i)).collect();
     let states: Vec<_> =
-        endstop::study::interface::sweep::frequency_sweep(&d, &freqs, 1.0, &set, |_, _| {})
+        endstop::study::interface::sweep::frequency_sweep(&d, &freqs, 1.0, &set, &Silent)
             .into_iter()
             .map(|s| s.unwrap())
             .collect();

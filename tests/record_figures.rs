@@ -29,6 +29,7 @@ use endstop::paper::setups::{paper_record, prototype2_setup, ParamSet};
 use endstop::paper::Figure;
 use endstop::physics::linear::LinearResponse;
 use endstop::physics::two_port::*;
+use endstop::progress::Silent;
 use endstop::study::ensemble::run_ensemble;
 use endstop::study::record::*;
 use endstop::G;
@@ -632,7 +633,7 @@ fn impacting_regime_statistics_converge() {
     );
     spec.record.rtol = DEFAULT_RTOL / 100.0;
     spec.record.scheme = Scheme::Dopri5;
-    let b = run_ensemble(&d, &spec, || {}).unwrap();
+    let b = run_ensemble(&d, &spec, &Silent).unwrap();
     // The same streams on both sides: the first half of the default ensemble.
     let first: Vec<f64> = a.records[..spec.realisations]
         .iter()

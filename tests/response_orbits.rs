@@ -8,6 +8,7 @@ use endstop::ode::Stats;
 use endstop::paper::setups::{comb, endstop, stiffness_model, with_endstop};
 use endstop::physics::harvester::Harvester;
 use endstop::physics::linear::LinearResponse;
+use endstop::progress::Silent;
 use endstop::study::continuation::{
     continue_branch, first_orbit, Branch, ContinuationSettings, EventKind,
 };
@@ -129,7 +130,7 @@ fn fig13_branch(cfg: ShootingConfig) -> (Harvester<Sine>, Branch) {
         &mut stats,
     )
     .unwrap();
-    let b = continue_branch(&h, o, &s, |_| {}).unwrap();
+    let b = continue_branch(&h, o, &s, &Silent).unwrap();
     (h, b)
 }
 
@@ -218,7 +219,7 @@ fn amplitude_continuation_in_the_linear_regime_scales_the_power_with_the_square(
         &mut stats,
     )
     .unwrap();
-    let b = continue_branch(&h, first, &s, |_| {}).unwrap();
+    let b = continue_branch(&h, first, &s, &Silent).unwrap();
     assert!(b.events.is_empty());
     assert!(b.points.len() >= 9, "{} points", b.points.len());
     let ref_ratio = {
@@ -265,12 +266,12 @@ fn a_grazing_corner_is_crossed_from_the_free_flight_side() {
             .find(|e| e.kind == EventKind::Grazing)
             .map(|e| e.param)
     };
-    let b = frequency_branch(&d, g, 900.0, 2000.0, 10.0, |_| {}).unwrap();
+    let b = frequency_branch(&d, g, 900.0, 2000.0, 10.0, &Silent).unwrap();
     // The grazing orbit is a free-flight orbit, independent of b_im: the same device with
     // b_im = 0 (whose branch crosses grazing smoothly) gives the reference. Tolerance: the
     // event location (1e-4 Hz) and the hop's first step.
     let undamped = with_endstop(&d, stiffness_model(&d), 0.0);
-    let reference = grazing(&frequency_branch(&undamped, g, 900.0, 2000.0, 10.0, |_| {}).unwrap())
+    let reference = grazing(&frequency_branch(&undamped, g, 900.0, 2000.0, 10.0, &Silent).unwrap())
         .expect("the undamped branch grazes");
     let found = grazing(&b).expect("the branch grazes");
     assert!((found - reference).abs() < 0.01, "{found} vs {reference}");

@@ -3,9 +3,10 @@
 //! each an ensemble of records on streams the design never uses) are fitted by the emulators
 //! of one design, and the 95 % intervals must hold the truth as often as 95 % intervals do.
 
-use endstop::device::Device;
+use endstop::device::{Device, ParamRange};
 use endstop::fit::spectrum::{build_emulator, model_features, MeasuredSpectrum, SpectrumSettings};
-use endstop::fit::{FreeParam, ACCEL_SCALE_PATH};
+use endstop::fit::ACCEL_SCALE_PATH;
+use endstop::progress::Silent;
 use endstop::study::ensemble::{run_ensemble, EnsembleSpec};
 
 /// Figure 15's lowest level (g²/Hz), where prototype 2 at 15 V just reaches its stops.
@@ -28,16 +29,8 @@ fn a_known_device_is_recovered_within_its_intervals() {
     let base = p2();
     let b = base.mechanics.damping_n_s_per_m;
     let free = vec![
-        FreeParam {
-            path: "mechanics.damping_n_s_per_m".into(),
-            lo: 0.7 * b,
-            hi: 1.3 * b,
-        },
-        FreeParam {
-            path: ACCEL_SCALE_PATH.into(),
-            lo: 0.8,
-            hi: 1.25,
-        },
+        ParamRange::auto("mechanics.damping_n_s_per_m", 0.7 * b, 1.3 * b),
+        ParamRange::auto(ACCEL_SCALE_PATH, 0.8, 1.25),
     ];
     let truth = (1.1 * b, 1.05);
     let settings = SpectrumSettings {
@@ -62,7 +55,7 @@ fn a_known_device_is_recovered_within_its_intervals() {
         );
         spec.analysis_band_hz = BAND;
         spec.first_stream = 1000 + 100 * k as u64;
-        let e = run_ensemble(&device, &spec, || {}).unwrap();
+        let e = run_ensemble(&device, &spec, &Silent).unwrap();
         let m = MeasuredSpectrum {
             freq_hz: e.mean_spectrum.total.freq_hz.clone(),
             psd_w_per_hz: e.mean_spectrum.total.density.clone(),

@@ -4,6 +4,7 @@
 use endstop::device::Device;
 use endstop::drive::Sine;
 use endstop::physics::harvester::Harvester;
+use endstop::progress::Silent;
 use endstop::study::attractors::{find_attractors, seeds, AttractorSearch, Attractors, Place};
 use endstop::study::basins::{basins, BasinGrid, BasinSettings};
 use endstop::study::continuation::frequency_branch;
@@ -146,7 +147,7 @@ fn the_hardening_device_has_the_branch_s_two_stable_orbits_between_its_folds() {
     // The continuation's stable orbits at 110 Hz are the same two (the states at drive phase
     // zero agree to 1e-6 scaled, far above the orbits' accuracy of about 1e-9 and far below
     // their distance).
-    let branch = frequency_branch(&device, 0.1, 80.0, 140.0, 1.0, |_| {}).unwrap();
+    let branch = frequency_branch(&device, 0.1, 80.0, 140.0, 1.0, &Silent).unwrap();
     let start = Harvester::new(&device, Sine::from_rms_g(0.1, 80.0));
     let shooter = Shooter::new(&start, ShootingConfig::default());
     let mut stats = Default::default();

@@ -18,6 +18,7 @@ use endstop::paper::figures::fig15::{self, Fig15};
 use endstop::paper::figures::{fig13::Fig13, table3::Table3};
 use endstop::paper::setups::{prototype2_setup, Prototypes, P1_BIAS_V, P2_BIAS_V};
 use endstop::paper::Figure;
+use endstop::progress::Silent;
 use rayon::prelude::*;
 
 fn device(text: &str) -> Device {
@@ -65,7 +66,7 @@ fn prototype1_fast_path_matches_the_figure_8_sweeps_and_table_3() {
         .map(|(_, _, c)| {
             let spec = c.spec();
             settings
-                .run(&spec.device(&base), spec.accel_rms_g, |_| {})
+                .run(&spec.device(&base), spec.accel_rms_g, &Silent)
                 .unwrap()
         })
         .collect();

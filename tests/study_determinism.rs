@@ -18,6 +18,7 @@ fn p2() -> Device {
 
 fn design() -> SobolDesign {
     SobolDesign {
+        factors: 8,
         base_rows: 2,
         seed: 13,
         bootstrap: Bootstrap {

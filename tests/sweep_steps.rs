@@ -6,6 +6,7 @@
 
 use endstop::device::Device;
 use endstop::physics::contact::Mode;
+use endstop::progress::Silent;
 use endstop::study::chirp::{default_ramp_rate_hz_per_s, default_step_hz, half_power_band};
 use endstop::study::continuation::{frequency_diagram, DiagramEventKind};
 use endstop::study::stepped::Approach;
@@ -39,7 +40,7 @@ fn the_down_sweep_leaves_the_lower_branch_at_its_end_at_the_default_step() {
         let step = default_step_hz(&device, from, to);
         assert!(step <= 0.25 * band.width_hz, "{name}: step {step} Hz");
         let rate = default_ramp_rate_hz_per_s(&device).unwrap();
-        let d = frequency_diagram(&device, g, from, to, 0.01 * (to - from), |_| {}).unwrap();
+        let d = frequency_diagram(&device, g, from, to, 0.01 * (to - from), &Silent).unwrap();
         let ends: Vec<f64> = d
             .events
             .iter()
@@ -76,7 +77,7 @@ fn the_down_sweep_leaves_the_lower_branch_at_its_end_at_the_default_step() {
                 g,
                 Approach::Ramp { rate_per_s: rate },
                 (first.fingerprint, Mode::Free),
-                |_| {},
+                &Silent,
             )
             .unwrap();
         let (kind, t) = down

@@ -13,6 +13,7 @@ use endstop::drive::Sine;
 use endstop::ode::Stats;
 use endstop::paper::setups::paper_record;
 use endstop::physics::harvester::Harvester;
+use endstop::progress::Silent;
 use endstop::study::continuation::frequency_branch;
 use endstop::study::flow::SineFlow;
 use endstop::study::orbit::{Forcing, Parameter, Shooter, ShootingConfig};
@@ -197,9 +198,9 @@ fn measure_one(ex: &Example, device: &Device, repeats: usize, quick: bool) -> Re
         let settings =
             SweepSettings::for_device(device, linspace_step(from, to, step), REFINE_TOL_HZ);
         let ((stats, orbits), t) = cpu(|| {
-            let up = settings.run(device, g, |_| {})?;
-            let down = settings.run_down(device, g, |_| {})?;
-            let branch = frequency_branch(device, g, from, to, step, |_| {})?;
+            let up = settings.run(device, g, &Silent)?;
+            let down = settings.run_down(device, g, &Silent)?;
+            let branch = frequency_branch(device, g, from, to, step, &Silent)?;
             let mut s = up.total_stats();
             s += down.total_stats();
             s += branch.stats;

@@ -185,7 +185,7 @@ pub(crate) fn basins_study(a: BasinArgs) -> Result<()> {
     let search = AttractorSearch::default();
     let found = common::with_progress(1, "attractors", |tick| {
         let r = find_attractors(&h, &device, &forcing, shooting, &seeds, &search);
-        tick();
+        tick.tick();
         r
     })?;
     if found.found.is_empty() {

@@ -83,15 +83,14 @@ pub fn charge(a: ChargeArgs) -> Result<()> {
         block_s: (200.0 * period).min(a.t_max_s / 10.0),
         rtol: 1e-8,
     };
-    let bar = endstop_experiments::progress(100, "charging (% of the target)");
-    let run = run_charge(
-        &device,
-        Sine::from_rms_g(a.accel_rms_g, a.freq_hz),
-        &settings,
-        |_, v| bar.set_position((100.0 * (v - a.start_v) / (a.target_v - a.start_v)) as u64),
-    );
-    bar.finish_and_clear();
-    let run = run?;
+    let run = endstop_experiments::with_progress(100, "charging (% of the target)", |p| {
+        run_charge(
+            &device,
+            Sine::from_rms_g(a.accel_rms_g, a.freq_hz),
+            &settings,
+            p,
+        )
+    })?;
     let rows = run
         .t_s
         .iter()
@@ -146,7 +145,7 @@ pub fn dc_sweep(a: RangeArgs) -> Result<()> {
     let freqs = linspace_step(a.from, a.to, step_hz);
     let settings = SteadySettings::default();
     let results = endstop_experiments::with_progress(freqs.len(), "sweep", |tick| {
-        frequency_sweep(&device, &freqs, a.accel_rms_g, &settings, |_, _| tick())
+        frequency_sweep(&device, &freqs, a.accel_rms_g, &settings, tick)
     });
     let mut states = Vec::new();
     let mut failed = Vec::new();

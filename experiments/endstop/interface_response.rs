@@ -27,12 +27,8 @@ pub fn response(a: &RangeArgs) -> Result<()> {
     let settings = SteadySettings::default();
     let (up, down) = endstop_experiments::with_progress(2 * up_freqs.len(), "sweeps", |tick| {
         rayon::join(
-            || frequency_sweep(&device, &up_freqs, a.accel_rms_g, &settings, |_, _| tick()),
-            || {
-                frequency_sweep(&device, &down_freqs, a.accel_rms_g, &settings, |_, _| {
-                    tick()
-                })
-            },
+            || frequency_sweep(&device, &up_freqs, a.accel_rms_g, &settings, tick),
+            || frequency_sweep(&device, &down_freqs, a.accel_rms_g, &settings, tick),
         )
     });
     let mut failed = Vec::new();
@@ -56,13 +52,9 @@ pub fn response(a: &RangeArgs) -> Result<()> {
     let mut cont = IfContinuationSettings::new(a.from, a.to, a.accel_rms_g);
     cont.max_freq_step_hz = protocol.max_step_hz;
     cont.ds_max = protocol.max_step_hz / cont.freq_scale_hz;
-    let bar = endstop_experiments::progress(100, "continuation (% of the range)");
-    let branch = continue_frequency(&device, &cont, |p| {
-        let done = (p.steady.freq_hz - a.from) / (a.to - a.from);
-        bar.set_position((100.0 * done.clamp(0.0, 1.0)) as u64);
-    });
-    bar.finish_and_clear();
-    let branch = branch?;
+    let branch = endstop_experiments::with_progress(100, "continuation (% of the range)", |p| {
+        continue_frequency(&device, &cont, p)
+    })?;
 
     let mut rows = Vec::new();
     for (dir, states) in [("up", &up), ("down", &down)] {

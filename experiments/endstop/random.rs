@@ -283,7 +283,7 @@ fn displacement(
     let bins = DisplacementBins::uniform(device, -reach, reach, DISPLACEMENT_BINS);
     let de = common::with_progress(1, "displacement pass over the records", |tick| {
         let r = displacement_ensemble(device, record, &bins, a.seed, a.records as u64);
-        tick();
+        tick.tick();
         r
     })?;
     let law = StationaryLaw::of(device, record).ok();

@@ -63,8 +63,8 @@ pub(crate) fn response(args: ResponseArgs) -> Result<()> {
     let approach = protocol.approach;
     let (up, down) = common::with_progress(2 * freqs.len(), "sweeps", |tick| {
         rayon::join(
-            || settings.run_with(&device, a.accel_rms_g, approach, |_| tick()),
-            || settings.run_down_with(&device, a.accel_rms_g, approach, |_| tick()),
+            || settings.run_with(&device, a.accel_rms_g, approach, tick),
+            || settings.run_down_with(&device, a.accel_rms_g, approach, tick),
         )
     });
     let (up, down) = (up?, down?);
@@ -95,13 +95,15 @@ pub(crate) fn response(args: ResponseArgs) -> Result<()> {
         accel_rms_g: a.accel_rms_g,
     };
     let cont = ContinuationSettings::frequency(a.from, a.to, protocol.max_step_hz);
-    let diagram = diagram(
-        &device,
-        start_drive,
-        &cont,
-        &DiagramOptions::default(),
-        |b| eprintln!("[endstop-response]   branch: {b}"),
-    )?;
+    let diagram = common::with_progress(1, "continuation", |branch| {
+        diagram(
+            &device,
+            start_drive,
+            &cont,
+            &DiagramOptions::default(),
+            branch,
+        )
+    })?;
 
     let rows = diagram_rows(&device.name, &diagram);
     exp.write_parquet("continuation", &mut frame(rows)?, &device.params)?;

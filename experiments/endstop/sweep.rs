@@ -18,7 +18,7 @@ pub(crate) fn sweep(a: RangeArgs) -> Result<()> {
     let protocol = a.protocol(&device);
     let settings = a.sweep_settings(&device, &protocol);
     let report = common::with_progress(settings.freqs_hz.len(), "sweep", |tick| {
-        settings.run_with(&device, a.accel_rms_g, protocol.approach, |_| tick())
+        settings.run_with(&device, a.accel_rms_g, protocol.approach, tick)
     })?;
 
     let steps = &report.sweep.steps;

@@ -13,7 +13,7 @@
 //!   skipped, the answer boxes, the book's build);
 //! * [`reports`]: the outputs of each figure, study and `endstop` command (Parquet rows,
 //!   plots, the book's tables and sentences), and the readers of measured files;
-//! * [`io`]: the helpers every report uses (plots, data frames, Markdown tables);
+//! * [`io`]: the helpers every report uses (plots, data frames, Markdown tables, progress bars);
 //!
 //! and [`ngspice`], the runner of the external circuit simulator.
 pub mod io;
@@ -21,6 +21,7 @@ pub mod ngspice;
 pub mod pipeline;
 pub mod reports;
 
+pub use io::progress::{progress, with_progress, Bar};
 pub use reports::calibration_io::{calibrated_prototype1, prototype1_both_sets};
 
 /// Every experiment binary allocates through mimalloc: a record's 10^6-sample vectors are
@@ -41,7 +42,6 @@ use endstop::device::Device;
 use endstop::paper::claims::{Claims, Value};
 use endstop::paper::setups::ParamSet;
 use endstop::paper::Figure;
-use indicatif::{ProgressBar, ProgressStyle};
 use polars::prelude::*;
 use serde::Serialize;
 
@@ -516,27 +516,6 @@ fn rusage_s(_who: Who) -> Option<f64> {
 /// Locks a mutex, also after a panic elsewhere (the data are append-only lists).
 fn lock<T>(m: &Mutex<T>) -> MutexGuard<'_, T> {
     m.lock().unwrap_or_else(|e| e.into_inner())
-}
-
-/// A progress bar on stderr (hidden when stderr is not a terminal).
-pub fn progress(len: u64, what: &str) -> ProgressBar {
-    let pb = ProgressBar::new(len);
-    pb.set_style(
-        ProgressStyle::with_template("{prefix:>10} [{bar:30}] {pos}/{len} {msg} ({elapsed})")
-            .unwrap_or_else(|_| ProgressStyle::default_bar())
-            .progress_chars("=> "),
-    );
-    pb.set_prefix(what.to_string());
-    pb
-}
-
-/// Runs `work` under a progress bar of `len` steps labelled `what` (cleared when `work`
-/// returns); `work` gets the callback that advances the bar by one step.
-pub fn with_progress<T>(len: usize, what: &str, work: impl FnOnce(&(dyn Fn() + Sync)) -> T) -> T {
-    let pb = progress(len as u64, what);
-    let out = work(&|| pb.inc(1));
-    pb.finish_and_clear();
-    out
 }
 
 /// Formats a number with `sig` significant digits for generated prose.

@@ -5,8 +5,8 @@
 
 use std::path::Path;
 
-use endstop::device::Device;
-use endstop::fit::{fit, Direction, FeatureKind, FitReport, FitSettings, FreeParam, SweepData};
+use endstop::device::{Device, ParamRange};
+use endstop::fit::{fit, Direction, FeatureKind, FitReport, FitSettings, SweepData};
 use endstop::paper::calibration::calibrate_prototype1;
 use endstop_experiments::reports::fit_csv::parse_sweep;
 
@@ -27,14 +27,10 @@ fn paper_data() -> SweepData {
 
 const GAP: &str = "stops.both.gap_m";
 
-fn gap_range() -> FreeParam {
+fn gap_range() -> ParamRange {
     // From well below the calibrated gap up to just below the finger overlap x0 = 10 um,
     // which the gap must not exceed.
-    FreeParam {
-        path: GAP.into(),
-        lo: 4e-6,
-        hi: 9.9e-6,
-    }
+    ParamRange::auto(GAP, 4e-6, 9.9e-6)
 }
 
 fn print(r: &FitReport) {
@@ -76,11 +72,7 @@ fn the_joint_fit_of_kink_and_jump_contains_the_calibrated_gap() {
     let device = published();
     let free = [
         gap_range(),
-        FreeParam {
-            path: "stops.both.damping_n_s_per_m".into(),
-            lo: 0.1,
-            hi: 20.0,
-        },
+        ParamRange::auto("stops.both.damping_n_s_per_m", 0.1, 20.0),
     ];
     let r = fit(&device, &[paper_data()], &free, &FitSettings::default()).unwrap();
     print(&r);

@@ -3,9 +3,10 @@
 //! `endstop.fit.sweep_data` in Python), the result as a dict with the GIL released while the
 //! fit runs.
 
+use endstop::device::ParamRange;
 use endstop::fit::{
-    self, Direction, Feature, FeatureKind, FitError, FitReport, FitSettings, FreeParam, Point,
-    Quantity, SweepData,
+    self, Direction, Feature, FeatureKind, FitError, FitReport, FitSettings, Point, Quantity,
+    SweepData,
 };
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
@@ -164,9 +165,9 @@ fn fit_py<'py>(
         .iter()
         .map(sweep_from_dict)
         .collect::<PyResult<_>>()?;
-    let free: Vec<FreeParam> = free
+    let free: Vec<ParamRange> = free
         .into_iter()
-        .map(|(path, lo, hi)| FreeParam { path, lo, hi })
+        .map(|(path, lo, hi)| ParamRange::auto(&path, lo, hi))
         .collect();
     let dev = device.inner.clone();
     let report = py

@@ -3,10 +3,11 @@
 //! spectrum's features over the free parameters from a design of ensembles, then the posterior
 //! of the parameters with the emulators' uncertainty in it.
 
+use endstop::device::ParamRange;
 use endstop::fit::spectrum::{
     build_emulator, MeasuredSpectrum, SpectrumFitError, SpectrumSettings, FEATURES,
 };
-use endstop::fit::{FitError, FreeParam};
+use endstop::fit::FitError;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 
@@ -52,9 +53,9 @@ fn fit_spectrum<'py>(
             "per_param must be at least 1 and design_records at least 2",
         ));
     }
-    let free: Vec<FreeParam> = free
+    let free: Vec<ParamRange> = free
         .into_iter()
-        .map(|(path, lo, hi)| FreeParam { path, lo, hi })
+        .map(|(path, lo, hi)| ParamRange::auto(&path, lo, hi))
         .collect();
     let dev = device.inner.clone();
     let settings = SpectrumSettings {

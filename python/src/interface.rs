@@ -4,6 +4,7 @@
 //! and numpy arrays with the GIL released while it runs.
 
 use endstop::drive::Sine;
+use endstop::progress::Silent;
 use endstop::study::interface::charging::{charge, ChargeSettings};
 use endstop::study::interface::continuation::{
     continue_frequency, IfBranchEnd, IfContinuationSettings,
@@ -51,7 +52,7 @@ fn interface_response<'py>(
     set.ds_max = max_step_hz / set.freq_scale_hz;
     let dev = device.inner.clone();
     let branch = py
-        .detach(move || continue_frequency(&dev, &set, |_| {}))
+        .detach(move || continue_frequency(&dev, &set, &Silent))
         .map_err(solver_err)?;
     let d = PyDict::new(py);
     let col = |f: &dyn Fn(&endstop::study::interface::IfSteady) -> f64| {
@@ -131,7 +132,7 @@ fn charge_storage<'py>(
                 &dev,
                 Sine::from_rms_g(accel_rms_g, freq_hz),
                 &settings,
-                |_, _| {},
+                &Silent,
             )
         })
         .map_err(solver_err)?;

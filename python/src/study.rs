@@ -7,6 +7,7 @@ use endstop::device::Device;
 use endstop::paper::setups::paper_record;
 use endstop::physics::linear::white_noise_power_w;
 use endstop::physics::two_port::{self, TwoPort};
+use endstop::progress::Silent;
 use endstop::study::amplitude::{amplitude_sweep_report, AmplitudeReport};
 use endstop::study::ensemble::{run_ensemble, EnsembleSpec};
 use endstop::study::record::{simulate_record, RecordSpec, RecordSummary};
@@ -119,7 +120,7 @@ fn up_sweep<'py>(
     let approach = approach(ramp_rate_hz_per_s)?;
     let dev = device.inner.clone();
     let report = py
-        .detach(move || settings.run_with(&dev, accel_rms_g, approach, |_| {}))
+        .detach(move || settings.run_with(&dev, accel_rms_g, approach, &Silent))
         .map_err(solver_err)?;
     sweep_dict(py, &report)
 }
@@ -200,7 +201,7 @@ fn down_sweep<'py>(
     let approach = approach(ramp_rate_hz_per_s)?;
     let dev = device.inner.clone();
     let report = py
-        .detach(move || settings.run_down_with(&dev, accel_rms_g, approach, |_| {}))
+        .detach(move || settings.run_down_with(&dev, accel_rms_g, approach, &Silent))
         .map_err(solver_err)?;
     let all: Vec<&Measurement> = report.measurements().collect();
     let d = steps_dict(py, &all)?;
@@ -241,7 +242,7 @@ fn orbits<'py>(
     check_range(accel_rms_g, start_hz, stop_hz, step_hz)?;
     let dev = device.inner.clone();
     let branch = py
-        .detach(move || frequency_branch(&dev, accel_rms_g, start_hz, stop_hz, step_hz, |_| {}))
+        .detach(move || frequency_branch(&dev, accel_rms_g, start_hz, stop_hz, step_hz, &Silent))
         .map_err(solver_err)?;
     let d = PyDict::new(py);
     let col = |f: &dyn Fn(&endstop::study::orbit::Orbit) -> f64| {
@@ -320,7 +321,7 @@ fn amplitude_sweep<'py>(
     let report = py
         .detach(move || {
             let cfg = steady_config(&dev, freq_hz);
-            amplitude_sweep_report(&dev, freq_hz, &acc, &cfg, refine_tol_g, |_| {})
+            amplitude_sweep_report(&dev, freq_hz, &acc, &cfg, refine_tol_g, &Silent)
         })
         .map_err(solver_err)?;
     amplitude_dict(py, &report)
@@ -403,7 +404,7 @@ fn ensemble<'py>(
     let spec = EnsembleSpec::for_device(&dev, record, seed, records);
     let nperseg = spec.welch.nperseg;
     let ens = py
-        .detach(move || run_ensemble(&dev, &spec, || {}))
+        .detach(move || run_ensemble(&dev, &spec, &Silent))
         .map_err(solver_err)?;
     let d = PyDict::new(py);
     d.set_item("nperseg", nperseg)?;

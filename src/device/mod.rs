@@ -47,7 +47,7 @@ use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
 pub use interface::{DcLoad, Diode, Interface, Inversion, Rectifier};
-pub use range::{device_at, ParamRange, Spacing};
+pub use range::{at_unit, own_value, with_values, ParamRange, Spacing, ACCEL_SCALE_PATH};
 pub use stops::{HertzLineStop, HertzPointStiffness, Stop, StopLaw, StopSide, Stops};
 pub use suspension::Suspension;
 pub use transducer::{AreaOverlapPair, Electromagnetic, GapClosingPair, Piezoelectric, Transducer};

@@ -112,7 +112,8 @@ impl Device {
         Ok(values[0])
     }
 
-    /// A copy with a numeric parameter set by its dotted path, validated like a file.
+    /// A copy with a numeric parameter set by its dotted path, validated like a file. A yes/no
+    /// switch (`stops.both.tension_free`) is set by 0 (no) or 1 (yes).
     ///
     /// ```
     /// # let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/data/prototype2.toml")).unwrap();
@@ -124,27 +125,25 @@ impl Device {
     /// assert!(dev.with_param("mechanics.no_such_key", 1.0).is_err());
     /// ```
     pub fn with_param(&self, path: &str, value: f64) -> Result<Device, ParamError> {
+        self.with_params(&[(path, value)])
+    }
+
+    /// A copy with several parameters set by their dotted paths (as [`Device::with_param`]),
+    /// validated once, after all are set.
+    pub fn with_params(&self, values: &[(&str, f64)]) -> Result<Device, ParamError> {
         let mut table = self.expanded_value();
-        let path_c = canonical(path);
-        for p in targets(path_c) {
-            let slot =
-                lookup_mut(&mut table, &p).ok_or_else(|| unknown(path, &self.param_paths()))?;
-            *slot = match slot {
-                toml::Value::Integer(_) => {
-                    if value.fract() != 0.0 || !value.is_finite() {
-                        return Err(ParamError::OutOfRange {
-                            source_name: "parameter".into(),
-                            field: path.to_string(),
-                            value,
-                            range: "an integer".into(),
-                        });
-                    }
-                    toml::Value::Integer(value as i64)
-                }
-                toml::Value::Float(_) => toml::Value::Float(value),
-                _ => return Err(unknown(path, &self.param_paths())),
-            };
+        for &(path, value) in values {
+            for p in targets(canonical(path)) {
+                let slot =
+                    lookup_mut(&mut table, &p).ok_or_else(|| unknown(path, &self.param_paths()))?;
+                *slot = set(slot, path, value)?;
+            }
         }
+        let path = values
+            .iter()
+            .map(|(p, _)| *p)
+            .collect::<Vec<_>>()
+            .join("`, `");
         let text = toml::to_string(&table).expect("a TOML table serialises");
         let raw: RawDevice = toml::from_str(&text).map_err(|e| ParamError::Parse {
             source_name: format!("parameter `{path}`"),
@@ -188,6 +187,7 @@ fn lookup(t: &toml::Table, path: &str) -> Option<f64> {
             return match v {
                 toml::Value::Float(f) => Some(*f),
                 toml::Value::Integer(i) => Some(*i as f64),
+                toml::Value::Boolean(b) => Some(f64::from(u8::from(*b))),
                 _ => None,
             };
         }
@@ -208,5 +208,32 @@ fn lookup_mut<'a>(t: &'a mut toml::Table, path: &str) -> Option<&'a mut toml::Va
         }
     }
     let v = table.get_mut(last)?;
-    matches!(v, toml::Value::Float(_) | toml::Value::Integer(_)).then_some(v)
+    matches!(
+        v,
+        toml::Value::Float(_) | toml::Value::Integer(_) | toml::Value::Boolean(_)
+    )
+    .then_some(v)
+}
+
+/// The value `value` in the slot's type: an integer for an integer, 0 or 1 for a yes/no.
+fn set(slot: &toml::Value, path: &str, value: f64) -> Result<toml::Value, ParamError> {
+    let refuse = |range: &str| ParamError::OutOfRange {
+        source_name: "parameter".into(),
+        field: path.to_string(),
+        value,
+        range: range.into(),
+    };
+    Ok(match slot {
+        toml::Value::Integer(_) => {
+            if value.fract() != 0.0 || !value.is_finite() {
+                return Err(refuse("an integer"));
+            }
+            toml::Value::Integer(value as i64)
+        }
+        toml::Value::Boolean(_) if value == 0.0 || value == 1.0 => {
+            toml::Value::Boolean(value == 1.0)
+        }
+        toml::Value::Boolean(_) => return Err(refuse("0 (no) or 1 (yes) for a yes/no switch")),
+        _ => toml::Value::Float(value),
+    })
 }

@@ -15,6 +15,7 @@
 use crate::device::Device;
 use crate::drive::Sine;
 use crate::physics::harvester::Harvester;
+use crate::progress::Silent;
 use crate::study::orbit::Orbit;
 use crate::study::stepped::{in_contact, SweepStep, Transition};
 use crate::study::sweep::{BranchEndKind, DownEndKind, SweepSettings, REFINE_TOL_HZ};
@@ -151,7 +152,7 @@ impl Path {
         let settings = SweepSettings::for_device(device, data.grid(), REFINE_TOL_HZ);
         Ok(match data.direction {
             Direction::Up => {
-                let r = settings.run(device, s.accel_rms_g, |_| {})?;
+                let r = settings.run(device, s.accel_rms_g, &Silent)?;
                 let end = r
                     .branch_end()
                     .map(|e| (e.kind == BranchEndKind::Jump, e.transition));
@@ -164,7 +165,7 @@ impl Path {
                 }
             }
             Direction::Down => {
-                let r = settings.run_down(device, s.accel_rms_g, |_| {})?;
+                let r = settings.run_down(device, s.accel_rms_g, &Silent)?;
                 let end = r.branch_end().map(|(k, t)| (k == DownEndKind::Jump, t));
                 Path {
                     values: r.sweep.values.clone(),

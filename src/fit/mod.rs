@@ -32,9 +32,11 @@
 //! converged one is reported, with the number of starts tried.
 //!
 //! # Coordinates
-//! A free parameter with range `lo..hi` is searched as `u = logit((p - lo) / (hi - lo))`, or,
-//! when `lo > 0` and `hi / lo >= 10`, as the logit of `ln p` between `ln lo` and `ln hi`: the
-//! search cannot leave the range, and wide ranges are searched by ratios.
+//! A free parameter ([`ParamRange`]) with range `lo..hi` is searched as
+//! `u = logit((p - lo) / (hi - lo))`, or, when its spacing is [`Spacing::Log`] (the default of
+//! a range written with `lo > 0` and `hi / lo >= 10`, [`Spacing::auto`]), as the logit of
+//! `ln p` between `ln lo` and `ln hi`: the search cannot leave the range, and wide ranges are
+//! searched by ratios.
 //!
 //! # Uncertainty
 //! The covariance of the estimates is the Gauss-Newton one, `(J^T J)^-1` in the transformed
@@ -72,18 +74,20 @@ use thiserror::Error;
 pub use data::{DataError, Direction, Feature, FeatureKind, Point, Quantity, SweepData};
 pub use lm::{LmSettings, Termination};
 pub use model::{model_curve, model_sweep, model_values, ModelSweep};
-pub use params::{check_free, FreeParam};
+pub use params::check_free;
 pub use report::{FitReport, FitWarning, FittedParam, Residual, Uncertainty};
 
 use params::{apply, Transform};
 
-use crate::device::{Device, ParamError};
+#[cfg(doc)]
+use crate::device::Spacing;
+use crate::device::{Device, ParamError, ParamRange};
 use crate::num::stats::student_t_975;
 use crate::ode::SolverError;
 
 /// The path of the one free parameter that is not the device's: a factor on every data set's
 /// stated acceleration (an accelerometer's calibration error).
-pub const ACCEL_SCALE_PATH: &str = "drive.accel_scale";
+pub use crate::device::ACCEL_SCALE_PATH;
 
 /// Steady-state criterion of the stepped-sweep model ([`model`]): the relative change of the RMS voltages between
 /// blocks (the sweeps' default is 1e-3, as large as the forward-difference change of a
@@ -230,7 +234,7 @@ fn measured(data: &[SweepData]) -> (Vec<f64>, Vec<f64>, Vec<bool>) {
 pub fn fit(
     device: &Device,
     data: &[SweepData],
-    free: &[FreeParam],
+    free: &[ParamRange],
     settings: &FitSettings,
 ) -> Result<FitReport, FitError> {
     for d in data {
@@ -242,7 +246,7 @@ pub fn fit(
     if n < p {
         return Err(FitError::TooFewData { n, p });
     }
-    let tr: Vec<Transform> = free.iter().map(|f| Transform::new(f.lo, f.hi)).collect();
+    let tr: Vec<Transform> = free.iter().map(Transform::of).collect();
     let u0: Vec<f64> = tr.iter().zip(&starts).map(|(t, &v)| t.to_u(v)).collect();
     let (y, sigma, stated) = measured(data);
     let all_stated = stated.iter().all(|&s| s);

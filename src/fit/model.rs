@@ -10,6 +10,7 @@ use super::{
     Direction, FeatureKind, FitError, Quantity, SweepData, FIT_REFINE_TOL_HZ, FIT_REL_CHANGE_TOL,
 };
 use crate::device::Device;
+use crate::progress::Silent;
 use crate::study::steady::Measurement;
 use crate::study::sweep::{SweepSettings, REFINE_TOL_HZ};
 
@@ -64,7 +65,7 @@ fn sweep_with(
     let (mut curve, onset_hz, branch_end_hz): (Vec<(f64, f64)>, Option<f64>, Option<f64>) =
         match data.direction {
             Direction::Up => {
-                let r = settings.run(device, accel, |_| {})?;
+                let r = settings.run(device, accel, &Silent)?;
                 let curve = r
                     .measurements()
                     .map(|m| (m.freq_hz, quantity_of(data.quantity, m)))
@@ -82,7 +83,7 @@ fn sweep_with(
                 (curve, Some(onset), Some(end))
             }
             Direction::Down => {
-                let r = settings.run_down(device, accel, |_| {})?;
+                let r = settings.run_down(device, accel, &Silent)?;
                 let curve = r
                     .measurements()
                     .map(|m| (m.freq_hz, quantity_of(data.quantity, m)))

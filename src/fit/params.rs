@@ -1,22 +1,9 @@
-//! The free parameters of a fit: named by their dotted path, checked against the device, and
-//! mapped to the unbounded coordinates the search works in (see the parent module's docs).
-
-use serde::Serialize;
+//! The free parameters of a fit: device parameters with ranges ([`ParamRange`], by their
+//! dotted path), checked against the device, and mapped to the unbounded coordinates the search
+//! works in (see the parent module's docs).
 
 use super::{FitError, ACCEL_SCALE_PATH};
-use crate::device::Device;
-
-/// A free parameter: a device parameter by its dotted path ([`Device::param`]) or
-/// [`ACCEL_SCALE_PATH`], searched within `lo..hi`.
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct FreeParam {
-    /// Dotted path.
-    pub path: String,
-    /// Lower end of the range.
-    pub lo: f64,
-    /// Upper end of the range.
-    pub hi: f64,
-}
+use crate::device::{own_value, with_values, Device, ParamError, ParamRange, Spacing};
 
 /// How a free parameter maps to the unbounded coordinate.
 #[derive(Debug, Clone, Copy)]
@@ -29,8 +16,13 @@ pub(super) struct Transform {
 }
 
 impl Transform {
-    pub(super) fn new(lo: f64, hi: f64) -> Self {
-        if lo > 0.0 && hi / lo >= 10.0 {
+    /// The transform of a free parameter: of its logarithm for a log-spaced range.
+    pub(super) fn of(range: &ParamRange) -> Self {
+        Self::new(range.lo, range.hi, range.spacing == Spacing::Log)
+    }
+
+    fn new(lo: f64, hi: f64, log: bool) -> Self {
+        if log {
             Self {
                 a: lo.ln(),
                 b: hi.ln(),
@@ -80,40 +72,38 @@ impl Transform {
 /// The device and acceleration factor at parameter values `p`.
 pub(super) fn apply(
     base: &Device,
-    free: &[FreeParam],
+    free: &[ParamRange],
     p: &[f64],
 ) -> Result<(Device, f64), FitError> {
-    let mut d = base.clone();
-    let mut scale = 1.0;
-    for (f, &v) in free.iter().zip(p) {
-        if f.path == ACCEL_SCALE_PATH {
-            scale = v;
-        } else {
-            d = d.with_param(&f.path, v).map_err(|error| FitError::Param {
-                path: f.path.clone(),
-                error,
-            })?;
-        }
-    }
-    Ok((d, scale))
+    with_values(base, free, p).map_err(|error| param_error(free, error))
+}
+
+/// A device's refusal of the free parameters' values, naming the parameter at fault (the
+/// field the device names, or every free path when it names none).
+fn param_error(free: &[ParamRange], error: ParamError) -> FitError {
+    let path = match error.field() {
+        Some(field) => field.to_string(),
+        None => free
+            .iter()
+            .map(|f| f.path.as_str())
+            .collect::<Vec<_>>()
+            .join(", "),
+    };
+    FitError::Param { path, error }
 }
 
 /// The starting value of a free parameter in `device`.
-fn start_value(device: &Device, f: &FreeParam) -> Result<f64, FitError> {
-    if f.path == ACCEL_SCALE_PATH {
-        Ok(1.0)
-    } else {
-        device.param(&f.path).map_err(|error| FitError::Param {
-            path: f.path.clone(),
-            error,
-        })
-    }
+fn start_value(device: &Device, f: &ParamRange) -> Result<f64, FitError> {
+    own_value(device, &f.path).map_err(|error| FitError::Param {
+        path: f.path.clone(),
+        error,
+    })
 }
 
 /// Checks the free parameters against `device`: each exists, is free once, its range is
 /// finite with `lo < hi`, both ends are valid values of the device, and the device's value
 /// lies strictly inside. Returns the starting values.
-pub fn check_free(device: &Device, free: &[FreeParam]) -> Result<Vec<f64>, FitError> {
+pub fn check_free(device: &Device, free: &[ParamRange]) -> Result<Vec<f64>, FitError> {
     if free.is_empty() {
         return Err(FitError::NoFreeParam);
     }
@@ -133,6 +123,14 @@ pub fn check_free(device: &Device, free: &[FreeParam]) -> Result<Vec<f64>, FitEr
         let p0 = start_value(device, f)?;
         if !(f.lo.is_finite() && f.hi.is_finite() && f.lo < f.hi) {
             return Err(range_err("must be finite with lo < hi"));
+        }
+        if f.relative || f.spacing == Spacing::Switch {
+            return Err(range_err(
+                "must be a range of values (not of factors, not a switch)",
+            ));
+        }
+        if f.spacing == Spacing::Log && f.lo <= 0.0 {
+            return Err(range_err("must be positive for log spacing"));
         }
         if f.path == ACCEL_SCALE_PATH {
             if f.lo <= 0.0 {
@@ -165,7 +163,7 @@ mod tests {
     #[test]
     fn transforms_round_trip_inside_the_range() {
         for (lo, hi, p) in [(4e-6, 8e-6, 5e-6), (0.1, 10.0, 1.5), (-1.0, 1.0, 0.3)] {
-            let t = Transform::new(lo, hi);
+            let t = Transform::new(lo, hi, Spacing::auto(lo, hi) == Spacing::Log);
             let u = t.to_u(p);
             assert!((t.to_p(u) - p).abs() <= 1e-12 * p.abs().max(1.0));
             let h = 1e-6;

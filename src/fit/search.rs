@@ -6,17 +6,17 @@ use super::branch::{self, SetModel};
 use super::lm::{self, levenberg_marquardt_tracked, LmResult, LmSettings, Tracked};
 use super::params::{apply, Transform};
 use super::{
-    model_values, FitError, FitSettings, FreeParam, SweepData, AGREE_REL, AGREE_SIGMA, MAX_ROUNDS,
+    model_values, FitError, FitSettings, SweepData, AGREE_REL, AGREE_SIGMA, MAX_ROUNDS,
     STATED_COST_ABS_TOL,
 };
-use crate::device::Device;
+use crate::device::{Device, ParamRange};
 
 /// What every evaluation needs: the device, the data, the free parameters with their
 /// transforms, and the measured values with their weights.
 pub(super) struct Problem<'a> {
     pub(super) device: &'a Device,
     pub(super) data: &'a [SweepData],
-    pub(super) free: &'a [FreeParam],
+    pub(super) free: &'a [ParamRange],
     pub(super) tr: Vec<Transform>,
     pub(super) y: Vec<f64>,
     pub(super) sigma: Vec<f64>,

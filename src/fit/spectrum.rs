@@ -29,12 +29,13 @@ use rayon::prelude::*;
 use thiserror::Error;
 
 use super::params::{apply, check_free};
-use super::{FitError, FreeParam};
-use crate::device::Device;
+use super::FitError;
+use crate::device::{Device, ParamRange};
 use crate::drive::noise::NoiseSpec;
 use crate::num::gp::GpSettings;
 use crate::num::history::{maximin_lhs, Emulator, HistoryError};
 use crate::num::stats::Jackknife;
+use crate::progress::{Progress, Silent};
 use crate::study::ensemble::{run_ensemble, EnsembleSpec};
 use crate::study::record::RecordSpec;
 
@@ -189,7 +190,7 @@ pub fn model_features(
     let mut spec = EnsembleSpec::for_device(device, model_record(device, psd), seed, records);
     spec.analysis_band_hz = band;
     spec.first_stream = first_stream;
-    let e = run_ensemble(device, &spec, || {}).map_err(|e| e.to_string())?;
+    let e = run_ensemble(device, &spec, &Silent).map_err(|e| e.to_string())?;
     let mean = &e.mean_spectrum.total;
     let all = features(&mean.freq_hz, &mean.density, band).ok_or("no power in the band")?;
     let n = e.records.len();
@@ -244,7 +245,7 @@ impl Default for SpectrumSettings {
 #[derive(Debug, Clone)]
 pub struct SpectrumEmulator {
     /// The free parameters.
-    pub free: Vec<FreeParam>,
+    pub free: Vec<ParamRange>,
     /// The settings.
     pub settings: SpectrumSettings,
     /// The design (unit cube of the free parameters).
@@ -257,31 +258,21 @@ pub struct SpectrumEmulator {
     pub emulators: Vec<Emulator>,
 }
 
-/// A free parameter's value at unit coordinate `s` (logarithmic for ranges of a decade or
-/// more with a positive lower end, as the sweep fit's transform).
-pub fn param_at(f: &FreeParam, s: f64) -> f64 {
-    if f.lo > 0.0 && f.hi / f.lo >= 10.0 {
-        (f.lo.ln() + s * (f.hi.ln() - f.lo.ln())).exp()
-    } else {
-        f.lo + s * (f.hi - f.lo)
-    }
-}
-
 /// The device and the drive's scale at a unit-cube point.
-fn at(base: &Device, free: &[FreeParam], u: &[f64]) -> Result<(Device, f64), FitError> {
-    let p: Vec<f64> = free.iter().zip(u).map(|(f, s)| param_at(f, *s)).collect();
+fn at(base: &Device, free: &[ParamRange], u: &[f64]) -> Result<(Device, f64), FitError> {
+    let p: Vec<f64> = free.iter().zip(u).map(|(f, s)| f.at(*s)).collect();
     apply(base, free, &p)
 }
 
 /// Runs the design of ensembles of `base` with `free` over `band` at the stated level and fits
-/// the emulators; `on_point()` after each design point.
+/// the emulators; `on_point.tick()` after each design point.
 pub fn build_emulator(
     base: &Device,
-    free: &[FreeParam],
+    free: &[ParamRange],
     accel_psd: f64,
     band: (f64, f64),
     settings: SpectrumSettings,
-    on_point: &(dyn Fn() + Sync),
+    on_point: &dyn Progress,
 ) -> Result<SpectrumEmulator, SpectrumFitError> {
     check_free(base, free)?;
     let n = settings.per_param * free.len();
@@ -302,7 +293,7 @@ pub fn build_emulator(
                 (settings.seed, 0),
             )
             .map_err(|why| SpectrumFitError::Ensemble { point: k, why });
-            on_point();
+            on_point.tick();
             r
         })
         .collect::<Result<Vec<_>, _>>()?;
@@ -432,8 +423,7 @@ impl SpectrumEmulator {
             .iter()
             .enumerate()
             .map(|(j, f)| {
-                let mut v: Vec<(f64, f64)> =
-                    last.iter().map(|(u, w)| (param_at(f, u[j]), *w)).collect();
+                let mut v: Vec<(f64, f64)> = last.iter().map(|(u, w)| (f.at(u[j]), *w)).collect();
                 v.sort_by(|a, b| a.0.total_cmp(&b.0));
                 let q = |p: f64| {
                     let mut acc = 0.0;
@@ -448,7 +438,7 @@ impl SpectrumEmulator {
                 SpectrumParam {
                     path: f.path.clone(),
                     mean: v.iter().map(|(x, w)| x * w).sum::<f64>() / total,
-                    best: param_at(f, best_u[j]),
+                    best: f.at(best_u[j]),
                     interval: (q(0.025), q(0.975)),
                 }
             })

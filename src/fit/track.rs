@@ -7,6 +7,7 @@
 use crate::drive::Sine;
 use crate::ode::Stats;
 use crate::physics::harvester::{Harvester, State};
+use crate::progress::Silent;
 use crate::study::continuation::{continue_branch_until, ContinuationSettings, Event, EventKind};
 use crate::study::orbit::{Forcing, Orbit, Parameter, Shooter, ShootingConfig};
 
@@ -338,7 +339,7 @@ fn fold_from(
     let jump = |e: &Event| e.kind == EventKind::Fold && !e.at_grazing && e.stable_before;
     // The branch ends at that fold: what lies beyond it is not needed.
     let branch =
-        continue_branch_until(h, first, &settings, |_| {}, jump).map_err(|e| ctx(e.into()))?;
+        continue_branch_until(h, first, &settings, &Silent, jump).map_err(|e| ctx(e.into()))?;
     let Some(fold) = branch.events.iter().find(|e| jump(e)) else {
         return Err(Lost(format!(
             "no fold between {f_start} and {limit_hz} Hz on the branch"

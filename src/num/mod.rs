@@ -1,7 +1,8 @@
 //! Generic numerical helpers: one bracketing root finder ([`roots`]), sample statistics
-//! ([`stats`]), variance-based global sensitivity ([`sensitivity`]), multi-start minimax
-//! fitting ([`minimax`]), Pareto fronts ([`pareto`]), Gaussian-process emulators ([`gp`]) with
-//! their Sobol indices ([`gp_sensitivity`]) and history matching in waves ([`history`]).
+//! ([`stats`]), one number against a reference with its verdict ([`compare`]), variance-based
+//! global sensitivity ([`sensitivity`]), multi-start minimax fitting ([`minimax`]), Pareto
+//! fronts ([`pareto`]), Gaussian-process emulators ([`gp`]) with their Sobol indices
+//! ([`gp_sensitivity`]) and history matching in waves ([`history`]).
 //!
 //! ```
 //! use endstop::num::roots::{illinois, RootOptions, Sample};
@@ -19,6 +20,7 @@
 //! assert!((m.ci95 - 2.776_445 * 2.5f64.sqrt() / 5f64.sqrt()).abs() < 1e-5);
 //! ```
 
+pub mod compare;
 pub mod gp;
 pub mod gp_sensitivity;
 pub mod history;

@@ -27,6 +27,7 @@ use crate::paper::measured::P1_MEASURED_ONSET_HZ;
 use crate::paper::setups::{comb, endstop, hertz_stop, prototype1_setup, with_endstop, ParamSet};
 use crate::paper::sweeps::{self, P1_HIGH_ACCEL_RMS_G};
 use crate::physics::harvester::Harvester;
+use crate::progress::Silent;
 use crate::study::steady::SteadyConfig;
 use crate::study::stepped::{continue_sweep, in_contact, Sweep, Transition};
 use crate::study::sweep::frequency_continuation;
@@ -334,7 +335,7 @@ pub fn fit_bim_for_jump(
     let mut samples = Vec::new();
     let mut eval = |bim: f64| -> Result<(f64, Option<BranchEnd>), SolverError> {
         let d = with_endstop(device, stiffness, bim);
-        let r = settings.run(&d, accel_rms_g, |_| {})?;
+        let r = settings.run(&d, accel_rms_g, &Silent)?;
         let end = r.branch_end();
         samples.push(BimSample {
             bim_n_s_per_m: bim,

@@ -19,10 +19,13 @@ use thiserror::Error;
 
 use crate::device::{Device, StiffnessModel};
 use crate::drive::Sine;
+pub use crate::num::compare::Verdict;
+use crate::num::compare::{Comparison, Measure};
 use crate::ode::{Dopri5, SolverError, Stats};
 use crate::paper::setups::{with_endstop, FIG13_BIAS_V};
 use crate::physics::contact::Mode;
 use crate::physics::harvester::{Harvester, State};
+use crate::progress::Silent;
 use crate::spice::{
     netlist, parse_wrdata, InitialCondition, Method, SolverSettings, SpiceDrive, SpiceError,
     SpiceOptions, Transient, Waveforms, DOCUMENTED_STEPS_PER_PERIOD, HERTZ_NEWTON_STEPS,
@@ -313,7 +316,7 @@ pub fn prepare(case: &Case) -> Result<Prepared, SolverError> {
                 drive: move |ff: f64| (ff, a),
                 cfg: cfg.clone(),
             };
-            let sweep = c.run(&linspace_step(from_hz, f, step_hz), |_| {})?;
+            let sweep = c.run(&linspace_step(from_hz, f, step_hz), &Silent)?;
             let last = sweep
                 .steps
                 .last()
@@ -499,25 +502,14 @@ impl SpiceRun {
     }
 }
 
-/// The verdict on one ngspice run against ours.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub enum Verdict {
-    /// The relative difference is within the case's tolerance.
-    Within,
-    /// It is not (or is not a number).
-    Outside,
-    /// ngspice did not give a result (the reason).
-    Failed(String),
-}
-
-impl Verdict {
-    /// The verdict as the tables write it.
-    pub fn label(&self) -> String {
-        match self {
-            Verdict::Within => "within tolerance".into(),
-            Verdict::Outside => "outside tolerance".into(),
-            Verdict::Failed(why) => format!("ngspice failed: {why}"),
-        }
+/// The verdict on one ngspice run as the tables write it: within or outside the case's
+/// tolerance, or, with [`Verdict::NotYet`], why ngspice gave no result (`failure`).
+pub fn verdict_label(verdict: Verdict, failure: Option<&str>) -> String {
+    match verdict {
+        Verdict::Reproduced => "within tolerance".into(),
+        Verdict::Deviates => "outside tolerance".into(),
+        Verdict::NotYet => format!("ngspice failed: {}", failure.unwrap_or("no result")),
+        Verdict::Open => "open question".into(),
     }
 }
 
@@ -530,6 +522,10 @@ pub struct Difference {
     pub rel_v2: f64,
     /// The larger magnitude of the two, what the tolerance applies to.
     pub rel: f64,
+    /// Our RMS voltages of loads 1 and 2 (V).
+    pub ours_v: [f64; 2],
+    /// ngspice's (V).
+    pub spice_v: [f64; 2],
 }
 
 impl Difference {
@@ -541,42 +537,50 @@ impl Difference {
             rel_v1,
             rel_v2,
             rel: rel_v1.abs().max(rel_v2.abs()),
+            ours_v: [ours.v1_rms_v, ours.v2_rms_v],
+            spice_v: [spice.v1_rms_v, spice.v2_rms_v],
         }
     }
 
-    /// The verdict under `tolerance`: within if the larger relative difference is at most
-    /// `tolerance` (a NaN is outside).
+    /// Each load's RMS voltage, ngspice's against ours relative to ours, under `tolerance`.
+    pub fn comparisons(&self, tolerance: f64) -> [Comparison; 2] {
+        [0, 1].map(|k| Comparison {
+            ours: self.ours_v[k],
+            reference: self.spice_v[k],
+            measure: Measure::RelativeToOurs,
+            tolerance,
+        })
+    }
+
+    /// The verdict under `tolerance`: reproduced if both loads' relative differences are at
+    /// most `tolerance` (a NaN deviates).
     pub fn verdict(&self, tolerance: f64) -> Verdict {
-        if self.rel <= tolerance {
-            Verdict::Within
-        } else {
-            Verdict::Outside
-        }
+        Verdict::of(self.comparisons(tolerance).iter().all(Comparison::within))
     }
 }
 
 /// The acceptance over the whole cross-check: every case of `case_keys` must have exactly one
 /// verdict under the documented settings ([`Setting::documented`]), and each must be
-/// [`Verdict::Within`]. `verdicts` holds (case key, setting, verdict) of every run. Returns
+/// [`Verdict::Reproduced`]. `verdicts` holds (case key, setting, verdict) of every run. Returns
 /// the failures, one line each: a case without a documented verdict (or with two), and a
 /// documented verdict outside the tolerance or failed; a set with no case fails.
 pub fn acceptance_failures(
     case_keys: &[&str],
-    verdicts: &[(&str, Setting, &Verdict)],
+    verdicts: &[(&str, Setting, Verdict)],
 ) -> Vec<String> {
     if case_keys.is_empty() {
         return vec!["no case was compared".into()];
     }
     let mut failures = Vec::new();
     for key in case_keys {
-        let documented: Vec<&Verdict> = verdicts
+        let documented: Vec<Verdict> = verdicts
             .iter()
             .filter(|(k, s, _)| k == key && s.documented())
             .map(|(_, _, v)| *v)
             .collect();
         match documented.as_slice() {
-            [Verdict::Within] => {}
-            [v] => failures.push(format!("{key} [documented]: {}", v.label())),
+            [Verdict::Reproduced] => {}
+            [v] => failures.push(format!("{key} [documented]: {}", verdict_label(*v, None))),
             vs => failures.push(format!(
                 "{key}: {} verdicts under the documented settings, expected one",
                 vs.len()
@@ -592,12 +596,12 @@ mod tests {
 
     #[test]
     fn the_acceptance_fails_on_a_missing_case_an_outside_verdict_or_no_case() {
-        let within = Verdict::Within;
-        let outside = Verdict::Outside;
+        let within = Verdict::Reproduced;
+        let outside = Verdict::Deviates;
         let all = [
-            ("a", Setting::Defaults, &outside),
-            ("a", Setting::Documented, &within),
-            ("b", Setting::Documented, &within),
+            ("a", Setting::Defaults, outside),
+            ("a", Setting::Documented, within),
+            ("b", Setting::Documented, within),
         ];
         assert!(acceptance_failures(&["a", "b"], &all).is_empty());
         // Case b was not run under the documented settings: a failure, not a pass.
@@ -608,7 +612,7 @@ mod tests {
         assert_eq!(acceptance_failures(&[], &[]).len(), 1);
         assert_eq!(acceptance_failures(&["a"], &[]).len(), 1);
         // A documented verdict outside the tolerance.
-        let f = acceptance_failures(&["a"], &[("a", Setting::Documented, &outside)]);
+        let f = acceptance_failures(&["a"], &[("a", Setting::Documented, outside)]);
         assert_eq!(f, ["a [documented]: outside tolerance"]);
     }
 
@@ -629,7 +633,15 @@ mod tests {
             rel_v1: f64::NAN,
             rel_v2: f64::NAN,
             rel: f64::NAN,
+            ours_v: [1.0, 1.0],
+            spice_v: [f64::NAN, f64::NAN],
         };
-        assert_eq!(d.verdict(1e-3), Verdict::Outside);
+        assert_eq!(d.verdict(1e-3), Verdict::Deviates);
+        // One load's NaN is enough.
+        let d = Difference {
+            spice_v: [1.0, f64::NAN],
+            ..d
+        };
+        assert_eq!(d.verdict(1e-3), Verdict::Deviates);
     }
 }

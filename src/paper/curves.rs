@@ -13,6 +13,7 @@ use crate::device::{Device, StiffnessModel};
 use crate::ode::SolverError;
 use crate::paper::claims::{bool_value, Answer, ClaimKey, ClaimValue};
 use crate::paper::setups::{endstop, with_endstop};
+use crate::progress::Progress;
 use crate::study::steady::SteadyConfig;
 use crate::study::sweep::{compare_sweeps, BranchEnd, SweepComparison, SweepReport, SweepSettings};
 
@@ -110,18 +111,18 @@ pub struct Curve {
 }
 
 /// Runs the up-sweeps of `specs` on `device` in parallel (rayon), in the order of `specs`;
-/// `on_step()` is called after every coarse step of every sweep (from any thread).
+/// `on_step.tick()` is called after every coarse step of every sweep (from any thread).
 pub fn run_curves(
     device: &Device,
     specs: &[CurveSpec],
     settings: &SweepSettings,
-    on_step: &(dyn Fn() + Sync),
+    on_step: &dyn Progress,
 ) -> Result<Vec<Curve>, SolverError> {
     use rayon::prelude::*;
     specs
         .par_iter()
         .map(|spec| {
-            let report = settings.run(&spec.device(device), spec.accel_rms_g, |_| on_step())?;
+            let report = settings.run(&spec.device(device), spec.accel_rms_g, on_step)?;
             Ok(Curve {
                 spec: *spec,
                 report,
@@ -152,12 +153,12 @@ pub struct CurveSweeps<K> {
 
 impl<K: FigureCurve> CurveSweeps<K> {
     /// Runs every curve of `K` on `device` with `settings` and again with `halved`, in
-    /// parallel ([`run_curves`]); `on_step()` is called after every coarse step of every sweep.
+    /// parallel ([`run_curves`]); `on_step.tick()` is called after every coarse step of every sweep.
     pub fn run(
         device: &Device,
         settings: &SweepSettings,
         halved: &SweepSettings,
-        on_step: &(dyn Fn() + Sync),
+        on_step: &dyn Progress,
     ) -> Result<Self, SolverError> {
         let specs: Vec<CurveSpec> = K::ALL.iter().map(|c| c.spec()).collect();
         let (curves, halved) = rayon::join(

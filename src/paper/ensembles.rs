@@ -9,6 +9,7 @@ use crate::num::stats::Jackknife;
 use crate::paper::setups::{paper_record, prototype1_setup, ParamSet, Prototype1Sets};
 use crate::physics::linear::{linear_widths, LinearResponse};
 use crate::physics::two_port::{eq21_efficiency, eq21_power_w};
+use crate::progress::Progress;
 use crate::signal::welch::matlab_default_nperseg;
 use crate::signal::{Psd, WelchConfig, Widths};
 use crate::study::ensemble::{
@@ -144,7 +145,7 @@ impl Level {
 /// levels come back in the order of `cases`.
 pub fn run_levels(
     cases: Vec<LevelCase>,
-    progress: &(dyn Fn() + Sync),
+    progress: &dyn Progress,
 ) -> Result<Vec<Level>, RecordError> {
     let ec: Vec<EnsembleCase> = cases
         .iter()
@@ -251,7 +252,7 @@ pub fn run_prototype1(
     sets: &Prototype1Sets,
     levels: &[f64],
     realisations: usize,
-    progress: &(dyn Fn() + Sync),
+    progress: &dyn Progress,
 ) -> Result<Prototype1Run, RecordError> {
     let devices = sets.each().map(|(set, d)| (set, prototype1_setup(d)));
     let mut cases = Vec::new();

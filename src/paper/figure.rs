@@ -22,6 +22,7 @@
 //! ```
 
 use crate::paper::claims::{Claims, ClaimsError, Value};
+use crate::progress::Progress;
 
 /// A figure or table of the paper: its setup, its run, and our values of its claims.
 pub trait Figure {
@@ -43,7 +44,7 @@ pub trait Figure {
     fn work(setup: &Self::Setup) -> usize;
 
     /// Runs the figure, calling `progress` after each unit of work (from any thread).
-    fn run(setup: &Self::Setup, progress: &(dyn Fn() + Sync)) -> Result<Self::Run, Self::Error>;
+    fn run(setup: &Self::Setup, progress: &dyn Progress) -> Result<Self::Run, Self::Error>;
 
     /// Our values of the figure's claims under every parameter set it runs, each checked
     /// against `claims` (the tolerance classes a rule needs are read from it too).

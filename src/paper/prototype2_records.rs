@@ -17,6 +17,7 @@ use crate::paper::ensembles::{
     protocol_spec, run_levels, Level, LevelCase, P2_BAND_HZ, P2_NPERSEG,
 };
 use crate::paper::setups::{prototype2_setup, with_endstop, ParamSet};
+use crate::progress::Progress;
 use crate::study::record::{simulate_record, RecordError, Scheme};
 
 /// One of Figure 15's three levels.
@@ -228,11 +229,7 @@ fn case(device: &Device, index: usize, records: usize, variant: Option<&str>) ->
 
 /// Runs the protocol for prototype 2 (the parameter file's device; [`prototype2_setup`] is
 /// applied here), calling `progress` after each record of the ensembles.
-pub fn run(
-    prototype2: &Device,
-    scope: Scope,
-    progress: &(dyn Fn() + Sync),
-) -> Result<Run, RecordError> {
+pub fn run(prototype2: &Device, scope: Scope, progress: &dyn Progress) -> Result<Run, RecordError> {
     let dev = prototype2_setup(prototype2);
     let indices: Vec<usize> = match scope.levels {
         Levels::All => (0..LEVELS.len()).collect(),

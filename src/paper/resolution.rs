@@ -21,6 +21,7 @@ use crate::paper::ensembles::P1_BAND_HZ;
 use crate::paper::figures::{fig11, fig12};
 use crate::paper::setups::{paper_record, prototype1_setup};
 use crate::physics::linear::linear_widths;
+use crate::progress::Progress;
 use crate::signal::bandwidth::mean_psd;
 use crate::signal::{self, Psd, WelchConfig};
 use crate::study::ensemble::{first_stream_for_level, DEFAULT_SEED};
@@ -87,7 +88,7 @@ impl Study {
 pub fn run(
     published: &Device,
     records: usize,
-    progress: &(dyn Fn() + Sync),
+    progress: &dyn Progress,
 ) -> Result<Study, RecordError> {
     let dev = prototype1_setup(published);
     let rl = dev.transducer.load_resistance_ohm();
@@ -114,7 +115,7 @@ pub fn run(
                     )
                 })
                 .collect::<Result<Vec<_>, RecordError>>();
-            progress();
+            progress.tick();
             out
         })
         .collect::<Result<_, _>>()?;

@@ -5,6 +5,7 @@ use crate::device::Device;
 use crate::drive::Sine;
 use crate::ode::SolverError;
 use crate::physics::harvester::Harvester;
+use crate::progress::Progress;
 use crate::study::steady::{Measurement, SteadyConfig};
 use crate::study::stepped::{
     continue_sweep, first_contact, in_contact, values_beyond, with_midpoints, SteppedDrive, Sweep,
@@ -72,7 +73,7 @@ impl AmplitudeSettings {
     pub fn run(
         &self,
         device: &Device,
-        progress: impl FnMut(usize),
+        progress: &dyn Progress,
     ) -> Result<AmplitudeReport, SolverError> {
         let f = self.freq_hz;
         let acc = &self.accels_rms_g;
@@ -118,7 +119,7 @@ pub fn amplitude_sweep_report(
     accels_rms_g: &[f64],
     cfg: &SteadyConfig,
     refine_tol_g: f64,
-    progress: impl FnMut(usize),
+    progress: &dyn Progress,
 ) -> Result<AmplitudeReport, SolverError> {
     AmplitudeSettings {
         freq_hz,

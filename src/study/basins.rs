@@ -16,6 +16,7 @@ use rayon::prelude::*;
 use crate::drive::Sine;
 use crate::ode::{Dopri5, Stats};
 use crate::physics::harvester::{Harvester, State};
+use crate::progress::Progress;
 use crate::study::orbit::{mode_of, Forcing, Orbit, OrbitError, Shooter};
 
 /// A grid of initial states.
@@ -157,13 +158,13 @@ impl Basins {
 }
 
 /// The basins of `attractors` under `forcing` on the grid of `settings` (see the module
-/// docs); `on_cell()` is called after each cell.
+/// docs); `on_cell.tick()` is called after each cell.
 pub fn basins(
     base: &Harvester<Sine>,
     forcing: &Forcing,
     attractors: &[Attractor],
     settings: &BasinSettings,
-    on_cell: &(dyn Fn() + Sync),
+    on_cell: &dyn Progress,
 ) -> Result<Basins, OrbitError> {
     let cells = settings.grid.cells();
     let known = vec![None; cells.len()];
@@ -173,7 +174,7 @@ pub fn basins(
 /// The basins on `coarse_settings.grid.refined()`, with the other settings of
 /// `coarse_settings`, taking every cell that the refined grid shares with `coarse` (computed
 /// by [`basins`] with `coarse_settings` and the same `attractors`) from it instead of
-/// integrating it again; `on_cell()` is called after each new cell.
+/// integrating it again; `on_cell.tick()` is called after each new cell.
 ///
 /// A shared cell is taken only when its initial state is the coarse cell's to the bit (it is
 /// for [`BasinGrid::cells`], whose even-indexed refined values repeat the coarse ones exactly),
@@ -185,7 +186,7 @@ pub fn refine(
     attractors: &[Attractor],
     coarse_settings: &BasinSettings,
     coarse: &Basins,
-    on_cell: &(dyn Fn() + Sync),
+    on_cell: &dyn Progress,
 ) -> Result<Basins, OrbitError> {
     let g = coarse_settings.grid;
     if g.nx == 0 || g.nv == 0 {
@@ -235,7 +236,7 @@ fn settle_cells(
     settings: &BasinSettings,
     cells: Vec<(f64, f64)>,
     known: Vec<Option<(Option<usize>, usize)>>,
-    on_cell: &(dyn Fn() + Sync),
+    on_cell: &dyn Progress,
 ) -> Result<Basins, OrbitError> {
     if attractors.is_empty() || settings.grid.nx == 0 || settings.grid.nv == 0 {
         return Err(OrbitError::Invalid(
@@ -276,7 +277,7 @@ fn settle_cells(
                 }
                 previous = near;
             }
-            on_cell();
+            on_cell.tick();
             Ok((found, k, ode.stats()))
         })
         .collect();

@@ -29,6 +29,7 @@ use rayon::prelude::*;
 use crate::device::Device;
 use crate::num::stats::{Jackknife, MeanCi, Spread};
 use crate::ode::Stats;
+use crate::progress::Progress;
 use crate::signal::bandwidth::{mean_psd, restrict, Widths};
 use crate::signal::{self, Psd, WelchConfig};
 use crate::study::record::{
@@ -239,9 +240,9 @@ pub fn run_record(
 /// Runs every record of every case in parallel (rayon; one task per record, so that the
 /// cores stay busy across levels of very different cost), calling `on_record` after each,
 /// and analyses each case into an [`Ensemble`] (in the order of `cases`).
-pub fn run_ensembles<F: Fn() + Sync>(
+pub fn run_ensembles(
     cases: &[EnsembleCase],
-    on_record: F,
+    on_record: &dyn Progress,
 ) -> Result<Vec<Ensemble>, RecordError> {
     for c in cases {
         if c.spec.realisations == 0 {
@@ -262,7 +263,7 @@ pub fn run_ensembles<F: Fn() + Sync>(
         .par_iter()
         .map(|&(c, i)| {
             let r = run_record(&cases[c].device, &cases[c].spec, i);
-            on_record();
+            on_record.tick();
             r
         })
         .collect::<Result<_, _>>()?;
@@ -280,6 +281,7 @@ pub fn run_ensembles<F: Fn() + Sync>(
 ///
 /// ```
 /// use endstop::device::Device;
+/// use endstop::progress::Silent;
 /// use endstop::study::ensemble::{run_ensemble, EnsembleSpec};
 /// use endstop::drive::noise::NoiseSpec;
 /// use endstop::study::record::RecordSpec;
@@ -296,15 +298,15 @@ pub fn run_ensembles<F: Fn() + Sync>(
 /// let mut record = RecordSpec::of(&device, noise);
 /// record.transient_s = 0.01;
 /// let spec = EnsembleSpec::for_device(&device, record, 2012, 2);
-/// let ensemble = run_ensemble(&device, &spec, || {})?;
+/// let ensemble = run_ensemble(&device, &spec, &Silent)?;
 /// assert_eq!(ensemble.records.len(), 2);
 /// assert!(ensemble.power_w.mean > 0.0);
 /// # Ok::<(), Box<dyn std::error::Error>>(())
 /// ```
-pub fn run_ensemble<F: Fn() + Sync>(
+pub fn run_ensemble(
     device: &Device,
     spec: &EnsembleSpec,
-    on_record: F,
+    on_record: &dyn Progress,
 ) -> Result<Ensemble, RecordError> {
     let case = EnsembleCase {
         device: device.clone(),

@@ -1,6 +1,6 @@
 //! Sobol indices of any quantity of any device over parameters the user names: a Saltelli
 //! design ([`crate::num::sensitivity`]) on the unit cube of the named [`ParamRange`]s, each point
-//! a device built by [`device_at`], the quantity evaluated on every device in parallel.
+//! a device built by [`at_unit`], the quantity evaluated on every device in parallel.
 //!
 //! ```
 //! # let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/data/prototype2.toml")).unwrap();
@@ -22,7 +22,7 @@
 
 use rayon::prelude::*;
 
-use crate::device::{device_at, Device, ParamError, ParamRange};
+use crate::device::{at_unit, Device, ParamError, ParamRange};
 use crate::num::sensitivity::{Bootstrap, Indices, Saltelli, SensitivityError};
 
 /// Why a sensitivity study could not be made.
@@ -57,9 +57,10 @@ pub struct SobolStudy {
     pub outputs: Vec<f64>,
 }
 
-/// Sobol first-order and total indices of `quantity` over `ranges` of `device`, from a Saltelli
-/// design of `base` rows (a power of two) seeded with `seed`; `base * (ranges + 2)` devices are
-/// evaluated, in parallel.
+/// Sobol first-order and total indices of `quantity` over `ranges` of `device` (device
+/// parameters: the quantity sees no acceleration scale), from a Saltelli design of `base` rows
+/// (a power of two) seeded with `seed`; `base * (ranges + 2)` devices are evaluated, in
+/// parallel.
 pub fn sobol<E, F>(
     device: &Device,
     ranges: &[ParamRange],
@@ -74,6 +75,13 @@ where
 {
     for r in ranges {
         r.check(device)?;
+        if r.path == crate::device::ACCEL_SCALE_PATH {
+            return Err(SobolError::Range(ParamError::Invalid {
+                source_name: "range".into(),
+                field: r.path.clone(),
+                message: "not a device parameter: a quantity of a device sees no drive".into(),
+            }));
+        }
     }
     let design = Saltelli::new(base, ranges.len(), seed)?;
     let points = design.points();
@@ -81,13 +89,16 @@ where
         .par_iter()
         .enumerate()
         .map(|(index, u)| {
-            let dev = device_at(device, ranges, u)?;
+            let (dev, _) = at_unit(device, ranges, u)?;
             quantity(&dev).map_err(|source| SobolError::Quantity {
                 index,
                 point: ranges
                     .iter()
                     .zip(u)
-                    .map(|(r, &ui)| format!("{}={:e}", r.path, r.at(ui)))
+                    .map(|(r, &ui)| {
+                        let own = crate::device::own_value(device, &r.path).unwrap_or(f64::NAN);
+                        format!("{}={:e}", r.path, r.value(own, ui))
+                    })
                     .collect::<Vec<_>>()
                     .join(", "),
                 source,

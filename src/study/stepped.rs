@@ -22,6 +22,7 @@ use crate::drive::Sine;
 use crate::ode::{SolverError, Stats};
 use crate::physics::contact::Mode;
 use crate::physics::harvester::{Harvester, State};
+use crate::progress::Progress;
 use crate::study::chirp::ramp;
 use crate::study::steady::{steady_state, Measurement, SteadyConfig};
 
@@ -154,8 +155,8 @@ impl<D: Drive> SteppedDrive<'_, D> {
 
     /// Runs the continuation over `values` (increasing for an up-sweep, decreasing for a
     /// down-sweep), starting from rest;
-    /// `on_step(i)` is called after each step.
-    pub fn run(&self, values: &[f64], on_step: impl FnMut(usize)) -> Result<Sweep, SolverError> {
+    /// `on_step.tick()` is called after each step.
+    pub fn run(&self, values: &[f64], on_step: &dyn Progress) -> Result<Sweep, SolverError> {
         self.run_with(values, Approach::Jump, on_step)
     }
 
@@ -164,7 +165,7 @@ impl<D: Drive> SteppedDrive<'_, D> {
         &self,
         values: &[f64],
         approach: Approach,
-        on_step: impl FnMut(usize),
+        on_step: &dyn Progress,
     ) -> Result<Sweep, SolverError> {
         self.run_from(
             self.base.rest_state(),
@@ -185,14 +186,14 @@ impl<D: Drive> SteppedDrive<'_, D> {
         from: Option<f64>,
         values: &[f64],
         approach: Approach,
-        mut on_step: impl FnMut(usize),
+        on_step: &dyn Progress,
     ) -> Result<Sweep, SolverError> {
         let (mut y, mut mode, mut prev) = (y, mode, from);
         // Nothing is known of the state given: the first step off it keeps its ramp.
         let mut off_stops = false;
         let mut steps = Vec::with_capacity(values.len());
         let mut stats = Stats::default();
-        for (i, &p) in values.iter().enumerate() {
+        for &p in values {
             let step = self.measure_after(prev, off_stops, p, y, mode, approach)?;
             prev = Some(p);
             off_stops = !in_contact(&step.measurement);
@@ -200,7 +201,7 @@ impl<D: Drive> SteppedDrive<'_, D> {
             y = step.state;
             mode = step.mode;
             steps.push(step);
-            on_step(i);
+            on_step.tick();
         }
         Ok(Sweep {
             values: values.to_vec(),

@@ -11,6 +11,7 @@
 
 use crate::device::{Device, StopLaw, Transducer};
 use crate::physics::closed_forms::Oscillator;
+use crate::progress::Silent;
 use crate::study::continuation::{branch_from_rest, ContinuationSettings};
 use crate::study::orbit::Forcing;
 use crate::validation::{Check, Group, Measure, ValidationError};
@@ -69,7 +70,7 @@ pub fn grazing_checks(
             freq_hz: start,
             accel_rms_g,
         };
-        let branch = branch_from_rest(device, forcing, &settings, 200, |_| {})?;
+        let branch = branch_from_rest(device, forcing, &settings, 200, &Silent)?;
         let events: Vec<f64> = branch.grazing_events().map(|e| e.param).collect();
         g.add(
             "the branch crosses the gap once",

@@ -33,64 +33,54 @@ pub mod stationary_law;
 
 use serde::{Deserialize, Serialize};
 
-/// How a check measures the difference between ours and the reference.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-pub enum Measure {
-    /// `|ours - reference| / |reference|`.
-    Relative,
-    /// `|ours - reference|`, in the quantity's unit.
-    Absolute,
-    /// `ours - reference`: ours must not exceed the reference (a bound) by more than the
-    /// tolerance.
-    NotAbove,
-}
+use crate::num::compare::Comparison;
+pub use crate::num::compare::{Measure, Verdict};
 
-/// One comparison of our value with a reference value.
+/// One comparison of our value with a reference value, with where the reference comes from and
+/// why the tolerance is what it is.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Check {
     /// Which group of the chapter the check belongs to (its table).
     pub group: String,
     /// Where the reference value comes from (a closed form and its source, a peer tool).
-    pub reference: String,
+    pub source: String,
     /// What is compared, with its unit.
     pub quantity: String,
-    /// The reference value.
-    pub theirs: f64,
-    /// Our value.
-    pub ours: f64,
-    /// How the difference is measured.
-    pub measure: Measure,
-    /// The largest difference accepted.
-    pub tolerance: f64,
+    /// Our value against the reference value, with the measure and the tolerance.
+    pub compared: Comparison,
     /// Why the tolerance is what it is.
     pub reason: String,
     /// `Some(why)` for a row reported as an open question: its reference is a hypothesis that
     /// a study did not confirm, so the row shows our value and its difference but is neither
-    /// within nor outside a tolerance ([`Check::passes`] is false, [`Check::is_open`] true).
+    /// within nor outside a tolerance ([`Check::verdict`] is [`Verdict::Open`]).
     #[serde(default)]
     pub open: Option<String>,
 }
 
 impl Check {
-    /// The difference, as [`Check::measure`] says.
+    /// The difference, as the comparison's measure says.
     pub fn difference(&self) -> f64 {
-        let d = (self.ours - self.theirs).abs();
-        match self.measure {
-            Measure::Relative => d / self.theirs.abs(),
-            Measure::Absolute => d,
-            Measure::NotAbove => self.ours - self.theirs,
+        self.compared.difference()
+    }
+
+    /// [`Verdict::Open`] for an open question, else the comparison's verdict (a NaN on either
+    /// side deviates).
+    pub fn verdict(&self) -> Verdict {
+        if self.open.is_some() {
+            Verdict::Open
+        } else {
+            self.compared.verdict()
         }
     }
 
-    /// True when the difference is within the tolerance (a NaN on either side fails); false
-    /// for an open question.
+    /// True when the check is judged and within its tolerance.
     pub fn passes(&self) -> bool {
-        self.open.is_none() && self.difference() <= self.tolerance
+        self.verdict() == Verdict::Reproduced
     }
 
     /// True for a row reported as an open question (see [`Check::open`]).
     pub fn is_open(&self) -> bool {
-        self.open.is_some()
+        self.verdict() == Verdict::Open
     }
 }
 
@@ -123,12 +113,14 @@ impl Group {
     ) {
         self.checks.push(Check {
             group: self.name.clone(),
-            reference: reference.to_string(),
+            source: reference.to_string(),
             quantity: quantity.to_string(),
-            theirs,
-            ours,
-            measure,
-            tolerance,
+            compared: Comparison {
+                ours,
+                reference: theirs,
+                measure,
+                tolerance,
+            },
             reason: reason.to_string(),
             open: None,
         });

@@ -31,6 +31,7 @@ use crate::device::Device;
 use crate::drive::Sine;
 use crate::ode::Stats;
 use crate::physics::harvester::Harvester;
+use crate::progress::Silent;
 use crate::study::continuation::{continue_branch, first_orbit, Branch, ContinuationSettings};
 use crate::study::orbit::{Forcing, Orbit, Parameter, Shooter, ShootingConfig};
 use crate::validation::harmonics::first_harmonic;
@@ -193,7 +194,7 @@ impl Ours {
             200,
             &mut stats,
         )?;
-        Ok(continue_branch(&self.model, first, &settings, |_| {})?)
+        Ok(continue_branch(&self.model, first, &settings, &Silent)?)
     }
 
     /// The first-harmonic amplitude of x over an orbit (m).

@@ -24,12 +24,12 @@ pub fn assert_all(checks: &[Check]) {
         eprintln!(
             "{} | {} | {} | theirs {:e} | ours {:e} | difference {:e} (tolerance {:e}){}",
             c.group,
-            c.reference,
+            c.source,
             c.quantity,
-            c.theirs,
-            c.ours,
+            c.compared.reference,
+            c.compared.ours,
             c.difference(),
-            c.tolerance,
+            c.compared.tolerance,
             if c.is_open() { " [open question]" } else { "" }
         );
     }
@@ -39,9 +39,9 @@ pub fn assert_all(checks: &[Check]) {
             "{}: {} against {}: difference {:e} above {:e} ({})",
             c.group,
             c.quantity,
-            c.reference,
+            c.source,
             c.difference(),
-            c.tolerance,
+            c.compared.tolerance,
             c.reason
         );
     }

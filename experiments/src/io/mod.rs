@@ -1,6 +1,8 @@
 //! The helpers every report uses: plots drawn once into SVG and PNG ([`plot`]), rows turned
-//! into typed data frames ([`frame`]) and Markdown tables ([`md`]). Nothing here knows a figure.
+//! into typed data frames ([`frame`]) and Markdown tables ([`md`]), progress bars
+//! ([`progress`]). Nothing here knows a figure.
 
 pub mod frame;
 pub mod md;
 pub mod plot;
+pub mod progress;

@@ -54,6 +54,7 @@ fn ours(r: &Row) -> String {
         Verdict::Reproduced => ", **reproduced**",
         Verdict::Deviates => ", *deviates*",
         Verdict::NotYet => ", not yet",
+        Verdict::Open => ", open question",
     });
     if !r.note.is_empty() {
         s.push_str(&format!(" ({})", r.note));

@@ -8,7 +8,7 @@
 use anyhow::Result;
 use endstop::num::history::Termination;
 use endstop::paper::claims::Kind;
-use endstop::paper::deviations::{self, ClaimIndices, Factor, HistoryRun};
+use endstop::paper::deviations::{self, ClaimIndices, HistoryRun};
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
@@ -173,7 +173,7 @@ fn numbers_md(
          wave{}, cut {} on the {} implausibility, a pool of {} points; {}; ensemble claims \
          (Figures 12, 14, 15): {}.\n\n",
         s.per_input,
-        s.per_input * Factor::ALL.len(),
+        s.per_input * runs.first().map_or(0, |h| h.factors.len()),
         s.max_waves,
         if s.max_waves == 1 { "" } else { "s" },
         fmt_sig(s.cut, 1),
@@ -220,25 +220,17 @@ fn numbers_md(
         for (q, ix) in qs {
             let (big, ci, second) = match ix {
                 Some(ix) => {
-                    let mut order: Vec<usize> = (0..Factor::ALL.len()).collect();
+                    let mut order: Vec<usize> = (0..h.factors.len()).collect();
                     order.sort_by(|&a, &b| ix.total[b].value.total_cmp(&ix.total[a].value));
                     let (i, j) = (order[0], order[1]);
                     (
-                        format!(
-                            "{} ({})",
-                            fmt_sig(ix.total[i].value, 2),
-                            Factor::ALL[i].key()
-                        ),
+                        format!("{} ({})", fmt_sig(ix.total[i].value, 2), h.factors[i]),
                         format!(
                             "{} to {}",
                             fmt_sig(ix.total[i].lo, 2),
                             fmt_sig(ix.total[i].hi, 2)
                         ),
-                        format!(
-                            "{} ({})",
-                            fmt_sig(ix.total[j].value, 2),
-                            Factor::ALL[j].key()
-                        ),
+                        format!("{} ({})", fmt_sig(ix.total[j].value, 2), h.factors[j]),
                     )
                 }
                 None => ("constant over the runs".into(), "-".into(), "-".into()),
@@ -259,6 +251,7 @@ fn numbers_md(
 
 /// Claims x factors, total Sobol index as a grey level (white 0, black 1).
 struct HeatMap {
+    factors: Vec<String>,
     rows: Vec<String>,
     cells: Vec<Vec<Option<f64>>>,
 }
@@ -272,11 +265,16 @@ impl HeatMap {
                 rows.push(format!("{} {} {}", h.prototype.key(), q.claim, q.quantity));
                 cells.push(match ix {
                     Some(ix) => ix.total.iter().map(|t| Some(t.value)).collect(),
-                    None => vec![None; Factor::ALL.len()],
+                    None => vec![None; h.factors.len()],
                 });
             }
         }
-        Self { rows, cells }
+        let factors = runs.first().map_or(Vec::new(), |(h, _)| h.factors.clone());
+        Self {
+            factors,
+            rows,
+            cells,
+        }
     }
 }
 
@@ -296,10 +294,10 @@ impl Chart for HeatMap {
         root.fill(&WHITE)?;
         let (left, top, cw, ch) = (380i32, 90i32, 88i32, 34i32);
         let font = ("sans-serif", 15).into_font();
-        for (j, f) in Factor::ALL.iter().enumerate() {
+        for (j, f) in self.factors.iter().enumerate() {
             let x = left + j as i32 * cw + 4;
             root.draw(&Text::new(
-                f.key().replace('_', " "),
+                f.replace('_', " "),
                 (x, top - 22 - 14 * (j as i32 % 2)),
                 font.clone(),
             ))?;

@@ -21,7 +21,8 @@
 
 use std::collections::BTreeMap;
 
-use endstop::fit::{Direction, Feature, FeatureKind, FreeParam, Point, Quantity, SweepData};
+use endstop::device::{ParamError, ParamRange};
+use endstop::fit::{Direction, Feature, FeatureKind, Point, Quantity, SweepData};
 use thiserror::Error;
 
 /// A measured file or option that cannot be used.
@@ -95,28 +96,21 @@ pub enum FitInputError {
         /// Free parameters.
         p: usize,
     },
-    /// A `--free` option that is not `PATH=LO..HI`.
-    #[error("--free `{given}`: expected PATH=LO..HI with numbers LO < HI, e.g. stops.both.gap_m=4e-6..8e-6")]
-    FreeSyntax {
+    /// A `--free` option that is not a range `PATH=LO..HI` ([`ParamRange::parse`]).
+    #[error("--free `{given}`: {error}")]
+    Free {
         /// The option as given.
         given: String,
+        /// What is wrong, naming the parameter.
+        error: ParamError,
     },
 }
 
-/// Parses `PATH=LO..HI`.
-pub fn parse_free(s: &str) -> Result<FreeParam, FitInputError> {
-    let err = || FitInputError::FreeSyntax { given: s.into() };
-    let (path, range) = s.split_once('=').ok_or_else(err)?;
-    let (lo, hi) = range.split_once("..").ok_or_else(err)?;
-    let lo: f64 = lo.trim().parse().map_err(|_| err())?;
-    let hi: f64 = hi.trim().parse().map_err(|_| err())?;
-    if path.trim().is_empty() {
-        return Err(err());
-    }
-    Ok(FreeParam {
-        path: path.trim().into(),
-        lo,
-        hi,
+/// Parses a `--free` option, `PATH=LO..HI` ([`ParamRange::parse`]).
+pub fn parse_free(s: &str) -> Result<ParamRange, FitInputError> {
+    ParamRange::parse(s).map_err(|error| FitInputError::Free {
+        given: s.into(),
+        error,
     })
 }
 

@@ -9,8 +9,9 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
 use clap::Parser;
+use endstop::device::ParamRange;
 use endstop::fit::{
-    fit, model_curve, Direction, FitReport, FitSettings, FreeParam, SweepData, ACCEL_SCALE_PATH,
+    fit, model_curve, Direction, FitReport, FitSettings, SweepData, ACCEL_SCALE_PATH,
 };
 use polars::prelude::*;
 use sha2::{Digest, Sha256};
@@ -58,7 +59,7 @@ pub fn run(a: FitArgs) -> Result<()> {
         return crate::reports::spectrum_io::run(&a.device, s, &a.free, a.out.clone());
     }
     let loaded = load_device_file(&a.device)?;
-    let free: Vec<FreeParam> = a
+    let free: Vec<ParamRange> = a
         .free
         .iter()
         .map(|s| parse_free(s))

@@ -4,7 +4,7 @@
 
 use anyhow::Result;
 use endstop::num::history::Projection;
-use endstop::paper::deviations::{ClaimIndices, Factor, HistoryRun, TOLERANCE_SIGMAS};
+use endstop::paper::deviations::{ClaimIndices, HistoryRun, TOLERANCE_SIGMAS};
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
@@ -24,6 +24,7 @@ fn label(h: &HistoryRun) -> &'static str {
 pub fn write_history(exp: &Experiment, runs: &[HistoryRun]) -> Result<()> {
     let mut rows = Vec::new();
     for h in runs {
+        let columns = column_names(&h.factors);
         for (r, ((wave, run), evals)) in h.matcher.runs.iter().zip(&h.evaluations).enumerate() {
             for e in evals {
                 let mut row = row![
@@ -38,8 +39,8 @@ pub fn write_history(exp: &Experiment, runs: &[HistoryRun]) -> Result<()> {
                     "ci95" => e.ci95,
                     "meets" => e.meets,
                 ];
-                for (f, u) in Factor::ALL.iter().zip(&run.point) {
-                    row.push((f.key(), Cell::from(*u)));
+                for (f, u) in columns.iter().zip(&run.point) {
+                    row.push((f, Cell::from(*u)));
                 }
                 rows.push(row);
             }
@@ -86,8 +87,8 @@ pub fn write_history(exp: &Experiment, runs: &[HistoryRun]) -> Result<()> {
                     cells.push(row![
                         "prototype" => h.prototype.key(),
                         "wave" => s.wave as u64,
-                        "factor_x" => Factor::ALL[p.i].key(),
-                        "factor_y" => Factor::ALL[p.j].key(),
+                        "factor_x" => h.factors[p.i].as_str(),
+                        "factor_y" => h.factors[p.j].as_str(),
                         "cell_x" => (c / n) as u64,
                         "cell_y" => (c % n) as u64,
                         "min_implausibility" => if m.is_finite() { Some(*m) } else { None },
@@ -116,6 +117,7 @@ pub fn write_history(exp: &Experiment, runs: &[HistoryRun]) -> Result<()> {
                         s.wave
                     ),
                     projections: s.projections.clone(),
+                    factors: h.factors.clone(),
                     cells: h.matcher.settings.cells,
                     cut: h.matcher.settings.cut,
                 },
@@ -123,6 +125,15 @@ pub fn write_history(exp: &Experiment, runs: &[HistoryRun]) -> Result<()> {
         }
     }
     Ok(())
+}
+
+/// The factors' names as column names of a frame (`&'static str`): leaked once per write of
+/// a history, a handful of short strings, so that the columns follow the ranges file.
+fn column_names(factors: &[String]) -> Vec<&'static str> {
+    factors
+        .iter()
+        .map(|f| &*Box::leak(f.clone().into_boxed_str()))
+        .collect()
 }
 
 /// (points, share within +-2, share within +-3) of leave-one-out standardised errors.
@@ -138,13 +149,13 @@ pub fn write_sobol(exp: &Experiment, sobols: &[(&HistoryRun, ClaimIndices)]) -> 
     for (h, qs) in sobols {
         for (q, ix) in qs {
             let Some(ix) = ix else { continue };
-            for (i, f) in Factor::ALL.iter().enumerate() {
+            for (i, f) in h.factors.iter().enumerate() {
                 let (fi, ti) = (ix.first[i], ix.total[i]);
                 rows.push(row![
                     "prototype" => h.prototype.key(),
                     "claim" => q.claim,
                     "quantity" => q.quantity,
-                    "factor" => f.key(),
+                    "factor" => f.as_str(),
                     "first" => fi.value,
                     "first_lo" => fi.lo,
                     "first_hi" => fi.hi,
@@ -355,6 +366,8 @@ pub struct ProjectionPlot {
     pub title: String,
     /// The projections.
     pub projections: Vec<Projection>,
+    /// The factors' names, in the order of the inputs.
+    pub factors: Vec<String>,
     /// Cells per axis.
     pub cells: usize,
     /// The cut.
@@ -398,8 +411,8 @@ impl Chart for ProjectionPlot {
             (10, 32),
             font.clone(),
         ))?;
-        for (k, f) in Factor::ALL.iter().enumerate() {
-            let name = f.key().replace('_', " ");
+        for (k, f) in self.factors.iter().enumerate() {
+            let name = f.replace('_', " ");
             let k = k as i32;
             root.draw(&Text::new(
                 name.clone(),

@@ -12,10 +12,12 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
+use endstop::device::ParamRange;
 use endstop::fit::spectrum::{
-    build_emulator, param_at, MeasuredSpectrum, SpectrumEstimate, SpectrumSettings, FEATURES,
+    build_emulator, MeasuredSpectrum, SpectrumEstimate, SpectrumSettings, FEATURES,
 };
-use endstop::fit::{FreeParam, ACCEL_SCALE_PATH};
+use endstop::fit::ACCEL_SCALE_PATH;
+use endstop::progress::Silent;
 use endstop::study::ensemble::{run_ensemble, EnsembleSpec};
 
 use crate::io::frame::frame;
@@ -99,7 +101,7 @@ pub fn read_spectrum(path: &Path, level: f64, records: usize) -> Result<Measured
 /// Runs `endstop fit --spectrum` (one spectrum; its free parameters from `--free`).
 pub fn run(device: &Path, spectrum: &str, free: &[String], out: Option<PathBuf>) -> Result<()> {
     let loaded = load_device_file(device)?;
-    let free: Vec<FreeParam> = free
+    let free: Vec<ParamRange> = free
         .iter()
         .map(|s| parse_free(s))
         .collect::<Result<_, _>>()?;
@@ -171,7 +173,7 @@ fn write_outputs(
             design.push(row![
                 "point" => k as u64,
                 "parameter" => f.path.as_str(),
-                "value" => param_at(f, *s),
+                "value" => f.at(*s),
                 "ln_band_power" => v[0],
                 "centroid_hz" => v[1],
                 "spread_hz" => v[2],
@@ -200,7 +202,7 @@ fn write_outputs(
         em.settings.records,
     );
     spec.analysis_band_hz = measured.band();
-    let e = run_ensemble(&device, &spec, || {})?;
+    let e = run_ensemble(&device, &spec, &Silent)?;
     let model = &e.mean_spectrum.total;
     exp.write_plot(&LinePlot::new(
         "Measured output spectrum and the model at the fit",

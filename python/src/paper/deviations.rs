@@ -15,7 +15,7 @@ use endstop::paper::deviations::{
     self, DeviationsError, Evaluation, Outcome, Prototype, Scope, SobolDesign, STUDY_BOOTSTRAP,
     STUDY_SEED,
 };
-use endstop::paper::deviations::{Factor, Ranges, RangesFile};
+use endstop::paper::deviations::{Ranges, RangesFile};
 use numpy::PyArray2;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
@@ -52,13 +52,25 @@ fn scope(ensemble_records: Option<usize>) -> PyResult<Scope> {
     Ok(Scope { ensemble_records })
 }
 
-fn design(base_rows: usize, seed: u32, scope: Scope) -> SobolDesign {
-    SobolDesign {
+/// The factors' names (both prototypes have the same, in the same order).
+fn factor_names() -> PyResult<Vec<String>> {
+    let ranges = RangesFile::bundled().map_err(solver_err)?;
+    Ok(ranges
+        .prototype1
+        .names()
+        .iter()
+        .map(|n| n.to_string())
+        .collect())
+}
+
+fn design(base_rows: usize, seed: u32, scope: Scope) -> PyResult<SobolDesign> {
+    Ok(SobolDesign {
+        factors: factor_names()?.len(),
         base_rows,
         seed,
         bootstrap: STUDY_BOOTSTRAP,
         scope,
-    }
+    })
 }
 
 fn err(e: DeviationsError) -> PyErr {
@@ -155,8 +167,8 @@ fn evaluation_of(p: Prototype, d: &Bound<'_, PyDict>, claims: &Claims) -> PyResu
 
 /// The keys of the uncertain factors, in the order of a point's coordinates.
 #[pyfunction]
-fn paper_deviations_factors() -> Vec<&'static str> {
-    Factor::ALL.iter().map(|f| f.key()).collect()
+fn paper_deviations_factors() -> PyResult<Vec<String>> {
+    factor_names()
 }
 
 /// The points of the Saltelli design of `base_rows` base rows (a power of two), one row per
@@ -168,7 +180,7 @@ fn paper_deviations_design<'py>(
     base_rows: usize,
     seed: u32,
 ) -> PyResult<Bound<'py, PyArray2<f64>>> {
-    let d = design(base_rows, seed, Scope::default())
+    let d = design(base_rows, seed, Scope::default())?
         .design()
         .map_err(err)?;
     PyArray2::from_vec2(py, &d.points()).map_err(|e| arg_err(e.to_string()))
@@ -207,7 +219,8 @@ fn paper_deviations_indices<'py>(
     seed: u32,
 ) -> PyResult<Bound<'py, PyList>> {
     let p = self::prototype(prototype)?;
-    let d = design(base_rows, seed, scope(ensemble_records)?);
+    let d = design(base_rows, seed, scope(ensemble_records)?)?;
+    let factors = factor_names()?;
     let claims = Claims::bundled().map_err(solver_err)?;
     let evals = evaluations
         .iter()
@@ -219,12 +232,12 @@ fn paper_deviations_indices<'py>(
     let rows = PyList::empty(py);
     for q in &run.quantities {
         let Some(ix) = &q.indices else { continue };
-        for (i, f) in Factor::ALL.iter().enumerate() {
+        for (i, f) in factors.iter().enumerate() {
             let r = PyDict::new(py);
             r.set_item("prototype", p.key())?;
             r.set_item("claim", q.quantity.claim)?;
             r.set_item("quantity", q.quantity.quantity)?;
-            r.set_item("factor", f.key())?;
+            r.set_item("factor", f)?;
             for (k, x) in [("first", ix.first[i]), ("total", ix.total[i])] {
                 r.set_item(k, x.value)?;
                 r.set_item(format!("{k}_lo"), x.lo)?;
@@ -387,7 +400,7 @@ fn paper_deviations_history<'py>(
 ) -> PyResult<Bound<'py, PyDict>> {
     let p = self::prototype(prototype)?;
     let scope = scope(ensemble_records)?;
-    let claims = Claims::bundled().map_err(solver_err)?;
+    let (_, ranges, claims) = inputs(p)?;
     let waves = waves
         .iter()
         .map(|(pts, evals)| {
@@ -401,7 +414,7 @@ fn paper_deviations_history<'py>(
     let settings = history_settings(per_input, max_waves, pool, seed);
     let (run, indices) = py
         .detach(move || -> Result<_, DeviationsError> {
-            let mut run = deviations::HistoryRun::new(p, scope, &claims, settings)?;
+            let mut run = deviations::HistoryRun::new(p, &ranges, scope, &claims, settings)?;
             for (pts, e) in waves {
                 run.add_wave(&pts, e)?;
             }
@@ -486,8 +499,8 @@ fn paper_deviations_history<'py>(
             {
                 let r = PyDict::new(py);
                 r.set_item("wave", s.wave)?;
-                r.set_item("factor_x", Factor::ALL[pr.i].key())?;
-                r.set_item("factor_y", Factor::ALL[pr.j].key())?;
+                r.set_item("factor_x", &run.factors[pr.i])?;
+                r.set_item("factor_y", &run.factors[pr.j])?;
                 r.set_item("cell_x", c / n)?;
                 r.set_item("cell_y", c % n)?;
                 r.set_item("min_implausibility", *m)?;
@@ -500,12 +513,12 @@ fn paper_deviations_history<'py>(
     let rows = PyList::empty(py);
     for (q, ix) in &indices {
         let Some(ix) = ix else { continue };
-        for (i, f) in Factor::ALL.iter().enumerate() {
+        for (i, f) in run.factors.iter().enumerate() {
             let r = PyDict::new(py);
             r.set_item("prototype", p.key())?;
             r.set_item("claim", q.claim)?;
             r.set_item("quantity", q.quantity)?;
-            r.set_item("factor", f.key())?;
+            r.set_item("factor", f)?;
             for (k, x) in [("first", ix.first[i]), ("total", ix.total[i])] {
                 r.set_item(k, x.value)?;
                 r.set_item(format!("{k}_lo"), x.lo)?;

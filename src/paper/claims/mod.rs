@@ -29,6 +29,7 @@ use thiserror::Error;
 pub use answer::Answer;
 pub use keys::ClaimKey;
 
+use crate::num::compare::{Comparison, Measure};
 use crate::paper::setups::ParamSet;
 
 /// The claims file as compiled into the crate.
@@ -364,30 +365,7 @@ impl Value {
     }
 }
 
-/// Outcome of a comparison.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-pub enum Verdict {
-    /// Within tolerance.
-    #[serde(rename = "reproduced")]
-    Reproduced,
-    /// Outside tolerance: our value is reported.
-    #[serde(rename = "deviates")]
-    Deviates,
-    /// No value from us yet.
-    #[serde(rename = "not yet")]
-    NotYet,
-}
-
-impl Verdict {
-    /// The label used in files and the book.
-    pub fn label(self) -> &'static str {
-        match self {
-            Verdict::Reproduced => "reproduced",
-            Verdict::Deviates => "deviates",
-            Verdict::NotYet => "not yet",
-        }
-    }
-}
+pub use crate::num::compare::Verdict;
 
 /// `x` as a value of a claim of `kind` (see [`Claim::read`]).
 fn read(kind: Kind, claim: &str, quantity: &str, x: f64) -> Result<Answer, ClaimsError> {
@@ -429,18 +407,17 @@ impl Claim {
     /// Verdict for our value: a number within the tolerance, or the paper's yes/no; a value
     /// that is not a finite number of this claim's kind deviates.
     pub fn verdict(&self, ours: Option<Answer>) -> Verdict {
-        let within = match (ours, self.paper) {
-            (None, _) => return Verdict::NotYet,
-            (Some(Answer::Number(v)), Answer::Number(p)) => {
-                v.is_finite() && (v - p).abs() <= self.tolerance()
+        match (ours, self.paper) {
+            (None, _) => Verdict::NotYet,
+            (Some(Answer::Number(v)), Answer::Number(p)) => Comparison {
+                ours: v,
+                reference: p,
+                measure: Measure::Absolute,
+                tolerance: self.tolerance(),
             }
-            (Some(Answer::YesNo(v)), Answer::YesNo(p)) => v == p,
-            (Some(_), _) => false,
-        };
-        if within {
-            Verdict::Reproduced
-        } else {
-            Verdict::Deviates
+            .verdict(),
+            (Some(Answer::YesNo(v)), Answer::YesNo(p)) => Verdict::of(v == p),
+            (Some(_), _) => Verdict::Deviates,
         }
     }
 }

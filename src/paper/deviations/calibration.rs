@@ -6,11 +6,12 @@ use rayon::prelude::*;
 
 use super::evaluation::{evaluate, evaluate_quantitative};
 use super::quantity::{Evaluation, Prototype, Scope};
-use super::ranges::{Factor, Ranges, Variant};
+use super::ranges::{Ranges, Variant};
 use super::DeviationsError;
 use crate::device::Device;
 use crate::num::minimax::{Fit, MinimaxSettings};
 use crate::paper::claims::{Claims, Kind};
+use crate::progress::Progress;
 
 /// The multi-claim calibration of a prototype: the point of the ranges that minimises the
 /// worst normalised deviation over its quantitative claims (the yes/no claims are reported,
@@ -81,7 +82,7 @@ pub fn calibration_starts(
 ) -> Result<Vec<Vec<f64>>, DeviationsError> {
     let published = ranges.published_point(base)?;
     Ok(crate::num::minimax::starts(
-        Factor::ALL.len(),
+        ranges.len(),
         settings,
         std::slice::from_ref(&published),
     )?)
@@ -122,11 +123,11 @@ pub fn calibrate(
     settings: MinimaxSettings,
     claims: &Claims,
     scope: Scope,
-    on_eval: &(dyn Fn() + Sync),
+    on_eval: &dyn Progress,
 ) -> Result<MultiClaimCalibration, DeviationsError> {
     let model = |u: &[f64]| {
         let d = calibration_objective(prototype, ranges, base, claims, scope, u);
-        on_eval();
+        on_eval.tick();
         d
     };
     let fits = calibration_starts(ranges, base, settings)?

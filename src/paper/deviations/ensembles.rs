@@ -13,6 +13,7 @@ use crate::paper::figures::fig12::{self, FIG12_LEVELS};
 use crate::paper::figures::fig15::{self, FIG15_LEVELS};
 use crate::paper::setups::{P1_BIAS_V, P2_BIAS_V};
 use crate::physics::two_port::efficiency;
+use crate::progress::Silent;
 use crate::study::ensemble::{run_ensembles, Ensemble, EnsembleCase, EnsembleSpec};
 
 /// An ensemble of the study at the stated level `psd_g2_per_hz`: the figure's protocol
@@ -89,7 +90,7 @@ fn study_ensembles(
             spec: study_ensemble_spec(device, sa, welch, records, accel_scale),
         })
         .collect();
-    run_ensembles(&cases, || {}).ok()
+    run_ensembles(&cases, &Silent).ok()
 }
 
 /// Figure 12 by `records` records at 7.4e-3 and 2.85e-2 g²/Hz: the two half-power widths and

@@ -24,12 +24,13 @@ use rayon::prelude::*;
 
 use super::evaluation::evaluate_at;
 use super::quantity::{Evaluation, Prototype, Quantity, Scope};
-use super::ranges::{Factor, Ranges};
+use super::ranges::Ranges;
 use super::DeviationsError;
 use crate::device::Device;
 use crate::num::gp_sensitivity::{emulated_indices, EmulatedIndices, EmulatedSobol};
 use crate::num::history::{HistoryMatch, HistorySettings, Mean, Observation, Run, Termination};
 use crate::paper::claims::{Claims, Kind};
+use crate::progress::Progress;
 
 /// The emulated Sobol indices of each emulated quantity (`None`: constant over the runs).
 pub type ClaimIndices = Vec<(Quantity, Option<EmulatedIndices>)>;
@@ -43,6 +44,8 @@ pub const TOLERANCE_SIGMAS: f64 = 3.0;
 pub struct HistoryRun {
     /// The prototype.
     pub prototype: Prototype,
+    /// The factors' names, in the order of the unit cube's coordinates.
+    pub factors: Vec<String>,
     /// What each run evaluates.
     pub scope: Scope,
     /// Every quantity a run evaluates, in [`Prototype::quantities`] order.
@@ -58,9 +61,10 @@ pub struct HistoryRun {
 }
 
 impl HistoryRun {
-    /// An empty match of `prototype` in `scope`.
+    /// An empty match of `prototype` over `ranges` in `scope`.
     pub fn new(
         prototype: Prototype,
+        ranges: &Ranges,
         scope: Scope,
         claims: &Claims,
         settings: HistorySettings,
@@ -83,15 +87,12 @@ impl HistoryRun {
                 });
             }
         }
-        let switch = Factor::ALL
-            .iter()
-            .position(|f| *f == Factor::TensionFree)
-            .expect("a factor");
-        let matcher = HistoryMatch::new(Factor::ALL.len(), observations, settings)
+        let matcher = HistoryMatch::new(ranges.len(), observations, settings)
             .map_err(|e| DeviationsError::Evaluations(e.to_string()))?
-            .with_switches(vec![switch]);
+            .with_switches(ranges.switches());
         Ok(Self {
             prototype,
+            factors: ranges.names().iter().map(|n| n.to_string()).collect(),
             scope,
             quantities,
             emulated,
@@ -219,7 +220,7 @@ impl HistoryRun {
             .par_iter()
             .zip(self.outputs())
             .map(|(e, q)| match &e.mean {
-                Mean::Gp(g) => Ok((q, emulated_indices(g, Factor::ALL.len(), &input, s)?)),
+                Mean::Gp(g) => Ok((q, emulated_indices(g, self.factors.len(), &input, s)?)),
                 Mean::Constant(_) => Ok((q, None)),
             })
             .collect()
@@ -258,7 +259,7 @@ impl Answer {
 }
 
 /// The history match of `prototype` over `ranges` on this machine: each wave's runs in
-/// parallel (`on_run()` after each), until the match ends.
+/// parallel (`on_run.tick()` after each), until the match ends.
 pub fn history_match(
     prototype: Prototype,
     ranges: &Ranges,
@@ -266,15 +267,15 @@ pub fn history_match(
     claims: &Claims,
     scope: Scope,
     settings: HistorySettings,
-    on_run: &(dyn Fn() + Sync),
+    on_run: &dyn Progress,
 ) -> Result<HistoryRun, DeviationsError> {
-    let mut run = HistoryRun::new(prototype, scope, claims, settings)?;
+    let mut run = HistoryRun::new(prototype, ranges, scope, claims, settings)?;
     while let Some(design) = run.next_design() {
         let evaluations = design
             .par_iter()
             .map(|p| {
                 let e = evaluate_at(prototype, ranges, base, p, claims, scope);
-                on_run();
+                on_run.tick();
                 e
             })
             .collect::<Result<Vec<_>, _>>()?;

@@ -6,19 +6,20 @@ use rayon::prelude::*;
 
 use super::evaluation::evaluate_at;
 use super::quantity::{Evaluation, Outcome, Prototype, Quantity, Scope};
-use super::ranges::{Factor, Ranges};
+use super::ranges::Ranges;
 use super::DeviationsError;
 use crate::device::Device;
 use crate::num::pareto::pareto_front;
 use crate::num::sensitivity::{Bootstrap, Indices, Saltelli, SensitivityError};
 use crate::paper::claims::{Claims, Kind};
+use crate::progress::Progress;
 
 /// The Sobol indices of one quantity.
 #[derive(Debug, Clone, PartialEq)]
 pub struct QuantityIndices {
     /// The quantity.
     pub quantity: Quantity,
-    /// First-order and total indices with their bootstrap intervals, in [`Factor::ALL`] order;
+    /// First-order and total indices with their bootstrap intervals, in the factors' order;
     /// `None` when the quantity does not vary over the design (every index is 0/0).
     pub indices: Option<Indices>,
     /// Share of the design's points where the quantity does not exist (its substitute is used):
@@ -48,6 +49,8 @@ pub struct SobolRun {
 /// The design of a Sobol study.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SobolDesign {
+    /// How many factors: the dimension of the unit cube ([`Ranges::len`]).
+    pub factors: usize,
     /// Base rows of the Saltelli design (a power of two).
     pub base_rows: usize,
     /// Scramble of the design.
@@ -59,7 +62,7 @@ pub struct SobolDesign {
 }
 
 /// Sobol first-order and total indices of every quantity of `prototype` over `ranges`, from
-/// the Saltelli design of `d`; `on_point()` after every design point (points run in
+/// the Saltelli design of `d`; `on_point.tick()` after every design point (points run in
 /// parallel, results in design order). The same as evaluating every point of
 /// [`SobolDesign::design`] with [`evaluate_at`] (e.g. as tasks of a cluster) and passing the
 /// evaluations to [`sobol_indices`].
@@ -69,15 +72,22 @@ pub fn sobol(
     base: &Device,
     d: SobolDesign,
     claims: &Claims,
-    on_point: &(dyn Fn() + Sync),
+    on_point: &dyn Progress,
 ) -> Result<SobolRun, DeviationsError> {
+    if d.factors != ranges.len() {
+        return Err(DeviationsError::Evaluations(format!(
+            "a design over {} factors for ranges of {}",
+            d.factors,
+            ranges.len()
+        )));
+    }
     let design = d.design()?;
     let evaluations = design
         .points()
         .par_iter()
         .map(|p| {
             let e = evaluate_at(prototype, ranges, base, p, claims, d.scope);
-            on_point();
+            on_point.tick();
             e
         })
         .collect::<Result<Vec<_>, _>>()?;
@@ -85,9 +95,9 @@ pub fn sobol(
 }
 
 impl SobolDesign {
-    /// The Saltelli design over [`Factor::ALL`].
+    /// The Saltelli design over the unit cube of the factors.
     pub fn design(&self) -> Result<Saltelli, DeviationsError> {
-        Ok(Saltelli::new(self.base_rows, Factor::ALL.len(), self.seed)?)
+        Ok(Saltelli::new(self.base_rows, self.factors, self.seed)?)
     }
 }
 

@@ -18,6 +18,7 @@ use crate::paper::qm::TABLE3_QM;
 use crate::paper::setups::{endstop, with_endstop, FIG13_BIAS_V, P1_BIAS_V, P2_BIAS_V};
 use crate::physics::harvester::Harvester;
 use crate::physics::two_port::TwoPort;
+use crate::progress::Silent;
 use crate::study::continuation::{self, Branch, ContinuationSettings, EventKind};
 use crate::study::orbit::{Forcing, Shooter};
 use crate::study::sweep;
@@ -43,7 +44,7 @@ pub fn frequency_branch(
     step: f64,
     what: &'static str,
 ) -> Result<Branch, DeviationsError> {
-    continuation::frequency_branch(device, accel_rms_g, start, stop, step, |_| {})
+    continuation::frequency_branch(device, accel_rms_g, start, stop, step, &Silent)
         .map_err(|source| DeviationsError::Orbit { what, source })
 }
 
@@ -169,7 +170,7 @@ fn p1_fig9_bias(variant: &Variant, bias_v: f64) -> (Outcome, Outcome) {
         freq_hz: P1_RESONANCE_HZ,
         accel_rms_g: FIG9_RANGE_G.0 * s,
     };
-    let Ok(branch) = continuation::branch_from_rest(&device, start, &settings, 200, |_| {}) else {
+    let Ok(branch) = continuation::branch_from_rest(&device, start, &settings, 200, &Silent) else {
         return (Outcome::Failed, Outcome::Failed);
     };
     let onset = branch

@@ -10,6 +10,7 @@ use crate::paper::Figure;
 use crate::physics::hertz::{
     normalised_delta, HertzLine, LinearFits, EQ19_FIT_RANGE_M, EQ19_FIT_SAMPLES,
 };
+use crate::progress::Progress;
 
 /// Samples of the normalised curve of Figure 5, uniform in the normalised force.
 pub const CURVE_SAMPLES: usize = 2001;
@@ -161,7 +162,7 @@ impl Figure for Fig05 {
     }
 
     /// Evaluates Figure 5 for the two prototypes' parameter files (no simulation).
-    fn run(setup: &Prototypes, _: &(dyn Fn() + Sync)) -> Result<Run, Infallible> {
+    fn run(setup: &Prototypes, _: &dyn Progress) -> Result<Run, Infallible> {
         Ok(evaluate(&setup.prototype1, &setup.prototype2))
     }
 

@@ -14,6 +14,7 @@ use crate::paper::curves::{
 use crate::paper::measured::P1_MEASURED_JUMP_HZ;
 use crate::paper::setups::{ParamSet, Prototype1Sets, P1_BIAS_V};
 use crate::paper::Figure;
+use crate::progress::Progress;
 use crate::study::sweep::SweepSettings;
 
 /// Figure 8's drive levels, frequency range and sweep settings, stated in
@@ -172,8 +173,8 @@ impl Figure for Fig08 {
 
     /// Runs Figure 8 for both parameter sets of prototype 1 (as loaded; the bias is set
     /// here): every curve, its repetition with refined numerics, and the b_im fits, in
-    /// parallel. `progress()` is called after every coarse step of every sweep.
-    fn run(setup: &Prototype1Sets, progress: &(dyn Fn() + Sync)) -> Result<Run, CalibrationError> {
+    /// parallel. `progress.tick()` is called after every coarse step of every sweep.
+    fn run(setup: &Prototype1Sets, progress: &dyn Progress) -> Result<Run, CalibrationError> {
         use rayon::prelude::*;
         let protocol = Protocol::new(&setup.published);
         let sets = setup

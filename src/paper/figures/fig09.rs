@@ -10,6 +10,7 @@ use crate::paper::claims::{
 use crate::paper::measured::P1_RESONANCE_HZ;
 use crate::paper::setups::{prototype1_setup, ParamSet, Prototype1Sets};
 use crate::paper::Figure;
+use crate::progress::Progress;
 use crate::study::amplitude::{
     compare_amplitude, AmplitudeComparison, AmplitudeReport, AmplitudeSettings,
 };
@@ -157,14 +158,14 @@ impl Protocol {
 pub fn run_biases(
     device: &Device,
     settings: &AmplitudeSettings,
-    on_step: &(dyn Fn() + Sync),
+    on_step: &dyn Progress,
 ) -> Result<Vec<AmplitudeCurve>, SolverError> {
     use rayon::prelude::*;
     let dev = prototype1_setup(device);
     Fig9Bias::ALL
         .par_iter()
         .map(|&bias| {
-            let report = settings.run(&dev.with_bias(bias.volts()), |_| on_step())?;
+            let report = settings.run(&dev.with_bias(bias.volts()), on_step)?;
             Ok(AmplitudeCurve { bias, report })
         })
         .collect()
@@ -240,9 +241,9 @@ impl Figure for Fig09 {
     }
 
     /// Runs Figure 9 for both parameter sets of prototype 1 (as loaded; bias and end-stop
-    /// model are set here), with the convergence repetition. `progress()` is called after
+    /// model are set here), with the convergence repetition. `progress.tick()` is called after
     /// every coarse step of every continuation.
-    fn run(setup: &Prototype1Sets, progress: &(dyn Fn() + Sync)) -> Result<Run, SolverError> {
+    fn run(setup: &Prototype1Sets, progress: &dyn Progress) -> Result<Run, SolverError> {
         let protocol = Protocol::new(&setup.published);
         let sets = setup
             .each()

@@ -9,6 +9,7 @@ use crate::num::stats::MeanCi;
 use crate::paper::claims::{keys, Claims, ClaimsError, Value};
 use crate::paper::setups::{paper_noise, ParamSet};
 use crate::paper::Figure;
+use crate::progress::Progress;
 use crate::signal::bandwidth::{mean_psd, upper_band_edge_hz};
 use crate::signal::{welch, Psd, WelchConfig};
 use crate::study::ensemble::{first_stream_for_level, DEFAULT_SEED};
@@ -132,7 +133,7 @@ impl Figure for Fig10 {
 
     /// Generates and analyses the [`RECORDS`] records in parallel, calling `progress` after
     /// each.
-    fn run(_: &(), progress: &(dyn Fn() + Sync)) -> Result<Run, RecordError> {
+    fn run(_: &(), progress: &dyn Progress) -> Result<Run, RecordError> {
         let spec = paper_noise(FIG10_SA);
         let first_stream = first_stream_for_level(FIG10_SA);
         let cfg = WelchConfig::half_overlap(NPERSEG);
@@ -143,7 +144,7 @@ impl Figure for Fig10 {
                 let g: Vec<f64> = a.iter().map(|x| x / G).collect();
                 let mean_square_g2 = g.iter().map(|x| x * x).sum::<f64>() / g.len() as f64;
                 let psd = welch(&g, spec.sample_rate_hz, &cfg)?;
-                progress();
+                progress.tick();
                 Ok(NoiseRecord {
                     psd,
                     mean_square_g2,

@@ -7,6 +7,7 @@ use crate::paper::claims::{keys, Claims, ClaimsError, Value};
 use crate::paper::ensembles::{run_prototype1, Prototype1Run, WidthReading};
 use crate::paper::setups::{ParamSet, Prototype1Sets};
 use crate::paper::Figure;
+use crate::progress::Progress;
 use crate::study::record::RecordError;
 
 /// Figure 11's levels (g²/Hz).
@@ -72,7 +73,7 @@ impl Figure for Fig11 {
     /// Runs Figure 11 for the published and the calibrated prototype 1 (the parameter files'
     /// devices; [`crate::paper::setups::prototype1_setup`] is applied here), calling
     /// `progress` after each record.
-    fn run(setup: &Prototype1Sets, progress: &(dyn Fn() + Sync)) -> Result<Run, RecordError> {
+    fn run(setup: &Prototype1Sets, progress: &dyn Progress) -> Result<Run, RecordError> {
         run_prototype1(setup, &FIG11_LEVELS, FIG11_REALISATIONS, progress)
     }
 

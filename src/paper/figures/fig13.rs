@@ -7,6 +7,7 @@ use crate::paper::claims::{bool_value, keys, Claims, ClaimsError, Value};
 use crate::paper::curves::{no_impact_value, CurveSpec, CurveSweeps, FigureCurve};
 use crate::paper::setups::{ParamSet, FIG13_BIAS_V};
 use crate::paper::Figure;
+use crate::progress::Progress;
 use crate::study::steady::steady_config_across_folds;
 use crate::study::stepped;
 use crate::study::sweep::{SweepSettings, REFINE_TOL_HZ};
@@ -97,9 +98,9 @@ impl Figure for Fig13 {
     }
 
     /// Runs Figure 13 on the published prototype 2 (as loaded; the bias is set here): every
-    /// curve and its repetition with refined numerics, in parallel. `progress()` is called
+    /// curve and its repetition with refined numerics, in parallel. `progress.tick()` is called
     /// after every coarse step of every sweep.
-    fn run(published: &Device, progress: &(dyn Fn() + Sync)) -> Result<Run, SolverError> {
+    fn run(published: &Device, progress: &dyn Progress) -> Result<Run, SolverError> {
         let device = published.with_bias(FIG13_BIAS_V);
         let settings = sweep_settings(&device);
         let halved_settings = settings.halved();

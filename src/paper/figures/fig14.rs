@@ -10,6 +10,7 @@ use crate::paper::prototype2_records::{self, Extras, Fig15Level, Levels, Scope, 
 use crate::paper::setups::ParamSet;
 use crate::paper::Figure;
 use crate::physics::two_port::{efficiency, eq21_efficiency};
+use crate::progress::Progress;
 use crate::study::ensemble::Ensemble;
 use crate::study::record::RecordError;
 
@@ -173,7 +174,7 @@ impl Figure for Fig14 {
 
     /// Runs the protocol at every level for prototype 2, calling `progress` after each record
     /// of the ensembles.
-    fn run(setup: &Setup, progress: &(dyn Fn() + Sync)) -> Result<Run, RecordError> {
+    fn run(setup: &Setup, progress: &dyn Progress) -> Result<Run, RecordError> {
         prototype2_records::run(&setup.prototype2, setup.scope(), progress)
     }
 

@@ -10,6 +10,7 @@ use crate::paper::prototype2_records::{self, Extras, Fig15Level, Levels, Scope};
 use crate::paper::setups::ParamSet;
 use crate::paper::Figure;
 use crate::physics::linear::linear_widths;
+use crate::progress::Progress;
 use crate::signal::Widths;
 use crate::study::ensemble::Ensemble;
 use crate::study::record::RecordError;
@@ -212,7 +213,7 @@ impl Figure for Fig15 {
 
     /// Runs the protocol at Figure 15's levels for prototype 2, calling `progress` after each
     /// record.
-    fn run(setup: &Setup, progress: &(dyn Fn() + Sync)) -> Result<Run, RecordError> {
+    fn run(setup: &Setup, progress: &dyn Progress) -> Result<Run, RecordError> {
         let protocol = prototype2_records::run(&setup.prototype2, setup.scope(), progress)?;
         Ok(Run::of(&protocol).expect("a run of Figure 15's levels has them all"))
     }

@@ -10,6 +10,7 @@ use crate::paper::qm::{QmReading, EQ21_QM, TABLE3_QM};
 use crate::paper::setups::{comb, comb_mut, ParamSet, Prototypes, P1_BIAS_V, P2_BIAS_V};
 use crate::paper::Figure;
 use crate::physics::two_port::{bias_for_coupling, TwoPort};
+use crate::progress::Progress;
 
 /// The abstract's k^2 for prototype 1 (a fraction): 1.44 %.
 pub const ABSTRACT_K2_P1: f64 = 0.0144;
@@ -143,7 +144,7 @@ impl Figure for Table3 {
     }
 
     /// Evaluates Table 3 for the two prototypes' parameter files (no simulation).
-    fn run(setup: &Prototypes, _: &(dyn Fn() + Sync)) -> Result<Run, Infallible> {
+    fn run(setup: &Prototypes, _: &dyn Progress) -> Result<Run, Infallible> {
         Ok(evaluate(&setup.prototype1, &setup.prototype2))
     }
 

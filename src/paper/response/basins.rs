@@ -5,6 +5,7 @@
 use crate::drive::Sine;
 use crate::ode::Stats;
 use crate::physics::harvester::Harvester;
+use crate::progress::Progress;
 use crate::study::basins::{basins, refine, Attractor, BasinGrid, BasinSettings, Basins};
 use crate::study::continuation::Branch;
 use crate::study::orbit::{Forcing, Orbit, OrbitError, Shooter};
@@ -62,7 +63,7 @@ pub(super) fn case_basins(
     branch: &Branch,
     cells: usize,
     stats: &mut Stats,
-    on_step: &(dyn Fn() + Sync),
+    on_step: &dyn Progress,
 ) -> Result<Option<(Basins, Attractors)>, OrbitError> {
     let Some(bs) = setup.basin_settings(cells) else {
         return Ok(None);

@@ -25,6 +25,7 @@ use crate::paper::figures::fig13;
 use crate::paper::setups::{prototype1_setup, with_endstop, ParamSet, FIG13_BIAS_V};
 use crate::paper::sweeps::{self, P1_HIGH_ACCEL_RMS_G, P1_SWEEP_STEP_HZ};
 use crate::physics::harvester::Harvester;
+use crate::progress::{Progress, Silent};
 use crate::study::basins::Basins;
 use crate::study::continuation::{
     branch_from_rest, Branch, ContinuationSettings, Diagram, DiagramEvent,
@@ -363,7 +364,7 @@ pub fn continuation(setup: &Setup) -> Result<Branch, OrbitError> {
         freq_hz: s.start,
         accel_rms_g: setup.accel_rms_g,
     };
-    branch_from_rest(&setup.device, start, s, setup.transient_periods, |_| {})
+    branch_from_rest(&setup.device, start, s, setup.transient_periods, &Silent)
 }
 
 /// The upper fold of a branch ([`Branch::upper_fold`]): its frequency (Hz).
@@ -388,22 +389,15 @@ pub fn phase_lag_deg(orbit: &Orbit) -> Option<f64> {
 
 /// The core of a case: both sweeps (in parallel) and the continuation, with nothing else
 /// filled in (no probe, basins or ghost study).
-pub fn sweeps_and_branch(
-    setup: &Setup,
-    on_step: &(dyn Fn() + Sync),
-) -> Result<CaseRun, ResponseError> {
+pub fn sweeps_and_branch(setup: &Setup, on_step: &dyn Progress) -> Result<CaseRun, ResponseError> {
     let key = setup.case.key();
     let serr = |source| ResponseError::Sweep { case: key, source };
     let (up, down) = rayon::join(
+        || setup.sweep.run(&setup.device, setup.accel_rms_g, on_step),
         || {
             setup
                 .sweep
-                .run(&setup.device, setup.accel_rms_g, |_| on_step())
-        },
-        || {
-            setup
-                .sweep
-                .run_down(&setup.device, setup.accel_rms_g, |_| on_step())
+                .run_down(&setup.device, setup.accel_rms_g, on_step)
         },
     );
     let (up, down) = (up.map_err(serr)?, down.map_err(serr)?);
@@ -430,7 +424,7 @@ pub fn sweeps_and_branch(
 pub fn run_case(
     setup: &Setup,
     basin_cells: usize,
-    on_step: &(dyn Fn() + Sync),
+    on_step: &dyn Progress,
 ) -> Result<CaseRun, ResponseError> {
     let key = setup.case.key();
     let serr = |source| ResponseError::Sweep { case: key, source };
@@ -461,7 +455,7 @@ pub fn run_case(
         let mut half = setup.sweep.clone();
         half.cfg.block_periods = FOLD_BLOCK_PERIODS / 2;
         run.up_half_blocks = Some(
-            half.run(&setup.device, setup.accel_rms_g, |_| {})
+            half.run(&setup.device, setup.accel_rms_g, &Silent)
                 .map_err(serr)?,
         );
     }
@@ -499,7 +493,7 @@ pub fn work_units(setups: &[Setup], basin_cells: usize) -> usize {
 pub fn run(
     setups: &[Setup],
     basin_cells: usize,
-    on_step: &(dyn Fn() + Sync),
+    on_step: &dyn Progress,
 ) -> Result<Run, ResponseError> {
     let cases = setups
         .par_iter()

@@ -17,6 +17,7 @@ use crate::drive::Sine;
 use crate::ode::Stats;
 use crate::physics::contact::{Side, StopModel};
 use crate::physics::harvester::{Harvester, State};
+use crate::progress::{Progress, Silent};
 use crate::study::orbit::{Forcing, Orbit, OrbitError, OrbitSummary, Parameter, Shooter};
 
 use super::impacting::{rigid_diagram, DiagramOptions, ImpactSequence};
@@ -268,13 +269,13 @@ pub fn diagram(
     start: Forcing,
     settings: &ContinuationSettings,
     options: &DiagramOptions,
-    mut progress: impl FnMut(&str),
+    progress: &dyn Progress,
 ) -> Result<Diagram, OrbitError> {
     if all_stops_rigid(device) {
         return rigid_diagram(device, start, settings, options, progress);
     }
-    progress("periodic orbits from rest");
-    let branch = branch_from_rest(device, start, settings, options.transient_periods, |_| {})?;
+    progress.stage("periodic orbits from rest");
+    let branch = branch_from_rest(device, start, settings, options.transient_periods, &Silent)?;
     let h = Harvester::new(device, start.sine(0.0));
     let shooter = Shooter::new(&h, settings.shooting);
     Diagram::from_branch(&shooter, &branch)
@@ -286,11 +287,12 @@ pub fn diagram(
 ///
 /// ```
 /// use endstop::device::Device;
+/// use endstop::progress::Silent;
 /// use endstop::study::continuation::{frequency_diagram, DiagramEventKind as EventKind, EndKind};
 ///
 /// let text = include_str!(concat!(env!("CARGO_MANIFEST_DIR"), "/data/examples/rigid_restitution.toml"));
 /// let device = Device::from_toml_str(text, "rigid_restitution.toml")?;
-/// let d = frequency_diagram(&device, 0.3, 600.0, 640.0, 2.0, |_| {})?;
+/// let d = frequency_diagram(&device, 0.3, 600.0, 640.0, 2.0, &Silent)?;
 /// // The non-impacting orbit grazes both stops twice; no period doubling anywhere.
 /// assert_eq!(d.events_of(EventKind::Grazing).count(), 2);
 /// assert_eq!(d.events_of(EventKind::PeriodDoubling).count(), 0);
@@ -304,7 +306,7 @@ pub fn frequency_diagram(
     from_hz: f64,
     to_hz: f64,
     max_step_hz: f64,
-    progress: impl FnMut(&str),
+    progress: &dyn Progress,
 ) -> Result<Diagram, OrbitError> {
     let start = Forcing {
         freq_hz: from_hz,

@@ -48,6 +48,7 @@ use nalgebra::{SMatrix, SVector};
 use crate::drive::Sine;
 use crate::ode::Stats;
 use crate::physics::harvester::{Harvester, State};
+use crate::progress::{share, Progress};
 use crate::study::orbit::{Forcing, Orbit, OrbitError, Parameter, Shooter};
 
 mod corrector;
@@ -106,15 +107,15 @@ pub fn first_orbit(
 }
 
 /// Continues the branch of periodic orbits of `base` through `first` (an orbit at the
-/// settings' start value) until the parameter passes `settings.stop`; `on_point(p)` is called
-/// with the parameter of every accepted point.
+/// settings' start value) until the parameter passes `settings.stop`; `progress` is told of
+/// every accepted point's parameter as the share of the way from the start to the stop.
 pub fn continue_branch(
     base: &Harvester<Sine>,
     first: Orbit,
     settings: &ContinuationSettings,
-    on_point: impl FnMut(f64),
+    progress: &dyn Progress,
 ) -> Result<Branch, OrbitError> {
-    continue_branch_until(base, first, settings, on_point, |_| false)
+    continue_branch_until(base, first, settings, progress, |_| false)
 }
 
 /// [`continue_branch`], ending early at the point after the first event for which
@@ -124,10 +125,11 @@ pub fn continue_branch_until(
     base: &Harvester<Sine>,
     first: Orbit,
     settings: &ContinuationSettings,
-    mut on_point: impl FnMut(f64),
+    progress: &dyn Progress,
     mut until: impl FnMut(&Event) -> bool,
 ) -> Result<Branch, OrbitError> {
     settings.validate()?;
+    let on_point = |p: f64| progress.fraction(share(settings.start, settings.stop, p));
     let shooter = Shooter::new(base, settings.shooting);
     let mut c = Continuer {
         shooter: &shooter,
@@ -247,14 +249,13 @@ pub fn continue_branch_until(
 /// The branch of periodic orbits of `device` continued by `settings` from the drive `start`
 /// (whose frequency or amplitude is the settings' start value), beginning with the orbit
 /// reached from rest (shooting, after up to `transient_periods` periods of transient if Newton
-/// does not converge from rest); `on_point(p)` is called with the parameter of every accepted
-/// point.
+/// does not converge from rest); `progress` as in [`continue_branch`].
 pub fn branch_from_rest(
     device: &crate::device::Device,
     start: Forcing,
     settings: &ContinuationSettings,
     transient_periods: usize,
-    on_point: impl FnMut(f64),
+    progress: &dyn Progress,
 ) -> Result<Branch, OrbitError> {
     settings.validate()?;
     let h = Harvester::new(device, Sine::from_rms_g(start.accel_rms_g, start.freq_hz));
@@ -268,7 +269,7 @@ pub fn branch_from_rest(
         transient_periods,
         &mut stats,
     )?;
-    let mut branch = continue_branch(&h, first, settings, on_point)?;
+    let mut branch = continue_branch(&h, first, settings, progress)?;
     branch.stats += stats;
     Ok(branch)
 }
@@ -280,12 +281,13 @@ pub fn branch_from_rest(
 ///
 /// ```
 /// use endstop::device::Device;
+/// use endstop::progress::Silent;
 /// use endstop::study::continuation::frequency_branch;
 ///
 /// let text = include_str!(concat!(env!("CARGO_MANIFEST_DIR"), "/data/prototype1.toml"));
 /// let device = Device::from_toml_str(text, "prototype1.toml")?;
 /// // Far below the stops (0.02 g rms): one stable branch, no events.
-/// let branch = frequency_branch(&device, 0.02, 1000.0, 1100.0, 50.0, |_| {})?;
+/// let branch = frequency_branch(&device, 0.02, 1000.0, 1100.0, 50.0, &Silent)?;
 /// assert!(branch.params().last().unwrap() >= 1100.0);
 /// assert!(branch.points.iter().all(|p| p.orbit.is_stable()));
 /// assert!(branch.events.is_empty());
@@ -297,12 +299,12 @@ pub fn frequency_branch(
     from_hz: f64,
     to_hz: f64,
     max_step_hz: f64,
-    on_point: impl FnMut(f64),
+    progress: &dyn Progress,
 ) -> Result<Branch, OrbitError> {
     let start = Forcing {
         freq_hz: from_hz,
         accel_rms_g,
     };
     let settings = ContinuationSettings::frequency(from_hz, to_hz, max_step_hz);
-    branch_from_rest(device, start, &settings, 200, on_point)
+    branch_from_rest(device, start, &settings, 200, progress)
 }

@@ -24,6 +24,7 @@ use crate::drive::Excitation;
 use crate::ode::{Dopri5, SolverError};
 use crate::physics::harvester::State;
 use crate::physics::interface::Interfaced;
+use crate::progress::{share, Progress};
 
 /// A drive multiplied by a linear ramp from 0 at t = 0 to 1 at `ramp_s`.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -136,13 +137,13 @@ pub enum ChargeError {
     Circuit(#[from] super::InterfaceError),
 }
 
-/// Charges the storage of `device` under `drive` (see the module docs); `progress` gets the
-/// time and storage voltage at the end of each block.
+/// Charges the storage of `device` under `drive` (see the module docs); `progress` is told at
+/// the end of each block how far the storage voltage has come from the start to the target.
 pub fn charge<E: Excitation + Clone>(
     device: &Device,
     drive: E,
     s: &ChargeSettings,
-    mut progress: impl FnMut(f64, f64),
+    progress: &dyn Progress,
 ) -> Result<ChargeRun, ChargeError> {
     if s.target_v <= s.start_v {
         return Err(ChargeError::TargetBelowStart {
@@ -204,7 +205,7 @@ pub fn charge<E: Excitation + Clone>(
             break;
         }
         let v = ode.y()[3];
-        progress(t_end, v);
+        progress.fraction(share(s.start_v, s.target_v, v));
         ends.push(v);
         if let [.., a, b, c] = ends[..] {
             let (d1, d2) = (b - a, c - b);

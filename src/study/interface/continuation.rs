@@ -34,6 +34,7 @@ use nalgebra::{Complex, Matrix4, SMatrix, SVector, Vector4};
 use crate::device::Device;
 use crate::drive::Sine;
 use crate::physics::harvester::State;
+use crate::progress::{share, Progress};
 use crate::study::orbit::multipliers;
 
 use super::monodromy::{linearise, IfLinearised};
@@ -260,11 +261,12 @@ impl Cont<'_> {
 
 /// Continues the steady state of `device` (with an interface and a load) in the drive
 /// frequency from `settings.start_hz` towards `settings.stop_hz` (see the module docs);
-/// `progress` is called with every accepted point.
+/// `progress` is told of every accepted point's frequency as the share of the way from the
+/// start to the stop.
 pub fn continue_frequency(
     device: &Device,
     settings: &IfContinuationSettings,
-    mut progress: impl FnMut(&IfBranchPoint),
+    progress: &dyn Progress,
 ) -> Result<IfBranch, InterfaceError> {
     let set = *settings;
     let first_sine = Sine::from_rms_g(set.accel_rms_g, set.start_hz);
@@ -293,7 +295,7 @@ pub fn continue_frequency(
         tol: set.tol,
     })?;
     let p0 = c.point(&u, &lin, t[4], first.newton_steps)?;
-    progress(&p0);
+    progress.fraction(share(set.start_hz, set.stop_hz, p0.steady.freq_hz));
     let mut branch = IfBranch {
         points: vec![p0],
         folds: Vec::new(),
@@ -337,7 +339,7 @@ pub fn continue_frequency(
             branch.folds.push((f0 + w * (f1 - f0), branch.points.len()));
         }
         let p = c.point(&cor.u, &cor.lin, tn[4], cor.iterations)?;
-        progress(&p);
+        progress.fraction(share(set.start_hz, set.stop_hz, p.steady.freq_hz));
         branch.points.push(p);
         u = cor.u;
         t = tn;

@@ -8,26 +8,27 @@
 use crate::device::Device;
 use crate::drive::Sine;
 use crate::physics::harvester::State;
+use crate::progress::Progress;
 
 use super::{steady_state, IfSteady, InterfaceError, SteadySettings};
 
 /// The steady states at each frequency (Hz) in order, at `accel_rms_g`, from rest (storage at
-/// zero) for the first.
+/// zero) for the first; `progress` is told of each point.
 pub fn frequency_sweep(
     device: &Device,
     freqs_hz: &[f64],
     accel_rms_g: f64,
     settings: &SteadySettings,
-    mut progress: impl FnMut(usize, &Result<IfSteady, InterfaceError>),
+    progress: &dyn Progress,
 ) -> Vec<Result<IfSteady, InterfaceError>> {
     let mut out = Vec::with_capacity(freqs_hz.len());
     let mut start = State::zeros();
-    for (i, &f) in freqs_hz.iter().enumerate() {
+    for &f in freqs_hz {
         let s = steady_state(device, Sine::from_rms_g(accel_rms_g, f), &start, settings);
         if let Ok(s) = &s {
             start = State::from(s.state);
         }
-        progress(i, &s);
+        progress.tick();
         out.push(s);
     }
     out
@@ -35,20 +36,20 @@ pub fn frequency_sweep(
 
 /// The steady states at each DC load resistance (ohm) in order, at one drive; every point
 /// starts from rest with the storage at `vs_start_v` (a different load moves the DC voltage
-/// far, so a neighbour's state is no better a start).
+/// far, so a neighbour's state is no better a start); `progress` is told of each point.
 pub fn load_sweep(
     device: &Device,
     loads_ohm: &[f64],
     sine: Sine,
     settings: &SteadySettings,
-    mut progress: impl FnMut(usize, &Result<IfSteady, InterfaceError>),
+    progress: &dyn Progress,
 ) -> Vec<Result<IfSteady, InterfaceError>> {
     let mut out = Vec::with_capacity(loads_ohm.len());
-    for (i, &r) in loads_ohm.iter().enumerate() {
+    for &r in loads_ohm {
         let mut d = device.clone();
         d.interface = d.interface.with_load_resistance(r);
         let s = steady_state(&d, sine, &State::zeros(), settings);
-        progress(i, &s);
+        progress.tick();
         out.push(s);
     }
     out

@@ -1,6 +1,7 @@
 use super::charging::{charge, ChargeError, ChargeSettings};
 use super::*;
 use crate::device::DcLoad;
+use crate::progress::Silent;
 
 fn device() -> Device {
     let text = include_str!("../../../data/validation/piezo_bridge.toml");
@@ -71,13 +72,13 @@ fn charging_reaches_a_target_or_says_out_of_reach() {
         block_s: 0.1,
         rtol: 1e-8,
     };
-    let run = charge(&d, Sine::from_rms_g(0.1, f), &settings, |_, _| {}).unwrap();
+    let run = charge(&d, Sine::from_rms_g(0.1, f), &settings, &Silent).unwrap();
     assert!(run.time_to_target_s > 0.0 && run.time_to_target_s < 20.0);
     let far = ChargeSettings {
         target_v: 50.0,
         ..settings
     };
-    let e = charge(&d, Sine::from_rms_g(0.1, f), &far, |_, _| {}).unwrap_err();
+    let e = charge(&d, Sine::from_rms_g(0.1, f), &far, &Silent).unwrap_err();
     assert!(
         matches!(
             e,

@@ -12,6 +12,7 @@ use crate::drive::Sine;
 use crate::ode::{SolverError, Stats};
 use crate::physics::contact::Mode;
 use crate::physics::harvester::{Harvester, State};
+use crate::progress::{Progress, Silent};
 use crate::study::steady::Measurement;
 use crate::study::stepped::{
     first_contact, in_contact, Approach, Drive, SteppedDrive, Sweep, Transition,
@@ -95,13 +96,13 @@ impl DownSweepReport {
 impl SweepSettings {
     /// Runs the down-sweep of `device` at `accel_rms_g` over the same grid taken from its
     /// highest to its lowest frequency (no extension), and refines its jump up and first
-    /// contact to brackets narrower than the refinement tolerance. `progress(i)` is called
+    /// contact to brackets narrower than the refinement tolerance. `progress.tick()` is called
     /// after each coarse step.
     pub fn run_down(
         &self,
         device: &Device,
         accel_rms_g: f64,
-        progress: impl FnMut(usize),
+        progress: &dyn Progress,
     ) -> Result<DownSweepReport, SolverError> {
         self.run_down_with(device, accel_rms_g, Approach::Jump, progress)
     }
@@ -113,7 +114,7 @@ impl SweepSettings {
         device: &Device,
         accel_rms_g: f64,
         approach: Approach,
-        progress: impl FnMut(usize),
+        progress: &dyn Progress,
     ) -> Result<DownSweepReport, SolverError> {
         let base = Harvester::new(device, Sine::from_rms_g(accel_rms_g, self.freqs_hz[0]));
         let rest = base.rest_state();
@@ -129,7 +130,7 @@ impl SweepSettings {
         accel_rms_g: f64,
         approach: Approach,
         start: (State, Mode),
-        progress: impl FnMut(usize),
+        progress: &dyn Progress,
     ) -> Result<DownSweepReport, SolverError> {
         let mut freqs = self.freqs_hz.clone();
         freqs.sort_by(|a, b| b.total_cmp(a));
@@ -214,7 +215,7 @@ impl SweepSettings {
             Some(sweep.values[start]),
             &values,
             approach,
-            |_| {},
+            &Silent,
         )?;
         Ok(Some(with_history(sweep, start, local)))
     }

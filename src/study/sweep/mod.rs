@@ -41,6 +41,7 @@ use crate::device::Device;
 use crate::drive::Sine;
 use crate::ode::{SolverError, Stats};
 use crate::physics::harvester::Harvester;
+use crate::progress::Progress;
 use crate::study::steady::{steady_config_across_folds, Measurement, SteadyConfig};
 use crate::study::stepped::{
     continue_sweep, first_contact, in_contact, values_beyond, with_midpoints, Approach, Drive,
@@ -271,12 +272,12 @@ impl SweepSettings {
     }
 
     /// Runs the up-sweep of `device` at `accel_rms_g`, extends it if needed, and refines its
-    /// transitions. `progress(i)` is called after each coarse step of the requested range.
+    /// transitions. `progress.tick()` is called after each coarse step of the requested range.
     pub fn run(
         &self,
         device: &Device,
         accel_rms_g: f64,
-        progress: impl FnMut(usize),
+        progress: &dyn Progress,
     ) -> Result<SweepReport, SolverError> {
         self.run_with(device, accel_rms_g, Approach::Jump, progress)
     }
@@ -288,7 +289,7 @@ impl SweepSettings {
         device: &Device,
         accel_rms_g: f64,
         approach: Approach,
-        progress: impl FnMut(usize),
+        progress: &dyn Progress,
     ) -> Result<SweepReport, SolverError> {
         let freqs = &self.freqs_hz;
         let base = Harvester::new(device, Sine::from_rms_g(accel_rms_g, freqs[0]));
@@ -452,6 +453,7 @@ pub fn compare_sweeps(reference: &SweepReport, refined: &SweepReport) -> SweepCo
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::progress::Silent;
     use crate::study::steady::{steady_config, steady_state};
     use crate::study::stepped::linspace_step;
 
@@ -500,7 +502,7 @@ mod tests {
             cfg: steady_config(&device, 1220.0),
             refine_tol_hz: tol,
         };
-        let r = settings.run(&device, accel, |_| {}).unwrap();
+        let r = settings.run(&device, accel, &Silent).unwrap();
         assert!(r.onset.is_some() && r.jump.is_none() && r.contact_lost.is_none());
         let k = first_contact(&r.sweep).unwrap();
         let base = Harvester::new(&device, Sine::from_rms_g(accel, freqs[0]));

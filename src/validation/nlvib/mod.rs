@@ -36,6 +36,7 @@ use crate::drive::Sine;
 use crate::ode::Stats;
 use crate::physics::closed_forms::Oscillator;
 use crate::physics::harvester::{Harvester, State};
+use crate::progress::Silent;
 use crate::study::continuation::{continue_branch, first_orbit, Branch, ContinuationSettings};
 use crate::study::orbit::{Forcing, Orbit, Parameter, Shooter, ShootingConfig};
 use crate::validation::harmonics::first_harmonic;
@@ -137,7 +138,7 @@ impl<'d> Ours<'d> {
             200,
             &mut stats,
         )?;
-        Ok(continue_branch(&self.model, first, &settings, |_| {})?)
+        Ok(continue_branch(&self.model, first, &settings, &Silent)?)
     }
 
     /// Our orbits at Omega on a branch, in branch order (m).

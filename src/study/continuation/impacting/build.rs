@@ -15,6 +15,7 @@ use crate::num::roots::{illinois, RootOptions, Sample};
 use crate::ode::Stats;
 use crate::physics::contact::{Side, StopModel};
 use crate::physics::harvester::Harvester;
+use crate::progress::{Progress, Silent};
 use crate::study::continuation::diagram::orbit_point;
 use crate::study::continuation::{continue_branch, first_orbit, ContinuationSettings};
 use crate::study::orbit::{mirror, Forcing, Orbit, OrbitError, Parameter, Shooter};
@@ -95,7 +96,7 @@ pub fn rigid_diagram(
     start: Forcing,
     settings: &ContinuationSettings,
     options: &DiagramOptions,
-    mut progress: impl FnMut(&str),
+    progress: &dyn Progress,
 ) -> Result<Diagram, OrbitError> {
     settings.validate()?;
     let param = settings.parameter;
@@ -114,7 +115,7 @@ pub fn rigid_diagram(
     let shooter = Shooter::new(&free, settings.shooting);
     let sym = mirror(&h);
     let mut stats = Stats::default();
-    progress("non-impacting");
+    progress.stage("non-impacting");
     let first = first_orbit(
         &shooter,
         &start,
@@ -123,7 +124,7 @@ pub fn rigid_diagram(
         options.transient_periods,
         &mut stats,
     )?;
-    let ni = continue_branch(&free, first, settings, |_| {})?;
+    let ni = continue_branch(&free, first, settings, &Silent)?;
     stats += ni.stats;
     let gaps = (h.gap(Side::Upper), h.gap(Side::Lower));
     let reach = |o: &Orbit| (o.summary.x_upper_m - gaps.0).max(-o.summary.x_lower_m - gaps.1);
@@ -227,13 +228,13 @@ pub fn rigid_diagram(
             b.grazings[n].branch = idx;
         }
     }
-    b.drain(&mut progress);
+    b.drain(progress);
     // The orbits reached from rest at either end of the range, unless on a branch already
     // followed (an impacting branch that meets no grazing inside the range).
     for at in [settings.start, settings.stop] {
         if let Some(s) = b.seed_from_rest(at) {
             b.queue.push_back(s);
-            b.drain(&mut progress);
+            b.drain(progress);
         }
     }
     b.finish(stats)
@@ -259,13 +260,13 @@ pub(super) struct Builder<'a> {
 
 impl Builder<'_> {
     /// Follows every queued start (and what they lead to) up to the budget of branches.
-    fn drain(&mut self, progress: &mut impl FnMut(&str)) {
+    fn drain(&mut self, progress: &dyn Progress) {
         while let Some(s) = self.queue.pop_front() {
             if self.branches.len() >= self.options.max_branches {
                 self.queue.clear();
                 break;
             }
-            progress(&s.seq.describe());
+            progress.stage(&s.seq.describe());
             self.follow_start(s);
         }
     }
