@@ -14,60 +14,18 @@ use std::collections::BTreeMap;
 use std::time::Instant;
 
 use anyhow::{bail, Result};
-use common::io::plot::{LegendPos, LinePlot, Series, Style, PALETTE};
+use common::io::plot::{Series, Style, PALETTE};
 use common::ngspice::{Reading, Reduced, Runner, Source};
+use common::reports::crosscheck_io::{numbers_md, rows_df, waveform_plot, Row};
 use common::{fmt_sig, write_atomic, Experiment};
 use endstop::paper::crosscheck::{
-    acceptance_failures, cases, prepare, verdict_label, Case, Difference, Ours, Prepared, Setting,
-    SpiceRun, Verdict, BOOK_CASE, OUTPUT_STEPS_PER_PERIOD, SETTINGS, TOL_FREE, TOL_IMPACTING,
+    acceptance_failures, cases, prepare, Case, Difference, Ours, Prepared, Setting, SpiceRun,
+    Verdict, BOOK_CASE, SETTINGS,
 };
 use endstop::paper::setups::{comb, endstop, stiffness_model, ParamSet};
-use polars::prelude::*;
 
 fn main() {
     common::run_main("crosscheck", run);
-}
-
-/// One row of the table.
-struct Row {
-    case: String,
-    case_label: String,
-    device: String,
-    stiffness: String,
-    bim: f64,
-    bias_v: f64,
-    accel_rms_g: f64,
-    freq_hz: f64,
-    start: String,
-    setting: String,
-    setting_kind: Setting,
-    setting_label: String,
-    documented: bool,
-    settings_text: String,
-    span_s: f64,
-    window_s: f64,
-    v1_ours: f64,
-    v2_ours: f64,
-    v1_spice: f64,
-    v2_spice: f64,
-    rel_diff_v1: f64,
-    rel_diff_v2: f64,
-    rel_diff: f64,
-    x_peak_ours_m: f64,
-    x_peak_spice_m: f64,
-    cf_ours: f64,
-    cf_spice: f64,
-    v1_ours_from_rest: f64,
-    ours_s: f64,
-    ours_steps: u64,
-    spice_s: f64,
-    spice_recorded: bool,
-    spice_points: usize,
-    tolerance: f64,
-    impacting: bool,
-    verdict: Verdict,
-    /// Why ngspice gave no result (with [`Verdict::NotYet`]).
-    failure: Option<String>,
 }
 
 /// Our side of a case as the rows report it.
@@ -80,74 +38,67 @@ struct OursRun<'a> {
     v1_from_rest: f64,
 }
 
-impl Row {
-    /// The row of a setting before ngspice has run.
-    fn new(o: &OursRun, setting: Setting) -> Self {
-        let case = &o.prepared.case;
-        let dev = &case.device;
-        let m = &o.ours.measurement;
-        Row {
-            case: case.key.to_string(),
-            case_label: case.label.to_string(),
-            device: dev.name.clone(),
-            stiffness: format!("{:?}", stiffness_model(dev)).to_lowercase(),
-            bim: endstop(dev).damping_n_s_per_m,
-            bias_v: comb(dev).bias_v,
-            accel_rms_g: case.accel_rms_g,
-            freq_hz: case.freq_hz,
-            start: o.prepared.start_label.clone(),
-            setting: setting.key().to_string(),
-            setting_kind: setting,
-            setting_label: setting.label().to_string(),
-            documented: setting.documented(),
-            settings_text: setting.text(case.period_s()),
-            span_s: o.ours.t_end_s,
-            window_s: o.ours.window_length_s(),
-            v1_ours: m.v1_rms_v,
-            v2_ours: m.v2_rms_v,
-            v1_spice: f64::NAN,
-            v2_spice: f64::NAN,
-            rel_diff_v1: f64::NAN,
-            rel_diff_v2: f64::NAN,
-            rel_diff: f64::NAN,
-            x_peak_ours_m: m.x_peak_m,
-            x_peak_spice_m: f64::NAN,
-            cf_ours: m.contact_fraction,
-            cf_spice: f64::NAN,
-            v1_ours_from_rest: o.v1_from_rest,
-            ours_s: o.seconds,
-            ours_steps: o.ours.stats.accepted,
-            spice_s: f64::NAN,
-            spice_recorded: false,
-            spice_points: 0,
-            tolerance: case.tolerance(),
-            impacting: case.impacting,
-            verdict: Verdict::NotYet,
-            failure: Some("not run".into()),
-        }
+/// The row of a setting before ngspice has run.
+fn new_row(o: &OursRun, setting: Setting) -> Row {
+    let case = &o.prepared.case;
+    let dev = &case.device;
+    let m = &o.ours.measurement;
+    Row {
+        case: case.key.to_string(),
+        case_label: case.label.to_string(),
+        device: dev.name.clone(),
+        stiffness: format!("{:?}", stiffness_model(dev)).to_lowercase(),
+        bim: endstop(dev).damping_n_s_per_m,
+        bias_v: comb(dev).bias_v,
+        accel_rms_g: case.accel_rms_g,
+        freq_hz: case.freq_hz,
+        start: o.prepared.start_label.clone(),
+        setting: setting.key().to_string(),
+        setting_kind: setting,
+        setting_label: setting.label().to_string(),
+        documented: setting.documented(),
+        settings_text: setting.text(case.period_s()),
+        span_s: o.ours.t_end_s,
+        window_s: o.ours.window_length_s(),
+        v1_ours: m.v1_rms_v,
+        v2_ours: m.v2_rms_v,
+        v1_spice: f64::NAN,
+        v2_spice: f64::NAN,
+        rel_diff_v1: f64::NAN,
+        rel_diff_v2: f64::NAN,
+        rel_diff: f64::NAN,
+        x_peak_ours_m: m.x_peak_m,
+        x_peak_spice_m: f64::NAN,
+        cf_ours: m.contact_fraction,
+        cf_spice: f64::NAN,
+        v1_ours_from_rest: o.v1_from_rest,
+        ours_s: o.seconds,
+        ours_steps: o.ours.stats.accepted,
+        spice_s: f64::NAN,
+        spice_recorded: false,
+        spice_points: 0,
+        tolerance: case.tolerance(),
+        impacting: case.impacting,
+        verdict: Verdict::NotYet,
+        failure: Some("not run".into()),
     }
+}
 
-    /// Fills in ngspice's run and the verdict.
-    fn judge(&mut self, spice: &SpiceRun, ours: &Ours, reading: &Reading) {
-        let d = Difference::of(&ours.measurement, spice);
-        self.v1_spice = spice.v1_rms_v;
-        self.v2_spice = spice.v2_rms_v;
-        self.rel_diff_v1 = d.rel_v1;
-        self.rel_diff_v2 = d.rel_v2;
-        self.rel_diff = d.rel;
-        self.x_peak_spice_m = spice.x_peak_m;
-        self.cf_spice = spice.contact_fraction;
-        self.spice_s = reading.run.wall_s;
-        self.spice_recorded = reading.recorded;
-        self.spice_points = spice.points;
-        self.verdict = d.verdict(self.tolerance);
-        self.failure = None;
-    }
-
-    /// The verdict as the tables write it.
-    fn verdict_label(&self) -> String {
-        verdict_label(self.verdict, self.failure.as_deref())
-    }
+/// Fills in ngspice's run and the verdict.
+fn judge(row: &mut Row, spice: &SpiceRun, ours: &Ours, reading: &Reading) {
+    let d = Difference::of(&ours.measurement, spice);
+    row.v1_spice = spice.v1_rms_v;
+    row.v2_spice = spice.v2_rms_v;
+    row.rel_diff_v1 = d.rel_v1;
+    row.rel_diff_v2 = d.rel_v2;
+    row.rel_diff = d.rel;
+    row.x_peak_spice_m = spice.x_peak_m;
+    row.cf_spice = spice.contact_fraction;
+    row.spice_s = reading.run.wall_s;
+    row.spice_recorded = reading.recorded;
+    row.spice_points = spice.points;
+    row.verdict = d.verdict(row.tolerance);
+    row.failure = None;
 }
 
 /// Where ngspice's numbers for the cross-check are recorded.
@@ -307,7 +258,7 @@ fn run_setting(
             )?;
         }
     }
-    let mut row = Row::new(o, setting);
+    let mut row = new_row(o, setting);
     let gap = endstop(&case.device).gap_m;
     let plotted =
         case.key == BOOK_CASE && matches!(setting, Setting::Documented | Setting::Defaults);
@@ -330,7 +281,7 @@ fn run_setting(
     match reading {
         Ok(reading) => {
             let run = spice_run(&reading)?;
-            row.judge(&run, o.ours, &reading);
+            judge(&mut row, &run, o.ours, &reading);
             Ok((row, Some((run, reading))))
         }
         Err(e) => {
@@ -403,165 +354,6 @@ fn spice_series(
         .map(|(t, v)| ((t - (t1 - period)) / period, *v))
         .collect();
     Some(Series::new(label, pts, color, style))
-}
-
-/// The book case's V1 over the last period: ours and ngspice's.
-fn waveform_plot(series: Vec<Series>) -> LinePlot {
-    let (lo, hi) = series
-        .iter()
-        .flat_map(|s| s.points.iter().map(|p| p.1))
-        .fold((f64::MAX, f64::MIN), |(a, b), y| (a.min(y), b.max(y)));
-    let pad = 0.08 * (hi - lo).max(1e-9);
-    LinePlot::new(
-        "Cross-check: P1, 30 V, 7 g, 1350 Hz (Hertz), V1 over the last period",
-        "time in the last period [periods]",
-        "V1 [V]",
-        series,
-    )
-    .x(0.0, 1.0)
-    .y(lo - pad, hi + 3.0 * pad)
-    .legend(LegendPos::UpperRight)
-}
-
-fn numbers_md(rows: &[Row], version: &str) -> String {
-    let mut md = format!(
-        "Simulator: {version}. Relative difference = (ngspice - ours)/ours of the RMS voltage \
-         over the comparison window, the larger of V1 and V2. Tolerance: {} % without impacts, \
-         {} % with impacts, applied to the documented settings. Settings marked * \
-         are ngspice's defaults; T is the drive period; the output step of `.tran` is \
-         T/{OUTPUT_STEPS_PER_PERIOD}. The verdict applies the tolerance to every row; only the \
-         documented settings (in bold) are required to meet it. Run times are wall-clock seconds \
-         (ngspice's include starting the process and writing its output); {}.\n\n",
-        TOL_FREE * 100.0,
-        TOL_IMPACTING * 100.0,
-        if rows.iter().all(|r| r.spice_recorded) {
-            "ours were measured on the machine that generated this page, ngspice's where its \
-             runs were recorded"
-        } else if rows.iter().any(|r| r.spice_recorded) {
-            "ours were measured on the machine that generated this page, ngspice's there or, \
-             for runs taken from the recording, where they were recorded"
-        } else {
-            "both were measured on the machine that generated this page"
-        },
-    );
-    let mut last_case = String::new();
-    for r in rows {
-        if r.case != last_case {
-            last_case = r.case.clone();
-            md.push_str(&format!(
-                "\n**{}** (`{}`). Start: {}. Span {} periods, window {} periods. Ours: V1 = {} V, \
-                 V2 = {} V, peak abs(x) = {} um, time in contact {} %, {} steps in {} s.{}\n\n\
-                 | ngspice setting | V1 ngspice (V) | V2 ngspice (V) | rel. diff | peak abs(x) (um) | time in contact (%) | points in window | ngspice (s) | verdict |\n\
-                 |---|---|---|---|---|---|---|---|---|\n",
-                r.case_label,
-                r.case,
-                r.start,
-                (r.span_s * r.freq_hz).round(),
-                (r.window_s * r.freq_hz).round(),
-                fmt_sig(r.v1_ours, 7),
-                fmt_sig(r.v2_ours, 7),
-                fmt_sig(r.x_peak_ours_m * 1e6, 6),
-                fmt_sig(r.cf_ours * 100.0, 3),
-                r.ours_steps,
-                fmt_sig(r.ours_s, 2),
-                if r.impacting {
-                    format!(
-                        " Ours from rest at the same drive (the lower branch where the drive is \
-                         bistable): V1 = {} V.",
-                        fmt_sig(r.v1_ours_from_rest, 4)
-                    )
-                } else {
-                    String::new()
-                },
-            ));
-        }
-        let verdict = if r.documented {
-            format!("**{}**", r.verdict_label())
-        } else {
-            r.verdict_label()
-        };
-        md.push_str(&format!(
-            "| {}: `{}` | {} | {} | {} | {} | {} | {} | {} | {} |\n",
-            r.setting_label,
-            r.settings_text,
-            fmt_sig(r.v1_spice, 7),
-            fmt_sig(r.v2_spice, 7),
-            sci(r.rel_diff),
-            fmt_sig(r.x_peak_spice_m * 1e6, 6),
-            fmt_sig(r.cf_spice * 100.0, 3),
-            r.spice_points,
-            fmt_sig(r.spice_s, 2),
-            verdict,
-        ));
-    }
-    // Speed: ngspice at the documented settings against ours over the same span (ngspice's
-    // time includes starting the process and writing its output).
-    let mut ratios: Vec<f64> = rows
-        .iter()
-        .filter(|r| r.documented && r.spice_s.is_finite() && r.ours_s > 0.0)
-        .map(|r| r.spice_s / r.ours_s)
-        .collect();
-    ratios.sort_by(f64::total_cmp);
-    if let (Some(lo), Some(hi)) = (ratios.first(), ratios.last()) {
-        md.push_str(&format!(
-            "\n**Speed.** Over the same span, ngspice at the documented settings took {} times \
-             as long as ours (median of the {} cases; from {} to {}).\n",
-            fmt_sig(ratios[ratios.len() / 2], 3),
-            ratios.len(),
-            fmt_sig(*lo, 3),
-            fmt_sig(*hi, 3),
-        ));
-    }
-    md
-}
-
-fn sci(x: f64) -> String {
-    if x.is_finite() {
-        format!("{x:.1e}")
-    } else {
-        "-".into()
-    }
-}
-
-fn rows_df(rows: &[Row]) -> Result<DataFrame> {
-    let s = |f: fn(&Row) -> String| rows.iter().map(f).collect::<Vec<String>>();
-    let x = |f: fn(&Row) -> f64| rows.iter().map(f).collect::<Vec<f64>>();
-    Ok(df!(
-        "case" => s(|r| r.case.clone()),
-        "case_label" => s(|r| r.case_label.clone()),
-        "device" => s(|r| r.device.clone()),
-        "stiffness" => s(|r| r.stiffness.clone()),
-        "bim_n_s_per_m" => x(|r| r.bim),
-        "bias_v" => x(|r| r.bias_v),
-        "accel_rms_g" => x(|r| r.accel_rms_g),
-        "freq_hz" => x(|r| r.freq_hz),
-        "start" => s(|r| r.start.clone()),
-        "setting" => s(|r| r.setting.clone()),
-        "setting_label" => s(|r| r.setting_label.clone()),
-        "documented" => rows.iter().map(|r| r.documented).collect::<Vec<bool>>(),
-        "ngspice_options" => s(|r| r.settings_text.clone()),
-        "span_s" => x(|r| r.span_s),
-        "window_s" => x(|r| r.window_s),
-        "v1_rms_ours_v" => x(|r| r.v1_ours),
-        "v2_rms_ours_v" => x(|r| r.v2_ours),
-        "v1_rms_spice_v" => x(|r| r.v1_spice),
-        "v2_rms_spice_v" => x(|r| r.v2_spice),
-        "rel_diff_v1" => x(|r| r.rel_diff_v1),
-        "rel_diff_v2" => x(|r| r.rel_diff_v2),
-        "rel_diff" => x(|r| r.rel_diff),
-        "x_peak_ours_m" => x(|r| r.x_peak_ours_m),
-        "x_peak_spice_m" => x(|r| r.x_peak_spice_m),
-        "contact_fraction_ours" => x(|r| r.cf_ours),
-        "contact_fraction_spice" => x(|r| r.cf_spice),
-        "v1_rms_ours_from_rest_v" => x(|r| r.v1_ours_from_rest),
-        "ours_s" => x(|r| r.ours_s),
-        "ours_steps" => rows.iter().map(|r| r.ours_steps).collect::<Vec<u64>>(),
-        "spice_s" => x(|r| r.spice_s),
-        "spice_points_in_window" => rows.iter().map(|r| r.spice_points as u64).collect::<Vec<u64>>(),
-        "tolerance" => x(|r| r.tolerance),
-        "status" => s(|r| r.verdict_label()),
-        "params" => s(|_| ParamSet::Published.label().to_string()),
-    )?)
 }
 
 /// The diode-bridge cases (`endstop::spice::bridge::BRIDGE_CASES`): ngspice from our steady

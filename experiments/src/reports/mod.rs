@@ -10,6 +10,7 @@ pub mod band_limit_io;
 pub mod basins_io;
 pub mod branch_io;
 pub mod calibration_io;
+pub mod crosscheck_io;
 pub mod deviations_io;
 pub mod fig05_io;
 pub mod fig08_io;
