@@ -293,7 +293,7 @@ fn run() -> Result<()> {
             let key = c.name.split(' ').next().unwrap_or(c.name);
             exp.number(
                 &format!("interface_record_cost_ratio_median_{key}"),
-                c.ratios[c.ratios.len() / 2],
+                c.ratios.0,
             );
         }
         let md = interfaces::table(&costs, repeats);

@@ -113,7 +113,7 @@ pub struct Costs {
 
 /// Processor time of `f` (s): this process's user and system time (the timed work runs on one
 /// thread, and the machine is shared, so processor time is steadier than wall time).
-fn cpu<T>(f: impl FnOnce() -> Result<T>) -> Result<(T, f64)> {
+pub(crate) fn cpu<T>(f: impl FnOnce() -> Result<T>) -> Result<(T, f64)> {
     let t0 = common::cpu_time_s().unwrap_or(0.0);
     let wall = Instant::now();
     let out = f()?;
@@ -124,7 +124,8 @@ fn cpu<T>(f: impl FnOnce() -> Result<T>) -> Result<(T, f64)> {
     Ok((out, t))
 }
 
-fn median(mut v: Vec<f64>) -> (f64, f64, f64) {
+/// The median of `v` with its smallest and largest value.
+pub(crate) fn median(mut v: Vec<f64>) -> (f64, f64, f64) {
     v.sort_by(f64::total_cmp);
     (v[v.len() / 2], v[0], v[v.len() - 1])
 }

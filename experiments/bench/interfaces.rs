@@ -6,7 +6,7 @@
 //! machine's speed shifts each round's runs alike; the table gives each one's median
 //! processor time and the median of the per-round ratios with their range.
 
-use anyhow::{Context, Result};
+use anyhow::Result;
 use endstop::device::{Device, Interface, Inversion};
 use endstop::drive::noise::NoiseSpec;
 use endstop::study::interface::record::noise_record;
@@ -14,6 +14,8 @@ use endstop::study::record::{simulate_record, RecordSpec, Scheme, DEFAULT_RTOL};
 use endstop_experiments as common;
 
 use common::fmt_sig;
+
+use crate::examples::{cpu, median};
 
 /// Seed of the records.
 const SEED: u64 = 2012;
@@ -25,16 +27,16 @@ const PSD_G2_PER_HZ: f64 = 1e-4;
 pub struct InterfaceCost {
     /// The interface.
     pub name: &'static str,
-    /// Its runs' processor times (s), sorted.
-    pub times_s: Vec<f64>,
-    /// Per-round ratios to the resistive run, sorted.
-    pub ratios: Vec<f64>,
+    /// Its runs' processor times (s): median, smallest, largest.
+    pub times_s: (f64, f64, f64),
+    /// Per-round ratios to the resistive run: median, smallest, largest.
+    pub ratios: (f64, f64, f64),
 }
 
 /// The resistive runs and each interface's.
 pub struct Costs {
-    /// The resistive runs' processor times (s), sorted.
-    pub resistive_s: Vec<f64>,
+    /// The resistive runs' processor times (s): median, smallest, largest.
+    pub resistive_s: (f64, f64, f64),
     /// Each interface.
     pub interfaces: Vec<InterfaceCost>,
 }
@@ -49,16 +51,6 @@ fn spec() -> RecordSpec {
         rtol: DEFAULT_RTOL,
         scheme: Scheme::Exponential,
     }
-}
-
-fn cpu_s<T>(f: impl FnOnce() -> Result<T>) -> Result<f64> {
-    let t0 = common::cpu_time_s().context("processor time is not available")?;
-    f()?;
-    Ok(common::cpu_time_s().context("processor time is not available")? - t0)
-}
-
-fn median(v: &[f64]) -> f64 {
-    v[v.len() / 2]
 }
 
 /// Runs `rounds` alternated rounds on the calling thread.
@@ -76,30 +68,25 @@ pub fn measure(rounds: usize) -> Result<Costs> {
     let mut resistive_s = Vec::new();
     let mut per: Vec<(Vec<f64>, Vec<f64>)> = vec![(Vec::new(), Vec::new()); variants.len()];
     for _ in 0..rounds {
-        let base = cpu_s(|| Ok(simulate_record(&resistive, &spec, SEED, 0)?))?;
+        let (_, base) = cpu(|| Ok(simulate_record(&resistive, &spec, SEED, 0)?))?;
         resistive_s.push(base);
         for ((_, d), (times, ratios)) in variants.iter().zip(per.iter_mut()) {
-            let t = cpu_s(|| Ok(noise_record(d, &spec, SEED, 0)?))?;
+            let (_, t) = cpu(|| Ok(noise_record(d, &spec, SEED, 0)?))?;
             times.push(t);
             ratios.push(t / base);
         }
     }
-    resistive_s.sort_by(f64::total_cmp);
     let interfaces = variants
         .iter()
         .zip(per)
-        .map(|((name, _), (mut times_s, mut ratios))| {
-            times_s.sort_by(f64::total_cmp);
-            ratios.sort_by(f64::total_cmp);
-            InterfaceCost {
-                name,
-                times_s,
-                ratios,
-            }
+        .map(|((name, _), (times_s, ratios))| InterfaceCost {
+            name,
+            times_s: median(times_s),
+            ratios: median(ratios),
         })
         .collect();
     Ok(Costs {
-        resistive_s,
+        resistive_s: median(resistive_s),
         interfaces,
     })
 }
@@ -117,16 +104,16 @@ pub fn table(costs: &Costs, rounds: usize) -> String {
     );
     md.push_str(&format!(
         "| `piezo_cantilever` on its resistor (exponential free flight) | {} | 1 |\n",
-        fmt_sig(median(&costs.resistive_s), 3)
+        fmt_sig(costs.resistive_s.0, 3)
     ));
     for c in &costs.interfaces {
         md.push_str(&format!(
             "| `piezo_bridge`, {} | {} | {} ({} to {}) |\n",
             c.name,
-            fmt_sig(median(&c.times_s), 3),
-            fmt_sig(median(&c.ratios), 3),
-            fmt_sig(c.ratios[0], 3),
-            fmt_sig(c.ratios[c.ratios.len() - 1], 3),
+            fmt_sig(c.times_s.0, 3),
+            fmt_sig(c.ratios.0, 3),
+            fmt_sig(c.ratios.1, 3),
+            fmt_sig(c.ratios.2, 3),
         ));
     }
     md
