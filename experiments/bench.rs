@@ -1,8 +1,10 @@
 //! `bench`: how fast the model runs, on fixed cases. Speed is measured here, never
 //! asserted by a test.
 //!
-//! Usage: `cargo run --release --bin bench [-- --quick]` (`just bench` runs the whole
-//! benchmark; `reproduce` runs `--quick`, which keeps its last phase short).
+//! Usage: `cargo run --release --bin bench [-- --quick | --interfaces]` (`just bench` runs the
+//! whole benchmark; `reproduce` runs `--quick`, which keeps its last phase short;
+//! `--interfaces` measures the records behind an interface circuit alone and prints their
+//! table, writing nothing).
 //!
 //! * a 10 s prototype-1 record at Sa = 2.85e-2 g^2/Hz (heavy impacts; calibrated set, whose
 //!   stops are closer, and published set), and a 10 s prototype-2 record at 1.69e-3;
@@ -119,7 +121,11 @@ fn run() -> Result<()> {
     for a in std::env::args().skip(1) {
         match a.as_str() {
             "--quick" => quick = true,
-            other => bail!("unknown argument `{other}`; usage: bench [--quick]"),
+            "--interfaces" => {
+                print!("{}", interfaces::table(&interfaces::measure(REPEATS)?, REPEATS));
+                return Ok(());
+            }
+            other => bail!("unknown argument `{other}`; usage: bench [--quick | --interfaces]"),
         }
     }
     let repeats = if quick { 1 } else { REPEATS };
