@@ -122,7 +122,10 @@ fn run() -> Result<()> {
         match a.as_str() {
             "--quick" => quick = true,
             "--interfaces" => {
-                print!("{}", interfaces::table(&interfaces::measure(REPEATS)?, REPEATS));
+                print!(
+                    "{}",
+                    interfaces::table(&interfaces::measure(REPEATS)?, REPEATS)
+                );
                 return Ok(());
             }
             other => bail!("unknown argument `{other}`; usage: bench [--quick | --interfaces]"),

@@ -26,6 +26,7 @@ mod history_study;
 mod impacting_orbits;
 mod integrator;
 mod interface_orbits;
+mod interface_records;
 mod interfaces;
 mod interfaces_spice;
 mod record_accuracy;

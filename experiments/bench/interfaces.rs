@@ -1,7 +1,10 @@
 //! The cost of a record behind an interface circuit against the same record on a resistive
 //! load: the cantilever of `data/examples/piezo_bridge.toml` behind its full bridge and behind
-//! a parallel SSHI, and `data/examples/piezo_cantilever.toml` on its resistor (whose free
-//! flight is propagated exactly), each a 10 s record of the same noise after a 1 s pre-roll.
+//! a parallel SSHI, and `data/examples/piezo_cantilever.toml` on its resistor, each a 10 s
+//! record of the same noise after a 1 s pre-roll, by the records' default scheme: the
+//! resistive free flight by the exponential step, the interface's linear modes propagated
+//! exactly with the intervals where a conduction or switch event may fall handed to
+//! Dormand-Prince (`endstop::study::interface::record`).
 //! The runs alternate (resistive, bridge, SSHI, resistive, ...) so that a drift of the
 //! machine's speed shifts each round's runs alike; the table gives each one's median
 //! processor time and the median of the per-round ratios with their range.
@@ -108,7 +111,8 @@ pub fn table(costs: &Costs, rounds: usize) -> String {
     ));
     for c in &costs.interfaces {
         md.push_str(&format!(
-            "| `piezo_bridge`, {} | {} | {} ({} to {}) |\n",
+            "| `piezo_bridge`, {} (exact linear modes, Dormand-Prince at events) | {} | {} ({} to \
+             {}) |\n",
             c.name,
             fmt_sig(c.times_s.0, 3),
             fmt_sig(c.ratios.0, 3),

@@ -634,7 +634,7 @@ impl<E: Excitation> Interfaced<E> {
 
     /// The circuit's guards, dimensionless: (conduction, extremum).
     #[inline]
-    fn circuit_guards(&self, mode: IfMode, y: &State) -> [f64; 2] {
+    pub(crate) fn circuit_guards(&self, mode: IfMode, y: &State) -> [f64; 2] {
         let c = &self.circuit;
         let sc = self.scales();
         let conduction = if c.has_conduction_events() {

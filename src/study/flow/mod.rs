@@ -49,7 +49,7 @@ mod walk;
 pub use walk::{GRAZE_MARGIN, MIN_STEPS_PER_OSCILLATION, MIN_STEPS_PER_PERIOD};
 
 pub(crate) use affine::AffineMode;
-pub(crate) use walk::{Carrier, Engine};
+pub(crate) use walk::{cubic_max, Carrier, Engine};
 
 use crate::drive::Sine;
 use crate::ode::{Observer, Options, SolverError, Stats, Step, Steps};

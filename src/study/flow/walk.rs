@@ -512,7 +512,7 @@ struct Point {
 
 /// The largest value of the cubic Hermite interpolant with end values `g0`, `g1` and end
 /// slopes times the step `d0`, `d1` on [0, 1].
-fn cubic_max(g0: f64, d0: f64, g1: f64, d1: f64) -> f64 {
+pub(crate) fn cubic_max(g0: f64, d0: f64, g1: f64, d1: f64) -> f64 {
     // p(th) = g0 + d0 th + b th^2 + c th^3.
     let b = 3.0 * (g1 - g0) - 2.0 * d0 - d1;
     let c = 2.0 * (g0 - g1) + d0 + d1;

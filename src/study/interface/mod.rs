@@ -36,6 +36,7 @@
 
 pub mod charging;
 pub mod continuation;
+mod linear_modes;
 pub mod monodromy;
 pub mod record;
 pub mod sweep;
