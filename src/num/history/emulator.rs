@@ -130,7 +130,7 @@ pub struct Wave {
 
 impl Wave {
     /// The implausibility of every output at `x`, the input as the emulators see it
-    /// ([`HistoryMatch::emulator_input`]).
+    /// ([`HistoryMatch::emulator_input`](super::HistoryMatch::emulator_input)).
     pub fn implausibilities(&self, obs: &[Observation], x: &[f64]) -> Vec<f64> {
         self.emulators
             .iter()
