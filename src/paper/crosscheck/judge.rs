@@ -20,8 +20,6 @@ pub struct SpiceRun {
     pub contact_fraction: f64,
     /// Time points in the window.
     pub points: usize,
-    /// The waveforms as read.
-    pub waveforms: Waveforms,
 }
 
 impl SpiceRun {
@@ -32,6 +30,15 @@ impl SpiceRun {
         gap_m: f64,
         window_s: (f64, f64),
     ) -> Result<Self, CrosscheckError> {
+        Self::read_wrdata(text, gap_m, window_s).map(|(run, _)| run)
+    }
+
+    /// [`SpiceRun::of_wrdata`], with the waveforms as read (for a caller that plots them).
+    pub fn read_wrdata(
+        text: &str,
+        gap_m: f64,
+        window_s: (f64, f64),
+    ) -> Result<(Self, Waveforms), CrosscheckError> {
         let (t0, t1) = window_s;
         let w = parse_wrdata(text)?;
         let run = Self {
@@ -40,12 +47,11 @@ impl SpiceRun {
             x_peak_m: w.max_abs("v(xpos)", t0, t1)? * 1e-6,
             contact_fraction: w.fraction_above("v(xpos)", gap_m * 1e6, t0, t1)?,
             points: w.time.iter().filter(|&&t| t >= t0 && t <= t1).count(),
-            waveforms: w,
         };
         if !(run.v1_rms_v.is_finite() && run.v2_rms_v.is_finite()) {
             return Err(CrosscheckError::NonFinite);
         }
-        Ok(run)
+        Ok((run, w))
     }
 }
 

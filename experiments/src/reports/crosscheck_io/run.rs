@@ -260,9 +260,8 @@ fn run_setting(
         case.key == BOOK_CASE && matches!(setting, Setting::Documented | Setting::Defaults);
     let (period, t1) = (case.period_s(), o.ours.window_s.1);
     let reading = spice.run(&stem, &text, &format!("{stem}.dat"), |text| {
-        let run = SpiceRun::of_wrdata(text, gap, o.ours.window_s)?;
+        let (run, w) = SpiceRun::read_wrdata(text, gap, o.ours.window_s)?;
         let series = if plotted {
-            let w = &run.waveforms;
             w.time
                 .iter()
                 .zip(w.column("v(n1)")?)
@@ -300,7 +299,7 @@ fn reduce(run: &SpiceRun, series: Vec<(f64, f64)>) -> Reduced {
     (values, series)
 }
 
-/// The run [`reduce`] kept, as the paper layer judges it (without its waveforms).
+/// The run [`reduce`] kept, as the paper layer judges it.
 fn spice_run(reading: &Reading) -> Result<SpiceRun> {
     let v = |k: &str| {
         reading
@@ -316,7 +315,6 @@ fn spice_run(reading: &Reading) -> Result<SpiceRun> {
         x_peak_m: v("x_peak_m")?,
         contact_fraction: v("contact_fraction")?,
         points: v("points_in_window")? as usize,
-        waveforms: Default::default(),
     })
 }
 
