@@ -22,6 +22,13 @@ pub fn version() -> Result<String> {
         ),
         Err(e) => return Err(e).context("cannot run `ngspice -v`"),
     };
+    if !out.status.success() {
+        bail!(
+            "`ngspice -v` failed ({}): {}",
+            out.status,
+            String::from_utf8_lossy(&out.stderr).trim()
+        );
+    }
     let text = String::from_utf8_lossy(&out.stdout);
     Ok(text
         .lines()

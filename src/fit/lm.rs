@@ -9,10 +9,16 @@
 //! evaluation fails, whereas here a trial point whose model cannot be evaluated (an orbit
 //! that no longer exists, a fold that left the range) is a rejected step like one that raises
 //! the cost, and the evaluations must start from the state of the accepted point. The method
-//! is Marquardt's (the damping scales the diagonal of J^T J), with the damping divided by 10
-//! after an accepted step and multiplied by 10 after a rejected one (Nocedal and Wright,
-//! Numerical Optimization, 2nd ed., section 10.3). Each residual evaluation here costs orbits
-//! or a whole sweep, so the solver counts them.
+//! is Marquardt's (the damping scales the diagonal of J^T J; Nocedal and Wright, Numerical
+//! Optimization, 2nd ed., section 10.3) with Nielsen's update of the damping (Madsen, Nielsen
+//! and Tingleff, Methods for Non-Linear Least Squares Problems, 2nd ed., IMM DTU 2004,
+//! section 3.2): after an accepted step the damping is multiplied by
+//! `max(1/3, 1 - (2 rho - 1)^3)`, where `rho` is the cost's actual decrease over the decrease
+//! the Gauss-Newton model predicted for the step, and after a rejected one by `nu`, which
+//! starts at 2 and doubles at each rejection in a row. A step the model predicts well thus
+//! lowers the damping, one it predicts badly keeps it, where a fixed factor of 10 lowers it
+//! either way and, in a curved valley, sends the next step across the valley. Each residual
+//! evaluation here costs orbits or a whole sweep, so the solver counts them.
 
 use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
@@ -218,13 +224,15 @@ pub fn levenberg_marquardt_tracked<P: Tracked>(
         let g = jac.transpose() * DVector::from_column_slice(&r);
         let diag_max = (0..p).map(|k| a[(k, k)]).fold(f64::MIN_POSITIVE, f64::max);
         let mut accepted = None;
+        let mut nu = 2.0;
         while lambda <= s.lambda_max {
             let mut damped = a.clone();
             for k in 0..p {
                 damped[(k, k)] += lambda * a[(k, k)].max(DIAG_FLOOR * diag_max);
             }
             let Some(mut step) = damped.lu().solve(&(-&g)) else {
-                lambda *= 10.0;
+                lambda *= nu;
+                nu *= 2.0;
                 continue;
             };
             if step.norm() > s.max_step {
@@ -235,14 +243,23 @@ pub fn levenberg_marquardt_tracked<P: Tracked>(
             match problem.residuals(&trial, &state) {
                 Ok((rt, st)) if cost(&rt).is_finite() && cost(&rt) < c => {
                     let ct = cost(&rt);
+                    // The Gauss-Newton model's decrease for this step: -(2 g.d + d^T A d).
+                    let predicted = -(2.0 * g.dot(&step) + step.dot(&(&a * &step)));
+                    let rho = (c - ct) / predicted;
+                    let factor = if rho.is_finite() {
+                        (1.0 - (2.0 * rho - 1.0).powi(3)).max(1.0 / 3.0)
+                    } else {
+                        1.0 / 3.0
+                    };
                     accepted = Some((trial, rt, st, ct, step.norm()));
-                    lambda = (lambda / 10.0).max(1e-12);
+                    lambda = (lambda * factor).max(1e-12);
                     break;
                 }
                 Ok(_) => {}
                 Err(_) => failed += 1,
             }
-            lambda *= 10.0;
+            lambda *= nu;
+            nu *= 2.0;
         }
         let Some((trial, rt, st, ct, step_norm)) = accepted else {
             let promised = a

@@ -42,6 +42,13 @@ impl Preprocessor for Math {
         let mut failures = Vec::new();
         book.for_each_mut(|item| {
             if let BookItem::Chapter(ch) = item {
+                for link in unresolved_includes(&ch.content) {
+                    failures.push(format!(
+                        "chapter `{}`: mdBook could not resolve `{link}` (a moved or \
+                         missing file)",
+                        ch.name
+                    ));
+                }
                 match render_chapter(&ch.content) {
                     Ok(html) => ch.content = html,
                     Err(e) => failures.push(format!("chapter `{}`: {e:#}", ch.name)),
@@ -53,6 +60,21 @@ impl Preprocessor for Math {
         }
         Ok(book)
     }
+}
+
+/// The `{{#include ...}}` links left in a chapter after mdBook's own preprocessor: it
+/// replaces each link it resolves and leaves (with a logged warning only) one whose file is
+/// missing, so that a moved source file would otherwise vanish from the book silently.
+pub fn unresolved_includes(content: &str) -> Vec<&str> {
+    let mut found = Vec::new();
+    let mut rest = content;
+    while let Some(start) = rest.find("{{#include") {
+        let tail = &rest[start..];
+        let end = tail.find("}}").map_or(tail.len(), |e| e + 2);
+        found.push(&tail[..end]);
+        rest = &tail[end..];
+    }
+    found
 }
 
 fn delimiters() -> ExtraOpts {
@@ -153,6 +175,16 @@ mod tests {
             "{html}"
         );
         assert!(html.starts_with("Force <span"), "{html}");
+    }
+
+    #[test]
+    fn an_include_mdbook_left_in_place_is_found() {
+        let text = "intro\n```rust\n{{#include ../../src/gone.rs}}\n```\nend";
+        assert_eq!(
+            unresolved_includes(text),
+            vec!["{{#include ../../src/gone.rs}}"]
+        );
+        assert!(unresolved_includes("no links here").is_empty());
     }
 
     #[test]

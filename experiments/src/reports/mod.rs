@@ -31,3 +31,4 @@ pub mod spectrum_io;
 pub mod springs_io;
 pub mod sweep_io;
 pub mod table3_io;
+pub mod validation_io;

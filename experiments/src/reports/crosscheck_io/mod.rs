@@ -1,6 +1,6 @@
-//! The cross-check's report (`experiments/crosscheck.rs` runs it): one row per case and
-//! ngspice setting, the book's table of them, their Parquet frame and the plot of the book's
-//! case.
+//! The cross-check with ngspice (the program `crosscheck`): [`run`] compares every case and
+//! setting (see `run.rs`); this module holds its report: one row per case and ngspice setting,
+//! the book's table of them, their Parquet frame and the plot of the book's case.
 
 use anyhow::Result;
 use endstop::num::compare::Verdict;
@@ -12,6 +12,10 @@ use polars::prelude::*;
 
 use crate::fmt_sig;
 use crate::io::plot::{LegendPos, LinePlot, Series};
+
+mod run;
+
+pub use run::run;
 
 /// One row of the table.
 pub struct Row {

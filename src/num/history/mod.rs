@@ -3,9 +3,9 @@
 //! the emulators' uncertainty, the simulator's own sampling variance and the observations'.
 //!
 //! Each output `j` has an observation `z_j` with variance `v_obs,j` and, at each wave, an
-//! emulator ([`Emulator`]: a [`Gp`] of the output with each run's sampling variance as its
-//! nugget, and a model of that sampling variance over the inputs). The implausibility of an
-//! input `x` for output `j` is
+//! emulator ([`Emulator`]: a [`Gp`](super::gp::Gp) of the output with each run's sampling
+//! variance as its nugget, and a model of that sampling variance over the inputs). The
+//! implausibility of an input `x` for output `j` is
 //!
 //! `I_j(x) = |z_j - E[f_j(x)]| / sqrt(Var_emulator,j(x) + Var_ensemble,j(x) + v_obs,j)`,
 //!
@@ -27,20 +27,27 @@
 //! 2-D projections: per cell of each pair of inputs, the least implausibility over the pool's
 //! points there and the share of them that are non-implausible (the optical depth).
 //!
-//! The module reads better whole: a wave's design, its emulators, the cut and the pool that
-//! measures what is left are one loop over shared state (the runs so far, the waves' emulators,
-//! the pool's implausibilities), and each step is written against the others.
+//! The loop ([`HistoryMatch`]) reads better whole: a wave's design, its emulators, the cut and
+//! the pool that measures what is left are one loop over shared state (the runs so far, the
+//! waves' emulators, the pool's implausibilities), and each step is written against the
+//! others. What each step calls on is a submodule written against its inputs only: the
+//! emulator of one output and its implausibility (`emulator`), the space-filling designs
+//! (`design`) and the Nelder-Mead search of the statistic (`descent`).
 
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 
-use super::gp::{Gp, GpError, GpSettings, Loo};
+use super::gp::{GpError, GpSettings, Loo};
 
-/// Variance of the logarithm of a sampling variance estimated from about 30 records (the
-/// nugget of the emulator of `ln Var_ensemble`): `Var[ln s^2] ~ 2 / (n - 1)` for a chi-square
-/// estimate, 0.07 at 30, rounded up to 0.1 because the jackknife's is larger.
-pub const LOG_VARIANCE_NUGGET: f64 = 0.1;
+mod descent;
+mod design;
+mod emulator;
+
+pub use design::{maximin_lhs, maximin_subset};
+pub use emulator::{
+    implausibility, ranked, Emulator, Mean, Prediction, SamplingVariance, Wave, LOG_VARIANCE_NUGGET,
+};
 
 /// One output's observation.
 #[derive(Debug, Clone, PartialEq)]
@@ -147,136 +154,6 @@ pub enum HistoryError {
     /// Runs that do not fit the outputs, or settings out of range.
     #[error("history match: {0}")]
     Input(String),
-}
-
-/// The emulator of one output's expected value, or the value where it is constant over the
-/// runs.
-#[derive(Debug, Clone)]
-pub enum Mean {
-    /// A Gaussian process.
-    Gp(Box<Gp>),
-    /// The same value at every run (no variance to emulate).
-    Constant(f64),
-}
-
-/// The model of one output's sampling variance over the inputs.
-#[derive(Debug, Clone)]
-pub enum SamplingVariance {
-    /// A deterministic output.
-    None,
-    /// The median of the runs' variances (too few runs with a variance to emulate it).
-    Constant(f64),
-    /// A Gaussian process of its logarithm (stochastic kriging, Ankenman et al. 2010).
-    LogGp(Box<Gp>),
-}
-
-/// One output's emulator at one wave.
-#[derive(Debug, Clone)]
-pub struct Emulator {
-    /// Its expected value.
-    pub mean: Mean,
-    /// Its sampling variance.
-    pub sampling: SamplingVariance,
-}
-
-/// A prediction of one output.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Prediction {
-    /// Expected value.
-    pub mean: f64,
-    /// The emulator's variance of it (the process's, the mean's and the fitted nugget).
-    pub emulator_var: f64,
-    /// The simulator's sampling variance there.
-    pub sampling_var: f64,
-}
-
-impl Emulator {
-    /// Fits the emulator of one output to its runs (inputs, values, sampling variances).
-    pub fn fit(x: &[Vec<f64>], y: &[f64], var: &[f64], gp: GpSettings) -> Result<Self, GpError> {
-        let mean = if y.iter().all(|v| *v == y[0]) {
-            Mean::Constant(y[0])
-        } else {
-            Mean::Gp(Box::new(Gp::fit(x, y, var, gp)?))
-        };
-        let with_var: Vec<usize> = (0..y.len()).filter(|&i| var[i] > 0.0).collect();
-        let sampling = if with_var.is_empty() {
-            SamplingVariance::None
-        } else if with_var.len() < x[0].len() + 3 {
-            let mut v: Vec<f64> = with_var.iter().map(|&i| var[i]).collect();
-            v.sort_by(f64::total_cmp);
-            SamplingVariance::Constant(v[v.len() / 2])
-        } else {
-            let xs: Vec<Vec<f64>> = with_var.iter().map(|&i| x[i].clone()).collect();
-            let ln: Vec<f64> = with_var.iter().map(|&i| var[i].ln()).collect();
-            let nugget = vec![LOG_VARIANCE_NUGGET; ln.len()];
-            SamplingVariance::LogGp(Box::new(Gp::fit(&xs, &ln, &nugget, gp)?))
-        };
-        Ok(Self { mean, sampling })
-    }
-
-    /// The prediction at `x`.
-    pub fn predict(&self, x: &[f64]) -> Prediction {
-        // The emulator's variance holds its fitted nugget: what the smooth process does not
-        // follow (a step where a fold appears) is as unknown at a new input as at a run.
-        let (mean, emulator_var) = match &self.mean {
-            Mean::Gp(g) => {
-                let (m, v) = g.predict(x);
-                (m, v + g.nugget_var())
-            }
-            Mean::Constant(c) => (*c, 0.0),
-        };
-        let sampling_var = match &self.sampling {
-            SamplingVariance::None => 0.0,
-            SamplingVariance::Constant(v) => *v,
-            SamplingVariance::LogGp(g) => g.mean(x).exp(),
-        };
-        Prediction {
-            mean,
-            emulator_var,
-            sampling_var,
-        }
-    }
-
-    /// The leave-one-out predictions of the expected value (empty for a constant).
-    pub fn loo(&self) -> &[Loo] {
-        match &self.mean {
-            Mean::Gp(g) => g.loo(),
-            Mean::Constant(_) => &[],
-        }
-    }
-}
-
-/// The implausibility of a prediction against an observation.
-pub fn implausibility(p: &Prediction, obs: &Observation) -> f64 {
-    (obs.value - p.mean).abs() / (p.emulator_var + p.sampling_var + obs.variance).sqrt()
-}
-
-/// The `rank`-th largest of `values` (1: the largest); 0 when there are fewer.
-pub fn ranked(values: &[f64], rank: usize) -> f64 {
-    let mut v = values.to_vec();
-    v.sort_by(|a, b| b.total_cmp(a));
-    v.get(rank.saturating_sub(1)).copied().unwrap_or(0.0)
-}
-
-/// One wave's emulators.
-#[derive(Debug, Clone)]
-pub struct Wave {
-    /// One per output.
-    pub emulators: Vec<Emulator>,
-    /// Indices (into all runs) of the runs the emulators were fitted to.
-    pub training: Vec<usize>,
-}
-
-impl Wave {
-    /// The implausibility of every output at `x`, the input as the emulators see it
-    /// ([`HistoryMatch::emulator_input`]).
-    pub fn implausibilities(&self, obs: &[Observation], x: &[f64]) -> Vec<f64> {
-        self.emulators
-            .iter()
-            .zip(obs)
-            .map(|(e, o)| implausibility(&e.predict(x), o))
-            .collect()
-    }
 }
 
 /// A 2-D projection of the space onto inputs `(i, j)`: per cell (row-major, `i` slow), the
@@ -659,73 +536,6 @@ impl HistoryMatch {
     }
 }
 
-impl HistoryMatch {
-    /// A non-implausible point found by minimising the statistic from `x0` (at most 400
-    /// Nelder-Mead iterations inside the cube), if any.
-    fn descend(&self, x0: &[f64]) -> Option<Vec<f64>> {
-        let cost = |x: &[f64]| {
-            let inside: Vec<f64> = x.iter().map(|u| u.clamp(0.0, 1.0)).collect();
-            // Outside the cube: the clamped point's statistic plus the distance, so the
-            // simplex turns back.
-            let out: f64 = x.iter().map(|u| (u - u.clamp(0.0, 1.0)).abs()).sum();
-            (self.statistics(&inside).0 + 10.0 * out, inside)
-        };
-        let d = x0.len();
-        let mut simplex: Vec<(f64, Vec<f64>)> = (0..=d)
-            .map(|k| {
-                let mut x = x0.to_vec();
-                if k > 0 {
-                    x[k - 1] += if x[k - 1] < 0.5 { 0.05 } else { -0.05 };
-                }
-                (cost(&x).0, x)
-            })
-            .collect();
-        for _ in 0..400 {
-            simplex.sort_by(|a, b| a.0.total_cmp(&b.0));
-            if simplex[0].0 <= self.settings.cut {
-                return Some(cost(&simplex[0].1).1);
-            }
-            let centroid: Vec<f64> = (0..d)
-                .map(|j| simplex[..d].iter().map(|s| s.1[j]).sum::<f64>() / d as f64)
-                .collect();
-            let along = |t: f64| -> Vec<f64> {
-                centroid
-                    .iter()
-                    .zip(&simplex[d].1)
-                    .map(|(c, w)| c + t * (w - c))
-                    .collect()
-            };
-            let r = along(-1.0);
-            let fr = cost(&r).0;
-            if fr < simplex[0].0 {
-                let e = along(-2.0);
-                let fe = cost(&e).0;
-                simplex[d] = if fe < fr { (fe, e) } else { (fr, r) };
-            } else if fr < simplex[d - 1].0 {
-                simplex[d] = (fr, r);
-            } else {
-                let c = along(0.5);
-                let fc = cost(&c).0;
-                if fc < simplex[d].0 {
-                    simplex[d] = (fc, c);
-                } else {
-                    let best = simplex[0].1.clone();
-                    for s in simplex.iter_mut().skip(1) {
-                        s.1 =
-                            s.1.iter()
-                                .zip(&best)
-                                .map(|(x, b)| b + 0.5 * (x - b))
-                                .collect();
-                        s.0 = cost(&s.1).0;
-                    }
-                }
-            }
-        }
-        simplex.sort_by(|a, b| a.0.total_cmp(&b.0));
-        (simplex[0].0 <= self.settings.cut).then(|| cost(&simplex[0].1).1)
-    }
-}
-
 /// The projections of `stat` over `pool` on every pair of inputs.
 fn projections(
     pool: &[Vec<f64>],
@@ -767,60 +577,4 @@ fn projections(
         }
     }
     out
-}
-
-fn min_distance(points: &[Vec<f64>]) -> f64 {
-    let mut best = f64::INFINITY;
-    for (a, p) in points.iter().enumerate() {
-        for q in &points[a + 1..] {
-            best = best.min(p.iter().zip(q).map(|(x, y)| (x - y).powi(2)).sum::<f64>());
-        }
-    }
-    best.sqrt()
-}
-
-/// The Latin hypercube of `n` points over `dim` inputs with the largest least distance
-/// between its points, among 100 random ones.
-pub fn maximin_lhs(n: usize, dim: usize, rng: &mut ChaCha8Rng) -> Vec<Vec<f64>> {
-    let mut best: Option<(f64, Vec<Vec<f64>>)> = None;
-    for _ in 0..100 {
-        let mut pts = vec![vec![0.0; dim]; n];
-        for d in 0..dim {
-            let mut perm: Vec<usize> = (0..n).collect();
-            for k in (1..n).rev() {
-                perm.swap(k, rng.random_range(0..=k));
-            }
-            for (p, s) in pts.iter_mut().zip(perm) {
-                p[d] = (s as f64 + rng.random::<f64>()) / n as f64;
-            }
-        }
-        let m = min_distance(&pts);
-        if best.as_ref().is_none_or(|b| m > b.0) {
-            best = Some((m, pts));
-        }
-    }
-    best.map(|b| b.1).unwrap_or_default()
-}
-
-/// `n` of `points` chosen greedily to spread them: the first point, then each time the point
-/// farthest from those chosen (all of them when there are at most `n`).
-pub fn maximin_subset(points: &[Vec<f64>], n: usize) -> Vec<Vec<f64>> {
-    if points.len() <= n {
-        return points.to_vec();
-    }
-    let d2 = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| (x - y).powi(2)).sum::<f64>();
-    let mut chosen = vec![0usize];
-    let mut near: Vec<f64> = points.iter().map(|p| d2(p, &points[0])).collect();
-    while chosen.len() < n {
-        let (k, _) = near
-            .iter()
-            .enumerate()
-            .max_by(|a, b| a.1.total_cmp(b.1))
-            .expect("points");
-        chosen.push(k);
-        for (m, p) in points.iter().enumerate() {
-            near[m] = near[m].min(d2(p, &points[k]));
-        }
-    }
-    chosen.into_iter().map(|k| points[k].clone()).collect()
 }
