@@ -6,9 +6,10 @@
 //! [`RecordSpec::scheme`]:
 //!
 //! * [`Scheme::Exponential`]: each sample interval is advanced **exactly** in the current mode
-//!   when that mode is linear ([`super::linear_modes`]: the interval's propagator of the state
-//!   augmented with the linearly interpolated drive, once per mode and sample rate), and the
-//!   energy ledger and the mean storage voltage are summed exactly over it (its Gram sums).
+//!   when that mode is linear (`linear_modes.rs` beside this file: the interval's propagator
+//!   of the state augmented with the linearly interpolated drive, once per mode and sample
+//!   rate), and the energy ledger and the mean storage voltage are summed exactly over it (its
+//!   Gram sums).
 //!   An interval in which a guard may fire (bridge conduction starting or stopping, a
 //!   velocity zero of SSHI or SECE, a contact: the cubic Hermite estimate of a guard, from its
 //!   exact values and rates at both ends, comes within
