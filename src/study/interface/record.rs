@@ -123,6 +123,27 @@ pub fn noise_record(
 /// A device with an interface under a sampled drive from rest: the first `transient_samples`
 /// intervals discarded, the rest analysed up to one interval past the last sample (over
 /// which the last sample holds), by `scheme` (see the module docs).
+///
+/// ```
+/// use endstop::device::Device;
+/// use endstop::drive::Sampled;
+/// use endstop::study::interface::record::sampled_record;
+/// use endstop::study::record::{Scheme, DEFAULT_RTOL};
+///
+/// let text = include_str!(concat!(env!("CARGO_MANIFEST_DIR"), "/data/examples/piezo_bridge.toml"));
+/// let device = Device::from_toml_str(text, "piezo_bridge.toml")?;
+/// // 50 ms of a 120 Hz sine of 5 m/s^2 sampled at 100 kHz; the first 20 ms discarded.
+/// let fs = 100e3;
+/// let samples: Vec<f64> = (0..5000)
+///     .map(|k| 5.0 * (2.0 * std::f64::consts::PI * 120.0 * k as f64 / fs).sin())
+///     .collect();
+/// let drive = Sampled::new(samples.into(), fs);
+/// let exact = sampled_record(&device, &drive, 2000, DEFAULT_RTOL, Scheme::Exponential)?;
+/// let dopri = sampled_record(&device, &drive, 2000, DEFAULT_RTOL, Scheme::Dopri5)?;
+/// assert!(exact.exact_steps > 4000);
+/// assert!((exact.p_drive_w - dopri.p_drive_w).abs() < 1e-6 * dopri.p_drive_w.abs());
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
 pub fn sampled_record(
     device: &Device,
     drive: &Sampled,
