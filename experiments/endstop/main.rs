@@ -18,6 +18,7 @@
 
 mod basins;
 mod interface;
+mod interface_random;
 mod interface_response;
 mod random;
 mod response;

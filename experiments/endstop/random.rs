@@ -33,7 +33,7 @@ use crate::shared::{describe, start};
 pub struct RandomArgs {
     /// Device file (TOML), e.g. a copy of data/prototype2.toml or of a file in data/examples/.
     #[arg(long)]
-    device: PathBuf,
+    pub(crate) device: PathBuf,
     /// Two-sided acceleration PSD of the white noise in its flat band (g^2/Hz); or give
     /// --accel-file instead.
     #[arg(
@@ -41,43 +41,50 @@ pub struct RandomArgs {
         required_unless_present = "accel_file",
         conflicts_with = "accel_file"
     )]
-    psd: Option<f64>,
+    pub(crate) psd: Option<f64>,
     /// A measured acceleration record to drive the device with instead of noise: a CSV file
     /// whose header names a time column (`time_s` or `time_ms`) and an acceleration column
     /// (`accel_m_per_s2` or `accel_g`), or a mono WAV file with --accel-scale. It is checked
     /// (uniform time, finite values, long enough for the band), resampled to
     /// --sample-rate-hz, and its first pre-roll (five ring-up times 2m/b) is discarded.
     #[arg(long)]
-    accel_file: Option<PathBuf>,
+    pub(crate) accel_file: Option<PathBuf>,
     /// The acceleration of a WAV file's full scale (m/s^2); a WAV file carries no unit.
     #[arg(long)]
-    accel_scale: Option<f64>,
+    pub(crate) accel_scale: Option<f64>,
     /// The integrator's sample rate for a measured record (Hz).
     #[arg(long, default_value_t = 100e3)]
-    sample_rate_hz: f64,
+    pub(crate) sample_rate_hz: f64,
     /// The band a measured record must carry, `LO,HI` in Hz (default: the analysis band, a
     /// quarter to four times the device's open-circuit resonance).
     #[arg(long, value_delimiter = ',', num_args = 2)]
-    band_hz: Option<Vec<f64>>,
+    pub(crate) band_hz: Option<Vec<f64>>,
     /// Number of independent noise records (their mean and 95 % interval are reported).
     #[arg(long, default_value_t = 4)]
-    records: usize,
+    pub(crate) records: usize,
     /// Length of each noise record (s).
     #[arg(long, default_value_t = 10.0)]
-    duration_s: f64,
+    pub(crate) duration_s: f64,
     /// Seed of the random streams (record i uses stream i).
     #[arg(long, default_value_t = 2012)]
-    seed: u64,
+    pub(crate) seed: u64,
     /// Bias voltage (V) of an electrostatic transducer; default: the device file's.
     #[arg(long)]
-    bias_v: Option<f64>,
+    pub(crate) bias_v: Option<f64>,
     /// Output directory; default: data/results/endstop-random.
     #[arg(long)]
-    out: Option<PathBuf>,
+    pub(crate) out: Option<PathBuf>,
 }
 
 /// Runs `endstop random`.
 pub fn random(a: RandomArgs) -> Result<()> {
+    if !common::load_device_file(&a.device)?
+        .device
+        .interface
+        .is_resistive()
+    {
+        return crate::interface_random::random(&a);
+    }
     match (&a.accel_file, a.psd) {
         (Some(path), _) => measured(&a, path.clone()),
         (None, Some(psd)) => noise(&a, psd),
@@ -361,7 +368,25 @@ fn displacement(
 /// The most samples a resampled measured record may have.
 const MAX_RESAMPLED: usize = 1 << 27;
 
-fn measured(a: &RandomArgs, path: PathBuf) -> Result<()> {
+/// A measured record read, checked against the band the device needs, and resampled to the
+/// integrator's rate, before anything is written.
+pub(crate) struct MeasuredDrive {
+    /// The record as read.
+    pub(crate) rec: endstop::drive::measured::MeasuredRecord,
+    /// The resampled acceleration (m/s^2).
+    pub(crate) accel: Arc<[f64]>,
+    /// The integrator's sample rate (Hz).
+    pub(crate) fs: f64,
+    /// Samples of the pre-roll.
+    pub(crate) n_tr: usize,
+    /// The pre-roll (s): five ring-up times.
+    pub(crate) preroll_s: f64,
+    /// The analysis band (Hz).
+    pub(crate) band_hz: (f64, f64),
+}
+
+/// Reads `path` as `--accel-file` for the device of `a`, checks it and resamples it.
+pub(crate) fn read_measured(a: &RandomArgs, path: &std::path::Path) -> Result<MeasuredDrive> {
     let fs = a.sample_rate_hz;
     if !(fs.is_finite() && fs > 0.0) {
         bail!("--sample-rate-hz = {fs}: must be finite and > 0");
@@ -369,7 +394,7 @@ fn measured(a: &RandomArgs, path: PathBuf) -> Result<()> {
     // Read and check everything before the experiment starts, so that nothing is written for
     // a bad record.
     let loaded = common::load_device_file(&a.device)?;
-    let rec = measured_io::read_record(&path, a.accel_scale)?;
+    let rec = measured_io::read_record(path, a.accel_scale)?;
     let preroll_s = transient_s(&loaded.device);
     let f0 = endstop::physics::linear::open_circuit_resonance_hz(&loaded.device);
     let (lo, hi) = match a.band_hz.as_deref() {
@@ -395,9 +420,28 @@ fn measured(a: &RandomArgs, path: PathBuf) -> Result<()> {
         );
     }
 
-    let (mut exp, loaded, device) = start("endstop-random", &a.device, a.bias_v, a.out.clone())?;
     let accel: Arc<[f64]> = rec.resampled(fs).into();
     let n_tr = (preroll_s * fs).round() as usize;
+    Ok(MeasuredDrive {
+        rec,
+        accel,
+        fs,
+        n_tr,
+        preroll_s,
+        band_hz: (lo, hi),
+    })
+}
+
+fn measured(a: &RandomArgs, path: PathBuf) -> Result<()> {
+    let MeasuredDrive {
+        rec,
+        accel,
+        fs,
+        n_tr,
+        preroll_s,
+        band_hz: (lo, hi),
+    } = read_measured(a, &path)?;
+    let (mut exp, loaded, device) = start("endstop-random", &a.device, a.bias_v, a.out.clone())?;
     let drive = SampledDrive {
         accel: accel.clone(),
         sample_rate_hz: fs,

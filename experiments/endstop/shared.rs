@@ -196,12 +196,13 @@ pub(crate) fn start(
     if !device.interface.is_resistive()
         && !matches!(
             name,
-            "endstop-sweep" | "endstop-charge" | "endstop-response"
+            "endstop-sweep" | "endstop-charge" | "endstop-response" | "endstop-random"
         )
     {
         bail!(
-            "device `{}` has an interface circuit (`{}`): `endstop sweep`, `endstop response` \
-             and `endstop charge` take it; this study models resistive loads only",
+            "device `{}` has an interface circuit (`{}`): `endstop sweep`, `endstop response`, \
+             `endstop random` and `endstop charge` take it; this study models resistive loads \
+             only",
             device.name,
             device.interface.key()
         );

@@ -1,6 +1,8 @@
-//! `endstop response` on a device with an interface circuit (the example cantilever with a
-//! stop behind a full bridge, `data/examples/piezo_bridge.toml`): it writes the sweeps and the
-//! continued branch, and the branch turns at two folds with an unstable stretch between them.
+//! `endstop response` and `endstop random` on a device with an interface circuit (the example
+//! cantilever with a stop behind a full bridge, `data/examples/piezo_bridge.toml`): the
+//! response writes the sweeps and the continued branch, which turns at two folds with an
+//! unstable stretch between them; a noise ensemble writes each record's DC power, efficiency
+//! and ledger, and an open DC load is refused with nothing written.
 
 use std::path::Path;
 use std::process::Command;
@@ -105,4 +107,103 @@ fn response_with_an_interface_continues_through_two_folds() {
         );
     }
     let _ = std::fs::remove_dir_all(out);
+}
+
+fn example(name: &str) -> String {
+    format!("{}/../data/examples/{name}", env!("CARGO_MANIFEST_DIR"))
+}
+
+/// A noise ensemble behind the bridge: one row per record, the summary's means are the rows'
+/// means, every record's energy ledger closes (to 1e-9 of its largest term: the exact steps
+/// close it to rounding, the Dormand-Prince intervals to their tolerance) and most sample
+/// intervals are propagated exactly.
+#[test]
+fn random_with_an_interface_reports_each_records_dc_power_and_ledger() {
+    let out = std::env::temp_dir().join(format!(
+        "endstop-cli-{}-interface-random",
+        std::process::id()
+    ));
+    let _ = std::fs::remove_dir_all(&out);
+    let o = Command::new(BIN)
+        .args(["random", "--device", &example("piezo_bridge.toml")])
+        .args([
+            "--psd",
+            "1e-4",
+            "--records",
+            "3",
+            "--duration-s",
+            "2",
+            "--out",
+        ])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let rec = read_parquet(&out.join("records.parquet"));
+    assert_eq!(rec.height(), 3);
+    let col = |name: &str| -> Vec<f64> {
+        rec.column(name)
+            .unwrap()
+            .cast(&polars::prelude::DataType::Float64)
+            .unwrap()
+            .f64()
+            .unwrap()
+            .into_no_null_iter()
+            .collect()
+    };
+    let (p_dc, p_drive) = (col("p_dc_w"), col("p_drive_w"));
+    for (dc, drive) in p_dc.iter().zip(&p_drive) {
+        assert!(*dc > 0.0 && dc < drive, "{dc} of {drive}");
+    }
+    for r in col("ledger_relative_residual") {
+        assert!(r.abs() < 1e-9, "ledger residual {r}");
+    }
+    let (exact, steps) = (col("exact_steps"), col("steps"));
+    for (e, s) in exact.iter().zip(&steps) {
+        assert!(*e > 0.9 * s, "{e} exact of {s}");
+    }
+    let text = std::fs::read_to_string(out.join("summary.json")).unwrap();
+    let v: serde_json::Value = serde_json::from_str(&text).unwrap();
+    let mean = p_dc.iter().sum::<f64>() / 3.0;
+    let reported = v["numbers"]["p_dc_w"].as_f64().unwrap();
+    assert!(
+        (reported - mean).abs() <= 1e-12 * mean,
+        "{reported} vs {mean}"
+    );
+}
+
+/// A storage feeding nothing has no steady mean under noise: a named error, nothing written.
+#[test]
+fn random_with_an_open_dc_load_is_refused_and_writes_nothing() {
+    let dir = std::env::temp_dir().join(format!("endstop-cli-{}-open-load", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let text = std::fs::read_to_string(example("piezo_bridge.toml")).unwrap();
+    let i = text.find("[interface.load]").unwrap();
+    let device = dir.join("open.toml");
+    std::fs::write(
+        &device,
+        format!("{}[interface.load]\nkind = \"open\"\n", &text[..i]),
+    )
+    .unwrap();
+    let out = dir.join("out");
+    let o = Command::new(BIN)
+        .args(["random", "--device"])
+        .arg(&device)
+        .args([
+            "--psd",
+            "1e-4",
+            "--records",
+            "1",
+            "--duration-s",
+            "1",
+            "--out",
+        ])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(!o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("open load"), "{err}");
+    assert!(!out.exists(), "nothing written");
 }

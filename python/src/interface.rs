@@ -4,8 +4,11 @@
 //! and numpy arrays with the GIL released while it runs.
 
 use endstop::drive::Sine;
+use endstop::num::stats::MeanCi;
+use endstop::paper::setups::paper_record;
 use endstop::progress::Silent;
 use endstop::study::interface::charging::{charge, ChargeSettings};
+use endstop::study::interface::record::{noise_ensemble, settling_preroll_s, DcRecord};
 use endstop::study::interface::continuation::{
     continue_frequency, IfBranchEnd, IfContinuationSettings,
 };
@@ -144,9 +147,64 @@ fn charge_storage<'py>(
     Ok(d)
 }
 
+/// An ensemble of band-limited white-noise records (record i uses stream i of `seed`) through
+/// the interface: the `endstop random` command's study on such a device (its noise, and its
+/// pre-roll: the longer of five ring-up times and five storage time constants `R C_s`).
+/// Keys: `p_dc_w`, `p_dc_ci95_w`, `p_drive_w`, `efficiency`, `efficiency_ci95`, `vdc_v`,
+/// `preroll_s`, and per-record arrays `p_dc_w_each`, `p_drive_w_each`, `vdc_v_each`,
+/// `ledger_relative_residual_each`. An open DC load (no steady mean) raises `SolverError`.
+#[pyfunction]
+#[pyo3(signature = (device, psd_g2_per_hz, records = 4, duration_s = 10.0, seed = 2012))]
+fn interface_ensemble<'py>(
+    py: Python<'py>,
+    device: &PyDevice,
+    psd_g2_per_hz: f64,
+    records: u64,
+    duration_s: f64,
+    seed: u64,
+) -> PyResult<Bound<'py, PyDict>> {
+    positive("psd_g2_per_hz", psd_g2_per_hz)?;
+    positive("duration_s", duration_s)?;
+    if records == 0 {
+        return Err(arg_err("records must be at least 1"));
+    }
+    let dev = device.inner.clone();
+    let mut spec = paper_record(&dev, psd_g2_per_hz);
+    spec.noise.duration_s = duration_s;
+    spec.transient_s = settling_preroll_s(&dev, spec.transient_s).map_err(solver_err)?;
+    let ens = py
+        .detach(move || noise_ensemble(&dev, &spec, seed, records))
+        .map_err(solver_err)?;
+    let each = |f: fn(&DcRecord) -> f64| ens.iter().map(f).collect::<Vec<f64>>();
+    let (p_dc, p_drive, eff, vdc) = (
+        each(|r| r.p_dc_w),
+        each(|r| r.p_drive_w),
+        each(DcRecord::efficiency),
+        each(|r| r.vdc_v),
+    );
+    let d = PyDict::new(py);
+    let (p, e) = (MeanCi::of(&p_dc), MeanCi::of(&eff));
+    d.set_item("p_dc_w", p.mean)?;
+    d.set_item("p_dc_ci95_w", p.ci95)?;
+    d.set_item("p_drive_w", MeanCi::of(&p_drive).mean)?;
+    d.set_item("efficiency", e.mean)?;
+    d.set_item("efficiency_ci95", e.ci95)?;
+    d.set_item("vdc_v", MeanCi::of(&vdc).mean)?;
+    d.set_item("preroll_s", spec.transient_s)?;
+    d.set_item("p_dc_w_each", array(py, p_dc))?;
+    d.set_item("p_drive_w_each", array(py, p_drive))?;
+    d.set_item("vdc_v_each", array(py, vdc))?;
+    d.set_item(
+        "ledger_relative_residual_each",
+        array(py, each(|r| r.ledger.relative_residual())),
+    )?;
+    Ok(d)
+}
+
 /// Adds the module's functions to `_native`.
 pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(interface_response, m)?)?;
     m.add_function(wrap_pyfunction!(charge_storage, m)?)?;
+    m.add_function(wrap_pyfunction!(interface_ensemble, m)?)?;
     Ok(())
 }

@@ -1,5 +1,6 @@
-"""Devices with an interface circuit from Python: the continued steady state and the charging
-of the storage, against the `endstop charge` command on the same arguments."""
+"""Devices with an interface circuit from Python: the continued steady state, the charging of
+the storage and noise ensembles, against the `endstop charge` and `endstop random` commands on
+the same arguments."""
 
 import numpy as np
 import pytest
@@ -48,3 +49,28 @@ def test_out_of_reach_is_a_solver_error(root):
     dev = endstop.Device.from_dict(d, "piezo_bridge_open")
     with pytest.raises(endstop.SolverError, match="out of reach|not reached"):
         endstop.study.charge(dev, 120.0, 0.3, 500.0, t_max_s=20.0)
+
+
+def test_interface_ensemble_matches_the_command(root, tmp_path):
+    dev = bridge(root)
+    ours = endstop.study.interface_ensemble(dev, 1e-4, records=2, duration_s=1.0)
+    assert len(ours["p_dc_w_each"]) == 2
+    assert 0.0 < ours["efficiency"] < 1.0
+    # The pre-roll covers five storage time constants, 5 x 41.7 kOhm x 10 uF.
+    assert ours["preroll_s"] == pytest.approx(2.085, abs=1e-3)
+    assert np.all(np.abs(ours["ledger_relative_residual_each"]) < 1e-9)
+    out = run_cli(["random", "--device", str(root / "data/examples/piezo_bridge.toml"),
+                   "--psd", "1e-4", "--records", "2", "--duration-s", "1",
+                   "--out", str(tmp_path)], tmp_path)
+    cli = summary(out / "summary.json")["numbers"]
+    # The same records by the same code: equal to rounding.
+    assert ours["p_dc_w"] == pytest.approx(cli["p_dc_w"], rel=1e-12)
+    assert ours["efficiency"] == pytest.approx(cli["efficiency"], rel=1e-12)
+
+
+def test_interface_ensemble_refuses_an_open_load(root):
+    d = bridge(root).to_dict()
+    d["interface"]["load"] = {"kind": "open"}
+    dev = endstop.Device.from_dict(d, "piezo_bridge_open")
+    with pytest.raises(endstop.SolverError, match="open load"):
+        endstop.study.interface_ensemble(dev, 1e-4, records=1, duration_s=1.0)

@@ -20,7 +20,9 @@ For a device with an ``[interface]`` table (a bridge, SSHI or SECE into a storag
 * :func:`interface_response`: the steady state's DC voltage and power continued in frequency
   through folds, with its stability from the monodromy through saltation matrices;
 * :func:`charge`: the time for the storage to reach a target voltage under a sine (the
-  ``endstop charge`` command's study).
+  ``endstop charge`` command's study);
+* :func:`interface_ensemble`: noise records through the interface, DC power and efficiency
+  (the ``endstop random`` command's study on such a device).
 """
 
 import numpy as np
@@ -114,3 +116,13 @@ def charge(device, freq_hz, accel_rms_g, target_v, start_v=0.0, ramp_periods=0.0
     ``t_s``, ``vs_v``. A target out of reach raises :class:`endstop.SolverError`."""
     return _native.charge_storage(device, float(freq_hz), float(accel_rms_g), float(target_v),
                                   float(start_v), float(ramp_periods), float(t_max_s))
+
+
+def interface_ensemble(device, psd_g2_per_hz, records=4, duration_s=10.0, seed=2012):
+    """An ensemble of band-limited white-noise records (record i uses stream i of ``seed``)
+    through the interface circuit of ``device``, each from rest after a pre-roll covering five
+    storage time constants: ``p_dc_w`` and ``efficiency`` (means, with ``*_ci95``
+    half-widths), ``p_drive_w``, ``vdc_v``, ``preroll_s`` and per-record arrays ``*_each``.
+    An open DC load (no steady mean) raises :class:`endstop.SolverError`."""
+    return _native.interface_ensemble(device, float(psd_g2_per_hz), int(records),
+                                      float(duration_s), int(seed))

@@ -30,7 +30,7 @@
 
 use rayon::prelude::*;
 
-use crate::device::Device;
+use crate::device::{DcLoad, Device};
 use crate::drive::noise::generate_shared;
 use crate::drive::Excitation;
 use crate::drive::Sampled;
@@ -98,6 +98,52 @@ pub fn dc_record<E: Excitation + Clone>(
         steps: ode.stats().accepted,
         exact_steps: 0,
     })
+}
+
+/// Storage time constants a record's pre-roll covers ([`storage_settling_s`]).
+pub const STORAGE_SETTLING_TIMES: f64 = 5.0;
+
+/// [`STORAGE_SETTLING_TIMES`] discharge time constants of the storage through its DC load,
+/// `R C_s` (s), with a battery's series resistance for `R`: the time over which the storage's
+/// mean settles from rest (to `e^-5`, 0.7 %), which a record's pre-roll must cover as well as
+/// the mass's ring-up. `None` for an open load (the storage then only charges, with no steady
+/// mean) or a device without an interface.
+///
+/// ```
+/// use endstop::device::Device;
+/// use endstop::study::interface::record::storage_settling_s;
+///
+/// let text = include_str!(concat!(env!("CARGO_MANIFEST_DIR"), "/data/examples/piezo_bridge.toml"));
+/// let device = Device::from_toml_str(text, "piezo_bridge.toml")?;
+/// // 41.7 kOhm on 10 uF: five time constants of 0.417 s.
+/// assert!((storage_settling_s(&device).unwrap() - 2.085).abs() < 1e-12);
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+pub fn storage_settling_s(device: &Device) -> Option<f64> {
+    let cs = device.interface.storage_capacitance_f()?;
+    let r = match device.interface.load()? {
+        DcLoad::Resistor { resistance_ohm } => *resistance_ohm,
+        DcLoad::Battery {
+            series_resistance_ohm,
+            ..
+        } => *series_resistance_ohm,
+        DcLoad::Open => return None,
+    };
+    Some(STORAGE_SETTLING_TIMES * r * cs)
+}
+
+/// A record's pre-roll (s) that covers the storage's settling as well as `preroll_s` (the
+/// mass's ring-up): the longer of the two, the settling ([`storage_settling_s`]) rounded up
+/// to a whole millisecond. An open load has no steady mean to settle to
+/// ([`InterfaceError::OpenLoad`]); a device without an interface is
+/// [`InterfaceError::Resistive`].
+pub fn settling_preroll_s(device: &Device, preroll_s: f64) -> Result<f64, InterfaceError> {
+    if device.interface.is_resistive() {
+        return Err(InterfaceError::Resistive(device.name.clone()));
+    }
+    let settling =
+        storage_settling_s(device).ok_or_else(|| InterfaceError::OpenLoad(device.name.clone()))?;
+    Ok(preroll_s.max((settling * 1e3).ceil() / 1e3))
 }
 
 /// One noise record of `spec` (seed, stream) through the interface.

@@ -1,0 +1,208 @@
+//! `endstop random` on a device with an interface circuit (`[interface]`: a diode bridge,
+//! SSHI, SECE into a storage capacitor): an ensemble of band-limited white-noise records, or
+//! one measured acceleration record, each run from rest with the pre-roll discarded; the DC
+//! power, the drive's power, their ratio (the efficiency), the mean storage voltage and the
+//! energy ledger's closure of each record. The records' linear modes are propagated exactly
+//! between switchings (`endstop::study::interface::record`).
+//!
+//! The pre-roll covers the storage as well as the mechanics: the storage charges towards its
+//! mean with the time constant of its DC load, `R C_s` (a battery's series resistance for
+//! `R`), often longer than the mass's ring-up, so the pre-roll is the longer of the
+//! resistive study's (five ring-up times) and five of these; an open DC load has no steady
+//! mean under noise and is refused.
+
+use anyhow::{bail, Result};
+use endstop::drive::Sampled;
+use endstop::num::stats::MeanCi;
+use endstop::paper::setups::paper_record;
+use endstop::study::interface::record::{
+    noise_ensemble, sampled_record, settling_preroll_s, DcRecord,
+};
+use endstop::study::record::{Scheme, DEFAULT_RTOL};
+use endstop_experiments::fmt_sig;
+use endstop_experiments::io::frame::frame;
+use endstop_experiments::row;
+
+use crate::random::{read_measured, MeasuredDrive, RandomArgs};
+use crate::shared::{describe, start};
+
+/// Runs `endstop random` on a device with an interface circuit.
+pub fn random(a: &RandomArgs) -> Result<()> {
+    match (&a.accel_file, a.psd) {
+        (Some(path), _) => {
+            let m = read_measured(a, path)?;
+            measured(a, m, &path.display().to_string())
+        }
+        (None, Some(psd)) => noise(a, psd),
+        (None, None) => bail!("give --psd (white noise) or --accel-file (a measured record)"),
+    }
+}
+
+/// The per-record table's rows.
+fn rows(records: &[DcRecord], source: &str) -> Vec<endstop_experiments::io::frame::Row> {
+    records
+        .iter()
+        .enumerate()
+        .map(|(k, r)| {
+            row![
+                "realisation" => k as u64,
+                "source" => source.to_string(),
+                "p_dc_w" => r.p_dc_w,
+                "p_drive_w" => r.p_drive_w,
+                "efficiency" => r.efficiency(),
+                "vdc_v" => r.vdc_v,
+                "ledger_relative_residual" => r.ledger.relative_residual(),
+                "steps" => r.steps,
+                "exact_steps" => r.exact_steps,
+            ]
+        })
+        .collect()
+}
+
+fn noise(a: &RandomArgs, psd: f64) -> Result<()> {
+    if !(psd.is_finite() && psd > 0.0) {
+        bail!("--psd = {psd}: must be a finite positive two-sided PSD in g^2/Hz");
+    }
+    if a.records == 0 {
+        bail!("--records = 0: must be at least 1");
+    }
+    if !(a.duration_s.is_finite() && a.duration_s > 0.0) {
+        bail!("--duration-s = {}: must be finite and > 0", a.duration_s);
+    }
+    let loaded = endstop_experiments::load_device_file(&a.device)?;
+    let mut spec = paper_record(&loaded.device, psd);
+    spec.noise.duration_s = a.duration_s;
+    spec.transient_s = settling_preroll_s(&loaded.device, spec.transient_s)?;
+    let (mut exp, loaded, device) = start("endstop-random", &a.device, a.bias_v, a.out.clone())?;
+    exp.seed = Some(a.seed);
+    eprintln!(
+        "[endstop-random] {} records of {} s behind the `{}` interface",
+        a.records,
+        a.duration_s,
+        device.interface.key()
+    );
+    let records = noise_ensemble(&device, &spec, a.seed, a.records as u64)?;
+    let source = format!("noise {psd:e} g^2/Hz, seed {}", a.seed);
+    exp.write_parquet(
+        "records",
+        &mut frame(rows(&records, &source))?,
+        &device.params,
+    )?;
+    let stat = |f: fn(&DcRecord) -> f64| MeanCi::of(&records.iter().map(f).collect::<Vec<_>>());
+    let (p_dc, p_drive, eff, vdc) = (
+        stat(|r| r.p_dc_w),
+        stat(|r| r.p_drive_w),
+        stat(DcRecord::efficiency),
+        stat(|r| r.vdc_v),
+    );
+    exp.number("p_dc_w", p_dc.mean);
+    exp.number("p_dc_ci95_w", p_dc.ci95);
+    exp.number("p_drive_w", p_drive.mean);
+    exp.number("efficiency", eff.mean);
+    exp.number("efficiency_ci95", eff.ci95);
+    exp.number("vdc_v", vdc.mean);
+    let md = format!(
+        "Random vibration of `{}` ({} set; {}; `{}` interface): {} records of band-limited white \
+         noise ({} g^2/Hz two-sided, {} Hz band, sampled at {} Hz), {} s each after a pre-roll \
+         of {} s from rest (the longer of five ring-up times and five storage time constants), \
+         seed {}; means with 95 % intervals over the records (Student t).\n\n\
+         - DC power: {} +- {} uW\n\
+         - the drive's power: {} +- {} uW\n\
+         - efficiency (DC power over the drive's power): {} +- {}\n\
+         - mean storage voltage: {} +- {} V\n\
+         - energy ledger: largest relative residual {}\n\
+         - steps: {} sample intervals propagated exactly, of {} in all (the rest by \
+         Dormand-Prince with its events located)\n",
+        loaded.file,
+        device.params,
+        describe(&device),
+        device.interface.key(),
+        records.len(),
+        psd,
+        fmt_sig(spec.noise.bandwidth_hz, 4),
+        fmt_sig(spec.noise.sample_rate_hz, 4),
+        a.duration_s,
+        fmt_sig(spec.transient_s, 4),
+        a.seed,
+        fmt_sig(p_dc.mean * 1e6, 4),
+        fmt_sig(p_dc.ci95 * 1e6, 2),
+        fmt_sig(p_drive.mean * 1e6, 4),
+        fmt_sig(p_drive.ci95 * 1e6, 2),
+        fmt_sig(eff.mean, 3),
+        fmt_sig(eff.ci95, 2),
+        fmt_sig(vdc.mean, 4),
+        fmt_sig(vdc.ci95, 2),
+        largest_residual(&records),
+        records.iter().map(|r| r.exact_steps).sum::<u64>(),
+        records.iter().map(|r| r.steps).sum::<u64>(),
+    );
+    exp.write_numbers_md(&md)?;
+    print!("{md}");
+    exp.finish()
+}
+
+fn measured(a: &RandomArgs, m: MeasuredDrive, file: &str) -> Result<()> {
+    let loaded = endstop_experiments::load_device_file(&a.device)?;
+    let preroll_s = settling_preroll_s(&loaded.device, m.preroll_s)?;
+    let n_tr = m.n_tr.max((preroll_s * m.fs).ceil() as usize);
+    if n_tr >= m.accel.len() {
+        bail!(
+            "{file}: the record lasts {} s, no longer than the pre-roll of {} s (five storage time \
+             constants of the interface's DC load): give a longer record",
+            fmt_sig(m.accel.len() as f64 / m.fs, 4),
+            fmt_sig(preroll_s, 4)
+        );
+    }
+    let (mut exp, loaded, device) = start("endstop-random", &a.device, a.bias_v, a.out.clone())?;
+    let drive = Sampled::new(m.accel.clone(), m.fs);
+    let r = sampled_record(&device, &drive, n_tr, DEFAULT_RTOL, Scheme::Exponential)?;
+    exp.write_parquet(
+        "records",
+        &mut frame(rows(&[r], &format!("measured record {file}")))?,
+        &device.params,
+    )?;
+    exp.number("p_dc_w", r.p_dc_w);
+    exp.number("p_drive_w", r.p_drive_w);
+    exp.number("efficiency", r.efficiency());
+    exp.number("vdc_v", r.vdc_v);
+    let md = format!(
+        "Measured drive on `{}` ({} set; {}; `{}` interface): record `{file}` ({} samples at {} \
+         Hz, {} s), resampled to {} Hz; the first {} s discarded (the longer of five ring-up \
+         times and five storage time constants).\n\n\
+         - DC power: {} uW; the drive's power: {} uW; efficiency {}\n\
+         - mean storage voltage: {} V\n\
+         - energy ledger: relative residual {}\n\
+         - steps: {} sample intervals propagated exactly, of {} in all (the rest by \
+         Dormand-Prince with its events located)\n",
+        loaded.file,
+        device.params,
+        describe(&device),
+        device.interface.key(),
+        m.rec.accel_si.len(),
+        fmt_sig(m.rec.sample_rate_hz, 6),
+        fmt_sig(m.rec.duration_s(), 4),
+        m.fs,
+        fmt_sig(n_tr as f64 / m.fs, 4),
+        fmt_sig(r.p_dc_w * 1e6, 4),
+        fmt_sig(r.p_drive_w * 1e6, 4),
+        fmt_sig(r.efficiency(), 3),
+        fmt_sig(r.vdc_v, 4),
+        largest_residual(&[r]),
+        r.exact_steps,
+        r.steps,
+    );
+    exp.write_numbers_md(&md)?;
+    print!("{md}");
+    exp.finish()
+}
+
+/// The largest relative residual of the records' energy ledgers, for the text.
+fn largest_residual(records: &[DcRecord]) -> String {
+    format!(
+        "{:.1e}",
+        records
+            .iter()
+            .map(|r| r.ledger.relative_residual().abs())
+            .fold(0.0, f64::max)
+    )
+}
