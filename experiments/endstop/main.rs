@@ -62,7 +62,8 @@ enum Study {
     Sweep(RangeArgs),
     /// Random vibration: an ensemble of band-limited white-noise records (10 kHz band,
     /// 100 kHz sampling), or one measured acceleration record (--accel-file), with mean
-    /// power, output power spectrum and the drive's spectrum.
+    /// power, output power spectrum and the drive's spectrum. On a device with an interface
+    /// circuit: each record's DC power, efficiency, storage voltage and energy ledger.
     Random(random::RandomArgs),
     /// The whole frequency response: up- and down-sweeps, the periodic orbits continued in
     /// frequency (pseudo-arclength, through folds) with their Floquet multipliers, and the
