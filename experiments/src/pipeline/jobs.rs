@@ -185,6 +185,21 @@ pub const JOBS: &[Job] = &[
         &[PIEZO_BRIDGE],
     ),
     tool_run(
+        "own_device_piezo_bridge_random",
+        &[
+            "random",
+            "--device",
+            PIEZO_BRIDGE,
+            "--psd",
+            "1e-4",
+            "--records",
+            "4",
+            "--duration-s",
+            "4",
+        ],
+        &[PIEZO_BRIDGE],
+    ),
+    tool_run(
         "own_device_piezo_random",
         &[
             "random",
