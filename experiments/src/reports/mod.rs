@@ -24,6 +24,7 @@ pub mod fig15_io;
 pub mod fit_csv;
 pub mod fit_io;
 pub mod history_io;
+pub mod interfaces_io;
 pub mod measured_io;
 pub mod record_io;
 pub mod response_io;

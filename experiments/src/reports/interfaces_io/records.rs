@@ -1,0 +1,118 @@
+//! The interfaces' records: charging an open storage from 0 V, and random ensembles behind
+//! every interface (the cost of a record against the resistive load is the benchmark's,
+//! `experiments/bench/interfaces.rs`).
+
+use anyhow::Result;
+use endstop::device::{Interface, Rectifier};
+use endstop::drive::noise::NoiseSpec;
+use endstop::drive::Sine;
+use endstop::study::interface::charging::{charge, ChargeSettings};
+use endstop::study::interface::record::noise_ensemble;
+use endstop::study::record::{RecordSpec, Scheme, DEFAULT_RTOL};
+
+use super::{resonance_hz, variants, ACCEL_RMS_G, SEED};
+use crate::io::frame::frame;
+use crate::io::md::Table;
+use crate::io::plot::{LegendPos, LinePlot, Series, Style, PALETTE};
+use crate::{fmt_sig, row, write_atomic, Experiment, LoadedDevice};
+
+/// Charging an open storage from 0 V at the cantilever's resonance, the drive ramped over 20
+/// periods.
+pub(super) fn charging(exp: &mut Experiment, piezo: &LoadedDevice) -> Result<()> {
+    let f0 = resonance_hz(&piezo.device);
+    let mut open = piezo.device.clone();
+    if let Interface::FullBridge(r) = &mut open.interface {
+        *r = Rectifier {
+            load: endstop::device::DcLoad::Open,
+            ..r.clone()
+        };
+    }
+    let cs = ChargeSettings {
+        start_v: 0.0,
+        target_v: 5.0,
+        ramp_s: 20.0 / f0,
+        t_max_s: 60.0,
+        sample_s: 1e-3,
+        block_s: 0.5,
+        rtol: 1e-8,
+    };
+    let run = crate::with_progress(100, "charging (% of 5 V)", |p| {
+        charge(&open, Sine::from_rms_g(ACCEL_RMS_G, f0), &cs, p)
+    })?;
+    exp.number("charge_time_to_5v_s", run.time_to_target_s);
+    exp.write_parquet(
+        "charging",
+        &mut frame(
+            run.t_s
+                .iter()
+                .zip(&run.vs_v)
+                .map(|(&t, &v)| row!["t_s" => t, "vs_v" => v]),
+        )?,
+        "hypothetical",
+    )?;
+    exp.write_extra_plot(
+        "interfaces_charging",
+        &LinePlot::new(
+            "Charging 10 uF from 0 V, full bridge",
+            "time [s]",
+            "V_s [V]",
+            vec![Series::new(
+                "V_s",
+                run.t_s
+                    .iter()
+                    .copied()
+                    .zip(run.vs_v.iter().copied())
+                    .collect(),
+                PALETTE[0],
+                Style::Line,
+            )],
+        )
+        .legend(LegendPos::LowerRight),
+    )?;
+    write_atomic(&exp.book_dir.join("charging.md"), format!("With the drive ramped up over 20 periods from rest at phase zero, the 10 uF storage of `piezo_bridge.toml` (load removed) reaches 5 V after **{} s** at {} Hz, {ACCEL_RMS_G} g rms.\n", fmt_sig(run.time_to_target_s, 4), fmt_sig(f0, 4)).as_bytes())?;
+    Ok(())
+}
+
+/// Eight 2 s records behind every interface of the cantilever, at 1e-4 g^2/Hz.
+pub(super) fn ensembles(exp: &mut Experiment, piezo: &LoadedDevice) -> Result<()> {
+    let spec = |secs: f64| RecordSpec {
+        noise: NoiseSpec {
+            duration_s: secs,
+            ..endstop::paper::setups::paper_noise(1e-4)
+        },
+        transient_s: 1.0,
+        rtol: DEFAULT_RTOL,
+        scheme: Scheme::Exponential,
+    };
+    let mut t = Table::new([
+        "interface",
+        "records",
+        "mean DC power (uW)",
+        "mean efficiency",
+        "largest relative ledger residual",
+    ]);
+    let mut rows = Vec::new();
+    for (name, d) in variants(&piezo.device) {
+        eprintln!("[interfaces] ensemble, {name}");
+        let ens = noise_ensemble(&d, &spec(2.0), SEED, 8)?;
+        let n = ens.len() as f64;
+        for (k, r) in ens.iter().enumerate() {
+            rows.push(row!["interface" => name, "stream" => k, "p_dc_w" => r.p_dc_w, "p_drive_w" => r.p_drive_w, "vdc_v" => r.vdc_v]);
+        }
+        t.row([
+            name.into(),
+            ens.len().to_string(),
+            fmt_sig(ens.iter().map(|r| r.p_dc_w).sum::<f64>() / n * 1e6, 4),
+            fmt_sig(ens.iter().map(|r| r.efficiency()).sum::<f64>() / n, 3),
+            format!(
+                "{:.1e}",
+                ens.iter()
+                    .map(|r| r.ledger.relative_residual().abs())
+                    .fold(0.0, f64::max)
+            ),
+        ]);
+    }
+    exp.write_parquet("ensembles", &mut frame(rows)?, "hypothetical")?;
+    write_atomic(&exp.book_dir.join("ensembles.md"), t.render().as_bytes())?;
+    Ok(())
+}
