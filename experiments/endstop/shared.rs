@@ -48,7 +48,7 @@ pub(crate) struct RangeArgs {
     /// for a device without a bias (piezoelectric, electromagnetic, none).
     #[arg(long)]
     pub(crate) bias_v: Option<f64>,
-    /// Output directory; default: data/results/endstop-<study>.
+    /// Output directory; default: data/results/endstop-STUDY, STUDY the subcommand.
     #[arg(long)]
     pub(crate) out: Option<PathBuf>,
 }

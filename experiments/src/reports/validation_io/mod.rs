@@ -1,7 +1,7 @@
 //! The validation experiment (`experiments/validation.rs` runs it): every check of
 //! `endstop::validation` with the cases of `endstop::validation::cases` (the ones
-//! `tests/validation.rs` asserts), written as Parquet, two plots ([`plots`]) and the book
-//! chapter's generated tables ([`tables`]), with the wall time of each case.
+//! `tests/validation.rs` asserts), written as Parquet, two plots (`plots.rs`) and the book
+//! chapter's generated tables (`tables.rs`), with the wall time of each case.
 
 use std::time::Instant;
 
