@@ -24,7 +24,7 @@ book:
 lint:
     cargo fmt --check
     cargo clippy --release --workspace --all-targets -- -D warnings
-    RUSTDOCFLAGS="-D warnings" cargo doc --no-deps -p endstop
+    RUSTDOCFLAGS="-D warnings" cargo doc --no-deps -p endstop -p endstop-experiments
 
 # Run the benchmarks.
 bench:
