@@ -60,15 +60,7 @@ fn rows(records: &[DcRecord], source: &str) -> Vec<endstop_experiments::io::fram
 }
 
 fn noise(a: &RandomArgs, psd: f64) -> Result<()> {
-    if !(psd.is_finite() && psd > 0.0) {
-        bail!("--psd = {psd}: must be a finite positive two-sided PSD in g^2/Hz");
-    }
-    if a.records == 0 {
-        bail!("--records = 0: must be at least 1");
-    }
-    if !(a.duration_s.is_finite() && a.duration_s > 0.0) {
-        bail!("--duration-s = {}: must be finite and > 0", a.duration_s);
-    }
+    a.check_noise(psd)?;
     let loaded = endstop_experiments::load_device_file(&a.device)?;
     let mut spec = paper_record(&loaded.device, psd);
     spec.noise.duration_s = a.duration_s;

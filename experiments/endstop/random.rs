@@ -143,16 +143,24 @@ fn spectra_plot(device: &Device, title: &str, out: &Psd, linear: &[f64], drive: 
     Panels::row(vec![response, drive_plot])
 }
 
+impl RandomArgs {
+    /// Checks the noise ensemble's arguments (`--psd`, `--records`, `--duration-s`).
+    pub(crate) fn check_noise(&self, psd: f64) -> Result<()> {
+        if !(psd.is_finite() && psd > 0.0) {
+            bail!("--psd = {psd}: must be a finite positive two-sided PSD in g^2/Hz");
+        }
+        if self.records == 0 {
+            bail!("--records = 0: must be at least 1");
+        }
+        if !(self.duration_s.is_finite() && self.duration_s > 0.0) {
+            bail!("--duration-s = {}: must be finite and > 0", self.duration_s);
+        }
+        Ok(())
+    }
+}
+
 fn noise(a: &RandomArgs, psd: f64) -> Result<()> {
-    if !(psd.is_finite() && psd > 0.0) {
-        bail!("--psd = {psd}: must be a finite positive two-sided PSD in g^2/Hz");
-    }
-    if a.records == 0 {
-        bail!("--records = 0: must be at least 1");
-    }
-    if !(a.duration_s.is_finite() && a.duration_s > 0.0) {
-        bail!("--duration-s = {}: must be finite and > 0", a.duration_s);
-    }
+    a.check_noise(psd)?;
     let (mut exp, loaded, device) = start("endstop-random", &a.device, a.bias_v, a.out.clone())?;
     exp.seed = Some(a.seed);
     let mut record = paper_record(&device, psd);

@@ -8,10 +8,10 @@ use endstop::num::stats::MeanCi;
 use endstop::paper::setups::paper_record;
 use endstop::progress::Silent;
 use endstop::study::interface::charging::{charge, ChargeSettings};
-use endstop::study::interface::record::{noise_ensemble, settling_preroll_s, DcRecord};
 use endstop::study::interface::continuation::{
     continue_frequency, IfBranchEnd, IfContinuationSettings,
 };
+use endstop::study::interface::record::{noise_ensemble, settling_preroll_s, DcRecord};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
