@@ -1,22 +1,25 @@
 //! The cost of a record behind an interface circuit against the same record on a resistive
-//! load: the cantilever of `data/examples/piezo_bridge.toml` behind its full bridge and behind
-//! a parallel SSHI, and `data/examples/piezo_cantilever.toml` on its resistor, each a 10 s
+//! load: the cantilever of `data/examples/piezo_bridge.toml` behind each interface of the
+//! interfaces chapter (its full bridge, parallel and series SSHI, SECE:
+//! `endstop_experiments::reports::interfaces_io::variants`), and
+//! `data/examples/piezo_cantilever.toml` on its resistor, each a 10 s
 //! record of the same noise after a 1 s pre-roll, by the records' default scheme: the
 //! resistive free flight by the exponential step, the interface's linear modes propagated
 //! exactly with the intervals where a conduction or switch event may fall handed to
 //! Dormand-Prince (`endstop::study::interface::record`).
-//! The runs alternate (resistive, bridge, SSHI, resistive, ...) so that a drift of the
+//! The runs alternate (resistive, then each interface, then again) so that a drift of the
 //! machine's speed shifts each round's runs alike; the table gives each one's median
 //! processor time and the median of the per-round ratios with their range.
 
 use anyhow::Result;
-use endstop::device::{Device, Interface, Inversion};
+use endstop::device::Interface;
 use endstop::drive::noise::NoiseSpec;
 use endstop::study::interface::record::noise_record;
 use endstop::study::record::{simulate_record, RecordSpec, Scheme, DEFAULT_RTOL};
 use endstop_experiments as common;
 
 use common::fmt_sig;
+use common::reports::interfaces_io::variants;
 
 use crate::examples::{cpu, median};
 
@@ -60,13 +63,10 @@ fn spec() -> RecordSpec {
 pub fn measure(rounds: usize) -> Result<Costs> {
     let bridge = common::load_device("examples/piezo_bridge")?.device;
     let resistive = common::load_device("examples/piezo_cantilever")?.device;
-    let Interface::FullBridge(r) = &bridge.interface else {
+    if !matches!(bridge.interface, Interface::FullBridge(_)) {
         anyhow::bail!("examples/piezo_bridge.toml: expected a full bridge");
-    };
-    let mut sshi = bridge.clone();
-    sshi.interface = Interface::ParallelSshi(r.clone(), Inversion::QualityFactor(3.0));
-    let variants: [(&'static str, &Device); 2] =
-        [("full bridge", &bridge), ("parallel SSHI (Q = 3)", &sshi)];
+    }
+    let variants = variants(&bridge);
     let spec = spec();
     let mut resistive_s = Vec::new();
     let mut per: Vec<(Vec<f64>, Vec<f64>)> = vec![(Vec::new(), Vec::new()); variants.len()];
@@ -99,7 +99,8 @@ pub fn table(costs: &Costs, rounds: usize) -> String {
     let mut md = format!(
         "Processor time of a 10 s record (1 s pre-roll, Sa = {PSD_G2_PER_HZ:e} g^2/Hz, seed \
          {SEED}, stream 0) on one thread, median of {rounds} alternated rounds (resistive, \
-         full bridge, parallel SSHI, then again), measured by the whole benchmark (`just \
+         then each interface, then again; SSHI with Q = 3, SECE with an efficiency of 0.8), \
+         measured by the whole benchmark (`just \
          bench`) at commit `{}`. The ratio is taken within each round. Each record runs its \
          default scheme: the resistive free flight by the exponential step, the interface's \
          linear modes propagated exactly, with the intervals where an event may fall handed to \
