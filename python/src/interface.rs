@@ -12,6 +12,8 @@ use endstop::study::interface::continuation::{
     continue_frequency, IfBranchEnd, IfContinuationSettings,
 };
 use endstop::study::interface::record::{noise_ensemble, settling_preroll_s, DcRecord};
+use endstop::study::interface::sweep::frequency_sweep;
+use endstop::study::interface::{IfSteady, SteadySettings};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
@@ -30,8 +32,9 @@ fn positive(name: &str, v: f64) -> PyResult<()> {
 /// The steady state of a device with an interface continued in frequency from `start_hz` to
 /// `stop_hz` through folds (the library's `continue_frequency`, steps of at most
 /// `max_step_hz`). Keys: per-point arrays `freq_hz`, `vdc_v`, `p_dc_w`, `x_peak_m`,
-/// `multiplier_max_abs`, the list `stable`; `folds_hz` and `end` ("reached", "stalled at
-/// <f> Hz" or "max points").
+/// `multiplier_max_abs`, the lists `stable` and `method` (how each steady state was found:
+/// "newton" or "period map"); `folds_hz` and `end` ("reached", "stalled at <f> Hz" or "max
+/// points").
 #[pyfunction]
 #[pyo3(signature = (device, accel_rms_g, start_hz, stop_hz, max_step_hz = 0.5))]
 fn interface_response<'py>(
@@ -67,6 +70,14 @@ fn interface_response<'py>(
     d.set_item("x_peak_m", col(&|s| s.x_peak_m))?;
     d.set_item("multiplier_max_abs", col(&|s| s.max_multiplier))?;
     d.set_item(
+        "method",
+        branch
+            .points
+            .iter()
+            .map(|p| p.steady.method.label())
+            .collect::<Vec<_>>(),
+    )?;
+    d.set_item(
         "stable",
         branch
             .points
@@ -85,6 +96,71 @@ fn interface_response<'py>(
             IfBranchEnd::Stalled(f) => format!("stalled at {f} Hz"),
             IfBranchEnd::MaxPoints => "max points".to_string(),
         },
+    )?;
+    Ok(d)
+}
+
+/// The steady state of a device with an interface at each frequency of `freqs_hz` in order
+/// (an up- or down-sweep as given), each shot from the previous one's (the first from rest):
+/// the `endstop sweep` command's study on such a device. Keys: per-point arrays `freq_hz`,
+/// `vdc_v`, `p_dc_w`, `ripple_v`, `x_peak_m`, `multiplier_max_abs` (NaN where no period-one
+/// steady state was found), the lists `stable`, `method` ("newton", "period map", or the
+/// error where none was found) and `found`.
+#[pyfunction]
+fn interface_sweep<'py>(
+    py: Python<'py>,
+    device: &PyDevice,
+    accel_rms_g: f64,
+    freqs_hz: Vec<f64>,
+) -> PyResult<Bound<'py, PyDict>> {
+    positive("accel_rms_g", accel_rms_g)?;
+    if freqs_hz.is_empty() {
+        return Err(arg_err("freqs_hz must hold at least one frequency"));
+    }
+    for &f in &freqs_hz {
+        positive("every frequency of freqs_hz", f)?;
+    }
+    let dev = device.inner.clone();
+    let fs = freqs_hz.clone();
+    let results = py.detach(move || {
+        frequency_sweep(&dev, &fs, accel_rms_g, &SteadySettings::default(), &Silent)
+    });
+    let d = PyDict::new(py);
+    let col = |f: &dyn Fn(&IfSteady) -> f64| {
+        array(
+            py,
+            results
+                .iter()
+                .map(|r| r.as_ref().map_or(f64::NAN, f))
+                .collect(),
+        )
+    };
+    d.set_item("freq_hz", array(py, freqs_hz))?;
+    d.set_item("vdc_v", col(&|s| s.vdc_v))?;
+    d.set_item("p_dc_w", col(&|s| s.p_dc_w))?;
+    d.set_item("ripple_v", col(&|s| s.ripple_v))?;
+    d.set_item("x_peak_m", col(&|s| s.x_peak_m))?;
+    d.set_item("multiplier_max_abs", col(&|s| s.max_multiplier))?;
+    d.set_item(
+        "stable",
+        results
+            .iter()
+            .map(|r| r.as_ref().is_ok_and(IfSteady::is_stable))
+            .collect::<Vec<bool>>(),
+    )?;
+    d.set_item(
+        "method",
+        results
+            .iter()
+            .map(|r| match r {
+                Ok(s) => s.method.label().to_string(),
+                Err(e) => e.to_string(),
+            })
+            .collect::<Vec<String>>(),
+    )?;
+    d.set_item(
+        "found",
+        results.iter().map(Result::is_ok).collect::<Vec<bool>>(),
     )?;
     Ok(d)
 }
@@ -204,6 +280,7 @@ fn interface_ensemble<'py>(
 /// Adds the module's functions to `_native`.
 pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(interface_response, m)?)?;
+    m.add_function(wrap_pyfunction!(interface_sweep, m)?)?;
     m.add_function(wrap_pyfunction!(charge_storage, m)?)?;
     m.add_function(wrap_pyfunction!(interface_ensemble, m)?)?;
     Ok(())

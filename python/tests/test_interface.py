@@ -74,3 +74,17 @@ def test_interface_ensemble_refuses_an_open_load(root):
     dev = endstop.Device.from_dict(d, "piezo_bridge_open")
     with pytest.raises(endstop.SolverError, match="open load"):
         endstop.study.interface_ensemble(dev, 1e-4, records=1, duration_s=1.0)
+
+
+def test_interface_sweep_matches_the_command(root, tmp_path):
+    pd = pytest.importorskip("pandas")
+    ours = endstop.study.interface_sweep(bridge(root), 0.3, [116.0, 118.0, 120.0])
+    assert all(ours["found"]) and all(m in ("newton", "period map") for m in ours["method"])
+    out = run_cli(["sweep", "--device", str(root / "data/examples/piezo_bridge.toml"),
+                   "--from", "116", "--to", "120", "--step", "2", "--accel-rms-g", "0.3",
+                   "--out", str(tmp_path)], tmp_path)
+    cli = pd.read_parquet(out / "sweep.parquet")
+    # The same steady states by the same code: equal to rounding.
+    assert np.allclose(ours["freq_hz"], cli["freq_hz"], rtol=1e-12)
+    assert np.allclose(ours["p_dc_w"], cli["p_dc_w"], rtol=1e-12)
+    assert list(ours["method"]) == list(cli["method"])

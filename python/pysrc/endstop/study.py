@@ -17,6 +17,8 @@ arrays, with the GIL released while it runs.
 
 For a device with an ``[interface]`` table (a bridge, SSHI or SECE into a storage capacitor):
 
+* :func:`interface_sweep`: the steady state's DC voltage and power at each frequency, each
+  shot from the previous one (the ``endstop sweep`` command's study on such a device);
 * :func:`interface_response`: the steady state's DC voltage and power continued in frequency
   through folds, with its stability from the monodromy through saltation matrices;
 * :func:`charge`: the time for the storage to reach a target voltage under a sine (the
@@ -98,12 +100,22 @@ def ensemble(device, psd_g2_per_hz, records=4, duration_s=10.0, seed=2012):
 __all__ = ["up_sweep", "down_sweep", "orbits", "amplitude_sweep", "record", "ensemble"]
 
 
+def interface_sweep(device, accel_rms_g, freqs_hz):
+    """The steady state of ``device`` (with an interface circuit and a DC load) at
+    ``accel_rms_g`` at each frequency of ``freqs_hz`` in order, each shot from the previous
+    one's: per-point arrays ``freq_hz``, ``vdc_v``, ``p_dc_w``, ``ripple_v``, ``x_peak_m``,
+    ``multiplier_max_abs`` (NaN where none was found), the lists ``stable``, ``method`` and
+    ``found``."""
+    return _native.interface_sweep(device, float(accel_rms_g),
+                                   [float(f) for f in freqs_hz])
+
+
 def interface_response(device, accel_rms_g, start_hz, stop_hz, max_step_hz=0.5):
     """The steady state of ``device`` (with an interface circuit and a DC load) at
     ``accel_rms_g`` continued in frequency from ``start_hz`` to ``stop_hz`` through folds
     (frequency steps of at most ``max_step_hz``): per-point arrays ``freq_hz``, ``vdc_v``,
-    ``p_dc_w``, ``x_peak_m``, ``multiplier_max_abs``, the list ``stable``; ``folds_hz`` and
-    ``end``."""
+    ``p_dc_w``, ``x_peak_m``, ``multiplier_max_abs``, the lists ``stable`` and ``method``;
+    ``folds_hz`` and ``end``."""
     return _native.interface_response(device, float(accel_rms_g), float(start_hz),
                                       float(stop_hz), float(max_step_hz))
 
