@@ -5,18 +5,18 @@
 //! energy ledger's closure of each record. The records' linear modes are propagated exactly
 //! between switchings (`endstop::study::interface::record`).
 //!
-//! The pre-roll covers the storage as well as the mechanics: the storage charges towards its
-//! mean with the time constant of its DC load, `R C_s` (a battery's series resistance for
-//! `R`), often longer than the mass's ring-up, so the pre-roll is the longer of the
-//! resistive study's (five ring-up times) and five of these; an open DC load has no steady
-//! mean under noise and is refused.
+//! The pre-roll ([`endstop::study::record::transient_s`]) covers the storage as well as the
+//! mechanics: the storage charges towards its mean with the time constant of its DC load,
+//! `R C_s`, often longer than the mass's ring-up; an open DC load has no steady mean under
+//! noise and is refused before anything is written.
 
 use anyhow::{bail, Result};
+use endstop::device::Device;
 use endstop::drive::Sampled;
 use endstop::num::stats::MeanCi;
 use endstop::paper::setups::paper_record;
 use endstop::study::interface::record::{
-    noise_ensemble, sampled_record, settling_preroll_s, DcRecord,
+    check_steady_mean, noise_ensemble, sampled_record, DcRecord,
 };
 use endstop::study::record::{Scheme, DEFAULT_RTOL};
 use endstop_experiments::fmt_sig;
@@ -26,8 +26,10 @@ use endstop_experiments::row;
 use crate::random::{read_measured, MeasuredDrive, RandomArgs};
 use crate::shared::{describe, start};
 
-/// Runs `endstop random` on a device with an interface circuit.
-pub fn random(a: &RandomArgs) -> Result<()> {
+/// Runs `endstop random` on `device` (as loaded from `a.device`), which has an interface
+/// circuit.
+pub fn random(a: &RandomArgs, device: &Device) -> Result<()> {
+    check_steady_mean(device)?;
     match (&a.accel_file, a.psd) {
         (Some(path), _) => {
             let m = read_measured(a, path)?;
@@ -61,12 +63,10 @@ fn rows(records: &[DcRecord], source: &str) -> Vec<endstop_experiments::io::fram
 
 fn noise(a: &RandomArgs, psd: f64) -> Result<()> {
     a.check_noise(psd)?;
-    let loaded = endstop_experiments::load_device_file(&a.device)?;
-    let mut spec = paper_record(&loaded.device, psd);
-    spec.noise.duration_s = a.duration_s;
-    spec.transient_s = settling_preroll_s(&loaded.device, spec.transient_s)?;
     let (mut exp, loaded, device) = start("endstop-random", &a.device, a.bias_v, a.out.clone())?;
     exp.seed = Some(a.seed);
+    let mut spec = paper_record(&device, psd);
+    spec.noise.duration_s = a.duration_s;
     eprintln!(
         "[endstop-random] {} records of {} s behind the `{}` interface",
         a.records,
@@ -134,20 +134,9 @@ fn noise(a: &RandomArgs, psd: f64) -> Result<()> {
 }
 
 fn measured(a: &RandomArgs, m: MeasuredDrive, file: &str) -> Result<()> {
-    let loaded = endstop_experiments::load_device_file(&a.device)?;
-    let preroll_s = settling_preroll_s(&loaded.device, m.preroll_s)?;
-    let n_tr = m.n_tr.max((preroll_s * m.fs).ceil() as usize);
-    if n_tr >= m.accel.len() {
-        bail!(
-            "{file}: the record lasts {} s, no longer than the pre-roll of {} s (five storage time \
-             constants of the interface's DC load): give a longer record",
-            fmt_sig(m.accel.len() as f64 / m.fs, 4),
-            fmt_sig(preroll_s, 4)
-        );
-    }
     let (mut exp, loaded, device) = start("endstop-random", &a.device, a.bias_v, a.out.clone())?;
     let drive = Sampled::new(m.accel.clone(), m.fs);
-    let r = sampled_record(&device, &drive, n_tr, DEFAULT_RTOL, Scheme::Exponential)?;
+    let r = sampled_record(&device, &drive, m.n_tr, DEFAULT_RTOL, Scheme::Exponential)?;
     exp.write_parquet(
         "records",
         &mut frame(rows(&[r], &format!("measured record {file}")))?,
@@ -174,7 +163,7 @@ fn measured(a: &RandomArgs, m: MeasuredDrive, file: &str) -> Result<()> {
         fmt_sig(m.rec.sample_rate_hz, 6),
         fmt_sig(m.rec.duration_s(), 4),
         m.fs,
-        fmt_sig(n_tr as f64 / m.fs, 4),
+        fmt_sig(m.preroll_s, 4),
         fmt_sig(r.p_dc_w * 1e6, 4),
         fmt_sig(r.p_drive_w * 1e6, 4),
         fmt_sig(r.efficiency(), 3),

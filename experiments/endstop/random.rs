@@ -46,7 +46,8 @@ pub struct RandomArgs {
     /// whose header names a time column (`time_s` or `time_ms`) and an acceleration column
     /// (`accel_m_per_s2` or `accel_g`), or a mono WAV file with --accel-scale. It is checked
     /// (uniform time, finite values, long enough for the band), resampled to
-    /// --sample-rate-hz, and its first pre-roll (five ring-up times 2m/b) is discarded.
+    /// --sample-rate-hz, and its first pre-roll (five ring-up times 2m/b; behind an interface circuit at least five
+    /// storage time constants R C_s) is discarded.
     #[arg(long)]
     pub(crate) accel_file: Option<PathBuf>,
     /// The acceleration of a WAV file's full scale (m/s^2); a WAV file carries no unit.
@@ -78,12 +79,9 @@ pub struct RandomArgs {
 
 /// Runs `endstop random`.
 pub fn random(a: RandomArgs) -> Result<()> {
-    if !common::load_device_file(&a.device)?
-        .device
-        .interface
-        .is_resistive()
-    {
-        return crate::interface_random::random(&a);
+    let loaded = common::load_device_file(&a.device)?;
+    if !loaded.device.interface.is_resistive() {
+        return crate::interface_random::random(&a, &loaded.device);
     }
     match (&a.accel_file, a.psd) {
         (Some(path), _) => measured(&a, path.clone()),
@@ -387,7 +385,7 @@ pub(crate) struct MeasuredDrive {
     pub(crate) fs: f64,
     /// Samples of the pre-roll.
     pub(crate) n_tr: usize,
-    /// The pre-roll (s): five ring-up times.
+    /// The pre-roll (s): the device's (`endstop::study::record::transient_s`).
     pub(crate) preroll_s: f64,
     /// The analysis band (Hz).
     pub(crate) band_hz: (f64, f64),

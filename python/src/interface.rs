@@ -11,7 +11,7 @@ use endstop::study::interface::charging::{charge, ChargeSettings};
 use endstop::study::interface::continuation::{
     continue_frequency, IfBranchEnd, IfContinuationSettings,
 };
-use endstop::study::interface::record::{noise_ensemble, settling_preroll_s, DcRecord};
+use endstop::study::interface::record::{check_steady_mean, noise_ensemble, DcRecord};
 use endstop::study::interface::sweep::frequency_sweep;
 use endstop::study::interface::{IfSteady, SteadySettings};
 use pyo3::prelude::*;
@@ -245,9 +245,9 @@ fn interface_ensemble<'py>(
         return Err(arg_err("records must be at least 1"));
     }
     let dev = device.inner.clone();
+    check_steady_mean(&dev).map_err(solver_err)?;
     let mut spec = paper_record(&dev, psd_g2_per_hz);
     spec.noise.duration_s = duration_s;
-    spec.transient_s = settling_preroll_s(&dev, spec.transient_s).map_err(solver_err)?;
     let ens = py
         .detach(move || noise_ensemble(&dev, &spec, seed, records))
         .map_err(solver_err)?;

@@ -132,18 +132,17 @@ pub fn storage_settling_s(device: &Device) -> Option<f64> {
     Some(STORAGE_SETTLING_TIMES * r * cs)
 }
 
-/// A record's pre-roll (s) that covers the storage's settling as well as `preroll_s` (the
-/// mass's ring-up): the longer of the two, the settling ([`storage_settling_s`]) rounded up
-/// to a whole millisecond. An open load has no steady mean to settle to
-/// ([`InterfaceError::OpenLoad`]); a device without an interface is
-/// [`InterfaceError::Resistive`].
-pub fn settling_preroll_s(device: &Device, preroll_s: f64) -> Result<f64, InterfaceError> {
+/// Whether the records of `device` have a steady mean to study: an interface circuit whose
+/// storage feeds a load ([`InterfaceError::OpenLoad`] where it feeds nothing and only charges;
+/// [`InterfaceError::Resistive`] without an interface). Their pre-roll
+/// ([`crate::study::record::transient_s`]) covers the storage's settling.
+pub fn check_steady_mean(device: &Device) -> Result<(), InterfaceError> {
     if device.interface.is_resistive() {
         return Err(InterfaceError::Resistive(device.name.clone()));
     }
-    let settling =
-        storage_settling_s(device).ok_or_else(|| InterfaceError::OpenLoad(device.name.clone()))?;
-    Ok(preroll_s.max((settling * 1e3).ceil() / 1e3))
+    storage_settling_s(device)
+        .map(|_| ())
+        .ok_or_else(|| InterfaceError::OpenLoad(device.name.clone()))
 }
 
 /// One noise record of `spec` (seed, stream) through the interface.

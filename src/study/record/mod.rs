@@ -49,6 +49,7 @@ use crate::physics::free_flight::{FlightKind, GeneralFlight};
 use crate::physics::harvester::{Harvester, State};
 use crate::signal::bandwidth::restrict;
 use crate::signal::{self, Psd, SpectralError, WelchConfig};
+use crate::study::interface::record::storage_settling_s;
 
 mod stepping;
 
@@ -94,9 +95,11 @@ pub fn ring_up_time_s(device: &Device) -> f64 {
 }
 
 /// The discarded pre-roll of a device: [`TRANSIENT_RING_TIMES`] ring-up times, rounded up to a
-/// whole millisecond (s).
+/// whole millisecond (s); behind an interface circuit at least the storage's settling
+/// ([`storage_settling_s`], rounded up likewise), which is often the longer.
 pub fn transient_s(device: &Device) -> f64 {
-    (TRANSIENT_RING_TIMES * ring_up_time_s(device) * 1e3 - 1e-9).ceil() / 1e3
+    let ring = (TRANSIENT_RING_TIMES * ring_up_time_s(device) * 1e3 - 1e-9).ceil() / 1e3;
+    storage_settling_s(device).map_or(ring, |s| ring.max((s * 1e3).ceil() / 1e3))
 }
 
 /// Settings of one random-vibration record.

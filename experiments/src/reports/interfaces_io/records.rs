@@ -7,8 +7,8 @@ use endstop::device::{Device, Interface, Rectifier};
 use endstop::drive::noise::NoiseSpec;
 use endstop::drive::Sine;
 use endstop::study::interface::charging::{charge, ChargeSettings};
-use endstop::study::interface::record::{noise_ensemble, settling_preroll_s};
-use endstop::study::record::{RecordSpec, Scheme, DEFAULT_RTOL};
+use endstop::study::interface::record::noise_ensemble;
+use endstop::study::record::{transient_s, RecordSpec, Scheme, DEFAULT_RTOL};
 
 use super::{resonance_hz, variants, ACCEL_RMS_G, SEED};
 use crate::io::frame::frame;
@@ -76,15 +76,15 @@ pub(super) fn charging(exp: &mut Experiment, piezo: &LoadedDevice) -> Result<()>
 /// Eight 2 s records behind every interface of the cantilever, at 1e-4 g^2/Hz, each after a
 /// pre-roll that lets the storage settle.
 pub(super) fn ensembles(exp: &mut Experiment, piezo: &LoadedDevice) -> Result<()> {
-    // The pre-roll covers the storage's settling (five R_L C_s) as well as the 1 s that rings
-    // the cantilever up.
+    // The pre-roll covers the storage's settling (five R_L C_s, `transient_s`) and at least
+    // the 1 s that rings the cantilever up.
     let spec = |secs: f64, d: &Device| -> Result<RecordSpec> {
         Ok(RecordSpec {
             noise: NoiseSpec {
                 duration_s: secs,
                 ..endstop::paper::setups::paper_noise(1e-4)
             },
-            transient_s: settling_preroll_s(d, 1.0)?,
+            transient_s: transient_s(d).max(1.0),
             rtol: DEFAULT_RTOL,
             scheme: Scheme::Exponential,
         })
