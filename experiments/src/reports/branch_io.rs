@@ -113,17 +113,32 @@ fn event_series(branch: &Branch, value: impl Fn(&Orbit) -> Option<f64>) -> Vec<S
             .filter_map(|e| value(&e.orbit).map(|y| (e.param, y)))
             .collect()
     };
-    let mut out = Vec::new();
-    for (kind, label, color, style) in [
-        (EventKind::Fold, "folds", PALETTE[3], Style::Triangles),
-        (EventKind::Grazing, "grazing", PALETTE[4], Style::Circles),
-    ] {
-        let pts = marks(kind);
-        if !pts.is_empty() {
-            out.push(Series::new(label, pts, color, style));
-        }
-    }
-    out
+    marked([
+        (
+            marks(EventKind::Fold),
+            "folds",
+            PALETTE[3],
+            Style::Triangles,
+        ),
+        (
+            marks(EventKind::Grazing),
+            "grazing",
+            PALETTE[4],
+            Style::Circles,
+        ),
+    ])
+}
+
+/// A series for each group of event marks that has any: a kind of event absent from a branch
+/// gets no legend entry.
+fn marked<'a>(
+    groups: impl IntoIterator<Item = (Vec<(f64, f64)>, &'a str, plotters::style::RGBColor, Style)>,
+) -> Vec<Series> {
+    groups
+        .into_iter()
+        .filter(|(pts, ..)| !pts.is_empty())
+        .map(|(pts, label, color, style)| Series::new(label, pts, color, style))
+        .collect()
 }
 
 /// The whole response of a continued branch with the sweeps over it, in two panels that share
@@ -277,38 +292,31 @@ fn diagram_event_series(d: &Diagram, value: impl Fn(&DiagramPoint) -> Option<f64
             .filter_map(|e| value(&e.point).map(|y| (e.param, y)))
             .collect()
     };
-    let mut out = Vec::new();
-    for (kinds, label, color, style) in [
+    marked([
         (
-            &[DiagramEventKind::Fold][..],
+            marks(&[DiagramEventKind::Fold]),
             "folds",
             PALETTE[3],
             Style::Triangles,
         ),
         (
-            &[DiagramEventKind::Grazing][..],
+            marks(&[DiagramEventKind::Grazing]),
             "grazing",
             PALETTE[4],
             Style::Circles,
         ),
         (
-            &[
+            marks(&[
                 DiagramEventKind::SymmetryBreaking,
                 DiagramEventKind::BranchPoint,
                 DiagramEventKind::PeriodDoubling,
                 DiagramEventKind::Torus,
-            ][..],
+            ]),
             "pitchfork, branch point, period doubling, torus",
             PALETTE[6],
             Style::Points,
         ),
-    ] {
-        let pts = marks(kinds);
-        if !pts.is_empty() {
-            out.push(Series::new(label, pts, color, style));
-        }
-    }
-    out
+    ])
 }
 
 /// The whole response of a diagram with the sweeps over it, in two panels that share the
