@@ -35,7 +35,8 @@ use crate::study::steady::{steady_config, SteadyConfig, FOLD_BLOCK_PERIODS};
 use crate::study::sweep::{DownSweepReport, SweepReport, SweepSettings};
 
 pub use basins::{
-    basin_convergence, BasinConvergence, BASIN_CELLS, BASIN_MAX_PERIODS, BASIN_SETTLE_TOL,
+    basin_convergence, BasinConvergence, BASIN_CELLS, BASIN_MAX_PERIODS, BASIN_RTOL,
+    BASIN_SETTLE_TOL,
 };
 pub use folds::{claim_folds, fold_key, FIG13_JUMP_CLAIM, FOLD_CLAIMS};
 pub use ghost::{ghost_study, GhostRow, GHOST_MAX_PERIODS, GHOST_OFFSETS_HZ};
