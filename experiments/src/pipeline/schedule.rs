@@ -130,13 +130,13 @@ fn longest_first(jobs: &mut [(&'static Job, String)]) {
 /// 2 cores (the Performance chapter's table of each job's time): the order of a run without
 /// earlier timings.
 const LONG_JOBS: [&str; 7] = [
-    "response",
     "fig14",
+    "validation",
     "fig12",
-    "own_device_fit",
+    "response",
     "fig08",
     "fig11",
-    "validation",
+    "own_device_sweep",
 ];
 
 fn build_binaries() -> Result<()> {
