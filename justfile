@@ -20,11 +20,12 @@ fig NAME:
 book:
     cargo run --release --bin reproduce -- --book-only
 
-# Check formatting, lints and the library's rustdoc (warnings are errors).
+# Check formatting, lints and every crate's rustdoc (warnings are errors; the rustdoc, in the
+# release profile too, reuses the dependencies clippy checked).
 lint:
     cargo fmt --check
     cargo clippy --release --workspace --all-targets -- -D warnings
-    RUSTDOCFLAGS="-D warnings" cargo doc --no-deps -p endstop -p endstop-experiments
+    RUSTDOCFLAGS="-D warnings" cargo doc --release --no-deps --workspace
 
 # Run the benchmarks.
 bench:
