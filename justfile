@@ -25,7 +25,7 @@ book:
 lint:
     cargo fmt --check
     cargo clippy --release --workspace --all-targets -- -D warnings
-    RUSTDOCFLAGS="-D warnings" cargo doc --release --no-deps --workspace
+    RUSTDOCFLAGS="-D warnings" cargo doc --release --no-deps --workspace --lib
 
 # Run the benchmarks.
 bench:

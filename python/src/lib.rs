@@ -7,10 +7,10 @@
 //! `endstop.ParamError` (a `ValueError`) with the library's message, which names the field and
 //! its valid range; solver failures raise `endstop.SolverError` (a `RuntimeError`).
 //!
-//! The Rust modules mirror the Python package's: [`device`] (`endstop.Device`), [`fit`]
-//! (`endstop.fit`), [`linear`]
-//! (`endstop.linear`), [`study`] (`endstop.study`) and [`paper`] (`endstop.paper` and its
-//! `fig09`, `fig13` and `deviations`); each registers its functions in [`_native`].
+//! The Rust modules (private: the crate is the extension module, its API is Python's) mirror
+//! the Python package's: `device` (`endstop.Device`), `fit` (`endstop.fit`), `linear`
+//! (`endstop.linear`), `study` (`endstop.study`) and `paper` (`endstop.paper` and its
+//! `fig09`, `fig13` and `deviations`); each registers its functions in `_native`.
 
 use endstop::device::ParamError as LibParamError;
 use numpy::PyArray1;
