@@ -3,9 +3,9 @@
 //! lower branch where that branch ends, each within the sweep's frequency resolution (the
 //! refined bracket, [`REFINE_TOL_HZ`]).
 
-use endstop::paper::response::BASIN_RTOL;
 use endstop::paper::response::{
     continuation, ghost_study, setups, sweeps_and_branch, upper_fold_hz, Case, CaseRun, Setup,
+    BASIN_RTOL,
 };
 use endstop::study::basins::{basins, refine, Attractor, BasinSettings};
 use endstop::study::steady::{horizon_periods, steady_config, SteadyConfig, FOLD_BLOCK_PERIODS};
@@ -170,7 +170,7 @@ fn fig13_basin_inputs() -> (
 /// by one (a cell whose distance crosses the settling distance near the end of a period settles
 /// a period earlier or later); no more.
 #[test]
-#[ignore = "characterisation: the basins at two tolerances, some 10 s"]
+#[ignore = "characterisation: the basins at two tolerances, some 5 s"]
 fn basins_do_not_depend_on_the_tolerance() {
     let (p1, p2) = (common::prototype1(), common::prototype2());
     let calibrated = endstop::paper::calibration::calibrate_prototype1(&p1)

@@ -25,9 +25,9 @@ pub const BASIN_SETTLE_TOL: f64 = 1e-3;
 /// Integrator tolerance of the basin cells. A cell is classified at a scaled distance of
 /// [`BASIN_SETTLE_TOL`] from an attractor, five orders of magnitude above the integration's
 /// global error at this tolerance (some 15 rtol, [`crate::study::orbit::ShootingConfig`]);
-/// the attractors' states themselves come from the shooting at its own 1e-10. At 1e-8 a cell
-/// takes about half the steps it takes at 1e-10 (where the step limit of a fiftieth of the
-/// natural period binds), and every cell of both cases' grids ends on the same attractor as at
+/// the attractors' states themselves come from the shooting at its own 1e-10. At 1e-8, where
+/// the step limit of a fiftieth of the natural period binds, a cell takes about half the steps
+/// it takes at 1e-10, and every cell of both cases' grids ends on the same attractor as at
 /// 1e-10 (the test `basins_do_not_depend_on_the_tolerance` checks a grid of each case; on the
 /// book's grids and their refinements one cell in 6561 settles one period apart).
 pub const BASIN_RTOL: f64 = 1e-8;
