@@ -13,10 +13,9 @@
 use anyhow::{bail, Result};
 use endstop::device::Device;
 use endstop::drive::Sampled;
-use endstop::num::stats::MeanCi;
 use endstop::paper::setups::paper_record;
 use endstop::study::interface::record::{
-    check_steady_mean, noise_ensemble, sampled_record, DcRecord,
+    check_steady_mean, noise_ensemble, sampled_record, DcRecord, DcSummary,
 };
 use endstop::study::record::{Scheme, DEFAULT_RTOL};
 use endstop_experiments::fmt_sig;
@@ -32,7 +31,7 @@ pub fn random(a: &RandomArgs, device: &Device) -> Result<()> {
     check_steady_mean(device)?;
     match (&a.accel_file, a.psd) {
         (Some(path), _) => {
-            let m = read_measured(a, path)?;
+            let m = read_measured(a, device, path)?;
             measured(a, m, &path.display().to_string())
         }
         (None, Some(psd)) => noise(a, psd),
@@ -80,13 +79,12 @@ fn noise(a: &RandomArgs, psd: f64) -> Result<()> {
         &mut frame(rows(&records, &source))?,
         &device.params,
     )?;
-    let stat = |f: fn(&DcRecord) -> f64| MeanCi::of(&records.iter().map(f).collect::<Vec<_>>());
-    let (p_dc, p_drive, eff, vdc) = (
-        stat(|r| r.p_dc_w),
-        stat(|r| r.p_drive_w),
-        stat(DcRecord::efficiency),
-        stat(|r| r.vdc_v),
-    );
+    let DcSummary {
+        p_dc_w: p_dc,
+        p_drive_w: p_drive,
+        efficiency: eff,
+        vdc_v: vdc,
+    } = DcSummary::of(&records);
     exp.number("p_dc_w", p_dc.mean);
     exp.number("p_dc_ci95_w", p_dc.ci95);
     exp.number("p_drive_w", p_drive.mean);

@@ -46,8 +46,8 @@ pub struct RandomArgs {
     /// whose header names a time column (`time_s` or `time_ms`) and an acceleration column
     /// (`accel_m_per_s2` or `accel_g`), or a mono WAV file with --accel-scale. It is checked
     /// (uniform time, finite values, long enough for the band), resampled to
-    /// --sample-rate-hz, and its first pre-roll (five ring-up times 2m/b; behind an interface circuit at least five
-    /// storage time constants R C_s) is discarded.
+    /// --sample-rate-hz, and its first pre-roll (five ring-up times 2m/b; behind an interface
+    /// circuit at least five storage time constants R C_s) is discarded.
     #[arg(long)]
     pub(crate) accel_file: Option<PathBuf>,
     /// The acceleration of a WAV file's full scale (m/s^2); a WAV file carries no unit.
@@ -84,7 +84,7 @@ pub fn random(a: RandomArgs) -> Result<()> {
         return crate::interface_random::random(&a, &loaded.device);
     }
     match (&a.accel_file, a.psd) {
-        (Some(path), _) => measured(&a, path.clone()),
+        (Some(path), _) => measured(&a, &loaded.device, path.clone()),
         (None, Some(psd)) => noise(&a, psd),
         (None, None) => bail!("give --psd (white noise) or --accel-file (a measured record)"),
     }
@@ -391,18 +391,22 @@ pub(crate) struct MeasuredDrive {
     pub(crate) band_hz: (f64, f64),
 }
 
-/// Reads `path` as `--accel-file` for the device of `a`, checks it and resamples it.
-pub(crate) fn read_measured(a: &RandomArgs, path: &std::path::Path) -> Result<MeasuredDrive> {
+/// Reads `path` as `--accel-file` for `device` (the file of `a`, as loaded), checks it and
+/// resamples it.
+pub(crate) fn read_measured(
+    a: &RandomArgs,
+    device: &Device,
+    path: &std::path::Path,
+) -> Result<MeasuredDrive> {
     let fs = a.sample_rate_hz;
     if !(fs.is_finite() && fs > 0.0) {
         bail!("--sample-rate-hz = {fs}: must be finite and > 0");
     }
     // Read and check everything before the experiment starts, so that nothing is written for
     // a bad record.
-    let loaded = common::load_device_file(&a.device)?;
     let rec = measured_io::read_record(path, a.accel_scale)?;
-    let preroll_s = transient_s(&loaded.device);
-    let f0 = endstop::physics::linear::open_circuit_resonance_hz(&loaded.device);
+    let preroll_s = transient_s(device);
+    let f0 = endstop::physics::linear::open_circuit_resonance_hz(device);
     let (lo, hi) = match a.band_hz.as_deref() {
         Some([lo, hi]) => (*lo, *hi),
         _ => (0.25 * f0, (4.0 * f0).min(0.45 * fs)),
@@ -438,7 +442,7 @@ pub(crate) fn read_measured(a: &RandomArgs, path: &std::path::Path) -> Result<Me
     })
 }
 
-fn measured(a: &RandomArgs, path: PathBuf) -> Result<()> {
+fn measured(a: &RandomArgs, file_device: &Device, path: PathBuf) -> Result<()> {
     let MeasuredDrive {
         rec,
         accel,
@@ -446,7 +450,7 @@ fn measured(a: &RandomArgs, path: PathBuf) -> Result<()> {
         n_tr,
         preroll_s,
         band_hz: (lo, hi),
-    } = read_measured(a, &path)?;
+    } = read_measured(a, file_device, &path)?;
     let (mut exp, loaded, device) = start("endstop-random", &a.device, a.bias_v, a.out.clone())?;
     let drive = SampledDrive {
         accel: accel.clone(),

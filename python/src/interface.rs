@@ -4,14 +4,13 @@
 //! and numpy arrays with the GIL released while it runs.
 
 use endstop::drive::Sine;
-use endstop::num::stats::MeanCi;
 use endstop::paper::setups::paper_record;
 use endstop::progress::Silent;
 use endstop::study::interface::charging::{charge, ChargeSettings};
 use endstop::study::interface::continuation::{
     continue_frequency, IfBranchEnd, IfContinuationSettings,
 };
-use endstop::study::interface::record::{check_steady_mean, noise_ensemble, DcRecord};
+use endstop::study::interface::record::{check_steady_mean, noise_ensemble, DcRecord, DcSummary};
 use endstop::study::interface::sweep::frequency_sweep;
 use endstop::study::interface::{IfSteady, SteadySettings};
 use pyo3::prelude::*;
@@ -252,24 +251,18 @@ fn interface_ensemble<'py>(
         .detach(move || noise_ensemble(&dev, &spec, seed, records))
         .map_err(solver_err)?;
     let each = |f: fn(&DcRecord) -> f64| ens.iter().map(f).collect::<Vec<f64>>();
-    let (p_dc, p_drive, eff, vdc) = (
-        each(|r| r.p_dc_w),
-        each(|r| r.p_drive_w),
-        each(DcRecord::efficiency),
-        each(|r| r.vdc_v),
-    );
+    let sum = DcSummary::of(&ens);
     let d = PyDict::new(py);
-    let (p, e) = (MeanCi::of(&p_dc), MeanCi::of(&eff));
-    d.set_item("p_dc_w", p.mean)?;
-    d.set_item("p_dc_ci95_w", p.ci95)?;
-    d.set_item("p_drive_w", MeanCi::of(&p_drive).mean)?;
-    d.set_item("efficiency", e.mean)?;
-    d.set_item("efficiency_ci95", e.ci95)?;
-    d.set_item("vdc_v", MeanCi::of(&vdc).mean)?;
+    d.set_item("p_dc_w", sum.p_dc_w.mean)?;
+    d.set_item("p_dc_ci95_w", sum.p_dc_w.ci95)?;
+    d.set_item("p_drive_w", sum.p_drive_w.mean)?;
+    d.set_item("efficiency", sum.efficiency.mean)?;
+    d.set_item("efficiency_ci95", sum.efficiency.ci95)?;
+    d.set_item("vdc_v", sum.vdc_v.mean)?;
     d.set_item("preroll_s", spec.transient_s)?;
-    d.set_item("p_dc_w_each", array(py, p_dc))?;
-    d.set_item("p_drive_w_each", array(py, p_drive))?;
-    d.set_item("vdc_v_each", array(py, vdc))?;
+    d.set_item("p_dc_w_each", array(py, each(|r| r.p_dc_w)))?;
+    d.set_item("p_drive_w_each", array(py, each(|r| r.p_drive_w)))?;
+    d.set_item("vdc_v_each", array(py, each(|r| r.vdc_v)))?;
     d.set_item(
         "ledger_relative_residual_each",
         array(py, each(|r| r.ledger.relative_residual())),

@@ -34,6 +34,7 @@ use crate::device::{DcLoad, Device};
 use crate::drive::noise::generate_shared;
 use crate::drive::Excitation;
 use crate::drive::Sampled;
+use crate::num::stats::MeanCi;
 use crate::ode::{Dopri5, SolverError};
 use crate::physics::harvester::State;
 use crate::physics::interface::{audit_start, InterfaceAudit, InterfaceLedger, Interfaced};
@@ -63,6 +64,32 @@ impl DcRecord {
     /// DC power over the drive's power.
     pub fn efficiency(&self) -> f64 {
         self.p_dc_w / self.p_drive_w
+    }
+}
+
+/// The means over an ensemble's records, each with its 95 % interval (Student t).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DcSummary {
+    /// DC power (W).
+    pub p_dc_w: MeanCi,
+    /// The drive's power (W).
+    pub p_drive_w: MeanCi,
+    /// Each record's efficiency ([`DcRecord::efficiency`]).
+    pub efficiency: MeanCi,
+    /// Storage voltage (V).
+    pub vdc_v: MeanCi,
+}
+
+impl DcSummary {
+    /// The summary of `records`.
+    pub fn of(records: &[DcRecord]) -> Self {
+        let stat = |f: fn(&DcRecord) -> f64| MeanCi::of(&records.iter().map(f).collect::<Vec<_>>());
+        Self {
+            p_dc_w: stat(|r| r.p_dc_w),
+            p_drive_w: stat(|r| r.p_drive_w),
+            efficiency: stat(DcRecord::efficiency),
+            vdc_v: stat(|r| r.vdc_v),
+        }
     }
 }
 
