@@ -98,8 +98,10 @@ pub fn ring_up_time_s(device: &Device) -> f64 {
 /// whole millisecond (s); behind an interface circuit at least the storage's settling
 /// ([`storage_settling_s`], rounded up likewise), which is often the longer.
 pub fn transient_s(device: &Device) -> f64 {
-    let ring = (TRANSIENT_RING_TIMES * ring_up_time_s(device) * 1e3 - 1e-9).ceil() / 1e3;
-    storage_settling_s(device).map_or(ring, |s| ring.max((s * 1e3).ceil() / 1e3))
+    // Up to a whole millisecond; a time already whole to rounding stays as it is.
+    let up_to_ms = |t: f64| (t * 1e3 - 1e-9).ceil() / 1e3;
+    let ring = up_to_ms(TRANSIENT_RING_TIMES * ring_up_time_s(device));
+    storage_settling_s(device).map_or(ring, |s| ring.max(up_to_ms(s)))
 }
 
 /// Settings of one random-vibration record.
