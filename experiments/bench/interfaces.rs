@@ -19,7 +19,7 @@ use endstop::study::record::{simulate_record, RecordSpec, Scheme, DEFAULT_RTOL};
 use endstop_experiments as common;
 
 use common::fmt_sig;
-use common::reports::interfaces_io::variants;
+use common::reports::interfaces_io::{variants, SECE_EFFICIENCY, SSHI_Q};
 
 use crate::examples::{cpu, median};
 
@@ -99,7 +99,8 @@ pub fn table(costs: &Costs, rounds: usize) -> String {
     let mut md = format!(
         "Processor time of a 10 s record (1 s pre-roll, Sa = {PSD_G2_PER_HZ:e} g^2/Hz, seed \
          {SEED}, stream 0) on one thread, median of {rounds} alternated rounds (resistive, \
-         then each interface, then again; SSHI with Q = 3, SECE with an efficiency of 0.8), \
+         then each interface, then again; SSHI with Q = {SSHI_Q}, SECE with an efficiency of \
+         {SECE_EFFICIENCY}), \
          measured by the whole benchmark (`just \
          bench`) at commit `{}`. The ratio is taken within each round. Each record runs its \
          default scheme: the resistive free flight by the exponential step, the interface's \

@@ -41,9 +41,15 @@ pub fn run() -> Result<()> {
     exp.finish()
 }
 
+/// Quality factor of the SSHI variants' inversion branch ([`variants`]).
+pub const SSHI_Q: f64 = 3.0;
+
+/// Energy efficiency of the SECE variant's extraction ([`variants`]).
+pub const SECE_EFFICIENCY: f64 = 0.8;
+
 /// The interfaces the chapter puts behind a device: its own full bridge and, for a
-/// piezoelectric device, the parallel and series SSHI (Q = 3) and SECE (efficiency 0.8) on
-/// the same storage and load. The benchmark times the same variants.
+/// piezoelectric device, the parallel and series SSHI ([`SSHI_Q`]) and SECE
+/// ([`SECE_EFFICIENCY`]) on the same storage and load. The benchmark times the same variants.
 pub fn variants(d: &Device) -> Vec<(&'static str, Device)> {
     let Interface::FullBridge(r) = &d.interface else {
         return vec![("full_bridge", d.clone())];
@@ -53,7 +59,7 @@ pub fn variants(d: &Device) -> Vec<(&'static str, Device)> {
         x.interface = i;
         x
     };
-    let q = Inversion::QualityFactor(3.0);
+    let q = Inversion::QualityFactor(SSHI_Q);
     let mut v = vec![("full_bridge", d.clone())];
     if matches!(d.transducer, endstop::device::Transducer::Piezoelectric(_)) {
         v.push(("parallel_sshi", with(Interface::ParallelSshi(r.clone(), q))));
@@ -63,7 +69,7 @@ pub fn variants(d: &Device) -> Vec<(&'static str, Device)> {
             with(Interface::Sece {
                 storage_capacitance_f: r.storage_capacitance_f,
                 load: r.load.clone(),
-                efficiency: 0.8,
+                efficiency: SECE_EFFICIENCY,
             }),
         ));
     }
