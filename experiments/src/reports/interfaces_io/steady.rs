@@ -9,7 +9,7 @@ use endstop::study::interface::sweep::{frequency_sweep, load_sweep};
 use endstop::study::interface::{IfSteady, SteadyMethod, SteadySettings};
 use endstop::study::stepped::linspace_step;
 
-use super::{resonance_hz, variants, ACCEL_RMS_G};
+use super::{resonance_hz, variants, ACCEL_RMS_G, SECE_EFFICIENCY, SSHI_Q};
 use crate::io::frame::frame;
 use crate::io::md::Table;
 use crate::io::plot::{LegendPos, LinePlot, Series, Style, PALETTE};
@@ -122,7 +122,12 @@ pub(super) fn power_vs_load(
         .log(true, false)
         .legend(LegendPos::UpperRight),
     )?;
-    let mut md = best.render();
+    let mut md = format!(
+        "At the resonance, {} Hz, and {ACCEL_RMS_G} g rms; SSHI inverts with Q = {SSHI_Q}, SECE \
+         extracts with an efficiency of {SECE_EFFICIENCY}.\n\n{}",
+        fmt_sig(f0, 4),
+        best.render()
+    );
     if !missing.is_empty() {
         md.push_str(&format!(
             "\nNo period-one steady state (shooting did not converge; the response there may be \
