@@ -357,8 +357,8 @@ fn impact_oscillator_period_doubling_and_its_period_two_branch() {
         last: State,
         speeds: Vec<f64>,
     }
-    impl Observer<4, Mode> for Impacts {
-        fn step(&mut self, st: &Step<4>, _: Mode) {
+    impl Observer<State, Mode> for Impacts {
+        fn step(&mut self, st: &Step<State>, _: Mode) {
             self.last = st.y1;
         }
         fn switched(&mut self, _t: f64, from: Mode, to: Mode) {

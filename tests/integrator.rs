@@ -8,7 +8,6 @@ use endstop::device::StiffnessModel;
 use endstop::drive::Excitation;
 use endstop::drive::Sine;
 use endstop::ode::Dopri5;
-use endstop::ode::Guards;
 use endstop::ode::HybridSystem;
 use endstop::ode::Options;
 use endstop::ode::Rk4;
@@ -18,7 +17,6 @@ use endstop::physics::contact::Side;
 use endstop::physics::energy::ledger_index;
 use endstop::physics::energy::AuditState;
 use endstop::physics::energy::EnergyAudit;
-use endstop::physics::energy::AUDIT_DIM;
 use endstop::physics::harvester::Harvester;
 use endstop::physics::harvester::State;
 use nalgebra::SVector;
@@ -27,7 +25,7 @@ use crate::common;
 use common::device;
 
 /// Integrator options with the given tolerances (shared with `integrator_stepping`).
-pub(crate) fn opts<const N: usize>(rtol: f64, atol: f64) -> Options<N> {
+pub(crate) fn opts<const N: usize>(rtol: f64, atol: f64) -> Options<SVector<f64, N>> {
     Options {
         rtol,
         atol: SVector::repeat(atol),
@@ -44,13 +42,17 @@ pub(crate) struct Oscillator {
     pub(crate) w: f64,
 }
 
-impl HybridSystem<2> for Oscillator {
+impl HybridSystem for Oscillator {
+    type State = SVector<f64, 2>;
+    fn guard_count(&self) -> usize {
+        3
+    }
     type Mode = ();
     fn rhs(&self, _: (), _t: f64, y: &SVector<f64, 2>) -> SVector<f64, 2> {
         SVector::<f64, 2>::new(y[1], -self.w * self.w * y[0])
     }
-    fn guards(&self, _: (), _t: f64, _y: &SVector<f64, 2>) -> Guards {
-        [f64::NEG_INFINITY; 3]
+    fn guards(&self, _: (), _t: f64, _y: &SVector<f64, 2>, g: &mut [f64]) {
+        g.fill(f64::NEG_INFINITY);
     }
     fn switch(&self, _: (), _: usize, _: f64, _: &mut SVector<f64, 2>) {}
 }
@@ -91,7 +93,11 @@ struct Flight {
     a: f64,
 }
 
-impl HybridSystem<2> for Flight {
+impl HybridSystem for Flight {
+    type State = SVector<f64, 2>;
+    fn guard_count(&self) -> usize {
+        3
+    }
     type Mode = u8;
     fn rhs(&self, mode: u8, _t: f64, y: &SVector<f64, 2>) -> SVector<f64, 2> {
         if mode == 0 {
@@ -100,12 +106,15 @@ impl HybridSystem<2> for Flight {
             SVector::<f64, 2>::zeros()
         }
     }
-    fn guards(&self, mode: u8, _t: f64, y: &SVector<f64, 2>) -> Guards {
-        if mode == 0 {
-            [y[0] - 1.0, f64::NEG_INFINITY, f64::NEG_INFINITY]
-        } else {
-            [f64::NEG_INFINITY; 3]
-        }
+    fn guards(&self, mode: u8, _t: f64, y: &SVector<f64, 2>, g: &mut [f64]) {
+        let v: [f64; 3] = {
+            if mode == 0 {
+                [y[0] - 1.0, f64::NEG_INFINITY, f64::NEG_INFINITY]
+            } else {
+                [f64::NEG_INFINITY; 3]
+            }
+        };
+        g.copy_from_slice(&v);
     }
     fn switch(&self, _: u8, _: usize, _: f64, _: &mut SVector<f64, 2>) -> u8 {
         1
@@ -296,13 +305,17 @@ struct WatchedAudit {
     bookings: std::cell::RefCell<Vec<(Mode, Mode, [f64; 3])>>,
 }
 
-impl HybridSystem<AUDIT_DIM> for WatchedAudit {
+impl HybridSystem for WatchedAudit {
+    type State = AuditState;
+    fn guard_count(&self) -> usize {
+        3
+    }
     type Mode = Mode;
     fn rhs(&self, m: Mode, t: f64, y: &AuditState) -> AuditState {
         self.audit.rhs(m, t, y)
     }
-    fn guards(&self, m: Mode, t: f64, y: &AuditState) -> Guards {
-        self.audit.guards(m, t, y)
+    fn guards(&self, m: Mode, t: f64, y: &AuditState, g: &mut [f64]) {
+        self.audit.guards(m, t, y, g);
     }
     fn switch(&self, m: Mode, i: usize, t: f64, y: &mut AuditState) -> Mode {
         use ledger_index::{CLIP_LOSSES, REENGAGEMENT_GAINS, STOP_DAMPING};

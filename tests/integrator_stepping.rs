@@ -6,7 +6,6 @@
 
 use endstop::drive::Sampled;
 use endstop::ode::Dopri5;
-use endstop::ode::Guards;
 use endstop::ode::HybridSystem;
 use endstop::ode::SolverError;
 use endstop::physics::contact::Mode;
@@ -20,13 +19,17 @@ use crate::integrator::{opts, Oscillator};
 /// y' = y^2 blows up at t = 1.
 struct BlowUp;
 
-impl HybridSystem<1> for BlowUp {
+impl HybridSystem for BlowUp {
+    type State = SVector<f64, 1>;
+    fn guard_count(&self) -> usize {
+        3
+    }
     type Mode = ();
     fn rhs(&self, _: (), _t: f64, y: &SVector<f64, 1>) -> SVector<f64, 1> {
         SVector::<f64, 1>::new(y[0] * y[0])
     }
-    fn guards(&self, _: (), _t: f64, _y: &SVector<f64, 1>) -> Guards {
-        [f64::NEG_INFINITY; 3]
+    fn guards(&self, _: (), _t: f64, _y: &SVector<f64, 1>, g: &mut [f64]) {
+        g.fill(f64::NEG_INFINITY);
     }
     fn switch(&self, _: (), _: usize, _: f64, _: &mut SVector<f64, 1>) {}
 }
@@ -96,13 +99,17 @@ struct FastForcing {
     w: f64,
 }
 
-impl HybridSystem<1> for FastForcing {
+impl HybridSystem for FastForcing {
+    type State = SVector<f64, 1>;
+    fn guard_count(&self) -> usize {
+        3
+    }
     type Mode = ();
     fn rhs(&self, _: (), t: f64, _y: &SVector<f64, 1>) -> SVector<f64, 1> {
         SVector::<f64, 1>::new(self.w * (self.w * t).cos())
     }
-    fn guards(&self, _: (), _t: f64, _y: &SVector<f64, 1>) -> Guards {
-        [f64::NEG_INFINITY; 3]
+    fn guards(&self, _: (), _t: f64, _y: &SVector<f64, 1>, g: &mut [f64]) {
+        g.fill(f64::NEG_INFINITY);
     }
     fn switch(&self, _: (), _: usize, _: f64, _: &mut SVector<f64, 1>) {}
 }
@@ -137,7 +144,11 @@ struct PoisonedFlight {
     seen_positive: std::cell::Cell<bool>,
 }
 
-impl HybridSystem<2> for PoisonedFlight {
+impl HybridSystem for PoisonedFlight {
+    type State = SVector<f64, 2>;
+    fn guard_count(&self) -> usize {
+        3
+    }
     type Mode = u8;
     fn rhs(&self, mode: u8, _t: f64, y: &SVector<f64, 2>) -> SVector<f64, 2> {
         match (mode, self.seen_positive.get()) {
@@ -146,15 +157,18 @@ impl HybridSystem<2> for PoisonedFlight {
             _ => SVector::<f64, 2>::zeros(),
         }
     }
-    fn guards(&self, mode: u8, _t: f64, y: &SVector<f64, 2>) -> Guards {
-        if mode == 0 {
-            if y[0] > 1.0 {
-                self.seen_positive.set(true);
+    fn guards(&self, mode: u8, _t: f64, y: &SVector<f64, 2>, g: &mut [f64]) {
+        let v: [f64; 3] = {
+            if mode == 0 {
+                if y[0] > 1.0 {
+                    self.seen_positive.set(true);
+                }
+                [y[0] - 1.0, f64::NEG_INFINITY, f64::NEG_INFINITY]
+            } else {
+                [f64::NEG_INFINITY; 3]
             }
-            [y[0] - 1.0, f64::NEG_INFINITY, f64::NEG_INFINITY]
-        } else {
-            [f64::NEG_INFINITY; 3]
-        }
+        };
+        g.copy_from_slice(&v);
     }
     fn switch(&self, _: u8, _: usize, _: f64, _: &mut SVector<f64, 2>) -> u8 {
         1
@@ -191,13 +205,18 @@ fn a_non_finite_step_onto_an_event_is_an_error() {
 /// a mode that asks to leave at once.
 struct Chatter;
 
-impl HybridSystem<1> for Chatter {
+impl HybridSystem for Chatter {
+    type State = SVector<f64, 1>;
+    fn guard_count(&self) -> usize {
+        3
+    }
     type Mode = bool;
     fn rhs(&self, _: bool, _t: f64, _y: &SVector<f64, 1>) -> SVector<f64, 1> {
         SVector::<f64, 1>::new(1.0)
     }
-    fn guards(&self, _: bool, _t: f64, y: &SVector<f64, 1>) -> Guards {
-        [y[0], f64::NEG_INFINITY, f64::NEG_INFINITY]
+    fn guards(&self, _: bool, _t: f64, y: &SVector<f64, 1>, g: &mut [f64]) {
+        let v: [f64; 3] = { [y[0], f64::NEG_INFINITY, f64::NEG_INFINITY] };
+        g.copy_from_slice(&v);
     }
     fn switch(&self, mode: bool, _: usize, _: f64, _: &mut SVector<f64, 1>) -> bool {
         !mode
@@ -235,7 +254,11 @@ struct Graze {
     a: f64,
 }
 
-impl HybridSystem<2> for Graze {
+impl HybridSystem for Graze {
+    type State = SVector<f64, 2>;
+    fn guard_count(&self) -> usize {
+        3
+    }
     type Mode = u8;
     fn rhs(&self, mode: u8, _t: f64, y: &SVector<f64, 2>) -> SVector<f64, 2> {
         if mode == 0 {
@@ -244,12 +267,15 @@ impl HybridSystem<2> for Graze {
             SVector::<f64, 2>::zeros()
         }
     }
-    fn guards(&self, mode: u8, _t: f64, y: &SVector<f64, 2>) -> Guards {
-        if mode == 0 {
-            [y[0] - 1.0, f64::NEG_INFINITY, f64::NEG_INFINITY]
-        } else {
-            [f64::NEG_INFINITY; 3]
-        }
+    fn guards(&self, mode: u8, _t: f64, y: &SVector<f64, 2>, g: &mut [f64]) {
+        let v: [f64; 3] = {
+            if mode == 0 {
+                [y[0] - 1.0, f64::NEG_INFINITY, f64::NEG_INFINITY]
+            } else {
+                [f64::NEG_INFINITY; 3]
+            }
+        };
+        g.copy_from_slice(&v);
     }
     fn switch(&self, _: u8, _: usize, _: f64, _: &mut SVector<f64, 2>) -> u8 {
         1

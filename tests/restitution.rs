@@ -38,8 +38,8 @@ impl Excitation for Constant {
 #[derive(Default)]
 struct Switches(Vec<(f64, Mode, Mode)>);
 
-impl Observer<4, Mode> for Switches {
-    fn step(&mut self, _: &Step<4>, _: Mode) {}
+impl Observer<State, Mode> for Switches {
+    fn step(&mut self, _: &Step<State>, _: Mode) {}
     fn switched(&mut self, t: f64, from: Mode, to: Mode) {
         self.0.push((t, from, to));
     }

@@ -155,7 +155,7 @@ proptest! {
                     let y = endstop::physics::harvester::State::zeros();
                     let mode = m.mode_of(&y);
                     let _ = m.rhs(mode, 0.0, &y);
-                    let _ = m.guards(mode, 0.0, &y);
+                    let _ = m.guard_values(mode, 0.0, &y);
                 }
             }
             Err(e) => prop_assert!(e.to_string().contains("gen.toml"), "{e}"),

@@ -5,13 +5,11 @@
 
 use std::marker::PhantomData;
 
-use nalgebra::SVector;
-
 use crate::ode::events;
 use crate::ode::runge_kutta::{dense_output, error_estimate, stages};
 use crate::ode::tableau::{DormandPrince54, Method};
 use crate::ode::{
-    HybridSystem, Observer, Options, SolverError, Stats, Step, Steps, MAX_GUARDS,
+    HybridSystem, Observer, Options, SolverError, Stats, Step, Steps, Vector,
     MAX_SWITCHES_AT_ONE_TIME,
 };
 
@@ -38,10 +36,10 @@ const fn max_err_keeping_step(q: u32) -> f64 {
 
 /// The adaptive integrator with the Dormand-Prince 5(4) pair, the crate's integrator for
 /// hybrid systems.
-pub type Dopri5<Sys, const N: usize> = Adaptive<Sys, DormandPrince54, N, 7>;
+pub type Dopri5<Sys> = Adaptive<Sys, DormandPrince54, 7>;
 
-/// Integrator state of the embedded pair `M` (`K` stages) on a system `S` of dimension `N`:
-/// time, state, mode, the derivative at the current point, proposed step and counters.
+/// Integrator state of the embedded pair `M` (`K` stages) on a system `S`: time, state, mode,
+/// the derivative at the current point, proposed step and counters.
 ///
 /// The fields are private because the derivative at the current point (`k1`, the last stage of
 /// the previous step for a first-same-as-last pair) is cached: read them with
@@ -49,13 +47,13 @@ pub type Dopri5<Sys, const N: usize> = Adaptive<Sys, DormandPrince54, N, 7>;
 /// [`Adaptive::options`], and move the integrator to another state with [`Adaptive::restart`],
 /// which drops the cache.
 #[derive(Debug)]
-pub struct Adaptive<S: HybridSystem<N>, M: Method<K>, const N: usize, const K: usize> {
+pub struct Adaptive<S: HybridSystem, M: Method<K>, const K: usize> {
     t: f64,
-    y: SVector<f64, N>,
+    y: S::State,
     mode: S::Mode,
-    opts: Options<N>,
+    opts: Options<S::State>,
     stats: Stats,
-    k1: SVector<f64, N>,
+    k1: S::State,
     h: f64,
     k1_valid: bool,
     /// The modes visited since time last advanced (empty when no switch happened since).
@@ -65,13 +63,13 @@ pub struct Adaptive<S: HybridSystem<N>, M: Method<K>, const N: usize, const K: u
     /// Per mode, the first full step accepted after the last switch into it: the step
     /// proposed after the next switch into that mode (see [`Adaptive::switch`]).
     entry_steps: Vec<(S::Mode, f64)>,
+    /// The guards' values at the probes of a step (see `events.rs`), kept between steps.
+    scratch: events::Scratch,
     method: PhantomData<M>,
 }
 
 // By hand: a derived `Clone` would ask `M: Clone` of the method's marker type.
-impl<S: HybridSystem<N>, M: Method<K>, const N: usize, const K: usize> Clone
-    for Adaptive<S, M, N, K>
-{
+impl<S: HybridSystem, M: Method<K>, const K: usize> Clone for Adaptive<S, M, K> {
     fn clone(&self) -> Self {
         Self {
             t: self.t,
@@ -85,20 +83,21 @@ impl<S: HybridSystem<N>, M: Method<K>, const N: usize, const K: usize> Clone
             switch_trail: self.switch_trail.clone(),
             after_event: self.after_event,
             entry_steps: self.entry_steps.clone(),
+            scratch: self.scratch.clone(),
             method: PhantomData,
         }
     }
 }
 
-struct Trial<const N: usize, const K: usize> {
-    y1: SVector<f64, N>,
-    k: [SVector<f64, N>; K],
+struct Trial<V, const K: usize> {
+    y1: V,
+    k: [V; K],
     err: f64,
 }
 
-impl<S: HybridSystem<N>, M: Method<K>, const N: usize, const K: usize> Adaptive<S, M, N, K> {
+impl<S: HybridSystem, M: Method<K>, const K: usize> Adaptive<S, M, K> {
     /// A new integrator at (t0, y0) in `mode`.
-    pub fn new(t0: f64, y0: SVector<f64, N>, mode: S::Mode, opts: Options<N>) -> Self {
+    pub fn new(t0: f64, y0: S::State, mode: S::Mode, opts: Options<S::State>) -> Self {
         let h = opts.h_init;
         Self {
             t: t0,
@@ -106,12 +105,13 @@ impl<S: HybridSystem<N>, M: Method<K>, const N: usize, const K: usize> Adaptive<
             mode,
             opts,
             stats: Stats::default(),
-            k1: SVector::zeros(),
+            k1: S::State::zeros(),
             h,
             k1_valid: false,
             switch_trail: Vec::new(),
             after_event: false,
             entry_steps: Vec::new(),
+            scratch: events::Scratch::default(),
             method: PhantomData,
         }
     }
@@ -122,7 +122,7 @@ impl<S: HybridSystem<N>, M: Method<K>, const N: usize, const K: usize> Adaptive<
     }
 
     /// Current state.
-    pub fn y(&self) -> SVector<f64, N> {
+    pub fn y(&self) -> S::State {
         self.y
     }
 
@@ -137,13 +137,13 @@ impl<S: HybridSystem<N>, M: Method<K>, const N: usize, const K: usize> Adaptive<
     }
 
     /// Options.
-    pub fn options(&self) -> &Options<N> {
+    pub fn options(&self) -> &Options<S::State> {
         &self.opts
     }
 
     /// Continues from a new point (t, y, mode), keeping the options and the counters: the
     /// cached derivative is dropped and the next trial step is [`Options::h_init`].
-    pub fn restart(&mut self, t: f64, y: SVector<f64, N>, mode: S::Mode) {
+    pub fn restart(&mut self, t: f64, y: S::State, mode: S::Mode) {
         self.t = t;
         self.y = y;
         self.mode = mode;
@@ -156,37 +156,43 @@ impl<S: HybridSystem<N>, M: Method<K>, const N: usize, const K: usize> Adaptive<
     /// [`Adaptive::restart`] with the next trial step `h` instead of [`Options::h_init`] (for a
     /// caller that knows the scale of the motion, e.g. the sample interval of a sampled
     /// input in free flight).
-    pub fn restart_with_step(&mut self, t: f64, y: SVector<f64, N>, mode: S::Mode, h: f64) {
+    pub fn restart_with_step(&mut self, t: f64, y: S::State, mode: S::Mode, h: f64) {
         self.restart(t, y, mode);
         self.h = h;
     }
 
     fn state_vec(&self) -> Vec<f64> {
-        self.y.iter().copied().collect()
+        self.y.to_vec()
     }
 
-    fn trial(&mut self, sys: &S, h: f64) -> Trial<N, K> {
-        let (k, y1) = stages::<S, M, N, K>(sys, self.mode, self.t, &self.y, self.k1, h);
+    fn trial(&mut self, sys: &S, h: f64) -> Trial<S::State, K> {
+        let (k, y1) = stages::<S, M, K>(sys, self.mode, self.t, &self.y, self.k1, h);
         self.stats.rhs_evals += (K - 1) as u64;
-        let e = error_estimate::<M, N, K>(&k, h);
-        let y = &self.y;
+        let e = error_estimate::<M, S::State, K>(&k, h);
+        let (y, y1c, e, atol) = (
+            self.y.components(),
+            y1.components(),
+            e.components(),
+            self.opts.atol.components(),
+        );
+        let n = y.len();
         let mut acc = 0.0;
-        for i in 0..N {
-            let sc = self.opts.atol[i] + self.opts.rtol * y[i].abs().max(y1[i].abs());
+        for i in 0..n {
+            let sc = atol[i] + self.opts.rtol * y[i].abs().max(y1c[i].abs());
             let r = e[i] / sc;
             acc += r * r;
         }
-        let err = (acc / N as f64).sqrt();
+        let err = (acc / n as f64).sqrt();
         Trial { y1, k, err }
     }
 
-    fn make_step(&self, h: f64, tr: &Trial<N, K>) -> Step<N> {
+    fn make_step(&self, h: f64, tr: &Trial<S::State, K>) -> Step<S::State> {
         Step {
             t0: self.t,
             h,
             y0: self.y,
             y1: tr.y1,
-            rcont: dense_output::<M, N, K>(&self.y, &tr.y1, &tr.k, h),
+            rcont: dense_output::<M, S::State, K>(&self.y, &tr.y1, &tr.k, h),
         }
     }
 
@@ -200,7 +206,7 @@ impl<S: HybridSystem<N>, M: Method<K>, const N: usize, const K: usize> Adaptive<
     /// at the switch does not serve here: at a contact entry the penetration, hence the contact
     /// force, is zero, so a derivative estimate at that point cannot see the stiffness that
     /// builds up within the step.
-    fn switch<O: Observer<N, S::Mode>>(
+    fn switch<O: Observer<S::State, S::Mode>>(
         &mut self,
         sys: &S,
         index: usize,
@@ -245,7 +251,7 @@ impl<S: HybridSystem<N>, M: Method<K>, const N: usize, const K: usize> Adaptive<
     }
 
     /// Moves to the end of an accepted step of positive length.
-    fn advance(&mut self, t: f64, y: SVector<f64, N>) {
+    fn advance(&mut self, t: f64, y: S::State) {
         self.t = t;
         self.y = y;
         self.switch_trail.clear();
@@ -253,7 +259,7 @@ impl<S: HybridSystem<N>, M: Method<K>, const N: usize, const K: usize> Adaptive<
 
     /// Integrates to `t_end`, calling `observer` with every accepted step (and with the mode
     /// that was active over it).
-    pub fn integrate<O: FnMut(&Step<N>, S::Mode)>(
+    pub fn integrate<O: FnMut(&Step<S::State>, S::Mode)>(
         &mut self,
         sys: &S,
         t_end: f64,
@@ -263,7 +269,7 @@ impl<S: HybridSystem<N>, M: Method<K>, const N: usize, const K: usize> Adaptive<
     }
 
     /// Integrates to `t_end`, showing `observer` every accepted step and every mode switch.
-    pub fn integrate_observed<O: Observer<N, S::Mode>>(
+    pub fn integrate_observed<O: Observer<S::State, S::Mode>>(
         &mut self,
         sys: &S,
         t_end: f64,
@@ -277,7 +283,7 @@ impl<S: HybridSystem<N>, M: Method<K>, const N: usize, const K: usize> Adaptive<
     /// which `stop` holds (at the switch's time, in the new mode), with `true`; `false` when
     /// `t_end` is reached first. A caller that integrates some modes otherwise (exactly, see
     /// [`crate::study::flow`]) hands this integrator the others.
-    pub fn integrate_until<O: Observer<N, S::Mode>>(
+    pub fn integrate_until<O: Observer<S::State, S::Mode>>(
         &mut self,
         sys: &S,
         t_end: f64,
@@ -290,15 +296,16 @@ impl<S: HybridSystem<N>, M: Method<K>, const N: usize, const K: usize> Adaptive<
                 self.k1 = sys.rhs(self.mode, self.t, &self.y);
                 self.stats.rhs_evals += 1;
                 self.k1_valid = true;
-                if !self.k1.iter().all(|v| v.is_finite()) {
+                if !self.k1.is_finite() {
                     return Err(SolverError::NonFinite {
                         t: self.t,
                         state: self.state_vec(),
                     });
                 }
                 // A guard already positive at the start of a step fires at once.
-                let g = sys.guards(self.mode, self.t, &self.y);
-                if let Some(i) = (0..MAX_GUARDS).find(|&i| g[i] > 0.0) {
+                let g = self.scratch.guards(sys.guard_count());
+                sys.guards(self.mode, self.t, &self.y, g);
+                if let Some(i) = g.iter().position(|&gi| gi > 0.0) {
                     self.switch(sys, i, observer)?;
                     if stop(self.mode) {
                         return Ok(true);
@@ -332,7 +339,7 @@ impl<S: HybridSystem<N>, M: Method<K>, const N: usize, const K: usize> Adaptive<
                 });
             }
             let tr = self.trial(sys, h);
-            if !tr.err.is_finite() || !tr.y1.iter().all(|v| v.is_finite()) {
+            if !tr.err.is_finite() || !tr.y1.is_finite() {
                 self.stats.rejected += 1;
                 if self.after_event {
                     self.stats.rejected_after_event += 1;
@@ -377,7 +384,13 @@ impl<S: HybridSystem<N>, M: Method<K>, const N: usize, const K: usize> Adaptive<
             let first_after_event = std::mem::replace(&mut self.after_event, false);
             let step = self.make_step(h, &tr);
             let t_new = if clipped { limit } else { self.t + h };
-            match events::locate(sys, self.mode, &step, self.opts.event_time_tol) {
+            match events::locate(
+                sys,
+                self.mode,
+                &step,
+                self.opts.event_time_tol,
+                &mut self.scratch,
+            ) {
                 None => {
                     self.stats.accepted += 1;
                     observer.step(&step, self.mode);
@@ -399,7 +412,7 @@ impl<S: HybridSystem<N>, M: Method<K>, const N: usize, const K: usize> Adaptive<
                     let h_ev = theta * h;
                     if h_ev > 0.0 {
                         let tr_ev = self.trial(sys, h_ev);
-                        if !tr_ev.err.is_finite() || !tr_ev.y1.iter().all(|v| v.is_finite()) {
+                        if !tr_ev.err.is_finite() || !tr_ev.y1.is_finite() {
                             return Err(SolverError::NonFinite {
                                 t: self.t,
                                 state: self.state_vec(),

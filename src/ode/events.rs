@@ -15,7 +15,7 @@
 use std::convert::Infallible;
 
 use crate::num::roots::{illinois, RootOptions, Sample};
-use crate::ode::{HybridSystem, Step, MAX_GUARDS};
+use crate::ode::{HybridSystem, Step};
 
 /// Interior probe points of a step (theta = (t - t0)/h), the end included.
 pub(crate) const PROBES: [f64; 3] = [1.0 / 3.0, 2.0 / 3.0, 1.0];
@@ -23,38 +23,63 @@ pub(crate) const PROBES: [f64; 3] = [1.0 / 3.0, 2.0 / 3.0, 1.0];
 /// Largest number of guard evaluations spent locating one crossing.
 const MAX_LOCATE_EVALS: usize = 200;
 
-/// The guards of `mode` on the dense output of `step` at `theta` (the stored end state at 1).
-fn guards_at<S: HybridSystem<N>, const N: usize>(
+/// Buffers for the guards' values, sized by the system's guard count on first use and kept
+/// by the integrator between steps.
+#[derive(Debug, Clone, Default)]
+pub struct Scratch {
+    /// One evaluation of every guard.
+    values: Vec<f64>,
+    /// Per guard, its values at theta = 0 and at the probes.
+    samples: Vec<[f64; 4]>,
+}
+
+impl Scratch {
+    /// The buffer of one evaluation of `count` guards.
+    pub(crate) fn guards(&mut self, count: usize) -> &mut [f64] {
+        self.values.resize(count, f64::NEG_INFINITY);
+        &mut self.values
+    }
+}
+
+/// Guard `i` of `mode` on the dense output of `step` at `theta`, evaluated into `buf`.
+fn guard_at<S: HybridSystem>(
     sys: &S,
     mode: S::Mode,
-    step: &Step<N>,
+    step: &Step<S::State>,
     theta: f64,
-) -> [f64; MAX_GUARDS] {
-    let y = if theta == 1.0 {
-        step.y1
-    } else if theta == 0.0 {
-        step.y0
-    } else {
-        step.at_theta(theta)
-    };
-    sys.guards(mode, step.t0 + theta * step.h, &y)
+    i: usize,
+    buf: &mut [f64],
+) -> f64 {
+    sys.guards(mode, step.t0 + theta * step.h, &step.at_theta(theta), buf);
+    buf[i]
 }
 
 /// The earliest guard crossing within `step` (taken in `mode`) as (theta, guard index), with
 /// theta the upper end of the final bracket (the event is never placed before the crossing),
 /// located to `time_tol` seconds.
-pub(crate) fn locate<S: HybridSystem<N>, const N: usize>(
+pub(crate) fn locate<S: HybridSystem>(
     sys: &S,
     mode: S::Mode,
-    step: &Step<N>,
+    step: &Step<S::State>,
     time_tol: f64,
+    scratch: &mut Scratch,
 ) -> Option<(f64, usize)> {
-    // Per guard, its values at theta = 0 and at the probes.
-    let mut samples = [[0.0; 4]; MAX_GUARDS];
+    let count = sys.guard_count();
+    scratch.values.resize(count, f64::NEG_INFINITY);
+    scratch.samples.resize(count, [0.0; 4]);
+    let Scratch { values, samples } = scratch;
+    // Per guard, its values at theta = 0 and at the probes (the stored end states at 0 and 1).
     for (k, &th) in THETAS.iter().enumerate() {
-        let g = guards_at(sys, mode, step, th);
-        for (s, gi) in samples.iter_mut().zip(g) {
-            s[k] = gi;
+        let y = if th == 1.0 {
+            step.y1
+        } else if th == 0.0 {
+            step.y0
+        } else {
+            step.at_theta(th)
+        };
+        sys.guards(mode, step.t0 + th * step.h, &y, values);
+        for (s, gi) in samples.iter_mut().zip(values.iter()) {
+            s[k] = *gi;
         }
     }
     let opts = RootOptions {
@@ -65,6 +90,7 @@ pub(crate) fn locate<S: HybridSystem<N>, const N: usize>(
     };
     let mut best: Option<(f64, usize)> = None;
     for (i, samples) in samples.iter().enumerate() {
+        let samples = *samples;
         // The first probe where the guard is positive brackets a crossing with the one before.
         let first_positive = (1..4).find(|&k| samples[k] > 0.0);
         let mut bracket =
@@ -72,7 +98,7 @@ pub(crate) fn locate<S: HybridSystem<N>, const N: usize>(
         // A crossing and return between the probes before that (a grazing contact).
         let upper = first_positive.map_or(1.0, |k| THETAS[k - 1]);
         if upper > 0.0 {
-            if let Some(b) = graze(sys, mode, step, i, samples, upper, &opts) {
+            if let Some(b) = graze(sys, mode, step, i, &samples, upper, &opts, values) {
                 bracket = Some(b);
             }
         }
@@ -81,7 +107,7 @@ pub(crate) fn locate<S: HybridSystem<N>, const N: usize>(
         if best.is_some_and(|(b, _)| b <= lo.0) {
             continue;
         }
-        let th = crossing(sys, mode, step, i, lo, hi, &opts);
+        let th = crossing(sys, mode, step, i, lo, hi, &opts, values);
         if best.is_none_or(|(b, _)| th < b) {
             best = Some((th, i));
         }
@@ -106,14 +132,16 @@ const MAX_GRAZE_EVALS: usize = 60;
 /// a parabola), so a grazing contact is found wherever it falls in the step. What may still be
 /// missed: two maxima between the same pair of probes, and excursions above zero shorter than
 /// the maximiser's resolution (sqrt(eps) relative in theta, plus the event time tolerance).
-fn graze<S: HybridSystem<N>, const N: usize>(
+#[allow(clippy::too_many_arguments)]
+fn graze<S: HybridSystem>(
     sys: &S,
     mode: S::Mode,
-    step: &Step<N>,
+    step: &Step<S::State>,
     i: usize,
     samples: &[f64; 4],
     upper: f64,
     opts: &RootOptions,
+    buf: &mut [f64],
 ) -> Option<((f64, f64), (f64, f64))> {
     let [s0, s1, s2, s3] = *samples;
     let s_max = max2(max2(s0, s1), max2(s2, s3));
@@ -137,7 +165,7 @@ fn graze<S: HybridSystem<N>, const N: usize>(
     let mut n = 0;
     let positive = maximise(
         |th| {
-            let v = sys.guards(mode, step.t0 + th * step.h, &step.at_theta(th))[i];
+            let v = guard_at(sys, mode, step, th, i, buf);
             if n < MAX_GRAZE_EVALS {
                 evals[n] = (th, v);
                 n += 1;
@@ -304,20 +332,19 @@ fn maximise(
 
 /// Locates the crossing of guard `i` between `lo` (g <= 0) and `hi` (g > 0) on the dense
 /// output; returns the positive end of the final bracket.
-fn crossing<S: HybridSystem<N>, const N: usize>(
+#[allow(clippy::too_many_arguments)]
+fn crossing<S: HybridSystem>(
     sys: &S,
     mode: S::Mode,
-    step: &Step<N>,
+    step: &Step<S::State>,
     i: usize,
     lo: (f64, f64),
     hi: (f64, f64),
     opts: &RootOptions,
+    buf: &mut [f64],
 ) -> f64 {
     let g = |th: f64| -> Result<(f64, ()), Infallible> {
-        Ok((
-            sys.guards(mode, step.t0 + th * step.h, &step.at_theta(th))[i],
-            (),
-        ))
+        Ok((guard_at(sys, mode, step, th, i, buf), ()))
     };
     let (a, b) = (Sample::new(lo.0, lo.1, ()), Sample::new(hi.0, hi.1, ()));
     match illinois(g, a, b, opts) {

@@ -14,15 +14,13 @@
 use std::convert::Infallible;
 use std::marker::PhantomData;
 
-use nalgebra::SVector;
-
 use crate::num::roots::{illinois, RootOptions, Sample};
 use crate::ode::runge_kutta::stages;
 use crate::ode::tableau::{ClassicalRk4, Method};
-use crate::ode::{HybridSystem, SolverError, Stats, MAX_GUARDS, MAX_SWITCHES_AT_ONE_TIME};
+use crate::ode::{HybridSystem, SolverError, Stats, Vector, MAX_SWITCHES_AT_ONE_TIME};
 
 /// The fixed-step integrator with the classical RK4.
-pub type Rk4<Sys, const N: usize> = FixedStep<Sys, ClassicalRk4, N, 4>;
+pub type Rk4<Sys> = FixedStep<Sys, ClassicalRk4, 4>;
 
 /// Largest number of guard evaluations spent locating one crossing.
 const MAX_LOCATE_EVALS: usize = 60;
@@ -30,26 +28,29 @@ const MAX_LOCATE_EVALS: usize = 60;
 /// Relative part of the time tolerance of a located crossing (times the step's length).
 const LOCATE_REL_TOL: f64 = 1e-12;
 
-/// Integrator state of the method `M` (`K` stages) on a system `S` of dimension `N`: time,
-/// state, mode, the number of steps per interval between breakpoints, and counters.
+/// Integrator state of the method `M` (`K` stages) on a system `S`: time, state, mode, the
+/// number of steps per interval between breakpoints, and counters.
 #[derive(Debug)]
-pub struct FixedStep<S: HybridSystem<N>, M: Method<K>, const N: usize, const K: usize> {
+pub struct FixedStep<S: HybridSystem, M: Method<K>, const K: usize> {
     t: f64,
-    y: SVector<f64, N>,
+    y: S::State,
     mode: S::Mode,
     steps_per_interval: usize,
     root: RootOptions,
     stats: Stats,
+    /// The guards' values at the start and the end of a step, and one evaluation while a
+    /// crossing is located (kept between steps).
+    buffers: [Vec<f64>; 3],
     method: PhantomData<M>,
 }
 
-impl<S: HybridSystem<N>, M: Method<K>, const N: usize, const K: usize> FixedStep<S, M, N, K> {
+impl<S: HybridSystem, M: Method<K>, const K: usize> FixedStep<S, M, K> {
     /// A new integrator at (t0, y0) in `mode` taking `steps_per_interval` equal steps between
     /// consecutive breakpoints (at least one) and locating crossings to `event_time_tol`
     /// seconds (plus 1e-12 of the step).
     pub fn new(
         t0: f64,
-        y0: SVector<f64, N>,
+        y0: S::State,
         mode: S::Mode,
         steps_per_interval: usize,
         event_time_tol: f64,
@@ -66,6 +67,7 @@ impl<S: HybridSystem<N>, M: Method<K>, const N: usize, const K: usize> FixedStep
                 max_iter: MAX_LOCATE_EVALS,
             },
             stats: Stats::default(),
+            buffers: Default::default(),
             method: PhantomData,
         }
     }
@@ -76,7 +78,7 @@ impl<S: HybridSystem<N>, M: Method<K>, const N: usize, const K: usize> FixedStep
     }
 
     /// Current state.
-    pub fn y(&self) -> SVector<f64, N> {
+    pub fn y(&self) -> S::State {
         self.y
     }
 
@@ -91,13 +93,13 @@ impl<S: HybridSystem<N>, M: Method<K>, const N: usize, const K: usize> FixedStep
     }
 
     fn state_vec(&self) -> Vec<f64> {
-        self.y.iter().copied().collect()
+        self.y.to_vec()
     }
 
     /// The state after a step of length `h` from the current point, whose derivative is `k1`.
-    fn step(&mut self, sys: &S, k1: SVector<f64, N>, h: f64) -> SVector<f64, N> {
+    fn step(&mut self, sys: &S, k1: S::State, h: f64) -> S::State {
         self.stats.rhs_evals += (K - 1) as u64;
-        stages::<S, M, N, K>(sys, self.mode, self.t, &self.y, k1, h).1
+        stages::<S, M, K>(sys, self.mode, self.t, &self.y, k1, h).1
     }
 
     /// Integrates to `t_end`: each span between the current time, the breakpoints and `t_end`
@@ -120,12 +122,16 @@ impl<S: HybridSystem<N>, M: Method<K>, const N: usize, const K: usize> FixedStep
     fn step_to(&mut self, sys: &S, end: f64) -> Result<(), SolverError> {
         let mut switches = 0u32;
         while self.t < end {
-            let g0 = sys.guards(self.mode, self.t, &self.y);
+            let [mut g0, g1, buf] = std::mem::take(&mut self.buffers);
+            g0.resize(sys.guard_count(), f64::NEG_INFINITY);
+            sys.guards(self.mode, self.t, &self.y, &mut g0);
             // A guard already positive at the start of a step fires at once.
-            let crossing = match (0..MAX_GUARDS).find(|&i| g0[i] > 0.0) {
-                Some(i) => Some((0.0, self.y, i)),
-                None => self.crossing(sys, end, &g0)?,
+            let found = match g0.iter().position(|&g| g > 0.0) {
+                Some(i) => Ok(Some((0.0, self.y, i))),
+                None => self.crossing(sys, end, &g0, g1, buf),
             };
+            self.buffers[0] = g0;
+            let crossing = found?;
             let Some((dt, y, i)) = crossing else {
                 break;
             };
@@ -166,30 +172,37 @@ impl<S: HybridSystem<N>, M: Method<K>, const N: usize, const K: usize> FixedStep
         &mut self,
         sys: &S,
         end: f64,
-        g0: &[f64; MAX_GUARDS],
-    ) -> Result<Option<(f64, SVector<f64, N>, usize)>, SolverError> {
+        g0: &[f64],
+        mut g1: Vec<f64>,
+        mut buf: Vec<f64>,
+    ) -> Result<Option<(f64, S::State, usize)>, SolverError> {
         let left = end - self.t;
         let k1 = sys.rhs(self.mode, self.t, &self.y);
         self.stats.rhs_evals += 1;
         let y1 = self.step(sys, k1, left);
-        if !y1.iter().all(|v| v.is_finite()) {
+        if !y1.is_finite() {
+            self.buffers[1] = g1;
+            self.buffers[2] = buf;
             return Err(SolverError::NonFinite {
                 t: self.t,
                 state: self.state_vec(),
             });
         }
-        let g1 = sys.guards(self.mode, end, &y1);
-        let mut first: Option<(f64, SVector<f64, N>, usize)> = None;
-        for i in (0..MAX_GUARDS).filter(|&i| g0[i] <= 0.0 && g1[i] > 0.0) {
+        g1.resize(g0.len(), f64::NEG_INFINITY);
+        buf.resize(g0.len(), f64::NEG_INFINITY);
+        sys.guards(self.mode, end, &y1, &mut g1);
+        let mut first: Option<(f64, S::State, usize)> = None;
+        for i in (0..g0.len()).filter(|&i| g0[i] <= 0.0 && g1[i] > 0.0) {
             let (t0, y0, mode) = (self.t, self.y, self.mode);
             let evals = std::cell::Cell::new(0u64);
-            let f = |s: f64| -> Result<(f64, SVector<f64, N>), Infallible> {
+            let mut f = |s: f64| -> Result<(f64, S::State), Infallible> {
                 evals.set(evals.get() + (K - 1) as u64);
-                let ys = stages::<S, M, N, K>(sys, mode, t0, &y0, k1, s).1;
-                Ok((sys.guards(mode, t0 + s, &ys)[i], ys))
+                let ys = stages::<S, M, K>(sys, mode, t0, &y0, k1, s).1;
+                sys.guards(mode, t0 + s, &ys, &mut buf);
+                Ok((buf[i], ys))
             };
             let root = illinois(
-                f,
+                &mut f,
                 Sample::new(0.0, g0[i], y0),
                 Sample::new(left, g1[i], y1),
                 &self.root,
@@ -209,6 +222,8 @@ impl<S: HybridSystem<N>, M: Method<K>, const N: usize, const K: usize> FixedStep
             self.t = end;
             self.y = y1;
         }
+        self.buffers[1] = g1;
+        self.buffers[2] = buf;
         Ok(first)
     }
 }

@@ -14,8 +14,11 @@
 //! # Conventions
 //! * A [`HybridSystem`] has a discrete `Mode`. Within one step the mode is fixed, so the
 //!   right-hand side is smooth over the step.
-//! * In each mode the system exposes up to [`MAX_GUARDS`] guard functions g_i(t, y). A guard
-//!   that becomes **positive** asks to leave the mode. After each accepted step the guards are
+//! * The system carries a [`Vector`] (a model's state, or the state augmented with its
+//!   variational equations or running integrals, see [`vector`]).
+//! * The system has [`HybridSystem::guard_count`] guard functions g_i(t, y), as many as it
+//!   needs (a mode that uses fewer fills the rest with `f64::NEG_INFINITY`). A guard that
+//!   becomes **positive** asks to leave the mode. After each accepted step the guards are
 //!   evaluated at the end point and at two interior points of the dense output; the earliest
 //!   sign change from <= 0 to > 0 is located on the dense output by the crate's root finder
 //!   ([`crate::num::roots::illinois`]) to a time tolerance of [`Options::event_time_tol`]
@@ -48,18 +51,22 @@
 //! velocity.
 //!
 //! ```
-//! use endstop::ode::{Dopri5, Guards, HybridSystem, Options};
+//! use endstop::ode::{Dopri5, HybridSystem, Options};
 //! use nalgebra::SVector;
 //!
 //! struct Ball;
 //!
-//! impl HybridSystem<2> for Ball {
+//! impl HybridSystem for Ball {
+//!     type State = SVector<f64, 2>;
 //!     type Mode = ();
+//!     fn guard_count(&self) -> usize {
+//!         1
+//!     }
 //!     fn rhs(&self, _: (), _t: f64, y: &SVector<f64, 2>) -> SVector<f64, 2> {
 //!         SVector::<f64, 2>::new(y[1], -9.81)
 //!     }
-//!     fn guards(&self, _: (), _t: f64, y: &SVector<f64, 2>) -> Guards {
-//!         [-y[0], f64::NEG_INFINITY, f64::NEG_INFINITY]
+//!     fn guards(&self, _: (), _t: f64, y: &SVector<f64, 2>, g: &mut [f64]) {
+//!         g[0] = -y[0];
 //!     }
 //!     fn switch(&self, _: (), _guard: usize, _t: f64, y: &mut SVector<f64, 2>) {
 //!         y[0] = 0.0;
@@ -94,39 +101,41 @@ mod fixed;
 pub mod phi;
 mod runge_kutta;
 pub mod tableau;
+pub mod vector;
 
 use std::ops::AddAssign;
 
-use nalgebra::SVector;
 use thiserror::Error;
 
 pub use adaptive::{Adaptive, Dopri5};
 pub use fixed::{FixedStep, Rk4};
-
-/// Maximum number of guard functions of one mode.
-pub const MAX_GUARDS: usize = 3;
+pub use vector::{Augmented, Tangent, Vector};
 
 /// Most mode switches allowed in a row without time advancing (see [`SolverError::Chattering`]).
 pub const MAX_SWITCHES_AT_ONE_TIME: u32 = 16;
 
-/// Guard values of one mode; unused entries are `f64::NEG_INFINITY`.
-pub type Guards = [f64; MAX_GUARDS];
-
 /// A piecewise-smooth ODE system y' = f_mode(t, y).
-pub trait HybridSystem<const N: usize> {
+pub trait HybridSystem {
+    /// What the system carries.
+    type State: Vector;
+
     /// Discrete mode (e.g. free flight or contact with one stop).
     type Mode: Copy + PartialEq + std::fmt::Debug;
 
-    /// Right-hand side in a given mode.
-    fn rhs(&self, mode: Self::Mode, t: f64, y: &SVector<f64, N>) -> SVector<f64, N>;
+    /// Number of guard functions (the same in every mode; a mode that has fewer fills the
+    /// rest of [`HybridSystem::guards`] with `f64::NEG_INFINITY`).
+    fn guard_count(&self) -> usize;
 
-    /// Guard functions of a mode: a guard > 0 asks to leave the mode.
-    fn guards(&self, mode: Self::Mode, t: f64, y: &SVector<f64, N>) -> Guards;
+    /// Right-hand side in a given mode.
+    fn rhs(&self, mode: Self::Mode, t: f64, y: &Self::State) -> Self::State;
+
+    /// Guard functions of a mode, written into `g` (of length [`HybridSystem::guard_count`]):
+    /// a guard > 0 asks to leave the mode.
+    fn guards(&self, mode: Self::Mode, t: f64, y: &Self::State, g: &mut [f64]);
 
     /// Called when guard `index` of `mode` fires at time `t`: returns the new mode and may
     /// adjust the state (a projection within the integration tolerance).
-    fn switch(&self, mode: Self::Mode, index: usize, t: f64, y: &mut SVector<f64, N>)
-        -> Self::Mode;
+    fn switch(&self, mode: Self::Mode, index: usize, t: f64, y: &mut Self::State) -> Self::Mode;
 
     /// The first breakpoint strictly after `t` that no step may cross (default: none).
     fn next_breakpoint(&self, _t: f64) -> f64 {
@@ -134,7 +143,7 @@ pub trait HybridSystem<const N: usize> {
     }
 
     /// Checks that a state is physically admissible; an `Err` stops the integration.
-    fn check_state(&self, _mode: Self::Mode, _t: f64, _y: &SVector<f64, N>) -> Result<(), String> {
+    fn check_state(&self, _mode: Self::Mode, _t: f64, _y: &Self::State) -> Result<(), String> {
         Ok(())
     }
 }
@@ -199,11 +208,11 @@ pub enum SolverError {
 
 /// Integrator options.
 #[derive(Debug, Clone, PartialEq)]
-pub struct Options<const N: usize> {
+pub struct Options<V> {
     /// Relative tolerance.
     pub rtol: f64,
     /// Absolute tolerance per component (in the component's units).
-    pub atol: SVector<f64, N>,
+    pub atol: V,
     /// Largest step (s).
     pub h_max: f64,
     /// Absolute floor of the smallest step (s); the smallest step at time t is
@@ -217,7 +226,7 @@ pub struct Options<const N: usize> {
     pub event_time_tol: f64,
 }
 
-impl<const N: usize> Options<N> {
+impl<V> Options<V> {
     /// The smallest step allowed at time `t` (s): `max(h_min, MIN_STEP_REL |t|)`. A step
     /// shorter than a few units in the last place of t cannot advance t (as in Hairer's codes,
     /// whose DOPRI5 stops when 0.1 |h| <= |t| eps).
@@ -225,13 +234,10 @@ impl<const N: usize> Options<N> {
         self.h_min.max(MIN_STEP_REL * t.abs())
     }
 
-    /// The same options for the system augmented to `M` components (variational equations,
-    /// energy accumulators): `atol` gives the added components' tolerances, and its first `N`
-    /// entries are replaced by this system's.
-    pub fn augmented<const M: usize>(&self, mut atol: SVector<f64, M>) -> Options<M> {
-        for i in 0..N.min(M) {
-            atol[i] = self.atol[i];
-        }
+    /// The same options for another carried vector with absolute tolerances `atol` (a system
+    /// augmented with variational equations or accumulators; the caller puts the system's own
+    /// tolerances in the state's place).
+    pub fn with_atol<W>(&self, atol: W) -> Options<W> {
         Options {
             rtol: self.rtol,
             atol,
@@ -241,6 +247,21 @@ impl<const N: usize> Options<N> {
             max_steps: self.max_steps,
             event_time_tol: self.event_time_tol,
         }
+    }
+}
+
+impl<const N: usize> Options<nalgebra::SVector<f64, N>> {
+    /// The same options for the system augmented to `M` components (variational equations,
+    /// energy accumulators): `atol` gives the added components' tolerances, and its first `N`
+    /// entries are replaced by this system's.
+    pub fn augmented<const M: usize>(
+        &self,
+        mut atol: nalgebra::SVector<f64, M>,
+    ) -> Options<nalgebra::SVector<f64, M>> {
+        for i in 0..N.min(M) {
+            atol[i] = self.atol[i];
+        }
+        self.with_atol(atol)
     }
 }
 
@@ -282,9 +303,9 @@ impl AddAssign for Stats {
 /// What an integration shows of itself as it runs: every accepted step, and every mode switch.
 /// [`Dopri5::integrate`] takes a closure for the steps alone; [`Dopri5::integrate_observed`]
 /// takes an observer of both.
-pub trait Observer<const N: usize, M> {
+pub trait Observer<V, M> {
     /// An accepted step, with the mode that was active over it.
-    fn step(&mut self, step: &Step<N>, mode: M);
+    fn step(&mut self, step: &Step<V>, mode: M);
     /// A mode switch at time `t` from `from` to `to` (after the system's reset of the state).
     fn switched(&mut self, _t: f64, _from: M, _to: M) {}
 }
@@ -292,28 +313,28 @@ pub trait Observer<const N: usize, M> {
 /// An observer of the steps alone, from a closure.
 pub(crate) struct Steps<F>(pub(crate) F);
 
-impl<const N: usize, M, F: FnMut(&Step<N>, M)> Observer<N, M> for Steps<F> {
+impl<V, M, F: FnMut(&Step<V>, M)> Observer<V, M> for Steps<F> {
     #[inline(always)]
-    fn step(&mut self, step: &Step<N>, mode: M) {
+    fn step(&mut self, step: &Step<V>, mode: M) {
         (self.0)(step, mode)
     }
 }
 
 /// One accepted step, with its dense output, as seen by an observer.
 #[derive(Debug, Clone)]
-pub struct Step<const N: usize> {
+pub struct Step<V> {
     /// Start time (s).
     pub t0: f64,
     /// Step length (s).
     pub h: f64,
     /// State at the start.
-    pub y0: SVector<f64, N>,
+    pub y0: V,
     /// State at the end.
-    pub y1: SVector<f64, N>,
-    rcont: [SVector<f64, N>; 5],
+    pub y1: V,
+    rcont: [V; 5],
 }
 
-impl<const N: usize> Step<N> {
+impl<V: Vector> Step<V> {
     /// A step of an integrator that knows its solution at the ends and the midpoint (an exact
     /// propagator): its dense output is the quartic through `y0`, `y_mid` and `y1` with
     /// derivatives `f0` and `f1` at the ends (the cubic Hermite interpolant plus a multiple of
@@ -321,8 +342,8 @@ impl<const N: usize> Step<N> {
     pub fn from_ends_and_midpoint(
         t0: f64,
         h: f64,
-        [y0, y_mid, y1]: [SVector<f64, N>; 3],
-        [f0, f1]: [SVector<f64, N>; 2],
+        [y0, y_mid, y1]: [V; 3],
+        [f0, f1]: [V; 2],
     ) -> Self {
         let r1 = y1 - y0;
         let r2 = f0 * h - r1;
@@ -343,19 +364,19 @@ impl<const N: usize> Step<N> {
     }
 
     /// Dense output at theta = (t - t0)/h in [0, 1].
-    pub fn at_theta(&self, theta: f64) -> SVector<f64, N> {
+    pub fn at_theta(&self, theta: f64) -> V {
         let th1 = 1.0 - theta;
         let r = &self.rcont;
         r[0] + (r[1] + (r[2] + (r[3] + r[4] * th1) * theta) * th1) * theta
     }
 
     /// Dense output at time t (s), t in [t0, t0 + h].
-    pub fn at(&self, t: f64) -> SVector<f64, N> {
+    pub fn at(&self, t: f64) -> V {
         self.at_theta((t - self.t0) / self.h)
     }
 
     /// Integral over the step of `f(y(t))` by 3-point Gauss-Legendre on the dense output.
-    pub fn integrate<F: Fn(&SVector<f64, N>) -> f64>(&self, f: F) -> f64 {
+    pub fn integrate<F: Fn(&V) -> f64>(&self, f: F) -> f64 {
         let mut s = 0.0;
         for (x, w) in GAUSS_LEGENDRE_3 {
             s += w * f(&self.at_theta(x));
@@ -366,10 +387,7 @@ impl<const N: usize> Step<N> {
     /// The integrals over the step of each component of `f(y(t))`, as [`Step::integrate`]
     /// computes each of them (the same operations in the same order, so the same bits), with
     /// the dense output and `f` evaluated once per node for all of them.
-    pub fn integrate_each<const K: usize, F: Fn(&SVector<f64, N>) -> [f64; K]>(
-        &self,
-        f: F,
-    ) -> [f64; K] {
+    pub fn integrate_each<const K: usize, F: Fn(&V) -> [f64; K]>(&self, f: F) -> [f64; K] {
         let mut s = [0.0; K];
         for (x, w) in GAUSS_LEGENDRE_3 {
             let v = f(&self.at_theta(x));

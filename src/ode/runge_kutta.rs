@@ -18,10 +18,8 @@
 //! right-hand side is not unrolled by the compiler, and each stage's coefficients would then
 //! be read from memory and tested for zero at run time (the records took about 10 % longer).
 
-use nalgebra::SVector;
-
 use crate::ode::tableau::{Method, Tableau};
-use crate::ode::HybridSystem;
+use crate::ode::{HybridSystem, Vector};
 
 /// Most stages a method may have (the loop over stages is written out up to this).
 pub(crate) const MAX_STAGES: usize = 16;
@@ -46,11 +44,7 @@ macro_rules! each_stage {
 /// `(sum_j w_j k_j) h` over the nonzero `w_j`, in order (`k_j (w_j h)` for a single one; zero
 /// for none).
 #[inline(always)]
-pub(crate) fn weighted<const N: usize, const S: usize>(
-    w: &[f64; S],
-    k: &[SVector<f64, N>; S],
-    h: f64,
-) -> SVector<f64, N> {
+pub(crate) fn weighted<V: Vector, const S: usize>(w: &[f64; S], k: &[V; S], h: f64) -> V {
     let mut nonzero = 0;
     let mut last = 0;
     for (j, &wj) in w.iter().enumerate() {
@@ -60,12 +54,12 @@ pub(crate) fn weighted<const N: usize, const S: usize>(
         }
     }
     if nonzero == 0 {
-        return SVector::zeros();
+        return V::zeros();
     }
     if nonzero == 1 {
         return k[last] * (w[last] * h);
     }
-    let mut sum: Option<SVector<f64, N>> = None;
+    let mut sum: Option<V> = None;
     for (j, &wj) in w.iter().enumerate() {
         if wj != 0.0 {
             let term = k[j] * wj;
@@ -75,7 +69,7 @@ pub(crate) fn weighted<const N: usize, const S: usize>(
             });
         }
     }
-    sum.unwrap_or_else(SVector::zeros) * h
+    sum.unwrap_or_else(V::zeros) * h
 }
 
 /// The stages of one step of length `h` from `(t, y)` in `mode`, given the first stage
@@ -83,16 +77,16 @@ pub(crate) fn weighted<const N: usize, const S: usize>(
 /// first-same-as-last method the last stage's argument is `y1` and the last stage is
 /// `f(t + h, y1)`.
 #[inline(always)]
-pub(crate) fn stages<Sys, M, const N: usize, const S: usize>(
+pub(crate) fn stages<Sys, M, const S: usize>(
     sys: &Sys,
     mode: Sys::Mode,
     t: f64,
-    y: &SVector<f64, N>,
-    k1: SVector<f64, N>,
+    y: &Sys::State,
+    k1: Sys::State,
     h: f64,
-) -> ([SVector<f64, N>; S], SVector<f64, N>)
+) -> ([Sys::State; S], Sys::State)
 where
-    Sys: HybridSystem<N>,
+    Sys: HybridSystem,
     M: Method<S>,
 {
     let tab: &Tableau<S> = &M::TABLEAU;
@@ -100,18 +94,18 @@ where
         assert!(S <= MAX_STAGES, "more stages than MAX_STAGES");
         M::TABLEAU.is_fsal()
     };
-    let mut k = [SVector::<f64, N>::zeros(); S];
+    let mut k = [Sys::State::zeros(); S];
     k[0] = k1;
     let mut y1 = *y;
     each_stage!(S, i => {
-        let yi = y + weighted(&tab.a[i], &k, h);
+        let yi = *y + weighted(&tab.a[i], &k, h);
         k[i] = sys.rhs(mode, t + tab.c[i] * h, &yi);
         if fsal && i == S - 1 {
             y1 = yi;
         }
     });
     if !fsal {
-        y1 = y + weighted(&tab.b, &k, h);
+        y1 = *y + weighted(&tab.b, &k, h);
     }
     (k, y1)
 }
@@ -119,10 +113,7 @@ where
 /// The embedded error estimate `h sum_j error_j k_j` of a step's stages (see
 /// [`Tableau::error`]); a method without one does not compile here.
 #[inline(always)]
-pub(crate) fn error_estimate<M, const N: usize, const S: usize>(
-    k: &[SVector<f64, N>; S],
-    h: f64,
-) -> SVector<f64, N>
+pub(crate) fn error_estimate<M, V: Vector, const S: usize>(k: &[V; S], h: f64) -> V
 where
     M: Method<S>,
 {
@@ -141,12 +132,12 @@ where
 /// A method without dense output, or whose last stage is not `f(t1, y1)`, does not compile
 /// here.
 #[inline]
-pub(crate) fn dense_output<M, const N: usize, const S: usize>(
-    y0: &SVector<f64, N>,
-    y1: &SVector<f64, N>,
-    k: &[SVector<f64, N>; S],
+pub(crate) fn dense_output<M, V: Vector, const S: usize>(
+    y0: &V,
+    y1: &V,
+    k: &[V; S],
     h: f64,
-) -> [SVector<f64, N>; 5]
+) -> [V; 5]
 where
     M: Method<S>,
 {
@@ -160,7 +151,7 @@ where
             None => panic!("the method has no dense output"),
         }
     };
-    let ydiff = y1 - y0;
+    let ydiff = *y1 - *y0;
     let bspl = k[0] * h - ydiff;
     let r3 = ydiff - k[S - 1] * h - bspl;
     let r4 = weighted(&d, k, h);

@@ -12,7 +12,7 @@
 use nalgebra::SVector;
 
 use crate::drive::Excitation;
-use crate::ode::{Guards, HybridSystem, Options};
+use crate::ode::{HybridSystem, Options};
 use crate::physics::contact::Mode;
 use crate::physics::harvester::{Harvester, State};
 
@@ -217,11 +217,13 @@ impl EnergyLedger {
 impl<E: Excitation> EnergyAudit<E> {
     /// Integrator options: the model's, with absolute tolerances for the energy accumulators
     /// of `rtol` times the suspension energy at the displacement scale, km x_s^2 / 2.
-    pub fn solver_options(&self, rtol: f64) -> Options<AUDIT_DIM> {
+    pub fn solver_options(&self, rtol: f64) -> Options<AuditState> {
         let base = self.0.solver_options(rtol);
         let xs = self.0.x_scale();
         let e_scale = 0.5 * self.0.well_stiffness() * xs * xs;
-        base.augmented(AuditState::repeat(e_scale * rtol))
+        let mut atol = AuditState::repeat(e_scale * rtol);
+        atol.fixed_rows_mut::<4>(0).copy_from(&base.atol);
+        base.with_atol(atol)
     }
 
     /// Every term of the energy balance between the rest state and `y` (in `mode`).
@@ -252,8 +254,13 @@ impl<E: Excitation> EnergyAudit<E> {
     }
 }
 
-impl<E: Excitation> HybridSystem<AUDIT_DIM> for EnergyAudit<E> {
+impl<E: Excitation> HybridSystem for EnergyAudit<E> {
+    type State = AuditState;
     type Mode = Mode;
+
+    fn guard_count(&self) -> usize {
+        self.0.guard_count()
+    }
 
     fn rhs(&self, mode: Mode, t: f64, y: &AuditState) -> AuditState {
         use ledger_index as l;
@@ -270,8 +277,8 @@ impl<E: Excitation> HybridSystem<AUDIT_DIM> for EnergyAudit<E> {
         d
     }
 
-    fn guards(&self, mode: Mode, t: f64, y: &AuditState) -> Guards {
-        self.0.guards(mode, t, &audit_state(y))
+    fn guards(&self, mode: Mode, t: f64, y: &AuditState, g: &mut [f64]) {
+        self.0.guards(mode, t, &audit_state(y), g)
     }
 
     /// Switches mode and books the stored energy that the switch makes disappear or appear

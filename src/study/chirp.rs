@@ -255,8 +255,8 @@ impl Windows<'_> {
     }
 }
 
-impl Observer<4, Mode> for Windows<'_> {
-    fn step(&mut self, st: &Step<4>, mode: Mode) {
+impl Observer<State, Mode> for Windows<'_> {
+    fn step(&mut self, st: &Step<State>, mode: Mode) {
         let two_pi = 2.0 * std::f64::consts::PI;
         let mid = st.t0 + 0.5 * st.h;
         let k = (self.model.excitation.phase(mid) / (two_pi * self.cycles)).floor() as i64;

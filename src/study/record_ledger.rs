@@ -228,7 +228,7 @@ impl RecordObserver for Books {
         self.close(model, Mode::Free, y1);
     }
 
-    fn dopri(&mut self, model: &Harvester<Sampled>, step: &Step<4>, mode: Mode) {
+    fn dopri(&mut self, model: &Harvester<Sampled>, step: &Step<State>, mode: Mode) {
         self.open(model, step.t0, mode, &step.y0);
         let work = GAUSS_LEGENDRE_3
             .map(|(x, _)| model.power_terms(mode, step.t0 + x * step.h, &step.at_theta(x)));

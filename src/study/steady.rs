@@ -156,8 +156,8 @@ struct Block<'m> {
     prev_mode_free: bool,
 }
 
-impl Observer<4, Mode> for Block<'_> {
-    fn step(&mut self, st: &Step<4>, m: Mode) {
+impl Observer<State, Mode> for Block<'_> {
+    fn step(&mut self, st: &Step<State>, m: Mode) {
         let model = self.model;
         let [v1sq, v2sq, vdsq] = st.integrate_each(|y: &State| {
             let v = model.electrical(y).v;

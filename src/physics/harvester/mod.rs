@@ -32,7 +32,7 @@ use nalgebra::SVector;
 
 use crate::device::Device;
 use crate::drive::Excitation;
-use crate::ode::{Guards, HybridSystem, Options};
+use crate::ode::{HybridSystem, Options};
 use crate::physics::contact::{Mode, Side, StopModel};
 use crate::physics::suspension::{self, Spring};
 use crate::physics::transducer::TransducerModel;
@@ -44,6 +44,9 @@ pub use linearisation::reset_jacobian;
 /// The rebound height below which impacts on a rigid stop end in sticking, relative to the
 /// displacement scale ([`Harvester::x_scale`]).
 pub const STICK_HEIGHT_REL: f64 = 1e-9;
+
+/// Guards of every mode: a stop's two in free flight, or a contact's leaving and clipping.
+pub const GUARDS: usize = 3;
 
 /// The harvester driven by an excitation: a [`HybridSystem`] of dimension 4.
 #[derive(Debug, Clone)]
@@ -333,7 +336,7 @@ impl<E: Excitation> Harvester<E> {
 
     /// Integrator options with relative tolerance `rtol` and absolute tolerances
     /// `rtol` times [`Harvester::scales`].
-    pub fn solver_options(&self, rtol: f64) -> Options<4> {
+    pub fn solver_options(&self, rtol: f64) -> Options<State> {
         let w0 = self.well_omega_rad_s();
         Options {
             rtol,
@@ -363,8 +366,14 @@ impl<E: Excitation> Harvester<E> {
     }
 }
 
-impl<E: Excitation> HybridSystem<4> for Harvester<E> {
+impl<E: Excitation> HybridSystem for Harvester<E> {
+    type State = State;
     type Mode = Mode;
+
+    #[inline(always)]
+    fn guard_count(&self) -> usize {
+        GUARDS
+    }
 
     #[inline]
     fn rhs(&self, mode: Mode, t: f64, y: &State) -> State {
@@ -381,30 +390,8 @@ impl<E: Excitation> HybridSystem<4> for Harvester<E> {
     }
 
     #[inline]
-    fn guards(&self, mode: Mode, t: f64, y: &State) -> Guards {
-        const OFF: f64 = f64::NEG_INFINITY;
-        match mode {
-            Mode::Free => [
-                self.penetration(Side::Upper, y[0]),
-                self.penetration(Side::Lower, y[0]),
-                OFF,
-            ],
-            Mode::Contact(side) => [
-                -self.penetration(side, y[0]),
-                if self.stop(side).is_some_and(StopModel::tension_free) {
-                    -self.contact_bracket(side, y)
-                } else {
-                    OFF
-                },
-                OFF,
-            ],
-            Mode::Clipped(side) => [
-                -self.penetration(side, y[0]),
-                self.contact_bracket(side, y),
-                OFF,
-            ],
-            Mode::Stuck(side) => [-self.holding_force(side, t, y), OFF, OFF],
-        }
+    fn guards(&self, mode: Mode, t: f64, y: &State, g: &mut [f64]) {
+        g[..GUARDS].copy_from_slice(&self.guard_values(mode, t, y));
     }
 
     fn switch(&self, mode: Mode, index: usize, t: f64, y: &mut State) -> Mode {
@@ -437,6 +424,36 @@ impl<E: Excitation> HybridSystem<4> for Harvester<E> {
         self.transducer
             .check(y[0], y)
             .map_err(|m| format!("at t = {t:e} s: {m}"))
+    }
+}
+
+impl<E: Excitation> Harvester<E> {
+    /// The guards of a mode (see the module docs); unused ones are `f64::NEG_INFINITY`.
+    #[inline]
+    pub fn guard_values(&self, mode: Mode, t: f64, y: &State) -> [f64; GUARDS] {
+        const OFF: f64 = f64::NEG_INFINITY;
+        match mode {
+            Mode::Free => [
+                self.penetration(Side::Upper, y[0]),
+                self.penetration(Side::Lower, y[0]),
+                OFF,
+            ],
+            Mode::Contact(side) => [
+                -self.penetration(side, y[0]),
+                if self.stop(side).is_some_and(StopModel::tension_free) {
+                    -self.contact_bracket(side, y)
+                } else {
+                    OFF
+                },
+                OFF,
+            ],
+            Mode::Clipped(side) => [
+                -self.penetration(side, y[0]),
+                self.contact_bracket(side, y),
+                OFF,
+            ],
+            Mode::Stuck(side) => [-self.holding_force(side, t, y), OFF, OFF],
+        }
     }
 }
 

@@ -11,7 +11,7 @@
 use nalgebra::SVector;
 
 use crate::drive::Excitation;
-use crate::ode::{Guards, HybridSystem, Options};
+use crate::ode::{HybridSystem, Options};
 use crate::physics::contact::Mode;
 use crate::physics::energy::EnergyLedger;
 use crate::physics::harvester::State;
@@ -21,7 +21,8 @@ use super::{IfMode, Interfaced};
 /// Number of states of the audit: the model's four and eleven accumulators.
 pub const IF_AUDIT_DIM: usize = 15;
 
-type AuditState = SVector<f64, IF_AUDIT_DIM>;
+/// The interface audit's carried vector: the state, then its accumulators.
+pub type AuditState = SVector<f64, IF_AUDIT_DIM>;
 
 const EXCITATION: usize = 4;
 const MECH: usize = 5;
@@ -115,12 +116,13 @@ impl<E: Excitation> InterfaceAudit<E> {
 
     /// Integrator options: the model's, with absolute tolerances for the accumulators of
     /// `rtol` times the suspension energy at the displacement scale.
-    pub fn solver_options(&self, rtol: f64) -> Options<IF_AUDIT_DIM> {
+    pub fn solver_options(&self, rtol: f64) -> Options<AuditState> {
         let xs = self.0.h.x_scale();
         let e_scale = 0.5 * self.0.h.km * xs * xs;
-        self.0
-            .solver_options(rtol)
-            .augmented(AuditState::repeat(e_scale * rtol))
+        let base = self.0.solver_options(rtol);
+        let mut atol = AuditState::repeat(e_scale * rtol);
+        atol.fixed_rows_mut::<4>(0).copy_from(&base.atol);
+        base.with_atol(atol)
     }
 
     /// Every term of the balance between the audit's start `y0` (in `mode0`) and `y` (in
@@ -148,8 +150,13 @@ impl<E: Excitation> InterfaceAudit<E> {
     }
 }
 
-impl<E: Excitation> HybridSystem<IF_AUDIT_DIM> for InterfaceAudit<E> {
+impl<E: Excitation> HybridSystem for InterfaceAudit<E> {
+    type State = AuditState;
     type Mode = IfMode;
+
+    fn guard_count(&self) -> usize {
+        self.0.guard_count()
+    }
 
     fn rhs(&self, mode: IfMode, t: f64, z: &AuditState) -> AuditState {
         let s = &self.0;
@@ -169,8 +176,8 @@ impl<E: Excitation> HybridSystem<IF_AUDIT_DIM> for InterfaceAudit<E> {
         d
     }
 
-    fn guards(&self, mode: IfMode, t: f64, z: &AuditState) -> Guards {
-        self.0.guards(mode, t, &head(z))
+    fn guards(&self, mode: IfMode, t: f64, z: &AuditState, g: &mut [f64]) {
+        self.0.guards(mode, t, &head(z), g)
     }
 
     fn switch(&self, mode: IfMode, i: usize, t: f64, z: &mut AuditState) -> IfMode {

@@ -61,11 +61,13 @@ pub mod closed_forms;
 mod jacobian;
 mod ledger;
 
-pub use ledger::{audit_start, InterfaceAudit, InterfaceLedger, IF_AUDIT_DIM};
+pub use ledger::{
+    audit_start, AuditState as IfAuditState, InterfaceAudit, InterfaceLedger, IF_AUDIT_DIM,
+};
 
 use crate::device::{DcLoad, Device, Diode, Interface, Transducer};
 use crate::drive::Excitation;
-use crate::ode::{Guards, HybridSystem, Options};
+use crate::ode::{HybridSystem, Options};
 use crate::physics::contact::{Mode, Side, StopModel};
 use crate::physics::harvester::{Harvester, State};
 use crate::physics::transducer::TransducerModel;
@@ -591,7 +593,7 @@ impl<E: Excitation> Interfaced<E> {
     }
 
     /// Integrator options with relative tolerance `rtol`.
-    pub fn solver_options(&self, rtol: f64) -> Options<4> {
+    pub fn solver_options(&self, rtol: f64) -> Options<State> {
         let mut o = self.h.solver_options(rtol);
         o.atol = self.scales() * rtol;
         o
@@ -632,6 +634,21 @@ impl<E: Excitation> Interfaced<E> {
         h.mass_kg * h.excitation.accel(t) - h.damping * y[1] - h.km * y[0] + fe
     }
 
+    /// The guards of a mode: the contact's two and the circuit's (see the module docs).
+    #[inline]
+    pub fn guard_values(&self, mode: IfMode, t: f64, y: &State) -> [f64; 3] {
+        let mut v = match mode.contact {
+            Mode::Stuck(side) => {
+                let (fe, _) = self.circuit.force_and_rates(mode.bridge, y);
+                [-side.sign() * self.free_force(t, y, fe), OFF, OFF]
+            }
+            m => self.h.guard_values(m, t, y),
+        };
+        let [a, b] = self.circuit_guards(mode, y);
+        v[2] = a.max(b);
+        v
+    }
+
     /// The circuit's guards, dimensionless: (conduction, extremum).
     #[inline]
     pub(crate) fn circuit_guards(&self, mode: IfMode, y: &State) -> [f64; 2] {
@@ -664,8 +681,14 @@ impl<E: Excitation> Interfaced<E> {
     }
 }
 
-impl<E: Excitation> HybridSystem<4> for Interfaced<E> {
+impl<E: Excitation> HybridSystem for Interfaced<E> {
+    type State = State;
     type Mode = IfMode;
+
+    #[inline(always)]
+    fn guard_count(&self) -> usize {
+        crate::physics::harvester::GUARDS
+    }
 
     #[inline]
     fn rhs(&self, mode: IfMode, t: f64, y: &State) -> State {
@@ -678,17 +701,8 @@ impl<E: Excitation> HybridSystem<4> for Interfaced<E> {
     }
 
     #[inline]
-    fn guards(&self, mode: IfMode, t: f64, y: &State) -> Guards {
-        let mut g = match mode.contact {
-            Mode::Stuck(side) => {
-                let (fe, _) = self.circuit.force_and_rates(mode.bridge, y);
-                [-side.sign() * self.free_force(t, y, fe), OFF, OFF]
-            }
-            m => self.h.guards(m, t, y),
-        };
-        let [a, b] = self.circuit_guards(mode, y);
-        g[2] = a.max(b);
-        g
+    fn guards(&self, mode: IfMode, t: f64, y: &State, g: &mut [f64]) {
+        g[..3].copy_from_slice(&self.guard_values(mode, t, y));
     }
 
     fn switch(&self, mode: IfMode, index: usize, t: f64, y: &mut State) -> IfMode {

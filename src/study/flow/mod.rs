@@ -67,7 +67,7 @@ pub enum SineScheme {
 
 /// The integration of a sine-driven harvester (see the module docs).
 pub struct SineFlow<'m> {
-    engine: Engine<'m, Harvester<Sine>, 4>,
+    engine: Engine<'m, Harvester<Sine>>,
 }
 
 impl<'m> SineFlow<'m> {
@@ -90,7 +90,7 @@ impl<'m> SineFlow<'m> {
         t0: f64,
         y0: State,
         mode: Mode,
-        opts: Options<4>,
+        opts: Options<State>,
         scheme: SineScheme,
     ) -> Self {
         Self {
@@ -125,7 +125,7 @@ impl<'m> SineFlow<'m> {
     }
 
     /// Integrates to `t_end`, calling `observer` with every step and the mode over it.
-    pub fn integrate<O: FnMut(&Step<4>, Mode)>(
+    pub fn integrate<O: FnMut(&Step<State>, Mode)>(
         &mut self,
         t_end: f64,
         observer: O,
@@ -134,7 +134,7 @@ impl<'m> SineFlow<'m> {
     }
 
     /// Integrates to `t_end`, showing `observer` every step and every mode switch.
-    pub fn integrate_observed<O: Observer<4, Mode>>(
+    pub fn integrate_observed<O: Observer<State, Mode>>(
         &mut self,
         t_end: f64,
         observer: &mut O,

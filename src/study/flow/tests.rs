@@ -112,8 +112,8 @@ fn sine_on_a_stop(gap_rel: f64) -> (Harvester<Sine>, f64, f64) {
 /// The time of the first contact entry.
 struct FirstImpact(Option<f64>);
 
-impl Observer<4, Mode> for FirstImpact {
-    fn step(&mut self, _: &Step<4>, _: Mode) {}
+impl Observer<State, Mode> for FirstImpact {
+    fn step(&mut self, _: &Step<State>, _: Mode) {}
 
     fn switched(&mut self, t: f64, from: Mode, to: Mode) {
         if from == Mode::Free && to == Mode::Contact(Side::Upper) && self.0.is_none() {

@@ -3,12 +3,12 @@
 //! It carries either the state alone or the state with its variational equations
 //! ([`Carrier`]).
 
-use nalgebra::{Matrix4, SVector};
+use nalgebra::Matrix4;
 
 use crate::drive::Sine;
 use crate::ode::phi::expm;
-use crate::ode::{Dopri5, HybridSystem, Observer, Options, SolverError, Stats, Step};
-use crate::ode::{MAX_GUARDS, MAX_SWITCHES_AT_ONE_TIME};
+use crate::ode::MAX_SWITCHES_AT_ONE_TIME;
+use crate::ode::{Dopri5, HybridSystem, Observer, Options, SolverError, Stats, Step, Vector};
 use crate::physics::contact::Mode;
 use crate::physics::harvester::{Harvester, State};
 
@@ -27,7 +27,7 @@ pub const GRAZE_MARGIN: f64 = 1e-3;
 
 /// What the engine integrates: the harvester's state, or the state with its variational
 /// equations. The state is the head of the vector.
-pub(crate) trait Carrier<const N: usize>: HybridSystem<N, Mode = Mode> {
+pub(crate) trait Carrier: HybridSystem<Mode = Mode> {
     /// The harvester under its drive.
     fn harvester(&self) -> &Harvester<Sine>;
 
@@ -42,18 +42,19 @@ pub(crate) trait Carrier<const N: usize>: HybridSystem<N, Mode = Mode> {
         e: &Matrix4<f64>,
         t: f64,
         s: f64,
-        z: &SVector<f64, N>,
+        z: &Self::State,
         y1: &State,
-    ) -> SVector<f64, N>;
+    ) -> Self::State;
 }
 
 /// The state at the head of a carried vector.
 #[inline(always)]
-pub(crate) fn head<const N: usize>(z: &SVector<f64, N>) -> State {
-    State::new(z[0], z[1], z[2], z[3])
+pub(crate) fn head<V: Vector>(z: &V) -> State {
+    let c = z.components();
+    State::new(c[0], c[1], c[2], c[3])
 }
 
-impl Carrier<4> for Harvester<Sine> {
+impl Carrier for Harvester<Sine> {
     fn harvester(&self) -> &Harvester<Sine> {
         self
     }
@@ -134,15 +135,15 @@ struct Located {
 }
 
 /// The exact-and-Dormand-Prince integration of a [`Carrier`] (see [`super`]).
-pub(crate) struct Engine<'a, S: Carrier<N>, const N: usize> {
+pub(crate) struct Engine<'a, S: Carrier> {
     sys: &'a S,
     modes: Option<AffineModes>,
     props: Vec<Propagators>,
     h: f64,
     t: f64,
-    z: SVector<f64, N>,
+    z: S::State,
     mode: Mode,
-    ode: Dopri5<S, N>,
+    ode: Dopri5<S>,
     /// True when `ode` holds the current point.
     ode_current: bool,
     /// Counters of the exact steps and their events.
@@ -154,14 +155,14 @@ pub(crate) struct Engine<'a, S: Carrier<N>, const N: usize> {
     scales: State,
 }
 
-impl<'a, S: Carrier<N>, const N: usize> Engine<'a, S, N> {
+impl<'a, S: Carrier> Engine<'a, S> {
     /// An engine at `(t0, z0)` in `mode`; `exact` false sends everything to Dormand-Prince.
     pub(crate) fn new(
         sys: &'a S,
         t0: f64,
-        z0: SVector<f64, N>,
+        z0: S::State,
         mode: Mode,
-        opts: Options<N>,
+        opts: Options<S::State>,
         exact: bool,
     ) -> Self {
         let time_tol = opts.event_time_tol;
@@ -206,7 +207,7 @@ impl<'a, S: Carrier<N>, const N: usize> Engine<'a, S, N> {
     }
 
     /// Current vector.
-    pub(crate) fn z(&self) -> SVector<f64, N> {
+    pub(crate) fn z(&self) -> S::State {
         self.z
     }
 
@@ -225,7 +226,7 @@ impl<'a, S: Carrier<N>, const N: usize> Engine<'a, S, N> {
 
     /// Integrates to `t_end`, showing `observer` every step (with [`Carrier::DENSE`]) and
     /// every mode switch.
-    pub(crate) fn integrate_observed<O: Observer<N, Mode>>(
+    pub(crate) fn integrate_observed<O: Observer<S::State, Mode>>(
         &mut self,
         t_end: f64,
         observer: &mut O,
@@ -278,7 +279,7 @@ impl<'a, S: Carrier<N>, const N: usize> Engine<'a, S, N> {
     }
 
     /// Exact steps in the affine mode `i` until `t_end` or a switch out of it.
-    fn exact<O: Observer<N, Mode>>(
+    fn exact<O: Observer<S::State, Mode>>(
         &mut self,
         i: usize,
         t_end: f64,
@@ -347,7 +348,7 @@ impl<'a, S: Carrier<N>, const N: usize> Engine<'a, S, N> {
 
     /// Shows the step from `a` to `b` to the observer, with the quartic dense output through
     /// the exact midpoint (`half` is `e^{sL/2}` when known).
-    fn show<O: Observer<N, Mode>>(
+    fn show<O: Observer<S::State, Mode>>(
         &self,
         am: &AffineMode,
         observer: &mut O,
@@ -373,7 +374,7 @@ impl<'a, S: Carrier<N>, const N: usize> Engine<'a, S, N> {
     /// The switch through guard `index` of the affine mode `am` at the current time, where the
     /// state is `y`: by the carrier's own switch when the new mode is affine, else by handing
     /// the point to Dormand-Prince, which fires the guard at once.
-    fn switch<O: Observer<N, Mode>>(
+    fn switch<O: Observer<S::State, Mode>>(
         &mut self,
         am: &AffineMode,
         index: usize,
@@ -381,9 +382,7 @@ impl<'a, S: Carrier<N>, const N: usize> Engine<'a, S, N> {
         observer: &mut O,
     ) -> Result<(), SolverError> {
         let mut z = self.z;
-        for k in 0..4 {
-            z[k] = y[k];
-        }
+        z.components_mut()[..4].copy_from_slice(y.as_slice());
         let mut z_new = z;
         let to = self.sys.switch(am.mode, index, self.t, &mut z_new);
         let affine = self.modes.as_ref().is_some_and(|m| m.index(to).is_some());
@@ -542,13 +541,10 @@ pub(crate) fn cubic_max(g0: f64, d0: f64, g1: f64, d1: f64) -> f64 {
 
 /// A state as a carried vector's head (zeros elsewhere), for the dense steps of the state.
 #[inline(always)]
-fn widen<const N: usize>(y: &State) -> SVector<f64, N> {
-    let mut z = SVector::<f64, N>::zeros();
-    for k in 0..4.min(N) {
-        z[k] = y[k];
-    }
+fn widen<V: Vector>(y: &State) -> V {
+    let mut z = V::zeros();
+    let c = z.components_mut();
+    let n = c.len().min(4);
+    c[..n].copy_from_slice(&y.as_slice()[..n]);
     z
 }
-
-/// The guards of a mode are at most [`MAX_GUARDS`]; an affine mode has two.
-const _: () = assert!(MAX_GUARDS >= 2);

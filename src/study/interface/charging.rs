@@ -161,7 +161,8 @@ pub fn charge<E: Excitation + Clone>(
     .ok_or_else(|| ChargeError::Resistive(device.name.clone()))?;
     super::check_stiffness(device, &model)?;
     let y0 = State::new(0.0, 0.0, 0.0, s.start_v);
-    let mut ode = Dopri5::new(0.0, y0, model.mode_of(&y0), model.solver_options(s.rtol));
+    let mut ode: Dopri5<Interfaced<_>> =
+        Dopri5::new(0.0, y0, model.mode_of(&y0), model.solver_options(s.rtol));
     let (mut t_s, mut vs_v) = (vec![0.0], vec![s.start_v]);
     let mut next_sample = s.sample_s;
     let mut hit: Option<f64> = None;

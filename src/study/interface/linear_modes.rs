@@ -325,7 +325,7 @@ fn guard_rows<E: Excitation>(
     let mut list: Vec<Guard> = Vec::new();
     for i in 0..2 {
         list.push(Box::new(move |y: &State| {
-            model.h.guards(mode.contact, 0.0, y)[i]
+            model.h.guard_values(mode.contact, 0.0, y)[i]
         }));
     }
     if mode.bridge == Bridge::Off && c.has_conduction_events() {

@@ -49,7 +49,7 @@ use crate::drive::Sine;
 use crate::ode::{Dopri5, Observer, SolverError, Stats, Step};
 use crate::physics::harvester::State;
 use crate::physics::interface::{
-    audit_start, IfMode, InterfaceAudit, InterfaceLedger, Interfaced, IF_AUDIT_DIM,
+    audit_start, IfAuditState, IfMode, InterfaceAudit, InterfaceLedger, Interfaced,
 };
 use crate::study::orbit::multipliers;
 
@@ -267,8 +267,8 @@ struct Meter {
     contact: bool,
 }
 
-impl Observer<IF_AUDIT_DIM, IfMode> for Meter {
-    fn step(&mut self, st: &Step<IF_AUDIT_DIM>, m: IfMode) {
+impl Observer<IfAuditState, IfMode> for Meter {
+    fn step(&mut self, st: &Step<IfAuditState>, m: IfMode) {
         let (t0, w) = (self.t0, self.w);
         self.vs += st.integrate(|z| z[3]);
         self.x0 += st.integrate(|z| z[0]);

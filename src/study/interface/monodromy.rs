@@ -27,7 +27,7 @@
 use nalgebra::{Matrix4, SVector, Vector4};
 
 use crate::drive::Sine;
-use crate::ode::{Dopri5, Guards, HybridSystem, SolverError, Stats};
+use crate::ode::{Dopri5, HybridSystem, SolverError, Stats};
 use crate::physics::contact::Mode;
 use crate::physics::harvester::{head, reset_jacobian, State, SwitchKind};
 use crate::physics::interface::{IfMode, Interfaced};
@@ -81,11 +81,13 @@ impl Variational<'_> {
             let (mut yp, mut ym) = (*y, *y);
             yp[c] += h;
             ym[c] -= h;
-            n[c] = (m.guards(mode, t, &yp)[index] - m.guards(mode, t, &ym)[index]) / (2.0 * h);
+            n[c] = (m.guard_values(mode, t, &yp)[index] - m.guard_values(mode, t, &ym)[index])
+                / (2.0 * h);
         }
         let g_t = if let Mode::Stuck(_) = mode.contact {
             let ht = 1e-6 / self.w0;
-            (m.guards(mode, t + ht, y)[index] - m.guards(mode, t - ht, y)[index]) / (2.0 * ht)
+            (m.guard_values(mode, t + ht, y)[index] - m.guard_values(mode, t - ht, y)[index])
+                / (2.0 * ht)
         } else {
             0.0
         };
@@ -93,8 +95,13 @@ impl Variational<'_> {
     }
 }
 
-impl HybridSystem<DIM> for Variational<'_> {
+impl HybridSystem for Variational<'_> {
+    type State = Aug;
     type Mode = IfMode;
+
+    fn guard_count(&self) -> usize {
+        self.model.guard_count()
+    }
 
     #[inline]
     fn rhs(&self, mode: IfMode, t: f64, z: &Aug) -> Aug {
@@ -114,8 +121,8 @@ impl HybridSystem<DIM> for Variational<'_> {
         out
     }
 
-    fn guards(&self, mode: IfMode, t: f64, z: &Aug) -> Guards {
-        self.model.guards(mode, t, &head(z))
+    fn guards(&self, mode: IfMode, t: f64, z: &Aug, g: &mut [f64]) {
+        self.model.guards(mode, t, &head(z), g)
     }
 
     fn switch(&self, mode: IfMode, index: usize, t: f64, z: &mut Aug) -> IfMode {

@@ -49,8 +49,8 @@ pub(super) struct Accumulator<'m> {
     pub(super) sums: Sums,
 }
 
-impl Observer<4, Mode> for Accumulator<'_> {
-    fn step(&mut self, st: &Step<4>, mode: Mode) {
+impl Observer<State, Mode> for Accumulator<'_> {
+    fn step(&mut self, st: &Step<State>, mode: Mode) {
         self.sums.add(self.model, st, mode);
     }
 
@@ -68,7 +68,7 @@ impl Observer<4, Mode> for Accumulator<'_> {
 }
 
 impl Sums {
-    fn add(&mut self, model: &Harvester<Sine>, st: &Step<4>, mode: Mode) {
+    fn add(&mut self, model: &Harvester<Sine>, st: &Step<State>, mode: Mode) {
         let [v1sq, v2sq] = st.integrate_each(|y: &State| {
             let v = model.electrical(y).v;
             [v[0].powi(2), v[1].powi(2)]
@@ -104,7 +104,7 @@ impl Sums {
 
 /// theta in [0, 1] where component `c` of the dense output of `st` changes sign (the upper
 /// end of the final bracket), located by the crate's root finder to 1e-12 of the step.
-fn root_on_step(st: &Step<4>, c: usize) -> Option<f64> {
+fn root_on_step(st: &Step<State>, c: usize) -> Option<f64> {
     let f =
         |th: f64| -> Result<(f64, ()), std::convert::Infallible> { Ok((st.at_theta(th)[c], ())) };
     let (a, b) = (

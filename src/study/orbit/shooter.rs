@@ -85,7 +85,7 @@ impl<'a> Shooter<'a> {
 
     /// Integrates from `y` at drive phase `phase_rad` for `duration_s`, calling `observer`
     /// with every accepted step; returns the final state and mode and the counters.
-    pub fn flow<O: FnMut(&Step<4>, Mode)>(
+    pub fn flow<O: FnMut(&Step<State>, Mode)>(
         &self,
         forcing: &Forcing,
         phase_rad: f64,
@@ -157,7 +157,7 @@ impl<'a> Shooter<'a> {
         let opts = base.augmented(atol);
         let mut ode = Engine::new(&sys, 0.0, z0, mode_of(&model, &y), opts, true);
         let period = forcing.period_s();
-        ode.integrate_observed(duration_s, &mut crate::ode::Steps(|_: &Step<24>, _| {}))?;
+        ode.integrate_observed(duration_s, &mut crate::ode::Steps(|_: &Step<Aug>, _| {}))?;
         *stats += ode.stats();
         let z = ode.z();
         let end = state_of(&z);

@@ -37,8 +37,13 @@ impl Variational<'_> {
     }
 }
 
-impl HybridSystem<VARIATIONAL_DIM> for Variational<'_> {
+impl HybridSystem for Variational<'_> {
+    type State = Aug;
     type Mode = Mode;
+
+    fn guard_count(&self) -> usize {
+        self.model.guard_count()
+    }
 
     #[inline]
     fn rhs(&self, mode: Mode, t: f64, z: &Aug) -> Aug {
@@ -56,8 +61,8 @@ impl HybridSystem<VARIATIONAL_DIM> for Variational<'_> {
         out
     }
 
-    fn guards(&self, mode: Mode, t: f64, z: &Aug) -> crate::ode::Guards {
-        self.model.guards(mode, t, &state_of(z))
+    fn guards(&self, mode: Mode, t: f64, z: &Aug, g: &mut [f64]) {
+        self.model.guards(mode, t, &state_of(z), g)
     }
 
     // ANCHOR: saltation
@@ -109,7 +114,7 @@ impl HybridSystem<VARIATIONAL_DIM> for Variational<'_> {
 /// In an affine mode the variational equations are solved exactly too: the monodromy's
 /// columns by `e^{sL}`, the parameter column by `e^{sL}` and the particular solution of its
 /// forcing ([`AffineMode::sensitivity`]); the saltation at every switch is the one above.
-impl Carrier<VARIATIONAL_DIM> for Variational<'_> {
+impl Carrier for Variational<'_> {
     fn harvester(&self) -> &Harvester<Sine> {
         self.model
     }
@@ -150,11 +155,13 @@ fn guard_gradient(
         let (mut yp, mut ym) = (*y, *y);
         yp[c] += h;
         ym[c] -= h;
-        n[c] = (model.guards(mode, t, &yp)[index] - model.guards(mode, t, &ym)[index]) / (2.0 * h);
+        n[c] = (model.guard_values(mode, t, &yp)[index] - model.guard_values(mode, t, &ym)[index])
+            / (2.0 * h);
     }
     let g_t = if let Mode::Stuck(_) = mode {
         let ht = 1e-6 / model.well_omega_rad_s();
-        (model.guards(mode, t + ht, y)[index] - model.guards(mode, t - ht, y)[index]) / (2.0 * ht)
+        (model.guard_values(mode, t + ht, y)[index] - model.guard_values(mode, t - ht, y)[index])
+            / (2.0 * ht)
     } else {
         0.0
     };

@@ -361,7 +361,7 @@ pub(crate) trait RecordObserver {
     }
 
     /// An accepted Dormand-Prince step, in its mode.
-    fn dopri(&mut self, _model: &Harvester<Sampled>, _step: &Step<4>, _mode: Mode) {}
+    fn dopri(&mut self, _model: &Harvester<Sampled>, _step: &Step<State>, _mode: Mode) {}
 
     /// The state and mode at an analysed sample instant.
     #[inline(always)]

@@ -175,9 +175,9 @@ struct Watch<'a, O> {
     in_contact: &'a mut bool,
 }
 
-impl<O: RecordObserver> Observer<4, Mode> for Watch<'_, O> {
+impl<O: RecordObserver> Observer<State, Mode> for Watch<'_, O> {
     #[inline(always)]
-    fn step(&mut self, step: &Step<4>, mode: Mode) {
+    fn step(&mut self, step: &Step<State>, mode: Mode) {
         self.observer.dopri(self.model, step, mode);
         let now = mode.in_contact();
         if step.t0 >= self.analysed_from {

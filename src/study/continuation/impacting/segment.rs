@@ -8,7 +8,7 @@ use nalgebra::{Matrix4, SVector, Vector4};
 
 use crate::drive::Sine;
 use crate::num::roots::{illinois, RootOptions, Sample};
-use crate::ode::{Dopri5, Guards, HybridSystem, SolverError, Stats, Step};
+use crate::ode::{Dopri5, HybridSystem, SolverError, Stats, Step};
 use crate::physics::contact::Mode;
 use crate::physics::harvester::{head, Harvester, State};
 use crate::study::orbit::Parameter;
@@ -41,8 +41,13 @@ impl FreeFlow<'_> {
     }
 }
 
-impl HybridSystem<DIM> for FreeFlow<'_> {
+impl HybridSystem for FreeFlow<'_> {
+    type State = Aug;
     type Mode = Mode;
+
+    fn guard_count(&self) -> usize {
+        0
+    }
 
     #[inline]
     fn rhs(&self, _mode: Mode, t: f64, z: &Aug) -> Aug {
@@ -62,9 +67,7 @@ impl HybridSystem<DIM> for FreeFlow<'_> {
         out
     }
 
-    fn guards(&self, _mode: Mode, _t: f64, _z: &Aug) -> Guards {
-        [f64::NEG_INFINITY; crate::ode::MAX_GUARDS]
-    }
+    fn guards(&self, _mode: Mode, _t: f64, _z: &Aug, _g: &mut [f64]) {}
 
     fn switch(&self, mode: Mode, _index: usize, _t: f64, _z: &mut Aug) -> Mode {
         mode
@@ -150,7 +153,7 @@ pub(super) fn fly(
     let mut v_sq = [0.0; 2];
     let mut upcrossing = None;
     let mut marked = vec![None; marks.len()];
-    ode.integrate(&sys, duration_s, |st: &Step<DIM>, _| {
+    ode.integrate(&sys, duration_s, |st: &Step<Aug>, _| {
         for (m, &t) in marked.iter_mut().zip(marks) {
             if m.is_none() && t >= st.t0 && t <= st.t1() {
                 *m = Some(head(&st.at(t)));
@@ -195,7 +198,7 @@ pub(super) fn fly(
 
 /// theta in [0, 1] where component `c` of a step's dense output changes sign, to 1e-13 of
 /// the step.
-fn root_on_step(st: &Step<DIM>, c: usize) -> Option<f64> {
+fn root_on_step(st: &Step<Aug>, c: usize) -> Option<f64> {
     let f =
         |th: f64| -> Result<(f64, ()), std::convert::Infallible> { Ok((st.at_theta(th)[c], ())) };
     let opts = RootOptions {

@@ -26,8 +26,8 @@ struct ImpactLog {
     other: bool,
 }
 
-impl Observer<4, Mode> for ImpactLog {
-    fn step(&mut self, st: &Step<4>, _mode: Mode) {
+impl Observer<State, Mode> for ImpactLog {
+    fn step(&mut self, st: &Step<State>, _mode: Mode) {
         self.last = st.y1;
     }
 
