@@ -93,6 +93,7 @@
 pub mod device;
 pub mod drive;
 pub mod fit;
+pub mod model;
 pub mod num;
 pub mod ode;
 pub mod paper;

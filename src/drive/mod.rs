@@ -41,7 +41,7 @@ mod sine;
 
 pub use chirp::{Chirp, Profile};
 pub use sampled::Sampled;
-pub use sine::Sine;
+pub use sine::{Parameter, Sine};
 
 /// A base acceleration (m/s^2) as a function of time, with the instants where it is not
 /// smooth.

@@ -3,6 +3,26 @@
 
 use crate::drive::Excitation;
 
+/// A parameter of a sine drive: what a continuation varies, and what a parameter column of
+/// the variational equations differentiates by.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Parameter {
+    /// Frequency (Hz).
+    Frequency,
+    /// RMS acceleration (g).
+    Amplitude,
+}
+
+impl Parameter {
+    /// Label with unit, for messages.
+    pub fn label(self) -> &'static str {
+        match self {
+            Parameter::Frequency => "frequency (Hz)",
+            Parameter::Amplitude => "RMS acceleration (g)",
+        }
+    }
+}
+
 /// Sinusoidal acceleration.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Sine {

@@ -194,6 +194,9 @@ pub enum SolverError {
         /// State at `t`.
         state: Vec<f64>,
     },
+    /// The system could not be built (a model whose parts do not assemble).
+    #[error("{0}")]
+    Model(String),
     /// The system reported an inadmissible state.
     #[error("inadmissible state at t = {t:e} s: {message} (state {state:?})")]
     InvalidState {

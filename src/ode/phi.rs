@@ -90,6 +90,12 @@ pub fn expm(z: &Matrix4<f64>) -> Matrix4<f64> {
     z.exp()
 }
 
+/// `e^Z` alone for a model's `N x N` matrices, by scaling and squaring
+/// ([`Matrix::exp`](nalgebra::Matrix::exp)).
+pub fn expm_n<const N: usize>(z: &SMatrix<f64, N, N>) -> SMatrix<f64, N, N> {
+    z.exp()
+}
+
 /// The φ functions by their Taylor series (a scaled norm below [`SERIES_MAX_NORM`]).
 fn series<const N: usize>(z: &SMatrix<f64, N, N>, p: usize) -> Vec<SMatrix<f64, N, N>> {
     let mut phi = vec![SMatrix::<f64, N, N>::zeros(); p + 1];

@@ -117,29 +117,29 @@ macro_rules! fieldwise_vector {
     };
 }
 
-/// A state with its first-order sensitivities: the tangent map `phi = dy/dy0` and one
-/// parameter column `dp = dy/dp`, in that order after the state (the layout of the flat vector
-/// `(y, phi by columns, dp)`).
+/// A state with its first-order sensitivities: the tangent map `phi = dy/dy0` and `P`
+/// parameter columns `dp = dy/dp` (one by default), in that order after the state (the layout
+/// of the flat vector `(y, phi by columns, dp by columns)`).
 #[repr(C)]
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Tangent<const N: usize> {
+pub struct Tangent<const N: usize, const P: usize = 1> {
     /// The state.
     pub y: SVector<f64, N>,
     /// The tangent map, `d y / d y0`.
     pub phi: SMatrix<f64, N, N>,
-    /// The parameter column, `d y / d p`.
-    pub dp: SVector<f64, N>,
+    /// The parameter columns, `d y / d p`.
+    pub dp: SMatrix<f64, N, P>,
 }
 
-fieldwise_vector!(Tangent<N> { y, phi, dp });
+fieldwise_vector!(Tangent<N, P> { y, phi, dp });
 
-impl<const N: usize> Tangent<N> {
-    /// The state `y0` with the identity tangent map and a zero parameter column.
+impl<const N: usize, const P: usize> Tangent<N, P> {
+    /// The state `y0` with the identity tangent map and zero parameter columns.
     pub fn start(y0: SVector<f64, N>) -> Self {
         Self {
             y: y0,
             phi: SMatrix::identity(),
-            dp: SVector::zeros(),
+            dp: SMatrix::zeros(),
         }
     }
 }

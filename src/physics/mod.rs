@@ -38,6 +38,7 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
+pub mod assembly;
 pub mod closed_forms;
 pub mod contact;
 pub mod energy;

@@ -84,6 +84,12 @@ impl CapacitorPair {
         }
     }
 
+    /// `dC_i/dx` of both transducers at x (F/m).
+    #[inline]
+    pub fn capacitance_slopes(&self, x: f64) -> [f64; 2] {
+        self.capacitance_changes(x).1
+    }
+
     /// Capacitances and node voltages at a state.
     #[inline(always)]
     pub fn electrical(&self, y: &State) -> Electrical {

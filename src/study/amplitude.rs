@@ -2,9 +2,8 @@
 //! onset refined, and their convergence comparison.
 
 use crate::device::Device;
-use crate::drive::Sine;
+use crate::model::Model;
 use crate::ode::SolverError;
-use crate::physics::harvester::Harvester;
 use crate::progress::Progress;
 use crate::study::steady::{Measurement, SteadyConfig};
 use crate::study::stepped::{
@@ -75,11 +74,19 @@ impl AmplitudeSettings {
         device: &Device,
         progress: &dyn Progress,
     ) -> Result<AmplitudeReport, SolverError> {
+        crate::with_harvester!(device, |h| self.run_on(&h, progress))
+    }
+
+    /// As [`AmplitudeSettings::run`] on a model.
+    pub fn run_on<M: Model<N>, const N: usize>(
+        &self,
+        base: &M,
+        progress: &dyn Progress,
+    ) -> Result<AmplitudeReport, SolverError> {
         let f = self.freq_hz;
         let acc = &self.accels_rms_g;
-        let base = Harvester::new(device, Sine::from_rms_g(acc[0], f));
         let cont = SteppedDrive {
-            base: &base,
+            base,
             drive: move |a: f64| (f, a),
             cfg: self.cfg.clone(),
         };
@@ -89,7 +96,7 @@ impl AmplitudeSettings {
         if first_contact(&sweep).is_none() && n >= 2 {
             let step = acc[n - 1] - acc[n - 2];
             let more = values_beyond(acc[n - 1], step, self.extend_to_g);
-            continue_sweep(&base, |a| (f, a), &self.cfg, &mut sweep, more, in_contact)?;
+            continue_sweep(base, |a| (f, a), &self.cfg, &mut sweep, more, in_contact)?;
             if sweep.steps.len() > n {
                 extended_from = Some(n);
             }

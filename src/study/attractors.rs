@@ -19,8 +19,7 @@
 //!
 //! ```
 //! use endstop::device::Device;
-//! use endstop::drive::Sine;
-//! use endstop::physics::harvester::Harvester;
+//! use endstop::physics::assembly::Harvester;
 //! use endstop::study::attractors::{find_attractors, seeds, AttractorSearch, Place};
 //! use endstop::study::basins::BasinGrid;
 //! use endstop::study::orbit::{Forcing, ShootingConfig};
@@ -29,7 +28,7 @@
 //! let device = Device::from_toml_str(text, "bistable_stops_em.toml")?;
 //! // A weak drive far above the wells' resonance: each well keeps its own small orbit.
 //! let forcing = Forcing { freq_hz: 70.0, accel_rms_g: 0.05 };
-//! let h = Harvester::new(&device, forcing.sine(0.0));
+//! let h = Harvester::<4>::new(&device)?;
 //! let grid = BasinGrid { x_m: (-7e-4, 7e-4), v_m_per_s: (-0.1, 0.1), nx: 3, nv: 1 };
 //! let found = find_attractors(
 //!     &h, &device, &forcing, ShootingConfig::default(), &seeds(&device, &grid, 0),
@@ -43,9 +42,8 @@
 use rayon::prelude::*;
 
 use crate::device::Device;
-use crate::drive::Sine;
+use crate::model::Model;
 use crate::ode::Stats;
-use crate::physics::harvester::Harvester;
 use crate::physics::suspension::Place as EquilibriumPlace;
 use crate::study::basins::{Attractor, BasinGrid};
 use crate::study::displacement::two_wells;
@@ -177,8 +175,8 @@ type SeedOutcome = (Option<Orbit>, Stats);
 /// The stable period-one orbits of `device` (whose model is `base`) under `forcing` reached
 /// from `seeds` (see the module docs). Seeds run in parallel and are read in order, so the
 /// result does not depend on the number of threads.
-pub fn find_attractors(
-    base: &Harvester<Sine>,
+pub fn find_attractors<M: Model<N>, const N: usize>(
+    base: &M,
     device: &Device,
     forcing: &Forcing,
     shooting: ShootingConfig,
@@ -230,7 +228,9 @@ pub fn find_attractors(
         let known = out
             .found
             .iter()
-            .any(|f| shooter.norm(&(f.orbit.state - orbit.state)) < search.same_tol);
+            .any(|f| {
+                shooter.norm(&(f.orbit.state_n::<N>() - orbit.state_n::<N>())) < search.same_tol
+            });
         if known {
             out.repeats += 1;
             continue;

@@ -11,13 +11,13 @@
 //! dropped). Cells run in parallel (rayon) and are collected in grid order, so the result does
 //! not depend on the number of threads.
 
+use nalgebra::{DVector, SVector};
 use rayon::prelude::*;
 
-use crate::drive::Sine;
+use crate::model::{Driven, Model};
 use crate::ode::{Dopri5, Stats};
-use crate::physics::harvester::{Harvester, State};
 use crate::progress::Progress;
-use crate::study::orbit::{mode_of, Forcing, Orbit, OrbitError, Shooter};
+use crate::study::orbit::{Forcing, Orbit, OrbitError, Shooter};
 
 /// A grid of initial states.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -83,13 +83,17 @@ pub struct BasinSettings {
 pub struct Attractor {
     /// Label (used in column values and summary keys).
     pub label: String,
-    /// State at drive phase zero.
-    pub state: State,
+    /// State at drive phase zero (the model's components).
+    pub state: DVector<f64>,
 }
 
 impl Attractor {
     /// The attractor of a stable orbit, labelled `label`.
-    pub fn of_orbit(shooter: &Shooter<'_>, orbit: &Orbit, label: &str) -> Result<Self, OrbitError> {
+    pub fn of_orbit<M: Model<N>, const N: usize>(
+        shooter: &Shooter<'_, M, N>,
+        orbit: &Orbit,
+        label: &str,
+    ) -> Result<Self, OrbitError> {
         if !orbit.is_stable() {
             return Err(OrbitError::Invalid(format!(
                 "the orbit labelled {label} is unstable (largest multiplier {})",
@@ -105,7 +109,7 @@ impl Attractor {
             })?;
         Ok(Self {
             label: label.to_string(),
-            state,
+            state: DVector::from_column_slice(state.as_slice()),
         })
     }
 }
@@ -159,8 +163,8 @@ impl Basins {
 
 /// The basins of `attractors` under `forcing` on the grid of `settings` (see the module
 /// docs); `on_cell.tick()` is called after each cell.
-pub fn basins(
-    base: &Harvester<Sine>,
+pub fn basins<M: Model<N>, const N: usize>(
+    base: &M,
     forcing: &Forcing,
     attractors: &[Attractor],
     settings: &BasinSettings,
@@ -180,8 +184,8 @@ pub fn basins(
 /// for [`BasinGrid::cells`], whose even-indexed refined values repeat the coarse ones exactly),
 /// so the result is the one [`basins`] gives on the refined grid, except that `stats` counts
 /// only the cells integrated here.
-pub fn refine(
-    base: &Harvester<Sine>,
+pub fn refine<M: Model<N>, const N: usize>(
+    base: &M,
     forcing: &Forcing,
     attractors: &[Attractor],
     coarse_settings: &BasinSettings,
@@ -229,8 +233,8 @@ pub fn refine(
 
 /// Integrates every cell of `cells` without a `known` outcome until it settles (see the
 /// module docs) and collects the outcomes in grid order.
-fn settle_cells(
-    base: &Harvester<Sine>,
+fn settle_cells<M: Model<N>, const N: usize>(
+    base: &M,
     forcing: &Forcing,
     attractors: &[Attractor],
     settings: &BasinSettings,
@@ -243,10 +247,14 @@ fn settle_cells(
             "basins need at least one attractor and a non-empty grid".into(),
         ));
     }
-    let model = base.with_excitation(forcing.sine(0.0));
+    let model = Driven::new(base, forcing.sine(0.0));
     let scales = base.scales();
     let period = forcing.period_s();
-    let opts = model.solver_options(settings.rtol);
+    let opts = base.solver_options(settings.rtol);
+    let states: Vec<SVector<f64, N>> = attractors
+        .iter()
+        .map(|a| SVector::<f64, N>::from_column_slice(a.state.as_slice()))
+        .collect();
     let results: Vec<Result<CellOutcome, OrbitError>> = cells
         .par_iter()
         .zip(&known)
@@ -254,8 +262,8 @@ fn settle_cells(
             if let Some((found, k)) = *known {
                 return Ok((found, k, Stats::default()));
             }
-            let y0 = model.static_state(x, v);
-            let mut ode = Dopri5::new(0.0, y0, mode_of(&model, &y0), opts.clone());
+            let y0 = base.static_state(x, v);
+            let mut ode = Dopri5::new(0.0, y0, base.mode_of(&y0), opts.clone());
             let mut previous: Option<usize> = None;
             let mut found = None;
             let mut k = 0;
@@ -268,9 +276,9 @@ fn settle_cells(
                         source: e,
                     })?;
                 let y = ode.y();
-                let near = attractors.iter().position(|a| {
-                    (y - a.state).component_div(&scales).norm() < settings.settle_tol
-                });
+                let near = states
+                    .iter()
+                    .position(|a| (y - a).component_div(&scales).norm() < settings.settle_tol);
                 if near.is_some() && near == previous {
                     found = near;
                     break;

@@ -33,12 +33,13 @@
 //! rounded down to 1, 2 or 5 times a power of ten: the steps resolve the resonance, and the
 //! ramps make the transitions independent of them.
 
+use nalgebra::SVector;
+
 use crate::device::Device;
 use crate::drive::{Chirp, Profile, Sine};
+use crate::model::{Driven, Mode, Model, SwitchKind, MAX_OUTPUTS};
 use crate::num::roots::{illinois, RootOptions, Sample};
 use crate::ode::{Dopri5, Observer, SolverError, Stats, Step};
-use crate::physics::contact::Mode;
-use crate::physics::harvester::{Harvester, State, SwitchKind};
 use crate::physics::linear::{open_circuit_resonance_hz, LinearResponse};
 use crate::study::flow::SineFlow;
 use crate::study::steady::{steady_state, SteadyConfig};
@@ -152,15 +153,15 @@ pub fn default_ramp_rate_hz_per_s(device: &Device) -> Option<f64> {
 /// least one), in stairs of one cycle (see the module docs), from the state `y` in `mode` at
 /// drive phase zero, with relative tolerance `rtol`. Returns the state and mode at the end
 /// (at drive phase zero) and the counters.
-pub fn ramp(
-    base: &Harvester<Sine>,
+pub fn ramp<M: Model<N>, const N: usize>(
+    base: &M,
     from: (f64, f64),
     to: (f64, f64),
     min_duration_s: f64,
-    y: State,
+    y: SVector<f64, N>,
     mode: Mode,
     rtol: f64,
-) -> Result<(State, Mode, Stats), SolverError> {
+) -> Result<(SVector<f64, N>, Mode, Stats), SolverError> {
     let f_mean = 0.5 * (from.0 + to.0);
     let cycles = (min_duration_s * f_mean).ceil().max(1.0) as usize;
     let (mut y, mut mode, mut stats) = (y, mode, Stats::default());
@@ -168,8 +169,7 @@ pub fn ramp(
         let s = Profile::Smooth.s((k as f64 + 0.5) / cycles as f64);
         let f = from.0 + (to.0 - from.0) * s;
         let g = from.1 + (to.1 - from.1) * s;
-        let model = base.with_excitation(Sine::from_rms_g(g, f));
-        let mut flow = SineFlow::new(&model, 0.0, y, mode, rtol);
+        let mut flow = SineFlow::new(base, Sine::from_rms_g(g, f), 0.0, y, mode, rtol);
         flow.integrate(1.0 / f, |_, _| {})?;
         (y, mode) = (flow.y(), flow.mode());
         stats += flow.stats();
@@ -227,47 +227,69 @@ pub struct ChirpReport {
 }
 
 /// Sums over the windows of a swept sine.
-struct Windows<'m> {
-    model: &'m Harvester<Chirp>,
+struct Windows<'m, M> {
+    model: &'m M,
+    chirp: Chirp,
     cycles: f64,
     current: Option<i64>,
     acc: [f64; 5],
+    /// Per output, the integrals of its square and of itself over the window.
+    squares: Vec<f64>,
+    integrals: Vec<f64>,
     t0: f64,
     out: Vec<ChirpWindow>,
 }
 
-impl Windows<'_> {
+impl<M: Model<N>, const N: usize> Windows<'_, M> {
     fn close(&mut self, t1: f64) {
         let dur = t1 - self.t0;
         if self.current.is_some() && dur > 0.0 {
             let [v1sq, v2sq, x_peak, contact, _] = self.acc;
+            let layout = self.model.layout();
             self.out.push(ChirpWindow {
-                freq_hz: self.model.excitation.freq_hz(0.5 * (self.t0 + t1)),
+                freq_hz: self.chirp.freq_hz(0.5 * (self.t0 + t1)),
                 v1_rms_v: (v1sq / dur).sqrt(),
                 v2_rms_v: (v2sq / dur).sqrt(),
-                p_total_w: (v1sq + v2sq) / dur / self.model.load_resistance(),
+                p_total_w: layout.load_power(&self.squares, &self.integrals, dur),
                 x_peak_m: x_peak,
                 contact: contact > 0.0,
             });
         }
         self.acc = [0.0; 5];
+        self.squares.iter_mut().for_each(|v| *v = 0.0);
+        self.integrals.iter_mut().for_each(|v| *v = 0.0);
         self.t0 = t1;
     }
 }
 
-impl Observer<State, Mode> for Windows<'_> {
-    fn step(&mut self, st: &Step<State>, mode: Mode) {
+impl<M: Model<N>, const N: usize> Observer<SVector<f64, N>, Mode> for Windows<'_, M> {
+    fn step(&mut self, st: &Step<SVector<f64, N>>, mode: Mode) {
         let two_pi = 2.0 * std::f64::consts::PI;
         let mid = st.t0 + 0.5 * st.h;
-        let k = (self.model.excitation.phase(mid) / (two_pi * self.cycles)).floor() as i64;
+        let k = (self.chirp.phase(mid) / (two_pi * self.cycles)).floor() as i64;
         if self.current != Some(k) {
             self.close(st.t0);
             self.current = Some(k);
         }
         let model = self.model;
-        let el = |y: &State| model.electrical(y).v;
-        self.acc[0] += st.integrate(|y| el(y)[0].powi(2));
-        self.acc[1] += st.integrate(|y| el(y)[1].powi(2));
+        let n_out = self.squares.len();
+        // The outputs' squares and values by 3-point Gauss-Legendre on the dense output, as
+        // `Step::integrate` sums each.
+        let (mut sq, mut li) = ([0.0; MAX_OUTPUTS], [0.0; MAX_OUTPUTS]);
+        for (x, w) in crate::ode::GAUSS_LEGENDRE_3 {
+            let mut out = [0.0; MAX_OUTPUTS];
+            model.outputs(mode, &st.at_theta(x), &mut out[..n_out]);
+            for i in 0..n_out {
+                sq[i] += w * out[i].powi(2);
+                li[i] += w * out[i];
+            }
+        }
+        self.acc[0] += sq[0] * st.h;
+        self.acc[1] += sq[1] * st.h;
+        for i in 0..n_out {
+            self.squares[i] += sq[i] * st.h;
+            self.integrals[i] += li[i] * st.h;
+        }
         self.acc[2] = self.acc[2]
             .max(st.y1[0].abs())
             .max(st.at_theta(0.5)[0].abs());
@@ -277,7 +299,7 @@ impl Observer<State, Mode> for Windows<'_> {
     }
 
     fn switched(&mut self, _t: f64, from: Mode, to: Mode) {
-        if SwitchKind::of(from, to).is_impact() {
+        if SwitchKind::between(from, to).is_impact() {
             self.acc[3] += 1.0;
         }
     }
@@ -286,12 +308,27 @@ impl Observer<State, Mode> for Windows<'_> {
 impl ChirpSweep {
     /// Runs the swept sine on `device` at `accel_rms_g` (g rms).
     pub fn run(&self, device: &Device, accel_rms_g: f64) -> Result<ChirpReport, SolverError> {
-        let base = Harvester::new(device, Sine::from_rms_g(accel_rms_g, self.from_hz));
-        let (_, y, mode, mut stats) =
-            steady_state(&base, base.rest_state(), Mode::Free, accel_rms_g, &self.cfg)?;
+        crate::with_harvester!(device, |h| self.run_on(&h, accel_rms_g))
+    }
+
+    /// Runs the swept sine on a model at `accel_rms_g` (g rms).
+    pub fn run_on<M: Model<N>, const N: usize>(
+        &self,
+        base: &M,
+        accel_rms_g: f64,
+    ) -> Result<ChirpReport, SolverError> {
+        let rest = base.rest_state();
+        let (_, y, mode, mut stats) = steady_state(
+            base,
+            Sine::from_rms_g(accel_rms_g, self.from_hz),
+            rest,
+            base.mode_of(&rest),
+            accel_rms_g,
+            &self.cfg,
+        )?;
         let duration_s = (self.to_hz - self.from_hz).abs() / self.rate_hz_per_s;
         let amp = std::f64::consts::SQRT_2 * accel_rms_g * crate::G;
-        let model = base.with_excitation(Chirp {
+        let chirp = Chirp {
             f0_hz: self.from_hz,
             f1_hz: self.to_hz,
             a0_m_s2: amp,
@@ -299,16 +336,21 @@ impl ChirpSweep {
             duration_s,
             phase_rad: 0.0,
             profile: Profile::Linear,
-        });
+        };
+        let n_out = base.layout().outputs.len();
+        let model = Driven::new(base, chirp.clone());
         let mut w = Windows {
-            model: &model,
+            model: base,
+            chirp,
             cycles: self.window_cycles.max(1) as f64,
             current: None,
             acc: [0.0; 5],
+            squares: vec![0.0; n_out],
+            integrals: vec![0.0; n_out],
             t0: 0.0,
             out: Vec::new(),
         };
-        let mut ode = Dopri5::new(0.0, y, mode, model.solver_options(self.cfg.rtol));
+        let mut ode = Dopri5::new(0.0, y, mode, base.solver_options(self.cfg.rtol));
         // In pieces of a second: the integrator's budget of steps is per call, and a stiff
         // contact can take many steps per period over a long sweep.
         let mut t = 0.0;

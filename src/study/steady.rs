@@ -24,11 +24,12 @@
 //! inequality). Closer to the fold than that the passage time still grows without bound: no
 //! fixed block resolves a fold better than the bracket it was chosen for.
 
+use nalgebra::SVector;
+
 use crate::device::Device;
 use crate::drive::Sine;
+use crate::model::{Load, Mode, Model, SwitchKind, MAX_OUTPUTS};
 use crate::ode::{Observer, SolverError, Stats, Step};
-use crate::physics::contact::Mode;
-use crate::physics::harvester::{Harvester, State, SwitchKind};
 use crate::study::flow::SineFlow;
 
 /// Minimum block length in periods for the default steady-state settings.
@@ -145,8 +146,10 @@ impl Measurement {
 /// Accumulates whole-period averages over accepted steps.
 /// The sums of one block of periods: an observer of its steps and of its rebounds off rigid
 /// stops (impacts without a contact phase).
-struct Block<'m> {
-    model: &'m Harvester<Sine>,
+struct Block<'m, M> {
+    model: &'m M,
+    /// The integral of the first output (for a battery's power).
+    v1: f64,
     v1sq: f64,
     v2sq: f64,
     vdsq: f64,
@@ -156,13 +159,17 @@ struct Block<'m> {
     prev_mode_free: bool,
 }
 
-impl Observer<State, Mode> for Block<'_> {
-    fn step(&mut self, st: &Step<State>, m: Mode) {
+impl<M: Model<N>, const N: usize> Observer<SVector<f64, N>, Mode> for Block<'_, M> {
+    fn step(&mut self, st: &Step<SVector<f64, N>>, m: Mode) {
         let model = self.model;
-        let [v1sq, v2sq, vdsq] = st.integrate_each(|y: &State| {
-            let v = model.electrical(y).v;
-            [v[0].powi(2), v[1].powi(2), (v[1] - v[0]).powi(2)]
+        let k = model.layout().outputs.len().min(MAX_OUTPUTS);
+        let [v1sq, v2sq, vdsq, v1] = st.integrate_each(|y: &SVector<f64, N>| {
+            let mut out = [0.0; MAX_OUTPUTS];
+            model.outputs(m, y, &mut out[..k]);
+            let v = [out[0], out[1]];
+            [v[0].powi(2), v[1].powi(2), (v[1] - v[0]).powi(2), v[0]]
         });
+        self.v1 += v1;
         self.v1sq += v1sq;
         self.v2sq += v2sq;
         self.vdsq += vdsq;
@@ -178,7 +185,7 @@ impl Observer<State, Mode> for Block<'_> {
     }
 
     fn switched(&mut self, _t: f64, from: Mode, to: Mode) {
-        if SwitchKind::of(from, to) == SwitchKind::Rebound {
+        if SwitchKind::between(from, to) == SwitchKind::Rebound {
             self.impacts += 1;
         }
     }
@@ -187,16 +194,17 @@ impl Observer<State, Mode> for Block<'_> {
 /// Integrates `model` from (y, mode) at phase zero to steady state and measures it (by
 /// [`SineFlow`]: exactly where the device is affine, by Dormand-Prince elsewhere).
 /// Returns the measurement, the final state and mode (at a whole period), and the counters.
-pub fn steady_state(
-    model: &Harvester<Sine>,
-    y: State,
+pub fn steady_state<M: Model<N>, const N: usize>(
+    model: &M,
+    sine: Sine,
+    y: SVector<f64, N>,
     mode: Mode,
     accel_rms_g: f64,
     cfg: &SteadyConfig,
-) -> Result<(Measurement, State, Mode, Stats), SolverError> {
-    let period = model.excitation.period_s();
+) -> Result<(Measurement, SVector<f64, N>, Mode, Stats), SolverError> {
+    let period = sine.period_s();
     let block_t = cfg.block_periods as f64 * period;
-    let mut ode = SineFlow::new(model, 0.0, y, mode, cfg.rtol);
+    let mut ode = SineFlow::new(model, sine, 0.0, y, mode, cfg.rtol);
     let mut t_end = 0.0;
     for _ in 0..cfg.settle_blocks {
         t_end += block_t;
@@ -210,7 +218,8 @@ pub fn steady_state(
         t_end += block_t;
         let mut b = Block {
             model,
-            prev_mode_free: ode.mode() == Mode::Free,
+            prev_mode_free: !ode.mode().in_contact(),
+            v1: 0.0,
             v1sq: 0.0,
             v2sq: 0.0,
             vdsq: 0.0,
@@ -232,14 +241,21 @@ pub fn steady_state(
         };
         prev = Some((v1, v2));
         if converged || blocks >= cfg.max_blocks {
+            let power = |i: usize, sq: f64, int: f64| {
+                match model.layout().outputs.get(i).and_then(|o| o.load) {
+                    Some(Load::Resistor(r)) => sq / dur / r,
+                    Some(l) => l.mean_power(int / dur, sq / dur),
+                    None => 0.0,
+                }
+            };
             let m = Measurement {
-                freq_hz: model.excitation.freq_hz,
+                freq_hz: sine.freq_hz,
                 accel_rms_g,
                 v1_rms_v: v1,
                 v2_rms_v: v2,
                 vdiff_rms_v: (b.vdsq / dur).sqrt(),
-                p1_w: b.v1sq / dur / model.load_resistance(),
-                p2_w: b.v2sq / dur / model.load_resistance(),
+                p1_w: power(0, b.v1sq, b.v1),
+                p2_w: power(1, b.v2sq, f64::NAN),
                 x_peak_m: b.x_peak,
                 contact_fraction: b.contact_time / dur,
                 impacts_per_period: b.impacts as f64 / cfg.block_periods as f64,

@@ -16,12 +16,12 @@
 //! transient touches a stop is taken again from the same state by the ramp. Far from the
 //! stops (most of a wide sweep) the sweep then costs what steps taken at once cost.
 
+use nalgebra::{DVector, SVector};
 use serde::{Deserialize, Serialize};
 
 use crate::drive::Sine;
+use crate::model::{Mode, Model};
 use crate::ode::{SolverError, Stats};
-use crate::physics::contact::Mode;
-use crate::physics::harvester::{Harvester, State};
 use crate::progress::Progress;
 use crate::study::chirp::ramp;
 use crate::study::steady::{steady_state, Measurement, SteadyConfig};
@@ -31,8 +31,8 @@ use crate::study::steady::{steady_state, Measurement, SteadyConfig};
 pub struct SweepStep {
     /// The measurement.
     pub measurement: Measurement,
-    /// Final state (at a whole period).
-    pub state: State,
+    /// Final state (at a whole period; the model's components).
+    pub state: DVector<f64>,
     /// Final mode.
     pub mode: Mode,
     /// Integrator counters of this step.
@@ -70,23 +70,28 @@ pub trait Drive: Fn(f64) -> (f64, f64) + Sync {}
 impl<T: Fn(f64) -> (f64, f64) + Sync> Drive for T {}
 
 /// A continuation in one drive parameter (frequency or amplitude) of a device.
-pub struct SteppedDrive<'a, D: Drive> {
-    /// The device model (its excitation is replaced at every step).
-    pub base: &'a Harvester<Sine>,
+pub struct SteppedDrive<'a, M, D: Drive> {
+    /// The device's model.
+    pub base: &'a M,
     /// Drive at parameter value p: (frequency Hz, RMS acceleration g).
     pub drive: D,
     /// Steady-state settings.
     pub cfg: SteadyConfig,
 }
 
-impl<D: Drive> SteppedDrive<'_, D> {
-    fn measure(&self, p: f64, y: State, mode: Mode) -> Result<SweepStep, SolverError> {
+/// A state of dimension `N` from a step's.
+fn state_of<const N: usize>(y: &DVector<f64>) -> SVector<f64, N> {
+    SVector::<f64, N>::from_column_slice(y.as_slice())
+}
+
+impl<M: Model<N>, D: Drive, const N: usize> SteppedDrive<'_, M, D> {
+    fn measure(&self, p: f64, y: SVector<f64, N>, mode: Mode) -> Result<SweepStep, SolverError> {
         let (f, a) = (self.drive)(p);
-        let model = self.base.with_excitation(Sine::from_rms_g(a, f));
-        let (m, y1, mode1, stats) = steady_state(&model, y, mode, a, &self.cfg)?;
+        let (m, y1, mode1, stats) =
+            steady_state(self.base, Sine::from_rms_g(a, f), y, mode, a, &self.cfg)?;
         Ok(SweepStep {
             measurement: m,
-            state: y1,
+            state: DVector::from_column_slice(y1.as_slice()),
             mode: mode1,
             stats,
         })
@@ -102,14 +107,14 @@ impl<D: Drive> SteppedDrive<'_, D> {
         from: Option<f64>,
         off_stops: bool,
         p: f64,
-        y: State,
+        y: SVector<f64, N>,
         mode: Mode,
         approach: Approach,
     ) -> Result<SweepStep, SolverError> {
         match (approach, from) {
             (Approach::Ramp { rate_per_s }, Some(q)) if q != p => {
                 let mut tried = Stats::default();
-                if off_stops && mode == Mode::Free && self.base.free_flight().is_linear() {
+                if off_stops && !mode.in_contact() && self.base.free_flight_is_linear() {
                     let step = self.measure(p, y, mode)?;
                     if step.stats.events == 0 {
                         return Ok(step);
@@ -147,7 +152,7 @@ impl<D: Drive> SteppedDrive<'_, D> {
             Some(from),
             !in_contact(&step.measurement),
             p,
-            step.state,
+            state_of(&step.state),
             step.mode,
             approach,
         )
@@ -169,7 +174,7 @@ impl<D: Drive> SteppedDrive<'_, D> {
     ) -> Result<Sweep, SolverError> {
         self.run_from(
             self.base.rest_state(),
-            Mode::Free,
+            self.base.mode_of(&self.base.rest_state()),
             None,
             values,
             approach,
@@ -181,7 +186,7 @@ impl<D: Drive> SteppedDrive<'_, D> {
     /// (`None`: the first step starts from `y` at once).
     pub fn run_from(
         &self,
-        y: State,
+        y: SVector<f64, N>,
         mode: Mode,
         from: Option<f64>,
         values: &[f64],
@@ -198,7 +203,7 @@ impl<D: Drive> SteppedDrive<'_, D> {
             prev = Some(p);
             off_stops = !in_contact(&step.measurement);
             stats += step.stats;
-            y = step.state;
+            y = state_of(&step.state);
             mode = step.mode;
             steps.push(step);
             on_step.tick();
@@ -264,7 +269,7 @@ impl<D: Drive> SteppedDrive<'_, D> {
                 Some(lo),
                 !in_contact(&before.measurement),
                 mid,
-                before.state,
+                state_of(&before.state),
                 before.mode,
                 approach,
             )?;
@@ -358,8 +363,8 @@ pub fn with_midpoints(values: &[f64]) -> Vec<f64> {
 
 /// Appends steps to `sweep` at `values`, each continuing from the last state, at drive
 /// `drive(p)` = (Hz, g rms); stops after the first step for which `stop(m)` is true.
-pub fn continue_sweep(
-    base: &Harvester<Sine>,
+pub fn continue_sweep<M: Model<N>, const N: usize>(
+    base: &M,
     drive: impl Fn(f64) -> (f64, f64),
     cfg: &SteadyConfig,
     sweep: &mut Sweep,
@@ -367,19 +372,18 @@ pub fn continue_sweep(
     stop: impl Fn(&Measurement) -> bool,
 ) -> Result<(), SolverError> {
     for p in values {
-        let (mut y, mut mode) = (base.rest_state(), Mode::Free);
+        let (mut y, mut mode) = (base.rest_state(), base.mode_of(&base.rest_state()));
         if let Some(last) = sweep.steps.last() {
-            y = last.state;
+            y = state_of(&last.state);
             mode = last.mode;
         }
         let (f, a) = drive(p);
-        let model = base.with_excitation(Sine::from_rms_g(a, f));
-        let (m, y1, mode1, st) = steady_state(&model, y, mode, a, cfg)?;
+        let (m, y1, mode1, st) = steady_state(base, Sine::from_rms_g(a, f), y, mode, a, cfg)?;
         sweep.stats += st;
         sweep.values.push(p);
         sweep.steps.push(SweepStep {
             measurement: m,
-            state: y1,
+            state: DVector::from_column_slice(y1.as_slice()),
             mode: mode1,
             stats: st,
         });

@@ -124,7 +124,7 @@ pub enum Sink {
 }
 
 impl Sink {
-    fn of(l: &DcLoad) -> Self {
+    pub(crate) fn of(l: &DcLoad) -> Self {
         match *l {
             DcLoad::Resistor { resistance_ohm } => Sink::Resistor(resistance_ohm),
             DcLoad::Battery {

@@ -2,14 +2,14 @@
 //! the tangent from the kernel, the acceptance of a corrected step ([`Rejection`]), and the
 //! hop over a corner of the branch at grazing where no arclength step converges.
 
-use nalgebra::{Matrix4, SMatrix, Vector4};
+use nalgebra::{DMatrix, DVector, SMatrix, SVector};
 
+use crate::model::Model;
 use crate::ode::Stats;
-use crate::physics::harvester::State;
 use crate::study::orbit::{Forcing, Linearised, Orbit, OrbitError, Shooter, CHORD_STEPS};
 
 use super::test_functions::{test_grazing, test_plus_one, Gaps, GRAZING_NEAR};
-use super::{BranchPoint, ContinuationSettings, Matrix5, Rejection, Vector5};
+use super::{BranchPoint, ContinuationSettings, Rejection};
 
 /// Largest distance of a corrected point from its predictor, in arclength steps: beyond it
 /// the step is rejected as having jumped to another branch.
@@ -25,32 +25,54 @@ const MAX_MULTIPLIER_RATIO: f64 = 2.0;
 struct Corrected {
     orbit: Orbit,
     /// [M - I | dP/dq] in scaled coordinates.
-    jac: SMatrix<f64, 4, 5>,
+    jac: DMatrix<f64>,
     iterations: usize,
 }
 
 /// The continuation's working state: the shooter on the period map, the settings, and the
 /// integrator counters of every integration so far.
-pub(super) struct Continuer<'s, 'a> {
-    pub(super) shooter: &'s Shooter<'a>,
+pub(super) struct Continuer<'s, 'a, M, const N: usize> {
+    pub(super) shooter: &'s Shooter<'a, M, N>,
     pub(super) settings: ContinuationSettings,
     pub(super) stats: Stats,
 }
 
-impl Continuer<'_, '_> {
+/// The vector `(z, q)` of the bordered system: the scaled state and the scaled parameter.
+fn join<const N: usize>(z: &SVector<f64, N>, q: f64) -> DVector<f64> {
+    DVector::from_fn(N + 1, |i, _| if i < N { z[i] } else { q })
+}
+
+/// The scaled state of `(z, q)`.
+fn state_part<const N: usize>(u: &DVector<f64>) -> SVector<f64, N> {
+    SVector::<f64, N>::from_fn(|i, _| u[i])
+}
+
+/// The bordered matrix `[jac; t^T]`.
+fn bordered(jac: &DMatrix<f64>, t: &DVector<f64>) -> DMatrix<f64> {
+    let n = jac.nrows();
+    let mut big = DMatrix::zeros(n + 1, n + 1);
+    big.view_mut((0, 0), (n, n + 1)).copy_from(jac);
+    big.set_row(n, &t.transpose());
+    big
+}
+
+impl<M: Model<N>, const N: usize> Continuer<'_, '_, M, N> {
     fn p_of(&self, q: f64) -> f64 {
         q * self.settings.param_scale
     }
 
-    pub(super) fn u_of(&self, o: &Orbit) -> Vector5 {
-        let z = o.state.component_div(&self.shooter.scales());
-        Vector5::new(
-            z[0],
-            z[1],
-            z[2],
-            z[3],
-            o.param(self.settings.parameter) / self.settings.param_scale,
-        )
+    pub(super) fn u_of(&self, o: &Orbit) -> DVector<f64> {
+        let z = o.state_n::<N>().component_div(&self.shooter.scales());
+        join(&z, o.param(self.settings.parameter) / self.settings.param_scale)
+    }
+
+    /// `[M - I | dP/dq]` of a monodromy in scaled coordinates and a scaled parameter column.
+    fn jac_of(m: &SMatrix<f64, N, N>, gq: &SVector<f64, N>) -> DMatrix<f64> {
+        let d = m - SMatrix::<f64, N, N>::identity();
+        let mut jac = DMatrix::zeros(N, N + 1);
+        jac.view_mut((0, 0), (N, N)).copy_from(&d);
+        jac.set_column(N, gq);
+        jac
     }
 
     /// Newton on P(z, q) = z with t . (u - anchor) = s, from the predictor anchor + s t, at the
@@ -59,8 +81,8 @@ impl Continuer<'_, '_> {
         &mut self,
         template: &Forcing,
         phase: f64,
-        anchor: &Vector5,
-        t: &Vector5,
+        anchor: &DVector<f64>,
+        t: &DVector<f64>,
         s: f64,
     ) -> Result<Corrected, OrbitError> {
         let param = self.settings.parameter;
@@ -69,14 +91,14 @@ impl Continuer<'_, '_> {
         let mut u = anchor + t * s;
         let mut residual = f64::INFINITY;
         for it in 0..=cfg.max_newton {
-            let q = u[4];
+            let q = u[N];
             let p = self.p_of(q);
             if !(p.is_finite() && p > 0.0) {
                 break;
             }
             let forcing = template.with(param, p);
-            let z = Vector4::new(u[0], u[1], u[2], u[3]);
-            let y: State = z.component_mul(&sc);
+            let z: SVector<f64, N> = state_part(&u);
+            let y = z.component_mul(&sc);
             let lin = self
                 .shooter
                 .linearise(&forcing, param, phase, y, &mut self.stats)
@@ -88,23 +110,17 @@ impl Continuer<'_, '_> {
             let g = (lin.end - y).component_div(&sc);
             let m = self.shooter.scaled_monodromy(&lin.monodromy);
             let gq = lin.dp.component_div(&sc) * self.settings.param_scale;
-            let arc = t.dot(&(u - anchor)) - s;
+            let arc = t.dot(&(&u - anchor)) - s;
             residual = g.norm() / z.norm().max(1e-300);
-            let mut jac = SMatrix::<f64, 4, 5>::zeros();
-            jac.fixed_view_mut::<4, 4>(0, 0)
-                .copy_from(&(m - Matrix4::identity()));
-            jac.set_column(4, &gq);
-            let mut big = Matrix5::zeros();
-            big.fixed_view_mut::<4, 5>(0, 0).copy_from(&jac);
-            big.set_row(4, &t.transpose());
-            let lu = big.lu();
+            let jac = Self::jac_of(&m, &gq);
+            let lu = bordered(&jac, t).lu();
             if residual < cfg.residual_tol && arc.abs() <= 1e-9 * (1.0 + s.abs()) {
                 // Polish on the plain period map by chord steps (see `Shooter::solve`).
                 for _ in 0..CHORD_STEPS {
-                    let p = self.p_of(u[4]);
+                    let p = self.p_of(u[N]);
                     let forcing = template.with(param, p);
-                    let z = Vector4::new(u[0], u[1], u[2], u[3]);
-                    let y: State = z.component_mul(&sc);
+                    let z: SVector<f64, N> = state_part(&u);
+                    let y = z.component_mul(&sc);
                     let (end, summary) = self
                         .shooter
                         .measure(&forcing, phase, y, &mut self.stats)
@@ -127,7 +143,7 @@ impl Continuer<'_, '_> {
                     }
                     residual = plain;
                     // The last row keeps the arclength condition.
-                    let rhs = Vector5::new(-gp[0], -gp[1], -gp[2], -gp[3], 0.0);
+                    let rhs = join(&(-gp), 0.0);
                     let Some(du) = lu.solve(&rhs) else { break };
                     u += du;
                 }
@@ -136,7 +152,7 @@ impl Continuer<'_, '_> {
             if it == cfg.max_newton {
                 break;
             }
-            let rhs = Vector5::new(-g[0], -g[1], -g[2], -g[3], -arc);
+            let rhs = join(&(-g), -arc);
             let Some(du) = lu.solve(&rhs) else {
                 break;
             };
@@ -144,7 +160,7 @@ impl Continuer<'_, '_> {
         }
         Err(OrbitError::NoConvergence {
             what: param.label(),
-            param: self.p_of(u[4]),
+            param: self.p_of(u[N]),
             iterations: cfg.max_newton,
             residual,
         })
@@ -152,23 +168,18 @@ impl Continuer<'_, '_> {
 
     /// [M - I | dP/dq] in scaled coordinates at a linearised orbit: the matrix whose kernel
     /// is the branch's tangent.
-    pub(super) fn kernel_jacobian(&self, lin: &Linearised) -> SMatrix<f64, 4, 5> {
+    pub(super) fn kernel_jacobian(&self, lin: &Linearised<N>) -> DMatrix<f64> {
         let sc = self.shooter.scales();
         let m = self.shooter.scaled_monodromy(&lin.monodromy);
-        let mut jac = SMatrix::<f64, 4, 5>::zeros();
-        jac.fixed_view_mut::<4, 4>(0, 0)
-            .copy_from(&(m - Matrix4::identity()));
-        jac.set_column(4, &(lin.dp.component_div(&sc) * self.settings.param_scale));
-        jac
+        Self::jac_of(&m, &(lin.dp.component_div(&sc) * self.settings.param_scale))
     }
 
     /// The unit tangent spanning the kernel of `jac`, oriented along `prev`.
-    pub(super) fn tangent(jac: &SMatrix<f64, 4, 5>, prev: &Vector5) -> Option<Vector5> {
-        let mut big = Matrix5::zeros();
-        big.fixed_view_mut::<4, 5>(0, 0).copy_from(jac);
-        big.set_row(4, &prev.transpose());
-        let e5 = Vector5::new(0.0, 0.0, 0.0, 0.0, 1.0);
-        let t = big.lu().solve(&e5)?;
+    pub(super) fn tangent(jac: &DMatrix<f64>, prev: &DVector<f64>) -> Option<DVector<f64>> {
+        let big = bordered(jac, prev);
+        let mut e = DVector::zeros(prev.len());
+        e[prev.len() - 1] = 1.0;
+        let t = big.lu().solve(&e)?;
         let n = t.norm();
         if !(n.is_finite() && n > 0.0) {
             return None;
@@ -217,7 +228,7 @@ impl Continuer<'_, '_> {
         // The kernel at the new section, oriented so that the parameter moves the same way.
         let lin = self
             .shooter
-            .linearise(&o.forcing, param, o.phase_rad, o.state, &mut self.stats)
+            .linearise(&o.forcing, param, o.phase_rad, o.state_n(), &mut self.stats)
             .map_err(|e| OrbitError::Solver {
                 what: param.label(),
                 param: o.param(param),
@@ -225,7 +236,7 @@ impl Continuer<'_, '_> {
             })?;
         let jac = self.kernel_jacobian(&lin);
         let sign = p.param_tangent().signum();
-        let e = Vector5::new(0.0, 0.0, 0.0, 0.0, sign);
+        let e = join(&SVector::<f64, N>::zeros(), sign);
         let tangent = Self::tangent(&jac, &e).ok_or(OrbitError::NoConvergence {
             what: param.label(),
             param: o.param(param),
@@ -256,7 +267,7 @@ impl Continuer<'_, '_> {
         // The corrector must stay near its predictor: a correction much longer than the step
         // has left the branch (near a grazing corner it can land on another branch that passes
         // close by).
-        let predicted = self.u_of(&last.orbit) + last.tangent * ds;
+        let predicted = self.u_of(&last.orbit) + &last.tangent * ds;
         if (self.u_of(&p.orbit) - predicted).norm() > MAX_CORRECTION * ds {
             return Err(Rejection::LeftPredictor);
         }
@@ -329,17 +340,17 @@ impl Continuer<'_, '_> {
                     &f,
                     param,
                     last.orbit.phase_rad,
-                    last.orbit.state,
+                    last.orbit.state_n(),
                     &mut self.stats,
                 );
                 if let Ok(o) = solved {
                     if o.is_impacting() != leaving_contact {
                         let lin = self
                             .shooter
-                            .linearise(&o.forcing, param, o.phase_rad, o.state, &mut self.stats)
+                            .linearise(&o.forcing, param, o.phase_rad, o.state_n(), &mut self.stats)
                             .ok()?;
                         let jac = self.kernel_jacobian(&lin);
-                        let e = Vector5::new(0.0, 0.0, 0.0, 0.0, dir);
+                        let e = join(&SVector::<f64, N>::zeros(), dir);
                         let tangent = Self::tangent(&jac, &e)?;
                         return Some(BranchPoint { orbit: o, tangent });
                     }

@@ -10,13 +10,11 @@
 //! located as on a smooth branch; a branch point of a symmetric orbit is named by its
 //! half-period map ([`crate::study::orbit::HalfMap`]).
 
-use nalgebra::Complex;
+use nalgebra::{Complex, DVector};
 
 use crate::device::Device;
-use crate::drive::Sine;
+use crate::model::Model;
 use crate::ode::Stats;
-use crate::physics::contact::{Side, StopModel};
-use crate::physics::harvester::{Harvester, State};
 use crate::progress::{Progress, Silent};
 use crate::study::orbit::{Forcing, Orbit, OrbitError, OrbitSummary, Parameter, Shooter};
 
@@ -32,14 +30,14 @@ pub struct DiagramPoint {
     pub periods: u32,
     /// Floquet multipliers of the orbit (of its whole period), largest modulus first; not
     /// finite at a grazing impact.
-    pub multipliers: [Complex<f64>; 4],
+    pub multipliers: Vec<Complex<f64>>,
     /// Multipliers of the half-period map of a symmetric orbit.
-    pub half_multipliers: Option<[Complex<f64>; 4]>,
+    pub half_multipliers: Option<Vec<Complex<f64>>>,
     /// Whole-orbit measures (RMS voltages over the orbit's period; impacts over the whole
     /// orbit).
     pub summary: OrbitSummary,
     /// The drive phase (rad) and state at the orbit's first upward zero crossing of x.
-    pub section: Option<(f64, State)>,
+    pub section: Option<(f64, DVector<f64>)>,
     /// The speed of each impact (m/s), in the order of the orbit's impact sequence.
     pub impact_speeds_m_s: Vec<f64>,
     /// How far the orbit's free flights stay from the stops (m): the smallest distance from
@@ -52,7 +50,7 @@ pub struct DiagramPoint {
     pub residual: f64,
     /// The mean over the orbit's periods of its states at drive phase zero (how two orbits
     /// are told apart, whichever period is taken as the first).
-    pub fingerprint: State,
+    pub fingerprint: DVector<f64>,
 }
 
 impl DiagramPoint {
@@ -68,13 +66,13 @@ impl DiagramPoint {
 
     /// Largest modulus of the half-period map's multipliers, for a symmetric orbit.
     pub fn half_multiplier_max_abs(&self) -> Option<f64> {
-        self.half_multipliers.map(|h| h[0].norm())
+        self.half_multipliers.as_ref().map(|h| h[0].norm())
     }
 
     /// The phase by which the displacement lags the drive (degrees, in (-90, 270]): the
     /// drive's phase at the first upward zero crossing of x.
     pub fn phase_lag_deg(&self) -> Option<f64> {
-        let lag = self.section?.0.to_degrees();
+        let lag = self.section.as_ref()?.0.to_degrees();
         Some(if lag > 270.0 { lag - 360.0 } else { lag })
     }
 }
@@ -255,9 +253,11 @@ impl Diagram {
 
 /// True when every stop of the device is rigid (and it has one).
 pub fn all_stops_rigid(device: &Device) -> bool {
-    let h = Harvester::new(device, Sine::from_rms_g(1.0, 1.0));
-    let stops: Vec<_> = [h.upper, h.lower].into_iter().flatten().collect();
-    !stops.is_empty() && stops.iter().all(|s| matches!(s, StopModel::Rigid { .. }))
+    let stops: Vec<_> = device.stops.present().map(|(_, s)| s).collect();
+    !stops.is_empty()
+        && stops
+            .iter()
+            .all(|s| matches!(s.law, crate::device::StopLaw::Restitution { .. }))
 }
 
 /// The diagram of `device` under the drive `start` (at the settings' start value) over the
@@ -276,9 +276,10 @@ pub fn diagram(
     }
     progress.stage("periodic orbits from rest");
     let branch = branch_from_rest(device, start, settings, options.transient_periods, &Silent)?;
-    let h = Harvester::new(device, start.sine(0.0));
-    let shooter = Shooter::new(&h, settings.shooting);
-    Diagram::from_branch(&shooter, &branch)
+    crate::with_harvester!(device, |h| {
+        let shooter = Shooter::new(&h, settings.shooting);
+        Diagram::from_branch(&shooter, &branch)
+    })
 }
 
 /// The diagram of `device` at `accel_rms_g` (g rms) in frequency from `from_hz` to `to_hz`,
@@ -333,7 +334,10 @@ impl Diagram {
     /// point of a symmetric orbit whose half-period map has a multiplier at -1 is a
     /// symmetry-breaking pitchfork). `shooter` is the branch's, for the fingerprints and the
     /// half-period maps.
-    pub fn from_branch(shooter: &Shooter<'_>, branch: &Branch) -> Result<Self, OrbitError> {
+    pub fn from_branch<M: Model<N>, const N: usize>(
+        shooter: &Shooter<'_, M, N>,
+        branch: &Branch,
+    ) -> Result<Self, OrbitError> {
         let mut stats = Stats::default();
         let points = branch
             .points
@@ -348,7 +352,7 @@ impl Diagram {
                 BranchEventKind::Fold => EventKind::Fold,
                 BranchEventKind::BranchPoint => {
                     let half = shooter.half_map(&e.orbit, &mut stats)?;
-                    let at_minus_one = half.is_some_and(|h| {
+                    let at_minus_one = half.as_ref().is_some_and(|h| {
                         h.multipliers
                             .iter()
                             .any(|m| (m + 1.0).norm() < HALF_MINUS_ONE_TOL)
@@ -407,8 +411,8 @@ impl Diagram {
 }
 
 /// An orbit of the period map as a point of a diagram (its half-period map with `half`).
-pub(crate) fn orbit_point(
-    shooter: &Shooter<'_>,
+pub(crate) fn orbit_point<M: Model<N>, const N: usize>(
+    shooter: &Shooter<'_, M, N>,
     o: &Orbit,
     half: bool,
     stats: &mut Stats,
@@ -428,7 +432,7 @@ pub(crate) fn orbit_point(
     let w = 2.0 * std::f64::consts::PI * o.forcing.freq_hz;
     let section = o.summary.upcrossing_s.map(|t| {
         let phase = (o.phase_rad + w * t).rem_euclid(2.0 * std::f64::consts::PI);
-        (phase, o.state)
+        (phase, o.state.clone())
     });
     let mut speeds = Vec::new();
     for s in o.summary.impact_speed_m_s {
@@ -436,20 +440,20 @@ pub(crate) fn orbit_point(
             speeds.push(s);
         }
     }
-    let b = shooter.base;
-    let clearance_m =
-        (b.gap(Side::Upper) - o.summary.x_upper_m).min(b.gap(Side::Lower) + o.summary.x_lower_m);
+    let [(g_up, _), (g_lo, _)] = super::impacting::side_stops(shooter.base);
+    let clearance_m = (g_up - o.summary.x_upper_m).min(g_lo + o.summary.x_lower_m);
+    let symmetric = half.is_some();
     Ok(DiagramPoint {
         forcing: o.forcing,
         periods: 1,
-        multipliers: o.multipliers,
+        multipliers: o.multipliers.clone(),
         half_multipliers: half.map(|h| h.multipliers),
-        summary: o.summary,
+        summary: o.summary.clone(),
         section,
         impact_speeds_m_s: speeds,
         clearance_m,
-        symmetric: half.is_some(),
+        symmetric,
         residual: o.residual,
-        fingerprint,
+        fingerprint: DVector::from_column_slice(fingerprint.as_slice()),
     })
 }

@@ -3,6 +3,7 @@
 //! root finder along the branch, and the location of grazing on the branch of the same device
 //! without stops.
 
+use crate::model::Model;
 use crate::num::roots::{illinois, RootOptions, Sample};
 use crate::ode::Stats;
 use crate::study::orbit::{OrbitError, Shooter};
@@ -13,7 +14,7 @@ use super::test_functions::{
 };
 use super::{BranchPoint, Event, EventKind};
 
-impl Continuer<'_, '_> {
+impl<M: Model<N> + Clone, const N: usize> Continuer<'_, '_, M, N> {
     /// Locates a sign change of `test` between `a` (index `k`) and `b`, at arclength `ds`.
     #[allow(clippy::too_many_arguments)]
     fn locate(
@@ -86,7 +87,7 @@ impl Continuer<'_, '_> {
         ds: f64,
     ) -> Result<Event, OrbitError> {
         let gaps = Gaps::of(self.shooter.base);
-        let free_model = self.shooter.base.without_stops();
+        let free_model = self.shooter.base.without_contacts();
         let free = Shooter::with_scales(&free_model, self.shooter.cfg, self.shooter.scales());
         let mut c = Continuer {
             shooter: &free,
@@ -103,7 +104,7 @@ impl Continuer<'_, '_> {
             vec![
                 BranchPoint {
                     orbit: b.orbit.clone(),
-                    tangent: -b.tangent,
+                    tangent: -b.tangent.clone(),
                 },
                 b.clone(),
             ]
@@ -164,7 +165,7 @@ impl Continuer<'_, '_> {
         // the inverse impact speed): the interval holds a non-smooth point, across which no
         // smooth event is tested for, and a turn there is not a fold. The branches that meet
         // at such a point are the business of `impacting`.
-        let rigid = self.shooter.base.has_rigid_stop();
+        let rigid = self.shooter.base.contacts().iter().any(|c| c.rigid());
         let mut corner = false;
         if graze {
             // Located on the stop-free branch; a failure leaves the grazing unlocated (the
@@ -173,7 +174,7 @@ impl Continuer<'_, '_> {
                 if a.orbit.is_impacting() && !b.orbit.is_impacting() {
                     let away = self.u_of(&b.orbit) - self.u_of(&g.orbit);
                     if b.tangent.dot(&away) < 0.0 {
-                        b.tangent = -b.tangent;
+                        b.tangent = -b.tangent.clone();
                     }
                     corner = (a.param_tangent() > 0.0) != (b.param_tangent() > 0.0);
                 }

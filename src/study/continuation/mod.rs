@@ -43,11 +43,10 @@
 //! corner hops), `events.rs` the test functions and the location of events; this file holds the
 //! loop that drives them ([`continue_branch`]) and the entry points.
 
-use nalgebra::{SMatrix, SVector};
+use nalgebra::{DVector, SVector};
 
-use crate::drive::Sine;
+use crate::model::Model;
 use crate::ode::Stats;
-use crate::physics::harvester::{Harvester, State};
 use crate::progress::{share, Progress};
 use crate::study::orbit::{Forcing, Orbit, OrbitError, Parameter, Shooter};
 
@@ -65,17 +64,15 @@ pub use diagram::{
 };
 pub use types::{Branch, BranchPoint, ContinuationSettings, Event, EventKind, Rejection};
 
-type Vector5 = SVector<f64, 5>;
-type Matrix5 = SMatrix<f64, 5, 5>;
 
 /// The first orbit of a branch: Newton at `forcing` from `guess` (the state at drive phase
 /// zero), or, if that fails, from the state after a transient of `transient_periods` periods
 /// from `guess`; its section is then moved into free flight.
-pub fn first_orbit(
-    shooter: &Shooter<'_>,
+pub fn first_orbit<M: Model<N>, const N: usize>(
+    shooter: &Shooter<'_, M, N>,
     forcing: &Forcing,
     param: Parameter,
-    guess: State,
+    guess: SVector<f64, N>,
     transient_periods: usize,
     stats: &mut Stats,
 ) -> Result<Orbit, OrbitError> {
@@ -109,8 +106,8 @@ pub fn first_orbit(
 /// Continues the branch of periodic orbits of `base` through `first` (an orbit at the
 /// settings' start value) until the parameter passes `settings.stop`; `progress` is told of
 /// every accepted point's parameter as the share of the way from the start to the stop.
-pub fn continue_branch(
-    base: &Harvester<Sine>,
+pub fn continue_branch<M: Model<N> + Clone, const N: usize>(
+    base: &M,
     first: Orbit,
     settings: &ContinuationSettings,
     progress: &dyn Progress,
@@ -121,8 +118,8 @@ pub fn continue_branch(
 /// [`continue_branch`], ending early at the point after the first event for which
 /// `until(event)` is true (the branch then ends with that event, located as always): a caller
 /// that wants only the first fold need not follow the branch back from it.
-pub fn continue_branch_until(
-    base: &Harvester<Sine>,
+pub fn continue_branch_until<M: Model<N> + Clone, const N: usize>(
+    base: &M,
     first: Orbit,
     settings: &ContinuationSettings,
     progress: &dyn Progress,
@@ -139,13 +136,14 @@ pub fn continue_branch_until(
     let param = settings.parameter;
     let dir = settings.direction();
     // The first tangent: the kernel oriented along the parameter's direction.
-    let start_dir = Vector5::new(0.0, 0.0, 0.0, 0.0, dir);
+    let mut start_dir = DVector::zeros(N + 1);
+    start_dir[N] = dir;
     let lin = shooter
         .linearise(
             &first.forcing,
             param,
             first.phase_rad,
-            first.state,
+            first.state_n(),
             &mut c.stats,
         )
         .map_err(|e| OrbitError::Solver {
@@ -258,8 +256,24 @@ pub fn branch_from_rest(
     progress: &dyn Progress,
 ) -> Result<Branch, OrbitError> {
     settings.validate()?;
-    let h = Harvester::new(device, Sine::from_rms_g(start.accel_rms_g, start.freq_hz));
-    let shooter = Shooter::new(&h, settings.shooting);
+    crate::with_harvester!(device, |h| branch_of_model(
+        &h,
+        start,
+        settings,
+        transient_periods,
+        progress
+    ))
+}
+
+/// [`branch_from_rest`] on a model.
+pub fn branch_of_model<M: Model<N> + Clone, const N: usize>(
+    h: &M,
+    start: Forcing,
+    settings: &ContinuationSettings,
+    transient_periods: usize,
+    progress: &dyn Progress,
+) -> Result<Branch, OrbitError> {
+    let shooter = Shooter::new(h, settings.shooting);
     let mut stats = Stats::default();
     let first = first_orbit(
         &shooter,
@@ -269,7 +283,7 @@ pub fn branch_from_rest(
         transient_periods,
         &mut stats,
     )?;
-    let mut branch = continue_branch(&h, first, settings, progress)?;
+    let mut branch = continue_branch(h, first, settings, progress)?;
     branch.stats += stats;
     Ok(branch)
 }

@@ -3,9 +3,7 @@
 //! corrector (which watches grazing and the +1 multiplier while it steps) and the event
 //! location along the branch read them here.
 
-use crate::drive::Sine;
-use crate::physics::contact::Side;
-use crate::physics::harvester::Harvester;
+use crate::model::Model;
 
 use super::BranchPoint;
 
@@ -19,11 +17,22 @@ pub(super) struct Gaps {
 }
 
 impl Gaps {
-    pub(super) fn of(h: &Harvester<Sine>) -> Self {
+    /// The gaps of the first mass's stops to the frame: the sides the orbit's summary measures.
+    pub(super) fn of<M: Model<N>, const N: usize>(h: &M) -> Self {
+        let (mut upper, mut lower) = (f64::INFINITY, f64::INFINITY);
+        for c in h.contacts() {
+            if c.mass == 0 && c.other.is_none() {
+                if c.side > 0.0 {
+                    upper = upper.min(c.gap);
+                } else {
+                    lower = lower.min(c.gap);
+                }
+            }
+        }
         Self {
-            upper: h.gap(Side::Upper),
-            lower: h.gap(Side::Lower),
-            w0: h.well_omega_rad_s(),
+            upper,
+            lower,
+            w0: h.omega_rad_s(),
         }
     }
 

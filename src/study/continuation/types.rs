@@ -1,10 +1,11 @@
 //! What a continuation is given and what it gives: its settings, the points and events of a
 //! branch, and why a step was rejected.
 
+use nalgebra::DVector;
+
+use crate::model::Model;
 use crate::ode::Stats;
 use crate::study::orbit::{Orbit, OrbitError, Parameter, Shooter, ShootingConfig};
-
-use super::Vector5;
 
 /// Settings of a continuation.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -128,14 +129,15 @@ impl ContinuationSettings {
 pub struct BranchPoint {
     /// The orbit.
     pub orbit: Orbit,
-    /// Unit tangent (dz, dq) in scaled coordinates, oriented along the branch.
-    pub tangent: Vector5,
+    /// Unit tangent (dz, dq) in scaled coordinates, oriented along the branch: the state's
+    /// components, then the parameter's.
+    pub tangent: DVector<f64>,
 }
 
 impl BranchPoint {
     /// The parameter component of the tangent (its sign changes at a fold).
     pub fn param_tangent(&self) -> f64 {
-        self.tangent[4]
+        self.tangent[self.tangent.len() - 1]
     }
 }
 
@@ -265,9 +267,9 @@ impl Branch {
 
     /// Every point of the branch at parameter `value`, corrected there: one orbit per crossing
     /// of `value` by the branch (in branch order).
-    pub fn orbits_at(
+    pub fn orbits_at<M: Model<N>, const N: usize>(
         &self,
-        shooter: &Shooter<'_>,
+        shooter: &Shooter<'_, M, N>,
         value: f64,
         stats: &mut Stats,
     ) -> Result<Vec<Orbit>, OrbitError> {
@@ -286,7 +288,7 @@ impl Branch {
                 &w[1].orbit
             };
             let f = start.forcing.with(self.parameter, value);
-            let mut o = shooter.solve(&f, self.parameter, start.phase_rad, start.state, stats)?;
+            let mut o = shooter.solve(&f, self.parameter, start.phase_rad, start.state_n(), stats)?;
             if !shooter.section_is_free(&o) {
                 o = shooter.reanchor(&o, self.parameter, stats)?;
             }

@@ -51,10 +51,11 @@ pub use walk::{GRAZE_MARGIN, MIN_STEPS_PER_OSCILLATION, MIN_STEPS_PER_PERIOD};
 pub(crate) use affine::AffineMode;
 pub(crate) use walk::{cubic_max, Carrier, Engine};
 
+use nalgebra::SVector;
+
 use crate::drive::Sine;
+use crate::model::{Driven, Mode, Model};
 use crate::ode::{Observer, Options, SolverError, Stats, Step, Steps};
-use crate::physics::contact::Mode;
-use crate::physics::harvester::{Harvester, State};
 
 /// How a [`SineFlow`] integrates.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -65,36 +66,38 @@ pub enum SineScheme {
     Dopri5,
 }
 
-/// The integration of a sine-driven harvester (see the module docs).
-pub struct SineFlow<'m> {
-    engine: Engine<'m, Harvester<Sine>>,
+/// The integration of a model under a sine (see the module docs).
+pub struct SineFlow<'m, M: Model<N>, const N: usize> {
+    engine: Engine<Driven<'m, M, Sine, N>, N>,
 }
 
-impl<'m> SineFlow<'m> {
-    /// An integrator of `model` from `y0` in `mode` at time `t0`, with Dormand-Prince at
-    /// relative tolerance `rtol` ([`Harvester::solver_options`]) where it is not exact.
-    pub fn new(model: &'m Harvester<Sine>, t0: f64, y0: State, mode: Mode, rtol: f64) -> Self {
-        Self::with(
-            model,
-            t0,
-            y0,
-            mode,
-            model.solver_options(rtol),
-            SineScheme::Exact,
-        )
+impl<'m, M: Model<N>, const N: usize> SineFlow<'m, M, N> {
+    /// An integrator of `model` under `sine` from `y0` in `mode` at time `t0`, with
+    /// Dormand-Prince at relative tolerance `rtol` ([`Model::solver_options`]) where it is not
+    /// exact.
+    pub fn new(model: &'m M, sine: Sine, t0: f64, y0: SVector<f64, N>, mode: Mode, rtol: f64) -> Self {
+        Self::with(model, sine, t0, y0, mode, model.solver_options(rtol), SineScheme::Exact)
     }
 
     /// As [`SineFlow::new`], with the integrator's options and the scheme given.
     pub fn with(
-        model: &'m Harvester<Sine>,
+        model: &'m M,
+        sine: Sine,
         t0: f64,
-        y0: State,
+        y0: SVector<f64, N>,
         mode: Mode,
-        opts: Options<State>,
+        opts: Options<SVector<f64, N>>,
         scheme: SineScheme,
     ) -> Self {
         Self {
-            engine: Engine::new(model, t0, y0, mode, opts, scheme == SineScheme::Exact),
+            engine: Engine::new(
+                Driven::new(model, sine),
+                t0,
+                y0,
+                mode,
+                opts,
+                scheme == SineScheme::Exact,
+            ),
         }
     }
 
@@ -110,7 +113,7 @@ impl<'m> SineFlow<'m> {
     }
 
     /// Current state.
-    pub fn y(&self) -> State {
+    pub fn y(&self) -> SVector<f64, N> {
         self.engine.z()
     }
 
@@ -125,7 +128,7 @@ impl<'m> SineFlow<'m> {
     }
 
     /// Integrates to `t_end`, calling `observer` with every step and the mode over it.
-    pub fn integrate<O: FnMut(&Step<State>, Mode)>(
+    pub fn integrate<O: FnMut(&Step<SVector<f64, N>>, Mode)>(
         &mut self,
         t_end: f64,
         observer: O,
@@ -134,7 +137,7 @@ impl<'m> SineFlow<'m> {
     }
 
     /// Integrates to `t_end`, showing `observer` every step and every mode switch.
-    pub fn integrate_observed<O: Observer<State, Mode>>(
+    pub fn integrate_observed<O: Observer<SVector<f64, N>, Mode>>(
         &mut self,
         t_end: f64,
         observer: &mut O,

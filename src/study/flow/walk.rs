@@ -3,16 +3,15 @@
 //! It carries either the state alone or the state with its variational equations
 //! ([`Carrier`]).
 
-use nalgebra::Matrix4;
+use nalgebra::{SMatrix, SVector};
 
 use crate::drive::Sine;
-use crate::ode::phi::expm;
+use crate::model::{Driven, Mode, Model};
+use crate::ode::phi::expm_n;
 use crate::ode::MAX_SWITCHES_AT_ONE_TIME;
 use crate::ode::{Dopri5, HybridSystem, Observer, Options, SolverError, Stats, Step, Vector};
-use crate::physics::contact::Mode;
-use crate::physics::harvester::{Harvester, State};
 
-use super::affine::{AffineMode, AffineModes};
+use super::affine::{fastest_oscillation, AffineMode};
 
 /// Fewest grid steps per drive period.
 pub const MIN_STEPS_PER_PERIOD: usize = 64;
@@ -25,11 +24,17 @@ pub const MIN_STEPS_PER_OSCILLATION: usize = 32;
 /// is maximised on the exact solution (see the module docs of [`super`]).
 pub const GRAZE_MARGIN: f64 = 1e-3;
 
-/// What the engine integrates: the harvester's state, or the state with its variational
+/// What the engine integrates: a model's state under a sine, or the state with its variational
 /// equations. The state is the head of the vector.
-pub(crate) trait Carrier: HybridSystem<Mode = Mode> {
-    /// The harvester under its drive.
-    fn harvester(&self) -> &Harvester<Sine>;
+pub(crate) trait Carrier<const N: usize>: HybridSystem<Mode = Mode> {
+    /// The model.
+    type M: Model<N>;
+
+    /// The model.
+    fn model(&self) -> &Self::M;
+
+    /// The drive.
+    fn sine(&self) -> &Sine;
 
     /// True when the observers are shown every step with its dense output.
     const DENSE: bool;
@@ -38,25 +43,30 @@ pub(crate) trait Carrier: HybridSystem<Mode = Mode> {
     /// `z` at `t` and the state `y1` at `t + s`.
     fn carry(
         &self,
-        am: &AffineMode,
-        e: &Matrix4<f64>,
+        am: &AffineMode<N>,
+        e: &SMatrix<f64, N, N>,
         t: f64,
         s: f64,
         z: &Self::State,
-        y1: &State,
+        y1: &SVector<f64, N>,
     ) -> Self::State;
 }
 
 /// The state at the head of a carried vector.
 #[inline(always)]
-pub(crate) fn head<V: Vector>(z: &V) -> State {
-    let c = z.components();
-    State::new(c[0], c[1], c[2], c[3])
+pub(crate) fn head<V: Vector, const N: usize>(z: &V) -> SVector<f64, N> {
+    SVector::<f64, N>::from_column_slice(&z.components()[..N])
 }
 
-impl Carrier for Harvester<Sine> {
-    fn harvester(&self) -> &Harvester<Sine> {
-        self
+impl<M: Model<N>, const N: usize> Carrier<N> for Driven<'_, M, Sine, N> {
+    type M = M;
+
+    fn model(&self) -> &M {
+        self.model
+    }
+
+    fn sine(&self) -> &Sine {
+        &self.drive
     }
 
     const DENSE: bool = true;
@@ -64,13 +74,13 @@ impl Carrier for Harvester<Sine> {
     #[inline(always)]
     fn carry(
         &self,
-        _: &AffineMode,
-        _: &Matrix4<f64>,
+        _: &AffineMode<N>,
+        _: &SMatrix<f64, N, N>,
         _: f64,
         _: f64,
-        _: &State,
-        y1: &State,
-    ) -> State {
+        _: &SVector<f64, N>,
+        y1: &SVector<f64, N>,
+    ) -> SVector<f64, N> {
         *y1
     }
 }
@@ -78,18 +88,18 @@ impl Carrier for Harvester<Sine> {
 /// The propagators of one affine mode on the grid: `e^{hL}` and `e^{h L / 2^j}`
 /// (computed when first needed).
 #[derive(Debug, Clone)]
-struct Propagators {
-    step: Matrix4<f64>,
+struct Propagators<const N: usize> {
+    step: SMatrix<f64, N, N>,
     /// `dyadic[j - 1] = e^{h L / 2^j}`.
-    dyadic: Vec<Matrix4<f64>>,
-    l: Matrix4<f64>,
+    dyadic: Vec<SMatrix<f64, N, N>>,
+    l: SMatrix<f64, N, N>,
     h: f64,
 }
 
-impl Propagators {
-    fn new(l: &Matrix4<f64>, h: f64) -> Self {
+impl<const N: usize> Propagators<N> {
+    fn new(l: &SMatrix<f64, N, N>, h: f64) -> Self {
         Self {
-            step: expm(&(l * h)),
+            step: expm_n(&(l * h)),
             dyadic: Vec::new(),
             l: *l,
             h,
@@ -97,10 +107,10 @@ impl Propagators {
     }
 
     /// `e^{h L / 2^j}`, `j >= 1`.
-    fn dyadic(&mut self, j: usize) -> &Matrix4<f64> {
+    fn dyadic(&mut self, j: usize) -> &SMatrix<f64, N, N> {
         while self.dyadic.len() < j {
             let k = self.dyadic.len() + 1;
-            let m = expm(&(self.l * (self.h * 0.5f64.powi(k as i32))));
+            let m = expm_n(&(self.l * (self.h * 0.5f64.powi(k as i32))));
             self.dyadic.push(m);
         }
         &self.dyadic[j - 1]
@@ -110,16 +120,10 @@ impl Propagators {
 /// The grid step of a model under its drive: [`MIN_STEPS_PER_PERIOD`] per period at least,
 /// and [`MIN_STEPS_PER_OSCILLATION`] per period of the fastest oscillation of its affine
 /// modes, a whole number per drive period.
-fn grid_step(model: &Harvester<Sine>, modes: &AffineModes) -> f64 {
-    let period = model.excitation.period_s();
-    let active = model.active_states();
+fn grid_step<const N: usize>(period: f64, modes: &[AffineMode<N>], unused: &[usize]) -> f64 {
     let mut fastest = 0.0f64;
-    for i in 0..modes.len() {
-        let l = modes.at(i).l;
-        let block = l.view((0, 0), (active, active)).clone_owned();
-        for ev in block.complex_eigenvalues().iter() {
-            fastest = fastest.max(ev.im.abs());
-        }
+    for m in modes {
+        fastest = fastest.max(fastest_oscillation(&m.l, unused));
     }
     let per_oscillation =
         (period * fastest / (2.0 * std::f64::consts::PI) * MIN_STEPS_PER_OSCILLATION as f64).ceil();
@@ -128,17 +132,19 @@ fn grid_step(model: &Harvester<Sine>, modes: &AffineModes) -> f64 {
 }
 
 /// A located event: where in the step (s from its start), which guard, and the state there.
-struct Located {
+struct Located<const N: usize> {
     s: f64,
     index: usize,
-    y: State,
+    y: SVector<f64, N>,
 }
 
 /// The exact-and-Dormand-Prince integration of a [`Carrier`] (see [`super`]).
-pub(crate) struct Engine<'a, S: Carrier> {
-    sys: &'a S,
-    modes: Option<AffineModes>,
-    props: Vec<Propagators>,
+pub(crate) struct Engine<S: Carrier<N>, const N: usize> {
+    sys: S,
+    /// The affine modes (none when the free flight is not affine: then everything goes to
+    /// Dormand-Prince).
+    modes: Option<Vec<AffineMode<N>>>,
+    props: Vec<Propagators<N>>,
     h: f64,
     t: f64,
     z: S::State,
@@ -152,13 +158,33 @@ pub(crate) struct Engine<'a, S: Carrier> {
     /// Switches made at the current time by the exact path.
     switches_here: u32,
     /// The model's state scales (for the guards' scales).
-    scales: State,
+    scales: SVector<f64, N>,
 }
 
-impl<'a, S: Carrier> Engine<'a, S> {
+/// The affine modes of a model under a sine: every mode the model can be in whose affine
+/// form it gives, or none when its free flight is not affine.
+fn affine_modes<M: Model<N>, const N: usize>(model: &M, sine: &Sine) -> Option<Vec<AffineMode<N>>> {
+    let unused = model.unused();
+    let free = model.affine(Mode::FREE)?;
+    let first = AffineMode::of(Mode::FREE, free, sine, unused)?;
+    let mut modes = vec![first];
+    for m in model.modes() {
+        if m == Mode::FREE {
+            continue;
+        }
+        if let Some(a) = model.affine(m) {
+            if let Some(am) = AffineMode::of(m, a, sine, unused) {
+                modes.push(am);
+            }
+        }
+    }
+    Some(modes)
+}
+
+impl<S: Carrier<N>, const N: usize> Engine<S, N> {
     /// An engine at `(t0, z0)` in `mode`; `exact` false sends everything to Dormand-Prince.
     pub(crate) fn new(
-        sys: &'a S,
+        sys: S,
         t0: f64,
         z0: S::State,
         mode: Mode,
@@ -166,19 +192,22 @@ impl<'a, S: Carrier> Engine<'a, S> {
         exact: bool,
     ) -> Self {
         let time_tol = opts.event_time_tol;
-        let model = sys.harvester();
-        let modes = if exact { AffineModes::of(model) } else { None };
+        let model = sys.model();
+        let modes = if exact {
+            affine_modes(model, sys.sine())
+        } else {
+            None
+        };
         let exact_path = modes.is_some();
         let (h, props) = match &modes {
             Some(m) => {
-                let h = grid_step(model, m);
-                let props = (0..m.len())
-                    .map(|i| Propagators::new(&m.at(i).l, h))
-                    .collect();
+                let h = grid_step(sys.sine().period_s(), m, model.unused());
+                let props = m.iter().map(|a| Propagators::new(&a.l, h)).collect();
                 (h, props)
             }
             None => (0.0, Vec::new()),
         };
+        let scales = model.scales();
         Self {
             sys,
             modes,
@@ -192,8 +221,13 @@ impl<'a, S: Carrier> Engine<'a, S> {
             stats: Stats::default(),
             time_tol,
             switches_here: 0,
-            scales: model.scales(),
+            scales,
         }
+    }
+
+    /// The system integrated.
+    pub(crate) fn system(&self) -> &S {
+        &self.sys
     }
 
     /// True when the affine modes are integrated exactly.
@@ -234,8 +268,8 @@ impl<'a, S: Carrier> Engine<'a, S> {
         while self.t < t_end {
             if self.ode_current {
                 let modes = &self.modes;
-                let back = self.ode.integrate_until(self.sys, t_end, observer, |m| {
-                    modes.as_ref().is_some_and(|a| a.index(m).is_some())
+                let back = self.ode.integrate_until(&self.sys, t_end, observer, |m| {
+                    modes.as_ref().is_some_and(|a| a.iter().any(|am| am.mode == m))
                 })?;
                 self.t = self.ode.t();
                 self.z = self.ode.y();
@@ -245,7 +279,12 @@ impl<'a, S: Carrier> Engine<'a, S> {
                     self.switches_here = 0;
                 }
             } else {
-                match self.modes.as_ref().and_then(|m| m.index(self.mode)) {
+                let mode = self.mode;
+                match self
+                    .modes
+                    .as_ref()
+                    .and_then(|m| m.iter().position(|am| am.mode == mode))
+                {
                     Some(i) => self.exact(i, t_end, observer)?,
                     None => self.hand_over(self.mode),
                 }
@@ -286,10 +325,10 @@ impl<'a, S: Carrier> Engine<'a, S> {
         observer: &mut O,
     ) -> Result<(), SolverError> {
         let modes = self.modes.as_ref().expect("an affine mode has its modes");
-        let am = modes.at(i).clone();
+        let am = modes[i].clone();
         // A guard already positive at the start fires at once (as in Dormand-Prince).
-        let y = head(&self.z);
-        if let Some(g) = am.guards.iter().flatten().find(|g| g.at(&y) > 0.0) {
+        let y: SVector<f64, N> = head(&self.z);
+        if let Some(g) = am.guards.iter().find(|g| g.at(&y) > 0.0) {
             return self.switch(&am, g.index, y, observer);
         }
         let t0 = self.t;
@@ -306,7 +345,7 @@ impl<'a, S: Carrier> Engine<'a, S> {
             let e = if whole {
                 self.props[i].step
             } else {
-                expm(&(am.l * s))
+                expm_n(&(am.l * s))
             };
             let (p1, a1) = am.forced(t1);
             let y1 = e * (at.y - at.p) + p1;
@@ -321,7 +360,7 @@ impl<'a, S: Carrier> Engine<'a, S> {
             if let Some(ev) = self.locate(i, &am, &at, &next) {
                 // The step to the event, then the switch.
                 if ev.s > 0.0 {
-                    let e_ev = expm(&(am.l * ev.s));
+                    let e_ev = expm_n(&(am.l * ev.s));
                     let (p_ev, a_ev) = am.forced(at.t + ev.s);
                     let end = Point {
                         t: at.t + ev.s,
@@ -350,17 +389,17 @@ impl<'a, S: Carrier> Engine<'a, S> {
     /// the exact midpoint (`half` is `e^{sL/2}` when known).
     fn show<O: Observer<S::State, Mode>>(
         &self,
-        am: &AffineMode,
+        am: &AffineMode<N>,
         observer: &mut O,
-        a: &Point,
-        b: &Point,
-        half: Option<Matrix4<f64>>,
+        a: &Point<N>,
+        b: &Point<N>,
+        half: Option<SMatrix<f64, N, N>>,
     ) {
         if !S::DENSE {
             return;
         }
         let s = b.t - a.t;
-        let half = half.unwrap_or_else(|| expm(&(am.l * (0.5 * s))));
+        let half = half.unwrap_or_else(|| expm_n(&(am.l * (0.5 * s))));
         let y_mid = half * (a.y - a.p) + am.particular(a.t + 0.5 * s);
         let step = Step::from_ends_and_midpoint(
             a.t,
@@ -376,16 +415,19 @@ impl<'a, S: Carrier> Engine<'a, S> {
     /// the point to Dormand-Prince, which fires the guard at once.
     fn switch<O: Observer<S::State, Mode>>(
         &mut self,
-        am: &AffineMode,
+        am: &AffineMode<N>,
         index: usize,
-        y: State,
+        y: SVector<f64, N>,
         observer: &mut O,
     ) -> Result<(), SolverError> {
         let mut z = self.z;
-        z.components_mut()[..4].copy_from_slice(y.as_slice());
+        z.components_mut()[..N].copy_from_slice(y.as_slice());
         let mut z_new = z;
         let to = self.sys.switch(am.mode, index, self.t, &mut z_new);
-        let affine = self.modes.as_ref().is_some_and(|m| m.index(to).is_some());
+        let affine = self
+            .modes
+            .as_ref()
+            .is_some_and(|m| m.iter().any(|am| am.mode == to));
         if affine {
             self.switches_here += 1;
             if self.switches_here > MAX_SWITCHES_AT_ONE_TIME {
@@ -411,10 +453,16 @@ impl<'a, S: Carrier> Engine<'a, S> {
 
     /// The earliest crossing of a guard of `am` within the step from `a` to `b`, on the exact
     /// solution (see [`super`]).
-    fn locate(&mut self, i: usize, am: &AffineMode, a: &Point, b: &Point) -> Option<Located> {
+    fn locate(
+        &mut self,
+        i: usize,
+        am: &AffineMode<N>,
+        a: &Point<N>,
+        b: &Point<N>,
+    ) -> Option<Located<N>> {
         let s = b.t - a.t;
-        let mut best: Option<Located> = None;
-        for g in am.guards.iter().flatten() {
+        let mut best: Option<Located<N>> = None;
+        for g in am.guards.iter() {
             let (g0, g1) = (g.at(&a.y), g.at(&b.y));
             let upper = if g1 > 0.0 {
                 Some((s, b.y))
@@ -458,12 +506,12 @@ impl<'a, S: Carrier> Engine<'a, S> {
     fn bisect_with(
         &mut self,
         i: usize,
-        am: &AffineMode,
-        a: &Point,
+        am: &AffineMode<N>,
+        a: &Point<N>,
         s: f64,
-        y_s: Option<State>,
-        past: impl Fn(&State, f64) -> bool,
-    ) -> (f64, State) {
+        y_s: Option<SVector<f64, N>>,
+        past: impl Fn(&SVector<f64, N>, f64) -> bool,
+    ) -> (f64, SVector<f64, N>) {
         let (mut lo, mut y_lo, mut p_lo) = (0.0, a.y, a.p);
         let (mut hi, mut y_hi) = (s, y_s);
         let mut j = 0usize;
@@ -482,7 +530,7 @@ impl<'a, S: Carrier> Engine<'a, S> {
                 (lo, y_lo, p_lo) = (lo + ds, y_c, p_c);
             }
         }
-        let y = y_hi.unwrap_or_else(|| expm(&(am.l * hi)) * (a.y - a.p) + am.particular(a.t + hi));
+        let y = y_hi.unwrap_or_else(|| expm_n(&(am.l * hi)) * (a.y - a.p) + am.particular(a.t + hi));
         (hi, y)
     }
 
@@ -490,11 +538,11 @@ impl<'a, S: Carrier> Engine<'a, S> {
     fn bisect(
         &mut self,
         i: usize,
-        am: &AffineMode,
-        a: &Point,
+        am: &AffineMode<N>,
+        a: &Point<N>,
         s: f64,
-        past: impl Fn(&State, f64) -> bool,
-    ) -> (f64, State) {
+        past: impl Fn(&SVector<f64, N>, f64) -> bool,
+    ) -> (f64, SVector<f64, N>) {
         self.bisect_with(i, am, a, s, None, past)
     }
 }
@@ -502,11 +550,11 @@ impl<'a, S: Carrier> Engine<'a, S> {
 /// A point of an exact step: time, state, the particular solution and the right-hand side
 /// there.
 #[derive(Debug, Clone, Copy)]
-struct Point {
+struct Point<const N: usize> {
     t: f64,
-    y: State,
-    p: State,
-    f: State,
+    y: SVector<f64, N>,
+    p: SVector<f64, N>,
+    f: SVector<f64, N>,
 }
 
 /// The largest value of the cubic Hermite interpolant with end values `g0`, `g1` and end
@@ -541,10 +589,10 @@ pub(crate) fn cubic_max(g0: f64, d0: f64, g1: f64, d1: f64) -> f64 {
 
 /// A state as a carried vector's head (zeros elsewhere), for the dense steps of the state.
 #[inline(always)]
-fn widen<V: Vector>(y: &State) -> V {
+fn widen<V: Vector, const N: usize>(y: &SVector<f64, N>) -> V {
     let mut z = V::zeros();
     let c = z.components_mut();
-    let n = c.len().min(4);
+    let n = c.len().min(N);
     c[..n].copy_from_slice(&y.as_slice()[..n]);
     z
 }

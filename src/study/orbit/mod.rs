@@ -49,42 +49,22 @@
 //! [`Harvester::scales`]: crate::physics::harvester::Harvester::scales
 //! [`Harvester::jacobian`]: crate::physics::harvester::Harvester::jacobian
 
-use nalgebra::{Complex, Matrix4};
+use nalgebra::{Complex, DMatrix, DVector, SMatrix, SVector};
 use thiserror::Error;
 
 use crate::drive::Sine;
+use crate::model::Layout;
 use crate::ode::SolverError;
-use crate::physics::harvester::State;
 
 mod period_sums;
 mod shooter;
 mod symmetry;
 mod variational;
 
-pub use shooter::{mode_of, Linearised, Shooter};
-pub use symmetry::{mirror, HalfMap, SYMMETRY_TOL};
+pub use shooter::{Linearised, Shooter};
+pub use symmetry::{HalfMap, SYMMETRY_TOL};
 
-/// Dimension of the state with its variational equations: 4 + 16 (monodromy) + 4 (dP/dp).
-pub const VARIATIONAL_DIM: usize = 24;
-
-/// The parameter a continuation varies.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Parameter {
-    /// Drive frequency (Hz).
-    Frequency,
-    /// RMS acceleration (g).
-    Amplitude,
-}
-
-impl Parameter {
-    /// Label with unit, for messages.
-    pub fn label(self) -> &'static str {
-        match self {
-            Parameter::Frequency => "frequency (Hz)",
-            Parameter::Amplitude => "RMS acceleration (g)",
-        }
-    }
-}
+pub use crate::drive::Parameter;
 
 /// A sinusoidal drive: frequency and RMS acceleration.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -219,17 +199,24 @@ pub enum OrbitError {
     /// Bad input.
     #[error("invalid input: {0}")]
     Invalid(String),
+    /// The device's parts do not assemble into a model.
+    #[error(transparent)]
+    Device(#[from] crate::physics::assembly::AssemblyError),
 }
 
 /// Whole-period measures of an orbit.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct OrbitSummary {
-    /// RMS voltage of load 1 (V).
+    /// RMS of the model's first output over the period (for a transducer with its loads, the
+    /// voltage of load 1; behind a circuit, the storage voltage) (V).
     pub v1_rms_v: f64,
-    /// RMS voltage of load 2 (V).
+    /// RMS of the model's second output (load 2's voltage; behind a circuit, the element's).
     pub v2_rms_v: f64,
-    /// Mean power of both loads (W).
+    /// Mean power of the loads the outputs are across (W).
     pub p_total_w: f64,
+    /// Per output, its mean and RMS over the period, in the units of
+    /// [`Layout::outputs`].
+    pub outputs: Vec<OutputStats>,
     /// Largest |x| over the period (m), at a zero of v located on the dense output.
     pub x_max_m: f64,
     /// Largest x (m).
@@ -248,6 +235,81 @@ pub struct OrbitSummary {
     pub upcrossing_s: Option<f64>,
 }
 
+/// One output's mean and RMS over a period.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct OutputStats {
+    /// Mean.
+    pub mean: f64,
+    /// Root mean square.
+    pub rms: f64,
+}
+
+impl OrbitSummary {
+    /// The summary of a period's sums for a model's layout.
+    pub(crate) fn of(layout: &Layout, acc: &period_sums::Sums, period: f64) -> Self {
+        Self::from_integrals(
+            layout,
+            &acc.squares,
+            &acc.integrals,
+            period,
+            Extent {
+                x_upper_m: acc.x_upper,
+                x_lower_m: acc.x_lower,
+                contact_fraction: acc.contact_time / period,
+                impacts: acc.impacts,
+                impact_speed_m_s: [acc.impact_speed[0], acc.impact_speed[1]],
+                upcrossing_s: acc.upcrossing,
+            },
+        )
+    }
+
+    /// The summary of an orbit of `period` (s) from the integrals over it of each output's
+    /// square and of itself, and how far it reaches.
+    pub(crate) fn from_integrals(
+        layout: &Layout,
+        squares: &[f64],
+        integrals: &[f64],
+        period: f64,
+        extent: Extent,
+    ) -> Self {
+        let outputs: Vec<OutputStats> = squares
+            .iter()
+            .zip(integrals)
+            .map(|(sq, int)| OutputStats {
+                mean: int / period,
+                rms: (sq / period).sqrt(),
+            })
+            .collect();
+        let rms = |i: usize| outputs.get(i).map_or(0.0, |o| o.rms);
+        let p_total_w = layout.load_power(squares, integrals, period);
+        Self {
+            v1_rms_v: rms(0),
+            v2_rms_v: rms(1),
+            p_total_w,
+            outputs,
+            x_max_m: extent.x_upper_m.max(-extent.x_lower_m),
+            x_upper_m: extent.x_upper_m,
+            x_lower_m: extent.x_lower_m,
+            contact_fraction: extent.contact_fraction,
+            impacts: extent.impacts,
+            impact_speed_m_s: extent.impact_speed_m_s,
+            upcrossing_s: extent.upcrossing_s,
+        }
+    }
+}
+
+/// How far an orbit reaches over its period (the measures of [`OrbitSummary`] besides its
+/// outputs').
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct Extent {
+    pub(crate) x_upper_m: f64,
+    pub(crate) x_lower_m: f64,
+    pub(crate) contact_fraction: f64,
+    pub(crate) impacts: u32,
+    pub(crate) impact_speed_m_s: [f64; 2],
+    pub(crate) upcrossing_s: Option<f64>,
+}
+
 /// A periodic orbit with its stability.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Orbit {
@@ -255,13 +317,13 @@ pub struct Orbit {
     pub forcing: Forcing,
     /// Drive phase at the section (rad).
     pub phase_rad: f64,
-    /// State at the section.
-    pub state: State,
+    /// State at the section (the model's components, [`crate::model::Layout`]).
+    pub state: DVector<f64>,
     /// Monodromy matrix in scaled coordinates (z = y / scales).
-    pub monodromy: Matrix4<f64>,
-    /// Floquet multipliers, largest modulus first (a state component the transducer leaves
+    pub monodromy: DMatrix<f64>,
+    /// Floquet multipliers, largest modulus first (a state component the model leaves
     /// unused contributes a multiplier 0).
-    pub multipliers: [Complex<f64>; 4],
+    pub multipliers: Vec<Complex<f64>>,
     /// |P(y) - y| / |y| of the plain period map (scaled coordinates).
     pub residual: f64,
     /// Newton iterations used.
@@ -271,6 +333,16 @@ pub struct Orbit {
 }
 
 impl Orbit {
+    /// The state at the section as a model's state of dimension `N`.
+    pub fn state_n<const N: usize>(&self) -> SVector<f64, N> {
+        SVector::<f64, N>::from_column_slice(self.state.as_slice())
+    }
+
+    /// The scaled monodromy as a matrix of dimension `N`.
+    pub fn monodromy_n<const N: usize>(&self) -> SMatrix<f64, N, N> {
+        SMatrix::<f64, N, N>::from_column_slice(self.monodromy.as_slice())
+    }
+
     /// Largest modulus of the multipliers.
     pub fn max_multiplier_abs(&self) -> f64 {
         self.multipliers[0].norm()
@@ -318,10 +390,10 @@ pub const CHORD_STEPS: usize = 4;
 
 /// The eigenvalues of a monodromy matrix, largest modulus first (None if the Schur iteration
 /// fails).
-pub fn multipliers(m: &Matrix4<f64>) -> Option<[Complex<f64>; 4]> {
+pub fn multipliers<const N: usize>(m: &SMatrix<f64, N, N>) -> Option<Vec<Complex<f64>>> {
     let schur = nalgebra::Schur::try_new(*m, f64::EPSILON, 10_000)?;
     let ev = schur.complex_eigenvalues();
-    let mut out = [ev[0], ev[1], ev[2], ev[3]];
+    let mut out: Vec<Complex<f64>> = ev.iter().copied().collect();
     out.sort_by(|a, b| b.norm().total_cmp(&a.norm()));
     Some(out)
 }

@@ -1,17 +1,19 @@
-//! The sums over one period of an orbit (RMS voltages, extreme displacements, time in
-//! contact, impacts, the first upward zero crossing) that make its [`super::OrbitSummary`].
+//! The sums over one period of an orbit (the outputs' means and mean squares, extreme
+//! displacements, time in contact, impacts, the first upward zero crossing) that make its
+//! [`super::OrbitSummary`].
 
-use crate::drive::Sine;
+use nalgebra::SVector;
+
+use crate::model::{Mode, Model, SwitchKind, MAX_CONTACTS, MAX_OUTPUTS};
 use crate::num::roots::{illinois, RootOptions, Sample};
 use crate::ode::{Observer, Step};
-use crate::physics::contact::Mode;
-use crate::physics::harvester::{Harvester, State, SwitchKind};
 
 /// Whole-period sums over the accepted steps of one period.
 #[derive(Debug)]
 pub(super) struct Sums {
-    pub(super) v1sq: f64,
-    pub(super) v2sq: f64,
+    /// Per output, the integrals of its square and of itself.
+    pub(super) squares: Vec<f64>,
+    pub(super) integrals: Vec<f64>,
     pub(super) x_upper: f64,
     pub(super) x_lower: f64,
     pub(super) contact_time: f64,
@@ -20,16 +22,16 @@ pub(super) struct Sums {
     pub(super) upcrossing: Option<f64>,
     /// The velocity at the end of the last step (before a switch, the impact velocity).
     last_v: f64,
-    pub(super) impact_speed: [f64; 2],
+    pub(super) impact_speed: Vec<f64>,
 }
 
-impl Default for Sums {
-    /// Nothing summed; the extremes start empty (an orbit in a well off x = 0 never reaches
-    /// zero, so zero is no bound on its extremes).
-    fn default() -> Self {
+impl Sums {
+    /// Nothing summed for `outputs` outputs and `contacts` contacts; the extremes start empty
+    /// (an orbit in a well off x = 0 never reaches zero, so zero is no bound on its extremes).
+    pub(super) fn new(outputs: usize, contacts: usize) -> Self {
         Self {
-            v1sq: 0.0,
-            v2sq: 0.0,
+            squares: vec![0.0; outputs],
+            integrals: vec![0.0; outputs],
             x_upper: f64::NEG_INFINITY,
             x_lower: f64::INFINITY,
             contact_time: 0.0,
@@ -37,25 +39,38 @@ impl Default for Sums {
             was_contact: None,
             upcrossing: None,
             last_v: 0.0,
-            impact_speed: [0.0; 2],
+            impact_speed: vec![0.0; contacts],
         }
     }
 }
 
 /// Observes one period: the sums over its steps, and the rebounds off rigid stops (impacts
 /// without a contact phase, seen only as switches).
-pub(super) struct Accumulator<'m> {
-    pub(super) model: &'m Harvester<Sine>,
+pub(super) struct Accumulator<'m, M> {
+    pub(super) model: &'m M,
     pub(super) sums: Sums,
+    /// One evaluation of the outputs.
+    buf: Vec<f64>,
 }
 
-impl Observer<State, Mode> for Accumulator<'_> {
-    fn step(&mut self, st: &Step<State>, mode: Mode) {
-        self.sums.add(self.model, st, mode);
+impl<'m, M> Accumulator<'m, M> {
+    /// Sums of a model's period, for `outputs` outputs.
+    pub(super) fn new(model: &'m M, outputs: usize) -> Self {
+        Self {
+            model,
+            sums: Sums::new(outputs, MAX_CONTACTS),
+            buf: vec![0.0; outputs],
+        }
+    }
+}
+
+impl<M: Model<N>, const N: usize> Observer<SVector<f64, N>, Mode> for Accumulator<'_, M> {
+    fn step(&mut self, st: &Step<SVector<f64, N>>, mode: Mode) {
+        self.sums.add(self.model, st, mode, &mut self.buf);
     }
 
     fn switched(&mut self, _t: f64, from: Mode, to: Mode) {
-        let kind = SwitchKind::of(from, to);
+        let kind = SwitchKind::between(from, to);
         if kind == SwitchKind::Rebound {
             self.sums.impacts += 1;
         }
@@ -68,13 +83,29 @@ impl Observer<State, Mode> for Accumulator<'_> {
 }
 
 impl Sums {
-    fn add(&mut self, model: &Harvester<Sine>, st: &Step<State>, mode: Mode) {
-        let [v1sq, v2sq] = st.integrate_each(|y: &State| {
-            let v = model.electrical(y).v;
-            [v[0].powi(2), v[1].powi(2)]
-        });
-        self.v1sq += v1sq;
-        self.v2sq += v2sq;
+    fn add<M: Model<N>, const N: usize>(
+        &mut self,
+        model: &M,
+        st: &Step<SVector<f64, N>>,
+        mode: Mode,
+        buf: &mut [f64],
+    ) {
+        // The outputs' squares and values by 3-point Gauss-Legendre on the dense output, as
+        // `Step::integrate_each` sums them.
+        let k = buf.len();
+        let mut sq = [0.0f64; MAX_OUTPUTS];
+        let mut lin = [0.0f64; MAX_OUTPUTS];
+        for (x, w) in crate::ode::GAUSS_LEGENDRE_3 {
+            model.outputs(mode, &st.at_theta(x), buf);
+            for i in 0..k {
+                sq[i] += w * buf[i].powi(2);
+                lin[i] += w * buf[i];
+            }
+        }
+        for i in 0..k {
+            self.squares[i] += sq[i] * st.h;
+            self.integrals[i] += lin[i] * st.h;
+        }
         for x in [st.y0[0], st.y1[0]] {
             self.x_upper = self.x_upper.max(x);
             self.x_lower = self.x_lower.min(x);
@@ -104,7 +135,7 @@ impl Sums {
 
 /// theta in [0, 1] where component `c` of the dense output of `st` changes sign (the upper
 /// end of the final bracket), located by the crate's root finder to 1e-12 of the step.
-fn root_on_step(st: &Step<State>, c: usize) -> Option<f64> {
+fn root_on_step<const N: usize>(st: &Step<SVector<f64, N>>, c: usize) -> Option<f64> {
     let f =
         |th: f64| -> Result<(f64, ()), std::convert::Infallible> { Ok((st.at_theta(th)[c], ())) };
     let (a, b) = (

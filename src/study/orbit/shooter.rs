@@ -1,81 +1,62 @@
-//! Shooting: the period map of one device, its linearisation, Newton's method for a periodic
+//! Shooting: the period map of one model, its linearisation, Newton's method for a periodic
 //! orbit, and the move of an orbit's section into free flight.
 
-use nalgebra::{Matrix4, Vector4};
+use nalgebra::{SMatrix, SVector};
 
 use crate::drive::Sine;
-use crate::ode::{HybridSystem, SolverError, Stats, Step};
-use crate::physics::contact::{Mode, Side, StopModel};
-use crate::physics::harvester::{Harvester, State};
+use crate::model::tangent::{tangent_options, Tangents};
+use crate::model::{Mode, Model};
+use crate::ode::{SolverError, Stats, Step, Tangent};
 use crate::study::flow::{Engine, SineFlow};
 
-use super::period_sums::{Accumulator, Sums};
-use super::variational::{state_of, Aug, Variational};
+use super::period_sums::Accumulator;
 use super::CHORD_STEPS;
 use super::{multipliers, Forcing, Orbit, OrbitError, OrbitSummary, Parameter, ShootingConfig};
-
-/// The mode a state is in when an integration starts from it: in contact past a compliant
-/// stop, else free.
-pub fn mode_of(model: &Harvester<Sine>, y: &State) -> Mode {
-    for side in Side::BOTH {
-        if model.penetration(side, y[0]) > 0.0
-            && matches!(model.stop(side), Some(StopModel::Compliant { .. }))
-        {
-            return Mode::Contact(side);
-        }
-    }
-    Mode::Free
-}
 
 /// The period map and its derivatives at one point: P(y), M = dP/dy and dP/dp (physical
 /// units).
 #[derive(Debug, Clone, Copy)]
-pub struct Linearised {
+pub struct Linearised<const N: usize> {
     /// P(y).
-    pub end: State,
+    pub end: SVector<f64, N>,
     /// dP/dy.
-    pub monodromy: Matrix4<f64>,
+    pub monodromy: SMatrix<f64, N, N>,
     /// dP/dp.
-    pub dp: Vector4<f64>,
+    pub dp: SVector<f64, N>,
 }
 
-/// Shooting for periodic orbits of one device.
+/// Shooting for periodic orbits of one model.
 #[derive(Debug, Clone)]
-pub struct Shooter<'a> {
-    /// The device model (its excitation is replaced for every drive).
-    pub base: &'a Harvester<Sine>,
+pub struct Shooter<'a, M, const N: usize> {
+    /// The model.
+    pub base: &'a M,
     /// Settings.
     pub cfg: ShootingConfig,
-    scales: State,
+    scales: SVector<f64, N>,
 }
 
-impl<'a> Shooter<'a> {
-    /// Shooting on `base` (its excitation is ignored) with settings `cfg`.
-    pub fn new(base: &'a Harvester<Sine>, cfg: ShootingConfig) -> Self {
+impl<'a, M: Model<N>, const N: usize> Shooter<'a, M, N> {
+    /// Shooting on `base` with settings `cfg`.
+    pub fn new(base: &'a M, cfg: ShootingConfig) -> Self {
         Self::with_scales(base, cfg, base.scales())
     }
 
     /// Shooting with given state scales (e.g. those of another model of the same device).
-    pub fn with_scales(base: &'a Harvester<Sine>, cfg: ShootingConfig, scales: State) -> Self {
+    pub fn with_scales(base: &'a M, cfg: ShootingConfig, scales: SVector<f64, N>) -> Self {
         Self { base, cfg, scales }
     }
 
     /// The state scales of the scaled coordinates.
-    pub fn scales(&self) -> State {
+    pub fn scales(&self) -> SVector<f64, N> {
         self.scales
     }
 
-    /// The model under a drive with drive phase `phase_rad` at t = 0.
-    pub fn model(&self, forcing: &Forcing, phase_rad: f64) -> Harvester<Sine> {
-        self.base.with_excitation(forcing.sine(phase_rad))
-    }
-
     /// The scaled Euclidean norm of a state.
-    pub fn norm(&self, y: &State) -> f64 {
+    pub fn norm(&self, y: &SVector<f64, N>) -> f64 {
         y.component_div(&self.scales).norm()
     }
 
-    fn solver_err(&self, p: Parameter, forcing: &Forcing, e: SolverError) -> OrbitError {
+    pub(crate) fn solver_err(&self, p: Parameter, forcing: &Forcing, e: SolverError) -> OrbitError {
         OrbitError::Solver {
             what: p.label(),
             param: forcing.get(p),
@@ -85,27 +66,27 @@ impl<'a> Shooter<'a> {
 
     /// Integrates from `y` at drive phase `phase_rad` for `duration_s`, calling `observer`
     /// with every accepted step; returns the final state and mode and the counters.
-    pub fn flow<O: FnMut(&Step<State>, Mode)>(
+    pub fn flow<O: FnMut(&Step<SVector<f64, N>>, Mode)>(
         &self,
         forcing: &Forcing,
         phase_rad: f64,
-        y: State,
+        y: SVector<f64, N>,
         duration_s: f64,
         observer: O,
-    ) -> Result<(State, Mode, Stats), SolverError> {
-        let model = self.model(forcing, phase_rad);
-        let mut ode = SineFlow::new(&model, 0.0, y, mode_of(&model, &y), self.cfg.rtol);
+    ) -> Result<(SVector<f64, N>, Mode, Stats), SolverError> {
+        let sine = forcing.sine(phase_rad);
+        let mut ode = SineFlow::new(self.base, sine, 0.0, y, self.base.mode_of(&y), self.cfg.rtol);
         ode.integrate(duration_s, observer)?;
         Ok((ode.y(), ode.mode(), ode.stats()))
     }
 
-    /// The plain period map P(y) (4-dimensional integration).
+    /// The plain period map P(y).
     pub fn period_map(
         &self,
         forcing: &Forcing,
         phase_rad: f64,
-        y: State,
-    ) -> Result<State, SolverError> {
+        y: SVector<f64, N>,
+    ) -> Result<SVector<f64, N>, SolverError> {
         self.flow(forcing, phase_rad, y, forcing.period_s(), |_, _| {})
             .map(|r| r.0)
     }
@@ -117,9 +98,9 @@ impl<'a> Shooter<'a> {
         forcing: &Forcing,
         param: Parameter,
         phase_rad: f64,
-        y: State,
+        y: SVector<f64, N>,
         stats: &mut Stats,
-    ) -> Result<Linearised, SolverError> {
+    ) -> Result<Linearised<N>, SolverError> {
         self.linearise_over(forcing, param, phase_rad, y, forcing.period_s(), stats)
     }
 
@@ -132,41 +113,30 @@ impl<'a> Shooter<'a> {
         forcing: &Forcing,
         param: Parameter,
         phase_rad: f64,
-        y: State,
+        y: SVector<f64, N>,
         duration_s: f64,
         stats: &mut Stats,
-    ) -> Result<Linearised, SolverError> {
-        let model = self.model(forcing, phase_rad);
-        let sys = Variational {
-            model: &model,
-            param,
-        };
-        let base = model.solver_options(self.cfg.rtol);
+    ) -> Result<Linearised<N>, SolverError> {
+        let sine = forcing.sine(phase_rad);
+        let sys = Tangents::new(self.base, sine, param);
         let p_ref = forcing.get(param).abs().max(1e-300);
-        let mut atol = Aug::zeros();
-        let mut z0 = Aug::zeros();
-        for i in 0..4 {
-            z0[i] = y[i];
-            for j in 0..4 {
-                // Phi_ij is of order s_i / s_j.
-                atol[4 + i + 4 * j] = self.cfg.rtol * self.scales[i] / self.scales[j];
-            }
-            z0[4 + 5 * i] = 1.0;
-            atol[20 + i] = self.cfg.rtol * self.scales[i] / p_ref;
-        }
-        let opts = base.augmented(atol);
-        let mut ode = Engine::new(&sys, 0.0, z0, mode_of(&model, &y), opts, true);
+        let opts = tangent_options(self.base, &self.scales, self.cfg.rtol, p_ref);
+        let mut ode = Engine::new(sys, 0.0, Tangent::start(y), self.base.mode_of(&y), opts, true);
         let period = forcing.period_s();
-        ode.integrate_observed(duration_s, &mut crate::ode::Steps(|_: &Step<Aug>, _| {}))?;
+        ode.integrate_observed(
+            duration_s,
+            &mut crate::ode::Steps(|_: &Step<Tangent<N>>, _| {}),
+        )?;
         *stats += ode.stats();
         let z = ode.z();
-        let end = state_of(&z);
-        let mut monodromy = Matrix4::from_column_slice(&z.as_slice()[4..20]);
+        let end = z.y;
+        let mut monodromy = z.phi;
         self.drop_unused(&mut monodromy);
-        let mut dp = Vector4::new(z[20], z[21], z[22], z[23]);
+        let mut dp = z.dp;
         if param == Parameter::Frequency {
             // The end time t = c/f moves with the frequency: + f(y(t)) dt/df, dt/df = -t T.
-            let f_end = model.rhs(ode.mode(), duration_s, &end);
+            let a = crate::drive::Excitation::accel(&sine, duration_s);
+            let f_end = self.base.rhs(ode.mode(), &end, a);
             dp -= f_end * (duration_s * period);
         }
         Ok(Linearised { end, monodromy, dp })
@@ -178,11 +148,11 @@ impl<'a> Shooter<'a> {
         &self,
         forcing: &Forcing,
         phase_rad: f64,
-        y: State,
+        y: SVector<f64, N>,
         eps: f64,
-    ) -> Result<Matrix4<f64>, SolverError> {
-        let mut m = Matrix4::zeros();
-        for c in 0..4 {
+    ) -> Result<SMatrix<f64, N, N>, SolverError> {
+        let mut m = SMatrix::<f64, N, N>::zeros();
+        for c in 0..N {
             let h = eps * self.scales[c];
             let (mut yp, mut ym) = (y, y);
             yp[c] += h;
@@ -196,21 +166,21 @@ impl<'a> Shooter<'a> {
         Ok(m)
     }
 
-    /// Replaces the trivial multiplier 1 of each state component the transducer leaves unused
+    /// Replaces the trivial multiplier 1 of each state component the model leaves unused
     /// (held at zero; its row and column of the monodromy are those of the identity) by 0, so
     /// that Newton's matrix M - I is regular and the Floquet tests see only the device's
     /// multipliers.
-    fn drop_unused(&self, m: &mut Matrix4<f64>) {
-        for i in self.base.active_states()..4 {
+    fn drop_unused(&self, m: &mut SMatrix<f64, N, N>) {
+        for &i in self.base.unused() {
             m[(i, i)] = 0.0;
         }
     }
 
     /// Scales a physical monodromy to the scaled coordinates: D^-1 M D.
-    pub fn scaled_monodromy(&self, m: &Matrix4<f64>) -> Matrix4<f64> {
+    pub fn scaled_monodromy(&self, m: &SMatrix<f64, N, N>) -> SMatrix<f64, N, N> {
         let mut out = *m;
-        for i in 0..4 {
-            for j in 0..4 {
+        for i in 0..N {
+            for j in 0..N {
                 out[(i, j)] *= self.scales[j] / self.scales[i];
             }
         }
@@ -223,35 +193,18 @@ impl<'a> Shooter<'a> {
         &self,
         forcing: &Forcing,
         phase_rad: f64,
-        y: State,
+        y: SVector<f64, N>,
         stats: &mut Stats,
-    ) -> Result<(State, OrbitSummary), SolverError> {
-        let model = self.model(forcing, phase_rad);
-        let mut acc = Accumulator {
-            model: &model,
-            sums: Sums::default(),
-        };
-        let mut ode = SineFlow::new(&model, 0.0, y, mode_of(&model, &y), self.cfg.rtol);
+    ) -> Result<(SVector<f64, N>, OrbitSummary), SolverError> {
+        let sine = forcing.sine(phase_rad);
+        let outputs = self.base.layout().outputs.len();
+        let mut acc = Accumulator::new(self.base, outputs);
+        let mut ode = SineFlow::new(self.base, sine, 0.0, y, self.base.mode_of(&y), self.cfg.rtol);
         ode.integrate_observed(forcing.period_s(), &mut acc)?;
         let (end, st) = (ode.y(), ode.stats());
-        let acc = acc.sums;
         *stats += st;
         let period = forcing.period_s();
-        Ok((
-            end,
-            OrbitSummary {
-                v1_rms_v: (acc.v1sq / period).sqrt(),
-                v2_rms_v: (acc.v2sq / period).sqrt(),
-                p_total_w: (acc.v1sq + acc.v2sq) / period / model.load_resistance(),
-                x_max_m: acc.x_upper.max(-acc.x_lower),
-                x_upper_m: acc.x_upper,
-                x_lower_m: acc.x_lower,
-                contact_fraction: acc.contact_time / period,
-                impacts: acc.impacts,
-                impact_speed_m_s: acc.impact_speed,
-                upcrossing_s: acc.upcrossing,
-            },
-        ))
+        Ok((end, OrbitSummary::of(self.base.layout(), &acc.sums, period)))
     }
 
     /// Newton's method for the periodic orbit of `forcing` with section at `phase_rad`, from
@@ -263,7 +216,7 @@ impl<'a> Shooter<'a> {
         forcing: &Forcing,
         param: Parameter,
         phase_rad: f64,
-        guess: State,
+        guess: SVector<f64, N>,
         stats: &mut Stats,
     ) -> Result<Orbit, OrbitError> {
         let err = |e| self.solver_err(param, forcing, e);
@@ -276,7 +229,7 @@ impl<'a> Shooter<'a> {
             let g = (lin.end - y).component_div(&self.scales);
             residual = g.norm() / self.norm(&y).max(1e-300);
             let m = self.scaled_monodromy(&lin.monodromy);
-            let lu = (m - Matrix4::identity()).lu();
+            let lu = (m - SMatrix::<f64, N, N>::identity()).lu();
             if residual < self.cfg.residual_tol {
                 // The fixed point of the variational integration; polish it on the plain
                 // period map (the one every reported residual refers to) by chord steps
@@ -318,8 +271,8 @@ impl<'a> Shooter<'a> {
         forcing: &Forcing,
         param: Parameter,
         phase_rad: f64,
-        y: State,
-        monodromy: Matrix4<f64>,
+        y: SVector<f64, N>,
+        monodromy: SMatrix<f64, N, N>,
         residual: f64,
         iterations: usize,
         summary: OrbitSummary,
@@ -331,8 +284,8 @@ impl<'a> Shooter<'a> {
         Ok(Orbit {
             forcing: *forcing,
             phase_rad,
-            state: y,
-            monodromy,
+            state: nalgebra::DVector::from_column_slice(y.as_slice()),
+            monodromy: nalgebra::DMatrix::from_column_slice(N, N, monodromy.as_slice()),
             multipliers,
             residual,
             iterations,
@@ -340,11 +293,17 @@ impl<'a> Shooter<'a> {
         })
     }
 
-    /// True when the orbit's section lies well inside free flight (at most half the gap from
-    /// rest towards either stop).
+    /// True when the orbit's section lies well inside free flight: with every mass's
+    /// displacement doubled, no contact's guard of free flight fires (for a mass between two
+    /// stops: at most half the gap from rest towards either).
     pub fn section_is_free(&self, orbit: &Orbit) -> bool {
-        let x = orbit.state[0];
-        x <= 0.5 * self.base.gap(Side::Upper) && -x <= 0.5 * self.base.gap(Side::Lower)
+        let mut probe: SVector<f64, N> = orbit.state_n();
+        for &(x, _) in &self.base.layout().masses {
+            probe[x] *= 2.0;
+        }
+        let mut g = vec![0.0; self.base.guard_count()];
+        self.base.guards(Mode::FREE, &probe, || 0.0, &mut g);
+        g[..self.base.contact_guards()].iter().all(|h| *h <= 0.0)
     }
 
     /// The same orbit cut at the drive phase where x crosses zero upwards (see the module
@@ -361,7 +320,7 @@ impl<'a> Shooter<'a> {
         };
         let f = &orbit.forcing;
         let (y, _, st) = self
-            .flow(f, orbit.phase_rad, orbit.state, t, |_, _| {})
+            .flow(f, orbit.phase_rad, orbit.state_n(), t, |_, _| {})
             .map_err(|e| self.solver_err(param, f, e))?;
         *stats += st;
         let w = 2.0 * std::f64::consts::PI * f.freq_hz;
@@ -370,15 +329,24 @@ impl<'a> Shooter<'a> {
     }
 
     /// The state of an orbit at drive phase `phase_rad` (integrated from its section).
-    pub fn state_at_phase(&self, orbit: &Orbit, phase_rad: f64) -> Result<State, SolverError> {
+    pub fn state_at_phase(
+        &self,
+        orbit: &Orbit,
+        phase_rad: f64,
+    ) -> Result<SVector<f64, N>, SolverError> {
         let f = &orbit.forcing;
         let w = 2.0 * std::f64::consts::PI * f.freq_hz;
         let dphi = (phase_rad - orbit.phase_rad).rem_euclid(2.0 * std::f64::consts::PI);
         let t = dphi / w;
         if t == 0.0 {
-            return Ok(orbit.state);
+            return Ok(orbit.state_n());
         }
-        self.flow(f, orbit.phase_rad, orbit.state, t, |_, _| {})
+        self.flow(f, orbit.phase_rad, orbit.state_n(), t, |_, _| {})
             .map(|r| r.0)
     }
+}
+
+/// A sine with its phase: the drive the shooting of `forcing` at `phase_rad` integrates.
+pub fn drive(forcing: &Forcing, phase_rad: f64) -> Sine {
+    forcing.sine(phase_rad)
 }

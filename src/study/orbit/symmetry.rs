@@ -11,12 +11,11 @@
 //! loses or gains stability to a pair of mirror-image asymmetric orbits, a symmetry-breaking
 //! pitchfork.
 
-use nalgebra::{Complex, Matrix4};
+use nalgebra::{Complex, SMatrix, SVector};
 
-use crate::drive::Sine;
+
+use crate::model::Model;
 use crate::ode::Stats;
-use crate::physics::harvester::{Harvester, State};
-use crate::physics::transducer::TransducerModel;
 
 use super::{multipliers, Orbit, OrbitError, Parameter, Shooter};
 
@@ -25,48 +24,21 @@ use super::{multipliers, Orbit, OrbitError, Parameter, Shooter};
 /// orbit off the symmetric branch that matters.
 pub const SYMMETRY_TOL: f64 = 1e-6;
 
-/// The involution S of the model's state under x -> -x, when the model is symmetric (equal
-/// stops on both sides or none, a transducer odd in x); `None` otherwise.
-pub fn mirror(h: &Harvester<Sine>) -> Option<Matrix4<f64>> {
-    if h.upper != h.lower {
-        return None;
-    }
-    let mut s = Matrix4::zeros();
-    s[(0, 0)] = -1.0;
-    s[(1, 1)] = -1.0;
-    match h.transducer {
-        // The pair's capacitors trade places: C1(-x) = C2(x), and so do the node charges.
-        TransducerModel::Pair(_) => {
-            s[(2, 3)] = 1.0;
-            s[(3, 2)] = 1.0;
-        }
-        TransducerModel::Piezo { .. } | TransducerModel::Electromagnetic { .. } => {
-            s[(2, 2)] = -1.0;
-            s[(3, 3)] = 1.0;
-        }
-        TransducerModel::None => {
-            s[(2, 2)] = 1.0;
-            s[(3, 3)] = 1.0;
-        }
-    }
-    Some(s)
-}
-
 /// The half-period map of a symmetric orbit: its multipliers, and how far the orbit is from
 /// symmetric.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct HalfMap {
     /// Scaled |S y(T/2) - y(0)| / |y(0)| (zero for an exactly symmetric orbit).
     pub defect: f64,
     /// Multipliers of H = S phi_{T/2}, largest modulus first (unused components give 0).
-    pub multipliers: [Complex<f64>; 4],
+    pub multipliers: Vec<Complex<f64>>,
 }
 
-impl Shooter<'_> {
+impl<M: Model<N>, const N: usize> Shooter<'_, M, N> {
     /// The scaled distance of an orbit from the mirror image of itself half a period later,
     /// `|S y(T/2) - y(0)| / |y(0)|`; `None` for a device without the symmetry.
     pub fn symmetry_defect(&self, orbit: &Orbit) -> Result<Option<f64>, OrbitError> {
-        let Some(s) = mirror(self.base) else {
+        let Some(s) = self.base.mirror() else {
             return Ok(None);
         };
         let f = &orbit.forcing;
@@ -74,7 +46,7 @@ impl Shooter<'_> {
             .flow(
                 f,
                 orbit.phase_rad,
-                orbit.state,
+                orbit.state_n(),
                 0.5 * f.period_s(),
                 |_, _| {},
             )
@@ -83,10 +55,10 @@ impl Shooter<'_> {
                 param: f.freq_hz,
                 source: e,
             })?;
-        Ok(Some(self.defect(&s, &orbit.state, &y)))
+        Ok(Some(self.defect(&s, &orbit.state_n(), &y)))
     }
 
-    fn defect(&self, s: &Matrix4<f64>, y0: &State, y_half: &State) -> f64 {
+    fn defect(&self, s: &SMatrix<f64, N, N>, y0: &SVector<f64, N>, y_half: &SVector<f64, N>) -> f64 {
         self.norm(&(s * y_half - y0)) / self.norm(y0).max(1e-300)
     }
 
@@ -97,7 +69,7 @@ impl Shooter<'_> {
         orbit: &Orbit,
         stats: &mut Stats,
     ) -> Result<Option<HalfMap>, OrbitError> {
-        let Some(s) = mirror(self.base) else {
+        let Some(s) = self.base.mirror() else {
             return Ok(None);
         };
         let f = &orbit.forcing;
@@ -106,7 +78,7 @@ impl Shooter<'_> {
                 f,
                 Parameter::Frequency,
                 orbit.phase_rad,
-                orbit.state,
+                orbit.state_n(),
                 0.5 * f.period_s(),
                 stats,
             )
@@ -115,7 +87,7 @@ impl Shooter<'_> {
                 param: f.freq_hz,
                 source: e,
             })?;
-        let defect = self.defect(&s, &orbit.state, &lin.end);
+        let defect = self.defect(&s, &orbit.state_n(), &lin.end);
         if defect > SYMMETRY_TOL {
             return Ok(None);
         }

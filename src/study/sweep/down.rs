@@ -7,11 +7,11 @@ use super::{
     analyse_up_sweep, frequency_continuation, BranchEnd, SweepReport, SweepSettings,
     CANDIDATE_DROP, JUMP_MIN_DROP,
 };
+use nalgebra::{DVector, SVector};
+
 use crate::device::Device;
-use crate::drive::Sine;
+use crate::model::{Mode, Model};
 use crate::ode::{SolverError, Stats};
-use crate::physics::contact::Mode;
-use crate::physics::harvester::{Harvester, State};
 use crate::progress::{Progress, Silent};
 use crate::study::steady::Measurement;
 use crate::study::stepped::{
@@ -116,9 +116,11 @@ impl SweepSettings {
         approach: Approach,
         progress: &dyn Progress,
     ) -> Result<DownSweepReport, SolverError> {
-        let base = Harvester::new(device, Sine::from_rms_g(accel_rms_g, self.freqs_hz[0]));
-        let rest = base.rest_state();
-        self.run_down_from(device, accel_rms_g, approach, (rest, Mode::Free), progress)
+        let rest = crate::with_harvester!(device, |h| {
+            let r = h.rest_state();
+            Ok::<_, SolverError>((DVector::from_column_slice(r.as_slice()), h.mode_of(&r)))
+        })?;
+        self.run_down_from(device, accel_rms_g, approach, rest, progress)
     }
 
     /// As [`SweepSettings::run_down_with`] from the state `start` (and its mode) at drive
@@ -129,15 +131,23 @@ impl SweepSettings {
         device: &Device,
         accel_rms_g: f64,
         approach: Approach,
-        start: (State, Mode),
+        start: (DVector<f64>, Mode),
         progress: &dyn Progress,
     ) -> Result<DownSweepReport, SolverError> {
         let mut freqs = self.freqs_hz.clone();
         freqs.sort_by(|a, b| b.total_cmp(a));
-        let base = Harvester::new(device, Sine::from_rms_g(accel_rms_g, freqs[0]));
-        let cont = frequency_continuation(&base, accel_rms_g, &self.cfg);
-        let sweep = cont.run_from(start.0, start.1, None, &freqs, approach, progress)?;
-        analyse_down_sweep(&cont, sweep, self.refine_tol_hz, approach)
+        crate::with_harvester!(device, |h| {
+            let cont = frequency_continuation(&h, accel_rms_g, &self.cfg);
+            let sweep = cont.run_from(
+                SVector::from_column_slice(start.0.as_slice()),
+                start.1,
+                None,
+                &freqs,
+                approach,
+                progress,
+            )?;
+            analyse_down_sweep(&cont, sweep, self.refine_tol_hz, approach)
+        })
     }
 
     /// The end of the lower branch of a down-sweep found again with the step divided by
@@ -160,10 +170,11 @@ impl SweepSettings {
         else {
             return Ok(None);
         };
-        let base = Harvester::new(device, Sine::from_rms_g(accel_rms_g, local.values[0]));
-        let cont = frequency_continuation(&base, accel_rms_g, &self.cfg);
-        let r = analyse_down_sweep(&cont, local, self.refine_tol_hz, approach)?;
-        Ok(r.branch_end())
+        crate::with_harvester!(device, |h| {
+            let cont = frequency_continuation(&h, accel_rms_g, &self.cfg);
+            let r = analyse_down_sweep(&cont, local, self.refine_tol_hz, approach)?;
+            Ok(r.branch_end())
+        })
     }
 
     /// The end of the upper branch of an up-sweep found again with the step divided by
@@ -185,10 +196,11 @@ impl SweepSettings {
         else {
             return Ok(None);
         };
-        let base = Harvester::new(device, Sine::from_rms_g(accel_rms_g, local.values[0]));
-        let cont = frequency_continuation(&base, accel_rms_g, &self.cfg);
-        let r = analyse_up_sweep(&cont, local, self.refine_tol_hz, approach)?;
-        Ok(r.branch_end())
+        crate::with_harvester!(device, |h| {
+            let cont = frequency_continuation(&h, accel_rms_g, &self.cfg);
+            let r = analyse_up_sweep(&cont, local, self.refine_tol_hz, approach)?;
+            Ok(r.branch_end())
+        })
     }
 
     /// The steps of `sweep` rerun around its transition `t` with the step divided by
@@ -206,17 +218,18 @@ impl SweepSettings {
         let Some((start, values)) = local_grid(&sweep.values, t, divisor) else {
             return Ok(None);
         };
-        let base = Harvester::new(device, Sine::from_rms_g(accel_rms_g, values[0]));
-        let cont = frequency_continuation(&base, accel_rms_g, &self.cfg);
         let s0 = &sweep.steps[start];
-        let local = cont.run_from(
-            s0.state,
-            s0.mode,
-            Some(sweep.values[start]),
-            &values,
-            approach,
-            &Silent,
-        )?;
+        let local = crate::with_harvester!(device, |h| {
+            let cont = frequency_continuation(&h, accel_rms_g, &self.cfg);
+            cont.run_from(
+                SVector::from_column_slice(s0.state.as_slice()),
+                s0.mode,
+                Some(sweep.values[start]),
+                &values,
+                approach,
+                &Silent,
+            )
+        })?;
         Ok(Some(with_history(sweep, start, local)))
     }
 }
@@ -263,8 +276,8 @@ fn local_grid(values: &[f64], t: Transition, divisor: f64) -> Option<(usize, Vec
     Some((start, grid))
 }
 
-fn analyse_down_sweep<D: Drive>(
-    cont: &SteppedDrive<'_, D>,
+fn analyse_down_sweep<M: Model<N>, D: Drive, const N: usize>(
+    cont: &SteppedDrive<'_, M, D>,
     sweep: Sweep,
     tol: f64,
     approach: Approach,

@@ -40,7 +40,7 @@
 use crate::device::Device;
 use crate::drive::Sine;
 use crate::ode::{SolverError, Stats};
-use crate::physics::harvester::Harvester;
+use crate::model::Model;
 use crate::progress::Progress;
 use crate::study::steady::{steady_config_across_folds, Measurement, SteadyConfig};
 use crate::study::stepped::{
@@ -167,11 +167,11 @@ impl SweepReport {
 }
 
 /// The continuation of an up-sweep in frequency at fixed RMS acceleration.
-pub fn frequency_continuation<'a>(
-    base: &'a Harvester<Sine>,
+pub fn frequency_continuation<'a, M: Model<N>, const N: usize>(
+    base: &'a M,
     accel_rms_g: f64,
     cfg: &SteadyConfig,
-) -> SteppedDrive<'a, impl Drive> {
+) -> SteppedDrive<'a, M, impl Drive> {
     SteppedDrive {
         base,
         drive: move |f: f64| (f, accel_rms_g),
@@ -291,9 +291,19 @@ impl SweepSettings {
         approach: Approach,
         progress: &dyn Progress,
     ) -> Result<SweepReport, SolverError> {
+        crate::with_harvester!(device, |h| self.run_on(&h, accel_rms_g, approach, progress))
+    }
+
+    /// As [`SweepSettings::run_with`] on a model.
+    pub fn run_on<M: Model<N>, const N: usize>(
+        &self,
+        base: &M,
+        accel_rms_g: f64,
+        approach: Approach,
+        progress: &dyn Progress,
+    ) -> Result<SweepReport, SolverError> {
         let freqs = &self.freqs_hz;
-        let base = Harvester::new(device, Sine::from_rms_g(accel_rms_g, freqs[0]));
-        let cont = frequency_continuation(&base, accel_rms_g, &self.cfg);
+        let cont = frequency_continuation(base, accel_rms_g, &self.cfg);
         let mut sweep = cont.run_with(freqs, approach, progress)?;
         let n = sweep.steps.len();
         let mut extended_from = None;
@@ -305,7 +315,7 @@ impl SweepSettings {
             let step = freqs[n - 1] - freqs[n - 2];
             let more = values_beyond(freqs[n - 1], step, self.extend_to_hz);
             continue_sweep(
-                &base,
+                base,
                 |f| (f, accel_rms_g),
                 &self.cfg,
                 &mut sweep,
@@ -322,8 +332,8 @@ impl SweepSettings {
     }
 }
 
-fn analyse_up_sweep<D: Drive>(
-    cont: &SteppedDrive<'_, D>,
+fn analyse_up_sweep<M: Model<N>, D: Drive, const N: usize>(
+    cont: &SteppedDrive<'_, M, D>,
     sweep: Sweep,
     tol: f64,
     approach: Approach,
@@ -505,15 +515,25 @@ mod tests {
         let r = settings.run(&device, accel, &Silent).unwrap();
         assert!(r.onset.is_some() && r.jump.is_none() && r.contact_lost.is_none());
         let k = first_contact(&r.sweep).unwrap();
-        let base = Harvester::new(&device, Sine::from_rms_g(accel, freqs[0]));
+        let base = crate::physics::assembly::Harvester::<4>::new(&device).unwrap();
         let (mut lo, mut hi) = (r.sweep.values[k - 1], r.sweep.values[k]);
         let before = &r.sweep.steps[k - 1];
-        let (mut y, mut mode) = (before.state, before.mode);
+        let (mut y, mut mode) = (
+            nalgebra::SVector::<f64, 4>::from_column_slice(before.state.as_slice()),
+            before.mode,
+        );
         let (mut expected, mut trials) = (Stats::default(), 0);
         while hi - lo > tol {
             let mid = 0.5 * (lo + hi);
-            let model = base.with_excitation(Sine::from_rms_g(accel, mid));
-            let (m, y1, mode1, st) = steady_state(&model, y, mode, accel, &settings.cfg).unwrap();
+            let (m, y1, mode1, st) = steady_state(
+                &base,
+                Sine::from_rms_g(accel, mid),
+                y,
+                mode,
+                accel,
+                &settings.cfg,
+            )
+            .unwrap();
             expected += st;
             trials += 1;
             if in_contact(&m) {

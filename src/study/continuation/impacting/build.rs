@@ -10,17 +10,15 @@ use std::collections::VecDeque;
 use nalgebra::DVector;
 
 use crate::device::Device;
-use crate::drive::Sine;
+use crate::model::Model;
 use crate::num::roots::{illinois, RootOptions, Sample};
 use crate::ode::Stats;
-use crate::physics::contact::{Side, StopModel};
-use crate::physics::harvester::Harvester;
 use crate::progress::{Progress, Silent};
 use crate::study::continuation::diagram::orbit_point;
 use crate::study::continuation::{continue_branch, first_orbit, ContinuationSettings};
-use crate::study::orbit::{mirror, Forcing, Orbit, OrbitError, Parameter, Shooter};
+use crate::study::orbit::{Forcing, Orbit, OrbitError, Parameter, Shooter};
 
-use super::bvp::{ImpactSequence, Problem};
+use super::bvp::{side_stops, ImpactSequence, Problem};
 use super::follow::{test_excursion, test_speed, Followed, Follower, Node};
 use super::{
     BranchEnd, BranchKind, Diagram, DiagramBranch, DiagramEvent, DiagramPoint, EndKind, EventKind,
@@ -99,10 +97,23 @@ pub fn rigid_diagram(
     progress: &dyn Progress,
 ) -> Result<Diagram, OrbitError> {
     settings.validate()?;
+    crate::with_harvester!(device, |h| rigid_diagram_of(
+        &h, start, settings, options, progress
+    ))
+}
+
+/// [`rigid_diagram`] on a model whose contacts are all rigid.
+pub fn rigid_diagram_of<M: Model<N> + Clone, const N: usize>(
+    h: &M,
+    start: Forcing,
+    settings: &ContinuationSettings,
+    options: &DiagramOptions,
+    progress: &dyn Progress,
+) -> Result<Diagram, OrbitError> {
     let param = settings.parameter;
-    let h = Harvester::new(device, start.sine(0.0));
-    let stops: Vec<_> = [h.upper, h.lower].into_iter().flatten().collect();
-    if stops.is_empty() || !stops.iter().all(|s| matches!(s, StopModel::Rigid { .. })) {
+    let contacts = h.contacts();
+    let present: Vec<_> = contacts.iter().filter(|c| c.gap.is_finite()).collect();
+    if present.is_empty() || !present.iter().all(|c| c.rigid()) {
         return Err(OrbitError::Invalid(
             "the impacting-orbit diagram needs a device whose stops are all rigid".into(),
         ));
@@ -111,9 +122,9 @@ pub fn rigid_diagram(
         settings.start.min(settings.stop),
         settings.start.max(settings.stop),
     );
-    let free = h.without_stops();
+    let free = h.without_contacts();
     let shooter = Shooter::new(&free, settings.shooting);
-    let sym = mirror(&h);
+    let sym = h.mirror();
     let mut stats = Stats::default();
     progress.stage("non-impacting");
     let first = first_orbit(
@@ -126,11 +137,12 @@ pub fn rigid_diagram(
     )?;
     let ni = continue_branch(&free, first, settings, &Silent)?;
     stats += ni.stats;
-    let gaps = (h.gap(Side::Upper), h.gap(Side::Lower));
+    let [(g_up, _), (g_lo, _)] = side_stops(h);
+    let gaps = (g_up, g_lo);
     let reach = |o: &Orbit| (o.summary.x_upper_m - gaps.0).max(-o.summary.x_lower_m - gaps.1);
 
     let mut b = Builder {
-        h: &h,
+        h,
         shooter: &shooter,
         sym,
         settings: *settings,
@@ -240,11 +252,11 @@ pub fn rigid_diagram(
     b.finish(stats)
 }
 
-pub(super) struct Builder<'a> {
-    pub h: &'a Harvester<Sine>,
+pub(super) struct Builder<'a, M, const N: usize> {
+    pub h: &'a M,
     /// Shooting on the device without its stops (the non-impacting branch).
-    pub shooter: &'a Shooter<'a>,
-    pub sym: Option<nalgebra::Matrix4<f64>>,
+    pub shooter: &'a Shooter<'a, M, N>,
+    pub sym: Option<nalgebra::SMatrix<f64, N, N>>,
     pub settings: ContinuationSettings,
     pub options: DiagramOptions,
     /// The drive at the start of the range.
@@ -258,7 +270,7 @@ pub(super) struct Builder<'a> {
     pub stats: Stats,
 }
 
-impl Builder<'_> {
+impl<M: Model<N> + Clone, const N: usize> Builder<'_, M, N> {
     /// Follows every queued start (and what they lead to) up to the budget of branches.
     fn drain(&mut self, progress: &dyn Progress) {
         while let Some(s) = self.queue.pop_front() {
@@ -280,8 +292,8 @@ impl Builder<'_> {
     fn ni_point(&mut self, o: &Orbit) -> Result<DiagramPoint, OrbitError> {
         let mut p = orbit_point(self.shooter, o, self.sym.is_some(), &mut self.stats)?;
         // Measured from the device's stops (the shooter's model has none).
-        p.clearance_m = (self.h.gap(Side::Upper) - o.summary.x_upper_m)
-            .min(self.h.gap(Side::Lower) + o.summary.x_lower_m);
+        let [(g_up, _), (g_lo, _)] = side_stops(self.h);
+        p.clearance_m = (g_up - o.summary.x_upper_m).min(g_lo + o.summary.x_lower_m);
         Ok(p)
     }
 
@@ -316,7 +328,7 @@ impl Builder<'_> {
                     b
                 };
                 let f = from.forcing.with(param, p);
-                let o = shooter.solve(&f, param, from.phase_rad, from.state, stats)?;
+                let o = shooter.solve(&f, param, from.phase_rad, from.state_n(), stats)?;
                 let v = reach(&o);
                 if v.abs() < reach(&best).abs() {
                     best = o;
@@ -508,7 +520,7 @@ impl Builder<'_> {
     fn add_branch(
         &mut self,
         s: &Start,
-        problem: &Problem<'_>,
+        problem: &Problem<'_, M, N>,
         back: Option<Followed>,
         fwd: Followed,
         watch: bool,

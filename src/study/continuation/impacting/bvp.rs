@@ -33,18 +33,18 @@
 //! at grazing. For the half orbit the product, premultiplied by S, is the half-period map,
 //! whose multipliers square to those of the period map.
 
-use nalgebra::{Complex, DMatrix, DVector, Matrix4};
+use nalgebra::{Complex, DMatrix, DVector, SMatrix, SVector};
 
-use crate::drive::Sine;
-use crate::ode::{HybridSystem, SolverError, Stats};
-use crate::physics::contact::{Mode, Side, StopModel};
-use crate::physics::harvester::{Harvester, State};
-use crate::study::orbit::{mirror, multipliers, Forcing, OrbitSummary, Parameter};
+use crate::drive::{Excitation, Sine};
+use crate::model::{Mode, Model};
+use crate::ode::{SolverError, Stats};
+use crate::physics::contact::Side;
+use crate::study::orbit::{multipliers, Extent, Forcing, OrbitSummary, Parameter};
 
 use super::segment::{fly, Flight};
 
 /// An orbit's measures, its section (drive phase, state) if it has one, and its fingerprint.
-type Measures = (OrbitSummary, Option<(f64, State)>, State);
+type Measures<const N: usize> = (OrbitSummary, Option<(f64, SVector<f64, N>)>, SVector<f64, N>);
 
 /// How the chain of flights closes.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -129,22 +129,24 @@ impl ImpactSequence {
 }
 
 /// The problem of one impact sequence on one device.
-pub(super) struct Problem<'a> {
-    /// The device (its drive is replaced for every flight).
-    pub base: &'a Harvester<Sine>,
+pub(super) struct Problem<'a, M, const N: usize> {
+    /// The model.
+    pub base: &'a M,
     pub seq: ImpactSequence,
     pub param: Parameter,
-    pub scales: State,
+    pub scales: SVector<f64, N>,
     pub rtol: f64,
-    /// Live state components.
+    /// Live state components (the leading ones; the model holds the rest at zero).
     pub d: usize,
     /// The mirror involution (for [`Closure::Mirror`] and symmetry tests).
-    pub mirror: Option<Matrix4<f64>>,
+    pub mirror: Option<SMatrix<f64, N, N>>,
+    /// The gap (m) and coefficient of restitution of each side's stop (upper, lower).
+    stops: [(f64, f64); 2],
 }
 
 /// The problem evaluated at one point.
 #[derive(Debug, Clone)]
-pub(super) struct Evaluated {
+pub(super) struct Evaluated<const N: usize> {
     /// Residual, scaled by the state scales.
     pub r: DVector<f64>,
     /// d r / d z (z the scaled unknowns).
@@ -152,7 +154,7 @@ pub(super) struct Evaluated {
     /// d r / d p (per unit of the parameter).
     pub jp: DVector<f64>,
     /// Each flight.
-    pub flights: Vec<Flight>,
+    pub flights: Vec<Flight<N>>,
 }
 
 /// What a solved point of a branch is, besides its unknowns.
@@ -164,26 +166,46 @@ pub struct ImpactOrbitInfo {
     /// real orbit): flight, time from its start (s), side and state of that extremum.
     pub excursion_m: f64,
     /// Where the largest excursion is: (flight, time from its start in s, side, state).
-    pub excursion_at: Option<(usize, f64, Side, State)>,
+    pub excursion_at: Option<(usize, f64, Side, DVector<f64>)>,
     /// Multipliers of the period map (of all the orbit's periods), largest modulus first.
-    pub multipliers: [Complex<f64>; 4],
+    pub multipliers: Vec<Complex<f64>>,
     /// Multipliers of the half-period map, for a symmetric orbit.
-    pub half_multipliers: Option<[Complex<f64>; 4]>,
+    pub half_multipliers: Option<Vec<Complex<f64>>>,
 }
 
-impl<'a> Problem<'a> {
+/// The gap of the first mass's stop to the frame on each side (upper, lower; infinite where
+/// there is none) and its coefficient of restitution (`None` unless the stop is rigid).
+pub(crate) fn side_stops<M: Model<N>, const N: usize>(m: &M) -> [(f64, Option<f64>); 2] {
+    let mut out = [(f64::INFINITY, None); 2];
+    for c in m.contacts() {
+        if c.mass == 0 && c.other.is_none() {
+            let k = usize::from(c.side < 0.0);
+            out[k] = (c.gap, c.restitution);
+        }
+    }
+    out
+}
+
+/// The number of leading components the model does not hold at zero.
+pub(super) fn live_components<M: Model<N>, const N: usize>(m: &M) -> usize {
+    (0..N).find(|i| m.unused().contains(i)).unwrap_or(N)
+}
+
+impl<'a, M: Model<N>, const N: usize> Problem<'a, M, N> {
     pub(super) fn new(
-        base: &'a Harvester<Sine>,
+        base: &'a M,
         seq: ImpactSequence,
         param: Parameter,
         rtol: f64,
     ) -> Result<Self, String> {
+        let rigid = side_stops(base);
         for s in &seq.sides {
-            if !matches!(base.stop(*s), Some(StopModel::Rigid { .. })) {
+            let k = usize::from(*s == Side::Lower);
+            if rigid[k].1.is_none() {
                 return Err(format!("no rigid stop on the {s:?} side"));
             }
         }
-        let mirror = mirror(base);
+        let mirror = base.mirror();
         if seq.closure == Closure::Mirror && mirror.is_none() {
             return Err("a symmetric orbit needs a device symmetric under x -> -x".into());
         }
@@ -193,16 +215,18 @@ impl<'a> Problem<'a> {
             param,
             scales: base.scales(),
             rtol,
-            d: base.active_states(),
+            d: live_components(base),
             mirror,
+            stops: rigid.map(|(g, e)| (g, e.unwrap_or(0.0))),
         })
     }
 
     fn restitution(&self, side: Side) -> f64 {
-        match self.base.stop(side) {
-            Some(&StopModel::Rigid { restitution, .. }) => restitution,
-            _ => 0.0,
-        }
+        self.stops[usize::from(side == Side::Lower)].1
+    }
+
+    fn gap(&self, side: Side) -> f64 {
+        self.stops[usize::from(side == Side::Lower)].0
     }
 
     /// The drive phase of impact k (rad).
@@ -211,10 +235,10 @@ impl<'a> Problem<'a> {
     }
 
     /// The state just before impact k.
-    pub(super) fn pre_state(&self, z: &DVector<f64>, k: usize) -> State {
+    pub(super) fn pre_state(&self, z: &DVector<f64>, k: usize) -> SVector<f64, N> {
         let side = self.seq.sides[k];
-        let mut y = State::zeros();
-        y[0] = side.sign() * self.base.gap(side);
+        let mut y = SVector::<f64, N>::zeros();
+        y[0] = side.sign() * self.gap(side);
         for i in 1..self.d {
             y[i] = z[k * self.d + i] * self.scales[i];
         }
@@ -222,22 +246,22 @@ impl<'a> Problem<'a> {
     }
 
     /// The scaled unknowns of impact k from its phase and the state before it.
-    pub(super) fn pack(&self, z: &mut DVector<f64>, k: usize, phase: f64, y: &State) {
+    pub(super) fn pack(&self, z: &mut DVector<f64>, k: usize, phase: f64, y: &SVector<f64, N>) {
         z[k * self.d] = phase;
         for i in 1..self.d {
             z[k * self.d + i] = y[i] / self.scales[i];
         }
     }
 
-    fn rebound(&self, k: usize, y: &State) -> State {
+    fn rebound(&self, k: usize, y: &SVector<f64, N>) -> SVector<f64, N> {
         let mut r = *y;
         r[1] *= -self.restitution(self.seq.sides[k]);
         r
     }
 
-    /// The model of flight k: the device with the drive's phase at its start.
-    pub(super) fn model(&self, forcing: &Forcing, phase: f64) -> Harvester<Sine> {
-        self.base.with_excitation(forcing.sine(phase))
+    /// The drive of flight k: the sine with its phase at the flight's start.
+    pub(super) fn drive(&self, forcing: &Forcing, phase: f64) -> Sine {
+        forcing.sine(phase)
     }
 
     /// The phase at which flight k ends.
@@ -255,7 +279,7 @@ impl<'a> Problem<'a> {
         forcing: &Forcing,
         z: &DVector<f64>,
         stats: &mut Stats,
-    ) -> Result<Evaluated, SolverError> {
+    ) -> Result<Evaluated<N>, SolverError> {
         let (n, d) = (self.seq.len(), self.d);
         let w = 2.0 * std::f64::consts::PI * forcing.freq_hz;
         let sc = &self.scales;
@@ -273,14 +297,14 @@ impl<'a> Problem<'a> {
                     state: vec![],
                 });
             }
-            let model = self.model(forcing, p0);
+            let sine = self.drive(forcing, p0);
             let pre = self.pre_state(z, k);
             let y0 = self.rebound(k, &pre);
-            let fl = fly(&model, self.param, y0, tau, self.rtol, sc, &[], stats)?;
+            let fl = fly(self.base, sine, self.param, y0, tau, self.rtol, sc, &[], stats)?;
             let last = k + 1 == n;
             let kn = if last { 0 } else { k + 1 };
             let mut target = self.pre_state(z, kn);
-            let mut dtarget = Matrix4::identity();
+            let mut dtarget = SMatrix::<f64, N, N>::identity();
             if last && self.seq.closure == Closure::Mirror {
                 let s = self.mirror.expect("checked in new");
                 target = s * target;
@@ -317,13 +341,13 @@ impl<'a> Problem<'a> {
         &self,
         forcing: &Forcing,
         z: &DVector<f64>,
-        ev: &Evaluated,
+        ev: &Evaluated<N>,
     ) -> ImpactOrbitInfo {
         let n = self.seq.len();
         let speeds_m_s: Vec<f64> = (0..n)
             .map(|k| self.seq.sides[k].sign() * self.pre_state(z, k)[1])
             .collect();
-        let (g_up, g_lo) = (self.base.gap(Side::Upper), self.base.gap(Side::Lower));
+        let (g_up, g_lo) = (self.gap(Side::Upper), self.gap(Side::Lower));
         let mut excursion_m = f64::NEG_INFINITY;
         let mut excursion_at = None;
         for (k, fl) in ev.flights.iter().enumerate() {
@@ -335,7 +359,7 @@ impl<'a> Problem<'a> {
                 };
                 if e > excursion_m {
                     excursion_m = e;
-                    excursion_at = Some((k, x.t, side, x.state));
+                    excursion_at = Some((k, x.t, side, DVector::from_column_slice(x.state.as_slice())));
                 }
             }
         }
@@ -345,24 +369,24 @@ impl<'a> Problem<'a> {
             excursion_m = -g_up.min(g_lo);
         }
         let m = self.transfer(forcing, z, ev);
-        let scaled = |m: &Matrix4<f64>| {
+        let scaled = |m: &SMatrix<f64, N, N>| {
             let mut out = *m;
-            for i in 0..4 {
-                for j in 0..4 {
+            for i in 0..N {
+                for j in 0..N {
                     out[(i, j)] *= self.scales[j] / self.scales[i];
                 }
             }
-            for i in self.d..4 {
+            for i in self.d..N {
                 out[(i, i)] = 0.0;
             }
             out
         };
-        let nan = [Complex::new(f64::NAN, 0.0); 4];
+        let nan = vec![Complex::new(f64::NAN, 0.0); N];
         let (mults, half) = match self.seq.closure {
             Closure::Mirror => {
                 let h = self.mirror.expect("checked in new") * m;
                 let hm = multipliers(&scaled(&h)).unwrap_or(nan);
-                let mut pm = hm.map(|x| x * x);
+                let mut pm: Vec<Complex<f64>> = hm.iter().map(|x| x * x).collect();
                 pm.sort_by(|a, b| b.norm().total_cmp(&a.norm()));
                 (pm, Some(hm))
             }
@@ -383,20 +407,20 @@ impl<'a> Problem<'a> {
         &self,
         forcing: &Forcing,
         z: &DVector<f64>,
-        ev: &Evaluated,
-    ) -> Matrix4<f64> {
-        let mut m = Matrix4::identity();
+        ev: &Evaluated<N>,
+    ) -> SMatrix<f64, N, N> {
+        let mut m = SMatrix::<f64, N, N>::identity();
         for (k, fl) in ev.flights.iter().enumerate() {
-            let model = self.model(forcing, self.phase(z, k));
+            let a = self.drive(forcing, self.phase(z, k)).accel(0.0);
             let pre = self.pre_state(z, k);
             let post = self.rebound(k, &pre);
-            let f_minus = model.rhs(Mode::Free, 0.0, &pre);
-            let f_plus = model.rhs(Mode::Free, 0.0, &post);
-            let mut dmat = Matrix4::identity();
+            let f_minus = self.base.rhs(Mode::FREE, &pre, a);
+            let f_plus = self.base.rhs(Mode::FREE, &post, a);
+            let mut dmat = SMatrix::<f64, N, N>::identity();
             dmat[(1, 1)] = -self.restitution(self.seq.sides[k]);
             let jump = (f_plus - dmat * f_minus) / pre[1];
             let mut salt = dmat;
-            for i in 0..4 {
+            for i in 0..N {
                 salt[(i, 0)] += jump[i];
             }
             m = fl.phi * salt * m;
@@ -432,19 +456,21 @@ impl<'a> Problem<'a> {
         &self,
         forcing: &Forcing,
         z: &DVector<f64>,
-        ev: &Evaluated,
+        ev: &Evaluated<N>,
         stats: &mut Stats,
-    ) -> Result<Measures, SolverError> {
+    ) -> Result<Measures<N>, SolverError> {
         let n = self.seq.len();
         let w = 2.0 * std::f64::consts::PI * forcing.freq_hz;
         let two_pi = 2.0 * std::f64::consts::PI;
-        let mut v_sq = [0.0; 2];
+        let n_out = self.base.layout().outputs.len();
+        let mut out_sq = vec![0.0; n_out];
+        let mut out_int = vec![0.0; n_out];
         let mut x_up = f64::NEG_INFINITY;
         let mut x_lo = f64::INFINITY;
         let mut speed = [0.0f64; 2];
         let mut section = None;
-        let mut zeros: Vec<State> = Vec::new();
-        let mirror = self.mirror.unwrap_or_else(Matrix4::identity);
+        let mut zeros: Vec<SVector<f64, N>> = Vec::new();
+        let mirror = self.mirror.unwrap_or_else(SMatrix::<f64, N, N>::identity);
         let halves = if self.seq.closure == Closure::Mirror {
             2
         } else {
@@ -471,10 +497,11 @@ impl<'a> Problem<'a> {
                 } else {
                     // Flown again for the states at phase zero (the evaluation kept none), and
                     // the mirror half for the first time.
-                    let model = self.model(forcing, phase0);
+                    let sine = self.drive(forcing, phase0);
                     let y0 = self.rebound(k, &pre);
                     fly(
-                        &model,
+                        self.base,
+                        sine,
                         self.param,
                         y0,
                         tau,
@@ -485,8 +512,10 @@ impl<'a> Problem<'a> {
                     )?
                 };
                 zeros.extend(fl.marked.iter().flatten());
-                v_sq[0] += fl.v_sq[0];
-                v_sq[1] += fl.v_sq[1];
+                for i in 0..n_out {
+                    out_sq[i] += fl.out_sq[i];
+                    out_int[i] += fl.out_int[i];
+                }
                 let side = if pre[0] > 0.0 { 0 } else { 1 };
                 speed[side] = speed[side].max(pre[1].abs());
                 x_up = x_up.max(pre[0]);
@@ -503,24 +532,26 @@ impl<'a> Problem<'a> {
             }
         }
         let period = f64::from(self.seq.periods()) / forcing.freq_hz;
-        let summary = OrbitSummary {
-            v1_rms_v: (v_sq[0] / period).sqrt(),
-            v2_rms_v: (v_sq[1] / period).sqrt(),
-            p_total_w: (v_sq[0] + v_sq[1]) / period / self.base.load_resistance(),
-            x_max_m: x_up.max(-x_lo),
-            x_upper_m: x_up,
-            x_lower_m: x_lo,
-            contact_fraction: 0.0,
-            impacts: self.seq.impacts() as u32,
-            impact_speed_m_s: speed,
-            upcrossing_s: section.map(|_| 0.0),
-        };
+        let summary = OrbitSummary::from_integrals(
+            self.base.layout(),
+            &out_sq,
+            &out_int,
+            period,
+            Extent {
+                x_upper_m: x_up,
+                x_lower_m: x_lo,
+                contact_fraction: 0.0,
+                impacts: self.seq.impacts() as u32,
+                impact_speed_m_s: speed,
+                upcrossing_s: section.map(|_| 0.0),
+            },
+        );
         // The mean of the states at phase zero of each period: the same for every choice of
         // the orbit's first period.
         let fingerprint = if zeros.is_empty() {
             self.pre_state(z, 0)
         } else {
-            zeros.iter().sum::<State>() / zeros.len() as f64
+            zeros.iter().sum::<SVector<f64, N>>() / zeros.len() as f64
         };
         Ok((summary, section, fingerprint))
     }

@@ -66,8 +66,8 @@ pub(super) struct Followed {
     pub ending: Ending,
 }
 
-pub(super) struct Follower<'p, 'a> {
-    pub problem: &'p Problem<'a>,
+pub(super) struct Follower<'p, 'a, M, const N: usize> {
+    pub problem: &'p Problem<'a, M, N>,
     pub settings: ContinuationSettings,
     /// The asymmetry of a mirror-structured periodic orbit is watched (the branch ends when
     /// it returns to the symmetric orbits).
@@ -82,7 +82,7 @@ const MAX_CORRECTION: f64 = 0.5;
 /// impacts merge into a chattering sequence, ends at this budget).
 const MAX_BRANCH_POINTS: usize = 2000;
 
-impl Follower<'_, '_> {
+impl<M: crate::model::Model<N>, const N: usize> Follower<'_, '_, M, N> {
     fn q_of(&self, f: &Forcing) -> f64 {
         f.get(self.settings.parameter) / self.settings.param_scale
     }
@@ -96,7 +96,7 @@ impl Follower<'_, '_> {
     }
 
     /// [jz | jp * scale].
-    fn bordered(&self, ev: &Evaluated) -> DMatrix<f64> {
+    fn bordered(&self, ev: &Evaluated<N>) -> DMatrix<f64> {
         let m = ev.jz.nrows();
         let mut j = DMatrix::zeros(m, m + 1);
         j.view_mut((0, 0), (m, m)).copy_from(&ev.jz);
@@ -126,7 +126,7 @@ impl Follower<'_, '_> {
         &mut self,
         forcing: Forcing,
         z: DVector<f64>,
-        ev: &Evaluated,
+        ev: &Evaluated<N>,
         prev: &DVector<f64>,
         residual: f64,
     ) -> Option<Node> {
@@ -140,15 +140,15 @@ impl Follower<'_, '_> {
         let point = DiagramPoint {
             forcing,
             periods: self.problem.seq.periods(),
-            multipliers: info.multipliers,
-            half_multipliers: info.half_multipliers,
+            multipliers: info.multipliers.clone(),
+            half_multipliers: info.half_multipliers.clone(),
             summary,
-            section,
+            section: section.map(|(p, y)| (p, DVector::from_column_slice(y.as_slice()))),
             impact_speeds_m_s: info.speeds_m_s.clone(),
             clearance_m: -info.excursion_m,
             symmetric: self.problem.seq.closure == Closure::Mirror,
             residual,
-            fingerprint,
+            fingerprint: DVector::from_column_slice(fingerprint.as_slice()),
         };
         Some(Node {
             forcing,

@@ -52,6 +52,7 @@ mod starts;
 
 pub use build::{rigid_diagram, DiagramOptions};
 pub use bvp::{Closure, ImpactSequence};
+pub(crate) use bvp::side_stops;
 
 use super::diagram::{
     BranchEnd, BranchKind, Diagram, DiagramBranch, DiagramEvent, DiagramPoint, EndKind, EventKind,

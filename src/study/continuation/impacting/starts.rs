@@ -4,42 +4,43 @@
 
 use nalgebra::{DMatrix, DVector};
 
-use crate::drive::Sine;
+use nalgebra::SVector;
+
+use crate::model::{Driven, Mode, Model, SwitchKind};
 use crate::ode::{Dopri5, Observer, Step};
-use crate::physics::contact::{Mode, Side};
-use crate::physics::harvester::{Harvester, State, SwitchKind};
+use crate::physics::contact::Side;
 use crate::study::continuation::first_orbit;
-use crate::study::orbit::{mode_of, Orbit, OrbitError, Shooter};
+use crate::study::orbit::{Orbit, OrbitError, Shooter};
 
 use super::build::{Builder, From, Start};
-use super::bvp::{Closure, ImpactSequence, Problem};
+use super::bvp::{live_components, side_stops, Closure, ImpactSequence, Problem};
 use super::follow::{Found, Node};
 use super::segment::fly;
 use super::{EndKind, EventKind};
 
 /// The impacts of one period, recorded as they happen.
-struct ImpactLog {
+struct ImpactLog<const N: usize> {
     /// The state at the end of the last step (before a switch, the state at impact).
-    last: State,
-    impacts: Vec<(f64, State)>,
+    last: SVector<f64, N>,
+    impacts: Vec<(f64, SVector<f64, N>)>,
     /// A switch that is not a rebound (sticking): no chain of flights holds it.
     other: bool,
 }
 
-impl Observer<State, Mode> for ImpactLog {
-    fn step(&mut self, st: &Step<State>, _mode: Mode) {
+impl<const N: usize> Observer<SVector<f64, N>, Mode> for ImpactLog<N> {
+    fn step(&mut self, st: &Step<SVector<f64, N>>, _mode: Mode) {
         self.last = st.y1;
     }
 
     fn switched(&mut self, t: f64, from: Mode, to: Mode) {
-        match SwitchKind::of(from, to) {
+        match SwitchKind::between(from, to) {
             SwitchKind::Rebound => self.impacts.push((t, self.last)),
             _ => self.other = true,
         }
     }
 }
 
-impl Builder<'_> {
+impl<M: Model<N> + Clone, const N: usize> Builder<'_, M, N> {
     /// The impacting orbit reached from rest at parameter value `at` (a transient, then
     /// Newton on the period map of the device with its stops), as a start to follow both
     /// ways; `None` when it does not impact, Newton does not converge, or it sticks to a stop
@@ -74,17 +75,18 @@ impl Builder<'_> {
     /// The impact sequence and the chain's unknowns of a period-one orbit of the device.
     fn chain_of(&mut self, o: &Orbit) -> Option<(ImpactSequence, DVector<f64>)> {
         let f = &o.forcing;
-        let model: Harvester<Sine> = self.h.with_excitation(f.sine(o.phase_rad));
+        let model = Driven::new(self.h, f.sine(o.phase_rad));
+        let y0: SVector<f64, N> = o.state_n();
         let mut log = ImpactLog {
-            last: o.state,
+            last: y0,
             impacts: Vec::new(),
             other: false,
         };
         let mut ode = Dopri5::new(
             0.0,
-            o.state,
-            mode_of(&model, &o.state),
-            model.solver_options(self.settings.shooting.rtol),
+            y0,
+            self.h.mode_of(&y0),
+            self.h.solver_options(self.settings.shooting.rtol),
         );
         ode.integrate_observed(&model, f.period_s(), &mut log)
             .ok()?;
@@ -122,11 +124,12 @@ impl Builder<'_> {
         let param = self.param();
         let f = g.forcing;
         let w = 2.0 * std::f64::consts::PI * f.freq_hz;
-        let model = self.h.without_stops().with_excitation(f.sine(g.phase_rad));
+        let free = self.h.without_contacts();
         let fl = fly(
-            &model,
+            &free,
+            f.sine(g.phase_rad),
             param,
-            g.state,
+            g.state_n(),
             f.period_s(),
             self.settings.shooting.rtol,
             &self.h.scales(),
@@ -148,12 +151,13 @@ impl Builder<'_> {
             .iter()
             .filter(|x| !x.maximum)
             .min_by(|a, b| a.state[0].total_cmp(&b.state[0]));
-        let tol = 1e-6 * self.h.x_scale();
+        let tol = 1e-6 * self.h.scales()[0];
+        let [(g_up, _), (g_lo, _)] = side_stops(self.h);
         let mut grazed = Vec::new();
-        if let Some(x) = top.filter(|x| (x.state[0] - self.h.gap(Side::Upper)).abs() <= tol) {
+        if let Some(x) = top.filter(|x| (x.state[0] - g_up).abs() <= tol) {
             grazed.push((Side::Upper, *x));
         }
-        if let Some(x) = bottom.filter(|x| (-x.state[0] - self.h.gap(Side::Lower)).abs() <= tol) {
+        if let Some(x) = bottom.filter(|x| (-x.state[0] - g_lo).abs() <= tol) {
             grazed.push((Side::Lower, *x));
         }
         for (side, x) in &grazed {
@@ -161,7 +165,7 @@ impl Builder<'_> {
                 sides: vec![*side],
                 closure: Closure::Periodic(1),
             };
-            let mut z = DVector::zeros(self.h.active_states());
+            let mut z = DVector::zeros(live_components(self.h));
             let problem = Problem::new(self.h, seq.clone(), param, self.settings.shooting.rtol)
                 .map_err(OrbitError::Invalid)?;
             problem.pack(&mut z, 0, g.phase_rad + w * x.t, &x.state);
@@ -182,7 +186,7 @@ impl Builder<'_> {
             };
             let problem = Problem::new(self.h, seq.clone(), param, self.settings.shooting.rtol)
                 .map_err(OrbitError::Invalid)?;
-            let mut z = DVector::zeros(self.h.active_states());
+            let mut z = DVector::zeros(live_components(self.h));
             problem.pack(&mut z, 0, g.phase_rad + w * x.t, &x.state);
             self.queue.push_back(Start {
                 seq,
@@ -198,7 +202,7 @@ impl Builder<'_> {
 
     /// The branch a smooth event leads to: the asymmetric pair at a symmetry-breaking
     /// pitchfork, the period-two branch at a period doubling.
-    pub(super) fn starts_at_event(&mut self, idx: usize, problem: &Problem<'_>, e: &Found) {
+    pub(super) fn starts_at_event(&mut self, idx: usize, problem: &Problem<'_, M, N>, e: &Found) {
         let n = &e.node;
         let seq = &problem.seq;
         let (new_seq, z, both) = match (e.kind, seq.closure) {
@@ -274,7 +278,7 @@ impl Builder<'_> {
     pub(super) fn starts_at_end(
         &mut self,
         idx: usize,
-        problem: &Problem<'_>,
+        problem: &Problem<'_, M, N>,
         last: &Node,
         kind: EndKind,
     ) {
