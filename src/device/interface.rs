@@ -4,7 +4,7 @@
 //! | `kind` | circuit | transducer |
 //! |---|---|---|
 //! | `resistive` (the default, and the meaning of a file without the table) | the transducer's own `load_resistance_ohm` | any |
-//! | `full_bridge` | a full-wave diode bridge into a storage capacitor `storage_capacitance_f` with a DC load | piezoelectric, electromagnetic |
+//! | `full_bridge` | a full-wave diode bridge into a storage capacitor `storage_capacitance_f` with a DC load | piezoelectric, electromagnetic, an electrostatic pair (across its two electrodes) |
 //! | `parallel_sshi` | the bridge, plus an inductive switch across the piezoelectric element that inverts its voltage, `V -> -gamma V`, at each displacement extremum | piezoelectric |
 //! | `series_sshi` | the switch in series with the bridge: the element is open but at each displacement extremum, when it discharges through the inductor and the bridge into the storage | piezoelectric |
 //! | `sece` | synchronous electric charge extraction: the element is open but at each displacement extremum, when the energy on its clamped capacitance moves to the storage with an efficiency | piezoelectric |
@@ -36,8 +36,12 @@
 //! resistance_ohm = 100e3
 //! ```
 //!
-//! The electrostatic pairs have two loads with a bias between them; a bridge on each is a
-//! different circuit, which this description refuses with a named error.
+//! An electrostatic pair feeds the bridge from its two electrodes (the bias stays on the proof
+//! mass): the bridge's input is `V1 - V2`, which swings twice as far as either node. The pair's
+//! `load_resistance_ohm` is then a bleed resistor from each electrode to ground (a probe's
+//! input, say), and its `load_capacitance_f` the capacitance of each electrode's node. The
+//! synchronous switches act on a piezoelectric element's clamped capacitance and refuse a pair
+//! with a named error.
 
 use serde::{Deserialize, Serialize};
 
@@ -420,20 +424,36 @@ impl Interface {
                     ));
                 }
             }
-            other => {
+            Transducer::AreaOverlapPair(_) | Transducer::GapClosingPair(_) => {
+                if !matches!(self, Interface::FullBridge(_)) {
+                    return Err(c.message(
+                        "interface.kind",
+                        &format!(
+                            "interface kind `{}` takes a piezoelectric transducer (its switch \
+                             acts on the clamped capacitance); transducer kind `{}` takes \
+                             `resistive` or `full_bridge` (across its two electrodes)",
+                            self.key(),
+                            transducer.key()
+                        ),
+                    ));
+                }
+            }
+            Transducer::None => {
                 return Err(c.message(
                     "interface.kind",
                     &format!(
-                        "interface kind `{}` takes a one-load transducer (piezoelectric or \
-                         electromagnetic); transducer kind `{}` has two loads with a bias \
-                         between them, and a bridge on each is not modelled",
-                        self.key(),
-                        other.key()
+                        "interface kind `{}` needs a transducer to connect; transducer kind \
+                         `none` takes `resistive` only",
+                        self.key()
                     ),
                 ))
             }
         }
-        if transducer.load_resistance_ohm().is_finite() {
+        let pair = matches!(
+            transducer,
+            Transducer::AreaOverlapPair(_) | Transducer::GapClosingPair(_)
+        );
+        if !pair && transducer.load_resistance_ohm().is_finite() {
             return Err(c.message(
                 "transducer.load_resistance_ohm",
                 &format!(
@@ -510,13 +530,18 @@ impl Interface {
                         "in [0.5, 10]",
                     )?;
                     c.positive("interface.diode.thermal_voltage_v", thermal_voltage_v)?;
-                    if !matches!(transducer, Transducer::Piezoelectric(_))
-                        || matches!(self, Interface::SeriesSshi(..))
-                    {
+                    let capacitive = matches!(
+                        transducer,
+                        Transducer::Piezoelectric(_)
+                            | Transducer::AreaOverlapPair(_)
+                            | Transducer::GapClosingPair(_)
+                    );
+                    if !capacitive || matches!(self, Interface::SeriesSshi(..)) {
                         return Err(c.message(
                             "interface.diode.law",
-                            "the `shockley` law is modelled for a piezoelectric element with \
-                             `full_bridge` or `parallel_sshi`; use `piecewise_linear`",
+                            "the `shockley` law is modelled for a piezoelectric element or an \
+                             electrostatic pair with `full_bridge` (and a piezoelectric element \
+                             with `parallel_sshi`); use `piecewise_linear`",
                         ));
                     }
                 }

@@ -13,8 +13,10 @@
 //! grazing orbits, a jump the fold: each moves smoothly with the parameters.
 
 use crate::device::Device;
-use crate::drive::Sine;
-use crate::physics::harvester::Harvester;
+use crate::physics::assembly::Harvester as Model4;
+
+/// The fit's model: the paper's devices, four components.
+type Harvester = Model4<4>;
 use crate::progress::Silent;
 use crate::study::orbit::Orbit;
 use crate::study::stepped::{in_contact, SweepStep, Transition};
@@ -98,8 +100,8 @@ impl Setup {
         }
     }
 
-    fn harvester(&self, device: &Device) -> Harvester<Sine> {
-        Harvester::new(device, Sine::from_rms_g(self.accel_rms_g, self.lo))
+    fn harvester(&self, device: &Device) -> Result<Harvester, Lost> {
+        Harvester::new(device).map_err(|e| Lost(e.to_string()))
     }
 }
 
@@ -202,7 +204,7 @@ impl Path {
     }
 
     /// The grazing inside the transition `t` between a step without contact and one with.
-    fn grazing(&self, h: &Harvester<Sine>, s: &Setup, t: &Transition) -> Result<Grazing, Lost> {
+    fn grazing(&self, h: &Harvester, s: &Setup, t: &Transition) -> Result<Grazing, Lost> {
         let k = self.before(t.before, s.dir);
         if k + 1 >= self.steps.len() {
             return Err(Lost("a transition at the sweep's last step".into()));
@@ -216,7 +218,7 @@ impl Path {
             h,
             s.accel_rms_g,
             self.values[free],
-            self.steps[free].state,
+            nalgebra::SVector::from_column_slice(self.steps[free].state.as_slice()),
             self.values[other],
         )
     }
@@ -226,7 +228,7 @@ impl Path {
 /// stepped sweep (see the module docs).
 pub(super) fn identify(device: &Device, scale: f64, data: &SweepData) -> Result<SetModel, Lost> {
     let s = Setup::of(data, scale);
-    let h = s.harvester(device);
+    let h = s.harvester(device)?;
     let path = Path::run(device, data, &s)?;
     let a = s.accel_rms_g;
     // The fold, when the sweep jumps, and the last coarse step before it. A branch that the
@@ -242,7 +244,7 @@ pub(super) fn identify(device: &Device, scale: f64, data: &SweepData) -> Result<
                 .map(|i| Guess {
                     freq_hz: path.values[i],
                     phase_rad: 0.0,
-                    state: path.steps[i].state,
+                    state: nalgebra::SVector::from_column_slice(path.steps[i].state.as_slice()),
                 })
                 .collect();
             let limit = if jump {
@@ -288,7 +290,7 @@ pub(super) fn identify(device: &Device, scale: f64, data: &SweepData) -> Result<
     for p in &data.points {
         let f = p.freq_hz;
         let j = path.nearest(f);
-        let step_orbit = |j: usize| stable_orbit(&h, f, a, 0.0, path.steps[j].state);
+        let step_orbit = |j: usize| stable_orbit(&h, f, a, 0.0, nalgebra::SVector::from_column_slice(path.steps[j].state.as_slice()));
         let (Some(fold), Some(k)) = (&fold, k_jump) else {
             points.push((true, PointModel::Orbit(Box::new(step_orbit(j)?))));
             continue;
@@ -311,11 +313,17 @@ pub(super) fn identify(device: &Device, scale: f64, data: &SweepData) -> Result<
         } else {
             // A point the data place after the jump but the model before it: the second
             // branch followed back from the first step after the model's jump.
-            let mut o = stable_orbit(&h, path.values[k + 1], a, 0.0, path.steps[k + 1].state)
+            let mut o = stable_orbit(
+                &h,
+                path.values[k + 1],
+                a,
+                0.0,
+                nalgebra::SVector::from_column_slice(path.steps[k + 1].state.as_slice()),
+            )
                 .map_err(|e| Lost(format!("second branch at the jump: {}", e.0)))?;
             for i in (j..=k).rev() {
                 let fi = if i == j { f } else { path.values[i] };
-                o = stable_orbit(&h, fi, a, o.phase_rad, o.state)
+                o = stable_orbit(&h, fi, a, o.phase_rad, o.state_n())
                     .map_err(|e| Lost(format!("second branch below the jump: {}", e.0)))?;
             }
             PointModel::Orbit(Box::new(o))
@@ -339,7 +347,7 @@ pub(super) fn track(
     prev: &SetModel,
 ) -> Result<SetModel, Lost> {
     let s = Setup::of(data, scale);
-    let h = s.harvester(device);
+    let h = s.harvester(device)?;
     let a = s.accel_rms_g;
     let fold = match &prev.fold {
         Some(f) => Some(locate_fold(
@@ -369,7 +377,7 @@ pub(super) fn track(
             (Some(fold), true) if fold.beyond(f) => PointModel::AtFold,
             (Some(fold), true) => {
                 let (ph, y) = match pm {
-                    PointModel::Orbit(o) => (o.phase_rad, o.state),
+                    PointModel::Orbit(o) => (o.phase_rad, o.state_n()),
                     PointModel::AtFold => {
                         let g = fold.nearest(f);
                         (g.phase_rad, g.state)
@@ -379,7 +387,7 @@ pub(super) fn track(
             }
             _ => match pm {
                 PointModel::Orbit(o) => PointModel::Orbit(Box::new(
-                    stable_orbit(&h, f, a, o.phase_rad, o.state).map_err(ctx)?,
+                    stable_orbit(&h, f, a, o.phase_rad, o.state_n()).map_err(ctx)?,
                 )),
                 PointModel::AtFold => return Err(Lost("a point at a fold that vanished".into())),
             },

@@ -4,9 +4,12 @@
 //! new parameter values by Newton's method from where it was, so that an evaluation of the
 //! misfit costs a few periods of integration per measured value instead of a sweep.
 
-use crate::drive::Sine;
 use crate::ode::Stats;
-use crate::physics::harvester::{Harvester, State};
+use crate::physics::assembly::Harvester as Model4;
+
+/// The fit's model: the paper's devices, four components.
+type Harvester = Model4<4>;
+type State = nalgebra::SVector<f64, 4>;
 use crate::progress::Silent;
 use crate::study::continuation::{continue_branch_until, ContinuationSettings, Event, EventKind};
 use crate::study::orbit::{Forcing, Orbit, Parameter, Shooter, ShootingConfig};
@@ -63,7 +66,7 @@ fn forcing(freq_hz: f64, accel_rms_g: f64) -> Forcing {
 /// `phase_rad`), with its section moved into free flight; refused unless stable (a measured
 /// steady state is stable).
 pub(super) fn stable_orbit(
-    h: &Harvester<Sine>,
+    h: &Harvester,
     freq_hz: f64,
     accel_rms_g: f64,
     phase_rad: f64,
@@ -80,7 +83,7 @@ pub(super) fn stable_orbit(
 }
 
 fn orbit(
-    h: &Harvester<Sine>,
+    h: &Harvester,
     freq_hz: f64,
     accel_rms_g: f64,
     phase_rad: f64,
@@ -112,7 +115,7 @@ pub(super) struct Grazing {
 }
 
 /// How far the stop-free orbit `o` reaches past the nearer stop of `h` (m; zero at grazing).
-fn past_stop(h: &Harvester<Sine>, o: &Orbit) -> f64 {
+fn past_stop(h: &Harvester, o: &Orbit) -> f64 {
     use crate::physics::contact::Side;
     let s = &o.summary;
     (s.x_upper_m - h.gap(Side::Upper)).max(-s.x_lower_m - h.gap(Side::Lower))
@@ -121,8 +124,8 @@ fn past_stop(h: &Harvester<Sine>, o: &Orbit) -> f64 {
 /// The stop-free orbit at `freq_hz` from `guess` (phase zero) and how far it reaches past the
 /// stop.
 fn free_test(
-    h: &Harvester<Sine>,
-    free: &Harvester<Sine>,
+    h: &Harvester,
+    free: &Harvester,
     freq_hz: f64,
     accel_rms_g: f64,
     guess: State,
@@ -137,13 +140,13 @@ fn free_test(
         guess,
         &mut stats,
     )?;
-    Ok((past_stop(h, &o), o.state))
+    Ok((past_stop(h, &o), o.state_n()))
 }
 
 /// Secant iteration on the grazing test from (f0, g0) with slope `slope`, the stop-free orbit
 /// at f0 being `y0`; each step at most `max_step_hz`.
 fn secant(
-    h: &Harvester<Sine>,
+    h: &Harvester,
     accel_rms_g: f64,
     (mut f0, mut g0, mut y0): (f64, f64, State),
     mut slope: f64,
@@ -179,7 +182,7 @@ fn secant(
 /// Locates the grazing between `f_free` (where the device's orbit, from `y_free` at phase
 /// zero, does not touch a stop) and `f_other` (where it does).
 pub(super) fn locate_grazing(
-    h: &Harvester<Sine>,
+    h: &Harvester,
     accel_rms_g: f64,
     f_free: f64,
     y_free: State,
@@ -207,7 +210,7 @@ pub(super) fn locate_grazing(
 
 /// The grazing of `h` near `from` (its frequency at the parameters before).
 pub(super) fn track_grazing(
-    h: &Harvester<Sine>,
+    h: &Harvester,
     accel_rms_g: f64,
     from: &Grazing,
 ) -> Result<Grazing, Lost> {
@@ -238,7 +241,7 @@ impl Guess {
         Self {
             freq_hz: o.forcing.freq_hz,
             phase_rad: o.phase_rad,
-            state: o.state,
+            state: o.state_n(),
         }
     }
 }
@@ -290,7 +293,7 @@ const FOLD_TRIES: usize = 4;
 /// orbit Newton finds (trying earlier ones while it does not); returns the first fold at
 /// which the branch loses stability (away from a grazing corner).
 pub(super) fn locate_fold(
-    h: &Harvester<Sine>,
+    h: &Harvester,
     accel_rms_g: f64,
     before: &[Guess],
     near_hz: f64,
@@ -325,7 +328,7 @@ pub(super) fn locate_fold(
 /// The fold ahead of the stable orbit Newton finds from `g`, and the branch's stable states
 /// before it.
 fn fold_from(
-    h: &Harvester<Sine>,
+    h: &Harvester,
     accel_rms_g: f64,
     g: &Guess,
     limit_hz: f64,

@@ -85,6 +85,7 @@
 
 mod driven;
 mod layout;
+pub mod ledger;
 mod mode;
 pub mod tangent;
 
@@ -93,6 +94,7 @@ use nalgebra::{SMatrix, SVector};
 use crate::ode::Options;
 
 pub use driven::Driven;
+pub use ledger::{Books, Ledger};
 pub use layout::{Layout, Load, Slot, MAX_OUTPUTS};
 pub use mode::{Contact, Mode, SwitchKind, MAX_CIRCUITS, MAX_CONTACTS};
 
@@ -160,7 +162,7 @@ impl ContactGeometry {
 }
 
 /// What one energy-ledger term is (see [`Model::ledger_terms`]).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
 pub enum Flow {
     /// Energy into the model (the drive's work, a bias source's).
     In,
@@ -170,7 +172,7 @@ pub enum Flow {
 
 /// One term of a model's energy ledger: its name (a column name, in J when integrated) and
 /// which way it flows.
-#[derive(Debug, Clone, PartialEq, Eq)]
+#[derive(Debug, Clone, PartialEq, Eq, serde::Serialize)]
 pub struct LedgerTerm {
     /// Name, e.g. `"drive"`, `"mech_damping"`, `"stop_upper_damping"`, `"load"`.
     pub name: String,
@@ -331,13 +333,12 @@ pub trait Model<const N: usize>: Send + Sync {
         0.0
     }
 
-    /// Books what a switch moved: `before` and `after` the states around it (the reset's
-    /// losses and any change of the stored energy by a projection), added into `book` (J,
-    /// each as its term flows).
+    /// Books what a switch from `from` to `to` moved, `before` and `after` the states around
+    /// it (the reset's losses and any change of the stored energy by a projection), added into
+    /// `book` (J, each as its term flows; [`SwitchKind::between`] tells what the switch was).
     fn book_switch(
         &self,
         _from: Mode,
-        _index: usize,
         _to: Mode,
         _before: &SVector<f64, N>,
         _after: &SVector<f64, N>,

@@ -21,6 +21,7 @@
 //! ```
 
 pub mod compare;
+pub mod dense;
 pub mod gp;
 pub mod gp_sensitivity;
 pub mod history;

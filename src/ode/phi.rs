@@ -92,8 +92,16 @@ pub fn expm(z: &Matrix4<f64>) -> Matrix4<f64> {
 
 /// `e^Z` alone for a model's `N x N` matrices, by scaling and squaring
 /// ([`Matrix::exp`](nalgebra::Matrix::exp)).
+///
+/// The model's 4 x 4 matrices go through [`expm`] (the static matrix's own scaling and
+/// squaring); other sizes through the dynamic matrix's, the same algorithm.
 pub fn expm_n<const N: usize>(z: &SMatrix<f64, N, N>) -> SMatrix<f64, N, N> {
-    z.exp()
+    if N == 4 {
+        let m = expm(&Matrix4::from_column_slice(z.as_slice()));
+        return SMatrix::<f64, N, N>::from_column_slice(m.as_slice());
+    }
+    let e = DMatrix::from_column_slice(N, N, z.as_slice()).exp();
+    SMatrix::<f64, N, N>::from_column_slice(e.as_slice())
 }
 
 /// The φ functions by their Taylor series (a scaled norm below [`SERIES_MAX_NORM`]).

@@ -19,14 +19,13 @@ use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
 use crate::device::{Device, StiffnessModel};
-use crate::drive::Sine;
 use crate::num::roots::{illinois, RootError, RootOptions, Sample, Termination};
 use crate::ode::{SolverError, Stats};
 use crate::paper::claims::{keys, ClaimKey};
 use crate::paper::measured::P1_MEASURED_ONSET_HZ;
 use crate::paper::setups::{comb, endstop, hertz_stop, prototype1_setup, with_endstop, ParamSet};
 use crate::paper::sweeps::{self, P1_HIGH_ACCEL_RMS_G};
-use crate::physics::harvester::Harvester;
+use crate::physics::assembly::Harvester;
 use crate::progress::Silent;
 use crate::study::steady::SteadyConfig;
 use crate::study::stepped::{continue_sweep, in_contact, Sweep, Transition};
@@ -120,7 +119,7 @@ fn onset_search(
     cfg: &SteadyConfig,
     refine_tol_hz: f64,
 ) -> Result<OnsetSearch, SolverError> {
-    let base = Harvester::new(device, Sine::from_rms_g(accel_rms_g, freqs_hz[0]));
+    let base = Harvester::<4>::new(device)?;
     let cont = frequency_continuation(&base, accel_rms_g, cfg);
     let mut sweep = Sweep {
         values: Vec::new(),

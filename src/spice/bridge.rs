@@ -18,7 +18,7 @@
 use std::fmt::Write as _;
 
 use crate::device::{DcLoad, Device, Diode, Interface, StopLaw, Transducer};
-use crate::physics::harvester::State;
+use crate::physics::transducer::State;
 use crate::spice::{units, SolverSettings};
 
 /// Why a device has no bridge netlist.

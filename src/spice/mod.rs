@@ -94,7 +94,7 @@ mod wrdata;
 
 use crate::device::Device;
 use crate::drive::Sine;
-use crate::physics::harvester::{Harvester, State};
+use crate::physics::transducer::{State, TransducerModel};
 
 pub use netlist::{hertz_force_closed_form, netlist, supports};
 pub use wrdata::{parse_wrdata, SpiceError, Waveforms};
@@ -154,8 +154,7 @@ impl InitialCondition {
 
     /// The state (x, v, s1, s2) of our model for a device, converted to node voltages.
     pub fn from_state(device: &Device, y: &State) -> Self {
-        let model = Harvester::new(device, Sine::from_rms_g(0.0, 1.0));
-        let el = model.electrical(y);
+        let el = TransducerModel::of(&device.transducer).electrical(y);
         Self {
             x_m: y[0],
             v_m_per_s: y[1],

@@ -143,7 +143,7 @@ impl Attractors {
             .iter()
             .map(|f| Attractor {
                 label: f.label.clone(),
-                state: f.orbit.state,
+                state: f.orbit.state.clone(),
             })
             .collect()
     }

@@ -227,7 +227,7 @@ pub struct ChirpReport {
 }
 
 /// Sums over the windows of a swept sine.
-struct Windows<'m, M> {
+struct Windows<'m, M, const N: usize> {
     model: &'m M,
     chirp: Chirp,
     cycles: f64,
@@ -240,7 +240,7 @@ struct Windows<'m, M> {
     out: Vec<ChirpWindow>,
 }
 
-impl<M: Model<N>, const N: usize> Windows<'_, M> {
+impl<M: Model<N>, const N: usize> Windows<'_, M, N> {
     fn close(&mut self, t1: f64) {
         let dur = t1 - self.t0;
         if self.current.is_some() && dur > 0.0 {
@@ -262,7 +262,7 @@ impl<M: Model<N>, const N: usize> Windows<'_, M> {
     }
 }
 
-impl<M: Model<N>, const N: usize> Observer<SVector<f64, N>, Mode> for Windows<'_, M> {
+impl<M: Model<N>, const N: usize> Observer<SVector<f64, N>, Mode> for Windows<'_, M, N> {
     fn step(&mut self, st: &Step<SVector<f64, N>>, mode: Mode) {
         let two_pi = 2.0 * std::f64::consts::PI;
         let mid = st.t0 + 0.5 * st.h;
@@ -339,7 +339,7 @@ impl ChirpSweep {
         };
         let n_out = base.layout().outputs.len();
         let model = Driven::new(base, chirp.clone());
-        let mut w = Windows {
+        let mut w: Windows<M, N> = Windows {
             model: base,
             chirp,
             cycles: self.window_cycles.max(1) as f64,

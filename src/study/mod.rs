@@ -21,6 +21,7 @@ pub mod ensemble;
 pub mod flow;
 pub mod interface;
 pub mod orbit;
+pub mod periodic;
 pub mod record;
 pub mod record_ledger;
 pub mod rk4_record;

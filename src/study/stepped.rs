@@ -70,7 +70,7 @@ pub trait Drive: Fn(f64) -> (f64, f64) + Sync {}
 impl<T: Fn(f64) -> (f64, f64) + Sync> Drive for T {}
 
 /// A continuation in one drive parameter (frequency or amplitude) of a device.
-pub struct SteppedDrive<'a, M, D: Drive> {
+pub struct SteppedDrive<'a, M, D: Drive, const N: usize> {
     /// The device's model.
     pub base: &'a M,
     /// Drive at parameter value p: (frequency Hz, RMS acceleration g).
@@ -84,7 +84,7 @@ fn state_of<const N: usize>(y: &DVector<f64>) -> SVector<f64, N> {
     SVector::<f64, N>::from_column_slice(y.as_slice())
 }
 
-impl<M: Model<N>, D: Drive, const N: usize> SteppedDrive<'_, M, D> {
+impl<M: Model<N>, D: Drive, const N: usize> SteppedDrive<'_, M, D, N> {
     fn measure(&self, p: f64, y: SVector<f64, N>, mode: Mode) -> Result<SweepStep, SolverError> {
         let (f, a) = (self.drive)(p);
         let (m, y1, mode1, stats) =

@@ -5,7 +5,9 @@
 use nalgebra::Complex;
 
 use crate::ode::{SolverError, GAUSS_LEGENDRE_3};
-use crate::physics::harvester::State;
+use nalgebra::SVector;
+
+use crate::model::Model;
 use crate::study::orbit::{Orbit, Shooter};
 
 /// The first Fourier coefficient of `f(y(t))` over one period of `orbit`, referred to the
@@ -20,16 +22,16 @@ use crate::study::orbit::{Orbit, Shooter};
 /// The integral is the 3-point Gauss-Legendre rule on every accepted step's dense output (the
 /// integrator's steps are at most a fiftieth of the natural period, so the rule's error on
 /// the fundamental is below 1e-10 relative).
-pub fn first_harmonic(
-    shooter: &Shooter<'_>,
+pub fn first_harmonic<M: Model<N>, const N: usize>(
+    shooter: &Shooter<'_, M, N>,
     orbit: &Orbit,
-    f: impl Fn(&State) -> f64,
+    f: impl Fn(&SVector<f64, N>) -> f64,
 ) -> Result<Complex<f64>, SolverError> {
     let forcing = &orbit.forcing;
     let w = 2.0 * std::f64::consts::PI * forcing.freq_hz;
     let period = forcing.period_s();
     let mut sum = Complex::new(0.0, 0.0);
-    shooter.flow(forcing, orbit.phase_rad, orbit.state, period, |st, _| {
+    shooter.flow(forcing, orbit.phase_rad, orbit.state_n(), period, |st, _| {
         for (x, wt) in GAUSS_LEGENDRE_3 {
             let t = st.t0 + x * st.h;
             let arg = w * t + orbit.phase_rad;

@@ -10,9 +10,8 @@ use std::f64::consts::PI;
 
 use crate::device::{Device, Interface, Inversion, Rectifier, Transducer};
 use crate::drive::Sine;
-use crate::physics::harvester::State;
 use crate::physics::interface::closed_forms::{standard_coupled, Element};
-use crate::study::interface::{steady_state, IfSteady, SteadySettings};
+use crate::study::periodic::{steady_state_from_rest, PeriodicState as IfSteady, SteadySettings};
 use crate::validation::{Check, Group, Measure, ValidationError};
 
 /// The sine of the checks (g rms), at the suspension's resonance.
@@ -73,7 +72,7 @@ impl Case {
     fn run(&self, interface: Interface) -> Result<IfSteady, ValidationError> {
         let mut d = self.device.clone();
         d.interface = interface;
-        steady_state(&d, self.sine, &State::zeros(), &self.settings).map_err(err)
+        steady_state_from_rest(&d, self.sine, &self.settings).map_err(err)
     }
 }
 
@@ -225,7 +224,7 @@ pub fn coupling_rows(device: &Device) -> Result<Vec<CouplingRow>, ValidationErro
         let r = e.standard_optimal_load();
         let mut dd = d.clone();
         dd.interface = d.interface.with_load_resistance(r);
-        let s = steady_state(&dd, c.sine, &State::zeros(), &c.settings).map_err(err)?;
+        let s = steady_state_from_rest(&dd, c.sine, &c.settings).map_err(err)?;
         let (_, v) = standard_coupled(
             &e,
             m.mass_kg,

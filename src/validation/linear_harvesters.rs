@@ -25,7 +25,8 @@ use crate::device::{Device, Transducer};
 use crate::drive::Sine;
 use crate::ode::Stats;
 use crate::physics::closed_forms::{Electromagnetic, Oscillator, Piezoelectric};
-use crate::physics::harvester::Harvester;
+use crate::model::Model;
+use crate::physics::assembly::Harvester;
 use crate::physics::linear::LinearResponse;
 use crate::study::orbit::{Forcing, Orbit, OrbitError, Parameter, Shooter, ShootingConfig};
 use crate::validation::harmonics::first_harmonic;
@@ -156,7 +157,8 @@ pub fn steady_response(
     accel_rms_g: f64,
     freq_hz: f64,
 ) -> Result<SteadyResponse, ValidationError> {
-    let h = Harvester::new(device, Sine::from_rms_g(accel_rms_g, freq_hz));
+    let h = Harvester::<4>::new(device)
+        .map_err(|e| ValidationError::Device(format!("{}: {e}", device.name)))?;
     let shooter = Shooter::new(&h, ShootingConfig::default());
     let forcing = Forcing {
         freq_hz,
@@ -170,9 +172,13 @@ pub fn steady_response(
         h.rest_state(),
         &mut stats,
     )?;
-    let c = first_harmonic(&shooter, &orbit, |y| h.electrical(y).v[0])
-        .map_err(|e| ValidationError::Orbit(solver(freq_hz, e)))?;
-    let amplitude = h.excitation.amplitude_m_s2;
+    let c = first_harmonic(&shooter, &orbit, |y| {
+        let mut out = [0.0; 2];
+        h.outputs(crate::model::Mode::FREE, y, &mut out);
+        out[0]
+    })
+    .map_err(|e| ValidationError::Orbit(solver(freq_hz, e)))?;
+    let amplitude = Sine::from_rms_g(accel_rms_g, freq_hz).amplitude_m_s2;
     Ok(SteadyResponse {
         voltage_per_accel: Complex::new(0.0, 1.0) * c / amplitude,
         mean_power_w: orbit.summary.p_total_w,

@@ -28,9 +28,9 @@
 use serde::Deserialize;
 
 use crate::device::Device;
-use crate::drive::Sine;
 use crate::ode::Stats;
-use crate::physics::harvester::Harvester;
+use crate::model::Model;
+use crate::physics::assembly::Harvester;
 use crate::progress::Silent;
 use crate::study::continuation::{continue_branch, first_orbit, Branch, ContinuationSettings};
 use crate::study::orbit::{Forcing, Orbit, Parameter, Shooter, ShootingConfig};
@@ -153,21 +153,22 @@ impl DuffingReference {
 
 /// Our model of the example.
 pub struct Ours {
-    model: Harvester<Sine>,
+    model: Harvester<4>,
     accel_rms_g: f64,
 }
 
 impl Ours {
     /// The model of `data/validation/nlvib_duffing.toml` under F cos(Omega t).
-    pub fn new(device: &Device) -> Self {
+    pub fn new(device: &Device) -> Result<Self, ValidationError> {
         let a = FORCE_N / device.mechanics.mass_kg / std::f64::consts::SQRT_2 / crate::G;
-        Self {
-            model: Harvester::new(device, Sine::from_rms_g(a, 0.1)),
+        Ok(Self {
+            model: Harvester::<4>::new(device)
+                .map_err(|e| ValidationError::Device(e.to_string()))?,
             accel_rms_g: a,
-        }
+        })
     }
 
-    fn shooter(&self) -> Shooter<'_> {
+    fn shooter(&self) -> Shooter<'_, Harvester<4>, 4> {
         Shooter::new(&self.model, ShootingConfig::default())
     }
 

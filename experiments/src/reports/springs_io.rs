@@ -100,7 +100,7 @@ pub fn run(
         })
     })?;
     let t = std::time::Instant::now();
-    let ours = nlvib_duffing::Ours::new(&duffing);
+    let ours = nlvib_duffing::Ours::new(&duffing)?;
     let branch = ours.branch(0.5, 1.6, spring_cases::NLVIB_DUFFING_MAX_STEP_RAD_S)?;
     let hb = nlvib_duffing::hb_convergence(&ours, &branch, &reference)?;
     timed(

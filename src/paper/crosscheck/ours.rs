@@ -7,9 +7,10 @@ use super::{
     REL_CHANGE_TOL,
 };
 use crate::drive::Sine;
+use crate::model::{Driven, Mode, Model};
 use crate::ode::{Dopri5, SolverError, Stats};
-use crate::physics::contact::Mode;
-use crate::physics::harvester::{Harvester, State};
+use crate::physics::assembly::Harvester;
+use crate::physics::transducer::State;
 use crate::progress::Silent;
 use crate::spice::{
     netlist, InitialCondition, SpiceDrive, SpiceOptions, Transient, HERTZ_NEWTON_STEPS,
@@ -23,8 +24,10 @@ use crate::study::stepped::{linspace_step, SteppedDrive};
 pub struct Prepared {
     /// The case.
     pub case: Case,
-    /// The device driven at the case's drive.
-    pub model: Harvester<Sine>,
+    /// The device's model (the paper's, four components).
+    pub model: Harvester<4>,
+    /// The case's drive.
+    pub sine: Sine,
     /// Our steady-state criterion: blocks of the ring-up time, [`REL_CHANGE_TOL`], and enough
     /// settling blocks to span [`MIN_SPAN_PERIODS`].
     pub cfg: SteadyConfig,
@@ -40,11 +43,12 @@ pub struct Prepared {
 /// frequency (the upper branch).
 pub fn prepare(case: &Case) -> Result<Prepared, SolverError> {
     let (f, a) = (case.freq_hz, case.accel_rms_g);
-    let model = Harvester::new(&case.device, Sine::from_rms_g(a, f));
+    let model = Harvester::<4>::new(&case.device)?;
+    let sine = Sine::from_rms_g(a, f);
     let mut cfg = steady_config(&case.device, f);
     cfg.rel_change_tol = REL_CHANGE_TOL;
     let (y0, mode0, start_label) = match case.start {
-        Start::Rest => (model.rest_state(), Mode::Free, "rest".to_string()),
+        Start::Rest => (model.rest_state(), Mode::FREE, "rest".to_string()),
         Start::UpSweep { from_hz, step_hz } => {
             let c = SteppedDrive {
                 base: &model,
@@ -57,7 +61,7 @@ pub fn prepare(case: &Case) -> Result<Prepared, SolverError> {
                 .last()
                 .expect("a sweep up to the case frequency has a step");
             (
-                last.state,
+                State::from_column_slice(last.state.as_slice()),
                 last.mode,
                 format!("up-sweep {from_hz}-{f} Hz in {step_hz} Hz steps (ours)"),
             )
@@ -67,6 +71,7 @@ pub fn prepare(case: &Case) -> Result<Prepared, SolverError> {
     Ok(Prepared {
         case: case.clone(),
         model,
+        sine,
         cfg,
         y0,
         mode0,
@@ -99,7 +104,8 @@ impl Prepared {
     /// measured over the last block; an error unless it converged.
     pub fn ours(&self) -> Result<Ours, CrosscheckError> {
         let a = self.case.accel_rms_g;
-        let (m, _, _, stats) = steady_state(&self.model, self.y0, self.mode0, a, &self.cfg)?;
+        let (m, _, _, stats) =
+            steady_state(&self.model, self.sine, self.y0, self.mode0, a, &self.cfg)?;
         if !m.converged {
             return Err(CrosscheckError::NotSteady {
                 case: self.case.key,
@@ -124,7 +130,14 @@ impl Prepared {
         }
         let cfg = steady_config(&self.case.device, self.case.freq_hz);
         let rest = self.model.rest_state();
-        let (m, ..) = steady_state(&self.model, rest, Mode::Free, self.case.accel_rms_g, &cfg)?;
+        let (m, ..) = steady_state(
+            &self.model,
+            self.sine,
+            rest,
+            Mode::FREE,
+            self.case.accel_rms_g,
+            &cfg,
+        )?;
         Ok(m.v1_rms_v)
     }
 
@@ -182,11 +195,13 @@ impl Prepared {
         let mut k = 0;
         let opts = model.solver_options(self.cfg.rtol);
         let mut ode = Dopri5::new(0.0, self.y0, self.mode0, opts);
-        ode.integrate(model, t_end, |st, _| {
+        let mut out = [0.0; 2];
+        ode.integrate(&Driven::new(model, self.sine), t_end, |st, m| {
             while k < times.len() && times[k] <= st.t1() {
                 if times[k] >= st.t0 {
                     let y = st.at(times[k]);
-                    pts.push(((times[k] - t_start) / period, model.electrical(&y).v[0]));
+                    model.outputs(m, &y, &mut out);
+                    pts.push(((times[k] - t_start) / period, out[0]));
                 }
                 k += 1;
             }

@@ -8,7 +8,6 @@ use super::quantity::{ratio, Outcome};
 use super::ranges::Variant;
 use super::DeviationsError;
 use crate::device::{Device, StiffnessModel};
-use crate::drive::Sine;
 use crate::ode::Stats;
 use crate::paper::claims::{Claims, ToleranceClass};
 use crate::paper::figures::fig09::{Fig9Bias, FIG9_EXTEND_G, FIG9_RANGE_G, FIG9_STEP_G};
@@ -16,7 +15,7 @@ use crate::paper::figures::{fig08, fig09};
 use crate::paper::measured::P1_RESONANCE_HZ;
 use crate::paper::qm::TABLE3_QM;
 use crate::paper::setups::{endstop, with_endstop, FIG13_BIAS_V, P1_BIAS_V, P2_BIAS_V};
-use crate::physics::harvester::Harvester;
+use crate::physics::assembly::Harvester;
 use crate::physics::two_port::TwoPort;
 use crate::progress::Silent;
 use crate::study::continuation::{self, Branch, ContinuationSettings, EventKind};
@@ -177,10 +176,9 @@ fn p1_fig9_bias(variant: &Variant, bias_v: f64) -> (Outcome, Outcome) {
         .grazing_events()
         .next()
         .map_or(Outcome::NoGrazing, |e| Outcome::Value(e.param / s));
-    let h = Harvester::new(
-        &device,
-        Sine::from_rms_g(FIG9_RANGE_G.1 * s, P1_RESONANCE_HZ),
-    );
+    let Ok(h) = Harvester::<4>::new(&device) else {
+        return (onset, Outcome::Failed);
+    };
     let shooter = Shooter::new(&h, settings.shooting);
     let mut stats = Stats::default();
     let power = match branch.orbits_at(&shooter, FIG9_RANGE_G.1 * s, &mut stats) {

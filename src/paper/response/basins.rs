@@ -2,9 +2,8 @@
 //! grid, the attractors (the stable orbits of the branch there), and the convergence of the
 //! basins' shares on a grid twice as fine.
 
-use crate::drive::Sine;
 use crate::ode::Stats;
-use crate::physics::harvester::Harvester;
+use crate::physics::assembly::Harvester;
 use crate::progress::Progress;
 use crate::study::basins::{basins, refine, Attractor, BasinGrid, BasinSettings, Basins};
 use crate::study::continuation::Branch;
@@ -82,10 +81,7 @@ pub(super) fn case_basins(
         .case
         .basin_freq_hz()
         .expect("a case with basin settings has a frequency");
-    // The model at the continuation's first frequency, as the branch was shot (every flow
-    // sets its own drive).
-    let start_hz = setup.continuation.start;
-    let h = Harvester::new(&setup.device, Sine::from_rms_g(setup.accel_rms_g, start_hz));
+    let h = Harvester::<4>::new(&setup.device)?;
     let shooter = Shooter::new(&h, setup.continuation.shooting);
     let orbits = branch.orbits_at(&shooter, f, stats)?;
     let mut attractors = Vec::new();
@@ -128,7 +124,7 @@ pub fn basin_convergence(
     ) else {
         return Ok(None);
     };
-    let h = Harvester::new(&setup.device, Sine::from_rms_g(setup.accel_rms_g, f));
+    let h = Harvester::<4>::new(&setup.device)?;
     let shooter = Shooter::new(&h, setup.continuation.shooting);
     let catalogue = run
         .attractors

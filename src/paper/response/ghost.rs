@@ -4,7 +4,8 @@
 
 use crate::drive::Sine;
 use crate::ode::Stats;
-use crate::physics::harvester::Harvester;
+use crate::model::Model;
+use crate::physics::assembly::Harvester;
 use crate::study::continuation::Branch;
 use crate::study::orbit::{Forcing, OrbitError, Shooter};
 use crate::study::steady::SteadyConfig;
@@ -48,10 +49,7 @@ pub fn ghost_study(
     let Some(fold) = upper_fold_hz(branch) else {
         return Ok(Vec::new());
     };
-    let h = Harvester::new(
-        &setup.device,
-        Sine::from_rms_g(setup.accel_rms_g, setup.continuation.start),
-    );
+    let h = Harvester::<4>::new(&setup.device)?;
     let shooter = Shooter::new(&h, setup.continuation.shooting);
     let mut stats = Stats::default();
     let below = fold - 1.0;
@@ -78,11 +76,11 @@ pub fn ghost_study(
                 param: f,
                 source: e,
             };
-            let model = h.with_excitation(Sine::from_rms_g(setup.accel_rms_g, f));
             let (m, _, _, _) = crate::study::steady::steady_state(
-                &model,
+                &h,
+                Sine::from_rms_g(setup.accel_rms_g, f),
                 y0,
-                crate::study::orbit::mode_of(&h, &y0),
+                h.mode_of(&y0),
                 setup.accel_rms_g,
                 cfg,
             )

@@ -19,12 +19,11 @@ use rayon::prelude::*;
 use thiserror::Error;
 
 use crate::device::{Device, StiffnessModel};
-use crate::drive::Sine;
 use crate::ode::{SolverError, Stats};
 use crate::paper::figures::fig13;
 use crate::paper::setups::{prototype1_setup, with_endstop, ParamSet, FIG13_BIAS_V};
 use crate::paper::sweeps::{self, P1_HIGH_ACCEL_RMS_G, P1_SWEEP_STEP_HZ};
-use crate::physics::harvester::Harvester;
+use crate::physics::assembly::Harvester;
 use crate::progress::{Progress, Silent};
 use crate::study::basins::Basins;
 use crate::study::continuation::{
@@ -431,10 +430,7 @@ pub fn run_case(
     let serr = |source| ResponseError::Sweep { case: key, source };
     let oerr = |source| ResponseError::Orbit { case: key, source };
     let mut run = sweeps_and_branch(setup, on_step)?;
-    let h = Harvester::new(
-        &setup.device,
-        Sine::from_rms_g(setup.accel_rms_g, setup.continuation.start),
-    );
+    let h = Harvester::<4>::new(&setup.device).map_err(|e| oerr(e.into()))?;
     let shooter = Shooter::new(&h, setup.continuation.shooting);
     let mut stats = Stats::default();
     run.named_events = Diagram::from_branch(&shooter, &run.branch)

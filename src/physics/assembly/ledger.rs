@@ -18,10 +18,10 @@ use nalgebra::SVector;
 
 use crate::model::{Contact, Flow, LedgerTerm, Mode, SwitchKind};
 
-use super::circuit::CircuitMode;
+use super::circuits::CircuitMode;
 use super::port::{head, Port};
 use super::stops::FrameStops;
-use super::{Harvester, STOP_GUARDS};
+use super::Harvester;
 
 /// The drive's work, `m a v`.
 pub const DRIVE: usize = 0;
@@ -147,43 +147,51 @@ impl<const N: usize> Harvester<N> {
         }
     }
 
-    /// Books what the switch through guard `index` from `from` to `to` moved, from the states
-    /// `before` and `after` it (see the module docs).
+    /// Books what the switch from `from` to `to` moved, from the states `before` and `after`
+    /// it (see the module docs).
     pub(super) fn book(
         &self,
         from: Mode,
-        index: usize,
         to: Mode,
         before: &SVector<f64, N>,
         after: &SVector<f64, N>,
         book: &mut [f64],
     ) {
         let dropped = self.energy(from, before) - self.energy(to, after);
-        if index >= STOP_GUARDS {
-            let mut rest = dropped;
-            if let Port::Circuit(c) = &self.port {
-                let cm = CircuitMode::of(from.circuit(0));
-                let [conduction, extremum] = c.guards(cm, before, &self.scales);
-                if extremum >= conduction {
-                    let mut probe = *before;
-                    probe[1] = 0.0;
-                    let loss = c.reset(&mut probe);
-                    book[INTERNAL] += loss.diode;
-                    book[SWITCHING] += loss.switching;
-                    rest -= loss.diode + loss.switching;
+        match SwitchKind::between(from, to) {
+            SwitchKind::Circuit => {
+                let mut rest = dropped;
+                if let Port::Circuit(c) = &self.port {
+                    let (a, b) = (CircuitMode::of(from.circuit(0)), CircuitMode::of(to.circuit(0)));
+                    // An extremum flips the heading; its reset loses what the switch takes.
+                    if a.heading != b.heading {
+                        let mut probe = *before;
+                        probe[1] = 0.0;
+                        let loss = c.reset(&mut probe);
+                        book[INTERNAL] += loss.diode;
+                        book[SWITCHING] += loss.switching;
+                        rest -= loss.diode + loss.switching;
+                    }
+                }
+                book[PROJECTIONS] += rest;
+            }
+            SwitchKind::Clip => {
+                let k = changed_contact(from, to);
+                if from.contact(k) == Contact::Pressed {
+                    book[CLIP_LOSSES] += dropped
+                } else {
+                    book[REENGAGEMENT_GAINS] -= dropped
                 }
             }
-            book[PROJECTIONS] += rest;
-            return;
-        }
-        let k = index / 2;
-        match crate::model::Model::switch_kind(self, from, index, to) {
-            SwitchKind::Clip if from.contact(k) == Contact::Pressed => {
-                book[CLIP_LOSSES] += dropped
-            }
-            SwitchKind::Clip => book[REENGAGEMENT_GAINS] -= dropped,
             SwitchKind::Rebound | SwitchKind::Stick => book[IMPACT_LOSSES] += dropped,
             _ => book[PROJECTIONS] += dropped,
         }
     }
+}
+
+/// The first contact whose state differs between two modes.
+fn changed_contact(a: Mode, b: Mode) -> usize {
+    (0..crate::model::MAX_CONTACTS)
+        .find(|&k| a.contact(k) != b.contact(k))
+        .unwrap_or(0)
 }

@@ -18,7 +18,7 @@ use crate::physics::contact::{ContactDamping, ContactLaw, Side, StopModel};
 use crate::physics::interface::DiodeLaw;
 use crate::physics::transducer::TransducerModel;
 
-use super::circuit::{Bridge, CircuitMode, Element};
+use super::circuits::{Bridge, CircuitMode, Element};
 use super::port::{head, Port};
 use super::stops::{contact_of, FrameStops};
 use super::{Harvester, STOP_GUARDS};
@@ -29,7 +29,7 @@ impl<const N: usize> Harvester<N> {
     ///
     /// A pair's part is [`crate::physics::transducer::CapacitorPair::gradients`], the other
     /// loaded transducers' their linear coefficients, a circuit's its own
-    /// ([`super::circuit::Circuit::jacobian`]); in contact the end-stop force adds the bracket's
+    /// ([`super::circuits::Circuit::jacobian`]); in contact the end-stop force adds the bracket's
     /// derivatives (a tension-free contact whose force is clipped adds nothing); resting on a
     /// stop, x and v do not move.
     pub fn linearised(&self, mode: Mode, y: &SVector<f64, N>) -> SMatrix<f64, N, N> {
@@ -218,7 +218,7 @@ impl<const N: usize> Harvester<N> {
     /// current's zero while it conducts, and the extremum's velocity.
     fn circuit_guard_pieces(
         &self,
-        circuit: &super::circuit::Circuit,
+        circuit: &super::circuits::Circuit,
         cm: CircuitMode,
     ) -> Vec<AffineGuard<N>> {
         let index = STOP_GUARDS;
@@ -276,8 +276,8 @@ impl<const N: usize> Harvester<N> {
         }
         if !matches!(circuit.switch, crate::physics::interface::Switch::None) {
             let sign = match cm.heading {
-                super::circuit::Heading::Up => -1.0,
-                super::circuit::Heading::Down => 1.0,
+                super::circuits::Heading::Up => -1.0,
+                super::circuits::Heading::Down => 1.0,
             };
             out.push(AffineGuard {
                 index,
@@ -292,7 +292,7 @@ impl<const N: usize> Harvester<N> {
     /// current at the zero state and at unit states: it is affine in a linear mode).
     fn bridge_current_row(
         &self,
-        circuit: &super::circuit::Circuit,
+        circuit: &super::circuits::Circuit,
         b: Bridge,
     ) -> (SVector<f64, N>, f64) {
         let zero = SVector::<f64, N>::zeros();

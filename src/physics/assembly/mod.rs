@@ -22,7 +22,7 @@
 //! ([`Contact::Resting`]) until the holding force changes sign. The position error of this
 //! shortcut is below that height; the sequence it replaces would have lasted `2u/(A(1 - e))`.
 
-pub mod circuit;
+pub mod circuits;
 mod ledger;
 mod linearisation;
 pub mod port;
@@ -42,6 +42,10 @@ use stops::{contact_of, side_of, FrameStops};
 /// The rebound height below which impacts on a rigid stop end at rest, relative to the
 /// displacement scale ([`Harvester::x_scale_m`]).
 pub const STICK_HEIGHT_REL: f64 = 1e-9;
+
+/// The smallest conduction time constant of an interface circuit accepted, relative to the
+/// suspension's period.
+pub const STIFF_LIMIT: f64 = 1e-5;
 
 /// The guards of the stops: two for each of the two sides.
 const STOP_GUARDS: usize = 4;
@@ -86,6 +90,22 @@ pub enum AssemblyError {
         /// What was asked.
         asked: usize,
     },
+    /// A conduction mode of the interface circuit is too stiff for the explicit integrator.
+    #[error(
+        "device `{device}`: a conduction mode's time constant {tau_s:e} s is below {limit:e} of \
+         the suspension's period {period_s:e} s: the integrator would take more than 1e5 steps a \
+         period; use interface.diode.on_resistance_ohm = 0 (ideal with a drop) or a larger one"
+    )]
+    Stiff {
+        /// The device.
+        device: String,
+        /// The time constant (s).
+        tau_s: f64,
+        /// The suspension's period (s).
+        period_s: f64,
+        /// The smallest ratio accepted ([`STIFF_LIMIT`]).
+        limit: f64,
+    },
     /// A combination of parts that is not supported yet.
     #[error("device `{device}`: {transducer} behind {interface} is not supported yet ({why})")]
     Unsupported {
@@ -111,6 +131,18 @@ impl<const N: usize> Harvester<N> {
     /// need another dimension than `N` ([`dimension`] says which) or do not combine.
     pub fn new(device: &Device) -> Result<Self, AssemblyError> {
         let port = port_of(device)?;
+        if let Port::Circuit(c) = &port {
+            let period_s = 2.0 * std::f64::consts::PI / device.suspension_omega_rad_s();
+            let tau_s = c.conduction_time_constant_s();
+            if tau_s < STIFF_LIMIT * period_s {
+                return Err(AssemblyError::Stiff {
+                    device: device.name.clone(),
+                    tau_s,
+                    period_s,
+                    limit: STIFF_LIMIT,
+                });
+            }
+        }
         if port.dimension() != N {
             return Err(AssemblyError::Dimension {
                 device: device.name.clone(),
@@ -245,7 +277,7 @@ impl<const N: usize> Harvester<N> {
         let pair = match &self.port {
             Port::Loaded(TransducerModel::Pair(p)) => Some(*p),
             Port::Circuit(c) => match c.element {
-                circuit::Element::Pair(p) => Some(p),
+                circuits::Element::Pair(p) => Some(p),
                 _ => None,
             },
             Port::Loaded(_) => None,
@@ -305,12 +337,12 @@ impl<const N: usize> Harvester<N> {
             }
             Port::Circuit(c) => {
                 match c.element {
-                    circuit::Element::Pair(_) => {
+                    circuits::Element::Pair(_) => {
                         names.push(("s1", "C"));
                         names.push(("s2", "C"));
                     }
-                    circuit::Element::Piezo { .. } => names.push(("vp", "V")),
-                    circuit::Element::Coil { .. } => names.push(("i", "A")),
+                    circuits::Element::Piezo { .. } => names.push(("vp", "V")),
+                    circuits::Element::Coil { .. } => names.push(("i", "A")),
                 }
                 names.push(("vs", "V"));
                 let load = match c.sink {
@@ -379,7 +411,7 @@ impl<const N: usize> Harvester<N> {
                 s[(3, 3)] = 1.0;
             }
             Port::Circuit(c) => match c.element {
-                circuit::Element::Pair(_) => {
+                circuits::Element::Pair(_) => {
                     s[(c.e, c.e + 1)] = 1.0;
                     s[(c.e + 1, c.e)] = 1.0;
                     s[(c.vs, c.vs)] = 1.0;
@@ -439,7 +471,7 @@ fn port_of(device: &Device) -> Result<Port, AssemblyError> {
 }
 
 /// The interface circuit of a device, if its interface is not resistive.
-fn circuit_of(device: &Device) -> Result<Option<circuit::Circuit>, AssemblyError> {
+fn circuit_of(device: &Device) -> Result<Option<circuits::Circuit>, AssemblyError> {
     use crate::device::Interface;
     use crate::physics::interface::{DiodeLaw, Sink, Switch};
     if device.interface.is_resistive() {
@@ -452,11 +484,11 @@ fn circuit_of(device: &Device) -> Result<Option<circuit::Circuit>, AssemblyError
         why: why.to_string(),
     };
     let (element, e_slots) = match TransducerModel::of(&device.transducer) {
-        TransducerModel::Piezo { theta, cp, .. } => (circuit::Element::Piezo { theta, cp }, 1),
+        TransducerModel::Piezo { theta, cp, .. } => (circuits::Element::Piezo { theta, cp }, 1),
         TransducerModel::Electromagnetic { phi, rc, l, .. } => {
-            (circuit::Element::Coil { phi, rc, l }, 1)
+            (circuits::Element::Coil { phi, rc, l }, 1)
         }
-        TransducerModel::Pair(p) => (circuit::Element::Pair(p), 2),
+        TransducerModel::Pair(p) => (circuits::Element::Pair(p), 2),
         TransducerModel::None => return Err(unsupported("there is no transducer to connect")),
     };
     let diode_of = |d: &crate::device::Diode| match *d {
@@ -507,12 +539,12 @@ fn circuit_of(device: &Device) -> Result<Option<circuit::Circuit>, AssemblyError
             Switch::Sece(*efficiency),
         ),
     };
-    if matches!(element, circuit::Element::Pair(_)) && switch != Switch::None {
+    if matches!(element, circuits::Element::Pair(_)) && switch != Switch::None {
         return Err(unsupported(
             "a synchronous switch acts on a piezoelectric element's voltage only",
         ));
     }
-    Ok(Some(circuit::Circuit {
+    Ok(Some(circuits::Circuit {
         element,
         diode,
         cs,
@@ -587,7 +619,7 @@ impl<const N: usize> Model<N> for Harvester<N> {
             g,
         );
         if let Port::Circuit(c) = &self.port {
-            let [p, q] = c.guards(circuit::CircuitMode::of(bits), y, &self.scales);
+            let [p, q] = c.guards(circuits::CircuitMode::of(bits), y, &self.scales);
             g[STOP_GUARDS] = p.max(q);
         }
     }
@@ -598,7 +630,7 @@ impl<const N: usize> Model<N> for Harvester<N> {
             let Port::Circuit(c) = &self.port else {
                 return mode;
             };
-            let (next, _) = c.switch(circuit::CircuitMode::of(bits), y, &self.scales);
+            let (next, _) = c.switch(circuits::CircuitMode::of(bits), y, &self.scales);
             return mode.with_circuit(0, next.bits());
         }
         let k = index / 2;
@@ -647,7 +679,7 @@ impl<const N: usize> Model<N> for Harvester<N> {
                 return None;
             };
             let [conduction, extremum] =
-                c.guards(circuit::CircuitMode::of(from.circuit(0)), y, &self.scales);
+                c.guards(circuits::CircuitMode::of(from.circuit(0)), y, &self.scales);
             if extremum < conduction {
                 return None;
             }
@@ -703,9 +735,9 @@ impl<const N: usize> Model<N> for Harvester<N> {
             Port::Loaded(_) => vec![0],
             Port::Circuit(_) => {
                 let mut v = Vec::new();
-                for bridge in [circuit::Bridge::Off, circuit::Bridge::Positive, circuit::Bridge::Negative] {
-                    for heading in [circuit::Heading::Up, circuit::Heading::Down] {
-                        v.push(circuit::CircuitMode { bridge, heading }.bits());
+                for bridge in [circuits::Bridge::Off, circuits::Bridge::Positive, circuits::Bridge::Negative] {
+                    for heading in [circuits::Heading::Up, circuits::Heading::Down] {
+                        v.push(circuits::CircuitMode { bridge, heading }.bits());
                     }
                 }
                 v
@@ -736,7 +768,7 @@ impl<const N: usize> Model<N> for Harvester<N> {
         match &self.port {
             Port::Loaded(t) => t.check(y[0], &port::head(y)),
             Port::Circuit(c) => match c.element {
-                circuit::Element::Pair(p) => {
+                circuits::Element::Pair(p) => {
                     TransducerModel::Pair(p).check(y[0], &port::head(y))
                 }
                 _ => Ok(()),
@@ -771,13 +803,12 @@ impl<const N: usize> Model<N> for Harvester<N> {
     fn book_switch(
         &self,
         from: Mode,
-        index: usize,
         to: Mode,
         before: &SVector<f64, N>,
         after: &SVector<f64, N>,
         book: &mut [f64],
     ) {
-        self.book(from, index, to, before, after, book)
+        self.book(from, to, before, after, book)
     }
 
     fn outputs(&self, mode: Mode, y: &SVector<f64, N>, out: &mut [f64]) {

@@ -56,6 +56,20 @@ fn bordered(jac: &DMatrix<f64>, t: &DVector<f64>) -> DMatrix<f64> {
     big
 }
 
+/// The unit tangent spanning the kernel of `jac`, oriented along `prev`.
+pub(super) fn tangent(jac: &DMatrix<f64>, prev: &DVector<f64>) -> Option<DVector<f64>> {
+    let big = bordered(jac, prev);
+    let mut e = DVector::zeros(prev.len());
+    e[prev.len() - 1] = 1.0;
+    let t = big.lu().solve(&e)?;
+    let n = t.norm();
+    if !(n.is_finite() && n > 0.0) {
+        return None;
+    }
+    let t = t / n;
+    Some(if t.dot(prev) < 0.0 { -t } else { t })
+}
+
 impl<M: Model<N>, const N: usize> Continuer<'_, '_, M, N> {
     fn p_of(&self, q: f64) -> f64 {
         q * self.settings.param_scale
@@ -174,19 +188,6 @@ impl<M: Model<N>, const N: usize> Continuer<'_, '_, M, N> {
         Self::jac_of(&m, &(lin.dp.component_div(&sc) * self.settings.param_scale))
     }
 
-    /// The unit tangent spanning the kernel of `jac`, oriented along `prev`.
-    pub(super) fn tangent(jac: &DMatrix<f64>, prev: &DVector<f64>) -> Option<DVector<f64>> {
-        let big = bordered(jac, prev);
-        let mut e = DVector::zeros(prev.len());
-        e[prev.len() - 1] = 1.0;
-        let t = big.lu().solve(&e)?;
-        let n = t.norm();
-        if !(n.is_finite() && n > 0.0) {
-            return None;
-        }
-        let t = t / n;
-        Some(if t.dot(prev) < 0.0 { -t } else { t })
-    }
 
     /// The point at arclength `s` from `from` along its tangent, with its tangent.
     pub(super) fn point_at(
@@ -202,7 +203,7 @@ impl<M: Model<N>, const N: usize> Continuer<'_, '_, M, N> {
             &from.tangent,
             s,
         )?;
-        let tangent = Self::tangent(&c.jac, &from.tangent).ok_or(OrbitError::NoConvergence {
+        let tangent = tangent(&c.jac, &from.tangent).ok_or(OrbitError::NoConvergence {
             what: self.settings.parameter.label(),
             param: c.orbit.param(self.settings.parameter),
             iterations: c.iterations,
@@ -237,7 +238,7 @@ impl<M: Model<N>, const N: usize> Continuer<'_, '_, M, N> {
         let jac = self.kernel_jacobian(&lin);
         let sign = p.param_tangent().signum();
         let e = join(&SVector::<f64, N>::zeros(), sign);
-        let tangent = Self::tangent(&jac, &e).ok_or(OrbitError::NoConvergence {
+        let tangent = tangent(&jac, &e).ok_or(OrbitError::NoConvergence {
             what: param.label(),
             param: o.param(param),
             iterations: 0,
@@ -351,7 +352,7 @@ impl<M: Model<N>, const N: usize> Continuer<'_, '_, M, N> {
                             .ok()?;
                         let jac = self.kernel_jacobian(&lin);
                         let e = join(&SVector::<f64, N>::zeros(), dir);
-                        let tangent = Self::tangent(&jac, &e)?;
+                        let tangent = tangent(&jac, &e)?;
                         return Some(BranchPoint { orbit: o, tangent });
                     }
                 }

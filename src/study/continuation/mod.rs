@@ -152,7 +152,7 @@ pub fn continue_branch_until<M: Model<N> + Clone, const N: usize>(
             source: e,
         })?;
     let jac = c.kernel_jacobian(&lin);
-    let tangent = Continuer::tangent(&jac, &start_dir).ok_or(OrbitError::Invalid(
+    let tangent = corrector::tangent(&jac, &start_dir).ok_or(OrbitError::Invalid(
         "the first orbit is singular (a fold or branch point): start elsewhere".into(),
     ))?;
     on_point(first.param(param));

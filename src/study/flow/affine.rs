@@ -53,7 +53,7 @@ impl<const N: usize> AffineMode<N> {
             let diag = if i == j { omega } else { 0.0 };
             Complex::new(-a.l[(i, j)], diag)
         });
-        let lu = m.lu();
+        let lu = crate::num::dense::ComplexLu::of(&m);
         let z = lu.solve(&c)?;
         // dz/dw = -(i w - L)^-1 i z.
         let dz_dw = lu.solve(&z.map(|v| -Complex::<f64>::i() * v))?;

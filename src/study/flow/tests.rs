@@ -2,8 +2,10 @@
 
 use super::*;
 use crate::device::Device;
-use crate::physics::contact::Side;
+use crate::physics::assembly::Harvester;
 use crate::study::orbit::{Forcing, Parameter, Shooter, ShootingConfig};
+
+type State = SVector<f64, 4>;
 
 fn example(name: &str) -> Device {
     let text = match name {
@@ -16,26 +18,37 @@ fn example(name: &str) -> Device {
 
 /// Runs `model` from rest over `periods` drive periods by `scheme` at `rtol`: the final
 /// state, the events, and the integral of V1^2 over the run.
-fn run(model: &Harvester<Sine>, periods: f64, scheme: SineScheme, rtol: f64) -> (State, u64, f64) {
+fn run(
+    model: &Harvester<4>,
+    sine: Sine,
+    periods: f64,
+    scheme: SineScheme,
+    rtol: f64,
+) -> (State, u64, f64) {
     let mut flow = SineFlow::with(
         model,
+        sine,
         0.0,
         model.rest_state(),
-        Mode::Free,
+        Mode::FREE,
         model.solver_options(rtol),
         scheme,
     );
     assert_eq!(flow.is_exact(), scheme == SineScheme::Exact);
     let mut v1sq = 0.0;
-    flow.integrate(periods / model.excitation.freq_hz, |st, _| {
-        v1sq += st.integrate(|y| model.electrical(y).v[0].powi(2));
+    flow.integrate(periods / sine.freq_hz, |st, mode| {
+        v1sq += st.integrate(|y| {
+            let mut out = [0.0; 4];
+            model.outputs(mode, y, &mut out);
+            out[0].powi(2)
+        });
     })
     .unwrap();
     (flow.y(), flow.stats().events, v1sq)
 }
 
 /// The largest difference of two states relative to the model's scales.
-fn scaled_diff(model: &Harvester<Sine>, a: &State, b: &State) -> f64 {
+fn scaled_diff(model: &Harvester<4>, a: &State, b: &State) -> f64 {
     (a - b).component_div(&model.scales()).amax()
 }
 
@@ -45,9 +58,10 @@ fn exact_through_linear_contacts_matches_dormand_prince() {
     // period on, every mode affine. Dormand-Prince at rtol 1e-12 is accurate to about 1e-10
     // of the scales over 40 periods, the events to about 1e-14 s: the two agree within 1e-8
     // (measured: a few 1e-10), with the same number of events.
-    let model = Harvester::new(&example("piezo"), Sine::from_rms_g(0.5, 130.0));
-    let (ye, ne, ve) = run(&model, 40.0, SineScheme::Exact, 1e-8);
-    let (yd, nd, vd) = run(&model, 40.0, SineScheme::Dopri5, 1e-12);
+    let model = Harvester::<4>::new(&example("piezo")).unwrap();
+    let sine = Sine::from_rms_g(0.5, 130.0);
+    let (ye, ne, ve) = run(&model, sine, 40.0, SineScheme::Exact, 1e-8);
+    let (yd, nd, vd) = run(&model, sine, 40.0, SineScheme::Dopri5, 1e-12);
     assert!(ne > 40, "{ne} events: the run must impact");
     assert_eq!(ne, nd);
     let d = scaled_diff(&model, &ye, &yd);
@@ -62,9 +76,10 @@ fn exact_with_a_stiff_coil_and_nonlinear_contacts_matches_dormand_prince() {
     // about the 20th period on, by Dormand-Prince. With Dormand-Prince at rtol 1e-11 in the
     // contacts the runs agree with Dormand-Prince everywhere at rtol 1e-11 within 1e-7 of the
     // scales (the contacts' own error; measured: about 1e-9).
-    let model = Harvester::new(&example("em"), Sine::from_rms_g(0.2, 50.0));
-    let (ye, ne, ve) = run(&model, 40.0, SineScheme::Exact, 1e-11);
-    let (yd, nd, vd) = run(&model, 40.0, SineScheme::Dopri5, 1e-11);
+    let model = Harvester::<4>::new(&example("em")).unwrap();
+    let sine = Sine::from_rms_g(0.2, 50.0);
+    let (ye, ne, ve) = run(&model, sine, 40.0, SineScheme::Exact, 1e-11);
+    let (yd, nd, vd) = run(&model, sine, 40.0, SineScheme::Dopri5, 1e-11);
     assert!(ne >= 10, "{ne} events: the run must impact");
     assert_eq!(ne, nd);
     let d = scaled_diff(&model, &ye, &yd);
@@ -75,7 +90,7 @@ fn exact_with_a_stiff_coil_and_nonlinear_contacts_matches_dormand_prince() {
 /// A linear oscillator without transducer at 10 Hz, 100 Hz natural frequency, light damping,
 /// started on its periodic solution (no homogeneous part): x(t) = X sin(w t + psi) exactly.
 /// Returns the model with an upper stop at `gap_rel` times X, and (X, psi).
-fn sine_on_a_stop(gap_rel: f64) -> (Harvester<Sine>, f64, f64) {
+fn sine_on_a_stop(gap_rel: f64) -> (Harvester<4>, f64, f64) {
     let text = r#"
         name = "oscillator"
         params = "example"
@@ -93,20 +108,16 @@ fn sine_on_a_stop(gap_rel: f64) -> (Harvester<Sine>, f64, f64) {
         kind = "none"
     "#;
     let dev = Device::from_toml_str(text, "oscillator").unwrap();
-    let model = Harvester::new(&dev, Sine::from_rms_g(1.0, 10.0));
+    let sine = Sine::from_rms_g(1.0, 10.0);
     // The forced response of m x'' + b x' + k x = m a: x = Im[A e^{i w t} / (k/m - w^2 + i w b/m)].
     let w = 2.0 * std::f64::consts::PI * 10.0;
     let (m, k, b) = (1e-3, 394.78417604357435, 1e-3);
     let den = nalgebra::Complex::new(k / m - w * w, w * b / m);
-    let amp = model.excitation.amplitude_m_s2 / den;
+    let amp = sine.amplitude_m_s2 / den;
     let (x_amp, psi) = (amp.norm(), amp.arg());
     let mut dev = dev;
     dev.stops.upper.as_mut().unwrap().gap_m = gap_rel * x_amp;
-    (
-        Harvester::new(&dev, Sine::from_rms_g(1.0, 10.0)),
-        x_amp,
-        psi,
-    )
+    (Harvester::<4>::new(&dev).unwrap(), x_amp, psi)
 }
 
 /// The time of the first contact entry.
@@ -116,7 +127,7 @@ impl Observer<State, Mode> for FirstImpact {
     fn step(&mut self, _: &Step<State>, _: Mode) {}
 
     fn switched(&mut self, t: f64, from: Mode, to: Mode) {
-        if from == Mode::Free && to == Mode::Contact(Side::Upper) && self.0.is_none() {
+        if !from.in_contact() && to.in_contact() && self.0.is_none() {
             self.0 = Some(t);
         }
     }
@@ -130,10 +141,12 @@ fn a_grazing_orbit_is_found_at_the_closed_form_time() {
     let w = 2.0 * std::f64::consts::PI * 10.0;
     for (gap_rel, hits) in [(1.0 - 1e-7, true), (1.0 + 1e-7, false)] {
         let (model, x_amp, psi) = sine_on_a_stop(gap_rel);
-        let am = AffineMode::of(&model, Mode::Free).unwrap();
+        let sine = Sine::from_rms_g(1.0, 10.0);
+        let affine = model.affine(Mode::FREE).unwrap();
+        let am = AffineMode::of(Mode::FREE, affine, &sine, model.unused()).unwrap();
         let y0 = am.particular(0.0);
         assert!((y0[0] - x_amp * psi.sin()).abs() < 1e-12 * x_amp);
-        let mut flow = SineFlow::new(&model, 0.0, y0, Mode::Free, 1e-8);
+        let mut flow = SineFlow::new(&model, sine, 0.0, y0, Mode::FREE, 1e-8);
         let mut first = FirstImpact(None);
         flow.integrate_observed(0.1, &mut first).unwrap();
         let first = first.0;
@@ -164,25 +177,26 @@ fn exact_variational_equations_match_finite_differences() {
     // eps times the scale under the differences); a missing saltation term changes entries by
     // order one (measured: 1.5e-7 at both steps). And dP/df against a central difference in
     // f, to 1e-6.
-    let model = Harvester::new(&example("piezo"), Sine::from_rms_g(0.5, 130.0));
+    let model = Harvester::<4>::new(&example("piezo")).unwrap();
+    let sine = Sine::from_rms_g(0.5, 130.0);
     let forcing = Forcing {
         freq_hz: 130.0,
         accel_rms_g: 0.5,
     };
     let shooter = Shooter::new(&model, ShootingConfig::default());
-    let settled = run(&model, 60.0, SineScheme::Exact, 1e-10).0;
+    let settled = run(&model, sine, 60.0, SineScheme::Exact, 1e-10).0;
     let mut stats = Stats::default();
     let orbit = shooter
         .solve(&forcing, Parameter::Frequency, 0.0, settled, &mut stats)
         .unwrap();
     assert!(orbit.summary.impacts > 0);
     let lin = shooter
-        .linearise(&forcing, Parameter::Frequency, 0.0, orbit.state, &mut stats)
+        .linearise(&forcing, Parameter::Frequency, 0.0, orbit.state_n(), &mut stats)
         .unwrap();
     let exact = shooter.scaled_monodromy(&lin.monodromy);
     for eps in [3e-5, 1e-5] {
         let fd = shooter
-            .monodromy_fd(&forcing, 0.0, orbit.state, eps)
+            .monodromy_fd(&forcing, 0.0, orbit.state_n(), eps)
             .unwrap();
         let err = (exact - fd).amax() / fd.amax();
         assert!(err < 1e-5, "eps {eps:e}: monodromy differs by {err:e}");
@@ -194,14 +208,14 @@ fn exact_variational_equations_match_finite_differences() {
         .period_map(
             &forcing.with(Parameter::Frequency, 130.0 + df),
             0.0,
-            orbit.state,
+            orbit.state_n(),
         )
         .unwrap();
     let down = shooter
         .period_map(
             &forcing.with(Parameter::Frequency, 130.0 - df),
             0.0,
-            orbit.state,
+            orbit.state_n(),
         )
         .unwrap();
     let fd_dp = (up - down) / (2.0 * df);

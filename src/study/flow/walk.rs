@@ -225,11 +225,6 @@ impl<S: Carrier<N>, const N: usize> Engine<S, N> {
         }
     }
 
-    /// The system integrated.
-    pub(crate) fn system(&self) -> &S {
-        &self.sys
-    }
-
     /// True when the affine modes are integrated exactly.
     pub(crate) fn is_exact(&self) -> bool {
         self.modes.is_some()

@@ -246,7 +246,7 @@ pub struct OutputStats {
 
 impl OrbitSummary {
     /// The summary of a period's sums for a model's layout.
-    pub(crate) fn of(layout: &Layout, acc: &period_sums::Sums, period: f64) -> Self {
+    fn of(layout: &Layout, acc: &period_sums::Sums, period: f64) -> Self {
         Self::from_integrals(
             layout,
             &acc.squares,
@@ -391,9 +391,7 @@ pub const CHORD_STEPS: usize = 4;
 /// The eigenvalues of a monodromy matrix, largest modulus first (None if the Schur iteration
 /// fails).
 pub fn multipliers<const N: usize>(m: &SMatrix<f64, N, N>) -> Option<Vec<Complex<f64>>> {
-    let schur = nalgebra::Schur::try_new(*m, f64::EPSILON, 10_000)?;
-    let ev = schur.complex_eigenvalues();
-    let mut out: Vec<Complex<f64>> = ev.iter().copied().collect();
+    let mut out = crate::num::dense::eigenvalues(m)?;
     out.sort_by(|a, b| b.norm().total_cmp(&a.norm()));
     Some(out)
 }

@@ -117,12 +117,43 @@ impl<'a, M: Model<N>, const N: usize> Shooter<'a, M, N> {
         duration_s: f64,
         stats: &mut Stats,
     ) -> Result<Linearised<N>, SolverError> {
-        let sine = forcing.sine(phase_rad);
-        let sys = Tangents::new(self.base, sine, param);
         let p_ref = forcing.get(param).abs().max(1e-300);
+        self.linearise_with(forcing.sine(phase_rad), param, p_ref, y, duration_s, stats)
+    }
+
+    /// As [`Shooter::linearise_over`] under the sine `sine` itself.
+    pub fn linearise_sine(
+        &self,
+        sine: Sine,
+        param: Parameter,
+        y: SVector<f64, N>,
+        duration_s: f64,
+        stats: &mut Stats,
+    ) -> Result<Linearised<N>, SolverError> {
+        let p_ref = match param {
+            Parameter::Frequency => sine.freq_hz,
+            Parameter::Amplitude => sine.amplitude_m_s2 / (std::f64::consts::SQRT_2 * crate::G),
+        }
+        .abs()
+        .max(1e-300);
+        self.linearise_with(sine, param, p_ref, y, duration_s, stats)
+    }
+
+    /// The linearisation under `sine` with the parameter's scale `p_ref` (for the parameter
+    /// column's tolerance).
+    fn linearise_with(
+        &self,
+        sine: Sine,
+        param: Parameter,
+        p_ref: f64,
+        y: SVector<f64, N>,
+        duration_s: f64,
+        stats: &mut Stats,
+    ) -> Result<Linearised<N>, SolverError> {
+        let sys = Tangents::new(self.base, sine, param);
         let opts = tangent_options(self.base, &self.scales, self.cfg.rtol, p_ref);
         let mut ode = Engine::new(sys, 0.0, Tangent::start(y), self.base.mode_of(&y), opts, true);
-        let period = forcing.period_s();
+        let period = sine.period_s();
         ode.integrate_observed(
             duration_s,
             &mut crate::ode::Steps(|_: &Step<Tangent<N>>, _| {}),
@@ -229,7 +260,7 @@ impl<'a, M: Model<N>, const N: usize> Shooter<'a, M, N> {
             let g = (lin.end - y).component_div(&self.scales);
             residual = g.norm() / self.norm(&y).max(1e-300);
             let m = self.scaled_monodromy(&lin.monodromy);
-            let lu = (m - SMatrix::<f64, N, N>::identity()).lu();
+            let lu = crate::num::dense::Lu::of(&(m - SMatrix::<f64, N, N>::identity()));
             if residual < self.cfg.residual_tol {
                 // The fixed point of the variational integration; polish it on the plain
                 // period map (the one every reported residual refers to) by chord steps
@@ -344,9 +375,4 @@ impl<'a, M: Model<N>, const N: usize> Shooter<'a, M, N> {
         self.flow(f, orbit.phase_rad, orbit.state_n(), t, |_, _| {})
             .map(|r| r.0)
     }
-}
-
-/// A sine with its phase: the drive the shooting of `forcing` at `phase_rad` integrates.
-pub fn drive(forcing: &Forcing, phase_rad: f64) -> Sine {
-    forcing.sine(phase_rad)
 }

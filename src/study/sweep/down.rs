@@ -277,7 +277,7 @@ fn local_grid(values: &[f64], t: Transition, divisor: f64) -> Option<(usize, Vec
 }
 
 fn analyse_down_sweep<M: Model<N>, D: Drive, const N: usize>(
-    cont: &SteppedDrive<'_, M, D>,
+    cont: &SteppedDrive<'_, M, D, N>,
     sweep: Sweep,
     tol: f64,
     approach: Approach,

@@ -38,7 +38,6 @@
 //! that the ghost of the merged orbits cannot hold the state on a branch that has ended.
 
 use crate::device::Device;
-use crate::drive::Sine;
 use crate::ode::{SolverError, Stats};
 use crate::model::Model;
 use crate::progress::Progress;
@@ -171,7 +170,7 @@ pub fn frequency_continuation<'a, M: Model<N>, const N: usize>(
     base: &'a M,
     accel_rms_g: f64,
     cfg: &SteadyConfig,
-) -> SteppedDrive<'a, M, impl Drive> {
+) -> SteppedDrive<'a, M, impl Drive, N> {
     SteppedDrive {
         base,
         drive: move |f: f64| (f, accel_rms_g),
@@ -333,7 +332,7 @@ impl SweepSettings {
 }
 
 fn analyse_up_sweep<M: Model<N>, D: Drive, const N: usize>(
-    cont: &SteppedDrive<'_, M, D>,
+    cont: &SteppedDrive<'_, M, D, N>,
     sweep: Sweep,
     tol: f64,
     approach: Approach,
@@ -464,6 +463,7 @@ pub fn compare_sweeps(reference: &SweepReport, refined: &SweepReport) -> SweepCo
 mod tests {
     use super::*;
     use crate::progress::Silent;
+    use crate::drive::Sine;
     use crate::study::steady::{steady_config, steady_state};
     use crate::study::stepped::linspace_step;
 

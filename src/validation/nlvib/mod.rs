@@ -32,9 +32,12 @@
 //! used as a verdict (the provenance explains why).
 
 use crate::device::Device;
-use crate::drive::Sine;
 use crate::ode::Stats;
-use crate::physics::harvester::{Harvester, State};
+use crate::model::Model;
+use crate::physics::assembly::Harvester;
+
+/// The problem's state: one mass, no transducer.
+type State = nalgebra::SVector<f64, 4>;
 use crate::progress::Silent;
 use crate::study::continuation::{continue_branch, first_orbit, Branch, ContinuationSettings};
 use crate::study::orbit::{Forcing, Orbit, Parameter, Shooter, ShootingConfig};
@@ -65,22 +68,23 @@ pub fn accel_rms_g(device: &Device) -> f64 {
 /// Our model of the problem and its shooting settings.
 pub struct Ours<'d> {
     device: &'d Device,
-    model: Harvester<Sine>,
+    model: Harvester<4>,
     accel_rms_g: f64,
 }
 
 impl<'d> Ours<'d> {
     /// The model of the problem's device (`data/validation/nlvib_sdof.toml`).
-    pub fn new(device: &'d Device) -> Self {
+    pub fn new(device: &'d Device) -> Result<Self, ValidationError> {
         let a = accel_rms_g(device);
-        Self {
+        Ok(Self {
             device,
-            model: Harvester::new(device, Sine::from_rms_g(a, 0.1)),
+            model: Harvester::<4>::new(device)
+                .map_err(|e| ValidationError::Device(e.to_string()))?,
             accel_rms_g: a,
-        }
+        })
     }
 
-    fn shooter(&self) -> Shooter<'_> {
+    fn shooter(&self) -> Shooter<'_, Harvester<4>, 4> {
         Shooter::new(&self.model, ShootingConfig::default())
     }
 

@@ -356,11 +356,10 @@ fn spice_series(
 fn bridge_cases(exp: &mut Experiment, spice: &mut Runner) -> Result<(String, Vec<String>)> {
     use endstop::drive::Sine;
     use endstop::num::compare::{Comparison, Measure};
-    use endstop::physics::harvester::State;
     use endstop::spice::bridge::{
         bridge_netlist, bridge_solver, dc_means, BRIDGE_CASES, BRIDGE_PERIODS,
     };
-    use endstop::study::interface::{steady_state, SteadySettings};
+    use endstop::study::periodic::{steady_state_from_rest, SteadySettings};
 
     let mut t = crate::io::md::Table::new([
         "device",
@@ -382,14 +381,14 @@ fn bridge_cases(exp: &mut Experiment, spice: &mut Runner) -> Result<(String, Vec
         let d = loaded.device;
         let f = d.suspension_omega_rad_s() / (2.0 * std::f64::consts::PI);
         let sine = Sine::from_rms_g(case.accel_rms_g, f);
-        let ours = steady_state(&d, sine, &State::zeros(), &SteadySettings::default())?;
+        let ours = steady_state_from_rest(&d, sine, &SteadySettings::default())?;
         let (t0, t1) = ((BRIDGE_PERIODS - 1.0) / f, BRIDGE_PERIODS / f);
         let dat_name = format!("{}.dat", d.name);
         let net = bridge_netlist(
             &d,
             sine.amplitude_m_s2,
             f,
-            &State::from(ours.state),
+            &endstop::study::periodic::state_of::<4>(&ours),
             t1,
             t0,
             &bridge_solver(f),

@@ -8,7 +8,7 @@
 
 use anyhow::Result;
 use endstop::device::{Device, Interface, Inversion};
-use endstop::study::interface::SteadySettings;
+use endstop::study::periodic::SteadySettings;
 
 use crate::Experiment;
 

@@ -5,8 +5,10 @@
 use anyhow::Result;
 use endstop::drive::Sine;
 use endstop::progress::Silent;
-use endstop::study::interface::sweep::{frequency_sweep, load_sweep};
-use endstop::study::interface::{IfSteady, SteadyMethod, SteadySettings};
+use endstop::study::periodic::{
+    frequency_sweep, load_sweep, steady_state_from_rest, PeriodicState, SteadyMethod,
+    SteadySettings,
+};
 use endstop::study::stepped::linspace_step;
 
 use super::{resonance_hz, variants, ACCEL_RMS_G, SECE_EFFICIENCY, SSHI_Q};
@@ -39,7 +41,7 @@ pub(super) fn power_vs_load(
     ]);
     for (k, (name, d)) in variants(&piezo.device).into_iter().enumerate() {
         eprintln!("[interfaces] load sweep, {name}");
-        let found: Vec<(f64, IfSteady)> = loads
+        let found: Vec<(f64, PeriodicState)> = loads
             .iter()
             .zip(load_sweep(&d, &loads, sine, settings, &Silent))
             .filter_map(|(r, s)| match s {
@@ -155,9 +157,9 @@ pub(super) fn power_vs_frequency(
         let d = &dev.device;
         let freqs = linspace_step(from, to, 0.5);
         eprintln!("[interfaces] frequency sweep, {}", d.name);
-        let states: Vec<IfSteady> = freqs
+        let states: Vec<PeriodicState> = freqs
             .iter()
-            .zip(frequency_sweep(d, &freqs, ACCEL_RMS_G, settings, &Silent))
+            .zip(frequency_sweep(d, &freqs, ACCEL_RMS_G, settings, &Silent)?)
             .filter_map(|(f, s)| match s {
                 Ok(s) => Some(s),
                 Err(e) => {
@@ -245,12 +247,7 @@ pub(super) fn ledger(
     ]);
     for (dev, f) in [(piezo, f0), (em, resonance_hz(&em.device))] {
         for (name, d) in variants(&dev.device) {
-            let s = endstop::study::interface::steady_state(
-                &d,
-                Sine::from_rms_g(ACCEL_RMS_G, f),
-                &endstop::physics::harvester::State::zeros(),
-                settings,
-            );
+            let s = steady_state_from_rest(&d, Sine::from_rms_g(ACCEL_RMS_G, f), settings);
             let s = match s {
                 Ok(s) => s,
                 Err(e) => {
@@ -270,19 +267,23 @@ pub(super) fn ledger(
                     continue;
                 }
             };
-            let l = s.ledger;
+            let l = &s.ledger;
             let u = |x: f64| fmt_sig(x * 1e6, 4);
+            // The contact's net loss: the stop's damper, clips less re-engagements, impacts.
+            let contact = l.get("stop_damping") + l.get("clip_losses")
+                - l.get("reengagement_gains")
+                + l.get("impact_losses");
             t.row([
                 d.name.clone(),
                 name.into(),
-                u(l.excitation),
-                u(l.mech_damping),
-                u(l.contact),
-                u(l.coil),
-                u(l.diode),
-                u(l.switching),
-                u(l.dc_load),
-                u(l.stored_change),
+                u(l.get("drive")),
+                u(l.get("mech_damping")),
+                u(contact),
+                u(l.get("element")),
+                u(l.get("diodes")),
+                u(l.get("switching")),
+                u(l.get("dc_load")),
+                u(l.stored_change_j),
                 format!("{:.1e}", l.relative_residual()),
             ]);
         }

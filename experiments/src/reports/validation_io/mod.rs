@@ -118,7 +118,7 @@ pub fn run() -> Result<()> {
             message: e.to_string(),
         })
     })?;
-    let ours = nlvib::Ours::new(&sdof);
+    let ours = nlvib::Ours::new(&sdof)?;
     let (exact_checks, exact_rows) =
         timed(&mut costs, &sdof.name, "through every exact orbit", || {
             nlvib::exact_point_checks(&ours, &reference, cases::NLVIB_EXACT_STRIDE)

@@ -430,7 +430,7 @@ impl<M: Model<N> + Clone, const N: usize> Builder<'_, M, N> {
             let Some((probe, _)) = fol.step(&n0, probe_ds) else {
                 continue;
             };
-            if !Follower::admissible(&probe) {
+            if !super::follow::admissible(&probe) {
                 continue;
             }
             let on = if matches!(s.from, From::Rest) {

@@ -224,12 +224,6 @@ impl<M: crate::model::Model<N>, const N: usize> Follower<'_, '_, M, N> {
             || (self.u_of(b) - predicted).norm() > MAX_CORRECTION * ds
     }
 
-    /// True while a node's orbit is real: every impact speed positive and no flight past a
-    /// stop.
-    pub(super) fn admissible(n: &Node) -> bool {
-        test_speed(n) > 0.0 && test_excursion(n) < 0.0
-    }
-
     /// Follows the branch from `start` along its tangent until it ends (see the module docs).
     /// `start` may lie on the boundary of the real orbits (a grazing or the symmetric orbit
     /// of a pitchfork): the ending tests are then armed from the first step on.
@@ -467,4 +461,9 @@ fn test_torus(n: &Node) -> f64 {
 /// point): zero on a symmetric orbit.
 fn test_asymmetry(n: &Node) -> f64 {
     n.asymmetry
+}
+
+/// True while a node's orbit is real: every impact speed positive and no flight past a stop.
+pub(super) fn admissible(n: &Node) -> bool {
+    test_speed(n) > 0.0 && test_excursion(n) < 0.0
 }

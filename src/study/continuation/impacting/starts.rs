@@ -334,9 +334,10 @@ impl<M: Model<N> + Clone, const N: usize> Builder<'_, M, N> {
                 });
             }
             EndKind::NewContact => {
-                let Some((k, t, side, y)) = last.info.excursion_at else {
+                let Some((k, t, side, y)) = last.info.excursion_at.clone() else {
                     return;
                 };
+                let y = SVector::<f64, N>::from_column_slice(y.as_slice());
                 // With an impact where the flight touches the stop, at zero speed: the new
                 // branch starts at a grazing impact.
                 let w = 2.0 * std::f64::consts::PI * last.forcing.freq_hz;

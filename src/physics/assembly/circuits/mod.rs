@@ -1,0 +1,9 @@
+//! The interface circuits a transducer's port can sit behind. Each circuit kind is one file:
+//! its modes, guards, switches and linearisation written against one another.
+//!
+//! * [`bridge`]: a diode bridge into a storage capacitor and DC load, with the synchronous
+//!   switches (parallel and series SSHI, SECE) acting at the displacement extrema.
+
+pub mod bridge;
+
+pub use bridge::*;
