@@ -247,6 +247,15 @@ pub trait Model<const N: usize>: Send + Sync {
         false
     }
 
+    /// A time constant of the model far longer than its mechanics' ring-up (s), such as a
+    /// storage capacitor charging through its load, or `None`. A study that settles by
+    /// integrating block after block cannot see such an approach end (two blocks differ by
+    /// little while the state is still far from the orbit), so it first puts the state on the
+    /// periodic orbit by shooting ([`crate::study::steady`]).
+    fn slow_time_constant_s(&self) -> Option<f64> {
+        None
+    }
+
     /// The affine form of `mode`, or `None` where the mode is not affine (a nonlinear force, a
     /// guard that depends on the drive) or the model leaves it to the adaptive integrator.
     fn affine(&self, _mode: Mode) -> Option<Affine<N>> {

@@ -191,6 +191,36 @@ impl<M: Model<N>, const N: usize> Observer<SVector<f64, N>, Mode> for Block<'_, 
     }
 }
 
+/// The state moved onto the periodic orbit by shooting ([`crate::study::periodic`]) when the
+/// model has a time constant longer than a block ([`Model::slow_time_constant_s`]): blocks
+/// would accept a state still approaching it. Where shooting finds no orbit the blocks start
+/// from the state given (and say by `converged` whether they settled).
+fn onto_slow_orbit<M: Model<N>, const N: usize>(
+    model: &M,
+    sine: Sine,
+    y: SVector<f64, N>,
+    mode: Mode,
+    block_t: f64,
+    cfg: &SteadyConfig,
+) -> (SVector<f64, N>, Mode) {
+    match model.slow_time_constant_s() {
+        Some(tau) if tau > block_t => {
+            let settings = crate::study::periodic::SteadySettings {
+                rtol: cfg.rtol,
+                ..Default::default()
+            };
+            match crate::study::periodic::steady_state(model, sine, &y, &settings) {
+                Ok(p) => {
+                    let y = crate::study::periodic::state_of(&p);
+                    (y, model.mode_of(&y))
+                }
+                Err(_) => (y, mode),
+            }
+        }
+        _ => (y, mode),
+    }
+}
+
 /// Integrates `model` from (y, mode) at phase zero to steady state and measures it (by
 /// [`SineFlow`]: exactly where the device is affine, by Dormand-Prince elsewhere).
 /// Returns the measurement, the final state and mode (at a whole period), and the counters.
@@ -204,6 +234,7 @@ pub fn steady_state<M: Model<N>, const N: usize>(
 ) -> Result<(Measurement, SVector<f64, N>, Mode, Stats), SolverError> {
     let period = sine.period_s();
     let block_t = cfg.block_periods as f64 * period;
+    let (y, mode) = onto_slow_orbit(model, sine, y, mode, block_t, cfg);
     let mut ode = SineFlow::new(model, sine, 0.0, y, mode, cfg.rtol);
     let mut t_end = 0.0;
     for _ in 0..cfg.settle_blocks {

@@ -842,6 +842,13 @@ impl<const N: usize> Model<N> for Harvester<N> {
     fn affine(&self, mode: Mode) -> Option<crate::model::Affine<N>> {
         self.affine_form(mode)
     }
+
+    fn slow_time_constant_s(&self) -> Option<f64> {
+        match &self.port {
+            Port::Circuit(c) => c.storage_time_constant_s(),
+            Port::Loaded(_) => None,
+        }
+    }
 }
 
 #[cfg(test)]

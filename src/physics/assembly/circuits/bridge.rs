@@ -542,7 +542,16 @@ impl Circuit {
         }
     }
 
-    /// The fastest time constant of a conduction mode (s): `2 R_on C_port Cs / (C_port + Cs)`
+    /// The storage's time constant through its load (s): `R Cs` for a resistor, `R_b Cs` for
+    /// a battery; `None` for an open load (it only charges).
+    pub fn storage_time_constant_s(&self) -> Option<f64> {
+        match self.sink {
+            Sink::Resistor(r) | Sink::Battery(_, r) => Some(r * self.cs),
+            Sink::Open => None,
+        }
+    }
+
+    /// The shortest time constant of a conduction mode (s): `2 R_on C_port Cs / (C_port + Cs)`
     /// for a capacitive element with an on-resistance (`C_port` the element's capacitance at
     /// rest), `L / (Rc + 2 R_on)` for a coil; infinite where a mode has none.
     pub fn conduction_time_constant_s(&self) -> f64 {
