@@ -11,8 +11,8 @@ use common::io::frame::frame;
 use common::io::md::Table;
 use common::reports::basins_io::basin_map;
 use common::{fmt_sig, row};
-use endstop::drive::Sine;
-use endstop::physics::harvester::Harvester;
+use endstop::device::Device;
+use endstop::model::Model;
 use endstop::study::attractors::{find_attractors, seeds, AttractorSearch, Attractors};
 use endstop::study::basins::{basins, BasinGrid, BasinSettings, Basins, UNSETTLED};
 use endstop::study::displacement::two_wells;
@@ -168,23 +168,20 @@ fn key(label: &str) -> String {
         .join("_")
 }
 
-/// Runs `endstop basins`.
-pub(crate) fn basins_study(a: BasinArgs) -> Result<()> {
-    a.check()?;
-    // Everything is checked and computed before the experiment writes a file.
-    let loaded = common::load_device_file(&a.device)?;
-    let grid = a.grid(&loaded.device)?;
-    let (mut exp, loaded, device) = start("endstop-basins", &a.device, a.bias_v, a.out.clone())?;
-    let forcing = Forcing {
-        freq_hz: a.freq,
-        accel_rms_g: a.accel_rms_g,
-    };
-    let h = Harvester::new(&device, Sine::from_rms_g(a.accel_rms_g, a.freq));
-    let shooting = ShootingConfig::default();
-    let seeds = seeds(&device, &grid, a.seeds_per_side);
-    let search = AttractorSearch::default();
+/// The attractors found from `seeds` and the basins of the grid, on the assembled model.
+#[allow(clippy::too_many_arguments)]
+fn attractors_and_basins<M: Model<N>, const N: usize>(
+    h: &M,
+    device: &Device,
+    a: &BasinArgs,
+    forcing: &Forcing,
+    grid: BasinGrid,
+    seeds: &[(f64, f64)],
+    search: &AttractorSearch,
+    shooting: ShootingConfig,
+) -> Result<(Attractors, Basins)> {
     let found = common::with_progress(1, "attractors", |tick| {
-        let r = find_attractors(&h, &device, &forcing, shooting, &seeds, &search);
+        let r = find_attractors(h, device, forcing, shooting, seeds, search);
         tick.tick();
         r
     })?;
@@ -207,8 +204,28 @@ pub(crate) fn basins_study(a: BasinArgs) -> Result<()> {
     };
     let catalogue = found.catalogue();
     let b = common::with_progress(grid.nx * grid.nv, "basins", |tick| {
-        basins(&h, &forcing, &catalogue, &settings, tick)
+        basins(h, forcing, &catalogue, &settings, tick)
     })?;
+    Ok((found, b))
+}
+
+/// Runs `endstop basins`.
+pub(crate) fn basins_study(a: BasinArgs) -> Result<()> {
+    a.check()?;
+    // Everything is checked and computed before the experiment writes a file.
+    let loaded = common::load_device_file(&a.device)?;
+    let grid = a.grid(&loaded.device)?;
+    let (mut exp, loaded, device) = start("endstop-basins", &a.device, a.bias_v, a.out.clone())?;
+    let forcing = Forcing {
+        freq_hz: a.freq,
+        accel_rms_g: a.accel_rms_g,
+    };
+    let shooting = ShootingConfig::default();
+    let seeds = seeds(&device, &grid, a.seeds_per_side);
+    let search = AttractorSearch::default();
+    let (found, b) = endstop::with_harvester!(&device, |h| attractors_and_basins(
+        &h, &device, &a, &forcing, grid, &seeds, &search, shooting
+    ))?;
 
     write_tables(&mut exp, &device.params, &b, &found)?;
     let mut md = format!(

@@ -17,9 +17,8 @@
 //! every device, and for a transducer with one load the second load's columns are zero.
 
 mod basins;
-mod interface;
+mod charge;
 mod interface_random;
-mod interface_response;
 mod random;
 mod response;
 mod shared;
@@ -76,7 +75,7 @@ enum Study {
     Basins(basins::BasinArgs),
     /// Charge the storage of a device with an interface circuit: the time for its voltage to
     /// go from a start value to a target under a sine, with V_s(t).
-    Charge(interface::ChargeArgs),
+    Charge(charge::ChargeArgs),
     /// Fit free device parameters to measured sweeps (CSV with units in the header): the
     /// fitted device file with provenance, values with standard errors and 95 % intervals,
     /// their correlation, warnings for what the data do not determine, and plots of the data
@@ -87,7 +86,7 @@ enum Study {
 fn main() {
     common::run_main("endstop", || match Cli::parse().study {
         Study::Sweep(a) => sweep::sweep(a),
-        Study::Charge(a) => interface::charge(a),
+        Study::Charge(a) => charge::charge(a),
         Study::Random(a) => random::random(a),
         Study::Response(a) => response::response(a),
         Study::Basins(a) => basins::basins_study(a),

@@ -43,19 +43,6 @@ pub(crate) fn response(args: ResponseArgs) -> Result<()> {
             anyhow::bail!("--sweep-rate must be a finite positive rate in Hz/s, not {r}");
         }
     }
-    if !common::load_device_file(&a.device)?
-        .device
-        .interface
-        .is_resistive()
-    {
-        if args.sweep_rate.is_some() || args.step_study {
-            anyhow::bail!(
-                "--sweep-rate and --step-study take a resistive load; a device with an \
-                 interface circuit gets its sweeps and continued steady state without them"
-            );
-        }
-        return crate::interface_response::response(a);
-    }
     let (mut exp, loaded, device) = start("endstop-response", &a.device, a.bias_v, a.out.clone())?;
     let protocol = a.protocol(&device);
     let settings = a.sweep_settings(&device, &protocol);

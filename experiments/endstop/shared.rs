@@ -193,20 +193,6 @@ pub(crate) fn start(
 ) -> Result<(Experiment, LoadedDevice, Device)> {
     let loaded = load_device_file(path)?;
     let mut device = loaded.device.clone();
-    if !device.interface.is_resistive()
-        && !matches!(
-            name,
-            "endstop-sweep" | "endstop-charge" | "endstop-response" | "endstop-random"
-        )
-    {
-        bail!(
-            "device `{}` has an interface circuit (`{}`): `endstop sweep`, `endstop response`, \
-             `endstop random` and `endstop charge` take it; this study models resistive loads \
-             only",
-            device.name,
-            device.interface.key()
-        );
-    }
     if let Some(v) = bias_v {
         if device.bias_v().is_none() {
             bail!(

@@ -3,16 +3,12 @@
 
 use anyhow::Result;
 
-use crate::interface;
 use crate::shared::{describe, start, step_effect, RangeArgs};
 use endstop_experiments::io::plot::{LegendPos, LinePlot, Series, Style, PALETTE};
-use endstop_experiments::{self as common, fmt_sig, load_device_file};
+use endstop_experiments::{self as common, fmt_sig};
 
 /// Runs `endstop sweep`.
 pub(crate) fn sweep(a: RangeArgs) -> Result<()> {
-    if !load_device_file(&a.device)?.device.interface.is_resistive() {
-        return interface::dc_sweep(a);
-    }
     a.check()?;
     let (mut exp, loaded, device) = start("endstop-sweep", &a.device, a.bias_v, a.out.clone())?;
     let protocol = a.protocol(&device);

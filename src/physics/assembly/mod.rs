@@ -238,6 +238,14 @@ impl<const N: usize> Harvester<N> {
         }
     }
 
+    /// The interface circuit, if the port is one.
+    pub fn circuit(&self) -> Option<&circuits::Circuit> {
+        match &self.port {
+            Port::Circuit(c) => Some(c),
+            Port::Loaded(_) => None,
+        }
+    }
+
     /// The suspension's restoring force `km x + F_higher(x)` (N, along +x on eq 7's left).
     #[inline(always)]
     pub fn restoring_force(&self, x: f64) -> f64 {

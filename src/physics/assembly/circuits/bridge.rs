@@ -687,11 +687,19 @@ impl Circuit {
                     Bridge::Negative
                 }
             }
-            _ => {
-                if let Element::Coil { l, .. } = self.element {
-                    if l > 0.0 {
-                        y[self.e] = 0.0;
+            b => {
+                match self.element {
+                    Element::Coil { l, .. } if l > 0.0 => y[self.e] = 0.0,
+                    // The conduction ends where the current falls to zero, which is where the
+                    // port's voltage, held at the threshold, would start to fall below it: the
+                    // off mode's guard starts at zero with zero rate. Held within rounding, it
+                    // may start a rounding error above zero and fire at once, back into a
+                    // conduction whose current is already negative, again and again; put on
+                    // the threshold (a projection within rounding), it starts at zero.
+                    Element::Piezo { .. } | Element::Pair(_) if self.ron() == 0.0 => {
+                        self.project(b.sign(), y)
                     }
+                    _ => {}
                 }
                 Bridge::Off
             }

@@ -1,6 +1,5 @@
-//! The studies of a device with an interface circuit (`[interface]`: a diode bridge, SSHI,
-//! SECE): `endstop charge`, and `endstop sweep` on such a device (DC voltage and DC power
-//! against frequency, each point a steady state found by shooting).
+//! `endstop charge`: the time for a storage capacitor behind an interface circuit
+//! (`[interface]`: a diode bridge, SSHI, SECE) to reach a target voltage under a sine.
 
 use std::path::PathBuf;
 
@@ -8,11 +7,8 @@ use anyhow::Result;
 use clap::Parser;
 use endstop::drive::Sine;
 use endstop::study::interface::charging::{charge as run_charge, ChargeSettings};
-use endstop::study::interface::sweep::frequency_sweep;
-use endstop::study::interface::SteadySettings;
-use endstop::study::stepped::linspace_step;
 
-use crate::shared::{start, RangeArgs};
+use crate::shared::start;
 use endstop_experiments::fmt_sig;
 use endstop_experiments::io::frame::frame;
 use endstop_experiments::io::plot::{LegendPos, LinePlot, Series, Style, PALETTE};
@@ -133,94 +129,6 @@ pub fn charge(a: ChargeArgs) -> Result<()> {
         vec![Series::new("V_s", pts, PALETTE[0], Style::Line)],
     )
     .legend(LegendPos::LowerRight);
-    exp.write_plot(&plot)?;
-    exp.finish()
-}
-
-/// `endstop sweep` on a device with an interface: the steady state at each frequency.
-pub fn dc_sweep(a: RangeArgs) -> Result<()> {
-    a.check()?;
-    let (mut exp, loaded, device) = start("endstop-sweep", &a.device, a.bias_v, a.out.clone())?;
-    let step_hz = a.protocol(&device).step_hz;
-    let freqs = linspace_step(a.from, a.to, step_hz);
-    let settings = SteadySettings::default();
-    let results = endstop_experiments::with_progress(freqs.len(), "sweep", |tick| {
-        frequency_sweep(&device, &freqs, a.accel_rms_g, &settings, tick)
-    });
-    let mut states = Vec::new();
-    let mut failed = Vec::new();
-    for (f, r) in freqs.iter().zip(results) {
-        match r {
-            Ok(s) => states.push(s),
-            Err(e) => failed.push(format!("{} Hz: {e}", fmt_sig(*f, 5))),
-        }
-    }
-    if states.is_empty() {
-        anyhow::bail!("no steady state found: {}", failed.join("; "));
-    }
-    let rows = states
-        .iter()
-        .map(|s| {
-            row![
-                "freq_hz" => s.freq_hz,
-                "vdc_v" => s.vdc_v,
-                "p_dc_w" => s.p_dc_w,
-                "ripple_v" => s.ripple_v,
-                "x_max_m" => s.x_peak_m,
-                "contact" => s.contact,
-                "stable" => s.is_stable(),
-                "max_multiplier" => s.max_multiplier,
-                "method" => s.method.label(),
-                "ledger_rel_residual" => s.ledger.relative_residual(),
-            ]
-        })
-        .collect::<Vec<_>>();
-    exp.write_parquet("sweep", &mut frame(rows)?, &device.params)?;
-    let best = states
-        .iter()
-        .max_by(|a, b| a.p_dc_w.total_cmp(&b.p_dc_w))
-        .expect("a sweep has at least one point");
-    exp.number("p_dc_max_w", best.p_dc_w);
-    exp.number("p_dc_max_freq_hz", best.freq_hz);
-    let md = format!(
-        "Up-sweep of `{}` ({} interface) from {} to {} Hz in {} Hz steps at {} g rms; each point \
-         is the periodic steady state found by shooting from the previous one.\n\n- largest DC \
-         power: {} uW at {} Hz (V_DC = {} V)\n",
-        loaded.file,
-        device.interface.key(),
-        a.from,
-        a.to,
-        fmt_sig(step_hz, 3),
-        a.accel_rms_g,
-        fmt_sig(best.p_dc_w * 1e6, 4),
-        fmt_sig(best.freq_hz, 5),
-        fmt_sig(best.vdc_v, 4)
-    );
-    let mut md = md;
-    for f in &failed {
-        md.push_str(&format!("- no period-one steady state at {f}\n"));
-    }
-    exp.write_numbers_md(&md)?;
-    print!("{md}");
-    let pts = |f: &dyn Fn(&endstop::study::interface::IfSteady) -> f64| {
-        states.iter().map(|s| (s.freq_hz, f(s))).collect::<Vec<_>>()
-    };
-    let plot = LinePlot::new(
-        &format!(
-            "DC power, {} interface: {}",
-            device.interface.key(),
-            device.name
-        ),
-        "frequency [Hz]",
-        "DC power [uW]",
-        vec![Series::new(
-            "P_DC",
-            pts(&|s| s.p_dc_w * 1e6),
-            PALETTE[0],
-            Style::LinePoints,
-        )],
-    )
-    .legend(LegendPos::UpperLeft);
     exp.write_plot(&plot)?;
     exp.finish()
 }
