@@ -61,13 +61,13 @@ enum Study {
     Sweep(RangeArgs),
     /// Random vibration: an ensemble of band-limited white-noise records (10 kHz band,
     /// 100 kHz sampling), or one measured acceleration record (--accel-file), with mean
-    /// power, output power spectrum and the drive's spectrum. On a device with an interface
-    /// circuit: each record's DC power, efficiency, storage voltage and energy ledger.
+    /// power, output power spectrum and the drive's spectrum; behind an interface circuit
+    /// also each record's DC power, efficiency, storage voltage and energy ledger.
     Random(random::RandomArgs),
     /// The whole frequency response: up- and down-sweeps, the periodic orbits continued in
     /// frequency (pseudo-arclength, through folds) with their Floquet multipliers, and the
-    /// folds and grazing points on the branch. On a device with an interface circuit: the DC
-    /// up- and down-sweeps and the steady state continued through its folds, with stability.
+    /// folds and grazing points on the branch, for any device (a circuit's switchings are
+    /// events of the orbit like its impacts).
     Response(response::ResponseArgs),
     /// Basins of attraction under a fixed sine: the stable periodic orbits reached from a set
     /// of seeds (for a device with two wells, each placed in its well or across the barrier),
