@@ -298,7 +298,7 @@ impl FamilyCase {
     /// The true device.
     pub fn truth_device(&self) -> Result<Device, FitError> {
         let (free, truth) = self.device_params(&self.truth);
-        Ok(with_values(&self.base.device().map_err(bad)?, &free, &truth).map_err(bad)?)
+        with_values(&self.base.device().map_err(bad)?, &free, &truth).map_err(bad)
     }
 
     /// The device the fit starts from.

@@ -100,10 +100,25 @@ fn sweep_with(
     })
 }
 
-/// The model's values for a data set (its points, then its features) on `device` with the
+/// The model's values for a data set (its points, its features, then the end of its branch
+/// where the points show a jump, [`SweepData::measured_jump`]) on `device` with the
 /// acceleration factor `scale`.
 pub fn model_values(device: &Device, scale: f64, data: &SweepData) -> Result<Vec<f64>, FitError> {
-    let m = model_sweep(device, scale, data)?;
+    Ok(values_of(&model_sweep(device, scale, data)?, data))
+}
+
+/// The values of [`model_values`] from the stepped sweep with a plain sweep's settings
+/// ([`model_curve`]): the cheap model that ranks the fit's starts.
+pub(super) fn design_values(
+    device: &Device,
+    scale: f64,
+    data: &SweepData,
+) -> Result<Vec<f64>, FitError> {
+    Ok(values_of(&model_curve(device, scale, data)?, data))
+}
+
+/// The values of a data set's points, features and jump in the model sweep `m`.
+fn values_of(m: &ModelSweep, data: &SweepData) -> Vec<f64> {
     let grid = data.grid();
     let lo = grid.iter().copied().fold(f64::INFINITY, f64::min);
     let hi = grid.iter().copied().fold(f64::NEG_INFINITY, f64::max);
@@ -118,7 +133,10 @@ pub fn model_values(device: &Device, scale: f64, data: &SweepData) -> Result<Vec
             FeatureKind::BranchEnd => m.branch_end_hz.unwrap_or(lo),
         });
     }
-    Ok(out)
+    if data.measured_jump().is_some() {
+        out.push(m.branch_end_hz.unwrap_or(lo));
+    }
+    out
 }
 
 /// Linear interpolation in a curve sorted by frequency (exact at its frequencies).
