@@ -367,3 +367,55 @@ impl SweepData {
         Ok(())
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn up_sweep(values: &[f64], sigma: Option<f64>) -> SweepData {
+        SweepData {
+            label: "t".into(),
+            direction: Direction::Up,
+            accel_rms_g: 1.0,
+            quantity: Quantity::V1RmsV,
+            points: values
+                .iter()
+                .enumerate()
+                .map(|(i, &v)| Point {
+                    freq_hz: 100.0 + 2.0 * i as f64,
+                    value: v,
+                    sigma: sigma.map(|s| s * v),
+                })
+                .collect(),
+            grid_hz: None,
+            features: vec![],
+        }
+    }
+
+    #[test]
+    fn a_fall_of_most_of_the_response_is_the_jump_and_a_resonance_flank_is_not() {
+        // A hardening branch rising to its fold, then the jump down to the low branch.
+        let jump = up_sweep(&[1.0, 1.5, 2.2, 3.1, 4.0, 1.0, 0.8, 0.7], Some(0.02));
+        let j = jump.measured_jump().expect("a jump");
+        assert_eq!((j.before, j.from_hz, j.to_hz), (4, 108.0, 110.0));
+        assert!((j.sigma_hz() - 2.0 / 12f64.sqrt()).abs() < 1e-12);
+        assert_eq!(jump.n_values(), jump.len() + 1);
+        // A linear resonance of half-power width 5.44 Hz (the piezoelectric example's)
+        // sampled every 2 Hz: its flank falls by up to about 30 % between points, but alike
+        // from point to point.
+        let flank: Vec<f64> = (0..12)
+            .map(|i| {
+                let df = 100.0 + 2.0 * i as f64 - 110.0;
+                1.0 / (1.0 + (2.0 * df / 5.44f64).powi(2)).sqrt()
+            })
+            .collect();
+        assert_eq!(up_sweep(&flank, Some(0.02)).measured_jump(), None);
+        // A fall hidden in noise of 10 %: not a jump by the five-sigma criterion.
+        assert_eq!(
+            up_sweep(&[1.0, 1.0, 1.0, 0.6, 0.6, 0.6], Some(0.1)).measured_jump(),
+            None
+        );
+        // Values not yet filled in (all zero) show no jump.
+        assert_eq!(up_sweep(&[0.0; 6], None).measured_jump(), None);
+    }
+}

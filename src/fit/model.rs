@@ -107,14 +107,33 @@ pub fn model_values(device: &Device, scale: f64, data: &SweepData) -> Result<Vec
     Ok(values_of(&model_sweep(device, scale, data)?, data))
 }
 
+/// Most intervals of the grid of the cheap model's sweep of a data set without points (see
+/// [`design_values`]).
+pub const DESIGN_GRID_INTERVALS: usize = 16;
+
 /// The values of [`model_values`] from the stepped sweep with a plain sweep's settings
-/// ([`model_curve`]): the cheap model that ranks the fit's starts.
+/// ([`model_curve`]): the cheap model that ranks the fit's starts. A data set without points
+/// (features only) is swept on its grid thinned to at most [`DESIGN_GRID_INTERVALS`]
+/// intervals, its ends kept: its features are refined by bisection whatever the grid.
 pub(super) fn design_values(
     device: &Device,
     scale: f64,
     data: &SweepData,
 ) -> Result<Vec<f64>, FitError> {
-    Ok(values_of(&model_curve(device, scale, data)?, data))
+    let grid = data.grid();
+    if !data.points.is_empty() || grid.len() <= DESIGN_GRID_INTERVALS + 1 {
+        return Ok(values_of(&model_curve(device, scale, data)?, data));
+    }
+    let every = (grid.len() - 1).div_ceil(DESIGN_GRID_INTERVALS);
+    let mut thin: Vec<f64> = grid.iter().copied().step_by(every).collect();
+    if thin.last() != grid.last() {
+        thin.push(grid[grid.len() - 1]);
+    }
+    let coarse = SweepData {
+        grid_hz: Some(thin),
+        ..data.clone()
+    };
+    Ok(values_of(&model_curve(device, scale, &coarse)?, &coarse))
 }
 
 /// The values of a data set's points, features and jump in the model sweep `m`.
