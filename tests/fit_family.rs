@@ -111,5 +111,8 @@ fn the_recovery_family_covers_the_truth_and_follows_the_chi_square_law() {
         p_low >= ALPHA,
         "coverage {covering} of {intervals}: P(at most as many) {p_low:.2e}"
     );
-    assert!(d <= d_crit, "chi-square law: KS distance {d:.3} > {d_crit:.3}");
+    assert!(
+        d <= d_crit,
+        "chi-square law: KS distance {d:.3} > {d_crit:.3}"
+    );
 }

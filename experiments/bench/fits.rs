@@ -37,7 +37,11 @@ fn note(r: &FitReport) -> String {
 }
 
 /// The Figure 8 fit's inputs, as `endstop fit` reads them.
-fn fig08() -> Result<(endstop::device::Device, Vec<endstop::fit::SweepData>, Vec<ParamRange>)> {
+fn fig08() -> Result<(
+    endstop::device::Device,
+    Vec<endstop::fit::SweepData>,
+    Vec<ParamRange>,
+)> {
     let device = common::load_device("prototype1")?.device;
     let file = "data/measured/fig08_paper.csv";
     let text = std::fs::read_to_string(common::root().join(file))?;
@@ -54,10 +58,20 @@ pub fn measure(repeats: usize) -> Result<Vec<FitCost>> {
     let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build()?;
     let mut cases = vec![{
         let (device, data, free) = fig08()?;
-        ("Figure 8 (prototype 1, kink and jump)".to_string(), device, data, free)
+        (
+            "Figure 8 (prototype 1, kink and jump)".to_string(),
+            device,
+            data,
+            free,
+        )
     }];
     for c in recovery_family() {
-        cases.push((c.name.to_string(), c.start_device()?, c.data()?, c.free.clone()));
+        cases.push((
+            c.name.to_string(),
+            c.start_device()?,
+            c.data()?,
+            c.free.clone(),
+        ));
     }
     cases
         .into_iter()
@@ -65,9 +79,8 @@ pub fn measure(repeats: usize) -> Result<Vec<FitCost>> {
             let mut times = Vec::new();
             let mut last = String::new();
             for _ in 0..repeats.max(1) {
-                let (r, t) = pool.install(|| {
-                    cpu(|| Ok(fit(&device, &data, &free, &FitSettings::default())?))
-                })?;
+                let (r, t) = pool
+                    .install(|| cpu(|| Ok(fit(&device, &data, &free, &FitSettings::default())?)))?;
                 times.push(t);
                 last = note(&r);
             }

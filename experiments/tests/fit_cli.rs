@@ -246,7 +246,12 @@ fn a_device_with_an_interface_circuit_is_refused_naming_it_and_nothing_is_writte
     )
     .unwrap();
     for input in [["--up-sweep", "m.csv"], ["--spectrum", "psd.csv:1e-4"]] {
-        let mut args = vec!["--device", bridge, "--free", "stops.upper.gap_m=0.05e-3..0.3e-3"];
+        let mut args = vec![
+            "--device",
+            bridge,
+            "--free",
+            "stops.upper.gap_m=0.05e-3..0.3e-3",
+        ];
         args.extend(input);
         args.extend(["--out", "out"]);
         let (ok, code, stderr) = run(&dir, &args);

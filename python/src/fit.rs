@@ -133,7 +133,10 @@ fn report_dict<'py>(py: Python<'py>, r: &FitReport) -> PyResult<Bound<'py, PyDic
         q.set_item("values", s.values.clone())?;
         q.set_item("design_ssr", s.design_ssr)?;
         q.set_item("refined_ssr", s.refined.as_ref().map(|f| f.ssr))?;
-        q.set_item("refined_values", s.refined.as_ref().map(|f| f.values.clone()))?;
+        q.set_item(
+            "refined_values",
+            s.refined.as_ref().map(|f| f.values.clone()),
+        )?;
         q.set_item("settled", s.refined.as_ref().map(|f| f.settled))?;
         q.set_item("reported", i == r.best_start)?;
         starts.append(q)?;

@@ -248,7 +248,11 @@ impl SweepData {
     /// sweep's direction of jumping (down in an up-sweep, up in a down-sweep) between
     /// consecutive points.
     pub fn measured_jump(&self) -> Option<MeasuredJump> {
-        if self.features.iter().any(|f| f.kind == FeatureKind::BranchEnd) {
+        if self
+            .features
+            .iter()
+            .any(|f| f.kind == FeatureKind::BranchEnd)
+        {
             return None;
         }
         let sign = match self.direction {

@@ -184,41 +184,140 @@ fn piezo_cases() -> Vec<FamilyCase> {
     let gb = || vec![r(GAP_U, 0.05e-3, 0.3e-3), r(BIM_U, 0.05, 5.0)];
     let p = Base::Piezo;
     vec![
-        case("1 piezo up, jump between points, from the file's values", p, gb(),
-            &[0.12e-3, 0.8], &[0.1e-3, 0.5], vec![up(0.5, 100.0, 160.0, 2.0)], 0.02, 4901),
-        case("2 piezo up, 0.5 % noise, from +50 %, -50 %", p, gb(),
-            &[0.08e-3, 0.3], &[0.12e-3, 0.15], vec![up(0.3, 100.0, 150.0, 2.0)], 0.005, 4902),
-        case("3 piezo up with onset and jump, 5 % noise", p, gb(),
-            &[0.15e-3, 1.5], &[0.09e-3, 2.25],
-            vec![features(up(0.6, 100.0, 170.0, 2.0), ONSET_END)], 0.05, 4903),
-        case("4 piezo down-sweep", p, gb(),
-            &[0.11e-3, 0.6], &[0.14e-3, 0.35], vec![down(0.5, 100.0, 160.0, 2.0)], 0.02, 4904),
-        case("5 piezo up, the gap alone", p, vec![r(GAP_U, 0.05e-3, 0.3e-3)],
-            &[0.1e-3], &[0.14e-3], vec![up(0.4, 100.0, 160.0, 2.5)], 0.01, 4905),
-        case("6 piezo up, gap, stop and mechanical damping", p,
-            vec![r(GAP_U, 0.05e-3, 0.3e-3), r(BIM_U, 0.05, 5.0),
-                 r("mechanics.damping_n_s_per_m", 0.03, 0.3)],
-            &[0.12e-3, 0.8, 0.0754], &[0.09e-3, 1.1, 0.1], vec![up(0.5, 100.0, 160.0, 2.0)],
-            0.01, 4906),
-        case("7 piezo up and down, gap, damping and acceleration factor", p,
-            vec![r(GAP_U, 0.05e-3, 0.3e-3), r(BIM_U, 0.05, 5.0),
-                 r(super::ACCEL_SCALE_PATH, 0.7, 1.4)],
-            &[0.1e-3, 0.5, 1.1], &[0.13e-3, 0.7, 1.0],
-            vec![up(0.5, 100.0, 160.0, 2.0), down(0.5, 100.0, 160.0, 2.0)], 0.02, 4907),
-        case("8 piezo up, gap and stop stiffness", p,
-            vec![r(GAP_U, 0.05e-3, 0.3e-3), r("stops.upper.stiffness_n_per_m", 5e3, 2e5)],
-            &[0.1e-3, 28420.0], &[0.14e-3, 15000.0], vec![up(0.5, 100.0, 160.0, 2.0)],
-            0.03, 4908),
-        case("9 piezo up, wide gap at 0.8 g", p, gb(),
-            &[0.2e-3, 0.2], &[0.12e-3, 0.3], vec![up(0.8, 100.0, 170.0, 2.5)], 0.03, 4909),
-        case("10 piezo up, power measured", p, gb(),
-            &[0.09e-3, 2.0], &[0.13e-3, 1.2],
-            vec![SyntheticSweep { quantity: Quantity::PTotalW, ..up(0.4, 100.0, 160.0, 2.0) }],
-            0.04, 4910),
-        case("11 piezo down, the stop damping alone", p, vec![r(BIM_U, 0.05, 5.0)],
-            &[1.0], &[0.6], vec![down(0.5, 100.0, 160.0, 2.0)], 0.005, 4911),
-        case("12 piezo up, 5 Hz steps", p, gb(),
-            &[0.1e-3, 0.5], &[0.07e-3, 0.75], vec![up(0.5, 100.0, 170.0, 5.0)], 0.02, 4912),
+        case(
+            "1 piezo up, jump between points, from the file's values",
+            p,
+            gb(),
+            &[0.12e-3, 0.8],
+            &[0.1e-3, 0.5],
+            vec![up(0.5, 100.0, 160.0, 2.0)],
+            0.02,
+            4901,
+        ),
+        case(
+            "2 piezo up, 0.5 % noise, from +50 %, -50 %",
+            p,
+            gb(),
+            &[0.08e-3, 0.3],
+            &[0.12e-3, 0.15],
+            vec![up(0.3, 100.0, 150.0, 2.0)],
+            0.005,
+            4902,
+        ),
+        case(
+            "3 piezo up with onset and jump, 5 % noise",
+            p,
+            gb(),
+            &[0.15e-3, 1.5],
+            &[0.09e-3, 2.25],
+            vec![features(up(0.6, 100.0, 170.0, 2.0), ONSET_END)],
+            0.05,
+            4903,
+        ),
+        case(
+            "4 piezo down-sweep",
+            p,
+            gb(),
+            &[0.11e-3, 0.6],
+            &[0.14e-3, 0.35],
+            vec![down(0.5, 100.0, 160.0, 2.0)],
+            0.02,
+            4904,
+        ),
+        case(
+            "5 piezo up, the gap alone",
+            p,
+            vec![r(GAP_U, 0.05e-3, 0.3e-3)],
+            &[0.1e-3],
+            &[0.14e-3],
+            vec![up(0.4, 100.0, 160.0, 2.5)],
+            0.01,
+            4905,
+        ),
+        case(
+            "6 piezo up, gap, stop and mechanical damping",
+            p,
+            vec![
+                r(GAP_U, 0.05e-3, 0.3e-3),
+                r(BIM_U, 0.05, 5.0),
+                r("mechanics.damping_n_s_per_m", 0.03, 0.3),
+            ],
+            &[0.12e-3, 0.8, 0.0754],
+            &[0.09e-3, 1.1, 0.1],
+            vec![up(0.5, 100.0, 160.0, 2.0)],
+            0.01,
+            4906,
+        ),
+        case(
+            "7 piezo up and down, gap, damping and acceleration factor",
+            p,
+            vec![
+                r(GAP_U, 0.05e-3, 0.3e-3),
+                r(BIM_U, 0.05, 5.0),
+                r(super::ACCEL_SCALE_PATH, 0.7, 1.4),
+            ],
+            &[0.1e-3, 0.5, 1.1],
+            &[0.13e-3, 0.7, 1.0],
+            vec![up(0.5, 100.0, 160.0, 2.0), down(0.5, 100.0, 160.0, 2.0)],
+            0.02,
+            4907,
+        ),
+        case(
+            "8 piezo up, gap and stop stiffness",
+            p,
+            vec![
+                r(GAP_U, 0.05e-3, 0.3e-3),
+                r("stops.upper.stiffness_n_per_m", 5e3, 2e5),
+            ],
+            &[0.1e-3, 28420.0],
+            &[0.14e-3, 15000.0],
+            vec![up(0.5, 100.0, 160.0, 2.0)],
+            0.03,
+            4908,
+        ),
+        case(
+            "9 piezo up, wide gap at 0.8 g",
+            p,
+            gb(),
+            &[0.2e-3, 0.2],
+            &[0.12e-3, 0.3],
+            vec![up(0.8, 100.0, 170.0, 2.5)],
+            0.03,
+            4909,
+        ),
+        case(
+            "10 piezo up, power measured",
+            p,
+            gb(),
+            &[0.09e-3, 2.0],
+            &[0.13e-3, 1.2],
+            vec![SyntheticSweep {
+                quantity: Quantity::PTotalW,
+                ..up(0.4, 100.0, 160.0, 2.0)
+            }],
+            0.04,
+            4910,
+        ),
+        case(
+            "11 piezo down, the stop damping alone",
+            p,
+            vec![r(BIM_U, 0.05, 5.0)],
+            &[1.0],
+            &[0.6],
+            vec![down(0.5, 100.0, 160.0, 2.0)],
+            0.005,
+            4911,
+        ),
+        case(
+            "12 piezo up, 5 Hz steps",
+            p,
+            gb(),
+            &[0.1e-3, 0.5],
+            &[0.07e-3, 0.75],
+            vec![up(0.5, 100.0, 170.0, 5.0)],
+            0.02,
+            4912,
+        ),
     ]
 }
 
@@ -226,41 +325,130 @@ fn piezo_cases() -> Vec<FamilyCase> {
 fn other_cases() -> Vec<FamilyCase> {
     let em = Base::Em;
     let es = Base::P2;
-    let gap2 = || vec![r("stops.both.gap_m", 6e-6, 9.95e-6), r("stops.both.damping_n_s_per_m", 0.1, 2.0)];
+    let gap2 = || {
+        vec![
+            r("stops.both.gap_m", 6e-6, 9.95e-6),
+            r("stops.both.damping_n_s_per_m", 0.1, 2.0),
+        ]
+    };
     let rigid = Base::PiezoRigid;
     vec![
-        case("13 em up, both gaps", em,
+        case(
+            "13 em up, both gaps",
+            em,
             vec![r(GAP_U, 0.5e-3, 2e-3), r("stops.lower.gap_m", 0.7e-3, 3e-3)],
-            &[1e-3, 1.5e-3], &[1.3e-3, 1.1e-3], vec![up(1.0, 40.0, 70.0, 1.0)], 0.02, 4913),
-        case("14 em down, the upper gap alone", em, vec![r(GAP_U, 0.5e-3, 2e-3)],
-            &[1e-3], &[0.7e-3], vec![down(1.0, 40.0, 70.0, 1.0)], 0.01, 4914),
-        case("15 em up with onset and jump, gap and mechanical damping", em,
-            vec![r(GAP_U, 0.5e-3, 2e-3), r("mechanics.damping_n_s_per_m", 0.05, 0.8)],
-            &[1.1e-3, 0.2], &[0.8e-3, 0.28],
-            vec![features(up(1.0, 40.0, 70.0, 1.0), ONSET_END)], 0.03, 4915),
-        case("16 em up, gap and transduction, 5 % noise", em,
-            vec![r(GAP_U, 0.5e-3, 2e-3), r("transducer.transduction_n_per_a", 2.0, 10.0)],
-            &[1e-3, 5.0], &[1.4e-3, 3.5], vec![up(1.0, 40.0, 70.0, 1.0)], 0.05, 4916),
-        case("17 prototype 2 up, gap and stop damping", es, gap2(),
-            &[9e-6, 0.4], &[7e-6, 0.6], vec![up(0.31, 640.0, 760.0, 4.0)], 0.02, 4917),
-        case("18 prototype 2 up, mechanical damping and gap", es,
-            vec![r("mechanics.damping_n_s_per_m", 1e-5, 1e-4), r("stops.both.gap_m", 6e-6, 9.95e-6)],
-            &[2.5e-5, 9e-6], &[3.5e-5, 7.5e-6], vec![up(0.31, 640.0, 760.0, 4.0)], 0.01, 4918),
-        case("19 prototype 2 down, gap and stop damping", es, gap2(),
-            &[9e-6, 0.4], &[8e-6, 0.25], vec![down(0.31, 640.0, 760.0, 4.0)], 0.02, 4919),
-        case("20 prototype 2 up with the jump, gap, damping and acceleration factor", es,
+            &[1e-3, 1.5e-3],
+            &[1.3e-3, 1.1e-3],
+            vec![up(1.0, 40.0, 70.0, 1.0)],
+            0.02,
+            4913,
+        ),
+        case(
+            "14 em down, the upper gap alone",
+            em,
+            vec![r(GAP_U, 0.5e-3, 2e-3)],
+            &[1e-3],
+            &[0.7e-3],
+            vec![down(1.0, 40.0, 70.0, 1.0)],
+            0.01,
+            4914,
+        ),
+        case(
+            "15 em up with onset and jump, gap and mechanical damping",
+            em,
+            vec![
+                r(GAP_U, 0.5e-3, 2e-3),
+                r("mechanics.damping_n_s_per_m", 0.05, 0.8),
+            ],
+            &[1.1e-3, 0.2],
+            &[0.8e-3, 0.28],
+            vec![features(up(1.0, 40.0, 70.0, 1.0), ONSET_END)],
+            0.03,
+            4915,
+        ),
+        case(
+            "16 em up, gap and transduction, 5 % noise",
+            em,
+            vec![
+                r(GAP_U, 0.5e-3, 2e-3),
+                r("transducer.transduction_n_per_a", 2.0, 10.0),
+            ],
+            &[1e-3, 5.0],
+            &[1.4e-3, 3.5],
+            vec![up(1.0, 40.0, 70.0, 1.0)],
+            0.05,
+            4916,
+        ),
+        case(
+            "17 prototype 2 up, gap and stop damping",
+            es,
+            gap2(),
+            &[9e-6, 0.4],
+            &[7e-6, 0.6],
+            vec![up(0.31, 640.0, 760.0, 4.0)],
+            0.02,
+            4917,
+        ),
+        case(
+            "18 prototype 2 up, mechanical damping and gap",
+            es,
+            vec![
+                r("mechanics.damping_n_s_per_m", 1e-5, 1e-4),
+                r("stops.both.gap_m", 6e-6, 9.95e-6),
+            ],
+            &[2.5e-5, 9e-6],
+            &[3.5e-5, 7.5e-6],
+            vec![up(0.31, 640.0, 760.0, 4.0)],
+            0.01,
+            4918,
+        ),
+        case(
+            "19 prototype 2 down, gap and stop damping",
+            es,
+            gap2(),
+            &[9e-6, 0.4],
+            &[8e-6, 0.25],
+            vec![down(0.31, 640.0, 760.0, 4.0)],
+            0.02,
+            4919,
+        ),
+        case(
+            "20 prototype 2 up with the jump, gap, damping and acceleration factor",
+            es,
             {
                 let mut f = gap2();
                 f.push(r(super::ACCEL_SCALE_PATH, 0.7, 1.4));
                 f
             },
-            &[9e-6, 0.4, 0.95], &[7.5e-6, 0.3, 1.15],
-            vec![features(up(0.31, 640.0, 760.0, 4.0), END)], 0.005, 4920),
-        case("21 rigid stop up, gap and mechanical damping", rigid,
-            vec![r(GAP_U, 0.05e-3, 0.3e-3), r("mechanics.damping_n_s_per_m", 0.03, 0.3)],
-            &[0.1e-3, 0.0754], &[0.13e-3, 0.05], vec![up(0.5, 100.0, 170.0, 2.0)], 0.02, 4921),
-        case("22 rigid stop down, the gap alone", rigid, vec![r(GAP_U, 0.05e-3, 0.3e-3)],
-            &[0.12e-3], &[0.08e-3], vec![down(0.5, 100.0, 170.0, 2.0)], 0.01, 4922),
+            &[9e-6, 0.4, 0.95],
+            &[7.5e-6, 0.3, 1.15],
+            vec![features(up(0.31, 640.0, 760.0, 4.0), END)],
+            0.005,
+            4920,
+        ),
+        case(
+            "21 rigid stop up, gap and mechanical damping",
+            rigid,
+            vec![
+                r(GAP_U, 0.05e-3, 0.3e-3),
+                r("mechanics.damping_n_s_per_m", 0.03, 0.3),
+            ],
+            &[0.1e-3, 0.0754],
+            &[0.13e-3, 0.05],
+            vec![up(0.5, 100.0, 170.0, 2.0)],
+            0.02,
+            4921,
+        ),
+        case(
+            "22 rigid stop down, the gap alone",
+            rigid,
+            vec![r(GAP_U, 0.05e-3, 0.3e-3)],
+            &[0.12e-3],
+            &[0.08e-3],
+            vec![down(0.5, 100.0, 170.0, 2.0)],
+            0.01,
+            4922,
+        ),
     ]
 }
 
@@ -327,7 +515,9 @@ impl FamilyCase {
         let mut out = Vec::new();
         for (k, s) in self.sweeps.iter().enumerate() {
             let n = ((s.span_hz.1 - s.span_hz.0) / s.step_hz).round() as usize;
-            let mut freqs: Vec<f64> = (0..=n).map(|i| s.span_hz.0 + s.step_hz * i as f64).collect();
+            let mut freqs: Vec<f64> = (0..=n)
+                .map(|i| s.span_hz.0 + s.step_hz * i as f64)
+                .collect();
             if s.direction == Direction::Down {
                 freqs.reverse();
             }
@@ -339,13 +529,21 @@ impl FamilyCase {
                 quantity: s.quantity,
                 points: freqs
                     .iter()
-                    .map(|&f| Point { freq_hz: f, value: 0.0, sigma: None })
+                    .map(|&f| Point {
+                        freq_hz: f,
+                        value: 0.0,
+                        sigma: None,
+                    })
                     .collect(),
                 grid_hz: None,
                 features: s
                     .features
                     .iter()
-                    .map(|&kind| Feature { kind, freq_hz: mid, sigma_hz: 0.25 * s.step_hz })
+                    .map(|&kind| Feature {
+                        kind,
+                        freq_hz: mid,
+                        sigma_hz: 0.25 * s.step_hz,
+                    })
                     .collect(),
             };
             let exact = model_values(&truth, self.accel_scale(), &d)?;

@@ -5,15 +5,15 @@
 
 use super::branch::{self, SetModel};
 use super::lm::{self, levenberg_marquardt_tracked, LmResult, LmSettings, Tracked};
-use super::params::{apply, Transform};
 use super::model::design_values;
+use super::params::{apply, Transform};
 use super::report::{Refined, StartOrigin, StartTried};
 use super::{
     model_values, FitError, FitSettings, SweepData, AGREE_REL, AGREE_SIGMA, MAX_ROUNDS,
     STATED_COST_ABS_TOL,
 };
-use rayon::prelude::*;
 use crate::device::{Device, ParamRange};
+use rayon::prelude::*;
 
 /// What every evaluation needs: the device, the data, the free parameters with their
 /// transforms, and the measured values with their weights.
@@ -243,7 +243,10 @@ fn design_ssr(pb: &Problem<'_>, u: &[f64]) -> f64 {
         }
         Ok(pb.weighted(&m).iter().map(|r| r * r).sum())
     };
-    eval().ok().filter(|c| c.is_finite()).unwrap_or(f64::INFINITY)
+    eval()
+        .ok()
+        .filter(|c| c.is_finite())
+        .unwrap_or(f64::INFINITY)
 }
 
 /// The searches of a fit: the design (the device's values and [`FitSettings::design_points`] points
@@ -313,9 +316,9 @@ pub(super) fn search(
             values: pb.to_p(&run.lm.u),
         });
         let good = run.settled() && chi2_limit.is_some_and(|l| run.ssr() <= l);
-        let better = best.as_ref().is_none_or(|(b, _)| {
-            (run.settled(), -run.ssr()) > (b.settled(), -b.ssr())
-        });
+        let better = best
+            .as_ref()
+            .is_none_or(|(b, _)| (run.settled(), -run.ssr()) > (b.settled(), -b.ssr()));
         if better {
             best = Some((run, i));
         }

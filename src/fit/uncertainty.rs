@@ -6,9 +6,7 @@
 use nalgebra::DMatrix;
 
 use super::params::Transform;
-use super::{
-    FitWarning, FittedParam, COLUMN_NOISE_REL, NUMERICALLY_ZERO, SINGULAR_RATIO_WARN,
-};
+use super::{FitWarning, FittedParam, COLUMN_NOISE_REL, NUMERICALLY_ZERO, SINGULAR_RATIO_WARN};
 use crate::device::ParamRange;
 
 /// The Jacobian at the optimum with its columns scaled to unit length, and what the
@@ -32,7 +30,13 @@ impl Scaled {
         // depend on.
         let norms: Vec<f64> = norms
             .into_iter()
-            .map(|c| if c < COLUMN_NOISE_REL * norm_max { 0.0 } else { c })
+            .map(|c| {
+                if c < COLUMN_NOISE_REL * norm_max {
+                    0.0
+                } else {
+                    c
+                }
+            })
             .collect();
         let scaled = DMatrix::from_fn(n, p, |i, j| {
             if norms[j] > 0.0 {
@@ -110,7 +114,11 @@ impl Scaled {
             let comps: Vec<f64> = (0..p)
                 .map(|j| {
                     let v = self.v_t[(k, j)];
-                    let du = if self.norms[j] > 0.0 { v / self.norms[j] } else { v };
+                    let du = if self.norms[j] > 0.0 {
+                        v / self.norms[j]
+                    } else {
+                        v
+                    };
                     let dp = du * tr[j].dp_du(u[j]);
                     let c = if p_fit[j] != 0.0 && free[j].lo > 0.0 {
                         dp / p_fit[j]

@@ -256,7 +256,11 @@ pub fn results_markdown(report: &FitReport) -> String {
 
 /// The table of the starts: each start's values, its cheap misfit, and its refinement.
 fn starts_markdown(report: &FitReport) -> String {
-    let names: Vec<String> = report.params.iter().map(|p| format!("`{}`", p.path)).collect();
+    let names: Vec<String> = report
+        .params
+        .iter()
+        .map(|p| format!("`{}`", p.path))
+        .collect();
     let mut md = format!(
         "\nStarts (ranked by the weighted SSR of a plain stepped sweep; the best refined by \
          Levenberg-Marquardt on the branches):\n\n| start | {} | stepped-sweep SSR | \
@@ -287,7 +291,11 @@ fn starts_markdown(report: &FitReport) -> String {
         } else {
             fmt_sig(s.design_ssr, 4)
         };
-        let reported = if i == report.best_start { "reported" } else { "" };
+        let reported = if i == report.best_start {
+            "reported"
+        } else {
+            ""
+        };
         md.push_str(&format!(
             "| {} | {} | {design} | {refined_ssr} | {to} | {reported} |\n",
             s.origin,
