@@ -221,7 +221,7 @@ pub(super) fn resample(x: &[f64], fs_in: f64, fs: f64, m: usize, plan: Plan) -> 
         Plan::Direct => direct(x, fs_in, fs, m, &kernel),
         Plan::Polyphase { p, q } => {
             let (lead, taps) = (kernel.lead(), kernel.taps());
-            let table = weights(&kernel, p as usize, |phase| phase as f64 / p as f64);
+            let table = weights(&kernel, p as usize, p as usize);
             let xp = padded(x, lead, taps);
             (0..m as u64)
                 .map(|j| {
@@ -232,7 +232,7 @@ pub(super) fn resample(x: &[f64], fs_in: f64, fs: f64, m: usize, plan: Plan) -> 
         }
         Plan::Table { phases } => {
             let (lead, taps) = (kernel.lead(), kernel.taps());
-            let table = weights(&kernel, phases + 1, |phase| phase as f64 / phases as f64);
+            let table = weights(&kernel, phases + 1, phases);
             let xp = padded(x, lead, taps);
             (0..m)
                 .map(|j| {
@@ -269,14 +269,31 @@ pub(super) fn direct(x: &[f64], fs_in: f64, fs: f64, m: usize, kernel: &Kernel) 
         .collect()
 }
 
-/// `rows` rows of `kernel.taps()` weights: row `i` holds `h(f_i + K - t)` for tap `t`, with
-/// `f_i = frac(i)` the row's fractional position.
-fn weights(kernel: &Kernel, rows: usize, frac: impl Fn(usize) -> f64) -> Vec<f64> {
+/// `rows` rows of `kernel.taps()` weights at `per_sample` phases per input sample: row `i`
+/// holds `h(i / per_sample + K - t)` for tap `t`. The kernel is even, so the row of phase
+/// `1 - f` is the row of phase `f` reversed (`h(1 - f + K - t) = h(f + K - (2K + 1 - t))`,
+/// and `2K + 1 - t` is tap `t` counted from the end): half the rows are evaluated.
+fn weights(kernel: &Kernel, rows: usize, per_sample: usize) -> Vec<f64> {
     let (lead, taps) = (kernel.lead() as f64, kernel.taps());
-    let mut table = Vec::with_capacity(rows * taps);
+    let mut table = vec![0.0; rows * taps];
     for i in 0..rows {
-        let f = frac(i);
-        table.extend((0..taps).map(|t| kernel.at(f + lead - t as f64)));
+        let (row, done) = table.split_at_mut(i * taps);
+        let row_i = &mut done[..taps];
+        match per_sample.checked_sub(i) {
+            Some(mirror) if mirror < i => {
+                let source = &row[mirror * taps..(mirror + 1) * taps];
+                row_i
+                    .iter_mut()
+                    .zip(source.iter().rev())
+                    .for_each(|(w, s)| *w = *s);
+            }
+            _ => {
+                let f = i as f64 / per_sample as f64;
+                for (t, w) in row_i.iter_mut().enumerate() {
+                    *w = kernel.at(f + lead - t as f64);
+                }
+            }
+        }
     }
     table
 }
