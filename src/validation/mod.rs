@@ -7,7 +7,7 @@
 //! |---|---|
 //! | [`linear_harvesters`] | the linear piezoelectric and electromagnetic harvesters' closed forms ([`crate::physics::closed_forms`]) against the time-domain steady state and against [`crate::physics::linear`]; their optimal loads against the time-domain power maximised over the load |
 //! | [`random_law`] | the power that white base acceleration delivers to a mass, `m Sa / 2`, against random ensembles' drive power, with their energy ledgers' closure |
-//! | [`band_limit`] | the band-limited noise's shortfall from that law at several bandwidths, against its first-order estimate (a recorded study) |
+//! | [`band_limit`] | the band-limited noise's shortfall from that law at several bandwidths, against its first-order estimate (a recorded study), and the rigid stops' cells against an independent simulation of the same equations |
 //! | [`grazing`] | where a linear oscillator's amplitude equals the gap of a rigid stop, against the continuation's grazing points |
 //! | [`interfaces`] | the standard bridge, parallel and series SSHI and SECE closed forms against the steady state behind each interface; the standard bridge with strong coupling against the first-harmonic balance |
 //! | [`nlvib`] | NLvib-py's harmonic balance and an exact shooting of a one-sided spring oscillator, against our shooting and continuation |
