@@ -292,6 +292,11 @@ fn excursion_term(r: &CouplingRow) -> f64 {
 ///   power by twice that: the excursion term, `2 d` and the floor.
 pub fn coupling_checks(rows: &[CouplingRow]) -> Vec<Check> {
     let mut g = Group::new("interface circuits, coupling");
+    // Strongest coupling first, whatever the order given: the shrinking is judged between
+    // neighbours in the coupling.
+    let mut rows = rows.to_vec();
+    rows.sort_by(|a, b| b.k2.total_cmp(&a.k2));
+    let rows = &rows[..];
     let rel = |r: &CouplingRow| (r.p_dc_w - r.p_closed_w).abs() / r.p_closed_w;
     for r in rows {
         g.add(
