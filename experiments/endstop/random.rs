@@ -283,7 +283,7 @@ struct Displacement {
 /// Reads the ensemble's displacement (a second pass over the same records, streams
 /// `0..records` of the seed): the histogram with its 95 % interval across records, beside the
 /// exact stationary density where it applies (viscous damping only, lossless stops), and for
-/// a device with two wells the rate of well-to-well transitions.
+/// a device with two wells the rate of passages from one well's bottom to the other's.
 fn displacement(
     exp: &mut common::Experiment,
     device: &Device,
@@ -321,7 +321,9 @@ fn displacement(
         exp.number("transition_rate_per_s", rate.mean);
         exp.number("transition_rate_ci95_per_s", rate.ci95);
         md.push_str(&format!(
-            "- well-to-well transitions (wells at {} and {} um): {} per s ± {} (95 %), {} in all\n",
+            "- bottom-to-bottom passages (from one well's bottom, at {} or {} um, to the other's; \
+             not escapes that settle: with light damping a mass above the barrier makes many \
+             before it settles): {} per s ± {} (95 %), {} in all\n",
             fmt_sig(lo * 1e6, 4),
             fmt_sig(hi * 1e6, 4),
             fmt_sig(rate.mean, 4),
