@@ -68,7 +68,7 @@ pub enum Base {
     /// `data/prototype2.toml` at 10 V (Figure 13's bias) with its gap at 9 um (inside the
     /// finger overlap, so that the gap can be free on both sides of its value).
     P2,
-    /// The piezoelectric cantilever with a rigid stopper ([`PIEZO_RIGID`]).
+    /// The piezoelectric cantilever with a rigid stopper (`PIEZO_RIGID`).
     PiezoRigid,
 }
 

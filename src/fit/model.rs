@@ -108,7 +108,7 @@ pub fn model_values(device: &Device, scale: f64, data: &SweepData) -> Result<Vec
 }
 
 /// Most intervals of the grid of the cheap model's sweep of a data set without points (see
-/// [`design_values`]).
+/// `design_values`).
 pub const DESIGN_GRID_INTERVALS: usize = 16;
 
 /// The values of [`model_values`] from the stepped sweep with a plain sweep's settings

@@ -278,9 +278,9 @@ fn excursion_term(r: &CouplingRow) -> f64 {
 ///   to `V` first), so it charges on the displacement's excursion, which the closed form takes
 ///   to be the fundamental `u_M`. Given the simulated excursion (the largest `|x|`, the same on
 ///   both sides without stops), it leaves out only the storage ripple and the steady state's
-///   convergence ([`floor`]);
+///   convergence (`floor`);
 /// - **the uncoupled closed form's residual at `u_M` shrinks with the coupling**: that residual
-///   is the closed form's change from the excursion to `u_M` ([`excursion_term`]), which the
+///   is the closed form's change from the excursion to `u_M` (`excursion_term`), which the
 ///   coupling makes through the displacement's distortion; for each pair of
 ///   neighbouring couplings whose stronger one's residual stands at least ten times above the
 ///   floor (below it the residual is the floor's, and a shrinking cannot be seen), the weaker
