@@ -1,7 +1,9 @@
 //! `bench`: how fast the model runs, on fixed cases. Speed is measured here, never
 //! asserted by a test.
 //!
-//! Usage: `cargo run --release --bin bench [-- --quick | --interfaces]` (`just bench` runs the
+//! Usage: `cargo run --release --bin bench [-- --quick | --interfaces | --fits]` (`--fits`
+//! times every fit of the recovery family and Figure 8's on one thread and prints their
+//! table, writing nothing; `just bench` runs the
 //! whole benchmark; `reproduce` runs `--quick`, which keeps its last phase short;
 //! `--interfaces` measures the records behind an interface circuit alone and prints their
 //! table, writing nothing).
@@ -35,6 +37,8 @@ mod accuracy;
 mod cases;
 #[path = "bench/examples.rs"]
 mod examples;
+#[path = "bench/fits.rs"]
+mod fits;
 #[path = "bench/interfaces.rs"]
 mod interfaces;
 #[path = "bench/report.rs"]
@@ -60,6 +64,13 @@ struct Args {
     /// nothing.
     #[arg(long)]
     interfaces: bool,
+    /// Time the fits of the recovery family and of Figure 8, each on one thread, and print
+    /// their table, writing nothing.
+    #[arg(long)]
+    fits: bool,
+    /// Runs of each fit with `--fits`.
+    #[arg(long, default_value_t = 3)]
+    fit_repeats: usize,
 }
 
 fn main() {
@@ -68,6 +79,13 @@ fn main() {
 
 fn run() -> Result<()> {
     let args = Args::parse();
+    if args.fits {
+        print!(
+            "{}",
+            fits::table(&fits::measure(args.fit_repeats)?, args.fit_repeats)
+        );
+        return Ok(());
+    }
     if args.interfaces {
         print!(
             "{}",

@@ -18,6 +18,7 @@ mod common;
 mod calibration_recovery;
 mod crosscheck;
 mod device_description;
+mod fit_family;
 mod fit_recovery;
 mod foundation;
 mod general_model;
@@ -59,4 +60,38 @@ mod validation;
 fn every_test_file_is_a_module_here() {
     let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests");
     common::layout::assert_every_test_file_is_a_module(&dir, "all.rs", include_str!("all.rs"));
+}
+
+/// The guard sees a file in a subfolder that no module declares (the defect it exists for,
+/// planted in a temporary tree), at any depth and beside a `mod.rs`, and passes the same tree
+/// once each file is declared.
+#[test]
+fn the_layout_guard_finds_undeclared_files_in_subfolders() {
+    use common::layout::undeclared_test_files;
+    let dir = std::env::temp_dir().join(format!("endstop-layout-guard-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    for sub in ["a/deep", "m"] {
+        std::fs::create_dir_all(dir.join(sub)).unwrap();
+    }
+    let write = |rel: &str, text: &str| std::fs::write(dir.join(rel), text).unwrap();
+    let root = "mod a;\nmod m;\n";
+    write("root.rs", root);
+    write("a.rs", "mod deep;\n");
+    write("a/deep.rs", "");
+    write("a/deep/x.rs", "");
+    write("a/y.rs", "");
+    write("m/mod.rs", "");
+    write("m/z.rs", "");
+    let (missing, seen) = undeclared_test_files(&dir, "root.rs", root);
+    assert_eq!(seen, 6);
+    assert_eq!(missing, ["a/deep/x.rs", "a/y.rs", "m/z.rs"]);
+    write("a.rs", "mod deep;\n#[path = \"a/y.rs\"]\nmod y;\n");
+    write("a/deep.rs", "pub mod x;\n");
+    write("m/mod.rs", "pub(crate) mod z;\n");
+    let (missing, _) = undeclared_test_files(&dir, "root.rs", root);
+    assert!(missing.is_empty(), "{missing:?}");
+    // A folder module the root leaves out: its `mod.rs` is reported (its children follow it).
+    let (missing, _) = undeclared_test_files(&dir, "root.rs", "mod a;\n");
+    assert_eq!(missing, ["m/mod.rs"]);
+    std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -191,11 +191,11 @@ fn fits_started_up_to_half_off_recover_the_truth_within_their_intervals() {
         let r = fit(&start, &[data], &c.free, &FitSettings::default()).unwrap();
         let cov = covered(&r, &c.truth);
         eprintln!(
-            "{}: {:.1} s, stop {:?}, {} starts, chi2/dof {:.3}, covered {cov:?}, warnings {:?}",
+            "{}: {:.1} s, stop {:?}, {} starts refined, chi2/dof {:.3}, covered {cov:?}, warnings {:?}",
             c.name,
             t.elapsed().as_secs_f64(),
             r.stop,
-            r.starts_tried,
+            r.starts_refined(),
             r.reduced_chi2,
             r.warnings
         );

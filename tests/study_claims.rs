@@ -111,7 +111,16 @@ fn prototype1_fast_path_matches_the_figure_8_sweeps_and_table_3() {
         prototype2: p1.clone(),
     };
     let t3 = Table3::claims(&Table3::run(&both, &|| {}).unwrap(), &claims).unwrap();
-    for v in t3.iter().filter(|v| v.claim == "T3-a") {
+    // Every quantity of the claims file's T3-a, each compared: an empty selection (a renamed
+    // claim, a table that lost a row) fails here instead of comparing nothing.
+    let rows: Vec<_> = t3.iter().filter(|v| v.claim == "T3-a").collect();
+    let stated = claims.claims.iter().filter(|c| c.id == "T3-a").count();
+    assert!(
+        stated > 0 && rows.len() == stated,
+        "T3-a: {} rows of Table 3 for the claims file's {stated} quantities",
+        rows.len()
+    );
+    for v in rows {
         let e = find(&fast, &v.claim, &v.quantity);
         // Same formula (eqs 15-18) on the same device: equal to rounding.
         assert!((e.value - v.ours.to_f64()).abs() <= 1e-12 * v.ours.to_f64().abs());
@@ -135,7 +144,16 @@ fn prototype2_fast_path_matches_figure_13_and_table_3() {
         prototype2: p2.clone(),
     };
     let t3 = Table3::claims(&Table3::run(&both, &|| {}).unwrap(), &claims).unwrap();
-    for v in t3.iter().filter(|v| v.claim == "T3-b") {
+    // Every quantity of the claims file's T3-b, each compared: an empty selection (a renamed
+    // claim, a table that lost a row) fails here instead of comparing nothing.
+    let rows: Vec<_> = t3.iter().filter(|v| v.claim == "T3-b").collect();
+    let stated = claims.claims.iter().filter(|c| c.id == "T3-b").count();
+    assert!(
+        stated > 0 && rows.len() == stated,
+        "T3-b: {} rows of Table 3 for the claims file's {stated} quantities",
+        rows.len()
+    );
+    for v in rows {
         let e = find(&fast, &v.claim, &v.quantity);
         assert!((e.value - v.ours.to_f64()).abs() <= 1e-12 * v.ours.to_f64().abs());
     }

@@ -83,20 +83,18 @@ fn the_down_sweep_leaves_the_lower_branch_at_its_end_at_the_default_step() {
         let (kind, t) = down
             .branch_end()
             .expect("the down-sweep leaves the lower branch");
-        let nearest = ends
-            .iter()
-            .copied()
-            .min_by(|a, b| (a - t.value()).abs().total_cmp(&(b - t.value()).abs()))
-            .unwrap();
         eprintln!(
             "{name}: step {step} Hz, ramps at {rate:.3} Hz/s: leaves at {} Hz ({}), \
-             nearest fold or grazing {nearest} Hz",
+             the lower branch ends at {lower_end} Hz (events {ends:?})",
             t.value(),
             kind.label()
         );
+        // The end computed above, not the nearest of all events: a sweep that left at another
+        // fold or grazing (the upper fold, a grazing on the impacting branch) would be a sweep
+        // that did not follow the lower branch to its end.
         assert!(
-            (t.value() - nearest).abs() <= REFINE_TOL_HZ,
-            "{name}: {} Hz vs {nearest} Hz",
+            (t.value() - lower_end).abs() <= REFINE_TOL_HZ,
+            "{name}: leaves at {} Hz, the lower branch ends at {lower_end} Hz",
             t.value()
         );
         // The step's effect: the same end found again with a quarter of the step (a local

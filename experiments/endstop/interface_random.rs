@@ -131,10 +131,12 @@ fn noise(a: &RandomArgs, psd: f64) -> Result<()> {
     exp.finish()
 }
 
-fn measured(a: &RandomArgs, m: MeasuredDrive, file: &str) -> Result<()> {
+fn measured(a: &RandomArgs, mut m: MeasuredDrive, file: &str) -> Result<()> {
     let (mut exp, loaded, device) = start("endstop-random", &a.device, a.bias_v, a.out.clone())?;
+    m.times.lap("setup");
     let drive = Sampled::new(m.accel.clone(), m.fs);
     let r = sampled_record(&device, &drive, m.n_tr, DEFAULT_RTOL, Scheme::Exponential)?;
+    m.times.lap("integrating");
     exp.write_parquet(
         "records",
         &mut frame(rows(&[r], &format!("measured record {file}")))?,
@@ -172,6 +174,8 @@ fn measured(a: &RandomArgs, m: MeasuredDrive, file: &str) -> Result<()> {
     );
     exp.write_numbers_md(&md)?;
     print!("{md}");
+    m.times.lap("output");
+    m.times.report("endstop-random", &mut exp);
     exp.finish()
 }
 

@@ -25,6 +25,7 @@ use common::fmt_sig;
 use common::io::plot::Panels;
 use common::io::plot::{LinePlot, Series, Style, PALETTE};
 use common::reports::measured_io;
+use common::time_split::TimeSplit;
 
 use crate::shared::{describe, start};
 
@@ -282,7 +283,7 @@ struct Displacement {
 /// Reads the ensemble's displacement (a second pass over the same records, streams
 /// `0..records` of the seed): the histogram with its 95 % interval across records, beside the
 /// exact stationary density where it applies (viscous damping only, lossless stops), and for
-/// a device with two wells the rate of well-to-well transitions.
+/// a device with two wells the rate of passages from one well's bottom to the other's.
 fn displacement(
     exp: &mut common::Experiment,
     device: &Device,
@@ -320,7 +321,9 @@ fn displacement(
         exp.number("transition_rate_per_s", rate.mean);
         exp.number("transition_rate_ci95_per_s", rate.ci95);
         md.push_str(&format!(
-            "- well-to-well transitions (wells at {} and {} um): {} per s ± {} (95 %), {} in all\n",
+            "- bottom-to-bottom passages (from one well's bottom, at {} or {} um, to the other's; \
+             not escapes that settle: with light damping a mass above the barrier makes many \
+             before it settles): {} per s ± {} (95 %), {} in all\n",
             fmt_sig(lo * 1e6, 4),
             fmt_sig(hi * 1e6, 4),
             fmt_sig(rate.mean, 4),
@@ -389,6 +392,8 @@ pub(crate) struct MeasuredDrive {
     pub(crate) preroll_s: f64,
     /// The analysis band (Hz).
     pub(crate) band_hz: (f64, f64),
+    /// The run's time so far: reading and resampling.
+    pub(crate) times: TimeSplit,
 }
 
 /// Reads `path` as `--accel-file` for `device` (the file of `a`, as loaded), checks it and
@@ -404,6 +409,7 @@ pub(crate) fn read_measured(
     }
     // Read and check everything before the experiment starts, so that nothing is written for
     // a bad record.
+    let mut times = TimeSplit::start();
     let rec = measured_io::read_record(path, a.accel_scale)?;
     let preroll_s = transient_s(device);
     let f0 = endstop::physics::linear::open_circuit_resonance_hz(device);
@@ -429,8 +435,9 @@ pub(crate) fn read_measured(
             fmt_sig(rec.duration_s(), 6)
         );
     }
-
+    times.lap("reading");
     let accel: Arc<[f64]> = rec.resampled(fs).into();
+    times.lap("resampling");
     let n_tr = (preroll_s * fs).round() as usize;
     Ok(MeasuredDrive {
         rec,
@@ -439,6 +446,7 @@ pub(crate) fn read_measured(
         n_tr,
         preroll_s,
         band_hz: (lo, hi),
+        times,
     })
 }
 
@@ -450,8 +458,10 @@ fn measured(a: &RandomArgs, file_device: &Device, path: PathBuf) -> Result<()> {
         n_tr,
         preroll_s,
         band_hz: (lo, hi),
+        mut times,
     } = read_measured(a, file_device, &path)?;
     let (mut exp, loaded, device) = start("endstop-random", &a.device, a.bias_v, a.out.clone())?;
+    times.lap("setup");
     let drive = SampledDrive {
         accel: accel.clone(),
         sample_rate_hz: fs,
@@ -467,6 +477,7 @@ fn measured(a: &RandomArgs, file_device: &Device, path: PathBuf) -> Result<()> {
         preroll_s
     );
     let out_rec = simulate_drive(&device, &drive, DEFAULT_RTOL, Scheme::Exponential)?;
+    times.lap("integrating");
 
     // The Welch segmenting and analysis band the noise ensembles use, for this length.
     let mut spec_rec = paper_record(&device, 1.0);
@@ -504,6 +515,7 @@ fn measured(a: &RandomArgs, file_device: &Device, path: PathBuf) -> Result<()> {
         .filter(|(f, _)| (lo..=hi).contains(*f))
         .map(|(_, p)| *p)
         .collect();
+    times.lap("spectra");
 
     let m = out.freq_hz.len();
     let file = path.display().to_string();
@@ -575,5 +587,7 @@ fn measured(a: &RandomArgs, file_device: &Device, path: PathBuf) -> Result<()> {
         &drive_band,
     );
     exp.write_plot(&plot)?;
+    times.lap("output");
+    times.report("endstop-random", &mut exp);
     exp.finish()
 }

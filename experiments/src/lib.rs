@@ -20,6 +20,7 @@ pub mod io;
 pub mod ngspice;
 pub mod pipeline;
 pub mod reports;
+pub mod time_split;
 
 pub use io::progress::{progress, with_progress, Bar};
 pub use reports::calibration_io::{calibrated_prototype1, prototype1_both_sets};
@@ -184,6 +185,9 @@ pub struct Experiment {
     started: Instant,
     /// This process's processor time when the experiment started (s).
     cpu_started: Option<f64>,
+    /// Further wall-clock figures for `timing.json` (a run's time split,
+    /// [`time_split::TimeSplit`]), by key.
+    timing_extra: serde_json::Map<String, serde_json::Value>,
 }
 
 #[derive(Serialize)]
@@ -213,6 +217,7 @@ impl Experiment {
             plots: Mutex::new(Vec::new()),
             started: Instant::now(),
             cpu_started: cpu_time_s(),
+            timing_extra: serde_json::Map::new(),
         }
     }
 
@@ -261,6 +266,12 @@ impl Experiment {
     /// Records a named number for the summary (not a claim).
     pub fn number(&mut self, key: &str, value: f64) {
         self.numbers.insert(key.to_string(), value);
+    }
+
+    /// Records a figure of time under `key` in `timing.json` (wall-clock content, kept out of
+    /// `summary.json`).
+    pub fn timing(&mut self, key: &str, value: serde_json::Value) {
+        self.timing_extra.insert(key.to_string(), value);
     }
 
     /// Key-value metadata written into every Parquet file.
@@ -453,11 +464,14 @@ impl Experiment {
         // The processor time since the start: a process that writes two experiments (Figure
         // 14's writes Figure 15's from the same records) counts each second once.
         let cpu = cpu_time_s().zip(self.cpu_started).map(|(now, t0)| now - t0);
-        let timing = serde_json::json!({
+        let mut timing = serde_json::json!({
             "experiment": self.name,
             "wall_time_s": secs,
             "cpu_time_s": cpu,
         });
+        if let Some(t) = timing.as_object_mut() {
+            t.extend(self.timing_extra.clone());
+        }
         write_atomic(
             &self.dir.join("timing.json"),
             serde_json::to_string_pretty(&timing)?.as_bytes(),

@@ -1,5 +1,5 @@
 //! Property tests of bad input: generated device files, measured records and `endstop`
-//! command lines (every study, `fit` included) never make the library or the tool panic. A device file or a record either
+//! command lines (every subcommand) never make the library or the tool panic. A device file or a record either
 //! loads or is refused with an error that names its source; a command line either runs or
 //! exits with a message, never a panic, an abort, or a run past its time limit.
 
@@ -223,8 +223,10 @@ fn opt(name: &'static str, pool: Vec<&'static str>) -> impl Strategy<Value = Vec
         .prop_map(move |v| v.map_or_else(Vec::new, |v| vec![name.to_string(), v.to_string()]))
 }
 
-/// A command line of the `endstop` tool: a study, a device (an example, a missing file, a
-/// directory, a file that is not TOML) and each option valid, invalid or absent.
+/// A command line of the `endstop` tool: every subcommand (`sweep`, `response`, `random`,
+/// `fit`, `charge`, `basins`) and an unknown one, a device (an example, a missing file, a
+/// directory, a file that is not TOML, a device the subcommand does not take) and each option
+/// valid, invalid or absent.
 fn command_line() -> impl Strategy<Value = Vec<String>> {
     let device = select(vec![
         "data/examples/piezo_cantilever.toml",
@@ -319,17 +321,72 @@ fn command_line() -> impl Strategy<Value = Vec<String>> {
         )
         .prop_map(|v| v.map_or_else(Vec::new, |v| vec!["--free".into(), v.into()])),
     );
+    // `charge`: a device with an interface (the examples with a bridge), one without, a
+    // missing file; the sine, the storage's start and target voltages, the ramp and the
+    // longest simulated time, each valid, invalid or absent.
+    let charge = (
+        select(vec![
+            "data/examples/piezo_bridge.toml",
+            "data/examples/em_bridge.toml",
+            "data/examples/piezo_cantilever.toml",
+            "data/no_such_device.toml",
+        ]),
+        opt("--freq-hz", vec!["120", "0", "-1", "nan", "1e300", "x"]),
+        opt("--accel-rms-g", vec!["0.3", "0", "-1", "nan", "1e300"]),
+        opt("--start-v", vec!["0", "-1", "nan", "1e300", "inf"]),
+        opt("--target-v", vec!["0.2", "0", "-1", "nan", "1e300", "inf"]),
+        opt("--ramp-periods", vec!["0", "10", "-1", "nan", "1e300"]),
+        opt("--t-max-s", vec!["0.2", "0", "-1", "nan", "1e9", "inf"]),
+    );
+    // `basins`: the bistable example (a valid grid is 5 by 5 cells of at most 50 periods),
+    // a device without wells, a missing file; the sine, the grid, the ranges, the settling and
+    // the seeds, each valid, invalid or absent.
+    let basins = (
+        select(vec![
+            "data/examples/bistable_stops_em.toml",
+            "data/examples/piezo_cantilever.toml",
+            "data/no_such_device.toml",
+        ]),
+        opt("--freq", vec!["30", "0", "-1", "nan", "1e300"]),
+        opt("--accel-rms-g", vec!["0.05", "0", "-1", "nan", "1e300"]),
+        opt("--cells", vec!["5", "0", "1", "501", "502", "-1", "x"]),
+        opt(
+            "--x-range",
+            vec![
+                "-7.5e-4,7.5e-4",
+                "1,-1",
+                "nan,1",
+                "0,0",
+                "-1e300,1e300",
+                "1",
+            ],
+        ),
+        opt(
+            "--v-range",
+            vec!["-0.1,0.1", "0.1,-0.1", "nan,0", "-inf,inf"],
+        ),
+        opt("--max-periods", vec!["50", "0", "1000000000", "-1"]),
+        opt("--settle-tol", vec!["1e-3", "0", "-1", "nan", "1e300"]),
+        opt("--seeds-per-side", vec!["2", "0", "100", "-1"]),
+    );
     (
         select(vec![
-            "sweep", "response", "random", "random", "fit", "fit", "bogus",
+            "sweep", "response", "random", "random", "fit", "fit", "charge", "charge", "basins",
+            "basins", "bogus",
         ]),
         device,
         range,
         random,
         fit,
+        (charge, basins),
         any::<bool>(),
     )
-        .prop_map(|(study, device, r, x, f, surplus)| {
+        .prop_map(|(study, device, r, x, f, (c, b), surplus)| {
+            let device = match study {
+                "charge" => c.0,
+                "basins" => b.0,
+                _ => device,
+            };
             let mut args = vec![study.to_string(), "--device".into(), device.into()];
             if study == "fit" {
                 for o in [f.0, f.1, f.2, f.3] {
@@ -337,6 +394,14 @@ fn command_line() -> impl Strategy<Value = Vec<String>> {
                 }
             } else if study == "random" {
                 for o in [x.0, x.1, x.2, x.3, x.4, x.5, x.6, r.4] {
+                    args.extend(o);
+                }
+            } else if study == "charge" {
+                for o in [c.1, c.2, c.3, c.4, c.5, c.6] {
+                    args.extend(o);
+                }
+            } else if study == "basins" {
+                for o in [b.1, b.2, b.3, b.4, b.5, b.6, b.7, b.8, r.4] {
                     args.extend(o);
                 }
             } else {
@@ -356,8 +421,8 @@ fn command_line() -> impl Strategy<Value = Vec<String>> {
         })
 }
 
-/// How long one generated command may run: its valid runs are a few sweep steps or a short
-/// record, seconds each.
+/// How long one generated command may run: its valid runs are a few sweep steps, a short
+/// record, a charge over 0.2 s or a 5 by 5 basin grid, seconds each.
 const RUN_LIMIT: Duration = Duration::from_secs(120);
 
 proptest! {

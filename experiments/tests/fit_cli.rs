@@ -234,6 +234,38 @@ fn bad_measured_files_and_free_parameters_are_named_errors_and_write_nothing() {
 }
 
 #[test]
+fn a_device_with_an_interface_circuit_is_refused_naming_it_and_nothing_is_written() {
+    // The fit models a transducer on its resistive load (its sweeps and its spectrum alike):
+    // a bridge is refused before any fitting, never fitted as if it were not there.
+    let dir = scratch("interface");
+    let bridge = root().join("data/examples/piezo_bridge.toml");
+    let bridge = bridge.to_str().unwrap();
+    std::fs::write(
+        dir.join("m.csv"),
+        "# accel_rms_g = 0.5\nfreq_hz,v1_rms_v\n100,0.1\n110,0.2\n120,0.3\n",
+    )
+    .unwrap();
+    for input in [["--up-sweep", "m.csv"], ["--spectrum", "psd.csv:1e-4"]] {
+        let mut args = vec![
+            "--device",
+            bridge,
+            "--free",
+            "stops.upper.gap_m=0.05e-3..0.3e-3",
+        ];
+        args.extend(input);
+        args.extend(["--out", "out"]);
+        let (ok, code, stderr) = run(&dir, &args);
+        assert!(!ok && code == Some(1), "{input:?}: {stderr}");
+        assert!(
+            stderr.contains("its interface circuit `[interface]` of kind `full_bridge`"),
+            "{input:?}: {stderr}"
+        );
+        assert!(!dir.join("out").exists(), "{input:?}: wrote output");
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
 fn a_down_sweep_file_in_rising_order_is_read_in_sweep_order_and_free_comments_pass() {
     use endstop_experiments::reports::fit_csv::parse_sweep;
     let text = "# measured 2026 = bench B\n# accel_rms_g = 0.3\n# jump_hz = 615\n\

@@ -42,7 +42,11 @@ fn print(r: &FitReport) {
     }
     eprintln!(
         "evaluations {}, stop {:?}, model {}, starts {}, warnings {:?}",
-        r.evaluations, r.stop, r.model, r.starts_tried, r.warnings
+        r.evaluations,
+        r.stop,
+        r.model,
+        r.starts.len(),
+        r.warnings
     );
 }
 

@@ -1,6 +1,6 @@
 //! The `endstop` tool on nonlinear suspensions (`data/examples/hardening_em.toml`,
 //! `bistable_stops_em.toml`): `random` writes the displacement density with its interval and,
-//! for two wells, the well-to-well rate; `response` reports the static equilibria; `basins`
+//! for two wells, the rate of bottom-to-bottom passages; `response` reports the static equilibria; `basins`
 //! writes the grid and each cell's attractor (every cell, each attractor placed by well) with
 //! the attractors' table; a bad suspension or a bad basin option is refused by name, and
 //! nothing is written.
@@ -55,7 +55,7 @@ fn random_on_a_bistable_device_writes_the_density_and_the_transition_rate() {
     // The bins span the largest |x| of the records, so every sample is in one.
     assert!((total - 1.0).abs() < 1e-9, "density integrates to {total}");
     let md = std::fs::read_to_string(out.join("numbers.md")).unwrap();
-    assert!(md.contains("well-to-well transitions"), "{md}");
+    assert!(md.contains("bottom-to-bottom passages"), "{md}");
     assert!(
         md.contains("`bistable` suspension (static equilibria"),
         "{md}"

@@ -123,7 +123,25 @@ fn report_dict<'py>(py: Python<'py>, r: &FitReport) -> PyResult<Bound<'py, PyDic
     d.set_item("reduced_chi2", r.reduced_chi2)?;
     d.set_item("chi2_p", r.chi2_p)?;
     d.set_item("model", &r.model)?;
-    d.set_item("starts_tried", r.starts_tried)?;
+    d.set_item("headline", r.headline())?;
+    d.set_item("starts_tried", r.starts.len())?;
+    d.set_item("starts_refined", r.starts_refined())?;
+    let starts = PyList::empty(py);
+    for (i, s) in r.starts.iter().enumerate() {
+        let q = PyDict::new(py);
+        q.set_item("origin", s.origin.to_string())?;
+        q.set_item("values", s.values.clone())?;
+        q.set_item("design_ssr", s.design_ssr)?;
+        q.set_item("refined_ssr", s.refined.as_ref().map(|f| f.ssr))?;
+        q.set_item(
+            "refined_values",
+            s.refined.as_ref().map(|f| f.values.clone()),
+        )?;
+        q.set_item("settled", s.refined.as_ref().map(|f| f.settled))?;
+        q.set_item("reported", i == r.best_start)?;
+        starts.append(q)?;
+    }
+    d.set_item("starts", starts)?;
     d.set_item("singular_ratio", r.singular_ratio)?;
     d.set_item("evaluations", r.evaluations)?;
     d.set_item("converged", r.stop.converged())?;

@@ -1,7 +1,7 @@
 //! Nonlinear suspensions from Python: a device's static equilibria, and the displacement of a
-//! random ensemble (histogram with its interval across records, well shares, well-to-well
-//! transitions, and the exact stationary density where it applies), and the basins of the
-//! stable orbits under a sine, each orbit placed by well.
+//! random ensemble (histogram with its interval across records, well shares, passages from one
+//! well's bottom to the other's, and the exact stationary density where it applies), and the
+//! basins of the stable orbits under a sine, each orbit placed by well.
 
 use endstop::drive::Sine;
 use endstop::physics::harvester::Harvester;

@@ -34,6 +34,19 @@ def test_fit_recovers_the_gap_and_damping_of_a_noise_free_sweep():
     assert isinstance(r["device"], endstop.Device)
     assert np.asarray(r["correlation"]).shape == (2, 2)
     assert r["residuals"]["model"].shape == (n + 1,)
+    # Every start of the design is listed, and the reported one among them.
+    assert r["starts_tried"] == len(r["starts"]) > 1
+    assert sum(s["reported"] for s in r["starts"]) == 1
+    assert r["headline"] is None, r["headline"]
+
+
+def test_a_device_with_an_interface_circuit_is_refused_naming_it(root):
+    # The fit models a transducer on its resistive load: a bridge must not be fitted as if
+    # it were not there.
+    bridge = endstop.Device.from_toml(root / "data/examples/piezo_bridge.toml")
+    data = endstop.fit.sweep_data([100.0, 110.0, 120.0], [0.1, 0.2, 0.3], 0.5)
+    with pytest.raises(ValueError, match="interface circuit .*full_bridge"):
+        endstop.fit.fit(bridge, [data], {"stops.upper.gap_m": (0.05e-3, 0.3e-3)})
 
 
 def test_an_unknown_free_parameter_raises_param_error_naming_it():

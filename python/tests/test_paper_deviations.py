@@ -58,7 +58,7 @@ def test_indices_of_ishigami_through_the_evaluation_dicts():
 
 def test_the_pieces_on_dask_workers_are_the_pieces_here():
     # Other processes, pickled arguments and results: the same numbers, bit for bit.
-    distributed = pytest.importorskip("dask.distributed")
+    import dask.distributed as distributed  # the test extra installs it
     points = deviations.design(2)[:4]
     here = [deviations.evaluate("p2", u) for u in points]
     fits_here = [deviations.calibrate_start("p2", i, 1, 3) for i in range(2)]
@@ -130,7 +130,7 @@ def test_the_recorded_cluster_run_is_what_this_code_computes(name):
     # outcomes, and the recorded values within their sampling error (see RECORDED_Z): a change
     # of the model or of the protocol that moves them fails here and asks for the run to be
     # repeated (`just record`).
-    pd = pytest.importorskip("pandas")
+    import pandas as pd  # the test extra installs it
     record = RECORDED / name
     run = json.loads((record / "run.json").read_text())
     cal = pd.read_parquet(record / "calibration.parquet")

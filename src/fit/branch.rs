@@ -35,6 +35,9 @@ pub(super) enum PointModel {
     Orbit(Box<Orbit>),
     /// A point of the first branch beyond its fold: the fold's orbit.
     AtFold,
+    /// A point of the second branch where that branch does not reach: the orbit where it
+    /// ends nearest the point, followed at its own frequency.
+    Nearest(Box<Orbit>),
 }
 
 /// The model of a measured frequency feature.
@@ -56,6 +59,8 @@ pub(super) struct SetModel {
     onset: Option<Edge>,
     /// The branch end feature's model (when the data set has one).
     end: Option<Edge>,
+    /// The model of the jump the points show (when they show one, [`SweepData::measured_jump`]).
+    bracket: Option<Edge>,
     /// The fold ending the first branch, when the sweep jumps.
     fold: Option<Fold>,
     /// Each point: on the first branch, and its model.
@@ -124,7 +129,7 @@ impl SetModel {
             .points
             .iter()
             .map(|(_, pm)| match pm {
-                PointModel::Orbit(o) => quantity_of(data.quantity, o),
+                PointModel::Orbit(o) | PointModel::Nearest(o) => quantity_of(data.quantity, o),
                 PointModel::AtFold => fold_value.unwrap_or(f64::NAN),
             })
             .collect();
@@ -134,6 +139,9 @@ impl SetModel {
                 FeatureKind::BranchEnd => self.end.as_ref(),
             };
             out.push(e.map_or(f64::NAN, |e| edge_value(e, self.fold.as_ref())));
+        }
+        if let Some(b) = &self.bracket {
+            out.push(edge_value(b, self.fold.as_ref()));
         }
         out
     }
@@ -271,21 +279,34 @@ pub(super) fn identify(device: &Device, scale: f64, data: &SweepData) -> Result<
     } else {
         None
     };
-    let end = if has(FeatureKind::BranchEnd) {
-        Some(match &path.end {
+    // The end of the first branch: the fold, a grazing, or the grid's end it lies beyond (a
+    // constant: the search cannot move it, and the rounds identify afresh).
+    let end_edge = || -> Result<Edge, Lost> {
+        Ok(match &path.end {
             Some(_) if fold.is_some() => Edge::Fold,
             Some((_, t)) => Edge::Grazing(path.grazing(&h, &s, t)?),
             None if s.dir > 0.0 && path.any_contact() => Edge::Fixed(s.hi),
             None => Edge::Fixed(s.lo),
         })
+    };
+    let end = if has(FeatureKind::BranchEnd) {
+        Some(end_edge()?)
     } else {
         None
     };
+    let jump = data.measured_jump();
+    let bracket = match jump {
+        Some(_) => Some(end_edge()?),
+        None => None,
+    };
+    // Which branch a point lies on: the measurement says, by its measured branch end or the
+    // jump its points show; else the stepped sweep at these values.
     let measured_end = data
         .features
         .iter()
         .find(|f| f.kind == FeatureKind::BranchEnd)
-        .map(|f| f.freq_hz);
+        .map(|f| f.freq_hz)
+        .or(jump.map(|j| j.mid_hz()));
     let mut points = Vec::with_capacity(data.points.len());
     for p in &data.points {
         let f = p.freq_hz;
@@ -311,31 +332,41 @@ pub(super) fn identify(device: &Device, scale: f64, data: &SweepData) -> Result<
         } else if j > k {
             PointModel::Orbit(Box::new(step_orbit(j)?))
         } else {
-            // A point the data place after the jump but the model before it: the second
-            // branch followed back from the first step after the model's jump.
-            let mut o = stable_orbit(
-                &h,
-                path.values[k + 1],
-                a,
-                0.0,
-                nalgebra::SVector::from_column_slice(path.steps[k + 1].state.as_slice()),
-            )
-                .map_err(|e| Lost(format!("second branch at the jump: {}", e.0)))?;
-            for i in (j..=k).rev() {
-                let fi = if i == j { f } else { path.values[i] };
-                o = stable_orbit(&h, fi, a, o.phase_rad, o.state_n())
-                    .map_err(|e| Lost(format!("second branch below the jump: {}", e.0)))?;
-            }
-            PointModel::Orbit(Box::new(o))
+            second_branch_back(&h, a, &path, k, j, f)?
         };
         points.push((first, pm));
     }
     Ok(SetModel {
         onset,
         end,
+        bracket,
         fold,
         points,
     })
+}
+
+/// A point the data place after the jump but the model before it (at `f`, nearest the coarse
+/// step `j <= k`): the second branch followed back from the first step after the model's jump
+/// (step `k + 1`); where that branch ends before reaching `f`, the orbit where it ends.
+fn second_branch_back(
+    h: &Harvester,
+    a: f64,
+    path: &Path,
+    k: usize,
+    j: usize,
+    f: f64,
+) -> Result<PointModel, Lost> {
+    let start = nalgebra::SVector::from_column_slice(path.steps[k + 1].state.as_slice());
+    let mut o = stable_orbit(h, path.values[k + 1], a, 0.0, start)
+        .map_err(|e| Lost(format!("second branch at the jump: {}", e.0)))?;
+    for i in (j..=k).rev() {
+        let fi = if i == j { f } else { path.values[i] };
+        match stable_orbit(h, fi, a, o.phase_rad, o.state_n()) {
+            Ok(next) => o = next,
+            Err(_) => return Ok(PointModel::Nearest(Box::new(o))),
+        }
+    }
+    Ok(PointModel::Orbit(Box::new(o)))
 }
 
 /// The model of `data` on `device` with the acceleration factor `scale`, followed from the
@@ -369,6 +400,7 @@ pub(super) fn track(
     };
     let onset = edge(&prev.onset)?;
     let end = edge(&prev.end)?;
+    let bracket = edge(&prev.bracket)?;
     let mut points = Vec::with_capacity(prev.points.len());
     for (p, (first, pm)) in data.points.iter().zip(&prev.points) {
         let f = p.freq_hz;
@@ -377,7 +409,7 @@ pub(super) fn track(
             (Some(fold), true) if fold.beyond(f) => PointModel::AtFold,
             (Some(fold), true) => {
                 let (ph, y) = match pm {
-                    PointModel::Orbit(o) => (o.phase_rad, o.state_n()),
+                    PointModel::Orbit(o) | PointModel::Nearest(o) => (o.phase_rad, o.state_n()),
                     PointModel::AtFold => {
                         let g = fold.nearest(f);
                         (g.phase_rad, g.state)
@@ -389,6 +421,12 @@ pub(super) fn track(
                 PointModel::Orbit(o) => PointModel::Orbit(Box::new(
                     stable_orbit(&h, f, a, o.phase_rad, o.state_n()).map_err(ctx)?,
                 )),
+                PointModel::Nearest(o) => {
+                    let fo = o.forcing.freq_hz;
+                    PointModel::Nearest(Box::new(
+                        stable_orbit(&h, fo, a, o.phase_rad, o.state_n()).map_err(ctx)?,
+                    ))
+                }
                 PointModel::AtFold => return Err(Lost("a point at a fold that vanished".into())),
             },
         };
@@ -397,6 +435,7 @@ pub(super) fn track(
     Ok(SetModel {
         onset,
         end,
+        bracket,
         fold,
         points,
     })

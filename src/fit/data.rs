@@ -192,6 +192,45 @@ fn finite(
     }
 }
 
+/// A measured point's drop across a jump must be at least this fraction of the larger of the
+/// two values: the jump of an impacting branch loses most of its response, whereas the steep
+/// flank of a linear resonance sampled at a quarter of its half-power width changes by a few
+/// tens of percent between points.
+pub const JUMP_MIN_REL_DROP: f64 = 0.25;
+
+/// ... and at least this many times the change between each neighbouring pair of points: a
+/// jump is a discontinuity, a flank changes alike from point to point.
+pub const JUMP_MIN_NEIGHBOUR_RATIO: f64 = 3.0;
+
+/// ... and at least this many standard deviations of the difference, where the points state
+/// theirs.
+pub const JUMP_MIN_SIGMAS: f64 = 5.0;
+
+/// A jump the measured points show: between the point `before` (the last on the branch the
+/// sweep starts on) and the next (the first on the branch it jumps to).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct MeasuredJump {
+    /// Index of the last point before the jump.
+    pub before: usize,
+    /// Frequency of that point (Hz).
+    pub from_hz: f64,
+    /// Frequency of the next point (Hz).
+    pub to_hz: f64,
+}
+
+impl MeasuredJump {
+    /// The middle of the bracket (Hz).
+    pub fn mid_hz(&self) -> f64 {
+        0.5 * (self.from_hz + self.to_hz)
+    }
+
+    /// The standard deviation of a frequency uniformly distributed across the bracket
+    /// (Hz): its width over sqrt(12).
+    pub fn sigma_hz(&self) -> f64 {
+        (self.to_hz - self.from_hz).abs() / 12f64.sqrt()
+    }
+}
+
 impl SweepData {
     /// Measured values that enter the misfit (points and features).
     pub fn len(&self) -> usize {
@@ -201,6 +240,54 @@ impl SweepData {
     /// True if the data set has neither points nor features.
     pub fn is_empty(&self) -> bool {
         self.len() == 0
+    }
+
+    /// The jump the measured points show, when the data set states no branch end of its own
+    /// (see [`MeasuredJump`] and the criteria [`JUMP_MIN_REL_DROP`],
+    /// [`JUMP_MIN_NEIGHBOUR_RATIO`], [`JUMP_MIN_SIGMAS`]): the largest change against the
+    /// sweep's direction of jumping (down in an up-sweep, up in a down-sweep) between
+    /// consecutive points.
+    pub fn measured_jump(&self) -> Option<MeasuredJump> {
+        if self
+            .features
+            .iter()
+            .any(|f| f.kind == FeatureKind::BranchEnd)
+        {
+            return None;
+        }
+        let sign = match self.direction {
+            Direction::Up => 1.0,
+            Direction::Down => -1.0,
+        };
+        let pts = &self.points;
+        let drop = |i: usize| sign * (pts[i].value - pts[i + 1].value);
+        let k = (0..pts.len().saturating_sub(1)).max_by(|&a, &b| drop(a).total_cmp(&drop(b)))?;
+        let d = drop(k);
+        let scale = pts[k].value.abs().max(pts[k + 1].value.abs());
+        let neighbours = [k.checked_sub(1), Some(k + 1).filter(|&j| j + 1 < pts.len())]
+            .into_iter()
+            .flatten()
+            .map(|j| (pts[j].value - pts[j + 1].value).abs())
+            .fold(0.0, f64::max);
+        let noise = match (pts[k].sigma, pts[k + 1].sigma) {
+            (Some(a), Some(b)) => a.hypot(b),
+            _ => 0.0,
+        };
+        (d > 0.0
+            && d >= JUMP_MIN_REL_DROP * scale
+            && d >= JUMP_MIN_NEIGHBOUR_RATIO * neighbours
+            && d >= JUMP_MIN_SIGMAS * noise)
+            .then(|| MeasuredJump {
+                before: k,
+                from_hz: pts[k].freq_hz,
+                to_hz: pts[k + 1].freq_hz,
+            })
+    }
+
+    /// Measured values that enter the misfit: points, features, and the bracket of a jump the
+    /// points show ([`SweepData::measured_jump`]).
+    pub fn n_values(&self) -> usize {
+        self.len() + usize::from(self.measured_jump().is_some())
     }
 
     /// The stepped sweep's grid, in sweep order.
@@ -282,5 +369,57 @@ impl SweepData {
             outside("a feature", f.freq_hz)?;
         }
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn up_sweep(values: &[f64], sigma: Option<f64>) -> SweepData {
+        SweepData {
+            label: "t".into(),
+            direction: Direction::Up,
+            accel_rms_g: 1.0,
+            quantity: Quantity::V1RmsV,
+            points: values
+                .iter()
+                .enumerate()
+                .map(|(i, &v)| Point {
+                    freq_hz: 100.0 + 2.0 * i as f64,
+                    value: v,
+                    sigma: sigma.map(|s| s * v),
+                })
+                .collect(),
+            grid_hz: None,
+            features: vec![],
+        }
+    }
+
+    #[test]
+    fn a_fall_of_most_of_the_response_is_the_jump_and_a_resonance_flank_is_not() {
+        // A hardening branch rising to its fold, then the jump down to the low branch.
+        let jump = up_sweep(&[1.0, 1.5, 2.2, 3.1, 4.0, 1.0, 0.8, 0.7], Some(0.02));
+        let j = jump.measured_jump().expect("a jump");
+        assert_eq!((j.before, j.from_hz, j.to_hz), (4, 108.0, 110.0));
+        assert!((j.sigma_hz() - 2.0 / 12f64.sqrt()).abs() < 1e-12);
+        assert_eq!(jump.n_values(), jump.len() + 1);
+        // A linear resonance of half-power width 5.44 Hz (the piezoelectric example's)
+        // sampled every 2 Hz: its flank falls by up to about 30 % between points, but alike
+        // from point to point.
+        let flank: Vec<f64> = (0..12)
+            .map(|i| {
+                let df = 100.0 + 2.0 * i as f64 - 110.0;
+                1.0 / (1.0 + (2.0 * df / 5.44f64).powi(2)).sqrt()
+            })
+            .collect();
+        assert_eq!(up_sweep(&flank, Some(0.02)).measured_jump(), None);
+        // A fall hidden in noise of 10 %: not a jump by the five-sigma criterion.
+        assert_eq!(
+            up_sweep(&[1.0, 1.0, 1.0, 0.6, 0.6, 0.6], Some(0.1)).measured_jump(),
+            None
+        );
+        // Values not yet filled in (all zero) show no jump.
+        assert_eq!(up_sweep(&[0.0; 6], None).measured_jump(), None);
     }
 }

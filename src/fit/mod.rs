@@ -1,7 +1,14 @@
 //! Fitting a device to measured sweeps: named free parameters with ranges, a weighted
 //! least-squares misfit evaluated on the branches of periodic orbits the sweeps follow
-//! (`branch.rs`), a Levenberg-Marquardt search ([`lm`]) in bounded-transformed coordinates from
-//! one or several starts, and an honest account of what the data determine.
+//! (`branch.rs`), a global search (a design of starts ranked by a cheap model, the best few
+//! refined by Levenberg-Marquardt, [`lm`]) in bounded-transformed coordinates, and an honest
+//! account of what the data determine.
+//!
+//! # What it models
+//! A device whose transducer drives its resistive load (the device file without an
+//! `[interface]` table); any suspension, stops and transducer of the device description. A
+//! device with an interface circuit is refused ([`FitError::Unmodelled`]), never fitted as if
+//! the circuit were not there.
 //!
 //! # Misfit
 //! Each measured point contributes `(model - measured) / sigma`, each measured feature (impact
@@ -10,12 +17,20 @@
 //! the sweep itself is discontinuous in the parameters and a search stalls at the jump. The
 //! model therefore compares each measured point with the stable periodic orbit of the branch
 //! the point lies on ([`crate::study::orbit`]), which exists past the jump up to its fold; a
-//! point beyond the fold of its branch is compared with the fold's orbit. The onset and a
-//! gradual end of contact are grazing orbits (where the branch of the device without stops
-//! reaches a stop), a jump is the fold ([`crate::study::continuation`]), each located to far
-//! below a measured feature's standard deviation and smooth in the parameters.
+//! point beyond the fold of its branch is compared with the fold's orbit, and a point of the
+//! second branch where that branch does not reach with the orbit where it ends. The
+//! measurement says which branch a point lies on: the points before a measured branch end
+//! (a feature) or before the jump the points themselves show ([`SweepData::measured_jump`])
+//! lie on the first, the others on the second; without either, the stepped sweep at the
+//! parameters of the identification assigns them. The onset and a gradual end of contact are
+//! grazing orbits (where the branch of the device without stops reaches a stop), a jump is
+//! the fold ([`crate::study::continuation`]), each located to far below a measured feature's
+//! standard deviation and smooth in the parameters. A jump the points show enters as what it
+//! is, the end of the first branch between the last point before it and the first after: a
+//! residual of the fold (or grazing) frequency against the middle of that bracket with the
+//! standard deviation of a frequency uniform across it (its width over sqrt 12).
 //!
-//! The branches are identified once from the stepped sweep at the starting values
+//! The branches are identified from the stepped sweep at a start's values
 //! ([`crate::study::sweep::SweepSettings::for_device`]), then followed by Newton's method as
 //! the search moves: an evaluation costs a few periods per measured value. After the search
 //! the model is identified afresh at the fitted values; if it differs from the one followed
@@ -25,11 +40,16 @@
 //! that is not periodic, a jump that is not a fold) the model is the stepped sweep itself
 //! ([`model`]), with a warning ([`FitWarning::SteppedSweepModel`]).
 //!
-//! # Several starts
-//! A search from the device's values that does not converge, or whose chi-square (with stated
-//! standard deviations) exceeds its 99.9 % quantile, is followed by searches from the points of
-//! a Sobol sequence in the transformed box ([`FitSettings::starts`] in all); the best
-//! converged one is reported, with the number of starts tried.
+//! # Global search
+//! The starts are the device's values and the points of a Sobol sequence over the transformed
+//! box ([`FitSettings::design_points`]: `DESIGN_BASE + DESIGN_PER_PARAM p` of them for `p`
+//! free parameters), each ranked by the misfit of a cheap model, the plain stepped sweep over
+//! each data set's grid (one sweep per data set and start, evaluated in parallel). The best
+//! ranked [`FitSettings::refine`] are refined by Levenberg-Marquardt on the branches in their
+//! order, stopping early at one that converges with a chi-square (with stated standard
+//! deviations) below its [`CHI2_QUANTILE`] quantile; the report is the best refined one
+//! (converged first, then the smallest SSR), whichever start it came from, and lists every
+//! start with its cheap misfit and refinement ([`FitReport::starts`]).
 //!
 //! # Coordinates
 //! A free parameter ([`ParamRange`]) with range `lo..hi` is searched as
@@ -59,6 +79,7 @@
 
 mod branch;
 pub mod data;
+pub mod family;
 pub mod lm;
 pub mod model;
 pub mod params;
@@ -66,16 +87,20 @@ pub mod report;
 mod search;
 pub mod spectrum;
 mod track;
+mod uncertainty;
 
-use nalgebra::DMatrix;
 use statrs::distribution::{ChiSquared, ContinuousCDF};
 use thiserror::Error;
 
-pub use data::{DataError, Direction, Feature, FeatureKind, Point, Quantity, SweepData};
+pub use data::{
+    DataError, Direction, Feature, FeatureKind, MeasuredJump, Point, Quantity, SweepData,
+};
 pub use lm::{LmSettings, Termination};
 pub use model::{model_curve, model_sweep, model_values, ModelSweep};
 pub use params::check_free;
-pub use report::{FitReport, FitWarning, FittedParam, Residual, Uncertainty};
+pub use report::{
+    FitReport, FitWarning, FittedParam, Refined, Residual, StartOrigin, StartTried, Uncertainty,
+};
 
 use params::{apply, Transform};
 
@@ -188,29 +213,84 @@ pub enum FitError {
     /// An orbit, grazing or fold of the model could not be followed to new parameter values.
     #[error("model branch lost: {0}")]
     Lost(String),
+    /// The device has a part the fit's model leaves out.
+    #[error("device `{device}` cannot be fitted: the fit models a transducer on its resistive load, not {part}")]
+    Unmodelled {
+        /// The device's name.
+        device: String,
+        /// The part, named as in the device file.
+        part: String,
+    },
 }
 
-/// Settings of [`fit()`]: the search, and how many starts it may take.
+/// Settings of [`fit()`]: the search, the design of starts and how many are refined.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct FitSettings {
     /// The Levenberg-Marquardt search.
     pub lm: LmSettings,
-    /// Most starts: the device's values, then points of a Sobol sequence (see the module
-    /// docs). 1: the device's values only.
-    pub starts: usize,
+    /// Points of the Sobol design beside the device's own values (see the module docs);
+    /// `None`: `DESIGN_BASE + DESIGN_PER_PARAM p` for `p` free parameters; `Some(0)`: the
+    /// device's values alone, refined without a design.
+    pub design: Option<usize>,
+    /// Most starts refined, the best ranked first.
+    pub refine: usize,
 }
+
+/// Points of the design per free parameter, beside [`DESIGN_BASE`]: a Sobol sequence of
+/// `DESIGN_BASE + DESIGN_PER_PARAM p` points puts points in each half of every range and in
+/// every quadrant of each pair, at the price of one plain stepped sweep per data set each.
+pub const DESIGN_PER_PARAM: usize = 4;
+
+/// Points of the design whatever the number of free parameters.
+pub const DESIGN_BASE: usize = 4;
+
+/// Starts refined by default: the best ranked three.
+pub const REFINE_DEFAULT: usize = 3;
 
 impl Default for FitSettings {
     fn default() -> Self {
         Self {
             lm: LmSettings::default(),
-            starts: 8,
+            design: None,
+            refine: REFINE_DEFAULT,
         }
     }
 }
 
+impl FitSettings {
+    /// The device's values alone, refined without a design (a fit that must stay on the
+    /// branch it starts on).
+    pub fn from_device_only() -> Self {
+        Self {
+            design: Some(0),
+            refine: 1,
+            ..Self::default()
+        }
+    }
+
+    /// Points of the design for `p` free parameters.
+    pub fn design_points(&self, p: usize) -> usize {
+        self.design.unwrap_or(DESIGN_BASE + DESIGN_PER_PARAM * p)
+    }
+}
+
+/// Why a device cannot be fitted: a part of it the fit's model leaves out.
+pub fn check_modelled(device: &Device) -> Result<(), FitError> {
+    if !device.interface.is_resistive() {
+        return Err(FitError::Unmodelled {
+            device: device.name.clone(),
+            part: format!(
+                "its interface circuit `[interface]` of kind `{}`",
+                device.interface.key()
+            ),
+        });
+    }
+    Ok(())
+}
+
 /// The measured values, their weights (standard deviations; 1 where none is stated) and
-/// whether each states its own.
+/// whether each states its own: each data set's points, features, and the bracket of a jump
+/// its points show.
 fn measured(data: &[SweepData]) -> (Vec<f64>, Vec<f64>, Vec<bool>) {
     let mut y = Vec::new();
     let mut s = Vec::new();
@@ -224,6 +304,11 @@ fn measured(data: &[SweepData]) -> (Vec<f64>, Vec<f64>, Vec<bool>) {
         for f in &d.features {
             y.push(f.freq_hz);
             s.push(f.sigma_hz);
+            stated.push(true);
+        }
+        if let Some(j) = d.measured_jump() {
+            y.push(j.mid_hz());
+            s.push(j.sigma_hz());
             stated.push(true);
         }
     }
@@ -272,11 +357,12 @@ pub fn fit(
     free: &[ParamRange],
     settings: &FitSettings,
 ) -> Result<FitReport, FitError> {
+    check_modelled(device)?;
     for d in data {
         d.validate()?;
     }
     let starts = check_free(device, free)?;
-    let n: usize = data.iter().map(SweepData::len).sum();
+    let n: usize = data.iter().map(SweepData::n_values).sum();
     let p = free.len();
     if n < p {
         return Err(FitError::TooFewData { n, p });
@@ -289,29 +375,45 @@ pub fn fit(
         device,
         data,
         free,
-        tr: tr.clone(),
-        y: y.clone(),
-        sigma: sigma.clone(),
+        tr,
+        y,
+        sigma,
         stated,
     };
     let dof = n - p;
-    // With stated standard deviations a fit is accepted from one start unless its
-    // chi-square is improbably large; without, a converged search is accepted.
-    let chi2_limit = if all_stated && dof > 0 {
-        ChiSquared::new(dof as f64)
-            .map(|c| c.inverse_cdf(CHI2_QUANTILE))
-            .unwrap_or(f64::INFINITY)
-    } else {
-        f64::INFINITY
-    };
-    let (run, starts_tried, best_start) =
-        search::search(&pb, &u0, settings, all_stated, |ssr| ssr <= chi2_limit)?;
+    // A chi-square above this is improbably large (with stated standard deviations).
+    let chi2_limit = (all_stated && dof > 0)
+        .then(|| ChiSquared::new(dof as f64).ok())
+        .flatten()
+        .map(|c| c.inverse_cdf(CHI2_QUANTILE));
+    // The refinements stop early at a chi-square that is not improbably large; with as many
+    // values as parameters (no law), at one not improbable for a single degree of freedom.
+    // Without stated standard deviations every start ranked among the best is refined.
+    let early = all_stated
+        .then(|| ChiSquared::new(dof.max(1) as f64).ok())
+        .flatten()
+        .map(|c| c.inverse_cdf(CHI2_QUANTILE));
+    let (run, tried, best_start) = search::search(&pb, &u0, settings, all_stated, early)?;
+    summarise(&pb, &starts, run, tried, best_start, chi2_limit)
+}
+
+/// The report of the search's best run `run` (see [`fit()`]).
+fn summarise(
+    pb: &search::Problem<'_>,
+    starts: &[f64],
+    run: search::Run,
+    tried: Vec<report::StartTried>,
+    best_start: usize,
+    chi2_limit: Option<f64>,
+) -> Result<FitReport, FitError> {
+    let (free, tr) = (pb.free, &pb.tr);
+    let (n, p) = (pb.y.len(), free.len());
+    let dof = n - p;
+    let all_stated = pb.stated.iter().all(|&s| s);
     let lm = &run.lm;
     let p_fit = pb.to_p(&lm.u);
-    let (fitted_device, accel_scale) = apply(device, free, &p_fit)?;
-    let mut fitted_device = fitted_device;
+    let (mut fitted_device, accel_scale) = apply(pb.device, free, &p_fit)?;
     fitted_device.params = "fitted".into();
-
     let ssr: f64 = lm.residuals.iter().map(|r| r * r).sum();
     let uncertainty = if all_stated {
         Uncertainty::Stated
@@ -327,135 +429,11 @@ pub fn fit(
             (f64::NAN, f64::NAN)
         }
     };
-    let jac = &lm.jacobian;
-    // The Jacobian with its columns scaled to unit length, and its singular value
-    // decomposition: the covariance below and the identifiability test after it.
-    // A column below the model's numerical noise is a parameter the model does not depend on.
-    let norms: Vec<f64> = (0..p).map(|j| jac.column(j).norm()).collect();
-    let norm_max = norms.iter().copied().fold(0.0, f64::max);
-    let norms: Vec<f64> = norms
-        .into_iter()
-        .map(|n| {
-            if n < COLUMN_NOISE_REL * norm_max {
-                0.0
-            } else {
-                n
-            }
-        })
-        .collect();
-    let scaled = DMatrix::from_fn(n, p, |i, j| {
-        if norms[j] > 0.0 {
-            jac[(i, j)] / norms[j]
-        } else {
-            0.0
-        }
-    });
-    let svd = scaled.svd(false, true);
-    let sv = &svd.singular_values;
-    let smax = sv.max();
-    let v_t = svd.v_t.as_ref().expect("V^T requested");
-    // (J^T J)^-1 = D^-1 V S^-2 V^T D^-1 (D: the column norms). A direction with a zero
-    // singular value (relative to the largest, below [`NUMERICALLY_ZERO`]) has an infinite
-    // variance, and so has every parameter that takes part in it: its interval is then the
-    // whole range, never a spuriously narrow one.
-    let cov_u = DMatrix::from_fn(p, p, |i, j| {
-        let mut c = 0.0;
-        for k in 0..sv.len() {
-            let w = v_t[(k, i)] * v_t[(k, j)];
-            if sv[k] <= NUMERICALLY_ZERO * smax {
-                if w.abs() > NUMERICALLY_ZERO || (i == j && norms[i] == 0.0) {
-                    c += if i == j { f64::INFINITY } else { f64::NAN };
-                }
-            } else {
-                c += w / (sv[k] * sv[k]);
-            }
-        }
-        if norms[i] > 0.0 && norms[j] > 0.0 {
-            scale2 * c / (norms[i] * norms[j])
-        } else if i == j {
-            f64::INFINITY
-        } else {
-            f64::NAN
-        }
-    });
-    let params: Vec<FittedParam> = (0..p)
-        .map(|k| {
-            let se_u = cov_u[(k, k)].max(0.0).sqrt();
-            let (a, b) = (
-                tr[k].to_p(lm.u[k] - q * se_u),
-                tr[k].to_p(lm.u[k] + q * se_u),
-            );
-            let (interval, std_err) = if !q.is_finite() || se_u.is_nan() {
-                ((f64::NAN, f64::NAN), f64::NAN)
-            } else if se_u.is_infinite() {
-                ((free[k].lo, free[k].hi), f64::INFINITY)
-            } else {
-                ((a.min(b), a.max(b)), tr[k].dp_du(lm.u[k]).abs() * se_u)
-            };
-            FittedParam {
-                path: free[k].path.clone(),
-                start: starts[k],
-                value: p_fit[k],
-                std_err,
-                interval,
-                range: (free[k].lo, free[k].hi),
-            }
-        })
-        .collect();
-    let correlation: Vec<Vec<f64>> = (0..p)
-        .map(|i| {
-            (0..p)
-                .map(|j| cov_u[(i, j)] / (cov_u[(i, i)] * cov_u[(j, j)]).sqrt())
-                .collect()
-        })
-        .collect();
-
-    // Identifiability: the singular values of the column-scaled Jacobian.
-    let mut singular_ratio = 1.0;
-    for (k, &s) in sv.iter().enumerate() {
-        let ratio = if smax > 0.0 { s / smax } else { 0.0 };
-        singular_ratio = f64::min(singular_ratio, ratio);
-        if ratio >= SINGULAR_RATIO_WARN {
-            continue;
-        }
-        // The direction in the scaled coordinates, back to du and then to relative changes.
-        let comps: Vec<f64> = (0..p)
-            .map(|j| {
-                let du = if norms[j] > 0.0 {
-                    v_t[(k, j)] / norms[j]
-                } else {
-                    v_t[(k, j)]
-                };
-                let dp = du * tr[j].dp_du(lm.u[j]);
-                if p_fit[j] != 0.0 && free[j].lo > 0.0 {
-                    dp / p_fit[j]
-                } else {
-                    dp
-                }
-            })
-            .collect();
-        // A parameter pinned at an end of its range has dp/du = 0: its component is 0 here
-        // and it is reported by [`FitWarning::AtBound`].
-        let comps: Vec<f64> = comps
-            .into_iter()
-            .map(|c| if c.is_finite() { c } else { 0.0 })
-            .collect();
-        let big = comps.iter().fold(0.0_f64, |m, c| m.max(c.abs()));
-        let sign = comps
-            .iter()
-            .copied()
-            .find(|c| c.abs() == big)
-            .map_or(1.0, f64::signum);
-        warnings.push(FitWarning::Undetermined {
-            direction: free
-                .iter()
-                .zip(&comps)
-                .filter(|(_, c)| c.abs() >= 1e-3 * big)
-                .map(|(f, c)| (f.path.clone(), sign * c / big))
-                .collect(),
-            ratio,
-        });
-    }
+    let scaled = uncertainty::Scaled::of(&lm.jacobian);
+    let cov_u = scaled.covariance(scale2);
+    let (params, correlation) = uncertainty::parameters(free, tr, starts, &lm.u, &cov_u, q);
+    let (undetermined, singular_ratio) = scaled.undetermined(free, tr, &lm.u, &p_fit);
+    warnings.extend(undetermined);
     for (k, f) in free.iter().enumerate() {
         let frac = (p_fit[k] - f.lo) / (f.hi - f.lo);
         if !(1e-3..=1.0 - 1e-3).contains(&frac) {
@@ -470,7 +448,42 @@ pub fn fit(
             stop: format!("{:?}", lm.stop),
         });
     }
-    let model = match &run.used {
+    let model = model_warning(&run.used, &mut warnings);
+    if chi2_limit.is_some_and(|l| ssr > l) {
+        warnings.push(FitWarning::PoorFit {
+            reduced_chi2: ssr / dof as f64,
+            quantile: CHI2_QUANTILE,
+        });
+    }
+    let chi2_p = (all_stated && dof > 0)
+        .then(|| ChiSquared::new(dof as f64).ok().map(|c| c.sf(ssr)))
+        .flatten();
+    Ok(FitReport {
+        device: fitted_device,
+        accel_scale,
+        params,
+        correlation,
+        warnings,
+        uncertainty,
+        residuals: residual_rows(pb, &lm.residuals),
+        ssr,
+        dof,
+        reduced_chi2: if dof > 0 { ssr / dof as f64 } else { f64::NAN },
+        chi2_p,
+        singular_ratio,
+        iterations: run.iterations,
+        evaluations: run.evaluations,
+        failed_trials: lm.failed_trials,
+        stop: lm.stop,
+        model,
+        starts: tried,
+        best_start,
+    })
+}
+
+/// The model a search used, in words, with its warning.
+fn model_warning(used: &search::Used, warnings: &mut Vec<FitWarning>) -> String {
+    match used {
         search::Used::Branches {
             disagreement,
             rounds,
@@ -488,22 +501,15 @@ pub fn fit(
             warnings.push(FitWarning::SteppedSweepModel { why: why.clone() });
             "stepped sweep".to_string()
         }
-    };
-    if all_stated && dof > 0 && ssr > chi2_limit {
-        warnings.push(FitWarning::PoorFit {
-            reduced_chi2: ssr / dof as f64,
-            quantile: CHI2_QUANTILE,
-        });
     }
-    let chi2_p = if all_stated && dof > 0 {
-        ChiSquared::new(dof as f64).ok().map(|c| c.sf(ssr))
-    } else {
-        None
-    };
+}
 
-    let mut residual_rows = Vec::with_capacity(n);
+/// The residual rows at the optimum (weighted residuals `r`), data set by data set: points,
+/// features, then the jump the points show.
+fn residual_rows(pb: &search::Problem<'_>, r: &[f64]) -> Vec<Residual> {
+    let mut rows = Vec::with_capacity(r.len());
     let mut i = 0;
-    for d in data {
+    for d in pb.data {
         let items = d
             .points
             .iter()
@@ -512,38 +518,22 @@ pub fn fit(
                 d.features
                     .iter()
                     .map(|f| (f.kind.label().to_string(), f.freq_hz)),
+            )
+            .chain(
+                d.measured_jump()
+                    .map(|j| ("jump between points".to_string(), j.mid_hz())),
             );
         for (what, freq_hz) in items {
-            residual_rows.push(Residual {
+            rows.push(Residual {
                 dataset: d.label.clone(),
                 what,
                 freq_hz,
-                measured: y[i],
-                model: y[i] + lm.residuals[i] * sigma[i],
-                sigma: sigma[i],
+                measured: pb.y[i],
+                model: pb.y[i] + r[i] * pb.sigma[i],
+                sigma: pb.sigma[i],
             });
             i += 1;
         }
     }
-    Ok(FitReport {
-        device: fitted_device,
-        accel_scale,
-        params,
-        correlation,
-        warnings,
-        uncertainty,
-        residuals: residual_rows,
-        ssr,
-        dof,
-        reduced_chi2: if dof > 0 { ssr / dof as f64 } else { f64::NAN },
-        chi2_p,
-        singular_ratio,
-        iterations: run.iterations,
-        evaluations: run.evaluations,
-        failed_trials: lm.failed_trials,
-        stop: lm.stop,
-        model,
-        starts_tried,
-        best_start,
-    })
+    rows
 }

@@ -100,10 +100,44 @@ fn sweep_with(
     })
 }
 
-/// The model's values for a data set (its points, then its features) on `device` with the
+/// The model's values for a data set (its points, its features, then the end of its branch
+/// where the points show a jump, [`SweepData::measured_jump`]) on `device` with the
 /// acceleration factor `scale`.
 pub fn model_values(device: &Device, scale: f64, data: &SweepData) -> Result<Vec<f64>, FitError> {
-    let m = model_sweep(device, scale, data)?;
+    Ok(values_of(&model_sweep(device, scale, data)?, data))
+}
+
+/// Most intervals of the grid of the cheap model's sweep of a data set without points (see
+/// `design_values`).
+pub const DESIGN_GRID_INTERVALS: usize = 16;
+
+/// The values of [`model_values`] from the stepped sweep with a plain sweep's settings
+/// ([`model_curve`]): the cheap model that ranks the fit's starts. A data set without points
+/// (features only) is swept on its grid thinned to at most [`DESIGN_GRID_INTERVALS`]
+/// intervals, its ends kept: its features are refined by bisection whatever the grid.
+pub(super) fn design_values(
+    device: &Device,
+    scale: f64,
+    data: &SweepData,
+) -> Result<Vec<f64>, FitError> {
+    let grid = data.grid();
+    if !data.points.is_empty() || grid.len() <= DESIGN_GRID_INTERVALS + 1 {
+        return Ok(values_of(&model_curve(device, scale, data)?, data));
+    }
+    let every = (grid.len() - 1).div_ceil(DESIGN_GRID_INTERVALS);
+    let mut thin: Vec<f64> = grid.iter().copied().step_by(every).collect();
+    if thin.last() != grid.last() {
+        thin.push(grid[grid.len() - 1]);
+    }
+    let coarse = SweepData {
+        grid_hz: Some(thin),
+        ..data.clone()
+    };
+    Ok(values_of(&model_curve(device, scale, &coarse)?, &coarse))
+}
+
+/// The values of a data set's points, features and jump in the model sweep `m`.
+fn values_of(m: &ModelSweep, data: &SweepData) -> Vec<f64> {
     let grid = data.grid();
     let lo = grid.iter().copied().fold(f64::INFINITY, f64::min);
     let hi = grid.iter().copied().fold(f64::NEG_INFINITY, f64::max);
@@ -118,7 +152,10 @@ pub fn model_values(device: &Device, scale: f64, data: &SweepData) -> Result<Vec
             FeatureKind::BranchEnd => m.branch_end_hz.unwrap_or(lo),
         });
     }
-    Ok(out)
+    if data.measured_jump().is_some() {
+        out.push(m.branch_end_hz.unwrap_or(lo));
+    }
+    out
 }
 
 /// Linear interpolation in a curve sorted by frequency (exact at its frequencies).

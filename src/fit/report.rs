@@ -219,8 +219,90 @@ pub struct FitReport {
     pub stop: Termination,
     /// The model the search used, in words.
     pub model: String,
-    /// Starts tried (see [`crate::fit::FitSettings::starts`]).
-    pub starts_tried: usize,
-    /// The start reported: 0 the device's values, k the k-th Sobol start.
+    /// Every start of the design with its cheap misfit and, for those refined, the outcome
+    /// (see [`crate::fit::FitSettings`]).
+    pub starts: Vec<StartTried>,
+    /// Index in `starts` of the start reported.
     pub best_start: usize,
+}
+
+impl FitReport {
+    /// Starts refined by Levenberg-Marquardt.
+    pub fn starts_refined(&self) -> usize {
+        self.starts.iter().filter(|s| s.refined.is_some()).count()
+    }
+
+    /// What must head the report: a fitted value at an end of its range, a chi-square
+    /// improbably large for its law, a search that did not converge. `None` when there is
+    /// none of these.
+    pub fn headline(&self) -> Option<String> {
+        let mut parts: Vec<String> = Vec::new();
+        for w in &self.warnings {
+            match w {
+                FitWarning::AtBound { path, value } => parts.push(format!(
+                    "`{path}` = {value:e} sits at an end of its range (the optimum may lie \
+                     outside it; its interval means nothing)"
+                )),
+                FitWarning::PoorFit {
+                    reduced_chi2,
+                    quantile,
+                } => parts.push(format!(
+                    "the chi-square per degree of freedom {reduced_chi2:.3} exceeds its \
+                     {:.1} % quantile (probability of a larger one {}): the model does not \
+                     describe the data within their stated standard deviations, and the \
+                     intervals are not to be trusted",
+                    100.0 * quantile,
+                    self.chi2_p.map_or("-".to_string(), |p| format!("{p:.2e}"))
+                )),
+                FitWarning::NotConverged { stop } => {
+                    parts.push(format!("the search did not converge ({stop})"))
+                }
+                _ => {}
+            }
+        }
+        (!parts.is_empty()).then(|| format!("NOT A GOOD FIT: {}.", parts.join("; ")))
+    }
+}
+
+/// Where a start of the design lies.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+pub enum StartOrigin {
+    /// The device's own values.
+    DeviceFile,
+    /// The k-th point (from 1) of the Sobol sequence over the ranges.
+    Sobol(usize),
+}
+
+impl std::fmt::Display for StartOrigin {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            StartOrigin::DeviceFile => write!(f, "the device file's values"),
+            StartOrigin::Sobol(k) => write!(f, "Sobol point {k}"),
+        }
+    }
+}
+
+/// A start refined by Levenberg-Marquardt.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Refined {
+    /// Weighted SSR of the refined fit (the model on the branches).
+    pub ssr: f64,
+    /// Converged, on branches that agree with the ones identified afresh.
+    pub settled: bool,
+    /// The refined values, in the order of the free parameters.
+    pub values: Vec<f64>,
+}
+
+/// A start of the global search.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct StartTried {
+    /// Where it lies.
+    pub origin: StartOrigin,
+    /// Its values, in the order of the free parameters.
+    pub values: Vec<f64>,
+    /// Weighted SSR of the cheap model (a plain stepped sweep) there; infinite where it could
+    /// not be evaluated, NaN when the design had one start only.
+    pub design_ssr: f64,
+    /// The refinement from it, when it was among the best ranked.
+    pub refined: Option<Refined>,
 }

@@ -1,15 +1,19 @@
 //! The search of a fit: the misfit on the branches ([`super::branch`]) or, where they cannot
 //! be identified, on the stepped sweep ([`super::model`]); the rounds of one start; and the
-//! several starts (see the parent module's docs).
+//! global search, a design of starts ranked by a cheap model with the best few refined (see
+//! the parent module's docs).
 
 use super::branch::{self, SetModel};
 use super::lm::{self, levenberg_marquardt_tracked, LmResult, LmSettings, Tracked};
+use super::model::design_values;
 use super::params::{apply, Transform};
+use super::report::{Refined, StartOrigin, StartTried};
 use super::{
     model_values, FitError, FitSettings, SweepData, AGREE_REL, AGREE_SIGMA, MAX_ROUNDS,
     STATED_COST_ABS_TOL,
 };
 use crate::device::{Device, ParamRange};
+use rayon::prelude::*;
 
 /// What every evaluation needs: the device, the data, the free parameters with their
 /// transforms, and the measured values with their weights.
@@ -215,54 +219,117 @@ fn stepped(
     })
 }
 
-/// The start `k` (from 1) of the Sobol sequence in the transformed box: each parameter's
-/// range with a tenth cut off at either end (a start at an end would sit where the transform
-/// is flat).
+/// The point `k` (from 1) of the Sobol sequence in the transformed box: each parameter's
+/// range with a twentieth cut off at either end (a start at an end would sit where the
+/// transform is flat).
 fn sobol_start(tr: &[Transform], k: usize) -> Vec<f64> {
     tr.iter()
         .enumerate()
         .map(|(d, t)| {
             let s = f64::from(sobol_burley::sample(k as u32, d as u32, 0x5eed));
-            t.to_u_frac(0.1 + 0.8 * s)
+            t.to_u_frac(0.05 + 0.9 * s)
         })
         .collect()
 }
 
-/// The searches of a fit: from `u0`, then, unless that one converged and fits (`fits`), from
-/// Sobol starts; the best one (converged first, then the smallest SSR) and the number of
-/// starts tried and the index of the best (0: `u0`).
+/// The weighted SSR of the cheap model ([`design_values`]) at `u`; infinite where it cannot
+/// be evaluated.
+fn design_ssr(pb: &Problem<'_>, u: &[f64]) -> f64 {
+    let eval = || -> Result<f64, FitError> {
+        let (d, scale) = apply(pb.device, pb.free, &pb.to_p(u))?;
+        let mut m = Vec::with_capacity(pb.y.len());
+        for ds in pb.data {
+            m.extend(design_values(&d, scale, ds)?);
+        }
+        Ok(pb.weighted(&m).iter().map(|r| r * r).sum())
+    };
+    eval()
+        .ok()
+        .filter(|c| c.is_finite())
+        .unwrap_or(f64::INFINITY)
+}
+
+/// The searches of a fit: the design (the device's values and [`FitSettings::design_points`] points
+/// of a Sobol sequence) ranked by the cheap model's SSR, then the best
+/// [`FitSettings::refine`] refined by Levenberg-Marquardt in that order, stopping early at a
+/// refined start that settles with a chi-square within `chi2_limit` (when the standard
+/// deviations are stated). Returns the best refined run (settled first, then the smallest SSR),
+/// every start with what became of it, and the index of the best among them.
 pub(super) fn search(
     pb: &Problem<'_>,
-    u0: &[f64],
+    u_file: &[f64],
     settings: &FitSettings,
     all_stated: bool,
-    fits: impl Fn(f64) -> bool,
-) -> Result<(Run, usize, usize), FitError> {
+    chi2_limit: Option<f64>,
+) -> Result<(Run, Vec<StartTried>, usize), FitError> {
     let mut lm = settings.lm;
     if all_stated {
         lm.cost_abs_tol = lm.cost_abs_tol.max(STATED_COST_ABS_TOL);
     }
-    let good = |r: &Run| r.settled() && fits(r.ssr());
-    let first = search_from(pb, u0, &lm)?;
-    if good(&first) || settings.starts <= 1 {
-        return Ok((first, 1, 0));
-    }
-    let mut best = (first, 0);
-    let mut tried = 1;
-    for k in 1..settings.starts {
-        tried += 1;
-        // A start whose model cannot be evaluated at all is skipped.
-        let Ok(run) = search_from(pb, &sobol_start(&pb.tr, k), &lm) else {
-            continue;
-        };
-        let better = (run.settled(), -run.ssr()) > (best.0.settled(), -best.0.ssr());
-        let stop = good(&run);
-        if better {
-            best = (run, k);
+    let us: Vec<Vec<f64>> = std::iter::once(u_file.to_vec())
+        .chain((1..=settings.design_points(pb.free.len())).map(|k| sobol_start(&pb.tr, k)))
+        .collect();
+    let mut starts: Vec<StartTried> = us
+        .iter()
+        .enumerate()
+        .map(|(i, u)| StartTried {
+            origin: if i == 0 {
+                StartOrigin::DeviceFile
+            } else {
+                StartOrigin::Sobol(i)
+            },
+            values: pb.to_p(u),
+            design_ssr: f64::NAN,
+            refined: None,
+        })
+        .collect();
+    // One design point alone (no design) is refined without being ranked.
+    if starts.len() > 1 {
+        let costs: Vec<f64> = us.par_iter().map(|u| design_ssr(pb, u)).collect();
+        for (s, c) in starts.iter_mut().zip(costs) {
+            s.design_ssr = c;
         }
-        if stop {
+    }
+    // The best ranked starts whose cheap model could be evaluated (the device's values when
+    // there is none, or no design).
+    let mut order: Vec<usize> = (0..starts.len())
+        .filter(|&i| starts.len() == 1 || starts[i].design_ssr.is_finite())
+        .collect();
+    order.sort_by(|&a, &b| starts[a].design_ssr.total_cmp(&starts[b].design_ssr));
+    order.truncate(settings.refine.max(1));
+    if order.is_empty() {
+        order.push(0);
+    }
+    let mut best: Option<(Run, usize)> = None;
+    let mut last_err = None;
+    for i in order {
+        let run = match search_from(pb, &us[i], &lm) {
+            Ok(run) => run,
+            Err(e) => {
+                last_err = Some(e);
+                continue;
+            }
+        };
+        starts[i].refined = Some(Refined {
+            ssr: run.ssr(),
+            settled: run.settled(),
+            values: pb.to_p(&run.lm.u),
+        });
+        let good = run.settled() && chi2_limit.is_some_and(|l| run.ssr() <= l);
+        let better = best
+            .as_ref()
+            .is_none_or(|(b, _)| (run.settled(), -run.ssr()) > (b.settled(), -b.ssr()));
+        if better {
+            best = Some((run, i));
+        }
+        if good {
             break;
         }
     }
-    Ok((best.0, tried, best.1))
+    match best {
+        Some((run, i)) => Ok((run, starts, i)),
+        None => Err(last_err.unwrap_or_else(|| {
+            FitError::Lost("the model could not be evaluated at any start of the design".into())
+        })),
+    }
 }

@@ -1,6 +1,7 @@
 //! What a random ensemble says about where the mass is: the displacement's histogram with its
 //! sampling uncertainty, its mean square, the share of time in contact with each stop and in
-//! each well, and for a device with two wells the rate of well-to-well transitions.
+//! each well, and for a device with two wells the rate of passages from one well's bottom to
+//! the other's.
 //!
 //! Each record ([`crate::study::record`]) is read at its analysed sample instants
 //! ([`record_displacement`]). The records of an ensemble are independent realisations, so the
@@ -8,13 +9,18 @@
 //! record, Student's t, [`MeanCi`]): the samples within one record are correlated over the
 //! device's correlation time, and counting them as independent would understate it.
 //!
-//! **Wells and transitions.** The wells are the device's stable equilibria between its stops
+//! **Wells and passages.** The wells are the device's stable equilibria between its stops
 //! ([`Device::equilibria`]); the region of a well reaches to the barrier (the unstable
-//! equilibrium) between it and the next. With two wells a transition is counted when the mass,
+//! equilibrium) between it and the next. With two wells a passage is counted when the mass,
 //! last at the bottom of one well, reaches the bottom of the other (a crossing of the other
 //! well's position): a passage over the barrier that falls back before the other well's bottom
-//! is not a transition. The rate is transitions per second of the analysed record; in a
-//! symmetric double well it estimates the escape rate from one well.
+//! is not counted. These are not escapes that settle in the other well: with light damping a
+//! mass above the barrier swings through both bottoms many times before it loses the energy to
+//! settle in either, and each swing counts (the validation chapter's escape rows,
+//! [`crate::validation::escapes`], count both and hold each to its theory). The rate
+//! ([`DisplacementEnsemble::transition_rate`]) is such passages per second of the analysed
+//! record; with moderate damping, where a mass that reaches the other bottom settles there, it
+//! estimates the escape rate from one well.
 
 use rayon::prelude::*;
 
@@ -100,7 +106,7 @@ pub struct RecordDisplacement {
     pub lower_contact_share: f64,
     /// Share of samples on the upper well's side of the barrier (NaN without two wells).
     pub upper_well_share: f64,
-    /// Well-to-well transitions.
+    /// Passages from one well's bottom to the other's (see the module docs).
     pub transitions: u64,
     /// Analysed duration (s).
     pub duration_s: f64,
@@ -109,7 +115,7 @@ pub struct RecordDisplacement {
 }
 
 impl RecordDisplacement {
-    /// Transitions per second.
+    /// Bottom-to-bottom passages per second.
     pub fn transition_rate_per_s(&self) -> f64 {
         self.transitions as f64 / self.duration_s
     }
@@ -262,12 +268,12 @@ impl DisplacementEnsemble {
             .collect()
     }
 
-    /// The transition rate (1/s) with its 95 % interval across records.
+    /// The rate of bottom-to-bottom passages (1/s) with its 95 % interval across records.
     pub fn transition_rate(&self) -> MeanCi {
         self.stat(RecordDisplacement::transition_rate_per_s)
     }
 
-    /// Total transitions over the ensemble.
+    /// Bottom-to-bottom passages over the ensemble.
     pub fn transitions(&self) -> u64 {
         self.records.iter().map(|r| r.transitions).sum()
     }

@@ -7,19 +7,20 @@
 //! |---|---|
 //! | [`linear_harvesters`] | the linear piezoelectric and electromagnetic harvesters' closed forms ([`crate::physics::closed_forms`]) against the time-domain steady state and against [`crate::physics::linear`]; their optimal loads against the time-domain power maximised over the load |
 //! | [`random_law`] | the power that white base acceleration delivers to a mass, `m Sa / 2`, against random ensembles' drive power, with their energy ledgers' closure |
-//! | [`band_limit`] | the band-limited noise's shortfall from that law at several bandwidths, against its first-order estimate (a recorded study) |
+//! | [`band_limit`] | the band-limited noise's shortfall from that law at several bandwidths, against its first-order estimate (a recorded study), and the rigid stops' cells against an independent simulation of the same equations |
 //! | [`grazing`] | where a linear oscillator's amplitude equals the gap of a rigid stop, against the continuation's grazing points |
 //! | [`interfaces`] | the standard bridge, parallel and series SSHI and SECE closed forms against the steady state behind each interface; the standard bridge with strong coupling against the first-harmonic balance |
 //! | [`nlvib`] | NLvib-py's harmonic balance and an exact shooting of a one-sided spring oscillator, against our shooting and continuation |
 //! | [`nlvib_duffing`] | NLvib-py's harmonic balance of NLvib's Duffing example, against our continuation's folds, amplitudes and stability |
 //! | [`stationary_law`] | the exact stationary density `exp(-U/theta)` of white-noise driven devices with viscous damping and any conservative suspension and stops, against random ensembles' histograms, moments, contact and well shares and load power |
-//! | [`kramers`] | Kramers' escape rate over a double well's barrier, against random ensembles' well-to-well rates |
+//! | [`escapes`], [`kramers`] | the escape over a double well's barrier: random ensembles' barrier passages against Rice's count on the exact law, and their escapes that settle in the other well against Kramers' rate (moderate damping) or the energy-diffusion limit (light damping) |
 //!
 //! This module computes and judges; reading the reference files and writing the tables is the
 //! callers' job (the `validation` experiment and the tests).
 
 pub mod band_limit;
 pub mod cases;
+pub mod escapes;
 pub mod grazing;
 pub mod harmonics;
 pub mod interfaces;

@@ -41,6 +41,7 @@ use crate::physics::closed_forms::white_noise_input_power_w;
 use crate::physics::energy::EnergyLedger;
 use crate::study::record::{FreeFlightPath, RecordSpec};
 use crate::study::record_ledger::record_ledgers;
+use crate::validation::band_limit::ImpactTerm;
 use crate::validation::{Check, Group, Measure, ValidationError};
 
 /// The ledger's balance must close to this relative residual on every record (the tolerance of
@@ -243,10 +244,10 @@ pub fn law_ensemble(
 ///
 /// The band's deficit, derived after this check first missed on a device with rigid stops,
 /// carries for such a device the impact term `(1 + e) nu`; [`super::band_limit`] tests it on
-/// cases it was not derived from. Unless that study confirmed it (`impact_term_confirmed`),
-/// the drive row of such a device is reported as an open question ([`Check::open`]), not
-/// passed by it.
-pub fn checks(e: &LawEnsemble, impact_term_confirmed: bool) -> Vec<Check> {
+/// cases it was not derived from. Unless that study confirmed it ([`ImpactTerm::Confirmed`]),
+/// the drive row of such a device shows its shortfall without a verdict ([`Check::open`]),
+/// with the study's statement of the limit and its evidence ([`ImpactTerm::Beyond`]).
+pub fn checks(e: &LawEnsemble, impact_term: &ImpactTerm) -> Vec<Check> {
     let mut g = Group::new(&format!("random vibration: {}", e.device));
     let theirs = e.band_law_w();
     let d = e.drive();
@@ -260,11 +261,8 @@ pub fn checks(e: &LawEnsemble, impact_term_confirmed: bool) -> Vec<Check> {
         d.ci95 / theirs,
         "the ensemble's 95 % interval (Student's t)",
     );
-    if e.rigid_stops && !impact_term_confirmed {
-        g.open_last(
-            "the band's deficit of rigid stops: it was derived after this row missed, and the \
-             band-limit study does not confirm its impact term",
-        );
+    if let (true, ImpactTerm::Beyond(why)) = (e.rigid_stops, impact_term) {
+        g.open_last(why);
     }
     g.add(
         "energy balance of each record",

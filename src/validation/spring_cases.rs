@@ -1,13 +1,14 @@
 //! The cases of the validation chapter's nonlinear-spring rows: which devices, levels, record
 //! lengths and ensembles the exact stationary law ([`crate::validation::stationary_law`]) and
-//! Kramers' law ([`crate::validation::kramers`]) are checked with. The chapter's experiment and
+//! the escape over a double well's barrier ([`crate::validation::kramers`]) are checked with. The chapter's experiment and
 //! the tests both call these, so that every row the chapter prints is a row a test asserts.
 
 use crate::device::{Device, Suspension};
 use crate::drive::noise::NoiseSpec;
 use crate::study::displacement::{displacement_ensemble, DisplacementBins, DisplacementEnsemble};
 use crate::study::record::{transient_s, RecordSpec, Scheme, DEFAULT_RTOL};
-use crate::validation::kramers::{self, kramers_rate, KramersLevel};
+use crate::validation::escapes::escape_ensemble;
+use crate::validation::kramers::{self, EscapeLevel, EscapeTheory};
 use crate::validation::stationary_law::{self, StationaryLaw};
 use crate::validation::{Check, ValidationError};
 
@@ -29,14 +30,38 @@ pub const HISTOGRAM_BINS: usize = 120;
 /// Seed of the ensembles' noise (stream i is record i).
 pub const SEED: u64 = 2012;
 
-/// The Kramers device and its levels, as `dU / theta` (before the band's deficit).
-pub const KRAMERS_DEVICE: &str = "kramers_bistable_em";
-/// `dU / theta` of the Kramers levels.
-pub const KRAMERS_RATIOS: [f64; 3] = [3.0, 4.0, 5.0];
-/// Analysed length of one Kramers record (s).
+/// A double well's escape case: the device file under `data/validation/`, its levels as
+/// `dU / theta` (white noise's `theta`, the displacement's; the band's deficit lowers only the
+/// velocity's), and the records per level.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct EscapeCase {
+    /// The device file (without `.toml`).
+    pub file: &'static str,
+    /// `dU / theta` of the levels.
+    pub ratios: &'static [f64],
+    /// Records per level.
+    pub records: u64,
+}
+
+/// The escape cases: moderate damping (20 % of critical in the well; `Delta` about 15 and 18:
+/// Kramers' rate) and light damping (0.27 %; `Delta` 0.2: the energy-diffusion limit). The
+/// levels put the barrier five and six temperatures high, where the settled states (within
+/// `theta` of a well's bottom) lie four and more temperatures below the barrier; the records
+/// give each settled count a few thousand escapes.
+pub const ESCAPE_CASES: [EscapeCase; 2] = [
+    EscapeCase {
+        file: "kramers_bistable_em",
+        ratios: &[5.0, 6.0],
+        records: 192,
+    },
+    EscapeCase {
+        file: "kramers_light_em",
+        ratios: &[5.0],
+        records: 384,
+    },
+];
+/// Analysed length of one escape record (s).
 pub const KRAMERS_RECORD_S: f64 = 10.0;
-/// Records per Kramers level.
-pub const KRAMERS_RECORDS: u64 = 48;
 
 /// The records of an ensemble: the project's band-limited noise (10 kHz band at 100 kHz) at
 /// `psd_g2_per_hz`, `duration_s` analysed after the device's pre-roll.
@@ -87,21 +112,22 @@ pub fn kramers_psd_g2_per_hz(device: &Device, ratio: f64) -> Result<f64, Validat
     Ok(2.0 * c * (barrier_j / ratio) / (m * m * crate::G * crate::G))
 }
 
-/// The Kramers levels: each one's ensemble beside its rate, and the checks.
-pub fn kramers(device: &Device) -> Result<(Vec<KramersLevel>, Vec<Check>), ValidationError> {
+/// One escape case on its device: each level's counts beside its theories, and the checks.
+pub fn escapes(
+    device: &Device,
+    case: &EscapeCase,
+) -> Result<(Vec<EscapeLevel>, Vec<Check>), ValidationError> {
     let mut levels = Vec::new();
-    for ratio in KRAMERS_RATIOS {
+    for &ratio in case.ratios {
         let spec = spec(
             device,
             kramers_psd_g2_per_hz(device, ratio)?,
             KRAMERS_RECORD_S,
         );
-        let bins = bins(device, &spec)?;
-        let ensemble = displacement_ensemble(device, &spec, &bins, SEED, KRAMERS_RECORDS)?;
-        levels.push(KramersLevel {
-            law: kramers_rate(device, &spec)?,
-            ensemble,
-        });
+        let theory = EscapeTheory::of(device, &spec)?;
+        let theta = StationaryLaw::of(device, &spec)?.theta_j;
+        let ensemble = escape_ensemble(device, &spec, theta, SEED, case.records)?;
+        levels.push(EscapeLevel { theory, ensemble });
     }
     let checks = kramers::checks(device, &levels);
     Ok((levels, checks))

@@ -12,16 +12,24 @@
 //!
 //! In this model `c` is the suspension's damping plus an electromagnetic transducer's without
 //! inductance, whose force `Phi i = Phi^2 v / (Rc + R)` is viscous; the load then takes
-//! `R Phi^2 E[v^2] / (Rc + R)^2`. `U` is the suspension's potential plus the stops' elastic
+//! `R Phi^2 E[v^2] / (Rc + R)^2` ([`StationaryLaw::load_power_w`]; not a row of the checks:
+//! it is the `E[v^2]` row times a constant, sample by sample). `U` is the suspension's potential plus the stops' elastic
 //! energies ([`crate::physics::suspension::potential_j`]): any suspension form, and stops with
 //! linear, Hertz line or Hertz point springs and no contact damping. Devices outside this
 //! class (a capacitive or piezoelectric transducer, a coil with inductance, contact damping,
 //! rigid stops with `e < 1`) are refused.
 //!
-//! **The band.** The records' noise is flat up to `B` (10 kHz) and zero above; the velocity
-//! variance it drives falls short of white noise's by the fraction
-//! [`crate::validation::random_law::band_deficit`] (`c / (m pi^2 B)`, derived
-//! there), and so does `theta` (applied to both the density and the power here).
+//! **The band.** The records' noise is flat up to `B` (10 kHz) and zero above. The content it
+//! lacks, beyond `B`, far above the device's frequencies, drives only the velocity's fast part:
+//! the velocity variance falls short of white noise's by the fraction
+//! [`crate::validation::random_law::band_deficit`] (`c / (m pi^2 B)`, derived there; applied to
+//! `E[v^2]` here), while the displacement keeps white noise's `theta` (for a linear oscillator
+//! the band removes `int_{|f|>B} |H|^2`, of order `(f_0 / B)^3` of the variance, against the
+//! velocity's `f_0 / B`). The density here is `exp(-U / theta)` with white noise's `theta`:
+//! the barrier passages of a double well, whose rate goes as `exp(-dU / theta)` and so magnifies
+//! an error of `theta` by `dU / theta`, show it ([`crate::validation::kramers`]: with the
+//! deficit applied to the density as well, they exceed Rice's count by about `dU / theta` times
+//! the deficit, well outside their interval on a device whose deficit is a few per cent).
 //!
 //! **The checks** ([`checks`]). Every ensemble quantity is a mean over independent records
 //! with its interval across records, so the correlation of samples within a record is
@@ -49,11 +57,12 @@ pub const GOF_BINS: usize = 10;
 /// The stationary law of one device under one level.
 #[derive(Debug, Clone)]
 pub struct StationaryLaw {
-    /// `theta` (J), with the band's deficit.
+    /// `theta = m^2 S / (2 c)` (J): the displacement density's temperature (see the module
+    /// docs on the band).
     pub theta_j: f64,
     /// The total viscous damping `c` (N s/m).
     pub damping_n_s_per_m: f64,
-    /// The band's deficit (relative).
+    /// The band's deficit of the velocity variance (relative).
     pub band_deficit: f64,
     mass_kg: f64,
     poly: Polynomial,
@@ -101,7 +110,7 @@ impl StationaryLaw {
         }
         let c = m.damping_n_s_per_m + c_e;
         let deficit = band_deficit(m.mass_kg, c, 0.0, 0.0, spec.noise.bandwidth_hz);
-        let theta = m.mass_kg * m.mass_kg * spec.noise.psd_si() / (2.0 * c) * (1.0 - deficit);
+        let theta = m.mass_kg * m.mass_kg * spec.noise.psd_si() / (2.0 * c);
         let mut law = Self {
             theta_j: theta,
             damping_n_s_per_m: c,
@@ -230,9 +239,10 @@ impl StationaryLaw {
         self.weight(x) / self.integrate(self.lo_m, self.hi_m, &|_| 1.0)
     }
 
-    /// `E[v^2] = theta / m` (m^2/s^2).
+    /// `E[v^2] = theta (1 - deficit) / m` (m^2/s^2): white noise's `theta / m` less the band's
+    /// deficit.
     pub fn v2_m2_s2(&self) -> f64 {
-        self.theta_j / self.mass_kg
+        self.theta_j * (1.0 - self.band_deficit) / self.mass_kg
     }
 
     /// The load power `R Phi^2 E[v^2] / (Rc + R)^2` (W).
@@ -291,7 +301,7 @@ pub fn hotelling(shares: &[Vec<f64>], exact: &[f64]) -> (f64, f64, usize, usize)
 
 /// The half-width of the two-sided 99.9 % Student-t interval of a mean over `n` records with
 /// sample standard deviation `std`.
-fn ci999(std: f64, n: usize) -> f64 {
+pub(crate) fn ci999(std: f64, n: usize) -> f64 {
     let t = StudentsT::new(0.0, 1.0, (n - 1) as f64)
         .map(|d| d.inverse_cdf(0.9995))
         .unwrap_or(f64::NAN);
@@ -397,9 +407,9 @@ pub fn checks(
     rel(&mut g, "E[v^2] (m^2/s^2)", law.v2_m2_s2(), &|r| {
         r.v2_mean_m2_s2
     });
-    rel(&mut g, "load power (W)", law.load_power_w(), &|r| {
-        r.summary.p_total_w()
-    });
+    // No load-power row: a coil without inductance carries `Phi v / (Rc + R)` at every
+    // instant, so the load takes `R Phi^2 v^2 / (Rc + R)^2` sample by sample and its mean is
+    // the E[v^2] row times a constant; a second row would count one check twice.
     if let Some(s) = &device.stops.upper {
         abs(
             &mut g,

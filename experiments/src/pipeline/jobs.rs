@@ -434,6 +434,8 @@ pub const JOBS: &[Job] = &[
             "data/validation/random_bistable_stops_em.toml",
             "data/validation/random_linear_asym_stops_em.toml",
             "data/validation/kramers_bistable_em.toml",
+            "data/validation/kramers_light_em.toml",
+            "data/references/rigid_band_limit/cells.csv",
             "data/validation/nlvib_duffing.toml",
             "data/references/nlvib_duffing/nlvib_hb_H01.csv",
             "data/references/nlvib_duffing/nlvib_hb_H03.csv",

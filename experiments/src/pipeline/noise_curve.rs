@@ -1,4 +1,4 @@
-//! The bistable example's power and well-to-well transition rate against the noise level,
+//! The bistable example's power and rate of bottom-to-bottom passages against the noise level,
 //! read from the summaries of its random-vibration jobs ([`NOISE_LEVEL_JOBS`]) after they
 //! have run: a table and a plot for the "Nonlinear springs" chapter, each level with its 95 %
 //! interval across records. Nothing is simulated here.
@@ -34,7 +34,7 @@ pub struct Level {
     pub power_w: (f64, f64),
     /// The linear device's power without stops (W).
     pub linear_power_w: f64,
-    /// Well-to-well transitions per second and the 95 % half-width across records.
+    /// Bottom-to-bottom passages per second and the 95 % half-width across records.
     pub rate_per_s: (f64, f64),
 }
 
@@ -97,7 +97,7 @@ pub fn table(levels: &[Level]) -> String {
         "power (uW)",
         "± 95 % (uW)",
         "linear theory without stops (uW)",
-        "transitions per s",
+        "bottom-to-bottom passages per s",
         "± 95 %",
     ]);
     for l in levels {
@@ -113,7 +113,7 @@ pub fn table(levels: &[Level]) -> String {
     t.render()
 }
 
-/// The two panels: power (with the linear theory) and the transition rate against the level,
+/// The two panels: power (with the linear theory) and the passage rate against the level,
 /// on logarithmic axes, each point with its 95 % interval.
 pub fn figure(levels: &[Level]) -> Result<crate::io::plot::Panels> {
     if levels.is_empty() {
@@ -155,8 +155,8 @@ pub fn figure(levels: &[Level]) -> Result<crate::io::plot::Panels> {
         )],
     );
     let rate = panel(
-        "Well-to-well transitions",
-        "transitions per second",
+        "Bottom-to-bottom passages",
+        "passages per second",
         levels
             .iter()
             .map(|l| (l.psd_g2_per_hz, l.rate_per_s.0, l.rate_per_s.1))
@@ -188,7 +188,7 @@ pub fn publish(results: &Path, dst: &Path) -> Result<()> {
     write_atomic(
         &caption,
         format!(
-            "![Power and well-to-well transitions against the noise level](generated/own_device/{STEM}.svg)\n\n\
+            "![Power and bottom-to-bottom passages against the noise level](generated/own_device/{STEM}.svg)\n\n\
              *Made by `reproduce` ([`experiments/src/pipeline/noise_curve.rs`](../../experiments/src/pipeline/noise_curve.rs)) \
              from the summaries of the jobs {}.*\n",
             jobs.join(", ")

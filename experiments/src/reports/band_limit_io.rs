@@ -107,6 +107,17 @@ pub fn recorded_cells() -> Result<Vec<band_limit::BandCell>> {
     Ok(cells)
 }
 
+/// Where the independent simulation of the study's rigid-stop cells is stored.
+pub const INDEPENDENT_CSV: &str = "data/references/rigid_band_limit/cells.csv";
+
+/// The independent simulation's cells ([`band_limit::parse_independent`]).
+pub fn independent_cells() -> Result<Vec<band_limit::IndependentCell>> {
+    let path = crate::root().join(INDEPENDENT_CSV);
+    let text = std::fs::read_to_string(&path)
+        .with_context(|| format!("cannot read the independent simulation {}", path.display()))?;
+    Ok(band_limit::parse_independent(&text)?)
+}
+
 /// The band-limit study's table and verdict.
 pub fn table_md(cells: &[band_limit::BandCell]) -> Result<String> {
     let verdict = band_limit::BandVerdict::of(cells)?;
@@ -173,7 +184,7 @@ pub fn table_md(cells: &[band_limit::BandCell]) -> Result<String> {
         if verdict.consistent() {
             "judged with the estimate"
         } else {
-            "reported as an open question"
+            "shown without a verdict, with the limit this study finds stated in the row"
         },
     ))
 }

@@ -11,7 +11,8 @@ use anyhow::{Context, Result};
 use clap::Parser;
 use endstop::device::ParamRange;
 use endstop::fit::{
-    fit, model_curve, Direction, FitReport, FitSettings, SweepData, ACCEL_SCALE_PATH,
+    check_modelled, fit, model_curve, Direction, FitReport, FitSettings, SweepData,
+    ACCEL_SCALE_PATH,
 };
 use polars::prelude::*;
 use sha2::{Digest, Sha256};
@@ -55,10 +56,13 @@ fn sha256_hex(bytes: &[u8]) -> String {
 
 /// Runs `endstop fit`.
 pub fn run(a: FitArgs) -> Result<()> {
+    // A device with a part the fit does not model is refused before anything runs, for the
+    // sweeps and the spectrum alike (the spectrum's model is the resistive record too).
+    let loaded = load_device_file(&a.device)?;
+    check_modelled(&loaded.device)?;
     if let Some(s) = &a.spectrum {
         return crate::reports::spectrum_io::run(&a.device, s, &a.free, a.out.clone());
     }
-    let loaded = load_device_file(&a.device)?;
     let free: Vec<ParamRange> = a
         .free
         .iter()
@@ -83,7 +87,7 @@ pub fn run(a: FitArgs) -> Result<()> {
     if data.is_empty() {
         anyhow::bail!("no measured data: give --up-sweep and/or --down-sweep");
     }
-    let n: usize = data.iter().map(SweepData::len).sum();
+    let n: usize = data.iter().map(SweepData::n_values).sum();
     if n < free.len() {
         return Err(FitInputError::TooFewPoints {
             files: hashes
@@ -116,12 +120,18 @@ pub fn run(a: FitArgs) -> Result<()> {
     })?;
     let command: Vec<String> = std::env::args().collect();
     write_outputs(&mut exp, &report, &data, &hashes, &command.join(" "))?;
+    if let Some(h) = report.headline() {
+        eprintln!("[endstop-fit] {h}");
+    }
     exp.finish()
 }
 
 /// The fitted device file: provenance as comments, then the device.
 pub fn fitted_toml(report: &FitReport, hashes: &[(String, String)], command: &str) -> String {
     let mut s = String::new();
+    if let Some(h) = report.headline() {
+        s.push_str(&format!("# {h}\n"));
+    }
     s.push_str("# Fitted by `endstop fit` (src/fit/mod.rs).\n");
     s.push_str(&format!(
         "# command: {command}\n# commit: {}\n",
@@ -167,7 +177,11 @@ fn fmt_chi2(c: f64) -> String {
 
 /// The results table, correlation and warnings in Markdown.
 pub fn results_markdown(report: &FitReport) -> String {
-    let mut md = String::from("| parameter | start | fitted | std error | 95 % interval | chi2/dof | range |\n|---|---|---|---|---|---|---|\n");
+    let mut md = String::new();
+    if let Some(h) = report.headline() {
+        md.push_str(&format!("**{h}**\n\n"));
+    }
+    md.push_str("| parameter | start | fitted | std error | 95 % interval | chi2/dof | range |\n|---|---|---|---|---|---|---|\n");
     for p in &report.params {
         md.push_str(&format!(
             "| `{}` | {} | {} | {} | {} .. {} | {} | {} .. {} |\n",
@@ -188,7 +202,8 @@ pub fn results_markdown(report: &FitReport) -> String {
     md.push_str(&format!(
         "\nUncertainty: {}. Weighted SSR {} with {} degrees of freedom, chi-square per degree of \
          freedom {}{}. Model: {}; {} model evaluations ({} trial points could not be \
-         evaluated), {} iterations, stop: {:?}; {} start(s) tried, the reported one {}.\n\n\
+         evaluated), {} iterations, stop: {:?}; {} start(s) ranked by a plain stepped sweep, \
+         {} refined, the reported one from {}.\n\n\
          Correlation of the estimates:\n\n|  | {} |\n|---|{}\n",
         report.uncertainty.describe(),
         fmt_sig(report.ssr, 4),
@@ -200,12 +215,9 @@ pub fn results_markdown(report: &FitReport) -> String {
         report.failed_trials,
         report.iterations,
         report.stop,
-        report.starts_tried,
-        if report.best_start == 0 {
-            "from the device file's values".to_string()
-        } else {
-            format!("from Sobol start {}", report.best_start)
-        },
+        report.starts.len(),
+        report.starts_refined(),
+        report.starts[report.best_start].origin,
         report
             .params
             .iter()
@@ -224,6 +236,7 @@ pub fn results_markdown(report: &FitReport) -> String {
                 .join(" | ")
         ));
     }
+    md.push_str(&starts_markdown(report));
     md.push_str(&format!(
         "\nSmallest over largest singular value of the column-scaled Jacobian: {:.3e} (a \
          combination is reported below {}).\n\n",
@@ -237,6 +250,57 @@ pub fn results_markdown(report: &FitReport) -> String {
         for w in &report.warnings {
             md.push_str(&format!("- {w}\n"));
         }
+    }
+    md
+}
+
+/// The table of the starts: each start's values, its cheap misfit, and its refinement.
+fn starts_markdown(report: &FitReport) -> String {
+    let names: Vec<String> = report
+        .params
+        .iter()
+        .map(|p| format!("`{}`", p.path))
+        .collect();
+    let mut md = format!(
+        "\nStarts (ranked by the weighted SSR of a plain stepped sweep; the best refined by \
+         Levenberg-Marquardt on the branches):\n\n| start | {} | stepped-sweep SSR | \
+         refined SSR | refined to | |\n|---|{}---|---|---|---|\n",
+        names.join(" | "),
+        "---|".repeat(names.len()),
+    );
+    let vals = |v: &[f64], sep: &str| {
+        v.iter()
+            .map(|x| fmt_sig(*x, 4))
+            .collect::<Vec<_>>()
+            .join(sep)
+    };
+    for (i, s) in report.starts.iter().enumerate() {
+        let (refined_ssr, to) = match &s.refined {
+            Some(r) => (
+                format!(
+                    "{}{}",
+                    fmt_sig(r.ssr, 4),
+                    if r.settled { "" } else { " (not settled)" }
+                ),
+                vals(&r.values, ", "),
+            ),
+            None => ("-".into(), "-".into()),
+        };
+        let design = if s.design_ssr.is_nan() {
+            "-".to_string()
+        } else {
+            fmt_sig(s.design_ssr, 4)
+        };
+        let reported = if i == report.best_start {
+            "reported"
+        } else {
+            ""
+        };
+        md.push_str(&format!(
+            "| {} | {} | {design} | {refined_ssr} | {to} | {reported} |\n",
+            s.origin,
+            vals(&s.values, " | "),
+        ));
     }
     md
 }
@@ -266,7 +330,8 @@ fn write_outputs(
     }
     exp.number("ssr", report.ssr);
     exp.number("reduced_chi2", report.reduced_chi2);
-    exp.number("starts_tried", report.starts_tried as f64);
+    exp.number("starts_tried", report.starts.len() as f64);
+    exp.number("starts_refined", report.starts_refined() as f64);
     exp.number("singular_ratio", report.singular_ratio);
     exp.number("warnings", report.warnings.len() as f64);
 

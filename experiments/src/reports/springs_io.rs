@@ -1,5 +1,5 @@
 //! The nonlinear-spring rows of the validation experiment: the exact stationary law on three
-//! devices, Kramers' rate over a double well's barrier and NLvib's Duffing example, with the
+//! devices, the escape over a double well's barrier and NLvib's Duffing example, with the
 //! cases of `endstop::validation::spring_cases` (those `tests/springs_validation.rs` asserts),
 //! and their data as Parquet.
 
@@ -64,31 +64,48 @@ pub fn run(
     }
     exp.write_parquet("springs_density", &mut frame(densities)?, "hypothetical")?;
 
-    let kd = load(exp, spring_cases::KRAMERS_DEVICE)?;
-    let t = std::time::Instant::now();
-    let (levels, c) = spring_cases::kramers(&kd)?;
-    timed(
-        spring_cases::KRAMERS_DEVICE,
-        &format!(
-            "{} levels of {} records of {} s",
-            spring_cases::KRAMERS_RATIOS.len(),
-            spring_cases::KRAMERS_RECORDS,
-            spring_cases::KRAMERS_RECORD_S
-        ),
-        t,
-    );
-    checks.extend(c);
-    let rows = levels.iter().map(|l| {
-        let r = l.ensemble.transition_rate();
-        row![
-            "barrier_over_theta" => l.law.barrier_over_theta,
-            "kramers_rate_per_s" => l.law.rate_per_s,
-            "rate_per_s" => r.mean,
-            "rate_ci95_per_s" => r.ci95,
-            "transitions" => l.ensemble.transitions(),
-            "turnover" => l.law.turnover,
-        ]
-    });
+    let mut rows = Vec::new();
+    for case in spring_cases::ESCAPE_CASES {
+        let kd = load(exp, case.file)?;
+        let t = std::time::Instant::now();
+        let (levels, c) = spring_cases::escapes(&kd, &case)?;
+        timed(
+            case.file,
+            &format!(
+                "{} levels of {} records of {} s",
+                case.ratios.len(),
+                case.records,
+                spring_cases::KRAMERS_RECORD_S
+            ),
+            t,
+        );
+        checks.extend(c);
+        for l in &levels {
+            let (p, s, th) = (
+                l.ensemble.passage_rate(),
+                l.ensemble.settled_rate(),
+                &l.theory,
+            );
+            rows.push(row![
+                "device" => case.file,
+                "barrier_over_theta" => th.barrier_over_theta,
+                "energy_loss_delta" => th.loss,
+                "regime" => format!("{:?}", th.regime),
+                "passages_per_s" => p.mean,
+                "passages_ci95_per_s" => p.ci95,
+                "rice_passages_per_s" => th.passage_rate_per_s,
+                "settled_escapes_per_s" => s.mean,
+                "settled_escapes_ci95_per_s" => s.ci95,
+                "settled_reference_per_s" => th.settled_reference_per_s(),
+                "kramers_per_s" => th.kramers_per_s,
+                "kramers_harmonic_per_s" => th.kramers_harmonic_per_s,
+                "energy_diffusion_half_per_s" => 0.5 * th.diffusion_escape_per_s,
+                "own_error" => th.own_error(),
+                "passages" => l.ensemble.passages(),
+                "settled_escapes" => l.ensemble.settled(),
+            ]);
+        }
+    }
     exp.write_parquet("springs_kramers", &mut frame(rows)?, "hypothetical")?;
 
     let duffing = load(exp, "nlvib_duffing")?;

@@ -2,9 +2,10 @@
 
 * :func:`sweep_data`: one measured sweep (frequencies, values, their standard deviations, the
   stated acceleration, and optionally the measured onset and jump);
-* :func:`fit`: the free parameters (dotted paths with ranges) fitted by Levenberg-Marquardt
-  on the branches of periodic orbits the sweeps follow, with standard errors, 95 % intervals, correlations and a warning for
-  each combination the data do not determine (the method is the library's ``endstop::fit``,
+* :func:`fit`: the free parameters (dotted paths with ranges) fitted by a global search (a
+  design of starts ranked by a plain stepped sweep, the best refined by Levenberg-Marquardt on
+  the branches of periodic orbits the sweeps follow), with standard errors, 95 % intervals,
+  correlations and a warning for each combination the data do not determine (the method is the library's ``endstop::fit``,
   described in the book chapter "Fit your measurements").
 """
 
@@ -35,13 +36,19 @@ def sweep_data(freq_hz, value, accel_rms_g, *, direction="up", quantity="v1_rms_
 def fit(device, sweeps, free):
     """Fits ``free`` (a dict ``{path: (lo, hi)}``, e.g. ``{"stops.both.gap_m": (7e-6, 1e-5)}``;
     ``"drive.accel_scale"`` is a factor on every sweep's acceleration) of ``device`` to
-    ``sweeps`` (a list of :func:`sweep_data` dicts), starting from the device's values.
+    ``sweeps`` (a list of :func:`sweep_data` dicts); the device's values are one start of the
+    design among the others. A device with an interface circuit is refused (``ValueError``
+    naming it): the fit models a transducer on its resistive load.
 
     Returns a dict: ``params`` (one dict per free parameter: ``path``, ``start``, ``value``,
     ``std_err``, ``interval`` (95 %), ``range``), ``correlation``, ``warnings`` (strings),
     ``uncertainty`` (the method, in words), ``device`` (the fitted :class:`endstop.Device`),
     ``ssr``, ``dof``, ``reduced_chi2`` (chi-square per degree of freedom, beside every
-    interval), ``chi2_p``, ``model`` (in words), ``starts_tried``, ``singular_ratio``,
+    interval), ``chi2_p``, ``model`` (in words), ``headline`` (None, or what must be read
+    first: a value at an end of its range, an improbable chi-square, no convergence),
+    ``starts_tried``, ``starts_refined``, ``starts`` (one dict per start: ``origin``,
+    ``values``, ``design_ssr``, ``refined_ssr``, ``refined_values``, ``settled``,
+    ``reported``), ``singular_ratio``,
     ``evaluations``, ``converged`` and ``residuals``
     (arrays ``freq_hz``, ``measured``, ``model``, ``sigma`` and lists ``dataset``, ``what``).
     A bad path or range raises :class:`endstop.ParamError` naming the field; bad data raise

@@ -5,7 +5,9 @@
   wells, the barriers between them, any rest on a stop) and their stability;
 * :func:`displacement`: the displacement of a random ensemble, its density with its 95 %
   interval across records, beside the exact stationary density where it applies (viscous
-  damping only, lossless stops), and for two wells the rate of well-to-well transitions;
+  damping only, lossless stops), and for two wells the rate of passages from one well's
+  bottom to the other's (not escapes that settle: with light damping a mass above the barrier
+  makes many such passages before it settles in either well);
 * :func:`basins`: which stable orbit each initial state of a grid ends on under a sine, each
   orbit placed in its well or across the barrier (as ``endstop basins``).
 """
@@ -25,8 +27,9 @@ def displacement(device, psd_g2_per_hz, reach_m, bins=80, records=8, duration_s=
     """The displacement of ``records`` white-noise records of two-sided level
     ``psd_g2_per_hz`` (g^2/Hz), read into ``bins`` bins over ``[-reach_m, reach_m]``. Keys:
     ``x_m``, ``density_per_m``, ``density_ci95_per_m`` (arrays), ``exact_density_per_m``
-    (an array, or None where the exact law does not apply), ``x2_mean_m2``, ``transitions``,
-    ``transition_rate_per_s`` and its ``..._ci95_per_s`` (None without two wells),
+    (an array, or None where the exact law does not apply), ``x2_mean_m2``, ``transitions``
+    (passages from one well's bottom to the other's), ``transition_rate_per_s`` and its
+    ``..._ci95_per_s`` (None without two wells),
     ``wells_m``."""
     return _native.displacement(device, float(psd_g2_per_hz), float(reach_m), int(bins),
                                 int(records), float(duration_s), int(seed))

@@ -87,7 +87,11 @@ pub fn run() -> Result<()> {
     // The white-noise law, and the recorded study of its band limit, which decides whether the
     // rigid stops' impact term is a reference or an open question.
     let band = band_limit_io::recorded_cells()?;
-    let impact_term_confirmed = band_limit::BandVerdict::of(&band)?.consistent();
+    let impact_term = band_limit::ImpactTerm::of(&band)?;
+    checks.extend(band_limit::independent_checks(
+        &band,
+        &band_limit_io::independent_cells()?,
+    )?);
     let mut ensembles: Vec<LawEnsemble> = Vec::new();
     for name in [
         "random_linear_piezo",
@@ -105,7 +109,7 @@ pub fn run() -> Result<()> {
             ),
             || cases::random_law(&d),
         )?;
-        checks.extend(random_law::checks(&ens, impact_term_confirmed));
+        checks.extend(random_law::checks(&ens, &impact_term));
         ensembles.push(ens);
     }
 
@@ -299,16 +303,24 @@ pub fn run() -> Result<()> {
     )?;
     write_atomic(
         &book.join("band_limit.md"),
-        band_limit_io::table_md(&band)?.as_bytes(),
+        format!(
+            "{}\n{}",
+            band_limit_io::table_md(&band)?,
+            checks_table(in_groups(&checks, "band limit: independent simulation"))
+        )
+        .as_bytes(),
     )?;
     write_atomic(
         &book.join("springs.md"),
         checks_table(
             in_groups(&checks, "exact stationary law")
-                .chain(in_groups(&checks, "escape over the barrier"))
                 .chain(in_groups(&checks, "peer: NLvib's Duffing")),
         )
         .as_bytes(),
+    )?;
+    write_atomic(
+        &book.join("escapes.md"),
+        checks_table(in_groups(&checks, "escape over the barrier")).as_bytes(),
     )?;
     write_atomic(
         &book.join("interfaces.md"),

@@ -1,0 +1,154 @@
+//! The time a run spends in each of its phases (reading, resampling, integrating, spectra,
+//! output), measured by the run itself and reported on stderr and in `timing.json` (beside the
+//! run's wall time; `summary.json` stays free of wall-clock content so that it is
+//! byte-identical between runs).
+//!
+//! A run calls [`TimeSplit::lap`] at the end of each phase: the time since the previous lap is
+//! added to that phase, so that the phases add up to the time since [`TimeSplit::start`]. Each
+//! phase gets its wall time ([`Instant`]) and its processor time ([`crate::cpu_time_s`], user
+//! and system): on a shared machine the wall time includes waiting for a processor, which the
+//! processor time does not.
+
+use std::time::Instant;
+
+use crate::Experiment;
+
+/// One phase's seconds.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Phase {
+    /// The phase's name.
+    pub name: &'static str,
+    /// Wall time (s).
+    pub wall_s: f64,
+    /// Processor time, user and system (s); None where it cannot be read.
+    pub cpu_s: Option<f64>,
+}
+
+/// The seconds spent in each phase so far, in the order the phases first ended.
+#[derive(Debug, Clone)]
+pub struct TimeSplit {
+    last: Instant,
+    last_cpu: Option<f64>,
+    phases: Vec<Phase>,
+}
+
+impl TimeSplit {
+    /// Starts the clocks.
+    pub fn start() -> Self {
+        Self {
+            last: Instant::now(),
+            last_cpu: crate::cpu_time_s(),
+            phases: Vec::new(),
+        }
+    }
+
+    /// Ends a stretch of `phase`: adds the time since the previous lap (or the start) to it.
+    pub fn lap(&mut self, phase: &'static str) {
+        let (now, cpu) = (Instant::now(), crate::cpu_time_s());
+        let wall_s = now.duration_since(self.last).as_secs_f64();
+        let cpu_s = cpu.zip(self.last_cpu).map(|(c, c0)| c - c0);
+        (self.last, self.last_cpu) = (now, cpu);
+        self.add(phase, wall_s, cpu_s);
+    }
+
+    fn add(&mut self, name: &'static str, wall_s: f64, cpu_s: Option<f64>) {
+        match self.phases.iter_mut().find(|p| p.name == name) {
+            Some(p) => {
+                p.wall_s += wall_s;
+                p.cpu_s = p.cpu_s.zip(cpu_s).map(|(a, b)| a + b);
+            }
+            None => self.phases.push(Phase {
+                name,
+                wall_s,
+                cpu_s,
+            }),
+        }
+    }
+
+    /// The phases, in the order they first ended.
+    pub fn phases(&self) -> &[Phase] {
+        &self.phases
+    }
+
+    /// The sums over the phases: wall and processor time (s).
+    pub fn total(&self) -> (f64, Option<f64>) {
+        let wall = self.phases.iter().map(|p| p.wall_s).sum();
+        let cpu = self.phases.iter().map(|p| p.cpu_s).sum();
+        (wall, cpu)
+    }
+
+    /// One line: each phase's processor time and share of the total (wall time where the
+    /// processor time cannot be read), then the totals.
+    pub fn line(&self) -> String {
+        let (wall, cpu) = self.total();
+        let (total, what) = match cpu {
+            Some(c) => (c, "processor"),
+            None => (wall, "wall"),
+        };
+        let parts: Vec<String> = self
+            .phases
+            .iter()
+            .map(|p| {
+                let s = if cpu.is_some() {
+                    p.cpu_s.unwrap_or(0.0)
+                } else {
+                    p.wall_s
+                };
+                let pct = if total > 0.0 { 100.0 * s / total } else { 0.0 };
+                format!("{} {s:.3} s ({pct:.0} %)", p.name)
+            })
+            .collect();
+        format!(
+            "{what} time: {}; total {total:.3} s ({wall:.3} s wall)",
+            parts.join(", ")
+        )
+    }
+
+    /// Prints the split on stderr under `tag` and records it in `exp`'s `timing.json`
+    /// (`phases_wall_s` and `phases_cpu_s`, by phase).
+    pub fn report(&self, tag: &str, exp: &mut Experiment) {
+        eprintln!("[{tag}] time split, {}", self.line());
+        let by_phase = |f: &dyn Fn(&Phase) -> serde_json::Value| {
+            serde_json::Value::Object(
+                self.phases
+                    .iter()
+                    .map(|p| (p.name.to_string(), f(p)))
+                    .collect(),
+            )
+        };
+        exp.timing("phases_wall_s", by_phase(&|p| serde_json::json!(p.wall_s)));
+        exp.timing("phases_cpu_s", by_phase(&|p| serde_json::json!(p.cpu_s)));
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Laps of the same phase add up, the phases keep the order they first ended in, and the
+    /// line gives each one's share of the processor time (or, without it, of the wall time).
+    #[test]
+    fn phases_add_up_in_order() {
+        let mut t = TimeSplit::start();
+        t.add("reading", 0.5, Some(0.25));
+        t.add("integrating", 1.0, Some(0.5));
+        t.add("reading", 0.5, Some(0.25));
+        let names: Vec<&str> = t.phases().iter().map(|p| p.name).collect();
+        assert_eq!(names, ["reading", "integrating"]);
+        assert_eq!(t.total(), (2.0, Some(1.0)));
+        assert_eq!(
+            t.line(),
+            "processor time: reading 0.500 s (50 %), integrating 0.500 s (50 %); total 1.000 s \
+             (2.000 s wall)"
+        );
+        t.add("output", 2.0, None);
+        assert_eq!(t.total(), (4.0, None));
+        assert!(
+            t.line().starts_with("wall time: reading 1.000 s (25 %)"),
+            "{}",
+            t.line()
+        );
+        t.lap("output");
+        assert_eq!(t.phases().len(), 3);
+    }
+}
