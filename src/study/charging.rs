@@ -143,16 +143,14 @@ pub enum ChargeError {
 }
 
 /// Charges the storage of `device` under `drive` (see the module docs); `progress` is told at
-/// the end of each block how far the storage voltage has come from the start to the target.
+/// the end of each block how far the storage voltage has come from the start to the target. A
+/// device whose model has no storage (resistive loads) is [`ChargeError::NoStorage`].
 pub fn charge<E: Excitation + Clone>(
     device: &Device,
     drive: E,
     s: &ChargeSettings,
     progress: &dyn Progress,
 ) -> Result<ChargeRun, ChargeError> {
-    if device.interface.is_resistive() {
-        return Err(ChargeError::NoStorage(device.name.clone()));
-    }
     crate::with_harvester!(device, |h| charge_on(&h, &device.name, drive, s, progress))
 }
 

@@ -617,3 +617,6 @@ impl<M: Model<N>, O: RecordObserver, const N: usize> FlightVisitor<N> for Visit<
         )
     }
 }
+
+#[cfg(test)]
+mod tests;
