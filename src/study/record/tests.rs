@@ -26,8 +26,10 @@ fn hash(v: &[f64]) -> u64 {
 /// `endstop`, commit 54fdb70 (`study::record` over `physics::harvester::Harvester`), its
 /// `simulate_record` run on the same specs, with the sampled outputs hashed as [`hash`] does
 /// and `p1_w` printed as bits. The exponential Adams step, the stop check and the
-/// Dormand-Prince intervals are the same operations in the same order, so any change of the
-/// arithmetic (a reordered sum, a split made differently) shows here: the paper's pair on both
+/// Dormand-Prince intervals are the same operations in the same order, so a change of the
+/// step's arithmetic shows here (regrouping the input terms of the step fails it); a last-bit
+/// change of the pair's small remainder does not (two regroupings of it were tried: its
+/// contribution is below the state's resolution). The devices: the paper's pair on both
 /// prototypes (prototype 1 striking its stops 19 times), a coil on Hertzian stops that are
 /// struck once, and a linear piezoelectric cantilever.
 #[test]
