@@ -217,7 +217,7 @@ pub fn energy_balance(
             md.push_str(&format!(
                 "| {label} | {name} | {r:+.1e} | {:+.1e} | {:.3e} | {} |\n",
                 l.residual(),
-                l.excitation,
+                l.excitation(),
                 impacts
             ));
             if run == 0 {

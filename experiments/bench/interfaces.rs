@@ -6,7 +6,7 @@
 //! record of the same noise after a 1 s pre-roll, by the records' default scheme: the
 //! resistive free flight by the exponential step, the interface's linear modes propagated
 //! exactly with the intervals where a conduction or switch event may fall handed to
-//! Dormand-Prince (`endstop::study::interface::record`).
+//! Dormand-Prince (`endstop::study::record`, its affine modes).
 //! The runs alternate (resistive, then each interface, then again) so that a drift of the
 //! machine's speed shifts each round's runs alike; the table gives each one's median
 //! processor time and the median of the per-round ratios with their range.
@@ -14,8 +14,7 @@
 use anyhow::Result;
 use endstop::device::Interface;
 use endstop::drive::noise::NoiseSpec;
-use endstop::study::interface::record::noise_record;
-use endstop::study::record::{simulate_record, RecordSpec, Scheme, DEFAULT_RTOL};
+use endstop::study::record::{simulate_record, storage_record, RecordSpec, Scheme, DEFAULT_RTOL};
 use endstop_experiments as common;
 
 use common::fmt_sig;
@@ -74,7 +73,7 @@ pub fn measure(rounds: usize) -> Result<Costs> {
         let (_, base) = cpu(|| Ok(simulate_record(&resistive, &spec, SEED, 0)?))?;
         resistive_s.push(base);
         for ((_, d), (times, ratios)) in variants.iter().zip(per.iter_mut()) {
-            let (_, t) = cpu(|| Ok(noise_record(d, &spec, SEED, 0)?))?;
+            let (_, t) = cpu(|| Ok(storage_record(d, &spec, SEED, 0)?))?;
             times.push(t);
             ratios.push(t / base);
         }

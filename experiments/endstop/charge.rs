@@ -6,7 +6,7 @@ use std::path::PathBuf;
 use anyhow::Result;
 use clap::Parser;
 use endstop::drive::Sine;
-use endstop::study::interface::charging::{charge as run_charge, ChargeSettings};
+use endstop::study::charging::{charge as run_charge, ChargeSettings};
 
 use crate::shared::start;
 use endstop_experiments::fmt_sig;

@@ -18,8 +18,8 @@
 
 mod basins;
 mod charge;
-mod interface_random;
 mod random;
+mod random_storage;
 mod response;
 mod shared;
 mod sweep;

@@ -1,5 +1,9 @@
 //! `endstop random`: random vibration of any device, driven by band-limited white noise (an
-//! ensemble of records) or by one measured acceleration record read from a file.
+//! ensemble of records) or by one measured acceleration record read from a file. Every record
+//! is the one record engine's over the device's model (`endstop::study::record`); what is
+//! reported follows the model's outputs: a transducer with its own loads gets the loads' power
+//! and its spectrum (below), a model with a storage (behind an interface circuit) its DC
+//! power, efficiency, storage voltage and energy ledger (`random_storage.rs`).
 
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -7,6 +11,7 @@ use std::sync::Arc;
 use anyhow::{bail, Result};
 use clap::Parser;
 use endstop::device::Device;
+use endstop::model::Model;
 use endstop::paper::setups::paper_record;
 use endstop::physics::linear::{white_noise_power_w, LinearResponse};
 use endstop::physics::two_port::TwoPort;
@@ -15,7 +20,7 @@ use endstop::signal::{welch, Psd};
 use endstop::study::ensemble::EnsembleSpec;
 use endstop::study::record::{
     output_psd, simulate_drive, transient_s, FreeFlightPath, RecordSpec, SampledDrive, Scheme,
-    DEFAULT_RTOL,
+    DEFAULT_RTOL, STORAGE,
 };
 use endstop::G;
 use endstop_experiments as common;
@@ -81,8 +86,8 @@ pub struct RandomArgs {
 /// Runs `endstop random`.
 pub fn random(a: RandomArgs) -> Result<()> {
     let loaded = common::load_device_file(&a.device)?;
-    if !loaded.device.interface.is_resistive() {
-        return crate::interface_random::random(&a, &loaded.device);
+    if has_storage(&loaded.device)? {
+        return crate::random_storage::random(&a, &loaded.device);
     }
     match (&a.accel_file, a.psd) {
         (Some(path), _) => measured(&a, &loaded.device, path.clone()),
@@ -91,10 +96,17 @@ pub fn random(a: RandomArgs) -> Result<()> {
     }
 }
 
+/// True when the model of `device` has a storage output ([`STORAGE`]): its records report
+/// the DC power and the ledger rather than the loads' spectrum.
+fn has_storage(device: &Device) -> Result<bool> {
+    endstop::with_harvester!(device, |h| Ok(h.layout().output(STORAGE).is_some()))
+}
+
 /// How a record's free flight was integrated, for tables and text.
 fn free_flight_label(p: FreeFlightPath) -> String {
     match p {
         FreeFlightPath::Exponential => "exponential".into(),
+        FreeFlightPath::Affine => "exact affine modes".into(),
         FreeFlightPath::Dopri5(why) => format!("dormand-prince: {why}"),
     }
 }

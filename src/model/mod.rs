@@ -84,6 +84,7 @@
 //! ```
 
 mod driven;
+mod flight;
 mod layout;
 pub mod ledger;
 mod mode;
@@ -94,6 +95,7 @@ use nalgebra::{SMatrix, SVector};
 use crate::ode::Options;
 
 pub use driven::Driven;
+pub use flight::{FlightSplit, FlightVisitor, NoFlight, Remainder};
 pub use ledger::{Books, Ledger};
 pub use layout::{Layout, Load, Slot, MAX_OUTPUTS};
 pub use mode::{Contact, Mode, SwitchKind, MAX_CIRCUITS, MAX_CONTACTS};
@@ -254,6 +256,13 @@ pub trait Model<const N: usize>: Send + Sync {
     /// periodic orbit by shooting ([`crate::study::steady`]).
     fn slow_time_constant_s(&self) -> Option<f64> {
         None
+    }
+
+    /// The free flight split for the exponential integrator over steps of `dt_s`
+    /// ([`FlightSplit`]), handed to `visitor` with its remainder's own type, so that the
+    /// visitor's loop is compiled for it ([`FlightVisitor`]); the default offers none.
+    fn flight<V: FlightVisitor<N>>(&self, _dt_s: f64, visitor: V) -> V::Output {
+        visitor.refused(NoFlight::Unavailable)
     }
 
     /// The affine form of `mode`, or `None` where the mode is not affine (a nonlinear force, a

@@ -25,9 +25,8 @@
 use rayon::prelude::*;
 
 use crate::device::Device;
+use crate::model::Mode;
 use crate::num::stats::MeanCi;
-use crate::physics::contact::Mode;
-use crate::physics::harvester::State;
 use crate::physics::suspension::Place;
 use crate::study::record::{
     simulate_observed, RecordError, RecordObserver, RecordSpec, RecordSummary,
@@ -137,7 +136,7 @@ struct Reader<'a> {
 
 impl RecordObserver for Reader<'_> {
     #[inline(always)]
-    fn sample(&mut self, y: &State, _mode: Mode) {
+    fn sample(&mut self, y: &[f64], _mode: Mode) {
         let x = y[0];
         if let Some(i) = self.bins.bin(x) {
             self.counts[i] += 1;

@@ -8,18 +8,19 @@
 //! seeds and placed by well ([`attractors`]), and random-vibration records ([`record`]) and
 //! their ensembles ([`ensemble`]), with the fixed-step RK4 record that is the benchmark's
 //! yardstick ([`rk4_record`]), and Sobol indices of any quantity over device parameters the
-//! user names ([`sensitivity`]). A device with an interface circuit (a diode
-//! bridge, SSHI, SECE) has its own steady states, sweeps and charging runs ([`interface`]).
+//! user names ([`sensitivity`]). Every study takes any model, a device behind an interface
+//! circuit (a diode bridge, SSHI, SECE) as well; such a device's storage has its periodic
+//! steady states ([`periodic`]) and its charging runs ([`charging`]).
 
 pub mod amplitude;
 pub mod attractors;
 pub mod basins;
+pub mod charging;
 pub mod chirp;
 pub mod continuation;
 pub mod displacement;
 pub mod ensemble;
 pub mod flow;
-pub mod interface;
 pub mod orbit;
 pub mod periodic;
 pub mod record;

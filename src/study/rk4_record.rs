@@ -2,8 +2,8 @@
 //! ([`crate::ode::Rk4`]): the yardstick the benchmark times [`simulate_record`] against, at
 //! the number of steps per sample interval that gives the same accuracy.
 //!
-//! The record is the one [`simulate_record`] computes (the same excitation, pre-roll and
-//! analysed samples); only its mean power is kept. The steps divide each 10 us sample
+//! The record is the one [`simulate_record`] computes (the same model, excitation, pre-roll and
+//! analysed samples); only the mean power of its outputs' loads is kept. The steps divide each 10 us sample
 //! interval equally, so they end on the sample instants (the input's breakpoints), and a
 //! contact is entered or left where a stop's guard changes sign over a step, located on
 //! shortened RK4 steps (see [`crate::ode::FixedStep`]).
@@ -11,12 +11,10 @@
 //! [`simulate_record`]: crate::study::record::simulate_record
 
 use crate::device::Device;
-use crate::drive::noise;
 use crate::drive::Sampled;
+use crate::model::{Driven, Model, MAX_OUTPUTS};
 use crate::ode::{Rk4, Stats};
-use crate::physics::contact::Mode;
-use crate::physics::harvester::Harvester;
-use crate::study::record::{RecordError, RecordSpec};
+use crate::study::record::{RecordError, RecordSpec, SampledDrive};
 
 /// RK4 steps per sample interval at which the power of the prototypes' impact-free records is
 /// within 1e-6 of Dormand-Prince at rtol 1e-10, the accuracy asked of a record (the fewest of
@@ -34,7 +32,8 @@ const EVENT_TIME_TOL: f64 = 1e-15;
 /// A record by RK4: its mean power and the integrator's counters.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Rk4Record {
-    /// Mean power of both loads over the analysed samples (W).
+    /// Mean power of the outputs' loads over the analysed samples (W): both loads of a
+    /// transducer with its own loads.
     pub p_total_w: f64,
     /// The integrator's counters (steps, right-hand-side evaluations, events).
     pub stats: Stats,
@@ -51,28 +50,45 @@ pub fn simulate_rk4_record(
     steps_per_sample: usize,
 ) -> Result<Rk4Record, RecordError> {
     spec.validate()?;
-    let gen = spec.generated_noise();
-    let accel = noise::generate_shared(&gen, seed, stream)?;
-    let model = Harvester::new(device, Sampled::new(accel, gen.sample_rate_hz));
-    let n_tr = spec.transient_samples();
-    let n = spec.analysed_samples();
+    let drive = SampledDrive::noise(spec, seed, stream)?;
+    crate::with_harvester!(device, |h| rk4_on(&h, &drive, steps_per_sample))
+}
+
+/// [`simulate_rk4_record`] of any model under a sampled drive.
+pub fn rk4_on<M: Model<N>, const N: usize>(
+    model: &M,
+    drive: &SampledDrive,
+    steps_per_sample: usize,
+) -> Result<Rk4Record, RecordError> {
+    let sampled = Sampled::new(drive.accel.clone(), drive.sample_rate_hz);
+    let sys = Driven::new(model, sampled.clone());
+    let n_tr = drive.transient_samples;
+    let n = drive.accel.len().saturating_sub(n_tr);
+    let y0 = model.rest_state();
     let mut ode = Rk4::new(
         0.0,
-        model.rest_state(),
-        Mode::Free,
+        y0,
+        model.mode_of(&y0),
         steps_per_sample,
         EVENT_TIME_TOL,
     );
-    let mut p_sum = 0.0;
+    let outputs = model.layout().outputs.len().min(MAX_OUTPUTS);
+    let (mut sums, mut squares) = ([0.0; MAX_OUTPUTS], [0.0; MAX_OUTPUTS]);
+    let mut out = [0.0; MAX_OUTPUTS];
     for k in 0..n_tr + n {
-        ode.integrate(&model, model.excitation.time_of(k))?;
+        ode.integrate(&sys, sampled.time_of(k))?;
         if k >= n_tr {
-            let v = model.electrical(&ode.y()).v;
-            p_sum += v[0] * v[0] + v[1] * v[1];
+            model.outputs(ode.mode(), &ode.y(), &mut out);
+            for i in 0..outputs {
+                sums[i] += out[i];
+                squares[i] += out[i] * out[i];
+            }
         }
     }
     Ok(Rk4Record {
-        p_total_w: p_sum / model.load_resistance() / n as f64,
+        p_total_w: model
+            .layout()
+            .load_power(&squares[..outputs], &sums[..outputs], n as f64),
         stats: ode.stats(),
     })
 }

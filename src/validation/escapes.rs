@@ -19,8 +19,7 @@ use rayon::prelude::*;
 
 use crate::device::{Device, Suspension};
 use crate::num::stats::MeanCi;
-use crate::physics::contact::Mode;
-use crate::physics::harvester::State;
+use crate::model::Mode;
 use crate::physics::suspension::{potential_j, Polynomial};
 use crate::study::record::{simulate_observed, RecordObserver, RecordSpec};
 use crate::validation::ValidationError;
@@ -60,7 +59,7 @@ struct Counter {
 
 impl RecordObserver for Counter {
     #[inline(always)]
-    fn sample(&mut self, y: &State, _mode: Mode) {
+    fn sample(&mut self, y: &[f64], _mode: Mode) {
         let (x, v) = (y[0], y[1]);
         let side = x > self.barrier_m;
         if self.side.is_some_and(|s| s != side) {

@@ -38,7 +38,7 @@ use rayon::prelude::*;
 use crate::device::{Device, StopLaw};
 use crate::num::stats::MeanCi;
 use crate::physics::closed_forms::white_noise_input_power_w;
-use crate::physics::energy::EnergyLedger;
+use crate::model::Ledger;
 use crate::study::record::{FreeFlightPath, RecordSpec};
 use crate::study::record_ledger::record_ledgers;
 use crate::validation::band_limit::ImpactTerm;
@@ -80,8 +80,8 @@ pub struct RecordPowers {
 
 /// Every dissipation of a ledger (J): both dampers, the stop's net absorption, the impact
 /// losses, the loads and the coil.
-pub fn dissipation_j(l: &EnergyLedger) -> f64 {
-    l.mech_damping + l.stop_absorbed() + l.impact_losses + l.loads + l.internal
+pub fn dissipation_j(l: &Ledger) -> f64 {
+    l.mech_damping() + l.stop_absorbed() + l.impact_losses() + l.loads() + l.internal()
 }
 
 /// An ensemble's drive power and dissipation against the law.
@@ -196,13 +196,13 @@ pub fn law_ensemble(
             let t = books.analysed_s;
             Ok(RecordPowers {
                 stream,
-                drive_w: l.excitation / t,
+                drive_w: l.excitation() / t,
                 dissipation_w: dissipation_j(&l) / t,
-                mech_damping_w: l.mech_damping / t,
+                mech_damping_w: l.mech_damping() / t,
                 stop_w: l.stop_absorbed() / t,
-                impact_losses_w: l.impact_losses / t,
-                loads_w: l.loads / t,
-                internal_w: l.internal / t,
+                impact_losses_w: l.impact_losses() / t,
+                loads_w: l.loads() / t,
+                internal_w: l.internal() / t,
                 impacts_per_s: rec.summary.impacts as f64 / t,
                 contact_fraction: rec.summary.contact_fraction,
                 relative_residual: l.relative_residual(),

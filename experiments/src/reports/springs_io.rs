@@ -177,6 +177,7 @@ pub fn paired_record_cost(
     let spec = endstop::paper::setups::paper_record(device, psd_g2_per_hz);
     let label = |p: FreeFlightPath| match p {
         FreeFlightPath::Exponential => "exponential".to_string(),
+        FreeFlightPath::Affine => "exact affine modes".to_string(),
         FreeFlightPath::Dopri5(why) => format!("dormand-prince: {why}"),
     };
     let (mut a, mut b, mut r) = (Vec::new(), Vec::new(), Vec::new());

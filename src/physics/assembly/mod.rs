@@ -23,6 +23,7 @@
 //! shortcut is below that height; the sequence it replaces would have lasted `2u/(A(1 - e))`.
 
 pub mod circuits;
+mod flight;
 mod ledger;
 mod linearisation;
 pub mod port;
@@ -856,6 +857,10 @@ impl<const N: usize> Model<N> for Harvester<N> {
             Port::Circuit(c) => c.storage_time_constant_s(),
             Port::Loaded(_) => None,
         }
+    }
+
+    fn flight<V: crate::model::FlightVisitor<N>>(&self, dt_s: f64, visitor: V) -> V::Output {
+        self.visit_flight(dt_s, visitor)
     }
 }
 

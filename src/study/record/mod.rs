@@ -1,25 +1,47 @@
-//! One random-vibration record: band-limited white noise drives the harvester from rest, and
-//! the load voltages are sampled and turned into an output power spectral density.
+//! One random-vibration record: band-limited white noise (or a measured record) drives a model
+//! from rest, and its outputs are sampled: the load voltages, turned into an output power
+//! spectral density, or behind an interface circuit the storage voltage, with the DC power and
+//! the drive's power.
 //!
 //! # One record
-//! [`simulate_record`] drives the lumped model of eq 7 with one realisation of band-limited
-//! white noise from [`crate::drive::noise::generate`] (two-sided level `Sa`, 10 kHz band, 100 kHz,
-//! the paper's section 4), read between samples by linear interpolation ([`crate::drive::Sampled`]), and
-//! integrates it from rest one sample interval at a time, so the node voltages V1, V2 are
-//! collected at the sample instants without interpolation. Between contacts an interval is one
-//! step of the exponential Adams-Bashforth method ([`crate::ode::exponential`], see
-//! [`Scheme::Exponential`]); an interval that may come near a stop, every contact and the
-//! samples just after it go to [`crate::ode::Dopri5`], for which every sample instant is a
-//! breakpoint and every contact an event located on its dense output.
+//! [`simulate_record`] drives a device's model ([`crate::physics::assembly`]; the lumped model
+//! of eq 7 for the paper's devices) with one realisation of band-limited white noise from
+//! [`crate::drive::noise::generate`] (two-sided level `Sa`, 10 kHz band, 100 kHz, the paper's
+//! section 4), read between samples by linear interpolation ([`crate::drive::Sampled`]), and
+//! integrates it from rest one sample interval at a time, so the outputs (the node voltages V1,
+//! V2 for the paper's pair) are collected at the sample instants without interpolation. An
+//! interval goes the fast way where one applies ([`Scheme::Exponential`]):
+//!
+//! * a model whose free flight splits into a linear part and a small remainder (a transducer
+//!   with its own loads, [`crate::model::FlightSplit`]): between contacts an interval is one
+//!   step of the exponential Adams-Bashforth method ([`crate::ode::exponential`]);
+//! * a model without that split whose modes are affine (an interface circuit with
+//!   piecewise-linear diodes, [`crate::model::Model::affine`]): an interval in an affine mode is
+//!   advanced exactly by the mode's propagator of the state augmented with the interpolated
+//!   drive (`affine.rs`), and its guards are checked as affine functions with their rates.
+//!
+//! An interval that may come near a stop or where a guard may fire, every contact and the
+//! samples just after it, and every interval of a mode that is not affine go to
+//! [`crate::ode::Dopri5`], for which every sample instant is a breakpoint and every switch an
+//! event located on its dense output. [`simulate_on`] runs any model.
 //!
 //! **Transient.** The model starts at rest, so its response needs a few mechanical ring-up
 //! times `2m/b` (the amplitude decay time of the unloaded resonator, an upper bound on that of
 //! the loaded one) to become stationary. The record is therefore preceded by a pre-roll of
 //! [`TRANSIENT_RING_TIMES`] ring-up times (rounded up to a whole millisecond) drawn from the
 //! same noise realisation and discarded: 0.48 s for prototype 2 (`2m/b` = 96 ms), 8 ms for
-//! prototype 1 (1.5 ms). The *analysed* record that follows has the paper's length (10 s), so a
-//! single-record estimate has the same statistics as the paper's. After five ring-up times the
-//! remaining amplitude deficit is below e^-5 = 0.7 %.
+//! prototype 1 (1.5 ms); behind an interface circuit at least the storage's settling
+//! ([`storage_settling_s`]). The *analysed* record that follows has the paper's length (10 s),
+//! so a single-record estimate has the same statistics as the paper's. After five ring-up times
+//! the remaining amplitude deficit is below e^-5 = 0.7 %.
+//!
+//! # The continuous books
+//! Where a record keeps them (a model with a storage output [`STORAGE`], or a caller that asks,
+//! [`crate::study::record_ledger`]), the integral over time of each energy-ledger power, of each
+//! output and of its square is booked interval by interval (`books.rs`): over the analysed
+//! window, from its first sample instant to its last, they give the drive's mean power, the
+//! storage's mean voltage and the DC power its load takes ([`RecordSummary::p_dc_w`]), and the
+//! window's [`crate::model::Ledger`].
 //!
 //! # Output power spectral density
 //! [`output_psd`] is the one-sided Welch estimate ([`crate::signal::welch()`], periodic Hann,
@@ -32,8 +54,8 @@
 //! in SI units (`Sa_g2 * 9.81^2`), the input power being `m Sa / 2` (eq 21 and its reference).
 //! [`eq21_power_w`](crate::physics::two_port::eq21_power_w) gives the linear theory with
 //! `Qm = sqrt(K m)/b` ([`crate::physics::two_port::TwoPort::qm_open_circuit`]), the reading
-//! eq 21 is derived with.
-//!
+//! eq 21 is derived with. Behind an interface circuit the efficiency is the DC power over the
+//! drive's ([`RecordSummary::efficiency`]).
 
 use std::sync::Arc;
 
@@ -42,18 +64,28 @@ use thiserror::Error;
 use crate::device::Device;
 use crate::drive::noise::{self, NoiseError, NoiseSpec};
 use crate::drive::Sampled;
-use crate::ode::exponential::History;
-use crate::ode::{SolverError, Stats, Step};
-use crate::physics::contact::Mode;
-use crate::physics::free_flight::{FlightKind, GeneralFlight};
-use crate::physics::harvester::{Harvester, State};
-use crate::signal::bandwidth::restrict;
-use crate::signal::{self, Psd, SpectralError, WelchConfig};
-use crate::study::interface::record::storage_settling_s;
+use crate::model::{FlightSplit, FlightVisitor, Ledger, Mode, Model, NoFlight, Remainder, Slot};
+use crate::ode::{SolverError, Stats};
+use crate::physics::assembly::AssemblyError;
+use crate::signal::SpectralError;
 
+mod affine;
+mod books;
+mod exponential;
+mod spectrum;
 mod stepping;
+mod storage;
 
-use stepping::{run, FastFlight};
+use books::Books;
+pub(crate) use books::Found;
+use exponential::ExpFlight;
+use stepping::{run, NoFast};
+
+pub use spectrum::{output_psd, OutputSpectrum};
+pub use storage::{
+    check_steady_mean, storage_ensemble, storage_record, storage_settling_s, StorageRecord,
+    StorageSummary, STORAGE_SETTLING_TIMES,
+};
 
 /// Length of the discarded pre-roll in mechanical ring-up times `2m/b` (see the module docs).
 pub const TRANSIENT_RING_TIMES: f64 = 5.0;
@@ -64,18 +96,35 @@ pub const TRANSIENT_RING_TIMES: f64 = 5.0;
 /// than the ensemble error when it is tightened.
 pub const DEFAULT_RTOL: f64 = 1e-7;
 
+/// The name of a model's storage output (the voltage across an interface circuit's storage
+/// capacitor): a record of a model that has one keeps its continuous books and reports the
+/// storage's mean voltage and DC power.
+pub const STORAGE: &str = "vs";
+
 /// Errors of a record (a random-vibration simulation).
 #[derive(Debug, Clone, PartialEq, Error)]
 pub enum RecordError {
     /// The excitation could not be generated.
     #[error("excitation: {0}")]
     Noise(#[from] NoiseError),
+    /// The device's parts do not assemble into a model.
+    #[error("model: {0}")]
+    Assembly(#[from] AssemblyError),
     /// The integrator failed.
     #[error("integration: {0}")]
     Solver(#[from] SolverError),
     /// The spectral estimate could not be formed.
     #[error("spectrum: {0}")]
     Spectral(#[from] SpectralError),
+    /// A storage study of a device without a storage (no interface circuit).
+    #[error("device `{0}` has no storage: it drives resistive loads, not an interface circuit")]
+    NoStorage(String),
+    /// A storage study of a storage without a load: it only charges, with no steady mean.
+    #[error(
+        "device `{0}`: the storage has an open load (interface.load.kind = \"open\"), so it \
+         charges towards the open-circuit limit and has no steady mean; use the charging study"
+    )]
+    OpenLoad(String),
     /// A setting is out of range.
     #[error("record spec: {field} = {value} is invalid; expected {expected}")]
     InvalidSpec {
@@ -87,7 +136,6 @@ pub enum RecordError {
         expected: &'static str,
     },
 }
-
 /// Mechanical ring-up time `2m/b` of a device (s): the amplitude decay time of the unloaded
 /// resonator (about 0.1 s for prototype 2).
 pub fn ring_up_time_s(device: &Device) -> f64 {
@@ -119,20 +167,22 @@ pub struct RecordSpec {
     pub scheme: Scheme,
 }
 
-/// How a record's free flight is integrated (contacts and their neighbourhood always go to
-/// [`Dopri5`](crate::ode::Dopri5) with event location).
+/// How a record's intervals are integrated where no switch is near (contacts, switches and
+/// their neighbourhood always go to [`Dopri5`](crate::ode::Dopri5) with event location).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub enum Scheme {
-    /// The exponential Adams-Bashforth method of order [`EXPONENTIAL_ORDER`] on the sample grid
+    /// The fast paths (see the module docs). A model that splits its free flight: the
+    /// exponential Adams-Bashforth method of order [`EXPONENTIAL_ORDER`] on the sample grid
     /// ([`crate::ode::exponential`]): the linearised model and the linearly interpolated input
-    /// exactly, the small remainder of eq 10's capacitances by extrapolation; one remainder
-    /// evaluation per sample. A step is taken only when the mass is in free flight, the remainder
-    /// has [`EXPONENTIAL_ORDER`] values since the last contact, and the cubic through the positions
-    /// and velocities at the step's ends stays [`STOP_MARGIN`] clear of the stops; any other
-    /// interval goes to [`Dopri5`](crate::ode::Dopri5).
+    /// exactly, the small remainder (eq 10's capacitances) by extrapolation; one remainder
+    /// evaluation per sample. A step is taken only when the mass is in free flight, the
+    /// remainder has [`EXPONENTIAL_ORDER`] values since the last contact, and the cubic through
+    /// the positions and velocities at the step's ends stays [`STOP_MARGIN`] clear of the stops.
+    /// A model with affine modes and no split: each interval of an affine mode exactly, unless
+    /// a guard may fire in it. Any other interval goes to [`Dopri5`](crate::ode::Dopri5).
     Exponential,
     /// [`Dopri5`](crate::ode::Dopri5) everywhere, one sample interval (a breakpoint of the input)
-    /// at a time: the reference the exponential scheme is checked against.
+    /// at a time: the reference the fast paths are checked against.
     Dopri5,
 }
 
@@ -201,11 +251,12 @@ impl RecordSpec {
 /// Scalar results of one record, over the analysed window (after the pre-roll).
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct RecordSummary {
-    /// Mean power in load 1, `<V1²>/RL` over the samples (W).
+    /// Mean power in the load of the model's first output over the samples (W): `<V1²>/RL`
+    /// for a resistor, `(<V²> - V_b <V>)/R` for a battery, zero without a load.
     pub p1_w: f64,
-    /// Mean power in load 2 (W).
+    /// Mean power in the load of the second output (W).
     pub p2_w: f64,
-    /// RMS displacement over the samples (m).
+    /// RMS displacement of the first mass over the samples (m).
     pub x_rms_m: f64,
     /// Largest |x| at the ends of the integrator's steps (which include every contact event) (m).
     pub x_peak_m: f64,
@@ -216,15 +267,24 @@ pub struct RecordSummary {
     /// Mean square of the applied acceleration over the analysed samples (m²/s⁴); its
     /// expectation is `2 B Sa` for a two-sided level `Sa` over the band `B`.
     pub accel_mean_square_si: f64,
-    /// Integrator counters for the whole record (pre-roll included); an exponential step
-    /// counts as an accepted step with one right-hand-side evaluation.
+    /// Integrator counters for the whole record (pre-roll included); a fast step counts as an
+    /// accepted step (with one right-hand-side evaluation for an exponential step's remainder).
     pub stats: Stats,
-    /// Sample intervals advanced by the exponential integrator (the rest went to
-    /// [`Dopri5`](crate::ode::Dopri5)).
+    /// Sample intervals advanced by a fast step, exponential or an affine mode's exact one (the
+    /// rest went to [`Dopri5`](crate::ode::Dopri5)).
     pub exponential_steps: u64,
     /// How the free flight was integrated, with the reason where it fell back to
     /// [`Dopri5`](crate::ode::Dopri5).
     pub free_flight: FreeFlightPath,
+    /// Mean power of the drive over the analysed window (W): the ledger's `drive` term over the
+    /// window's length; `None` where the record kept no books (see the module docs).
+    pub p_drive_w: Option<f64>,
+    /// Mean power the load of the storage output [`STORAGE`] takes over the window (W), from
+    /// the storage voltage's mean and mean square over time; `None` without a storage or its
+    /// load.
+    pub p_dc_w: Option<f64>,
+    /// Mean storage voltage over the window (V); `None` without a storage.
+    pub vdc_v: Option<f64>,
 }
 
 /// How a record's free flight was integrated.
@@ -232,12 +292,14 @@ pub struct RecordSummary {
 pub enum FreeFlightPath {
     /// By the exponential step between contacts ([`Scheme::Exponential`]).
     Exponential,
+    /// By the affine modes' exact steps ([`Scheme::Exponential`] for a model without a
+    /// free-flight split).
+    Affine,
     /// By [`Dopri5`](crate::ode::Dopri5) throughout, for the stated reason.
     Dopri5(Fallback),
 }
 
-/// Why a record's free flight went to [`Dopri5`](crate::ode::Dopri5) instead of the exponential
-/// step.
+/// Why a record's free flight went to [`Dopri5`](crate::ode::Dopri5) instead of a fast path.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub enum Fallback {
     /// The record's scheme asked for it ([`Scheme::Dopri5`]).
@@ -259,6 +321,9 @@ pub enum Fallback {
     /// exponential step could not reach the well itself
     /// ([`Spring::fast_path_reach_m`](crate::physics::suspension::Spring::fast_path_reach_m)).
     StiffSuspension,
+    /// The model has neither a free-flight split nor an affine mode (an interface circuit with
+    /// Shockley diodes, a nonlinear suspension or an electrostatic pair behind it).
+    NoExactMode,
 }
 
 impl std::fmt::Display for Fallback {
@@ -278,6 +343,9 @@ impl std::fmt::Display for Fallback {
                 "the suspension's stiffness departs from its value at the well within the well's \
                  distance from rest at this sample interval"
             }
+            Fallback::NoExactMode => {
+                "the model has neither a free-flight split nor a mode that is affine"
+            }
         })
     }
 }
@@ -287,27 +355,42 @@ impl RecordSummary {
     pub fn p_total_w(&self) -> f64 {
         self.p1_w + self.p2_w
     }
+
+    /// The DC power over the drive's power, where the record has both.
+    pub fn efficiency(&self) -> Option<f64> {
+        Some(self.p_dc_w? / self.p_drive_w?)
+    }
 }
 
-/// One simulated record: the node voltages at the analysed sample instants and its summary.
+/// One simulated record: the model's outputs at the analysed sample instants and its summary.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Record {
-    /// Sample rate of `v1_v`, `v2_v` (Hz).
+    /// Sample rate of the outputs (Hz).
     pub sample_rate_hz: f64,
-    /// V1 at `t = transient + k / fs`, `k = 0 .. N` (V).
+    /// The model's first output (V1 of the paper's pair; the storage voltage behind an
+    /// interface circuit) at `t = transient + k / fs`, `k = 0 .. N` (V); empty for a model
+    /// without outputs.
     pub v1_v: Vec<f64>,
-    /// V2 at the same instants (V).
+    /// Its second output (V2; the element's voltage behind a circuit) at the same instants (V).
     pub v2_v: Vec<f64>,
+    /// Its further outputs, in order, at the same instants.
+    pub more_v: Vec<Vec<f64>>,
+    /// The outputs' names, units and loads ([`crate::model::Layout::outputs`]).
+    pub outputs: Vec<Slot>,
+    /// The energy ledger over the analysed window, where the record kept its books (see the
+    /// module docs).
+    pub ledger: Option<Ledger>,
     /// Scalar results.
     pub summary: RecordSummary,
 }
 
 /// Simulates one record: realisation `stream` of seed `seed` of the excitation `spec` drives
-/// `device` (eq 7 with the end-stop of eq 1) from rest; see the module docs.
+/// `device` (for the paper's devices, eq 7 with the end-stop of eq 1) from rest; see the module
+/// docs.
 ///
-/// The only allocations are the excitation and the two output vectors. The loop advances
-/// from one sample instant to the next and stores V1, V2 there: by one step of the
-/// exponential integrator where the mass flies free ([`Scheme::Exponential`]), else by the
+/// The only allocations are the excitation and the output vectors (and the books, where the
+/// record keeps them). The loop advances from one sample instant to the next and stores the
+/// outputs there: by a fast step where one applies ([`Scheme::Exponential`]), else by the
 /// Dormand-Prince integrator up to the next sample instant (a breakpoint).
 ///
 /// ```
@@ -340,37 +423,23 @@ pub fn simulate_record(
     simulate_observed(device, spec, seed, stream, &mut ())
 }
 
-/// What [`simulate_observed`] shows of each sample interval it integrates, in time order:
-/// an exponential step or the accepted Dormand-Prince steps of the interval. The unit
-/// observer `()` does nothing (and costs nothing); [`crate::study::record_ledger`] books the
-/// energy balance.
+/// What [`simulate_observed`] shows of a record: the state and mode at each analysed sample
+/// instant, and whether the record keeps its continuous books whatever the model (see the
+/// module docs). The unit observer `()` does nothing (and costs nothing);
+/// [`crate::study::record_ledger`] asks for the books, [`crate::study::displacement`] reads
+/// the samples.
 pub(crate) trait RecordObserver {
-    /// An exponential step from `t0`: state `y0` to `y1`, input samples `a0` and `a1`, and
-    /// the remainder's history the step used.
-    #[allow(clippy::too_many_arguments)]
-    fn exponential(
-        &mut self,
-        _model: &Harvester<Sampled>,
-        _t0: f64,
-        _y0: &State,
-        _y1: &State,
-        _a0: f64,
-        _a1: f64,
-        _history: &History<4, EXPONENTIAL_ORDER>,
-    ) {
-    }
-
-    /// An accepted Dormand-Prince step, in its mode.
-    fn dopri(&mut self, _model: &Harvester<Sampled>, _step: &Step<State>, _mode: Mode) {}
+    /// True when the record keeps its books for this observer.
+    const BOOKS: bool = false;
 
     /// The state and mode at an analysed sample instant.
     #[inline(always)]
-    fn sample(&mut self, _y: &State, _mode: Mode) {}
+    fn sample(&mut self, _y: &[f64], _mode: Mode) {}
 }
 
 impl RecordObserver for () {}
 
-/// [`simulate_record`], showing every interval to `observer`.
+/// [`simulate_record`], showing every analysed sample to `observer`.
 pub(crate) fn simulate_observed<O: RecordObserver>(
     device: &Device,
     spec: &RecordSpec,
@@ -378,14 +447,20 @@ pub(crate) fn simulate_observed<O: RecordObserver>(
     stream: u64,
     observer: &mut O,
 ) -> Result<Record, RecordError> {
+    Ok(simulate_found(device, spec, seed, stream, observer)?.0)
+}
+
+/// [`simulate_observed`], with what the record's books found where it kept them.
+pub(crate) fn simulate_found<O: RecordObserver>(
+    device: &Device,
+    spec: &RecordSpec,
+    seed: u64,
+    stream: u64,
+    observer: &mut O,
+) -> Result<(Record, Option<Found>), RecordError> {
     spec.validate()?;
-    let gen = spec.generated_noise();
-    let drive = SampledDrive {
-        accel: noise::generate_shared(&gen, seed, stream)?,
-        sample_rate_hz: gen.sample_rate_hz,
-        transient_samples: spec.transient_samples(),
-    };
-    simulate_drive_observed(device, &drive, spec.rtol, spec.scheme, observer)
+    let drive = SampledDrive::noise(spec, seed, stream)?;
+    drive_found(device, &drive, spec.rtol, spec.scheme, observer)
 }
 
 /// A sampled base acceleration to drive a record with: a generated noise realisation or a
@@ -401,6 +476,41 @@ pub struct SampledDrive {
     pub transient_samples: usize,
 }
 
+impl SampledDrive {
+    /// Realisation `stream` of seed `seed` of a record's excitation: its pre-roll and analysed
+    /// samples.
+    pub fn noise(spec: &RecordSpec, seed: u64, stream: u64) -> Result<Self, RecordError> {
+        let gen = spec.generated_noise();
+        Ok(Self {
+            accel: noise::generate_shared(&gen, seed, stream)?,
+            sample_rate_hz: gen.sample_rate_hz,
+            transient_samples: spec.transient_samples(),
+        })
+    }
+
+    /// Refuses a drive no longer than its pre-roll and one more sample, or a sample rate that
+    /// is not positive, and a tolerance outside (0, 1).
+    fn check(&self, rtol: f64) -> Result<(), RecordError> {
+        if self.accel.len() <= self.transient_samples + 1
+            || !(self.sample_rate_hz.is_finite() && self.sample_rate_hz > 0.0)
+        {
+            return Err(RecordError::InvalidSpec {
+                field: "drive",
+                value: self.accel.len() as f64,
+                expected: "more samples than the pre-roll and a positive sample rate",
+            });
+        }
+        if !(rtol.is_finite() && rtol > 0.0 && rtol < 1.0) {
+            return Err(RecordError::InvalidSpec {
+                field: "rtol",
+                value: rtol,
+                expected: "0 < rtol < 1",
+            });
+        }
+        Ok(())
+    }
+}
+
 /// One record of `device` under a sampled drive (see [`simulate_record`], which draws the
 /// drive from band-limited noise); `rtol` and `scheme` as in [`RecordSpec`].
 pub fn simulate_drive(
@@ -409,115 +519,104 @@ pub fn simulate_drive(
     rtol: f64,
     scheme: Scheme,
 ) -> Result<Record, RecordError> {
-    simulate_drive_observed(device, drive, rtol, scheme, &mut ())
+    Ok(drive_found(device, drive, rtol, scheme, &mut ())?.0)
 }
 
-/// [`simulate_drive`], showing every interval to `observer`: builds the model and runs the
-/// record's loop compiled for the device's kind of free flight.
-pub(crate) fn simulate_drive_observed<O: RecordObserver>(
+/// One record of any model under a sampled drive (see [`simulate_drive`]).
+pub fn simulate_on<M: Model<N>, const N: usize>(
+    model: &M,
+    drive: &SampledDrive,
+    rtol: f64,
+    scheme: Scheme,
+) -> Result<Record, RecordError> {
+    drive.check(rtol)?;
+    Ok(model_found(model, drive, rtol, scheme, &mut ())?.0)
+}
+
+/// [`simulate_drive`], showing every analysed sample to `observer`: assembles the device's
+/// model and runs the record on it.
+pub(crate) fn drive_found<O: RecordObserver>(
     device: &Device,
     drive: &SampledDrive,
     rtol: f64,
     scheme: Scheme,
     observer: &mut O,
-) -> Result<Record, RecordError> {
-    if drive.accel.len() <= drive.transient_samples + 1
-        || !(drive.sample_rate_hz.is_finite() && drive.sample_rate_hz > 0.0)
-    {
-        return Err(RecordError::InvalidSpec {
-            field: "drive",
-            value: drive.accel.len() as f64,
-            expected: "more samples than the pre-roll and a positive sample rate",
-        });
-    }
-    if !(rtol.is_finite() && rtol > 0.0 && rtol < 1.0) {
-        return Err(RecordError::InvalidSpec {
-            field: "rtol",
-            value: rtol,
-            expected: "0 < rtol < 1",
-        });
-    }
-    let model = Harvester::new(
-        device,
-        Sampled::new(drive.accel.clone(), drive.sample_rate_hz),
-    );
-    let dt = model.excitation.dt_s;
-    let ff = model.free_flight();
-    match (scheme, ff.kind()) {
-        (Scheme::Dopri5, _) => run(
-            &model,
-            drive,
-            rtol,
-            Err::<FastFlight<GeneralFlight>, _>(Fallback::Requested),
-            observer,
-        ),
-        (Scheme::Exponential, FlightKind::AreaOverlap(r)) => run(
-            &model,
-            drive,
-            rtol,
-            FastFlight::new(&model, dt, &ff, r),
-            observer,
-        ),
-        (Scheme::Exponential, FlightKind::General(r)) => run(
-            &model,
-            drive,
-            rtol,
-            FastFlight::new(&model, dt, &ff, r),
-            observer,
-        ),
-    }
+) -> Result<(Record, Option<Found>), RecordError> {
+    drive.check(rtol)?;
+    crate::with_harvester!(device, |h| model_found(&h, drive, rtol, scheme, observer))
 }
 
-/// Output power spectral density of both loads and of each, one-sided, W/Hz.
-#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
-pub struct OutputSpectrum {
-    /// `(S_V1 + S_V2) / RL`: its integral is the mean power of both loads.
-    pub total: Psd,
-    /// `S_V1 / RL`.
-    pub load1: Psd,
-    /// `S_V2 / RL`.
-    pub load2: Psd,
+/// The record of a model: its loop compiled for the model's fast path (see the module docs).
+fn model_found<M: Model<N>, O: RecordObserver, const N: usize>(
+    model: &M,
+    drive: &SampledDrive,
+    rtol: f64,
+    scheme: Scheme,
+    observer: &mut O,
+) -> Result<(Record, Option<Found>), RecordError> {
+    let sampled = Sampled::new(drive.accel.clone(), drive.sample_rate_hz);
+    let books = (O::BOOKS || model.layout().output(STORAGE).is_some())
+        .then(|| Books::new(model, sampled.clone()));
+    if scheme == Scheme::Dopri5 {
+        let fast = NoFast(Fallback::Requested);
+        return run(model, drive, rtol, fast, observer, books);
+    }
+    let visit = Visit {
+        model,
+        drive,
+        rtol,
+        observer,
+        books,
+    };
+    model.flight(sampled.dt_s, visit)
 }
 
-impl OutputSpectrum {
-    /// The bins with `f_lo <= f <= f_hi` of each density.
-    pub fn restrict(&self, f_lo: f64, f_hi: f64) -> Self {
-        Self {
-            total: restrict(&self.total, f_lo, f_hi),
-            load1: restrict(&self.load1, f_lo, f_hi),
-            load2: restrict(&self.load2, f_lo, f_hi),
+/// Runs a record on the fast path a model's free flight split allows (see
+/// [`crate::model::FlightVisitor`]).
+struct Visit<'a, M, O, const N: usize> {
+    model: &'a M,
+    drive: &'a SampledDrive,
+    rtol: f64,
+    observer: &'a mut O,
+    books: Option<Books<N>>,
+}
+
+impl<M: Model<N>, O: RecordObserver, const N: usize> FlightVisitor<N> for Visit<'_, M, O, N> {
+    type Output = Result<(Record, Option<Found>), RecordError>;
+
+    fn visit<R: Remainder<N>>(self, split: FlightSplit<N>, remainder: R) -> Self::Output {
+        let dt = 1.0 / self.drive.sample_rate_hz;
+        let Self {
+            model,
+            drive,
+            rtol,
+            observer,
+            books,
+        } = self;
+        match ExpFlight::new(model, dt, split, remainder) {
+            Ok(fast) => run(model, drive, rtol, fast, observer, books),
+            Err(why) => run(model, drive, rtol, NoFast(why), observer, books),
         }
     }
+
+    fn refused(self, why: NoFlight) -> Self::Output {
+        let fallback = match why {
+            NoFlight::Unavailable => {
+                return affine::run(self.model, self.drive, self.rtol, self.observer, self.books)
+            }
+            NoFlight::UnboundedPair => Fallback::UnboundedPair,
+            NoFlight::CapacitanceVanishes => Fallback::CapacitanceVanishes,
+        };
+        run(
+            self.model,
+            self.drive,
+            self.rtol,
+            NoFast(fallback),
+            self.observer,
+            self.books,
+        )
+    }
 }
 
-/// One-sided Welch estimate of the output power PSD of both loads, `(S_V1 + S_V2)/RL` (W/Hz),
-/// and of each load (see the module docs).
-pub fn output_psd(
-    v1_v: &[f64],
-    v2_v: &[f64],
-    sample_rate_hz: f64,
-    load_resistance_ohm: f64,
-    cfg: &WelchConfig,
-) -> Result<OutputSpectrum, SpectralError> {
-    let scale = |mut p: Psd| {
-        p.density.iter_mut().for_each(|d| *d /= load_resistance_ohm);
-        p
-    };
-    let load1 = scale(signal::welch(v1_v, sample_rate_hz, cfg)?);
-    let load2 = scale(signal::welch(v2_v, sample_rate_hz, cfg)?);
-    let total = Psd {
-        freq_hz: load1.freq_hz.clone(),
-        density: load1
-            .density
-            .iter()
-            .zip(&load2.density)
-            .map(|(a, b)| a + b)
-            .collect(),
-        segments: load1.segments,
-    };
-    Ok(OutputSpectrum {
-        total,
-        load1,
-        load2,
-    })
-}
+#[cfg(test)]
+mod tests;

@@ -6,9 +6,8 @@ use anyhow::Result;
 use endstop::device::{Device, Interface, Rectifier};
 use endstop::drive::noise::NoiseSpec;
 use endstop::drive::Sine;
-use endstop::study::interface::charging::{charge, ChargeSettings};
-use endstop::study::interface::record::noise_ensemble;
-use endstop::study::record::{transient_s, RecordSpec, Scheme, DEFAULT_RTOL};
+use endstop::study::charging::{charge, ChargeSettings};
+use endstop::study::record::{storage_ensemble, transient_s, RecordSpec, Scheme, DEFAULT_RTOL};
 
 use super::{resonance_hz, variants, ACCEL_RMS_G, SEED};
 use crate::io::frame::frame;
@@ -101,7 +100,7 @@ pub(super) fn ensembles(exp: &mut Experiment, piezo: &LoadedDevice) -> Result<()
     for (name, d) in variants(&piezo.device) {
         eprintln!("[interfaces] ensemble, {name}");
         let spec = spec(2.0, &d)?;
-        let ens = noise_ensemble(&d, &spec, SEED, 8)?;
+        let ens = storage_ensemble(&d, &spec, SEED, 8)?;
         let n = ens.len() as f64;
         for (k, r) in ens.iter().enumerate() {
             rows.push(row!["interface" => name, "stream" => k, "p_dc_w" => r.p_dc_w, "p_drive_w" => r.p_drive_w, "vdc_v" => r.vdc_v]);

@@ -1,5 +1,7 @@
 //! Charging the storage: the time for its voltage to go from a start value to a target under a
-//! drive (a sine, a noise record, a measured record), with the voltage sampled on the way.
+//! drive (a sine, a noise record, a measured record), with the voltage sampled on the way. The
+//! storage is the model's output [`STORAGE`] (and the state's component of that name, which the
+//! start voltage sets); a model without one is refused ([`ChargeError::NoStorage`]).
 //!
 //! # How the drive starts
 //! The harvester starts at rest (x = v = 0, the element discharged) with the storage at the
@@ -17,14 +19,16 @@
 //! estimate, and a run that has not reached the target by `t_max_s` ends in
 //! [`ChargeError::NotReached`]. Neither hangs.
 
+use nalgebra::SVector;
 use thiserror::Error;
 
 use crate::device::Device;
 use crate::drive::Excitation;
+use crate::model::{Driven, Model, MAX_OUTPUTS};
 use crate::ode::{Dopri5, SolverError};
-use crate::physics::harvester::State;
-use crate::physics::interface::Interfaced;
+use crate::physics::assembly::AssemblyError;
 use crate::progress::{share, Progress};
+use crate::study::record::STORAGE;
 
 /// A drive multiplied by a linear ramp from 0 at t = 0 to 1 at `ramp_s`.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -91,9 +95,10 @@ pub struct ChargeRun {
 /// A charging run that failed.
 #[derive(Debug, Error, Clone, PartialEq)]
 pub enum ChargeError {
-    /// The device has no interface circuit.
-    #[error("device `{0}` has a resistive load, not an interface circuit with a storage")]
-    Resistive(String),
+    /// The model has no storage: no output and state component [`STORAGE`] (a device with
+    /// resistive loads, not an interface circuit).
+    #[error("`{0}` has no storage (no output and state component `vs`): it has resistive loads, not an interface circuit")]
+    NoStorage(String),
     /// The target is at or below the start.
     #[error("charging target {target_v} V is not above the start voltage {start_v} V")]
     TargetBelowStart {
@@ -132,15 +137,27 @@ pub enum ChargeError {
     /// The integrator failed.
     #[error("integration failed: {0}")]
     Solver(#[from] SolverError),
-    /// The circuit cannot be integrated (see [`super::InterfaceError::Stiff`]).
-    #[error("{0}")]
-    Circuit(#[from] super::InterfaceError),
+    /// The device's parts do not assemble into a model (or a conduction mode is too stiff).
+    #[error("model: {0}")]
+    Assembly(#[from] AssemblyError),
 }
 
 /// Charges the storage of `device` under `drive` (see the module docs); `progress` is told at
-/// the end of each block how far the storage voltage has come from the start to the target.
+/// the end of each block how far the storage voltage has come from the start to the target. A
+/// device whose model has no storage (resistive loads) is [`ChargeError::NoStorage`].
 pub fn charge<E: Excitation + Clone>(
     device: &Device,
+    drive: E,
+    s: &ChargeSettings,
+    progress: &dyn Progress,
+) -> Result<ChargeRun, ChargeError> {
+    crate::with_harvester!(device, |h| charge_on(&h, &device.name, drive, s, progress))
+}
+
+/// [`charge`] on any model with a storage; `name` names it in errors.
+pub fn charge_on<M: Model<N>, E: Excitation + Clone, const N: usize>(
+    model: &M,
+    name: &str,
     drive: E,
     s: &ChargeSettings,
     progress: &dyn Progress,
@@ -151,18 +168,25 @@ pub fn charge<E: Excitation + Clone>(
             start_v: s.start_v,
         });
     }
-    let model = Interfaced::new(
-        device,
+    let layout = model.layout();
+    let (Some(out), Some(state)) = (layout.output(STORAGE), layout.component(STORAGE)) else {
+        return Err(ChargeError::NoStorage(name.to_string()));
+    };
+    let sys = Driven::new(
+        model,
         Ramped {
             inner: drive,
             ramp_s: s.ramp_s,
         },
-    )
-    .ok_or_else(|| ChargeError::Resistive(device.name.clone()))?;
-    super::check_stiffness(device, &model)?;
-    let y0 = State::new(0.0, 0.0, 0.0, s.start_v);
-    let mut ode: Dopri5<Interfaced<_>> =
-        Dopri5::new(0.0, y0, model.mode_of(&y0), model.solver_options(s.rtol));
+    );
+    let storage = |y: &SVector<f64, N>, mode| {
+        let mut o = [0.0; MAX_OUTPUTS];
+        model.outputs(mode, y, &mut o);
+        o[out]
+    };
+    let mut y0 = model.rest_state();
+    y0[state] = s.start_v;
+    let mut ode = Dopri5::new(0.0, y0, model.mode_of(&y0), model.solver_options(s.rtol));
     let (mut t_s, mut vs_v) = (vec![0.0], vec![s.start_v]);
     let mut next_sample = s.sample_s;
     let mut hit: Option<f64> = None;
@@ -173,7 +197,7 @@ pub fn charge<E: Excitation + Clone>(
             return Err(ChargeError::NotReached {
                 target_v: s.target_v,
                 t_max_s: s.t_max_s,
-                reached_v: ode.y()[3],
+                reached_v: storage(&ode.y(), ode.mode()),
             });
         }
         t_end = (t_end + s.block_s).min(s.t_max_s);
@@ -182,17 +206,17 @@ pub fn charge<E: Excitation + Clone>(
         // step's dense output.
         let mut stop_at: Option<f64> = None;
         let sample = s.sample_s;
-        ode.integrate(&model, t_end, |st, _| {
+        ode.integrate(&sys, t_end, |st, mode| {
             while next_sample <= st.t1() {
                 t_s.push(next_sample);
-                vs_v.push(st.at(next_sample)[3]);
+                vs_v.push(storage(&st.at(next_sample), mode));
                 next_sample += sample;
             }
-            if stop_at.is_none() && st.y1[3] >= target {
+            if stop_at.is_none() && storage(&st.y1, mode) >= target {
                 let (mut a, mut b) = (st.t0, st.t1());
                 for _ in 0..60 {
                     let m = 0.5 * (a + b);
-                    if st.at(m)[3] >= target {
+                    if storage(&st.at(m), mode) >= target {
                         b = m;
                     } else {
                         a = m;
@@ -205,7 +229,7 @@ pub fn charge<E: Excitation + Clone>(
             hit = Some(t);
             break;
         }
-        let v = ode.y()[3];
+        let v = storage(&ode.y(), ode.mode());
         progress.fraction(share(s.start_v, s.target_v, v));
         ends.push(v);
         if let [.., a, b, c] = ends[..] {
@@ -225,11 +249,17 @@ pub fn charge<E: Excitation + Clone>(
         }
     }
     let t_hit = hit.unwrap_or(t_end);
-    let cs = model.circuit.cs;
+    // The energy the storage gained: the model's stored energy at the target less at the start,
+    // with everything but the storage at rest.
+    let at = |v: f64| {
+        let mut y = model.rest_state();
+        y[state] = v;
+        model.stored_energy(model.mode_of(&y), &y)
+    };
     Ok(ChargeRun {
         time_to_target_s: t_hit,
         t_s,
         vs_v,
-        stored_j: 0.5 * cs * (s.target_v * s.target_v - s.start_v * s.start_v),
+        stored_j: at(s.target_v) - at(s.start_v),
     })
 }

@@ -1,9 +1,10 @@
-//! `endstop random` on a device with an interface circuit (`[interface]`: a diode bridge,
-//! SSHI, SECE into a storage capacitor): an ensemble of band-limited white-noise records, or
-//! one measured acceleration record, each run from rest with the pre-roll discarded; the DC
-//! power, the drive's power, their ratio (the efficiency), the mean storage voltage and the
-//! energy ledger's closure of each record. The records' linear modes are propagated exactly
-//! between switchings (`endstop::study::interface::record`).
+//! The report of `endstop random` on a model with a storage (an interface circuit,
+//! `[interface]`: a diode bridge, SSHI, SECE into a storage capacitor): for an ensemble of
+//! band-limited white-noise records, or one measured acceleration record, each run from rest
+//! with the pre-roll discarded, the DC power, the drive's power, their ratio (the efficiency),
+//! the mean storage voltage and the energy ledger's closure of each record. The records are the
+//! one record engine's (`endstop::study::record`): the affine modes of the circuit are
+//! propagated exactly between switchings, the rest by Dormand-Prince with its events.
 //!
 //! The pre-roll ([`endstop::study::record::transient_s`]) covers the storage as well as the
 //! mechanics: the storage charges towards its mean with the time constant of its DC load,
@@ -12,12 +13,11 @@
 
 use anyhow::{bail, Result};
 use endstop::device::Device;
-use endstop::drive::Sampled;
 use endstop::paper::setups::paper_record;
-use endstop::study::interface::record::{
-    check_steady_mean, noise_ensemble, sampled_record, DcRecord, DcSummary,
+use endstop::study::record::{
+    check_steady_mean, simulate_drive, storage_ensemble, SampledDrive, Scheme, StorageRecord,
+    StorageSummary, DEFAULT_RTOL,
 };
-use endstop::study::record::{Scheme, DEFAULT_RTOL};
 use endstop_experiments::fmt_sig;
 use endstop_experiments::io::frame::frame;
 use endstop_experiments::row;
@@ -25,8 +25,7 @@ use endstop_experiments::row;
 use crate::random::{read_measured, MeasuredDrive, RandomArgs};
 use crate::shared::{describe, start};
 
-/// Runs `endstop random` on `device` (as loaded from `a.device`), which has an interface
-/// circuit.
+/// Runs `endstop random` on `device` (as loaded from `a.device`), whose model has a storage.
 pub fn random(a: &RandomArgs, device: &Device) -> Result<()> {
     check_steady_mean(device)?;
     match (&a.accel_file, a.psd) {
@@ -40,7 +39,7 @@ pub fn random(a: &RandomArgs, device: &Device) -> Result<()> {
 }
 
 /// The per-record table's rows.
-fn rows(records: &[DcRecord], source: &str) -> Vec<endstop_experiments::io::frame::Row> {
+fn rows(records: &[StorageRecord], source: &str) -> Vec<endstop_experiments::io::frame::Row> {
     records
         .iter()
         .enumerate()
@@ -53,8 +52,8 @@ fn rows(records: &[DcRecord], source: &str) -> Vec<endstop_experiments::io::fram
                 "efficiency" => r.efficiency(),
                 "vdc_v" => r.vdc_v,
                 "ledger_relative_residual" => r.ledger.relative_residual(),
-                "steps" => r.steps,
-                "exact_steps" => r.exact_steps,
+                "steps" => r.summary.stats.accepted,
+                "exact_steps" => r.summary.exponential_steps,
             ]
         })
         .collect()
@@ -72,26 +71,27 @@ fn noise(a: &RandomArgs, psd: f64) -> Result<()> {
         a.duration_s,
         device.interface.key()
     );
-    let records = noise_ensemble(&device, &spec, a.seed, a.records as u64)?;
+    let records = storage_ensemble(&device, &spec, a.seed, a.records as u64)?;
     let source = format!("noise {psd:e} g^2/Hz, seed {}", a.seed);
     exp.write_parquet(
         "records",
         &mut frame(rows(&records, &source))?,
         &device.params,
     )?;
-    let DcSummary {
+    let StorageSummary {
         p_dc_w: p_dc,
         p_drive_w: p_drive,
         efficiency: eff,
         vdc_v: vdc,
-    } = DcSummary::of(&records);
+    } = StorageSummary::of(&records);
     exp.number("p_dc_w", p_dc.mean);
     exp.number("p_dc_ci95_w", p_dc.ci95);
     exp.number("p_drive_w", p_drive.mean);
     exp.number("efficiency", eff.mean);
     exp.number("efficiency_ci95", eff.ci95);
     exp.number("vdc_v", vdc.mean);
-    let md = format!(
+    let md =
+        format!(
         "Random vibration of `{}` ({} set; {}; `{}` interface): {} records of band-limited white \
          noise ({} g^2/Hz two-sided, {} Hz band, sampled at {} Hz), {} s each after a pre-roll \
          of {} s from rest (the longer of five ring-up times and five storage time constants), \
@@ -123,8 +123,11 @@ fn noise(a: &RandomArgs, psd: f64) -> Result<()> {
         fmt_sig(vdc.mean, 4),
         fmt_sig(vdc.ci95, 2),
         largest_residual(&records),
-        records.iter().map(|r| r.exact_steps).sum::<u64>(),
-        records.iter().map(|r| r.steps).sum::<u64>(),
+        records
+            .iter()
+            .map(|r| r.summary.exponential_steps)
+            .sum::<u64>(),
+        records.iter().map(|r| r.summary.stats.accepted).sum::<u64>(),
     );
     exp.write_numbers_md(&md)?;
     print!("{md}");
@@ -134,12 +137,22 @@ fn noise(a: &RandomArgs, psd: f64) -> Result<()> {
 fn measured(a: &RandomArgs, mut m: MeasuredDrive, file: &str) -> Result<()> {
     let (mut exp, loaded, device) = start("endstop-random", &a.device, a.bias_v, a.out.clone())?;
     m.times.lap("setup");
-    let drive = Sampled::new(m.accel.clone(), m.fs);
-    let r = sampled_record(&device, &drive, m.n_tr, DEFAULT_RTOL, Scheme::Exponential)?;
+    let drive = SampledDrive {
+        accel: m.accel.clone(),
+        sample_rate_hz: m.fs,
+        transient_samples: m.n_tr,
+    };
+    let record = simulate_drive(&device, &drive, DEFAULT_RTOL, Scheme::Exponential)?;
+    let Some(r) = StorageRecord::of(record, 0) else {
+        bail!("device `{}`: the record kept no storage books", device.name);
+    };
     m.times.lap("integrating");
     exp.write_parquet(
         "records",
-        &mut frame(rows(&[r], &format!("measured record {file}")))?,
+        &mut frame(rows(
+            std::slice::from_ref(&r),
+            &format!("measured record {file}"),
+        ))?,
         &device.params,
     )?;
     exp.number("p_dc_w", r.p_dc_w);
@@ -168,9 +181,9 @@ fn measured(a: &RandomArgs, mut m: MeasuredDrive, file: &str) -> Result<()> {
         fmt_sig(r.p_drive_w * 1e6, 4),
         fmt_sig(r.efficiency(), 3),
         fmt_sig(r.vdc_v, 4),
-        largest_residual(&[r]),
-        r.exact_steps,
-        r.steps,
+        largest_residual(std::slice::from_ref(&r)),
+        r.summary.exponential_steps,
+        r.summary.stats.accepted,
     );
     exp.write_numbers_md(&md)?;
     print!("{md}");
@@ -180,7 +193,7 @@ fn measured(a: &RandomArgs, mut m: MeasuredDrive, file: &str) -> Result<()> {
 }
 
 /// The largest relative residual of the records' energy ledgers, for the text.
-fn largest_residual(records: &[DcRecord]) -> String {
+fn largest_residual(records: &[StorageRecord]) -> String {
     format!(
         "{:.1e}",
         records
