@@ -5,10 +5,10 @@
 use anyhow::Result;
 use endstop::device::Device;
 use endstop::drive::Sine;
+use endstop::model::{Mode, Model};
 use endstop::ode::Stats;
 use endstop::paper::setups::paper_record;
-use endstop::physics::contact::Mode;
-use endstop::physics::harvester::Harvester;
+use endstop::physics::assembly::Harvester;
 use endstop::progress::Silent;
 use endstop::study::flow::SineFlow;
 use endstop::study::record::simulate_record;
@@ -80,10 +80,11 @@ pub fn rows(
         });
     }
     // Steady impacting sine: how much of the work is spent in contact.
-    let h = Harvester::new(cal, Sine::from_rms_g(5.5, 1300.0));
+    let h = Harvester::<4>::new(cal)?;
+    let sine = Sine::from_rms_g(5.5, 1300.0);
     let t_end = 200.0 / 1300.0;
     let ((contact_steps, free_steps, stats), times) = timed(repeats, || {
-        let mut ode = SineFlow::new(&h, 0.0, h.rest_state(), Mode::Free, 1e-8);
+        let mut ode = SineFlow::new(&h, sine, 0.0, h.rest_state(), Mode::FREE, 1e-8);
         let (mut c, mut f) = (0u64, 0u64);
         ode.integrate(t_end, |_, m| if m.in_contact() { c += 1 } else { f += 1 })?;
         Ok((c, f, ode.stats()))

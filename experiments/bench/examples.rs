@@ -10,9 +10,9 @@ use std::time::Instant;
 use anyhow::{Context, Result};
 use endstop::device::Device;
 use endstop::drive::Sine;
+use endstop::model::{Mode, Model};
 use endstop::ode::Stats;
 use endstop::paper::setups::paper_record;
-use endstop::physics::harvester::Harvester;
 use endstop::progress::Silent;
 use endstop::study::continuation::frequency_branch;
 use endstop::study::flow::SineFlow;
@@ -156,41 +156,14 @@ fn measure_one(ex: &Example, device: &Device, repeats: usize, quick: bool) -> Re
     let summary = last.context("at least one repeat")?;
     let record_path = match summary.free_flight {
         endstop::study::record::FreeFlightPath::Exponential => "exponential".to_string(),
+        endstop::study::record::FreeFlightPath::Affine => "exact affine steps".to_string(),
         endstop::study::record::FreeFlightPath::Dopri5(why) => format!("Dormand-Prince: {why}"),
     };
 
     let (from, to, step, g) = ex.range;
     let f_mid = 0.5 * (from + to);
-    let model = Harvester::new(device, Sine::from_rms_g(g, f_mid));
-    let cfg = steady_config(device, f_mid);
-    let (_, settled, mode, _) = steady_state(&model, model.rest_state(), mode_free(), g, &cfg)?;
-    let shooter = Shooter::new(&model, ShootingConfig::default());
-    let forcing = Forcing {
-        freq_hz: f_mid,
-        accel_rms_g: g,
-    };
-    let mut orbit_times = Vec::new();
-    let mut iterations = 0;
-    for _ in 0..repeats {
-        let mut stats = Stats::default();
-        let (orbit, t) =
-            cpu(|| Ok(shooter.solve(&forcing, Parameter::Frequency, 0.0, settled, &mut stats)?))?;
-        orbit_times.push(t);
-        iterations = orbit.iterations;
-    }
-
-    let steady = cpu(|| {
-        let mut flow = SineFlow::new(&model, 0.0, settled, mode, 1e-8);
-        let (mut dopri, mut all) = (0u64, 0u64);
-        let exact = flow.is_exact();
-        flow.integrate(50.0 / f_mid, |_, m| {
-            all += 1;
-            // An exact step is shown only in an affine mode: free flight and linear contacts.
-            if !exact || (m.in_contact() && !linear_contact(device)) {
-                dopri += 1;
-            }
-        })?;
-        Ok(dopri as f64 / all.max(1) as f64)
+    let (orbit, iterations, steady) = endstop::with_harvester!(device, |model| {
+        orbit_and_steady(&model, device, f_mid, g, repeats)
     })?;
 
     let (response, response_stats, orbits) = if quick {
@@ -223,7 +196,7 @@ fn measure_one(ex: &Example, device: &Device, repeats: usize, quick: bool) -> Re
         record: median(record_times),
         record_path,
         impacts: summary.impacts,
-        orbit: median(orbit_times).0,
+        orbit,
         orbit_iterations: iterations,
         response,
         response_stats,
@@ -234,8 +207,47 @@ fn measure_one(ex: &Example, device: &Device, repeats: usize, quick: bool) -> Re
     })
 }
 
-fn mode_free() -> endstop::physics::contact::Mode {
-    endstop::physics::contact::Mode::Free
+/// The median time of `repeats` shootings of the orbit at `f_mid` from the settled state, the
+/// shooting's iterations, and the share of the steps of 50 periods on the orbit that go to
+/// Dormand-Prince with the time of those periods.
+fn orbit_and_steady<M: Model<N>, const N: usize>(
+    model: &M,
+    device: &Device,
+    f_mid: f64,
+    g: f64,
+    repeats: usize,
+) -> Result<(f64, usize, (f64, f64))> {
+    let sine = Sine::from_rms_g(g, f_mid);
+    let cfg = steady_config(device, f_mid);
+    let (_, settled, mode, _) = steady_state(model, sine, model.rest_state(), Mode::FREE, g, &cfg)?;
+    let shooter = Shooter::new(model, ShootingConfig::default());
+    let forcing = Forcing {
+        freq_hz: f_mid,
+        accel_rms_g: g,
+    };
+    let mut orbit_times = Vec::new();
+    let mut iterations = 0;
+    for _ in 0..repeats {
+        let mut stats = Stats::default();
+        let (orbit, t) =
+            cpu(|| Ok(shooter.solve(&forcing, Parameter::Frequency, 0.0, settled, &mut stats)?))?;
+        orbit_times.push(t);
+        iterations = orbit.iterations;
+    }
+    let steady = cpu(|| {
+        let mut flow = SineFlow::new(model, sine, 0.0, settled, mode, 1e-8);
+        let (mut dopri, mut all) = (0u64, 0u64);
+        let exact = flow.is_exact();
+        flow.integrate(50.0 / f_mid, |_, m| {
+            all += 1;
+            // An exact step is shown only in an affine mode: free flight and linear contacts.
+            if !exact || (m.in_contact() && !linear_contact(device)) {
+                dopri += 1;
+            }
+        })?;
+        Ok(dopri as f64 / all.max(1) as f64)
+    })?;
+    Ok((median(orbit_times).0, iterations, steady))
 }
 
 /// True when every stop of the device is a linear spring with a viscous damper (its contact
@@ -274,11 +286,14 @@ fn ngspice_ratio(device: &Device, freq_hz: f64, g: f64) -> Result<f64, String> {
         common::ngspice::version()?;
         let period = 1.0 / freq_hz;
         let t_end = NGSPICE_PERIODS * period;
-        let model = Harvester::new(device, Sine::from_rms_g(g, freq_hz));
-        let (_, ours) = cpu(|| {
-            let mut flow = SineFlow::new(&model, 0.0, model.rest_state(), mode_free(), 1e-8);
-            flow.integrate(t_end, |_, _| {})?;
-            Ok(())
+        let sine = Sine::from_rms_g(g, freq_hz);
+        let (_, ours) = endstop::with_harvester!(device, |model| {
+            cpu(|| {
+                let mut flow =
+                    SineFlow::new(&model, sine, 0.0, model.rest_state(), Mode::FREE, 1e-8);
+                flow.integrate(t_end, |_, _| {})?;
+                Ok(())
+            })
         })?;
         let tmp = common::ngspice::TempDir(
             std::env::temp_dir().join(format!("endstop-bench-{}", std::process::id())),

@@ -311,7 +311,15 @@ pub(super) fn identify(device: &Device, scale: f64, data: &SweepData) -> Result<
     for p in &data.points {
         let f = p.freq_hz;
         let j = path.nearest(f);
-        let step_orbit = |j: usize| stable_orbit(&h, f, a, 0.0, nalgebra::SVector::from_column_slice(path.steps[j].state.as_slice()));
+        let step_orbit = |j: usize| {
+            stable_orbit(
+                &h,
+                f,
+                a,
+                0.0,
+                nalgebra::SVector::from_column_slice(path.steps[j].state.as_slice()),
+            )
+        };
         let (Some(fold), Some(k)) = (&fold, k_jump) else {
             points.push((true, PointModel::Orbit(Box::new(step_orbit(j)?))));
             continue;

@@ -96,8 +96,8 @@ use crate::ode::Options;
 
 pub use driven::Driven;
 pub use flight::{FlightSplit, FlightVisitor, NoFlight, Remainder};
-pub use ledger::{Books, Ledger};
 pub use layout::{Layout, Load, Slot, MAX_OUTPUTS};
+pub use ledger::{Books, Ledger};
 pub use mode::{Contact, Mode, SwitchKind, MAX_CIRCUITS, MAX_CONTACTS};
 
 /// The state of a model of dimension `N`.

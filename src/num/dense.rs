@@ -56,9 +56,7 @@ impl<const N: usize> ComplexLu<N> {
     /// The decomposition of `m`.
     pub fn of(m: &SMatrix<Complex<f64>, N, N>) -> Self {
         if N == 4 {
-            ComplexLu::Four(
-                nalgebra::Matrix4::<Complex<f64>>::from_column_slice(m.as_slice()).lu(),
-            )
+            ComplexLu::Four(nalgebra::Matrix4::<Complex<f64>>::from_column_slice(m.as_slice()).lu())
         } else {
             ComplexLu::Dynamic(DMatrix::from_column_slice(N, N, m.as_slice()).lu())
         }
@@ -105,11 +103,13 @@ mod tests {
 
     #[test]
     fn four_and_five_solve_and_find_eigenvalues_alike() {
-        let m4 = SMatrix::<f64, 4, 4>::from_fn(|i, j| if i == j { 2.0 } else { 0.1 * (i + j) as f64 });
+        let m4 =
+            SMatrix::<f64, 4, 4>::from_fn(|i, j| if i == j { 2.0 } else { 0.1 * (i + j) as f64 });
         let b4 = SVector::<f64, 4>::new(1.0, 2.0, 3.0, 4.0);
         let x4 = Lu::of(&m4).solve(&b4).unwrap();
         assert!((m4 * x4 - b4).norm() < 1e-14);
-        let m5 = SMatrix::<f64, 5, 5>::from_fn(|i, j| if i == j { 2.0 } else { 0.1 * (i + j) as f64 });
+        let m5 =
+            SMatrix::<f64, 5, 5>::from_fn(|i, j| if i == j { 2.0 } else { 0.1 * (i + j) as f64 });
         let b5 = SVector::<f64, 5>::new(1.0, 2.0, 3.0, 4.0, 5.0);
         let x5 = Lu::of(&m5).solve(&b5).unwrap();
         assert!((m5 * x5 - b5).norm() < 1e-14);
@@ -123,6 +123,8 @@ mod tests {
         ev.sort_by(|a, b| a.re.total_cmp(&b.re).then(a.im.total_cmp(&b.im)));
         assert!((ev[0] - Complex::new(0.0, -1.0)).norm() < 1e-12);
         assert!((ev[1] - Complex::new(0.0, 1.0)).norm() < 1e-12);
-        assert!(ev[2..].iter().all(|e| (e - Complex::new(3.0, 0.0)).norm() < 1e-12));
+        assert!(ev[2..]
+            .iter()
+            .all(|e| (e - Complex::new(3.0, 0.0)).norm() < 1e-12));
     }
 }

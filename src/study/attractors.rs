@@ -225,12 +225,9 @@ pub fn find_attractors<M: Model<N>, const N: usize>(
             out.unstable += 1;
             continue;
         }
-        let known = out
-            .found
-            .iter()
-            .any(|f| {
-                shooter.norm(&(f.orbit.state_n::<N>() - orbit.state_n::<N>())) < search.same_tol
-            });
+        let known = out.found.iter().any(|f| {
+            shooter.norm(&(f.orbit.state_n::<N>() - orbit.state_n::<N>())) < search.same_tol
+        });
         if known {
             out.repeats += 1;
             continue;

@@ -275,7 +275,14 @@ pub fn steady_state<M: Model<N>, const N: usize>(
     }
     let period = sine.period_s();
     let sc = model.scales();
-    let mut flow = SineFlow::new(model, sine, 0.0, *start, model.mode_of(start), settings.rtol);
+    let mut flow = SineFlow::new(
+        model,
+        sine,
+        0.0,
+        *start,
+        model.mode_of(start),
+        settings.rtol,
+    );
     flow.integrate(settings.transient_periods as f64 * period, |_, _| {})?;
     let mut y = flow.y();
     let after_transient = y;
@@ -291,7 +298,14 @@ pub fn steady_state<M: Model<N>, const N: usize>(
             break;
         }
         if newton_steps >= settings.max_newton {
-            return iterate_map(model, sine, &after_transient, settings, newton_steps, residual);
+            return iterate_map(
+                model,
+                sine,
+                &after_transient,
+                settings,
+                newton_steps,
+                residual,
+            );
         }
         let lu = crate::num::dense::Lu::of(&(jac - SMatrix::<f64, N, N>::identity()));
         let newton = |f: &SVector<f64, N>| -> SVector<f64, N> { lu.solve(&(-f)).unwrap_or(-f) };
@@ -505,14 +519,18 @@ impl Forcing {
     }
 }
 
-
 /// The steady state of `device` under `sine` from rest ([`steady_state`] on its model).
 pub fn steady_state_from_rest(
     device: &crate::device::Device,
     sine: Sine,
     settings: &SteadySettings,
 ) -> Result<PeriodicState, PeriodicError> {
-    crate::with_harvester!(device, |h| steady_state(&h, sine, &h.rest_state(), settings))
+    crate::with_harvester!(device, |h| steady_state(
+        &h,
+        sine,
+        &h.rest_state(),
+        settings
+    ))
 }
 
 /// The steady states of `device` at each frequency (Hz) in order, at `accel_rms_g`, from rest

@@ -272,12 +272,15 @@ pub fn steady_state<M: Model<N>, const N: usize>(
         };
         prev = Some((v1, v2));
         if converged || blocks >= cfg.max_blocks {
-            let power = |i: usize, sq: f64, int: f64| {
-                match model.layout().outputs.get(i).and_then(|o| o.load) {
-                    Some(Load::Resistor(r)) => sq / dur / r,
-                    Some(l) => l.mean_power(int / dur, sq / dur),
-                    None => 0.0,
-                }
+            let power = |i: usize, sq: f64, int: f64| match model
+                .layout()
+                .outputs
+                .get(i)
+                .and_then(|o| o.load)
+            {
+                Some(Load::Resistor(r)) => sq / dur / r,
+                Some(l) => l.mean_power(int / dur, sq / dur),
+                None => 0.0,
             };
             let m = Measurement {
                 freq_hz: sine.freq_hz,

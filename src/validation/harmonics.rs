@@ -31,12 +31,18 @@ pub fn first_harmonic<M: Model<N>, const N: usize>(
     let w = 2.0 * std::f64::consts::PI * forcing.freq_hz;
     let period = forcing.period_s();
     let mut sum = Complex::new(0.0, 0.0);
-    shooter.flow(forcing, orbit.phase_rad, orbit.state_n(), period, |st, _| {
-        for (x, wt) in GAUSS_LEGENDRE_3 {
-            let t = st.t0 + x * st.h;
-            let arg = w * t + orbit.phase_rad;
-            sum += Complex::new(arg.cos(), -arg.sin()) * (wt * st.h * f(&st.at_theta(x)));
-        }
-    })?;
+    shooter.flow(
+        forcing,
+        orbit.phase_rad,
+        orbit.state_n(),
+        period,
+        |st, _| {
+            for (x, wt) in GAUSS_LEGENDRE_3 {
+                let t = st.t0 + x * st.h;
+                let arg = w * t + orbit.phase_rad;
+                sum += Complex::new(arg.cos(), -arg.sin()) * (wt * st.h * f(&st.at_theta(x)));
+            }
+        },
+    )?;
     Ok(sum * (2.0 / period))
 }

@@ -23,10 +23,10 @@ use nalgebra::Complex;
 
 use crate::device::{Device, Transducer};
 use crate::drive::Sine;
-use crate::ode::Stats;
-use crate::physics::closed_forms::{Electromagnetic, Oscillator, Piezoelectric};
 use crate::model::Model;
+use crate::ode::Stats;
 use crate::physics::assembly::Harvester;
+use crate::physics::closed_forms::{Electromagnetic, Oscillator, Piezoelectric};
 use crate::physics::linear::LinearResponse;
 use crate::study::orbit::{Forcing, Orbit, OrbitError, Parameter, Shooter, ShootingConfig};
 use crate::validation::harmonics::first_harmonic;

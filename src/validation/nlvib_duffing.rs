@@ -28,8 +28,8 @@
 use serde::Deserialize;
 
 use crate::device::Device;
-use crate::ode::Stats;
 use crate::model::Model;
+use crate::ode::Stats;
 use crate::physics::assembly::Harvester;
 use crate::progress::Silent;
 use crate::study::continuation::{continue_branch, first_orbit, Branch, ContinuationSettings};

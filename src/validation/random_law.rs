@@ -36,9 +36,9 @@
 use rayon::prelude::*;
 
 use crate::device::{Device, StopLaw};
+use crate::model::Ledger;
 use crate::num::stats::MeanCi;
 use crate::physics::closed_forms::white_noise_input_power_w;
-use crate::model::Ledger;
 use crate::study::record::{FreeFlightPath, RecordSpec};
 use crate::study::record_ledger::record_ledgers;
 use crate::validation::band_limit::ImpactTerm;

@@ -3,8 +3,8 @@
 //! for many periods, and a criterion with short blocks can accept that dying state as steady.
 
 use crate::drive::Sine;
-use crate::ode::Stats;
 use crate::model::Model;
+use crate::ode::Stats;
 use crate::physics::assembly::Harvester;
 use crate::study::continuation::Branch;
 use crate::study::orbit::{Forcing, OrbitError, Shooter};

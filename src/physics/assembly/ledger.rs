@@ -162,7 +162,10 @@ impl<const N: usize> Harvester<N> {
             SwitchKind::Circuit => {
                 let mut rest = dropped;
                 if let Port::Circuit(c) = &self.port {
-                    let (a, b) = (CircuitMode::of(from.circuit(0)), CircuitMode::of(to.circuit(0)));
+                    let (a, b) = (
+                        CircuitMode::of(from.circuit(0)),
+                        CircuitMode::of(to.circuit(0)),
+                    );
                     // An extremum flips the heading; its reset loses what the switch takes.
                     if a.heading != b.heading {
                         let mut probe = *before;

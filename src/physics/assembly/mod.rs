@@ -315,7 +315,14 @@ impl<const N: usize> Harvester<N> {
 
     /// Where a rebound off the rigid stop on `side` (at the stop, with the velocity before the
     /// impact `y[1]`) leads: the state after, and whether the mass rests on the stop.
-    fn rebound(&self, side: Side, restitution: f64, bits: u8, y: &mut SVector<f64, N>, a: f64) -> bool {
+    fn rebound(
+        &self,
+        side: Side,
+        restitution: f64,
+        bits: u8,
+        y: &mut SVector<f64, N>,
+        a: f64,
+    ) -> bool {
         y[1] *= -restitution;
         let u = y[1].abs();
         // The acceleration that presses the mass onto the stop.
@@ -411,7 +418,9 @@ impl<const N: usize> Harvester<N> {
                 s[(2, 3)] = 1.0;
                 s[(3, 2)] = 1.0;
             }
-            Port::Loaded(TransducerModel::Piezo { .. } | TransducerModel::Electromagnetic { .. }) => {
+            Port::Loaded(
+                TransducerModel::Piezo { .. } | TransducerModel::Electromagnetic { .. },
+            ) => {
                 s[(2, 2)] = -1.0;
                 s[(3, 3)] = 1.0;
             }
@@ -744,7 +753,11 @@ impl<const N: usize> Model<N> for Harvester<N> {
             Port::Loaded(_) => vec![0],
             Port::Circuit(_) => {
                 let mut v = Vec::new();
-                for bridge in [circuits::Bridge::Off, circuits::Bridge::Positive, circuits::Bridge::Negative] {
+                for bridge in [
+                    circuits::Bridge::Off,
+                    circuits::Bridge::Positive,
+                    circuits::Bridge::Negative,
+                ] {
                     for heading in [circuits::Heading::Up, circuits::Heading::Down] {
                         v.push(circuits::CircuitMode { bridge, heading }.bits());
                     }
@@ -777,9 +790,7 @@ impl<const N: usize> Model<N> for Harvester<N> {
         match &self.port {
             Port::Loaded(t) => t.check(y[0], &port::head(y)),
             Port::Circuit(c) => match c.element {
-                circuits::Element::Pair(p) => {
-                    TransducerModel::Pair(p).check(y[0], &port::head(y))
-                }
+                circuits::Element::Pair(p) => TransducerModel::Pair(p).check(y[0], &port::head(y)),
                 _ => Ok(()),
             },
         }

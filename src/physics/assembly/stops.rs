@@ -115,14 +115,7 @@ impl FrameStops {
     /// The contacts' guards of `mode` into `g[0..4]` (see the module docs); `holding` is the
     /// force that presses the mass onto a side's stop, asked only when it rests there.
     #[inline(always)]
-    pub fn guards(
-        &self,
-        mode: Mode,
-        x: f64,
-        v: f64,
-        holding: impl Fn(Side) -> f64,
-        g: &mut [f64],
-    ) {
+    pub fn guards(&self, mode: Mode, x: f64, v: f64, holding: impl Fn(Side) -> f64, g: &mut [f64]) {
         match Self::touching(mode) {
             None => {
                 g[0] = self.penetration(Side::Upper, x);

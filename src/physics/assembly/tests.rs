@@ -43,9 +43,18 @@ fn devices() -> Vec<Device> {
 fn contact_modes() -> Vec<(OldMode, Mode)> {
     let mut v = vec![(OldMode::Free, Mode::FREE)];
     for (side, k) in [(Side::Upper, 0), (Side::Lower, 1)] {
-        v.push((OldMode::Contact(side), Mode::FREE.with_contact(k, Contact::Pressed)));
-        v.push((OldMode::Clipped(side), Mode::FREE.with_contact(k, Contact::Clipped)));
-        v.push((OldMode::Stuck(side), Mode::FREE.with_contact(k, Contact::Resting)));
+        v.push((
+            OldMode::Contact(side),
+            Mode::FREE.with_contact(k, Contact::Pressed),
+        ));
+        v.push((
+            OldMode::Clipped(side),
+            Mode::FREE.with_contact(k, Contact::Clipped),
+        ));
+        v.push((
+            OldMode::Stuck(side),
+            Mode::FREE.with_contact(k, Contact::Resting),
+        ));
     }
     v
 }
@@ -87,15 +96,27 @@ fn the_assembly_is_the_loaded_harvester_bit_for_bit() {
             let a = sine.accel(t);
             for (om, nm) in contact_modes() {
                 let (fo, fn_) = (old.rhs(om, t, &y), new.rhs(nm, &y, a));
-                assert!(fo.iter().zip(fn_.iter()).all(|(p, q)| same(*p, *q)), "{} {om:?} rhs {fo} {fn_}", dev.name);
+                assert!(
+                    fo.iter().zip(fn_.iter()).all(|(p, q)| same(*p, *q)),
+                    "{} {om:?} rhs {fo} {fn_}",
+                    dev.name
+                );
                 let (jo, jn) = (old.jacobian(om, &y), new.jacobian(nm, &y));
-                assert!(jo.iter().zip(jn.iter()).all(|(p, q)| same(*p, *q)), "{} {om:?} jac", dev.name);
+                assert!(
+                    jo.iter().zip(jn.iter()).all(|(p, q)| same(*p, *q)),
+                    "{} {om:?} jac",
+                    dev.name
+                );
                 let go = old.guard_values(om, t, &y);
                 let mut gn = vec![0.0; new.guard_count()];
                 new.guards(nm, &y, || a, &mut gn);
                 for i in 0..2 {
                     if go[i] != f64::NEG_INFINITY {
-                        assert!(same(go[i], gn[guard_index(om, i)]), "{} {om:?} guard {i}", dev.name);
+                        assert!(
+                            same(go[i], gn[guard_index(om, i)]),
+                            "{} {om:?} guard {i}",
+                            dev.name
+                        );
                     }
                 }
                 // Every guard that can fire switches to the same state.
@@ -106,8 +127,16 @@ fn the_assembly_is_the_loaded_harvester_bit_for_bit() {
                     let (mut yo, mut yn) = (y, y);
                     let mo = old.switch(om, i, t, &mut yo);
                     let mn = new.switch(nm, guard_index(om, i), &mut yn, a);
-                    assert!(yo.iter().zip(yn.iter()).all(|(p, q)| same(*p, *q)), "{} {om:?} switch {i}", dev.name);
-                    let expect = contact_modes().into_iter().find(|(o, _)| *o == mo).unwrap().1;
+                    assert!(
+                        yo.iter().zip(yn.iter()).all(|(p, q)| same(*p, *q)),
+                        "{} {om:?} switch {i}",
+                        dev.name
+                    );
+                    let expect = contact_modes()
+                        .into_iter()
+                        .find(|(o, _)| *o == mo)
+                        .unwrap()
+                        .1;
                     assert_eq!(mn, expect, "{} {om:?} switch {i}", dev.name);
                 }
                 compared += 1;
@@ -142,19 +171,45 @@ fn the_assembly_is_the_interfaced_harvester_bit_for_bit() {
                         (OldBridge::Positive, Bridge::Positive),
                         (OldBridge::Negative, Bridge::Negative),
                     ] {
-                        for (oh, nh) in [(OldHeading::Up, Heading::Up), (OldHeading::Down, Heading::Down)] {
-                            let om = IfMode { contact: oc, bridge: ob, heading: oh };
-                            let nm = nc.with_circuit(0, CircuitMode { bridge: nb, heading: nh }.bits());
+                        for (oh, nh) in [
+                            (OldHeading::Up, Heading::Up),
+                            (OldHeading::Down, Heading::Down),
+                        ] {
+                            let om = IfMode {
+                                contact: oc,
+                                bridge: ob,
+                                heading: oh,
+                            };
+                            let nm = nc.with_circuit(
+                                0,
+                                CircuitMode {
+                                    bridge: nb,
+                                    heading: nh,
+                                }
+                                .bits(),
+                            );
                             let (fo, fn_) = (old.rhs(om, t, &y), new.rhs(nm, &y, a));
-                            assert!(fo.iter().zip(fn_.iter()).all(|(p, q)| same(*p, *q)), "{} {kind} {om:?} rhs {fo} {fn_}", dev.name);
+                            assert!(
+                                fo.iter().zip(fn_.iter()).all(|(p, q)| same(*p, *q)),
+                                "{} {kind} {om:?} rhs {fo} {fn_}",
+                                dev.name
+                            );
                             let (jo, jn) = (old.jacobian(om, &y), new.jacobian(nm, &y));
-                            assert!(jo.iter().zip(jn.iter()).all(|(p, q)| same(*p, *q)), "{} {kind} {om:?} jac {jo} {jn}", dev.name);
+                            assert!(
+                                jo.iter().zip(jn.iter()).all(|(p, q)| same(*p, *q)),
+                                "{} {kind} {om:?} jac {jo} {jn}",
+                                dev.name
+                            );
                             let go = old.guard_values(om, t, &y);
                             let mut gn = vec![0.0; new.guard_count()];
                             new.guards(nm, &y, || a, &mut gn);
                             for i in 0..3 {
                                 if go[i] != f64::NEG_INFINITY {
-                                    assert!(same(go[i], gn[guard_index(oc, i)]), "{} {kind} {om:?} guard {i}", dev.name);
+                                    assert!(
+                                        same(go[i], gn[guard_index(oc, i)]),
+                                        "{} {kind} {om:?} guard {i}",
+                                        dev.name
+                                    );
                                 }
                             }
                             if go[2] != f64::NEG_INFINITY {
@@ -162,17 +217,30 @@ fn the_assembly_is_the_interfaced_harvester_bit_for_bit() {
                                 old.switch(om, 2, t, &mut yo);
                                 let mn = new.switch(nm, 4, &mut yn, a);
                                 let after = CircuitMode::of(mn.circuit(0));
-                                if nb != Bridge::Off && after.bridge == Bridge::Off && after.heading == nh && yo[2] != yn[2] {
+                                if nb != Bridge::Off
+                                    && after.bridge == Bridge::Off
+                                    && after.heading == nh
+                                    && yo[2] != yn[2]
+                                {
                                     // The one intended difference: leaving an ideal capacitive
                                     // port's conduction puts its voltage on the threshold, so
                                     // that the off mode's conduction guard starts at zero.
                                     // (On a storage voltage of either sign: the threshold
                                     // `Vs + 2 V_F` is then negative on some random states.)
                                     let threshold = yn[3] + new.circuit().unwrap().path_drop();
-                                    assert_eq!(yn[2], nb.sign() * threshold, "{} {kind} {om:?} exit", dev.name);
+                                    assert_eq!(
+                                        yn[2],
+                                        nb.sign() * threshold,
+                                        "{} {kind} {om:?} exit",
+                                        dev.name
+                                    );
                                     yo[2] = yn[2];
                                 }
-                                assert!(yo.iter().zip(yn.iter()).all(|(p, q)| same(*p, *q)), "{} {kind} {om:?} circuit switch", dev.name);
+                                assert!(
+                                    yo.iter().zip(yn.iter()).all(|(p, q)| same(*p, *q)),
+                                    "{} {kind} {om:?} circuit switch",
+                                    dev.name
+                                );
                             }
                             compared += 1;
                         }

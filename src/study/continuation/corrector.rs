@@ -77,7 +77,10 @@ impl<M: Model<N>, const N: usize> Continuer<'_, '_, M, N> {
 
     pub(super) fn u_of(&self, o: &Orbit) -> DVector<f64> {
         let z = o.state_n::<N>().component_div(&self.shooter.scales());
-        join(&z, o.param(self.settings.parameter) / self.settings.param_scale)
+        join(
+            &z,
+            o.param(self.settings.parameter) / self.settings.param_scale,
+        )
     }
 
     /// `[M - I | dP/dq]` of a monodromy in scaled coordinates and a scaled parameter column.
@@ -187,7 +190,6 @@ impl<M: Model<N>, const N: usize> Continuer<'_, '_, M, N> {
         let m = self.shooter.scaled_monodromy(&lin.monodromy);
         Self::jac_of(&m, &(lin.dp.component_div(&sc) * self.settings.param_scale))
     }
-
 
     /// The point at arclength `s` from `from` along its tangent, with its tangent.
     pub(super) fn point_at(

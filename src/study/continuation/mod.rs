@@ -64,7 +64,6 @@ pub use diagram::{
 };
 pub use types::{Branch, BranchPoint, ContinuationSettings, Event, EventKind, Rejection};
 
-
 /// The first orbit of a branch: Newton at `forcing` from `guess` (the state at drive phase
 /// zero), or, if that fails, from the state after a transient of `transient_periods` periods
 /// from `guess`; its section is then moved into free flight.

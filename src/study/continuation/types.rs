@@ -288,7 +288,8 @@ impl Branch {
                 &w[1].orbit
             };
             let f = start.forcing.with(self.parameter, value);
-            let mut o = shooter.solve(&f, self.parameter, start.phase_rad, start.state_n(), stats)?;
+            let mut o =
+                shooter.solve(&f, self.parameter, start.phase_rad, start.state_n(), stats)?;
             if !shooter.section_is_free(&o) {
                 o = shooter.reanchor(&o, self.parameter, stats)?;
             }

@@ -75,8 +75,23 @@ impl<'m, M: Model<N>, const N: usize> SineFlow<'m, M, N> {
     /// An integrator of `model` under `sine` from `y0` in `mode` at time `t0`, with
     /// Dormand-Prince at relative tolerance `rtol` ([`Model::solver_options`]) where it is not
     /// exact.
-    pub fn new(model: &'m M, sine: Sine, t0: f64, y0: SVector<f64, N>, mode: Mode, rtol: f64) -> Self {
-        Self::with(model, sine, t0, y0, mode, model.solver_options(rtol), SineScheme::Exact)
+    pub fn new(
+        model: &'m M,
+        sine: Sine,
+        t0: f64,
+        y0: SVector<f64, N>,
+        mode: Mode,
+        rtol: f64,
+    ) -> Self {
+        Self::with(
+            model,
+            sine,
+            t0,
+            y0,
+            mode,
+            model.solver_options(rtol),
+            SineScheme::Exact,
+        )
     }
 
     /// As [`SineFlow::new`], with the integrator's options and the scheme given.

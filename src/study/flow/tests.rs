@@ -191,7 +191,13 @@ fn exact_variational_equations_match_finite_differences() {
         .unwrap();
     assert!(orbit.summary.impacts > 0);
     let lin = shooter
-        .linearise(&forcing, Parameter::Frequency, 0.0, orbit.state_n(), &mut stats)
+        .linearise(
+            &forcing,
+            Parameter::Frequency,
+            0.0,
+            orbit.state_n(),
+            &mut stats,
+        )
         .unwrap();
     let exact = shooter.scaled_monodromy(&lin.monodromy);
     for eps in [3e-5, 1e-5] {

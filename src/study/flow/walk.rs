@@ -264,7 +264,9 @@ impl<S: Carrier<N>, const N: usize> Engine<S, N> {
             if self.ode_current {
                 let modes = &self.modes;
                 let back = self.ode.integrate_until(&self.sys, t_end, observer, |m| {
-                    modes.as_ref().is_some_and(|a| a.iter().any(|am| am.mode == m))
+                    modes
+                        .as_ref()
+                        .is_some_and(|a| a.iter().any(|am| am.mode == m))
                 })?;
                 self.t = self.ode.t();
                 self.z = self.ode.y();
@@ -525,7 +527,8 @@ impl<S: Carrier<N>, const N: usize> Engine<S, N> {
                 (lo, y_lo, p_lo) = (lo + ds, y_c, p_c);
             }
         }
-        let y = y_hi.unwrap_or_else(|| expm_n(&(am.l * hi)) * (a.y - a.p) + am.particular(a.t + hi));
+        let y =
+            y_hi.unwrap_or_else(|| expm_n(&(am.l * hi)) * (a.y - a.p) + am.particular(a.t + hi));
         (hi, y)
     }
 

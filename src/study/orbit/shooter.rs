@@ -75,7 +75,14 @@ impl<'a, M: Model<N>, const N: usize> Shooter<'a, M, N> {
         observer: O,
     ) -> Result<(SVector<f64, N>, Mode, Stats), SolverError> {
         let sine = forcing.sine(phase_rad);
-        let mut ode = SineFlow::new(self.base, sine, 0.0, y, self.base.mode_of(&y), self.cfg.rtol);
+        let mut ode = SineFlow::new(
+            self.base,
+            sine,
+            0.0,
+            y,
+            self.base.mode_of(&y),
+            self.cfg.rtol,
+        );
         ode.integrate(duration_s, observer)?;
         Ok((ode.y(), ode.mode(), ode.stats()))
     }
@@ -152,7 +159,14 @@ impl<'a, M: Model<N>, const N: usize> Shooter<'a, M, N> {
     ) -> Result<Linearised<N>, SolverError> {
         let sys = Tangents::new(self.base, sine, param);
         let opts = tangent_options(self.base, &self.scales, self.cfg.rtol, p_ref);
-        let mut ode = Engine::new(sys, 0.0, Tangent::start(y), self.base.mode_of(&y), opts, true);
+        let mut ode = Engine::new(
+            sys,
+            0.0,
+            Tangent::start(y),
+            self.base.mode_of(&y),
+            opts,
+            true,
+        );
         let period = sine.period_s();
         ode.integrate_observed(
             duration_s,
@@ -230,7 +244,14 @@ impl<'a, M: Model<N>, const N: usize> Shooter<'a, M, N> {
         let sine = forcing.sine(phase_rad);
         let outputs = self.base.layout().outputs.len();
         let mut acc = Accumulator::new(self.base, outputs);
-        let mut ode = SineFlow::new(self.base, sine, 0.0, y, self.base.mode_of(&y), self.cfg.rtol);
+        let mut ode = SineFlow::new(
+            self.base,
+            sine,
+            0.0,
+            y,
+            self.base.mode_of(&y),
+            self.cfg.rtol,
+        );
         ode.integrate_observed(forcing.period_s(), &mut acc)?;
         let (end, st) = (ode.y(), ode.stats());
         *stats += st;

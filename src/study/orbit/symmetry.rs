@@ -13,7 +13,6 @@
 
 use nalgebra::{Complex, SMatrix, SVector};
 
-
 use crate::model::Model;
 use crate::ode::Stats;
 
@@ -58,7 +57,12 @@ impl<M: Model<N>, const N: usize> Shooter<'_, M, N> {
         Ok(Some(self.defect(&s, &orbit.state_n(), &y)))
     }
 
-    fn defect(&self, s: &SMatrix<f64, N, N>, y0: &SVector<f64, N>, y_half: &SVector<f64, N>) -> f64 {
+    fn defect(
+        &self,
+        s: &SMatrix<f64, N, N>,
+        y0: &SVector<f64, N>,
+        y_half: &SVector<f64, N>,
+    ) -> f64 {
         self.norm(&(s * y_half - y0)) / self.norm(y0).max(1e-300)
     }
 

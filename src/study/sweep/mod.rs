@@ -38,8 +38,8 @@
 //! that the ghost of the merged orbits cannot hold the state on a branch that has ended.
 
 use crate::device::Device;
-use crate::ode::{SolverError, Stats};
 use crate::model::Model;
+use crate::ode::{SolverError, Stats};
 use crate::progress::Progress;
 use crate::study::steady::{steady_config_across_folds, Measurement, SteadyConfig};
 use crate::study::stepped::{
@@ -462,8 +462,8 @@ pub fn compare_sweeps(reference: &SweepReport, refined: &SweepReport) -> SweepCo
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::progress::Silent;
     use crate::drive::Sine;
+    use crate::progress::Silent;
     use crate::study::steady::{steady_config, steady_state};
     use crate::study::stepped::linspace_step;
 

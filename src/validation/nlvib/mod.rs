@@ -32,8 +32,8 @@
 //! used as a verdict (the provenance explains why).
 
 use crate::device::Device;
-use crate::ode::Stats;
 use crate::model::Model;
+use crate::ode::Stats;
 use crate::physics::assembly::Harvester;
 
 /// The problem's state: one mass, no transducer.

@@ -44,7 +44,11 @@ use crate::study::orbit::{multipliers, Extent, Forcing, OrbitSummary, Parameter}
 use super::segment::{fly, Flight};
 
 /// An orbit's measures, its section (drive phase, state) if it has one, and its fingerprint.
-type Measures<const N: usize> = (OrbitSummary, Option<(f64, SVector<f64, N>)>, SVector<f64, N>);
+type Measures<const N: usize> = (
+    OrbitSummary,
+    Option<(f64, SVector<f64, N>)>,
+    SVector<f64, N>,
+);
 
 /// How the chain of flights closes.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -300,7 +304,17 @@ impl<'a, M: Model<N>, const N: usize> Problem<'a, M, N> {
             let sine = self.drive(forcing, p0);
             let pre = self.pre_state(z, k);
             let y0 = self.rebound(k, &pre);
-            let fl = fly(self.base, sine, self.param, y0, tau, self.rtol, sc, &[], stats)?;
+            let fl = fly(
+                self.base,
+                sine,
+                self.param,
+                y0,
+                tau,
+                self.rtol,
+                sc,
+                &[],
+                stats,
+            )?;
             let last = k + 1 == n;
             let kn = if last { 0 } else { k + 1 };
             let mut target = self.pre_state(z, kn);
@@ -359,7 +373,8 @@ impl<'a, M: Model<N>, const N: usize> Problem<'a, M, N> {
                 };
                 if e > excursion_m {
                     excursion_m = e;
-                    excursion_at = Some((k, x.t, side, DVector::from_column_slice(x.state.as_slice())));
+                    excursion_at =
+                        Some((k, x.t, side, DVector::from_column_slice(x.state.as_slice())));
                 }
             }
         }

@@ -51,8 +51,8 @@ mod segment;
 mod starts;
 
 pub use build::{rigid_diagram, DiagramOptions};
-pub use bvp::{Closure, ImpactSequence};
 pub(crate) use bvp::side_stops;
+pub use bvp::{Closure, ImpactSequence};
 
 use super::diagram::{
     BranchEnd, BranchKind, Diagram, DiagramBranch, DiagramEvent, DiagramPoint, EndKind, EventKind,

@@ -217,9 +217,8 @@ fn integrate<V: crate::ode::Vector>(st: &Step<V>, mut f: impl FnMut(&V) -> f64) 
 /// theta in [0, 1] where component `c` of a step's dense output changes sign, to 1e-13 of
 /// the step.
 fn root_on_step<const N: usize>(st: &Step<Aug<N>>, c: usize) -> Option<f64> {
-    let f = |th: f64| -> Result<(f64, ()), std::convert::Infallible> {
-        Ok((st.at_theta(th).y[c], ()))
-    };
+    let f =
+        |th: f64| -> Result<(f64, ()), std::convert::Infallible> { Ok((st.at_theta(th).y[c], ())) };
     let opts = RootOptions {
         f_tol: None,
         x_tol_abs: 1e-13,
