@@ -122,6 +122,27 @@ impl<const N: usize> AffineGuard<N> {
     pub fn at(&self, y: &SVector<f64, N>) -> f64 {
         self.n.dot(y) + self.g0
     }
+
+    /// Whether the guard is positive at `y` beyond the rounding of its own evaluation: the
+    /// sum `n . y + g0` carries an error of at most `(N + 1) eps (sum |n_i y_i| + |g0|)`
+    /// (Higham, Accuracy and Stability of Numerical Algorithms, 2nd ed., eq. 3.5), so a value
+    /// within that bound of zero is zero. A state a switch has put exactly on the guard's
+    /// threshold (a bridge's port voltage projected onto `Vs + 2 V_F`) then does not read as
+    /// past it by a rounding error and switch back at once.
+    #[inline]
+    pub fn positive_beyond_rounding(&self, y: &SVector<f64, N>) -> bool {
+        let g = self.at(y);
+        if g <= 0.0 {
+            return false;
+        }
+        let size: f64 = self
+            .n
+            .iter()
+            .zip(y.iter())
+            .map(|(n, y)| (n * y).abs())
+            .sum();
+        g > (N + 1) as f64 * f64::EPSILON * (size + self.g0.abs())
+    }
 }
 
 /// A mode in which the model is affine: `y' = L y + c a + d`, with guards affine in the state.

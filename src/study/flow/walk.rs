@@ -323,9 +323,11 @@ impl<S: Carrier<N>, const N: usize> Engine<S, N> {
     ) -> Result<(), SolverError> {
         let modes = self.modes.as_ref().expect("an affine mode has its modes");
         let am = modes[i].clone();
-        // A guard already positive at the start fires at once (as in Dormand-Prince).
+        // A guard already positive at the start fires at once (as in Dormand-Prince); one
+        // within the rounding of its affine row is at zero (see
+        // `AffineGuard::positive_beyond_rounding`).
         let y: SVector<f64, N> = head(&self.z);
-        if let Some(g) = am.guards.iter().find(|g| g.at(&y) > 0.0) {
+        if let Some(g) = am.guards.iter().find(|g| g.positive_beyond_rounding(&y)) {
             return self.switch(&am, g.index, y, observer);
         }
         let t0 = self.t;
