@@ -697,7 +697,8 @@ impl Circuit {
                     // conduction whose current is already negative, again and again; put on
                     // the threshold (a projection within rounding), it starts at zero.
                     Element::Piezo { .. } | Element::Pair(_) if self.ron() == 0.0 => {
-                        self.project(b.sign(), y)
+                        self.project(b.sign(), y);
+                        self.settle_off(b.sign(), mode, y, sc);
                     }
                     _ => {}
                 }
@@ -721,6 +722,41 @@ impl Circuit {
                 y[self.e + 1] += dq;
             }
             Element::Coil { .. } => {}
+        }
+    }
+
+    /// After a conduction's exit has put the port's voltage on the threshold, moves it inside
+    /// by the off guard's excess where that guard still reads above zero: the projection holds
+    /// only within rounding (the pair's voltage is computed from its charges), and a guard a
+    /// rounding error above zero would switch the bridge back on at once, again and again.
+    /// The move is of the order of the last places of the voltage.
+    fn settle_off<const N: usize>(
+        &self,
+        s: f64,
+        mode: CircuitMode,
+        y: &mut SVector<f64, N>,
+        sc: &SVector<f64, N>,
+    ) {
+        let off = CircuitMode {
+            bridge: Bridge::Off,
+            ..mode
+        };
+        for _ in 0..4 {
+            let g = self.guards(off, y, sc)[0];
+            if g <= 0.0 {
+                return;
+            }
+            let dv = 2.0 * g * sc[self.vs] + f64::EPSILON * (y[self.vs].abs() + self.path_drop());
+            match self.element {
+                Element::Piezo { .. } => y[self.e] -= s * dv,
+                Element::Pair(_) => {
+                    let (el, _) = self.elastance_and_open_rate(y);
+                    let dq = s * dv / el;
+                    y[self.e] -= dq;
+                    y[self.e + 1] += dq;
+                }
+                Element::Coil { .. } => return,
+            }
         }
     }
 
