@@ -743,10 +743,13 @@ impl Circuit {
         };
         for _ in 0..4 {
             let g = self.guards(off, y, sc)[0];
-            if g <= 0.0 {
+            // Only a rounding error is settled: a state that cannot sit on the threshold
+            // (a negative one, `Vs < -2 V_F`) is left as projected.
+            let size = y[self.vs].abs() + self.path_drop();
+            if g <= 0.0 || g * sc[self.vs] > 64.0 * f64::EPSILON * size {
                 return;
             }
-            let dv = 2.0 * g * sc[self.vs] + f64::EPSILON * (y[self.vs].abs() + self.path_drop());
+            let dv = 2.0 * g * sc[self.vs] + f64::EPSILON * size;
             match self.element {
                 Element::Piezo { .. } => y[self.e] -= s * dv,
                 Element::Pair(_) => {
