@@ -40,13 +40,24 @@ pub(crate) fn sweep(a: RangeArgs) -> Result<()> {
         a.accel_rms_g,
         protocol.words(),
     );
+    // The model's first two named outputs (`v1`, `v2` across a transducer's loads; `vs`, the
+    // storage voltage, and `v_element` behind a circuit).
+    let names: Vec<String> = endstop::with_harvester!(&device, |h| {
+        use endstop::model::Model;
+        Ok::<_, anyhow::Error>(h.layout().outputs.iter().map(|s| s.name.clone()).collect())
+    })?;
+    let name = |i: usize| names.get(i).map_or("?", String::as_str);
     exp.number("step_hz", protocol.step_hz);
     let vmax = col(&|m| m.v1_rms_v).into_iter().fold(0.0, f64::max);
     let pmax = col(&|m| m.p_total_w()).into_iter().fold(0.0, f64::max);
     exp.number("v1_rms_max_v", vmax);
     exp.number("power_max_w", pmax);
     md.push_str(&format!(
-        "- largest RMS voltage of load 1: {} V; largest power of the loads: {} uW\n",
+        "- largest {}: {} V; largest power of the loads: {} uW\n",
+        match name(0) {
+            "v1" => "RMS voltage of load 1".to_string(),
+            other => format!("RMS of `{other}`"),
+        },
         fmt_sig(vmax, 4),
         fmt_sig(pmax * 1e6, 4)
     ));
@@ -91,17 +102,18 @@ pub(crate) fn sweep(a: RangeArgs) -> Result<()> {
             .map(|s| (s.measurement.freq_hz, f(&s.measurement)))
             .collect()
     };
+    let two_loads = device.interface.is_resistive() && device.transducer.loads() == 2;
     let mut series = vec![Series::new(
-        if device.transducer.loads() == 2 {
-            "V1 (one load)"
-        } else {
-            "V (the load)"
+        &match name(0) {
+            "v1" if two_loads => "V1 (one load)".to_string(),
+            "v1" => "V (the load)".to_string(),
+            other => other.to_string(),
         },
         pts(&|m| m.v1_rms_v),
         PALETTE[0],
         Style::LinePoints,
     )];
-    if device.transducer.loads() == 2 {
+    if two_loads {
         series.push(Series::new(
             "V2 - V1",
             pts(&|m| m.vdiff_rms_v),
