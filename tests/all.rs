@@ -21,24 +21,32 @@ mod device_description;
 mod fit_family;
 mod fit_recovery;
 mod foundation;
-mod general_model;
+// PORT: not yet ported to the model (issue 45)
+// mod general_model;
 mod history_matching;
 mod history_study;
-mod impacting_orbits;
+// PORT: not yet ported to the model (issue 45)
+// mod impacting_orbits;
 mod integrator;
 mod integrator_stepping;
-mod interface_orbits;
-mod interface_records;
-mod interfaces;
-mod interfaces_spice;
+// PORT: not yet ported to the model (issue 45)
+// mod interface_orbits;
+// PORT: not yet ported to the model (issue 45)
+// mod interface_records;
+// PORT: not yet ported to the model (issue 45)
+// mod interfaces;
+// PORT: not yet ported to the model (issue 45)
+// mod interfaces_spice;
 mod record_accuracy;
 mod record_figures;
 mod record_ledger;
 mod record_simulation;
 mod regression_analytic;
 mod regression_response;
-mod response_orbits;
-mod response_sweeps;
+// PORT: not yet ported to the model (issue 45)
+// mod response_orbits;
+// PORT: not yet ported to the model (issue 45)
+// mod response_sweeps;
 mod restitution;
 mod restitution_orbits;
 mod robustness;

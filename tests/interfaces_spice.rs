@@ -12,10 +12,10 @@ use std::process::Command;
 
 use endstop::device::{DcLoad, Device};
 use endstop::drive::Sine;
-use endstop::physics::harvester::State;
+use endstop::physics::transducer::State;
 use endstop::spice::bridge::{bridge_netlist, bridge_solver, dc_means, BridgeCase, BRIDGE_CASES};
 use endstop::spice::parse_wrdata;
-use endstop::study::interface::{steady_state, SteadySettings};
+use endstop::study::periodic::{steady_state_from_rest, SteadySettings};
 
 /// The periods ngspice runs from rest, and the periods in one decay time: the slowest decay of
 /// the transient is bounded by the mechanical ring-up time `2 m / c` (the bridge only adds
@@ -40,7 +40,7 @@ fn run(case: &BridgeCase) {
     let d = Device::from_toml_str(&text, case.file).unwrap();
     let f = d.suspension_omega_rad_s() / (2.0 * std::f64::consts::PI);
     let sine = Sine::from_rms_g(case.accel_rms_g, f);
-    let ours = steady_state(&d, sine, &State::zeros(), &SteadySettings::default()).unwrap();
+    let ours = steady_state_from_rest(&d, sine, &SteadySettings::default()).unwrap();
     let Some(DcLoad::Resistor { resistance_ohm }) = d.interface.load() else {
         unreachable!("the bridge netlist takes a resistor")
     };

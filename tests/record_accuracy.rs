@@ -18,7 +18,7 @@
 use endstop::device::Device;
 use endstop::ode::SolverError;
 use endstop::paper::setups::{paper_record, prototype1_setup, prototype2_setup};
-use endstop::physics::energy::EnergyLedger;
+use endstop::model::Ledger;
 use endstop::study::record::{simulate_record, RecordError, RecordSpec, Scheme, DEFAULT_RTOL};
 use endstop::study::record_ledger::record_ledger;
 use endstop::study::rk4_record::{
@@ -158,7 +158,7 @@ fn prototype2_record_with_impacts_does_not_converge_to_the_target() {
 
 /// The energy ledger of the benchmark's record of `dev` at `sa` by our scheme at the default
 /// tolerance, and its impacts.
-fn ledger(dev: &Device, sa: f64) -> (EnergyLedger, u64) {
+fn ledger(dev: &Device, sa: f64) -> (Ledger, u64) {
     let spec = paper_record(dev, sa);
     let (rec, l) = record_ledger(dev, &spec, SEED, 0).unwrap();
     assert_eq!(spec.rtol, DEFAULT_RTOL);

@@ -3,12 +3,12 @@
 //! impacts the balance is set by Dormand-Prince in contact and tightens with its tolerance.
 //!
 //! The target is the Performance chapter's: the balance closed to 1e-6 of the sum of its
-//! terms' magnitudes ([`EnergyLedger::relative_residual`]). The records are the ones the
+//! terms' magnitudes ([`Ledger::relative_residual`]). The records are the ones the
 //! bench measures (seed 2012, stream 0, 10 s): about 0.3-1 s each.
 
 use endstop::device::Device;
 use endstop::paper::setups::{paper_noise, paper_record, prototype2_setup};
-use endstop::physics::energy::EnergyLedger;
+use endstop::model::Ledger;
 use endstop::study::record::{simulate_record, RecordSpec, Scheme, DEFAULT_RTOL};
 use endstop::study::record_ledger::{record_ledger, record_ledgers};
 
@@ -23,7 +23,7 @@ fn prototype2() -> Device {
     prototype2_setup(&common::prototype2())
 }
 
-fn ledger(dev: &Device, sa: f64, scheme: Scheme, rtol: f64) -> (EnergyLedger, u64) {
+fn ledger(dev: &Device, sa: f64, scheme: Scheme, rtol: f64) -> (Ledger, u64) {
     let mut spec = paper_record(dev, sa);
     spec.scheme = scheme;
     spec.rtol = rtol;
@@ -55,7 +55,7 @@ fn the_exponential_step_closes_the_energy_balance_without_impacts() {
         let r = l.relative_residual();
         assert!(r.abs() < TARGET, "{name}: relative residual {r:e}");
         // Not an empty ledger: the loads took energy and the drive put it in.
-        assert!(l.loads > 0.0 && l.excitation > l.loads, "{name}: {l:?}");
+        assert!(l.loads() > 0.0 && l.excitation() > l.loads(), "{name}: {l:?}");
     }
 }
 
@@ -119,7 +119,7 @@ fn the_analysed_window_books_impacts_and_coil_losses_and_closes_its_own_balance(
         );
         // The window is part of the record: less drive work than the whole, but most of it.
         assert!(
-            w.excitation > 0.5 * whole.excitation && w.excitation < whole.excitation,
+            w.excitation() > 0.5 * whole.excitation() && w.excitation() < whole.excitation(),
             "{name}: {w:?} of {whole:?}"
         );
         assert_eq!(
@@ -127,8 +127,8 @@ fn the_analysed_window_books_impacts_and_coil_losses_and_closes_its_own_balance(
             (rec.v1_v.len() - 1) as f64 / rec.sample_rate_hz
         );
         match name {
-            "random_restitution" => assert!(w.impact_losses > 0.0 && w.internal == 0.0),
-            _ => assert!(w.internal > 0.0 && w.stop_damping > 0.0 && w.impact_losses == 0.0),
+            "random_restitution" => assert!(w.impact_losses() > 0.0 && w.internal() == 0.0),
+            _ => assert!(w.internal() > 0.0 && w.stop_damping() > 0.0 && w.impact_losses() == 0.0),
         }
         for (what, l) in [("whole", whole), ("window", w)] {
             let r = l.relative_residual();

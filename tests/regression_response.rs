@@ -7,7 +7,7 @@
 
 use endstop::ode::Stats;
 use endstop::paper::response::{continuation, setups, Case};
-use endstop::physics::harvester::Harvester;
+use endstop::physics::assembly::Harvester;
 use endstop::study::orbit::Shooter;
 
 use crate::common;
@@ -30,7 +30,7 @@ fn figure13_whole_curve_events_and_multipliers() {
             e.stable_after
         ));
     }
-    let h = Harvester::new(&s.device, endstop::drive::Sine::from_rms_g(0.31, 714.0));
+    let h = Harvester::<4>::new(&s.device).unwrap();
     let shooter = Shooter::new(&h, s.continuation.shooting);
     let mut stats = Stats::default();
     out.push_str("\norbit at 714 Hz | impacting | stable | |mu| (largest first)\n");

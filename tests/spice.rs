@@ -5,9 +5,9 @@
 use endstop::device::StiffnessModel;
 use endstop::drive::Sine;
 use endstop::paper::setups::{comb, endstop, stiffness_model, with_endstop};
-use endstop::physics::contact::Mode;
-use endstop::physics::harvester::Harvester;
-use endstop::physics::harvester::State;
+use endstop::model::{Mode, Model};
+use endstop::physics::assembly::Harvester;
+use endstop::physics::transducer::State;
 use endstop::physics::hertz::HertzLine;
 use endstop::spice::*;
 use endstop::study::steady::steady_state;
@@ -176,10 +176,15 @@ fn initial_condition_and_settings_are_written_in_netlist_units() {
     let dev = p1();
     let y = State::new(-6.3e-6, 0.022, 1.0e-12, -2.0e-12);
     let ic = InitialCondition::from_state(&dev, &y);
-    let model = Harvester::new(&dev, Sine::from_rms_g(0.0, 1.0));
-    let el = model.electrical(&y);
-    assert_eq!(ic.v1_v, el.v[0]);
-    assert_eq!(ic.v2_v, el.v[1]);
+    let model = Harvester::<4>::new(&dev).unwrap();
+    let mut v = vec![0.0; model.layout().outputs.len()];
+    model.outputs(Mode::FREE, &y, &mut v);
+    let (v1, v2) = (
+        v[model.layout().output("v1").unwrap()],
+        v[model.layout().output("v2").unwrap()],
+    );
+    assert_eq!(ic.v1_v, v1);
+    assert_eq!(ic.v2_v, v2);
     let solver = SolverSettings {
         reltol: Some(1e-6),
         abstol: Some(1e-15),
@@ -207,8 +212,8 @@ fn initial_condition_and_settings_are_written_in_netlist_units() {
     };
     assert!(close(get("V(xpos)"), -6.3, 1e-14), "x in um");
     assert!(close(get("V(vel)"), 22.0, 1e-14), "v in mm/s");
-    assert_eq!(get("V(n1)"), el.v[0]);
-    assert_eq!(get("V(n2)"), el.v[1]);
+    assert_eq!(get("V(n1)"), v1);
+    assert_eq!(get("V(n2)"), v2);
     assert_eq!(get("V(bias)"), comb(&dev).bias_v);
     assert_eq!(get("V(s1)"), comb(&dev).bias_v);
     assert!(net.contains(
@@ -421,7 +426,7 @@ fn ngspice_agrees_with_our_integrator() {
     ];
     for (tag, dev, a, f, tol) in cases {
         let period = 1.0 / f;
-        let model = Harvester::new(&dev, Sine::from_rms_g(a, f));
+        let model = Harvester::<4>::new(&dev).unwrap();
         // Exactly 3 settling blocks and 1 measured block of 5 periods each.
         let cfg = SteadyConfig {
             rtol: 1e-8,
@@ -430,7 +435,14 @@ fn ngspice_agrees_with_our_integrator() {
             rel_change_tol: 0.0,
             max_blocks: 1,
         };
-        let (m, _, _, _) = steady_state(&model, model.rest_state(), Mode::Free, a, &cfg).unwrap();
+        let (m, _, _, _) = steady_state(
+            &model,
+            Sine::from_rms_g(a, f),
+            model.rest_state(),
+            Mode::FREE,
+            a,
+            &cfg,
+        ).unwrap();
         let block = 5.0 * period;
         let (t0, t1) = (3.0 * block, 4.0 * block);
         let solver = SolverSettings::documented(period);

@@ -2,8 +2,7 @@
 //! (`endstop::study::attractors`) and placed by well, and the basins they give.
 
 use endstop::device::Device;
-use endstop::drive::Sine;
-use endstop::physics::harvester::Harvester;
+use endstop::physics::assembly::Harvester;
 use endstop::progress::Silent;
 use endstop::study::attractors::{find_attractors, seeds, AttractorSearch, Attractors, Place};
 use endstop::study::basins::{basins, BasinGrid, BasinSettings};
@@ -19,10 +18,7 @@ fn example(name: &str) -> Device {
 /// The attractors of `device` under `forcing` from its wells at rest and 3 x 3 states over
 /// `grid`, with the default search.
 fn search(device: &Device, forcing: &Forcing, grid: &BasinGrid) -> Attractors {
-    let h = Harvester::new(
-        device,
-        Sine::from_rms_g(forcing.accel_rms_g, forcing.freq_hz),
-    );
+    let h = Harvester::<4>::new(device).unwrap();
     find_attractors(
         &h,
         device,
@@ -47,10 +43,7 @@ fn each_well_keeps_its_orbit_and_its_bottom_at_low_drive() {
         freq_hz: 30.0,
         accel_rms_g: 0.05,
     };
-    let h = Harvester::new(
-        &device,
-        Sine::from_rms_g(forcing.accel_rms_g, forcing.freq_hz),
-    );
+    let h = Harvester::<4>::new(&device).unwrap();
     // Positions in steps of 250 um from -750 to 750 um (the wells at +-500 um are cells);
     // velocities with v = 0 a cell.
     let grid = BasinGrid {
@@ -90,7 +83,7 @@ fn each_well_keeps_its_orbit_and_its_bottom_at_low_drive() {
     );
     for f in &found.found {
         assert!(f.orbit.is_stable());
-        let s = f.orbit.summary;
+        let s = &f.orbit.summary;
         // In its well: the orbit never reaches the barrier at x = 0.
         match f.place {
             Place::LeftWell => assert!(s.x_upper_m < 0.0, "{s:?}"),
@@ -148,7 +141,7 @@ fn the_hardening_device_has_the_branch_s_two_stable_orbits_between_its_folds() {
     // zero agree to 1e-6 scaled, far above the orbits' accuracy of about 1e-9 and far below
     // their distance).
     let branch = frequency_branch(&device, 0.1, 80.0, 140.0, 1.0, &Silent).unwrap();
-    let start = Harvester::new(&device, Sine::from_rms_g(0.1, 80.0));
+    let start = Harvester::<4>::new(&device).unwrap();
     let shooter = Shooter::new(&start, ShootingConfig::default());
     let mut stats = Default::default();
     let stable: Vec<_> = branch
@@ -161,7 +154,7 @@ fn the_hardening_device_has_the_branch_s_two_stable_orbits_between_its_folds() {
     for f in &found.found {
         let near = stable.iter().any(|o| {
             let y = shooter.state_at_phase(o, 0.0).unwrap();
-            shooter.norm(&(y - f.orbit.state)) < 1e-6
+            shooter.norm(&(y - f.orbit.state_n::<4>())) < 1e-6
         });
         assert!(near, "{} is not an orbit of the branch", f.label);
     }

@@ -113,7 +113,7 @@ fn nlvib_duffing_example_converges_to_our_branch() {
     })
     .unwrap();
     let d = device("nlvib_duffing");
-    let ours = Ours::new(&d);
+    let ours = Ours::new(&d).unwrap();
     let branch = ours
         .branch(0.5, 1.6, spring_cases::NLVIB_DUFFING_MAX_STEP_RAD_S)
         .unwrap();

@@ -5,7 +5,7 @@
 //! ends, and moves by less than that tolerance when the step is divided by four.
 
 use endstop::device::Device;
-use endstop::physics::contact::Mode;
+use endstop::model::Mode;
 use endstop::progress::Silent;
 use endstop::study::chirp::{default_ramp_rate_hz_per_s, default_step_hz, half_power_band};
 use endstop::study::continuation::{frequency_diagram, DiagramEventKind};
@@ -76,7 +76,7 @@ fn the_down_sweep_leaves_the_lower_branch_at_its_end_at_the_default_step() {
                 &device,
                 g,
                 Approach::Ramp { rate_per_s: rate },
-                (first.fingerprint, Mode::Free),
+                (first.fingerprint.clone(), Mode::FREE),
                 &Silent,
             )
             .unwrap();

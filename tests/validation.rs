@@ -170,7 +170,7 @@ fn the_one_sided_spring_oscillator_matches_the_peer_references() {
     use endstop::validation::nlvib;
     let r = nlvib_reference();
     let d = device("nlvib_sdof");
-    let ours = nlvib::Ours::new(&d);
+    let ours = nlvib::Ours::new(&d).unwrap();
     let t = std::time::Instant::now();
     let (checks, _) = nlvib::exact_point_checks(&ours, &r, cases::NLVIB_EXACT_STRIDE).unwrap();
     eprintln!("exact points: {:?}", t.elapsed());

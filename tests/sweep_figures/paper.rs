@@ -14,8 +14,8 @@ use endstop::paper::measured::*;
 use endstop::paper::setups::comb;
 use endstop::paper::setups::{prototype1_setup, ParamSet, P1_BIAS_V};
 use endstop::paper::Figure;
-use endstop::physics::contact::Mode;
-use endstop::physics::harvester::Harvester;
+use endstop::model::{Mode, Model};
+use endstop::physics::assembly::Harvester;
 use endstop::study::steady::{steady_config, steady_state};
 use endstop::study::sweep::{BranchEndKind, JUMP_MIN_DROP, REFINE_TOL_HZ};
 
@@ -260,19 +260,17 @@ fn calibrated_gap_equals_the_free_amplitude_at_the_measured_kink() {
     let c = &calibration().record;
     let mut d = p1().with_bias(P1_BIAS_V);
     d = d.with_stop_gap(comb(&d).finger_overlap_m);
-    let model = Harvester::new(
-        &d,
-        Sine::from_rms_g(P1_HIGH_ACCEL_RMS_G, P1_MEASURED_ONSET_HZ),
-    );
+    let model = Harvester::<4>::new(&d).unwrap();
+    let sine = Sine::from_rms_g(P1_HIGH_ACCEL_RMS_G, P1_MEASURED_ONSET_HZ);
     let cfg = steady_config(&d, P1_MEASURED_ONSET_HZ);
     // Ring up from rest over many blocks, then measure.
-    let (mut y, mut mode) = (model.rest_state(), Mode::Free);
+    let (mut y, mut mode) = (model.rest_state(), Mode::FREE);
     for _ in 0..3 {
-        let (_, y1, m1, _) = steady_state(&model, y, mode, P1_HIGH_ACCEL_RMS_G, &cfg).unwrap();
+        let (_, y1, m1, _) = steady_state(&model, sine, y, mode, P1_HIGH_ACCEL_RMS_G, &cfg).unwrap();
         y = y1;
         mode = m1;
     }
-    let (m, ..) = steady_state(&model, y, mode, P1_HIGH_ACCEL_RMS_G, &cfg).unwrap();
+    let (m, ..) = steady_state(&model, sine, y, mode, P1_HIGH_ACCEL_RMS_G, &cfg).unwrap();
     assert_eq!(m.contact_fraction, 0.0);
     let rel = (m.x_peak_m - c.fitted_gap_m).abs() / c.fitted_gap_m;
     assert!(
