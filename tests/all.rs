@@ -31,12 +31,9 @@ mod integrator;
 mod integrator_stepping;
 // PORT: not yet ported to the model (issue 45)
 // mod interface_orbits;
-// PORT: not yet ported to the model (issue 45)
-// mod interface_records;
-// PORT: not yet ported to the model (issue 45)
-// mod interfaces;
-// PORT: not yet ported to the model (issue 45)
-// mod interfaces_spice;
+mod interface_records;
+mod interfaces;
+mod interfaces_spice;
 mod record_accuracy;
 mod record_figures;
 mod record_ledger;
