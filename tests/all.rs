@@ -40,10 +40,8 @@ mod record_ledger;
 mod record_simulation;
 mod regression_analytic;
 mod regression_response;
-// PORT: not yet ported to the model (issue 45)
-// mod response_orbits;
-// PORT: not yet ported to the model (issue 45)
-// mod response_sweeps;
+mod response_orbits;
+mod response_sweeps;
 mod restitution;
 mod restitution_orbits;
 mod robustness;

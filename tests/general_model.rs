@@ -71,7 +71,7 @@ fn the_jacobian_matches_central_differences_on_every_device() {
     for t in TRANSDUCERS {
         for s in STOPS {
             let d = device(s, t);
-            let h = Harvester::new(&d, Sine::from_rms_g(1.0, 100.0));
+            let h = Harvester::<4>::new(&d).unwrap();
             let sc = h.scales();
             let live = h.active_states();
             let mut y = State::new(0.3 * sc[0], 0.4 * sc[1], 0.0, 0.0);
@@ -83,7 +83,7 @@ fn the_jacobian_matches_central_differences_on_every_device() {
                 d.transducer.key(),
                 d.stops.upper.as_ref().unwrap().law.key()
             );
-            check_jacobian(&h, Mode::Free, &y, &what);
+            check_jacobian(&h, Mode::FREE, &y, &what);
             // 2 % of the gap into the stop, moving in (the differences' steps are then 1/2000
             // of the penetration, so the power laws' truncation stays below 1e-6).
             let mut yc = y;
@@ -106,7 +106,7 @@ fn the_jacobian_matches_central_differences_on_every_device() {
 fn the_free_flight_split_equals_the_right_hand_side() {
     for t in TRANSDUCERS {
         let d = device(STOPS[0], t);
-        let h = Harvester::new(&d, Sine::from_rms_g(0.0, 100.0));
+        let h = Harvester::<4>::new(&d).unwrap();
         let ff = h.free_flight();
         let (l, _) = ff.linear();
         let sc = h.scales();
@@ -116,7 +116,7 @@ fn the_free_flight_split_equals_the_right_hand_side() {
             y[i] = 0.0;
         }
         let split = l * y + ff.remainder(&y);
-        let f = h.rhs(Mode::Free, 0.0, &y);
+        let f = h.rhs(Mode::FREE, 0.0, &y);
         for i in 0..4 {
             let tol = 1e-12 * (f[i].abs() + (l.row(i) * y)[0].abs()) + 1e-300;
             assert!(
@@ -147,10 +147,10 @@ fn the_energy_balance_closes_on_every_device() {
         for s in STOPS {
             let d = device(s, t);
             // Near resonance (100 Hz suspension), hard enough to hit the 1 mm stop.
-            let h = Harvester::new(&d, Sine::from_rms_g(3.0, 95.0));
+            let h = Harvester::<4>::new(&d).unwrap();
             let audit = EnergyAudit(h);
             let y0 = AuditState::zeros();
-            let mut ode = Dopri5::new(0.0, y0, Mode::Free, audit.solver_options(1e-9));
+            let mut ode = Dopri5::new(0.0, y0, Mode::FREE, audit.solver_options(1e-9));
             ode.integrate(&audit, 0.2, |_, _| {}).unwrap();
             let what = format!(
                 "{} / {}",
@@ -184,7 +184,7 @@ fn the_exact_sine_flow_matches_dormand_prince_on_every_device() {
     for t in TRANSDUCERS {
         for s in STOPS {
             let d = device(s, t);
-            let h = Harvester::new(&d, Sine::from_rms_g(3.0, 95.0));
+            let h = Harvester::<4>::new(&d).unwrap();
             let what = format!(
                 "{} / {}",
                 d.transducer.key(),
@@ -192,7 +192,7 @@ fn the_exact_sine_flow_matches_dormand_prince_on_every_device() {
             );
             let run = |scheme, rtol| {
                 let opts = h.solver_options(rtol);
-                let mut flow = SineFlow::with(&h, 0.0, h.rest_state(), Mode::Free, opts, scheme);
+                let mut flow = SineFlow::with(&h, 0.0, h.rest_state(), Mode::FREE, opts, scheme);
                 let exact = flow.is_exact();
                 flow.integrate(0.1, |_, _| {}).unwrap();
                 (flow.y(), flow.stats().events, exact)
@@ -250,10 +250,10 @@ fn a_nonlinear_suspension_keeps_the_sine_flow_on_dormand_prince() {
         let path = format!("{}/data/examples/{file}", env!("CARGO_MANIFEST_DIR"));
         let text = std::fs::read_to_string(&path).unwrap();
         let d = Device::from_toml_str(&text, &path).unwrap();
-        let h = Harvester::new(&d, Sine::from_rms_g(0.5, 40.0));
+        let h = Harvester::<4>::new(&d).unwrap();
         let run = |scheme| {
             let opts = h.solver_options(1e-8);
-            let mut flow = SineFlow::with(&h, 0.0, h.rest_state(), Mode::Free, opts, scheme);
+            let mut flow = SineFlow::with(&h, 0.0, h.rest_state(), Mode::FREE, opts, scheme);
             let exact = flow.is_exact();
             flow.integrate(0.2, |_, _| {}).unwrap();
             (flow.y(), exact)

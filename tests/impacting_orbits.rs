@@ -8,7 +8,7 @@ use endstop::device::Device;
 use endstop::drive::Sine;
 use endstop::num::roots::{illinois, RootOptions, Sample};
 use endstop::ode::{Dopri5, Observer, Step};
-use endstop::physics::contact::Mode;
+use endstop::model::Mode;
 use endstop::physics::harvester::{Harvester, State, SwitchKind};
 use endstop::physics::linear::LinearResponse;
 use endstop::progress::Silent;
@@ -110,7 +110,7 @@ fn linear_grazings(device: &Device, accel_rms_g: f64, gap_m: f64, lo: f64, hi: f
 /// difference.
 fn check_multipliers(device: &Device, d: &Diagram, every: usize) -> (usize, f64) {
     let p0 = &d.branches[0].points[0].forcing;
-    let h = Harvester::new(device, Sine::from_rms_g(p0.accel_rms_g, p0.freq_hz));
+    let h = Harvester::<4>::new(device).unwrap();
     let cfg = ShootingConfig {
         rtol: 1e-12,
         ..ShootingConfig::default()
@@ -311,7 +311,7 @@ fn impact_oscillator_period_doubling_and_its_period_two_branch() {
         .unwrap();
     assert!(!nearest.is_stable());
 
-    let h = Harvester::new(&device, Sine::from_rms_g(g, f));
+    let h = Harvester::<4>::new(&device).unwrap();
     let cfg = ShootingConfig {
         rtol: 1e-12,
         ..ShootingConfig::default()

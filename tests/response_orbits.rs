@@ -3,10 +3,10 @@
 //! computations against each other, residuals and the fold's convergence.
 
 use endstop::device::{Device, StiffnessModel};
-use endstop::drive::Sine;
+use endstop::model::Model;
 use endstop::ode::Stats;
 use endstop::paper::setups::{comb, endstop, stiffness_model, with_endstop};
-use endstop::physics::harvester::Harvester;
+use endstop::physics::assembly::Harvester;
 use endstop::physics::linear::LinearResponse;
 use endstop::progress::Silent;
 use endstop::study::continuation::{
@@ -69,7 +69,7 @@ fn sorted(mut v: Vec<Complex<f64>>) -> Vec<Complex<f64>> {
 fn far_from_the_stops_the_orbit_is_the_linear_steady_state() {
     let d = prototype2();
     let (f, a) = (600.0, 1e-3);
-    let h = Harvester::new(&d, Sine::from_rms_g(a, f)).without_stops();
+    let h = Harvester::<4>::new(&d).unwrap().without_stops();
     let shooter = Shooter::new(&h, ShootingConfig::default());
     let forcing = Forcing {
         freq_hz: f,
@@ -110,9 +110,9 @@ fn far_from_the_stops_the_orbit_is_the_linear_steady_state() {
 }
 
 /// Prototype 2 at 0.31 g (Figure 13's linear-law curve) continued from 600 to 850 Hz.
-fn fig13_branch(cfg: ShootingConfig) -> (Harvester<Sine>, Branch) {
+fn fig13_branch(cfg: ShootingConfig) -> (Harvester<4>, Branch) {
     let d = prototype2();
-    let h = Harvester::new(&d, Sine::from_rms_g(0.31, 600.0));
+    let h = Harvester::<4>::new(&d).unwrap();
     let mut s = ContinuationSettings::frequency(600.0, 850.0, 2.0);
     s.shooting = cfg;
     let shooter = Shooter::new(&h, cfg);
@@ -161,9 +161,9 @@ fn variational_monodromy_equals_finite_differences_on_impacting_orbits() {
         let scale = o.monodromy.abs().max();
         for eps in [3e-5, 1e-5] {
             let fd = shooter
-                .monodromy_fd(&o.forcing, o.phase_rad, o.state, eps)
+                .monodromy_fd(&o.forcing, o.phase_rad, o.state_n::<4>(), eps)
                 .unwrap();
-            let diff = (fd - o.monodromy).abs().max() / scale;
+            let diff = (fd - o.monodromy_n::<4>()).abs().max() / scale;
             assert!(
                 diff < 1e-5,
                 "eps {eps:e}: max difference {diff:e} of {scale:e}"
@@ -202,7 +202,7 @@ fn branch_residuals_and_fold_convergence() {
 #[test]
 fn amplitude_continuation_in_the_linear_regime_scales_the_power_with_the_square() {
     let d = prototype2();
-    let h = Harvester::new(&d, Sine::from_rms_g(1e-3, 600.0)).without_stops();
+    let h = Harvester::<4>::new(&d).unwrap().without_stops();
     let s = ContinuationSettings::amplitude(1e-3, 1e-2, 1e-3);
     let shooter = Shooter::new(&h, s.shooting);
     let forcing = Forcing {
