@@ -21,12 +21,10 @@ mod device_description;
 mod fit_family;
 mod fit_recovery;
 mod foundation;
-// PORT: not yet ported to the model (issue 45)
-// mod general_model;
+mod general_model;
 mod history_matching;
 mod history_study;
-// PORT: not yet ported to the model (issue 45)
-// mod impacting_orbits;
+mod impacting_orbits;
 mod integrator;
 mod integrator_stepping;
 // PORT: not yet ported to the model (issue 45)

@@ -8,8 +8,9 @@ use endstop::device::Device;
 use endstop::drive::Sine;
 use endstop::num::roots::{illinois, RootOptions, Sample};
 use endstop::ode::{Dopri5, Observer, Step};
-use endstop::model::Mode;
-use endstop::physics::harvester::{Harvester, State, SwitchKind};
+use endstop::model::{Driven, Mode, Model, SwitchKind};
+use endstop::physics::assembly::Harvester;
+use endstop::physics::transducer::State;
 use endstop::physics::linear::LinearResponse;
 use endstop::progress::Silent;
 use endstop::study::continuation::impacting::{rigid_diagram, Closure, DiagramOptions};
@@ -17,7 +18,7 @@ use endstop::study::continuation::{
     frequency_diagram, BranchKind, ContinuationSettings, Diagram, DiagramEventKind, DiagramPoint,
     EndKind,
 };
-use endstop::study::orbit::{mode_of, multipliers, Forcing, Shooter, ShootingConfig};
+use endstop::study::orbit::{multipliers, Forcing, Shooter, ShootingConfig};
 use nalgebra::{Complex, Matrix4};
 
 fn example(name: &str) -> Device {
@@ -57,8 +58,13 @@ fn multiplier_distance(a: &[Complex<f64>], b: &[Complex<f64>]) -> f64 {
 /// The multipliers of a point's whole orbit by central differences of the event-located
 /// period map (of the device with its stops) at its section, with steps of `eps` in each
 /// scaled coordinate (the map of an orbit of m periods is the product of m period maps).
-fn fd_multipliers(shooter: &Shooter<'_>, p: &DiagramPoint, eps: f64) -> [Complex<f64>; 4] {
-    let (mut phase, mut y) = p.section.expect("a section");
+fn fd_multipliers(
+    shooter: &Shooter<'_, Harvester<4>, 4>,
+    p: &DiagramPoint,
+    eps: f64,
+) -> Vec<Complex<f64>> {
+    let (mut phase, y) = p.section.clone().expect("a section");
+    let mut y = State::from_column_slice(y.as_slice());
     let mut m = Matrix4::identity();
     for _ in 0..p.periods {
         m = shooter.monodromy_fd(&p.forcing, phase, y, eps).unwrap() * m;
@@ -109,7 +115,6 @@ fn linear_grazings(device: &Device, accel_rms_g: f64, gap_m: f64, lo: f64, hi: f
 /// 1e-6 show that noise at 1e-5 on some orbits). Returns the points checked and the largest
 /// difference.
 fn check_multipliers(device: &Device, d: &Diagram, every: usize) -> (usize, f64) {
-    let p0 = &d.branches[0].points[0].forcing;
     let h = Harvester::<4>::new(device).unwrap();
     let cfg = ShootingConfig {
         rtol: 1e-12,
@@ -117,12 +122,12 @@ fn check_multipliers(device: &Device, d: &Diagram, every: usize) -> (usize, f64)
     };
     let shooter = Shooter::new(&h, cfg);
     let w0 = (h.km / h.mass_kg).sqrt();
-    let slow = 0.1 * w0 * h.x_scale();
+    let slow = 0.1 * w0 * h.x_scale_m;
     let (mut n, mut worst) = (0, 0.0f64);
     for b in &d.branches {
         for p in b.points.iter().step_by(every) {
             let away = p.impact_speeds_m_s.iter().all(|&s| s > slow)
-                && p.clearance_m > 0.01 * h.x_scale()
+                && p.clearance_m > 0.01 * h.x_scale_m
                 && p.max_multiplier_abs() < 30.0
                 && p.section.is_some();
             if !away {
@@ -195,7 +200,7 @@ fn symmetric_rigid_stops_grazing_pitchfork_and_no_period_doubling() {
     let pitchforks: Vec<_> = d.events_of(DiagramEventKind::SymmetryBreaking).collect();
     assert_eq!(pitchforks.len(), 1);
     let pf = pitchforks[0];
-    let half = pf.point.half_multipliers.expect("a symmetric orbit");
+    let half = pf.point.half_multipliers.clone().expect("a symmetric orbit");
     let to_minus_one = half
         .iter()
         .map(|m| (m + 1.0).norm())
@@ -279,7 +284,7 @@ fn impact_oscillator_period_doubling_and_its_period_two_branch() {
         "period doublings at {} and {} Hz",
         pds[0].param, upper_pd.param
     );
-    let mu = upper_pd.point.multipliers;
+    let mu = &upper_pd.point.multipliers;
     let to_minus_one = mu
         .iter()
         .map(|m| (m + 1.0).norm())
@@ -324,17 +329,21 @@ fn impact_oscillator_period_doubling_and_its_period_two_branch() {
 
     // Brute force: 600 periods (about 30 ring-up times 2m/b) from the unstable period-one
     // orbit, nudged, at the same frequency; then two periods recorded.
-    let (phase, y) = nearest.section.unwrap();
-    let model = h.with_excitation(Sine {
-        phase_rad: phase,
-        ..Sine::from_rms_g(g, f)
-    });
-    let mut y0 = y;
-    y0[0] += 1e-3 * h.x_scale();
-    let mut ode = Dopri5::new(0.0, y0, mode_of(&model, &y0), model.solver_options(1e-11));
+    let (phase, y) = nearest.section.clone().unwrap();
+    let model = Driven::new(
+        &h,
+        Sine {
+            phase_rad: phase,
+            ..Sine::from_rms_g(g, f)
+        },
+    );
+    let mut y0 = State::from_column_slice(y.as_slice());
+    y0[0] += 1e-3 * h.x_scale_m;
+    let mut ode = Dopri5::new(0.0, y0, h.mode_of(&y0), h.solver_options(1e-11));
     let period = 1.0 / f;
     // Sampled at the drive phase of the branch orbit's section.
-    let (phase2, y2) = p.section.unwrap();
+    let (phase2, y2) = p.section.clone().unwrap();
+    let y2 = State::from_column_slice(y2.as_slice());
     let w = 2.0 * std::f64::consts::PI * f;
     let t0 = 600.0 * period + (phase2 - phase).rem_euclid(2.0 * std::f64::consts::PI) / w;
     let strobe: Vec<State> = (0..4)
@@ -362,7 +371,7 @@ fn impact_oscillator_period_doubling_and_its_period_two_branch() {
             self.last = st.y1;
         }
         fn switched(&mut self, _t: f64, from: Mode, to: Mode) {
-            assert_eq!(SwitchKind::of(from, to), SwitchKind::Rebound);
+            assert_eq!(SwitchKind::between(from, to), SwitchKind::Rebound);
             self.speeds.push(self.last[1].abs());
         }
     }
