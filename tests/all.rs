@@ -27,8 +27,7 @@ mod history_study;
 mod impacting_orbits;
 mod integrator;
 mod integrator_stepping;
-// PORT: not yet ported to the model (issue 45)
-// mod interface_orbits;
+mod interface_orbits;
 mod interface_records;
 mod interfaces;
 mod interfaces_spice;
