@@ -6,12 +6,12 @@
 
 use endstop::device::Device;
 use endstop::drive::Sine;
+use endstop::model::{Driven, Mode, Model, SwitchKind};
 use endstop::num::roots::{illinois, RootOptions, Sample};
 use endstop::ode::{Dopri5, Observer, Step};
-use endstop::model::{Driven, Mode, Model, SwitchKind};
 use endstop::physics::assembly::Harvester;
-use endstop::physics::transducer::State;
 use endstop::physics::linear::LinearResponse;
+use endstop::physics::transducer::State;
 use endstop::progress::Silent;
 use endstop::study::continuation::impacting::{rigid_diagram, Closure, DiagramOptions};
 use endstop::study::continuation::{
@@ -200,7 +200,11 @@ fn symmetric_rigid_stops_grazing_pitchfork_and_no_period_doubling() {
     let pitchforks: Vec<_> = d.events_of(DiagramEventKind::SymmetryBreaking).collect();
     assert_eq!(pitchforks.len(), 1);
     let pf = pitchforks[0];
-    let half = pf.point.half_multipliers.clone().expect("a symmetric orbit");
+    let half = pf
+        .point
+        .half_multipliers
+        .clone()
+        .expect("a symmetric orbit");
     let to_minus_one = half
         .iter()
         .map(|m| (m + 1.0).norm())

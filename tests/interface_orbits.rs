@@ -362,12 +362,11 @@ fn the_period_map_finds_the_orbit_past_a_fold() {
     let d = example();
     let set = SteadySettings::default();
     let freqs: Vec<f64> = (0..=30).map(|i| 110.0 + 2.0 * f64::from(i)).collect();
-    let states: Vec<_> =
-        endstop::study::periodic::frequency_sweep(&d, &freqs, 1.0, &set, &Silent)
-            .unwrap()
-            .into_iter()
-            .map(|s| s.unwrap())
-            .collect();
+    let states: Vec<_> = endstop::study::periodic::frequency_sweep(&d, &freqs, 1.0, &set, &Silent)
+        .unwrap()
+        .into_iter()
+        .map(|s| s.unwrap())
+        .collect();
     let (upper, past) = (&states[29], &states[30]);
     eprintln!(
         "168 Hz: {:?}, P_DC {:.4e} W; 170 Hz: {:?}, max |mu| {:.5}, residual {:.1e}, P_DC \

@@ -155,7 +155,10 @@ fn the_energy_ledger_closes_for_every_interface() {
         // impact losses.
         let contact = l.stop_absorbed() + l.impact_losses();
         assert!(contact > 0.0, "{name}: the drive must strike the stop");
-        assert!(l.get("dc_load").abs() > 0.0, "{name}: nothing reached the load");
+        assert!(
+            l.get("dc_load").abs() > 0.0,
+            "{name}: nothing reached the load"
+        );
         // rtol 1e-9 over 20 periods with events: 1e-6 leaves room for the error's growth.
         assert!(l.relative_residual().abs() < 1e-6, "{name}: {l:?}");
     }
@@ -185,27 +188,45 @@ fn bad(t: &str) -> ParamError {
 fn bad_interfaces_are_named_errors() {
     let cases: [(String, &str); 7] = [
         (
-            text(PIEZO, &bridge("full_bridge", "", &PWL.replace("0.2", "-0.2"), RES)),
+            text(
+                PIEZO,
+                &bridge("full_bridge", "", &PWL.replace("0.2", "-0.2"), RES),
+            ),
             "interface.diode.forward_drop_v",
         ),
         (
-            text(PIEZO, &bridge("parallel_sshi", "inversion_factor = 1.0", PWL, RES)),
+            text(
+                PIEZO,
+                &bridge("parallel_sshi", "inversion_factor = 1.0", PWL, RES),
+            ),
             "interface.inversion_factor",
         ),
         (
-            text(PIEZO, &bridge("full_bridge", "", PWL, RES).replace("1e-6", "0.0")),
+            text(
+                PIEZO,
+                &bridge("full_bridge", "", PWL, RES).replace("1e-6", "0.0"),
+            ),
             "interface.storage_capacitance_f",
         ),
         (
-            text(PIEZO, &bridge("full_bridge", "", PWL, &BAT.replace("3.0", "-1.0"))),
+            text(
+                PIEZO,
+                &bridge("full_bridge", "", PWL, &BAT.replace("3.0", "-1.0")),
+            ),
             "interface.load.voltage_v",
         ),
         (
-            text(COIL, &bridge("parallel_sshi", "quality_factor = 3.0", PWL, RES)),
+            text(
+                COIL,
+                &bridge("parallel_sshi", "quality_factor = 3.0", PWL, RES),
+            ),
             "interface.kind",
         ),
         (
-            text(&format!("{PIEZO}\nload_resistance_ohm = 1e3"), &bridge("full_bridge", "", PWL, RES)),
+            text(
+                &format!("{PIEZO}\nload_resistance_ohm = 1e3"),
+                &bridge("full_bridge", "", PWL, RES),
+            ),
             "transducer.load_resistance_ohm",
         ),
         (text(PIEZO, ""), "transducer.load_resistance_ohm"),

@@ -16,9 +16,9 @@
 //! Run time: about ten 10 s records at tight tolerances, a few seconds each.
 
 use endstop::device::Device;
+use endstop::model::Ledger;
 use endstop::ode::SolverError;
 use endstop::paper::setups::{paper_record, prototype1_setup, prototype2_setup};
-use endstop::model::Ledger;
 use endstop::study::record::{simulate_record, RecordError, RecordSpec, Scheme, DEFAULT_RTOL};
 use endstop::study::record_ledger::record_ledger;
 use endstop::study::rk4_record::{

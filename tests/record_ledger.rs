@@ -7,8 +7,8 @@
 //! bench measures (seed 2012, stream 0, 10 s): about 0.3-1 s each.
 
 use endstop::device::Device;
-use endstop::paper::setups::{paper_noise, paper_record, prototype2_setup};
 use endstop::model::Ledger;
+use endstop::paper::setups::{paper_noise, paper_record, prototype2_setup};
 use endstop::study::record::{simulate_record, RecordSpec, Scheme, DEFAULT_RTOL};
 use endstop::study::record_ledger::{record_ledger, record_ledgers};
 
@@ -55,7 +55,10 @@ fn the_exponential_step_closes_the_energy_balance_without_impacts() {
         let r = l.relative_residual();
         assert!(r.abs() < TARGET, "{name}: relative residual {r:e}");
         // Not an empty ledger: the loads took energy and the drive put it in.
-        assert!(l.loads() > 0.0 && l.excitation() > l.loads(), "{name}: {l:?}");
+        assert!(
+            l.loads() > 0.0 && l.excitation() > l.loads(),
+            "{name}: {l:?}"
+        );
     }
 }
 

@@ -4,8 +4,8 @@
 //! unused state components of a one-load transducer contribute no multiplier of modulus one.
 
 use endstop::device::Device;
-use endstop::ode::Stats;
 use endstop::model::Model;
+use endstop::ode::Stats;
 use endstop::physics::assembly::Harvester;
 use endstop::study::orbit::{Forcing, Parameter, Shooter, ShootingConfig};
 

@@ -4,11 +4,11 @@
 
 use endstop::device::StiffnessModel;
 use endstop::drive::Sine;
-use endstop::paper::setups::{comb, endstop, stiffness_model, with_endstop};
 use endstop::model::{Mode, Model};
+use endstop::paper::setups::{comb, endstop, stiffness_model, with_endstop};
 use endstop::physics::assembly::Harvester;
-use endstop::physics::transducer::State;
 use endstop::physics::hertz::HertzLine;
+use endstop::physics::transducer::State;
 use endstop::spice::*;
 use endstop::study::steady::steady_state;
 use endstop::study::steady::SteadyConfig;
@@ -442,7 +442,8 @@ fn ngspice_agrees_with_our_integrator() {
             Mode::FREE,
             a,
             &cfg,
-        ).unwrap();
+        )
+        .unwrap();
         let block = 5.0 * period;
         let (t0, t1) = (3.0 * block, 4.0 * block);
         let solver = SolverSettings::documented(period);

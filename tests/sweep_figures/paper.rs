@@ -5,6 +5,7 @@
 
 use endstop::device::StiffnessModel;
 use endstop::drive::Sine;
+use endstop::model::{Mode, Model};
 use endstop::paper::calibration::*;
 use endstop::paper::claims::{keys, Answer, ClaimKey, Claims, Value, Verdict, CLAIMS_TOML};
 use endstop::paper::figures::fig08::{Fig08, Fig8Curve, P1_HIGH_ACCEL_RMS_G};
@@ -14,7 +15,6 @@ use endstop::paper::measured::*;
 use endstop::paper::setups::comb;
 use endstop::paper::setups::{prototype1_setup, ParamSet, P1_BIAS_V};
 use endstop::paper::Figure;
-use endstop::model::{Mode, Model};
 use endstop::physics::assembly::Harvester;
 use endstop::study::steady::{steady_config, steady_state};
 use endstop::study::sweep::{BranchEndKind, JUMP_MIN_DROP, REFINE_TOL_HZ};
@@ -266,7 +266,8 @@ fn calibrated_gap_equals_the_free_amplitude_at_the_measured_kink() {
     // Ring up from rest over many blocks, then measure.
     let (mut y, mut mode) = (model.rest_state(), Mode::FREE);
     for _ in 0..3 {
-        let (_, y1, m1, _) = steady_state(&model, sine, y, mode, P1_HIGH_ACCEL_RMS_G, &cfg).unwrap();
+        let (_, y1, m1, _) =
+            steady_state(&model, sine, y, mode, P1_HIGH_ACCEL_RMS_G, &cfg).unwrap();
         y = y1;
         mode = m1;
     }
