@@ -259,8 +259,9 @@ fn both_jacobians_shoot_to_the_same_orbit() {
 /// from 110 to 300 Hz: the stop bends the response to higher frequencies, the branch turns at
 /// two folds (the lower one where the orbit grazes the stop, a corner of the branch), and the
 /// stretch between them (the middle branch) is unstable while the rest is stable. Far above
-/// resonance the bridge stops conducting and the largest multiplier is the storage's slow
-/// mode, exp(-T / (R_L C_s)), about 0.99.
+/// resonance the bridge stops conducting: the piezoelectric element's charge is then conserved
+/// (a multiplier of 1: the orbits form a family) and the storage decays by its slow mode,
+/// exp(-T / (R_L C_s)), about 0.99.
 #[test]
 fn continuation_passes_the_folds_of_the_stop() {
     use endstop::study::continuation::{frequency_branch, EventKind};
@@ -282,22 +283,27 @@ fn continuation_passes_the_folds_of_the_stop() {
         folds.iter().map(|e| e.param).collect::<Vec<_>>(),
         branch.rejected_steps()
     );
-    // The branch reaches the end of the range.
+    // The branch reaches the end of the range (its last step may pass it).
     let last = branch.points.last().unwrap().orbit.forcing.freq_hz;
-    assert!((last - 300.0).abs() < 1e-9 * 300.0, "ends at {last} Hz");
+    assert!(last >= 300.0, "ends at {last} Hz");
     assert_eq!(folds.len(), 2, "{:?}", branch.events);
     // The first point past each fold.
     let (i1, i2) = (folds[0].after_point + 1, folds[1].after_point + 1);
+    for e in &branch.events {
+        eprintln!("event {:?} at {} Hz", e.kind, e.param);
+    }
     let tol = ShootingConfig::default().residual_tol;
     for (i, p) in branch.points.iter().enumerate() {
         assert!(p.orbit.residual < tol, "{i}");
         let middle = i >= i1 && i < i2;
         // A point next to a fold has a multiplier within its step of 1: judged only away.
         let near_fold = [i1, i2].iter().any(|&k| i + 1 >= k && i <= k);
+        // Stable within 1e-6 of the unit circle (the periodic study's judge): off the bridge's
+        // conduction the conserved charge's multiplier is 1 to rounding.
+        let stable = p.orbit.max_multiplier_abs() < 1.0 + 1e-6;
         if !near_fold {
             assert_eq!(
-                p.orbit.is_stable(),
-                !middle,
+                stable, !middle,
                 "point {i} at {} Hz",
                 p.orbit.forcing.freq_hz
             );
