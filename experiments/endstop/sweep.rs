@@ -102,7 +102,8 @@ pub(crate) fn sweep(a: RangeArgs) -> Result<()> {
             .map(|s| (s.measurement.freq_hz, f(&s.measurement)))
             .collect()
     };
-    let two_loads = device.interface.is_resistive() && device.transducer.loads() == 2;
+    // Two loads: a transducer's own (its outputs are `v1`, `v2`) with both electrodes loaded.
+    let two_loads = name(0) == "v1" && device.transducer.loads() == 2;
     let mut series = vec![Series::new(
         &match name(0) {
             "v1" if two_loads => "V1 (one load)".to_string(),
