@@ -264,7 +264,7 @@ fn matches_scipy_reference() {
 fn lorentzian_half_power_width() {
     // Analytic Lorentzian 1 / (1 + ((f - f0)/g)^2): FWHM = 2g, and the quarter-power
     // (half-amplitude) width is 2g sqrt(3). On a 0.5 Hz grid, linear interpolation of the
-    // edges errs by well under 1 % for a 14.9 Hz width. Tolerance 1 % (the brief's).
+    // edges errs by well under 1 % for a 14.9 Hz width. Tolerance 1 %, above that error.
     let (f0, g) = (675.3, 7.45);
     let freq_hz: Vec<f64> = (0..4000).map(|i| 0.5 * i as f64).collect();
     let density = freq_hz

@@ -88,7 +88,7 @@ fn random_drive_power_obeys_the_white_noise_law_and_the_ledgers_close() {
             e.mean(|r| r.internal_w),
             e.mean(|r| r.stop_w)
         );
-        let checks = endstop::validation::random_law::checks(&e, &impact);
+        let checks = endstop::validation::random_law::checks(&e, impact.limit());
         assert_eq!(checks.len(), 2, "one law row and one ledger row");
         assert_eq!(
             checks[0].is_open(),

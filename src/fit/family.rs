@@ -1,7 +1,7 @@
 //! The recovery family: synthetic measured sweeps of known devices, each with its free
 //! parameters, their true values, a start up to 50 % off inside the ranges and a noise seed,
-//! all fixed before the fit of issue 49 was run on any of them (the fit was not developed on
-//! them). `tests/fit_family.rs` fits every case and asserts the coverage of the 95 % intervals
+//! all fixed before the fit ([`crate::fit::fit`]) was run on any of them (it was not developed
+//! on them). `tests/fit_family.rs` fits every case and asserts the coverage of the 95 % intervals
 //! and the law of the chi-square; `bench --fits` times every fit.
 //!
 //! The data are the stepped sweep of the true device over each sweep's grid

@@ -428,6 +428,15 @@ impl ImpactTerm {
         )))
     }
 
+    /// The statement of the limit where the study rejects the estimate, `None` where it
+    /// confirms it (the form [`super::random_law::checks`] takes).
+    pub fn limit(&self) -> Option<&str> {
+        match self {
+            ImpactTerm::Confirmed => None,
+            ImpactTerm::Beyond(why) => Some(why),
+        }
+    }
+
     /// True when the row is judged with the estimate.
     pub fn confirmed(&self) -> bool {
         matches!(self, ImpactTerm::Confirmed)

@@ -234,25 +234,11 @@ pub fn depopulation(loss: f64) -> f64 {
 
 /// `int_a^b f` by 5-point Gauss-Legendre on `panels` equal panels.
 fn gauss_legendre(a: f64, b: f64, panels: usize, f: &dyn Fn(f64) -> f64) -> f64 {
-    const X: [f64; 5] = [
-        0.0,
-        -0.538_469_310_105_683,
-        0.538_469_310_105_683,
-        -0.906_179_845_938_664,
-        0.906_179_845_938_664,
-    ];
-    const W: [f64; 5] = [
-        0.568_888_888_888_889,
-        0.478_628_670_499_366,
-        0.478_628_670_499_366,
-        0.236_926_885_056_189,
-        0.236_926_885_056_189,
-    ];
     let h = (b - a) / panels as f64;
     let mut total = 0.0;
     for i in 0..panels {
         let mid = a + (i as f64 + 0.5) * h;
-        for (x, w) in X.iter().zip(W) {
+        for &(x, w) in &crate::ode::GAUSS_LEGENDRE_5 {
             total += 0.5 * h * w * f(mid + 0.5 * h * x);
         }
     }

@@ -41,7 +41,6 @@ use crate::num::stats::MeanCi;
 use crate::physics::closed_forms::white_noise_input_power_w;
 use crate::study::record::{FreeFlightPath, RecordSpec};
 use crate::study::record_ledger::record_ledgers;
-use crate::validation::band_limit::ImpactTerm;
 use crate::validation::{Check, Group, Measure, ValidationError};
 
 /// The ledger's balance must close to this relative residual on every record (the tolerance of
@@ -244,10 +243,11 @@ pub fn law_ensemble(
 ///
 /// The band's deficit, derived after this check first missed on a device with rigid stops,
 /// carries for such a device the impact term `(1 + e) nu`; [`super::band_limit`] tests it on
-/// cases it was not derived from. Unless that study confirmed it ([`ImpactTerm::Confirmed`]),
-/// the drive row of such a device shows its shortfall without a verdict ([`Check::open`]),
-/// with the study's statement of the limit and its evidence ([`ImpactTerm::Beyond`]).
-pub fn checks(e: &LawEnsemble, impact_term: &ImpactTerm) -> Vec<Check> {
+/// cases it was not derived from. Unless that study confirmed it (`impact_limit` is `None`,
+/// see [`super::band_limit::ImpactTerm::limit`]), the drive row of such a device shows its
+/// shortfall without a verdict ([`Check::open`]), with the study's statement of the limit and
+/// its evidence.
+pub fn checks(e: &LawEnsemble, impact_limit: Option<&str>) -> Vec<Check> {
     let mut g = Group::new(&format!("random vibration: {}", e.device));
     let theirs = e.band_law_w();
     let d = e.drive();
@@ -261,7 +261,7 @@ pub fn checks(e: &LawEnsemble, impact_term: &ImpactTerm) -> Vec<Check> {
         d.ci95 / theirs,
         "the ensemble's 95 % interval (Student's t)",
     );
-    if let (true, ImpactTerm::Beyond(why)) = (e.rigid_stops, impact_term) {
+    if let (true, Some(why)) = (e.rigid_stops, impact_limit) {
         g.open_last(why);
     }
     g.add(

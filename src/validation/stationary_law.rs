@@ -181,20 +181,6 @@ impl StationaryLaw {
     /// `int_a^b f(x) w(x) dx` by 5-point Gauss-Legendre on panels that break at the stops'
     /// contact points (where `U` has a kink in a higher derivative).
     fn integrate(&self, a: f64, b: f64, f: &dyn Fn(f64) -> f64) -> f64 {
-        const X: [f64; 5] = [
-            0.0,
-            -0.538_469_310_105_683,
-            0.538_469_310_105_683,
-            -0.906_179_845_938_664,
-            0.906_179_845_938_664,
-        ];
-        const W: [f64; 5] = [
-            0.568_888_888_888_889,
-            0.478_628_670_499_366,
-            0.478_628_670_499_366,
-            0.236_926_885_056_189,
-            0.236_926_885_056_189,
-        ];
         if b <= a {
             return 0.0;
         }
@@ -214,7 +200,7 @@ impl StationaryLaw {
             let h = (w[1] - w[0]) / panels as f64;
             for i in 0..panels {
                 let mid = w[0] + (i as f64 + 0.5) * h;
-                for (x, wt) in X.iter().zip(W) {
+                for &(x, wt) in &crate::ode::GAUSS_LEGENDRE_5 {
                     let xx = mid + 0.5 * h * x;
                     total += 0.5 * h * wt * f(xx) * self.weight(xx);
                 }

@@ -109,7 +109,7 @@ pub fn run() -> Result<()> {
             ),
             || cases::random_law(&d),
         )?;
-        checks.extend(random_law::checks(&ens, &impact_term));
+        checks.extend(random_law::checks(&ens, impact_term.limit()));
         ensembles.push(ens);
     }
 
