@@ -260,11 +260,12 @@ fn both_jacobians_shoot_to_the_same_orbit() {
 /// two folds (the lower one where the orbit grazes the stop, a corner of the branch), and the
 /// stretch between them (the middle branch) is unstable while the rest is stable. Far above
 /// resonance the bridge stops conducting: the piezoelectric element's charge is then conserved
-/// (a multiplier of 1: the orbits form a family) and the storage decays by its slow mode,
-/// exp(-T / (R_L C_s)), about 0.99.
+/// (a multiplier of 1: the orbits form a family), which marks no event and decides no
+/// stability, and the storage decays by its slow mode, exp(-T / (R_L C_s)), about 0.99.
 #[test]
 fn continuation_passes_the_folds_of_the_stop() {
     use endstop::study::continuation::{frequency_branch, EventKind};
+    use endstop::study::orbit::is_neutral;
     let d = example();
     let branch = frequency_branch(&d, 1.0, 110.0, 300.0, 2.0, &Silent).unwrap();
     for p in &branch.points {
@@ -292,15 +293,40 @@ fn continuation_passes_the_folds_of_the_stop() {
     for e in &branch.events {
         eprintln!("event {:?} at {} Hz", e.kind, e.param);
     }
+    // The neutral multiplier marks no event: the folds are the branch's only events
+    // (with the grazing of the stop at the lower one).
+    assert!(
+        branch
+            .events
+            .iter()
+            .all(|e| matches!(e.kind, EventKind::Fold | EventKind::Grazing)),
+        "{:?}",
+        branch.events
+    );
+    // Where the bridge no longer conducts (well above the upper fold) the orbit has a
+    // neutral multiplier; below the lower fold, where it conducts, none.
+    let neutral = |p: &endstop::study::continuation::BranchPoint| {
+        let m = &p.orbit.multipliers;
+        m.iter().filter(|m| is_neutral(**m, false)).count()
+    };
+    for p in &branch.points {
+        let f = p.orbit.forcing.freq_hz;
+        if f > 280.0 {
+            assert_eq!(neutral(p), 1, "{f} Hz: {:?}", p.orbit.multipliers);
+        }
+        if f < 130.0 {
+            assert_eq!(neutral(p), 0, "{f} Hz: {:?}", p.orbit.multipliers);
+        }
+    }
     let tol = ShootingConfig::default().residual_tol;
     for (i, p) in branch.points.iter().enumerate() {
         assert!(p.orbit.residual < tol, "{i}");
         let middle = i >= i1 && i < i2;
         // A point next to a fold has a multiplier within its step of 1: judged only away.
         let near_fold = [i1, i2].iter().any(|&k| i + 1 >= k && i <= k);
-        // Stable within 1e-6 of the unit circle (the periodic study's judge): off the bridge's
-        // conduction the conserved charge's multiplier is 1 to rounding.
-        let stable = p.orbit.max_multiplier_abs() < 1.0 + 1e-6;
+        // Off the bridge's conduction the conserved charge's multiplier is 1 to rounding:
+        // neutral, it decides no stability.
+        let stable = p.orbit.is_stable();
         if !near_fold {
             assert_eq!(
                 stable, !middle,

@@ -54,12 +54,13 @@ pub struct DiagramPoint {
 }
 
 impl DiagramPoint {
-    /// Largest modulus of the multipliers.
+    /// Largest modulus of the multipliers off the neutral band
+    /// ([`crate::study::orbit::is_neutral`]).
     pub fn max_multiplier_abs(&self) -> f64 {
-        self.multipliers[0].norm()
+        crate::study::orbit::leading_abs(&self.multipliers)
     }
 
-    /// True when every multiplier lies inside the unit circle.
+    /// True when every multiplier off the neutral band lies inside the unit circle.
     pub fn is_stable(&self) -> bool {
         self.max_multiplier_abs() < 1.0
     }

@@ -6,7 +6,7 @@
 use crate::model::Model;
 use crate::num::roots::{illinois, RootOptions, Sample};
 use crate::ode::Stats;
-use crate::study::orbit::{OrbitError, Shooter};
+use crate::study::orbit::{is_neutral, OrbitError, Shooter};
 
 use super::corrector::Continuer;
 use super::test_functions::{
@@ -193,7 +193,15 @@ impl<M: Model<N> + Clone, const N: usize> Continuer<'_, '_, M, N> {
             (f(a, gaps) > 0.0) != (f(b, gaps) > 0.0)
         };
         let turn = changes(test_fold, b);
-        let plus1 = changes(test_plus_one, b);
+        // A multiplier that enters or leaves the neutral band (`orbit::is_neutral`) changes
+        // the sign of the +1 test without crossing: a conserved quantity appears or goes (a
+        // circuit's switch stops or starts firing over the period), which is no branch point.
+        // A true crossing in the same interval is then not reported.
+        let neutral = |p: &BranchPoint| {
+            let m = &p.orbit.multipliers;
+            m.iter().filter(|m| is_neutral(**m, false)).count()
+        };
+        let plus1 = changes(test_plus_one, b) && neutral(a) == neutral(b);
         let minus1 = changes(test_minus_one, b);
         let torus = a.orbit.unstable_count() != b.orbit.unstable_count() && !plus1 && !minus1;
         // At a corner the changes of stability belong to the corner (the fold above); across

@@ -343,12 +343,13 @@ impl Orbit {
         SMatrix::<f64, N, N>::from_column_slice(self.monodromy.as_slice())
     }
 
-    /// Largest modulus of the multipliers.
+    /// Largest modulus of the multipliers off the neutral band ([`is_neutral`]; 0 when
+    /// there are none).
     pub fn max_multiplier_abs(&self) -> f64 {
-        self.multipliers[0].norm()
+        leading_abs(&self.multipliers)
     }
 
-    /// True when every multiplier lies inside the unit circle.
+    /// True when every multiplier off the neutral band lies inside the unit circle.
     pub fn is_stable(&self) -> bool {
         self.max_multiplier_abs() < 1.0
     }
@@ -363,26 +364,59 @@ impl Orbit {
         self.forcing.get(p)
     }
 
-    /// prod (mu_i - 1), real: changes sign where a real multiplier crosses +1.
+    /// prod (mu_i - 1) over the multipliers off the neutral band, real: changes sign where a
+    /// real multiplier crosses +1.
     pub fn det_minus_one(&self) -> f64 {
-        self.multipliers
-            .iter()
-            .fold(Complex::new(1.0, 0.0), |acc, &m| acc * (m - 1.0))
-            .re
+        shifted_product(&self.multipliers, -1.0, false)
     }
 
-    /// prod (mu_i + 1), real: changes sign where a real multiplier crosses -1.
+    /// prod (mu_i + 1) over the multipliers off the neutral band, real: changes sign where a
+    /// real multiplier crosses -1.
     pub fn det_plus_one(&self) -> f64 {
-        self.multipliers
-            .iter()
-            .fold(Complex::new(1.0, 0.0), |acc, &m| acc * (m + 1.0))
-            .re
+        shifted_product(&self.multipliers, 1.0, false)
     }
 
-    /// Number of multipliers outside the unit circle.
+    /// Number of multipliers outside the unit circle (off the neutral band).
     pub fn unstable_count(&self) -> usize {
-        self.multipliers.iter().filter(|m| m.norm() > 1.0).count()
+        self.multipliers
+            .iter()
+            .filter(|m| !is_neutral(**m, false) && m.norm() > 1.0)
+            .count()
     }
+}
+
+/// Half-width of the band about 1 in which a real multiplier is neutral ([`is_neutral`]):
+/// ten times the default shooting tolerance ([`ShootingConfig`]); the neutral multipliers of
+/// a bridge that never conducts, whose element charge the flow conserves, lie within 5e-11
+/// of 1 there.
+pub const NEUTRAL_BAND: f64 = 1e-9;
+
+/// Whether a multiplier is neutral: real and within [`NEUTRAL_BAND`] of 1 (of +1 or -1 for a
+/// half map's, `half`). A quantity the flow conserves (a circuit element's charge while its
+/// bridge never conducts) gives a whole family of orbits and a multiplier of exactly 1 that
+/// decides neither stability nor an event; a multiplier that crosses 1 as a parameter moves
+/// lies in the band over a stretch of about `2 NEUTRAL_BAND / |dmu/dp|` of the branch, where
+/// its event is located to that width.
+pub fn is_neutral(m: Complex<f64>, half: bool) -> bool {
+    let near = |c: f64| (m.re - c).abs() < NEUTRAL_BAND;
+    m.im.abs() < NEUTRAL_BAND && (near(1.0) || (half && near(-1.0)))
+}
+
+/// The largest modulus of the multipliers `ms` (largest first) off the neutral band; 0 when
+/// there are none.
+pub fn leading_abs(ms: &[Complex<f64>]) -> f64 {
+    ms.iter()
+        .find(|m| !is_neutral(**m, false))
+        .map_or(0.0, |m| m.norm())
+}
+
+/// prod (mu_i + shift) over the multipliers off the neutral band (of a half map's, `half`),
+/// real part.
+pub fn shifted_product(ms: &[Complex<f64>], shift: f64, half: bool) -> f64 {
+    ms.iter()
+        .filter(|m| !is_neutral(**m, half))
+        .fold(Complex::new(1.0, 0.0), |acc, &m| acc * (m + shift))
+        .re
 }
 
 /// Chord steps on the plain period map after Newton has converged on the variational one.

@@ -12,12 +12,12 @@
 //! pair), and on a symmetric branch the symmetry-breaking pitchfork (-1 of the half-period
 //! map).
 
-use nalgebra::{Complex, DMatrix, DVector};
+use nalgebra::{DMatrix, DVector};
 
 use crate::num::roots::{illinois, RootOptions, Sample};
 use crate::ode::Stats;
 use crate::study::continuation::ContinuationSettings;
-use crate::study::orbit::Forcing;
+use crate::study::orbit::{is_neutral, leading_abs, shifted_product, Forcing};
 
 use super::bvp::{Closure, Evaluated, ImpactOrbitInfo, Problem};
 use super::{DiagramPoint, EndKind, EventKind};
@@ -405,14 +405,12 @@ impl<M: crate::model::Model<N>, const N: usize> Follower<'_, '_, M, N> {
     }
 }
 
-fn prod(m: &[Complex<f64>], shift: f64) -> f64 {
-    m.iter()
-        .fold(Complex::new(1.0, 0.0), |acc, &x| acc * (x + shift))
-        .re
-}
-
 fn unstable(n: &Node) -> usize {
-    n.info.multipliers.iter().filter(|m| m.norm() > 1.0).count()
+    n.info
+        .multipliers
+        .iter()
+        .filter(|m| !is_neutral(**m, false) && m.norm() > 1.0)
+        .count()
 }
 
 /// The smallest impact speed (m/s): zero at a grazing impact.
@@ -437,24 +435,24 @@ fn test_plus_one(n: &Node) -> f64 {
     match &n.info.half_multipliers {
         // On a symmetric branch a +1 of the period map is either a +1 of the half map (a fold
         // or branch point within the symmetric orbits) or a -1 (the pitchfork, tested apart).
-        Some(h) => prod(h, -1.0),
-        None => prod(&n.info.multipliers, -1.0),
+        Some(h) => shifted_product(h, -1.0, true),
+        None => shifted_product(&n.info.multipliers, -1.0, false),
     }
 }
 
 fn test_minus_one(n: &Node) -> f64 {
-    prod(&n.info.multipliers, 1.0)
+    shifted_product(&n.info.multipliers, 1.0, false)
 }
 
 fn test_half_minus_one(n: &Node) -> f64 {
     n.info
         .half_multipliers
         .as_ref()
-        .map_or(1.0, |h| prod(h, 1.0))
+        .map_or(1.0, |h| shifted_product(h, 1.0, true))
 }
 
 fn test_torus(n: &Node) -> f64 {
-    n.info.multipliers[0].norm() - 1.0
+    leading_abs(&n.info.multipliers) - 1.0
 }
 
 /// The signed asymmetry of a mirror-structured chain (set by the diagram in the node's
