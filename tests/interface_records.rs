@@ -9,15 +9,18 @@
 //! sample interval (a breakpoint of the input) nearly everywhere, and its error is that of a
 //! fifth-order step of 10 us on a 50-120 Hz motion. The exact path integrates the linear modes
 //! exactly and hands every interval where a guard may fire to Dormand-Prince at the record's
-//! rtol. Each mean (DC power, drive power, storage voltage) is asserted within 1e-5 of the
-//! reference, relatively (ten times the largest error seen, Dormand-Prince's 1.2e-6 on the
-//! struck coil's drive power, and a small fraction of what a missed conduction event, a wrong
-//! ledger weight or a misread input changes), and the exact path's error is asserted at most
-//! twice Dormand-Prince's at the default rtol plus 1e-9 of the mean. Where the stops are
-//! struck both errors are mostly those of the contact intervals, which both runs integrate by
-//! Dormand-Prince at the default rtol (1.25e-8 and 1.25e-8 for the struck bridge's DC power;
-//! 1.7e-7 and 2.3e-7 for the coil's); elsewhere both are between 1e-12 and 1e-9 of the mean,
-//! near the reference's own error, and neither is consistently the smaller (the floor). The
+//! rtol. Each mean (DC power, drive power, storage voltage) is asserted within 2e-5 of the
+//! reference, relatively: twice the largest error seen, 1.1e-5 on the struck coil's drive
+//! power by both paths (its contact intervals go to Dormand-Prince at the default rtol, and
+//! the books integrate each step's 4th-order dense output; the ledger carried as states of
+//! the ODE, as an earlier engine did, gave 1.2e-6 there), and a small fraction of what a
+//! missed conduction event, a wrong ledger weight or a misread input changes. That that error
+//! is the integrator's and no bias is a hypothesis, tested here: at rtol 1e-9 it falls at
+//! least threefold (measured 2.2e-6, and 1.1e-7 at 1e-11). The exact path's error is asserted
+//! at most twice Dormand-Prince's at the default rtol plus 1e-9 of the mean. Where the stops
+//! are struck both errors are mostly those of the contact intervals; elsewhere both are
+//! between 1e-12 and 1e-9 of the mean, near the reference's own error, and neither is
+//! consistently the smaller (the floor). The
 //! ledgers close to 1e-6, as for the steady states (`tests/interfaces.rs`).
 
 use endstop::device::{DcLoad, Device, Diode, Interface, Inversion, Rectifier};
@@ -254,10 +257,21 @@ fn exact_records_agree_with_dormand_prince() {
         ] {
             let (err_e, err_d) = (((e - t) / t).abs(), ((d - t) / t).abs());
             eprintln!("  {what}: {t:e}; exact {err_e:.1e}, Dormand-Prince {err_d:.1e}");
-            assert!(err_e < 1e-5, "{name}: {what} exact {e:e} vs {t:e}");
+            assert!(err_e < 2e-5, "{name}: {what} exact {e:e} vs {t:e}");
             assert!(
                 err_e <= 2.0 * err_d + 1e-9,
                 "{name}: {what} exact error {err_e:e} above Dormand-Prince's {err_d:e}"
+            );
+        }
+        if c.name == "electromagnetic bridge" {
+            // The largest error is the integrator's: it falls with the tolerance.
+            let finer = record(&c, 1e-9, Scheme::Dopri5);
+            let err = |p: f64| ((p - tight[1]) / tight[1]).abs();
+            let (coarse, fine) = (err(dopri.p_drive_w), err(finer.p_drive_w));
+            eprintln!("  p_drive_w at rtol 1e-9: {fine:.1e} (1e-7: {coarse:.1e})");
+            assert!(
+                fine * 3.0 <= coarse,
+                "{name}: drive power error {coarse:e} at rtol 1e-7, {fine:e} at 1e-9"
             );
         }
         for (what, l) in [("exact", &exact.ledger), ("Dormand-Prince", &dopri.ledger)] {
