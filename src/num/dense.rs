@@ -46,8 +46,9 @@ impl<const N: usize> Lu<N> {
 /// An LU decomposition of an `N x N` complex matrix (see the module docs).
 #[derive(Debug, Clone)]
 pub enum ComplexLu<const N: usize> {
-    /// A 4 x 4 matrix, decomposed as nalgebra's static type.
-    Four(LU<Complex<f64>, U4, U4>),
+    /// A 4 x 4 matrix, decomposed as nalgebra's static type (boxed: it is four times the
+    /// dynamic variant's size).
+    Four(Box<LU<Complex<f64>, U4, U4>>),
     /// Any other size, as a dynamic matrix.
     Dynamic(LU<Complex<f64>, nalgebra::Dyn, nalgebra::Dyn>),
 }
@@ -56,7 +57,9 @@ impl<const N: usize> ComplexLu<N> {
     /// The decomposition of `m`.
     pub fn of(m: &SMatrix<Complex<f64>, N, N>) -> Self {
         if N == 4 {
-            ComplexLu::Four(nalgebra::Matrix4::<Complex<f64>>::from_column_slice(m.as_slice()).lu())
+            ComplexLu::Four(Box::new(
+                nalgebra::Matrix4::<Complex<f64>>::from_column_slice(m.as_slice()).lu(),
+            ))
         } else {
             ComplexLu::Dynamic(DMatrix::from_column_slice(N, N, m.as_slice()).lu())
         }

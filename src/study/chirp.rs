@@ -338,7 +338,7 @@ impl ChirpSweep {
             profile: Profile::Linear,
         };
         let n_out = base.layout().outputs.len();
-        let model = Driven::new(base, chirp.clone());
+        let model = Driven::new(base, chirp);
         let mut w: Windows<M, N> = Windows {
             model: base,
             chirp,

@@ -414,9 +414,9 @@ impl<M: Model<N>, const N: usize> Observer<SVector<f64, N>, Mode> for Meter<'_, 
             let t = st.t0 + th * st.h;
             let y = st.at_theta(th);
             self.model.outputs(m, &y, &mut out[..k]);
-            for i in 0..k {
-                self.squares[i] += wt * st.h * out[i] * out[i];
-                self.integrals[i] += wt * st.h * out[i];
+            for (i, o) in out.iter().take(k).enumerate() {
+                self.squares[i] += wt * st.h * o * o;
+                self.integrals[i] += wt * st.h * o;
             }
             let x = y[0];
             self.x0 += wt * st.h * x;

@@ -337,8 +337,7 @@ impl<const N: usize> Harvester<N> {
 
     fn make_layout(&self) -> Layout {
         let mut names: Vec<(&str, &str)> = vec![("x", "m"), ("v", "m/s")];
-        let outputs: Vec<(&str, &str, Option<Load>)>;
-        match &self.port {
+        let outputs: Vec<(&str, &str, Option<Load>)> = match &self.port {
             Port::Loaded(t) => {
                 let (a, b) = match t {
                     TransducerModel::Pair(_) => (("s1", "C"), ("s2", "C")),
@@ -349,7 +348,7 @@ impl<const N: usize> Harvester<N> {
                 names.push(a);
                 names.push(b);
                 let r = Some(Load::Resistor(t.load_resistance()));
-                outputs = vec![("v1", "V", r), ("v2", "V", r)];
+                vec![("v1", "V", r), ("v2", "V", r)]
             }
             Port::Circuit(c) => {
                 match c.element {
@@ -366,9 +365,9 @@ impl<const N: usize> Harvester<N> {
                     crate::physics::interface::Sink::Battery(vb, r) => Some(Load::Battery(vb, r)),
                     crate::physics::interface::Sink::Open => None,
                 };
-                outputs = vec![("vs", "V", load), ("v_element", "V", None)];
+                vec![("vs", "V", load), ("v_element", "V", None)]
             }
-        }
+        };
         let mut layout = Layout::new(&names);
         layout.components[1].name = "v_mass".into();
         layout.with_outputs(&outputs)

@@ -86,7 +86,10 @@ fn the_assembly_is_the_loaded_harvester_bit_for_bit() {
     let mut rng = ChaCha8Rng::seed_from_u64(45);
     let mut compared = 0;
     for dev in devices().iter().filter(|d| d.interface.is_resistive()) {
-        let sine = Sine::from_rms_g(0.7, 0.9 * dev.suspension_omega_rad_s() / 6.283);
+        let sine = Sine::from_rms_g(
+            0.7,
+            0.9 * dev.suspension_omega_rad_s() / std::f64::consts::TAU,
+        );
         let old = Old::new(dev, sine);
         let new = Harvester::<4>::new(dev).unwrap();
         assert_eq!(old.scales(), new.scales(), "{}", dev.name);
@@ -120,8 +123,8 @@ fn the_assembly_is_the_loaded_harvester_bit_for_bit() {
                     }
                 }
                 // Every guard that can fire switches to the same state.
-                for i in 0..2 {
-                    if go[i] == f64::NEG_INFINITY {
+                for (i, g) in go.iter().enumerate().take(2) {
+                    if *g == f64::NEG_INFINITY {
                         continue;
                     }
                     let (mut yo, mut yn) = (y, y);
@@ -157,7 +160,10 @@ fn the_assembly_is_the_interfaced_harvester_bit_for_bit() {
             let Some(dev) = with_kind(&text, kind) else {
                 continue;
             };
-            let sine = Sine::from_rms_g(0.5, 0.9 * dev.suspension_omega_rad_s() / 6.283);
+            let sine = Sine::from_rms_g(
+                0.5,
+                0.9 * dev.suspension_omega_rad_s() / std::f64::consts::TAU,
+            );
             let old = Interfaced::new(&dev, sine).unwrap();
             let new = Harvester::<4>::new(&dev).unwrap();
             assert_eq!(old.scales(), new.scales(), "{} {kind}", dev.name);

@@ -120,7 +120,6 @@ pub(super) struct Flight<const N: usize> {
 /// `scales` (their ratios for the derivatives); the states at the times `marks` (s from the
 /// start) are kept.
 #[allow(clippy::too_many_arguments)]
-#[allow(clippy::too_many_arguments)]
 pub(super) fn fly<M: Model<N>, const N: usize>(
     model: &M,
     sine: Sine,
