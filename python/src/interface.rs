@@ -1,18 +1,18 @@
-//! `endstop.study` for a device with an interface circuit (a bridge, SSHI or SECE into a
-//! storage capacitor): the steady state's DC voltage and power continued in frequency through
-//! folds with its stability, and the charging of the storage. Each returns a dict of numbers
-//! and numpy arrays with the GIL released while it runs.
+//! `endstop.study` for a model with a storage output (a device behind an interface circuit: a
+//! bridge, SSHI or SECE into a storage capacitor), each function one path through the library's
+//! studies written over any model: the periodic steady states by shooting at each frequency,
+//! the steady state continued in frequency through folds with its stability, the charging of
+//! the storage, and the storage ensemble of noise records. Each returns a dict of numbers and
+//! numpy arrays with the GIL released while it runs.
 
 use endstop::drive::Sine;
 use endstop::paper::setups::paper_record;
 use endstop::progress::Silent;
-use endstop::study::interface::charging::{charge, ChargeSettings};
-use endstop::study::interface::continuation::{
-    continue_frequency, IfBranchEnd, IfContinuationSettings,
-};
-use endstop::study::interface::record::{check_steady_mean, noise_ensemble, DcRecord, DcSummary};
-use endstop::study::interface::sweep::frequency_sweep;
-use endstop::study::interface::{IfSteady, SteadySettings};
+use endstop::study::charging::{charge, ChargeSettings};
+use endstop::study::continuation::{frequency_branch, EventKind};
+use endstop::study::orbit::Orbit;
+use endstop::study::periodic::{frequency_sweep, PeriodicState, SteadySettings};
+use endstop::study::record::{check_steady_mean, storage_ensemble, StorageRecord, StorageSummary};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
@@ -28,12 +28,17 @@ fn positive(name: &str, v: f64) -> PyResult<()> {
     }
 }
 
-/// The steady state of a device with an interface continued in frequency from `start_hz` to
-/// `stop_hz` through folds (the library's `continue_frequency`, steps of at most
-/// `max_step_hz`). Keys: per-point arrays `freq_hz`, `vdc_v`, `p_dc_w`, `x_peak_m`,
-/// `multiplier_max_abs`, the lists `stable` and `method` (how each steady state was found:
-/// "newton" or "period map"); `folds_hz` and `end` ("reached", "stalled at <f> Hz" or "max
-/// points").
+/// The periodic orbit of a device continued in frequency from `start_hz` to `stop_hz` through
+/// folds (the library's generic pseudo-arclength continuation, `frequency_branch`: from the
+/// orbit reached from rest at `start_hz`, parameter steps of at most `max_step_hz`). Keys:
+/// per-point arrays `freq_hz`, `vdc_v` (the mean of the model's first output over the period:
+/// behind a circuit, the storage voltage), `p_dc_w` (the mean power of the loads on the
+/// outputs: behind a circuit, the DC load's), `x_peak_m` (largest |x|), `multiplier_max_abs`,
+/// the lists `stable` and `method` (every point is a Newton solution of the bordered period
+/// map, so "newton"); `folds_hz` and `end` ("reached" when the branch passes `stop_hz`,
+/// "turned back past the start at <f> Hz" when it returns past `start_hz` after a fold; a
+/// branch that stalls or runs out of points raises `SolverError` naming the last frequency
+/// reached).
 #[pyfunction]
 #[pyo3(signature = (device, accel_rms_g, start_hz, stop_hz, max_step_hz = 0.5))]
 fn interface_response<'py>(
@@ -52,59 +57,65 @@ fn interface_response<'py>(
     ] {
         positive(n, v)?;
     }
-    let mut set = IfContinuationSettings::new(start_hz, stop_hz, accel_rms_g);
-    set.max_freq_step_hz = max_step_hz;
-    set.ds_max = max_step_hz / set.freq_scale_hz;
     let dev = device.inner.clone();
     let branch = py
-        .detach(move || continue_frequency(&dev, &set, &Silent))
+        .detach(move || {
+            frequency_branch(&dev, accel_rms_g, start_hz, stop_hz, max_step_hz, &Silent)
+        })
         .map_err(solver_err)?;
     let d = PyDict::new(py);
-    let col = |f: &dyn Fn(&endstop::study::interface::IfSteady) -> f64| {
-        array(py, branch.points.iter().map(|p| f(&p.steady)).collect())
-    };
-    d.set_item("freq_hz", col(&|s| s.freq_hz))?;
-    d.set_item("vdc_v", col(&|s| s.vdc_v))?;
-    d.set_item("p_dc_w", col(&|s| s.p_dc_w))?;
-    d.set_item("x_peak_m", col(&|s| s.x_peak_m))?;
-    d.set_item("multiplier_max_abs", col(&|s| s.max_multiplier))?;
+    let col =
+        |f: &dyn Fn(&Orbit) -> f64| array(py, branch.points.iter().map(|p| f(&p.orbit)).collect());
+    d.set_item("freq_hz", col(&|o| o.forcing.freq_hz))?;
     d.set_item(
-        "method",
-        branch
-            .points
-            .iter()
-            .map(|p| p.steady.method.label())
-            .collect::<Vec<_>>(),
+        "vdc_v",
+        col(&|o| o.summary.outputs.first().map_or(f64::NAN, |s| s.mean)),
     )?;
+    d.set_item("p_dc_w", col(&|o| o.summary.p_total_w))?;
+    d.set_item("x_peak_m", col(&|o| o.summary.x_max_m))?;
+    d.set_item("multiplier_max_abs", col(&|o| o.max_multiplier_abs()))?;
+    d.set_item("method", vec!["newton"; branch.points.len()])?;
     d.set_item(
         "stable",
         branch
             .points
             .iter()
-            .map(|p| p.is_stable())
+            .map(|p| p.orbit.is_stable())
             .collect::<Vec<bool>>(),
     )?;
     d.set_item(
         "folds_hz",
-        branch.folds.iter().map(|f| f.0).collect::<Vec<f64>>(),
+        branch
+            .events_of(EventKind::Fold)
+            .map(|e| e.param)
+            .collect::<Vec<f64>>(),
     )?;
+    // The branch ends at its first point past `stop_hz`, or at its first point back past
+    // `start_hz` (a branch that turns at a fold and runs out below its start).
+    let last_hz = branch
+        .points
+        .last()
+        .map_or(start_hz, |p| p.orbit.forcing.freq_hz);
+    let reached = (last_hz - stop_hz) * (stop_hz - start_hz) >= 0.0;
     d.set_item(
         "end",
-        match branch.end {
-            IfBranchEnd::Reached => "reached".to_string(),
-            IfBranchEnd::Stalled(f) => format!("stalled at {f} Hz"),
-            IfBranchEnd::MaxPoints => "max points".to_string(),
+        if reached {
+            "reached".to_string()
+        } else {
+            format!("turned back past the start at {last_hz} Hz")
         },
     )?;
     Ok(d)
 }
 
-/// The steady state of a device with an interface at each frequency of `freqs_hz` in order
-/// (an up- or down-sweep as given), each shot from the previous one's (the first from rest):
-/// the `endstop sweep` command's study on such a device. Keys: per-point arrays `freq_hz`,
-/// `vdc_v`, `p_dc_w`, `ripple_v`, `x_peak_m`, `multiplier_max_abs` (NaN where no period-one
-/// steady state was found), the lists `stable`, `method` ("newton", "period map", or the
-/// error where none was found) and `found`.
+/// The periodic steady state of a device at each frequency of `freqs_hz` in order (an up- or
+/// down-sweep as given), found by shooting on the period map from the previous one's state (the
+/// first from rest): the library's `periodic::frequency_sweep`. Keys: per-point arrays
+/// `freq_hz`, `vdc_v` (the mean of the model's first output: behind a circuit, the storage
+/// voltage), `p_dc_w` (the mean power of the loads on the outputs: behind a circuit, the DC
+/// load's), `ripple_v` (the first output's peak-to-peak), `x_peak_m`, `multiplier_max_abs`
+/// (NaN where no period-one steady state was found), the lists `stable`, `method` ("newton",
+/// "period map", or the error where none was found) and `found`.
 #[pyfunction]
 fn interface_sweep<'py>(
     py: Python<'py>,
@@ -121,11 +132,13 @@ fn interface_sweep<'py>(
     }
     let dev = device.inner.clone();
     let fs = freqs_hz.clone();
-    let results = py.detach(move || {
-        frequency_sweep(&dev, &fs, accel_rms_g, &SteadySettings::default(), &Silent)
-    });
+    let results = py
+        .detach(move || {
+            frequency_sweep(&dev, &fs, accel_rms_g, &SteadySettings::default(), &Silent)
+        })
+        .map_err(solver_err)?;
     let d = PyDict::new(py);
-    let col = |f: &dyn Fn(&IfSteady) -> f64| {
+    let col = |f: &dyn Fn(&PeriodicState) -> f64| {
         array(
             py,
             results
@@ -144,7 +157,7 @@ fn interface_sweep<'py>(
         "stable",
         results
             .iter()
-            .map(|r| r.as_ref().is_ok_and(IfSteady::is_stable))
+            .map(|r| r.as_ref().is_ok_and(PeriodicState::is_stable))
             .collect::<Vec<bool>>(),
     )?;
     d.set_item(
@@ -164,9 +177,10 @@ fn interface_sweep<'py>(
     Ok(d)
 }
 
-/// Charges the storage of a device with an interface from `start_v` to `target_v` under a
+/// Charges the storage of a device (a model with a storage output) from `start_v` to `target_v` under a
 /// sine at `freq_hz`, `accel_rms_g`, from rest at phase zero, ramped up over `ramp_periods`
-/// periods (0: at once): the `endstop charge` command's study with its settings (blocks of
+/// periods (0: at once): the library's `charging::charge`, with the `endstop charge` command's
+/// settings (blocks of
 /// 200 periods, samples every `max(t_max_s / 20000, period / 8)`). Keys: `time_to_target_s`,
 /// `stored_j`, arrays `t_s` and `vs_v`. A target out of reach raises `SolverError`.
 #[pyfunction]
@@ -222,9 +236,10 @@ fn charge_storage<'py>(
     Ok(d)
 }
 
-/// An ensemble of band-limited white-noise records (record i uses stream i of `seed`) through
-/// the interface: the `endstop random` command's study on such a device (its noise, and its
-/// pre-roll: the longer of five ring-up times and five storage time constants `R C_s`).
+/// An ensemble of band-limited white-noise records (record i uses stream i of `seed`) of a model
+/// with a storage output, summarised over the records: the library's `storage_ensemble` and
+/// `StorageSummary`, as the `endstop random` command calls them on such a model (its noise, and
+/// its pre-roll: the longer of five ring-up times and five storage time constants `R C_s`).
 /// Keys: `p_dc_w`, `p_dc_ci95_w`, `p_drive_w`, `efficiency`, `efficiency_ci95`, `vdc_v`,
 /// `preroll_s`, and per-record arrays `p_dc_w_each`, `p_drive_w_each`, `vdc_v_each`,
 /// `ledger_relative_residual_each`. An open DC load (no steady mean) raises `SolverError`.
@@ -248,10 +263,10 @@ fn interface_ensemble<'py>(
     let mut spec = paper_record(&dev, psd_g2_per_hz);
     spec.noise.duration_s = duration_s;
     let ens = py
-        .detach(move || noise_ensemble(&dev, &spec, seed, records))
+        .detach(move || storage_ensemble(&dev, &spec, seed, records))
         .map_err(solver_err)?;
-    let each = |f: fn(&DcRecord) -> f64| ens.iter().map(f).collect::<Vec<f64>>();
-    let sum = DcSummary::of(&ens);
+    let each = |f: fn(&StorageRecord) -> f64| ens.iter().map(f).collect::<Vec<f64>>();
+    let sum = StorageSummary::of(&ens);
     let d = PyDict::new(py);
     d.set_item("p_dc_w", sum.p_dc_w.mean)?;
     d.set_item("p_dc_ci95_w", sum.p_dc_w.ci95)?;

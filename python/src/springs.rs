@@ -3,13 +3,13 @@
 //! well's bottom to the other's, and the exact stationary density where it applies), and the
 //! basins of the stable orbits under a sine, each orbit placed by well.
 
-use endstop::drive::Sine;
-use endstop::physics::harvester::Harvester;
+use endstop::model::Model;
 use endstop::physics::suspension::Place;
-use endstop::study::attractors::{find_attractors, seeds, AttractorSearch};
-use endstop::study::basins::{basins as basin_map, BasinGrid, BasinSettings, UNSETTLED};
+use endstop::progress::Silent;
+use endstop::study::attractors::{find_attractors, seeds, AttractorSearch, Attractors};
+use endstop::study::basins::{basins as basin_map, BasinGrid, BasinSettings, Basins, UNSETTLED};
 use endstop::study::displacement::{displacement_ensemble, DisplacementBins};
-use endstop::study::orbit::{Forcing, ShootingConfig};
+use endstop::study::orbit::{Forcing, OrbitError, ShootingConfig};
 use endstop::validation::stationary_law::StationaryLaw;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
@@ -156,30 +156,15 @@ fn basins<'py>(
     };
     let (found, b) = py
         .detach(move || {
-            let h = Harvester::new(&dev, Sine::from_rms_g(accel_rms_g, freq_hz));
-            let shooting = ShootingConfig::default();
-            let found = find_attractors(
+            endstop::with_harvester!(&dev, |h| attractors_and_basins(
                 &h,
                 &dev,
                 &forcing,
-                shooting,
-                &seeds(&dev, &grid, seeds_per_side),
-                &AttractorSearch::default(),
-            )?;
-            if found.found.is_empty() {
-                return Err(endstop::study::orbit::OrbitError::Invalid(
-                    "no stable orbit of one drive period found: the basins need an attractor"
-                        .into(),
-                ));
-            }
-            let settings = BasinSettings {
                 grid,
+                seeds_per_side,
                 max_periods,
-                settle_tol,
-                rtol: shooting.rtol,
-            };
-            let b = basin_map(&h, &forcing, &found.catalogue(), &settings, &|| {})?;
-            Ok((found, b))
+                settle_tol
+            ))
         })
         .map_err(solver_err)?;
     let d = PyDict::new(py);
@@ -211,6 +196,42 @@ fn basins<'py>(
     }
     d.set_item("attractors", table)?;
     Ok(d)
+}
+
+/// The stable orbits of one drive period of `model` (assembled from `device`) reached from the
+/// wells at rest and `seeds_per_side` squared states over `grid`, and the basins of the grid
+/// among them: the study of ``endstop basins``, with its default shooting and search.
+fn attractors_and_basins<M: Model<N>, const N: usize>(
+    model: &M,
+    device: &endstop::device::Device,
+    forcing: &Forcing,
+    grid: BasinGrid,
+    seeds_per_side: usize,
+    max_periods: usize,
+    settle_tol: f64,
+) -> Result<(Attractors, Basins), OrbitError> {
+    let shooting = ShootingConfig::default();
+    let found = find_attractors(
+        model,
+        device,
+        forcing,
+        shooting,
+        &seeds(device, &grid, seeds_per_side),
+        &AttractorSearch::default(),
+    )?;
+    if found.found.is_empty() {
+        return Err(OrbitError::Invalid(
+            "no stable orbit of one drive period found: the basins need an attractor".into(),
+        ));
+    }
+    let settings = BasinSettings {
+        grid,
+        max_periods,
+        settle_tol,
+        rtol: shooting.rtol,
+    };
+    let b = basin_map(model, forcing, &found.catalogue(), &settings, &Silent)?;
+    Ok((found, b))
 }
 
 pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {

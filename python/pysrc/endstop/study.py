@@ -15,16 +15,19 @@ arrays, with the GIL released while it runs.
   Floquet stability and the folds, branch points and grazing points on the way (the
   ``endstop response`` command's continuation).
 
-For a device with an ``[interface]`` table (a bridge, SSHI or SECE into a storage capacitor):
+For a device with an ``[interface]`` table (a bridge, SSHI or SECE into a storage capacitor),
+each the library's study written once for any model:
 
-* :func:`interface_sweep`: the steady state's DC voltage and power at each frequency, each
-  shot from the previous one (the ``endstop sweep`` command's study on such a device);
-* :func:`interface_response`: the steady state's DC voltage and power continued in frequency
-  through folds, with its stability from the monodromy through saltation matrices;
+* :func:`interface_sweep`: the periodic steady state at each frequency, found by shooting on
+  the period map from the previous one's state: the mean storage voltage, the DC load's power,
+  the ripple and the Floquet stability;
+* :func:`interface_response`: the periodic orbit continued in frequency through folds
+  (pseudo-arclength continuation), with its stability from the monodromy through saltation
+  matrices;
 * :func:`charge`: the time for the storage to reach a target voltage under a sine (the
   ``endstop charge`` command's study);
-* :func:`interface_ensemble`: noise records through the interface, DC power and efficiency
-  (the ``endstop random`` command's study on such a device).
+* :func:`interface_ensemble`: noise records of the model with its storage, DC power and
+  efficiency (the ``endstop random`` command's study on such a device).
 """
 
 import numpy as np
@@ -101,21 +104,30 @@ __all__ = ["up_sweep", "down_sweep", "orbits", "amplitude_sweep", "record", "ens
 
 
 def interface_sweep(device, accel_rms_g, freqs_hz):
-    """The steady state of ``device`` (with an interface circuit and a DC load) at
-    ``accel_rms_g`` at each frequency of ``freqs_hz`` in order, each shot from the previous
-    one's: per-point arrays ``freq_hz``, ``vdc_v``, ``p_dc_w``, ``ripple_v``, ``x_peak_m``,
-    ``multiplier_max_abs`` (NaN where none was found), the lists ``stable``, ``method`` and
-    ``found``."""
+    """The periodic steady state of ``device`` (with an interface circuit and a DC load) at
+    ``accel_rms_g`` at each frequency of ``freqs_hz`` in order, found by shooting on the period
+    map from the previous one's state (the first from rest), measured over one period:
+    per-point arrays ``freq_hz``, ``vdc_v`` (the mean storage voltage), ``p_dc_w`` (the DC
+    load's mean power), ``ripple_v`` (the storage voltage's peak-to-peak), ``x_peak_m``,
+    ``multiplier_max_abs`` (NaN where no orbit of one period was found), the lists ``stable``,
+    ``method`` (``newton``, ``period map``, or the error where none was found) and ``found``.
+    The ``endstop sweep`` command reaches the same orbits by shooting and then measures them
+    over blocks of periods, to its block criterion."""
     return _native.interface_sweep(device, float(accel_rms_g),
                                    [float(f) for f in freqs_hz])
 
 
 def interface_response(device, accel_rms_g, start_hz, stop_hz, max_step_hz=0.5):
-    """The steady state of ``device`` (with an interface circuit and a DC load) at
-    ``accel_rms_g`` continued in frequency from ``start_hz`` to ``stop_hz`` through folds
-    (frequency steps of at most ``max_step_hz``): per-point arrays ``freq_hz``, ``vdc_v``,
-    ``p_dc_w``, ``x_peak_m``, ``multiplier_max_abs``, the lists ``stable`` and ``method``;
-    ``folds_hz`` and ``end``."""
+    """The periodic orbit of ``device`` (with an interface circuit and a DC load) at
+    ``accel_rms_g`` continued in frequency from ``start_hz`` to ``stop_hz`` through folds by
+    pseudo-arclength continuation (from the orbit reached from rest at ``start_hz``, frequency
+    steps of at most ``max_step_hz``): per-point arrays ``freq_hz``, ``vdc_v`` (the mean
+    storage voltage over the period), ``p_dc_w`` (the DC load's mean power), ``x_peak_m``,
+    ``multiplier_max_abs``, the lists ``stable`` and ``method`` (every point is a Newton
+    solution on the period map, so ``newton``); ``folds_hz`` and ``end`` (``reached`` when the
+    branch passes ``stop_hz``, ``turned back past the start at <f> Hz`` when it returns past
+    ``start_hz`` after a fold; a branch that stalls or runs out of points raises
+    :class:`endstop.SolverError` naming the last frequency reached)."""
     return _native.interface_response(device, float(accel_rms_g), float(start_hz),
                                       float(stop_hz), float(max_step_hz))
 
@@ -132,8 +144,9 @@ def charge(device, freq_hz, accel_rms_g, target_v, start_v=0.0, ramp_periods=0.0
 
 def interface_ensemble(device, psd_g2_per_hz, records=4, duration_s=10.0, seed=2012):
     """An ensemble of band-limited white-noise records (record i uses stream i of ``seed``)
-    through the interface circuit of ``device``, each from rest after a pre-roll covering five
-    storage time constants: ``p_dc_w`` and ``efficiency`` (means, with ``*_ci95``
+    of ``device`` with its interface circuit and storage, each from rest after a pre-roll
+    covering five storage time constants (the ``endstop random`` command's records and
+    summary): ``p_dc_w`` and ``efficiency`` (means, with ``*_ci95``
     half-widths), ``p_drive_w``, ``vdc_v``, ``preroll_s`` and per-record arrays ``*_each``.
     An open DC load (no steady mean) raises :class:`endstop.SolverError`."""
     return _native.interface_ensemble(device, float(psd_g2_per_hz), int(records),
