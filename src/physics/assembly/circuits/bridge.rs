@@ -271,17 +271,19 @@ impl Circuit {
         }
     }
 
-    /// A capacitive port's elastance `S` (V/C) and its voltage's rate with no current
-    /// (V/s), for the ideal bridge's constraint (see the module docs).
+    /// A capacitive port's elastance `S` (V/C) and its voltage's rate with no port current
+    /// (V/s; a pair's node loads still drain it), for the ideal bridge's constraint (see the
+    /// module docs).
     #[inline]
     fn elastance_and_open_rate<const N: usize>(&self, y: &SVector<f64, N>) -> (f64, f64) {
         match self.element {
             Element::Piezo { theta, cp } => (1.0 / cp, -theta * y[1] / cp),
             Element::Pair(p) => {
                 let ps = self.pair(&p, y);
-                // dV_i/dt at fixed charge = -a_i v (V_i - Vb) / D_i.
-                let r1 = -ps.a[0] * y[1] * (ps.v[0] - p.vb) / ps.d[0];
-                let r2 = -ps.a[1] * y[1] * (ps.v[1] - p.vb) / ps.d[1];
+                // dV_i/dt with no port current: the motion's -a_i v (V_i - Vb) / D_i and the
+                // node's own load draining it, -(V_i / R_L) / D_i.
+                let r1 = -(ps.a[0] * y[1] * (ps.v[0] - p.vb) + ps.v[0] / p.rl) / ps.d[0];
+                let r2 = -(ps.a[1] * y[1] * (ps.v[1] - p.vb) + ps.v[1] / p.rl) / ps.d[1];
                 (1.0 / ps.d[0] + 1.0 / ps.d[1], r1 - r2)
             }
             Element::Coil { .. } => (0.0, 0.0),
