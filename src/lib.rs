@@ -30,6 +30,37 @@
 //!   stream ([`drive::noise::generate`]): runs are deterministic and do not depend on the
 //!   number of threads.
 //!
+//! ## Words
+//! The crate uses these words in one sense each, in names and in prose:
+//!
+//! * **device**: a validated description of a harvester's parts ([`device::Device`]: mechanics,
+//!   stops, transducer, interface circuit), in the units its keys carry (`gap_m`,
+//!   `load_resistance_ohm`), as a parameter file states it.
+//! * **model**: the equations a device's parts assemble ([`model::Model`]): its state, modes,
+//!   right-hand side and Jacobian, guards and switches, energy ledger and named outputs. The
+//!   model's quantities use the paper's symbols (`km`, `b`, `vb`, `cp`) in SI units.
+//! * **state layout**: the model's state components in order and their names and units
+//!   ([`model::Layout`]): the mass's `x` and `v` first, then the transducer's or the circuit's
+//!   (node charges `s1`, `s2`; a voltage `v` or `vp`; a coil current `i`; the storage `vs`).
+//! * **study**: a computation over any model ([`study`]): a steady state, a sweep, a
+//!   continuation, a record, an ensemble, basins, a fit, charging. A study never names a
+//!   concrete device type.
+//! * **sweep**: steady states at a sequence of drive frequencies or levels, each started from
+//!   the last (stepped, ramped or chirped).
+//! * **record**: one time series of a model under a sampled drive, with its outputs, spectra
+//!   and energy ledger; an **ensemble** is several records of independent realisations of one
+//!   random drive, with means and intervals.
+//! * **run**: one invocation of a binary or command, writing one output directory.
+//! * **setup**: a paper figure's device, drive and protocol ([`paper`]); a **claim** is a
+//!   number or statement the paper makes about it, checked by a run; **deviations** are the
+//!   claims the published parameters do not reproduce, with their causes.
+//! * **Settings**: what a study is asked to do (ranges, tolerances, step sizes), one struct
+//!   per study; a solver's (an integrator's, a root finder's) are its `Options`
+//!   ([`ode::Options`], [`num::roots::RootOptions`]).
+//!
+//! Naming rule: descriptions carry units in their names (`freq_hz`, `accel_rms_g`), the
+//! model uses the paper's symbols, and a unit is named wherever it is not SI or not obvious.
+//!
 //! The model began as that of C. P. Le and E. Halvorsen, "MEMS electrostatic energy
 //! harvesters with end-stop effects", J. Micromech. Microeng. 22 (2012) 074013 (equation numbers are the paper's), and describes any
 //! single-degree-of-freedom impact harvester: each side's stop absent or a gap and a contact

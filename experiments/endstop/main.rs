@@ -19,6 +19,7 @@
 mod basins;
 mod charge;
 mod random;
+mod random_args;
 mod random_storage;
 mod response;
 mod shared;
@@ -63,7 +64,7 @@ enum Study {
     /// 100 kHz sampling), or one measured acceleration record (--accel-file), with mean
     /// power, output power spectrum and the drive's spectrum; behind an interface circuit
     /// also each record's DC power, efficiency, storage voltage and energy ledger.
-    Random(random::RandomArgs),
+    Random(random_args::RandomArgs),
     /// The whole frequency response: up- and down-sweeps, the periodic orbits continued in
     /// frequency (pseudo-arclength, through folds) with their Floquet multipliers, and the
     /// folds and grazing points on the branch, for any device (a circuit's switchings are

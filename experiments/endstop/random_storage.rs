@@ -22,7 +22,7 @@ use endstop_experiments::fmt_sig;
 use endstop_experiments::io::frame::frame;
 use endstop_experiments::row;
 
-use crate::random::{read_measured, MeasuredDrive, RandomArgs};
+use crate::random_args::{read_measured, MeasuredDrive, RandomArgs};
 use crate::shared::{describe, start};
 
 /// Runs `endstop random` on `device` (as loaded from `a.device`), whose model has a storage.

@@ -1,0 +1,154 @@
+//! The arguments of `endstop random` and its measured drive: a record read from a file,
+//! checked against the band the device needs and resampled before anything is written.
+
+use std::path::PathBuf;
+use std::sync::Arc;
+
+use anyhow::{bail, Result};
+use clap::Parser;
+use endstop::device::Device;
+use endstop::study::record::transient_s;
+use endstop_experiments::fmt_sig;
+use endstop_experiments::reports::measured_io;
+use endstop_experiments::time_split::TimeSplit;
+
+/// The arguments of `endstop random`.
+#[derive(Parser, Debug)]
+pub struct RandomArgs {
+    /// Device file (TOML), e.g. a copy of data/prototype2.toml or of a file in data/examples/.
+    #[arg(long)]
+    pub(crate) device: PathBuf,
+    /// Two-sided acceleration PSD of the white noise in its flat band (g^2/Hz); or give
+    /// --accel-file instead.
+    #[arg(
+        long,
+        required_unless_present = "accel_file",
+        conflicts_with = "accel_file"
+    )]
+    pub(crate) psd: Option<f64>,
+    /// A measured acceleration record to drive the device with instead of noise: a CSV file
+    /// whose header names a time column (`time_s` or `time_ms`) and an acceleration column
+    /// (`accel_m_per_s2` or `accel_g`), or a mono WAV file with --accel-scale. It is checked
+    /// (uniform time, finite values, long enough for the band), resampled to
+    /// --sample-rate-hz, and its first pre-roll (five ring-up times 2m/b; behind an interface
+    /// circuit at least five storage time constants R C_s) is discarded.
+    #[arg(long)]
+    pub(crate) accel_file: Option<PathBuf>,
+    /// The acceleration of a WAV file's full scale (m/s^2); a WAV file carries no unit.
+    #[arg(long)]
+    pub(crate) accel_scale: Option<f64>,
+    /// The integrator's sample rate for a measured record (Hz).
+    #[arg(long, default_value_t = 100e3)]
+    pub(crate) sample_rate_hz: f64,
+    /// The band a measured record must carry, `LO,HI` in Hz (default: the analysis band, a
+    /// quarter to four times the device's open-circuit resonance).
+    #[arg(long, value_delimiter = ',', num_args = 2)]
+    pub(crate) band_hz: Option<Vec<f64>>,
+    /// Number of independent noise records (their mean and 95 % interval are reported).
+    #[arg(long, default_value_t = 4)]
+    pub(crate) records: usize,
+    /// Length of each noise record (s).
+    #[arg(long, default_value_t = 10.0)]
+    pub(crate) duration_s: f64,
+    /// Seed of the random streams (record i uses stream i).
+    #[arg(long, default_value_t = 2012)]
+    pub(crate) seed: u64,
+    /// Bias voltage (V) of an electrostatic transducer; default: the device file's.
+    #[arg(long)]
+    pub(crate) bias_v: Option<f64>,
+    /// Output directory; default: data/results/endstop-random.
+    #[arg(long)]
+    pub(crate) out: Option<PathBuf>,
+}
+
+impl RandomArgs {
+    /// Checks the noise ensemble's arguments (`--psd`, `--records`, `--duration-s`).
+    pub(crate) fn check_noise(&self, psd: f64) -> Result<()> {
+        if !(psd.is_finite() && psd > 0.0) {
+            bail!("--psd = {psd}: must be a finite positive two-sided PSD in g^2/Hz");
+        }
+        if self.records == 0 {
+            bail!("--records = 0: must be at least 1");
+        }
+        if !(self.duration_s.is_finite() && self.duration_s > 0.0) {
+            bail!("--duration-s = {}: must be finite and > 0", self.duration_s);
+        }
+        Ok(())
+    }
+}
+
+/// The most samples a resampled measured record may have.
+const MAX_RESAMPLED: usize = 1 << 27;
+
+/// A measured record read, checked against the band the device needs, and resampled to the
+/// integrator's rate, before anything is written.
+pub(crate) struct MeasuredDrive {
+    /// The record as read.
+    pub(crate) rec: endstop::drive::measured::MeasuredRecord,
+    /// The resampled acceleration (m/s^2).
+    pub(crate) accel: Arc<[f64]>,
+    /// The integrator's sample rate (Hz).
+    pub(crate) fs: f64,
+    /// Samples of the pre-roll.
+    pub(crate) n_tr: usize,
+    /// The pre-roll (s): the device's (`endstop::study::record::transient_s`).
+    pub(crate) preroll_s: f64,
+    /// The analysis band (Hz).
+    pub(crate) band_hz: (f64, f64),
+    /// The run's time so far: reading and resampling.
+    pub(crate) times: TimeSplit,
+}
+
+/// Reads `path` as `--accel-file` for `device` (the file of `a`, as loaded), checks it and
+/// resamples it.
+pub(crate) fn read_measured(
+    a: &RandomArgs,
+    device: &Device,
+    path: &std::path::Path,
+) -> Result<MeasuredDrive> {
+    let fs = a.sample_rate_hz;
+    if !(fs.is_finite() && fs > 0.0) {
+        bail!("--sample-rate-hz = {fs}: must be finite and > 0");
+    }
+    // Read and check everything before the experiment starts, so that nothing is written for
+    // a bad record.
+    let mut times = TimeSplit::start();
+    let rec = measured_io::read_record(path, a.accel_scale)?;
+    let preroll_s = transient_s(device);
+    let f0 = endstop::physics::linear::open_circuit_resonance_hz(device);
+    let (lo, hi) = match a.band_hz.as_deref() {
+        Some([lo, hi]) => (*lo, *hi),
+        _ => (0.25 * f0, (4.0 * f0).min(0.45 * fs)),
+    };
+    if hi > 0.45 * fs {
+        bail!(
+            "--band-hz upper edge {hi} Hz: must be at most {} Hz (0.45 of --sample-rate-hz)",
+            0.45 * fs
+        );
+    }
+    rec.check_band(lo, hi, preroll_s)?;
+    // The resampled record and the response are held in memory: at most 2^27 samples (1 GiB
+    // per signal).
+    let samples = rec.duration_s() * fs;
+    if samples > MAX_RESAMPLED as f64 {
+        bail!(
+            "{}: --sample-rate-hz = {fs} gives {samples:.0} samples over the record's {} s: must \
+             give at most {MAX_RESAMPLED}",
+            path.display(),
+            fmt_sig(rec.duration_s(), 6)
+        );
+    }
+    times.lap("reading");
+    let accel: Arc<[f64]> = rec.resampled(fs).into();
+    times.lap("resampling");
+    let n_tr = (preroll_s * fs).round() as usize;
+    Ok(MeasuredDrive {
+        rec,
+        accel,
+        fs,
+        n_tr,
+        preroll_s,
+        band_hz: (lo, hi),
+        times,
+    })
+}
