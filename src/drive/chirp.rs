@@ -40,6 +40,27 @@ impl Profile {
 /// along a [`Profile`] and staying there: f(t) = f0 + (f1 - f0) s(t/T) and
 /// phi(t) = phi0 + 2 pi int_0^t f. Both profiles advance the phase over the ramp by
 /// 2 pi T (f0 + f1) / 2.
+///
+/// ```
+/// use endstop::drive::{Chirp, Excitation, Profile};
+///
+/// // 100 Hz to 120 Hz over 0.5 s at 1 m/s^2.
+/// let chirp = Chirp {
+///     f0_hz: 100.0,
+///     f1_hz: 120.0,
+///     a0_m_s2: 1.0,
+///     a1_m_s2: 1.0,
+///     duration_s: 0.5,
+///     phase_rad: 0.0,
+///     profile: Profile::Linear,
+/// };
+/// assert_eq!(chirp.freq_hz(0.5), 120.0);
+/// assert_eq!(chirp.freq_hz(0.7), 120.0);
+/// // The ramp advances the phase by 2 pi T (f0 + f1) / 2 = 2 pi 55 (to rounding).
+/// let turns = chirp.phase(0.5) / (2.0 * std::f64::consts::PI);
+/// assert!((turns - 55.0).abs() < 1e-9);
+/// assert_eq!(chirp.next_breakpoint(0.1), 0.5);
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Chirp {
     /// Frequency at t = 0 (Hz).

@@ -11,6 +11,21 @@ use std::sync::Arc;
 use crate::drive::Excitation;
 
 /// A sampled acceleration record, linearly interpolated.
+///
+/// ```
+/// use std::sync::Arc;
+/// use endstop::drive::{Excitation, Sampled};
+///
+/// let record = Sampled::new(Arc::from(vec![0.0, 2.0, -1.0]), 1000.0);
+/// assert_eq!(record.duration_s(), 2e-3);
+/// // Halfway between samples the acceleration is their mean (to rounding), and every sample
+/// // instant is a breakpoint for the integrator.
+/// assert!((record.accel(0.5e-3) - 1.0).abs() < 1e-12);
+/// assert!((record.accel(1.5e-3) - 0.5).abs() < 1e-12);
+/// assert_eq!(record.next_breakpoint(0.2e-3), record.time_of(1));
+/// // Past the last sample the drive is off.
+/// assert_eq!(record.accel(5e-3), 0.0);
+/// ```
 #[derive(Debug, Clone)]
 pub struct Sampled {
     /// Sample interval (s).

@@ -102,6 +102,32 @@ fn sweep_with(
 
 /// The model's values for a data set (its points, its features, then the end of its branch
 /// where the points show a jump, [`SweepData::measured_jump`]) on `device` with the
+///
+/// ```
+/// use endstop::device::Device;
+/// use endstop::fit::{model_values, Direction, Point, Quantity, SweepData};
+///
+/// let text = include_str!(concat!(env!("CARGO_MANIFEST_DIR"), "/data/examples/piezo_cantilever.toml"));
+/// let device = Device::from_toml_str(text, "piezo_cantilever.toml")?;
+/// // Two points of an up-sweep at 0.01 g rms, far below the stopper.
+/// let point = |freq_hz| Point { freq_hz, value: 1.0, sigma: None };
+/// let data = SweepData {
+///     label: "example".into(),
+///     direction: Direction::Up,
+///     accel_rms_g: 0.01,
+///     quantity: Quantity::V1RmsV,
+///     points: vec![point(110.0), point(115.0)],
+///     grid_hz: None,
+///     features: vec![],
+/// };
+/// // Off the stopper the model is linear: twice the acceleration factor, twice the voltage.
+/// // Each value is a steady state to the fit's criterion (1e-6 between blocks), so 1e-5.
+/// let v1 = model_values(&device, 1.0, &data)?;
+/// let v2 = model_values(&device, 2.0, &data)?;
+/// assert_eq!(v1.len(), 2);
+/// assert!(v1.iter().zip(&v2).all(|(a, b)| (b / a - 2.0).abs() < 1e-5));
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
 /// acceleration factor `scale`.
 pub fn model_values(device: &Device, scale: f64, data: &SweepData) -> Result<Vec<f64>, FitError> {
     Ok(values_of(&model_sweep(device, scale, data)?, data))

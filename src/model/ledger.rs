@@ -88,6 +88,32 @@ impl Ledger {
 /// Books a model's ledger from the steps and switches of an integration under the drive
 /// `drive` (see the module docs): each step's powers by 3-point Gauss-Legendre on its dense
 /// output (degree 5), and what a switch moved between one step's end and the next one's start
+///
+/// ```
+/// use endstop::device::Device;
+/// use endstop::drive::Sine;
+/// use endstop::model::{Books, Driven, Mode, Model};
+/// use endstop::ode::Dopri5;
+///
+/// let text = include_str!(concat!(env!("CARGO_MANIFEST_DIR"), "/data/examples/piezo_cantilever.toml"));
+/// let device = Device::from_toml_str(text, "piezo_cantilever.toml")?;
+/// // 0.3 g rms at 120 Hz for 0.1 s from rest: the tip strikes its stopper.
+/// let sine = Sine::from_rms_g(0.3, 120.0);
+/// let ledger = endstop::with_harvester!(&device, |h| {
+///     let sys = Driven::new(&h, sine);
+///     let rest = h.rest_state();
+///     let mut ode = Dopri5::new(0.0, rest, h.mode_of(&rest), h.solver_options(1e-9));
+///     let mut books = Books::new(&h, sine);
+///     ode.integrate_observed(&sys, 0.1, &mut books)?;
+///     assert!(ode.stats().events > 0);
+///     Ok::<_, Box<dyn std::error::Error>>(books.ledger())
+/// })?;
+/// assert!(ledger.get("drive") > 0.0 && ledger.get("loads") > 0.0);
+/// // Energy in = energy out + stored, to the integrator's tolerance (1e-9) times the
+/// // energies turned over and the quadrature's error on the dense output: 1e-6 leaves room.
+/// assert!(ledger.relative_residual().abs() < 1e-6);
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
 /// ([`super::Model::book_switch`]).
 pub struct Books<'m, M, D, const N: usize> {
     model: &'m M,

@@ -82,6 +82,38 @@
 //! assert_eq!(Mode::FREE.contact(0), Contact::Apart);
 //! # Ok::<(), endstop::ode::SolverError>(())
 //! ```
+//!
+//! The model of a device file is assembled by [`crate::with_harvester!`], which picks the
+//! state's dimension the device's parts need and hands the body the model as `h`:
+//!
+//! ```
+//! use endstop::device::Device;
+//! use endstop::model::{Mode, Model};
+//!
+//! let text = include_str!(concat!(env!("CARGO_MANIFEST_DIR"), "/data/examples/piezo_cantilever.toml"));
+//! let device = Device::from_toml_str(text, "piezo_cantilever.toml")?;
+//! endstop::with_harvester!(&device, |h| {
+//!     // The mass's position and velocity come first, then the piezoelectric voltage.
+//!     let names: Vec<&str> = h.layout().components.iter().map(|c| c.name.as_str()).collect();
+//!     assert_eq!(&names[..3], ["x", "v_mass", "v"]);
+//!     let rest = h.rest_state();
+//!     assert!(rest.iter().all(|c| *c == 0.0));
+//!     // At rest the base acceleration alone accelerates the mass: dv/dt = a (eq 7).
+//!     let a = 3.0;
+//!     let dydt = h.rhs(Mode::FREE, &rest, a);
+//!     assert_eq!((dydt[0], dydt[1], dydt[2]), (0.0, a, 0.0));
+//!     // Moving at 1 mm/s with the element discharged, the voltage changes at -theta v / Cp
+//!     // (2.67e-3 N/V and 50 nF in the file; Cp V' = -theta v - V / R, the force on the
+//!     // mass being +theta V); the rounding of a few products bounds the relative error far
+//!     // below 1e-12.
+//!     let mut y = rest;
+//!     y[1] = 1e-3;
+//!     let dv_dt = h.rhs(Mode::FREE, &y, 0.0)[2];
+//!     assert!((dv_dt / (-2.67e-3 * 1e-3 / 50e-9) - 1.0).abs() < 1e-12);
+//!     Ok::<(), Box<dyn std::error::Error>>(())
+//! })?;
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
 
 mod driven;
 mod flight;

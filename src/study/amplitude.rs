@@ -69,6 +69,37 @@ impl AmplitudeSettings {
     }
 
     /// Runs the continuation for `device` and refines the onset (see [`AmplitudeReport`]).
+    ///
+    /// Off its stopper a piezoelectric cantilever is linear, so the onset of impacts is the
+    /// amplitude at which its linear displacement reaches the gap.
+    ///
+    /// ```
+    /// use endstop::device::Device;
+    /// use endstop::physics::linear::LinearResponse;
+    /// use endstop::progress::Silent;
+    /// use endstop::study::amplitude::AmplitudeSettings;
+    /// use endstop::study::steady::steady_config;
+    ///
+    /// let text = include_str!(concat!(env!("CARGO_MANIFEST_DIR"), "/data/examples/piezo_cantilever.toml"));
+    /// let device = Device::from_toml_str(text, "piezo_cantilever.toml")?;
+    /// let f = 120.0;
+    /// let settings = AmplitudeSettings {
+    ///     freq_hz: f,
+    ///     accels_rms_g: vec![0.1, 0.15, 0.2, 0.25, 0.3],
+    ///     extend_to_g: 0.3,
+    ///     cfg: steady_config(&device, f),
+    ///     refine_tol_g: 1e-3,
+    /// };
+    /// let report = settings.run(&device, &Silent)?;
+    /// let onset = report.onset.expect("the stopper is reached within the range");
+    /// // The gap (0.1 mm) over the displacement per peak acceleration, in g rms.
+    /// let per_accel = LinearResponse::of(&device).displacement_per_accel(f);
+    /// let predicted = 0.1e-3 / per_accel / (2f64.sqrt() * endstop::G);
+    /// // The bracket's half-width, and the steady state's error (the criterion's 1e-3,
+    /// // relative) on the amplitude at which the peak displacement crosses the gap.
+    /// assert!((onset.value() - predicted).abs() < onset.half_width() + 2e-3 * predicted);
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
     pub fn run(
         &self,
         device: &Device,

@@ -19,7 +19,6 @@
 //!
 //! ```
 //! use endstop::device::Device;
-//! use endstop::physics::assembly::Harvester;
 //! use endstop::study::attractors::{find_attractors, seeds, AttractorSearch, Place};
 //! use endstop::study::basins::BasinGrid;
 //! use endstop::study::orbit::{Forcing, ShootingConfig};
@@ -28,12 +27,11 @@
 //! let device = Device::from_toml_str(text, "bistable_stops_em.toml")?;
 //! // A weak drive far above the wells' resonance: each well keeps its own small orbit.
 //! let forcing = Forcing { freq_hz: 70.0, accel_rms_g: 0.05 };
-//! let h = Harvester::<4>::new(&device)?;
 //! let grid = BasinGrid { x_m: (-7e-4, 7e-4), v_m_per_s: (-0.1, 0.1), nx: 3, nv: 1 };
-//! let found = find_attractors(
+//! let found = endstop::with_harvester!(&device, |h| find_attractors(
 //!     &h, &device, &forcing, ShootingConfig::default(), &seeds(&device, &grid, 0),
 //!     &AttractorSearch::default(),
-//! )?;
+//! ))?;
 //! let places: Vec<Place> = found.found.iter().map(|a| a.place).collect();
 //! assert_eq!(places, [Place::LeftWell, Place::RightWell]);
 //! # Ok::<(), Box<dyn std::error::Error>>(())

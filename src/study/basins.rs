@@ -162,6 +162,38 @@ impl Basins {
 }
 
 /// The basins of `attractors` under `forcing` on the grid of `settings` (see the module
+///
+/// ```
+/// use endstop::device::Device;
+/// use endstop::progress::Silent;
+/// use endstop::study::attractors::{find_attractors, seeds, AttractorSearch, Place};
+/// use endstop::study::basins::{basins, BasinGrid, BasinSettings};
+/// use endstop::study::displacement::two_wells;
+/// use endstop::study::orbit::{Forcing, ShootingConfig};
+///
+/// let text = include_str!(concat!(env!("CARGO_MANIFEST_DIR"), "/data/examples/bistable_stops_em.toml"));
+/// let device = Device::from_toml_str(text, "bistable_stops_em.toml")?;
+/// // A weak drive far above the wells' 40 Hz: each well keeps its own small orbit. Two cells,
+/// // one at rest at the bottom of each well, each settle on their own well's orbit.
+/// let forcing = Forcing { freq_hz: 70.0, accel_rms_g: 0.05 };
+/// let ([left, right], _) = two_wells(&device).unwrap();
+/// let grid = BasinGrid { x_m: (left, right), v_m_per_s: (0.0, 0.0), nx: 2, nv: 1 };
+/// let settings = BasinSettings { grid, max_periods: 2000, settle_tol: 1e-4, rtol: 1e-9 };
+/// let b = endstop::with_harvester!(&device, |h| {
+///     let found = find_attractors(
+///         &h, &device, &forcing, ShootingConfig::default(), &seeds(&device, &grid, 0),
+///         &AttractorSearch::default(),
+///     )?;
+///     assert_eq!(found.found[0].place, Place::LeftWell);
+///     assert_eq!(found.found[1].place, Place::RightWell);
+///     basins(&h, &forcing, &found.catalogue(), &settings, &Silent)
+/// })?;
+/// assert_eq!(b.label(0), Place::LeftWell.label());
+/// assert_eq!(b.label(1), Place::RightWell.label());
+/// let total: f64 = b.shares().iter().map(|(_, s)| s).sum();
+/// assert!((total - 1.0).abs() < 1e-12);
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
 /// docs); `on_cell.tick()` is called after each cell.
 pub fn basins<M: Model<N>, const N: usize>(
     base: &M,

@@ -145,6 +145,39 @@ pub enum ChargeError {
 /// Charges the storage of `device` under `drive` (see the module docs); `progress` is told at
 /// the end of each block how far the storage voltage has come from the start to the target. A
 /// device whose model has no storage (resistive loads) is [`ChargeError::NoStorage`].
+///
+/// ```
+/// use endstop::device::Device;
+/// use endstop::drive::Sine;
+/// use endstop::progress::Silent;
+/// use endstop::study::charging::{charge, ChargeError, ChargeSettings};
+///
+/// let text = include_str!(concat!(env!("CARGO_MANIFEST_DIR"), "/data/examples/piezo_bridge.toml"));
+/// let device = Device::from_toml_str(text, "piezo_bridge.toml")?;
+/// let s = ChargeSettings {
+///     start_v: 0.0,
+///     target_v: 0.5,
+///     ramp_s: 0.0,
+///     t_max_s: 2.0,
+///     sample_s: 1e-3,
+///     block_s: 0.05,
+///     rtol: 1e-8,
+/// };
+/// let run = charge(&device, Sine::from_rms_g(0.3, 120.0), &s, &Silent)?;
+/// assert!(run.time_to_target_s > 0.0 && run.time_to_target_s < s.t_max_s);
+/// // No sample before the target time is above the target.
+/// let before = run.t_s.iter().zip(&run.vs_v).filter(|(t, _)| **t < run.time_to_target_s);
+/// assert!(before.into_iter().all(|(_, v)| *v <= s.target_v));
+/// // The storage (10 uF) gains Cs V^2 / 2 = 1.25 uJ.
+/// assert!((run.stored_j / (0.5 * 10e-6 * 0.25) - 1.0).abs() < 1e-12);
+///
+/// // The same cantilever with a plain resistive load has no storage to charge.
+/// let text = include_str!(concat!(env!("CARGO_MANIFEST_DIR"), "/data/examples/piezo_cantilever.toml"));
+/// let plain = Device::from_toml_str(text, "piezo_cantilever.toml")?;
+/// let err = charge(&plain, Sine::from_rms_g(0.3, 120.0), &s, &Silent).unwrap_err();
+/// assert!(matches!(err, ChargeError::NoStorage(_)));
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
 pub fn charge<E: Excitation + Clone>(
     device: &Device,
     drive: E,

@@ -65,6 +65,24 @@ pub const RAMP_BANDS_PER_RING: f64 = 0.02;
 /// section, the half-power frequencies on either side by the root finder to 1e-9 of the peak
 /// frequency. `None` when either half-power frequency lies outside the searched range (an
 /// overdamped device).
+///
+/// ```
+/// use endstop::device::Device;
+/// use endstop::physics::linear::open_circuit_resonance_hz;
+/// use endstop::study::chirp::half_power_band;
+///
+/// let text = include_str!(concat!(env!("CARGO_MANIFEST_DIR"), "/data/examples/piezo_cantilever.toml"));
+/// let device = Device::from_toml_str(text, "piezo_cantilever.toml")?;
+/// let band = half_power_band(&device).unwrap();
+/// // The loaded element stiffens the suspension by less than open circuit does: the peak lies
+/// // between the short-circuit resonance sqrt(k/m) / 2 pi and the open-circuit one (damping
+/// // moves it below the undamped frequency by a relative zeta^2 = 1e-4; 1e-3 allows it).
+/// let short_hz = (2842.0f64 / 5e-3).sqrt() / (2.0 * std::f64::consts::PI);
+/// assert!(band.peak_hz > short_hz * (1.0 - 1e-3) && band.peak_hz < open_circuit_resonance_hz(&device));
+/// // The load only adds damping: the band is wider than the mechanics' own, b / (2 pi m).
+/// assert!(band.width_hz > 0.0754 / (2.0 * std::f64::consts::PI * 5e-3));
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
 pub fn half_power_band(device: &Device) -> Option<HalfPowerBand> {
     let lin = LinearResponse::of(device);
     let x = |f: f64| lin.displacement_per_accel(f);

@@ -34,6 +34,31 @@ use crate::study::record::{
 
 /// The wells of a device for the transition count: positions (m) and the barrier between
 /// them (m). `None` unless the device has exactly two stable equilibria between its stops.
+///
+/// ```
+/// use endstop::device::Device;
+/// use endstop::drive::noise::NoiseSpec;
+/// use endstop::study::displacement::{record_displacement, two_wells, DisplacementBins};
+/// use endstop::study::record::RecordSpec;
+///
+/// let text = include_str!(concat!(env!("CARGO_MANIFEST_DIR"), "/data/examples/bistable_stops_em.toml"));
+/// let device = Device::from_toml_str(text, "bistable_stops_em.toml")?;
+/// // The file's double well has its wells at +-0.5 mm and its barrier at 0; the equilibria
+/// // are found numerically, to far better than 1e-9 m.
+/// let ([left, right], barrier) = two_wells(&device).unwrap();
+/// assert!((left + 5e-4).abs() < 1e-9 && (right - 5e-4).abs() < 1e-9 && barrier.abs() < 1e-9);
+///
+/// // A short noise record read into 20 bins over +-1 mm. The stops at +-0.8 mm (20 kN/m)
+/// // would need 4 N, 80 g on the 5 g mass, to be pressed to 1 mm, so every sample is binned.
+/// let noise = NoiseSpec { psd_g2_per_hz: 1e-4, bandwidth_hz: 200.0, sample_rate_hz: 2e3, duration_s: 0.5 };
+/// let mut spec = RecordSpec::of(&device, noise);
+/// spec.transient_s = 0.0;
+/// let bins = DisplacementBins::uniform(&device, -1e-3, 1e-3, 20);
+/// let rec = record_displacement(&device, &spec, &bins, 2012, 0)?;
+/// assert_eq!(rec.counts.iter().sum::<u64>(), rec.samples);
+/// assert!(rec.x2_mean_m2 < 1e-6);
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
 pub fn two_wells(device: &Device) -> Option<([f64; 2], f64)> {
     let eq = device.equilibria();
     let wells: Vec<f64> = eq

@@ -520,6 +520,26 @@ impl Forcing {
 }
 
 /// The steady state of `device` under `sine` from rest ([`steady_state`] on its model).
+///
+/// ```
+/// use endstop::device::Device;
+/// use endstop::drive::Sine;
+/// use endstop::study::periodic::{steady_state_from_rest, SteadySettings};
+///
+/// let text = include_str!(concat!(env!("CARGO_MANIFEST_DIR"), "/data/examples/piezo_bridge.toml"));
+/// let device = Device::from_toml_str(text, "piezo_bridge.toml")?;
+/// let s = steady_state_from_rest(&device, Sine::from_rms_g(0.05, 120.0), &SteadySettings::default())?;
+/// assert!(s.is_stable() && s.vdc_v > 0.0);
+/// // The DC load (41.7 kOhm) takes <V^2> / R, which lies between <V>^2 / R and the square of
+/// // the storage's highest voltage over R (the ripple bounds how far V leaves its mean).
+/// let r = 41.7e3;
+/// assert!(s.p_dc_w >= s.vdc_v * s.vdc_v / r * (1.0 - 1e-12));
+/// assert!(s.p_dc_w <= (s.vdc_v + s.ripple_v).powi(2) / r);
+/// // Over the measured period the energy books balance: the residual is of the order of the
+/// // integrator's tolerance (1e-9) times the energies turned over; 1e-6 leaves room for it.
+/// assert!(s.ledger.relative_residual().abs() < 1e-6);
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
 pub fn steady_state_from_rest(
     device: &crate::device::Device,
     sine: Sine,
@@ -538,6 +558,21 @@ pub fn steady_state_from_rest(
 /// sweep follows one branch, as a stepped-sine measurement does). A point where shooting finds
 /// no period-one orbit (the response may be of a longer period, or not periodic) is kept as its
 /// error, and the sweep goes on from the last point found; `progress` is told of each point.
+///
+/// ```
+/// use endstop::device::Device;
+/// use endstop::progress::Silent;
+/// use endstop::study::periodic::{frequency_sweep, SteadySettings};
+///
+/// let text = include_str!(concat!(env!("CARGO_MANIFEST_DIR"), "/data/examples/piezo_bridge.toml"));
+/// let device = Device::from_toml_str(text, "piezo_bridge.toml")?;
+/// // 0.05 g rms at 100 Hz and at the 120 Hz resonance (quality factor about 50, so 100 Hz
+/// // lies many half-power widths below it): the storage charges higher at resonance.
+/// let points = frequency_sweep(&device, &[100.0, 120.0], 0.05, &SteadySettings::default(), &Silent)?;
+/// let vdc: Vec<f64> = points.into_iter().map(|p| p.map(|s| s.vdc_v)).collect::<Result<_, _>>()?;
+/// assert!(vdc[1] > vdc[0]);
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
 pub fn frequency_sweep(
     device: &crate::device::Device,
     freqs_hz: &[f64],

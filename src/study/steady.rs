@@ -86,6 +86,22 @@ impl SteadyConfig {
 /// Default steady-state settings for a device driven near `freq_hz`: blocks of about the
 /// mechanical ring-up time 2m/b, at least [`MIN_BLOCK_PERIODS`] periods, see
 /// [`SteadyConfig::for_ring_time`].
+///
+/// ```
+/// use endstop::device::Device;
+/// use endstop::study::steady::{horizon_periods, steady_config, MIN_BLOCK_PERIODS};
+///
+/// let text = include_str!(concat!(env!("CARGO_MANIFEST_DIR"), "/data/prototype1.toml"));
+/// let device = Device::from_toml_str(text, "prototype1.toml")?;
+/// // 2m/b = 2 (2.8e-6 kg) / (3.75e-3 N s/m) = 1.49 ms: 1.8 periods at 1200 Hz, so the
+/// // floor of MIN_BLOCK_PERIODS periods decides; at 10 kHz the ring-up time does (15 periods).
+/// assert_eq!(steady_config(&device, 1200.0).block_periods, MIN_BLOCK_PERIODS);
+/// let cfg = steady_config(&device, 10e3);
+/// assert_eq!(cfg.block_periods, 15);
+/// // The horizon: one settling block and two measured ones.
+/// assert_eq!(horizon_periods(&cfg), 45);
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
 pub fn steady_config(device: &Device, freq_hz: f64) -> SteadyConfig {
     let ring_s = 2.0 * device.mechanics.mass_kg / device.mechanics.damping_n_s_per_m;
     SteadyConfig::for_ring_time(ring_s, freq_hz, MIN_BLOCK_PERIODS)
@@ -224,6 +240,42 @@ fn onto_slow_orbit<M: Model<N>, const N: usize>(
 /// Integrates `model` from (y, mode) at phase zero to steady state and measures it (by
 /// [`SineFlow`]: exactly where the device is affine, by Dormand-Prince elsewhere).
 /// Returns the measurement, the final state and mode (at a whole period), and the counters.
+///
+/// A piezoelectric cantilever driven far below its stopper is linear, so its steady voltage
+/// has a closed form: with the load's admittance `Y = 1/R + j w Cp`, the displacement is
+/// `X = m A / |k - m w^2 + j w b + j w theta^2 / Y|` and the voltage `V = w theta X / |Y|`.
+///
+/// ```
+/// use endstop::device::Device;
+/// use endstop::drive::Sine;
+/// use endstop::model::Model;
+/// use endstop::study::steady::{steady_config, steady_state};
+/// use nalgebra::Complex;
+///
+/// let text = include_str!(concat!(env!("CARGO_MANIFEST_DIR"), "/data/examples/piezo_cantilever.toml"));
+/// let device = Device::from_toml_str(text, "piezo_cantilever.toml")?;
+/// let (f, g) = (115.0, 0.01);
+/// let m = endstop::with_harvester!(&device, |h| {
+///     let rest = h.rest_state();
+///     let cfg = steady_config(&device, f);
+///     steady_state(&h, Sine::from_rms_g(g, f), rest, h.mode_of(&rest), g, &cfg).map(|r| r.0)
+/// })?;
+/// // The file's m, k, b, theta, Cp and R.
+/// let (mass, k, b, theta, cp, r) = (5e-3, 2842.0, 0.0754, 2.67e-3, 50e-9, 26.5e3);
+/// let w = 2.0 * std::f64::consts::PI * f;
+/// let y = Complex::new(1.0 / r, w * cp);
+/// let z = Complex::new(k - mass * w * w, w * b) + Complex::new(0.0, w * theta * theta) / y;
+/// let x_amp = mass * 2f64.sqrt() * g * endstop::G / z.norm();
+/// let v_rms = w * theta * x_amp / y.norm() / 2f64.sqrt();
+/// assert!(m.converged && m.contact_fraction == 0.0 && m.x_peak_m < 0.1e-3);
+/// // The criterion stops when two blocks of about 2m/b differ by under 1e-3 and the
+/// // transient left shrinks by about e per block, so the last block is within about 1e-3
+/// // of the orbit: 5e-3 leaves room for that.
+/// assert!((m.v1_rms_v / v_rms - 1.0).abs() < 5e-3);
+/// // The load's power is V^2 / R (to rounding).
+/// assert!((m.p1_w / (m.v1_rms_v * m.v1_rms_v / r) - 1.0).abs() < 1e-12);
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
 pub fn steady_state<M: Model<N>, const N: usize>(
     model: &M,
     sine: Sine,

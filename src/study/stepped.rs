@@ -70,6 +70,25 @@ pub trait Drive: Fn(f64) -> (f64, f64) + Sync {}
 impl<T: Fn(f64) -> (f64, f64) + Sync> Drive for T {}
 
 /// A continuation in one drive parameter (frequency or amplitude) of a device.
+///
+/// ```
+/// use endstop::device::Device;
+/// use endstop::progress::Silent;
+/// use endstop::study::steady::steady_config;
+/// use endstop::study::stepped::SteppedDrive;
+///
+/// let text = include_str!(concat!(env!("CARGO_MANIFEST_DIR"), "/data/examples/piezo_cantilever.toml"));
+/// let device = Device::from_toml_str(text, "piezo_cantilever.toml")?;
+/// // An up-sweep in frequency at 0.01 g rms towards the 120 Hz short-circuit resonance.
+/// let sweep = endstop::with_harvester!(&device, |h| {
+///     let up = SteppedDrive { base: &h, drive: |f: f64| (f, 0.01), cfg: steady_config(&device, 110.0) };
+///     up.run(&[100.0, 110.0, 118.0], &Silent)
+/// })?;
+/// let v1: Vec<f64> = sweep.steps.iter().map(|s| s.measurement.v1_rms_v).collect();
+/// assert!(v1[0] < v1[1] && v1[1] < v1[2], "the response grows towards the resonance");
+/// assert!(sweep.steps.iter().all(|s| s.measurement.converged && s.measurement.contact_fraction == 0.0));
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
 pub struct SteppedDrive<'a, M, D: Drive, const N: usize> {
     /// The device's model.
     pub base: &'a M,

@@ -397,6 +397,20 @@ pub const NEUTRAL_BAND: f64 = 1e-9;
 /// decides neither stability nor an event; a multiplier that crosses 1 as a parameter moves
 /// lies in the band over a stretch of about `2 NEUTRAL_BAND / |dmu/dp|` of the branch, where
 /// its event is located to that width.
+///
+/// ```
+/// use endstop::study::orbit::{is_neutral, NEUTRAL_BAND};
+/// use nalgebra::Complex;
+///
+/// let near_one = Complex::new(1.0 + 0.5 * NEUTRAL_BAND, 0.0);
+/// assert!(is_neutral(near_one, false));
+/// // -1 is neutral only for a half map (a symmetric orbit's), whose square is the period map.
+/// assert!(!is_neutral(Complex::new(-1.0, 0.0), false));
+/// assert!(is_neutral(Complex::new(-1.0, 0.0), true));
+/// // A complex pair on the unit circle is not: it decides a Neimark-Sacker bifurcation.
+/// assert!(!is_neutral(Complex::from_polar(1.0, 0.1), false));
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
 pub fn is_neutral(m: Complex<f64>, half: bool) -> bool {
     let near = |c: f64| (m.re - c).abs() < NEUTRAL_BAND;
     m.im.abs() < NEUTRAL_BAND && (near(1.0) || (half && near(-1.0)))
