@@ -28,10 +28,10 @@ pub(crate) struct BasinArgs {
     #[arg(long)]
     device: PathBuf,
     /// Drive frequency (Hz).
-    #[arg(long)]
+    #[arg(long, allow_hyphen_values = true)]
     freq: f64,
     /// RMS base acceleration (g = 9.81 m/s^2); the sine's amplitude is sqrt(2) times this.
-    #[arg(long)]
+    #[arg(long, allow_hyphen_values = true)]
     accel_rms_g: f64,
     /// Cells per side of the grid of initial states (positions by velocities).
     #[arg(long, default_value_t = 41)]
@@ -49,14 +49,14 @@ pub(crate) struct BasinArgs {
     max_periods: usize,
     /// Scaled distance to an attractor's state at drive phase zero within which a cell has
     /// settled (two periods in a row).
-    #[arg(long, default_value_t = 1e-3)]
+    #[arg(long, default_value_t = 1e-3, allow_hyphen_values = true)]
     settle_tol: f64,
     /// The attractors are searched from the wells at rest and from this many by this many
     /// initial states spread over the grid.
     #[arg(long, default_value_t = 5)]
     seeds_per_side: usize,
     /// Bias voltage (V) of an electrostatic transducer; default: the device file's.
-    #[arg(long)]
+    #[arg(long, allow_hyphen_values = true)]
     bias_v: Option<f64>,
     /// Output directory; default: data/results/endstop-basins.
     #[arg(long)]

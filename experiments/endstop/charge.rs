@@ -22,28 +22,31 @@ pub struct ChargeArgs {
     #[arg(long)]
     device: PathBuf,
     /// Drive frequency (Hz).
-    #[arg(long)]
+    #[arg(long, allow_hyphen_values = true)]
     freq_hz: f64,
     /// RMS base acceleration (g).
-    #[arg(long)]
+    #[arg(long, allow_hyphen_values = true)]
     accel_rms_g: f64,
     /// Storage voltage at the start (V).
-    #[arg(long, default_value_t = 0.0)]
+    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
     start_v: f64,
     /// Target storage voltage (V).
-    #[arg(long)]
+    #[arg(long, allow_hyphen_values = true)]
     target_v: f64,
     /// Periods over which the drive ramps up from zero (0: it starts at once, from rest at
     /// phase zero).
-    #[arg(long, default_value_t = 0.0)]
+    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
     ramp_periods: f64,
     /// Longest simulated time (s).
-    #[arg(long, default_value_t = 600.0)]
+    #[arg(long, default_value_t = 600.0, allow_hyphen_values = true)]
     t_max_s: f64,
     /// Output directory; default: data/results/endstop-charge.
     #[arg(long)]
     out: Option<PathBuf>,
 }
+
+/// The most drive periods a charge may simulate (see [`charge`]).
+const MAX_PERIODS: f64 = 1e7;
 
 /// `endstop charge`: the time for the storage to reach a target under a sine.
 pub fn charge(a: ChargeArgs) -> Result<()> {
@@ -56,6 +59,30 @@ pub fn charge(a: ChargeArgs) -> Result<()> {
             anyhow::bail!("{name} must be a finite positive number, not {v}");
         }
     }
+    for (name, v) in [("--start-v", a.start_v), ("--target-v", a.target_v)] {
+        if !v.is_finite() {
+            anyhow::bail!("{name} must be a finite voltage, not {v}");
+        }
+    }
+    if a.target_v <= a.start_v {
+        anyhow::bail!(
+            "--target-v = {} V must be above --start-v = {} V",
+            a.target_v,
+            a.start_v
+        );
+    }
+    // The longest run: a charge simulates every period, at some thousands of periods a
+    // second, so that 1e7 periods is already hours.
+    if a.t_max_s * a.freq_hz > MAX_PERIODS {
+        anyhow::bail!(
+            "--t-max-s = {} s is {:.3e} periods at {} Hz: must be at most {MAX_PERIODS:e} \
+             periods (a storage still rising then needs a stronger drive or a smaller \
+             capacitor, not a longer run)",
+            a.t_max_s,
+            a.t_max_s * a.freq_hz,
+            a.freq_hz
+        );
+    }
     if !(a.ramp_periods.is_finite() && a.ramp_periods >= 0.0) {
         anyhow::bail!(
             "--ramp-periods must be a finite number >= 0, not {}",
@@ -63,12 +90,6 @@ pub fn charge(a: ChargeArgs) -> Result<()> {
         );
     }
     let (mut exp, loaded, device) = start("endstop-charge", &a.device, None, a.out.clone())?;
-    if device.interface.is_resistive() {
-        anyhow::bail!(
-            "device `{}` has no [interface] table: charging needs a storage capacitor",
-            device.name
-        );
-    }
     let period = 1.0 / a.freq_hz;
     let settings = ChargeSettings {
         start_v: a.start_v,

@@ -23,7 +23,8 @@ pub struct RandomArgs {
     #[arg(
         long,
         required_unless_present = "accel_file",
-        conflicts_with = "accel_file"
+        conflicts_with = "accel_file",
+        allow_hyphen_values = true
     )]
     pub(crate) psd: Option<f64>,
     /// A measured acceleration record to drive the device with instead of noise: a CSV file
@@ -35,26 +36,26 @@ pub struct RandomArgs {
     #[arg(long)]
     pub(crate) accel_file: Option<PathBuf>,
     /// The acceleration of a WAV file's full scale (m/s^2); a WAV file carries no unit.
-    #[arg(long)]
+    #[arg(long, allow_hyphen_values = true)]
     pub(crate) accel_scale: Option<f64>,
     /// The integrator's sample rate for a measured record (Hz).
-    #[arg(long, default_value_t = 100e3)]
+    #[arg(long, default_value_t = 100e3, allow_hyphen_values = true)]
     pub(crate) sample_rate_hz: f64,
     /// The band a measured record must carry, `LO,HI` in Hz (default: the analysis band, a
     /// quarter to four times the device's open-circuit resonance).
-    #[arg(long, value_delimiter = ',', num_args = 2)]
+    #[arg(long, value_delimiter = ',', num_args = 2, allow_hyphen_values = true)]
     pub(crate) band_hz: Option<Vec<f64>>,
     /// Number of independent noise records (their mean and 95 % interval are reported).
     #[arg(long, default_value_t = 4)]
     pub(crate) records: usize,
     /// Length of each noise record (s).
-    #[arg(long, default_value_t = 10.0)]
+    #[arg(long, default_value_t = 10.0, allow_hyphen_values = true)]
     pub(crate) duration_s: f64,
     /// Seed of the random streams (record i uses stream i).
     #[arg(long, default_value_t = 2012)]
     pub(crate) seed: u64,
     /// Bias voltage (V) of an electrostatic transducer; default: the device file's.
-    #[arg(long)]
+    #[arg(long, allow_hyphen_values = true)]
     pub(crate) bias_v: Option<f64>,
     /// Output directory; default: data/results/endstop-random.
     #[arg(long)]

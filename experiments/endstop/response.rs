@@ -15,7 +15,7 @@ use endstop::study::orbit::Forcing;
 use endstop::study::stepped::Approach;
 use endstop_experiments as common;
 
-use crate::shared::{describe, start, step_effect, Protocol, RangeArgs};
+use crate::shared::{describe, implausible_drive, start, step_effect, Protocol, RangeArgs};
 
 /// The arguments of `endstop response`.
 #[derive(Parser, Debug)]
@@ -24,7 +24,7 @@ pub(crate) struct ResponseArgs {
     range: RangeArgs,
     /// Also sweep the drive continuously at this rate (Hz/s), up and down, at a continuous
     /// phase (a swept sine, as a lab measures).
-    #[arg(long)]
+    #[arg(long, allow_hyphen_values = true)]
     sweep_rate: Option<f64>,
     /// Also find where the down-sweep leaves the lower branch with 4, 2, 1, 1/2 and 1/4 times
     /// the step, each taken at once and by a ramp (its convergence as the step shrinks).
@@ -146,6 +146,14 @@ pub(crate) fn response(args: ResponseArgs) -> Result<()> {
         points,
         residual
     );
+    let x_peak = up
+        .measurements()
+        .chain(down.measurements())
+        .map(|m| m.x_peak_m)
+        .fold(0.0, f64::max);
+    if let Some(w) = implausible_drive(&device, a.accel_rms_g, x_peak) {
+        md.push_str(&w);
+    }
     exp.number("step_hz", protocol.step_hz);
     if let Some(e) = up.branch_end() {
         let v = e.transition.value();

@@ -23,15 +23,15 @@ pub(crate) struct RangeArgs {
     #[arg(long)]
     pub(crate) device: PathBuf,
     /// Lowest frequency (Hz).
-    #[arg(long)]
+    #[arg(long, allow_hyphen_values = true)]
     pub(crate) from: f64,
     /// Highest frequency (Hz).
-    #[arg(long)]
+    #[arg(long, allow_hyphen_values = true)]
     pub(crate) to: f64,
     /// Frequency step of the sweeps (Hz), and largest step of the continuation; default: a
     /// quarter of the device's linear half-power width rounded down to 1, 2 or 5 times a power
     /// of ten (the continuation's largest step is then a hundredth of the range).
-    #[arg(long)]
+    #[arg(long, allow_hyphen_values = true)]
     pub(crate) step: Option<f64>,
     /// Take each step of the sweeps at once (the drive's frequency jumps), as the paper's
     /// figures do, instead of by a phase-continuous ramp.
@@ -39,14 +39,14 @@ pub(crate) struct RangeArgs {
     pub(crate) steps_at_once: bool,
     /// The rate of the ramps between steps (Hz/s); default: pi w^2 / 50 for the linear
     /// half-power width w (the frequency moves a fiftieth of w per ring-up time 1/(pi w)).
-    #[arg(long)]
+    #[arg(long, allow_hyphen_values = true)]
     pub(crate) ramp_rate: Option<f64>,
     /// RMS base acceleration (g = 9.81 m/s^2); the sine's amplitude is sqrt(2) times this.
-    #[arg(long)]
+    #[arg(long, allow_hyphen_values = true)]
     pub(crate) accel_rms_g: f64,
     /// Bias voltage (V) of an electrostatic transducer; default: the device file's. Refused
     /// for a device without a bias (piezoelectric, electromagnetic, none).
-    #[arg(long)]
+    #[arg(long, allow_hyphen_values = true)]
     pub(crate) bias_v: Option<f64>,
     /// Output directory; default: data/results/endstop-STUDY, STUDY the subcommand.
     #[arg(long)]
@@ -208,6 +208,43 @@ pub(crate) fn start(
     let mut exp = Experiment::start_in(name, out_dir(out));
     exp.uses(&loaded, &device.params);
     Ok((exp, loaded, device))
+}
+
+/// Times the largest stop gap that a displacement may reach before a run is called beyond
+/// its model: a stop pressed in by more than ten gaps has left every contact law's range
+/// (a Hertz contact's indentation is a small fraction of its bump radius, a rubber pad's of
+/// its thickness), and such a displacement almost always comes from a drive in the wrong
+/// unit.
+pub(crate) const IMPLAUSIBLE_GAPS: f64 = 10.0;
+
+/// A warning line when the largest displacement `x_peak_m` of a run of `device` exceeds
+/// [`IMPLAUSIBLE_GAPS`] times its largest stop gap (None for a device without stops or a
+/// plausible run); it is printed on stderr and belongs in the run's numbers.
+pub(crate) fn implausible_drive(
+    device: &Device,
+    accel_rms_g: f64,
+    x_peak_m: f64,
+) -> Option<String> {
+    let gap = device
+        .stops
+        .present()
+        .map(|(_, s)| s.gap_m)
+        .fold(0.0, f64::max);
+    (gap > 0.0 && x_peak_m > IMPLAUSIBLE_GAPS * gap).then(|| {
+        let line = format!(
+            "- **warning**: the displacement reaches {} m, {} times the largest stop gap \
+             ({} m): at {accel_rms_g} g rms the drive presses the mass through its stops, \
+             beyond any contact law's range; check the drive (`--accel-rms-g` is in g)\n",
+            fmt_sig(x_peak_m, 3),
+            fmt_sig(x_peak_m / gap, 3),
+            fmt_sig(gap, 3)
+        );
+        eprint!(
+            "[endstop] {}",
+            line.trim_start_matches("- ").replace("**", "")
+        );
+        line
+    })
 }
 
 /// One line on what a device is: its transducer (with its bias voltage, and a note where it

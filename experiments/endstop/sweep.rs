@@ -3,7 +3,7 @@
 
 use anyhow::Result;
 
-use crate::shared::{describe, start, step_effect, RangeArgs};
+use crate::shared::{describe, implausible_drive, start, step_effect, RangeArgs};
 use endstop_experiments::io::plot::{LegendPos, LinePlot, Series, Style, PALETTE};
 use endstop_experiments::{self as common, fmt_sig};
 
@@ -61,6 +61,10 @@ pub(crate) fn sweep(a: RangeArgs) -> Result<()> {
         fmt_sig(vmax, 4),
         fmt_sig(pmax * 1e6, 4)
     ));
+    let x_peak = col(&|m| m.x_peak_m).into_iter().fold(0.0, f64::max);
+    if let Some(w) = implausible_drive(&device, a.accel_rms_g, x_peak) {
+        md.push_str(&w);
+    }
     match report.onset {
         Some(t) => {
             exp.number("impact_onset_hz", t.value());

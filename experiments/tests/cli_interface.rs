@@ -2,7 +2,8 @@
 //! cantilever with a stop behind a full bridge, `data/examples/piezo_bridge.toml`): the
 //! response writes the sweeps and the continued branch, which turns at two folds with an
 //! unstable stretch between them; a noise ensemble writes each record's DC power, efficiency
-//! and ledger, and an open DC load is refused with nothing written.
+//! and ledger, and an open DC load is refused with nothing written; bad charging and noise
+//! options and an implausible drive are named.
 
 use std::path::Path;
 use std::process::Command;
@@ -50,24 +51,14 @@ fn response_with_an_interface_continues_through_two_folds() {
     let sweeps = read_parquet(&out.join("sweeps.parquet"));
     assert_eq!(sweeps.height(), 2 * 12, "a steady state at every frequency");
 
-    let text = std::fs::read_to_string(out.join("summary.json")).unwrap();
-    let v: serde_json::Value = serde_json::from_str(&text).unwrap();
-    let fold = |i: usize| v["numbers"][format!("fold_{i}_hz")].as_f64();
-    let (a, b) = (
-        fold(0).expect("a first fold"),
-        fold(1).expect("a second fold"),
-    );
-    assert!(fold(2).is_none(), "two folds only");
-    let (lo, hi) = (a.min(b), a.max(b));
-
+    // The continued branch, in its order: one branch whose frequency turns back twice (its
+    // folds), unstable between the turns and stable elsewhere.
     let df = read_parquet(&out.join("continuation.parquet"));
-    let freq: Vec<f64> = df
-        .column("freq_hz")
-        .unwrap()
-        .f64()
-        .unwrap()
-        .into_no_null_iter()
-        .collect();
+    let col_f64 = |name: &str| -> Vec<f64> {
+        let c = df.column(name).unwrap().f64().unwrap();
+        c.into_no_null_iter().collect()
+    };
+    let freq = col_f64("freq_hz");
     let stable: Vec<bool> = df
         .column("stable")
         .unwrap()
@@ -75,19 +66,21 @@ fn response_with_an_interface_continues_through_two_folds() {
         .unwrap()
         .into_no_null_iter()
         .collect();
-    let segment: Vec<u32> = df
+    let branches: Vec<u32> = df
         .column("branch")
         .unwrap()
         .u32()
         .unwrap()
         .into_no_null_iter()
         .collect();
-    // Stable, unstable, stable: three stretches along the branch, the middle one unstable.
-    assert_eq!(
-        segment.last(),
-        Some(&2),
-        "three stretches of equal stability"
-    );
+    assert!(branches.iter().all(|b| *b == 0), "one branch: {branches:?}");
+    let turns: Vec<f64> = freq
+        .windows(3)
+        .filter(|w| (w[1] - w[0]) * (w[2] - w[1]) < 0.0)
+        .map(|w| w[1])
+        .collect();
+    assert_eq!(turns.len(), 2, "two folds: {turns:?}");
+    let (lo, hi) = (turns[0].min(turns[1]), turns[0].max(turns[1]));
     let unstable: Vec<f64> = freq
         .iter()
         .zip(&stable)
@@ -95,16 +88,23 @@ fn response_with_an_interface_continues_through_two_folds() {
         .map(|(f, _)| *f)
         .collect();
     assert!(unstable.len() >= 3, "an unstable stretch: {unstable:?}");
-    for (f, (s, k)) in freq.iter().zip(stable.iter().zip(&segment)) {
-        assert_eq!(*s, *k != 1, "stretch {k} at {f} Hz");
-    }
-    // The unstable stretch lies between the folds (a point within 1e-6 Hz of a fold, where its
-    // multiplier is within its step of 1, may fall either side).
+    // The unstable stretch lies between the folds (the turning points are the branch's points
+    // nearest each fold, whose multiplier is within a step of 1: either side).
+    let step = freq
+        .windows(2)
+        .map(|w| (w[1] - w[0]).abs())
+        .fold(0.0, f64::max);
     for f in &unstable {
         assert!(
-            *f > lo - 1e-6 && *f < hi + 1e-6,
+            *f > lo - step && *f < hi + step,
             "{f} Hz outside {lo}-{hi} Hz"
         );
+    }
+    // Stable on either side: below the lower fold and above the upper one.
+    for (f, s) in freq.iter().zip(&stable) {
+        if *f < lo - step || *f > hi + step {
+            assert!(*s, "unstable at {f} Hz, outside the folds {lo}-{hi} Hz");
+        }
     }
     let _ = std::fs::remove_dir_all(out);
 }
@@ -207,4 +207,69 @@ fn random_with_an_open_dc_load_is_refused_and_writes_nothing() {
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(err.contains("open load"), "{err}");
     assert!(!out.exists(), "nothing written");
+}
+
+/// Bad charging options are refused before anything runs, each naming its option: a target
+/// that is no number or not above the start, a run of more than 1e7 drive periods, a negative
+/// value read as a number (not as an unknown option); a negative noise level likewise.
+#[test]
+fn bad_charge_and_noise_options_are_named_before_running() {
+    let out = std::env::temp_dir().join(format!("endstop-cli-{}-bad-charge", std::process::id()));
+    let device = example("piezo_bridge.toml");
+    let base = ["--freq-hz", "120", "--accel-rms-g", "0.3"];
+    for (extra, names) in [
+        (vec!["--target-v", "nan"], "--target-v"),
+        (vec!["--target-v", "-1"], "--target-v"),
+        (vec!["--start-v", "2", "--target-v", "1"], "--start-v"),
+        (vec!["--target-v", "1", "--t-max-s", "1e9"], "--t-max-s"),
+    ] {
+        let o = Command::new(BIN)
+            .args(["charge", "--device", &device])
+            .args(base)
+            .args(&extra)
+            .arg("--out")
+            .arg(&out)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success(), "{extra:?} accepted");
+        assert!(err.contains(names), "{extra:?}: {err}");
+        assert!(!out.exists(), "{extra:?}: something written");
+    }
+    let o = Command::new(BIN)
+        .args(["random", "--device", &device, "--psd", "-1e-3", "--out"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && err.contains("--psd"), "{err}");
+}
+
+/// A drive that presses the mass through its stops (1e6 g on the example cantilever, whose
+/// linear stop is 0.1 mm away) is named, on stderr and in the run's numbers.
+#[test]
+fn an_implausible_drive_is_named() {
+    let out = std::env::temp_dir().join(format!("endstop-cli-{}-implausible", std::process::id()));
+    let _ = std::fs::remove_dir_all(&out);
+    let o = Command::new(BIN)
+        .args(["sweep", "--device", &example("piezo_cantilever.toml")])
+        .args([
+            "--from",
+            "100",
+            "--to",
+            "101",
+            "--step",
+            "1",
+            "--steps-at-once",
+        ])
+        .args(["--accel-rms-g", "1e6", "--out"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("times the largest stop gap"), "{err}");
+    let md = std::fs::read_to_string(out.join("numbers.md")).unwrap();
+    assert!(md.contains("**warning**"), "{md}");
+    let _ = std::fs::remove_dir_all(out);
 }
