@@ -164,7 +164,10 @@ fn the_assembly_is_the_interfaced_harvester_bit_for_bit() {
                 0.5,
                 0.9 * dev.suspension_omega_rad_s() / std::f64::consts::TAU,
             );
-            let old = Interfaced::new(&dev, sine).unwrap();
+            // The old type holds no electrostatic pair behind a circuit: compared where both do.
+            let Some(old) = Interfaced::new(&dev, sine) else {
+                continue;
+            };
             let new = Harvester::<4>::new(&dev).unwrap();
             assert_eq!(old.scales(), new.scales(), "{} {kind}", dev.name);
             for _ in 0..100 {
