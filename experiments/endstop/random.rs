@@ -9,7 +9,6 @@ use std::path::PathBuf;
 
 use anyhow::{bail, Result};
 use endstop::device::Device;
-use endstop::model::Model;
 use endstop::paper::setups::paper_record;
 use endstop::physics::linear::{white_noise_power_w, LinearResponse};
 use endstop::physics::two_port::TwoPort;
@@ -18,7 +17,6 @@ use endstop::signal::{welch, Psd};
 use endstop::study::ensemble::EnsembleSpec;
 use endstop::study::record::{
     output_psd, simulate_drive, FreeFlightPath, RecordSpec, SampledDrive, Scheme, DEFAULT_RTOL,
-    STORAGE,
 };
 use endstop::G;
 use endstop_experiments as common;
@@ -34,7 +32,7 @@ use crate::shared::{describe, start};
 /// Runs `endstop random`.
 pub fn random(a: RandomArgs) -> Result<()> {
     let loaded = common::load_device_file(&a.device)?;
-    if has_storage(&loaded.device)? {
+    if endstop::study::record::has_storage(&loaded.device) {
         return crate::random_storage::random(&a, &loaded.device);
     }
     match (&a.accel_file, a.psd) {
@@ -46,9 +44,6 @@ pub fn random(a: RandomArgs) -> Result<()> {
 
 /// True when the model of `device` has a storage output ([`STORAGE`]): its records report
 /// the DC power and the ledger rather than the loads' spectrum.
-fn has_storage(device: &Device) -> Result<bool> {
-    endstop::with_harvester!(device, |h| Ok(h.layout().output(STORAGE).is_some()))
-}
 
 /// How a record's free flight was integrated, for tables and text.
 fn free_flight_label(p: FreeFlightPath) -> String {

@@ -276,7 +276,7 @@ impl FitSettings {
 
 /// Why a device cannot be fitted: a part of it the fit's model leaves out.
 pub fn check_modelled(device: &Device) -> Result<(), FitError> {
-    if !device.interface.is_resistive() {
+    if crate::study::record::has_storage(device) {
         return Err(FitError::Unmodelled {
             device: device.name.clone(),
             part: format!(

@@ -7,6 +7,10 @@
 //! is `(x, v)` followed by the port's components: two for a transducer with its loads (unused
 //! ones held at zero), the element's and the storage voltage behind a circuit.
 //!
+//! The file reads whole: most of it is the one `impl Model for Harvester<N>`, whose methods
+//! each make the same three-way split (mechanics, stops, port) over the harvester's private
+//! fields; the parts themselves live in the submodules.
+//!
 //! # Modes
 //! Each stop is one contact of the [`Mode`] (see [`stops`]); a circuit owns the mode's bits of
 //! circuit 0 (its bridge's conduction and the velocity's sign since the last extremum). The

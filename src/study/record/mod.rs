@@ -83,8 +83,8 @@ use stepping::{run, NoFast};
 
 pub use spectrum::{output_psd, OutputSpectrum};
 pub use storage::{
-    check_steady_mean, storage_ensemble, storage_record, storage_settling_s, StorageRecord,
-    StorageSummary, STORAGE_SETTLING_TIMES,
+    check_steady_mean, has_storage, storage_ensemble, storage_record, storage_settling_s,
+    StorageRecord, StorageSummary, STORAGE_SETTLING_TIMES,
 };
 
 /// Length of the discarded pre-roll in mechanical ring-up times `2m/b` (see the module docs).

@@ -8,7 +8,8 @@ use crate::device::{DcLoad, Device};
 use crate::model::Ledger;
 use crate::num::stats::MeanCi;
 
-use super::{simulate_record, Record, RecordError, RecordSpec, RecordSummary};
+use super::{simulate_record, Record, RecordError, RecordSpec, RecordSummary, STORAGE};
+use crate::model::Model;
 
 /// Storage time constants a record's pre-roll covers ([`storage_settling_s`]).
 pub const STORAGE_SETTLING_TIMES: f64 = 5.0;
@@ -42,12 +43,20 @@ pub fn storage_settling_s(device: &Device) -> Option<f64> {
     Some(STORAGE_SETTLING_TIMES * r * cs)
 }
 
+/// Whether the model `device` assembles has a storage: an output and state component
+/// [`STORAGE`] (false where it does not assemble; its records then fail with the reason).
+pub fn has_storage(device: &Device) -> bool {
+    let found: Result<bool, crate::physics::assembly::AssemblyError> =
+        crate::with_harvester!(device, |h| Ok(h.layout().output(STORAGE).is_some()));
+    found.unwrap_or(false)
+}
+
 /// Whether the records of `device` have a steady mean to study: an interface circuit whose
 /// storage feeds a load ([`RecordError::OpenLoad`] where it feeds nothing and only charges;
 /// [`RecordError::NoStorage`] without an interface). Their pre-roll
 /// ([`super::transient_s`]) covers the storage's settling.
 pub fn check_steady_mean(device: &Device) -> Result<(), RecordError> {
-    if device.interface.is_resistive() {
+    if !has_storage(device) {
         return Err(RecordError::NoStorage(device.name.clone()));
     }
     storage_settling_s(device)
