@@ -42,9 +42,6 @@ pub fn random(a: RandomArgs) -> Result<()> {
     }
 }
 
-/// True when the model of `device` has a storage output ([`STORAGE`]): its records report
-/// the DC power and the ledger rather than the loads' spectrum.
-
 /// How a record's free flight was integrated, for tables and text.
 fn free_flight_label(p: FreeFlightPath) -> String {
     match p {
