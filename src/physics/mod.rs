@@ -46,6 +46,7 @@ pub mod free_flight;
 pub mod harvester;
 pub mod hertz;
 pub mod interface;
+pub mod interface_closed_forms;
 pub mod linear;
 pub mod suspension;
 pub mod transducer;

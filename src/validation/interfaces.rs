@@ -1,4 +1,4 @@
-//! The interface circuits against their closed forms ([`crate::physics::interface::closed_forms`]):
+//! The interface circuits against their closed forms ([`crate::physics::interface_closed_forms`]):
 //! the standard bridge (Shu and Lien, Smart Mater. Struct. 15 (2006) 1499), parallel SSHI
 //! (Guyomar et al., IEEE Trans. Ultrason. Ferroelectr. Freq. Control 52 (2005) 584), series SSHI
 //! and SECE (Lefeuvre et al., Sens. Actuators A 126 (2006) 405), on a weakly coupled linear
@@ -10,7 +10,7 @@ use std::f64::consts::PI;
 
 use crate::device::{Device, Interface, Inversion, Rectifier, Transducer};
 use crate::drive::Sine;
-use crate::physics::interface::closed_forms::{standard_coupled, Element};
+use crate::physics::interface_closed_forms::{standard_coupled, Element};
 use crate::study::periodic::{steady_state_from_rest, PeriodicState as IfSteady, SteadySettings};
 use crate::validation::{Check, Group, Measure, ValidationError};
 

@@ -13,9 +13,9 @@
 
 use nalgebra::{SMatrix, SVector};
 
+use super::circuits::DiodeLaw;
 use crate::model::{Affine, AffineGuard, Contact, Mode};
 use crate::physics::contact::{ContactDamping, ContactLaw, Side, StopModel};
-use crate::physics::interface::DiodeLaw;
 use crate::physics::transducer::TransducerModel;
 
 use super::circuits::{Bridge, CircuitMode, Element};
@@ -274,7 +274,7 @@ impl<const N: usize> Harvester<N> {
                 }
             }
         }
-        if !matches!(circuit.switch, crate::physics::interface::Switch::None) {
+        if !matches!(circuit.switch, super::circuits::Switch::None) {
             let sign = match cm.heading {
                 super::circuits::Heading::Up => -1.0,
                 super::circuits::Heading::Down => 1.0,

@@ -365,9 +365,9 @@ impl<const N: usize> Harvester<N> {
                 }
                 names.push(("vs", "V"));
                 let load = match c.sink {
-                    crate::physics::interface::Sink::Resistor(r) => Some(Load::Resistor(r)),
-                    crate::physics::interface::Sink::Battery(vb, r) => Some(Load::Battery(vb, r)),
-                    crate::physics::interface::Sink::Open => None,
+                    circuits::Sink::Resistor(r) => Some(Load::Resistor(r)),
+                    circuits::Sink::Battery(vb, r) => Some(Load::Battery(vb, r)),
+                    circuits::Sink::Open => None,
                 };
                 vec![("vs", "V", load), ("v_element", "V", None)]
             }
@@ -494,7 +494,7 @@ fn port_of(device: &Device) -> Result<Port, AssemblyError> {
 /// The interface circuit of a device, if its interface is not resistive.
 fn circuit_of(device: &Device) -> Result<Option<circuits::Circuit>, AssemblyError> {
     use crate::device::Interface;
-    use crate::physics::interface::{DiodeLaw, Sink, Switch};
+    use circuits::{DiodeLaw, Sink, Switch};
     if device.interface.is_resistive() {
         return Ok(None);
     }

@@ -57,7 +57,6 @@
 //! guards, which turns positive when any of them does; the switch then picks the one that
 //! fired.
 
-pub mod closed_forms;
 mod jacobian;
 mod ledger;
 
@@ -65,12 +64,14 @@ pub use ledger::{
     audit_start, AuditState as IfAuditState, InterfaceAudit, InterfaceLedger, IF_AUDIT_DIM,
 };
 
-use crate::device::{DcLoad, Device, Diode, Interface, Transducer};
+use crate::device::{Device, Diode, Interface, Transducer};
 use crate::drive::Excitation;
 use crate::ode::{HybridSystem, Options};
 use crate::physics::contact::{Mode, Side, StopModel};
 use crate::physics::harvester::{Harvester, State};
 use crate::physics::transducer::TransducerModel;
+
+pub use crate::physics::assembly::circuits::{DiodeLaw, Sink, Switch};
 
 /// The element behind the interface.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -91,72 +92,6 @@ pub enum Element {
         /// L (H).
         l: f64,
     },
-}
-
-/// The diodes, evaluated.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum DiodeLaw {
-    /// Forward drop and on-resistance per diode.
-    PiecewiseLinear {
-        /// V_F (V).
-        vf: f64,
-        /// R_on (ohm).
-        ron: f64,
-    },
-    /// Shockley: saturation current and `n V_T` (V).
-    Shockley {
-        /// I_s (A).
-        is: f64,
-        /// n V_T (V).
-        nvt: f64,
-    },
-}
-
-/// The DC load, evaluated.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum Sink {
-    /// A resistor (ohm).
-    Resistor(f64),
-    /// A battery: voltage (V) and series resistance (ohm).
-    Battery(f64, f64),
-    /// Nothing.
-    Open,
-}
-
-impl Sink {
-    pub(crate) fn of(l: &DcLoad) -> Self {
-        match *l {
-            DcLoad::Resistor { resistance_ohm } => Sink::Resistor(resistance_ohm),
-            DcLoad::Battery {
-                voltage_v,
-                series_resistance_ohm,
-            } => Sink::Battery(voltage_v, series_resistance_ohm),
-            DcLoad::Open => Sink::Open,
-        }
-    }
-
-    /// The current drawn from the storage at its voltage `vs` (A).
-    #[inline(always)]
-    pub fn current(&self, vs: f64) -> f64 {
-        match *self {
-            Sink::Resistor(r) => vs / r,
-            Sink::Battery(vb, r) => (vs - vb) / r,
-            Sink::Open => 0.0,
-        }
-    }
-}
-
-/// The synchronous switch, if any.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum Switch {
-    /// None: a plain bridge.
-    None,
-    /// Parallel SSHI with inversion factor gamma.
-    Parallel(f64),
-    /// Series SSHI with inversion factor gamma.
-    Series(f64),
-    /// SECE with efficiency eta.
-    Sece(f64),
 }
 
 /// The interface circuit, evaluated (see the module docs).

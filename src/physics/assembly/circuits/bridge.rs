@@ -66,7 +66,7 @@
 
 use nalgebra::{SMatrix, SVector};
 
-use crate::physics::interface::{DiodeLaw, Sink, Switch};
+use super::parts::{DiodeLaw, Sink, Switch};
 use crate::physics::transducer::CapacitorPair;
 
 /// An unused guard.

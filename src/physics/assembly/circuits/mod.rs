@@ -3,7 +3,10 @@
 //!
 //! * [`bridge`]: a diode bridge into a storage capacitor and DC load, with the synchronous
 //!   switches (parallel and series SSHI, SECE) acting at the displacement extrema.
+//! * [`parts`]: the diodes' law, the DC load and the synchronous switch it is built from.
 
 pub mod bridge;
+pub mod parts;
 
 pub use bridge::*;
+pub use parts::{DiodeLaw, Sink, Switch};
