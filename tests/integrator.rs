@@ -7,18 +7,17 @@
 use endstop::device::StiffnessModel;
 use endstop::drive::Excitation;
 use endstop::drive::Sine;
+use endstop::model::{Books, Contact, Driven, FlightSplit, FlightVisitor, Mode, Model};
+use endstop::model::{NoFlight, Remainder};
 use endstop::ode::Dopri5;
 use endstop::ode::HybridSystem;
 use endstop::ode::Options;
 use endstop::ode::Rk4;
 use endstop::paper::setups::{comb_mut, endstop, with_endstop};
-use endstop::physics::contact::Mode;
+use endstop::physics::assembly::stops::contact_of;
+use endstop::physics::assembly::Harvester;
 use endstop::physics::contact::Side;
-use endstop::physics::energy::ledger_index;
-use endstop::physics::energy::AuditState;
-use endstop::physics::energy::EnergyAudit;
-use endstop::physics::harvester::Harvester;
-use endstop::physics::harvester::State;
+use endstop::physics::transducer::State;
 use nalgebra::SVector;
 
 use crate::common;
@@ -185,7 +184,7 @@ fn fixed_step_rk4_switches_at_the_exact_crossing_time() {
     assert_eq!(ode.t(), 5.0);
 }
 
-fn elastic_p1(km: f64, kim: f64) -> Harvester<Sine> {
+fn elastic_p1(km: f64, kim: f64) -> Harvester<4> {
     let mut d = with_endstop(&device("prototype1"), StiffnessModel::Linear, 0.0);
     d.mechanics.damping_n_s_per_m = 1e-300;
     d.mechanics.stiffness_n_per_m = km;
@@ -195,9 +194,14 @@ fn elastic_p1(km: f64, kim: f64) -> Harvester<Sine> {
             stiffness_n_per_m: kim,
         }
     });
-    let mut h = Harvester::new(&d, Sine::from_rms_g(0.0, 1000.0));
+    let mut h = Harvester::<4>::new(&d).unwrap();
     h.damping = 0.0;
     h
+}
+
+/// The mode with the stop on `side` in the state `c` and the other apart.
+fn at_stop(side: Side, c: Contact) -> Mode {
+    Mode::FREE.with_contact(contact_of(side), c)
 }
 
 #[test]
@@ -206,7 +210,7 @@ fn piecewise_linear_contact_on_the_harvester_model_matches_the_exact_solution() 
     // free sine until x = xmax and a faster sine about x_c while in contact.
     let (km, kim) = (166.5, 1.94e6);
     let h = elastic_p1(km, kim);
-    let (m, xmax) = (h.mass_kg, h.gap(endstop::physics::contact::Side::Upper));
+    let (m, xmax) = (h.mass_kg, h.gap(Side::Upper));
     let w0 = (km / m).sqrt();
     let w1 = ((km + kim) / m).sqrt();
     let v0 = 1.5 * w0 * xmax;
@@ -218,10 +222,11 @@ fn piecewise_linear_contact_on_the_harvester_model_matches_the_exact_solution() 
 
     let mut o = h.solver_options(1e-10);
     o.event_time_tol = 1e-16;
-    let mut ode = Dopri5::new(0.0, State::new(0.0, v0, 0.0, 0.0), Mode::Free, o);
+    let sys = Driven::new(&h, Sine::from_rms_g(0.0, 1000.0));
+    let mut ode = Dopri5::new(0.0, State::new(0.0, v0, 0.0, 0.0), Mode::FREE, o);
     let mut switches: Vec<(f64, Mode, f64)> = Vec::new();
-    let mut last = Mode::Free;
-    ode.integrate(&h, t_out * 1.01, |st, mode| {
+    let mut last = Mode::FREE;
+    ode.integrate(&sys, t_out * 1.01, |st, mode| {
         if mode != last {
             switches.push((st.t0, mode, st.y0[1]));
             last = mode;
@@ -229,8 +234,8 @@ fn piecewise_linear_contact_on_the_harvester_model_matches_the_exact_solution() 
     })
     .unwrap();
     assert_eq!(switches.len(), 2, "{switches:?}");
-    assert_eq!(switches[0].1, Mode::Contact(Side::Upper));
-    assert_eq!(switches[1].1, Mode::Free);
+    assert_eq!(switches[0].1, at_stop(Side::Upper, Contact::Pressed));
+    assert_eq!(switches[1].1, Mode::FREE);
     // Event times to 1e-9 relative (the contact lasts ~3.7 us; 1e-9 of t_out is ~0.2 ps).
     assert!(
         ((switches[0].0 - t_in) / t_in).abs() < 1e-9,
@@ -254,81 +259,96 @@ fn piecewise_linear_contact_on_the_harvester_model_matches_the_exact_solution() 
     );
 }
 
+/// The ledger of `h` under `drive` over `duration_s` from rest at rtol 1e-10, with the run's
+/// number of events.
+fn booked_run(h: &Harvester<4>, drive: Sine, duration_s: f64) -> (endstop::model::Ledger, u64) {
+    let mut books = Books::new(h, drive);
+    let mut ode = Dopri5::new(0.0, h.rest_state(), Mode::FREE, h.solver_options(1e-10));
+    ode.integrate_observed(&Driven::new(h, drive), duration_s, &mut books)
+        .unwrap();
+    (books.ledger(), ode.stats().events)
+}
+
 #[test]
 fn energy_balance_closes_over_a_run_with_impacts() {
     // Prototype 1 driven hard at 1300 Hz (Hertz stop, b_im = 1.5, Vb = 30 V): impacts on both
     // stops every period.
     let d = device("prototype1");
-    let h = Harvester::new(&d, Sine::from_rms_g(8.0, 1300.0));
-    let audit = EnergyAudit(h.clone());
-    let mut ode = Dopri5::new(
-        0.0,
-        AuditState::zeros(),
-        Mode::Free,
-        audit.solver_options(1e-10),
-    );
-    ode.integrate(&audit, 40.0 / 1300.0, |_, _| {}).unwrap();
+    let drive = Sine::from_rms_g(8.0, 1300.0);
+    let (ledger, events) = booked_run(&Harvester::<4>::new(&d).unwrap(), drive, 40.0 / 1300.0);
+    assert!(events > 40, "expected impacts, got {events} events");
     assert!(
-        ode.stats().events > 40,
-        "expected impacts, got {} events",
-        ode.stats().events
-    );
-    let y = ode.y();
-    assert!(
-        y[ledger_index::STOP_DAMPING] > 0.0 && y[ledger_index::LOADS] > 0.0,
+        ledger.get("stop_damping") > 0.0 && ledger.get("loads") > 0.0,
         "no end-stop or load dissipation"
     );
     // The source's work matters at this tolerance (it is ~1e-4 of the dissipation): a sign
     // error in the electrical bookkeeping would fail the check below.
-    let residual = audit.relative_residual(ode.mode(), &y);
+    let residual = ledger.relative_residual();
     assert!(residual.abs() < 1e-6, "relative residual {residual:e}");
     // Tension-free contact: the same balance (the clipped phase has no contact force).
-    let mut d2 = d.clone();
-    d2 = d2.with_tension_free(true);
-    let audit2 = EnergyAudit(Harvester::new(&d2, Sine::from_rms_g(8.0, 1300.0)));
-    let mut ode2 = Dopri5::new(
-        0.0,
-        AuditState::zeros(),
-        Mode::Free,
-        audit2.solver_options(1e-10),
-    );
-    ode2.integrate(&audit2, 40.0 / 1300.0, |_, _| {}).unwrap();
-    let r2 = audit2.relative_residual(ode2.mode(), &ode2.y());
-    assert!(ode2.stats().events > 40);
+    let d2 = d.with_tension_free(true);
+    let (ledger2, events2) = booked_run(&Harvester::<4>::new(&d2).unwrap(), drive, 40.0 / 1300.0);
+    let r2 = ledger2.relative_residual();
+    assert!(events2 > 40);
     assert!(r2.abs() < 1e-6, "tension-free relative residual {r2:e}");
 }
 
-/// The energy audit with a record of what each mode switch booked: (from, to, change of the
-/// end-stop damper, of the clip losses, of the re-engagement gains).
-struct WatchedAudit {
-    audit: EnergyAudit<Sine>,
+/// The model under its drive with a record of what each mode switch booked: (from, to, the
+/// end-stop damper's, the clip losses' and the re-engagement gains' share), each switch booked
+/// by the model's own [`Model::book_switch`] from the states around its reset.
+struct WatchedSwitches<'m> {
+    sys: Driven<'m, Harvester<4>, Sine, 4>,
     bookings: std::cell::RefCell<Vec<(Mode, Mode, [f64; 3])>>,
 }
 
-impl HybridSystem for WatchedAudit {
-    type State = AuditState;
-    fn guard_count(&self) -> usize {
-        3
-    }
+impl HybridSystem for WatchedSwitches<'_> {
+    type State = State;
     type Mode = Mode;
-    fn rhs(&self, m: Mode, t: f64, y: &AuditState) -> AuditState {
-        self.audit.rhs(m, t, y)
+    fn guard_count(&self) -> usize {
+        self.sys.guard_count()
     }
-    fn guards(&self, m: Mode, t: f64, y: &AuditState, g: &mut [f64]) {
-        self.audit.guards(m, t, y, g);
+    fn rhs(&self, m: Mode, t: f64, y: &State) -> State {
+        self.sys.rhs(m, t, y)
     }
-    fn switch(&self, m: Mode, i: usize, t: f64, y: &mut AuditState) -> Mode {
-        use ledger_index::{CLIP_LOSSES, REENGAGEMENT_GAINS, STOP_DAMPING};
+    fn guards(&self, m: Mode, t: f64, y: &State, g: &mut [f64]) {
+        self.sys.guards(m, t, y, g);
+    }
+    fn next_breakpoint(&self, t: f64) -> f64 {
+        self.sys.next_breakpoint(t)
+    }
+    fn switch(&self, m: Mode, i: usize, t: f64, y: &mut State) -> Mode {
         let before = *y;
-        let to = self.audit.switch(m, i, t, y);
-        let d = |k: usize| y[k] - before[k];
+        let to = self.sys.switch(m, i, t, y);
+        let h = self.sys.model;
+        let terms = h.ledger_terms();
+        let mut book = vec![0.0; terms.len()];
+        h.book_switch(m, to, &before, y, &mut book);
+        let share = |name: &str| {
+            terms
+                .iter()
+                .position(|t| t.name == name)
+                .map_or(0.0, |i| book[i])
+        };
         self.bookings.borrow_mut().push((
             m,
             to,
-            [d(STOP_DAMPING), d(CLIP_LOSSES), d(REENGAGEMENT_GAINS)],
+            [
+                share("stop_damping"),
+                share("clip_losses"),
+                share("reengagement_gains"),
+            ],
         ));
         to
     }
+}
+
+/// The stop whose contact changes from `a` to `b` between two modes, with its two states.
+fn changed_contact(a: Mode, b: Mode) -> Option<(Contact, Contact)> {
+    Side::BOTH
+        .iter()
+        .map(|&s| contact_of(s))
+        .find(|&k| a.contact(k) != b.contact(k))
+        .map(|k| (a.contact(k), b.contact(k)))
 }
 
 #[test]
@@ -340,29 +360,26 @@ fn tension_free_stop_books_clip_losses_and_reengagement_gains_apart() {
     // account must hold the damper only (it once took the spring energy of re-engagements as
     // negative losses), and clip losses and re-engagement gains are each booked with their
     // sign.
-    let mut d = device("prototype1");
-    d = d.with_tension_free(true);
-    let sys = WatchedAudit {
-        audit: EnergyAudit(Harvester::new(&d, Sine::from_rms_g(8.0, 1300.0))),
+    let d = device("prototype1").with_tension_free(true);
+    let h = Harvester::<4>::new(&d).unwrap();
+    let drive = Sine::from_rms_g(8.0, 1300.0);
+    let sys = WatchedSwitches {
+        sys: Driven::new(&h, drive),
         bookings: Default::default(),
     };
-    let mut ode = Dopri5::new(
-        0.0,
-        AuditState::zeros(),
-        Mode::Free,
-        sys.audit.solver_options(1e-10),
-    );
-    ode.integrate(&sys, 40.0 / 1300.0, |_, _| {}).unwrap();
-    let bookings = sys.bookings.borrow();
+    let mut books = Books::new(&h, drive);
+    let mut ode = Dopri5::new(0.0, h.rest_state(), Mode::FREE, h.solver_options(1e-10));
+    ode.integrate_observed(&sys, 40.0 / 1300.0, &mut books)
+        .unwrap();
     let (mut clips, mut reengagements) = (0, 0);
-    for &(from, to, [damper, clip, gain]) in bookings.iter() {
+    for &(from, to, [damper, clip, gain]) in sys.bookings.borrow().iter() {
         assert_eq!(damper, 0.0, "{from:?} -> {to:?} moved the damper's account");
-        match (from, to) {
-            (Mode::Contact(_), Mode::Clipped(_)) => {
+        match changed_contact(from, to) {
+            Some((Contact::Pressed, Contact::Clipped)) => {
                 clips += 1;
                 assert!(clip > 0.0 && gain == 0.0, "clip booked {clip:e}, {gain:e}");
             }
-            (Mode::Clipped(_), Mode::Contact(_)) => {
+            Some((Contact::Clipped, Contact::Pressed)) => {
                 reengagements += 1;
                 assert!(
                     gain > 0.0 && clip == 0.0,
@@ -376,13 +393,15 @@ fn tension_free_stop_books_clip_losses_and_reengagement_gains_apart() {
         clips > 40 && reengagements > 0,
         "{clips} clips, {reengagements} re-engagements"
     );
-    let ledger = sys.audit.ledger(ode.mode(), &ode.y());
-    // Passive: the stop absorbs more than it returns, and the balance closes as above.
+    let ledger = books.ledger();
+    let (clip_losses, gains) = (ledger.get("clip_losses"), ledger.get("reengagement_gains"));
+    // Passive: the stop absorbs more than it returns (its damper plus the clip losses minus
+    // the re-engagement gains), and the balance closes as above.
+    assert!(gains <= clip_losses, "{ledger:?}");
     assert!(
-        ledger.reengagement_gains <= ledger.clip_losses,
+        ledger.get("stop_damping") + clip_losses - gains > 0.0,
         "{ledger:?}"
     );
-    assert!(ledger.stop_absorbed() > 0.0, "{ledger:?}");
     let r = ledger.relative_residual();
     assert!(r.abs() < 1e-6, "relative residual {r:e}");
 }
@@ -390,11 +409,12 @@ fn tension_free_stop_books_clip_losses_and_reengagement_gains_apart() {
 /// Mode switches (time, new mode) and counters of prototype 1 driven at 8 g, 1300 Hz (impacts
 /// on both stops every period) over 40 periods.
 fn impacting_run(rtol: f64) -> (Vec<(f64, Mode)>, endstop::ode::Stats) {
-    let h = Harvester::new(&device("prototype1"), Sine::from_rms_g(8.0, 1300.0));
-    let mut ode = Dopri5::new(0.0, h.rest_state(), Mode::Free, h.solver_options(rtol));
+    let h = Harvester::<4>::new(&device("prototype1")).unwrap();
+    let sys = Driven::new(&h, Sine::from_rms_g(8.0, 1300.0));
+    let mut ode = Dopri5::new(0.0, h.rest_state(), Mode::FREE, h.solver_options(rtol));
     let mut switches = Vec::new();
-    let mut last = Mode::Free;
-    ode.integrate(&h, 40.0 / 1300.0, |st, m| {
+    let mut last = Mode::FREE;
+    ode.integrate(&sys, 40.0 / 1300.0, |st, m| {
         if m != last {
             switches.push((st.t0, m));
             last = m;
@@ -432,6 +452,45 @@ fn the_first_step_after_an_event_is_rarely_rejected_and_event_times_hold() {
     assert!(worst < bound, "event times off by up to {worst:e} s");
 }
 
+/// The free flight split of a model checked against its right-hand side on the states and
+/// drive values given (see the test below); the number of components checked.
+struct SplitMatchesRhs<'a> {
+    h: &'a Harvester<4>,
+    name: &'a str,
+    points: Vec<(f64, State)>,
+}
+
+impl FlightVisitor<4> for SplitMatchesRhs<'_> {
+    type Output = Result<usize, NoFlight>;
+
+    fn visit<R: Remainder<4>>(self, split: FlightSplit<4>, remainder: R) -> Self::Output {
+        let (l, c) = (split.l, split.c);
+        let mut checked = 0;
+        for (a, y) in &self.points {
+            let want = self.h.rhs(Mode::FREE, y, *a);
+            let got = l * y + c * *a + remainder.remainder(y);
+            for k in 0..4 {
+                let size = (l.row(k).transpose().component_mul(y)).abs().max()
+                    + (c[k] * a).abs()
+                    + want[k].abs();
+                assert!(
+                    (got[k] - want[k]).abs() <= 1e-12 * size,
+                    "{} a {a} y {y:?} component {k}: {} vs {}",
+                    self.name,
+                    got[k],
+                    want[k]
+                );
+                checked += 1;
+            }
+        }
+        Ok(checked)
+    }
+
+    fn refused(self, why: NoFlight) -> Self::Output {
+        Err(why)
+    }
+}
+
 #[test]
 fn free_flight_split_sums_to_the_right_hand_side() {
     // The exponential free-flight step integrates `L y + c a(t)` exactly and extrapolates the
@@ -441,10 +500,10 @@ fn free_flight_split_sums_to_the_right_hand_side() {
     // difference).
     for name in ["prototype1", "prototype2"] {
         let d = device(name);
-        let h = Harvester::new(&d, Sine::from_rms_g(2.0, 700.0));
-        let flight = h.free_flight();
-        let (l, c) = flight.linear();
+        let h = Harvester::<4>::new(&d).unwrap();
+        let drive = Sine::from_rms_g(2.0, 700.0);
         let s = h.scales();
+        let mut points = Vec::new();
         for (i, t) in [0.0, 1.1e-4, 3.7e-4].into_iter().enumerate() {
             for frac in [-0.99, -0.4, 0.0, 0.3, 0.95] {
                 let y = State::new(
@@ -453,20 +512,19 @@ fn free_flight_split_sums_to_the_right_hand_side() {
                     (0.3 + frac) * s[2],
                     (i as f64 - 1.3) * s[3],
                 );
-                let want = h.rhs(Mode::Free, t, &y);
-                let got = l * y + c * h.excitation.accel(t) + flight.remainder(&y);
-                for k in 0..4 {
-                    let size = (l.row(k).transpose().component_mul(&y)).abs().max()
-                        + (c[k] * h.excitation.accel(t)).abs()
-                        + want[k].abs();
-                    assert!(
-                        (got[k] - want[k]).abs() <= 1e-12 * size,
-                        "{name} t {t} x/gap {frac} component {k}: {} vs {}",
-                        got[k],
-                        want[k]
-                    );
-                }
+                points.push((drive.accel(t), y));
             }
         }
+        let checked = h
+            .flight(
+                1e-5,
+                SplitMatchesRhs {
+                    h: &h,
+                    name,
+                    points,
+                },
+            )
+            .unwrap_or_else(|why| panic!("{name}: no free flight split: {why:?}"));
+        assert_eq!(checked, 3 * 5 * 4, "{name}");
     }
 }

@@ -5,12 +5,12 @@
 //! the time, never a silent NaN. Its accuracy against exact solutions is `integrator.rs`.
 
 use endstop::drive::Sampled;
+use endstop::model::{Driven, Mode, Model};
 use endstop::ode::Dopri5;
 use endstop::ode::HybridSystem;
 use endstop::ode::SolverError;
-use endstop::physics::contact::Mode;
-use endstop::physics::harvester::Harvester;
-use endstop::physics::harvester::State;
+use endstop::physics::assembly::Harvester;
+use endstop::physics::transducer::State;
 use nalgebra::SVector;
 
 use crate::common::device;
@@ -53,11 +53,13 @@ fn every_sample_instant_of_a_sampled_input_is_a_step_boundary() {
     let samples: std::sync::Arc<[f64]> = (0..101).map(|k| (k as f64 * 0.37).sin()).collect();
     let ex = Sampled::new(samples, 1e5);
     let d = device("prototype1");
-    let h = Harvester::new(&d, ex.clone());
-    let mut ode = Dopri5::new(0.0, State::zeros(), Mode::Free, h.solver_options(1e-8));
+    let h = Harvester::<4>::new(&d).unwrap();
+    let mut ode = Dopri5::new(0.0, State::zeros(), Mode::FREE, h.solver_options(1e-8));
     let mut ends = Vec::new();
-    ode.integrate(&h, ex.duration_s(), |st, _| ends.push(st.t1()))
-        .unwrap();
+    ode.integrate(&Driven::new(&h, ex.clone()), ex.duration_s(), |st, _| {
+        ends.push(st.t1())
+    })
+    .unwrap();
     for k in 1..=100 {
         let t = ex.time_of(k);
         assert!(

@@ -9,14 +9,11 @@
 use endstop::device::Device;
 use endstop::device::StiffnessModel;
 use endstop::drive::Sine;
+use endstop::model::{Books, Driven, Mode, Model};
 use endstop::ode::Dopri5;
 use endstop::ode::SolverError;
 use endstop::paper::setups::{comb, comb_mut, endstop, with_endstop};
-use endstop::physics::contact::Mode;
-use endstop::physics::energy::AuditState;
-use endstop::physics::energy::EnergyAudit;
-use endstop::physics::energy::AUDIT_DIM;
-use endstop::physics::harvester::Harvester;
+use endstop::physics::assembly::Harvester;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
@@ -152,7 +149,7 @@ impl Case {
     }
 }
 
-/// Simulates 15 drive periods of a case with the energy audit; Ok(relative residual), or the
+/// Simulates 15 drive periods of a case with the energy ledger; Ok(relative residual), or the
 /// solver's error.
 fn simulate(c: &Case) -> Result<(f64, u64), SolverError> {
     let mut d = Device::from_toml_str(&p1_text(), "p1").unwrap();
@@ -175,7 +172,7 @@ fn simulate(c: &Case) -> Result<(f64, u64), SolverError> {
     let d = with_endstop(&d, law, c.bim);
     d.validate("random").unwrap();
     let drive = Sine::from_rms_g(c.accel_g, c.detune * c.f0);
-    let audit = EnergyAudit(Harvester::new(&d, drive));
+    let h = Harvester::<4>::new(&d).unwrap();
     // Absolute tolerances follow the size of the motion, so that a weak, detuned drive
     // (nanometres against a stop micrometres away) is integrated as accurately, relative to
     // its own energy, as a strong one: the expected amplitude is that of the linear
@@ -184,20 +181,20 @@ fn simulate(c: &Case) -> Result<(f64, u64), SolverError> {
     let w = c.detune * w0;
     let x_lin = drive.amplitude_m_s2 / ((w0 * w0 - w * w).powi(2) + (w0 * w / c.q).powi(2)).sqrt();
     let motion = (x_lin / endstop(&d).gap_m).min(1.0);
-    let mut opts = audit.solver_options(1e-10);
-    for i in 0..AUDIT_DIM {
-        opts.atol[i] *= if i < 4 { motion } else { motion * motion };
-    }
-    let mut ode = Dopri5::new(0.0, AuditState::zeros(), Mode::Free, opts);
-    ode.integrate(&audit, 15.0 / (c.detune * c.f0), |_, _| {})?;
+    let mut opts = h.solver_options(1e-10);
+    opts.atol *= motion;
+    let mut books = Books::new(&h, drive);
+    let mut ode = Dopri5::new(0.0, h.rest_state(), Mode::FREE, opts);
+    ode.integrate_observed(
+        &Driven::new(&h, drive),
+        15.0 / (c.detune * c.f0),
+        &mut books,
+    )?;
     assert!(
         ode.y().iter().all(|v| v.is_finite()),
         "{c:?}: non-finite state"
     );
-    Ok((
-        audit.relative_residual(ode.mode(), &ode.y()),
-        ode.stats().events,
-    ))
+    Ok((books.ledger().relative_residual(), ode.stats().events))
 }
 
 fn check(c: &Case) -> u64 {

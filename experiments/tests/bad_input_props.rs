@@ -146,17 +146,20 @@ proptest! {
                 let _ = endstop::study::record::transient_s(&d);
                 let lin = endstop::physics::linear::LinearResponse::of(&d);
                 let _ = lin.output_psd_w_per_hz(1.0, f0);
-                // An interface circuit: its model, and its right-hand side and guards at rest.
-                if let Some(m) = endstop::physics::interface::Interfaced::new(
-                    &d,
-                    endstop::drive::Sine::from_rms_g(0.1, f0),
-                ) {
-                    use endstop::ode::HybridSystem;
-                    let y = endstop::physics::harvester::State::zeros();
-                    let mode = m.mode_of(&y);
-                    let _ = m.rhs(mode, 0.0, &y);
-                    let _ = m.guard_values(mode, 0.0, &y);
-                }
+                // Its assembled model (behind an interface circuit, too), and its right-hand
+                // side and guards at rest; a device whose parts do not combine is refused with
+                // an error.
+                let a = endstop::drive::Excitation::accel(&endstop::drive::Sine::from_rms_g(0.1, f0), 0.0);
+                let _: Result<(), endstop::physics::assembly::AssemblyError> =
+                    endstop::with_harvester!(&d, |m| {
+                        use endstop::model::Model;
+                        let y = m.rest_state();
+                        let mode = m.mode_of(&y);
+                        let _ = m.rhs(mode, &y, a);
+                        let mut g = vec![0.0; m.guard_count()];
+                        m.guards(mode, &y, || a, &mut g);
+                        Ok(())
+                    });
             }
             Err(e) => prop_assert!(e.to_string().contains("gen.toml"), "{e}"),
         }

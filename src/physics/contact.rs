@@ -1,5 +1,6 @@
 //! The end-stop contact of eqs 1-2, generalised to any stop of [`crate::device::stops`]: which
-//! stop, the contact modes the integrator switches between, and each stop's force law.
+//! stop, and each stop's force law. The contact modes the integrator switches between are
+//! [`crate::model::Contact`]'s.
 //!
 //! For a compliant stop on side `s` (`s = +1` upper, `-1` lower) the penetration is
 //! `delta = s x - gap` (eq 2) and, while `delta > 0`, the stop pushes back with
@@ -9,12 +10,13 @@
 //! * Hunt-Crossley: `B = F_k(delta) (1 + alpha d(delta)/dt)` with `F_k = K delta^n`.
 //!
 //! With a tension-free stop (always for Hunt-Crossley) the bracket is clipped at zero: the
-//! mass is then in the mode [`Mode::Clipped`], past the stop but free of its force.
+//! mass is then [`Contact::Clipped`](crate::model::Contact::Clipped), past the stop but free
+//! of its force.
 //!
 //! A rigid stop (restitution) has no contact phase: when the mass reaches it, its velocity is
 //! reset to `-e` times itself (Newton's law), and where the rebounds would accumulate the mass
-//! sticks to the stop ([`Mode::Stuck`]) until the net force pulls it away (see
-//! [`crate::physics::harvester`]).
+//! rests on the stop ([`Contact::Resting`](crate::model::Contact::Resting)) until the net
+//! force pulls it away (see [`crate::physics::assembly`]).
 
 use crate::device::{HertzLineStop, Stop, StopLaw, StopSide};
 use crate::physics::hertz::HertzLine;
@@ -48,26 +50,6 @@ impl From<StopSide> for Side {
             StopSide::Upper => Side::Upper,
             StopSide::Lower => Side::Lower,
         }
-    }
-}
-
-/// Contact mode of the proof mass.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Mode {
-    /// Between the stops, no contact force.
-    Free,
-    /// In contact with a compliant stop, the contact force acts.
-    Contact(Side),
-    /// Past a tension-free stop, with the contact force clipped to zero.
-    Clipped(Side),
-    /// Resting on a rigid stop, held there by the net force (after impacts accumulated).
-    Stuck(Side),
-}
-
-impl Mode {
-    /// True while the mass touches or is past a stop.
-    pub fn in_contact(self) -> bool {
-        !matches!(self, Mode::Free)
     }
 }
 

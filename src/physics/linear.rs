@@ -1,7 +1,9 @@
 //! Linear theory of any device: the model linearised about rest, away from the stops, as a
 //! frequency response.
 //!
-//! Free of the stops, the model is `y' = L y + c a(t) + N(y)` ([`crate::physics::free_flight`]);
+//! Free of the stops, the model is `y' = L y + c a(t) + N(y)` (the free flight split of the
+//! harvester with its transducer's own loads,
+//! [`crate::physics::assembly::Harvester::flight_matrix`], its interface circuit left out);
 //! for small motion `N` is negligible (for the piezoelectric and electromagnetic transducers
 //! and without one it is zero) and the response to `a(t) = Re(A e^{jwt})` is
 //! `Y = (jw I - L)^{-1} c A`. The load voltages are linear in the state, so each has a
@@ -20,8 +22,7 @@
 use nalgebra::{Complex, Matrix4, Vector4};
 
 use crate::device::Device;
-use crate::drive::Sine;
-use crate::physics::harvester::Harvester;
+use crate::physics::assembly::Harvester;
 use crate::physics::transducer::TransducerModel;
 use crate::signal::{Psd, Widths};
 
@@ -36,12 +37,14 @@ pub struct LinearResponse {
 impl LinearResponse {
     /// The linearised model of `device` about rest.
     pub fn of(device: &Device) -> Self {
-        let h = Harvester::new(device, Sine::from_rms_g(0.0, 1.0));
-        let (l, _) = h.free_flight().linear();
+        let h = Harvester::<4>::with_own_loads(device);
+        let transducer = TransducerModel::of(&device.transducer);
         Self {
-            l,
-            transducer: h.transducer,
-            active: h.active_states(),
+            // A loaded transducer's port always has its split.
+            l: h.flight_matrix()
+                .unwrap_or_else(|| Matrix4::from_element(f64::NAN)),
+            transducer,
+            active: transducer.active_states(),
         }
     }
 

@@ -77,7 +77,7 @@
 //! # Initial condition
 //! The transient always starts with `uic` from [`InitialCondition`] (set with `.ic` on every
 //! state node), so ngspice starts from the same state as our integrator; the rest state of
-//! [`crate::physics::harvester::Harvester::rest_state`] has both node voltages zero. The sensing nodes
+//! [`crate::model::Model::rest_state`] has both node voltages zero. The sensing nodes
 //! `s1`, `s2` are set to Vb as well: left out of `.ic`, they would start at 0 V, the fixed
 //! capacitors would start uncharged, and the first time step would dump the bias charge into the
 //! loads.
@@ -142,7 +142,7 @@ pub struct InitialCondition {
 
 impl InitialCondition {
     /// The rest state (x = v = 0, both node voltages zero), as in
-    /// [`crate::physics::harvester::Harvester::rest_state`].
+    /// [`crate::model::Model::rest_state`].
     pub fn rest() -> Self {
         Self {
             x_m: 0.0,

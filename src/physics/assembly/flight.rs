@@ -94,40 +94,19 @@ impl<const N: usize> Harvester<N> {
         c[1] = 1.0;
         let reach_m = self.spring.fast_path_reach_m(self.km, self.mass_kg, dt_s);
         let centre_m = self.spring.well_m;
-        if let (TransducerModel::Pair(p), false) = (transducer, self.spring.nonlinear) {
-            if let PairGeometry::AreaOverlap { x0 } = p.geometry {
-                let ct = p.c0 + p.cp + p.cl;
-                let f = AreaOverlapFlight {
-                    dcdx: p.c0 / x0,
-                    vb: p.vb,
-                    ct,
-                    gamma: p.c0 * p.vb / x0,
-                    inv_ct: 1.0 / ct,
-                    inv_mass: 1.0 / self.mass_kg,
-                    inv_rl: 1.0 / p.rl,
-                    inv_ct_rl: 1.0 / (ct * p.rl),
-                    mass_kg: self.mass_kg,
-                    damping: self.damping,
-                    km: self.km,
-                };
-                let split = FlightSplit {
-                    l: f.linear(),
-                    c,
-                    linear: false,
-                    reach_m,
-                    centre_m,
-                };
-                return visitor.visit(split, f);
-            }
+        if let Some(f) = self.area_overlap_flight(transducer) {
+            let split = FlightSplit {
+                l: f.linear(),
+                c,
+                linear: false,
+                reach_m,
+                centre_m,
+            };
+            return visitor.visit(split, f);
         }
-        let at = if self.spring.nonlinear {
-            self.well_state()
-        } else {
-            SVector::zeros()
-        };
         let nonlinear = self.spring.nonlinear || matches!(transducer, TransducerModel::Pair(_));
         let f = GeneralFlight {
-            l: self.linearised(Mode::FREE, &at),
+            l: self.linearised_at_reference(),
             transducer,
             nonlinear,
             inv_mass: 1.0 / self.mass_kg,
@@ -143,6 +122,58 @@ impl<const N: usize> Harvester<N> {
             centre_m,
         };
         visitor.visit(split, f)
+    }
+}
+
+impl<const N: usize> Harvester<N> {
+    /// `L` of the free flight split, the model off the stops linearised about its reference
+    /// state (in closed form for the paper's area-overlap pair), whether or not the split is
+    /// offered to an integrator; `None` behind a circuit. The linear theory of
+    /// [`crate::physics::linear`] is taken from it.
+    pub fn flight_matrix(&self) -> Option<SMatrix<f64, N, N>> {
+        let Port::Loaded(transducer) = self.port else {
+            return None;
+        };
+        Some(match self.area_overlap_flight(transducer) {
+            Some(f) => f.linear(),
+            None => self.linearised_at_reference(),
+        })
+    }
+
+    /// The Jacobian of the free flight at the reference state: the reference well of a
+    /// nonlinear suspension, rest otherwise.
+    fn linearised_at_reference(&self) -> SMatrix<f64, N, N> {
+        let at = if self.spring.nonlinear {
+            self.well_state()
+        } else {
+            SVector::zeros()
+        };
+        self.linearised(Mode::FREE, &at)
+    }
+
+    /// The closed-form split of the paper's area-overlap pair on a linear suspension, if the
+    /// transducer is one.
+    fn area_overlap_flight(&self, transducer: TransducerModel) -> Option<AreaOverlapFlight> {
+        let (TransducerModel::Pair(p), false) = (transducer, self.spring.nonlinear) else {
+            return None;
+        };
+        let PairGeometry::AreaOverlap { x0 } = p.geometry else {
+            return None;
+        };
+        let ct = p.c0 + p.cp + p.cl;
+        Some(AreaOverlapFlight {
+            dcdx: p.c0 / x0,
+            vb: p.vb,
+            ct,
+            gamma: p.c0 * p.vb / x0,
+            inv_ct: 1.0 / ct,
+            inv_mass: 1.0 / self.mass_kg,
+            inv_rl: 1.0 / p.rl,
+            inv_ct_rl: 1.0 / (ct * p.rl),
+            mass_kg: self.mass_kg,
+            damping: self.damping,
+            km: self.km,
+        })
     }
 }
 

@@ -307,3 +307,68 @@ impl<const N: usize> Harvester<N> {
         (n, g0)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use nalgebra::Matrix4;
+
+    use super::*;
+    use crate::device::{Device, StopLaw};
+    use crate::drive::{Excitation, Sine};
+    use crate::model::Model;
+    use crate::physics::transducer::State;
+
+    /// The analytic Jacobian equals central differences of the right-hand side on the paper's
+    /// prototype 1 (its comb pair with charged nodes), in free flight and
+    /// pressed into a stop under both spring laws: the file's Hertz stops and the linear fit of
+    /// eq 19.
+    #[test]
+    fn jacobian_matches_central_differences_of_the_rhs() {
+        let text = include_str!("../../../data/prototype1.toml");
+        let base = Device::from_toml_str(text, "prototype1.toml").unwrap();
+        // The drive at t = 0.1 s.
+        let a = Sine::from_rms_g(5.5, 1300.0).accel(0.1);
+        // The file's Hertz stops (b_im = 1.5 N s/m), then the same with the linear fit of eq 19.
+        for linear_fit in [false, true] {
+            let mut d = base.clone();
+            d.stops.for_each_mut(|s| {
+                if let StopLaw::HertzLine(h) = &mut s.law {
+                    h.linear_fit = linear_fit;
+                }
+            });
+            let h = Harvester::<4>::new(&d).unwrap();
+            let sc = h.scales();
+            // A state 0.2 um into the upper stop, moving, with charged nodes.
+            let y = State::new(h.gap(Side::Upper) + 0.2e-6, 0.3, 0.4 * sc[2], -0.3 * sc[3]);
+            let pressed = Mode::FREE.with_contact(contact_of(Side::Upper), Contact::Pressed);
+            for mode in [Mode::FREE, pressed] {
+                let j = h.jacobian(mode, &y);
+                // Columns scaled by the state scales, so that every entry is the change of a
+                // derivative over a typical change of the state; compared per row against the
+                // row's largest entry.
+                let mut fd = Matrix4::zeros();
+                for c in 0..4 {
+                    // Steps of 1e-5 of each scale: truncation ~1e-10 of the row, rounding
+                    // ~1e-11 of it.
+                    let e = 1e-5 * sc[c];
+                    let (mut yp, mut ym) = (y, y);
+                    yp[c] += e;
+                    ym[c] -= e;
+                    let col = (h.rhs(mode, &yp, a) - h.rhs(mode, &ym, a)) * (sc[c] / (2.0 * e));
+                    fd.set_column(c, &col);
+                }
+                for r in 0..4 {
+                    let row_max = (0..4).map(|c| fd[(r, c)].abs()).fold(0.0, f64::max);
+                    for c in 0..4 {
+                        let an = j[(r, c)] * sc[c];
+                        assert!(
+                            (fd[(r, c)] - an).abs() <= 1e-6 * row_max,
+                            "linear fit {linear_fit} {mode:?} d f{r}/d y{c}: {an} vs {}",
+                            fd[(r, c)]
+                        );
+                    }
+                }
+            }
+        }
+    }
+}

@@ -131,6 +131,18 @@ impl From<AssemblyError> for crate::ode::SolverError {
     }
 }
 
+impl Harvester<4> {
+    /// The model of a device's transducer with its own loads, its interface circuit left out:
+    /// the linear theory's model ([`crate::physics::linear`]). A loaded transducer's state has
+    /// four components, so this assembly cannot fail.
+    pub fn with_own_loads(device: &Device) -> Self {
+        Self::assemble(
+            device,
+            Port::Loaded(TransducerModel::of(&device.transducer)),
+        )
+    }
+}
+
 impl<const N: usize> Harvester<N> {
     /// The model of a device (at its bias voltage and end-stop options); errs when its parts
     /// need another dimension than `N` ([`dimension`] says which) or do not combine.
@@ -155,6 +167,12 @@ impl<const N: usize> Harvester<N> {
                 asked: N,
             });
         }
+        Ok(Self::assemble(device, port))
+    }
+
+    /// The model of a device's mechanics and stops with the port `port`, whose dimension is
+    /// `N`.
+    fn assemble(device: &Device, port: Port) -> Self {
         let m = &device.mechanics;
         let (km, spring) = if m.suspension.is_linear() {
             (m.stiffness_n_per_m, Spring::linear(m.stiffness_n_per_m))
@@ -195,7 +213,7 @@ impl<const N: usize> Harvester<N> {
         h.layout = h.make_layout();
         h.terms = h.make_terms();
         h.scales = h.make_scales();
-        Ok(h)
+        h
     }
 
     /// The same model without stops (its scales unchanged).
@@ -877,6 +895,3 @@ impl<const N: usize> Model<N> for Harvester<N> {
         self.visit_flight(dt_s, visitor)
     }
 }
-
-#[cfg(test)]
-mod tests;

@@ -14,13 +14,13 @@
 //! own section phase, and [`Shooter::reanchor`] moves it to the drive phase where x crosses
 //! zero upwards (the orbit's fastest point, as far from both stops as it gets).
 //!
-//! Newton works in scaled coordinates z = y / s with s = [`Harvester::scales`] (x ~ xmax,
+//! Newton works in scaled coordinates z = y / s with s = [`Model::scales`] (x ~ xmax,
 //! v ~ w0 xmax, charges ~ C0 Vb xmax / x0), so that every component is of order one.
 //!
 //! # The monodromy matrix
 //! The monodromy matrix M = dP/dy is computed by the **variational equations** integrated
 //! alongside the state: Phi' = J(y) Phi with Phi(0) = I, J the Jacobian of the mode's
-//! right-hand side ([`Harvester::jacobian`]), and at every contact entry and exit the
+//! right-hand side ([`Model::jacobian`]), and at every contact entry and exit the
 //! saltation matrix
 //!
 //! S = I + (f+ - f-) n^T / (n . f-),
@@ -46,8 +46,8 @@
 //! of symmetric orbits.
 //!
 //! [`Dopri5`]: crate::ode::Dopri5
-//! [`Harvester::scales`]: crate::physics::harvester::Harvester::scales
-//! [`Harvester::jacobian`]: crate::physics::harvester::Harvester::jacobian
+//! [`Model::scales`]: crate::model::Model::scales
+//! [`Model::jacobian`]: crate::model::Model::jacobian
 
 use nalgebra::{Complex, DMatrix, DVector, SMatrix, SVector};
 use thiserror::Error;

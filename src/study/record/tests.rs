@@ -23,7 +23,7 @@ fn hash(v: &[f64]) -> u64 {
 
 /// Records of 50 ms (seed 2012, stream 3, the pre-roll the device's own or 50 ms if shorter)
 /// give the same bits as the record engine before the model abstraction: repository
-/// `endstop`, commit 54fdb70 (`study::record` over `physics::harvester::Harvester`), its
+/// `endstop`, commit 54fdb70 (`study::record` over that commit's loaded model, `Harvester<E>`), its
 /// `simulate_record` run on the same specs, with the sampled outputs hashed as [`hash`] does
 /// and `p1_w` printed as bits. The exponential Adams step, the stop check and the
 /// Dormand-Prince intervals are the same operations in the same order, so a change of the
