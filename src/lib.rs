@@ -78,7 +78,7 @@
 //! | [`physics::contact`] | contact modes and the stops' force laws | eqs 1-2 |
 //! | [`physics::transducer`] | the transducers' forces, rates and loads | eqs 8-10 |
 //! | [`model`] | the one model every study takes: modes, guards, switches, free flight split, energy ledger | |
-//! | [`physics::assembly`] | the harvester assembled from a device's parts as a [`model::Model`], with its interface circuits | eqs 7-10 |
+//! | [`physics::harvester`] | the harvester assembled from a device's parts as a [`model::Model`], with its interface circuits | eqs 7-10 |
 //! | [`physics::linear`] | linear frequency response of any device | |
 //! | [`physics::two_port`] | linear two-port, coupling, broadband efficiency | eqs 11-18, 21-22 |
 //! | [`drive`] | sine, sampled and band-limited noise accelerations | Figure 10 |

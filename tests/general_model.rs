@@ -8,8 +8,8 @@ use endstop::model::{
     Books, Contact, Driven, FlightSplit, FlightVisitor, Mode, Model, NoFlight, Remainder,
 };
 use endstop::ode::Dopri5;
-use endstop::physics::assembly::Harvester;
 use endstop::physics::contact::Side;
+use endstop::physics::harvester::Harvester;
 use endstop::physics::transducer::State;
 use nalgebra::Matrix4;
 

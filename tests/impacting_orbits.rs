@@ -9,7 +9,7 @@ use endstop::drive::Sine;
 use endstop::model::{Driven, Mode, Model, SwitchKind};
 use endstop::num::roots::{illinois, RootOptions, Sample};
 use endstop::ode::{Dopri5, Observer, Step};
-use endstop::physics::assembly::Harvester;
+use endstop::physics::harvester::Harvester;
 use endstop::physics::linear::LinearResponse;
 use endstop::physics::transducer::State;
 use endstop::progress::Silent;

@@ -14,9 +14,9 @@ use endstop::ode::HybridSystem;
 use endstop::ode::Options;
 use endstop::ode::Rk4;
 use endstop::paper::setups::{comb_mut, endstop, with_endstop};
-use endstop::physics::assembly::stops::contact_of;
-use endstop::physics::assembly::Harvester;
 use endstop::physics::contact::Side;
+use endstop::physics::harvester::stops::contact_of;
+use endstop::physics::harvester::Harvester;
 use endstop::physics::transducer::State;
 use nalgebra::SVector;
 

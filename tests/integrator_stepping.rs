@@ -9,7 +9,7 @@ use endstop::model::{Driven, Mode, Model};
 use endstop::ode::Dopri5;
 use endstop::ode::HybridSystem;
 use endstop::ode::SolverError;
-use endstop::physics::assembly::Harvester;
+use endstop::physics::harvester::Harvester;
 use endstop::physics::transducer::State;
 use nalgebra::SVector;
 

@@ -8,10 +8,10 @@ use endstop::device::{Device, Diode, Interface, Inversion};
 use endstop::drive::{Excitation, Parameter, Sine};
 use endstop::model::{Contact, Mode, Model};
 use endstop::ode::Stats;
-use endstop::physics::assembly::circuits::{Bridge, CircuitMode, Heading};
-use endstop::physics::assembly::stops::contact_of;
-use endstop::physics::assembly::AssemblyError;
 use endstop::physics::contact::Side;
+use endstop::physics::harvester::circuits::{Bridge, CircuitMode, Heading};
+use endstop::physics::harvester::stops::contact_of;
+use endstop::physics::harvester::AssemblyError;
 use endstop::progress::Silent;
 use endstop::study::orbit::{Shooter, ShootingConfig};
 use endstop::study::periodic::{

@@ -266,7 +266,7 @@ fn bad_interfaces_are_named_errors() {
         "pair.toml",
     )
     .unwrap();
-    assert_eq!(endstop::physics::assembly::dimension(&pair), Ok(5));
+    assert_eq!(endstop::physics::harvester::dimension(&pair), Ok(5));
 }
 
 /// A device with an interface writes itself back to an equal device.
@@ -305,7 +305,7 @@ fn a_stiff_conduction_mode_is_a_named_error() {
         matches!(
             e,
             endstop::study::periodic::PeriodicError::Device(
-                endstop::physics::assembly::AssemblyError::Stiff { .. }
+                endstop::physics::harvester::AssemblyError::Stiff { .. }
             )
         ),
         "{e}"

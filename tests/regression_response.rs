@@ -7,7 +7,7 @@
 
 use endstop::ode::Stats;
 use endstop::paper::response::{continuation, setups, Case};
-use endstop::physics::assembly::Harvester;
+use endstop::physics::harvester::Harvester;
 use endstop::study::orbit::Shooter;
 
 use crate::common;

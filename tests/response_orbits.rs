@@ -6,7 +6,7 @@ use endstop::device::{Device, StiffnessModel};
 use endstop::model::Model;
 use endstop::ode::Stats;
 use endstop::paper::setups::{comb, endstop, stiffness_model, with_endstop};
-use endstop::physics::assembly::Harvester;
+use endstop::physics::harvester::Harvester;
 use endstop::physics::linear::LinearResponse;
 use endstop::progress::Silent;
 use endstop::study::continuation::{

@@ -118,14 +118,14 @@ fn fold_rule_leaves_prototype2_blocks_at_the_ring_up_time() {
 fn basin_inputs(
     s: Setup,
 ) -> (
-    endstop::physics::assembly::Harvester<4>,
+    endstop::physics::harvester::Harvester<4>,
     Vec<Attractor>,
     endstop::study::orbit::Forcing,
     Setup,
 ) {
     let f = s.case.basin_freq_hz().expect("a case with basins");
     let branch = continuation(&s).unwrap();
-    let h = endstop::physics::assembly::Harvester::<4>::new(&s.device).unwrap();
+    let h = endstop::physics::harvester::Harvester::<4>::new(&s.device).unwrap();
     let shooter = endstop::study::orbit::Shooter::new(&h, s.continuation.shooting);
     let mut stats = endstop::ode::Stats::default();
     let catalogue: Vec<Attractor> = branch
@@ -152,7 +152,7 @@ fn basin_inputs(
 
 /// Figure 13's case at 720 Hz ([`basin_inputs`]).
 fn fig13_basin_inputs() -> (
-    endstop::physics::assembly::Harvester<4>,
+    endstop::physics::harvester::Harvester<4>,
     Vec<Attractor>,
     endstop::study::orbit::Forcing,
     Setup,

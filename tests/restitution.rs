@@ -8,9 +8,9 @@ use endstop::device::Device;
 use endstop::drive::{Excitation, Sine};
 use endstop::model::{Books, Contact, Driven, Mode, Model, SwitchKind};
 use endstop::ode::{Dopri5, Observer, Step};
-use endstop::physics::assembly::stops::contact_of;
-use endstop::physics::assembly::Harvester;
 use endstop::physics::contact::Side;
+use endstop::physics::harvester::stops::contact_of;
+use endstop::physics::harvester::Harvester;
 use endstop::physics::transducer::State;
 
 fn rigid_device(e: f64, transducer: &str) -> Device {

@@ -6,7 +6,7 @@
 use endstop::device::Device;
 use endstop::model::Model;
 use endstop::ode::Stats;
-use endstop::physics::assembly::Harvester;
+use endstop::physics::harvester::Harvester;
 use endstop::study::orbit::{Forcing, Parameter, Shooter, ShootingConfig};
 
 /// A 1 g, 32 Hz suspension (Q about 200) with a rigid stop 1 mm above rest; `transducer` the

@@ -13,7 +13,7 @@ use endstop::model::{Books, Driven, Mode, Model};
 use endstop::ode::Dopri5;
 use endstop::ode::SolverError;
 use endstop::paper::setups::{comb, comb_mut, endstop, with_endstop};
-use endstop::physics::assembly::Harvester;
+use endstop::physics::harvester::Harvester;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 

@@ -6,7 +6,7 @@ use endstop::device::StiffnessModel;
 use endstop::drive::Sine;
 use endstop::model::{Mode, Model};
 use endstop::paper::setups::{comb, endstop, stiffness_model, with_endstop};
-use endstop::physics::assembly::Harvester;
+use endstop::physics::harvester::Harvester;
 use endstop::physics::hertz::HertzLine;
 use endstop::physics::transducer::State;
 use endstop::spice::*;

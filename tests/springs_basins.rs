@@ -2,7 +2,7 @@
 //! (`endstop::study::attractors`) and placed by well, and the basins they give.
 
 use endstop::device::Device;
-use endstop::physics::assembly::Harvester;
+use endstop::physics::harvester::Harvester;
 use endstop::progress::Silent;
 use endstop::study::attractors::{find_attractors, seeds, AttractorSearch, Attractors, Place};
 use endstop::study::basins::{basins, BasinGrid, BasinSettings};

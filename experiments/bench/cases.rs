@@ -8,7 +8,7 @@ use endstop::drive::Sine;
 use endstop::model::{Mode, Model};
 use endstop::ode::Stats;
 use endstop::paper::setups::paper_record;
-use endstop::physics::assembly::Harvester;
+use endstop::physics::harvester::Harvester;
 use endstop::progress::Silent;
 use endstop::study::flow::SineFlow;
 use endstop::study::record::simulate_record;

@@ -150,7 +150,7 @@ proptest! {
                 // side and guards at rest; a device whose parts do not combine is refused with
                 // an error.
                 let a = endstop::drive::Excitation::accel(&endstop::drive::Sine::from_rms_g(0.1, f0), 0.0);
-                let _: Result<(), endstop::physics::assembly::AssemblyError> =
+                let _: Result<(), endstop::physics::harvester::AssemblyError> =
                     endstop::with_harvester!(&d, |m| {
                         use endstop::model::Model;
                         let y = m.rest_state();

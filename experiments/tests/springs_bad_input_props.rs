@@ -5,7 +5,7 @@
 
 use endstop::device::Device;
 use endstop::model::Model;
-use endstop::physics::assembly::Harvester;
+use endstop::physics::harvester::Harvester;
 use proptest::prelude::*;
 use proptest::sample::select;
 

@@ -13,7 +13,7 @@
 //! grazing orbits, a jump the fold: each moves smoothly with the parameters.
 
 use crate::device::Device;
-use crate::physics::assembly::Harvester as Model4;
+use crate::physics::harvester::Harvester as Model4;
 
 /// The fit's model: the paper's devices, four components.
 type Harvester = Model4<4>;

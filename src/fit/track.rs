@@ -5,7 +5,7 @@
 //! misfit costs a few periods of integration per measured value instead of a sweep.
 
 use crate::ode::Stats;
-use crate::physics::assembly::Harvester as Model4;
+use crate::physics::harvester::Harvester as Model4;
 
 /// The fit's model: the paper's devices, four components.
 type Harvester = Model4<4>;

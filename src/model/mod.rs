@@ -2,7 +2,7 @@
 //!
 //! A [`Model`] of dimension `N` is what a device's parts assemble into (mechanics, stops and
 //! their contact laws, transducers, interface circuits; see
-//! [`crate::physics::assembly::Harvester`]): it states the layout of its state ([`Layout`]),
+//! [`crate::physics::harvester::Harvester`]): it states the layout of its state ([`Layout`]),
 //! its modes ([`Mode`]), its right-hand side and Jacobian in each mode, its guards (as many as
 //! its parts need) and the resets at its switches with their Jacobians, the affine form of
 //! every mode that is linear (for the exact propagators of [`crate::study::flow`] and the

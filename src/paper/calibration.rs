@@ -25,7 +25,7 @@ use crate::paper::claims::{keys, ClaimKey};
 use crate::paper::measured::P1_MEASURED_ONSET_HZ;
 use crate::paper::setups::{comb, endstop, hertz_stop, prototype1_setup, with_endstop, ParamSet};
 use crate::paper::sweeps::{self, P1_HIGH_ACCEL_RMS_G};
-use crate::physics::assembly::Harvester;
+use crate::physics::harvester::Harvester;
 use crate::progress::Silent;
 use crate::study::steady::SteadyConfig;
 use crate::study::stepped::{continue_sweep, in_contact, Sweep, Transition};

@@ -16,7 +16,7 @@
 //! A rigid stop (restitution) has no contact phase: when the mass reaches it, its velocity is
 //! reset to `-e` times itself (Newton's law), and where the rebounds would accumulate the mass
 //! rests on the stop ([`Contact::Resting`](crate::model::Contact::Resting)) until the net
-//! force pulls it away (see [`crate::physics::assembly`]).
+//! force pulls it away (see [`crate::physics::harvester`]).
 
 use crate::device::{HertzLineStop, Stop, StopLaw, StopSide};
 use crate::physics::hertz::HertzLine;

@@ -3,7 +3,7 @@
 //!
 //! Free of the stops, the model is `y' = L y + c a(t) + N(y)` (the free flight split of the
 //! harvester with its transducer's own loads,
-//! [`crate::physics::assembly::Harvester::flight_matrix`], its interface circuit left out);
+//! [`crate::physics::harvester::Harvester::flight_matrix`], its interface circuit left out);
 //! for small motion `N` is negligible (for the piezoelectric and electromagnetic transducers
 //! and without one it is zero) and the response to `a(t) = Re(A e^{jwt})` is
 //! `Y = (jw I - L)^{-1} c A`. The load voltages are linear in the state, so each has a
@@ -22,7 +22,7 @@
 use nalgebra::{Complex, Matrix4, Vector4};
 
 use crate::device::Device;
-use crate::physics::assembly::Harvester;
+use crate::physics::harvester::Harvester;
 use crate::physics::transducer::TransducerModel;
 use crate::signal::{Psd, Widths};
 

@@ -1,7 +1,7 @@
 //! The physics of the harvester: Hertz line contact ([`hertz`], eqs 3-6 and 19), the end-stops
 //! and their laws ([`contact`], eqs 1-2), the transducers ([`transducer`], eqs 8-10 for the
 //! paper's), the suspension's restoring force ([`suspension`]), the harvester assembled from a
-//! device's parts ([`assembly`], eqs 7-10: a [`crate::model::Model`] with its free flight split
+//! device's parts ([`harvester`], eqs 7-10: a [`crate::model::Model`] with its free flight split
 //! for the exponential integrator and its energy ledger, and the interface circuits between a
 //! transducer and a DC load: diode bridges, SSHI, SECE), the linear response of any device
 //! ([`linear`]) and the paper's linear two-port theory ([`two_port`], eqs 11-18 and 21-22), and
@@ -11,8 +11,8 @@
 //! use endstop::device::Device;
 //! use endstop::drive::{Excitation, Sine};
 //! use endstop::model::{Contact, Mode, Model};
-//! use endstop::physics::assembly::Harvester;
-//! use endstop::physics::assembly::stops::contact_of;
+//! use endstop::physics::harvester::Harvester;
+//! use endstop::physics::harvester::stops::contact_of;
 //! use endstop::physics::contact::Side;
 //! use endstop::physics::linear::white_noise_power_w;
 //! use endstop::physics::two_port::eq21_power_w;
@@ -43,9 +43,9 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
-pub mod assembly;
 pub mod closed_forms;
 pub mod contact;
+pub mod harvester;
 pub mod hertz;
 pub mod interface_closed_forms;
 pub mod linear;

@@ -3,7 +3,7 @@
 //! The suspension pushes the mass back with `F_s(x) = k1 x + k2 x^2 + ... + k7 x^7` (eq 7's
 //! `km x` when only `k1` is present), derived from the potential
 //! `U_s(x) = k1 x^2 / 2 + k2 x^3 / 3 + ... + k7 x^8 / 8`. The model keeps `k1` as
-//! [`crate::physics::assembly::Harvester::km`] and the higher terms here ([`Spring`]), so that
+//! [`crate::physics::harvester::Harvester::km`] and the higher terms here ([`Spring`]), so that
 //! a linear device evaluates exactly the product it always did.
 //!
 //! Common forms (standard in the literature on nonlinear and bistable harvesters):

@@ -26,7 +26,7 @@ use crate::device::Device;
 use crate::drive::Excitation;
 use crate::model::{Driven, Model, MAX_OUTPUTS};
 use crate::ode::{Dopri5, SolverError};
-use crate::physics::assembly::AssemblyError;
+use crate::physics::harvester::AssemblyError;
 use crate::progress::{share, Progress};
 use crate::study::record::STORAGE;
 

@@ -45,7 +45,7 @@ pub enum PeriodicError {
     Solver(#[from] SolverError),
     /// The device's parts do not assemble into a model.
     #[error(transparent)]
-    Device(#[from] crate::physics::assembly::AssemblyError),
+    Device(#[from] crate::physics::harvester::AssemblyError),
     /// A storage with no load only charges: there is no periodic steady state.
     #[error(
         "the storage has an open load (interface.load.kind = \"open\"), so it charges towards \

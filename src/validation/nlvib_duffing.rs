@@ -30,7 +30,7 @@ use serde::Deserialize;
 use crate::device::Device;
 use crate::model::Model;
 use crate::ode::Stats;
-use crate::physics::assembly::Harvester;
+use crate::physics::harvester::Harvester;
 use crate::progress::Silent;
 use crate::study::continuation::{continue_branch, first_orbit, Branch, ContinuationSettings};
 use crate::study::orbit::{Forcing, Orbit, Parameter, Shooter, ShootingConfig};

@@ -15,7 +15,7 @@ use endstop::paper::measured::*;
 use endstop::paper::setups::comb;
 use endstop::paper::setups::{prototype1_setup, ParamSet, P1_BIAS_V};
 use endstop::paper::Figure;
-use endstop::physics::assembly::Harvester;
+use endstop::physics::harvester::Harvester;
 use endstop::study::steady::{steady_config, steady_state};
 use endstop::study::sweep::{BranchEndKind, JUMP_MIN_DROP, REFINE_TOL_HZ};
 

@@ -9,7 +9,7 @@ use super::{
 use crate::drive::Sine;
 use crate::model::{Driven, Mode, Model};
 use crate::ode::{Dopri5, SolverError, Stats};
-use crate::physics::assembly::Harvester;
+use crate::physics::harvester::Harvester;
 use crate::physics::transducer::State;
 use crate::progress::Silent;
 use crate::spice::{

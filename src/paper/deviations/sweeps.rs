@@ -15,7 +15,7 @@ use crate::paper::figures::{fig08, fig09};
 use crate::paper::measured::P1_RESONANCE_HZ;
 use crate::paper::qm::TABLE3_QM;
 use crate::paper::setups::{endstop, with_endstop, FIG13_BIAS_V, P1_BIAS_V, P2_BIAS_V};
-use crate::physics::assembly::Harvester;
+use crate::physics::harvester::Harvester;
 use crate::physics::two_port::TwoPort;
 use crate::progress::Silent;
 use crate::study::continuation::{self, Branch, ContinuationSettings, EventKind};

@@ -3,7 +3,7 @@
 //! basins' shares on a grid twice as fine.
 
 use crate::ode::Stats;
-use crate::physics::assembly::Harvester;
+use crate::physics::harvester::Harvester;
 use crate::progress::Progress;
 use crate::study::basins::{basins, refine, Attractor, BasinGrid, BasinSettings, Basins};
 use crate::study::continuation::Branch;

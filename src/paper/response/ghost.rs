@@ -5,7 +5,7 @@
 use crate::drive::Sine;
 use crate::model::Model;
 use crate::ode::Stats;
-use crate::physics::assembly::Harvester;
+use crate::physics::harvester::Harvester;
 use crate::study::continuation::Branch;
 use crate::study::orbit::{Forcing, OrbitError, Shooter};
 use crate::study::steady::SteadyConfig;

@@ -23,7 +23,7 @@ use crate::ode::{SolverError, Stats};
 use crate::paper::figures::fig13;
 use crate::paper::setups::{prototype1_setup, with_endstop, ParamSet, FIG13_BIAS_V};
 use crate::paper::sweeps::{self, P1_HIGH_ACCEL_RMS_G, P1_SWEEP_STEP_HZ};
-use crate::physics::assembly::Harvester;
+use crate::physics::harvester::Harvester;
 use crate::progress::{Progress, Silent};
 use crate::study::basins::Basins;
 use crate::study::continuation::{

@@ -2,7 +2,7 @@
 
 use super::*;
 use crate::device::Device;
-use crate::physics::assembly::Harvester;
+use crate::physics::harvester::Harvester;
 use crate::study::orbit::{Forcing, Parameter, Shooter, ShootingConfig};
 
 type State = SVector<f64, 4>;

@@ -201,7 +201,7 @@ pub enum OrbitError {
     Invalid(String),
     /// The device's parts do not assemble into a model.
     #[error(transparent)]
-    Device(#[from] crate::physics::assembly::AssemblyError),
+    Device(#[from] crate::physics::harvester::AssemblyError),
 }
 
 /// Whole-period measures of an orbit.

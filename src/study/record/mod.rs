@@ -4,7 +4,7 @@
 //! the drive's power.
 //!
 //! # One record
-//! [`simulate_record`] drives a device's model ([`crate::physics::assembly`]; the lumped model
+//! [`simulate_record`] drives a device's model ([`crate::physics::harvester`]; the lumped model
 //! of eq 7 for the paper's devices) with one realisation of band-limited white noise from
 //! [`crate::drive::noise::generate`] (two-sided level `Sa`, 10 kHz band, 100 kHz, the paper's
 //! section 4), read between samples by linear interpolation ([`crate::drive::Sampled`]), and
@@ -66,7 +66,7 @@ use crate::drive::noise::{self, NoiseError, NoiseSpec};
 use crate::drive::Sampled;
 use crate::model::{FlightSplit, FlightVisitor, Ledger, Mode, Model, NoFlight, Remainder, Slot};
 use crate::ode::{SolverError, Stats};
-use crate::physics::assembly::AssemblyError;
+use crate::physics::harvester::AssemblyError;
 use crate::signal::SpectralError;
 
 mod affine;

@@ -46,7 +46,7 @@ pub fn storage_settling_s(device: &Device) -> Option<f64> {
 /// Whether the model `device` assembles has a storage: an output and state component
 /// [`STORAGE`] (false where it does not assemble; its records then fail with the reason).
 pub fn has_storage(device: &Device) -> bool {
-    let found: Result<bool, crate::physics::assembly::AssemblyError> =
+    let found: Result<bool, crate::physics::harvester::AssemblyError> =
         crate::with_harvester!(device, |h| Ok(h.layout().output(STORAGE).is_some()));
     found.unwrap_or(false)
 }

@@ -515,7 +515,7 @@ mod tests {
         let r = settings.run(&device, accel, &Silent).unwrap();
         assert!(r.onset.is_some() && r.jump.is_none() && r.contact_lost.is_none());
         let k = first_contact(&r.sweep).unwrap();
-        let base = crate::physics::assembly::Harvester::<4>::new(&device).unwrap();
+        let base = crate::physics::harvester::Harvester::<4>::new(&device).unwrap();
         let (mut lo, mut hi) = (r.sweep.values[k - 1], r.sweep.values[k]);
         let before = &r.sweep.steps[k - 1];
         let (mut y, mut mode) = (

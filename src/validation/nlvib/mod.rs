@@ -34,7 +34,7 @@
 use crate::device::Device;
 use crate::model::Model;
 use crate::ode::Stats;
-use crate::physics::assembly::Harvester;
+use crate::physics::harvester::Harvester;
 
 /// The problem's state: one mass, no transducer.
 type State = nalgebra::SVector<f64, 4>;

@@ -476,16 +476,16 @@ pub const DIMENSIONS: [usize; 2] = [4, 5];
 macro_rules! with_harvester {
     ($device:expr, |$h:ident| $body:expr) => {{
         let device: &$crate::device::Device = $device;
-        match $crate::physics::assembly::dimension(device) {
-            Ok(4) => match $crate::physics::assembly::Harvester::<4>::new(device) {
+        match $crate::physics::harvester::dimension(device) {
+            Ok(4) => match $crate::physics::harvester::Harvester::<4>::new(device) {
                 Ok($h) => $body,
                 Err(e) => Err(e.into()),
             },
-            Ok(5) => match $crate::physics::assembly::Harvester::<5>::new(device) {
+            Ok(5) => match $crate::physics::harvester::Harvester::<5>::new(device) {
                 Ok($h) => $body,
                 Err(e) => Err(e.into()),
             },
-            Ok(n) => Err($crate::physics::assembly::AssemblyError::Dimension {
+            Ok(n) => Err($crate::physics::harvester::AssemblyError::Dimension {
                 device: device.name.clone(),
                 needs: n,
                 asked: 0,
