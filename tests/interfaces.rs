@@ -164,6 +164,26 @@ fn the_energy_ledger_closes_for_every_interface() {
     }
 }
 
+/// A storage capacitor so small that it discharges through its load within a fraction of the
+/// period (1e-30 F into 50 kOhm: 5e-26 s) ends in a named error at once, naming the storage,
+/// where it otherwise ran to a storage voltage of hundreds of megavolts; the file's own 1 uF
+/// assembles.
+#[test]
+fn a_storage_that_empties_within_a_step_is_a_named_error() {
+    use endstop::physics::harvester::{AssemblyError, Harvester};
+    let tiny = text(
+        PIEZO,
+        &bridge("full_bridge", "", PWL, RES).replace("1e-6", "1e-30"),
+    );
+    let d = Device::from_toml_str(&tiny, "tiny.toml").unwrap();
+    let e = Harvester::<4>::new(&d).unwrap_err();
+    assert!(matches!(e, AssemblyError::StiffStorage { .. }), "{e}");
+    assert!(e.to_string().contains("storage_capacitance_f"), "{e}");
+    let ok = text(PIEZO, &bridge("full_bridge", "", PWL, RES));
+    let d = Device::from_toml_str(&ok, "ok.toml").unwrap();
+    assert!(Harvester::<4>::new(&d).is_ok());
+}
+
 /// The paper's prototype 2 behind an ideal bridge (`data/examples/prototype2_bridge.toml`: the
 /// electrostatic pair's two node charges, each drained by its load, and the storage) balances
 /// its energy as every other interface does, striking its stops at 1 g near resonance.

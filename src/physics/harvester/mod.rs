@@ -48,8 +48,8 @@ use stops::{contact_of, side_of, FrameStops};
 /// displacement scale ([`Harvester::x_scale_m`]).
 pub const STICK_HEIGHT_REL: f64 = 1e-9;
 
-/// The smallest conduction time constant of an interface circuit accepted, relative to the
-/// suspension's period.
+/// The smallest time constant of an interface circuit accepted (a conduction mode's, the
+/// storage's through its load), relative to the suspension's period.
 pub const STIFF_LIMIT: f64 = 1e-5;
 
 /// The guards of the stops: two for each of the two sides.
@@ -111,6 +111,24 @@ pub enum AssemblyError {
         /// The smallest ratio accepted ([`STIFF_LIMIT`]).
         limit: f64,
     },
+    /// The storage capacitor discharges through its DC load faster than the explicit
+    /// integrator can follow.
+    #[error(
+        "device `{device}`: the storage's time constant through its load {tau_s:e} s \
+         (interface.storage_capacitance_f times the load's resistance) is below {limit:e} of the \
+         suspension's period {period_s:e} s: the integrator would take more than 1e5 steps a \
+         period; use a larger storage capacitance or load resistance"
+    )]
+    StiffStorage {
+        /// The device.
+        device: String,
+        /// The storage's time constant through its load (s).
+        tau_s: f64,
+        /// The suspension's period (s).
+        period_s: f64,
+        /// The smallest ratio accepted ([`STIFF_LIMIT`]).
+        limit: f64,
+    },
     /// A combination of parts that is not supported yet.
     #[error("device `{device}`: {transducer} behind {interface} is not supported yet ({why})")]
     Unsupported {
@@ -158,6 +176,16 @@ impl<const N: usize> Harvester<N> {
                     period_s,
                     limit: STIFF_LIMIT,
                 });
+            }
+            if let Some(tau_s) = c.storage_time_constant_s() {
+                if tau_s.is_nan() || tau_s < STIFF_LIMIT * period_s {
+                    return Err(AssemblyError::StiffStorage {
+                        device: device.name.clone(),
+                        tau_s,
+                        period_s,
+                        limit: STIFF_LIMIT,
+                    });
+                }
             }
         }
         if port.dimension() != N {
