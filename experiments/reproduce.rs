@@ -13,7 +13,9 @@ use endstop_experiments as common;
 use anyhow::{bail, Result};
 use clap::Parser;
 use endstop_experiments::pipeline::jobs::{experiment_names, Job, JOBS};
-use endstop_experiments::pipeline::{answers, book, provenance, publish, schedule, scorecard};
+use endstop_experiments::pipeline::{
+    answers, book, provenance, publish, recorded_history, schedule, scorecard,
+};
 
 #[derive(Parser, Debug)]
 #[command(about = "Run every experiment, write the scorecard and build the book")]
@@ -65,6 +67,7 @@ fn run() -> Result<()> {
     answers::write(&rows)?;
     provenance::write_provenance()?;
     publish::deviations_placeholder()?;
+    recorded_history::publish(&root, &common::book_generated_root())?;
     eprintln!("[reproduce] building the book");
     book::build(&root.join("book"))?;
 

@@ -2,7 +2,7 @@
 //! skipped ([`freshness`]), how they are run ([`schedule`]), the scorecard ([`scorecard`]), the
 //! provenance page ([`provenance`]), the answer boxes that open the figure chapters
 //! ([`answers`]), what the book takes from the own-device runs and the deviations study
-//! ([`publish`]), the noise-level curve read from the springs jobs' summaries after they ran
+//! ([`publish`]), the recorded definitive history match ([`recorded_history`]), the noise-level curve read from the springs jobs' summaries after they ran
 //! ([`noise_curve`]) and the book's build ([`book`]).
 
 pub mod answers;
@@ -12,5 +12,6 @@ pub mod jobs;
 pub mod noise_curve;
 pub mod provenance;
 pub mod publish;
+pub mod recorded_history;
 pub mod schedule;
 pub mod scorecard;

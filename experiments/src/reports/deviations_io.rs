@@ -1,8 +1,7 @@
 //! The deviations experiment's outputs (the study itself is `endstop::paper::deviations`):
 //! the numbers of each prototype's history match, the values of its best run under the keys
-//! the scorecard reads, the heat map of the emulators' total Sobol indices, the book's numbers
-//! (the match's settings, answers, tables and the indices) and the chapter's answer, from the
-//! recorded definitive match where there is one. The match's own files and plots are
+//! the scorecard reads, the heat map of the emulators' total Sobol indices and the book's
+//! numbers (the match's settings, answers, tables and the indices). The match's own files and plots are
 //! [`crate::reports::history_io`]'s.
 
 use anyhow::Result;
@@ -64,7 +63,8 @@ pub struct RunSettings {
 }
 
 /// Writes everything after the matches: the settings' numbers, the match's files, the Sobol
-/// indices and their heat map, the book's numbers and the chapter's answer, then the summary.
+/// indices and their heat map and the book's numbers, then the summary. The chapter's answer is
+/// the recorded definitive match's ([`crate::pipeline::recorded_history`]).
 pub fn write(
     mut exp: Experiment,
     settings: RunSettings,
@@ -82,54 +82,7 @@ pub fn write(
     write_sobol(&exp, sobols)?;
     exp.write_plot(&HeatMap::of(sobols))?;
     exp.write_numbers_md(&numbers_md(ensemble_records, runs, sobols))?;
-    write_answer(runs)?;
     exp.finish()
-}
-
-/// The recorded definitive match (`data/recorded/history/report.md`, written by
-/// `python/examples/study_dask.py --history`).
-const RECORDED_REPORT: &str = "data/recorded/history/report.md";
-
-/// `answer.md` (the chapter's first paragraphs) and `recorded.md`: the recorded definitive
-/// match's answer and report where it exists, else this build's answer, labelled as reduced.
-fn write_answer(runs: &[HistoryRun]) -> Result<()> {
-    let dir = crate::book_generated_root().join("deviations");
-    let recorded = std::fs::read_to_string(crate::root().join(RECORDED_REPORT)).ok();
-    let (answer, report) = match &recorded {
-        Some(r) => {
-            // The report opens with one answer paragraph per prototype, then the record's
-            // provenance ("Recorded run: ...").
-            let answer: String = r
-                .split("\n\n")
-                .take_while(|p| !p.starts_with("Recorded run:"))
-                .map(|p| format!("{p}\n\n"))
-                .collect();
-            (
-                format!(
-                    "{answer}*The recorded definitive history match ([below](#the-recorded-definitive-match)).*\n"
-                ),
-                r.clone(),
-            )
-        }
-        None => {
-            let mut a = String::from(
-                "*No definitive history match is recorded yet; this build's reduced match (its \
-                 settings in the first line of [its section](#this-builds-history-match)) \
-                 answers provisionally:*\n\n",
-            );
-            for h in runs {
-                a.push_str(&answer_md(h));
-                a.push('\n');
-            }
-            (
-                a,
-                format!("*No definitive match is recorded yet (`{RECORDED_REPORT}`).*\n"),
-            )
-        }
-    };
-    crate::write_atomic(&dir.join("answer.md"), answer.as_bytes())?;
-    crate::write_atomic(&dir.join("recorded.md"), report.as_bytes())?;
-    Ok(())
 }
 
 /// The run of the match with the smallest worst |normalised deviation| over its quantitative
