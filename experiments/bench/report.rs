@@ -12,6 +12,33 @@ use common::{fmt_sig, Experiment};
 use crate::timing::sig_or_dash;
 use crate::{cases, examples, interfaces, rk4, REPEATS, SEED};
 
+/// The whole benchmark's recorded tables (`data/recorded/bench/`): the whole run rewrites
+/// them, the short run shows them.
+pub const RECORDED_DIR: &str = "data/recorded/bench";
+
+fn recorded(file: &str) -> std::path::PathBuf {
+    common::root().join(RECORDED_DIR).join(file)
+}
+
+/// Writes to `dst` the recorded table `file` of the whole benchmark, labelled as recorded
+/// (the short run does not measure `what`); where there is no recording, says so and why.
+fn show_recorded(dst: &std::path::Path, file: &str, what: &str) -> Result<()> {
+    let md = match std::fs::read_to_string(recorded(file)) {
+        Ok(table) => format!(
+            "*Recorded, not measured in this build: `reproduce` runs the short benchmark \
+             (`bench --quick`), which leaves out {what}; below is the whole benchmark's \
+             recorded output (`{RECORDED_DIR}/{file}`, with the commit it measured). `just \
+             bench` measures it again on your machine.*\n\n{table}"
+        ),
+        Err(_) => format!(
+            "*Not measured in this build, and not recorded: `reproduce` runs the short \
+             benchmark (`bench --quick`), which leaves out {what}; `just bench` (the whole \
+             benchmark, about a minute on 2 cores) measures it and writes it here.*\n"
+        ),
+    };
+    common::write_atomic(dst, md.as_bytes())
+}
+
 /// Runs every case ([`REPEATS`] times, once with `quick`) and writes the tables.
 pub fn run(quick: bool) -> Result<()> {
     let repeats = if quick { 1 } else { REPEATS };
@@ -66,14 +93,10 @@ pub fn run(quick: bool) -> Result<()> {
             rk4::paper_rk4_and_accuracy(&mut exp, &records, &p1, &p2)?
         );
         common::write_atomic(&full_md, md.as_bytes())?;
+        common::write_atomic(&recorded("full.md"), md.as_bytes())?;
         print!("{md}");
     } else if !full_md.exists() {
-        common::write_atomic(
-            &full_md,
-            b"*Not measured in this build: `just bench` (the whole benchmark, about a minute \
-              on 2 cores) writes the comparison with RK4 and the accuracy tables here; \
-              `reproduce` runs `bench --quick`.*\n",
-        )?;
+        show_recorded(&full_md, "full.md", "the comparison with RK4 and the accuracy tables")?;
     }
     // Records behind an interface circuit against the resistive load: only the whole
     // benchmark measures them, in alternated rounds.
@@ -91,13 +114,13 @@ pub fn run(quick: bool) -> Result<()> {
         }
         let md = interfaces::table(&costs, repeats);
         common::write_atomic(&interfaces_md, md.as_bytes())?;
+        common::write_atomic(&recorded("interfaces.md"), md.as_bytes())?;
         print!("{md}");
     } else if !interfaces_md.exists() {
-        common::write_atomic(
+        show_recorded(
             &interfaces_md,
-            b"*Not measured in this build: `just bench` (the whole benchmark) writes the \
-              paired cost of records behind an interface here; `reproduce` runs `bench \
-              --quick`.*\n",
+            "interfaces.md",
+            "the paired cost of records behind an interface",
         )?;
     }
 

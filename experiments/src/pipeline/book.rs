@@ -111,6 +111,72 @@ pub fn unescape_markdown(s: &str) -> String {
     out
 }
 
+/// The TeX a chapter's Markdown would garble: a formula opened with `\(` or `\[` (Markdown
+/// makes it a plain parenthesis, and the TeX shows raw), and inside a formula a lone backslash
+/// before punctuation (`\,` in the source: Markdown eats the backslash, and TeX's thin space
+/// becomes a comma). Code spans and fenced code are skipped. Each defect is quoted.
+pub fn garbled_tex(markdown: &str) -> Vec<String> {
+    let mut found = Vec::new();
+    for task in get_render_tasks(markdown, "", &delimiters()) {
+        match task {
+            Render::Text(t) => {
+                let prose = strip_code(t);
+                let b = prose.as_bytes();
+                for i in 0..b.len().saturating_sub(1) {
+                    if b[i] == b'\\'
+                        && (b[i + 1] == b'(' || b[i + 1] == b'[')
+                        && (i == 0 || b[i - 1] != b'\\')
+                    {
+                        let end = (i + 40).min(b.len());
+                        found.push(String::from_utf8_lossy(&b[i..end]).into_owned());
+                    }
+                }
+            }
+            Render::InlineTask(t) | Render::DisplayTask(t) => {
+                let b = t.as_bytes();
+                let mut run = 0usize;
+                for &c in b {
+                    if c == b'\\' {
+                        run += 1;
+                        continue;
+                    }
+                    if run % 2 == 1 && c.is_ascii_punctuation() {
+                        found.push(t.to_string());
+                        break;
+                    }
+                    run = 0;
+                }
+            }
+        }
+    }
+    found
+}
+
+/// The text with code spans and fenced code removed (the scanner hands them back as text).
+fn strip_code(t: &str) -> String {
+    let mut out = String::new();
+    let mut fenced = false;
+    for line in t.lines() {
+        if line.trim_start().starts_with("```") {
+            fenced = !fenced;
+            continue;
+        }
+        if fenced {
+            continue;
+        }
+        let mut in_span = false;
+        for c in line.chars() {
+            if c == '`' {
+                in_span = !in_span;
+            } else if !in_span {
+                out.push(c);
+            }
+        }
+        out.push('\n');
+    }
+    out
+}
+
 /// Renders one formula (its TeX, Markdown escapes already undone) to HTML.
 pub fn render_formula(tex: &str, display: bool) -> Result<String> {
     let opts = katex::Opts::builder()
@@ -185,6 +251,31 @@ mod tests {
             vec!["{{#include ../../src/gone.rs}}"]
         );
         assert!(unresolved_includes("no links here").is_empty());
+    }
+
+    #[test]
+    fn garbled_tex_is_found_and_escaped_tex_is_not() {
+        // A planted `\(` opener and an eaten thin space: both are reported.
+        let bad = "near \\(e^{-T}\\) and \\\\(k = 4\\,x\\\\)";
+        assert_eq!(garbled_tex(bad).len(), 2, "{:?}", garbled_tex(bad));
+        let good = "near \\\\(e^{-T}\\\\) and \\\\(k = 4\\\\,x\\\\) and `\\(code\\)`";
+        assert!(garbled_tex(good).is_empty(), "{:?}", garbled_tex(good));
+    }
+
+    #[test]
+    fn no_chapter_garbles_its_tex() {
+        let src = crate::root().join("book/src");
+        let mut bad = Vec::new();
+        for entry in std::fs::read_dir(&src).unwrap() {
+            let path = entry.unwrap().path();
+            if path.extension().is_some_and(|e| e == "md") {
+                let text = std::fs::read_to_string(&path).unwrap();
+                for d in garbled_tex(&text) {
+                    bad.push(format!("{}: {d}", path.display()));
+                }
+            }
+        }
+        assert!(bad.is_empty(), "{}", bad.join("\n"));
     }
 
     #[test]

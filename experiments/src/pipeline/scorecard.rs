@@ -70,11 +70,26 @@ pub fn write_scorecard() -> Result<Vec<Row>> {
         r.fold_hz = endstop::paper::response::fold_key(&r.claim, &r.quantity, r.set)
             .and_then(|k| folds.get(&k).copied().flatten());
     }
-    // Beside each claim the study evaluates, its value at the best set of the multi-claim
-    // calibration (the study's summary, if `just deviations` has been run).
-    let best = read_summary(&crate::pipeline::jobs::DEVIATIONS)
-        .map(|s| s.numbers)
-        .unwrap_or_default();
+    // Beside each claim the history match evaluates, its value at the match's best run (the
+    // smallest worst normalised deviation over the prototype's quantitative claims): of the
+    // recorded definitive match, else of this build's reduced match if `just deviations` ran.
+    let recorded = crate::pipeline::recorded_history::best_runs(&crate::root())?;
+    let (best, best_source) = if recorded.is_empty() {
+        (
+            read_summary(&crate::pipeline::jobs::DEVIATIONS)
+                .map(|s| s.numbers)
+                .unwrap_or_default(),
+            BestSource::Reduced,
+        )
+    } else {
+        (
+            recorded
+                .iter()
+                .flat_map(|b| b.values.iter().map(|(k, v)| (k.clone(), Some(*v))))
+                .collect(),
+            BestSource::Recorded(recorded),
+        )
+    };
     for r in rows.iter_mut().filter(|r| r.set == ParamSet::Published) {
         r.best_calibrated = endstop::paper::deviations::best_value_key(&r.claim, &r.quantity)
             .and_then(|k| best.get(&k).copied().flatten());
@@ -83,7 +98,9 @@ pub fn write_scorecard() -> Result<Vec<Row>> {
         &crate::results_root().join("scorecard.json"),
         serde_json::to_string_pretty(&rows)?.as_bytes(),
     )?;
-    let mut md = String::from(
+    let mut md = tally_md(&rows);
+    md.push_str(&best_source.md());
+    md.push_str(
         "| claim | quantity | set | paper | ours | ± | unit | tolerance | verdict | fold (Hz) | best under calibration | note |\n|---|---|---|---|---|---|---|---|---|---|---|---|\n",
     );
     for r in &rows {
@@ -127,6 +144,77 @@ pub fn write_scorecard() -> Result<Vec<Row>> {
         md.as_bytes(),
     )?;
     Ok(rows)
+}
+
+/// Where the column "best under calibration" comes from.
+enum BestSource {
+    /// The recorded definitive history match's best runs.
+    Recorded(Vec<crate::pipeline::recorded_history::BestRun>),
+    /// This build's reduced match (`just deviations`), if it ran.
+    Reduced,
+}
+
+impl BestSource {
+    /// A paragraph saying so, before the table.
+    fn md(&self) -> String {
+        match self {
+            BestSource::Recorded(best) => {
+                let runs: Vec<String> = best
+                    .iter()
+                    .map(|b| {
+                        format!(
+                            "prototype {}: run {}, whose worst claim misses by {} tolerances",
+                            b.prototype.trim_start_matches('p'),
+                            b.run,
+                            crate::fmt_sig(b.worst, 2)
+                        )
+                    })
+                    .collect();
+                format!(
+                    "The column \"best under calibration\" gives, for each claim the history match \
+                     evaluates, its value at the best run of the [recorded definitive \
+                     match](why_deviates.md#the-recorded-definitive-match): the run with the \
+                     smallest worst normalised deviation over the prototype's quantitative \
+                     claims ({}). Empty: a claim the match does not evaluate, or a quantity that \
+                     does not exist at that run (no fold, no grazing).\n\n",
+                    runs.join("; ")
+                )
+            }
+            BestSource::Reduced => "The column \"best under calibration\" gives the value at the \
+                 best run of this build's reduced history match, where `just deviations` has \
+                 run (no definitive match is recorded); empty otherwise.\n\n"
+                .to_string(),
+        }
+    }
+}
+
+/// The tally line: the verdicts' counts for each parameter set.
+pub fn tally_md(rows: &[Row]) -> String {
+    let mut sets: Vec<ParamSet> = Vec::new();
+    for r in rows {
+        if !sets.contains(&r.set) {
+            sets.push(r.set);
+        }
+    }
+    let parts: Vec<String> = sets
+        .iter()
+        .map(|set| {
+            let of = |v: Verdict| rows.iter().filter(|r| r.set == *set && r.verdict == v).count();
+            let n = rows.iter().filter(|r| r.set == *set).count();
+            let mut s = format!(
+                "**{set}** set: {} of {n} rows reproduced, {} deviate",
+                of(Verdict::Reproduced),
+                of(Verdict::Deviates)
+            );
+            for (v, label) in [(Verdict::NotYet, "not yet"), (Verdict::Open, "open questions")] {
+                if of(v) > 0 {
+                    s.push_str(&format!(", {} {label}", of(v)));
+                }
+            }
+            s
+        })
+        .collect();
+    format!("{}.\n\n", parts.join("; "))
 }
 
 /// Prints the count of each verdict to standard error.

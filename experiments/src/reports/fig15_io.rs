@@ -77,6 +77,23 @@ pub fn write(
     );
 
     exp.write_numbers_md(&numbers_md(run, &f, paper_ratio))?;
+    // The widths the chapters' prose quotes (Figures 14 and 15), each a snippet included
+    // inline: the linear theory's and the ensemble's at the lowest level.
+    crate::write_atomic(
+        &exp.book_dir.join("bw_linear.md"),
+        format!("{} Hz", fmt_sig(lin.bw3db_hz(), 3)).as_bytes(),
+    )?;
+    if let Some(w) = f.widths.first() {
+        crate::write_atomic(
+            &exp.book_dir.join("bw_lowest.md"),
+            format!(
+                "{} Hz at {}",
+                fmt_sig(w.estimate, 3),
+                sa_label(levels[0].sa())
+            )
+            .as_bytes(),
+        )?;
+    }
     record_io::write_level_tables(
         &exp,
         Fig15::NAME,

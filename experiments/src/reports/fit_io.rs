@@ -400,11 +400,15 @@ fn write_outputs(
             series.push(Series::new("", vec![(g, y0), (g, y1)], c, Style::Line));
         }
     }
-    let q = data[0].quantity.column();
+    // The axis names the quantity with its unit (the column name in parentheses).
+    let q = match data[0].quantity {
+        endstop::fit::data::Quantity::V1RmsV => "RMS voltage of load 1 [V] (v1_rms_v)",
+        endstop::fit::data::Quantity::PTotalW => "power of the loads [W] (p_total_w)",
+    };
     exp.write_plot(
         &LinePlot::new(
             "Measured data and the fitted model",
-            "frequency (Hz)",
+            "frequency [Hz]",
             q,
             series,
         )
@@ -414,8 +418,8 @@ fn write_outputs(
         "endstop-fit-residuals",
         &LinePlot::new(
             "Residuals (model - measured) / sigma, points and features",
-            "frequency (Hz)",
-            "normalised residual",
+            "frequency [Hz]",
+            "normalised residual (model - measured) / sigma",
             resid,
         ),
     )?;
