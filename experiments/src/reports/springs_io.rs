@@ -10,7 +10,45 @@ use endstop::validation::stationary_law::StationaryLaw;
 use endstop::validation::{spring_cases, Check, ValidationError};
 
 use crate::io::frame::frame;
+use crate::io::plot::{error_bars, LinePlot, Panels, Series, Style, PALETTE};
 use crate::{row, Experiment};
+
+/// One exact-law case's panel: the ensemble's displacement density with its interval across
+/// records (`density`: x (m), density (1/m), half-width of its 95 % interval (1/m)) beside
+/// the exact stationary law.
+fn density_panel(
+    name: &str,
+    psd_g2_per_hz: f64,
+    density: &[(f64, f64, f64)],
+    law: &StationaryLaw,
+) -> LinePlot {
+    let um = |x: f64| x * 1e6;
+    let mut series = vec![Series::new(
+        "ensemble (bars: 95 %)",
+        density.iter().map(|d| (um(d.0), d.1 / 1e6)).collect(),
+        PALETTE[0],
+        Style::Points,
+    )];
+    series.extend(error_bars(
+        density.iter().map(|d| (um(d.0), d.1 / 1e6, d.2 / 1e6)),
+        PALETTE[0],
+    ));
+    series.push(Series::new(
+        "exact law exp(-U/theta)",
+        density
+            .iter()
+            .map(|d| (um(d.0), law.density(d.0) / 1e6))
+            .collect(),
+        PALETTE[1],
+        Style::Line,
+    ));
+    LinePlot::new(
+        &format!("{name}, Sa = {psd_g2_per_hz:e} g^2/Hz"),
+        "displacement x [um]",
+        "probability density [1/um]",
+        series,
+    )
+}
 
 /// What the rows computed, for the chapter's text.
 pub struct SpringRows {
@@ -30,6 +68,7 @@ pub fn run(
     let mut checks = Vec::new();
     let mut costs = Vec::new();
     let mut densities = Vec::new();
+    let mut panels = Vec::new();
     let mut timed = |case: &str, what: &str, t: std::time::Instant| {
         costs.push((
             case.to_string(),
@@ -52,6 +91,7 @@ pub fn run(
         );
         checks.extend(c);
         let law = StationaryLaw::of(&d, &spring_cases::spec(&d, psd, 1.0))?;
+        panels.push(density_panel(name, psd, &ens.density(), &law));
         for (x, p, ci) in ens.density() {
             densities.push(row![
                 "device" => name,
@@ -63,6 +103,7 @@ pub fn run(
         }
     }
     exp.write_parquet("springs_density", &mut frame(densities)?, "hypothetical")?;
+    exp.write_extra_plot("validation_springs_density", &Panels::row(panels))?;
 
     let mut rows = Vec::new();
     for case in spring_cases::ESCAPE_CASES {

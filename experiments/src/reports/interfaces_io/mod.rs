@@ -7,7 +7,7 @@
 //! plots and the chapter's generated tables (`book/src/generated/interfaces/`).
 
 use anyhow::Result;
-use endstop::device::{Device, Interface, Inversion};
+use endstop::device::{DcLoad, Device, Interface, Inversion, Rectifier};
 use endstop::study::periodic::SteadySettings;
 
 use crate::Experiment;
@@ -37,6 +37,18 @@ pub fn run() -> Result<()> {
     steady::ledger(&exp, &piezo, &em, &settings)?;
     records::charging(&mut exp, &piezo)?;
     records::ensembles(&mut exp, &piezo)?;
+    // The storage's time constant the chapter's prose quotes, R_L C_s of the bridge example.
+    if let Interface::FullBridge(Rectifier {
+        storage_capacitance_f: cs,
+        load: DcLoad::Resistor { resistance_ohm },
+        ..
+    }) = &piezo.device.interface
+    {
+        crate::write_atomic(
+            &exp.book_dir.join("storage_tau.md"),
+            format!("{} s", crate::fmt_sig(cs * resistance_ohm, 2)).as_bytes(),
+        )?;
+    }
     exp.write_numbers_md("The interface circuits' chapter data.\n")?;
     exp.finish()
 }

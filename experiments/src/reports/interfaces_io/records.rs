@@ -15,17 +15,27 @@ use crate::io::md::Table;
 use crate::io::plot::{LegendPos, LinePlot, Series, Style, PALETTE};
 use crate::{fmt_sig, row, write_atomic, Experiment, LoadedDevice};
 
-/// Charging an open storage from 0 V at the cantilever's resonance, the drive ramped over 20
-/// periods.
+/// The device with its storage's DC load removed (the storage charges open), for any interface
+/// with a storage.
+fn open_storage(d: &Device) -> Device {
+    let mut open = d.clone();
+    match &mut open.interface {
+        Interface::FullBridge(r) | Interface::ParallelSshi(r, _) | Interface::SeriesSshi(r, _) => {
+            *r = Rectifier {
+                load: endstop::device::DcLoad::Open,
+                ..r.clone()
+            };
+        }
+        Interface::Sece { load, .. } => *load = endstop::device::DcLoad::Open,
+        Interface::Resistive => {}
+    }
+    open
+}
+
+/// Charging an open storage from 0 V at the cantilever's resonance behind every interface, the
+/// drive ramped over 20 periods.
 pub(super) fn charging(exp: &mut Experiment, piezo: &LoadedDevice) -> Result<()> {
     let f0 = resonance_hz(&piezo.device);
-    let mut open = piezo.device.clone();
-    if let Interface::FullBridge(r) = &mut open.interface {
-        *r = Rectifier {
-            load: endstop::device::DcLoad::Open,
-            ..r.clone()
-        };
-    }
     let cs = ChargeSettings {
         start_v: 0.0,
         target_v: 5.0,
@@ -35,40 +45,66 @@ pub(super) fn charging(exp: &mut Experiment, piezo: &LoadedDevice) -> Result<()>
         block_s: 0.5,
         rtol: 1e-8,
     };
-    let run = crate::with_progress(100, "charging (% of 5 V)", |p| {
-        charge(&open, Sine::from_rms_g(ACCEL_RMS_G, f0), &cs, p)
-    })?;
-    exp.number("charge_time_to_5v_s", run.time_to_target_s);
-    exp.write_parquet(
-        "charging",
-        &mut frame(
+    let mut rows = Vec::new();
+    let mut series = Vec::new();
+    let mut t = Table::new(["interface", "time to 5 V (s)"]);
+    for (k, (name, d)) in variants(&piezo.device).into_iter().enumerate() {
+        let open = open_storage(&d);
+        let run = crate::with_progress(100, &format!("charging, {name} (% of 5 V)"), |p| {
+            charge(&open, Sine::from_rms_g(ACCEL_RMS_G, f0), &cs, p)
+        })?;
+        if name == "full_bridge" {
+            exp.number("charge_time_to_5v_s", run.time_to_target_s);
+        }
+        exp.number(
+            &format!("charge_time_to_5v_{name}_s"),
+            run.time_to_target_s,
+        );
+        t.row([name.to_string(), fmt_sig(run.time_to_target_s, 4)]);
+        rows.extend(
             run.t_s
                 .iter()
                 .zip(&run.vs_v)
-                .map(|(&t, &v)| row!["t_s" => t, "vs_v" => v]),
-        )?,
-        "hypothetical",
-    )?;
+                .map(|(&t, &v)| row!["interface" => name, "t_s" => t, "vs_v" => v]),
+        );
+        series.push(Series::new(
+            name,
+            run.t_s
+                .iter()
+                .copied()
+                .zip(run.vs_v.iter().copied())
+                .collect(),
+            PALETTE[k % PALETTE.len()],
+            Style::Line,
+        ));
+    }
+    exp.write_parquet("charging", &mut frame(rows)?, "hypothetical")?;
     exp.write_extra_plot(
         "interfaces_charging",
         &LinePlot::new(
-            "Charging 10 uF from 0 V, full bridge",
+            &format!(
+                "Charging 10 uF from 0 V behind each interface, {} Hz, {ACCEL_RMS_G} g rms",
+                fmt_sig(f0, 4)
+            ),
             "time [s]",
-            "V_s [V]",
-            vec![Series::new(
-                "V_s",
-                run.t_s
-                    .iter()
-                    .copied()
-                    .zip(run.vs_v.iter().copied())
-                    .collect(),
-                PALETTE[0],
-                Style::Line,
-            )],
+            "storage voltage V_s [V]",
+            series,
         )
         .legend(LegendPos::LowerRight),
     )?;
-    write_atomic(&exp.book_dir.join("charging.md"), format!("With the drive ramped up over 20 periods from rest at phase zero, the 10 uF storage of `piezo_bridge.toml` (load removed) reaches 5 V after **{} s** at {} Hz, {ACCEL_RMS_G} g rms.\n", fmt_sig(run.time_to_target_s, 4), fmt_sig(f0, 4)).as_bytes())?;
+    write_atomic(
+        &exp.book_dir.join("charging.md"),
+        format!(
+            "With the drive ramped up over 20 periods from rest at phase zero, at {} Hz and \
+             {ACCEL_RMS_G} g rms, the 10 uF storage of `piezo_bridge.toml` (load removed) \
+             reaches 5 V after (SSHI with Q = {}, SECE with an efficiency of {}):\n\n{}",
+            fmt_sig(f0, 4),
+            super::SSHI_Q,
+            super::SECE_EFFICIENCY,
+            t.render()
+        )
+        .as_bytes(),
+    )?;
     Ok(())
 }
 

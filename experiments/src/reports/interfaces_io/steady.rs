@@ -142,7 +142,8 @@ pub(super) fn power_vs_load(
     Ok(())
 }
 
-/// The DC power against frequency with stability, for both examples.
+/// The DC power against frequency with stability, for both examples behind every interface
+/// they take ([`variants`]).
 pub(super) fn power_vs_frequency(
     exp: &mut Experiment,
     piezo: &LoadedDevice,
@@ -154,46 +155,63 @@ pub(super) fn power_vs_frequency(
     let mut rows = Vec::new();
     let mut plots = Vec::new();
     for (dev, from, to) in [(piezo, 110.0, 130.0), (em, 44.0, 56.0)] {
-        let d = &dev.device;
         let freqs = linspace_step(from, to, 0.5);
-        eprintln!("[interfaces] frequency sweep, {}", d.name);
-        let states: Vec<PeriodicState> = freqs
-            .iter()
-            .zip(frequency_sweep(d, &freqs, ACCEL_RMS_G, settings, &Silent)?)
-            .filter_map(|(f, s)| match s {
-                Ok(s) => Some(s),
-                Err(e) => {
-                    missing_f.push(format!("{} at {} Hz ({e})", d.name, fmt_sig(*f, 4)));
-                    None
+        let mut series = Vec::new();
+        for (k, (name, d)) in variants(&dev.device).into_iter().enumerate() {
+            eprintln!("[interfaces] frequency sweep, {}, {name}", d.name);
+            let states: Vec<PeriodicState> = freqs
+                .iter()
+                .zip(frequency_sweep(&d, &freqs, ACCEL_RMS_G, settings, &Silent)?)
+                .filter_map(|(f, s)| match s {
+                    Ok(s) => Some(s),
+                    Err(e) => {
+                        missing_f.push(format!(
+                            "{}, {name} at {} Hz ({e})",
+                            d.name,
+                            fmt_sig(*f, 4)
+                        ));
+                        None
+                    }
+                })
+                .collect();
+            for s in &states {
+                rows.push(row!["device" => d.name.clone(), "interface" => name, "freq_hz" => s.freq_hz, "p_dc_w" => s.p_dc_w, "vdc_v" => s.vdc_v, "x_max_m" => s.x_peak_m, "contact" => s.contact, "stable" => s.is_stable(), "max_multiplier" => s.max_multiplier, "method" => s.method.label(), "ledger_rel_residual" => s.ledger.relative_residual()]);
+                if let SteadyMethod::PeriodMap { periods } = s.method {
+                    by_map.push(format!(
+                        "{}, {name} at {} Hz ({periods} periods)",
+                        d.name,
+                        fmt_sig(s.freq_hz, 4)
+                    ));
                 }
-            })
-            .collect();
-        for s in &states {
-            rows.push(row!["device" => d.name.clone(), "freq_hz" => s.freq_hz, "p_dc_w" => s.p_dc_w, "vdc_v" => s.vdc_v, "x_max_m" => s.x_peak_m, "contact" => s.contact, "stable" => s.is_stable(), "max_multiplier" => s.max_multiplier, "method" => s.method.label(), "ledger_rel_residual" => s.ledger.relative_residual()]);
-            if let SteadyMethod::PeriodMap { periods } = s.method {
-                by_map.push(format!(
-                    "{} at {} Hz ({periods} periods)",
-                    d.name,
-                    fmt_sig(s.freq_hz, 4)
+            }
+            let pts = |stable: bool| {
+                states
+                    .iter()
+                    .filter(|s| s.is_stable() == stable)
+                    .map(|s| (s.freq_hz, s.p_dc_w * 1e6))
+                    .collect::<Vec<_>>()
+            };
+            let c = PALETTE[k % PALETTE.len()];
+            series.push(Series::new(name, pts(true), c, Style::LinePoints));
+            let unstable = pts(false);
+            if !unstable.is_empty() {
+                series.push(Series::new(
+                    &format!("{name}, unstable"),
+                    unstable,
+                    c,
+                    Style::Points,
                 ));
             }
         }
-        let pts = |stable: bool| {
-            states
-                .iter()
-                .filter(|s| s.is_stable() == stable)
-                .map(|s| (s.freq_hz, s.p_dc_w * 1e6))
-                .collect::<Vec<_>>()
-        };
         plots.push(
             LinePlot::new(
-                &format!("{}: DC power, up-sweep", d.name),
+                &format!(
+                    "{}: DC power against frequency, {ACCEL_RMS_G} g rms, up-sweep",
+                    dev.device.name
+                ),
                 "frequency [Hz]",
                 "DC power [uW]",
-                vec![
-                    Series::new("stable", pts(true), PALETTE[0], Style::LinePoints),
-                    Series::new("unstable", pts(false), PALETTE[1], Style::Points),
-                ],
+                series,
             )
             .legend(LegendPos::UpperLeft),
         );
