@@ -96,7 +96,11 @@ pub fn run(quick: bool) -> Result<()> {
         common::write_atomic(&recorded("full.md"), md.as_bytes())?;
         print!("{md}");
     } else if !full_md.exists() {
-        show_recorded(&full_md, "full.md", "the comparison with RK4 and the accuracy tables")?;
+        show_recorded(
+            &full_md,
+            "full.md",
+            "the comparison with RK4 and the accuracy tables",
+        )?;
     }
     // Records behind an interface circuit against the resistive load: only the whole
     // benchmark measures them, in alternated rounds.

@@ -123,15 +123,14 @@ fn write_intro_example(dst: &std::path::Path) -> Result<()> {
     let Some(job) = crate::pipeline::jobs::job(INTRO_JOB) else {
         return Ok(());
     };
-    let command = format!("endstop {}", job.args.join(" "));
+    let command = format!(
+        "cargo run --release --bin endstop -- {}",
+        job.args.join(" ")
+    );
     let summary = std::fs::read_to_string(job.dir().join("summary.json"))
         .ok()
         .and_then(|s| serde_json::from_str::<serde_json::Value>(&s).ok());
-    let number = |k: &str| {
-        summary
-            .as_ref()
-            .and_then(|s| s["numbers"][k].as_f64())
-    };
+    let number = |k: &str| summary.as_ref().and_then(|s| s["numbers"][k].as_f64());
     let md = match (
         number("impact_onset_hz"),
         number("branch_end_hz"),

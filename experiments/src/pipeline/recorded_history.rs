@@ -122,9 +122,9 @@ fn answer_md(run: &Run) -> String {
     };
     let mut md = if none {
         format!(
-            "**No parameter set within the ranges meets every claim, {which}.** The model, not \
-             the parameters as printed, is what keeps the paper's numbers out of reach: the \
-             definitive history match (recorded {}, {} runs per input per wave, ensemble \
+            "**No parameter set within the ranges meets every claim, {which}.** The deviations \
+             are not the printed parameters' alone: no change of the uncertain inputs within \
+             their ranges reproduces every claim. The definitive history match (recorded {}, {} runs per input per wave, ensemble \
              claims {}) leaves no set consistent with all the quantitative claims at once, \
              and none of its runs meets every claim it evaluates directly.\n\n",
             run.date,
@@ -181,7 +181,9 @@ fn read_parquet(path: &Path) -> Result<DataFrame> {
 /// The waves of prototype `key` that have projections, in order.
 fn waves_of(cells: &DataFrame, key: &str) -> Result<Vec<usize>> {
     let protos = cells.column("prototype")?.str()?;
-    let waves = cells.column("wave")?.cast(&polars::prelude::DataType::UInt64)?;
+    let waves = cells
+        .column("wave")?
+        .cast(&polars::prelude::DataType::UInt64)?;
     let waves = waves.u64()?;
     let mut out: Vec<usize> = protos
         .into_iter()
@@ -337,7 +339,11 @@ pub fn best_runs(root: &Path) -> Result<Vec<BestRun>> {
         }
         let w = worst.entry((proto[r].clone(), run[r])).or_insert(0.0);
         let d = deviation[r].abs();
-        *w = if d.is_nan() || w.is_nan() { f64::NAN } else { w.max(d) };
+        *w = if d.is_nan() || w.is_nan() {
+            f64::NAN
+        } else {
+            w.max(d)
+        };
     }
     let mut best: BTreeMap<String, (u64, f64)> = BTreeMap::new();
     for ((p, r), w) in &worst {
@@ -380,7 +386,9 @@ mod tests {
         let answer = std::fs::read_to_string(dir.join(BOOK_DIR).join("answer.md")).unwrap();
         // The record's run.json says no prototype has a set meeting every claim.
         assert!(
-            answer.starts_with("**No parameter set within the ranges meets every claim, for either prototype.**"),
+            answer.starts_with(
+                "**No parameter set within the ranges meets every claim, for either prototype.**"
+            ),
             "{answer}"
         );
         let plots = std::fs::read_to_string(dir.join(BOOK_DIR).join("projections.md")).unwrap();

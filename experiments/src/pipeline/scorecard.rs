@@ -199,14 +199,21 @@ pub fn tally_md(rows: &[Row]) -> String {
     let parts: Vec<String> = sets
         .iter()
         .map(|set| {
-            let of = |v: Verdict| rows.iter().filter(|r| r.set == *set && r.verdict == v).count();
+            let of = |v: Verdict| {
+                rows.iter()
+                    .filter(|r| r.set == *set && r.verdict == v)
+                    .count()
+            };
             let n = rows.iter().filter(|r| r.set == *set).count();
             let mut s = format!(
                 "**{set}** set: {} of {n} rows reproduced, {} deviate",
                 of(Verdict::Reproduced),
                 of(Verdict::Deviates)
             );
-            for (v, label) in [(Verdict::NotYet, "not yet"), (Verdict::Open, "open questions")] {
+            for (v, label) in [
+                (Verdict::NotYet, "not yet"),
+                (Verdict::Open, "open questions"),
+            ] {
                 if of(v) > 0 {
                     s.push_str(&format!(", {} {label}", of(v)));
                 }

@@ -56,10 +56,7 @@ pub(super) fn charging(exp: &mut Experiment, piezo: &LoadedDevice) -> Result<()>
         if name == "full_bridge" {
             exp.number("charge_time_to_5v_s", run.time_to_target_s);
         }
-        exp.number(
-            &format!("charge_time_to_5v_{name}_s"),
-            run.time_to_target_s,
-        );
+        exp.number(&format!("charge_time_to_5v_{name}_s"), run.time_to_target_s);
         t.row([name.to_string(), fmt_sig(run.time_to_target_s, 4)]);
         rows.extend(
             run.t_s
