@@ -43,7 +43,8 @@ EXTERNAL = re.compile(
 )
 
 # Raw TeX as a reader would see it when a formula is not rendered.
-RAW_TEX = re.compile(r"\\[()\[\]]|\\(?:frac|mathrm|sqrt|left|right|delta|lambda|sum|dot|operatorname|text)\b")
+# A formula whose delimiters Markdown ate leaves its groups: `e^{-T/(R_L C_s)}`.
+RAW_TEX = re.compile(r"\\[()\[\]]|\\(?:frac|mathrm|sqrt|left|right|delta|lambda|sum|dot|operatorname|text)\b|[\^_]\{")
 
 SKIP = {"script", "style", "annotation", "code", "pre", "title", "noscript"}
 

@@ -123,9 +123,11 @@ fn write_intro_example(dst: &std::path::Path) -> Result<()> {
     let Some(job) = crate::pipeline::jobs::job(INTRO_JOB) else {
         return Ok(());
     };
+    // Two lines, so that the command fits the page's width.
     let command = format!(
-        "cargo run --release --bin endstop -- {}",
-        job.args.join(" ")
+        "cargo run --release --bin endstop -- {} \\\n    {}",
+        job.args.first().copied().unwrap_or_default(),
+        job.args.get(1..).unwrap_or_default().join(" ")
     );
     let summary = std::fs::read_to_string(job.dir().join("summary.json"))
         .ok()

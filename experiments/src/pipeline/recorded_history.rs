@@ -140,7 +140,9 @@ fn answer_md(run: &Run) -> String {
             run.date
         )
     };
-    md.push_str("| Prototype | Waves | Runs | Runs meeting every claim | Cube left, one claim may miss | Cube left, every claim within the cut | Ended |\n|---|---|---|---|---|---|---|\n");
+    md.push_str(
+        "| Prototype | Waves | Runs | Runs meeting all | Left, one may miss | Left, all within the cut | Ended |\n|---|---|---|---|---|---|---|\n",
+    );
     for (key, p) in &run.prototypes {
         let a = &p.answer;
         let share = |f: f64| {

@@ -98,8 +98,12 @@ pub fn write_scorecard() -> Result<Vec<Row>> {
         &crate::results_root().join("scorecard.json"),
         serde_json::to_string_pretty(&rows)?.as_bytes(),
     )?;
-    let mut md = tally_md(&rows);
-    md.push_str(&best_source.md());
+    // The tally opens the chapter (its own snippet); the table's source note precedes it.
+    crate::write_atomic(
+        &crate::book_generated_root().join("scorecard_tally.md"),
+        tally_md(&rows).as_bytes(),
+    )?;
+    let mut md = best_source.md();
     md.push_str(
         "| claim | quantity | set | paper | ours | ± | unit | tolerance | verdict | fold (Hz) | best under calibration | note |\n|---|---|---|---|---|---|---|---|---|---|---|---|\n",
     );

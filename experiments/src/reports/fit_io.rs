@@ -390,15 +390,28 @@ fn write_outputs(
         ));
     }
     for (f, model_f, c, what, name) in feature_lines {
-        series.push(Series::new(
+        let measured = Series::new(
             &format!("{name}: measured {what}"),
             vec![(f, y0), (f, y1)],
             c,
             Style::Dashed,
-        ));
+        );
+        // The fitted model's feature in the next colour, so that it shows beside the measured
+        // one it lies on when the fit is close.
         if let Some(g) = model_f {
-            series.push(Series::new("", vec![(g, y0), (g, y1)], c, Style::Line));
+            let next = PALETTE
+                .iter()
+                .position(|p| *p == c)
+                .map_or(c, |i| PALETTE[(i + 1) % PALETTE.len()]);
+            series.push(Series::new(
+                &format!("{name}: fitted model's {what}"),
+                vec![(g, y0), (g, y1)],
+                next,
+                Style::Line,
+            ));
         }
+        // Drawn after the model's, so that a dashed line on top of a solid one shows.
+        series.push(measured);
     }
     // The axis names the quantity with its unit (the column name in parentheses).
     let q = match data[0].quantity {

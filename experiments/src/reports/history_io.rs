@@ -376,7 +376,7 @@ pub struct ProjectionPlot {
 
 impl Chart for ProjectionPlot {
     fn size(&self) -> (u32, u32) {
-        (1100, 1140)
+        (1160, 1140)
     }
 
     fn title(&self) -> String {
@@ -388,7 +388,7 @@ impl Chart for ProjectionPlot {
         DB::ErrorType: 'static,
     {
         root.fill(&WHITE)?;
-        let (left, top, panel) = (120i32, 90i32, 120i32);
+        let (left, top, panel) = (180i32, 90i32, 120i32);
         let font = ("sans-serif", 14).into_font();
         root.draw(&Text::new(self.title.clone(), (10, 10), font.clone()))?;
         // The optical depth's grey scale runs to the largest share of any cell (a thin space
@@ -400,13 +400,22 @@ impl Chart for ProjectionPlot {
             .filter(|d| d.is_finite())
             .fold(0.0f64, |m, d| m.max(*d))
             .max(1e-12);
+        // With no non-implausible set anywhere the upper panels are white: say so rather than
+        // quote the scale's floor.
+        let depth = if depth_max > 1e-12 {
+            format!(
+                "share non-implausible (black: {} %, the largest of any cell)",
+                fmt_sig(100.0 * depth_max, 2)
+            )
+        } else {
+            "share non-implausible (none in any cell: all white)".to_string()
+        };
         root.draw(&Text::new(
             format!(
                 "below the diagonal: least implausibility (red from {} up; framed: at most {}); \
-                 above: share non-implausible (black: {} %, the largest of any cell)",
+                 above: {depth}",
                 fmt_sig(self.cut, 1),
                 fmt_sig(self.cut, 1),
-                fmt_sig(100.0 * depth_max, 2)
             ),
             (10, 32),
             font.clone(),

@@ -75,6 +75,16 @@ pub(super) fn charging(exp: &mut Experiment, piezo: &LoadedDevice) -> Result<()>
             Style::Line,
         ));
     }
+    let t_end = series
+        .iter()
+        .flat_map(|s| s.points.last().map(|p| p.0))
+        .fold(0.0f64, f64::max);
+    series.push(Series::new(
+        "target",
+        vec![(0.0, cs.target_v), (t_end, cs.target_v)],
+        PALETTE[5],
+        Style::Dashed,
+    ));
     exp.write_parquet("charging", &mut frame(rows)?, "hypothetical")?;
     exp.write_extra_plot(
         "interfaces_charging",
@@ -94,10 +104,12 @@ pub(super) fn charging(exp: &mut Experiment, piezo: &LoadedDevice) -> Result<()>
         format!(
             "With the drive ramped up over 20 periods from rest at phase zero, at {} Hz and \
              {ACCEL_RMS_G} g rms, the 10 uF storage of `piezo_bridge.toml` (load removed) \
-             reaches 5 V after (SSHI with Q = {}, SECE with an efficiency of {}):\n\n{}",
+             reaches 5 V after (SSHI with Q = {}, SECE with an efficiency of {}; each curve \
+             ends with the {} s block of integration in which it reached the target):\n\n{}",
             fmt_sig(f0, 4),
             super::SSHI_Q,
             super::SECE_EFFICIENCY,
+            fmt_sig(cs.block_s, 2),
             t.render()
         )
         .as_bytes(),
