@@ -125,6 +125,7 @@ impl LegacyDevice {
                 fingers_per_electrode: Some(g.fingers_per_electrode),
             }),
             interface: super::Interface::Resistive,
+            masses: None,
         }
     }
 }

@@ -37,6 +37,7 @@
 
 pub mod interface;
 mod legacy;
+pub mod masses;
 mod paths;
 mod range;
 pub mod stops;
@@ -47,6 +48,7 @@ use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
 pub use interface::{DcLoad, Diode, Interface, Inversion, Rectifier};
+pub use masses::{Body, Link, MassStop, Masses};
 pub use range::{at_unit, own_value, with_values, ParamRange, Spacing, ACCEL_SCALE_PATH};
 pub use stops::{HertzLineStop, HertzPointStiffness, Stop, StopLaw, StopSide, Stops};
 pub use suspension::Suspension;
@@ -158,6 +160,11 @@ pub struct Device {
     /// The interface circuit between a one-load transducer and its load (resistive by
     /// default; see [`interface`]).
     pub interface: Interface,
+    /// The masses, springs, dampers and stops of a device of several masses ([`masses`]);
+    /// `None` for one mass. With several, [`Device::mechanics`] summarises them (the total
+    /// mass, the springs to the frame, and the damping whose ring-up time `2 m / b`, which
+    /// the studies settle over, is the slowest mass's) and [`Device::stops`] is empty.
+    pub masses: Option<Masses>,
 }
 
 /// The file form of a device.
@@ -282,7 +289,9 @@ impl Device {
             message,
         };
         let table: toml::Table = toml::from_str(text).map_err(|e| parse_err(e.to_string()))?;
-        let dev = if legacy::LEGACY_SECTIONS
+        let dev = if table.contains_key("masses") {
+            Self::several_masses(table, source_name)?
+        } else if legacy::LEGACY_SECTIONS
             .iter()
             .any(|s| table.contains_key(*s))
         {
@@ -305,6 +314,7 @@ impl Device {
                 description: raw.description,
                 mechanics: raw.mechanics.parse(&c)?,
                 transducer: raw.transducer,
+                masses: None,
             };
             dev.derive_well_stiffness();
             dev
@@ -325,10 +335,74 @@ impl Device {
         }
     }
 
+    /// A device of several masses from its file's table ([`masses`]).
+    fn several_masses(mut table: toml::Table, source_name: &str) -> Result<Self, ParamError> {
+        let c = Checker {
+            source: source_name,
+        };
+        if table.contains_key("mechanics") {
+            return Err(c.message(
+                "mechanics",
+                "a file of several masses describes its mechanics in `[[masses]]`, \
+                 `[[springs]]` and `[[dampers]]`",
+            ));
+        }
+        let m = masses::RawMasses::take(&mut table, &c)?.parse(&c)?;
+        // The common part: a one-mass file's keys less its mechanics and stops.
+        table.insert("mechanics".into(), toml::Value::Table(toml::Table::new()));
+        #[derive(Deserialize)]
+        #[serde(deny_unknown_fields)]
+        struct Common {
+            name: String,
+            params: String,
+            description: String,
+            #[allow(dead_code)]
+            mechanics: toml::Table,
+            transducer: Transducer,
+            #[serde(default)]
+            interface: Option<interface::RawInterface>,
+        }
+        let raw: Common = toml::Value::Table(table)
+            .try_into()
+            .map_err(|e: toml::de::Error| ParamError::Parse {
+                source_name: source_name.to_string(),
+                message: e.to_string(),
+            })?;
+        Ok(Device {
+            interface: match raw.interface {
+                Some(i) => i.parse(&c)?,
+                None => Interface::Resistive,
+            },
+            name: raw.name,
+            params: raw.params,
+            description: raw.description,
+            mechanics: Mechanics {
+                mass_kg: m.total_mass_kg(),
+                stiffness_n_per_m: m.frame_stiffness_n_per_m(),
+                damping_n_s_per_m: m.ring_damping_n_s_per_m(),
+                measured_resonance_hz: None,
+                suspension: Suspension::default(),
+            },
+            stops: Stops::default(),
+            transducer: raw.transducer,
+            masses: Some(m),
+        })
+    }
+
     /// Serialises the device to TOML in the general format (for provenance records and
     /// fitted devices); [`Device::from_toml_str`] reads it back to an equal device.
     pub fn to_toml_string(&self) -> String {
-        toml::to_string(&self.raw()).expect("a validated device always serialises")
+        let Some(m) = &self.masses else {
+            return toml::to_string(&self.raw()).expect("a validated device always serialises");
+        };
+        let mut t = match toml::Value::try_from(self.raw()) {
+            Ok(toml::Value::Table(t)) => t,
+            _ => toml::Table::new(),
+        };
+        t.remove("mechanics");
+        t.remove("stops");
+        masses::RawMasses::write(m, &mut t);
+        toml::to_string(&t).expect("a validated device always serialises")
     }
 
     /// Checks every field against its valid range, and the stops against the transducer.
@@ -338,6 +412,25 @@ impl Device {
         };
         if self.name.trim().is_empty() {
             return Err(c.message("name", "must not be empty"));
+        }
+        if self.masses.is_some() {
+            // The masses were checked on load ([`masses`]); the transducer and the interface
+            // are checked as a one-mass file's.
+            self.transducer.validate(&c)?;
+            self.interface.validate(&self.transducer, &c)?;
+            if self.interface.is_resistive()
+                && matches!(
+                    self.transducer,
+                    Transducer::Piezoelectric(_) | Transducer::Electromagnetic(_)
+                )
+                && self.transducer.load_resistance_ohm() == f64::INFINITY
+            {
+                return Err(c.missing(
+                    "transducer.load_resistance_ohm",
+                    "the resistive load (or an [interface] table with another kind)",
+                ));
+            }
+            return Ok(());
         }
         let m = &self.mechanics;
         c.positive("mechanics.mass_kg", m.mass_kg)?;
@@ -475,10 +568,13 @@ impl Device {
         d
     }
 
-    /// A copy without stops.
+    /// A copy without stops (a device of several masses loses its stops too).
     pub fn without_stops(&self) -> Self {
         let mut d = self.clone();
         d.stops = Stops::default();
+        if let Some(m) = &mut d.masses {
+            m.stops.clear();
+        }
         d
     }
 

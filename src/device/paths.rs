@@ -55,6 +55,10 @@ fn unknown(path: &str, known: &[String]) -> ParamError {
 impl Device {
     /// The file form with the stops always written per side (`stops.upper`, `stops.lower`).
     fn expanded_value(&self) -> toml::Table {
+        if self.masses.is_some() {
+            // Several masses: the file form, whose arrays (`masses.1.mass_kg`) index by number.
+            return toml::from_str(&self.to_toml_string()).expect("a device's TOML reads back");
+        }
         let mut raw = self.raw();
         raw.stops = super::stops::RawStops::expanded(&self.stops);
         toml::Table::try_from(&raw).expect("a device serialises to a TOML table")
@@ -72,6 +76,13 @@ impl Device {
                 };
                 match v {
                     toml::Value::Table(inner) => walk(&p, inner, out),
+                    toml::Value::Array(items) => {
+                        for (i, item) in items.iter().enumerate() {
+                            if let toml::Value::Table(inner) = item {
+                                walk(&format!("{p}.{i}"), inner, out);
+                            }
+                        }
+                    }
                     toml::Value::Float(_) | toml::Value::Integer(_) => out.push(p),
                     _ => {}
                 }
@@ -145,6 +156,9 @@ impl Device {
             .collect::<Vec<_>>()
             .join("`, `");
         let text = toml::to_string(&table).expect("a TOML table serialises");
+        if self.masses.is_some() {
+            return Device::from_toml_str(&text, &format!("parameter `{path}`"));
+        }
         let raw: RawDevice = toml::from_str(&text).map_err(|e| ParamError::Parse {
             source_name: format!("parameter `{path}`"),
             message: e.to_string(),
@@ -163,6 +177,7 @@ impl Device {
             description: raw.description,
             mechanics: raw.mechanics.parse(&c)?,
             transducer: raw.transducer,
+            masses: None,
         };
         dev.derive_well_stiffness();
         dev.validate(&format!("parameter `{path}`"))?;
@@ -178,36 +193,44 @@ fn targets(path: &str) -> Vec<String> {
     }
 }
 
-fn lookup(t: &toml::Table, path: &str) -> Option<f64> {
-    let mut parts = path.split('.').peekable();
-    let mut table = t;
-    while let Some(k) = parts.next() {
-        let v = table.get(k)?;
-        if parts.peek().is_none() {
-            return match v {
-                toml::Value::Float(f) => Some(*f),
-                toml::Value::Integer(i) => Some(*i as f64),
-                toml::Value::Boolean(b) => Some(f64::from(u8::from(*b))),
-                _ => None,
-            };
-        }
-        table = v.as_table()?;
+/// The value under key `k` of a table, or item `k` (a number) of an array.
+fn child<'a>(v: &'a toml::Value, k: &str) -> Option<&'a toml::Value> {
+    match v {
+        toml::Value::Table(t) => t.get(k),
+        toml::Value::Array(a) => a.get(k.parse::<usize>().ok()?),
+        _ => None,
     }
-    None
+}
+
+/// [`child`], mutable.
+fn child_mut<'a>(v: &'a mut toml::Value, k: &str) -> Option<&'a mut toml::Value> {
+    match v {
+        toml::Value::Table(t) => t.get_mut(k),
+        toml::Value::Array(a) => a.get_mut(k.parse::<usize>().ok()?),
+        _ => None,
+    }
+}
+
+fn lookup(t: &toml::Table, path: &str) -> Option<f64> {
+    let mut parts = path.split('.');
+    let mut v = t.get(parts.next()?)?;
+    for k in parts {
+        v = child(v, k)?;
+    }
+    match v {
+        toml::Value::Float(f) => Some(*f),
+        toml::Value::Integer(i) => Some(*i as f64),
+        toml::Value::Boolean(b) => Some(f64::from(u8::from(*b))),
+        _ => None,
+    }
 }
 
 fn lookup_mut<'a>(t: &'a mut toml::Table, path: &str) -> Option<&'a mut toml::Value> {
-    let (head, last) = match path.rsplit_once('.') {
-        Some((h, l)) => (Some(h), l),
-        None => (None, path),
-    };
-    let mut table = t;
-    if let Some(h) = head {
-        for k in h.split('.') {
-            table = table.get_mut(k)?.as_table_mut()?;
-        }
+    let mut parts = path.split('.');
+    let mut v = t.get_mut(parts.next()?)?;
+    for k in parts {
+        v = child_mut(v, k)?;
     }
-    let v = table.get_mut(last)?;
     matches!(
         v,
         toml::Value::Float(_) | toml::Value::Integer(_) | toml::Value::Boolean(_)

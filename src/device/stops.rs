@@ -331,7 +331,7 @@ impl RawStops {
 pub const MAX_GAP_M: f64 = 1e3;
 
 impl RawStop {
-    fn parse(&self, c: &Checker, path: &str) -> Result<Stop, ParamError> {
+    pub(super) fn parse(&self, c: &Checker, path: &str) -> Result<Stop, ParamError> {
         let f = |key: &str| format!("{path}.{key}");
         let gap_m = self
             .gap_m
@@ -499,7 +499,7 @@ impl RawStop {
         keys
     }
 
-    fn of(s: &Stop) -> Self {
+    pub(super) fn of(s: &Stop) -> Self {
         let mut r = RawStop {
             gap_m: Some(s.gap_m),
             ..Self::default()
