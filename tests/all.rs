@@ -31,6 +31,7 @@ mod interface_orbits;
 mod interface_records;
 mod interfaces;
 mod interfaces_spice;
+mod masses;
 mod record_accuracy;
 mod record_figures;
 mod record_ledger;

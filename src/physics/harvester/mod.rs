@@ -30,6 +30,7 @@ pub mod circuits;
 mod flight;
 mod ledger;
 mod linearisation;
+pub mod masses;
 pub mod port;
 pub mod stops;
 
@@ -165,6 +166,14 @@ impl<const N: usize> Harvester<N> {
     /// The model of a device (at its bias voltage and end-stop options); errs when its parts
     /// need another dimension than `N` ([`dimension`] says which) or do not combine.
     pub fn new(device: &Device) -> Result<Self, AssemblyError> {
+        if device.masses.is_some() {
+            return Err(AssemblyError::Unsupported {
+                device: device.name.clone(),
+                transducer: device.transducer.key().to_string(),
+                interface: device.interface.key().to_string(),
+                why: "a device of several masses assembles into `masses::MassChain`".into(),
+            });
+        }
         let port = port_of(device)?;
         if let Port::Circuit(c) = &port {
             let period_s = 2.0 * std::f64::consts::PI / device.suspension_omega_rad_s();
@@ -496,10 +505,15 @@ impl<const N: usize> Harvester<N> {
 /// The dimensions a device's parts may need; a study is compiled for each.
 pub const DIMENSIONS: [usize; 2] = [4, 5];
 
+/// The dimensions a device of several masses may need ([`masses::MassChain`]): two masses
+/// with a transducer and its own loads.
+pub const CHAIN_DIMENSIONS: [usize; 1] = [6];
+
 /// Evaluates `$body` with `$h` bound to the harvester assembled from `$device`, of the
-/// dimension its parts need (one of [`DIMENSIONS`]); the body's `Result` error type must take
-/// an [`AssemblyError`] (`From`). A study written once over [`Model`] is called on any device
-/// this way.
+/// dimension its parts need (one of [`DIMENSIONS`], or for a device of several masses one of
+/// [`CHAIN_DIMENSIONS`], whose model is a [`masses::MassChain`]); the body's `Result` error
+/// type must take an [`AssemblyError`] (`From`). A study written once over [`Model`] is called
+/// on any device this way.
 #[macro_export]
 macro_rules! with_harvester {
     ($device:expr, |$h:ident| $body:expr) => {{
@@ -510,6 +524,10 @@ macro_rules! with_harvester {
                 Err(e) => Err(e.into()),
             },
             Ok(5) => match $crate::physics::harvester::Harvester::<5>::new(device) {
+                Ok($h) => $body,
+                Err(e) => Err(e.into()),
+            },
+            Ok(6) => match $crate::physics::harvester::masses::MassChain::<6>::new(device) {
                 Ok($h) => $body,
                 Err(e) => Err(e.into()),
             },
@@ -526,7 +544,8 @@ macro_rules! with_harvester {
 
 /// The state's dimension a device's parts need.
 pub fn dimension(device: &Device) -> Result<usize, AssemblyError> {
-    Ok(port_of(device)?.dimension())
+    let port = port_of(device)?;
+    Ok(masses::chain_dimension(device, &port))
 }
 
 /// The port of a device: its transducer with its loads, or behind its interface circuit.
