@@ -27,6 +27,11 @@
 //! # ...
 //! ```
 //!
+//! A device of two masses or more (a driver that strikes a generator, an impact pair) has
+//! `[[masses]]`, `[[springs]]`, `[[dampers]]` and `[[stops]]` arrays in place of `[mechanics]`
+//! and `[stops]` (see [`masses`]; `data/examples/upconverter.toml`); its model is
+//! [`crate::physics::harvester::masses::MassChain`].
+//!
 //! Files of the earlier format, which had sections `[geometry]`, `[electrical]`, `[material]`
 //! and `[endstop]` for the paper's topology, still load (converted on load; see the `legacy` module).
 //!
