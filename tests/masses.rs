@@ -392,3 +392,29 @@ kind = "none"
         y[idx[0].0]
     );
 }
+
+/// `response` on a two-mass file: the continuation runs over the model without a fork (a smoke
+/// check: the branch's accuracy is not yet compared with anything outside).
+#[test]
+fn response_continues_the_upconverter_branch() {
+    let d = Device::from_toml_str(UPCONVERTER, "upconverter.toml").unwrap();
+    let dg = endstop::study::continuation::frequency_diagram(
+        &d,
+        0.5,
+        19.0,
+        21.0,
+        0.5,
+        &endstop::progress::Silent,
+    )
+    .unwrap();
+    let points: usize = dg.branches.iter().map(|b| b.points.len()).sum();
+    println!(
+        "{} branches, {} events, {points} points",
+        dg.branches.len(),
+        dg.events.len()
+    );
+    assert!(
+        points >= 5,
+        "{points} points over 2 Hz in steps of at most 0.5 Hz"
+    );
+}
