@@ -120,6 +120,7 @@
 
 #![warn(missing_docs)]
 
+pub mod design;
 pub mod device;
 pub mod drive;
 pub mod fit;
