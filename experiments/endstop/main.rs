@@ -7,6 +7,9 @@
 //! endstop random   --device my.toml --accel-file shaker.csv [--out DIR]
 //! endstop response --device my.toml --from 600 --to 850 --accel-rms-g 0.31 [--out DIR]
 //! endstop basins   --device my.toml --freq 30 --accel-rms-g 0.5 [--cells 41] [--out DIR]
+//! endstop design --device my.toml --range load.resistance_ohm=1e4..1e6 \
+//!             --range stops.upper.gap_m=5e-5..3e-4 --freq-hz 120 --accel-rms-g 0.3 \
+//!             [--interfaces ifaces.toml] [--max-impact-speed-m-s 0.1] [--out DIR]
 //! endstop fit --device my.toml --up-sweep up.csv [--down-sweep down.csv] \
 //!             --free stops.both.gap_m=7e-6..10e-6 [--free ...] [--out DIR]
 //! ```
@@ -18,6 +21,7 @@
 
 mod basins;
 mod charge;
+mod design;
 mod random;
 mod random_args;
 mod random_storage;
@@ -82,6 +86,11 @@ enum Study {
     /// their correlation, warnings for what the data do not determine, and plots of the data
     /// against the fitted model with residuals.
     Fit(common::reports::fit_io::FitArgs),
+    /// Design: the device parameters within ranges and the interface circuit that deliver the
+    /// most DC power under a sine (the worst of a band of frequencies), within limits on the
+    /// impact speed, contact force, displacement and impacts per second; an infeasible
+    /// problem is reported with its least violating design.
+    Design(design::DesignArgs),
 }
 
 fn main() {
@@ -92,5 +101,6 @@ fn main() {
         Study::Response(a) => response::response(a),
         Study::Basins(a) => basins::basins_study(a),
         Study::Fit(a) => common::reports::fit_io::run(a),
+        Study::Design(a) => design::design(a),
     });
 }

@@ -1,0 +1,501 @@
+//! `endstop design`: the designer's inverse question on a device file, the I/O around
+//! [`endstop::design`]. The ranges, vibration and limits come from the command line; the
+//! interfaces to choose among from `--interfaces FILE` (TOML, `[[interface]]` tables in the
+//! device file's form) or, without it, the device's own interface.
+//!
+//! Everything is computed before anything is written: a run that fails leaves no output.
+
+use std::path::PathBuf;
+
+use anyhow::{bail, Context, Result};
+use clap::Parser;
+use endstop::design::{
+    merit, Answer, Evaluated, Limits, Problem, SearchSettings, Study, Verdict, Vibration,
+};
+use endstop::device::{Device, Interface, ParamRange};
+use endstop::drive::Sine;
+use endstop::num::pareto::pareto_front;
+use endstop::progress::Silent;
+use endstop::study::periodic::SteadySettings;
+
+use crate::shared::start;
+use endstop_experiments::fmt_sig;
+use endstop_experiments::io::frame::frame;
+use endstop_experiments::io::plot::{LegendPos, LinePlot, Panels, Series, Style, PALETTE};
+use endstop_experiments::row;
+
+/// The arguments of `endstop design`.
+#[derive(Parser, Debug)]
+pub struct DesignArgs {
+    /// Device file (TOML), e.g. a copy of data/examples/piezo_bridge.toml.
+    #[arg(long)]
+    device: PathBuf,
+    /// A decision variable, `PATH=LO..HI[:log|:linear]` (repeat for more); PATH is a key of the
+    /// device file, or `load.resistance_ohm` for the load of whichever interface.
+    #[arg(long = "range", required = true)]
+    ranges: Vec<String>,
+    /// A drive frequency (Hz); repeat for a band, whose worst frequency is the objective.
+    #[arg(long = "freq-hz", required = true, allow_hyphen_values = true)]
+    freqs_hz: Vec<f64>,
+    /// RMS base acceleration (g).
+    #[arg(long, allow_hyphen_values = true)]
+    accel_rms_g: f64,
+    /// Interfaces to choose among: a TOML file of `[[interface]]` tables, each as a device
+    /// file's `[interface]` (`kind = "resistive"` for the transducer's own load); default: the
+    /// device's own interface.
+    #[arg(long)]
+    interfaces: Option<PathBuf>,
+    /// Largest impact speed the stops survive (m/s).
+    #[arg(long, allow_hyphen_values = true)]
+    max_impact_speed_m_s: Option<f64>,
+    /// Largest contact force the stops survive (N).
+    #[arg(long, allow_hyphen_values = true)]
+    max_contact_force_n: Option<f64>,
+    /// Largest displacement (m).
+    #[arg(long, allow_hyphen_values = true)]
+    max_displacement_m: Option<f64>,
+    /// Most impacts per second.
+    #[arg(long, allow_hyphen_values = true)]
+    max_impacts_per_s: Option<f64>,
+    /// Points of the search's global sample per interface.
+    #[arg(long, default_value_t = 32)]
+    samples: usize,
+    /// Scramble of the sample.
+    #[arg(long, default_value_t = 0)]
+    seed: u32,
+    /// Points per side of the power map over the first two ranges (0: no map).
+    #[arg(long, default_value_t = 11)]
+    map_points: usize,
+    /// Target storage voltage for the charging time of the best design (V); only behind a
+    /// circuit with a storage.
+    #[arg(long, allow_hyphen_values = true)]
+    target_v: Option<f64>,
+    /// Output directory; default: data/results/endstop-design.
+    #[arg(long)]
+    out: Option<PathBuf>,
+}
+
+/// The interfaces of `--interfaces`: each table put in place of the device's `[interface]`
+/// and checked with the device, so that errors name the file and the field.
+fn interfaces_of(device: &Device, path: &std::path::Path) -> Result<Vec<Interface>> {
+    let text = std::fs::read_to_string(path)
+        .with_context(|| format!("--interfaces: cannot read {}", path.display()))?;
+    let file = path.display().to_string();
+    let doc: toml::Table =
+        toml::from_str(&text).with_context(|| format!("--interfaces: {file} is not TOML"))?;
+    let Some(list) = doc.get("interface").and_then(|v| v.as_array()) else {
+        bail!("--interfaces: {file} has no [[interface]] tables");
+    };
+    if doc.len() != 1 {
+        bail!("--interfaces: {file} may hold [[interface]] tables only");
+    }
+    let base: toml::Table = toml::from_str(&device.to_toml_string())?;
+    list.iter()
+        .enumerate()
+        .map(|(i, table)| {
+            let mut t = base.clone();
+            let resistive = table.get("kind").and_then(|k| k.as_str()) == Some("resistive");
+            if resistive {
+                t.remove("interface");
+            } else {
+                t.insert("interface".into(), table.clone());
+                if let Some(tr) = t.get_mut("transducer").and_then(|v| v.as_table_mut()) {
+                    tr.remove("load_resistance_ohm");
+                }
+            }
+            if resistive {
+                return Ok(Interface::Resistive);
+            }
+            let text = toml::to_string(&t)?;
+            Device::from_toml_str(&text, &format!("{file}, interface {}", i + 1))
+                .map(|d| d.interface)
+                .map_err(anyhow::Error::from)
+        })
+        .collect()
+}
+
+/// Refuses options no design study can use, naming the option.
+fn check(a: &DesignArgs) -> Result<()> {
+    if !(a.accel_rms_g.is_finite() && a.accel_rms_g > 0.0) {
+        bail!(
+            "--accel-rms-g must be a finite positive number, not {}",
+            a.accel_rms_g
+        );
+    }
+    if a.freqs_hz.iter().any(|f| !(f.is_finite() && *f > 0.0))
+        || a.freqs_hz.windows(2).any(|w| w[1] <= w[0])
+    {
+        bail!(
+            "--freq-hz must be positive frequencies in increasing order, got {:?}",
+            a.freqs_hz
+        );
+    }
+    for (name, v) in [
+        ("--max-impact-speed-m-s", a.max_impact_speed_m_s),
+        ("--max-contact-force-n", a.max_contact_force_n),
+        ("--max-displacement-m", a.max_displacement_m),
+        ("--max-impacts-per-s", a.max_impacts_per_s),
+        ("--target-v", a.target_v),
+    ] {
+        if let Some(v) = v {
+            if !(v.is_finite() && v > 0.0) {
+                bail!("{name} must be a finite positive number, not {v}");
+            }
+        }
+    }
+    if a.samples == 0 || a.samples > 4096 {
+        bail!("--samples must be in 1..=4096, not {}", a.samples);
+    }
+    if a.map_points == 1 || a.map_points > 101 {
+        bail!(
+            "--map-points must be 0 (no map) or in 2..=101, not {}",
+            a.map_points
+        );
+    }
+    Ok(())
+}
+
+/// One row per evaluated design.
+fn design_rows(
+    p: &Problem,
+    evals: &[Evaluated],
+    source: &str,
+) -> Result<polars::prelude::DataFrame> {
+    let names: Vec<&'static str> = p
+        .ranges
+        .iter()
+        .map(|r| &*Box::leak(r.path.clone().into_boxed_str()))
+        .collect();
+    let rows = evals.iter().map(|e| {
+        let perf = e.result.as_ref().ok();
+        let mut r = row![
+            "source" => source,
+            "interface" => p.interfaces[e.interface].key(),
+            "evaluated" => perf.is_some(),
+            "feasible" => e.feasible(),
+            "violation" => e.violation,
+            "power_w" => perf.map(|q| q.power_w),
+            "worst_freq_hz" => perf.map(|q| q.worst_freq_hz),
+            "impact_speed_m_s" => perf.map(|q| q.impact_speed_m_s),
+            "contact_force_n" => perf.map(|q| q.contact_force_n),
+            "displacement_m" => perf.map(|q| q.displacement_m),
+            "impacts_per_s" => perf.map(|q| q.impacts_per_s),
+            "error" => e.result.as_ref().err().cloned().unwrap_or_default(),
+        ];
+        for (n, v) in names.iter().zip(&e.values) {
+            r.push((*n, (*v).into()));
+        }
+        r
+    });
+    frame(rows)
+}
+
+fn words(p: &Problem, a: &Answer) -> String {
+    let d = &a.design;
+    let values: Vec<String> = p
+        .ranges
+        .iter()
+        .zip(&d.values)
+        .map(|(r, v)| format!("`{}` = {}", r.path, fmt_sig(*v, 4)))
+        .collect();
+    let perf = d.result.as_ref().ok();
+    let q =
+        |f: fn(&endstop::design::Performance) -> f64| perf.map_or("-".into(), |x| fmt_sig(f(x), 4));
+    format!(
+        "{} with the `{}` interface, {}: power {} W (worst over the band), impact speed {} m/s, \
+         contact force {} N, displacement {} m, {} impacts/s{}",
+        match a.verdict {
+            Verdict::Optimum => "**optimum**",
+            Verdict::Infeasible =>
+                "**infeasible**: no design tried meets every limit; the least violating is",
+        },
+        p.interfaces[d.interface].key(),
+        values.join(", "),
+        q(|x| x.power_w),
+        q(|x| x.impact_speed_m_s),
+        q(|x| x.contact_force_n),
+        q(|x| x.displacement_m),
+        q(|x| x.impacts_per_s),
+        if a.verdict == Verdict::Infeasible {
+            format!(" (violation {})", fmt_sig(d.violation, 3))
+        } else {
+            String::new()
+        }
+    )
+}
+
+/// `endstop design`.
+pub fn design(a: DesignArgs) -> Result<()> {
+    check(&a)?;
+    let (mut exp, loaded, device) = start("endstop-design", &a.device, None, a.out.clone())?;
+    let ranges = a
+        .ranges
+        .iter()
+        .map(|r| ParamRange::parse(r).with_context(|| format!("--range {r}")))
+        .collect::<Result<Vec<_>>>()?;
+    let interfaces = match &a.interfaces {
+        Some(path) => interfaces_of(&device, path)?,
+        None => vec![device.interface.clone()],
+    };
+    let p = Problem {
+        device: device.clone(),
+        interfaces,
+        ranges,
+        vibration: Vibration {
+            freqs_hz: a.freqs_hz.clone(),
+            accel_rms_g: a.accel_rms_g,
+        },
+        limits: Limits {
+            impact_speed_m_s: a.max_impact_speed_m_s,
+            contact_force_n: a.max_contact_force_n,
+            displacement_m: a.max_displacement_m,
+            impacts_per_s: a.max_impacts_per_s,
+        },
+        steady: SteadySettings::default(),
+    };
+    p.check()?;
+    let settings = SearchSettings {
+        samples: a.samples,
+        seed: a.seed,
+        ..SearchSettings::default()
+    };
+    let budget = p.interfaces.len()
+        * (settings.samples + settings.polish_starts * (2 + 2 * settings.max_iters as usize));
+    let study: Study =
+        endstop_experiments::with_progress(budget, "designs evaluated (at most)", |pr| {
+            p.solve(&settings, pr)
+        })?;
+    // The power maps: per interface, over the first two ranges, the others at that
+    // interface's answer.
+    let maps: Vec<(usize, Vec<Evaluated>)> = if a.map_points >= 2 && p.ranges.len() >= 2 {
+        let n = a.map_points;
+        endstop_experiments::with_progress(n * n * p.interfaces.len(), "power map points", |pr| {
+            (0..p.interfaces.len())
+                .filter_map(|i| {
+                    let at = study.per_interface[i].as_ref()?.design.unit.clone();
+                    let grid = p.grid(i, 0, 1, n, &at);
+                    for _ in 0..grid.len() {
+                        pr.tick();
+                    }
+                    Some((i, grid))
+                })
+                .collect()
+        })
+    } else {
+        Vec::new()
+    };
+    // Figures of merit of the answer.
+    let best = &study.answer.design;
+    let (best_dev, _) = p.device_at(best.interface, &best.unit)?;
+    let perf = best.result.as_ref().ok();
+    let limit_m = a
+        .max_displacement_m
+        .or_else(|| merit::displacement_limit_m(&best_dev));
+    let effectiveness = perf.zip(limit_m).map(|(q, zl)| {
+        merit::effectiveness(
+            q.power_w,
+            best_dev.mechanics.mass_kg,
+            zl,
+            a.accel_rms_g * endstop::G,
+            q.worst_freq_hz,
+        )
+    });
+    let band = if a.freqs_hz.len() >= 3 {
+        let pts = endstop::study::periodic::frequency_sweep(
+            &best_dev,
+            &a.freqs_hz,
+            a.accel_rms_g,
+            &SteadySettings::default(),
+            &Silent,
+        )?;
+        let pw: Vec<f64> = pts
+            .iter()
+            .map(|s| s.as_ref().map_or(f64::NAN, |s| s.p_dc_w))
+            .collect();
+        merit::half_power_band(&a.freqs_hz, &pw)
+    } else {
+        None
+    };
+    let charging = match (a.target_v, perf) {
+        (Some(v), Some(q)) => merit::charging_time_s(
+            &best_dev,
+            Sine::from_rms_g(a.accel_rms_g, q.worst_freq_hz),
+            v,
+            600.0,
+            &Silent,
+        )
+        .map(|r| r.map_err(|e| e.to_string())),
+        _ => None,
+    };
+
+    // Everything is computed: now write.
+    let mut df = design_rows(&p, &study.evaluations, "search")?;
+    exp.write_parquet("designs", &mut df, &device.params)?;
+    for (i, grid) in &maps {
+        let mut df = design_rows(&p, grid, "map")?;
+        exp.write_parquet(
+            &format!("map_{}", p.interfaces[*i].key()),
+            &mut df,
+            &device.params,
+        )?;
+    }
+    exp.number("power_w", best.power_w());
+    exp.number(
+        "feasible",
+        f64::from(u8::from(study.answer.verdict == Verdict::Optimum)),
+    );
+    exp.number("evaluations", study.evaluations.len() as f64);
+    if let Some(e) = effectiveness {
+        exp.number("effectiveness", e);
+    }
+    let mut md = format!(
+        "Design of `{}` under {} g rms at {} Hz (the objective is the worst of these \
+         frequencies), over {}; interfaces: {}.\n\n- {}\n",
+        loaded.file,
+        a.accel_rms_g,
+        a.freqs_hz
+            .iter()
+            .map(|f| fmt_sig(*f, 6))
+            .collect::<Vec<_>>()
+            .join(", "),
+        p.ranges
+            .iter()
+            .map(|r| format!(
+                "`{}` in [{}, {}]",
+                r.path,
+                fmt_sig(r.lo, 4),
+                fmt_sig(r.hi, 4)
+            ))
+            .collect::<Vec<_>>()
+            .join(", "),
+        p.interfaces
+            .iter()
+            .map(|i| format!("`{}`", i.key()))
+            .collect::<Vec<_>>()
+            .join(", "),
+        words(&p, &study.answer),
+    );
+    for (i, ans) in study.per_interface.iter().enumerate() {
+        match ans {
+            Some(ans) => md.push_str(&format!(
+                "- `{}` alone: {}\n",
+                p.interfaces[i].key(),
+                words(&p, ans)
+            )),
+            None => md.push_str(&format!(
+                "- `{}`: no design could be evaluated\n",
+                p.interfaces[i].key()
+            )),
+        }
+    }
+    md.push_str(&format!(
+        "- designs evaluated: {}\n",
+        study.evaluations.len()
+    ));
+    if let (Some(e), Some(zl)) = (effectiveness, limit_m) {
+        md.push_str(&format!(
+            "- harvester effectiveness (Mitcheson et al. 2008: over the ideal velocity-damped \
+             resonant generator's m A Z_l w / 2 with Z_l = {} m): {}\n",
+            fmt_sig(zl, 3),
+            fmt_sig(e, 3)
+        ));
+    }
+    if let Some(b) = band {
+        md.push_str(&format!(
+            "- half-power band of the answer over the given frequencies: {}\n",
+            match b.width_hz() {
+                Some(w) => format!("{} Hz wide", fmt_sig(w, 3)),
+                None => "wider than the frequencies given".to_string(),
+            }
+        ));
+    }
+    match charging {
+        Some(Ok(t)) => md.push_str(&format!(
+            "- charging time of the storage from 0 V to {} V with the load open: {} s\n",
+            a.target_v.unwrap_or_default(),
+            fmt_sig(t, 4)
+        )),
+        Some(Err(e)) => md.push_str(&format!("- charging to the target: {e}\n")),
+        None => {}
+    }
+    exp.write_numbers_md(&md)?;
+    print!("{md}");
+    exp.write_plot(&plots(&p, &study, &maps))?;
+    exp.finish()
+}
+
+/// The Pareto front of power against impact speed over every evaluated design, and the power
+/// map of each interface over the first two ranges (a curve per value of the second).
+fn plots(p: &Problem, study: &Study, maps: &[(usize, Vec<Evaluated>)]) -> Panels {
+    let done: Vec<&Evaluated> = study
+        .evaluations
+        .iter()
+        .filter(|e| e.result.is_ok())
+        .collect();
+    let perf = |e: &Evaluated| {
+        e.result
+            .as_ref()
+            .map(|q| (q.impact_speed_m_s, q.power_w))
+            .unwrap_or_default()
+    };
+    let pts: Vec<(f64, f64)> = done
+        .iter()
+        .map(|e| {
+            let (v, w) = perf(e);
+            (v, -w)
+        })
+        .collect();
+    let front: Vec<(f64, f64)> = pareto_front(&pts)
+        .into_iter()
+        .map(|k| (pts[k].0, -pts[k].1 * 1e6))
+        .collect();
+    let all: Vec<(f64, f64)> = done
+        .iter()
+        .map(|e| {
+            let (v, w) = perf(e);
+            (v, w * 1e6)
+        })
+        .collect();
+    let pareto = LinePlot::new(
+        "Power against impact speed",
+        "largest impact speed [m/s]",
+        "DC power [uW]",
+        vec![
+            Series::new("designs evaluated", all, PALETTE[1], Style::Dots),
+            Series::new("Pareto front", front, PALETTE[0], Style::LinePoints),
+        ],
+    )
+    .legend(LegendPos::LowerRight);
+    let mut panels = vec![pareto];
+    for (i, grid) in maps {
+        let n = (grid.len() as f64).sqrt().round() as usize;
+        let series = (0..n)
+            .step_by((n / 5).max(1))
+            .enumerate()
+            .map(|(c, j)| {
+                let pts = (0..n)
+                    .filter_map(|k| {
+                        let e = &grid[k * n + j];
+                        e.result
+                            .as_ref()
+                            .ok()
+                            .map(|q| (e.values[0], q.power_w * 1e6))
+                    })
+                    .collect();
+                let label = format!("{} = {}", p.ranges[1].path, fmt_sig(grid[j].values[1], 3));
+                Series::new(&label, pts, PALETTE[c % PALETTE.len()], Style::LinePoints)
+            })
+            .collect();
+        panels.push(
+            LinePlot::new(
+                &format!("Power map, `{}` interface", p.interfaces[*i].key()),
+                &p.ranges[0].path,
+                "DC power [uW]",
+                series,
+            )
+            .log(p.ranges[0].spacing == endstop::device::Spacing::Log, false)
+            .legend(LegendPos::UpperRight),
+        );
+    }
+    Panels::new(panels)
+}
