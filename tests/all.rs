@@ -17,6 +17,7 @@ mod common;
 
 mod calibration_recovery;
 mod crosscheck;
+mod design;
 mod device_description;
 mod fit_family;
 mod fit_recovery;

@@ -109,12 +109,12 @@ pub enum DesignError {
     #[error("design problem: {0}")]
     Invalid(String),
     /// A range does not fit the device behind an interface.
-    #[error("interface `{interface}`: {source}")]
+    #[error("interface `{interface}`: {error}")]
     Range {
         /// The interface's key.
         interface: String,
-        /// Why.
-        source: ParamError,
+        /// Why (in the message, so not also a source that a chain would print again).
+        error: ParamError,
     },
     /// The search settings are out of range, or the optimiser failed.
     #[error("search: {0}")]
@@ -273,9 +273,9 @@ impl Problem {
     /// The device with interface `i` and the ranges at the unit point `unit`, with the values.
     pub fn device_at(&self, i: usize, unit: &[f64]) -> Result<(Device, Vec<f64>), DesignError> {
         let iface = &self.interfaces[i];
-        let err = |source| DesignError::Range {
+        let err = |error| DesignError::Range {
             interface: iface.key().to_string(),
-            source,
+            error,
         };
         let mut base = self.device.clone();
         base.interface = iface.clone();

@@ -1,0 +1,253 @@
+//! The design search ([`endstop::design`]) against what it must find: a brute-force grid's
+//! best on two two-variable cases, the closed-form optimal load of a linear piezoelectric
+//! harvester, SECE's power whatever its load, and an infeasible problem reported as such.
+
+use endstop::design::{
+    answer, Evaluated, Limits, Problem, SearchSettings, Verdict, Vibration, LOAD_PATH,
+};
+use endstop::device::{DcLoad, Device, Interface, ParamRange, Spacing, Transducer};
+use endstop::physics::closed_forms::{Oscillator, Piezoelectric};
+use endstop::progress::Silent;
+use endstop::study::periodic::SteadySettings;
+
+use crate::common;
+
+fn example(name: &str) -> Device {
+    common::device(&format!("examples/{name}"))
+}
+
+fn problem(device: Device, ranges: Vec<ParamRange>, freqs_hz: Vec<f64>, g: f64) -> Problem {
+    Problem {
+        interfaces: vec![device.interface.clone()],
+        device,
+        ranges,
+        vibration: Vibration {
+            freqs_hz,
+            accel_rms_g: g,
+        },
+        limits: Limits::default(),
+        steady: SteadySettings::default(),
+    }
+}
+
+fn range(path: &str, lo: f64, hi: f64) -> ParamRange {
+    ParamRange::new(path, lo, hi, Spacing::auto(lo, hi)).unwrap()
+}
+
+/// The grid's best feasible design and the grid's resolution there: the largest change of
+/// power to a neighbouring grid point (the best within one cell of the grid is not known
+/// better than that).
+fn grid_best(grid: &[Evaluated], n: usize) -> (f64, f64) {
+    let (k, best) = grid
+        .iter()
+        .enumerate()
+        .filter(|(_, e)| e.feasible())
+        .max_by(|a, b| a.1.power_w().total_cmp(&b.1.power_w()))
+        .expect("a feasible grid point");
+    let (i, j) = ((k / n) as i64, (k % n) as i64);
+    let mut resolution: f64 = 0.0;
+    for (di, dj) in [(-1, 0), (1, 0), (0, -1), (0, 1)] {
+        let (a, b) = (i + di, j + dj);
+        if (0..n as i64).contains(&a) && (0..n as i64).contains(&b) {
+            let p = grid[(a * n as i64 + b) as usize].power_w();
+            if p.is_finite() {
+                resolution = resolution.max((best.power_w() - p).abs());
+            }
+        }
+    }
+    (best.power_w(), resolution)
+}
+
+fn search_against_grid(p: &Problem, n: usize) {
+    let study = p.solve(&SearchSettings::default(), &Silent).unwrap();
+    let grid = p.grid(0, 0, 1, n, &[0.5, 0.5]);
+    let (grid_p, resolution) = grid_best(&grid, n);
+    let found = &study.answer;
+    assert_eq!(found.verdict, Verdict::Optimum);
+    // The global sample alone (the first evaluations), for the report on the polish's worth.
+    let sample = endstop::design::answer(&study.evaluations[..SearchSettings::default().samples])
+        .map_or(f64::NAN, |a| a.design.power_w());
+    eprintln!(
+        "search {:.6e} W (sample alone {sample:.6e} W) at {:?} in {} evaluations; grid {grid_p:.6e} W (resolution {resolution:.3e} W, {} points)",
+        found.design.power_w(),
+        found.design.values,
+        study.evaluations.len(),
+        grid.len()
+    );
+    assert!(
+        found.design.power_w() >= grid_p - resolution,
+        "search {} W below the grid's best {grid_p} W by more than its resolution {resolution} W",
+        found.design.power_w()
+    );
+}
+
+/// The resistive cantilever driven into its stopper: the load and the stopper's gap, with the
+/// impact speed limited.
+#[test]
+fn the_search_finds_the_grid_best_over_load_and_gap() {
+    let mut p = problem(
+        example("piezo_cantilever"),
+        vec![
+            range(LOAD_PATH, 3e3, 3e5),
+            range("stops.upper.gap_m", 0.03e-3, 0.3e-3),
+        ],
+        vec![120.0],
+        0.3,
+    );
+    p.limits.impact_speed_m_s = Some(0.08);
+    search_against_grid(&p, 31);
+}
+
+/// The cantilever behind a diode bridge: its load and the suspension's stiffness (the tuning)
+/// under a band of two frequencies.
+#[test]
+fn the_search_finds_the_grid_best_over_load_and_tuning() {
+    let p = problem(
+        example("piezo_bridge"),
+        vec![
+            range(LOAD_PATH, 5e3, 5e5),
+            range("mechanics.stiffness_n_per_m", 2400.0, 3300.0),
+        ],
+        vec![118.0, 122.0],
+        0.05,
+    );
+    search_against_grid(&p, 31);
+}
+
+/// The resistive optimum of a cantilever whose stopper is never reached (0.01 g moves it
+/// about a micrometre, the gap is 0.1 mm) is the closed form's optimal load of the linear
+/// piezoelectric harvester (A. Erturk and D. J. Inman, *Piezoelectric Energy Harvesting*,
+/// Wiley 2011, the lumped-parameter equations; the formula is derived in
+/// [`endstop::physics::closed_forms::Piezoelectric`]).
+///
+/// Tolerance: Nelder-Mead stops when the spread of its simplex's scores (power over the
+/// sample's best) falls below `sd`; near the maximum `P(R) / P* = 1 - kappa (ln R / R*)^2 / 2`
+/// with `kappa` the closed form's curvature in `ln R`, so the best vertex lies within
+/// `sqrt(4 sd / kappa)` of the optimum in `ln R` (a spread of `sd` over vertices on both
+/// sides, doubled).
+#[test]
+fn the_resistive_optimum_is_the_closed_form_optimal_load() {
+    let device = example("piezo_cantilever");
+    let f = 120.0;
+    let p = problem(
+        device.clone(),
+        vec![range(LOAD_PATH, 1e3, 1e6)],
+        vec![f],
+        0.01,
+    );
+    let sd = 1e-8;
+    let settings = SearchSettings {
+        sd_tolerance: sd,
+        max_iters: 200,
+        ..SearchSettings::default()
+    };
+    let study = p.solve(&settings, &Silent).unwrap();
+    let r_found = study.answer.design.values[0];
+    let Transducer::Piezoelectric(pz) = &device.transducer else {
+        panic!("the example is piezoelectric")
+    };
+    let closed = |r: f64| Piezoelectric {
+        oscillator: Oscillator {
+            mass_kg: device.mechanics.mass_kg,
+            stiffness_n_per_m: device.mechanics.stiffness_n_per_m,
+            damping_n_s_per_m: device.mechanics.damping_n_s_per_m,
+        },
+        coupling_n_per_v: pz.coupling_n_per_v,
+        capacitance_f: pz.capacitance_f,
+        load_resistance_ohm: r,
+    };
+    let w = 2.0 * std::f64::consts::PI * f;
+    let r_opt = closed(1.0).optimal_load_ohm(w);
+    // The curvature of P / P* in ln R at the optimum, by central differences of step h.
+    let h = 1e-3;
+    let pw = |ln_r: f64| closed(ln_r.exp()).mean_power_w(1.0, w);
+    let l0 = r_opt.ln();
+    let kappa = -(pw(l0 + h) - 2.0 * pw(l0) + pw(l0 - h)) / (h * h) / pw(l0);
+    let tol = (4.0 * sd / kappa).sqrt();
+    eprintln!("found {r_found:.6e} ohm, closed form {r_opt:.6e} ohm, tolerance {tol:.3e} in ln R");
+    assert!(
+        (r_found / r_opt).ln().abs() <= tol,
+        "found {r_found} ohm, closed form {r_opt} ohm"
+    );
+}
+
+/// SECE delivers the same power to any load (Lefeuvre et al., Sens. Actuators A 126 (2006)
+/// 405; [`endstop::physics::interface_closed_forms`]): the energy on the element at each
+/// extremum moves to the storage whatever its voltage. The diode bridge's power, by contrast,
+/// changes with its load (the same check cannot pass for it).
+///
+/// Tolerance: the storage discharging through its load makes the period map's slowest
+/// multiplier about `1 - T / (R C_s)` (1 - 8.3e-4 at the largest load, 1 Mohm, with 10 uF at
+/// 120 Hz), so shooting to a scaled residual `tol` leaves the state within `tol R C_s / T` =
+/// 1200 `tol` of the orbit (in the storage's scale) and the power, a square, within twice
+/// that: 2.4e-7 for `tol` = 1e-10, the tolerance set here; the measured period at rtol 1e-9
+/// adds about 1e-9. 1e-6 allows four times the bound.
+#[test]
+fn sece_power_does_not_depend_on_its_load() {
+    let bridge = example("piezo_bridge");
+    let mut sece = bridge.clone();
+    sece.interface = Interface::Sece {
+        storage_capacitance_f: 10e-6,
+        load: DcLoad::Resistor {
+            resistance_ohm: 41.7e3,
+        },
+        efficiency: 0.8,
+    };
+    let powers = |d: Device| -> Vec<f64> {
+        let mut p = problem(d, vec![range(LOAD_PATH, 1e4, 1e6)], vec![120.0], 0.05);
+        p.steady.tol = 1e-10;
+        [0.0, 0.5, 1.0]
+            .iter()
+            .map(|&u| p.evaluate(0, &[u]).power_w())
+            .collect()
+    };
+    let spread = |p: &[f64]| {
+        let (lo, hi) = p
+            .iter()
+            .fold((f64::INFINITY, 0.0f64), |(a, b), &x| (a.min(x), b.max(x)));
+        (hi - lo) / hi
+    };
+    let s = powers(sece);
+    let b = powers(bridge);
+    eprintln!("SECE {s:?} W, bridge {b:?} W");
+    assert!(spread(&s) < 1e-6, "SECE's power moves with its load: {s:?}");
+    assert!(spread(&b) > 0.1, "the bridge's power should move: {b:?}");
+}
+
+/// A limit no design meets (an impact speed of 1 um/s while the gap range keeps the mass on
+/// its stopper at 0.5 g) is reported infeasible, with the least violating design evaluated.
+#[test]
+fn a_limit_no_design_meets_is_reported_infeasible() {
+    let mut p = problem(
+        example("piezo_cantilever"),
+        vec![
+            range("stops.upper.gap_m", 0.02e-3, 0.05e-3),
+            range(LOAD_PATH, 1e4, 1e5),
+        ],
+        vec![120.0],
+        0.5,
+    );
+    p.limits.impact_speed_m_s = Some(1e-6);
+    let settings = SearchSettings {
+        samples: 8,
+        polish_starts: 1,
+        max_iters: 10,
+        ..SearchSettings::default()
+    };
+    let study = p.solve(&settings, &Silent).unwrap();
+    assert_eq!(study.answer.verdict, Verdict::Infeasible);
+    assert!(study.evaluations.iter().all(|e| !e.feasible()));
+    let least = study
+        .evaluations
+        .iter()
+        .map(|e| e.violation)
+        .fold(f64::INFINITY, f64::min);
+    assert!(least > 0.0 && least.is_finite());
+    assert_eq!(study.answer.design.violation, least);
+    // The same designs with the limit lifted give an optimum.
+    let mut open = study.evaluations.clone();
+    for e in &mut open {
+        e.violation = 0.0;
+    }
+    assert_eq!(answer(&open).unwrap().verdict, Verdict::Optimum);
+}
