@@ -88,7 +88,7 @@ pub fn half_power_band(freqs_hz: &[f64], power_w: &[f64]) -> Option<HalfPowerBan
         .enumerate()
         .filter(|(_, p)| p.is_finite())
         .max_by(|a, b| a.1.total_cmp(b.1))?;
-    if !(peak_w > 0.0) {
+    if peak_w.is_nan() || peak_w <= 0.0 {
         return None;
     }
     let half = 0.5 * peak_w;

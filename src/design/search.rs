@@ -80,7 +80,7 @@ impl SearchSettings {
                 self.simplex_size
             ));
         }
-        if !(self.sd_tolerance >= 0.0) {
+        if self.sd_tolerance.is_nan() || self.sd_tolerance < 0.0 {
             return bad(format!("sd_tolerance = {} must be >= 0", self.sd_tolerance));
         }
         Ok(())
