@@ -74,12 +74,18 @@ fn search_against_grid(p: &Problem, n: usize) {
         study.evaluations.len(),
         grid.len()
     );
+    // The judging rule, fixed before any run: no grid point may be a feasible design
+    // more than 2 % better than the one returned. (The grid's resolution, printed above, is
+    // no bound: on the bridge case it is a third of the power, and the sample alone met it.)
     assert!(
-        found.design.power_w() >= grid_p - resolution,
-        "search {} W below the grid's best {grid_p} W by more than its resolution {resolution} W",
+        grid_p <= GRID_MARGIN * found.design.power_w(),
+        "the grid's best {grid_p} W beats the search's {} W by more than 2 %",
         found.design.power_w()
     );
 }
+
+/// How much better than the returned design a grid point may be (the rule: 2 %).
+const GRID_MARGIN: f64 = 1.02;
 
 /// The resistive cantilever driven into its stopper: the load and the stopper's gap, with the
 /// impact speed limited.
