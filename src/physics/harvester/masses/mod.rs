@@ -15,7 +15,7 @@
 //! (`v1`, `v2` with their loads, or `vs`, `v_element`) followed by each mass's position.
 //!
 //! # Contacts
-//! Each stop is one contact of the [`Mode`](crate::model::Mode), with guards `2k` (its
+//! Each stop is one contact of the [`Mode`], with guards `2k` (its
 //! boundary) and `2k + 1` (a tension-free bracket, or the holding force while resting) as a
 //! one-mass stop's; every contact is watched at once. An impact on a rigid stop between two
 //! masses conserves momentum and sets the relative velocity to `-e` times itself:
