@@ -74,9 +74,10 @@ fn search_against_grid(p: &Problem, n: usize) {
         study.evaluations.len(),
         grid.len()
     );
-    // The judging rule, fixed before any run: no grid point may be a feasible design
-    // more than 2 % better than the one returned. (The grid's resolution, printed above, is
-    // no bound: on the bridge case it is a third of the power, and the sample alone met it.)
+    // The acceptance rule of the design search (the book's Design chapter), fixed before any
+    // run: no grid point may be a feasible design more than 2 % better than the one returned.
+    // The grid's resolution, printed above, is no bound: on the bridge case it is a third of
+    // the power, and the sample alone met it.
     assert!(
         grid_p <= GRID_MARGIN * found.design.power_w(),
         "the grid's best {grid_p} W beats the search's {} W by more than 2 %",
@@ -84,7 +85,8 @@ fn search_against_grid(p: &Problem, n: usize) {
     );
 }
 
-/// How much better than the returned design a grid point may be (the rule: 2 %).
+/// How much better than the returned design a grid point may be (2 %: the acceptance rule of
+/// the book's Design chapter).
 const GRID_MARGIN: f64 = 1.02;
 
 /// The resistive cantilever driven into its stopper: the load and the stopper's gap, with the

@@ -25,7 +25,7 @@ pub mod search;
 
 use rayon::prelude::*;
 
-use crate::device::{own_value, Device, Interface, ParamError, ParamRange, Transducer};
+use crate::device::{own_value, Device, Interface, ParamError, ParamRange};
 use crate::progress::Progress;
 use crate::study::periodic::SteadySettings;
 
@@ -36,15 +36,6 @@ pub use search::SearchSettings;
 /// transducer's `load_resistance_ohm` behind the resistive interface, the DC load's
 /// `interface.load.resistance_ohm` behind a circuit.
 pub const LOAD_PATH: &str = "load.resistance_ohm";
-
-/// The device path [`LOAD_PATH`] stands for behind `interface`.
-pub fn load_path(interface: &Interface) -> &'static str {
-    if interface.is_resistive() {
-        "transducer.load_resistance_ohm"
-    } else {
-        "interface.load.resistance_ohm"
-    }
-}
 
 /// The limits a design must keep (none: not limited).
 #[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize)]
@@ -277,21 +268,13 @@ impl Problem {
             interface: iface.key().to_string(),
             error,
         };
-        let mut base = self.device.clone();
-        base.interface = iface.clone();
-        // The transducer's own resistive load is the load of the resistive interface only:
-        // absent behind a circuit, and set by the range of `LOAD_PATH` where the device's
-        // file had none (left absent otherwise, which the device's check names).
+        let mut base = self.device.behind(iface.clone());
+        // Behind the resistive interface the range of `LOAD_PATH` sets the transducer's own
+        // load; where the device's file had none it needs a finite placeholder until the range
+        // sets it (left absent otherwise, which the device's check names).
         let ranged_load = self.ranges.iter().any(|r| r.path == LOAD_PATH);
-        let own_load = match &mut base.transducer {
-            Transducer::Piezoelectric(p) => Some(&mut p.load_resistance_ohm),
-            Transducer::Electromagnetic(e) => Some(&mut e.load_resistance_ohm),
-            _ => None,
-        };
-        if let Some(r) = own_load {
-            if !iface.is_resistive() {
-                *r = f64::INFINITY;
-            } else if ranged_load && *r == f64::INFINITY {
+        if ranged_load && iface.load_resistance_path() == "transducer.load_resistance_ohm" {
+            if let Some(r) = base.own_load_mut().filter(|r| r.is_infinite()) {
                 *r = 1.0;
             }
         }
@@ -300,7 +283,7 @@ impl Problem {
             .iter()
             .map(|r| {
                 if r.path == LOAD_PATH {
-                    load_path(iface)
+                    iface.load_resistance_path()
                 } else {
                     r.path.as_str()
                 }

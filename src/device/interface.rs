@@ -347,6 +347,17 @@ impl Interface {
         matches!(self, Interface::Resistive)
     }
 
+    /// The device path of the load resistance behind this interface: the transducer's own
+    /// `transducer.load_resistance_ohm` for `resistive`, the DC load's
+    /// `interface.load.resistance_ohm` behind a circuit.
+    pub fn load_resistance_path(&self) -> &'static str {
+        if self.is_resistive() {
+            "transducer.load_resistance_ohm"
+        } else {
+            "interface.load.resistance_ohm"
+        }
+    }
+
     /// The storage capacitance (F), for every kind but `resistive`.
     pub fn storage_capacitance_f(&self) -> Option<f64> {
         match self {
@@ -548,5 +559,31 @@ impl Interface {
             }
         }
         Ok(())
+    }
+}
+
+impl super::Device {
+    /// This device behind `interface`; behind a circuit its transducer's own resistive load is
+    /// removed (the circuit's DC load replaces it, and the device's check refuses both).
+    #[must_use]
+    pub fn behind(&self, interface: Interface) -> Self {
+        let mut d = self.clone();
+        if !interface.is_resistive() {
+            if let Some(r) = d.own_load_mut() {
+                *r = f64::INFINITY;
+            }
+        }
+        d.interface = interface;
+        d
+    }
+
+    /// The transducer's own resistive load (ohm, infinite where it has none), for a
+    /// one-load transducer (piezoelectric or electromagnetic); `None` for the others.
+    pub fn own_load_mut(&mut self) -> Option<&mut f64> {
+        match &mut self.transducer {
+            Transducer::Piezoelectric(p) => Some(&mut p.load_resistance_ohm),
+            Transducer::Electromagnetic(e) => Some(&mut e.load_resistance_ohm),
+            _ => None,
+        }
     }
 }

@@ -7,9 +7,12 @@
 //! is `(x, v)` followed by the port's components: two for a transducer with its loads (unused
 //! ones held at zero), the element's and the storage voltage behind a circuit.
 //!
-//! The file reads whole: most of it is the one `impl Model for Harvester<N>`, whose methods
-//! each make the same three-way split (mechanics, stops, port) over the harvester's private
-//! fields; the parts themselves live in the submodules.
+//! The file reads better whole than split, although it is longer than most: most of it is the
+//! one `impl Model for Harvester<N>`, whose methods each make the same three-way split
+//! (mechanics, stops, port) over the harvester's private fields, and a reader checks each
+//! method against its siblings (the guards against the switches, the Jacobian against the
+//! right-hand side) on one page; splitting the impl across files would scatter that
+//! comparison. The parts themselves live in the submodules.
 //!
 //! # Modes
 //! Each stop is one contact of the [`Mode`] (see [`stops`]); a circuit owns the mode's bits of
