@@ -74,8 +74,8 @@
 //! | module | what | paper |
 //! |---|---|---|
 //! | [`device`] | validated device descriptions: mechanics, stops, transducer | Tables 1 and 2 |
-//! | [`physics::hertz`] | Hertz line contact and its linear fit | eqs 3-6, 19, Figure 5 |
-//! | [`physics::contact`] | contact modes and the stops' force laws | eqs 1-2 |
+//! | [`laws::hertz`] | Hertz line contact and its linear fit | eqs 3-6, 19, Figure 5 |
+//! | [`laws::contact`] | contact modes and the stops' force laws | eqs 1-2 |
 //! | [`physics::transducer`] | the transducers' forces, rates and loads | eqs 8-10 |
 //! | [`model`] | the one model every study takes: modes, guards, switches, free flight split, energy ledger | |
 //! | [`physics::harvester`] | the harvester assembled from a device's parts as a [`model::Model`], with its interface circuits | eqs 7-10 |
@@ -124,6 +124,7 @@ pub mod design;
 pub mod device;
 pub mod drive;
 pub mod fit;
+pub mod laws;
 pub mod model;
 pub mod num;
 pub mod ode;

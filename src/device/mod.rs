@@ -41,6 +41,7 @@
 //! This module parses text it is given; reading the file is the caller's job (no I/O here).
 
 pub mod interface;
+mod laws;
 mod legacy;
 pub mod masses;
 mod paths;

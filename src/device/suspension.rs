@@ -9,7 +9,7 @@
 //!
 //! With a nonlinear form, `mechanics.stiffness_n_per_m` is not written: the device derives it
 //! on load as the small-oscillation stiffness at its reference well (the stable equilibrium
-//! nearest rest, [`crate::physics::suspension::reference_well`]), the stiffness the linear
+//! nearest rest, [`crate::laws::suspension::reference_well`]), the stiffness the linear
 //! theory, the time scales and the records' linearisation use.
 //!
 //! Refused, with an error naming the file, the field, the value and the valid range: a
@@ -22,8 +22,8 @@
 use serde::{Deserialize, Serialize};
 
 use super::{Checker, Device, ParamError, StopLaw};
-use crate::physics::contact::{Side, StopModel};
-use crate::physics::suspension::{equilibria, reference_well, Equilibrium, Polynomial, MAX_ORDER};
+use crate::laws::contact::{Side, StopModel};
+use crate::laws::suspension::{equilibria, reference_well, Equilibrium, Polynomial, MAX_ORDER};
 
 /// The restoring force of the suspension (see the module docs).
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -328,7 +328,7 @@ impl Device {
     }
 
     /// The static equilibria of the suspension with the stops' springs, sorted by position
-    /// ([`crate::physics::suspension::equilibria`]): the wells (stable), the barriers between
+    /// ([`crate::laws::suspension::equilibria`]): the wells (stable), the barriers between
     /// them (unstable) and any rest on a stop.
     pub fn equilibria(&self) -> Vec<Equilibrium> {
         let up = self.stops.upper.as_ref().map(StopModel::of);

@@ -116,7 +116,7 @@ pub(super) struct Grazing {
 
 /// How far the stop-free orbit `o` reaches past the nearer stop of `h` (m; zero at grazing).
 fn past_stop(h: &Harvester, o: &Orbit) -> f64 {
-    use crate::physics::contact::Side;
+    use crate::laws::contact::Side;
     let s = &o.summary;
     (s.x_upper_m - h.gap(Side::Upper)).max(-s.x_lower_m - h.gap(Side::Lower))
 }

@@ -1,9 +1,11 @@
-//! The physics of the harvester: Hertz line contact ([`hertz`], eqs 3-6 and 19), the end-stops
-//! and their laws ([`contact`], eqs 1-2), the transducers ([`transducer`], eqs 8-10 for the
-//! paper's), the suspension's restoring force ([`suspension`]), the harvester assembled from a
-//! device's parts ([`harvester`], eqs 7-10: a [`crate::model::Model`] with its free flight split
-//! for the exponential integrator and its energy ledger, and the interface circuits between a
-//! transducer and a DC load: diode bridges, SSHI, SECE), the linear response of any device
+//! The physics of the harvester: the force laws of its mechanical parts (Hertz line contact
+//! [`hertz`], eqs 3-6 and 19; the end-stops and their laws [`contact`], eqs 1-2; the
+//! suspension's restoring force [`suspension`]; all three live in [`crate::laws`], below the
+//! device, and are re-exported here), the transducers ([`transducer`], eqs 8-10 for the
+//! paper's), the harvester assembled from a device's parts ([`harvester`], eqs 7-10: a
+//! [`crate::model::Model`] with its free flight split for the exponential integrator and its
+//! energy ledger, and the interface circuits between a transducer and a DC load: diode
+//! bridges, SSHI, SECE), the linear response of any device
 //! ([`linear`]) and the paper's linear two-port theory ([`two_port`], eqs 11-18 and 21-22), and
 //! the closed forms the model is validated against ([`closed_forms`], [`interface_closed_forms`]).
 //!
@@ -44,11 +46,10 @@
 //! ```
 
 pub mod closed_forms;
-pub mod contact;
 pub mod harvester;
-pub mod hertz;
 pub mod interface_closed_forms;
 pub mod linear;
-pub mod suspension;
 pub mod transducer;
 pub mod two_port;
+
+pub use crate::laws::{contact, hertz, suspension};

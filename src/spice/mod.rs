@@ -67,7 +67,7 @@
 //! d = f (1 - ln f), each of which simplifies to f <- (f - d) / ln f. The starting value
 //! overestimates f by a relative 10 % to 60 % on 1e-12 < d < 0.5 and the convergence is
 //! quadratic, so 4 steps bring the relative error below 1e-11 on that range (measured against
-//! [`HertzLine::force_of_delta`](crate::physics::hertz::HertzLine::force_of_delta) in
+//! [`HertzLine::force_of_delta`](crate::laws::hertz::HertzLine::force_of_delta) in
 //! `tests/spice.rs`; [`hertz_force_closed_form`] is the same
 //! formula in Rust). The Newton steps are `.func` definitions that ngspice inlines, so ngspice
 //! differentiates the closed form exactly for its Newton-Raphson.

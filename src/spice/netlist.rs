@@ -5,7 +5,7 @@ use std::fmt::Write as _;
 use crate::device::{
     AreaOverlapPair, Device, HertzLineStop, StiffnessModel, Stop, StopLaw, Transducer,
 };
-use crate::physics::hertz::HertzLine;
+use crate::laws::hertz::HertzLine;
 use crate::spice::{units, Method, SpiceDrive, SpiceOptions, WRDATA_VECTORS};
 
 /// Formats a number for the netlist: the shortest text that reads back as the same `f64`, in

@@ -40,9 +40,9 @@
 use rayon::prelude::*;
 
 use crate::device::Device;
+use crate::laws::suspension::Place as EquilibriumPlace;
 use crate::model::Model;
 use crate::ode::Stats;
-use crate::physics::suspension::Place as EquilibriumPlace;
 use crate::study::basins::{Attractor, BasinGrid};
 use crate::study::displacement::two_wells;
 use crate::study::orbit::{Forcing, Orbit, OrbitError, Parameter, Shooter, ShootingConfig};

@@ -25,9 +25,9 @@
 use rayon::prelude::*;
 
 use crate::device::Device;
+use crate::laws::suspension::Place;
 use crate::model::Mode;
 use crate::num::stats::MeanCi;
-use crate::physics::suspension::Place;
 use crate::study::record::{
     simulate_observed, RecordError, RecordObserver, RecordSpec, RecordSummary,
 };

@@ -18,9 +18,9 @@
 use rayon::prelude::*;
 
 use crate::device::{Device, Suspension};
+use crate::laws::suspension::{potential_j, Polynomial};
 use crate::model::Mode;
 use crate::num::stats::MeanCi;
-use crate::physics::suspension::{potential_j, Polynomial};
 use crate::study::record::{simulate_observed, RecordObserver, RecordSpec};
 use crate::validation::ValidationError;
 

@@ -14,7 +14,7 @@
 //! inductance, whose force `Phi i = Phi^2 v / (Rc + R)` is viscous; the load then takes
 //! `R Phi^2 E[v^2] / (Rc + R)^2` ([`StationaryLaw::load_power_w`]; not a row of the checks:
 //! it is the `E[v^2]` row times a constant, sample by sample). `U` is the suspension's potential plus the stops' elastic
-//! energies ([`crate::physics::suspension::potential_j`]): any suspension form, and stops with
+//! energies ([`crate::laws::suspension::potential_j`]): any suspension form, and stops with
 //! linear, Hertz line or Hertz point springs and no contact damping. Devices outside this
 //! class (a capacitive or piezoelectric transducer, a coil with inductance, contact damping,
 //! rigid stops with `e < 1`) are refused.
@@ -44,8 +44,8 @@ use nalgebra::{DMatrix, DVector};
 use statrs::distribution::{ContinuousCDF, FisherSnedecor, StudentsT};
 
 use crate::device::{Device, StopLaw, Transducer};
-use crate::physics::contact::StopModel;
-use crate::physics::suspension::{potential_j, Polynomial};
+use crate::laws::contact::StopModel;
+use crate::laws::suspension::{potential_j, Polynomial};
 use crate::study::displacement::{DisplacementBins, DisplacementEnsemble, RecordDisplacement};
 use crate::study::record::RecordSpec;
 use crate::validation::random_law::band_deficit;

@@ -4,12 +4,12 @@
 use std::convert::Infallible;
 
 use crate::device::Device;
+use crate::laws::hertz::{
+    normalised_delta, HertzLine, LinearFits, EQ19_FIT_RANGE_M, EQ19_FIT_SAMPLES,
+};
 use crate::paper::claims::{keys, Claims, ClaimsError, Value};
 use crate::paper::setups::{hertz_stop, with_hertz, ParamSet, Prototypes};
 use crate::paper::Figure;
-use crate::physics::hertz::{
-    normalised_delta, HertzLine, LinearFits, EQ19_FIT_RANGE_M, EQ19_FIT_SAMPLES,
-};
 use crate::progress::Progress;
 
 /// Samples of the normalised curve of Figure 5, uniform in the normalised force.

@@ -10,7 +10,7 @@
 //! * A gap-closing pair: `R` is the right-hand side minus `L y`.
 //! * Piezoelectric, electromagnetic, or no transducer: the free flight is linear and `R` is
 //!   zero, so the exponential step is exact for the linearly interpolated input.
-//! * A nonlinear suspension ([`crate::physics::suspension`]), with any transducer: `L` is the
+//! * A nonlinear suspension ([`crate::laws::suspension`]), with any transducer: `L` is the
 //!   Jacobian at the reference well (not at rest, which may be a barrier's top) and `R` the
 //!   right-hand side minus `L y`, which is constant at the well and grows with the distance
 //!   from it.
@@ -30,9 +30,9 @@
 
 use nalgebra::{SMatrix, SVector};
 
+use crate::laws::contact::Side;
+use crate::laws::suspension::Spring;
 use crate::model::{FlightSplit, FlightVisitor, Mode, NoFlight, Remainder, MAX_OUTPUTS};
-use crate::physics::contact::Side;
-use crate::physics::suspension::Spring;
 use crate::physics::transducer::{PairGeometry, TransducerModel};
 
 use super::port::{head, Port};

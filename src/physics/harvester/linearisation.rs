@@ -14,8 +14,8 @@
 use nalgebra::{SMatrix, SVector};
 
 use super::circuits::DiodeLaw;
+use crate::laws::contact::{ContactDamping, ContactLaw, Side, StopModel};
 use crate::model::{Affine, AffineGuard, Contact, Mode};
-use crate::physics::contact::{ContactDamping, ContactLaw, Side, StopModel};
 use crate::physics::transducer::TransducerModel;
 
 use super::circuits::{Bridge, CircuitMode, Element};

@@ -1,7 +1,7 @@
 //! The harvester assembled from a device's parts: a [`Model`] whose state the parts decide.
 //!
 //! Mechanics (eq 7): `m x'' + b x' + F_s(x) + F_e + F_im = m a(t)`, where `F_s` is the
-//! suspension's restoring force ([`crate::physics::suspension`]), `F_e` the transducer's
+//! suspension's restoring force ([`crate::laws::suspension`]), `F_e` the transducer's
 //! reaction through its port ([`port`]: the transducer's own loads, eqs 8-10 for the paper's
 //! pair, or an interface circuit) and `F_im` the end-stop force ([`stops`], eqs 1-2). The state
 //! is `(x, v)` followed by the port's components: two for a transducer with its loads (unused
@@ -40,9 +40,9 @@ pub mod stops;
 use nalgebra::{SMatrix, SVector};
 
 use crate::device::Device;
+use crate::laws::contact::{Side, StopModel};
+use crate::laws::suspension::{self, Spring};
 use crate::model::{Contact, Layout, LedgerTerm, Load, Mode, Model, SwitchKind};
-use crate::physics::contact::{Side, StopModel};
-use crate::physics::suspension::{self, Spring};
 use crate::physics::transducer::TransducerModel;
 
 use port::Port;

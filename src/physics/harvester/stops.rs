@@ -9,8 +9,8 @@
 //! negative or positive again) or, resting on a rigid stop, the holding force turning away
 //! from the stop. While the mass touches one of its stops the other is not watched.
 
+use crate::laws::contact::{Side, StopModel};
 use crate::model::{Contact, Mode};
-use crate::physics::contact::{Side, StopModel};
 
 /// An unused guard.
 pub(crate) const OFF: f64 = f64::NEG_INFINITY;

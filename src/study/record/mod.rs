@@ -319,7 +319,7 @@ pub enum Fallback {
     Unresolved,
     /// The suspension's stiffness strays so fast from its value at the well that the
     /// exponential step could not reach the well itself
-    /// ([`Spring::fast_path_reach_m`](crate::physics::suspension::Spring::fast_path_reach_m)).
+    /// ([`Spring::fast_path_reach_m`](crate::laws::suspension::Spring::fast_path_reach_m)).
     StiffSuspension,
     /// The model has neither a free-flight split nor an affine mode (an interface circuit with
     /// Shockley diodes, a nonlinear suspension or an electrostatic pair behind it).

@@ -38,9 +38,9 @@ mod model;
 use nalgebra::SVector;
 
 use crate::device::Device;
+use crate::laws::contact::StopModel;
+use crate::laws::suspension::Spring;
 use crate::model::{Contact, Layout, LedgerTerm, Load, Mode};
-use crate::physics::contact::StopModel;
-use crate::physics::suspension::Spring;
 
 use super::port::Port;
 use super::stops::FrameStops;

@@ -4,8 +4,8 @@
 
 use nalgebra::{SMatrix, SVector};
 
+use crate::laws::contact::StopModel;
 use crate::model::{Contact, ContactGeometry, Flow, LedgerTerm, Mode, Model, SwitchKind};
-use crate::physics::contact::StopModel;
 
 use super::super::ledger::PROJECTIONS as INNER_PROJECTIONS;
 use super::super::stops::OFF;

@@ -36,9 +36,9 @@
 use nalgebra::{Complex, DMatrix, DVector, SMatrix, SVector};
 
 use crate::drive::{Excitation, Sine};
+use crate::laws::contact::Side;
 use crate::model::{Mode, Model};
 use crate::ode::{SolverError, Stats};
-use crate::physics::contact::Side;
 use crate::study::orbit::{multipliers, Extent, Forcing, OrbitSummary, Parameter};
 
 use super::segment::{fly, Flight};

@@ -6,9 +6,9 @@ use nalgebra::{DMatrix, DVector};
 
 use nalgebra::SVector;
 
+use crate::laws::contact::Side;
 use crate::model::{Driven, Mode, Model, SwitchKind};
 use crate::ode::{Dopri5, Observer, Step};
-use crate::physics::contact::Side;
 use crate::study::continuation::first_orbit;
 use crate::study::orbit::{Orbit, OrbitError, Shooter};
 

@@ -23,7 +23,7 @@
 
 use nalgebra::DMatrix;
 
-use crate::physics::contact::{Side, StopModel};
+use crate::laws::contact::{Side, StopModel};
 
 /// The highest power of the suspension's polynomial.
 pub const MAX_ORDER: usize = 7;

@@ -1,5 +1,6 @@
 //! The end-stop contact of eqs 1-2, generalised to any stop of [`crate::device::stops`]: which
-//! stop, and each stop's force law. The contact modes the integrator switches between are
+//! stop, and each stop's force law, in plain physical parameters (a device builds them from its
+//! stops' descriptions). The contact modes the integrator switches between are
 //! [`crate::model::Contact`]'s.
 //!
 //! For a compliant stop on side `s` (`s = +1` upper, `-1` lower) the penetration is
@@ -18,8 +19,7 @@
 //! rests on the stop ([`Contact::Resting`](crate::model::Contact::Resting)) until the net
 //! force pulls it away (see [`crate::physics::harvester`]).
 
-use crate::device::{HertzLineStop, Stop, StopLaw, StopSide};
-use crate::physics::hertz::HertzLine;
+use crate::laws::hertz::HertzLine;
 
 /// Which stop: +1 the one at x = +gap, -1 the one at x = -gap.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -42,15 +42,6 @@ impl Side {
 
     /// Both sides, upper first.
     pub const BOTH: [Side; 2] = [Side::Upper, Side::Lower];
-}
-
-impl From<StopSide> for Side {
-    fn from(s: StopSide) -> Self {
-        match s {
-            StopSide::Upper => Side::Upper,
-            StopSide::Lower => Side::Lower,
-        }
-    }
 }
 
 /// The spring law of a compliant stop, evaluated.
@@ -107,15 +98,6 @@ impl ContactLaw {
             ContactLaw::Power { k, n } => k * delta_m.powf(n + 1.0) / (n + 1.0),
         }
     }
-
-    /// The law of a Hertz line stop: eq 6, or eq 19's linear fit.
-    pub fn of_hertz_line(h: &HertzLineStop) -> Self {
-        if h.linear_fit {
-            ContactLaw::Linear(h.linear_stiffness_n_per_m())
-        } else {
-            ContactLaw::Hertz(HertzLine::of_stop(h))
-        }
-    }
 }
 
 /// How a compliant stop dissipates while in contact.
@@ -151,45 +133,6 @@ pub enum StopModel {
 }
 
 impl StopModel {
-    /// The model of a stop description.
-    pub fn of(stop: &Stop) -> Self {
-        let gap = stop.gap_m;
-        let viscous = ContactDamping::Viscous(stop.damping_n_s_per_m);
-        let compliant = |law| StopModel::Compliant {
-            gap,
-            law,
-            damping: viscous,
-            tension_free: stop.tension_free,
-        };
-        match &stop.law {
-            StopLaw::HertzLine(h) => compliant(ContactLaw::of_hertz_line(h)),
-            StopLaw::Linear { stiffness_n_per_m } => {
-                compliant(ContactLaw::Linear(*stiffness_n_per_m))
-            }
-            StopLaw::HertzPoint(k) => compliant(ContactLaw::Power {
-                k: k.value(),
-                n: 1.5,
-            }),
-            StopLaw::HuntCrossley {
-                stiffness_n_per_m_pow_n,
-                exponent,
-                damping_s_per_m,
-            } => StopModel::Compliant {
-                gap,
-                law: ContactLaw::Power {
-                    k: *stiffness_n_per_m_pow_n,
-                    n: *exponent,
-                },
-                damping: ContactDamping::HuntCrossley(*damping_s_per_m),
-                tension_free: true,
-            },
-            StopLaw::Restitution { coefficient } => StopModel::Rigid {
-                gap,
-                restitution: *coefficient,
-            },
-        }
-    }
-
     /// The gap (m).
     #[inline(always)]
     pub fn gap(&self) -> f64 {

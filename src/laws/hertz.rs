@@ -10,8 +10,6 @@
 //! d = delta/delta0. On 0 < f < 1 it inverts to f = -d / W_{-1}(-d/e), with W_{-1} the lower
 //! branch of the Lambert W function (the `lambert_w` crate, accurate to 50 bits).
 
-use crate::device::{Device, HertzLineStop, StopLaw};
-
 /// Penetration range of the least-squares fit of eq 19 (the paper: 0 to 0.5 um).
 pub const EQ19_FIT_RANGE_M: f64 = 0.5e-6;
 /// Uniform samples of the fit range (trapezoid-weighted; `tests/foundation.rs` shows the
@@ -49,25 +47,6 @@ pub fn normalised_force(d: f64) -> f64 {
 }
 
 impl HertzLine {
-    /// The contact law of a Hertz line stop (t, R, E, nu).
-    pub fn of_stop(s: &HertzLineStop) -> Self {
-        Self {
-            length_m: s.contact_length_m,
-            radius_m: s.bump_radius_m,
-            lambda_per_pa: (1.0 - s.poisson_ratio * s.poisson_ratio)
-                / (std::f64::consts::PI * s.youngs_modulus_pa),
-        }
-    }
-
-    /// The Hertz line law of a device's first Hertz line stop (upper, then lower), if it
-    /// has one.
-    pub fn of_device(device: &Device) -> Option<Self> {
-        device.stops.present().find_map(|(_, s)| match &s.law {
-            StopLaw::HertzLine(h) => Some(Self::of_stop(h)),
-            _ => None,
-        })
-    }
-
     /// Force scale F0 = t^3 / (2 lambda R) (N).
     pub fn force_scale_n(&self) -> f64 {
         self.length_m.powi(3) / (2.0 * self.lambda_per_pa * self.radius_m)
