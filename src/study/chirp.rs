@@ -1,32 +1,7 @@
 //! Sweeps whose answer does not depend on their step: the device's half-power band that sets
-//! the default step, the phase-continuous ramp that joins two steps of a stepped sweep, and the
-//! swept sine at a stated rate (a chirp, as a lab sweeps).
-//!
-//! # Why a frequency step kicks the response
-//! Near a resonance of quality factor Q the steady response's phase moves by about
-//! 2 Q df / f0 per step df: a step taken at once leaves the state of the old frequency as the
-//! initial condition at the new one, and the transient that follows overshoots the new steady
-//! response by a fraction of order df / w (w = f0 / Q the half-power width). Next to the end of
-//! a branch (a fold, or the grazing of the non-impacting orbit) that overshoot is enough to
-//! carry the state across to the other branch, so that a stepped sweep leaves the branch early,
-//! by an amount that depends on the step rather than on the device.
-//!
-//! # The ramp
-//! Here a step is instead reached by a ramp: frequency and amplitude move at a continuous
-//! phase over a whole number of cycles, at a rate that rises from zero and falls back to zero
-//! ([`crate::drive::Profile::Smooth`]) and on average moves the frequency by a fiftieth of
-//! the half-power width per ring-up time 1/(pi w) ([`default_ramp_rate_hz_per_s`]): the
-//! response follows the branch adiabatically, and the sweep leaves it where it ends. The ramp
-//! ends at drive phase zero, where the next step's steady state starts, so that the drive's
-//! phase is continuous across the whole sweep.
-//!
-//! The ramp moves in stairs of one cycle: each cycle is a whole sine period at the profile's
-//! frequency and amplitude at the cycle's middle, so that it starts and ends at phase zero and
-//! is integrated by [`SineFlow`], exactly where the device is affine (a coil whose time
-//! constant is far below the drive's period costs what its slow modes cost) and by
-//! Dormand-Prince elsewhere. A stair moves the frequency by at most twice the rate times
-//! the period, whatever the step: at the default rate 0.04 pi w / f0 = 0.13 w / Q at the
-//! resonance f0 of quality factor Q, a kick far below the step's w / 4.
+//! the default step and the default rate of the phase-continuous ramp that joins two steps of
+//! a stepped sweep ([`crate::study::ramp`]), and the swept sine at a stated rate (a chirp, as a
+//! lab sweeps).
 //!
 //! # The default step
 //! [`default_step_hz`] is a quarter of the linear half-power width ([`half_power_band`]),
@@ -41,7 +16,6 @@ use crate::model::{Driven, Mode, Model, SwitchKind, MAX_OUTPUTS};
 use crate::num::roots::{illinois, RootOptions, Sample};
 use crate::ode::{Dopri5, Observer, SolverError, Stats, Step};
 use crate::physics::linear::{open_circuit_resonance_hz, LinearResponse};
-use crate::study::flow::SineFlow;
 use crate::study::steady::{steady_state, SteadyConfig};
 
 /// The resonance and half-power width of a device's linear response (the displacement per
@@ -164,35 +138,6 @@ pub fn default_step_hz(device: &Device, from_hz: f64, to_hz: f64) -> f64 {
 pub fn default_ramp_rate_hz_per_s(device: &Device) -> Option<f64> {
     half_power_band(device)
         .map(|b| RAMP_BANDS_PER_RING * std::f64::consts::PI * b.width_hz * b.width_hz)
-}
-
-/// Moves the drive of `base` from (frequency, RMS acceleration) `from` to `to` by a smooth ramp
-/// of at least `min_duration_s` (as many whole cycles as the mean frequency makes in it, at
-/// least one), in stairs of one cycle (see the module docs), from the state `y` in `mode` at
-/// drive phase zero, with relative tolerance `rtol`. Returns the state and mode at the end
-/// (at drive phase zero) and the counters.
-pub fn ramp<M: Model<N>, const N: usize>(
-    base: &M,
-    from: (f64, f64),
-    to: (f64, f64),
-    min_duration_s: f64,
-    y: SVector<f64, N>,
-    mode: Mode,
-    rtol: f64,
-) -> Result<(SVector<f64, N>, Mode, Stats), SolverError> {
-    let f_mean = 0.5 * (from.0 + to.0);
-    let cycles = (min_duration_s * f_mean).ceil().max(1.0) as usize;
-    let (mut y, mut mode, mut stats) = (y, mode, Stats::default());
-    for k in 0..cycles {
-        let s = Profile::Smooth.s((k as f64 + 0.5) / cycles as f64);
-        let f = from.0 + (to.0 - from.0) * s;
-        let g = from.1 + (to.1 - from.1) * s;
-        let mut flow = SineFlow::new(base, Sine::from_rms_g(g, f), 0.0, y, mode, rtol);
-        flow.integrate(1.0 / f, |_, _| {})?;
-        (y, mode) = (flow.y(), flow.mode());
-        stats += flow.stats();
-    }
-    Ok((y, mode, stats))
 }
 
 /// A swept sine: the drive's frequency moves linearly at `rate_hz_per_s` from `from_hz` to

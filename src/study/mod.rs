@@ -1,8 +1,8 @@
 //! Studies built on the model and the integrator: the exact integration of a sine-driven
 //! harvester's affine modes ([`flow`]), steady states under a sine ([`steady`]), the
 //! stepped-drive engine ([`stepped`]) behind frequency sweeps ([`sweep`], up and down) and
-//! amplitude sweeps ([`amplitude`]), the ramps and swept sines that make sweeps independent of
-//! their step ([`chirp`]), periodic orbits by shooting with their Floquet multipliers
+//! amplitude sweeps ([`amplitude`]), the ramps ([`ramp`]) and swept sines ([`chirp`]) that make
+//! sweeps independent of their step, periodic orbits by shooting with their Floquet multipliers
 //! ([`orbit`]), their pseudo-arclength continuation with folds, branch points and grazing
 //! ([`continuation`]), basins of attraction ([`basins`]) with the attractors found by settling
 //! seeds and placed by well ([`attractors`]), and random-vibration records ([`record`]) and
@@ -23,6 +23,7 @@ pub mod ensemble;
 pub mod flow;
 pub mod orbit;
 pub mod periodic;
+pub mod ramp;
 pub mod record;
 pub mod record_ledger;
 pub mod rk4_record;

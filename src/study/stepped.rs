@@ -23,7 +23,7 @@ use crate::drive::Sine;
 use crate::model::{Mode, Model};
 use crate::ode::{SolverError, Stats};
 use crate::progress::Progress;
-use crate::study::chirp::ramp;
+use crate::study::ramp::ramp;
 use crate::study::steady::{steady_state, Measurement, SteadyConfig};
 
 /// One step of a continuation: the measurement and the state it ended in.
@@ -57,7 +57,7 @@ pub enum Approach {
     /// phase is continuous, its frequency jumps).
     Jump,
     /// By a phase-continuous ramp at this rate (parameter units, Hz or g, per second), over
-    /// a whole number of cycles ([`crate::study::chirp::ramp`]).
+    /// a whole number of cycles ([`crate::study::ramp::ramp`]).
     Ramp {
         /// The rate (per second).
         rate_per_s: f64,
