@@ -52,15 +52,17 @@ use crate::study::orbit::{Forcing, Orbit, OrbitError, Parameter, Shooter};
 
 mod corrector;
 mod diagram;
+mod diagram_types;
 mod events;
 pub mod impacting;
 mod test_functions;
 mod types;
 
 use corrector::Continuer;
-pub use diagram::{
-    all_stops_rigid, diagram, frequency_diagram, BranchEnd, BranchKind, Diagram, DiagramBranch,
-    DiagramEvent, DiagramPoint, EndKind, EventKind as DiagramEventKind,
+pub use diagram::{all_stops_rigid, diagram, frequency_diagram};
+pub use diagram_types::{
+    BranchEnd, BranchKind, Diagram, DiagramBranch, DiagramEvent, DiagramPoint, EndKind,
+    EventKind as DiagramEventKind,
 };
 pub use types::{Branch, BranchPoint, ContinuationSettings, Event, EventKind, Rejection};
 

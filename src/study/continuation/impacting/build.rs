@@ -14,7 +14,7 @@ use crate::model::Model;
 use crate::num::roots::{illinois, RootOptions, Sample};
 use crate::ode::Stats;
 use crate::progress::{Progress, Silent};
-use crate::study::continuation::diagram::orbit_point;
+use crate::study::continuation::diagram_types::orbit_point;
 use crate::study::continuation::{continue_branch, first_orbit, ContinuationSettings};
 use crate::study::orbit::{Forcing, Orbit, OrbitError, Parameter, Shooter};
 

@@ -42,18 +42,17 @@
 //! `segment.rs` integrates one flight with its variational equations, `bvp.rs` poses the
 //! boundary-value problem of an impact sequence, `follow.rs` continues one branch with its
 //! events, `build.rs` builds the whole diagram from the non-impacting branch (its types are
-//! those of the parent's diagram), and `starts.rs` makes the starts of new branches.
+//! those of the parent's `diagram_types.rs`), and `starts.rs` makes the starts of new branches.
 
 mod build;
-mod bvp;
+pub(super) mod bvp;
 mod follow;
 mod segment;
 mod starts;
 
 pub use build::{rigid_diagram, DiagramOptions};
-pub(crate) use bvp::side_stops;
 pub use bvp::{Closure, ImpactSequence};
 
-use super::diagram::{
+use super::diagram_types::{
     BranchEnd, BranchKind, Diagram, DiagramBranch, DiagramEvent, DiagramPoint, EndKind, EventKind,
 };
