@@ -1,7 +1,8 @@
 //! `bench`: how fast the model runs, on fixed cases. Speed is measured here, never
 //! asserted by a test.
 //!
-//! Usage: `cargo run --release --bin bench [-- --quick | --interfaces | --fits]` (`--fits`
+//! Usage: `cargo run --release --bin bench [-- --quick | --interfaces | --fits | --floor]`
+//! (`--floor` times the record engine against its floor kernel, `bench/floor.rs`; `--fits`
 //! times every fit of the recovery family and Figure 8's on one thread and prints their
 //! table, writing nothing; `just bench` runs the
 //! whole benchmark; `reproduce` runs `--quick`, which keeps its last phase short;
@@ -39,6 +40,10 @@ mod cases;
 mod examples;
 #[path = "bench/fits.rs"]
 mod fits;
+#[path = "bench/floor.rs"]
+mod floor;
+#[path = "bench/floor_kernel.rs"]
+mod floor_kernel;
 #[path = "bench/interfaces.rs"]
 mod interfaces;
 #[path = "bench/report.rs"]
@@ -68,6 +73,10 @@ struct Args {
     /// their table, writing nothing.
     #[arg(long)]
     fits: bool,
+    /// Time the record engine against its floor kernel (issue 50's sine case and prototype
+    /// 2's noise record) and print their table, writing nothing.
+    #[arg(long)]
+    floor: bool,
     /// Runs of each fit with `--fits`.
     #[arg(long, default_value_t = 3)]
     fit_repeats: usize,
@@ -84,6 +93,10 @@ fn run() -> Result<()> {
             "{}",
             fits::table(&fits::measure(args.fit_repeats)?, args.fit_repeats)
         );
+        return Ok(());
+    }
+    if args.floor {
+        print!("{}", floor::table(&floor::measure(REPEATS)?, REPEATS));
         return Ok(());
     }
     if args.interfaces {

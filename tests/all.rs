@@ -36,6 +36,7 @@ mod masses;
 mod record_accuracy;
 mod record_figures;
 mod record_ledger;
+mod record_rebounds;
 mod record_simulation;
 mod regression_analytic;
 mod regression_response;

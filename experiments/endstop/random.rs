@@ -35,10 +35,13 @@ pub fn random(a: RandomArgs) -> Result<()> {
     if endstop::study::record::has_storage(&loaded.device) {
         return crate::random_storage::random(&a, &loaded.device);
     }
-    match (&a.accel_file, a.psd) {
-        (Some(path), _) => measured(&a, &loaded.device, path.clone()),
-        (None, Some(psd)) => noise(&a, psd),
-        (None, None) => bail!("give --psd (white noise) or --accel-file (a measured record)"),
+    match (&a.accel_file, a.sine_g, a.psd) {
+        (Some(path), _, _) => measured(&a, &loaded.device, Some(path.clone())),
+        (None, Some(_), _) => measured(&a, &loaded.device, None),
+        (None, None, Some(psd)) => noise(&a, psd),
+        (None, None, None) => {
+            bail!("give --psd (white noise), --sine-g (a sine) or --accel-file (a measured record)")
+        }
     }
 }
 
@@ -310,7 +313,8 @@ fn displacement(
     Ok(Displacement { md, plot })
 }
 
-fn measured(a: &RandomArgs, file_device: &Device, path: PathBuf) -> Result<()> {
+/// The record of a measured drive (`path`) or of a sine (`--sine-g`, without a path).
+fn measured(a: &RandomArgs, file_device: &Device, path: Option<PathBuf>) -> Result<()> {
     let MeasuredDrive {
         rec,
         accel,
@@ -319,7 +323,7 @@ fn measured(a: &RandomArgs, file_device: &Device, path: PathBuf) -> Result<()> {
         preroll_s,
         band_hz: (lo, hi),
         mut times,
-    } = read_measured(a, file_device, &path)?;
+    } = read_measured(a, file_device, path.as_deref())?;
     let (mut exp, loaded, device) = start("endstop-random", &a.device, a.bias_v, a.out.clone())?;
     times.lap("setup");
     let drive = SampledDrive {
@@ -378,7 +382,7 @@ fn measured(a: &RandomArgs, file_device: &Device, path: PathBuf) -> Result<()> {
     times.lap("spectra");
 
     let m = out.freq_hz.len();
-    let file = path.display().to_string();
+    let file = rec.source_name.clone();
     let mut df = df!(
         "freq_hz" => out.freq_hz.clone(),
         "out_psd_uw_per_hz" => out.density.iter().map(|d| d * 1e6).collect::<Vec<_>>(),

@@ -7,7 +7,9 @@ use std::sync::Arc;
 use anyhow::{bail, Result};
 use clap::Parser;
 use endstop::device::Device;
+use endstop::drive::measured::MeasuredRecord;
 use endstop::study::record::transient_s;
+use endstop::G;
 use endstop_experiments::fmt_sig;
 use endstop_experiments::reports::measured_io;
 use endstop_experiments::time_split::TimeSplit;
@@ -22,11 +24,24 @@ pub struct RandomArgs {
     /// --accel-file instead.
     #[arg(
         long,
-        required_unless_present = "accel_file",
-        conflicts_with = "accel_file",
+        required_unless_present_any = ["accel_file", "sine_g"],
+        conflicts_with_all = ["accel_file", "sine_g"],
         allow_hyphen_values = true
     )]
     pub(crate) psd: Option<f64>,
+    /// A sine drive instead of noise: its peak acceleration (g), `a(t) = A g sin(2 pi f t)`
+    /// from rest, with --freq-hz, sampled at --sample-rate-hz for the pre-roll (as for
+    /// --accel-file) and then --duration-s analysed; its outputs are --accel-file's.
+    #[arg(
+        long,
+        requires = "freq_hz",
+        conflicts_with = "accel_file",
+        allow_hyphen_values = true
+    )]
+    pub(crate) sine_g: Option<f64>,
+    /// The sine drive's frequency (Hz), with --sine-g.
+    #[arg(long, requires = "sine_g", allow_hyphen_values = true)]
+    pub(crate) freq_hz: Option<f64>,
     /// A measured acceleration record to drive the device with instead of noise: a CSV file
     /// whose header names a time column (`time_s` or `time_ms`) and an acceleration column
     /// (`accel_m_per_s2` or `accel_g`), or a mono WAV file with --accel-scale. It is checked
@@ -48,7 +63,7 @@ pub struct RandomArgs {
     /// Number of independent noise records (their mean and 95 % interval are reported).
     #[arg(long, default_value_t = 4)]
     pub(crate) records: usize,
-    /// Length of each noise record (s).
+    /// Length of each noise record, or of a sine drive's analysed record (s).
     #[arg(long, default_value_t = 10.0, allow_hyphen_values = true)]
     pub(crate) duration_s: f64,
     /// Seed of the random streams (record i uses stream i).
@@ -100,12 +115,39 @@ pub(crate) struct MeasuredDrive {
     pub(crate) times: TimeSplit,
 }
 
-/// Reads `path` as `--accel-file` for `device` (the file of `a`, as loaded), checks it and
-/// resamples it.
+/// The sine drive of `--sine-g` and `--freq-hz` for `device`: the device's pre-roll and then
+/// `--duration-s`, sampled at `--sample-rate-hz`.
+fn sine_record(a: &RandomArgs, device: &Device, amplitude_g: f64) -> Result<MeasuredRecord> {
+    let freq_hz = a.freq_hz.unwrap_or(f64::NAN);
+    if !(amplitude_g.is_finite() && freq_hz.is_finite() && freq_hz > 0.0) {
+        bail!("--sine-g = {amplitude_g}, --freq-hz = {freq_hz}: must be finite, the frequency > 0");
+    }
+    if !(a.duration_s.is_finite() && a.duration_s > 0.0) {
+        bail!("--duration-s = {}: must be finite and > 0", a.duration_s);
+    }
+    let fs = a.sample_rate_hz;
+    let samples = ((transient_s(device) + a.duration_s) * fs).round();
+    if samples >= MAX_RESAMPLED as f64 {
+        bail!("--duration-s = {} at --sample-rate-hz = {fs}: must give at most {MAX_RESAMPLED} samples", a.duration_s);
+    }
+    let w = 2.0 * std::f64::consts::PI * freq_hz / fs;
+    let accel = (0..=samples as usize)
+        .map(|k| amplitude_g * G * (w * k as f64).sin())
+        .collect();
+    let name = format!(
+        "sine {} g at {} Hz",
+        fmt_sig(amplitude_g, 6),
+        fmt_sig(freq_hz, 6)
+    );
+    Ok(MeasuredRecord::from_uniform(&name, fs, accel)?)
+}
+
+/// Reads `path` as `--accel-file` for `device` (the file of `a`, as loaded), or without a path
+/// makes the sine of `--sine-g`, checks it and resamples it.
 pub(crate) fn read_measured(
     a: &RandomArgs,
     device: &Device,
-    path: &std::path::Path,
+    path: Option<&std::path::Path>,
 ) -> Result<MeasuredDrive> {
     let fs = a.sample_rate_hz;
     if !(fs.is_finite() && fs > 0.0) {
@@ -114,7 +156,11 @@ pub(crate) fn read_measured(
     // Read and check everything before the experiment starts, so that nothing is written for
     // a bad record.
     let mut times = TimeSplit::start();
-    let rec = measured_io::read_record(path, a.accel_scale)?;
+    let rec = match (path, a.sine_g) {
+        (Some(path), _) => measured_io::read_record(path, a.accel_scale)?,
+        (None, Some(g)) => sine_record(a, device, g)?,
+        (None, None) => bail!("give --accel-file or --sine-g"),
+    };
     let preroll_s = transient_s(device);
     let f0 = endstop::physics::linear::open_circuit_resonance_hz(device);
     let (lo, hi) = match a.band_hz.as_deref() {
@@ -135,7 +181,7 @@ pub(crate) fn read_measured(
         bail!(
             "{}: --sample-rate-hz = {fs} gives {samples:.0} samples over the record's {} s: must \
              give at most {MAX_RESAMPLED}",
-            path.display(),
+            rec.source_name,
             fmt_sig(rec.duration_s(), 6)
         );
     }

@@ -28,13 +28,20 @@ use crate::shared::{describe, start};
 /// Runs `endstop random` on `device` (as loaded from `a.device`), whose model has a storage.
 pub fn random(a: &RandomArgs, device: &Device) -> Result<()> {
     check_steady_mean(device)?;
-    match (&a.accel_file, a.psd) {
-        (Some(path), _) => {
-            let m = read_measured(a, device, path)?;
+    match (&a.accel_file, a.sine_g, a.psd) {
+        (Some(path), _, _) => {
+            let m = read_measured(a, device, Some(path))?;
             measured(a, m, &path.display().to_string())
         }
-        (None, Some(psd)) => noise(a, psd),
-        (None, None) => bail!("give --psd (white noise) or --accel-file (a measured record)"),
+        (None, Some(_), _) => {
+            let m = read_measured(a, device, None)?;
+            let source = m.rec.source_name.clone();
+            measured(a, m, &source)
+        }
+        (None, None, Some(psd)) => noise(a, psd),
+        (None, None, None) => {
+            bail!("give --psd (white noise), --sine-g (a sine) or --accel-file (a measured record)")
+        }
     }
 }
 

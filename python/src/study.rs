@@ -10,7 +10,10 @@ use endstop::physics::two_port::{self, TwoPort};
 use endstop::progress::Silent;
 use endstop::study::amplitude::{amplitude_sweep_report, AmplitudeReport};
 use endstop::study::ensemble::{run_ensemble, EnsembleSpec};
-use endstop::study::record::{simulate_record, RecordSpec, RecordSummary};
+use endstop::study::record::{
+    simulate_drive, simulate_record, transient_s, RecordSpec, RecordSummary, SampledDrive, Scheme,
+    DEFAULT_RTOL,
+};
 use endstop::study::steady::{steady_config, Measurement};
 use endstop::study::stepped::{linspace_step, Approach, Transition};
 use endstop::study::sweep::{self, SweepReport, SweepSettings};
@@ -382,6 +385,50 @@ fn record<'py>(
     Ok(d)
 }
 
+/// One record under a sine, `a(t) = accel_g g sin(2 pi freq_hz t)` from rest, sampled at
+/// `sample_rate_hz`: the device's pre-roll, discarded, then `duration_s` analysed, as
+/// `endstop random --sine-g`. Returns what [`record`] returns.
+#[pyfunction]
+#[pyo3(signature = (device, accel_g, freq_hz, duration_s = 10.0, sample_rate_hz = 100e3))]
+fn sine_record<'py>(
+    py: Python<'py>,
+    device: &PyDevice,
+    accel_g: f64,
+    freq_hz: f64,
+    duration_s: f64,
+    sample_rate_hz: f64,
+) -> PyResult<Bound<'py, PyDict>> {
+    if !(accel_g.is_finite() && freq_hz.is_finite() && freq_hz > 0.0) {
+        return Err(arg_err("accel_g must be finite and freq_hz positive"));
+    }
+    if !(duration_s.is_finite() && duration_s > 0.0) {
+        return Err(arg_err("duration_s must be positive"));
+    }
+    if !(sample_rate_hz.is_finite() && sample_rate_hz > 0.0) {
+        return Err(arg_err("sample_rate_hz must be positive"));
+    }
+    let dev = device.inner.clone();
+    let n_tr = (transient_s(&dev) * sample_rate_hz).round() as usize;
+    let n = n_tr + (duration_s * sample_rate_hz).round() as usize;
+    let w = 2.0 * std::f64::consts::PI * freq_hz / sample_rate_hz;
+    let drive = SampledDrive {
+        accel: (0..=n)
+            .map(|k| accel_g * G * (w * k as f64).sin())
+            .collect(),
+        sample_rate_hz,
+        transient_samples: n_tr,
+    };
+    let rec = py
+        .detach(move || simulate_drive(&dev, &drive, DEFAULT_RTOL, Scheme::Exponential))
+        .map_err(solver_err)?;
+    let d = PyDict::new(py);
+    d.set_item("sample_rate_hz", rec.sample_rate_hz)?;
+    d.set_item("v1_v", array(py, rec.v1_v))?;
+    d.set_item("v2_v", array(py, rec.v2_v))?;
+    summary_items(&d, &rec.summary)?;
+    Ok(d)
+}
+
 /// An ensemble of independent random-vibration records (record i uses stream i of `seed`),
 /// with the ensemble-mean output PSD, power, efficiency and bandwidth: the `endstop random`
 /// command's study (same segmenting and analysis band).
@@ -469,6 +516,7 @@ pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
         wrap_pyfunction!(down_sweep, m)?,
         wrap_pyfunction!(orbits, m)?,
         wrap_pyfunction!(record, m)?,
+        wrap_pyfunction!(sine_record, m)?,
         wrap_pyfunction!(ensemble, m)?,
     ] {
         m.add_function(f)?;

@@ -6,6 +6,7 @@ arrays, with the GIL released while it runs.
 * :func:`amplitude_sweep`: amplitude continuation at one frequency with its impact onset
   (Figure 9);
 * :func:`record`: one band-limited white-noise record, the load voltages and a summary;
+  :func:`sine_record` the same under a sine;
 * :func:`ensemble`: independent records, mean output PSD, power, efficiency and bandwidth (the
   ``endstop random`` command; Figures 11-15).
 
@@ -89,6 +90,14 @@ def record(device, psd_g2_per_hz, seed=2012, stream=0, duration_s=10.0):
     return _native.record(device, float(psd_g2_per_hz), int(seed), int(stream), float(duration_s))
 
 
+def sine_record(device, accel_g, freq_hz, duration_s=10.0, sample_rate_hz=100e3):
+    """One record under the sine ``a(t) = accel_g g sin(2 pi freq_hz t)`` from rest, the
+    device's pre-roll discarded and ``duration_s`` analysed (``endstop random --sine-g``): what
+    :func:`record` returns."""
+    return _native.sine_record(device, float(accel_g), float(freq_hz), float(duration_s),
+                               float(sample_rate_hz))
+
+
 def ensemble(device, psd_g2_per_hz, records=4, duration_s=10.0, seed=2012):
     """``records`` independent records (stream i of ``seed`` for record i): ``power_w`` and
     its ``power_ci95_w``, ``efficiency`` (2P/(m Sa)), ``bw3db_hz`` of the mean PSD
@@ -100,7 +109,8 @@ def ensemble(device, psd_g2_per_hz, records=4, duration_s=10.0, seed=2012):
                             int(seed))
 
 
-__all__ = ["up_sweep", "down_sweep", "orbits", "amplitude_sweep", "record", "ensemble"]
+__all__ = ["up_sweep", "down_sweep", "orbits", "amplitude_sweep", "record", "sine_record",
+           "ensemble"]
 
 
 def interface_sweep(device, accel_rms_g, freqs_hz):

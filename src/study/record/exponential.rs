@@ -9,6 +9,7 @@ use crate::ode::exponential::{resolves, ExpAdams, History};
 use crate::ode::GAUSS_LEGENDRE_3;
 
 use super::books::Books;
+use super::impacts::{self, Rebounds, RigidStop};
 use super::stepping::{FastPath, POSITION, VELOCITY};
 use super::{Fallback, FreeFlightPath, EXPONENTIAL_ORDER, STOP_MARGIN};
 
@@ -30,6 +31,16 @@ pub(super) struct ExpFlight<R, const N: usize> {
     scales: SVector<f64, N>,
     /// The step's dense output at the Gauss nodes, once the books ask for it.
     dense: Option<[ExpAdams<N, EXPONENTIAL_ORDER>; 3]>,
+    /// The free flight is linear: its remainder is identically zero, so a step needs no
+    /// history and is the propagator's product with the input's two columns alone.
+    linear: bool,
+    /// A linear free flight resolved by the sample interval between rigid stops: its stops,
+    /// where an interval's rebounds are located on the exact solution (`impacts.rs`).
+    rigid: Option<Vec<RigidStop>>,
+    /// `1 / scales`.
+    inv_scales: SVector<f64, N>,
+    /// The rebounds of the last step.
+    rebounds: Rebounds,
 }
 
 impl<R: Remainder<N>, const N: usize> ExpFlight<R, N> {
@@ -71,6 +82,12 @@ impl<R: Remainder<N>, const N: usize> ExpFlight<R, N> {
             c: split.c,
             scales,
             dense: None,
+            linear: split.linear,
+            rigid: (split.linear && resolves(&split.l, dt, &scales))
+                .then(|| impacts::rigid_stops(model))
+                .flatten(),
+            inv_scales: scales.map(|s| 1.0 / s),
+            rebounds: Rebounds::default(),
         })
     }
 }
@@ -87,7 +104,8 @@ impl<M: Model<N>, R: Remainder<N>, const N: usize> FastPath<M, N> for ExpFlight<
     }
 
     /// One exponential step where the mass flies free, the remainder has
-    /// [`EXPONENTIAL_ORDER`] values since the last switch, and the cubic through the
+    /// [`EXPONENTIAL_ORDER`] values since the last switch (or the free flight is linear, its
+    /// remainder zero), and the cubic through the
     /// positions and velocities at the step's ends stays [`STOP_MARGIN`] clear of the stops.
     ///
     /// Forced inline, with the exponential step and the stop check it calls: this is the
@@ -105,14 +123,38 @@ impl<M: Model<N>, R: Remainder<N>, const N: usize> FastPath<M, N> for ExpFlight<
         outputs: &mut [f64; MAX_OUTPUTS],
         books: Option<&mut Books<N>>,
     ) -> Option<(SVector<f64, N>, bool)> {
-        if mode != Mode::FREE || !self.history.is_full() {
+        self.rebounds.len = 0;
+        if mode != Mode::FREE || !(self.linear || self.history.is_full()) {
             return None;
         }
-        let next = self.method.step(y, a0, a1, &self.history);
+        let next = if self.linear {
+            // The remainder's terms are products with exact zeros.
+            let m = &self.method;
+            m.propagator * y + m.input_start * a0 + m.input_end * a1
+        } else {
+            self.method.step(y, a0, a1, &self.history)
+        };
         let h = self.method.h;
         let (x, v) = (POSITION, VELOCITY);
         if !hermite_within(y[x], h * y[v], next[x], h * next[v], self.upper, self.lower) {
-            return None;
+            // Rebounds on the exact solution, where no books ask for the interval's integrals.
+            let (Some(stops), None) = (&self.rigid, &books) else {
+                return None;
+            };
+            let (end, rebounds) = impacts::interval(
+                model,
+                &self.l,
+                &self.c,
+                &self.inv_scales,
+                stops,
+                y,
+                h,
+                [a0, a1],
+            )?;
+            self.rebounds = rebounds;
+            let r = self.remainder.remainder_and_outputs(&end, outputs);
+            self.history.push(r);
+            return Some((end, true));
         }
         if let Some(b) = books {
             let (l, c, scales) = (&self.l, &self.c, &self.scales);
@@ -127,6 +169,10 @@ impl<M: Model<N>, R: Remainder<N>, const N: usize> FastPath<M, N> for ExpFlight<
         let r = self.remainder.remainder_and_outputs(&next, outputs);
         self.history.push(r);
         Some((next, true))
+    }
+
+    fn rebounds(&self) -> &[(f64, f64)] {
+        self.rebounds.found()
     }
 
     /// The remainder is smooth only between mode switches.

@@ -72,6 +72,7 @@ use crate::signal::SpectralError;
 mod affine;
 mod books;
 mod exponential;
+mod impacts;
 mod spectrum;
 mod stepping;
 mod storage;

@@ -49,6 +49,12 @@ pub(super) trait FastPath<M: Model<N>, const N: usize> {
         books: Option<&mut Books<N>>,
     ) -> Option<(SVector<f64, N>, bool)>;
 
+    /// The rebounds off rigid stops inside the last fast interval: the time into it (s) and
+    /// |x| there (m).
+    fn rebounds(&self) -> &[(f64, f64)] {
+        &[]
+    }
+
     /// A Dormand-Prince interval ended at `y` in `mode`; `switched` when a mode switch
     /// happened inside it.
     fn after_dopri(&mut self, _model: &M, _y: &SVector<f64, N>, _mode: Mode, _switched: bool) {}
@@ -140,6 +146,9 @@ pub(super) fn run<M: Model<N>, O: RecordObserver, F: FastPath<M, N>, const N: us
                 ode_current = false;
                 fast_steps += 1;
                 stats.fast(analysed, mode.in_contact(), dt, y[ix]);
+                for &(tau, x) in fast.rebounds() {
+                    stats.rebound(t0 + tau >= t_start - 0.5 * dt, x);
+                }
             } else {
                 if !ode_current {
                     ode.restart_with_step(t0, y, mode, dt);
@@ -263,6 +272,17 @@ impl Contacts {
             self.x_peak = self.x_peak.max(x.abs());
         }
         self.in_contact = now;
+    }
+}
+
+impl Contacts {
+    /// A rebound off a rigid stop at the position `x`, in the analysed window or not.
+    #[inline(always)]
+    fn rebound(&mut self, analysed: bool, x: f64) {
+        if analysed {
+            self.impacts += 1;
+            self.x_peak = self.x_peak.max(x.abs());
+        }
     }
 }
 
