@@ -10,7 +10,8 @@ use std::path::PathBuf;
 use anyhow::{bail, Context, Result};
 use clap::Parser;
 use endstop::design::{
-    interfaces, merit, Answer, Evaluated, Limits, Problem, SearchSettings, Study, Verdict, Vibration,
+    interfaces, merit, Answer, Evaluated, Limits, Problem, SearchSettings, Study, Verdict,
+    Vibration,
 };
 use endstop::device::{Device, Interface, ParamRange};
 use endstop::drive::Sine;
@@ -80,8 +81,7 @@ pub struct DesignArgs {
 fn interfaces_of(device: &Device, path: &std::path::Path) -> Result<Vec<Interface>> {
     let text = std::fs::read_to_string(path)
         .with_context(|| format!("--interfaces: cannot read {}", path.display()))?;
-    interfaces::from_toml_str(device, &text, &path.display().to_string())
-        .context("--interfaces")
+    interfaces::from_toml_str(device, &text, &path.display().to_string()).context("--interfaces")
 }
 
 /// Refuses options no design study can use, naming the option.

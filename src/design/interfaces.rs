@@ -32,9 +32,8 @@ pub fn from_tables(
             if let Some(tr) = t.get_mut("transducer").and_then(|v| v.as_table_mut()) {
                 tr.remove("load_resistance_ohm");
             }
-            let text = toml::to_string(&t).map_err(|e| {
-                DesignError::Invalid(format!("{source}, interface {}: {e}", i + 1))
-            })?;
+            let text = toml::to_string(&t)
+                .map_err(|e| DesignError::Invalid(format!("{source}, interface {}: {e}", i + 1)))?;
             Device::from_toml_str(&text, &format!("{source}, interface {}", i + 1))
                 .map(|d| d.interface)
                 .map_err(DesignError::Interface)
