@@ -7,12 +7,14 @@ a relative 1e-9, which only floating-point differences between two builds of the
 could use (as in test_against_cli.py)."""
 
 import math
+import threading
 
 import numpy as np
 import pandas as pd
 import pytest
 
 import endstop
+from endstop import _native
 from conftest import run_cli, summary
 
 REL = 1e-9
@@ -104,3 +106,29 @@ def test_a_malformed_problem_raises_value_error(root):
         endstop.design(dev, RANGES, [122.0, 118.0], 0.4, samples=4)
     with pytest.raises(ValueError, match="spacing"):
         endstop.design(dev, [("stops.upper.gap_m", 3e-5, 3e-4, "cubic")], 120.0, 0.4)
+
+
+def test_design_releases_the_gil(root):
+    # While this thread runs a search in the native call (two interfaces, 128 samples each:
+    # about 3 s here), another thread counts to two million in pure Python (about 0.25 s
+    # here). With the GIL released the count finishes during the search. Had the call kept
+    # the GIL, the count could run only while this thread is in Python around the call (the
+    # call is made without the Python wrapper, so that little Python runs around it), a few
+    # switch intervals (5 ms each) where it needs fifty, and would not have finished when the
+    # call returned. No clock is read.
+    dev = endstop.Device.from_toml(root / DEVICE)
+    counted = threading.Event()
+
+    def count():
+        n = 0
+        for _ in range(2_000_000):
+            n += 1
+        counted.set()
+
+    th = threading.Thread(target=count)
+    th.start()
+    _native.design(dev, RANGES, [118.0, 120.0, 122.0], 0.4,
+                   interfaces=["resistive", "full_bridge"], samples=128)
+    finished_during = counted.is_set()
+    th.join()
+    assert finished_during, "the count could not run during the search: the GIL was held"
