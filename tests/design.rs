@@ -1,9 +1,10 @@
 //! The design search ([`endstop::design`]) against what it must find: a brute-force grid's
 //! best on two two-variable cases, the closed-form optimal load of a linear piezoelectric
-//! harvester, SECE's power whatever its load, and an infeasible problem reported as such.
+//! harvester, SECE's power whatever its load, and an infeasible problem reported as such;
+//! the interfaces read as a designer names them.
 
 use endstop::design::{
-    answer, Evaluated, Limits, Problem, SearchSettings, Verdict, Vibration, LOAD_PATH,
+    answer, interfaces, Evaluated, Limits, Problem, SearchSettings, Verdict, Vibration, LOAD_PATH,
 };
 use endstop::device::{DcLoad, Device, Interface, ParamRange, Spacing, Transducer};
 use endstop::physics::closed_forms::{Oscillator, Piezoelectric};
@@ -258,4 +259,50 @@ fn a_limit_no_design_meets_is_reported_infeasible() {
         e.violation = 0.0;
     }
     assert_eq!(answer(&open).unwrap().verdict, Verdict::Optimum);
+}
+
+/// The interfaces as a designer names them: a table in the device file's `[interface]` form
+/// gives the circuit the device file gives, a name the device's own circuit or the resistive
+/// load, and a name of another circuit, whose values are unknown, is refused naming it.
+#[test]
+fn interfaces_by_table_and_by_name() {
+    let device = example("piezo_bridge");
+    let text = r#"
+[[interface]]
+kind = "resistive"
+
+[[interface]]
+kind = "full_bridge"
+storage_capacitance_f = 10e-6
+[interface.diode]
+law = "piecewise_linear"
+forward_drop_v = 0.2
+on_resistance_ohm = 0.0
+[interface.load]
+kind = "resistor"
+resistance_ohm = 41.7e3
+"#;
+    let tables = interfaces::from_toml_str(&device, text, "test").unwrap();
+    assert_eq!(tables, vec![Interface::Resistive, device.interface.clone()]);
+    let named: Vec<Interface> = ["resistive", "full_bridge"]
+        .iter()
+        .map(|n| interfaces::by_name(&device, n).unwrap())
+        .collect();
+    assert_eq!(named, tables);
+    let e = interfaces::by_name(&device, "sece")
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("`sece`") && e.contains("full_bridge"), "{e}");
+    // A table with a bad value is refused naming its field, as a device file's would be.
+    let bad = text.replace(
+        "storage_capacitance_f = 10e-6",
+        "storage_capacitance_f = -1.0",
+    );
+    let e = interfaces::from_toml_str(&device, &bad, "test")
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("interface 2") && e.contains("storage_capacitance_f"),
+        "{e}"
+    );
 }

@@ -10,7 +10,8 @@ use std::path::PathBuf;
 use anyhow::{bail, Context, Result};
 use clap::Parser;
 use endstop::design::{
-    merit, Answer, Evaluated, Limits, Problem, SearchSettings, Study, Verdict, Vibration,
+    interfaces, merit, Answer, Evaluated, Limits, Problem, SearchSettings, Study, Verdict,
+    Vibration,
 };
 use endstop::device::{Device, Interface, ParamRange};
 use endstop::drive::Sine;
@@ -75,43 +76,12 @@ pub struct DesignArgs {
     out: Option<PathBuf>,
 }
 
-/// The interfaces of `--interfaces`: each table put in place of the device's `[interface]`
-/// and checked with the device, so that errors name the file and the field.
+/// The interfaces of `--interfaces`, read by the library ([`interfaces::from_toml_str`]) so
+/// that errors name the file and the field.
 fn interfaces_of(device: &Device, path: &std::path::Path) -> Result<Vec<Interface>> {
     let text = std::fs::read_to_string(path)
         .with_context(|| format!("--interfaces: cannot read {}", path.display()))?;
-    let file = path.display().to_string();
-    let doc: toml::Table =
-        toml::from_str(&text).with_context(|| format!("--interfaces: {file} is not TOML"))?;
-    let Some(list) = doc.get("interface").and_then(|v| v.as_array()) else {
-        bail!("--interfaces: {file} has no [[interface]] tables");
-    };
-    if doc.len() != 1 {
-        bail!("--interfaces: {file} may hold [[interface]] tables only");
-    }
-    let base: toml::Table = toml::from_str(&device.to_toml_string())?;
-    list.iter()
-        .enumerate()
-        .map(|(i, table)| {
-            let mut t = base.clone();
-            let resistive = table.get("kind").and_then(|k| k.as_str()) == Some("resistive");
-            if resistive {
-                t.remove("interface");
-            } else {
-                t.insert("interface".into(), table.clone());
-                if let Some(tr) = t.get_mut("transducer").and_then(|v| v.as_table_mut()) {
-                    tr.remove("load_resistance_ohm");
-                }
-            }
-            if resistive {
-                return Ok(Interface::Resistive);
-            }
-            let text = toml::to_string(&t)?;
-            Device::from_toml_str(&text, &format!("{file}, interface {}", i + 1))
-                .map(|d| d.interface)
-                .map_err(anyhow::Error::from)
-        })
-        .collect()
+    interfaces::from_toml_str(device, &text, &path.display().to_string()).context("--interfaces")
 }
 
 /// Refuses options no design study can use, naming the option.
@@ -237,30 +207,27 @@ pub fn design(a: DesignArgs) -> Result<()> {
         Some(path) => interfaces_of(&device, path)?,
         None => vec![device.interface.clone()],
     };
-    let p = Problem {
-        device: device.clone(),
+    let p = Problem::new(
+        device.clone(),
         interfaces,
         ranges,
-        vibration: Vibration {
+        Vibration {
             freqs_hz: a.freqs_hz.clone(),
             accel_rms_g: a.accel_rms_g,
         },
-        limits: Limits {
+        Limits {
             impact_speed_m_s: a.max_impact_speed_m_s,
             contact_force_n: a.max_contact_force_n,
             displacement_m: a.max_displacement_m,
             impacts_per_s: a.max_impacts_per_s,
         },
-        steady: SteadySettings::default(),
-    };
-    p.check()?;
+    )?;
     let settings = SearchSettings {
         samples: a.samples,
         seed: a.seed,
         ..SearchSettings::default()
     };
-    let budget = p.interfaces.len()
-        * (settings.samples + settings.polish_starts * (2 + 2 * settings.max_iters as usize));
+    let budget = settings.budget(p.interfaces.len(), p.ranges.len());
     let study: Study =
         endstop_experiments::with_progress(budget, "designs evaluated (at most)", |pr| {
             p.solve(&settings, pr)

@@ -42,7 +42,7 @@ fn toml_to_py<'py>(py: Python<'py>, v: &toml::Value) -> PyResult<Bound<'py, PyAn
     })
 }
 
-fn py_to_toml(v: &Bound<'_, PyAny>, path: &str) -> PyResult<toml::Value> {
+pub(crate) fn py_to_toml(v: &Bound<'_, PyAny>, path: &str) -> PyResult<toml::Value> {
     if let Ok(d) = v.cast::<PyDict>() {
         let mut t = toml::map::Map::new();
         for (k, x) in d.iter() {

@@ -8,9 +8,10 @@
 //! its valid range; solver failures raise `endstop.SolverError` (a `RuntimeError`).
 //!
 //! The Rust modules (private: the crate is the extension module, its API is Python's) mirror
-//! the Python package's: `device` (`endstop.Device`), `fit` (`endstop.fit`), `linear`
-//! (`endstop.linear`), `study` (`endstop.study`) and `paper` (`endstop.paper` and its
-//! `fig09`, `fig13` and `deviations`); each registers its functions in `_native`.
+//! the Python package's: `design` (`endstop.design`), `device` (`endstop.Device`), `fit`
+//! (`endstop.fit`), `linear` (`endstop.linear`), `study` (`endstop.study`) and `paper`
+//! (`endstop.paper` and its `fig09`, `fig13` and `deviations`); each registers its functions
+//! in `_native`.
 
 use endstop::device::ParamError as LibParamError;
 use numpy::PyArray1;
@@ -18,6 +19,7 @@ use pyo3::create_exception;
 use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 
+mod design;
 mod device;
 mod fit;
 mod fit_spectrum;
@@ -71,6 +73,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("SolverError", py.get_type::<SolverError>())?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     m.add_class::<PyDevice>()?;
+    design::register(m)?;
     fit::register(m)?;
     fit_spectrum::register(m)?;
     interface::register(m)?;

@@ -17,9 +17,12 @@
 //!
 //! The search ([`search`]) samples the unit cube of the ranges by a scrambled Sobol sequence,
 //! then polishes the best points by argmin's Nelder-Mead; the figures of merit a designer
-//! reports are in [`merit`].
+//! reports are in [`merit`]. The interfaces come as a designer names them ([`interfaces`]);
+//! the `endstop design` command and Python's `endstop.design` build their problem by
+//! [`Problem::new`] and solve it by [`Problem::solve`].
 
 pub mod evaluate;
+pub mod interfaces;
 pub mod merit;
 pub mod search;
 
@@ -64,7 +67,28 @@ impl Limits {
         .filter_map(|(limit, value)| limit.map(|l| (value / l - 1.0).max(0.0)))
         .sum()
     }
+
+    /// The margin of a performance on each limit, in the order impact speed, contact force,
+    /// displacement, impacts per second: `1 - value / limit` (positive within the limit,
+    /// negative beyond it), `None` where there is no limit.
+    pub fn margins(&self, p: &Performance) -> [Option<f64>; 4] {
+        [
+            (self.impact_speed_m_s, p.impact_speed_m_s),
+            (self.contact_force_n, p.contact_force_n),
+            (self.displacement_m, p.displacement_m),
+            (self.impacts_per_s, p.impacts_per_s),
+        ]
+        .map(|(limit, value)| limit.map(|l| 1.0 - value / l))
+    }
 }
+
+/// The names of the limits, in the order of [`Limits::margins`].
+pub const LIMIT_NAMES: [&str; 4] = [
+    "impact_speed_m_s",
+    "contact_force_n",
+    "displacement_m",
+    "impacts_per_s",
+];
 
 /// The vibration a design is judged under: sines of one RMS acceleration at one or more
 /// frequencies (the objective is the worst).
@@ -99,6 +123,9 @@ pub enum DesignError {
     /// The problem is malformed (no interface, no range, a bad vibration or limit).
     #[error("design problem: {0}")]
     Invalid(String),
+    /// An interface table or name is not valid on the device.
+    #[error("{0}")]
+    Interface(ParamError),
     /// A range does not fit the device behind an interface.
     #[error("interface `{interface}`: {error}")]
     Range {
@@ -205,6 +232,27 @@ pub struct Study {
 }
 
 impl Problem {
+    /// The problem of `device` with these interfaces, ranges, vibration and limits, each
+    /// steady state found with the default settings; checked ([`Problem::check`]).
+    pub fn new(
+        device: Device,
+        interfaces: Vec<Interface>,
+        ranges: Vec<ParamRange>,
+        vibration: Vibration,
+        limits: Limits,
+    ) -> Result<Problem, DesignError> {
+        let p = Problem {
+            device,
+            interfaces,
+            ranges,
+            vibration,
+            limits,
+            steady: SteadySettings::default(),
+        };
+        p.check()?;
+        Ok(p)
+    }
+
     /// Checks the problem: at least one interface and one range, a vibration of positive
     /// increasing frequencies and positive acceleration, positive limits, and every range valid
     /// on the device behind every interface at both ends.

@@ -61,6 +61,15 @@ impl Default for SearchSettings {
 }
 
 impl SearchSettings {
+    /// The most designs a search of `interfaces` interfaces over `dims` ranges evaluates: per
+    /// interface the sample, then per polish its simplex's `dims + 1` vertices and at most
+    /// `dims + 2` designs an iteration (a reflection, an expansion or contraction, and a shrink
+    /// of the `dims` other vertices).
+    pub fn budget(&self, interfaces: usize, dims: usize) -> usize {
+        let polish = dims + 1 + self.max_iters as usize * (dims + 2);
+        interfaces * (self.samples + self.polish_starts * polish)
+    }
+
     fn check(&self, dims: usize) -> Result<(), DesignError> {
         let bad = |m: String| Err(DesignError::Search(m));
         if dims == 0 || dims > 64 {

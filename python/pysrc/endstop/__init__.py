@@ -9,6 +9,9 @@ The model runs in Rust (the repository's `endstop` library); this package is its
   linear output PSD;
 * :mod:`endstop.study`: simulations (frequency up-sweeps, amplitude sweeps, one random record,
   an ensemble), returning dicts of numbers and numpy arrays;
+* :func:`endstop.design`: the designer's inverse question, the most DC power over ranges of a
+  device's parameters and a choice of interface circuits within limits on impacts and stroke
+  (the ``endstop design`` command's);
 * :mod:`endstop.fit`: fitting a device's parameters to measured sweeps, with uncertainty;
 * :mod:`endstop.paper`: the paper's figure protocols (``endstop.paper.fig13.run()``) and the
   study of why the paper deviates (:mod:`endstop.paper.deviations`, ready for a Dask cluster).
@@ -18,5 +21,6 @@ Every simulation releases the GIL while it runs.
 
 from ._native import Device, ParamError, SolverError, __version__
 from . import fit, linear, paper, spectrum, springs, study
+from ._design import design
 
-__all__ = ["Device", "ParamError", "SolverError", "fit", "linear", "paper", "spectrum", "springs", "study", "__version__"]
+__all__ = ["Device", "ParamError", "SolverError", "design", "fit", "linear", "paper", "spectrum", "springs", "study", "__version__"]

@@ -1,0 +1,292 @@
+//! `endstop.design`: the designer's inverse question ([`endstop::design`]), the twin of the
+//! `endstop design` command: the same problem built by [`Problem::new`] from the same inputs
+//! (ranges of device keys, interfaces by name or as tables, frequencies, acceleration,
+//! limits) and solved by [`Problem::solve`] with the GIL released; the answer as a dict with
+//! every evaluated design as numpy arrays.
+
+use endstop::design::{
+    interfaces, Answer, DesignError, Evaluated, Limits, Problem, SearchSettings, Study, Verdict,
+    Vibration, LIMIT_NAMES,
+};
+use endstop::device::{Interface, ParamRange, Spacing};
+use endstop::progress::Silent;
+use numpy::PyArray1;
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyList, PyString};
+
+use crate::device::py_to_toml;
+use crate::{arg_err, array, param_err, solver_err, ParamError, PyDevice};
+
+/// The library's errors as the package's: a parameter, range or interface table that does
+/// not fit the device raises `ParamError` (naming the field), a design that no evaluation
+/// reached `SolverError`, a malformed problem or search setting `ValueError`.
+fn design_err(e: DesignError) -> PyErr {
+    match e {
+        DesignError::Range { interface, error } => {
+            let field = error.field().map(str::to_string);
+            let err = ParamError::new_err(format!("interface `{interface}`: {error}"));
+            Python::attach(|py| {
+                let _ = err.value(py).setattr("field", field);
+            });
+            err
+        }
+        DesignError::Interface(error) => param_err(error),
+        e @ DesignError::NoEvaluation(_) => solver_err(e),
+        e => arg_err(e.to_string()),
+    }
+}
+
+/// A range from `(path, lo, hi)` or `(path, lo, hi, spacing)`, spacing `"log"` or `"linear"`
+/// (without it, as the command's `PATH=LO..HI`: [`Spacing::auto`]).
+fn range_of(r: &Bound<'_, PyAny>) -> PyResult<ParamRange> {
+    let (path, lo, hi, spacing): (String, f64, f64, Option<String>) =
+        if let Ok((p, lo, hi)) = r.extract::<(String, f64, f64)>() {
+            (p, lo, hi, None)
+        } else {
+            r.extract::<(String, f64, f64, String)>()
+                .map(|(p, lo, hi, s)| (p, lo, hi, Some(s)))
+                .map_err(|_| {
+                    arg_err("a range is (path, lo, hi) or (path, lo, hi, \"log\" | \"linear\")")
+                })?
+        };
+    let spacing = match spacing.as_deref() {
+        None => Spacing::auto(lo, hi),
+        Some("log") => Spacing::Log,
+        Some("linear") => Spacing::Linear,
+        Some(other) => {
+            return Err(arg_err(format!(
+                "range `{path}`: spacing `{other}` must be \"log\" or \"linear\""
+            )))
+        }
+    };
+    ParamRange::new(&path, lo, hi, spacing).map_err(param_err)
+}
+
+/// The interfaces: each a name (`"resistive"` or the device's own interface's key) or a dict
+/// in a device file's `[interface]` form; none: the device's own interface.
+fn interfaces_of(device: &PyDevice, list: Option<&Bound<'_, PyList>>) -> PyResult<Vec<Interface>> {
+    let Some(list) = list else {
+        return Ok(vec![device.inner.interface.clone()]);
+    };
+    let mut out = Vec::new();
+    for (i, item) in list.iter().enumerate() {
+        if item.is_instance_of::<PyString>() {
+            let name: String = item.extract()?;
+            out.push(interfaces::by_name(&device.inner, &name).map_err(design_err)?);
+        } else if let Ok(d) = item.cast::<PyDict>() {
+            let toml::Value::Table(t) = py_to_toml(d.as_any(), "interface")? else {
+                return Err(arg_err("an interface dict must be a table"));
+            };
+            let source = format!("interfaces[{i}]");
+            out.extend(interfaces::from_tables(&device.inner, &[t], &source).map_err(design_err)?);
+        } else {
+            return Err(arg_err(format!(
+                "interfaces[{i}]: a name (str) or a device file's [interface] (dict), not {}",
+                item.get_type().name()?
+            )));
+        }
+    }
+    Ok(out)
+}
+
+fn bool_array<'py>(py: Python<'py>, v: Vec<bool>) -> Bound<'py, PyArray1<bool>> {
+    PyArray1::from_vec(py, v)
+}
+
+/// One design as a dict: its interface, parameter values, power and limits reached, the
+/// violation and the margins on the limits.
+fn design_dict<'py>(
+    py: Python<'py>,
+    p: &Problem,
+    e: &Evaluated,
+    verdict: Option<Verdict>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    if let Some(v) = verdict {
+        d.set_item(
+            "verdict",
+            match v {
+                Verdict::Optimum => "optimum",
+                Verdict::Infeasible => "infeasible",
+            },
+        )?;
+    }
+    d.set_item("interface", p.interfaces[e.interface].key())?;
+    d.set_item("interface_index", e.interface)?;
+    let params = PyDict::new(py);
+    for (r, v) in p.ranges.iter().zip(&e.values) {
+        params.set_item(&r.path, v)?;
+    }
+    d.set_item("params", params)?;
+    d.set_item("unit", e.unit.clone())?;
+    d.set_item("feasible", e.feasible())?;
+    d.set_item("violation", e.violation)?;
+    let margins = PyDict::new(py);
+    match &e.result {
+        Ok(q) => {
+            d.set_item("power_w", q.power_w)?;
+            d.set_item("worst_freq_hz", q.worst_freq_hz)?;
+            d.set_item("best_power_w", q.best_power_w)?;
+            d.set_item("impact_speed_m_s", q.impact_speed_m_s)?;
+            d.set_item("contact_force_n", q.contact_force_n)?;
+            d.set_item("displacement_m", q.displacement_m)?;
+            d.set_item("impacts_per_s", q.impacts_per_s)?;
+            for (name, m) in LIMIT_NAMES.iter().zip(p.limits.margins(q)) {
+                if let Some(m) = m {
+                    margins.set_item(name, m)?;
+                }
+            }
+            d.set_item("error", py.None())?;
+        }
+        Err(why) => d.set_item("error", why)?,
+    }
+    d.set_item("margins", margins)?;
+    Ok(d)
+}
+
+/// Every evaluated design as columns: numpy arrays of numbers and flags, lists of strings.
+fn designs_dict<'py>(
+    py: Python<'py>,
+    p: &Problem,
+    evals: &[Evaluated],
+) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    let perf = |f: fn(&endstop::design::Performance) -> f64| {
+        array(
+            py,
+            evals
+                .iter()
+                .map(|e| e.result.as_ref().map_or(f64::NAN, f))
+                .collect(),
+        )
+    };
+    d.set_item(
+        "interface",
+        evals
+            .iter()
+            .map(|e| p.interfaces[e.interface].key())
+            .collect::<Vec<_>>(),
+    )?;
+    d.set_item(
+        "interface_index",
+        PyArray1::from_vec(py, evals.iter().map(|e| e.interface as i64).collect()),
+    )?;
+    for (k, r) in p.ranges.iter().enumerate() {
+        d.set_item(
+            &r.path,
+            array(py, evals.iter().map(|e| e.values[k]).collect()),
+        )?;
+    }
+    d.set_item(
+        "evaluated",
+        bool_array(py, evals.iter().map(|e| e.result.is_ok()).collect()),
+    )?;
+    d.set_item(
+        "feasible",
+        bool_array(py, evals.iter().map(Evaluated::feasible).collect()),
+    )?;
+    d.set_item(
+        "violation",
+        array(py, evals.iter().map(|e| e.violation).collect()),
+    )?;
+    d.set_item("power_w", perf(|q| q.power_w))?;
+    d.set_item("worst_freq_hz", perf(|q| q.worst_freq_hz))?;
+    d.set_item("impact_speed_m_s", perf(|q| q.impact_speed_m_s))?;
+    d.set_item("contact_force_n", perf(|q| q.contact_force_n))?;
+    d.set_item("displacement_m", perf(|q| q.displacement_m))?;
+    d.set_item("impacts_per_s", perf(|q| q.impacts_per_s))?;
+    d.set_item(
+        "error",
+        evals
+            .iter()
+            .map(|e| e.result.as_ref().err().cloned().unwrap_or_default())
+            .collect::<Vec<_>>(),
+    )?;
+    Ok(d)
+}
+
+fn answer_dict<'py>(py: Python<'py>, p: &Problem, a: &Answer) -> PyResult<Bound<'py, PyDict>> {
+    design_dict(py, p, &a.design, Some(a.verdict))
+}
+
+/// Solves a design problem by the library's search; see `endstop.design.design`.
+#[pyfunction]
+#[pyo3(name = "design")]
+#[pyo3(signature = (device, ranges, freqs_hz, accel_rms_g, interfaces = None,
+    max_impact_speed_m_s = None, max_contact_force_n = None, max_displacement_m = None,
+    max_impacts_per_s = None, samples = 32, seed = 0))]
+#[allow(clippy::too_many_arguments)]
+fn design_py<'py>(
+    py: Python<'py>,
+    device: &PyDevice,
+    ranges: Vec<Bound<'py, PyAny>>,
+    freqs_hz: Vec<f64>,
+    accel_rms_g: f64,
+    interfaces: Option<Bound<'py, PyList>>,
+    max_impact_speed_m_s: Option<f64>,
+    max_contact_force_n: Option<f64>,
+    max_displacement_m: Option<f64>,
+    max_impacts_per_s: Option<f64>,
+    samples: usize,
+    seed: u32,
+) -> PyResult<Bound<'py, PyDict>> {
+    let ranges = ranges.iter().map(range_of).collect::<PyResult<Vec<_>>>()?;
+    let interfaces = interfaces_of(device, interfaces.as_ref())?;
+    let p = Problem::new(
+        device.inner.clone(),
+        interfaces,
+        ranges,
+        Vibration {
+            freqs_hz,
+            accel_rms_g,
+        },
+        Limits {
+            impact_speed_m_s: max_impact_speed_m_s,
+            contact_force_n: max_contact_force_n,
+            displacement_m: max_displacement_m,
+            impacts_per_s: max_impacts_per_s,
+        },
+    )
+    .map_err(design_err)?;
+    let settings = SearchSettings {
+        samples,
+        seed,
+        ..SearchSettings::default()
+    };
+    let study: Study = py
+        .detach(|| p.solve(&settings, &Silent))
+        .map_err(design_err)?;
+    let d = PyDict::new(py);
+    d.set_item("best", answer_dict(py, &p, &study.answer)?)?;
+    let per = PyList::empty(py);
+    for a in &study.per_interface {
+        match a {
+            Some(a) => per.append(answer_dict(py, &p, a)?)?,
+            None => per.append(py.None())?,
+        }
+    }
+    d.set_item("per_interface", per)?;
+    d.set_item("designs", designs_dict(py, &p, &study.evaluations)?)?;
+    d.set_item(
+        "interfaces",
+        p.interfaces.iter().map(Interface::key).collect::<Vec<_>>(),
+    )?;
+    d.set_item(
+        "ranges",
+        p.ranges.iter().map(|r| r.path.clone()).collect::<Vec<_>>(),
+    )?;
+    d.set_item("samples", settings.samples)?;
+    d.set_item("seed", settings.seed)?;
+    d.set_item("polish_starts", settings.polish_starts)?;
+    d.set_item("max_iters", settings.max_iters)?;
+    d.set_item(
+        "budget",
+        settings.budget(p.interfaces.len(), p.ranges.len()),
+    )?;
+    d.set_item("evaluations", study.evaluations.len())?;
+    Ok(d)
+}
+
+pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(design_py, m)?)
+}

@@ -1,0 +1,134 @@
+"""`endstop.design` against the `endstop design` command on the same problem and seed, and its
+errors.
+
+Both build the problem and search it by the same library code (`endstop::design`), so every
+design evaluated agrees, in order, far beyond the digits the command prints: the tolerance is
+a relative 1e-9, which only floating-point differences between two builds of the same code
+could use (as in test_against_cli.py)."""
+
+import math
+import threading
+
+import numpy as np
+import pandas as pd
+import pytest
+
+import endstop
+from endstop import _native
+from conftest import run_cli, summary
+
+REL = 1e-9
+
+DEVICE = "data/examples/piezo_bridge.toml"
+RANGES = [("load.resistance_ohm", 5e3, 5e5), ("stops.upper.gap_m", 3e-5, 3e-4)]
+# The interfaces as a designer names them: the transducer's own load, the device's own
+# circuit by its key, and another circuit by its values.
+SECE = {"kind": "sece", "storage_capacitance_f": 10e-6, "efficiency": 0.8,
+        "load": {"kind": "resistor", "resistance_ohm": 100e3}}
+INTERFACES_TOML = """
+[[interface]]
+kind = "resistive"
+
+[[interface]]
+kind = "full_bridge"
+storage_capacitance_f = 10e-6
+[interface.diode]
+law = "piecewise_linear"
+forward_drop_v = 0.2
+on_resistance_ohm = 0.0
+[interface.load]
+kind = "resistor"
+resistance_ohm = 41.7e3
+
+[[interface]]
+kind = "sece"
+storage_capacitance_f = 10e-6
+efficiency = 0.8
+[interface.load]
+kind = "resistor"
+resistance_ohm = 100e3
+"""
+
+
+def test_design_matches_endstop_design(root, tmp_path):
+    (tmp_path / "interfaces.toml").write_text(INTERFACES_TOML)
+    out = run_cli(["design", "--device", DEVICE, "--range", "load.resistance_ohm=5e3..5e5",
+                   "--range", "stops.upper.gap_m=3e-5..3e-4", "--freq-hz", "120",
+                   "--accel-rms-g", "0.4", "--interfaces", str(tmp_path / "interfaces.toml"),
+                   "--max-impact-speed-m-s", "0.05", "--max-displacement-m", "2e-4",
+                   "--samples", "8", "--seed", "5", "--map-points", "0",
+                   "--out", str(tmp_path / "cli")],
+                  tmp_path)
+    cli = summary(out / "cli" / "summary.json")["numbers"]
+    rows = pd.read_parquet(out / "cli" / "designs.parquet")
+    py = endstop.design(root / DEVICE, RANGES, 120.0, 0.4,
+                        interfaces=["resistive", "full_bridge", SECE],
+                        max_impact_speed_m_s=0.05, max_displacement_m=2e-4, samples=8, seed=5)
+    best = py["best"]
+    assert math.isclose(best["power_w"], cli["power_w"], rel_tol=REL, abs_tol=0.0)
+    assert (best["verdict"] == "optimum") == (cli["feasible"] == 1.0)
+    assert py["evaluations"] == cli["evaluations"] == len(rows)
+    assert py["evaluations"] <= py["budget"]
+    d = py["designs"]
+    assert list(d["interface"]) == list(rows["interface"])
+    assert list(d["feasible"]) == list(rows["feasible"])
+    for col in ["power_w", "violation", "impact_speed_m_s", "displacement_m",
+                "load.resistance_ohm", "stops.upper.gap_m"]:
+        np.testing.assert_allclose(d[col], rows[col].to_numpy(dtype=float), rtol=REL, atol=0.0,
+                                   err_msg=col)
+    # The best design is the one of most power among the feasible ones the search evaluated,
+    # and its margins are those of its limits.
+    feasible = d["feasible"]
+    assert best["power_w"] == d["power_w"][feasible].max()
+    assert set(best["margins"]) == {"impact_speed_m_s", "displacement_m"}
+    assert best["margins"]["displacement_m"] == pytest.approx(
+        1.0 - best["displacement_m"] / 2e-4, rel=1e-12)
+    assert all(m >= 0.0 for m in best["margins"].values())
+
+
+def test_a_bad_range_key_raises_param_error(root):
+    dev = endstop.Device.from_toml(root / DEVICE)
+    with pytest.raises(endstop.ParamError) as e:
+        endstop.design(dev, [("stops.upper.gapp_m", 3e-5, 3e-4)], 120.0, 0.4, samples=4)
+    assert "stops.upper.gapp_m" in str(e.value)
+    assert e.value.field == "stops.upper.gapp_m"
+
+
+def test_an_unknown_interface_name_raises_param_error(root):
+    dev = endstop.Device.from_toml(root / DEVICE)
+    with pytest.raises(endstop.ParamError, match="series_sshi"):
+        endstop.design(dev, RANGES, 120.0, 0.4, interfaces=["series_sshi"], samples=4)
+
+
+def test_a_malformed_problem_raises_value_error(root):
+    dev = endstop.Device.from_toml(root / DEVICE)
+    with pytest.raises(ValueError, match="increasing"):
+        endstop.design(dev, RANGES, [122.0, 118.0], 0.4, samples=4)
+    with pytest.raises(ValueError, match="spacing"):
+        endstop.design(dev, [("stops.upper.gap_m", 3e-5, 3e-4, "cubic")], 120.0, 0.4)
+
+
+def test_design_releases_the_gil(root):
+    # While this thread runs a search in the native call (two interfaces, 128 samples each:
+    # about 3 s here), another thread counts to two million in pure Python (about 0.25 s
+    # here). With the GIL released the count finishes during the search. Had the call kept
+    # the GIL, the count could run only while this thread is in Python around the call (the
+    # call is made without the Python wrapper, so that little Python runs around it), a few
+    # switch intervals (5 ms each) where it needs fifty, and would not have finished when the
+    # call returned. No clock is read.
+    dev = endstop.Device.from_toml(root / DEVICE)
+    counted = threading.Event()
+
+    def count():
+        n = 0
+        for _ in range(2_000_000):
+            n += 1
+        counted.set()
+
+    th = threading.Thread(target=count)
+    th.start()
+    _native.design(dev, RANGES, [118.0, 120.0, 122.0], 0.4,
+                   interfaces=["resistive", "full_bridge"], samples=128)
+    finished_during = counted.is_set()
+    th.join()
+    assert finished_during, "the count could not run during the search: the GIL was held"
