@@ -81,24 +81,27 @@ def test_bad_arguments_raise_value_errors():
 
 
 def test_simulations_release_the_gil():
-    # A record runs in another thread while this one runs a fixed piece of pure-Python work
-    # (about a hundredth of the record's time, so both slow alike on a loaded machine). Had the
-    # call kept the GIL, this thread could not run until the call returned, and the record
-    # would be done before the work; with the GIL released the work ends first. No clock is read.
+    # While this thread runs a 100 s record (about 1.2 s here), another thread counts to
+    # 400 000 in pure Python (about 0.05 s here, ten switch intervals of 5 ms); both slow alike
+    # on a loaded machine. With the GIL released the count finishes during the record. Had the
+    # call kept the GIL, the count could run only while this thread is in Python around the
+    # call, a switch interval or two, and would not have finished when the call returned. (A
+    # check the other way round, the record in the other thread, cannot fail: when the call
+    # returns, the waiting thread may take the GIL before the record's thread marks it done.)
+    # The same pattern, with the GIL held in a planted build, fails `test_design.py`'s check.
+    # No clock is read.
     dev = endstop.Device.prototype(2)
-    started, done = threading.Event(), threading.Event()
+    counted = threading.Event()
 
-    def work():
-        started.set()
-        endstop.study.record(dev, 1e-4, duration_s=10.0)
-        done.set()
+    def count():
+        n = 0
+        for _ in range(400_000):
+            n += 1
+        counted.set()
 
-    th = threading.Thread(target=work)
+    th = threading.Thread(target=count)
     th.start()
-    started.wait()
-    n = 0
-    for _ in range(20_000):
-        n += 1
-    finished_first = not done.is_set()
+    endstop.study.record(dev, 1e-4, duration_s=100.0)
+    finished_during = counted.is_set()
     th.join()
-    assert finished_first, "the record finished before this thread could run: the GIL was held"
+    assert finished_during, "the count could not run during the record: the GIL was held"
