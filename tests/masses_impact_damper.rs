@@ -79,29 +79,3 @@ fn the_stability_boundary_is_where_the_closed_form_says() {
     assert!(checks.len() >= 2, "{} checks", checks.len());
     assert_all(&checks);
 }
-
-#[test]
-fn zz_debug() {
-    use endstop::model::Model;
-    let d = device();
-    let damper = ImpactDamper::of(&d).unwrap();
-    let (cf, ph) = checks::closed_form(&damper, 12.0).unwrap();
-    println!("{cf:?} phase {ph}");
-    let t4 = 0.25 / 12.0;
-    println!("state T/4 {:?}", damper.state_at(&cf, t4));
-    let h = endstop::physics::harvester::masses::MassChain::<6>::new(&d).unwrap();
-    println!("layout {:?}", h.layout().masses);
-    let w = 2.0 * std::f64::consts::PI * 12.0;
-    let accel = std::f64::consts::SQRT_2 * endstop::G;
-    let sec = ph + 0.5 * std::f64::consts::PI;
-    let s = damper.state_at(&cf, t4);
-    let (yb, vb) = (accel / (w * w) * sec.sin(), accel / w * sec.cos());
-    let mut y = nalgebra::SVector::<f64, 6>::zeros();
-    y[0] = s[0] - yb; y[1] = s[1] - vb; y[4] = s[2] - yb; y[5] = s[3] - vb;
-    let f = endstop::study::orbit::Forcing { freq_hz: 12.0, accel_rms_g: 1.0 };
-    let sh = endstop::study::orbit::Shooter::new(&h, endstop::study::orbit::ShootingConfig::default());
-    let r = sh.flow(&f, sec, y, 1.0 / 12.0, |st, m| {
-        if st.t0 > 0.019 && st.t0 < 0.023 { println!("{:.6} {:.3e} {:?} {:?}", st.t0, st.h, m, [st.y0[0], st.y0[1], st.y0[4], st.y0[5], st.y1[4]-st.y1[0]]); }
-    });
-    println!("{:?}", r.map(|r| r.0));
-}

@@ -340,9 +340,7 @@ pub fn boundary_checks(device: &Device) -> Result<Vec<Check>, ValidationError> {
     let mut g = Group::new("impact damper: stability boundary");
     g.add(
         SOURCE,
-        &format!(
-            "crossings of |mu| = 1 from {from} to {to} Hz in steps of {BOUNDARY_STEP_HZ} Hz"
-        ),
+        &format!("crossings of |mu| = 1 from {from} to {to} Hz in steps of {BOUNDARY_STEP_HZ} Hz"),
         theirs_at.len() as f64,
         ours_at.len() as f64,
         Measure::Absolute,

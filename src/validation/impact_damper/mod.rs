@@ -205,10 +205,7 @@ impl ImpactDamper {
     /// The force amplitude F0 (N) and its phase lead beta (rad) over the drive of a base
     /// acceleration of peak `accel_m_s2` at `omega_rad_s` (see the module docs).
     pub fn base_force(&self, accel_m_s2: f64, omega_rad_s: f64) -> (f64, f64) {
-        let (k, cw) = (
-            self.stiffness_n_per_m,
-            self.damping_n_s_per_m * omega_rad_s,
-        );
+        let (k, cw) = (self.stiffness_n_per_m, self.damping_n_s_per_m * omega_rad_s);
         (accel_m_s2 / omega_rad_s.powi(2) * k.hypot(cw), cw.atan2(k))
     }
 
@@ -285,7 +282,12 @@ impl ImpactDamper {
         };
         let start = Vector2::new(orbit.x0_m, orbit.v_after_m_s);
         let x = p(t) + self.free_flow(t) * (start - p(0.0));
-        Vector4::new(x[0], x[1], orbit.z0_m + orbit.u_after_m_s * t, orbit.u_after_m_s)
+        Vector4::new(
+            x[0],
+            x[1],
+            orbit.z0_m + orbit.u_after_m_s * t,
+            orbit.u_after_m_s,
+        )
     }
 
     /// Inside the clearance in flight (on 1024 points of the half period, 1e-12 of d of room
@@ -355,10 +357,7 @@ impl ImpactDamper {
     pub fn primary_amplitude_m(&self, orbit: &SymmetricOrbit, samples: usize) -> f64 {
         let period = 2.0 * PI / orbit.omega_rad_s;
         (0..samples)
-            .map(|k| {
-                self.state_at(orbit, period * k as f64 / samples as f64)[0]
-                    .abs()
-            })
+            .map(|k| self.state_at(orbit, period * k as f64 / samples as f64)[0].abs())
             .fold(0.0, f64::max)
     }
 }
