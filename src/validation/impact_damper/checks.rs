@@ -18,7 +18,8 @@
 //! - A stability boundary, the frequency step of the line: our crossing is bracketed by two
 //!   shot points a step apart (we interpolate linearly between them, whose error is far below
 //!   a step, but the step is what is guaranteed); the closed form's is located by bisection to
-//!   1e-9 Hz.
+//!   1e-9 Hz. Every point of the line must be the closed form's orbit (its impact phase within
+//!   the orbit checks' 1e-6 rad): shooting from a wrong guess can land on another orbit.
 
 use nalgebra::SVector;
 use std::f64::consts::PI;
@@ -34,6 +35,10 @@ use super::{ImpactDamper, SymmetricOrbit};
 
 /// The drive of every check (RMS, g).
 pub const ACCEL_RMS_G: f64 = 1.0;
+
+/// The orbit checks' tolerance on the impact phase (rad), and the one that tells the
+/// boundary line's orbits are the closed form's (module docs).
+pub const PHASE_TOL_RAD: f64 = 1e-6;
 
 /// Samples of a period on which the primary's amplitude is taken, on both sides.
 pub const AMPLITUDE_SAMPLES: usize = 4096;
@@ -112,7 +117,7 @@ pub const POINTS: [Point; 8] = [
 pub const BOUNDARY_LINE_HZ: (f64, f64) = (11.2, 14.2);
 
 /// The boundary line's step (Hz).
-pub const BOUNDARY_STEP_HZ: f64 = 0.05;
+pub const BOUNDARY_STEP_HZ: f64 = 0.01;
 
 /// `device` with a point's particle, clearance and restitution.
 pub fn variant(device: &Device, p: &Point) -> Result<Device, ValidationError> {
@@ -264,7 +269,7 @@ pub fn orbit_checks(device: &Device) -> Result<Vec<Check>, ValidationError> {
             phase,
             phase + dphase,
             Measure::Absolute,
-            1e-6,
+            PHASE_TOL_RAD,
             orbit_reason,
         );
         g.add(
@@ -312,8 +317,14 @@ pub fn boundary_checks(device: &Device) -> Result<Vec<Check>, ValidationError> {
     };
     let mut ours = Vec::with_capacity(freqs.len());
     let mut theirs = Vec::with_capacity(freqs.len());
+    let mut elsewhere = 0usize;
     for &f in &freqs {
-        ours.push(shoot(device, f)?.max_multiplier);
+        let o = shoot(device, f)?;
+        let (_, phase) = closed_form(&damper, f)?;
+        if ((o.impact_phase_rad - phase + PI).rem_euclid(2.0 * PI) - PI).abs() > PHASE_TOL_RAD {
+            elsewhere += 1;
+        }
+        ours.push(o.max_multiplier);
         theirs.push(cf_max(f)?);
     }
     let ours_at: Vec<f64> = brackets(&ours)
@@ -338,6 +349,18 @@ pub fn boundary_checks(device: &Device) -> Result<Vec<Check>, ValidationError> {
         theirs_at.push(0.5 * (lo + hi));
     }
     let mut g = Group::new("impact damper: stability boundary");
+    g.add(
+        SOURCE,
+        &format!(
+            "points of the line whose orbit's impact phase is off the closed form's by more \
+             than {PHASE_TOL_RAD:e} rad"
+        ),
+        0.0,
+        elsewhere as f64,
+        Measure::Absolute,
+        0.0,
+        "a count: every multiplier compared is the closed-form orbit's",
+    );
     g.add(
         SOURCE,
         &format!("crossings of |mu| = 1 from {from} to {to} Hz in steps of {BOUNDARY_STEP_HZ} Hz"),
