@@ -33,6 +33,7 @@ mod interface_records;
 mod interfaces;
 mod interfaces_spice;
 mod masses;
+mod masses_impact_damper;
 mod record_accuracy;
 mod record_figures;
 mod record_ledger;

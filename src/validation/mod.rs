@@ -12,6 +12,7 @@
 //! | [`interfaces`] | the standard bridge, parallel and series SSHI and SECE closed forms against the steady state behind each interface; the standard bridge with strong coupling against the first-harmonic balance |
 //! | [`nlvib`] | NLvib-py's harmonic balance and an exact shooting of a one-sided spring oscillator, against our shooting and continuation |
 //! | [`nlvib_duffing`] | NLvib-py's harmonic balance of NLvib's Duffing example, against our continuation's folds, amplitudes and stability |
+//! | [`impact_damper`] | the impact damper of Masri & Caughey (1966): its symmetric two-impacts-per-cycle motion and its stability in closed form (derived from their conditions), against our shooting's orbits, Floquet multipliers and stability boundary |
 //! | [`stationary_law`] | the exact stationary density `exp(-U/theta)` of white-noise driven devices with viscous damping and any conservative suspension and stops, against random ensembles' histograms, moments, contact and well shares and load power |
 //! | [`escapes`], [`kramers`] | the escape over a double well's barrier: random ensembles' barrier passages against Rice's count on the exact law, and their escapes that settle in the other well against Kramers' rate (moderate damping) or the energy-diffusion limit (light damping) |
 //!
@@ -23,6 +24,7 @@ pub mod cases;
 pub mod escapes;
 pub mod grazing;
 pub mod harmonics;
+pub mod impact_damper;
 pub mod interfaces;
 pub mod kramers;
 pub mod linear_harvesters;

@@ -84,6 +84,18 @@ pub fn run() -> Result<()> {
         || cases::grazing(&rigid),
     )?);
 
+    // The impact damper of Masri & Caughey: its closed form against our shooting.
+    let damper = load(&mut exp, "impact_damper")?;
+    checks.extend(timed(&mut costs, &damper.name, "symmetric orbits", || {
+        endstop::validation::impact_damper::checks::orbit_checks(&damper)
+    })?);
+    checks.extend(timed(
+        &mut costs,
+        &damper.name,
+        "stability boundary line",
+        || endstop::validation::impact_damper::checks::boundary_checks(&damper),
+    )?);
+
     // The white-noise law, and the recorded study of its band limit, which decides whether the
     // rigid stops' impact term is a reference or an open question.
     let band = band_limit_io::recorded_cells()?;
@@ -329,6 +341,10 @@ pub fn run() -> Result<()> {
                 .chain(in_groups(&checks, "interface circuits, coupling")),
         )
         .as_bytes(),
+    )?;
+    write_atomic(
+        &book.join("impact_damper.md"),
+        checks_table(in_groups(&checks, "impact damper")).as_bytes(),
     )?;
     write_atomic(&book.join("cost.md"), cost_md(&costs).as_bytes())?;
     exp.number("checks", judged as f64);

@@ -443,7 +443,18 @@ impl<const N: usize> MassChain<N> {
     /// Puts a contact's masses on its surface (the mass `mass` moves).
     fn project(&self, c: &ChainContact, y: &mut SVector<f64, N>) {
         let xj = c.other.map_or(0.0, |o| y[self.bodies[o].ix]);
-        y[self.bodies[c.mass].ix] = xj + c.sign * c.stop.gap();
+        let ix = self.bodies[c.mass].ix;
+        y[ix] = xj + c.sign * c.stop.gap();
+        // Between two masses `(x_j + s gap) - x_j` may exceed the gap by a rounding: a
+        // penetration left positive would fire the guard again at once and rebound the pair
+        // back into the wall (chattering at one instant). Step inside by ulps until it is not.
+        while self.penetration(c, y).0 > 0.0 {
+            y[ix] = if c.sign > 0.0 {
+                y[ix].next_down()
+            } else {
+                y[ix].next_up()
+            };
+        }
     }
 
     /// The rebound off rigid contact `k` with restitution `e`, and whether the contact then
