@@ -73,8 +73,8 @@ struct Args {
     /// their table, writing nothing.
     #[arg(long)]
     fits: bool,
-    /// Time the record engine against its floor kernel (issue 50's sine case and prototype
-    /// 2's noise record) and print their table, writing nothing.
+    /// Time the record engine against its floor kernel (a sine-driven oscillator between
+    /// restitution stops, and prototype 2's noise record) and print their table, writing nothing.
     #[arg(long)]
     floor: bool,
     /// Runs of each fit with `--fits`.

@@ -1,5 +1,5 @@
 //! The record engine against its floor: a minimal exact kernel for one case, timed beside the
-//! general engine's record of the same case (issue 50).
+//! general engine's record of the same case.
 //!
 //! * **The sine case**: a 1-DOF oscillator (f0 = 1 kHz, ζ = 0.005) between rigid restitution
 //!   stops at ±10 um (e = 0.6), driven from rest by `a(t) = -10 cos(2π 1000 t)` m/s² for 10 s
@@ -33,7 +33,7 @@ use common::fmt_sig;
 use crate::examples::{cpu, median};
 use crate::floor_kernel::{self, SineCase};
 
-/// The issue's sine case.
+/// The sine case: a 1 kHz oscillator between rigid restitution stops, driven at resonance.
 pub const SINE_CASE: SineCase = SineCase {
     f0_hz: 1000.0,
     zeta: 0.005,
@@ -75,7 +75,7 @@ pub fn sine_device(case: &SineCase) -> Result<Device> {
     let b = 2.0 * case.zeta * MASS_KG * w0;
     let text = format!(
         "name = \"floor_sine\"\nparams = \"hypothetical\"\n\
-         description = \"issue 50's floor case\"\n\
+         description = \"the bench's floor case: a sine-driven oscillator between restitution stops\"\n\
          [mechanics]\nmass_kg = {MASS_KG:e}\nstiffness_n_per_m = {k:e}\n\
          damping_n_s_per_m = {b:e}\n\
          [stops.both]\ngap_m = {:e}\nlaw = \"restitution\"\ncoefficient = {}\n\

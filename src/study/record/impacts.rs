@@ -1,6 +1,6 @@
 //! Rebounds off rigid stops located on the exact solution of a linear free flight, so that a
 //! sample interval with impacts costs a few polynomial evaluations instead of a Dormand-Prince
-//! integration (issue 50).
+//! integration.
 //!
 //! Between two input samples a linear free flight `y' = L y + c a(t)`, with the input linear in
 //! time, `a = a0 + s t`, has the derivatives `y⁽¹⁾ = L y + c a0`, `y⁽²⁾ = L y⁽¹⁾ + c s`,
