@@ -21,6 +21,7 @@
 //! `v+ = -e v-`, `x = ±gap`, and the rest of the interval is searched again.
 
 use anyhow::{bail, Result};
+use endstop::num::polynomial::hermite_range;
 
 /// Clearance from the stops (fraction of the gap) the Hermite guard keeps.
 pub const MARGIN: f64 = 1e-4;
@@ -272,29 +273,6 @@ fn hermite_within(x0: f64, m0: f64, x1: f64, m1: f64, bound: f64) -> bool {
     if x0.abs().max(x1.abs()) + slack < bound {
         return true;
     }
-    let b = 3.0 * (x1 - x0) - 2.0 * m0 - m1;
-    let c = 2.0 * (x0 - x1) + m0 + m1;
-    let p = |th: f64| x0 + th * (m0 + th * (b + th * c));
-    let mut worst = x0.abs().max(x1.abs());
-    let (qa, qb, qc) = (3.0 * c, 2.0 * b, m0);
-    let mut consider = |th: f64| {
-        if th > 0.0 && th < 1.0 {
-            worst = worst.max(p(th).abs());
-        }
-    };
-    if qa == 0.0 {
-        if qb != 0.0 {
-            consider(-qc / qb);
-        }
-    } else {
-        let disc = qb * qb - 4.0 * qa * qc;
-        if disc >= 0.0 {
-            let q = -0.5 * (qb + qb.signum() * disc.sqrt());
-            consider(q / qa);
-            if q != 0.0 {
-                consider(qc / q);
-            }
-        }
-    }
-    worst < bound
+    let (min, max) = hermite_range(x0, m0, x1, m1);
+    min.abs().max(max.abs()) < bound
 }

@@ -1,7 +1,7 @@
 //! Generic numerical helpers: one bracketing root finder ([`roots`]), sample statistics
 //! ([`stats`]), one number against a reference with its verdict ([`compare`]), variance-based
 //! global sensitivity ([`sensitivity`]), multi-start minimax fitting ([`minimax`]), Pareto
-//! fronts ([`pareto`]), Gaussian-process emulators ([`gp`]) with their Sobol indices
+//! fronts ([`pareto`]), a quadratic's roots and a cubic's range ([`polynomial`]), Gaussian-process emulators ([`gp`]) with their Sobol indices
 //! ([`gp_sensitivity`]) and history matching in waves ([`history`]).
 //!
 //! ```
@@ -27,6 +27,7 @@ pub mod gp_sensitivity;
 pub mod history;
 pub mod minimax;
 pub mod pareto;
+pub mod polynomial;
 pub mod roots;
 pub mod sensitivity;
 pub mod stats;

@@ -20,6 +20,8 @@
 
 use nalgebra::Complex;
 
+use crate::num::polynomial::quadratic_roots;
+
 type C64 = Complex<f64>;
 
 /// A linear single-degree-of-freedom oscillator on a moving base.
@@ -60,14 +62,11 @@ impl Oscillator {
         let (m, k, c) = (self.mass_kg, self.stiffness_n_per_m, self.damping_n_s_per_m);
         let f = m * accel_amplitude_m_s2 / gap_m;
         let (qa, qb, qc) = (m * m, c * c - 2.0 * k * m, k * k - f * f);
-        let disc = qb * qb - 4.0 * qa * qc;
-        if disc < 0.0 {
-            return Vec::new();
-        }
-        // The root of larger magnitude without cancellation, the other from the product.
-        let q = -0.5 * (qb + qb.signum() * disc.sqrt());
-        let mut u = vec![q / qa, qc / q];
-        u.retain(|u| *u > 0.0 && u.is_finite());
+        let mut u: Vec<f64> = quadratic_roots(qa, qb, qc)
+            .into_iter()
+            .flatten()
+            .filter(|u| *u > 0.0 && u.is_finite())
+            .collect();
         u.sort_by(f64::total_cmp);
         u.into_iter().map(f64::sqrt).collect()
     }

@@ -5,6 +5,7 @@
 use nalgebra::{SMatrix, SVector};
 
 use crate::model::{FlightSplit, Mode, Model, Remainder, MAX_OUTPUTS};
+use crate::num::polynomial::hermite_range;
 use crate::ode::exponential::{resolves, ExpAdams, History};
 use crate::ode::GAUSS_LEGENDRE_3;
 
@@ -202,34 +203,7 @@ fn hermite_within(x0: f64, m0: f64, x1: f64, m1: f64, upper: f64, lower: f64) ->
     if hi + slack < upper && -lo + slack < lower {
         return true;
     }
-    // p(θ) = x0 + m0 θ + b θ² + c θ³.
-    let b = 3.0 * (x1 - x0) - 2.0 * m0 - m1;
-    let c = 2.0 * (x0 - x1) + m0 + m1;
-    let p = |th: f64| x0 + th * (m0 + th * (b + th * c));
-    let (mut max, mut min) = (hi, lo);
-    // p'(θ) = m0 + 2 b θ + 3 c θ².
-    let (qa, qb, qc) = (3.0 * c, 2.0 * b, m0);
-    let mut consider = |th: f64| {
-        if th > 0.0 && th < 1.0 {
-            let v = p(th);
-            max = max.max(v);
-            min = min.min(v);
-        }
-    };
-    if qa == 0.0 {
-        if qb != 0.0 {
-            consider(-qc / qb);
-        }
-    } else {
-        let disc = qb * qb - 4.0 * qa * qc;
-        if disc >= 0.0 {
-            let q = -0.5 * (qb + qb.signum() * disc.sqrt());
-            consider(q / qa);
-            if q != 0.0 {
-                consider(qc / q);
-            }
-        }
-    }
+    let (min, max) = hermite_range(x0, m0, x1, m1);
     max < upper && -min < lower
 }
 
