@@ -1,19 +1,9 @@
 //! The force laws of [`crate::laws`] built from a device's descriptions: a stop's contact law
-//! and model from its `[stops]` table, a Hertz line law from a `hertz_line` stop, and the
-//! laws' side from a stop's side.
+//! and model from its `[stops]` table, and a Hertz line law from a `hertz_line` stop.
 
-use super::{Device, HertzLineStop, Stop, StopLaw, StopSide};
-use crate::laws::contact::{ContactDamping, ContactLaw, Side, StopModel};
+use super::{Device, HertzLineStop, Stop, StopLaw};
+use crate::laws::contact::{ContactDamping, ContactLaw, StopModel};
 use crate::laws::hertz::HertzLine;
-
-impl From<StopSide> for Side {
-    fn from(s: StopSide) -> Self {
-        match s {
-            StopSide::Upper => Side::Upper,
-            StopSide::Lower => Side::Lower,
-        }
-    }
-}
 
 impl HertzLine {
     /// The contact law of a Hertz line stop (t, R, E, nu).

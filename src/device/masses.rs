@@ -42,8 +42,9 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::stops::{RawStop, Stop, StopSide};
+use super::stops::{RawStop, Stop};
 use super::{Checker, ParamError};
+use crate::laws::contact::Side;
 
 /// One mass.
 #[derive(Debug, Clone, PartialEq)]
@@ -74,7 +75,7 @@ pub struct MassStop {
     /// The other mass, if the stop is between two.
     pub other: Option<usize>,
     /// Upper (`+gap`) or lower (`-gap`).
-    pub side: StopSide,
+    pub side: Side,
     /// The stop and its contact law, as a one-mass file's.
     pub stop: Stop,
 }
@@ -244,8 +245,8 @@ impl RawMasses {
             };
             let (mass, other) = ends(&f, &masses)?;
             let side = match t.remove("side") {
-                Some(toml::Value::String(s)) if s == "upper" => StopSide::Upper,
-                Some(toml::Value::String(s)) if s == "lower" => StopSide::Lower,
+                Some(toml::Value::String(s)) if s == "upper" => Side::Upper,
+                Some(toml::Value::String(s)) if s == "lower" => Side::Lower,
                 Some(v) => {
                     return Err(c.message(
                         &format!("{f}.side"),
@@ -352,8 +353,8 @@ impl RawMasses {
                     .collect();
                 t.insert("masses".into(), toml::Value::Array(masses));
                 let side = match s.side {
-                    StopSide::Upper => "upper",
-                    StopSide::Lower => "lower",
+                    Side::Upper => "upper",
+                    Side::Lower => "lower",
                 };
                 t.insert("side".into(), toml::Value::String(side.into()));
                 toml::Value::Table(t)

@@ -53,12 +53,16 @@ pub mod transducer;
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
+pub use crate::laws::contact::Side;
 pub use interface::{DcLoad, Diode, Interface, Inversion, Rectifier};
 pub use masses::{Body, Link, MassStop, Masses};
 pub use range::{at_unit, own_value, with_values, ParamRange, Spacing, ACCEL_SCALE_PATH};
-pub use stops::{HertzLineStop, HertzPointStiffness, Stop, StopLaw, StopSide, Stops};
+pub use stops::{HertzLineStop, HertzPointStiffness, Stop, StopLaw, Stops};
 pub use suspension::Suspension;
 pub use transducer::{AreaOverlapPair, Electromagnetic, GapClosingPair, Piezoelectric, Transducer};
+
+/// [`Side`] under the name `src/spice/bridge.rs` spells; one type, not a second one.
+pub type StopSide = Side;
 
 /// A parameter that failed to load or validate.
 #[derive(Debug, Error, Clone, PartialEq)]
@@ -531,11 +535,11 @@ impl Device {
 
     /// The dotted path of a side's stop in this device's file form (`stops.both` for a
     /// symmetric pair).
-    pub fn stop_path(&self, side: StopSide) -> &'static str {
+    pub fn stop_path(&self, side: Side) -> &'static str {
         match (self.stops.symmetric().is_some(), side) {
             (true, _) => "stops.both",
-            (false, StopSide::Upper) => "stops.upper",
-            (false, StopSide::Lower) => "stops.lower",
+            (false, Side::Upper) => "stops.upper",
+            (false, Side::Lower) => "stops.lower",
         }
     }
 

@@ -21,18 +21,10 @@
 use serde::{Deserialize, Serialize};
 
 use super::{Checker, ParamError};
+use crate::laws::contact::Side;
 
 /// The paper's coefficient of eq 19 (k_im = 0.058 pi E t / (1 - nu^2)).
 pub const EQ19_COEFFICIENT: f64 = 0.058;
-
-/// Which side of rest a stop is on.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub enum StopSide {
-    /// At `x = +gap`.
-    Upper,
-    /// At `x = -gap`.
-    Lower,
-}
 
 /// The Hertz line contact of eq 6 (a half-cylinder of length `t` and radius `R` on a flat),
 /// or its linear fit of eq 19.
@@ -169,18 +161,18 @@ pub struct Stops {
 
 impl Stops {
     /// The stop on a side.
-    pub fn side(&self, side: StopSide) -> Option<&Stop> {
+    pub fn side(&self, side: Side) -> Option<&Stop> {
         match side {
-            StopSide::Upper => self.upper.as_ref(),
-            StopSide::Lower => self.lower.as_ref(),
+            Side::Upper => self.upper.as_ref(),
+            Side::Lower => self.lower.as_ref(),
         }
     }
 
     /// The present stops with their sides, upper first.
-    pub fn present(&self) -> impl Iterator<Item = (StopSide, &Stop)> {
+    pub fn present(&self) -> impl Iterator<Item = (Side, &Stop)> {
         [
-            (StopSide::Upper, self.upper.as_ref()),
-            (StopSide::Lower, self.lower.as_ref()),
+            (Side::Upper, self.upper.as_ref()),
+            (Side::Lower, self.lower.as_ref()),
         ]
         .into_iter()
         .filter_map(|(s, st)| st.map(|st| (s, st)))

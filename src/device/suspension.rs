@@ -394,10 +394,7 @@ impl Device {
             if poly.confines(side) {
                 continue;
             }
-            let stop = self.stops.side(match side {
-                Side::Upper => super::StopSide::Upper,
-                Side::Lower => super::StopSide::Lower,
-            });
+            let stop = self.stops.side(side);
             let confined = match stop.map(|s| stop_growth(&s.law)) {
                 None => false,
                 Some(None) => true,

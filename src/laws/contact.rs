@@ -21,8 +21,9 @@
 
 use crate::laws::hertz::HertzLine;
 
-/// Which stop: +1 the one at x = +gap, -1 the one at x = -gap.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+/// Which stop: +1 the one at x = +gap, -1 the one at x = -gap. A device file spells it
+/// `upper` or `lower`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum Side {
     /// The stop at x = +gap.
     Upper,

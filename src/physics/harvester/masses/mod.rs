@@ -196,10 +196,7 @@ impl<const N: usize> MassChain<N> {
             .stops
             .iter()
             .map(|s| {
-                let sign = match s.side {
-                    crate::device::StopSide::Upper => 1.0,
-                    crate::device::StopSide::Lower => -1.0,
-                };
+                let sign = s.side.sign();
                 let side = if sign > 0.0 { "upper" } else { "lower" };
                 let name = match s.other {
                     None => format!("stop_{}_{side}", m.bodies[s.mass].name),
