@@ -3,6 +3,7 @@
 //! and read back equal.
 
 use endstop::device::{Device, ParamError};
+use endstop::physics::statics::{equilibria, reference_well};
 use endstop::physics::suspension::Place;
 
 const HEAD: &str = r#"
@@ -37,7 +38,7 @@ fn bistable_loads_with_its_wells_barrier_and_derived_stiffness() {
         "",
     )
     .unwrap();
-    let eq = d.equilibria();
+    let eq = equilibria(&d);
     assert_eq!(eq.len(), 3);
     assert!(eq[0].stable && !eq[1].stable && eq[2].stable);
     assert!((eq[2].x_m - 1e-4).abs() < 1e-16);
@@ -57,7 +58,7 @@ fn a_polynomial_held_on_rigid_stops_rests_on_them() {
         "[stops.both]\ngap_m = 1e-3\nlaw = \"restitution\"\ncoefficient = 0.5",
     )
     .unwrap();
-    let eq = d.equilibria();
+    let eq = equilibria(&d);
     assert!(eq.iter().any(|e| e.place == Place::UpperStop && e.stable));
     assert!(eq.iter().any(|e| e.place == Place::LowerStop && e.stable));
     assert!(eq
@@ -181,7 +182,7 @@ fn a_stop_confines_a_softening_suspension_only_when_its_force_grows_faster() {
     .unwrap();
     let rigid = with_stop("law = \"restitution\"\ncoefficient = 0.8").unwrap();
     for d in [hc, rigid] {
-        let w = d.reference_well().unwrap();
+        let w = reference_well(&d).unwrap();
         assert_eq!(w.x_m, 0.0);
         assert!((d.mechanics.stiffness_n_per_m - 100.0).abs() < 1e-12);
     }

@@ -278,8 +278,7 @@ fn suspension(device: &Device) -> String {
     if device.mechanics.suspension.is_linear() {
         return String::new();
     }
-    let eq: Vec<String> = device
-        .equilibria()
+    let eq: Vec<String> = endstop::physics::statics::equilibria(device)
         .iter()
         .map(|e| {
             format!(

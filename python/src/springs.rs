@@ -22,7 +22,7 @@ use crate::{arg_err, array, solver_err, PyDevice};
 #[pyfunction]
 fn equilibria<'py>(py: Python<'py>, device: &PyDevice) -> PyResult<Bound<'py, PyList>> {
     let out = PyList::empty(py);
-    for e in device.inner.equilibria() {
+    for e in endstop::physics::statics::equilibria(&device.inner) {
         let d = PyDict::new(py);
         d.set_item("x_m", e.x_m)?;
         d.set_item("stiffness_n_per_m", e.stiffness_n_per_m)?;

@@ -1,9 +1,20 @@
 //! The force laws of [`crate::laws`] built from a device's descriptions: a stop's contact law
-//! and model from its `[stops]` table, and a Hertz line law from a `hertz_line` stop.
+//! and model from its `[stops]` table (and a device's two), and a Hertz line law from a
+//! `hertz_line` stop.
 
 use super::{Device, HertzLineStop, Stop, StopLaw};
 use crate::laws::contact::{ContactDamping, ContactLaw, StopModel};
 use crate::laws::hertz::HertzLine;
+
+impl Device {
+    /// The models of the upper and the lower stop, each if present.
+    pub fn stop_models(&self) -> (Option<StopModel>, Option<StopModel>) {
+        (
+            self.stops.upper.as_ref().map(StopModel::of),
+            self.stops.lower.as_ref().map(StopModel::of),
+        )
+    }
+}
 
 impl HertzLine {
     /// The contact law of a Hertz line stop (t, R, E, nu).

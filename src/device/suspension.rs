@@ -22,8 +22,8 @@
 use serde::{Deserialize, Serialize};
 
 use super::{Checker, Device, ParamError, StopLaw};
-use crate::laws::contact::{Side, StopModel};
-use crate::laws::suspension::{equilibria, reference_well, Equilibrium, Polynomial, MAX_ORDER};
+use crate::laws::contact::Side;
+use crate::laws::suspension::{equilibria, reference_well, Polynomial, MAX_ORDER};
 
 /// The restoring force of the suspension (see the module docs).
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -327,28 +327,17 @@ impl Device {
         )
     }
 
-    /// The static equilibria of the suspension with the stops' springs, sorted by position
-    /// ([`crate::laws::suspension::equilibria`]): the wells (stable), the barriers between
-    /// them (unstable) and any rest on a stop.
-    pub fn equilibria(&self) -> Vec<Equilibrium> {
-        let up = self.stops.upper.as_ref().map(StopModel::of);
-        let lo = self.stops.lower.as_ref().map(StopModel::of);
-        equilibria(&self.restoring_polynomial(), up.as_ref(), lo.as_ref())
-    }
-
-    /// The reference well of the device (the stable equilibrium nearest rest), if any.
-    pub fn reference_well(&self) -> Option<Equilibrium> {
-        reference_well(&self.equilibria())
-    }
-
     /// Fills a nonlinear suspension's `mechanics.stiffness_n_per_m` with the stiffness at its
-    /// reference well.
+    /// reference well (the laws' [`reference_well`] of the suspension with the stops; the
+    /// device's equilibria themselves are [`crate::physics::statics`]'s).
     pub(super) fn derive_well_stiffness(&mut self) {
         if !self.mechanics.suspension.is_linear() {
             let poly = self.restoring_polynomial();
+            let (upper, lower) = self.stop_models();
+            let well = reference_well(&equilibria(&poly, upper.as_ref(), lower.as_ref()));
             // On a rigid stop the static stiffness is infinite: the suspension's own sets
             // the scales there.
-            self.mechanics.stiffness_n_per_m = self.reference_well().map_or(f64::NAN, |w| {
+            self.mechanics.stiffness_n_per_m = well.map_or(f64::NAN, |w| {
                 if w.stiffness_n_per_m.is_finite() {
                     w.stiffness_n_per_m
                 } else {

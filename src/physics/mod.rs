@@ -5,7 +5,7 @@
 //! paper's), the harvester assembled from a device's parts ([`harvester`], eqs 7-10: a
 //! [`crate::model::Model`] with its free flight split for the exponential integrator and its
 //! energy ledger, and the interface circuits between a transducer and a DC load: diode
-//! bridges, SSHI, SECE), the linear response of any device
+//! bridges, SSHI, SECE), the static equilibria of any device ([`statics`]), the linear response of any device
 //! ([`linear`]) and the paper's linear two-port theory ([`two_port`], eqs 11-18 and 21-22), and
 //! the closed forms the model is validated against ([`closed_forms`], [`interface_closed_forms`]).
 //!
@@ -49,6 +49,7 @@ pub mod closed_forms;
 pub mod harvester;
 pub mod interface_closed_forms;
 pub mod linear;
+pub mod statics;
 pub mod transducer;
 pub mod two_port;
 

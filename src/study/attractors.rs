@@ -150,8 +150,7 @@ impl Attractors {
 /// The seeds of a search over `grid`: the device's stable equilibria between its stops at
 /// rest, then the cells of the grid's ranges taken `per_side` by `per_side` (none for 0).
 pub fn seeds(device: &Device, grid: &BasinGrid, per_side: usize) -> Vec<(f64, f64)> {
-    let mut out: Vec<(f64, f64)> = device
-        .equilibria()
+    let mut out: Vec<(f64, f64)> = crate::physics::statics::equilibria(device)
         .iter()
         .filter(|e| e.stable && e.place == EquilibriumPlace::Free)
         .map(|e| (e.x_m, 0.0))

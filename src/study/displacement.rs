@@ -10,7 +10,7 @@
 //! device's correlation time, and counting them as independent would understate it.
 //!
 //! **Wells and passages.** The wells are the device's stable equilibria between its stops
-//! ([`Device::equilibria`]); the region of a well reaches to the barrier (the unstable
+//! ([`crate::physics::statics::equilibria`]); the region of a well reaches to the barrier (the unstable
 //! equilibrium) between it and the next. With two wells a passage is counted when the mass,
 //! last at the bottom of one well, reaches the bottom of the other (a crossing of the other
 //! well's position): a passage over the barrier that falls back before the other well's bottom
@@ -60,7 +60,7 @@ use crate::study::record::{
 /// # Ok::<(), Box<dyn std::error::Error>>(())
 /// ```
 pub fn two_wells(device: &Device) -> Option<([f64; 2], f64)> {
-    let eq = device.equilibria();
+    let eq = crate::physics::statics::equilibria(device);
     let wells: Vec<f64> = eq
         .iter()
         .filter(|e| e.stable && e.place == Place::Free)

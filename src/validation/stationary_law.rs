@@ -126,7 +126,7 @@ impl StationaryLaw {
         };
         // The support: out from the lowest equilibrium until U exceeds its minimum by 60
         // theta (a density below e^-60 of its peak), or to a rigid stop.
-        let eq = device.equilibria();
+        let eq = crate::physics::statics::equilibria(device);
         let u_min = eq
             .iter()
             .map(|e| e.energy_j)

@@ -220,7 +220,7 @@ impl<const N: usize> Harvester<N> {
             let k = device.restoring_polynomial().0;
             let mut higher = [0.0; suspension::MAX_ORDER - 1];
             higher.copy_from_slice(&k[1..]);
-            let well = device.reference_well().map_or(0.0, |w| w.x_m);
+            let well = super::statics::reference_well(device).map_or(0.0, |w| w.x_m);
             let s = Spring {
                 higher,
                 nonlinear: true,
