@@ -14,7 +14,8 @@ use endstop::fit::{
     fit, model_values, Direction, Feature, FeatureKind, FitReport, FitSettings, FitWarning, Point,
     Quantity, SweepData,
 };
-use rand::{Rng, SeedableRng};
+use endstop::num::gaussian::box_muller_cosine;
+use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
 /// Relative standard deviation of the simulated voltage noise.
@@ -30,13 +31,6 @@ fn device(file: &str) -> Device {
 fn grid(from: f64, to: f64, step: f64) -> Vec<f64> {
     let n = ((to - from) / step).round() as usize;
     (0..=n).map(|i| from + step * i as f64).collect()
-}
-
-/// A standard normal draw (Box-Muller).
-fn normal(rng: &mut ChaCha8Rng) -> f64 {
-    let u1: f64 = rng.random::<f64>().max(f64::MIN_POSITIVE);
-    let u2: f64 = rng.random();
-    (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos()
 }
 
 /// An up-sweep of `device` over `freqs` at `accel_rms_g` with the given features (their
@@ -73,7 +67,7 @@ fn synthetic(
     };
     let exact = model_values(device, 1.0, &template).unwrap();
     let mut rng = seed.map(ChaCha8Rng::seed_from_u64);
-    let mut noise = |sigma: f64| rng.as_mut().map_or(0.0, |r| sigma * normal(r));
+    let mut noise = |sigma: f64| rng.as_mut().map_or(0.0, |r| sigma * box_muller_cosine(r));
     let mut data = template;
     for (p, &v) in data.points.iter_mut().zip(&exact) {
         let sigma = NOISE_REL * v;

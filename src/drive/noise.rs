@@ -49,7 +49,7 @@
 //! plus RustFFT's scratch), kept per thread with the transform's plan for the next record of
 //! the same length, and the output vector.
 
-use rand::{Rng, SeedableRng};
+use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use std::cell::RefCell;
 use std::sync::Arc;
@@ -59,6 +59,7 @@ use realfft::{ComplexToReal, RealFftPlanner};
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
+use crate::num::gaussian::box_muller;
 use crate::G;
 
 /// Relative slack when deciding whether the band edge `B` falls on a bin (`f_k <= B`).
@@ -377,16 +378,6 @@ fn coefficient_scale(spec: &NoiseSpec, m: usize) -> f64 {
 fn draw_coefficient(rng: &mut ChaCha8Rng, amp: f64) -> Complex<f64> {
     let (g1, g2) = box_muller(rng);
     Complex::new(amp * g1, amp * g2)
-}
-
-/// Two independent standard normals from two uniforms (Box-Muller, basic form).
-pub(crate) fn box_muller(rng: &mut ChaCha8Rng) -> (f64, f64) {
-    // random::<f64>() is in [0, 1); 1 - u is in (0, 1], so ln never sees 0.
-    let u1 = 1.0 - rng.random::<f64>();
-    let u2 = rng.random::<f64>();
-    let r = (-2.0 * u1.ln()).sqrt();
-    let (s, c) = (std::f64::consts::TAU * u2).sin_cos();
-    (r * c, r * s)
 }
 
 #[cfg(test)]

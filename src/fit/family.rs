@@ -17,11 +17,12 @@
 //! | electrostatic comb pair, the paper's prototype 2 at 10 V (`data/prototype2.toml`, gap 9 um) | 17-20 |
 //! | the piezoelectric cantilever with a rigid stop (restitution 0.7): jumps at grazing | 21-22 |
 
-use rand::{Rng, SeedableRng};
+use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
 use super::{model_values, Direction, Feature, FeatureKind, FitError, Point, Quantity, SweepData};
 use crate::device::{Device, ParamError, ParamRange};
+use crate::num::gaussian::box_muller_cosine;
 
 const PIEZO: &str = include_str!(concat!(
     env!("CARGO_MANIFEST_DIR"),
@@ -459,13 +460,6 @@ pub fn recovery_family() -> Vec<FamilyCase> {
     all
 }
 
-/// A standard normal draw (Box-Muller).
-fn normal(rng: &mut ChaCha8Rng) -> f64 {
-    let u1: f64 = rng.random::<f64>().max(f64::MIN_POSITIVE);
-    let u2: f64 = rng.random();
-    (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos()
-}
-
 fn with_values(d: &Device, free: &[ParamRange], values: &[f64]) -> Result<Device, ParamError> {
     free.iter()
         .filter(|f| f.path != super::ACCEL_SCALE_PATH)
@@ -549,12 +543,13 @@ impl FamilyCase {
             let exact = model_values(&truth, self.accel_scale(), &d)?;
             for (p, &v) in d.points.iter_mut().zip(&exact) {
                 let sigma = self.noise_rel * v.abs();
-                p.value = v + sigma * normal(&mut rng);
+                p.value = v + sigma * box_muller_cosine(&mut rng);
                 p.sigma = Some(sigma);
             }
             let np = d.points.len();
             for (f, &v) in d.features.iter_mut().zip(&exact[np..]) {
-                f.freq_hz = (v + f.sigma_hz * normal(&mut rng)).clamp(s.span_hz.0, s.span_hz.1);
+                f.freq_hz =
+                    (v + f.sigma_hz * box_muller_cosine(&mut rng)).clamp(s.span_hz.0, s.span_hz.1);
             }
             out.push(d);
         }

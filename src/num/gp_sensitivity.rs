@@ -9,10 +9,10 @@ use nalgebra::DVector;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
+use super::gaussian::box_muller;
 use super::gp::Gp;
 use super::sensitivity::{Bootstrap, Index, Saltelli, SensitivityError};
 use super::stats::quantile;
-use crate::drive::noise::box_muller;
 
 /// How the emulated indices are computed.
 #[derive(Debug, Clone, Copy, PartialEq)]

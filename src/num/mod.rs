@@ -1,8 +1,9 @@
 //! Generic numerical helpers: one bracketing root finder ([`roots`]), sample statistics
 //! ([`stats`]), one number against a reference with its verdict ([`compare`]), variance-based
 //! global sensitivity ([`sensitivity`]), multi-start minimax fitting ([`minimax`]), Pareto
-//! fronts ([`pareto`]), a quadratic's roots and a cubic's range ([`polynomial`]), Gaussian-process emulators ([`gp`]) with their Sobol indices
-//! ([`gp_sensitivity`]) and history matching in waves ([`history`]).
+//! fronts ([`pareto`]), standard normal draws ([`gaussian`]), a quadratic's roots and a
+//! cubic's range ([`polynomial`]), Gaussian-process emulators ([`gp`]) with their Sobol
+//! indices ([`gp_sensitivity`]) and history matching in waves ([`history`]).
 //!
 //! ```
 //! use endstop::num::roots::{illinois, RootOptions, Sample};
@@ -22,6 +23,7 @@
 
 pub mod compare;
 pub mod dense;
+pub mod gaussian;
 pub mod gp;
 pub mod gp_sensitivity;
 pub mod history;
