@@ -7,6 +7,7 @@ use std::time::Instant;
 
 use anyhow::{Context, Result};
 use endstop::device::Device;
+use endstop::study::continuation::Branch;
 use endstop::validation::band_limit;
 use endstop::validation::nlvib::{self, Reference};
 use endstop::validation::random_law::{self, LawEnsemble};
@@ -52,52 +53,102 @@ fn load(exp: &mut Experiment, name: &str) -> Result<Device> {
     Ok(d.device)
 }
 
+/// The checks found so far and the wall time of each case, in the order they ran.
+#[derive(Default)]
+struct Tally {
+    checks: Vec<Check>,
+    costs: Vec<Cost>,
+}
+
+/// What the peer comparison with NLvib leaves for the Parquet files, the plot and the tables.
+struct Peer {
+    reference: Reference,
+    exact_rows: Vec<nlvib::PointComparison>,
+    branch: Branch,
+    hb: Vec<nlvib::HbComparison>,
+    aft_floor: f64,
+    fold_floor: f64,
+    samples: Vec<nlvib::BranchSample>,
+}
+
 /// Runs every check with its cases and writes the checks, their data, the plots and the
 /// chapter's tables (the `validation` binary).
 pub fn run() -> Result<()> {
     let mut exp = Experiment::start("validation");
     exp.seed = Some(cases::RANDOM_SEED);
-    let mut checks: Vec<Check> = Vec::new();
-    let mut costs: Vec<Cost> = Vec::new();
+    let mut tally = Tally::default();
+    let (piezo, em) = closed_form_checks(&mut exp, &mut tally)?;
+    impact_checks(&mut exp, &mut tally)?;
+    let (band, ensembles) = random_checks(&mut exp, &mut tally)?;
+    let peer = peer_checks(&mut exp, &mut tally)?;
+    let springs = crate::reports::springs_io::run(&mut exp, load)?;
+    tally.checks.extend(springs.checks.iter().cloned());
+    tally
+        .costs
+        .extend(springs.costs.iter().map(|(c, w, s)| Cost {
+            case: c.clone(),
+            what: w.clone(),
+            wall_s: *s,
+        }));
+    interface_checks(&mut exp, &mut tally)?;
+    write_parquet(&mut exp, &tally.checks, &ensembles, &peer)?;
+    exp.write_extra_plot(
+        "validation_nlvib",
+        &nlvib_plot(&peer.samples, &peer.reference),
+    )?;
+    exp.write_extra_plot("validation_linear", &linear_plot(&piezo, &em)?)?;
+    write_tables(&mut exp, &tally, &band, &ensembles, &peer)?;
+    exp.finish()
+}
 
-    // Closed forms: frequency response and optimal loads.
-    let piezo = load(&mut exp, "piezo_linear")?;
-    let em = load(&mut exp, "em_linear")?;
-    let em0 = load(&mut exp, "em_linear_no_inductance")?;
+/// Closed forms: frequency response and optimal loads. Returns the piezoelectric and the
+/// electromagnetic linear devices, for the plot.
+fn closed_form_checks(exp: &mut Experiment, tally: &mut Tally) -> Result<(Device, Device)> {
+    let Tally { checks, costs } = tally;
+    let piezo = load(exp, "piezo_linear")?;
+    let em = load(exp, "em_linear")?;
+    let em0 = load(exp, "em_linear_no_inductance")?;
     for d in [&piezo, &em] {
-        checks.extend(timed(&mut costs, &d.name, "frequency response", || {
+        checks.extend(timed(costs, &d.name, "frequency response", || {
             cases::frequency_response(d)
         })?);
     }
     for d in [&piezo, &em, &em0] {
-        checks.extend(timed(&mut costs, &d.name, "optimal load", || {
+        checks.extend(timed(costs, &d.name, "optimal load", || {
             cases::optimal_load(d)
         })?);
     }
+    Ok((piezo, em))
+}
 
-    // Grazing of the rigid-stop oscillator.
-    let rigid = load(&mut exp, "grazing_rigid")?;
-    checks.extend(timed(
-        &mut costs,
-        &rigid.name,
-        "grazing continuations",
-        || cases::grazing(&rigid),
-    )?);
-
-    // The impact damper of Masri & Caughey: its closed form against our shooting.
-    let damper = load(&mut exp, "impact_damper")?;
-    checks.extend(timed(&mut costs, &damper.name, "symmetric orbits", || {
+/// The grazing of the rigid-stop oscillator, and the impact damper of Masri & Caughey: its
+/// closed form against our shooting.
+fn impact_checks(exp: &mut Experiment, tally: &mut Tally) -> Result<()> {
+    let Tally { checks, costs } = tally;
+    let rigid = load(exp, "grazing_rigid")?;
+    checks.extend(timed(costs, &rigid.name, "grazing continuations", || {
+        cases::grazing(&rigid)
+    })?);
+    let damper = load(exp, "impact_damper")?;
+    checks.extend(timed(costs, &damper.name, "symmetric orbits", || {
         endstop::validation::impact_damper::checks::orbit_checks(&damper)
     })?);
     checks.extend(timed(
-        &mut costs,
+        costs,
         &damper.name,
         "stability boundary line",
         || endstop::validation::impact_damper::checks::boundary_checks(&damper),
     )?);
+    Ok(())
+}
 
-    // The white-noise law, and the recorded study of its band limit, which decides whether the
-    // rigid stops' impact term is a reference or an open question.
+/// The white-noise law, and the recorded study of its band limit, which decides whether the
+/// rigid stops' impact term is a reference or an open question.
+fn random_checks(
+    exp: &mut Experiment,
+    tally: &mut Tally,
+) -> Result<(Vec<band_limit::BandCell>, Vec<LawEnsemble>)> {
+    let Tally { checks, costs } = tally;
     let band = band_limit_io::recorded_cells()?;
     let impact_term = band_limit::ImpactTerm::of(&band)?;
     checks.extend(band_limit::independent_checks(
@@ -110,9 +161,9 @@ pub fn run() -> Result<()> {
         "random_hertz_em",
         "random_restitution",
     ] {
-        let d = load(&mut exp, name)?;
+        let d = load(exp, name)?;
         let ens = timed(
-            &mut costs,
+            costs,
             name,
             &format!(
                 "{} records of {} s",
@@ -124,9 +175,13 @@ pub fn run() -> Result<()> {
         checks.extend(random_law::checks(&ens, impact_term.limit()));
         ensembles.push(ens);
     }
+    Ok((band, ensembles))
+}
 
-    // The peer tool.
-    let sdof = load(&mut exp, "nlvib_sdof")?;
+/// The peer tool: NLvib's orbits, continuation and harmonic balance against ours.
+fn peer_checks(exp: &mut Experiment, tally: &mut Tally) -> Result<Peer> {
+    let Tally { checks, costs } = tally;
+    let sdof = load(exp, "nlvib_sdof")?;
     let ref_dir = crate::root().join("data/references/nlvib");
     let reference = Reference::parse(|name| {
         std::fs::read_to_string(ref_dir.join(name)).map_err(|e| ValidationError::Reference {
@@ -135,61 +190,65 @@ pub fn run() -> Result<()> {
         })
     })?;
     let ours = nlvib::Ours::new(&sdof)?;
-    let (exact_checks, exact_rows) =
-        timed(&mut costs, &sdof.name, "through every exact orbit", || {
-            nlvib::exact_point_checks(&ours, &reference, cases::NLVIB_EXACT_STRIDE)
-        })?;
+    let (exact_checks, exact_rows) = timed(costs, &sdof.name, "through every exact orbit", || {
+        nlvib::exact_point_checks(&ours, &reference, cases::NLVIB_EXACT_STRIDE)
+    })?;
     checks.extend(exact_checks);
-    let branch = timed(
-        &mut costs,
-        &sdof.name,
-        "continuation 0.5 to 2.5 rad/s",
-        || {
-            ours.branch(
-                0.5,
-                2.5,
-                cases::NLVIB_MAX_STEP_RAD_S,
-                cases::NLVIB_LOCATE_TOL_RAD_S,
-            )
-        },
-    )?;
+    let branch = timed(costs, &sdof.name, "continuation 0.5 to 2.5 rad/s", || {
+        ours.branch(
+            0.5,
+            2.5,
+            cases::NLVIB_MAX_STEP_RAD_S,
+            cases::NLVIB_LOCATE_TOL_RAD_S,
+        )
+    })?;
     checks.extend(nlvib::continuation_checks(
         &ours,
         &branch,
         &reference,
         cases::NLVIB_LOCATE_TOL_RAD_S,
     )?);
-    let hb = timed(
-        &mut costs,
-        &sdof.name,
-        "amplitudes at NLvib's points",
-        || nlvib::hb_convergence(&ours, &branch, &reference),
-    )?;
+    let hb = timed(costs, &sdof.name, "amplitudes at NLvib's points", || {
+        nlvib::hb_convergence(&ours, &branch, &reference)
+    })?;
     let (aft_floor, fold_floor) = (reference.aft_floor_m(), reference.fold_floor_rad_s());
     checks.extend(nlvib::hb_checks(&hb, aft_floor, fold_floor));
     let samples = nlvib::branch_samples(&ours, &branch)?;
-    let springs = crate::reports::springs_io::run(&mut exp, load)?;
-    checks.extend(springs.checks.iter().cloned());
-    costs.extend(springs.costs.iter().map(|(c, w, s)| Cost {
-        case: c.clone(),
-        what: w.clone(),
-        wall_s: *s,
-    }));
+    Ok(Peer {
+        reference,
+        exact_rows,
+        branch,
+        hb,
+        aft_floor,
+        fold_floor,
+        samples,
+    })
+}
 
-    // The interface circuits against their closed forms.
-    let bridge = load(&mut exp, "piezo_bridge")?;
+/// The interface circuits against their closed forms.
+fn interface_checks(exp: &mut Experiment, tally: &mut Tally) -> Result<()> {
+    let Tally { checks, costs } = tally;
+    let bridge = load(exp, "piezo_bridge")?;
     checks.extend(timed(
-        &mut costs,
+        costs,
         &bridge.name,
         "interface closed forms",
         || endstop::validation::interfaces::weak_coupling_checks(&bridge),
     )?);
-    let coupling = timed(&mut costs, &bridge.name, "coupling rows", || {
+    let coupling = timed(costs, &bridge.name, "coupling rows", || {
         endstop::validation::interfaces::coupling_rows(&bridge)
     })?;
     checks.extend(endstop::validation::interfaces::coupling_checks(&coupling));
+    Ok(())
+}
 
-    // Parquet.
+/// The checks, the random records and the peer comparison as Parquet.
+fn write_parquet(
+    exp: &mut Experiment,
+    checks: &[Check],
+    ensembles: &[LawEnsemble],
+    peer: &Peer,
+) -> Result<()> {
     let mut df = frame(checks.iter().map(|c| {
         row![
             "group" => c.group.clone(),
@@ -227,7 +286,7 @@ pub fn run() -> Result<()> {
         })
     }))?;
     exp.write_parquet("random_records", &mut df, "hypothetical")?;
-    let mut df = frame(samples.iter().map(|s| {
+    let mut df = frame(peer.samples.iter().map(|s| {
         row![
             "omega_rad_s" => s.omega_rad_s,
             "a1_amplitude_m" => s.a1_amplitude_m,
@@ -237,7 +296,7 @@ pub fn run() -> Result<()> {
         ]
     }))?;
     exp.write_parquet("nlvib_branch", &mut df, "reference")?;
-    let mut df = frame(exact_rows.iter().map(|r| {
+    let mut df = frame(peer.exact_rows.iter().map(|r| {
         row![
             "segment" => r.exact.segment,
             "omega_rad_s" => r.exact.omega_rad_s,
@@ -250,7 +309,7 @@ pub fn run() -> Result<()> {
         ]
     }))?;
     exp.write_parquet("nlvib_exact", &mut df, "reference")?;
-    let mut df = frame(hb.iter().flat_map(|c| {
+    let mut df = frame(peer.hb.iter().flat_map(|c| {
         c.amplitudes.iter().map(move |(part, w, theirs, ours)| {
             row![
                 "harmonics_h" => c.harmonics,
@@ -262,12 +321,18 @@ pub fn run() -> Result<()> {
         })
     }))?;
     exp.write_parquet("nlvib_hb", &mut df, "reference")?;
+    Ok(())
+}
 
-    // Plots.
-    exp.write_extra_plot("validation_nlvib", &nlvib_plot(&samples, &reference))?;
-    exp.write_extra_plot("validation_linear", &linear_plot(&piezo, &em)?)?;
-
-    // The chapter's tables.
+/// The chapter's tables and the experiment's numbers.
+fn write_tables(
+    exp: &mut Experiment,
+    tally: &Tally,
+    band: &[band_limit::BandCell],
+    ensembles: &[LawEnsemble],
+    peer: &Peer,
+) -> Result<()> {
+    let (checks, costs) = (&tally.checks, &tally.costs);
     let book = &exp.book_dir;
     let within = checks.iter().filter(|c| c.passes()).count();
     let judged = checks.iter().filter(|c| !c.is_open()).count();
@@ -297,58 +362,66 @@ pub fn run() -> Result<()> {
     write_atomic(
         &book.join("closed_forms.md"),
         checks_table(
-            in_groups(&checks, "frequency response").chain(in_groups(&checks, "optimal load")),
+            in_groups(checks, "frequency response").chain(in_groups(checks, "optimal load")),
         )
         .as_bytes(),
     )?;
     write_atomic(
         &book.join("random.md"),
-        random_md(&ensembles, &checks).as_bytes(),
+        random_md(ensembles, checks).as_bytes(),
     )?;
     write_atomic(
         &book.join("grazing.md"),
-        checks_table(in_groups(&checks, "grazing")).as_bytes(),
+        checks_table(in_groups(checks, "grazing")).as_bytes(),
     )?;
     write_atomic(
         &book.join("nlvib.md"),
-        nlvib_md(&checks, &hb, aft_floor, fold_floor, &branch, &samples).as_bytes(),
+        nlvib_md(
+            checks,
+            &peer.hb,
+            peer.aft_floor,
+            peer.fold_floor,
+            &peer.branch,
+            &peer.samples,
+        )
+        .as_bytes(),
     )?;
     write_atomic(
         &book.join("band_limit.md"),
         format!(
             "{}\n{}",
-            band_limit_io::table_md(&band)?,
-            checks_table(in_groups(&checks, "band limit: independent simulation"))
+            band_limit_io::table_md(band)?,
+            checks_table(in_groups(checks, "band limit: independent simulation"))
         )
         .as_bytes(),
     )?;
     write_atomic(
         &book.join("springs.md"),
         checks_table(
-            in_groups(&checks, "exact stationary law")
-                .chain(in_groups(&checks, "peer: NLvib's Duffing")),
+            in_groups(checks, "exact stationary law")
+                .chain(in_groups(checks, "peer: NLvib's Duffing")),
         )
         .as_bytes(),
     )?;
     write_atomic(
         &book.join("escapes.md"),
-        checks_table(in_groups(&checks, "escape over the barrier")).as_bytes(),
+        checks_table(in_groups(checks, "escape over the barrier")).as_bytes(),
     )?;
     write_atomic(
         &book.join("interfaces.md"),
         checks_table(
-            in_groups(&checks, "interface circuits, weak coupling")
-                .chain(in_groups(&checks, "interface circuits, coupling")),
+            in_groups(checks, "interface circuits, weak coupling")
+                .chain(in_groups(checks, "interface circuits, coupling")),
         )
         .as_bytes(),
     )?;
     write_atomic(
         &book.join("impact_damper.md"),
-        checks_table(in_groups(&checks, "impact damper")).as_bytes(),
+        checks_table(in_groups(checks, "impact damper")).as_bytes(),
     )?;
-    write_atomic(&book.join("cost.md"), cost_md(&costs).as_bytes())?;
+    write_atomic(&book.join("cost.md"), cost_md(costs).as_bytes())?;
     exp.number("checks", judged as f64);
     exp.number("open_questions", open.len() as f64);
     exp.number("checks_within_tolerance", within as f64);
-    exp.finish()
+    Ok(())
 }
