@@ -126,8 +126,29 @@ fn hz(v: Option<f64>) -> String {
     v.map_or("-".into(), |x| format!("{x:.2}"))
 }
 
+/// The chapter's generated numbers: the transitions, the ghost past the fold, the events,
+/// the coexisting orbits, the basins and the cost, one section each.
 fn numbers_md(run: &response::Run, fine_shift: &[(Case, f64)]) -> String {
     let mut md = String::from("### Jumps, folds and grazing points\n\n");
+    md.push_str(&transitions_table(run));
+    md.push_str(
+        "\nThe sweeps' transitions are refined to brackets of 0.1 Hz (the midpoint is shown). \
+         The upper fold and the grazing points are located on the continued branch to 1e-4 Hz.\n",
+    );
+    md.push_str(&ghost_md(run));
+    md.push_str("\n### In words\n\n");
+    for c in &run.cases {
+        md.push_str(&in_words(c));
+    }
+    md.push_str(&events_md(run));
+    md.push_str(&multipliers_md(run));
+    md.push_str(&basins_md(run, fine_shift));
+    md.push_str(&cost_md(run));
+    md
+}
+
+/// Where each sweep leaves its branch, against the fold, the lower end and the grazing points.
+fn transitions_table(run: &response::Run) -> String {
     let mut t = Table::new([
         "case",
         "up-sweep leaves the upper branch (Hz)",
@@ -176,11 +197,13 @@ fn numbers_md(run: &response::Run, fine_shift: &[(Case, f64)]) -> String {
             hz(c.band_hz().map(|(a, b)| b - a)),
         ]);
     }
-    md.push_str(&t.render());
-    md.push_str(
-        "\nThe sweeps' transitions are refined to brackets of 0.1 Hz (the midpoint is shown). \
-         The upper fold and the grazing points are located on the continued branch to 1e-4 Hz.\n",
-    );
+    t.render()
+}
+
+/// The stepped sweep's steady-state criterion past the upper fold, and the fold rule's
+/// convergence.
+fn ghost_md(run: &response::Run) -> String {
+    let mut md = String::new();
     md.push_str("\n### The stepped sweep's steady-state criterion past the upper fold\n\n");
     md.push_str(&format!(
         "One step of the sweep's steady-state criterion from the stable impacting orbit 1 Hz \
@@ -239,10 +262,12 @@ fn numbers_md(run: &response::Run, fine_shift: &[(Case, f64)]) -> String {
         ]);
     }
     md.push_str(&t.render());
-    md.push_str("\n### In words\n\n");
-    for c in &run.cases {
-        md.push_str(&in_words(c));
-    }
+    md
+}
+
+/// Every event on the continued branches.
+fn events_md(run: &response::Run) -> String {
+    let mut md = String::new();
     md.push_str("\n### Every event on the branches\n\n");
     let mut t = Table::new([
         "case",
@@ -264,6 +289,12 @@ fn numbers_md(run: &response::Run, fine_shift: &[(Case, f64)]) -> String {
         }
     }
     md.push_str(&t.render());
+    md
+}
+
+/// The Floquet multipliers of the coexisting orbits in the hysteresis band.
+fn multipliers_md(run: &response::Run) -> String {
+    let mut md = String::new();
     md.push_str("\n### Floquet multipliers of the coexisting orbits in the hysteresis band\n\n");
     let mut t = Table::new([
         "case",
@@ -307,6 +338,12 @@ fn numbers_md(run: &response::Run, fine_shift: &[(Case, f64)]) -> String {
         }
     }
     md.push_str(&t.render());
+    md
+}
+
+/// The basins' shares, with their change on a grid twice as fine.
+fn basins_md(run: &response::Run, fine_shift: &[(Case, f64)]) -> String {
+    let mut md = String::new();
     md.push_str("\n### Basins of attraction\n\n");
     let mut t = Table::new([
         "case",
@@ -332,6 +369,12 @@ fn numbers_md(run: &response::Run, fine_shift: &[(Case, f64)]) -> String {
         }
     }
     md.push_str(&t.render());
+    md
+}
+
+/// The continuation's and the sweeps' cost.
+fn cost_md(run: &response::Run) -> String {
+    let mut md = String::new();
     md.push_str("\n### Cost\n\n");
     let mut t = Table::new([
         "case",
