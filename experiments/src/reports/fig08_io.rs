@@ -129,12 +129,30 @@ fn write_parquet(exp: &Experiment, run: &fig08::Run) -> Result<()> {
     Ok(())
 }
 
+/// The chapter's generated numbers: the calibration, the claims, every sweep, the paper's
+/// b_im procedure, the convergence and the tension-free sensitivity, one section each.
 fn numbers_md(
     cal: &CalibrationRecord,
     run: &fig08::Run,
     values: &[Value],
     claims: &Claims,
 ) -> String {
+    let mut md = calibration_md(cal);
+    md.push_str(
+        "\n### Claims\n\nOur value, what it is, and the verdict with the claims file's \
+         tolerance. Where a sweep has no jump, the value given for a jump claim is the frequency \
+         at which the impacting branch ends by a gradual loss of contact, and it says so.\n\n",
+    );
+    md.push_str(&claims_table_both_sets(claims.of_experiment(Fig08::NAME), values, 5).render());
+    md.push_str(&sweeps_md(run));
+    md.push_str(&bim_md(run));
+    md.push_str(&convergence_md(run));
+    md.push_str(&tension_free_md(run));
+    md
+}
+
+/// The calibration of the gap, read from its artefact.
+fn calibration_md(cal: &CalibrationRecord) -> String {
     let mut md = format!(
         "### Calibration\n\nOne parameter, the end-stop gap xmax, fitted so that the 5.5 g, 30 V \
          up-sweep first touches a stop at the paper's measured kink ({P1_MEASURED_ONSET_HZ} Hz): \
@@ -165,14 +183,12 @@ fn numbers_md(
         cal.evaluations.to_string(),
     ]);
     md.push_str(&t.render());
+    md
+}
 
-    md.push_str(
-        "\n### Claims\n\nOur value, what it is, and the verdict with the claims file's \
-         tolerance. Where a sweep has no jump, the value given for a jump claim is the frequency \
-         at which the impacting branch ends by a gradual loss of contact, and it says so.\n\n",
-    );
-    md.push_str(&claims_table_both_sets(claims.of_experiment(Fig08::NAME), values, 5).render());
-
+/// Every sweep's onset, branch end and cost.
+fn sweeps_md(run: &fig08::Run) -> String {
+    let mut md = String::new();
     md.push_str(
         "\n### Every sweep\n\nOnset and branch end are refined to brackets of 0.1 Hz (midpoints \
          shown). The jump power ratio is the total output power just after over just before the \
@@ -220,7 +236,12 @@ fn numbers_md(
         }
     }
     md.push_str(&t.render());
+    md
+}
 
+/// The paper's procedure for b_im, with our fits.
+fn bim_md(run: &fig08::Run) -> String {
+    let mut md = String::new();
     md.push_str(&format!(
         "\n### The paper's procedure for b_im\n\nThe end-stop damping for which the 5.5 g \
          up-sweep's impacting branch ends at the measured {P1_MEASURED_JUMP_HZ} Hz (Illinois \
@@ -259,7 +280,12 @@ fn numbers_md(
         }
     }
     md.push_str(&t.render());
+    md
+}
 
+/// The sweeps' convergence under halved steps and tolerances.
+fn convergence_md(run: &fig08::Run) -> String {
+    let mut md = String::new();
     md.push_str(&format!(
         "\n### Convergence\n\nEach sweep repeated with half the frequency step, half the \
          integrator tolerance, half the steady-state tolerance and half the refinement bracket. \
@@ -284,7 +310,12 @@ fn numbers_md(
         pct(Some(worst.1)),
         pct(Some(worst.2))
     ));
+    md
+}
 
+/// The tension-free contact's sensitivity.
+fn tension_free_md(run: &fig08::Run) -> String {
+    let mut md = String::new();
     md.push_str(
         "\n### Tension-free contact (sensitivity)\n\n5.5 g, Hertz, b_im = 1.5 N s/m, with eq 1 \
          as written and with the contact force clipped at zero.\n\n",
