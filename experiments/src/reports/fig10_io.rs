@@ -23,8 +23,6 @@ pub fn write(mut exp: Experiment, run: &fig10::Run, claims: &Claims) -> Result<(
     exp.seed = Some(run.seed);
     let f = fig10::findings(run);
     let spec = &run.spec;
-    let first = run.first_stream;
-    let ex = &run.records[0];
 
     exp.number("level_example_record_g2_per_hz", f.example_level);
     exp.number("edge_example_record_hz", f.example_edge_hz);
@@ -33,6 +31,17 @@ pub fn write(mut exp: Experiment, run: &fig10::Run, claims: &Claims) -> Result<(
     exp.number("bin_relative_std_example", f.example_bin_relative_std);
     exp.number("leakage_above_10p5khz_relative", f.example_leakage);
 
+    exp.write_numbers_md(&numbers_md(run, &f))?;
+    write_parquet(&exp, run, &f)?;
+    exp.write_plot(&psd_plot(run, &f, claims))?;
+    exp.finish()
+}
+
+/// The book's table of the generator's level, edge and mean square, with its method.
+fn numbers_md(run: &fig10::Run, f: &fig10::Findings) -> String {
+    let spec = &run.spec;
+    let first = run.first_stream;
+    let ex = &run.records[0];
     let mut md = format!(
         "Generator: `endstop::drive::noise::generate` (frequency-domain synthesis, flat to {} kHz and \
          empty above), {} records of {} s at {} kHz, ChaCha8 seed {}, streams {} to {}. Welch: \
@@ -94,9 +103,13 @@ pub fn write(mut exp: Experiment, run: &fig10::Run, claims: &Claims) -> Result<(
         LEAKAGE_FROM_HZ / 1e3,
         f.example_leakage,
     ));
-    exp.write_numbers_md(&md)?;
+    md
+}
 
-    // Parquet: the example record's two-sided PSD, the mean of the records and the target.
+/// The example record's two-sided PSD, the mean of the records and the target, as Parquet.
+fn write_parquet(exp: &Experiment, run: &fig10::Run, f: &fig10::Findings) -> Result<()> {
+    let spec = &run.spec;
+    let ex = &run.records[0];
     let mut rows = Vec::new();
     for (series, real, psd) in [
         ("example record", "0", &f.example_two_sided),
@@ -123,9 +136,15 @@ pub fn write(mut exp: Experiment, run: &fig10::Run, claims: &Claims) -> Result<(
     }
     exp.write_parquet("fig10_psd", &mut frame(rows)?, "none")?;
 
-    // Figure 10 as in the paper: log-log, two-sided density. Points from 10 Hz on; the line
-    // drops to the bottom of the axis at the first bin below it (above the band the density
-    // is some twelve decades down) and stops there.
+    Ok(())
+}
+
+/// Figure 10 as in the paper: log-log, two-sided density. Points from 10 Hz on; the line
+/// drops to the bottom of the axis at the first bin below it (above the band the density is
+/// some twelve decades down) and stops there.
+fn psd_plot(run: &fig10::Run, f: &fig10::Findings, claims: &Claims) -> LinePlot {
+    let spec = &run.spec;
+    let ex = &run.records[0];
     let pts = |p: &endstop::signal::Psd| -> Vec<(f64, f64)> {
         let mut out = Vec::new();
         for (&fr, &v) in p
@@ -144,7 +163,7 @@ pub fn write(mut exp: Experiment, run: &fig10::Run, claims: &Claims) -> Result<(
     let paper = claims
         .claim(keys::F10_LEVEL)
         .map_or(f64::NAN, |c| c.paper.to_f64());
-    let plot = LinePlot::new(
+    LinePlot::new(
         &format!(
             "Figure 10: generated acceleration, Sa = {} g²/Hz, 10 s at 100 kHz, band 10 kHz",
             sa_label(paper)
@@ -175,7 +194,5 @@ pub fn write(mut exp: Experiment, run: &fig10::Run, claims: &Claims) -> Result<(
     .x(10.0, 5e4)
     .y(Y_MIN, 1e-1)
     .log(true, true)
-    .legend(LegendPos::LowerLeft);
-    exp.write_plot(&plot)?;
-    exp.finish()
+    .legend(LegendPos::LowerLeft)
 }
