@@ -407,6 +407,21 @@ impl Interface {
             | Interface::SeriesSshi(r, _) => Some(r),
             Interface::Sece { .. } => None,
         };
+        self.validate_transducer(transducer, rect, c)?;
+        self.validate_values(c)?;
+        if let Some(r) = rect {
+            self.validate_diode(r, transducer, c)?;
+        }
+        Ok(())
+    }
+
+    /// That the transducer takes this interface, and leaves the DC load to it.
+    fn validate_transducer(
+        &self,
+        transducer: &Transducer,
+        rect: Option<&Rectifier>,
+        c: &Checker,
+    ) -> Result<(), ParamError> {
         match transducer {
             Transducer::Piezoelectric(_) => {}
             Transducer::Electromagnetic(em) => {
@@ -474,6 +489,11 @@ impl Interface {
                 ),
             ));
         }
+        Ok(())
+    }
+
+    /// The storage, the load, and the inversion or the SECE's efficiency.
+    fn validate_values(&self, c: &Checker) -> Result<(), ParamError> {
         c.positive(
             "interface.storage_capacitance_f",
             self.storage_capacitance_f().unwrap_or(f64::NAN),
@@ -510,51 +530,59 @@ impl Interface {
             }
             _ => {}
         }
-        if let Some(r) = rect {
-            match r.diode {
-                Diode::PiecewiseLinear {
-                    forward_drop_v,
-                    on_resistance_ohm,
-                } => {
-                    c.non_negative("interface.diode.forward_drop_v", forward_drop_v)?;
-                    c.non_negative("interface.diode.on_resistance_ohm", on_resistance_ohm)?;
-                    if matches!(self, Interface::SeriesSshi(..)) && on_resistance_ohm != 0.0 {
-                        return Err(c.err(
-                            "interface.diode.on_resistance_ohm",
-                            on_resistance_ohm,
-                            "0 for `series_sshi` (its diodes conduct only during the \
-                             inversion, whose losses the inversion factor covers)",
-                        ));
-                    }
+        Ok(())
+    }
+
+    /// The rectifier's diodes, and that their law suits the transducer and the interface.
+    fn validate_diode(
+        &self,
+        r: &Rectifier,
+        transducer: &Transducer,
+        c: &Checker,
+    ) -> Result<(), ParamError> {
+        match r.diode {
+            Diode::PiecewiseLinear {
+                forward_drop_v,
+                on_resistance_ohm,
+            } => {
+                c.non_negative("interface.diode.forward_drop_v", forward_drop_v)?;
+                c.non_negative("interface.diode.on_resistance_ohm", on_resistance_ohm)?;
+                if matches!(self, Interface::SeriesSshi(..)) && on_resistance_ohm != 0.0 {
+                    return Err(c.err(
+                        "interface.diode.on_resistance_ohm",
+                        on_resistance_ohm,
+                        "0 for `series_sshi` (its diodes conduct only during the \
+                         inversion, whose losses the inversion factor covers)",
+                    ));
                 }
-                Diode::Shockley {
-                    saturation_current_a,
+            }
+            Diode::Shockley {
+                saturation_current_a,
+                ideality,
+                thermal_voltage_v,
+            } => {
+                c.positive("interface.diode.saturation_current_a", saturation_current_a)?;
+                c.within_closed(
+                    "interface.diode.ideality",
                     ideality,
-                    thermal_voltage_v,
-                } => {
-                    c.positive("interface.diode.saturation_current_a", saturation_current_a)?;
-                    c.within_closed(
-                        "interface.diode.ideality",
-                        ideality,
-                        0.5,
-                        10.0,
-                        "in [0.5, 10]",
-                    )?;
-                    c.positive("interface.diode.thermal_voltage_v", thermal_voltage_v)?;
-                    let capacitive = matches!(
-                        transducer,
-                        Transducer::Piezoelectric(_)
-                            | Transducer::AreaOverlapPair(_)
-                            | Transducer::GapClosingPair(_)
-                    );
-                    if !capacitive || matches!(self, Interface::SeriesSshi(..)) {
-                        return Err(c.message(
-                            "interface.diode.law",
-                            "the `shockley` law is modelled for a piezoelectric element or an \
-                             electrostatic pair with `full_bridge` (and a piezoelectric element \
-                             with `parallel_sshi`); use `piecewise_linear`",
-                        ));
-                    }
+                    0.5,
+                    10.0,
+                    "in [0.5, 10]",
+                )?;
+                c.positive("interface.diode.thermal_voltage_v", thermal_voltage_v)?;
+                let capacitive = matches!(
+                    transducer,
+                    Transducer::Piezoelectric(_)
+                        | Transducer::AreaOverlapPair(_)
+                        | Transducer::GapClosingPair(_)
+                );
+                if !capacitive || matches!(self, Interface::SeriesSshi(..)) {
+                    return Err(c.message(
+                        "interface.diode.law",
+                        "the `shockley` law is modelled for a piezoelectric element or an \
+                         electrostatic pair with `full_bridge` (and a piezoelectric element \
+                         with `parallel_sshi`); use `piecewise_linear`",
+                    ));
                 }
             }
         }
