@@ -6,13 +6,16 @@ use anyhow::Result;
 use clap::Parser;
 use common::io::frame::frame;
 use common::io::md::Table;
+use common::io::plot::Panels;
 use common::reports::branch_io::{diagram_figure, diagram_rows, diagram_words};
-use common::{fmt_sig, row};
+use common::{fmt_sig, row, Experiment};
+use endstop::device::Device;
 use endstop::study::chirp::{ChirpReport, ChirpSweep};
 use endstop::study::continuation::impacting::DiagramOptions;
 use endstop::study::continuation::{diagram, ContinuationSettings, Diagram, DiagramEventKind};
 use endstop::study::orbit::Forcing;
 use endstop::study::stepped::Approach;
+use endstop::study::sweep::{DownSweepReport, SweepReport, SweepSettings};
 use endstop_experiments as common;
 
 use crate::shared::{describe, implausible_drive, start, step_effect, Protocol, RangeArgs};
@@ -56,23 +59,76 @@ pub(crate) fn response(args: ResponseArgs) -> Result<()> {
     });
     let (up, down) = (up?, down?);
     let chirps = match args.sweep_rate {
-        Some(rate) => {
-            eprintln!("[endstop-response] swept sines at {rate} Hz/s");
-            let sweep = |from: f64, to: f64| ChirpSweep {
-                from_hz: from,
-                to_hz: to,
-                rate_hz_per_s: rate,
-                window_cycles: 4,
-                cfg: settings.cfg.clone(),
-            };
-            let (u, d) = rayon::join(
-                || sweep(a.from, a.to).run(&device, a.accel_rms_g),
-                || sweep(a.to, a.from).run(&device, a.accel_rms_g),
-            );
-            Some((u?, d?))
-        }
+        Some(rate) => Some(swept_sines(&settings, &device, a, rate)?),
         None => None,
     };
+    let diagram = continue_orbits(&device, a, &protocol)?;
+    write_parquet(&exp, &device, &diagram, &up, &down, chirps.as_ref())?;
+    let found = Found {
+        up: &up,
+        down: &down,
+        chirps: chirps.as_ref(),
+        diagram: &diagram,
+    };
+    let mut md = summary_md(
+        &mut exp,
+        &loaded.file,
+        &device,
+        a,
+        &settings,
+        &protocol,
+        &found,
+    )?;
+    if args.step_study {
+        eprintln!("[endstop-response] the down-sweep's end against its step");
+        md.push_str(&step_study(
+            &settings,
+            &device,
+            a.accel_rms_g,
+            &protocol,
+            &down,
+            &diagram,
+            &mut exp,
+        )?);
+    }
+    exp.write_numbers_md(&md)?;
+    print!("{md}");
+    exp.write_plot(&response_plot(&device, a, &diagram, &up, &down))?;
+    exp.finish()
+}
+
+/// What the sweeps, the swept sines and the continuation found.
+struct Found<'a> {
+    up: &'a SweepReport,
+    down: &'a DownSweepReport,
+    chirps: Option<&'a (ChirpReport, ChirpReport)>,
+    diagram: &'a Diagram,
+}
+
+/// The swept sines up and down at `rate` (Hz/s).
+fn swept_sines(
+    settings: &SweepSettings,
+    device: &Device,
+    a: &RangeArgs,
+    rate: f64,
+) -> Result<(ChirpReport, ChirpReport)> {
+    eprintln!("[endstop-response] swept sines at {rate} Hz/s");
+    let sweep = |from: f64, to: f64| ChirpSweep {
+        from_hz: from,
+        to_hz: to,
+        rate_hz_per_s: rate,
+        window_cycles: 4,
+        cfg: settings.cfg.clone(),
+    };
+    let (u, d) = rayon::join(
+        || sweep(a.from, a.to).run(device, a.accel_rms_g),
+        || sweep(a.to, a.from).run(device, a.accel_rms_g),
+    );
+    Ok((u?, d?))
+}
+
+/// Every branch of periodic orbits from the range's lower end, with its events.
+fn continue_orbits(device: &Device, a: &RangeArgs, protocol: &Protocol) -> Result<Diagram> {
     eprintln!(
         "[endstop-response] continuing the periodic orbits from {} Hz",
         a.from
@@ -82,17 +138,27 @@ pub(crate) fn response(args: ResponseArgs) -> Result<()> {
         accel_rms_g: a.accel_rms_g,
     };
     let cont = ContinuationSettings::frequency(a.from, a.to, protocol.max_step_hz);
-    let diagram = common::with_progress(1, "continuation", |branch| {
+    Ok(common::with_progress(1, "continuation", |branch| {
         diagram(
-            &device,
+            device,
             start_drive,
             &cont,
             &DiagramOptions::default(),
             branch,
         )
-    })?;
+    })?)
+}
 
-    let rows = diagram_rows(&device.name, &diagram);
+/// The continuation and the sweeps (stepped and swept) as Parquet.
+fn write_parquet(
+    exp: &Experiment,
+    device: &Device,
+    diagram: &Diagram,
+    up: &SweepReport,
+    down: &DownSweepReport,
+    chirps: Option<&(ChirpReport, ChirpReport)>,
+) -> Result<()> {
+    let rows = diagram_rows(&device.name, diagram);
     exp.write_parquet("continuation", &mut frame(rows)?, &device.params)?;
     let mut rows = Vec::new();
     for (dir, ms) in [
@@ -109,7 +175,7 @@ pub(crate) fn response(args: ResponseArgs) -> Result<()> {
             ]);
         }
     }
-    if let Some((u, d)) = &chirps {
+    if let Some((u, d)) = chirps {
         for (dir, r) in [("swept up", u), ("swept down", d)] {
             for w in &r.windows {
                 rows.push(row![
@@ -123,7 +189,27 @@ pub(crate) fn response(args: ResponseArgs) -> Result<()> {
         }
     }
     exp.write_parquet("sweeps", &mut frame(rows)?, &device.params)?;
+    Ok(())
+}
 
+/// The summary's words and numbers: the run, where the sweeps leave their branches (with the
+/// step's effect), the swept sines and the continuation's events.
+fn summary_md(
+    exp: &mut Experiment,
+    file: &str,
+    device: &Device,
+    a: &RangeArgs,
+    settings: &SweepSettings,
+    protocol: &Protocol,
+    found: &Found<'_>,
+) -> Result<String> {
+    let Found {
+        up,
+        down,
+        chirps,
+        diagram,
+    } = *found;
+    let approach = protocol.approach;
     let points: usize = diagram.branches.iter().map(|b| b.points.len()).sum();
     let residual = diagram
         .branches
@@ -135,9 +221,9 @@ pub(crate) fn response(args: ResponseArgs) -> Result<()> {
         "Whole response of `{}` ({} set; {}) from {} to {} Hz at {} g rms: sweeps in {} \
          (transitions refined to 0.1 Hz); periodic orbits continued in frequency ({} branches, \
          {} points, largest residual {:.1e}).\n\n",
-        loaded.file,
+        file,
         device.params,
-        describe(&device),
+        describe(device),
         a.from,
         a.to,
         a.accel_rms_g,
@@ -151,7 +237,7 @@ pub(crate) fn response(args: ResponseArgs) -> Result<()> {
         .chain(down.measurements())
         .map(|m| m.x_peak_m)
         .fold(0.0, f64::max);
-    if let Some(w) = implausible_drive(&device, a.accel_rms_g, x_peak) {
+    if let Some(w) = implausible_drive(device, a.accel_rms_g, x_peak) {
         md.push_str(&w);
     }
     exp.number("step_hz", protocol.step_hz);
@@ -164,7 +250,7 @@ pub(crate) fn response(args: ResponseArgs) -> Result<()> {
             e.kind.label()
         ));
         let q = settings
-            .up_end_with_step_divided(&device, a.accel_rms_g, approach, &up, 4.0)?
+            .up_end_with_step_divided(device, a.accel_rms_g, approach, up, 4.0)?
             .map(|e| e.transition.value());
         if let Some(q) = q {
             exp.number("up_branch_end_quarter_step_hz", q);
@@ -179,7 +265,7 @@ pub(crate) fn response(args: ResponseArgs) -> Result<()> {
             kind.label()
         ));
         let q = settings
-            .down_end_with_step_divided(&device, a.accel_rms_g, approach, &down, 4.0)?
+            .down_end_with_step_divided(device, a.accel_rms_g, approach, down, 4.0)?
             .map(|e| e.1.value());
         if let Some(q) = q {
             exp.number("down_branch_end_quarter_step_hz", q);
@@ -190,7 +276,7 @@ pub(crate) fn response(args: ResponseArgs) -> Result<()> {
             q,
         ));
     }
-    if let Some((u, d)) = &chirps {
+    if let Some((u, d)) = chirps {
         md.push_str(&chirp_words(u, d));
         if let Some(f) = u.last_contact_hz {
             exp.number("swept_up_last_contact_hz", f);
@@ -202,37 +288,31 @@ pub(crate) fn response(args: ResponseArgs) -> Result<()> {
     for (i, e) in diagram.events.iter().enumerate() {
         exp.number(&format!("event_{i}_hz"), e.param);
     }
-    md.push_str(&diagram_words(&diagram));
-    if args.step_study {
-        eprintln!("[endstop-response] the down-sweep's end against its step");
-        md.push_str(&step_study(
-            &settings,
-            &device,
-            a.accel_rms_g,
-            &protocol,
-            &down,
-            &diagram,
-            &mut exp,
-        )?);
-    }
-    exp.write_numbers_md(&md)?;
-    print!("{md}");
+    md.push_str(&diagram_words(diagram));
+    Ok(md)
+}
 
+/// The stepped sweeps over the continued branches.
+fn response_plot(
+    device: &Device,
+    a: &RangeArgs,
+    diagram: &Diagram,
+    up: &SweepReport,
+    down: &DownSweepReport,
+) -> Panels {
     let steps = |ms: Vec<&endstop::study::steady::Measurement>| -> Vec<(f64, f64)> {
         ms.into_iter().map(|m| (m.freq_hz, m.v1_rms_v)).collect()
     };
-    let plot = diagram_figure(
+    diagram_figure(
         &format!(
             "Whole response at {} g rms: {} (orbits: solid stable, dashed unstable)",
             a.accel_rms_g, device.name
         ),
-        &diagram,
+        diagram,
         steps(up.measurements().collect()),
         steps(down.measurements().collect()),
         (a.from, a.to),
-    );
-    exp.write_plot(&plot)?;
-    exp.finish()
+    )
 }
 
 /// Where the swept sines start and stop touching the stops.
