@@ -20,10 +20,10 @@ use endstop::progress::Silent;
 use endstop::study::periodic::SteadySettings;
 
 use crate::shared::start;
-use endstop_experiments::fmt_sig;
 use endstop_experiments::io::frame::frame;
 use endstop_experiments::io::plot::{LegendPos, LinePlot, Panels, Series, Style, PALETTE};
 use endstop_experiments::row;
+use endstop_experiments::{fmt_sig, Experiment};
 
 /// The arguments of `endstop design`.
 #[derive(Parser, Debug)]
@@ -198,16 +198,41 @@ fn words(p: &Problem, a: &Answer) -> String {
 pub fn design(a: DesignArgs) -> Result<()> {
     check(&a)?;
     let (mut exp, loaded, device) = start("endstop-design", &a.device, None, a.out.clone())?;
+    let p = problem(&a, &device)?;
+    let settings = SearchSettings {
+        samples: a.samples,
+        seed: a.seed,
+        ..SearchSettings::default()
+    };
+    let budget = settings.budget(p.interfaces.len(), p.ranges.len());
+    let study: Study =
+        endstop_experiments::with_progress(budget, "designs evaluated (at most)", |pr| {
+            p.solve(&settings, pr)
+        })?;
+    let maps = power_maps(&a, &p, &study);
+    let merits = merits(&a, &p, &study)?;
+
+    // Everything is computed: now write.
+    write_outputs(&mut exp, &device, &p, &study, &maps, &merits)?;
+    let md = summary_md(&a, &loaded.file, &p, &study, &merits);
+    exp.write_numbers_md(&md)?;
+    print!("{md}");
+    exp.write_plot(&plots(&p, &study, &maps))?;
+    exp.finish()
+}
+
+/// The design problem of the command line on `device`.
+fn problem(a: &DesignArgs, device: &Device) -> Result<Problem> {
     let ranges = a
         .ranges
         .iter()
         .map(|r| ParamRange::parse(r).with_context(|| format!("--range {r}")))
         .collect::<Result<Vec<_>>>()?;
     let interfaces = match &a.interfaces {
-        Some(path) => interfaces_of(&device, path)?,
+        Some(path) => interfaces_of(device, path)?,
         None => vec![device.interface.clone()],
     };
-    let p = Problem::new(
+    Ok(Problem::new(
         device.clone(),
         interfaces,
         ranges,
@@ -221,20 +246,13 @@ pub fn design(a: DesignArgs) -> Result<()> {
             displacement_m: a.max_displacement_m,
             impacts_per_s: a.max_impacts_per_s,
         },
-    )?;
-    let settings = SearchSettings {
-        samples: a.samples,
-        seed: a.seed,
-        ..SearchSettings::default()
-    };
-    let budget = settings.budget(p.interfaces.len(), p.ranges.len());
-    let study: Study =
-        endstop_experiments::with_progress(budget, "designs evaluated (at most)", |pr| {
-            p.solve(&settings, pr)
-        })?;
-    // The power maps: per interface, over the first two ranges, the others at that
-    // interface's answer.
-    let maps: Vec<(usize, Vec<Evaluated>)> = if a.map_points >= 2 && p.ranges.len() >= 2 {
+    )?)
+}
+
+/// The power maps: per interface, over the first two ranges, the others at that interface's
+/// answer (none with fewer than two ranges or points).
+fn power_maps(a: &DesignArgs, p: &Problem, study: &Study) -> Vec<(usize, Vec<Evaluated>)> {
+    if a.map_points >= 2 && p.ranges.len() >= 2 {
         let n = a.map_points;
         endstop_experiments::with_progress(n * n * p.interfaces.len(), "power map points", |pr| {
             (0..p.interfaces.len())
@@ -250,8 +268,20 @@ pub fn design(a: DesignArgs) -> Result<()> {
         })
     } else {
         Vec::new()
-    };
-    // Figures of merit of the answer.
+    }
+}
+
+/// The figures of merit of the answer.
+struct Merits {
+    limit_m: Option<f64>,
+    effectiveness: Option<f64>,
+    band: Option<merit::HalfPowerBand>,
+    charging: Option<Result<f64, String>>,
+}
+
+/// The answer's figures of merit: its effectiveness, its half-power band over the given
+/// frequencies and its charging time to the target.
+fn merits(a: &DesignArgs, p: &Problem, study: &Study) -> Result<Merits> {
     let best = &study.answer.design;
     let (best_dev, _) = p.device_at(best.interface, &best.unit)?;
     let perf = best.result.as_ref().ok();
@@ -294,12 +324,28 @@ pub fn design(a: DesignArgs) -> Result<()> {
         .map(|r| r.map_err(|e| e.to_string())),
         _ => None,
     };
+    Ok(Merits {
+        limit_m,
+        effectiveness,
+        band,
+        charging,
+    })
+}
 
-    // Everything is computed: now write.
-    let mut df = design_rows(&p, &study.evaluations, "search")?;
+/// The designs and the maps as Parquet, and the summary's numbers.
+fn write_outputs(
+    exp: &mut Experiment,
+    device: &Device,
+    p: &Problem,
+    study: &Study,
+    maps: &[(usize, Vec<Evaluated>)],
+    merits: &Merits,
+) -> Result<()> {
+    let best = &study.answer.design;
+    let mut df = design_rows(p, &study.evaluations, "search")?;
     exp.write_parquet("designs", &mut df, &device.params)?;
-    for (i, grid) in &maps {
-        let mut df = design_rows(&p, grid, "map")?;
+    for (i, grid) in maps {
+        let mut df = design_rows(p, grid, "map")?;
         exp.write_parquet(
             &format!("map_{}", p.interfaces[*i].key()),
             &mut df,
@@ -312,13 +358,20 @@ pub fn design(a: DesignArgs) -> Result<()> {
         f64::from(u8::from(study.answer.verdict == Verdict::Optimum)),
     );
     exp.number("evaluations", study.evaluations.len() as f64);
-    if let Some(e) = effectiveness {
+    if let Some(e) = merits.effectiveness {
         exp.number("effectiveness", e);
     }
+    Ok(())
+}
+
+/// The summary in words: the question, the answer (overall and per interface) and its
+/// figures of merit.
+fn summary_md(a: &DesignArgs, file: &str, p: &Problem, study: &Study, merits: &Merits) -> String {
+    let (limit_m, effectiveness) = (merits.limit_m, merits.effectiveness);
     let mut md = format!(
         "Design of `{}` under {} g rms at {} Hz (the objective is the worst of these \
          frequencies), over {}; interfaces: {}.\n\n- {}\n",
-        loaded.file,
+        file,
         a.accel_rms_g,
         a.freqs_hz
             .iter()
@@ -340,14 +393,14 @@ pub fn design(a: DesignArgs) -> Result<()> {
             .map(|i| format!("`{}`", i.key()))
             .collect::<Vec<_>>()
             .join(", "),
-        words(&p, &study.answer),
+        words(p, &study.answer),
     );
     for (i, ans) in study.per_interface.iter().enumerate() {
         match ans {
             Some(ans) => md.push_str(&format!(
                 "- `{}` alone: {}\n",
                 p.interfaces[i].key(),
-                words(&p, ans)
+                words(p, ans)
             )),
             None => md.push_str(&format!(
                 "- `{}`: no design could be evaluated\n",
@@ -367,7 +420,7 @@ pub fn design(a: DesignArgs) -> Result<()> {
             fmt_sig(e, 3)
         ));
     }
-    if let Some(b) = band {
+    if let Some(b) = &merits.band {
         md.push_str(&format!(
             "- half-power band of the answer over the given frequencies: {}\n",
             match b.width_hz() {
@@ -376,19 +429,16 @@ pub fn design(a: DesignArgs) -> Result<()> {
             }
         ));
     }
-    match charging {
+    match &merits.charging {
         Some(Ok(t)) => md.push_str(&format!(
             "- charging time of the storage from 0 V to {} V with the load open: {} s\n",
             a.target_v.unwrap_or_default(),
-            fmt_sig(t, 4)
+            fmt_sig(*t, 4)
         )),
         Some(Err(e)) => md.push_str(&format!("- charging to the target: {e}\n")),
         None => {}
     }
-    exp.write_numbers_md(&md)?;
-    print!("{md}");
-    exp.write_plot(&plots(&p, &study, &maps))?;
-    exp.finish()
+    md
 }
 
 /// The Pareto front of power against impact speed over every evaluated design, and the power
