@@ -284,9 +284,23 @@ pub fn steady_state<M: Model<N>, const N: usize>(
     accel_rms_g: f64,
     cfg: &SteadyConfig,
 ) -> Result<(Measurement, SVector<f64, N>, Mode, Stats), SolverError> {
-    let period = sine.period_s();
-    let block_t = cfg.block_periods as f64 * period;
+    let block_t = cfg.block_periods as f64 * sine.period_s();
     let (y, mode) = onto_slow_orbit(model, sine, y, mode, block_t, cfg);
+    settle_and_measure(model, sine, y, mode, accel_rms_g, cfg)
+}
+
+/// The blocks of [`steady_state`] from (y, mode) as given, without putting the state on a slow
+/// orbit first: for a state already on its periodic orbit (then `cfg.settle_blocks` may be
+/// zero) or a model without a slow time constant.
+pub fn settle_and_measure<M: Model<N>, const N: usize>(
+    model: &M,
+    sine: Sine,
+    y: SVector<f64, N>,
+    mode: Mode,
+    accel_rms_g: f64,
+    cfg: &SteadyConfig,
+) -> Result<(Measurement, SVector<f64, N>, Mode, Stats), SolverError> {
+    let block_t = cfg.block_periods as f64 * sine.period_s();
     let mut ode = SineFlow::new(model, sine, 0.0, y, mode, cfg.rtol);
     let mut t_end = 0.0;
     for _ in 0..cfg.settle_blocks {

@@ -15,6 +15,20 @@
 //! to the steady-state tolerance. Such a step is kept and the ramp skipped; a step whose
 //! transient touches a stop is taken again from the same state by the ramp. Far from the
 //! stops (most of a wide sweep) the sweep then costs what steps taken at once cost.
+//!
+//! # Where a model has a slow time constant
+//! A model with a time constant far longer than its mechanics' ring-up
+//! ([`Model::slow_time_constant_s`]: a storage capacitor charging through its load) settles
+//! slowly whatever path the drive takes, which is why its steady state is found by shooting
+//! ([`crate::study::steady`]). The path a slow enough ramp follows is the periodic orbit
+//! continued from the previous step's, and Newton's method on the period map started from the
+//! previous step's state (a steady state, at a whole period) finds that orbit in a few periods,
+//! where the ramp integrates hundreds of cycles, each at its own frequency. The step is kept
+//! when Newton's method converges to a stable orbit that touches the stops as the previous
+//! step did, and is measured from it (no settling block: it starts on its orbit). Otherwise (a
+//! branch that ends, an impact that begins or stops: where the path decides) the step is taken
+//! again by the ramp from the same state, as for any other model. The counters of a kept step
+//! are its blocks'; those of a step taken again include the blocks of the first try.
 
 use nalgebra::{DVector, SVector};
 use serde::{Deserialize, Serialize};
@@ -23,8 +37,9 @@ use crate::drive::Sine;
 use crate::model::{Mode, Model};
 use crate::ode::{SolverError, Stats};
 use crate::progress::Progress;
+use crate::study::periodic::{self, SteadyMethod, SteadySettings};
 use crate::study::ramp::ramp;
-use crate::study::steady::{steady_state, Measurement, SteadyConfig};
+use crate::study::steady::{settle_and_measure, steady_state, Measurement, SteadyConfig};
 
 /// One step of a continuation: the measurement and the state it ended in.
 #[derive(Debug, Clone)]
@@ -116,15 +131,58 @@ impl<M: Model<N>, D: Drive, const N: usize> SteppedDrive<'_, M, D, N> {
         })
     }
 
+    /// The step at `p` continued along the orbit of the steady state `y` (at a whole period)
+    /// of a model with a slow time constant (see the module docs), when Newton's method finds
+    /// a stable orbit there and its measurement touches the stops as the previous step's did
+    /// (`contact`): `Ok(Ok(step))`. Otherwise `Ok(Err(counters))`, the counters of a
+    /// measurement that was tried and not kept.
+    fn continue_orbit(
+        &self,
+        p: f64,
+        y: SVector<f64, N>,
+        contact: bool,
+    ) -> Result<Result<SweepStep, Stats>, SolverError> {
+        let (f, a) = (self.drive)(p);
+        let sine = Sine::from_rms_g(a, f);
+        // Newton's method from the given state alone: no transient, no iterated map.
+        let settings = SteadySettings {
+            rtol: self.cfg.rtol,
+            transient_periods: 0,
+            max_map_periods: 0,
+            ..SteadySettings::default()
+        };
+        let orbit = match periodic::steady_state(self.base, sine, &y, &settings) {
+            Ok(o) if o.method == SteadyMethod::Newton && o.is_stable() && o.contact == contact => {
+                periodic::state_of(&o)
+            }
+            _ => return Ok(Err(Stats::default())),
+        };
+        let cfg = SteadyConfig {
+            settle_blocks: 0,
+            ..self.cfg.clone()
+        };
+        let (m, y1, mode1, stats) =
+            settle_and_measure(self.base, sine, orbit, self.base.mode_of(&orbit), a, &cfg)?;
+        if in_contact(&m) != contact {
+            return Ok(Err(stats));
+        }
+        Ok(Ok(SweepStep {
+            measurement: m,
+            state: DVector::from_column_slice(y1.as_slice()),
+            mode: mode1,
+            stats,
+        }))
+    }
+
     /// The step at `p` reached from the state `y` in `mode` at the value `from` (`None`: at
-    /// once, as from rest) by `approach`; the ramp's counters are the step's. `off_stops`: the
-    /// steady state at `from` touched no stop, so that with a linear free flight the ramp may
-    /// be skipped (see the module docs); the counters of a step taken at once and then again by
-    /// the ramp include both.
+    /// once, as from rest) by `approach`; the ramp's counters are the step's. `contact`: whether
+    /// the steady state at `from` touched a stop (`None`: unknown), so that with a linear free
+    /// flight or a slow time constant the ramp may be skipped (see the module docs); the
+    /// counters of a step tried first and then taken again by the ramp include both.
     fn measure_after(
         &self,
         from: Option<f64>,
-        off_stops: bool,
+        contact: Option<bool>,
         p: f64,
         y: SVector<f64, N>,
         mode: Mode,
@@ -133,12 +191,19 @@ impl<M: Model<N>, D: Drive, const N: usize> SteppedDrive<'_, M, D, N> {
         match (approach, from) {
             (Approach::Ramp { rate_per_s }, Some(q)) if q != p => {
                 let mut tried = Stats::default();
+                let off_stops = contact == Some(false);
                 if off_stops && !mode.in_contact() && self.base.free_flight_is_linear() {
                     let step = self.measure(p, y, mode)?;
                     if step.stats.events == 0 {
                         return Ok(step);
                     }
                     tried = step.stats;
+                }
+                if let (Some(c), Some(_)) = (contact, self.base.slow_time_constant_s()) {
+                    match self.continue_orbit(p, y, c)? {
+                        Ok(step) => return Ok(step),
+                        Err(st) => tried += st,
+                    }
                 }
                 let (y1, mode1, st) = ramp(
                     self.base,
@@ -169,7 +234,7 @@ impl<M: Model<N>, D: Drive, const N: usize> SteppedDrive<'_, M, D, N> {
     ) -> Result<SweepStep, SolverError> {
         self.measure_after(
             Some(from),
-            !in_contact(&step.measurement),
+            Some(in_contact(&step.measurement)),
             p,
             state_of(&step.state),
             step.mode,
@@ -214,13 +279,13 @@ impl<M: Model<N>, D: Drive, const N: usize> SteppedDrive<'_, M, D, N> {
     ) -> Result<Sweep, SolverError> {
         let (mut y, mut mode, mut prev) = (y, mode, from);
         // Nothing is known of the state given: the first step off it keeps its ramp.
-        let mut off_stops = false;
+        let mut contact = None;
         let mut steps = Vec::with_capacity(values.len());
         let mut stats = Stats::default();
         for &p in values {
-            let step = self.measure_after(prev, off_stops, p, y, mode, approach)?;
+            let step = self.measure_after(prev, contact, p, y, mode, approach)?;
             prev = Some(p);
-            off_stops = !in_contact(&step.measurement);
+            contact = Some(in_contact(&step.measurement));
             stats += step.stats;
             y = state_of(&step.state);
             mode = step.mode;
@@ -286,7 +351,7 @@ impl<M: Model<N>, D: Drive, const N: usize> SteppedDrive<'_, M, D, N> {
             let mid = 0.5 * (lo + hi);
             let step = self.measure_after(
                 Some(lo),
-                !in_contact(&before.measurement),
+                Some(in_contact(&before.measurement)),
                 mid,
                 state_of(&before.state),
                 before.mode,
