@@ -34,6 +34,7 @@ mod interfaces;
 mod interfaces_spice;
 mod masses;
 mod masses_impact_damper;
+mod pair_bridge_spice;
 mod record_accuracy;
 mod record_figures;
 mod record_ledger;

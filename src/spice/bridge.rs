@@ -24,7 +24,69 @@ use crate::spice::{units, SolverSettings};
 /// Why a device has no bridge netlist.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[error("the bridge netlist takes {0}")]
-pub struct Unsupported(&'static str);
+pub struct Unsupported(pub(super) &'static str);
+
+/// A full bridge of Shockley diodes into a storage capacitor and a resistor: what the bridge
+/// netlists take of a device's interface.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) struct ShockleyBridge {
+    /// The diodes' saturation current I_s (A).
+    saturation_current_a: f64,
+    /// Their ideality n.
+    ideality: f64,
+    /// Cs (F).
+    storage_capacitance_f: f64,
+    /// The DC load (ohm).
+    resistance_ohm: f64,
+}
+
+impl ShockleyBridge {
+    /// The bridge of `device`, or why the netlists do not take it: a full bridge of Shockley
+    /// diodes at the default thermal voltage (ngspice's 27 degrees C) into a resistor.
+    pub(super) fn of(device: &Device) -> Result<Self, Unsupported> {
+        let Interface::FullBridge(rect) = &device.interface else {
+            return Err(Unsupported("a full bridge"));
+        };
+        let Diode::Shockley {
+            saturation_current_a,
+            ideality,
+            thermal_voltage_v,
+        } = rect.diode
+        else {
+            return Err(Unsupported("Shockley diodes"));
+        };
+        if (thermal_voltage_v - crate::device::interface::THERMAL_VOLTAGE_V).abs() > 1e-12 {
+            return Err(Unsupported(
+                "the default thermal voltage (ngspice's 27 degrees C)",
+            ));
+        }
+        let DcLoad::Resistor { resistance_ohm } = rect.load else {
+            return Err(Unsupported("a resistor load"));
+        };
+        Ok(Self {
+            saturation_current_a,
+            ideality,
+            storage_capacitance_f: rect.storage_capacitance_f,
+            resistance_ohm,
+        })
+    }
+
+    /// The four diodes from the AC nodes `ac` to the DC nodes `dc` (positive, negative), their
+    /// model, and `Cs` and `RL` across the DC nodes.
+    pub(super) fn write(&self, s: &mut String, ac: [&str; 2], dc: [&str; 2]) {
+        let ([p, n], [a, b]) = (ac, dc);
+        for (name, anode, cathode) in [("D1", p, a), ("D2", n, a), ("D3", b, p), ("D4", b, n)] {
+            let _ = writeln!(s, "{name} {anode} {cathode} dbridge");
+        }
+        let _ = writeln!(
+            s,
+            ".model dbridge D(IS={:e} N={} RS=0 CJO=0)",
+            self.saturation_current_a, self.ideality
+        );
+        let _ = writeln!(s, "Cs {a} {b} {:e}", self.storage_capacitance_f);
+        let _ = writeln!(s, "RL {a} {b} {:e}", self.resistance_ohm);
+    }
+}
 
 /// The netlist of `device` driven by `a = amplitude sin(2 pi f t)` (m/s^2), starting from the
 /// model state `y0` (the bridge's nodes put where the symmetric bridge has them: `a` at `Vs`,
@@ -43,25 +105,7 @@ pub fn bridge_netlist(
     let Transducer::Piezoelectric(pz) = &device.transducer else {
         return Err(Unsupported("a piezoelectric transducer"));
     };
-    let Interface::FullBridge(rect) = &device.interface else {
-        return Err(Unsupported("a full bridge"));
-    };
-    let Diode::Shockley {
-        saturation_current_a,
-        ideality,
-        thermal_voltage_v,
-    } = rect.diode
-    else {
-        return Err(Unsupported("Shockley diodes"));
-    };
-    if (thermal_voltage_v - crate::device::interface::THERMAL_VOLTAGE_V).abs() > 1e-12 {
-        return Err(Unsupported(
-            "the default thermal voltage (ngspice's 27 degrees C)",
-        ));
-    }
-    let DcLoad::Resistor { resistance_ohm } = rect.load else {
-        return Err(Unsupported("a resistor load"));
-    };
+    let rect = ShockleyBridge::of(device)?;
     let m = &device.mechanics;
     let (xu, vu, fu) = (units::X_PER_M, units::V_PER_M_PER_S, units::F_PER_N);
     let mut s = String::new();
@@ -103,20 +147,7 @@ pub fn bridge_netlist(
             stop.damping_n_s_per_m * fu / vu,
         );
     }
-    for (name, a, k) in [
-        ("D1", "p", "a"),
-        ("D2", "n", "a"),
-        ("D3", "0", "p"),
-        ("D4", "0", "n"),
-    ] {
-        let _ = writeln!(s, "{name} {a} {k} dbridge");
-    }
-    let _ = writeln!(
-        s,
-        ".model dbridge D(IS={saturation_current_a:e} N={ideality} RS=0 CJO=0)"
-    );
-    let _ = writeln!(s, "Cs a 0 {:e}", rect.storage_capacitance_f);
-    let _ = writeln!(s, "RL a 0 {resistance_ohm:e}");
+    rect.write(&mut s, ["p", "n"], ["a", "0"]);
     let (vp, vs) = (y0[2], y0[3]);
     let _ = writeln!(
         s,
@@ -214,7 +245,19 @@ pub fn dc_means(
     t0: f64,
     t1: f64,
 ) -> Result<(f64, f64), crate::spice::SpiceError> {
-    let va = w.column("v(a)")?;
+    storage_means(w, "v(a)", load_ohm, t0, t1)
+}
+
+/// The mean (V) of the storage voltage in the column `column` and the load's mean power (W)
+/// over `[t0, t1]` (trapezoidal means).
+pub fn storage_means(
+    w: &crate::spice::Waveforms,
+    column: &str,
+    load_ohm: f64,
+    t0: f64,
+    t1: f64,
+) -> Result<(f64, f64), crate::spice::SpiceError> {
+    let va = w.column(column)?;
     let (mut sv, mut sp) = (0.0, 0.0);
     for i in 1..w.time.len() {
         let (a, b) = (w.time[i - 1].max(t0), w.time[i].min(t1));

@@ -87,9 +87,15 @@
 //! and mm/s; `chgtol` (coulombs) applies to the capacitor charges, which on the mechanical side
 //! are momenta (kg mm/s) and 1e-3 x (um). The `crosscheck` experiment documents the settings
 //! that make ngspice agree with our integrator, and what ngspice's defaults do.
+//!
+//! # Behind a bridge
+//! [`bridge`] writes a piezoelectric element behind a full bridge of Shockley diodes into a
+//! storage capacitor and a resistor; [`pair_bridge`] writes the paper's pair behind the same
+//! bridge, from this netlist's steps and the bridge's.
 
 pub mod bridge;
 mod netlist;
+pub mod pair_bridge;
 mod wrdata;
 
 use crate::device::Device;
