@@ -53,7 +53,7 @@ pub mod transducer;
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
-pub use interface::{DcLoad, Diode, Interface, Inversion, Rectifier};
+pub use interface::{DcLoad, Diode, Interface, Inversion, Rectifier, SeceInductor};
 pub use masses::{Body, Link, MassStop, Masses};
 pub use range::{at_unit, own_value, with_values, ParamRange, Spacing, ACCEL_SCALE_PATH};
 pub use stops::{HertzLineStop, HertzPointStiffness, Stop, StopLaw, StopSide, Stops};
