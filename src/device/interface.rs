@@ -51,6 +51,9 @@ use serde::{Deserialize, Serialize};
 
 use super::{Checker, ParamError, Transducer};
 
+mod sece_inductor;
+pub use sece_inductor::SeceInductor;
+
 /// The bridge's diodes.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "law", rename_all = "snake_case", deny_unknown_fields)]
@@ -154,23 +157,6 @@ pub enum Interface {
     /// Synchronous electric charge extraction through its buck-boost inductor (`kind =
     /// "sece"` with `inductance_h`).
     SeceInductor(SeceInductor),
-}
-
-/// A SECE whose transfer runs through its buck-boost inductor: at each displacement extremum
-/// the rectified element discharges into the inductor, which then discharges into the
-/// storage through a flyback diode (see `physics::harvester::circuits::sece_inductor`).
-#[derive(Debug, Clone, PartialEq)]
-pub struct SeceInductor {
-    /// Storage capacitance C_s (F).
-    pub storage_capacitance_f: f64,
-    /// The DC load.
-    pub load: DcLoad,
-    /// The inductance L (H).
-    pub inductance_h: f64,
-    /// The inductor's series resistance R_L (ohm).
-    pub inductor_resistance_ohm: f64,
-    /// The flyback diode's forward drop V_F (V).
-    pub flyback_drop_v: f64,
 }
 
 /// A diode bridge into a storage capacitor with a DC load.
@@ -306,32 +292,16 @@ impl RawInterface {
         if kind != "sece" && self.efficiency.is_some() {
             return Err(not_taken("efficiency"));
         }
-        let inductor = [
-            (self.inductance_h.is_some(), "inductance_h"),
-            (
-                self.inductor_resistance_ohm.is_some(),
-                "inductor_resistance_ohm",
-            ),
-            (self.flyback_drop_v.is_some(), "flyback_drop_v"),
-        ];
-        for (present, f) in inductor {
-            if present && kind != "sece" {
-                return Err(not_taken(f));
-            }
-            if present && self.inductance_h.is_none() {
-                return Err(c.missing(
-                    "interface.inductance_h",
-                    &format!("the inductor that `{f}` belongs to"),
-                ));
-            }
-        }
-        if self.inductance_h.is_some() && self.efficiency.is_some() {
-            return Err(c.message(
-                "interface.efficiency",
-                "interface kind `sece` with `inductance_h` takes no `efficiency`: the transfer \
-                 through the inductor loses what its resistance and flyback diode take",
-            ));
-        }
+        SeceInductor::check_keys(
+            kind,
+            [
+                self.inductance_h,
+                self.inductor_resistance_ohm,
+                self.flyback_drop_v,
+            ],
+            self.efficiency.is_some(),
+            c,
+        )?;
         if kind == "sece" && self.diode.is_some() {
             return Err(c.message(
                 "interface.diode",
@@ -632,34 +602,6 @@ impl Interface {
                         ));
                     }
                 }
-            }
-        }
-        Ok(())
-    }
-}
-
-impl SeceInductor {
-    /// Checks the inductor's values, and that the charge phase's loop with the element's
-    /// clamped capacitance is underdamped, `R_L < 2 sqrt(L / Cp)`: with more, the element's
-    /// voltage decays without reaching zero and the transfer never ends.
-    fn validate(&self, transducer: &Transducer, c: &Checker) -> Result<(), ParamError> {
-        c.positive("interface.inductance_h", self.inductance_h)?;
-        c.non_negative(
-            "interface.inductor_resistance_ohm",
-            self.inductor_resistance_ohm,
-        )?;
-        c.non_negative("interface.flyback_drop_v", self.flyback_drop_v)?;
-        if let Transducer::Piezoelectric(p) = transducer {
-            let critical = 2.0 * (self.inductance_h / p.capacitance_f).sqrt();
-            if self.inductor_resistance_ohm >= critical {
-                return Err(c.err(
-                    "interface.inductor_resistance_ohm",
-                    self.inductor_resistance_ohm,
-                    &format!(
-                        "below 2 sqrt(L / Cp) = {critical:e} ohm (an overdamped transfer never \
-                         empties the element)"
-                    ),
-                ));
             }
         }
         Ok(())
