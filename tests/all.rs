@@ -30,6 +30,7 @@ mod integrator;
 mod integrator_stepping;
 mod interface_orbits;
 mod interface_records;
+mod interface_sece_inductor;
 mod interfaces;
 mod interfaces_spice;
 mod masses;

@@ -128,6 +128,7 @@ pub fn charging_time_s(
             r.load = DcLoad::Open
         }
         Interface::Sece { load, .. } => *load = DcLoad::Open,
+        Interface::SeceInductor(s) => s.load = DcLoad::Open,
     }
     let settings = ChargeSettings {
         start_v: 0.0,

@@ -7,7 +7,7 @@
 //! | `full_bridge` | a full-wave diode bridge into a storage capacitor `storage_capacitance_f` with a DC load | piezoelectric, electromagnetic, an electrostatic pair (across its two electrodes) |
 //! | `parallel_sshi` | the bridge, plus an inductive switch across the piezoelectric element that inverts its voltage, `V -> -gamma V`, at each displacement extremum | piezoelectric |
 //! | `series_sshi` | the switch in series with the bridge: the element is open but at each displacement extremum, when it discharges through the inductor and the bridge into the storage | piezoelectric |
-//! | `sece` | synchronous electric charge extraction: the element is open but at each displacement extremum, when the energy on its clamped capacitance moves to the storage with an efficiency | piezoelectric |
+//! | `sece` | synchronous electric charge extraction: the element is open but at each displacement extremum, when the energy on its clamped capacitance moves to the storage with an `efficiency`; or, given `inductance_h`, through a buck-boost inductor in time ([`SeceInductor`]) | piezoelectric |
 //!
 //! The bridge's diodes (`[interface.diode]`) are either piecewise linear, a forward drop
 //! `forward_drop_v` and an on-resistance `on_resistance_ohm` **per diode** (two conduct in
@@ -42,10 +42,17 @@
 //! input, say), and its `load_capacitance_f` the capacitance of each electrode's node. The
 //! synchronous switches act on a piezoelectric element's clamped capacitance and refuse a pair
 //! with a named error.
+//!
+//! A `sece` with `inductance_h` resolves its transfer through the inductor (optional
+//! `inductor_resistance_ohm` and the flyback diode's `flyback_drop_v`, both 0 by default) and
+//! takes no `efficiency`: what the transfer loses follows from them.
 
 use serde::{Deserialize, Serialize};
 
 use super::{Checker, ParamError, Transducer};
+
+mod sece_inductor;
+pub use sece_inductor::SeceInductor;
 
 /// The bridge's diodes.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -147,6 +154,9 @@ pub enum Interface {
         /// Fraction of the extracted energy that reaches the storage.
         efficiency: f64,
     },
+    /// Synchronous electric charge extraction through its buck-boost inductor (`kind =
+    /// "sece"` with `inductance_h`).
+    SeceInductor(SeceInductor),
 }
 
 /// A diode bridge into a storage capacitor with a DC load.
@@ -178,6 +188,12 @@ pub(crate) struct RawInterface {
     diode: Option<Diode>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     load: Option<DcLoad>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    inductance_h: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    inductor_resistance_ohm: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    flyback_drop_v: Option<f64>,
 }
 
 /// The kinds, in the order of the module docs.
@@ -220,6 +236,13 @@ impl RawInterface {
                 raw.storage_capacitance_f = Some(*storage_capacitance_f);
                 raw.load = Some(load.clone());
                 raw.efficiency = Some(*efficiency);
+            }
+            Interface::SeceInductor(s) => {
+                raw.storage_capacitance_f = Some(s.storage_capacitance_f);
+                raw.load = Some(s.load.clone());
+                raw.inductance_h = Some(s.inductance_h);
+                raw.inductor_resistance_ohm = Some(s.inductor_resistance_ohm);
+                raw.flyback_drop_v = Some(s.flyback_drop_v);
             }
         }
         Some(raw)
@@ -269,6 +292,16 @@ impl RawInterface {
         if kind != "sece" && self.efficiency.is_some() {
             return Err(not_taken("efficiency"));
         }
+        SeceInductor::check_keys(
+            kind,
+            [
+                self.inductance_h,
+                self.inductor_resistance_ohm,
+                self.flyback_drop_v,
+            ],
+            self.efficiency.is_some(),
+            c,
+        )?;
         if kind == "sece" && self.diode.is_some() {
             return Err(c.message(
                 "interface.diode",
@@ -285,6 +318,15 @@ impl RawInterface {
         let load = self.load.ok_or_else(|| {
             c.missing("interface.load", "the DC load (resistor, battery or open)")
         })?;
+        if let (true, Some(inductance_h)) = (kind == "sece", self.inductance_h) {
+            return Ok(Interface::SeceInductor(SeceInductor {
+                storage_capacitance_f: cs,
+                load,
+                inductance_h,
+                inductor_resistance_ohm: self.inductor_resistance_ohm.unwrap_or(0.0),
+                flyback_drop_v: self.flyback_drop_v.unwrap_or(0.0),
+            }));
+        }
         if kind == "sece" {
             let efficiency = self.efficiency.ok_or_else(|| {
                 c.missing(
@@ -338,7 +380,7 @@ impl Interface {
             Interface::FullBridge(_) => "full_bridge",
             Interface::ParallelSshi(..) => "parallel_sshi",
             Interface::SeriesSshi(..) => "series_sshi",
-            Interface::Sece { .. } => "sece",
+            Interface::Sece { .. } | Interface::SeceInductor(_) => "sece",
         }
     }
 
@@ -369,6 +411,7 @@ impl Interface {
                 storage_capacitance_f,
                 ..
             } => Some(*storage_capacitance_f),
+            Interface::SeceInductor(s) => Some(s.storage_capacitance_f),
         }
     }
 
@@ -380,6 +423,7 @@ impl Interface {
             | Interface::ParallelSshi(r, _)
             | Interface::SeriesSshi(r, _) => Some(&r.load),
             Interface::Sece { load, .. } => Some(load),
+            Interface::SeceInductor(s) => Some(&s.load),
         }
     }
 
@@ -394,6 +438,7 @@ impl Interface {
             | Interface::ParallelSshi(r, _)
             | Interface::SeriesSshi(r, _) => r.load = load,
             Interface::Sece { load: l, .. } => *l = load,
+            Interface::SeceInductor(s) => s.load = load,
         }
         i
     }
@@ -405,7 +450,7 @@ impl Interface {
             Interface::FullBridge(r)
             | Interface::ParallelSshi(r, _)
             | Interface::SeriesSshi(r, _) => Some(r),
-            Interface::Sece { .. } => None,
+            Interface::Sece { .. } | Interface::SeceInductor(_) => None,
         };
         self.validate_transducer(transducer, rect, c)?;
         self.validate_values(c)?;
@@ -528,6 +573,7 @@ impl Interface {
             Interface::Sece { efficiency, .. } => {
                 c.within_closed("interface.efficiency", *efficiency, 0.0, 1.0, "in [0, 1]")?
             }
+            Interface::SeceInductor(s) => s.validate(transducer, c)?,
             _ => {}
         }
         Ok(())

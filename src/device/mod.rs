@@ -54,7 +54,7 @@ use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
 pub use crate::laws::contact::Side;
-pub use interface::{DcLoad, Diode, Interface, Inversion, Rectifier};
+pub use interface::{DcLoad, Diode, Interface, Inversion, Rectifier, SeceInductor};
 pub use masses::{Body, Link, MassStop, Masses};
 pub use range::{at_unit, own_value, with_values, ParamRange, Spacing, ACCEL_SCALE_PATH};
 pub use stops::{HertzLineStop, HertzPointStiffness, Stop, StopLaw, Stops};

@@ -229,6 +229,9 @@ impl<const N: usize> Harvester<N> {
             n
         };
         let (e, vs) = (circuit.e, circuit.vs);
+        if let super::circuits::Switch::BuckBoost(b) = circuit.switch {
+            out.extend(b.phase_guard_piece(circuit, cm.bridge, index));
+        }
         if circuit.has_conduction_events() {
             let drop = circuit.path_drop();
             let drive = match circuit.element {

@@ -422,6 +422,9 @@ impl<const N: usize> Harvester<N> {
                     circuits::Element::Coil { .. } => names.push(("i", "A")),
                 }
                 names.push(("vs", "V"));
+                if let circuits::Switch::BuckBoost(_) = c.switch {
+                    names.push(("i_inductor", "A"));
+                }
                 let load = match c.sink {
                     circuits::Sink::Resistor(r) => Some(Load::Resistor(r)),
                     circuits::Sink::Battery(vb, r) => Some(Load::Battery(vb, r)),
@@ -498,6 +501,10 @@ impl<const N: usize> Harvester<N> {
                 _ => {
                     s[(c.e, c.e)] = -1.0;
                     s[(c.vs, c.vs)] = 1.0;
+                    // A buck-boost inductor's current flows one way behind its rectifier.
+                    if let circuits::Switch::BuckBoost(b) = c.switch {
+                        s[(b.i, b.i)] = 1.0;
+                    }
                 }
             },
         }
@@ -627,7 +634,24 @@ fn circuit_of(device: &Device) -> Result<Option<circuits::Circuit>, AssemblyErro
             load,
             Switch::Sece(*efficiency),
         ),
+        Interface::SeceInductor(s) => (
+            DiodeLaw::PiecewiseLinear { vf: 0.0, ron: 0.0 },
+            s.storage_capacitance_f,
+            &s.load,
+            Switch::BuckBoost(circuits::BuckBoost {
+                l: s.inductance_h,
+                rl: s.inductor_resistance_ohm,
+                vf: s.flyback_drop_v,
+                i: 3 + e_slots,
+            }),
+        ),
     };
+    if matches!(switch, Switch::BuckBoost(_)) && !matches!(element, circuits::Element::Piezo { .. })
+    {
+        return Err(unsupported(
+            "a SECE's inductor discharges a piezoelectric element's clamped capacitance only",
+        ));
+    }
     if matches!(element, circuits::Element::Pair(_)) && switch != Switch::None {
         return Err(unsupported(
             "a synchronous switch acts on a piezoelectric element's voltage only",
@@ -822,13 +846,9 @@ impl<const N: usize> Model<N> for Harvester<N> {
         }
         let circuits: Vec<u8> = match &self.port {
             Port::Loaded(_) => vec![0],
-            Port::Circuit(_) => {
+            Port::Circuit(c) => {
                 let mut v = Vec::new();
-                for bridge in [
-                    circuits::Bridge::Off,
-                    circuits::Bridge::Positive,
-                    circuits::Bridge::Negative,
-                ] {
+                for &bridge in c.bridges() {
                     for heading in [circuits::Heading::Up, circuits::Heading::Down] {
                         v.push(circuits::CircuitMode { bridge, heading }.bits());
                     }

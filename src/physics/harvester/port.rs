@@ -62,11 +62,12 @@ impl Port {
 
     /// The state's dimension the port needs: four for a loaded transducer and for a
     /// piezoelectric element or a coil behind a circuit (the element's component and the
-    /// storage voltage), five for a pair behind a circuit.
+    /// storage voltage), five for a pair behind a circuit or a piezoelectric element behind a
+    /// SECE through its inductor (its current).
     pub fn dimension(&self) -> usize {
         match self {
             Port::Loaded(_) => 4,
-            Port::Circuit(c) => c.vs + 1,
+            Port::Circuit(c) => c.dimension(),
         }
     }
 

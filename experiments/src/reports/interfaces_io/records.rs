@@ -27,6 +27,7 @@ fn open_storage(d: &Device) -> Device {
             };
         }
         Interface::Sece { load, .. } => *load = endstop::device::DcLoad::Open,
+        Interface::SeceInductor(s) => s.load = endstop::device::DcLoad::Open,
         Interface::Resistive => {}
     }
     open

@@ -57,7 +57,9 @@
 //!   its voltage `u = |Vp| - Vs - 2 V_F` (when positive) becomes `-gamma u`, moving the charge
 //!   `q = (1 + gamma) u Cp Cs / (Cp + Cs)` from the element to the storage (`2 V_F q` is lost
 //!   in the diodes, the rest of the drop is a switching loss);
-//! * SECE: `Vp -> 0` and `Cs Vs^2 / 2` gains `eta Cp Vp^2 / 2`.
+//! * SECE: `Vp -> 0` and `Cs Vs^2 / 2` gains `eta Cp Vp^2 / 2` (its transfer resolved
+//!   through the inductor in time is [`super::sece_inductor`], which owns the behaviour of a
+//!   circuit with [`Switch::BuckBoost`]).
 //!
 //! # Guards
 //! The circuit has one guard: the largest of its dimensionless guards (conduction and
@@ -67,6 +69,7 @@
 use nalgebra::{SMatrix, SVector};
 
 use super::parts::{DiodeLaw, Sink, Switch};
+use super::sece_inductor::BuckBoost;
 use crate::physics::transducer::CapacitorPair;
 
 /// An unused guard.
@@ -105,6 +108,9 @@ pub enum Bridge {
     Positive,
     /// Conducting from its negative terminal.
     Negative,
+    /// Blocking, with a flyback diode carrying an inductor's current into the storage (a SECE
+    /// through its inductor, [`super::sece_inductor`]).
+    Flyback,
 }
 
 impl Bridge {
@@ -112,7 +118,7 @@ impl Bridge {
     #[inline(always)]
     pub fn sign(self) -> f64 {
         match self {
-            Bridge::Off => 0.0,
+            Bridge::Off | Bridge::Flyback => 0.0,
             Bridge::Positive => 1.0,
             Bridge::Negative => -1.0,
         }
@@ -145,7 +151,8 @@ impl CircuitMode {
             bridge: match bits & 3 {
                 0 => Bridge::Off,
                 1 => Bridge::Positive,
-                _ => Bridge::Negative,
+                2 => Bridge::Negative,
+                _ => Bridge::Flyback,
             },
             heading: if bits & 4 == 0 {
                 Heading::Up
@@ -162,6 +169,7 @@ impl CircuitMode {
             Bridge::Off => 0,
             Bridge::Positive => 1,
             Bridge::Negative => 2,
+            Bridge::Flyback => 3,
         };
         b | if self.heading == Heading::Down { 4 } else { 0 }
     }
@@ -207,6 +215,29 @@ pub struct Circuit {
 }
 
 impl Circuit {
+    /// The buck-boost inductor of a SECE through its inductor, which then owns the circuit's
+    /// behaviour ([`super::sece_inductor`]).
+    #[inline(always)]
+    fn buck_boost(&self) -> Option<BuckBoost> {
+        match self.switch {
+            Switch::BuckBoost(b) => Some(b),
+            _ => None,
+        }
+    }
+
+    /// The state's dimension the circuit needs: its last component's index plus one.
+    pub fn dimension(&self) -> usize {
+        self.buck_boost().map_or(self.vs, |b| b.i) + 1
+    }
+
+    /// The bridge states of the circuit's modes.
+    pub fn bridges(&self) -> &'static [Bridge] {
+        match self.switch {
+            Switch::BuckBoost(_) => &BuckBoost::PHASES,
+            _ => &[Bridge::Off, Bridge::Positive, Bridge::Negative],
+        }
+    }
+
     /// True when the bridge connects the element to the storage between extrema (a plain
     /// bridge or parallel SSHI); series SSHI and SECE leave the element open there.
     #[inline(always)]
@@ -370,6 +401,9 @@ impl Circuit {
         y: &SVector<f64, N>,
         rates: &mut SVector<f64, N>,
     ) -> f64 {
+        if let Some(b) = self.buck_boost() {
+            return b.force_and_rates(self, bridge, y, rates);
+        }
         let (e, ivs) = (self.e, self.vs);
         let vs = y[ivs];
         let il = self.sink.current(vs);
@@ -443,6 +477,9 @@ impl Circuit {
     /// Power lost in the diodes (W).
     #[inline]
     pub fn diode_power<const N: usize>(&self, bridge: Bridge, y: &SVector<f64, N>) -> f64 {
+        if let Some(b) = self.buck_boost() {
+            return b.diode_power(bridge, y);
+        }
         if !self.bridge_between_extrema() {
             return 0.0;
         }
@@ -462,6 +499,9 @@ impl Circuit {
     /// Power lost in the coil's resistance, or a pair's bleed resistors (W).
     #[inline]
     pub fn element_loss<const N: usize>(&self, bridge: Bridge, y: &SVector<f64, N>) -> f64 {
+        if let Some(b) = self.buck_boost() {
+            return b.resistive_power(bridge, y);
+        }
         match self.element {
             Element::Coil { rc, .. } => {
                 let i = self.coil_current(bridge, y);
@@ -499,7 +539,8 @@ impl Circuit {
                 e
             }
         };
-        e1 + 0.5 * self.cs * y[self.vs] * y[self.vs]
+        let inductor = self.buck_boost().map_or(0.0, |b| b.stored_energy(y));
+        e1 + inductor + 0.5 * self.cs * y[self.vs] * y[self.vs]
     }
 
     /// The charge a pair's bias source has delivered (C); zero for the others.
@@ -529,6 +570,9 @@ impl Circuit {
             Element::Piezo { theta, cp } => {
                 sc[self.e] = theta * x / cp;
                 sc[self.vs] = theta * x / cp;
+                if let Some(b) = self.buck_boost() {
+                    b.scale(self, sc);
+                }
             }
             Element::Coil { phi, rc, l } => {
                 let w = v / x;
@@ -557,6 +601,9 @@ impl Circuit {
     /// for a capacitive element with an on-resistance (`C_port` the element's capacitance at
     /// rest), `L / (Rc + 2 R_on)` for a coil; infinite where a mode has none.
     pub fn conduction_time_constant_s(&self) -> f64 {
+        if let Some(b) = self.buck_boost() {
+            return b.time_constant_s(self);
+        }
         let capacitive = |c: f64| 2.0 * self.ron() * c * self.cs / (c + self.cs);
         match self.element {
             Element::Piezo { cp, .. } if self.ron() > 0.0 && self.bridge_between_extrema() => {
@@ -578,7 +625,7 @@ impl Circuit {
         };
         let (e, ivs) = (self.e, self.vs);
         match self.switch {
-            Switch::None => ResetLoss::default(),
+            Switch::None | Switch::BuckBoost(_) => ResetLoss::default(),
             Switch::Parallel(gamma) => {
                 let en = 0.5 * cp * y[e] * y[e];
                 y[e] *= -gamma;
@@ -622,7 +669,9 @@ impl Circuit {
         y: &SVector<f64, N>,
         sc: &SVector<f64, N>,
     ) -> [f64; 2] {
-        let conduction = if self.has_conduction_events() {
+        let conduction = if let Some(b) = self.buck_boost() {
+            b.phase_guard(self, mode.bridge, y, sc)
+        } else if self.has_conduction_events() {
             let threshold = y[self.vs] + self.path_drop();
             match mode.bridge {
                 Bridge::Off => (self.drive_voltage(y).abs() - threshold) / sc[self.vs],
@@ -663,6 +712,10 @@ impl Circuit {
     ) -> (CircuitMode, ResetLoss) {
         let mut next = mode;
         let [conduction, extremum] = self.guards(mode, y, sc);
+        if let Some(b) = self.buck_boost() {
+            let next = b.switch(self, mode, extremum >= conduction, y, sc);
+            return (next, ResetLoss::default());
+        }
         if extremum >= conduction {
             // The extremum is located to the event tolerance; v is put at exactly zero so that
             // the guard of the new heading starts at zero and does not fire again at once.
@@ -769,9 +822,10 @@ impl Circuit {
     /// where it has one, else off (a guard already positive switches it on at once); the
     /// heading from the velocity's sign.
     pub fn mode_of<const N: usize>(&self, y: &SVector<f64, N>) -> CircuitMode {
-        let bridge = match self.element {
-            Element::Coil { l, .. } if l > 0.0 && y[self.e] > 0.0 => Bridge::Positive,
-            Element::Coil { l, .. } if l > 0.0 && y[self.e] < 0.0 => Bridge::Negative,
+        let bridge = match (self.element, self.buck_boost()) {
+            (_, Some(b)) => b.phase_of(y),
+            (Element::Coil { l, .. }, _) if l > 0.0 && y[self.e] > 0.0 => Bridge::Positive,
+            (Element::Coil { l, .. }, _) if l > 0.0 && y[self.e] < 0.0 => Bridge::Negative,
             _ => Bridge::Off,
         };
         CircuitMode {
@@ -785,7 +839,7 @@ impl Circuit {
     }
 
     /// d I_L / d Vs of the DC load (S).
-    fn sink_conductance(&self) -> f64 {
+    pub(super) fn sink_conductance(&self) -> f64 {
         match self.sink {
             Sink::Resistor(r) => 1.0 / r,
             Sink::Battery(_, r) => 1.0 / r,
@@ -804,6 +858,9 @@ impl Circuit {
         sc: &SVector<f64, N>,
         j: &mut SMatrix<f64, N, N>,
     ) {
+        if let Some(b) = self.buck_boost() {
+            return b.jacobian(self, bridge, m, j);
+        }
         let gl = self.sink_conductance();
         let cs = self.cs;
         let (e, ivs) = (self.e, self.vs);
@@ -925,7 +982,7 @@ impl Circuit {
         };
         let (e, ivs) = (self.e, self.vs);
         match self.switch {
-            Switch::None => {}
+            Switch::None | Switch::BuckBoost(_) => {}
             Switch::Parallel(gamma) => g[(e, e)] = -gamma,
             Switch::Series(gamma) => {
                 let s = y[e].signum();

@@ -3,10 +3,14 @@
 //!
 //! * [`bridge`]: a diode bridge into a storage capacitor and DC load, with the synchronous
 //!   switches (parallel and series SSHI, SECE) acting at the displacement extrema.
+//! * [`sece_inductor`]: a SECE whose transfer runs through its buck-boost inductor, the
+//!   inductor current a state of its own.
 //! * [`parts`]: the diodes' law, the DC load and the synchronous switch it is built from.
 
 pub mod bridge;
 pub mod parts;
+pub mod sece_inductor;
 
 pub use bridge::*;
 pub use parts::{DiodeLaw, Sink, Switch};
+pub use sece_inductor::BuckBoost;

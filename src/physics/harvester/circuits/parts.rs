@@ -69,4 +69,6 @@ pub enum Switch {
     Series(f64),
     /// SECE with efficiency eta.
     Sece(f64),
+    /// SECE through its buck-boost inductor ([`super::sece_inductor`]).
+    BuckBoost(super::sece_inductor::BuckBoost),
 }

@@ -1,0 +1,275 @@
+//! Synchronous electric charge extraction through its buck-boost inductor: the SECE whose
+//! transfer is resolved in time, with the inductor current a state of its own
+//! ([`crate::device::SeceInductor`]). The instantaneous SECE of [`super::bridge`] is its limit
+//! of a fast inductor.
+//!
+//! # The circuit
+//! A piezoelectric element (`Cp`, coupling `theta`) behind an ideal rectifier; at each
+//! displacement extremum a switch connects the rectified element to an inductor `L` with
+//! series resistance `R_L`, whose flyback diode (forward drop `V_F`) feeds the storage `Cs`
+//! and its DC load `I_L(Vs)`. The inductor current `I >= 0` is the state component after the
+//! storage voltage. Three phases, in the bits of the circuit's [`Bridge`]:
+//!
+//! * open ([`Bridge::Off`]): `Cp Vp' = -theta v`, `I = 0`, `Cs Vs' = -I_L`. An extremum (the
+//!   velocity's sign turning, as for every synchronous switch) closes the switch with the
+//!   rectifier's polarity `s = sign(Vp)`, unless `|Vp|` is below 1e-9 of its scale (nothing to
+//!   extract: the guard of the next phase would start at zero).
+//! * charge ([`Bridge::Positive`], [`Bridge::Negative`] by `s`): the element discharges into
+//!   the inductor, `Cp Vp' = -theta v - s I`, `L I' = s Vp - R_L I`. The guard is `-s Vp`: the
+//!   phase ends when the element's voltage reaches zero, where it is put at exactly zero (a
+//!   projection within the event tolerance).
+//! * flyback ([`Bridge::Flyback`]): the switch opens and the inductor discharges into the
+//!   storage, `L I' = -(Vs + V_F) - R_L I`, `Cs Vs' = I - I_L`, the element open. The guard
+//!   is `-I`: the phase ends when the current reaches zero (put at exactly zero), and the
+//!   circuit is open again.
+//!
+//! The mass feels `theta Vp` throughout. An extremum during a transfer (an inductor so slow
+//! that a transfer outlasts half a period) only turns the heading: the transfer runs on.
+//!
+//! The charge phase ends with the current at its peak only if the loop is underdamped,
+//! `R_L < 2 sqrt(L / Cp)` (with more, `Vp` decays without reaching zero): the description
+//! refuses more. With `R_L = 0` and `V_F = 0` the transfer loses nothing, so in the limit of
+//! a fast inductor this circuit is the instantaneous SECE with efficiency 1
+//! (`tests/interface_sece_inductor.rs` shows the convergence).
+//!
+//! # Ledger
+//! The inductor's `L I^2 / 2` is stored energy; `R_L I^2` is the element's loss, `V_F I` in
+//! flyback the diodes'; the switches move energy only by their projections.
+
+use nalgebra::{SMatrix, SVector};
+
+use super::bridge::{Bridge, Circuit, CircuitMode, Element, Heading};
+use crate::model::AffineGuard;
+
+/// A `|Vp|` below this fraction of its scale at an extremum is not extracted.
+const EMPTY: f64 = 1e-9;
+
+/// The buck-boost inductor, its resistance and its flyback diode, evaluated.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BuckBoost {
+    /// L (H).
+    pub l: f64,
+    /// R_L (ohm).
+    pub rl: f64,
+    /// The flyback diode's forward drop V_F (V).
+    pub vf: f64,
+    /// Index of the inductor current in the state.
+    pub i: usize,
+}
+
+/// The element's coupling and capacitance (theta, Cp); the description admits a piezoelectric
+/// element only, and the assembly refuses the others.
+#[inline(always)]
+fn piezo(c: &Circuit) -> (f64, f64) {
+    match c.element {
+        Element::Piezo { theta, cp } => (theta, cp),
+        _ => (0.0, f64::INFINITY),
+    }
+}
+
+impl BuckBoost {
+    /// The circuit's phases, as bridge states: open, charge by polarity, flyback.
+    pub const PHASES: [Bridge; 4] = [
+        Bridge::Off,
+        Bridge::Positive,
+        Bridge::Negative,
+        Bridge::Flyback,
+    ];
+
+    /// The inductor current in a phase (A): zero while open.
+    #[inline(always)]
+    fn current<const N: usize>(&self, phase: Bridge, y: &SVector<f64, N>) -> f64 {
+        if phase == Bridge::Off {
+            0.0
+        } else {
+            y[self.i]
+        }
+    }
+
+    /// The force on the mass (N) and the rates of `Vp`, `Vs` and `I` in a phase.
+    #[inline]
+    pub fn force_and_rates<const N: usize>(
+        &self,
+        c: &Circuit,
+        phase: Bridge,
+        y: &SVector<f64, N>,
+        rates: &mut SVector<f64, N>,
+    ) -> f64 {
+        let (theta, cp) = piezo(c);
+        let (e, ivs, ii) = (c.e, c.vs, self.i);
+        let (vp, vs) = (y[e], y[ivs]);
+        let i = self.current(phase, y);
+        let il = c.sink.current(vs);
+        rates[e] = -theta * y[1] / cp;
+        rates[ivs] = -il / c.cs;
+        rates[ii] = 0.0;
+        match phase {
+            Bridge::Off => {}
+            Bridge::Positive | Bridge::Negative => {
+                let s = phase.sign();
+                rates[e] -= s * i / cp;
+                rates[ii] = (s * vp - self.rl * i) / self.l;
+            }
+            Bridge::Flyback => {
+                rates[ii] = (-(vs + self.vf) - self.rl * i) / self.l;
+                rates[ivs] = (i - il) / c.cs;
+            }
+        }
+        theta * vp
+    }
+
+    /// The circuit's part of the Jacobian in a phase (see [`Circuit::jacobian`]).
+    pub fn jacobian<const N: usize>(
+        &self,
+        c: &Circuit,
+        phase: Bridge,
+        m: f64,
+        j: &mut SMatrix<f64, N, N>,
+    ) {
+        let (theta, cp) = piezo(c);
+        let (e, ivs, ii) = (c.e, c.vs, self.i);
+        let gl = c.sink_conductance();
+        j[(1, e)] += theta / m;
+        j[(e, 1)] = -theta / cp;
+        j[(ivs, ivs)] = -gl / c.cs;
+        match phase {
+            Bridge::Off => {}
+            Bridge::Positive | Bridge::Negative => {
+                let s = phase.sign();
+                j[(e, ii)] = -s / cp;
+                j[(ii, e)] = s / self.l;
+                j[(ii, ii)] = -self.rl / self.l;
+            }
+            Bridge::Flyback => {
+                j[(ii, ivs)] = -1.0 / self.l;
+                j[(ii, ii)] = -self.rl / self.l;
+                j[(ivs, ii)] = 1.0 / c.cs;
+            }
+        }
+    }
+
+    /// The phase's guard, dimensionless at the scales `sc` (the extremum's is the circuit's).
+    #[inline]
+    pub fn phase_guard<const N: usize>(
+        &self,
+        c: &Circuit,
+        phase: Bridge,
+        y: &SVector<f64, N>,
+        sc: &SVector<f64, N>,
+    ) -> f64 {
+        match phase {
+            Bridge::Off => f64::NEG_INFINITY,
+            Bridge::Positive | Bridge::Negative => -phase.sign() * y[c.e] / sc[c.e],
+            Bridge::Flyback => -y[self.i] / sc[self.i],
+        }
+    }
+
+    /// The phase's guard as an affine function of the state (for the exact propagators).
+    pub fn phase_guard_piece<const N: usize>(
+        &self,
+        c: &Circuit,
+        phase: Bridge,
+        index: usize,
+    ) -> Option<AffineGuard<N>> {
+        let mut n = SVector::<f64, N>::zeros();
+        match phase {
+            Bridge::Off => return None,
+            Bridge::Positive | Bridge::Negative => n[c.e] = -phase.sign(),
+            Bridge::Flyback => n[self.i] = -1.0,
+        }
+        Some(AffineGuard { index, n, g0: 0.0 })
+    }
+
+    /// The switch when the circuit's guard fires (`extremum` when the extremum's guard is the
+    /// larger): the next mode, with `y` projected.
+    pub fn switch<const N: usize>(
+        &self,
+        c: &Circuit,
+        mode: CircuitMode,
+        extremum: bool,
+        y: &mut SVector<f64, N>,
+        sc: &SVector<f64, N>,
+    ) -> CircuitMode {
+        let mut next = mode;
+        if extremum {
+            // As for every synchronous switch: v is put at exactly zero so that the new
+            // heading's guard starts at zero.
+            y[1] = 0.0;
+            next.heading = match mode.heading {
+                Heading::Up => Heading::Down,
+                Heading::Down => Heading::Up,
+            };
+            if mode.bridge == Bridge::Off && y[c.e].abs() > EMPTY * sc[c.e] {
+                y[self.i] = 0.0;
+                next.bridge = if y[c.e] > 0.0 {
+                    Bridge::Positive
+                } else {
+                    Bridge::Negative
+                };
+            }
+            return next;
+        }
+        match mode.bridge {
+            Bridge::Positive | Bridge::Negative => {
+                y[c.e] = 0.0;
+                next.bridge = Bridge::Flyback;
+            }
+            Bridge::Flyback => {
+                y[self.i] = 0.0;
+                next.bridge = Bridge::Off;
+            }
+            Bridge::Off => {}
+        }
+        next
+    }
+
+    /// The phase a state starts in: flyback while the inductor carries a current, else open.
+    pub fn phase_of<const N: usize>(&self, y: &SVector<f64, N>) -> Bridge {
+        if y[self.i] > 0.0 {
+            Bridge::Flyback
+        } else {
+            Bridge::Off
+        }
+    }
+
+    /// Power lost in the inductor's resistance (W).
+    #[inline]
+    pub fn resistive_power<const N: usize>(&self, phase: Bridge, y: &SVector<f64, N>) -> f64 {
+        let i = self.current(phase, y);
+        self.rl * i * i
+    }
+
+    /// Power lost in the flyback diode (W).
+    #[inline]
+    pub fn diode_power<const N: usize>(&self, phase: Bridge, y: &SVector<f64, N>) -> f64 {
+        if phase == Bridge::Flyback {
+            self.vf * y[self.i]
+        } else {
+            0.0
+        }
+    }
+
+    /// The inductor's energy `L I^2 / 2` (J).
+    #[inline]
+    pub fn stored_energy<const N: usize>(&self, y: &SVector<f64, N>) -> f64 {
+        0.5 * self.l * y[self.i] * y[self.i]
+    }
+
+    /// The inductor current's scale: the peak current of a transfer from the element's
+    /// voltage scale, `Vp sqrt(Cp / L)`.
+    pub fn scale<const N: usize>(&self, c: &Circuit, sc: &mut SVector<f64, N>) {
+        let (_, cp) = piezo(c);
+        sc[self.i] = sc[c.e] * (cp / self.l).sqrt();
+    }
+
+    /// The shortest time constant of a transfer (s): `sqrt(L Cp)`, or `L / R_L` if shorter.
+    pub fn time_constant_s(&self, c: &Circuit) -> f64 {
+        let (_, cp) = piezo(c);
+        let ring = (self.l * cp).sqrt();
+        if self.rl > 0.0 {
+            ring.min(self.l / self.rl)
+        } else {
+            ring
+        }
+    }
+}
