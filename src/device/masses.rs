@@ -11,6 +11,7 @@
 //! params = "example"
 //! description = "..."
 //! transducer_mass = 1          # the mass the transducer acts on (0 when absent)
+//! drive_mass = 1               # optional: the drive is a force m_1 a(t) on mass 1 alone
 //!
 //! [[masses]]
 //! name = "driver"
@@ -35,6 +36,11 @@
 //! kind = "piezoelectric"
 //! # ...
 //! ```
+//!
+//! Without `drive_mass` the frame's acceleration `a(t)` drives every mass (`m_i a` on mass
+//! `i`, displacements relative to the frame). With `drive_mass = j` the frame stands still and
+//! the drive is a force `m_j a(t)` on mass `j` alone (a shaker on that mass, or a force-driven
+//! reference problem): the same `a(t)` of the studies, applied to one mass.
 //!
 //! Every index is checked on load (a mass that does not exist, a spring, damper or stop
 //! between a mass and itself, a mass connected to nothing), in a [`ParamError`] that names
@@ -93,6 +99,9 @@ pub struct Masses {
     pub stops: Vec<MassStop>,
     /// The mass the transducer acts on.
     pub transducer_mass: usize,
+    /// The mass a force drive acts on (`m_j a(t)` on it alone, the frame still); `None`: the
+    /// frame's acceleration drives every mass.
+    pub drive_mass: Option<usize>,
 }
 
 /// Most masses a device may have.
@@ -127,6 +136,7 @@ pub(super) struct RawMasses {
     pub(super) dampers: Vec<RawDamper>,
     pub(super) stops: Vec<toml::Table>,
     pub(super) transducer_mass: Option<usize>,
+    pub(super) drive_mass: Option<usize>,
 }
 
 impl RawMasses {
@@ -147,22 +157,20 @@ impl RawMasses {
                     }),
             }
         }
-        let transducer_mass = match table.remove("transducer_mass") {
-            None => None,
-            Some(toml::Value::Integer(i)) if i >= 0 => Some(i as usize),
-            Some(v) => {
-                return Err(c.message(
-                    "transducer_mass",
-                    &format!("must be a mass's index (0, 1, ...), not {v}"),
-                ))
-            }
+        let index = |table: &mut toml::Table, key: &str| match table.remove(key) {
+            None => Ok(None),
+            Some(toml::Value::Integer(i)) if i >= 0 => Ok(Some(i as usize)),
+            Some(v) => Err(c.message(key, &format!("must be a mass's index (0, 1, ...), not {v}"))),
         };
+        let transducer_mass = index(table, "transducer_mass")?;
+        let drive_mass = index(table, "drive_mass")?;
         Ok(Self {
             masses: array(table, "masses", c)?,
             springs: array(table, "springs", c)?,
             dampers: array(table, "dampers", c)?,
             stops: array(table, "stops", c)?,
             transducer_mass,
+            drive_mass,
         })
     }
 
@@ -278,12 +286,16 @@ impl RawMasses {
                 &format!("a mass's index < {n}"),
             ));
         }
+        if let Some(j) = self.drive_mass.filter(|&j| j >= n) {
+            return Err(c.err("drive_mass", j as f64, &format!("a mass's index < {n}")));
+        }
         let m = Masses {
             bodies,
             springs,
             dampers,
             stops,
             transducer_mass,
+            drive_mass: self.drive_mass,
         };
         for i in 0..n {
             let touches = |l: &Link| l.mass == i || l.other == Some(i);
@@ -308,6 +320,9 @@ impl RawMasses {
             "transducer_mass".into(),
             toml::Value::Integer(m.transducer_mass as i64),
         );
+        if let Some(j) = m.drive_mass {
+            table.insert("drive_mass".into(), toml::Value::Integer(j as i64));
+        }
         let bodies: Vec<RawBody> = m
             .bodies
             .iter()

@@ -3,6 +3,8 @@
 //!
 //! Mechanics: each mass `i` obeys `m_i x_i'' = m_i a(t) - sum springs - sum dampers - sum
 //! contact forces (+ F_e on the transducer's mass)`, every displacement relative to the frame.
+//! A device with a `drive_mass` ([`crate::device::Masses::drive_mass`]) is driven by a force
+//! `m_j a(t)` on that mass alone, the frame still: the drive term `m_i a` is then mass `j`'s.
 //! A spring or damper between masses `i` and `j` acts on `x_i - x_j`; a stop between them is
 //! met where `s (x_i - x_j) = gap` (`s` = +1 upper, -1 lower), a stop to the frame where
 //! `s x_i = gap`.
@@ -102,6 +104,9 @@ pub struct MassChain<const N: usize> {
     pub dampers: Vec<ChainLink>,
     /// The stops.
     pub contacts: Vec<ChainContact>,
+    /// The mass a force drive acts on (state order); `None`: the frame's acceleration drives
+    /// every mass.
+    pub driven: Option<usize>,
     /// The transducer's mass with the port, no suspension and no stops.
     inner: Harvester<N>,
     /// The number of the port's components after the transducer's mass's two.
@@ -213,6 +218,7 @@ impl<const N: usize> MassChain<N> {
                 }
             })
             .collect();
+        let driven = m.drive_mass.map(order);
         let omega = slowest_frequency(&bodies, &springs);
         let x_scale_m = m.smallest_gap_m().unwrap_or(crate::G / (omega * omega));
         let mt = bodies[0].mass_kg;
@@ -243,6 +249,7 @@ impl<const N: usize> MassChain<N> {
             springs,
             dampers,
             contacts,
+            driven,
             inner,
             port_dim,
             omega,
@@ -355,14 +362,24 @@ impl<const N: usize> MassChain<N> {
         }
     }
 
-    /// The force on each mass (N) without the constraint of a resting contact: the drive
-    /// `m a`, the springs, the dampers, the pressed contacts and the port's force `fe` on the
-    /// transducer's mass.
-    fn forces(&self, mode: Mode, y: &SVector<f64, N>, a: f64, fe: f64) -> [f64; MAX_MASSES] {
+    /// The drive's force on each mass per unit drive acceleration (kg): `m_i` on every mass,
+    /// or on the driven mass alone.
+    pub(super) fn drive_masses(&self) -> [f64; MAX_MASSES] {
         let mut f = [0.0; MAX_MASSES];
         for (i, b) in self.bodies.iter().enumerate() {
-            f[i] = b.mass_kg * a;
+            if self.driven.is_none_or(|j| j == i) {
+                f[i] = b.mass_kg;
+            }
         }
+        f
+    }
+
+    /// The force on each mass (N) without the constraint of a resting contact: the drive
+    /// ([`Self::drive_masses`] times `a`), the springs, the dampers, the pressed contacts and the port's force `fe` on the
+    /// transducer's mass.
+    fn forces(&self, mode: Mode, y: &SVector<f64, N>, a: f64, fe: f64) -> [f64; MAX_MASSES] {
+        let mut f = self.drive_masses();
+        f.iter_mut().for_each(|x| *x *= a);
         f[0] += fe;
         let pos = |i: usize| y[self.bodies[i].ix];
         let vel = |i: usize| y[self.bodies[i].ix + 1];
@@ -417,7 +434,7 @@ impl<const N: usize> MassChain<N> {
 
     /// The accelerations of the masses from their forces, a resting contact's constraint
     /// applied.
-    fn accelerations(&self, mode: Mode, f: &[f64; MAX_MASSES]) -> [f64; MAX_MASSES] {
+    pub(super) fn accelerations(&self, mode: Mode, f: &[f64; MAX_MASSES]) -> [f64; MAX_MASSES] {
         let mut acc = [0.0; MAX_MASSES];
         for (i, b) in self.bodies.iter().enumerate() {
             acc[i] = f[i] / b.mass_kg;

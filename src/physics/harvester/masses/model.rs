@@ -140,15 +140,12 @@ impl<const N: usize> Model<N> for MassChain<N> {
     }
 
     fn drive_column(&self, mode: Mode) -> SVector<f64, N> {
+        // The accelerations are linear in the forces: those of the drive's forces per unit
+        // acceleration, a resting contact's constraint applied.
+        let acc = self.accelerations(mode, &self.drive_masses());
         let mut c = SVector::<f64, N>::zeros();
-        for b in &self.bodies {
-            c[b.ix + 1] = 1.0;
-        }
-        if let Some(k) = self.resting(mode) {
-            let ct = &self.contacts[k];
-            if ct.other.is_none() {
-                c[self.bodies[ct.mass].ix + 1] = 0.0;
-            }
+        for (i, b) in self.bodies.iter().enumerate() {
+            c[b.ix + 1] = acc[i];
         }
         c
     }
@@ -430,7 +427,8 @@ impl<const N: usize> Model<N> for MassChain<N> {
         p[0] = self
             .bodies
             .iter()
-            .map(|b| b.mass_kg * a * y[b.ix + 1])
+            .zip(self.drive_masses())
+            .map(|(b, m)| m * a * y[b.ix + 1])
             .sum();
         let vel = |i: usize| y[self.bodies[i].ix + 1];
         for (n, d) in self.dampers.iter().enumerate() {
