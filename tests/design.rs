@@ -2,7 +2,7 @@
 //! best on two two-variable cases, the closed-form optimal load of a linear piezoelectric
 //! harvester, the diode bridge's optimum load in weak coupling (Shu and Lien's), SECE's power
 //! whatever its load, and an infeasible problem reported as such; the interfaces read as a
-//! designer names them.
+//! designer names them; the effectiveness's bound against our own resonant generator.
 
 use endstop::design::{
     answer, interfaces, Evaluated, Limits, Problem, SearchSettings, Verdict, Vibration, LOAD_PATH,
@@ -478,3 +478,73 @@ fn the_bridge_optimum_is_shu_and_liens_in_weak_coupling() {
     );
 }
 
+/// The displacement-limited bound of the effectiveness ([`endstop::design::merit::vdrg_bound_w`],
+/// `m A Z_l w / 2`) against an independent computation: our own steady state of a linear
+/// velocity-damped resonant generator, built here (hypothetical: a 10 g magnet on a 50 Hz
+/// spring in a coil with neither resistance nor inductance, so that the coil's current follows
+/// the velocity and the load is a pure damper `c_e = Phi^2 / R`; no stops), driven at its
+/// resonance by 0.1 g rms.
+///
+/// At resonance the drive's force `m A` is in phase with the velocity, so the damping takes
+/// `m A w Z / 2` whatever its value, the load its share `c_e / (b + c_e)` beside the
+/// mechanical damping `b`; the damping `b + c_e = m A / (w Z_l)` makes the stroke `Z_l`. The
+/// generator's mechanical loss is set to a thousandth of that damping, so the load takes the
+/// bound times 0.999, at three loads the power of its own stroke's bound times its share.
+///
+/// Tolerance: the steady states are shot to rtol 1e-10 with a residual of 1e-10, their powers
+/// and amplitudes good to about 1e-9 times the orbit's memory `1 / (1 - e^(-pi (b + c_e) /
+/// (m w)))`, 12 periods here (as the linear harvesters' checks of the validation chapter,
+/// which hold such orbits to 1e-6); 1e-6 relative.
+#[test]
+fn the_vdrg_bound_is_our_resonant_generator_at_its_stroke() {
+    use endstop::design::merit::{effectiveness, vdrg_bound_w};
+    use endstop::drive::Sine;
+    use endstop::study::periodic::steady_state_from_rest;
+    let (m, f, phi, a_rms_g, z_l) = (10e-3, 50.0, 5.0, 0.1, 0.5e-3);
+    let w = 2.0 * std::f64::consts::PI * f;
+    let sine = Sine::from_rms_g(a_rms_g, f);
+    let a_rms = sine.amplitude_m_s2 / std::f64::consts::SQRT_2;
+    let c_total = m * sine.amplitude_m_s2 / (w * z_l);
+    let b = 1e-3 * c_total;
+    let r_l = phi * phi / (c_total - b);
+    let device = |r: f64| {
+        Device::from_toml_str(
+            &format!(
+                "name = \"vdrg\"\nparams = \"hypothetical\"\n\
+                 description = \"a linear velocity-damped resonant generator\"\n\
+                 [mechanics]\nmass_kg = {m:e}\nstiffness_n_per_m = {:e}\ndamping_n_s_per_m = {b:e}\n\
+                 [transducer]\nkind = \"electromagnetic\"\ntransduction_n_per_a = {phi:e}\n\
+                 coil_resistance_ohm = 0.0\ncoil_inductance_h = 0.0\nload_resistance_ohm = {r:e}\n",
+                m * w * w
+            ),
+            "vdrg",
+        )
+        .unwrap()
+    };
+    let settings = SteadySettings {
+        rtol: 1e-10,
+        tol: 1e-10,
+        ..SteadySettings::default()
+    };
+    let tol = 1e-6;
+    for k in [1.0, 0.5, 2.0] {
+        let r = k * r_l;
+        let s = steady_state_from_rest(&device(r), sine, &settings).unwrap();
+        assert!(!s.contact);
+        let share = (phi * phi / r) / (b + phi * phi / r);
+        let at_stroke = s.p_dc_w / vdrg_bound_w(m, s.x1_m, a_rms, f);
+        eprintln!(
+            "R = {k} R_l: stroke {:.6e} m, P {:.6e} W, P / bound(stroke) {at_stroke:.9} (share {share:.9})",
+            s.x1_m, s.p_dc_w
+        );
+        assert!(
+            (at_stroke / share - 1.0).abs() < tol,
+            "R = {r}: {at_stroke} vs {share}"
+        );
+        if k == 1.0 {
+            assert!((s.x1_m / z_l - 1.0).abs() < tol, "stroke {} m", s.x1_m);
+            let eff = effectiveness(s.p_dc_w, m, z_l, a_rms, f);
+            assert!((eff / share - 1.0).abs() < tol, "effectiveness {eff}");
+        }
+    }
+}
