@@ -194,6 +194,48 @@ fn words(p: &Problem, a: &Answer) -> String {
     )
 }
 
+/// Records in `summary.json` what repeats the run besides the device file (recorded with its
+/// text) and the seed: the arguments as given, the interfaces chosen among, the search's
+/// settings and the steady state's.
+fn record_settings(
+    exp: &mut endstop_experiments::Experiment,
+    a: &DesignArgs,
+    p: &Problem,
+    search: &SearchSettings,
+) -> Result<()> {
+    use serde_json::{json, to_value};
+    let s = &p.steady;
+    exp.setting("command", json!("design"));
+    exp.setting("device", json!(a.device.display().to_string()));
+    exp.setting("ranges", json!(a.ranges));
+    exp.setting("freqs_hz", json!(a.freqs_hz));
+    exp.setting("accel_rms_g", json!(a.accel_rms_g));
+    exp.setting(
+        "interfaces_file",
+        json!(a.interfaces.as_ref().map(|f| f.display().to_string())),
+    );
+    exp.setting(
+        "interfaces",
+        json!(p.interfaces.iter().map(Interface::key).collect::<Vec<_>>()),
+    );
+    exp.setting("limits", to_value(p.limits)?);
+    exp.setting("map_points", json!(a.map_points));
+    exp.setting("target_v", json!(a.target_v));
+    exp.setting("search", to_value(search)?);
+    exp.setting(
+        "steady",
+        json!({
+            "rtol": s.rtol,
+            "transient_periods": s.transient_periods,
+            "max_newton": s.max_newton,
+            "tol": s.tol,
+            "jacobian": format!("{:?}", s.jacobian),
+            "max_map_periods": s.max_map_periods,
+        }),
+    );
+    Ok(())
+}
+
 /// `endstop design`.
 pub fn design(a: DesignArgs) -> Result<()> {
     check(&a)?;
@@ -204,6 +246,8 @@ pub fn design(a: DesignArgs) -> Result<()> {
         seed: a.seed,
         ..SearchSettings::default()
     };
+    exp.seed = Some(u64::from(a.seed));
+    record_settings(&mut exp, &a, &p, &settings)?;
     let budget = settings.budget(p.interfaces.len(), p.ranges.len());
     let study: Study =
         endstop_experiments::with_progress(budget, "designs evaluated (at most)", |pr| {

@@ -177,6 +177,9 @@ pub struct Experiment {
     pub seed: Option<u64>,
     values: Vec<Value>,
     numbers: BTreeMap<String, f64>,
+    /// The run's settings, by key, for `summary.json`: what a run needs besides its parameter
+    /// files and seed to be repeated.
+    settings: serde_json::Map<String, serde_json::Value>,
     /// Parquet files written: (path, parameter set). (Behind a lock so that writing keeps
     /// taking `&self`.)
     parquet: Mutex<Vec<(PathBuf, String)>>,
@@ -199,6 +202,8 @@ struct Summary<'a> {
     params: Vec<(String, String)>,
     values: &'a [Value],
     numbers: &'a BTreeMap<String, f64>,
+    #[serde(skip_serializing_if = "serde_json::Map::is_empty")]
+    settings: &'a serde_json::Map<String, serde_json::Value>,
 }
 
 impl Experiment {
@@ -213,6 +218,7 @@ impl Experiment {
             seed: None,
             values: Vec::new(),
             numbers: BTreeMap::new(),
+            settings: serde_json::Map::new(),
             parquet: Mutex::new(Vec::new()),
             plots: Mutex::new(Vec::new()),
             started: Instant::now(),
@@ -266,6 +272,12 @@ impl Experiment {
     /// Records a named number for the summary (not a claim).
     pub fn number(&mut self, key: &str, value: f64) {
         self.numbers.insert(key.to_string(), value);
+    }
+
+    /// Records a setting of the run under `key` for `summary.json` (with the seed and the
+    /// parameter files, what repeats the run).
+    pub fn setting(&mut self, key: &str, value: serde_json::Value) {
+        self.settings.insert(key.to_string(), value);
     }
 
     /// Records a figure of time under `key` in `timing.json` (wall-clock content, kept out of
@@ -433,6 +445,7 @@ impl Experiment {
                 .collect(),
             values: &self.values,
             numbers: &self.numbers,
+            settings: &self.settings,
         };
         let json = serde_json::to_string_pretty(&summary)?;
         write_atomic(&self.dir.join("summary.json"), json.as_bytes())?;

@@ -284,6 +284,49 @@ fn design_py<'py>(
         settings.budget(p.interfaces.len(), p.ranges.len()),
     )?;
     d.set_item("evaluations", study.evaluations.len())?;
+    d.set_item("settings", settings_dict(py, &p, &settings)?)?;
+    Ok(d)
+}
+
+/// What repeats the run besides the device, as the `settings` of the command's
+/// `summary.json`: the vibration, the limits, the search's settings (its seed among them) and
+/// the steady state's.
+fn settings_dict<'py>(
+    py: Python<'py>,
+    p: &Problem,
+    search: &SearchSettings,
+) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    d.set_item("freqs_hz", p.vibration.freqs_hz.clone())?;
+    d.set_item("accel_rms_g", p.vibration.accel_rms_g)?;
+    let limits = PyDict::new(py);
+    let l = &p.limits;
+    for (name, v) in LIMIT_NAMES.iter().zip([
+        l.impact_speed_m_s,
+        l.contact_force_n,
+        l.displacement_m,
+        l.impacts_per_s,
+    ]) {
+        limits.set_item(name, v)?;
+    }
+    d.set_item("limits", limits)?;
+    let s = PyDict::new(py);
+    s.set_item("samples", search.samples)?;
+    s.set_item("polish_starts", search.polish_starts)?;
+    s.set_item("max_iters", search.max_iters)?;
+    s.set_item("simplex_size", search.simplex_size)?;
+    s.set_item("sd_tolerance", search.sd_tolerance)?;
+    s.set_item("seed", search.seed)?;
+    d.set_item("search", s)?;
+    let st = &p.steady;
+    let s = PyDict::new(py);
+    s.set_item("rtol", st.rtol)?;
+    s.set_item("transient_periods", st.transient_periods)?;
+    s.set_item("max_newton", st.max_newton)?;
+    s.set_item("tol", st.tol)?;
+    s.set_item("jacobian", format!("{:?}", st.jacobian))?;
+    s.set_item("max_map_periods", st.max_map_periods)?;
+    d.set_item("steady", s)?;
     Ok(d)
 }
 

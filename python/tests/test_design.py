@@ -59,7 +59,8 @@ def test_design_matches_endstop_design(root, tmp_path):
                    "--samples", "8", "--seed", "5", "--map-points", "0",
                    "--out", str(tmp_path / "cli")],
                   tmp_path)
-    cli = summary(out / "cli" / "summary.json")["numbers"]
+    cli_summary = summary(out / "cli" / "summary.json")
+    cli = cli_summary["numbers"]
     rows = pd.read_parquet(out / "cli" / "designs.parquet")
     py = endstop.design(root / DEVICE, RANGES, 120.0, 0.4,
                         interfaces=["resistive", "full_bridge", SECE],
@@ -84,6 +85,12 @@ def test_design_matches_endstop_design(root, tmp_path):
     assert best["margins"]["displacement_m"] == pytest.approx(
         1.0 - best["displacement_m"] / 2e-4, rel=1e-12)
     assert all(m >= 0.0 for m in best["margins"].values())
+    # The run's seed and settings, recorded alike by both: what repeats it.
+    assert cli_summary["seed"] == py["seed"] == 5
+    cs, ps = cli_summary["settings"], py["settings"]
+    for key in ["search", "steady", "freqs_hz", "accel_rms_g", "limits"]:
+        assert cs[key] == ps[key], key
+    assert ps["search"]["seed"] == 5 and ps["search"]["samples"] == 8
 
 
 def test_a_bad_range_key_raises_param_error(root):

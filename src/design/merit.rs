@@ -12,8 +12,13 @@
 //!   `P_max = Y0 Z_l w^3 m / 2 = m A Z_l w / 2` with the acceleration amplitude
 //!   `A = w^2 Y0`. (The bound over every architecture, `(2 / pi) Y0 Z_l w^3 m`, is the
 //!   Coulomb-damped generator's, Mitcheson et al., J. Microelectromech. Syst. 13(3) (2004)
-//!   429; [`architecture_bound_w`].) The equation numbers of the 2008 paper were not
-//!   checked against its text in this build; the formulas are derived above.
+//!   429; [`architecture_bound_w`].) Neither paper's text could be read in this build (the
+//!   stored public pages searched hold neither), so no equation number is cited: the
+//!   formulas are derived above, not read. The bound is checked instead against an independent
+//!   computation, our own steady state of a linear velocity-damped generator driven at
+//!   resonance, whose load takes exactly `m A w Z / 2` (times its share of the damping) at
+//!   its stroke `Z`, and the bound when that stroke is `Z_l` (`tests/design.rs`,
+//!   `the_vdrg_bound_is_our_resonant_generator_at_its_stroke`).
 //! * **Half-power bandwidth** ([`half_power_band`]): the range of frequencies over which the
 //!   power is at least half its largest value, the -3 dB band of a resonance (for a lightly
 //!   damped linear oscillator `f0 / Q`; S. S. Rao, *Mechanical Vibrations*, 5th ed., 2011,

@@ -31,7 +31,7 @@ use rayon::prelude::*;
 use super::{DesignError, Evaluated};
 
 /// How the search runs.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct SearchSettings {
     /// Points of the global sample.
     pub samples: usize,

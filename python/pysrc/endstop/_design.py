@@ -43,7 +43,12 @@ def design(device, ranges, freqs_hz, accel_rms_g, *, interfaces=None,
     ``power_w``, ``worst_freq_hz``, ``impact_speed_m_s``, ``contact_force_n``,
     ``displacement_m``, ``impacts_per_s`` (NaN where not evaluated), and lists ``interface``,
     ``error``); ``interfaces``, ``ranges``, ``samples``, ``seed``, ``polish_starts``,
-    ``max_iters``, ``budget`` (the most evaluations the search may make) and ``evaluations``.
+    ``max_iters``, ``budget`` (the most evaluations the search may make), ``evaluations``, and
+    ``settings``, what repeats the run besides the device (as the command's ``summary.json``
+    records it): ``freqs_hz``, ``accel_rms_g``, ``limits``, ``search`` (``samples``,
+    ``polish_starts``, ``max_iters``, ``simplex_size``, ``sd_tolerance``, ``seed``) and
+    ``steady`` (the steady state's ``rtol``, ``transient_periods``, ``max_newton``, ``tol``,
+    ``jacobian``, ``max_map_periods``).
 
     A range or interface that does not fit the device raises :class:`endstop.ParamError`
     naming the field; a malformed problem (no range, bad frequencies or limits) ``ValueError``;
