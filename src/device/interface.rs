@@ -453,7 +453,7 @@ impl Interface {
             Interface::Sece { .. } | Interface::SeceInductor(_) => None,
         };
         self.validate_transducer(transducer, rect, c)?;
-        self.validate_values(c)?;
+        self.validate_values(transducer, c)?;
         if let Some(r) = rect {
             self.validate_diode(r, transducer, c)?;
         }
@@ -537,8 +537,8 @@ impl Interface {
         Ok(())
     }
 
-    /// The storage, the load, and the inversion or the SECE's efficiency.
-    fn validate_values(&self, c: &Checker) -> Result<(), ParamError> {
+    /// The storage, the load, and the inversion, the SECE's efficiency or its inductor.
+    fn validate_values(&self, transducer: &Transducer, c: &Checker) -> Result<(), ParamError> {
         c.positive(
             "interface.storage_capacitance_f",
             self.storage_capacitance_f().unwrap_or(f64::NAN),
