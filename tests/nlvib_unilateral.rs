@@ -311,10 +311,17 @@ fn nlvib_two_dof_unilateral_spring_example_matches_our_continuation() {
         theirs("neimark-sacker", "4096"),
         theirs("neimark-sacker", "8192"),
     );
-    let mine: Vec<f64> = branch
-        .events_of(EventKind::Torus)
-        .map(|e| e.param * TWO_PI)
-        .collect();
+    // The reference's events are changes of stability (its largest modulus crossing 1), so
+    // ours are those where stability changes (a multiplier may cross -1 or +1 while another
+    // pair already lies outside the circle: no change of stability, no event of theirs).
+    let changes = |kind: EventKind| -> Vec<f64> {
+        branch
+            .events_of(kind)
+            .filter(|e| e.stable_before != e.stable_after)
+            .map(|e| e.param * TWO_PI)
+            .collect()
+    };
+    let mine = changes(EventKind::Torus);
     eprintln!("Neimark-Sacker: NLvib-py {coarse:?} (4096) {fine:?} (8192), ours {mine:?}");
     checks.push(check(
         "number of Neimark-Sacker events from Om = 0.5 to 0.8".into(),
@@ -340,10 +347,7 @@ fn nlvib_two_dof_unilateral_spring_example_matches_our_continuation() {
         theirs("period doubling", "4096"),
         theirs("period doubling", "8192"),
     );
-    let mine: Vec<f64> = branch
-        .events_of(EventKind::PeriodDoubling)
-        .map(|e| e.param * TWO_PI)
-        .collect();
+    let mine = changes(EventKind::PeriodDoubling);
     eprintln!("period doubling: NLvib-py {coarse:?} (4096) {fine:?} (8192), ours {mine:?}");
     let f = fine[0];
     let bound = coarse
