@@ -68,8 +68,7 @@
 
 use nalgebra::{SMatrix, SVector};
 
-use super::parts::{DiodeLaw, Sink, Switch};
-use super::sece_inductor::BuckBoost;
+use super::parts::{BuckBoost, DiodeLaw, Sink, Switch};
 use crate::physics::transducer::CapacitorPair;
 
 /// An unused guard.

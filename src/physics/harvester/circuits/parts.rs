@@ -70,5 +70,19 @@ pub enum Switch {
     /// SECE with efficiency eta.
     Sece(f64),
     /// SECE through its buck-boost inductor ([`super::sece_inductor`]).
-    BuckBoost(super::sece_inductor::BuckBoost),
+    BuckBoost(BuckBoost),
+}
+
+/// The buck-boost inductor of a SECE through its inductor, its resistance and its flyback
+/// diode, evaluated; its behaviour is [`super::sece_inductor`]'s.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BuckBoost {
+    /// L (H).
+    pub l: f64,
+    /// R_L (ohm).
+    pub rl: f64,
+    /// The flyback diode's forward drop V_F (V).
+    pub vf: f64,
+    /// Index of the inductor current in the state.
+    pub i: usize,
 }

@@ -39,23 +39,11 @@
 use nalgebra::{SMatrix, SVector};
 
 use super::bridge::{Bridge, Circuit, CircuitMode, Element, Heading};
+use super::parts::BuckBoost;
 use crate::model::AffineGuard;
 
 /// A `|Vp|` below this fraction of its scale at an extremum is not extracted.
 const EMPTY: f64 = 1e-9;
-
-/// The buck-boost inductor, its resistance and its flyback diode, evaluated.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct BuckBoost {
-    /// L (H).
-    pub l: f64,
-    /// R_L (ohm).
-    pub rl: f64,
-    /// The flyback diode's forward drop V_F (V).
-    pub vf: f64,
-    /// Index of the inductor current in the state.
-    pub i: usize,
-}
 
 /// The element's coupling and capacitance (theta, Cp); the description admits a piezoelectric
 /// element only, and the assembly refuses the others.
