@@ -5,19 +5,18 @@
 
 use crate::common;
 use endstop::device::{Device, Diode, Interface, Inversion};
-use endstop::drive::{Excitation, Parameter, Sine};
+use endstop::drive::{Excitation, Sine};
 use endstop::model::{Contact, Mode, Model};
-use endstop::ode::Stats;
 use endstop::physics::contact::Side;
 use endstop::physics::harvester::circuits::{Bridge, CircuitMode, Heading};
 use endstop::physics::harvester::stops::contact_of;
 use endstop::physics::harvester::AssemblyError;
 use endstop::progress::Silent;
-use endstop::study::orbit::{Shooter, ShootingConfig};
+use endstop::study::orbit::ShootingConfig;
 use endstop::study::periodic::{
     measure, period_map, state_of, steady_state, JacobianKind, SteadySettings,
 };
-use nalgebra::{SMatrix, SVector};
+use nalgebra::SVector;
 
 /// The example cantilever with a stop behind a full bridge (`data/examples/piezo_bridge.toml`).
 fn example() -> Device {
@@ -166,45 +165,13 @@ fn monodromy_matches_differences_of_the_period_map() {
 fn monodromy_check<M: Model<N>, const N: usize>(model: &M, kind: &str) {
     let (y, residual) = iterated(model);
     assert!(residual < 1e-9, "{kind}: not settled ({residual:e})");
-    let rtol = 1e-11;
     let sine = Sine::from_rms_g(0.3, 120.0);
-    let shooter = Shooter::new(
-        model,
-        ShootingConfig {
-            rtol,
-            ..ShootingConfig::default()
-        },
-    );
-    let mut stats = Stats::default();
-    let lin = shooter
-        .linearise_sine(sine, Parameter::Frequency, y, sine.period_s(), &mut stats)
-        .unwrap();
-    let sc = model.scales();
-    let scaled = |m: &SMatrix<f64, N, N>| {
-        SMatrix::<f64, N, N>::from_diagonal(&sc.map(|v| 1.0 / v))
-            * m
-            * SMatrix::<f64, N, N>::from_diagonal(&sc)
-    };
-    let exact = scaled(&lin.monodromy);
-    let mut fd = SMatrix::<f64, N, N>::zeros();
-    for c in 0..N {
-        let h = 1e-5 * sc[c];
-        let (mut yp, mut ym) = (y, y);
-        yp[c] += h;
-        ym[c] -= h;
-        let col = (period_map(model, sine, &yp, rtol).unwrap()
-            - period_map(model, sine, &ym, rtol).unwrap())
-            / (2.0 * h);
-        fd.set_column(c, &col);
-    }
-    let fd = scaled(&fd);
-    let diff = (exact - fd).amax() / exact.amax();
-    // dP/df by central differences in the frequency, scaled by the state scales.
-    let df = 1e-5;
-    let p_at = |f: f64| period_map(model, Sine::from_rms_g(0.3, f), &y, rtol).unwrap();
-    let dp_fd = ((p_at(120.0 + df) - p_at(120.0 - df)) / (2.0 * df)).component_div(&sc);
-    let dp = lin.dp.component_div(&sc);
-    let diff_p = (dp - dp_fd).amax() / dp.amax();
+    let common::linearisation::Against {
+        lin,
+        stats,
+        monodromy_rel: diff,
+        dp_rel: diff_p,
+    } = common::linearisation::against_differences(model, sine, y, 1e-11);
     let mu = endstop::study::orbit::multipliers(&lin.monodromy).unwrap();
     let m = measure(model, sine, &y, 1e-9).unwrap();
     eprintln!(
@@ -218,11 +185,13 @@ fn monodromy_check<M: Model<N>, const N: usize>(model: &M, kind: &str) {
     assert!(stats.events >= 2, "{kind}: {} events", stats.events);
     assert!(
         diff < 1e-4,
-        "{kind}: monodromy differs by {diff:e}\n{exact}{fd}"
+        "{kind}: monodromy differs by {diff:e}\n{}",
+        lin.monodromy
     );
     assert!(
         diff_p < 1e-4,
-        "{kind}: dP/df differs by {diff_p:e}\n{dp}{dp_fd}"
+        "{kind}: dP/df differs by {diff_p:e}\n{}",
+        lin.dp
     );
     // The iteration settled, so the orbit is stable: every multiplier inside the circle.
     assert!(mu[0].norm() < 1.0, "{kind}: {}", mu[0].norm());

@@ -25,18 +25,17 @@
 
 use crate::common;
 use endstop::device::{DcLoad, Device, Interface, SeceInductor};
-use endstop::drive::{Excitation, Parameter, Sine};
+use endstop::drive::{Excitation, Sine};
 use endstop::model::{Books, Contact, Driven, Ledger, Mode, Model};
-use endstop::ode::{Dopri5, Stats};
+use endstop::ode::Dopri5;
 use endstop::physics::contact::Side;
 use endstop::physics::harvester::circuits::{Bridge, CircuitMode, Heading};
 use endstop::physics::harvester::stops::contact_of;
 use endstop::physics::harvester::AssemblyError;
-use endstop::study::orbit::{Shooter, ShootingConfig};
 use endstop::study::periodic::{
-    period_map, steady_state, steady_state_from_rest, PeriodicError, PeriodicState, SteadySettings,
+    steady_state, steady_state_from_rest, PeriodicError, PeriodicState, SteadySettings,
 };
-use nalgebra::{SMatrix, SVector};
+use nalgebra::SVector;
 use std::f64::consts::PI;
 
 fn example() -> Device {
@@ -230,50 +229,21 @@ fn monodromy_check<M: Model<N>, const N: usize>(model: &M) {
     let sine = Sine::from_rms_g(0.3, 120.0);
     let s = steady_state(model, sine, &model.rest_state(), &SteadySettings::default()).unwrap();
     let y = SVector::<f64, N>::from_column_slice(&s.state);
-    let rtol = 1e-11;
-    let shooter = Shooter::new(
-        model,
-        ShootingConfig {
-            rtol,
-            ..ShootingConfig::default()
-        },
-    );
-    let mut stats = Stats::default();
-    let lin = shooter
-        .linearise_sine(sine, Parameter::Frequency, y, sine.period_s(), &mut stats)
-        .unwrap();
-    let sc = model.scales();
-    let scaled = |m: &SMatrix<f64, N, N>| {
-        SMatrix::<f64, N, N>::from_diagonal(&sc.map(|v| 1.0 / v))
-            * m
-            * SMatrix::<f64, N, N>::from_diagonal(&sc)
-    };
-    let exact = scaled(&lin.monodromy);
-    let mut fd = SMatrix::<f64, N, N>::zeros();
-    for c in 0..N {
-        let h = 1e-5 * sc[c];
-        let (mut yp, mut ym) = (y, y);
-        yp[c] += h;
-        ym[c] -= h;
-        let col = (period_map(model, sine, &yp, rtol).unwrap()
-            - period_map(model, sine, &ym, rtol).unwrap())
-            / (2.0 * h);
-        fd.set_column(c, &col);
-    }
-    let diff = (exact - scaled(&fd)).amax() / exact.amax();
-    let df = 1e-5;
-    let p_at = |f: f64| period_map(model, Sine::from_rms_g(0.3, f), &y, rtol).unwrap();
-    let dp_fd = ((p_at(120.0 + df) - p_at(120.0 - df)) / (2.0 * df)).component_div(&sc);
-    let dp = lin.dp.component_div(&sc);
-    let diff_p = (dp - dp_fd).amax() / dp.amax();
+    let common::linearisation::Against {
+        lin,
+        stats,
+        monodromy_rel: diff,
+        dp_rel: diff_p,
+    } = common::linearisation::against_differences(model, sine, y, 1e-11);
+    let (monodromy, dp) = (lin.monodromy, lin.dp);
     eprintln!(
         "events {}; |M - M_fd| / |M| = {diff:.2e}, |dP/df - fd| / |dP/df| = {diff_p:.2e}, \
          max |mu| {:.6}, P_dc {:.4e} W",
         stats.events, s.max_multiplier, s.p_dc_w
     );
     assert!(stats.events >= 6, "{} events", stats.events);
-    assert!(diff < 1e-4, "monodromy differs by {diff:e}\n{exact}{fd}");
-    assert!(diff_p < 1e-4, "dP/df differs by {diff_p:e}\n{dp}{dp_fd}");
+    assert!(diff < 1e-4, "monodromy differs by {diff:e}\n{monodromy}");
+    assert!(diff_p < 1e-4, "dP/df differs by {diff_p:e}\n{dp}");
 }
 
 /// Over 20 periods from rest at 1 g (the stop is struck), the ledger closes with the

@@ -1,5 +1,8 @@
 //! The interface circuit between a one-load transducer (piezoelectric or electromagnetic) and
-//! what it powers: the optional `[interface]` table of a device file.
+//! what it powers: the optional `[interface]` table of a device file. The module reads better
+//! whole: the table's raw keys, their parse into [`Interface`], the write-back to TOML and the
+//! checks are one format, a key read, written and checked side by side (the inductor's own
+//! keys and checks are in `sece_inductor`).
 //!
 //! | `kind` | circuit | transducer |
 //! |---|---|---|
@@ -46,10 +49,6 @@
 //! A `sece` with `inductance_h` resolves its transfer through the inductor (optional
 //! `inductor_resistance_ohm` and the flyback diode's `flyback_drop_v`, both 0 by default) and
 //! takes no `efficiency`: what the transfer loses follows from them.
-//!
-//! The module reads better whole: the table's raw keys, their parse into [`Interface`], the
-//! write-back to TOML and the checks are one format, and a key is read, written and checked
-//! side by side (the inductor's own keys and checks are in `sece_inductor`).
 
 use serde::{Deserialize, Serialize};
 

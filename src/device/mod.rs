@@ -415,6 +415,24 @@ impl Device {
         toml::to_string(&t).expect("a validated device always serialises")
     }
 
+    /// A one-load transducer (piezoelectric, electromagnetic) with no interface circuit needs
+    /// its own resistive load.
+    fn check_own_load(&self, c: &Checker) -> Result<(), ParamError> {
+        if self.interface.is_resistive()
+            && matches!(
+                self.transducer,
+                Transducer::Piezoelectric(_) | Transducer::Electromagnetic(_)
+            )
+            && self.transducer.load_resistance_ohm() == f64::INFINITY
+        {
+            return Err(c.missing(
+                "transducer.load_resistance_ohm",
+                "the resistive load (or an [interface] table with another kind)",
+            ));
+        }
+        Ok(())
+    }
+
     /// Checks every field against its valid range, and the stops against the transducer.
     pub fn validate(&self, source_name: &str) -> Result<(), ParamError> {
         let c = Checker {
@@ -428,19 +446,7 @@ impl Device {
             // are checked as a one-mass file's.
             self.transducer.validate(&c)?;
             self.interface.validate(&self.transducer, &c)?;
-            if self.interface.is_resistive()
-                && matches!(
-                    self.transducer,
-                    Transducer::Piezoelectric(_) | Transducer::Electromagnetic(_)
-                )
-                && self.transducer.load_resistance_ohm() == f64::INFINITY
-            {
-                return Err(c.missing(
-                    "transducer.load_resistance_ohm",
-                    "the resistive load (or an [interface] table with another kind)",
-                ));
-            }
-            return Ok(());
+            return self.check_own_load(&c);
         }
         let m = &self.mechanics;
         c.positive("mechanics.mass_kg", m.mass_kg)?;
@@ -466,18 +472,7 @@ impl Device {
         self.transducer.validate(&c)?;
         // The interface circuit: which transducers take it, and the resistive load it replaces.
         self.interface.validate(&self.transducer, &c)?;
-        if self.interface.is_resistive()
-            && matches!(
-                self.transducer,
-                Transducer::Piezoelectric(_) | Transducer::Electromagnetic(_)
-            )
-            && self.transducer.load_resistance_ohm() == f64::INFINITY
-        {
-            return Err(c.missing(
-                "transducer.load_resistance_ohm",
-                "the resistive load (or an [interface] table with another kind)",
-            ));
-        }
+        self.check_own_load(&c)?;
         for (side, stop) in self.stops.present() {
             let field = |key: &str| format!("{}.{key}", self.stop_path(side));
             c.positive(&field("gap_m"), stop.gap_m)?;

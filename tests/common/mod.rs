@@ -5,6 +5,7 @@
 #![allow(dead_code)]
 
 pub mod layout;
+pub mod linearisation;
 pub mod validation;
 
 use std::sync::OnceLock;
