@@ -55,8 +55,9 @@
 //!   number or statement the paper makes about it, checked by a run; **deviations** are the
 //!   claims the published parameters do not reproduce, with their causes.
 //! * **Settings**: what a study is asked to do (ranges, tolerances, step sizes), one struct
-//!   per study; a solver's (an integrator's, a root finder's) are its `Options`
-//!   ([`ode::Options`], [`num::roots::RootOptions`]).
+//!   per study; a solver's (an integrator's, a root finder's, the shooting method's, an
+//!   estimator's) are its `Options` ([`ode::Options`], [`num::roots::RootOptions`],
+//!   [`study::orbit::ShootingOptions`], [`signal::WelchOptions`]). No type is a `Config`.
 //!
 //! Naming rule: descriptions carry units in their names (`freq_hz`, `accel_rms_g`), the
 //! model uses the paper's symbols, and a unit is named wherever it is not SI or not obvious.

@@ -13,12 +13,12 @@ use endstop::physics::harvester::Harvester;
 use endstop::physics::linear::LinearResponse;
 use endstop::physics::transducer::State;
 use endstop::progress::Silent;
-use endstop::study::continuation::impacting::{rigid_diagram, Closure, DiagramOptions};
+use endstop::study::continuation::impacting::{rigid_diagram, Closure, DiagramSettings};
 use endstop::study::continuation::{
     frequency_diagram, BranchKind, ContinuationSettings, Diagram, DiagramEventKind, DiagramPoint,
     EndKind,
 };
-use endstop::study::orbit::{multipliers, Forcing, Shooter, ShootingConfig};
+use endstop::study::orbit::{multipliers, Forcing, Shooter, ShootingOptions};
 use nalgebra::{Complex, Matrix4};
 
 fn example(name: &str) -> Device {
@@ -116,9 +116,9 @@ fn linear_grazings(device: &Device, accel_rms_g: f64, gap_m: f64, lo: f64, hi: f
 /// difference.
 fn check_multipliers(device: &Device, d: &Diagram, every: usize) -> (usize, f64) {
     let h = Harvester::<4>::new(device).unwrap();
-    let cfg = ShootingConfig {
+    let cfg = ShootingOptions {
         rtol: 1e-12,
-        ..ShootingConfig::default()
+        ..ShootingOptions::default()
     };
     let shooter = Shooter::new(&h, cfg);
     let w0 = (h.km / h.mass_kg).sqrt();
@@ -267,9 +267,9 @@ fn impact_oscillator_period_doubling_and_its_period_two_branch() {
         accel_rms_g: g,
     };
     let settings = ContinuationSettings::frequency(30.0, 40.0, 1.0);
-    let options = DiagramOptions {
+    let options = DiagramSettings {
         period_two: true,
-        ..DiagramOptions::default()
+        ..DiagramSettings::default()
     };
     let d = rigid_diagram(&device, start, &settings, &options, &Silent).unwrap();
     let one = d.branch("1 impact a period (upper)").expect("period one");
@@ -321,9 +321,9 @@ fn impact_oscillator_period_doubling_and_its_period_two_branch() {
     assert!(!nearest.is_stable());
 
     let h = Harvester::<4>::new(&device).unwrap();
-    let cfg = ShootingConfig {
+    let cfg = ShootingOptions {
         rtol: 1e-12,
-        ..ShootingConfig::default()
+        ..ShootingOptions::default()
     };
     let shooter = Shooter::new(&h, cfg);
     // Finite differences of the two-period map at the branch's orbit.

@@ -12,7 +12,7 @@ use endstop::physics::harvester::circuits::{Bridge, CircuitMode, Heading};
 use endstop::physics::harvester::stops::contact_of;
 use endstop::physics::harvester::AssemblyError;
 use endstop::progress::Silent;
-use endstop::study::orbit::ShootingConfig;
+use endstop::study::orbit::ShootingOptions;
 use endstop::study::periodic::{
     measure, period_map, state_of, steady_state, JacobianKind, SteadySettings,
 };
@@ -287,7 +287,7 @@ fn continuation_passes_the_folds_of_the_stop() {
             assert_eq!(neutral(p), 0, "{f} Hz: {:?}", p.orbit.multipliers);
         }
     }
-    let tol = ShootingConfig::default().residual_tol;
+    let tol = ShootingOptions::default().residual_tol;
     for (i, p) in branch.points.iter().enumerate() {
         assert!(p.orbit.residual < tol, "{i}");
         let middle = i >= i1 && i < i2;

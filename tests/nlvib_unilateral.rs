@@ -31,7 +31,7 @@ use endstop::progress::Silent;
 use endstop::study::continuation::{
     continue_branch, first_orbit, Branch, ContinuationSettings, EventKind,
 };
-use endstop::study::orbit::{Forcing, Orbit, Parameter, Shooter, ShootingConfig};
+use endstop::study::orbit::{Forcing, Orbit, Parameter, Shooter, ShootingOptions};
 use endstop::validation::harmonics::first_harmonic;
 use endstop::validation::Check;
 
@@ -121,7 +121,7 @@ impl Ours {
     }
 
     fn shooter(&self) -> Shooter<'_, MassChain<6>, 6> {
-        Shooter::new(&self.model, ShootingConfig::default())
+        Shooter::new(&self.model, ShootingOptions::default())
     }
 
     fn forcing(&self, omega_rad_s: f64) -> Forcing {

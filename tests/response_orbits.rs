@@ -12,7 +12,7 @@ use endstop::progress::Silent;
 use endstop::study::continuation::{
     continue_branch, first_orbit, Branch, ContinuationSettings, EventKind,
 };
-use endstop::study::orbit::{Forcing, Parameter, Shooter, ShootingConfig};
+use endstop::study::orbit::{Forcing, Parameter, Shooter, ShootingOptions};
 use nalgebra::{Complex, Matrix3};
 
 use crate::common;
@@ -70,7 +70,7 @@ fn far_from_the_stops_the_orbit_is_the_linear_steady_state() {
     let d = prototype2();
     let (f, a) = (600.0, 1e-3);
     let h = Harvester::<4>::new(&d).unwrap().without_stops();
-    let shooter = Shooter::new(&h, ShootingConfig::default());
+    let shooter = Shooter::new(&h, ShootingOptions::default());
     let forcing = Forcing {
         freq_hz: f,
         accel_rms_g: a,
@@ -110,7 +110,7 @@ fn far_from_the_stops_the_orbit_is_the_linear_steady_state() {
 }
 
 /// Prototype 2 at 0.31 g (Figure 13's linear-law curve) continued from 600 to 850 Hz.
-fn fig13_branch(cfg: ShootingConfig) -> (Harvester<4>, Branch) {
+fn fig13_branch(cfg: ShootingOptions) -> (Harvester<4>, Branch) {
     let d = prototype2();
     let h = Harvester::<4>::new(&d).unwrap();
     let mut s = ContinuationSettings::frequency(600.0, 850.0, 2.0);
@@ -142,10 +142,10 @@ fn fig13_branch(cfg: ShootingConfig) -> (Harvester<4>, Branch) {
 /// error over eps) below eps = 1e-5; a missing saltation term changes entries by order one.
 #[test]
 fn variational_monodromy_equals_finite_differences_on_impacting_orbits() {
-    let (h, b) = fig13_branch(ShootingConfig::default());
-    let cfg = ShootingConfig {
+    let (h, b) = fig13_branch(ShootingOptions::default());
+    let cfg = ShootingOptions {
         rtol: 1e-12,
-        ..ShootingConfig::default()
+        ..ShootingOptions::default()
     };
     let shooter = Shooter::new(&h, cfg);
     let mut stats = Stats::default();
@@ -177,8 +177,8 @@ fn variational_monodromy_equals_finite_differences_on_impacting_orbits() {
 /// fold by less than 0.05 %.
 #[test]
 fn branch_residuals_and_fold_convergence() {
-    let (_, b) = fig13_branch(ShootingConfig::default());
-    let (_, bh) = fig13_branch(ShootingConfig::default().halved());
+    let (_, b) = fig13_branch(ShootingOptions::default());
+    let (_, bh) = fig13_branch(ShootingOptions::default().halved());
     for br in [&b, &bh] {
         assert!(br.max_residual() < 1e-9, "residual {:e}", br.max_residual());
     }

@@ -8,7 +8,9 @@ use endstop::paper::response::{
     BASIN_RTOL,
 };
 use endstop::study::basins::{basins, refine, Attractor, BasinSettings};
-use endstop::study::steady::{horizon_periods, steady_config, SteadyConfig, FOLD_BLOCK_PERIODS};
+use endstop::study::steady::{
+    horizon_periods, settle_settings, SettleSettings, FOLD_BLOCK_PERIODS,
+};
 use endstop::study::sweep::REFINE_TOL_HZ;
 
 use crate::common;
@@ -94,8 +96,8 @@ fn prototype1_ghost_at_the_bracket_dies_within_the_criterions_horizon() {
         horizon_periods(cfg)
     );
     assert!(!g.accepted_in_contact, "{g:?}");
-    let ring_up = SteadyConfig {
-        block_periods: steady_config(&s.device, upper_fold_hz(&branch).unwrap()).block_periods,
+    let ring_up = SettleSettings {
+        block_periods: settle_settings(&s.device, upper_fold_hz(&branch).unwrap()).block_periods,
         ..cfg.clone()
     };
     let short = ghost_study(&s, &branch, &ring_up, &[REFINE_TOL_HZ]).unwrap();
@@ -108,7 +110,7 @@ fn prototype1_ghost_at_the_bracket_dies_within_the_criterions_horizon() {
 #[test]
 fn fold_rule_leaves_prototype2_blocks_at_the_ring_up_time() {
     let s = setup(Case::Fig13P2);
-    let ring_up = steady_config(&s.device, 700.0);
+    let ring_up = settle_settings(&s.device, 700.0);
     assert!(ring_up.block_periods > FOLD_BLOCK_PERIODS);
     assert_eq!(s.sweep.cfg, ring_up);
 }

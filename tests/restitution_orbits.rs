@@ -7,7 +7,7 @@ use endstop::device::Device;
 use endstop::model::Model;
 use endstop::ode::Stats;
 use endstop::physics::harvester::Harvester;
-use endstop::study::orbit::{Forcing, Parameter, Shooter, ShootingConfig};
+use endstop::study::orbit::{Forcing, Parameter, Shooter, ShootingOptions};
 
 /// A 1 g, 32 Hz suspension (Q about 200) with a rigid stop 1 mm above rest; `transducer` the
 /// TOML of its transducer table.
@@ -37,9 +37,9 @@ fn the_monodromy_through_rebounds_equals_finite_differences() {
             accel_rms_g: 2.0,
         };
         let h = Harvester::<4>::new(&d).unwrap();
-        let cfg = ShootingConfig {
+        let cfg = ShootingOptions {
             rtol: 1e-12,
-            ..ShootingConfig::default()
+            ..ShootingOptions::default()
         };
         let shooter = Shooter::new(&h, cfg);
         let mut stats = Stats::default();

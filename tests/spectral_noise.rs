@@ -6,7 +6,7 @@ use endstop::paper::setups::paper_noise;
 use endstop::signal::hann_periodic;
 use endstop::signal::welch;
 use endstop::signal::Psd;
-use endstop::signal::WelchConfig;
+use endstop::signal::WelchOptions;
 use endstop::G;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -73,7 +73,7 @@ fn welch_matches_naive_dft_even_and_odd() {
     // floating-point rounding (~1e-15 per operation over a few hundred terms).
     let x = white(1000, SEED);
     for (nperseg, noverlap) in [(64, 32), (63, 21), (100, 0)] {
-        let fast = welch(&x, 250.0, &WelchConfig { nperseg, noverlap }).unwrap();
+        let fast = welch(&x, 250.0, &WelchOptions { nperseg, noverlap }).unwrap();
         let slow = welch_naive(&x, 250.0, nperseg, noverlap);
         assert_eq!(fast.density.len(), slow.len());
         assert_eq!(fast.segments, (1000 - nperseg) / (nperseg - noverlap) + 1);
@@ -94,7 +94,7 @@ fn parseval_exact_identity() {
     // window-weighted variance sum w^2 (x - mean)^2 / sum w^2, exactly (Parseval). Tolerance
     // 1e-12: rounding only.
     let x = white(50_000, SEED + 1);
-    let (fs, cfg) = (1e3, WelchConfig::half_overlap(1024));
+    let (fs, cfg) = (1e3, WelchOptions::half_overlap(1024));
     let psd = welch(&x, fs, &cfg).unwrap();
     let w = hann_periodic(cfg.nperseg);
     let s2: f64 = w.iter().map(|v| v * v).sum();
@@ -127,7 +127,7 @@ fn parseval_white_noise_variance() {
     // (about 2.6 %: "within a few %").
     let n = 100_000;
     let x = white(n, SEED + 2);
-    let cfg = WelchConfig::half_overlap(2048);
+    let cfg = WelchOptions::half_overlap(2048);
     let psd = welch(&x, 1.0, &cfg).unwrap();
     let w = hann_periodic(cfg.nperseg);
     let mut a = vec![0.0; n];
@@ -157,7 +157,7 @@ fn pure_tone_power_in_main_lobe() {
     let x: Vec<f64> = (0..20 * nperseg)
         .map(|n| amp * (std::f64::consts::TAU * f0 * n as f64 / fs).sin())
         .collect();
-    let psd = welch(&x, fs, &WelchConfig::half_overlap(nperseg)).unwrap();
+    let psd = welch(&x, fs, &WelchOptions::half_overlap(nperseg)).unwrap();
     let lobe: f64 = psd.density[k0 - 1..=k0 + 1].iter().sum::<f64>() * psd.df();
     let r = rel(lobe, amp * amp / 2.0);
     let outside = psd.integral() - lobe;
@@ -184,7 +184,7 @@ fn white_noise_level_in_band() {
         .iter()
         .map(|v| v * s2.sqrt())
         .collect();
-    let psd = welch(&x, fs, &WelchConfig::half_overlap(1024)).unwrap();
+    let psd = welch(&x, fs, &WelchOptions::half_overlap(1024)).unwrap();
     let (lo, hi) = (500.0, 9000.0);
     let m = psd
         .freq_hz
@@ -243,7 +243,7 @@ fn matches_scipy_reference() {
                 + 1e-3 * t / n as f64
         })
         .collect();
-    let cfg = WelchConfig {
+    let cfg = WelchOptions {
         nperseg: 4096,
         noverlap: 2048,
     };
@@ -348,7 +348,7 @@ fn noise_welch_level_and_stopband() {
     let sa = 1e-2;
     let spec = paper_noise(sa);
     let x = endstop::drive::noise::generate(&spec, SEED, 0).unwrap();
-    let psd = welch(&x, spec.sample_rate_hz, &WelchConfig::half_overlap(4096)).unwrap();
+    let psd = welch(&x, spec.sample_rate_hz, &WelchOptions::half_overlap(4096)).unwrap();
     let (lo, hi) = (100.0, 9.5e3);
     let m = psd
         .freq_hz

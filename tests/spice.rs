@@ -11,7 +11,7 @@ use endstop::physics::hertz::HertzLine;
 use endstop::physics::transducer::State;
 use endstop::spice::*;
 use endstop::study::steady::steady_state;
-use endstop::study::steady::SteadyConfig;
+use endstop::study::steady::SettleSettings;
 use std::collections::BTreeMap;
 use std::process::Command;
 
@@ -428,7 +428,7 @@ fn ngspice_agrees_with_our_integrator() {
         let period = 1.0 / f;
         let model = Harvester::<4>::new(&dev).unwrap();
         // Exactly 3 settling blocks and 1 measured block of 5 periods each.
-        let cfg = SteadyConfig {
+        let cfg = SettleSettings {
             rtol: 1e-8,
             block_periods: 5,
             settle_blocks: 3,

@@ -7,7 +7,7 @@ use endstop::progress::Silent;
 use endstop::study::attractors::{find_attractors, seeds, AttractorSearch, Attractors, Place};
 use endstop::study::basins::{basins, BasinGrid, BasinSettings};
 use endstop::study::continuation::frequency_branch;
-use endstop::study::orbit::{Forcing, Shooter, ShootingConfig};
+use endstop::study::orbit::{Forcing, Shooter, ShootingOptions};
 
 fn example(name: &str) -> Device {
     let path = format!("{}/data/examples/{name}.toml", env!("CARGO_MANIFEST_DIR"));
@@ -23,7 +23,7 @@ fn search(device: &Device, forcing: &Forcing, grid: &BasinGrid) -> Attractors {
         &h,
         device,
         forcing,
-        ShootingConfig::default(),
+        ShootingOptions::default(),
         &seeds(device, grid, 3),
         &AttractorSearch::default(),
     )
@@ -142,7 +142,7 @@ fn the_hardening_device_has_the_branch_s_two_stable_orbits_between_its_folds() {
     // their distance).
     let branch = frequency_branch(&device, 0.1, 80.0, 140.0, 1.0, &Silent).unwrap();
     let start = Harvester::<4>::new(&device).unwrap();
-    let shooter = Shooter::new(&start, ShootingConfig::default());
+    let shooter = Shooter::new(&start, ShootingOptions::default());
     let mut stats = Default::default();
     let stable: Vec<_> = branch
         .orbits_at(&shooter, 110.0, &mut stats)

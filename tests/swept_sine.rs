@@ -17,7 +17,7 @@
 use endstop::device::Device;
 use endstop::physics::linear::LinearResponse;
 use endstop::study::chirp::{half_power_band, ChirpReport, ChirpSweep};
-use endstop::study::steady::steady_config;
+use endstop::study::steady::settle_settings;
 
 fn piezo() -> Device {
     let path = format!(
@@ -62,7 +62,7 @@ fn sweep(device: &Device, from_hz: f64, to_hz: f64, rate_hz_per_s: f64) -> Chirp
         to_hz,
         rate_hz_per_s,
         window_cycles: WINDOW_CYCLES,
-        cfg: steady_config(device, from_hz),
+        cfg: settle_settings(device, from_hz),
     }
     .run(device, ACCEL_RMS_G)
     .unwrap()

@@ -16,10 +16,10 @@ use endstop::paper::setups::paper_record;
 use endstop::progress::Silent;
 use endstop::study::continuation::frequency_branch;
 use endstop::study::flow::SineFlow;
-use endstop::study::orbit::{Forcing, Parameter, Shooter, ShootingConfig};
+use endstop::study::orbit::{Forcing, Parameter, Shooter, ShootingOptions};
 use endstop::study::record::{simulate_record, RecordSpec, Scheme};
 use endstop::study::rk4_record::simulate_rk4_record;
-use endstop::study::steady::{steady_config, steady_state};
+use endstop::study::steady::{settle_settings, steady_state};
 use endstop::study::stepped::linspace_step;
 use endstop::study::sweep::{SweepSettings, REFINE_TOL_HZ};
 use endstop_experiments as common;
@@ -218,9 +218,9 @@ fn orbit_and_steady<M: Model<N>, const N: usize>(
     repeats: usize,
 ) -> Result<(f64, usize, (f64, f64))> {
     let sine = Sine::from_rms_g(g, f_mid);
-    let cfg = steady_config(device, f_mid);
+    let cfg = settle_settings(device, f_mid);
     let (_, settled, mode, _) = steady_state(model, sine, model.rest_state(), Mode::FREE, g, &cfg)?;
-    let shooter = Shooter::new(model, ShootingConfig::default());
+    let shooter = Shooter::new(model, ShootingOptions::default());
     let forcing = Forcing {
         freq_hz: f_mid,
         accel_rms_g: g,

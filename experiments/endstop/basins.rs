@@ -16,7 +16,7 @@ use endstop::model::Model;
 use endstop::study::attractors::{find_attractors, seeds, AttractorSearch, Attractors};
 use endstop::study::basins::{basins, BasinGrid, BasinSettings, Basins, UNSETTLED};
 use endstop::study::displacement::two_wells;
-use endstop::study::orbit::{Forcing, ShootingConfig};
+use endstop::study::orbit::{Forcing, ShootingOptions};
 use endstop_experiments as common;
 
 use crate::shared::{describe, start};
@@ -178,7 +178,7 @@ fn attractors_and_basins<M: Model<N>, const N: usize>(
     grid: BasinGrid,
     seeds: &[(f64, f64)],
     search: &AttractorSearch,
-    shooting: ShootingConfig,
+    shooting: ShootingOptions,
 ) -> Result<(Attractors, Basins)> {
     let found = common::with_progress(1, "attractors", |tick| {
         let r = find_attractors(h, device, forcing, shooting, seeds, search);
@@ -220,7 +220,7 @@ pub(crate) fn basins_study(a: BasinArgs) -> Result<()> {
         freq_hz: a.freq,
         accel_rms_g: a.accel_rms_g,
     };
-    let shooting = ShootingConfig::default();
+    let shooting = ShootingOptions::default();
     let seeds = seeds(&device, &grid, a.seeds_per_side);
     let search = AttractorSearch::default();
     let (found, b) = endstop::with_harvester!(&device, |h| attractors_and_basins(

@@ -11,7 +11,7 @@ use common::reports::branch_io::{diagram_figure, diagram_rows, diagram_words};
 use common::{fmt_sig, row, Experiment};
 use endstop::device::Device;
 use endstop::study::chirp::{ChirpReport, ChirpSweep};
-use endstop::study::continuation::impacting::DiagramOptions;
+use endstop::study::continuation::impacting::DiagramSettings;
 use endstop::study::continuation::{diagram, ContinuationSettings, Diagram, DiagramEventKind};
 use endstop::study::orbit::Forcing;
 use endstop::study::stepped::Approach;
@@ -143,7 +143,7 @@ fn continue_orbits(device: &Device, a: &RangeArgs, protocol: &Protocol) -> Resul
             device,
             start_drive,
             &cont,
-            &DiagramOptions::default(),
+            &DiagramSettings::default(),
             branch,
         )
     })?)

@@ -9,7 +9,7 @@ use endstop::progress::Silent;
 use endstop::study::attractors::{find_attractors, seeds, AttractorSearch, Attractors};
 use endstop::study::basins::{basins as basin_map, BasinGrid, BasinSettings, Basins, UNSETTLED};
 use endstop::study::displacement::{displacement_ensemble, DisplacementBins};
-use endstop::study::orbit::{Forcing, OrbitError, ShootingConfig};
+use endstop::study::orbit::{Forcing, OrbitError, ShootingOptions};
 use endstop::validation::stationary_law::StationaryLaw;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
@@ -210,7 +210,7 @@ fn attractors_and_basins<M: Model<N>, const N: usize>(
     max_periods: usize,
     settle_tol: f64,
 ) -> Result<(Attractors, Basins), OrbitError> {
-    let shooting = ShootingConfig::default();
+    let shooting = ShootingOptions::default();
     let found = find_attractors(
         model,
         device,

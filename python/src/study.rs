@@ -14,7 +14,7 @@ use endstop::study::record::{
     simulate_drive, simulate_record, transient_s, RecordSpec, RecordSummary, SampledDrive, Scheme,
     DEFAULT_RTOL,
 };
-use endstop::study::steady::{steady_config, Measurement};
+use endstop::study::steady::{settle_settings, Measurement};
 use endstop::study::stepped::{linspace_step, Approach, Transition};
 use endstop::study::sweep::{self, SweepReport, SweepSettings};
 use endstop::G;
@@ -323,7 +323,7 @@ fn amplitude_sweep<'py>(
     let dev = device.inner.clone();
     let report = py
         .detach(move || {
-            let cfg = steady_config(&dev, freq_hz);
+            let cfg = settle_settings(&dev, freq_hz);
             amplitude_sweep_report(&dev, freq_hz, &acc, &cfg, refine_tol_g, &Silent)
         })
         .map_err(solver_err)?;

@@ -61,9 +61,6 @@ pub use stops::{HertzLineStop, HertzPointStiffness, Stop, StopLaw, Stops};
 pub use suspension::Suspension;
 pub use transducer::{AreaOverlapPair, Electromagnetic, GapClosingPair, Piezoelectric, Transducer};
 
-/// [`Side`] under the name `src/spice/bridge.rs` spells; one type, not a second one.
-pub type StopSide = Side;
-
 /// A parameter that failed to load or validate.
 #[derive(Debug, Error, Clone, PartialEq)]
 pub enum ParamError {

@@ -10,7 +10,7 @@
 //! ```
 //! use endstop::drive::noise::{generate, NoiseSpec};
 //! use endstop::drive::{Excitation, Sine};
-//! use endstop::signal::{welch, WelchConfig};
+//! use endstop::signal::{welch, WelchOptions};
 //!
 //! // 1e-3 g^2/Hz flat to 1 kHz, sampled at 10 kHz for 2 s (seed 7, stream 0).
 //! let spec = NoiseSpec {
@@ -23,7 +23,7 @@
 //! let g2 = endstop::G * endstop::G;
 //! let mean_square = a.iter().map(|x| x * x).sum::<f64>() / a.len() as f64;
 //! assert!((mean_square / g2 / spec.mean_square_g2() - 1.0).abs() < 0.05); // 2 B Sa
-//! let psd = welch(&a, spec.sample_rate_hz, &WelchConfig::half_overlap(1000))?;
+//! let psd = welch(&a, spec.sample_rate_hz, &WelchOptions::half_overlap(1000))?;
 //! let level = psd.two_sided_level_in_band(100.0, 900.0) / g2;
 //! assert!((level / spec.psd_g2_per_hz - 1.0).abs() < 0.05);
 //!

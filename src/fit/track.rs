@@ -12,7 +12,7 @@ type Harvester = Model4<4>;
 type State = nalgebra::SVector<f64, 4>;
 use crate::progress::Silent;
 use crate::study::continuation::{continue_branch_until, ContinuationSettings, Event, EventKind};
-use crate::study::orbit::{Forcing, Orbit, Parameter, Shooter, ShootingConfig};
+use crate::study::orbit::{Forcing, Orbit, Parameter, Shooter, ShootingOptions};
 
 use super::Quantity;
 
@@ -40,10 +40,10 @@ const FOLD_LOCATE_TOL_HZ: f64 = 1e-5;
 /// branch that has ended is given up early.
 const TRACK_MAX_NEWTON: usize = 8;
 
-fn shooting() -> ShootingConfig {
-    ShootingConfig {
+fn shooting() -> ShootingOptions {
+    ShootingOptions {
         max_newton: TRACK_MAX_NEWTON,
-        ..ShootingConfig::default()
+        ..ShootingOptions::default()
     }
 }
 

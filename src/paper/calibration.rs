@@ -27,7 +27,7 @@ use crate::paper::setups::{comb, endstop, hertz_stop, prototype1_setup, with_end
 use crate::paper::sweeps::{self, P1_HIGH_ACCEL_RMS_G};
 use crate::physics::harvester::Harvester;
 use crate::progress::Silent;
-use crate::study::steady::SteadyConfig;
+use crate::study::steady::SettleSettings;
 use crate::study::stepped::{continue_sweep, in_contact, Sweep, Transition};
 use crate::study::sweep::frequency_continuation;
 use crate::study::sweep::{BranchEnd, SweepSettings};
@@ -116,7 +116,7 @@ fn onset_search(
     device: &Device,
     freqs_hz: &[f64],
     accel_rms_g: f64,
-    cfg: &SteadyConfig,
+    cfg: &SettleSettings,
     refine_tol_hz: f64,
 ) -> Result<OnsetSearch, SolverError> {
     let base = Harvester::<4>::new(device)?;

@@ -14,7 +14,7 @@ use crate::ode::SolverError;
 use crate::paper::claims::{bool_value, Answer, ClaimKey, ClaimValue};
 use crate::paper::setups::{endstop, with_endstop};
 use crate::progress::Progress;
-use crate::study::steady::SteadyConfig;
+use crate::study::steady::SettleSettings;
 use crate::study::sweep::{compare_sweeps, BranchEnd, SweepComparison, SweepReport, SweepSettings};
 
 /// Convergence limit on the onsets and branch ends of an up-sweep: relative change when the
@@ -236,7 +236,7 @@ pub struct CurveSummary {
 impl Curve {
     /// The table numbers of this sweep; `base` is the device the figure swept (for its gap)
     /// and `cfg` the steady-state criterion it used (for the block length).
-    pub fn summary(&self, base: &Device, cfg: &SteadyConfig) -> CurveSummary {
+    pub fn summary(&self, base: &Device, cfg: &SettleSettings) -> CurveSummary {
         let r = &self.report;
         let gap = endstop(&self.spec.device(base)).gap_m;
         let steps = r.sweep.steps.len();

@@ -11,7 +11,7 @@ use crate::physics::linear::{linear_widths, LinearResponse};
 use crate::physics::two_port::{eq21_efficiency, eq21_power_w};
 use crate::progress::Progress;
 use crate::signal::welch::matlab_default_nperseg;
-use crate::signal::{Psd, WelchConfig, Widths};
+use crate::signal::{Psd, WelchOptions, Widths};
 use crate::study::ensemble::{
     first_stream_for_level, run_ensembles, Ensemble, EnsembleCase, EnsembleSpec, RecordResult,
     DEFAULT_SEED,
@@ -47,10 +47,10 @@ pub fn protocol_spec(
 ) -> EnsembleSpec {
     let record = paper_record(device, psd_g2_per_hz);
     let alt_welch = matlab_alt
-        .then(|| WelchConfig::half_overlap(matlab_default_nperseg(record.analysed_samples())));
+        .then(|| WelchOptions::half_overlap(matlab_default_nperseg(record.analysed_samples())));
     EnsembleSpec {
         record,
-        welch: WelchConfig::half_overlap(nperseg),
+        welch: WelchOptions::half_overlap(nperseg),
         alt_welch,
         analysis_band_hz,
         seed: DEFAULT_SEED,

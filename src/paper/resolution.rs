@@ -23,7 +23,7 @@ use crate::paper::setups::{paper_record, prototype1_setup};
 use crate::physics::linear::linear_widths;
 use crate::progress::Progress;
 use crate::signal::bandwidth::mean_psd;
-use crate::signal::{self, Psd, WelchConfig};
+use crate::signal::{self, Psd, WelchOptions};
 use crate::study::ensemble::{first_stream_for_level, DEFAULT_SEED};
 use crate::study::record::{output_psd, simulate_record, RecordError};
 
@@ -107,7 +107,7 @@ pub fn run(
             let out = NPERSEGS
                 .iter()
                 .map(|&n| {
-                    let cfg = WelchConfig::half_overlap(n);
+                    let cfg = WelchOptions::half_overlap(n);
                     Ok(
                         output_psd(&rec.v1_v, &rec.v2_v, rec.sample_rate_hz, rl, &cfg)?
                             .restrict(lo, hi)

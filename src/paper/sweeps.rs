@@ -4,7 +4,7 @@
 //! same sweep, and the whole-response study ([`crate::paper::response`]).
 
 use crate::device::Device;
-use crate::study::steady::steady_config_across_folds;
+use crate::study::steady::settle_settings_across_folds;
 use crate::study::stepped;
 use crate::study::sweep::{SweepSettings, REFINE_TOL_HZ};
 
@@ -24,13 +24,13 @@ pub const P1_SWEEP_STOP_HZ: f64 = 1600.0;
 pub const P1_SWEEP_STEP_HZ: f64 = 10.0;
 
 /// Prototype 1, Figure 8: 900-1600 Hz in 10 Hz steps (extended to 2400 Hz if needed),
-/// [`steady_config_across_folds`] at 1220 Hz (blocks that outlast the ghost of the upper fold
+/// [`settle_settings_across_folds`] at 1220 Hz (blocks that outlast the ghost of the upper fold
 /// at the bracket's width past it), brackets of [`REFINE_TOL_HZ`].
 pub fn sweep_settings(device: &Device) -> SweepSettings {
     SweepSettings {
         freqs_hz: stepped::linspace_step(P1_SWEEP_START_HZ, P1_SWEEP_STOP_HZ, P1_SWEEP_STEP_HZ),
         extend_to_hz: 2400.0,
-        cfg: steady_config_across_folds(device, 1220.0),
+        cfg: settle_settings_across_folds(device, 1220.0),
         refine_tol_hz: REFINE_TOL_HZ,
     }
 }

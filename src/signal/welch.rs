@@ -4,7 +4,7 @@
 //!
 //! [`welch`] follows `scipy.signal.welch` with its defaults except the segment length
 //! (`window='hann', detrend='constant', return_onesided=True, scaling='density',
-//! average='mean'`), so `welch(x, fs, &WelchConfig { nperseg, noverlap })` equals
+//! average='mean'`), so `welch(x, fs, &WelchOptions { nperseg, noverlap })` equals
 //! `scipy.signal.welch(x, fs=fs, nperseg=nperseg, noverlap=noverlap)` to rounding.
 //!
 //! * **Segments.** Segment `j` is `x[j·step .. j·step + nperseg]` with
@@ -32,14 +32,14 @@ use thiserror::Error;
 
 /// Segmenting of a Welch estimate: segment length and overlap, in samples.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
-pub struct WelchConfig {
+pub struct WelchOptions {
     /// Segment (and DFT) length, samples. Bin spacing is `fs / nperseg`.
     pub nperseg: usize,
     /// Samples shared by consecutive segments; must be below `nperseg`.
     pub noverlap: usize,
 }
 
-impl WelchConfig {
+impl WelchOptions {
     /// Segments of `nperseg` samples with 50 % overlap (`noverlap = nperseg / 2`), the paper's
     /// choice and scipy's default overlap.
     pub fn half_overlap(nperseg: usize) -> Self {
@@ -170,7 +170,7 @@ impl Psd {
 /// Welch PSD of `x` sampled at `fs` Hz, with scipy's conventions (see the module docs).
 ///
 /// ```
-/// use endstop::signal::{welch, WelchConfig};
+/// use endstop::signal::{welch, WelchOptions};
 ///
 /// // A sine of amplitude 2 at 125 Hz sampled at 1 kHz: 125 Hz falls on a bin of 1000-sample
 /// // segments, and each segment holds whole periods.
@@ -178,15 +178,15 @@ impl Psd {
 /// let x: Vec<f64> = (0..10_000)
 ///     .map(|k| 2.0 * (2.0 * std::f64::consts::PI * 125.0 * k as f64 / fs).sin())
 ///     .collect();
-/// let psd = welch(&x, fs, &WelchConfig::half_overlap(1000))?;
+/// let psd = welch(&x, fs, &WelchOptions::half_overlap(1000))?;
 /// assert_eq!(psd.peak().0, 125.0);
 /// // The one-sided density integrates to the mean square, A^2 / 2 = 2 (Parseval with the
 /// // window's normalisation; the Hann window's leakage stays in the sum): to rounding.
 /// assert!((psd.integral() - 2.0).abs() < 1e-9);
 /// # Ok::<(), Box<dyn std::error::Error>>(())
 /// ```
-pub fn welch(x: &[f64], fs: f64, cfg: &WelchConfig) -> Result<Psd, SpectralError> {
-    let WelchConfig { nperseg, noverlap } = *cfg;
+pub fn welch(x: &[f64], fs: f64, cfg: &WelchOptions) -> Result<Psd, SpectralError> {
+    let WelchOptions { nperseg, noverlap } = *cfg;
     if !(fs.is_finite() && fs > 0.0) {
         return Err(SpectralError::InvalidSampleRate { fs });
     }
@@ -328,7 +328,7 @@ mod tests {
             welch(
                 &x,
                 fs,
-                &WelchConfig {
+                &WelchOptions {
                     nperseg: n,
                     noverlap: o,
                 },

@@ -17,7 +17,7 @@
 
 use std::fmt::Write as _;
 
-use crate::device::{DcLoad, Device, Diode, Interface, StopLaw, Transducer};
+use crate::device::{DcLoad, Device, Diode, Interface, Side, StopLaw, Transducer};
 use crate::physics::transducer::State;
 use crate::spice::{units, SolverSettings};
 
@@ -134,8 +134,8 @@ pub fn bridge_netlist(
             return Err(Unsupported("stops with the linear law"));
         };
         let sign = match side {
-            crate::device::StopSide::Upper => 1.0,
-            crate::device::StopSide::Lower => -1.0,
+            Side::Upper => 1.0,
+            Side::Lower => -1.0,
         };
         let gap = stop.gap_m * xu;
         // delta (um) = sign x - gap; F (mN) = sign (k delta + b d(delta)/dt) while delta > 0.

@@ -5,7 +5,7 @@ use crate::device::Device;
 use crate::model::Model;
 use crate::ode::SolverError;
 use crate::progress::Progress;
-use crate::study::steady::{Measurement, SteadyConfig};
+use crate::study::steady::{Measurement, SettleSettings};
 use crate::study::stepped::{
     continue_sweep, first_contact, in_contact, values_beyond, with_midpoints, SteppedDrive, Sweep,
     Transition,
@@ -50,7 +50,7 @@ pub struct AmplitudeSettings {
     /// found even beyond the paper's range.
     pub extend_to_g: f64,
     /// Steady-state criterion.
-    pub cfg: SteadyConfig,
+    pub cfg: SettleSettings,
     /// Bracket width of the refined onset (g).
     pub refine_tol_g: f64,
 }
@@ -78,7 +78,7 @@ impl AmplitudeSettings {
     /// use endstop::physics::linear::LinearResponse;
     /// use endstop::progress::Silent;
     /// use endstop::study::amplitude::AmplitudeSettings;
-    /// use endstop::study::steady::steady_config;
+    /// use endstop::study::steady::settle_settings;
     ///
     /// let text = include_str!(concat!(env!("CARGO_MANIFEST_DIR"), "/data/examples/piezo_cantilever.toml"));
     /// let device = Device::from_toml_str(text, "piezo_cantilever.toml")?;
@@ -87,7 +87,7 @@ impl AmplitudeSettings {
     ///     freq_hz: f,
     ///     accels_rms_g: vec![0.1, 0.15, 0.2, 0.25, 0.3],
     ///     extend_to_g: 0.3,
-    ///     cfg: steady_config(&device, f),
+    ///     cfg: settle_settings(&device, f),
     ///     refine_tol_g: 1e-3,
     /// };
     /// let report = settings.run(&device, &Silent)?;
@@ -155,7 +155,7 @@ pub fn amplitude_sweep_report(
     device: &Device,
     freq_hz: f64,
     accels_rms_g: &[f64],
-    cfg: &SteadyConfig,
+    cfg: &SettleSettings,
     refine_tol_g: f64,
     progress: &dyn Progress,
 ) -> Result<AmplitudeReport, SolverError> {

@@ -21,7 +21,7 @@
 //! use endstop::device::Device;
 //! use endstop::study::attractors::{find_attractors, seeds, AttractorSearch, Place};
 //! use endstop::study::basins::BasinGrid;
-//! use endstop::study::orbit::{Forcing, ShootingConfig};
+//! use endstop::study::orbit::{Forcing, ShootingOptions};
 //!
 //! let text = include_str!(concat!(env!("CARGO_MANIFEST_DIR"), "/data/examples/bistable_stops_em.toml"));
 //! let device = Device::from_toml_str(text, "bistable_stops_em.toml")?;
@@ -29,7 +29,7 @@
 //! let forcing = Forcing { freq_hz: 70.0, accel_rms_g: 0.05 };
 //! let grid = BasinGrid { x_m: (-7e-4, 7e-4), v_m_per_s: (-0.1, 0.1), nx: 3, nv: 1 };
 //! let found = endstop::with_harvester!(&device, |h| find_attractors(
-//!     &h, &device, &forcing, ShootingConfig::default(), &seeds(&device, &grid, 0),
+//!     &h, &device, &forcing, ShootingOptions::default(), &seeds(&device, &grid, 0),
 //!     &AttractorSearch::default(),
 //! ))?;
 //! let places: Vec<Place> = found.found.iter().map(|a| a.place).collect();
@@ -45,7 +45,7 @@ use crate::model::Model;
 use crate::ode::Stats;
 use crate::study::basins::{Attractor, BasinGrid};
 use crate::study::displacement::two_wells;
-use crate::study::orbit::{Forcing, Orbit, OrbitError, Parameter, Shooter, ShootingConfig};
+use crate::study::orbit::{Forcing, Orbit, OrbitError, Parameter, Shooter, ShootingOptions};
 
 /// Where an orbit lives.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
@@ -176,7 +176,7 @@ pub fn find_attractors<M: Model<N>, const N: usize>(
     base: &M,
     device: &Device,
     forcing: &Forcing,
-    shooting: ShootingConfig,
+    shooting: ShootingOptions,
     seeds: &[(f64, f64)],
     search: &AttractorSearch,
 ) -> Result<Attractors, OrbitError> {

@@ -169,7 +169,7 @@ impl Basins {
 /// use endstop::study::attractors::{find_attractors, seeds, AttractorSearch, Place};
 /// use endstop::study::basins::{basins, BasinGrid, BasinSettings};
 /// use endstop::study::displacement::two_wells;
-/// use endstop::study::orbit::{Forcing, ShootingConfig};
+/// use endstop::study::orbit::{Forcing, ShootingOptions};
 ///
 /// let text = include_str!(concat!(env!("CARGO_MANIFEST_DIR"), "/data/examples/bistable_stops_em.toml"));
 /// let device = Device::from_toml_str(text, "bistable_stops_em.toml")?;
@@ -181,7 +181,7 @@ impl Basins {
 /// let settings = BasinSettings { grid, max_periods: 2000, settle_tol: 1e-4, rtol: 1e-9 };
 /// let b = endstop::with_harvester!(&device, |h| {
 ///     let found = find_attractors(
-///         &h, &device, &forcing, ShootingConfig::default(), &seeds(&device, &grid, 0),
+///         &h, &device, &forcing, ShootingOptions::default(), &seeds(&device, &grid, 0),
 ///         &AttractorSearch::default(),
 ///     )?;
 ///     assert_eq!(found.found[0].place, Place::LeftWell);

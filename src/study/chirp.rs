@@ -16,7 +16,7 @@ use crate::model::{Driven, Mode, Model, SwitchKind, MAX_OUTPUTS};
 use crate::num::roots::{illinois, RootOptions, Sample};
 use crate::ode::{Dopri5, Observer, SolverError, Stats, Step};
 use crate::physics::linear::{open_circuit_resonance_hz, LinearResponse};
-use crate::study::steady::{steady_state, SteadyConfig};
+use crate::study::steady::{steady_state, SettleSettings};
 
 /// The resonance and half-power width of a device's linear response (the displacement per
 /// unit base acceleration of the model linearised about rest, transducer and loads included).
@@ -153,7 +153,7 @@ pub struct ChirpSweep {
     /// Cycles per reported window.
     pub window_cycles: usize,
     /// The steady state at the first frequency, and the integrator's tolerance.
-    pub cfg: SteadyConfig,
+    pub cfg: SettleSettings,
 }
 
 /// One window of a swept sine.

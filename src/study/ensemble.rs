@@ -31,7 +31,7 @@ use crate::num::stats::{Jackknife, MeanCi, Spread};
 use crate::ode::Stats;
 use crate::progress::Progress;
 use crate::signal::bandwidth::{mean_psd, restrict, Widths};
-use crate::signal::{self, Psd, WelchConfig};
+use crate::signal::{self, Psd, WelchOptions};
 use crate::study::record::{
     output_psd, simulate_record, OutputSpectrum, RecordError, RecordSpec, RecordSummary,
 };
@@ -42,11 +42,11 @@ pub struct EnsembleSpec {
     /// The record.
     pub record: RecordSpec,
     /// Welch segmenting of the output PSD.
-    pub welch: WelchConfig,
+    pub welch: WelchOptions,
     /// A second segmenting whose single-record widths are reported beside (e.g. MATLAB's
     /// default of eight segments,
     /// [`matlab_default_nperseg`](crate::signal::welch::matlab_default_nperseg)).
-    pub alt_welch: Option<WelchConfig>,
+    pub alt_welch: Option<WelchOptions>,
     /// Band (Hz) in which spectra are kept and bandwidths are searched.
     pub analysis_band_hz: (f64, f64),
     /// ChaCha8 seed of the excitation.
@@ -75,7 +75,7 @@ impl EnsembleSpec {
         }
         Self {
             record,
-            welch: WelchConfig::half_overlap(nperseg),
+            welch: WelchOptions::half_overlap(nperseg),
             alt_welch: None,
             analysis_band_hz: (0.25 * f0, (4.0 * f0).min(0.45 * fs)),
             seed,

@@ -35,7 +35,7 @@ use crate::drive::{Parameter, Sine};
 use crate::model::{Books, Ledger, Mode, Model, MAX_OUTPUTS};
 use crate::ode::{Observer, SolverError, Stats, Step};
 use crate::study::flow::SineFlow;
-use crate::study::orbit::{multipliers, Forcing, Shooter, ShootingConfig};
+use crate::study::orbit::{multipliers, Forcing, Shooter, ShootingOptions};
 
 /// A failed steady state.
 #[derive(Debug, Error, Clone, PartialEq)]
@@ -236,9 +236,9 @@ fn map_and_jacobian<M: Model<N>, const N: usize>(
         JacobianKind::Saltation => {
             let shooter = Shooter::new(
                 model,
-                ShootingConfig {
+                ShootingOptions {
                     rtol: settings.rtol,
-                    ..ShootingConfig::default()
+                    ..ShootingOptions::default()
                 },
             );
             let mut stats = Stats::default();

@@ -5,7 +5,7 @@
 //! continuous). The model is integrated for `settle_blocks` blocks of `block_periods` periods,
 //! then measured block by block; the steady state is reached when the RMS voltages of two
 //! successive blocks differ by less than `rel_change_tol` (relative). Blocks of about the
-//! mechanical ring-up time 2m/b ([`steady_config`]) leave a transient of the order of the
+//! mechanical ring-up time 2m/b ([`settle_settings`]) leave a transient of the order of the
 //! tolerance. The last block is the measurement.
 //!
 //! # Near a fold
@@ -18,7 +18,7 @@
 //! horizon makes two successive blocks differ by far more than the tolerance and is not
 //! accepted before it has fallen. A sweep that must leave a branch at its fold within its
 //! refinement bracket therefore needs a horizon longer than the ghost's passage time at the
-//! bracket's width from the fold: [`steady_config_across_folds`] gives blocks of at least
+//! bracket's width from the fold: [`settle_settings_across_folds`] gives blocks of at least
 //! [`FOLD_BLOCK_PERIODS`] periods, whose horizon outlasts prototype 1's ghost 0.1 Hz past its
 //! folds (the book's response chapter measures the passage time; a test checks the
 //! inequality). Closer to the fold than that the passage time still grows without bound: no
@@ -36,7 +36,7 @@ use crate::study::flow::SineFlow;
 pub const MIN_BLOCK_PERIODS: usize = 5;
 
 /// Minimum block length in periods for sweeps that cross a saddle-node fold
-/// ([`steady_config_across_folds`]; see the module docs): the horizon of three such blocks (192
+/// ([`settle_settings_across_folds`]; see the module docs): the horizon of three such blocks (192
 /// periods) outlasts the ghost of prototype 1's folds 0.1 Hz past them (the response
 /// chapter's ghost table: under 100 periods for either parameter set), by nearly a factor of
 /// two; the response chapter's convergence table repeats the sweeps with half the block and
@@ -45,7 +45,7 @@ pub const FOLD_BLOCK_PERIODS: usize = 64;
 
 /// Steady-state measurement settings.
 #[derive(Debug, Clone, PartialEq)]
-pub struct SteadyConfig {
+pub struct SettleSettings {
     /// Integrator relative tolerance.
     pub rtol: f64,
     /// Periods per block.
@@ -58,7 +58,7 @@ pub struct SteadyConfig {
     pub max_blocks: usize,
 }
 
-impl SteadyConfig {
+impl SettleSettings {
     /// Settings for a device: blocks of about the ring-up time 2m/b at `freq_hz`, at least
     /// `min_periods`.
     pub fn for_ring_time(ring_time_s: f64, freq_hz: f64, min_periods: usize) -> Self {
@@ -85,39 +85,39 @@ impl SteadyConfig {
 
 /// Default steady-state settings for a device driven near `freq_hz`: blocks of about the
 /// mechanical ring-up time 2m/b, at least [`MIN_BLOCK_PERIODS`] periods, see
-/// [`SteadyConfig::for_ring_time`].
+/// [`SettleSettings::for_ring_time`].
 ///
 /// ```
 /// use endstop::device::Device;
-/// use endstop::study::steady::{horizon_periods, steady_config, MIN_BLOCK_PERIODS};
+/// use endstop::study::steady::{horizon_periods, settle_settings, MIN_BLOCK_PERIODS};
 ///
 /// let text = include_str!(concat!(env!("CARGO_MANIFEST_DIR"), "/data/prototype1.toml"));
 /// let device = Device::from_toml_str(text, "prototype1.toml")?;
 /// // 2m/b = 2 (2.8e-6 kg) / (3.75e-3 N s/m) = 1.49 ms: 1.8 periods at 1200 Hz, so the
 /// // floor of MIN_BLOCK_PERIODS periods decides; at 10 kHz the ring-up time does (15 periods).
-/// assert_eq!(steady_config(&device, 1200.0).block_periods, MIN_BLOCK_PERIODS);
-/// let cfg = steady_config(&device, 10e3);
+/// assert_eq!(settle_settings(&device, 1200.0).block_periods, MIN_BLOCK_PERIODS);
+/// let cfg = settle_settings(&device, 10e3);
 /// assert_eq!(cfg.block_periods, 15);
 /// // The horizon: one settling block and two measured ones.
 /// assert_eq!(horizon_periods(&cfg), 45);
 /// # Ok::<(), Box<dyn std::error::Error>>(())
 /// ```
-pub fn steady_config(device: &Device, freq_hz: f64) -> SteadyConfig {
+pub fn settle_settings(device: &Device, freq_hz: f64) -> SettleSettings {
     let ring_s = 2.0 * device.mechanics.mass_kg / device.mechanics.damping_n_s_per_m;
-    SteadyConfig::for_ring_time(ring_s, freq_hz, MIN_BLOCK_PERIODS)
+    SettleSettings::for_ring_time(ring_s, freq_hz, MIN_BLOCK_PERIODS)
 }
 
 /// Steady-state settings for a sweep that must leave a branch at its saddle-node fold within
-/// its refinement bracket: as [`steady_config`], with blocks of at least
+/// its refinement bracket: as [`settle_settings`], with blocks of at least
 /// [`FOLD_BLOCK_PERIODS`] periods (see the module docs).
-pub fn steady_config_across_folds(device: &Device, freq_hz: f64) -> SteadyConfig {
+pub fn settle_settings_across_folds(device: &Device, freq_hz: f64) -> SettleSettings {
     let ring_s = 2.0 * device.mechanics.mass_kg / device.mechanics.damping_n_s_per_m;
-    SteadyConfig::for_ring_time(ring_s, freq_hz, FOLD_BLOCK_PERIODS)
+    SettleSettings::for_ring_time(ring_s, freq_hz, FOLD_BLOCK_PERIODS)
 }
 
 /// The horizon of a criterion: the fewest periods it simulates before it can accept a state
 /// (the settling blocks and two measured blocks).
-pub fn horizon_periods(cfg: &SteadyConfig) -> usize {
+pub fn horizon_periods(cfg: &SettleSettings) -> usize {
     (cfg.settle_blocks + 2) * cfg.block_periods
 }
 
@@ -217,7 +217,7 @@ fn onto_slow_orbit<M: Model<N>, const N: usize>(
     y: SVector<f64, N>,
     mode: Mode,
     block_t: f64,
-    cfg: &SteadyConfig,
+    cfg: &SettleSettings,
 ) -> (SVector<f64, N>, Mode) {
     match model.slow_time_constant_s() {
         Some(tau) if tau > block_t => {
@@ -249,7 +249,7 @@ fn onto_slow_orbit<M: Model<N>, const N: usize>(
 /// use endstop::device::Device;
 /// use endstop::drive::Sine;
 /// use endstop::model::Model;
-/// use endstop::study::steady::{steady_config, steady_state};
+/// use endstop::study::steady::{settle_settings, steady_state};
 /// use nalgebra::Complex;
 ///
 /// let text = include_str!(concat!(env!("CARGO_MANIFEST_DIR"), "/data/examples/piezo_cantilever.toml"));
@@ -257,7 +257,7 @@ fn onto_slow_orbit<M: Model<N>, const N: usize>(
 /// let (f, g) = (115.0, 0.01);
 /// let m = endstop::with_harvester!(&device, |h| {
 ///     let rest = h.rest_state();
-///     let cfg = steady_config(&device, f);
+///     let cfg = settle_settings(&device, f);
 ///     steady_state(&h, Sine::from_rms_g(g, f), rest, h.mode_of(&rest), g, &cfg).map(|r| r.0)
 /// })?;
 /// // The file's m, k, b, theta, Cp and R.
@@ -282,7 +282,7 @@ pub fn steady_state<M: Model<N>, const N: usize>(
     y: SVector<f64, N>,
     mode: Mode,
     accel_rms_g: f64,
-    cfg: &SteadyConfig,
+    cfg: &SettleSettings,
 ) -> Result<(Measurement, SVector<f64, N>, Mode, Stats), SolverError> {
     let block_t = cfg.block_periods as f64 * sine.period_s();
     let (y, mode) = onto_slow_orbit(model, sine, y, mode, block_t, cfg);
@@ -298,7 +298,7 @@ pub fn settle_and_measure<M: Model<N>, const N: usize>(
     y: SVector<f64, N>,
     mode: Mode,
     accel_rms_g: f64,
-    cfg: &SteadyConfig,
+    cfg: &SettleSettings,
 ) -> Result<(Measurement, SVector<f64, N>, Mode, Stats), SolverError> {
     let block_t = cfg.block_periods as f64 * sine.period_s();
     let mut ode = SineFlow::new(model, sine, 0.0, y, mode, cfg.rtol);

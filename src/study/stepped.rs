@@ -39,7 +39,7 @@ use crate::ode::{SolverError, Stats};
 use crate::progress::Progress;
 use crate::study::periodic::{self, SteadyMethod, SteadySettings};
 use crate::study::ramp::ramp;
-use crate::study::steady::{settle_and_measure, steady_state, Measurement, SteadyConfig};
+use crate::study::steady::{settle_and_measure, steady_state, Measurement, SettleSettings};
 
 /// One step of a continuation: the measurement and the state it ended in.
 #[derive(Debug, Clone)]
@@ -89,14 +89,14 @@ impl<T: Fn(f64) -> (f64, f64) + Sync> Drive for T {}
 /// ```
 /// use endstop::device::Device;
 /// use endstop::progress::Silent;
-/// use endstop::study::steady::steady_config;
+/// use endstop::study::steady::settle_settings;
 /// use endstop::study::stepped::SteppedDrive;
 ///
 /// let text = include_str!(concat!(env!("CARGO_MANIFEST_DIR"), "/data/examples/piezo_cantilever.toml"));
 /// let device = Device::from_toml_str(text, "piezo_cantilever.toml")?;
 /// // An up-sweep in frequency at 0.01 g rms towards the 120 Hz short-circuit resonance.
 /// let sweep = endstop::with_harvester!(&device, |h| {
-///     let up = SteppedDrive { base: &h, drive: |f: f64| (f, 0.01), cfg: steady_config(&device, 110.0) };
+///     let up = SteppedDrive { base: &h, drive: |f: f64| (f, 0.01), cfg: settle_settings(&device, 110.0) };
 ///     up.run(&[100.0, 110.0, 118.0], &Silent)
 /// })?;
 /// let v1: Vec<f64> = sweep.steps.iter().map(|s| s.measurement.v1_rms_v).collect();
@@ -110,7 +110,7 @@ pub struct SteppedDrive<'a, M, D: Drive, const N: usize> {
     /// Drive at parameter value p: (frequency Hz, RMS acceleration g).
     pub drive: D,
     /// Steady-state settings.
-    pub cfg: SteadyConfig,
+    pub cfg: SettleSettings,
 }
 
 /// A state of dimension `N` from a step's.
@@ -157,7 +157,7 @@ impl<M: Model<N>, D: Drive, const N: usize> SteppedDrive<'_, M, D, N> {
             }
             _ => return Ok(Err(Stats::default())),
         };
-        let cfg = SteadyConfig {
+        let cfg = SettleSettings {
             settle_blocks: 0,
             ..self.cfg.clone()
         };
@@ -450,7 +450,7 @@ pub fn with_midpoints(values: &[f64]) -> Vec<f64> {
 pub fn continue_sweep<M: Model<N>, const N: usize>(
     base: &M,
     drive: impl Fn(f64) -> (f64, f64),
-    cfg: &SteadyConfig,
+    cfg: &SettleSettings,
     sweep: &mut Sweep,
     values: impl IntoIterator<Item = f64>,
     stop: impl Fn(&Measurement) -> bool,

@@ -28,7 +28,7 @@ use crate::ode::Stats;
 use crate::physics::closed_forms::{Electromagnetic, Oscillator, Piezoelectric};
 use crate::physics::harvester::Harvester;
 use crate::physics::linear::LinearResponse;
-use crate::study::orbit::{Forcing, Orbit, OrbitError, Parameter, Shooter, ShootingConfig};
+use crate::study::orbit::{Forcing, Orbit, OrbitError, Parameter, Shooter, ShootingOptions};
 use crate::validation::harmonics::first_harmonic;
 use crate::validation::{Check, Group, Measure, ValidationError};
 
@@ -159,7 +159,7 @@ pub fn steady_response(
 ) -> Result<SteadyResponse, ValidationError> {
     let h = Harvester::<4>::new(device)
         .map_err(|e| ValidationError::Device(format!("{}: {e}", device.name)))?;
-    let shooter = Shooter::new(&h, ShootingConfig::default());
+    let shooter = Shooter::new(&h, ShootingOptions::default());
     let forcing = Forcing {
         freq_hz,
         accel_rms_g,

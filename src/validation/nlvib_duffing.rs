@@ -33,7 +33,7 @@ use crate::ode::Stats;
 use crate::physics::harvester::Harvester;
 use crate::progress::Silent;
 use crate::study::continuation::{continue_branch, first_orbit, Branch, ContinuationSettings};
-use crate::study::orbit::{Forcing, Orbit, Parameter, Shooter, ShootingConfig};
+use crate::study::orbit::{Forcing, Orbit, Parameter, Shooter, ShootingOptions};
 use crate::validation::harmonics::first_harmonic;
 use crate::validation::{Check, Group, Measure, ValidationError};
 
@@ -169,7 +169,7 @@ impl Ours {
     }
 
     fn shooter(&self) -> Shooter<'_, Harvester<4>, 4> {
-        Shooter::new(&self.model, ShootingConfig::default())
+        Shooter::new(&self.model, ShootingOptions::default())
     }
 
     /// Our branch from Omega = `from` to `to` (rad/s), started from rest.

@@ -4,7 +4,7 @@
 use endstop::drive::{Parameter, Sine};
 use endstop::model::Model;
 use endstop::ode::Stats;
-use endstop::study::orbit::{Linearised, Shooter, ShootingConfig};
+use endstop::study::orbit::{Linearised, Shooter, ShootingOptions};
 use endstop::study::periodic::period_map;
 use nalgebra::{SMatrix, SVector};
 
@@ -30,9 +30,9 @@ pub fn against_differences<M: Model<N>, const N: usize>(
 ) -> Against<N> {
     let shooter = Shooter::new(
         model,
-        ShootingConfig {
+        ShootingOptions {
             rtol,
-            ..ShootingConfig::default()
+            ..ShootingOptions::default()
         },
     );
     let mut stats = Stats::default();

@@ -16,7 +16,7 @@ use endstop::paper::setups::comb;
 use endstop::paper::setups::{prototype1_setup, ParamSet, P1_BIAS_V};
 use endstop::paper::Figure;
 use endstop::physics::harvester::Harvester;
-use endstop::study::steady::{steady_config, steady_state};
+use endstop::study::steady::{settle_settings, steady_state};
 use endstop::study::sweep::{BranchEndKind, JUMP_MIN_DROP, REFINE_TOL_HZ};
 
 use super::common::{calibration, claims as claims_file, prototype1 as p1};
@@ -262,7 +262,7 @@ fn calibrated_gap_equals_the_free_amplitude_at_the_measured_kink() {
     d = d.with_stop_gap(comb(&d).finger_overlap_m);
     let model = Harvester::<4>::new(&d).unwrap();
     let sine = Sine::from_rms_g(P1_HIGH_ACCEL_RMS_G, P1_MEASURED_ONSET_HZ);
-    let cfg = steady_config(&d, P1_MEASURED_ONSET_HZ);
+    let cfg = settle_settings(&d, P1_MEASURED_ONSET_HZ);
     // Ring up from rest over many blocks, then measure.
     let (mut y, mut mode) = (model.rest_state(), Mode::FREE);
     for _ in 0..3 {

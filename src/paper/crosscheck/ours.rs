@@ -15,7 +15,7 @@ use crate::progress::Silent;
 use crate::spice::{
     netlist, InitialCondition, SpiceDrive, SpiceOptions, Transient, HERTZ_NEWTON_STEPS,
 };
-use crate::study::steady::{steady_config, steady_state, Measurement, SteadyConfig};
+use crate::study::steady::{settle_settings, steady_state, Measurement, SettleSettings};
 use crate::study::stepped::{linspace_step, SteppedDrive};
 
 /// A case ready to run: the model, the steady-state criterion and the state both simulators
@@ -30,7 +30,7 @@ pub struct Prepared {
     pub sine: Sine,
     /// Our steady-state criterion: blocks of the ring-up time, [`REL_CHANGE_TOL`], and enough
     /// settling blocks to span [`MIN_SPAN_PERIODS`].
-    pub cfg: SteadyConfig,
+    pub cfg: SettleSettings,
     /// The initial state.
     pub y0: State,
     /// The initial contact mode.
@@ -45,7 +45,7 @@ pub fn prepare(case: &Case) -> Result<Prepared, SolverError> {
     let (f, a) = (case.freq_hz, case.accel_rms_g);
     let model = Harvester::<4>::new(&case.device)?;
     let sine = Sine::from_rms_g(a, f);
-    let mut cfg = steady_config(&case.device, f);
+    let mut cfg = settle_settings(&case.device, f);
     cfg.rel_change_tol = REL_CHANGE_TOL;
     let (y0, mode0, start_label) = match case.start {
         Start::Rest => (model.rest_state(), Mode::FREE, "rest".to_string()),
@@ -128,7 +128,7 @@ impl Prepared {
         if !self.case.impacting {
             return Ok(ours.measurement.v1_rms_v);
         }
-        let cfg = steady_config(&self.case.device, self.case.freq_hz);
+        let cfg = settle_settings(&self.case.device, self.case.freq_hz);
         let rest = self.model.rest_state();
         let (m, ..) = steady_state(
             &self.model,

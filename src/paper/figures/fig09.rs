@@ -14,7 +14,7 @@ use crate::progress::Progress;
 use crate::study::amplitude::{
     compare_amplitude, AmplitudeComparison, AmplitudeReport, AmplitudeSettings,
 };
-use crate::study::steady::{steady_config, Measurement};
+use crate::study::steady::{settle_settings, Measurement};
 use crate::study::stepped;
 
 /// Convergence limit on the onsets (g): their change when the numerics are refined
@@ -116,13 +116,13 @@ pub const FIG9_STEP_G: f64 = 0.1;
 pub const FIG9_EXTEND_G: f64 = 8.0;
 
 /// Figure 9: prototype 1 at its measured resonance 1220 Hz, 0.5-5.5 g rms in 0.1 g steps
-/// (extended to 8 g if needed), [`steady_config`] at 1220 Hz, onset brackets of 0.005 g.
+/// (extended to 8 g if needed), [`settle_settings`] at 1220 Hz, onset brackets of 0.005 g.
 pub fn amplitude_settings(device: &Device) -> AmplitudeSettings {
     AmplitudeSettings {
         freq_hz: P1_RESONANCE_HZ,
         accels_rms_g: stepped::linspace_step(FIG9_RANGE_G.0, FIG9_RANGE_G.1, FIG9_STEP_G),
         extend_to_g: FIG9_EXTEND_G,
-        cfg: steady_config(device, P1_RESONANCE_HZ),
+        cfg: settle_settings(device, P1_RESONANCE_HZ),
         refine_tol_g: 0.005,
     }
 }

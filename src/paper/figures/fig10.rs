@@ -11,7 +11,7 @@ use crate::paper::setups::{paper_noise, ParamSet};
 use crate::paper::Figure;
 use crate::progress::Progress;
 use crate::signal::bandwidth::{mean_psd, upper_band_edge_hz};
-use crate::signal::{welch, Psd, WelchConfig};
+use crate::signal::{welch, Psd, WelchOptions};
 use crate::study::ensemble::{first_stream_for_level, DEFAULT_SEED};
 use crate::study::record::RecordError;
 use crate::G;
@@ -55,7 +55,7 @@ pub struct Run {
     /// Stream of record 0; record `i` uses `first_stream + i`.
     pub first_stream: u64,
     /// Welch segmenting.
-    pub welch: WelchConfig,
+    pub welch: WelchOptions,
     /// The records, in stream order.
     pub records: Vec<NoiseRecord>,
 }
@@ -136,7 +136,7 @@ impl Figure for Fig10 {
     fn run(_: &(), progress: &dyn Progress) -> Result<Run, RecordError> {
         let spec = paper_noise(FIG10_SA);
         let first_stream = first_stream_for_level(FIG10_SA);
-        let cfg = WelchConfig::half_overlap(NPERSEG);
+        let cfg = WelchOptions::half_overlap(NPERSEG);
         let records = (0..RECORDS as u64)
             .into_par_iter()
             .map(|i| -> Result<NoiseRecord, RecordError> {

@@ -8,18 +8,18 @@ use crate::paper::curves::{no_impact_value, CurveSpec, CurveSweeps, FigureCurve}
 use crate::paper::setups::{ParamSet, FIG13_BIAS_V};
 use crate::paper::Figure;
 use crate::progress::Progress;
-use crate::study::steady::steady_config_across_folds;
+use crate::study::steady::settle_settings_across_folds;
 use crate::study::stepped;
 use crate::study::sweep::{SweepSettings, REFINE_TOL_HZ};
 
 /// Prototype 2, Figure 13: 600-850 Hz in 2 Hz steps (extended to 1200 Hz if needed),
-/// [`steady_config_across_folds`] at 700 Hz (the ring-up time, 68 periods, is already longer
+/// [`settle_settings_across_folds`] at 700 Hz (the ring-up time, 68 periods, is already longer
 /// than the fold rule's minimum), brackets of [`REFINE_TOL_HZ`].
 pub fn sweep_settings(device: &Device) -> SweepSettings {
     SweepSettings {
         freqs_hz: stepped::linspace_step(600.0, 850.0, 2.0),
         extend_to_hz: 1200.0,
-        cfg: steady_config_across_folds(device, 700.0),
+        cfg: settle_settings_across_folds(device, 700.0),
         refine_tol_hz: REFINE_TOL_HZ,
     }
 }

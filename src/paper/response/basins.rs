@@ -23,7 +23,7 @@ pub const BASIN_SETTLE_TOL: f64 = 1e-3;
 
 /// Integrator tolerance of the basin cells. A cell is classified at a scaled distance of
 /// [`BASIN_SETTLE_TOL`] from an attractor, five orders of magnitude above the integration's
-/// global error at this tolerance (some 15 rtol, [`crate::study::orbit::ShootingConfig`]);
+/// global error at this tolerance (some 15 rtol, [`crate::study::orbit::ShootingOptions`]);
 /// the attractors' states themselves come from the shooting at its own 1e-10. At 1e-8, where
 /// the step limit of a fiftieth of the natural period binds, a cell takes about half the steps
 /// it takes at 1e-10, and every cell of both cases' grids ends on the same attractor as at

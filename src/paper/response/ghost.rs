@@ -8,7 +8,7 @@ use crate::ode::Stats;
 use crate::physics::harvester::Harvester;
 use crate::study::continuation::Branch;
 use crate::study::orbit::{Forcing, OrbitError, Shooter};
-use crate::study::steady::SteadyConfig;
+use crate::study::steady::SettleSettings;
 
 use super::{upper_fold_hz, Setup};
 
@@ -43,7 +43,7 @@ pub struct GhostRow {
 pub fn ghost_study(
     setup: &Setup,
     branch: &Branch,
-    cfg: &SteadyConfig,
+    cfg: &SettleSettings,
     offsets_hz: &[f64],
 ) -> Result<Vec<GhostRow>, OrbitError> {
     let Some(fold) = upper_fold_hz(branch) else {

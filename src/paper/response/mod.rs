@@ -30,7 +30,7 @@ use crate::study::continuation::{
     branch_from_rest, Branch, ContinuationSettings, Diagram, DiagramEvent,
 };
 use crate::study::orbit::{Forcing, Orbit, OrbitError, Shooter};
-use crate::study::steady::{steady_config, SteadyConfig, FOLD_BLOCK_PERIODS};
+use crate::study::steady::{settle_settings, SettleSettings, FOLD_BLOCK_PERIODS};
 use crate::study::sweep::{DownSweepReport, SweepReport, SweepSettings};
 
 pub use basins::{
@@ -216,7 +216,7 @@ pub struct CaseRun {
     pub continuation_s: f64,
     /// The sweep's steady-state criterion on the ghost past the upper fold ([`ghost_study`]).
     pub ghost: Vec<GhostRow>,
-    /// The same study with blocks of the ring-up time alone ([`steady_config`]), where the
+    /// The same study with blocks of the ring-up time alone ([`settle_settings`]), where the
     /// sweep's blocks are longer (the criterion without the fold rule).
     pub ghost_ring_up: Vec<GhostRow>,
     /// The up-sweep again with half the sweep's blocks, where the fold rule
@@ -439,8 +439,8 @@ pub fn run_case(
     let cfg = &setup.sweep.cfg;
     run.ghost = ghost_study(setup, &run.branch, cfg, &GHOST_OFFSETS_HZ).map_err(oerr)?;
     if let Some(fold) = run.fold_hz() {
-        let ring_up = SteadyConfig {
-            block_periods: steady_config(&setup.device, fold).block_periods,
+        let ring_up = SettleSettings {
+            block_periods: settle_settings(&setup.device, fold).block_periods,
             ..cfg.clone()
         };
         if ring_up.block_periods < cfg.block_periods {

@@ -20,7 +20,7 @@ use super::diagram_types::{
     orbit_point, BranchEnd, BranchKind, Diagram, DiagramBranch, DiagramEvent, DiagramPoint,
     EndKind, EventKind,
 };
-use super::impacting::{rigid_diagram, DiagramOptions};
+use super::impacting::{rigid_diagram, DiagramSettings};
 use super::{branch_from_rest, Branch, ContinuationSettings, EventKind as BranchEventKind};
 
 /// True when every stop of the device is rigid (and it has one).
@@ -40,7 +40,7 @@ pub fn diagram(
     device: &Device,
     start: Forcing,
     settings: &ContinuationSettings,
-    options: &DiagramOptions,
+    options: &DiagramSettings,
     progress: &dyn Progress,
 ) -> Result<Diagram, OrbitError> {
     if all_stops_rigid(device) {
@@ -90,7 +90,7 @@ pub fn frequency_diagram(
         device,
         start,
         &settings,
-        &DiagramOptions::default(),
+        &DiagramSettings::default(),
         progress,
     )
 }

@@ -5,7 +5,7 @@ use nalgebra::DVector;
 
 use crate::model::Model;
 use crate::ode::Stats;
-use crate::study::orbit::{Orbit, OrbitError, Parameter, Shooter, ShootingConfig};
+use crate::study::orbit::{Orbit, OrbitError, Parameter, Shooter, ShootingOptions};
 
 /// Settings of a continuation.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -34,7 +34,7 @@ pub struct ContinuationSettings {
     /// Tolerance on the parameter of a located event (Hz or g).
     pub locate_tol: f64,
     /// Shooting settings.
-    pub shooting: ShootingConfig,
+    pub shooting: ShootingOptions,
 }
 
 impl ContinuationSettings {
@@ -54,7 +54,7 @@ impl ContinuationSettings {
             max_turn_rad: 10f64.to_radians(),
             max_points: 20_000,
             locate_tol: 1e-4,
-            shooting: ShootingConfig::default(),
+            shooting: ShootingOptions::default(),
         }
     }
 
@@ -73,7 +73,7 @@ impl ContinuationSettings {
             max_turn_rad: 10f64.to_radians(),
             max_points: 20_000,
             locate_tol: 1e-6,
-            shooting: ShootingConfig::default(),
+            shooting: ShootingOptions::default(),
         }
     }
 

@@ -3,7 +3,7 @@
 use super::*;
 use crate::device::Device;
 use crate::physics::harvester::Harvester;
-use crate::study::orbit::{Forcing, Parameter, Shooter, ShootingConfig};
+use crate::study::orbit::{Forcing, Parameter, Shooter, ShootingOptions};
 
 type State = SVector<f64, 4>;
 
@@ -183,7 +183,7 @@ fn exact_variational_equations_match_finite_differences() {
         freq_hz: 130.0,
         accel_rms_g: 0.5,
     };
-    let shooter = Shooter::new(&model, ShootingConfig::default());
+    let shooter = Shooter::new(&model, ShootingOptions::default());
     let settled = run(&model, sine, 60.0, SineScheme::Exact, 1e-10).0;
     let mut stats = Stats::default();
     let orbit = shooter

@@ -108,9 +108,9 @@ impl Forcing {
     }
 }
 
-/// Settings of the shooting method.
+/// Options of the shooting method (a solver: Newton on the period map).
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct ShootingConfig {
+pub struct ShootingOptions {
     /// Integrator relative tolerance (absolute tolerances are `rtol` times the state scales).
     pub rtol: f64,
     /// An orbit is accepted when |P(y) - y| / |y| (scaled, plain period map) is below this.
@@ -119,7 +119,7 @@ pub struct ShootingConfig {
     pub max_newton: usize,
 }
 
-impl Default for ShootingConfig {
+impl Default for ShootingOptions {
     /// rtol 1e-10: the orbit is then accurate to about 1e-9 (the global error of the
     /// integration is some 15 rtol relative), and Newton drives the residual of the period map
     /// itself below 5e-10 (on smooth stretches of a branch it reaches 1e-14; near grazing,
@@ -133,7 +133,7 @@ impl Default for ShootingConfig {
     }
 }
 
-impl ShootingConfig {
+impl ShootingOptions {
     /// Half the integrator tolerance (for convergence checks).
     pub fn halved(&self) -> Self {
         Self {
@@ -386,7 +386,7 @@ impl Orbit {
 }
 
 /// Half-width of the band about 1 in which a real multiplier is neutral ([`is_neutral`]):
-/// ten times the default shooting tolerance ([`ShootingConfig`]); the neutral multipliers of
+/// ten times the default shooting tolerance ([`ShootingOptions`]); the neutral multipliers of
 /// a bridge that never conducts, whose element charge the flow conserves, lie within 5e-11
 /// of 1 there.
 pub const NEUTRAL_BAND: f64 = 1e-9;

@@ -11,7 +11,7 @@ use crate::study::flow::{Engine, SineFlow};
 
 use super::period_sums::Accumulator;
 use super::CHORD_STEPS;
-use super::{multipliers, Forcing, Orbit, OrbitError, OrbitSummary, Parameter, ShootingConfig};
+use super::{multipliers, Forcing, Orbit, OrbitError, OrbitSummary, Parameter, ShootingOptions};
 
 /// The period map and its derivatives at one point: P(y), M = dP/dy and dP/dp (physical
 /// units).
@@ -31,18 +31,18 @@ pub struct Shooter<'a, M, const N: usize> {
     /// The model.
     pub base: &'a M,
     /// Settings.
-    pub cfg: ShootingConfig,
+    pub cfg: ShootingOptions,
     scales: SVector<f64, N>,
 }
 
 impl<'a, M: Model<N>, const N: usize> Shooter<'a, M, N> {
     /// Shooting on `base` with settings `cfg`.
-    pub fn new(base: &'a M, cfg: ShootingConfig) -> Self {
+    pub fn new(base: &'a M, cfg: ShootingOptions) -> Self {
         Self::with_scales(base, cfg, base.scales())
     }
 
     /// Shooting with given state scales (e.g. those of another model of the same device).
-    pub fn with_scales(base: &'a M, cfg: ShootingConfig, scales: SVector<f64, N>) -> Self {
+    pub fn with_scales(base: &'a M, cfg: ShootingOptions, scales: SVector<f64, N>) -> Self {
         Self { base, cfg, scales }
     }
 
@@ -262,7 +262,7 @@ impl<'a, M: Model<N>, const N: usize> Shooter<'a, M, N> {
     /// Newton's method for the periodic orbit of `forcing` with section at `phase_rad`, from
     /// `guess`; `param` names the parameter in errors (and is the one whose sensitivity is
     /// computed alongside). The orbit is accepted when the plain period map's residual is
-    /// below [`ShootingConfig::residual_tol`].
+    /// below [`ShootingOptions::residual_tol`].
     ///
     /// A piezoelectric cantilever below its stopper is linear, `y' = L y + c a`: its
     /// multipliers are those of `exp(L T)`, whose product is `exp(T trace L)` (Liouville's
@@ -272,14 +272,14 @@ impl<'a, M: Model<N>, const N: usize> Shooter<'a, M, N> {
     /// use endstop::device::Device;
     /// use endstop::model::Model;
     /// use endstop::ode::Stats;
-    /// use endstop::study::orbit::{Forcing, Parameter, Shooter, ShootingConfig};
+    /// use endstop::study::orbit::{Forcing, Parameter, Shooter, ShootingOptions};
     /// use nalgebra::Complex;
     ///
     /// let text = include_str!(concat!(env!("CARGO_MANIFEST_DIR"), "/data/examples/piezo_cantilever.toml"));
     /// let device = Device::from_toml_str(text, "piezo_cantilever.toml")?;
     /// let forcing = Forcing { freq_hz: 115.0, accel_rms_g: 0.01 };
     /// let orbit = endstop::with_harvester!(&device, |h| {
-    ///     let shooter = Shooter::new(&h, ShootingConfig::default());
+    ///     let shooter = Shooter::new(&h, ShootingOptions::default());
     ///     let mut stats = Stats::default();
     ///     shooter.solve(&forcing, Parameter::Frequency, 0.0, h.rest_state(), &mut stats)
     /// })?;

@@ -1,7 +1,7 @@
 //! The output power spectral density of a record's two loads (see the parent module).
 
 use crate::signal::bandwidth::restrict;
-use crate::signal::{self, Psd, SpectralError, WelchConfig};
+use crate::signal::{self, Psd, SpectralError, WelchOptions};
 
 /// Output power spectral density of both loads and of each, one-sided, W/Hz.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -32,7 +32,7 @@ pub fn output_psd(
     v2_v: &[f64],
     sample_rate_hz: f64,
     load_resistance_ohm: f64,
-    cfg: &WelchConfig,
+    cfg: &WelchOptions,
 ) -> Result<OutputSpectrum, SpectralError> {
     let scale = |mut p: Psd| {
         p.density.iter_mut().for_each(|d| *d /= load_resistance_ohm);

@@ -32,16 +32,16 @@
 //! until contact is lost, and the extra steps are marked ([`SweepReport::extended_from`]).
 //!
 //! # Steady state
-//! Every step is measured once the model has settled by the criterion of [`SteadyConfig`]
+//! Every step is measured once the model has settled by the criterion of [`SettleSettings`]
 //! ([`crate::study::steady`]). [`SweepSettings::for_device`] takes the criterion of sweeps
-//! that must leave a branch at its fold ([`steady_config_across_folds`]): blocks long enough
+//! that must leave a branch at its fold ([`settle_settings_across_folds`]): blocks long enough
 //! that the ghost of the merged orbits cannot hold the state on a branch that has ended.
 
 use crate::device::Device;
 use crate::model::Model;
 use crate::ode::{SolverError, Stats};
 use crate::progress::Progress;
-use crate::study::steady::{steady_config_across_folds, Measurement, SteadyConfig};
+use crate::study::steady::{settle_settings_across_folds, Measurement, SettleSettings};
 use crate::study::stepped::{
     continue_sweep, first_contact, in_contact, values_beyond, with_midpoints, Approach, Drive,
     SteppedDrive, Sweep, Transition,
@@ -169,7 +169,7 @@ impl SweepReport {
 pub fn frequency_continuation<'a, M: Model<N>, const N: usize>(
     base: &'a M,
     accel_rms_g: f64,
-    cfg: &SteadyConfig,
+    cfg: &SettleSettings,
 ) -> SteppedDrive<'a, M, impl Drive, N> {
     SteppedDrive {
         base,
@@ -190,7 +190,7 @@ pub struct SweepSettings {
     /// the requested range are marked by [`SweepReport::extended_from`].
     pub extend_to_hz: f64,
     /// Steady-state criterion.
-    pub cfg: SteadyConfig,
+    pub cfg: SettleSettings,
     /// Bracket width of the refined onset, jump and loss of contact (Hz).
     pub refine_tol_hz: f64,
 }
@@ -243,7 +243,7 @@ pub fn check_range(
 impl SweepSettings {
     /// The sweep of the grid `freqs_hz` (up or down) for any device, without extension: the
     /// steady-state criterion of sweeps that must leave a branch at its fold
-    /// ([`steady_config_across_folds`]) at the grid's middle frequency, and transitions
+    /// ([`settle_settings_across_folds`]) at the grid's middle frequency, and transitions
     /// refined to `refine_tol_hz`. The `endstop` command's and the Python package's sweeps.
     pub fn for_device(device: &Device, freqs_hz: Vec<f64>, refine_tol_hz: f64) -> Self {
         let (lo, hi) = freqs_hz
@@ -252,7 +252,7 @@ impl SweepSettings {
                 (lo.min(f), hi.max(f))
             });
         Self {
-            cfg: steady_config_across_folds(device, 0.5 * (lo + hi)),
+            cfg: settle_settings_across_folds(device, 0.5 * (lo + hi)),
             freqs_hz,
             extend_to_hz: f64::NEG_INFINITY,
             refine_tol_hz,
@@ -464,7 +464,7 @@ mod tests {
     use super::*;
     use crate::drive::Sine;
     use crate::progress::Silent;
-    use crate::study::steady::{steady_config, steady_state};
+    use crate::study::steady::{settle_settings, steady_state};
     use crate::study::stepped::linspace_step;
 
     #[test]
@@ -509,7 +509,7 @@ mod tests {
         let settings = SweepSettings {
             freqs_hz: freqs.clone(),
             extend_to_hz: f64::NEG_INFINITY,
-            cfg: steady_config(&device, 1220.0),
+            cfg: settle_settings(&device, 1220.0),
             refine_tol_hz: tol,
         };
         let r = settings.run(&device, accel, &Silent).unwrap();

@@ -7,7 +7,7 @@
 //!
 //! # Tolerances, stated before the runs
 //! - Orbit quantities, 1e-6 (relative; radians for the phase): shooting integrates at
-//!   rtol 1e-10 and accepts a period-map residual of 5e-10 ([`ShootingConfig`]), an orbit
+//!   rtol 1e-10 and accepts a period-map residual of 5e-10 ([`ShootingOptions`]), an orbit
 //!   accurate to about 1e-9; the fixed point's error is that residual amplified by
 //!   `|(I - M)^-1|`, at most about `1 / (1 - |mu|)` = 30 for the multipliers up to 0.97 and
 //!   a few for the unstable point's: 1e-6 leaves a factor 30 above that.
@@ -28,7 +28,7 @@ use crate::device::Device;
 use crate::model::Model;
 use crate::ode::Stats;
 use crate::physics::harvester::masses::MassChain;
-use crate::study::orbit::{Forcing, Parameter, Shooter, ShootingConfig};
+use crate::study::orbit::{Forcing, Parameter, Shooter, ShootingOptions};
 use crate::validation::{Check, Group, Measure, ValidationError};
 
 use super::{ImpactDamper, SymmetricOrbit};
@@ -193,7 +193,7 @@ pub fn shoot(device: &Device, freq_hz: f64) -> Result<Ours, ValidationError> {
         freq_hz,
         accel_rms_g: ACCEL_RMS_G,
     };
-    let shooter = Shooter::new(&h, ShootingConfig::default());
+    let shooter = Shooter::new(&h, ShootingOptions::default());
     let mut stats = Stats::default();
     let orbit = shooter.solve(&forcing, Parameter::Frequency, section, guess, &mut stats)?;
     // One period from the section: the primary's absolute displacement on the sample times,

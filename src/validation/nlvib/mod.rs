@@ -40,7 +40,7 @@ use crate::physics::harvester::Harvester;
 type State = nalgebra::SVector<f64, 4>;
 use crate::progress::Silent;
 use crate::study::continuation::{continue_branch, first_orbit, Branch, ContinuationSettings};
-use crate::study::orbit::{Forcing, Orbit, Parameter, Shooter, ShootingConfig};
+use crate::study::orbit::{Forcing, Orbit, Parameter, Shooter, ShootingOptions};
 use crate::validation::harmonics::first_harmonic;
 use crate::validation::ValidationError;
 
@@ -85,7 +85,7 @@ impl<'d> Ours<'d> {
     }
 
     fn shooter(&self) -> Shooter<'_, Harvester<4>, 4> {
-        Shooter::new(&self.model, ShootingConfig::default())
+        Shooter::new(&self.model, ShootingOptions::default())
     }
 
     fn forcing(&self, omega_rad_s: f64) -> Forcing {

@@ -26,7 +26,7 @@ use super::{
 
 /// What the diagram follows beyond the period-one orbits.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct DiagramOptions {
+pub struct DiagramSettings {
     /// Follow the period-two branch from every period doubling.
     pub period_two: bool,
     /// Periods of transient before the first non-impacting orbit is shot from rest.
@@ -35,7 +35,7 @@ pub struct DiagramOptions {
     pub max_branches: usize,
 }
 
-impl Default for DiagramOptions {
+impl Default for DiagramSettings {
     fn default() -> Self {
         Self {
             period_two: false,
@@ -93,7 +93,7 @@ pub fn rigid_diagram(
     device: &Device,
     start: Forcing,
     settings: &ContinuationSettings,
-    options: &DiagramOptions,
+    options: &DiagramSettings,
     progress: &dyn Progress,
 ) -> Result<Diagram, OrbitError> {
     settings.validate()?;
@@ -107,7 +107,7 @@ pub fn rigid_diagram_of<M: Model<N> + Clone, const N: usize>(
     h: &M,
     start: Forcing,
     settings: &ContinuationSettings,
-    options: &DiagramOptions,
+    options: &DiagramSettings,
     progress: &dyn Progress,
 ) -> Result<Diagram, OrbitError> {
     let param = settings.parameter;
@@ -258,7 +258,7 @@ pub(super) struct Builder<'a, M, const N: usize> {
     pub shooter: &'a Shooter<'a, M, N>,
     pub sym: Option<nalgebra::SMatrix<f64, N, N>>,
     pub settings: ContinuationSettings,
-    pub options: DiagramOptions,
+    pub options: DiagramSettings,
     /// The drive at the start of the range.
     pub start: Forcing,
     pub lo: f64,

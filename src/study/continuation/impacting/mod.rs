@@ -34,7 +34,7 @@
 //!    pitchfork: the two mirror-image asymmetric branches start there, and each ends where it
 //!    returns to the symmetric orbits;
 //! 4. a multiplier through -1 of the period map is a period doubling: optionally the
-//!    period-two branch starts there ([`DiagramOptions::period_two`]).
+//!    period-two branch starts there ([`DiagramSettings::period_two`]).
 //!
 //! Smooth events are located only between two points of one branch ([`EventKind`]).
 //!
@@ -50,7 +50,7 @@ mod follow;
 mod segment;
 mod starts;
 
-pub use build::{rigid_diagram, DiagramOptions};
+pub use build::{rigid_diagram, DiagramSettings};
 pub use bvp::{Closure, ImpactSequence};
 
 use super::diagram_types::{
