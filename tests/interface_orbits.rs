@@ -393,3 +393,38 @@ fn the_period_map_finds_the_orbit_past_a_fold() {
     assert!(moved < 1e-6);
     assert!(past.p_dc_w < 0.1 * upper.p_dc_w);
 }
+
+/// The electromagnetic example behind its bridge at 45 Hz and 0.2 g rms: the EMF (about
+/// `Phi a / |omega0^2 - omega^2|` times omega, 0.42 V) stays below the battery and two drops
+/// (1.8 V), so the bridge never conducts and the coil current stays at zero. The continuation
+/// starts there from rest and reaches 46 Hz; each orbit's largest multiplier is the free
+/// oscillator's, `exp(-b T / (2 m))` (the coil exerts no force, the stops are not reached, the
+/// storage's own mode decays as `exp(-T / (R_s C_s))`, below 1e-9), to 1e-6: the variational
+/// integration's error at its tolerance, with no neutral multiplier of the held current.
+#[test]
+fn an_orbit_that_never_conducts_has_no_neutral_multiplier() {
+    use endstop::study::continuation::impacting::DiagramSettings;
+    use endstop::study::continuation::{diagram, ContinuationSettings};
+    use endstop::study::orbit::Forcing;
+    let d = common::device("examples/em_bridge");
+    let start = Forcing {
+        freq_hz: 45.0,
+        accel_rms_g: 0.2,
+    };
+    let cont = ContinuationSettings::frequency(45.0, 46.0, 0.5);
+    let dia = diagram(&d, start, &cont, &DiagramSettings::default(), &Silent).unwrap();
+    let (m, b) = (d.mechanics.mass_kg, d.mechanics.damping_n_s_per_m);
+    let mut n = 0;
+    for p in dia.branches.iter().flat_map(|br| br.points.iter()) {
+        let t = 1.0 / p.forcing.freq_hz;
+        let free = (-b * t / (2.0 * m)).exp();
+        let largest = p.multipliers.iter().map(|z| z.norm()).fold(0.0, f64::max);
+        assert!(
+            (largest - free).abs() < 1e-6,
+            "{} Hz: largest |mu| {largest}, free oscillator {free}",
+            p.forcing.freq_hz
+        );
+        n += 1;
+    }
+    assert!(n >= 2, "{n} points");
+}

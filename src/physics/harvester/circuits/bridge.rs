@@ -448,6 +448,12 @@ impl Circuit {
                 let s = bridge.sign();
                 let di = if l > 0.0 && bridge != Bridge::Off {
                     (phi * y[1] - (rc + 2.0 * self.ron()) * i - s * (vs + self.path_drop())) / l
+                } else if l > 0.0 {
+                    // Off, the current is held at zero (projected there on entry). A current
+                    // off zero is outside the mode's states; it decays at the coil's own rate,
+                    // so the period map contracts across that direction and an orbit that
+                    // never conducts has no neutral multiplier 1 to stall Newton's method.
+                    -(rc + 2.0 * self.ron()) * i / l
                 } else {
                     0.0
                 };
@@ -931,6 +937,8 @@ impl Circuit {
                     for (k, &c) in cols.iter().enumerate() {
                         j[(e, c)] = (src[k] - di[k] * rpath) / l;
                     }
+                } else if l > 0.0 {
+                    j[(e, e)] = -rpath / l;
                 }
                 for (k, &c) in cols.iter().enumerate() {
                     let gl_k = if c == ivs { gl } else { 0.0 };
