@@ -36,6 +36,7 @@ mod interfaces_spice;
 mod masses;
 mod masses_force_drive;
 mod masses_impact_damper;
+mod masses_studies;
 mod nlvib_unilateral;
 mod pair_bridge_spice;
 mod record_accuracy;

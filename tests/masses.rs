@@ -113,7 +113,7 @@ const C12: f64 = 5e-4;
 const M1: f64 = 1e-3;
 const M2: f64 = 2e-4;
 
-fn linear_chain() -> Device {
+pub(crate) fn linear_chain() -> Device {
     load(&two_masses(&format!(
         "[[springs]]\nmasses = [0]\nstiffness_n_per_m = {K1}\n\
          [[springs]]\nmasses = [1]\nstiffness_n_per_m = {K2}\n\
@@ -126,7 +126,7 @@ fn linear_chain() -> Device {
 
 /// The closed-form steady state of `M x'' + C x' + K x = M 1 A sin(w t)`: the complex
 /// amplitudes `X = (K - w^2 M + i w C)^-1 M 1 A`, with `x(t) = Im(X e^{i w t})`.
-fn closed_form(w: f64, amplitude: f64) -> [Complex<f64>; 2] {
+pub(crate) fn closed_form(w: f64, amplitude: f64) -> [Complex<f64>; 2] {
     let i = Complex::new(0.0, 1.0);
     let d = Matrix2::new(
         Complex::from(K1 + K12 - w * w * M1) + i * w * (C1 + C12),

@@ -27,7 +27,9 @@ use common::io::plot::Panels;
 use common::io::plot::{LinePlot, Series, Style, PALETTE};
 
 use crate::random_args::{read_measured, MeasuredDrive, RandomArgs};
-use crate::shared::{describe, start};
+use crate::shared::{describe, mass_peaks_md, start};
+use common::reports::sweep_io::mass_columns;
+use endstop::study::mass_peaks::MassPeaks;
 
 /// Runs `endstop random`.
 pub fn random(a: RandomArgs) -> Result<()> {
@@ -135,6 +137,9 @@ fn noise(a: &RandomArgs, psd: f64) -> Result<()> {
         "psd_g2_per_hz" => vec![psd; recs.len()],
         "params" => vec![device.params.clone(); recs.len()],
     )?;
+    let masses = mass_columns(&device)?;
+    let peaks: Vec<_> = recs.iter().map(|r| r.summary.mass_peaks).collect();
+    with_mass_columns(&mut per, &masses, &peaks)?;
     exp.write_parquet("records", &mut per, &device.params)?;
 
     let disp = displacement(&mut exp, &device, &spec.record, &ens, a)?;
@@ -188,6 +193,12 @@ fn noise(a: &RandomArgs, psd: f64) -> Result<()> {
     if paths.iter().any(|p| p != &paths[0]) {
         md.push_str("- (the records did not all take the same path; see records.parquet)\n");
     }
+    md.push_str(&mass_peaks_md(
+        &mut exp,
+        &masses,
+        &ens.mass_peaks,
+        "over the records",
+    ));
     md.push_str(&disp.md);
     exp.write_numbers_md(&md)?;
     print!("{md}");
@@ -406,6 +417,8 @@ fn measured(a: &RandomArgs, file_device: &Device, path: Option<PathBuf>) -> Resu
         "accel_rms_g" => [accel_rms_g],
         "params" => [device.params.clone()],
     )?;
+    let masses = mass_columns(&device)?;
+    with_mass_columns(&mut per, &masses, &[s.mass_peaks])?;
     exp.write_parquet("records", &mut per, &device.params)?;
 
     exp.number("power_w", s.p_total_w());
@@ -414,7 +427,7 @@ fn measured(a: &RandomArgs, file_device: &Device, path: Option<PathBuf>) -> Resu
     exp.number("bw3db_hz", widths.bw3db_hz());
     exp.number("contact_fraction", s.contact_fraction);
     exp.number("x_rms_m", s.x_rms_m);
-    let md = format!(
+    let mut md = format!(
         "Measured drive on `{}` ({} set; {}): record `{file}` ({} samples at {} Hz, {} s), \
          resampled to {} Hz; the first {} s (five ring-up times) discarded; spectra in the band \
          {} to {} Hz, Welch segments of {} samples.\n\n\
@@ -441,6 +454,12 @@ fn measured(a: &RandomArgs, file_device: &Device, path: Option<PathBuf>) -> Resu
         s.impacts,
         free_flight_label(s.free_flight),
     );
+    md.push_str(&mass_peaks_md(
+        &mut exp,
+        &masses,
+        &s.mass_peaks,
+        "over the analysed record",
+    ));
     exp.write_numbers_md(&md)?;
     print!("{md}");
     let plot = spectra_plot(
@@ -454,4 +473,19 @@ fn measured(a: &RandomArgs, file_device: &Device, path: Option<PathBuf>) -> Resu
     times.lap("output");
     times.report("endstop-random", &mut exp);
     exp.finish()
+}
+
+/// Adds to `df` (one row per record) each mass's peaks of the records, under the per-mass
+/// column names `names` (none for a device of one mass).
+fn with_mass_columns(
+    df: &mut DataFrame,
+    names: &[&'static str],
+    peaks: &[MassPeaks],
+) -> Result<()> {
+    let values: Vec<Vec<f64>> = peaks.iter().map(MassPeaks::values).collect();
+    for (i, name) in names.iter().enumerate() {
+        let col: Vec<Option<f64>> = values.iter().map(|v| v.get(i).copied()).collect();
+        df.with_column(polars::prelude::Series::new((*name).into(), col))?;
+    }
+    Ok(())
 }

@@ -18,7 +18,11 @@ use endstop::study::stepped::Approach;
 use endstop::study::sweep::{DownSweepReport, SweepReport, SweepSettings};
 use endstop_experiments as common;
 
-use crate::shared::{describe, implausible_drive, start, step_effect, Protocol, RangeArgs};
+use crate::shared::{
+    describe, implausible_drive, mass_peaks_md, start, step_effect, Protocol, RangeArgs,
+};
+use common::reports::sweep_io::{mass_cells, mass_columns};
+use endstop::study::mass_peaks::MassPeaks;
 
 /// The arguments of `endstop response`.
 #[derive(Parser, Debug)]
@@ -158,7 +162,15 @@ fn write_parquet(
     down: &DownSweepReport,
     chirps: Option<&(ChirpReport, ChirpReport)>,
 ) -> Result<()> {
-    let rows = diagram_rows(&device.name, diagram);
+    let masses = mass_columns(device)?;
+    let rows: Vec<_> = diagram_rows(&device.name, diagram)
+        .into_iter()
+        .zip(diagram.branches.iter().flat_map(|b| &b.points))
+        .map(|(mut row, p)| {
+            row.extend(mass_cells(&masses, &p.summary.mass_peaks));
+            row
+        })
+        .collect();
     exp.write_parquet("continuation", &mut frame(rows)?, &device.params)?;
     let mut rows = Vec::new();
     for (dir, ms) in [
@@ -166,25 +178,29 @@ fn write_parquet(
         ("down", down.measurements().collect()),
     ] {
         for m in ms {
-            rows.push(row![
+            let mut row = row![
                 "direction" => dir,
                 "freq_hz" => m.freq_hz,
                 "v1_rms_v" => m.v1_rms_v,
                 "x_max_m" => m.x_peak_m,
                 "contact_fraction" => m.contact_fraction,
-            ]);
+            ];
+            row.extend(mass_cells(&masses, &m.mass_peaks));
+            rows.push(row);
         }
     }
     if let Some((u, d)) = chirps {
         for (dir, r) in [("swept up", u), ("swept down", d)] {
             for w in &r.windows {
-                rows.push(row![
+                let mut row = row![
                     "direction" => dir,
                     "freq_hz" => w.freq_hz,
                     "v1_rms_v" => w.v1_rms_v,
                     "x_max_m" => w.x_peak_m,
                     "contact_fraction" => if w.contact { 1.0 } else { 0.0 },
-                ]);
+                ];
+                row.extend(mass_cells(&masses, &w.mass_peaks));
+                rows.push(row);
             }
         }
     }
@@ -240,6 +256,16 @@ fn summary_md(
     if let Some(w) = implausible_drive(device, a.accel_rms_g, x_peak) {
         md.push_str(&w);
     }
+    let peaks = up
+        .measurements()
+        .chain(down.measurements())
+        .fold(MassPeaks::none(), |p, m| p.max(&m.mass_peaks));
+    md.push_str(&mass_peaks_md(
+        exp,
+        &mass_columns(device)?,
+        &peaks,
+        "over the up- and down-sweeps",
+    ));
     exp.number("step_hz", protocol.step_hz);
     if let Some(e) = up.branch_end() {
         let v = e.transition.value();

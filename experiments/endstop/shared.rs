@@ -304,3 +304,41 @@ fn suspension(device: &Device) -> String {
         )
     )
 }
+
+/// For a device of several masses, each mass's largest displacement and speed over `what`
+/// (`peaks`, under the per-mass column names `names` of
+/// [`endstop_experiments::reports::sweep_io::mass_columns`]): recorded as numbers under those
+/// names, and returned as a line of the numbers (empty for one mass).
+pub(crate) fn mass_peaks_md(
+    exp: &mut Experiment,
+    names: &[&'static str],
+    peaks: &endstop::study::mass_peaks::MassPeaks,
+    what: &str,
+) -> String {
+    let values = peaks.values();
+    if names.is_empty() || values.len() != names.len() {
+        return String::new();
+    }
+    for (n, v) in names.iter().zip(&values) {
+        exp.number(n, *v);
+    }
+    let each: Vec<String> = names
+        .chunks(2)
+        .zip(values.chunks(2))
+        .map(|(n, v)| {
+            let mass = n[0]
+                .strip_prefix("x_")
+                .and_then(|s| s.strip_suffix("_peak_m"))
+                .unwrap_or(n[0]);
+            format!(
+                "`{mass}` {} mm and {} m/s",
+                fmt_sig(v[0] * 1e3, 4),
+                fmt_sig(v[1], 4)
+            )
+        })
+        .collect();
+    format!(
+        "- largest displacement and speed of each mass {what}: {}\n",
+        each.join("; ")
+    )
+}

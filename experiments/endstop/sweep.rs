@@ -3,8 +3,10 @@
 
 use anyhow::Result;
 
-use crate::shared::{describe, implausible_drive, start, step_effect, RangeArgs};
+use crate::shared::{describe, implausible_drive, mass_peaks_md, start, step_effect, RangeArgs};
+use endstop::study::mass_peaks::MassPeaks;
 use endstop_experiments::io::plot::{LegendPos, LinePlot, Series, Style, PALETTE};
+use endstop_experiments::reports::sweep_io;
 use endstop_experiments::{self as common, fmt_sig};
 
 /// Runs `endstop sweep`.
@@ -21,12 +23,20 @@ pub(crate) fn sweep(a: RangeArgs) -> Result<()> {
     let col = |f: &dyn Fn(&endstop::study::steady::Measurement) -> f64| -> Vec<f64> {
         steps.iter().map(|s| f(&s.measurement)).collect()
     };
-    let rows = common::reports::sweep_io::sweep_rows(
+    let masses = sweep_io::mass_columns(&device)?;
+    let rows: Vec<_> = sweep_io::sweep_rows(
         &format!("{} g rms up-sweep", a.accel_rms_g),
         &device,
         report.measurements(),
         report.extended_from,
-    );
+    )
+    .into_iter()
+    .zip(report.measurements())
+    .map(|(mut row, m)| {
+        row.extend(sweep_io::mass_cells(&masses, &m.mass_peaks));
+        row
+    })
+    .collect();
     let mut df = common::io::frame::frame(rows)?;
     exp.write_parquet("sweep", &mut df, &device.params)?;
 
@@ -65,6 +75,10 @@ pub(crate) fn sweep(a: RangeArgs) -> Result<()> {
     if let Some(w) = implausible_drive(&device, a.accel_rms_g, x_peak) {
         md.push_str(&w);
     }
+    let peaks = steps
+        .iter()
+        .fold(MassPeaks::none(), |p, s| p.max(&s.measurement.mass_peaks));
+    md.push_str(&mass_peaks_md(&mut exp, &masses, &peaks, "over the sweep"));
     match report.onset {
         Some(t) => {
             exp.number("impact_onset_hz", t.value());

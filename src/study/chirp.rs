@@ -16,6 +16,7 @@ use crate::model::{Driven, Mode, Model, SwitchKind, MAX_OUTPUTS};
 use crate::num::roots::{illinois, RootOptions, Sample};
 use crate::ode::{Dopri5, Observer, SolverError, Stats, Step};
 use crate::physics::linear::{open_circuit_resonance_hz, LinearResponse};
+use crate::study::mass_peaks::MassPeaks;
 use crate::study::steady::{steady_state, SettleSettings};
 
 /// The resonance and half-power width of a device's linear response (the displacement per
@@ -169,6 +170,9 @@ pub struct ChirpWindow {
     pub p_total_w: f64,
     /// Largest |x| (m).
     pub x_peak_m: f64,
+    /// Each mass's largest |x| and |v| in the window for a model of several masses (at the
+    /// ends and midpoints of the steps, as `x_peak_m`); none for one mass.
+    pub mass_peaks: MassPeaks,
     /// True when the mass touched a stop in the window.
     pub contact: bool,
 }
@@ -196,6 +200,7 @@ struct Windows<'m, M, const N: usize> {
     cycles: f64,
     current: Option<i64>,
     acc: [f64; 5],
+    peaks: MassPeaks,
     /// Per output, the integrals of its square and of itself over the window.
     squares: Vec<f64>,
     integrals: Vec<f64>,
@@ -215,10 +220,12 @@ impl<M: Model<N>, const N: usize> Windows<'_, M, N> {
                 v2_rms_v: (v2sq / dur).sqrt(),
                 p_total_w: layout.load_power(&self.squares, &self.integrals, dur),
                 x_peak_m: x_peak,
+                mass_peaks: self.peaks,
                 contact: contact > 0.0,
             });
         }
         self.acc = [0.0; 5];
+        self.peaks = MassPeaks::of(self.model.layout());
         self.squares.iter_mut().for_each(|v| *v = 0.0);
         self.integrals.iter_mut().for_each(|v| *v = 0.0);
         self.t0 = t1;
@@ -253,9 +260,12 @@ impl<M: Model<N>, const N: usize> Observer<SVector<f64, N>, Mode> for Windows<'_
             self.squares[i] += sq[i] * st.h;
             self.integrals[i] += li[i] * st.h;
         }
-        self.acc[2] = self.acc[2]
-            .max(st.y1[0].abs())
-            .max(st.at_theta(0.5)[0].abs());
+        let ym = st.at_theta(0.5);
+        self.acc[2] = self.acc[2].max(st.y1[0].abs()).max(ym[0].abs());
+        if self.peaks.len > 0 {
+            self.peaks.see(model.layout(), st.y1.as_slice());
+            self.peaks.see(model.layout(), ym.as_slice());
+        }
         if mode.in_contact() {
             self.acc[3] += 1.0;
         }
@@ -308,6 +318,7 @@ impl ChirpSweep {
             cycles: self.window_cycles.max(1) as f64,
             current: None,
             acc: [0.0; 5],
+            peaks: MassPeaks::of(base.layout()),
             squares: vec![0.0; n_out],
             integrals: vec![0.0; n_out],
             t0: 0.0,

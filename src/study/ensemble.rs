@@ -32,6 +32,7 @@ use crate::ode::Stats;
 use crate::progress::Progress;
 use crate::signal::bandwidth::{mean_psd, restrict, Widths};
 use crate::signal::{self, Psd, WelchOptions};
+use crate::study::mass_peaks::MassPeaks;
 use crate::study::record::{
     output_psd, simulate_record, OutputSpectrum, RecordError, RecordSpec, RecordSummary,
 };
@@ -126,6 +127,10 @@ pub struct Ensemble {
     pub contact_fraction: MeanCi,
     /// Largest |x| over all records (m).
     pub x_peak_m: f64,
+    /// Each mass's largest |x| and |v| over all records (a model of several masses; none for
+    /// one).
+    #[serde(default)]
+    pub mass_peaks: MassPeaks,
     /// Impacts over all records.
     pub impacts: u64,
     /// Integrator counters summed over the records.
@@ -344,6 +349,9 @@ fn analyse(case: &EnsembleCase, records: Vec<RecordResult>) -> Ensemble {
             .iter()
             .map(|r| r.summary.x_peak_m)
             .fold(0.0, f64::max),
+        mass_peaks: records
+            .iter()
+            .fold(MassPeaks::none(), |p, r| p.max(&r.summary.mass_peaks)),
         impacts: records.iter().map(|r| r.summary.impacts).sum(),
         stats,
         mean_spectrum,

@@ -21,6 +21,7 @@ pub mod continuation;
 pub mod displacement;
 pub mod ensemble;
 pub mod flow;
+pub mod mass_peaks;
 pub mod orbit;
 pub mod periodic;
 pub mod ramp;

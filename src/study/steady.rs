@@ -31,6 +31,7 @@ use crate::drive::Sine;
 use crate::model::{Load, Mode, Model, SwitchKind, MAX_OUTPUTS};
 use crate::ode::{Observer, SolverError, Stats, Step};
 use crate::study::flow::SineFlow;
+use crate::study::mass_peaks::MassPeaks;
 
 /// Minimum block length in periods for the default steady-state settings.
 pub const MIN_BLOCK_PERIODS: usize = 5;
@@ -140,6 +141,9 @@ pub struct Measurement {
     pub p2_w: f64,
     /// Largest |x| (m).
     pub x_peak_m: f64,
+    /// Each mass's largest |x| and |v| for a model of several masses (at the ends and
+    /// midpoints of the measured block's steps, as `x_peak_m`); none for one mass.
+    pub mass_peaks: MassPeaks,
     /// Fraction of time past a stop.
     pub contact_fraction: f64,
     /// Impacts (contact entries) per period.
@@ -170,6 +174,7 @@ struct Block<'m, M> {
     v2sq: f64,
     vdsq: f64,
     x_peak: f64,
+    peaks: MassPeaks,
     contact_time: f64,
     impacts: u64,
     prev_mode_free: bool,
@@ -189,8 +194,13 @@ impl<M: Model<N>, const N: usize> Observer<SVector<f64, N>, Mode> for Block<'_, 
         self.v1sq += v1sq;
         self.v2sq += v2sq;
         self.vdsq += vdsq;
-        let xm = st.at_theta(0.5)[0].abs();
-        self.x_peak = self.x_peak.max(st.y1[0].abs()).max(xm);
+        let ym = st.at_theta(0.5);
+        self.x_peak = self.x_peak.max(st.y1[0].abs()).max(ym[0].abs());
+        if self.peaks.len > 0 {
+            let layout = model.layout();
+            self.peaks.see(layout, st.y1.as_slice());
+            self.peaks.see(layout, ym.as_slice());
+        }
         if m.in_contact() {
             self.contact_time += st.h;
             if self.prev_mode_free {
@@ -321,6 +331,7 @@ pub fn settle_and_measure<M: Model<N>, const N: usize>(
             v2sq: 0.0,
             vdsq: 0.0,
             x_peak: 0.0,
+            peaks: MassPeaks::of(model.layout()),
             contact_time: 0.0,
             impacts: 0,
         };
@@ -357,6 +368,7 @@ pub fn settle_and_measure<M: Model<N>, const N: usize>(
                 p1_w: power(0, b.v1sq, b.v1),
                 p2_w: power(1, b.v2sq, f64::NAN),
                 x_peak_m: b.x_peak,
+                mass_peaks: b.peaks,
                 contact_fraction: b.contact_time / dur,
                 impacts_per_period: b.impacts as f64 / cfg.block_periods as f64,
                 blocks,

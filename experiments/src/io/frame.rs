@@ -73,6 +73,26 @@ impl From<&str> for Cell {
 /// A row: `(column name, cell)` pairs, in column order.
 pub type Row = Vec<(&'static str, Cell)>;
 
+/// A column name made at run time (a device file's mass names) as a [`Row`]'s `&'static str`:
+/// each distinct name is leaked once and shared after, so a run leaks a handful of short
+/// strings however many rows it writes.
+pub fn column_name(name: &str) -> &'static str {
+    use std::collections::BTreeSet;
+    use std::sync::Mutex;
+    static NAMES: Mutex<BTreeSet<&'static str>> = Mutex::new(BTreeSet::new());
+    let mut names = NAMES
+        .lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner);
+    match names.get(name) {
+        Some(n) => *n,
+        None => {
+            let n: &'static str = Box::leak(name.to_string().into_boxed_str());
+            names.insert(n);
+            n
+        }
+    }
+}
+
 /// Builds a [`Row`]: `row!["freq_hz" => f, "series" => label]`.
 #[macro_export]
 macro_rules! row {

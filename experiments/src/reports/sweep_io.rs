@@ -6,9 +6,10 @@ use endstop::device::{Device, StiffnessModel, Stop, StopLaw};
 use endstop::paper::claims::{Answer, Claim, Value};
 use endstop::paper::curves::{law_key, Curve, CurveConvergence};
 use endstop::paper::setups::ParamSet;
+use endstop::study::mass_peaks::MassPeaks;
 use endstop::study::steady::Measurement;
 
-use crate::io::frame::Row;
+use crate::io::frame::{column_name, Cell, Row};
 use crate::io::md::Table;
 use crate::row;
 
@@ -28,6 +29,27 @@ pub fn measurement_cells(m: &Measurement) -> Row {
         "blocks" => m.blocks as u32,
         "converged" => m.converged,
     ]
+}
+
+/// The per-mass column names of `device`'s model ([`MassPeaks::column_names`]: each mass's
+/// `x_<mass>_peak_m` and `v_<mass>_peak_m_per_s`), none for a device of one mass.
+pub fn mass_columns(device: &Device) -> anyhow::Result<Vec<&'static str>> {
+    let names: Vec<String> = endstop::with_harvester!(device, |h| {
+        use endstop::model::Model;
+        Ok::<_, anyhow::Error>(MassPeaks::column_names(h.layout()))
+    })?;
+    Ok(names.iter().map(|n| column_name(n)).collect())
+}
+
+/// The cells of `peaks` under the columns `names` of [`mass_columns`] (null where a peak was
+/// not measured).
+pub fn mass_cells(names: &[&'static str], peaks: &MassPeaks) -> Row {
+    let values = peaks.values();
+    names
+        .iter()
+        .enumerate()
+        .map(|(i, n)| (*n, Cell::from(values.get(i).copied())))
+        .collect()
 }
 
 /// One row per step of a sweep of `device` (the device as simulated: its parameter-set label,

@@ -23,17 +23,45 @@ use super::diagram_types::{
 use super::impacting::{rigid_diagram, DiagramSettings};
 use super::{branch_from_rest, Branch, ContinuationSettings, EventKind as BranchEventKind};
 
-/// True when every stop of the device is rigid (and it has one).
+/// True when every stop of the device's model is rigid (and it has one): the model's
+/// contacts ([`Model::contacts`]), so that a device of several masses counts its stops to the
+/// frame and between masses. False for a device whose parts do not assemble (the study that
+/// assembles it reports why).
 pub fn all_stops_rigid(device: &Device) -> bool {
-    let stops: Vec<_> = device.stops.present().map(|(_, s)| s).collect();
-    !stops.is_empty()
-        && stops
-            .iter()
-            .all(|s| matches!(s.law, crate::device::StopLaw::Restitution { .. }))
+    crate::with_harvester!(
+        device,
+        |h| Ok::<_, crate::physics::harvester::AssemblyError>(model_stops_rigid(&h))
+    )
+    .unwrap_or(false)
+}
+
+/// True when every present contact of `model` (a finite gap) is rigid, and it has one.
+fn model_stops_rigid<M: Model<N>, const N: usize>(model: &M) -> bool {
+    let contacts = model.contacts();
+    let mut present = contacts.iter().filter(|c| c.gap.is_finite()).peekable();
+    present.peek().is_some() && present.all(|c| c.rigid())
+}
+
+/// True when the impacting-orbit diagram ([`rigid_diagram`]) follows every contact of the
+/// device's model: all rigid, and all the first mass's stops to the frame (a stop between two
+/// masses, or another mass's to the frame, is met by the branch continued from rest).
+fn rigid_diagram_applies(device: &Device) -> bool {
+    all_stops_rigid(device)
+        && crate::with_harvester!(
+            device,
+            |h| Ok::<_, crate::physics::harvester::AssemblyError>(
+                h.contacts()
+                    .iter()
+                    .filter(|c| c.gap.is_finite())
+                    .all(|c| c.mass == 0 && c.other.is_none())
+            )
+        )
+        .unwrap_or(false)
 }
 
 /// The diagram of `device` under the drive `start` (at the settings' start value) over the
-/// settings' range: [`rigid_diagram`] for a device whose stops are all rigid, else the branch
+/// settings' range: [`rigid_diagram`] for a device whose stops are all rigid and all the first
+/// mass's to the frame, else the branch
 /// continued from rest ([`branch_from_rest`]) as a diagram of one branch
 /// ([`Diagram::from_branch`]). `progress` is told of each branch as it is begun.
 pub fn diagram(
@@ -43,7 +71,7 @@ pub fn diagram(
     options: &DiagramSettings,
     progress: &dyn Progress,
 ) -> Result<Diagram, OrbitError> {
-    if all_stops_rigid(device) {
+    if rigid_diagram_applies(device) {
         return rigid_diagram(device, start, settings, options, progress);
     }
     progress.stage("periodic orbits from rest");

@@ -55,6 +55,7 @@ use thiserror::Error;
 use crate::drive::Sine;
 use crate::model::Layout;
 use crate::ode::SolverError;
+use crate::study::mass_peaks::MassPeaks;
 
 mod period_sums;
 mod shooter;
@@ -223,6 +224,9 @@ pub struct OrbitSummary {
     pub x_upper_m: f64,
     /// Smallest x (m).
     pub x_lower_m: f64,
+    /// Each mass's largest |x| and |v| over the period for a model of several masses (at the
+    /// ends and the Gauss-Legendre nodes of the steps, and at each impact); none for one mass.
+    pub mass_peaks: MassPeaks,
     /// Fraction of the period past a stop.
     pub contact_fraction: f64,
     /// Impacts per period: contact entries and rebounds off rigid stops.
@@ -255,6 +259,7 @@ impl OrbitSummary {
             Extent {
                 x_upper_m: acc.x_upper,
                 x_lower_m: acc.x_lower,
+                mass_peaks: acc.mass_peaks,
                 contact_fraction: acc.contact_time / period,
                 impacts: acc.impacts,
                 impact_speed_m_s: [acc.impact_speed[0], acc.impact_speed[1]],
@@ -290,6 +295,7 @@ impl OrbitSummary {
             x_max_m: extent.x_upper_m.max(-extent.x_lower_m),
             x_upper_m: extent.x_upper_m,
             x_lower_m: extent.x_lower_m,
+            mass_peaks: extent.mass_peaks,
             contact_fraction: extent.contact_fraction,
             impacts: extent.impacts,
             impact_speed_m_s: extent.impact_speed_m_s,
@@ -304,6 +310,7 @@ impl OrbitSummary {
 pub(crate) struct Extent {
     pub(crate) x_upper_m: f64,
     pub(crate) x_lower_m: f64,
+    pub(crate) mass_peaks: MassPeaks,
     pub(crate) contact_fraction: f64,
     pub(crate) impacts: u32,
     pub(crate) impact_speed_m_s: [f64; 2],

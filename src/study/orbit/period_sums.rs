@@ -7,6 +7,7 @@ use nalgebra::SVector;
 use crate::model::{Mode, Model, SwitchKind, MAX_CONTACTS, MAX_OUTPUTS};
 use crate::num::roots::{illinois, RootOptions, Sample};
 use crate::ode::{Observer, Step};
+use crate::study::mass_peaks::MassPeaks;
 
 /// Whole-period sums over the accepted steps of one period.
 #[derive(Debug)]
@@ -16,6 +17,7 @@ pub(super) struct Sums {
     pub(super) integrals: Vec<f64>,
     pub(super) x_upper: f64,
     pub(super) x_lower: f64,
+    pub(super) mass_peaks: MassPeaks,
     pub(super) contact_time: f64,
     pub(super) impacts: u32,
     was_contact: Option<bool>,
@@ -28,12 +30,13 @@ pub(super) struct Sums {
 impl Sums {
     /// Nothing summed for `outputs` outputs and `contacts` contacts; the extremes start empty
     /// (an orbit in a well off x = 0 never reaches zero, so zero is no bound on its extremes).
-    pub(super) fn new(outputs: usize, contacts: usize) -> Self {
+    pub(super) fn new(outputs: usize, contacts: usize, mass_peaks: MassPeaks) -> Self {
         Self {
             squares: vec![0.0; outputs],
             integrals: vec![0.0; outputs],
             x_upper: f64::NEG_INFINITY,
             x_lower: f64::INFINITY,
+            mass_peaks,
             contact_time: 0.0,
             impacts: 0,
             was_contact: None,
@@ -54,11 +57,12 @@ pub(super) struct Accumulator<'m, M> {
 }
 
 impl<'m, M> Accumulator<'m, M> {
-    /// Sums of a model's period, for `outputs` outputs.
-    pub(super) fn new(model: &'m M, outputs: usize) -> Self {
+    /// Sums of a model's period, for `outputs` outputs and the masses of `mass_peaks`
+    /// ([`MassPeaks::of`] the model's layout).
+    pub(super) fn new(model: &'m M, outputs: usize, mass_peaks: MassPeaks) -> Self {
         Self {
             model,
-            sums: Sums::new(outputs, MAX_CONTACTS),
+            sums: Sums::new(outputs, MAX_CONTACTS, mass_peaks),
             buf: vec![0.0; outputs],
         }
     }
@@ -95,8 +99,13 @@ impl Sums {
         let k = buf.len();
         let mut sq = [0.0f64; MAX_OUTPUTS];
         let mut lin = [0.0f64; MAX_OUTPUTS];
+        let peaks = self.mass_peaks.len > 0;
         for (x, w) in crate::ode::GAUSS_LEGENDRE_3 {
-            model.outputs(mode, &st.at_theta(x), buf);
+            let y = st.at_theta(x);
+            if peaks {
+                self.mass_peaks.see(model.layout(), y.as_slice());
+            }
+            model.outputs(mode, &y, buf);
             for i in 0..k {
                 sq[i] += w * buf[i].powi(2);
                 lin[i] += w * buf[i];
@@ -105,6 +114,10 @@ impl Sums {
         for i in 0..k {
             self.squares[i] += sq[i] * st.h;
             self.integrals[i] += lin[i] * st.h;
+        }
+        if peaks {
+            self.mass_peaks.see(model.layout(), st.y0.as_slice());
+            self.mass_peaks.see(model.layout(), st.y1.as_slice());
         }
         for x in [st.y0[0], st.y1[0]] {
             self.x_upper = self.x_upper.max(x);

@@ -243,7 +243,8 @@ impl<'a, M: Model<N>, const N: usize> Shooter<'a, M, N> {
     ) -> Result<(SVector<f64, N>, OrbitSummary), SolverError> {
         let sine = forcing.sine(phase_rad);
         let outputs = self.base.layout().outputs.len();
-        let mut acc = Accumulator::new(self.base, outputs);
+        let peaks = crate::study::mass_peaks::MassPeaks::of(self.base.layout());
+        let mut acc = Accumulator::new(self.base, outputs, peaks);
         let mut ode = SineFlow::new(
             self.base,
             sine,

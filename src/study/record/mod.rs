@@ -68,6 +68,7 @@ use crate::model::{FlightSplit, FlightVisitor, Ledger, Mode, Model, NoFlight, Re
 use crate::ode::{SolverError, Stats};
 use crate::physics::harvester::AssemblyError;
 use crate::signal::SpectralError;
+use crate::study::mass_peaks::MassPeaks;
 
 mod affine;
 mod books;
@@ -261,6 +262,10 @@ pub struct RecordSummary {
     pub x_rms_m: f64,
     /// Largest |x| at the ends of the integrator's steps (which include every contact event) (m).
     pub x_peak_m: f64,
+    /// Each mass's largest |x| and |v| in the analysed window for a model of several masses,
+    /// at the ends of the integrator's steps as `x_peak_m`; none for one mass.
+    #[serde(default)]
+    pub mass_peaks: MassPeaks,
     /// Fraction of the analysed time spent past a stop (eq 2: delta > 0).
     pub contact_fraction: f64,
     /// Contact entries (impacts) in the analysed window.

@@ -8,6 +8,7 @@ use nalgebra::SVector;
 use crate::drive::Sampled;
 use crate::model::{Driven, Load, Mode, Model, SwitchKind, MAX_OUTPUTS};
 use crate::ode::{Dopri5, Observer, Step};
+use crate::study::mass_peaks::MassPeaks;
 
 use super::books::{Books, Found};
 use super::{
@@ -121,7 +122,10 @@ pub(super) fn run<M: Model<N>, O: RecordObserver, F: FastPath<M, N>, const N: us
     let (mut v1, mut v2) = (Vec::with_capacity(n), Vec::with_capacity(n));
     let mut more: Vec<Vec<f64>> = (2..n_out.max(2)).map(|_| Vec::with_capacity(n)).collect();
     let mut out = [0.0; MAX_OUTPUTS];
-    let mut stats = Contacts::default();
+    let mut stats = Contacts {
+        peaks: MassPeaks::of(layout),
+        ..Contacts::default()
+    };
     let (mut sx2, mut sa2) = (0.0f64, 0.0f64);
     let mut fast_steps = 0u64;
 
@@ -146,6 +150,9 @@ pub(super) fn run<M: Model<N>, O: RecordObserver, F: FastPath<M, N>, const N: us
                 ode_current = false;
                 fast_steps += 1;
                 stats.fast(analysed, mode.in_contact(), dt, y[ix]);
+                if analysed && stats.peaks.len > 0 {
+                    stats.peaks.see(layout, y.as_slice());
+                }
                 for &(tau, x) in fast.rebounds() {
                     stats.rebound(t0 + tau >= t_start - 0.5 * dt, x);
                 }
@@ -214,6 +221,7 @@ pub(super) fn run<M: Model<N>, O: RecordObserver, F: FastPath<M, N>, const N: us
         p2_w,
         x_rms_m: (sx2 / nf).sqrt(),
         x_peak_m: stats.x_peak,
+        mass_peaks: stats.peaks,
         contact_fraction: if duration > 0.0 {
             stats.contact_time / duration
         } else {
@@ -255,6 +263,8 @@ struct Contacts {
     contact_time: f64,
     impacts: u64,
     x_peak: f64,
+    /// Each mass's peaks (a model of several masses).
+    peaks: MassPeaks,
     in_contact: bool,
 }
 
@@ -316,6 +326,9 @@ impl<M: Model<N>, const N: usize> Observer<SVector<f64, N>, Mode> for Watch<'_, 
                 }
             }
             s.x_peak = s.x_peak.max(step.y1[self.ix].abs());
+            if s.peaks.len > 0 {
+                s.peaks.see(self.model.layout(), step.y1.as_slice());
+            }
         }
         s.in_contact = now;
     }

@@ -88,7 +88,8 @@ pub(super) struct GrazingNode {
 
 /// The diagram of `device` under the drive `start` (whose parameter value is the settings'
 /// start), continued over the settings' range (see the module docs of the parent). The
-/// device's stops must all be rigid. `progress` is told of each branch as it is begun.
+/// device's stops must all be rigid and all the first mass's to the frame (a named
+/// [`OrbitError::Invalid`] otherwise). `progress` is told of each branch as it is begun.
 pub fn rigid_diagram(
     device: &Device,
     start: Forcing,
@@ -117,6 +118,23 @@ pub fn rigid_diagram_of<M: Model<N> + Clone, const N: usize>(
         return Err(OrbitError::Invalid(
             "the impacting-orbit diagram needs a device whose stops are all rigid".into(),
         ));
+    }
+    // Its grazings and impact maps are those of the first mass against the frame.
+    if let Some(c) = present.iter().find(|c| c.mass != 0 || c.other.is_some()) {
+        let (i, j) = (c.mass, c.other);
+        let names = &h.layout().components;
+        let mass = |k: usize| {
+            let x = names[h.layout().masses[k].0].name.as_str();
+            x.strip_prefix("x_").unwrap_or(x).to_string()
+        };
+        return Err(OrbitError::Invalid(format!(
+            "the impacting-orbit diagram follows the first mass's stops to the frame only; \
+             this model has a stop {}: continue its branch from rest instead",
+            match j {
+                Some(j) => format!("between `{}` and `{}`", mass(j), mass(i)),
+                None => format!("from `{}` to the frame", mass(i)),
+            }
+        )));
     }
     let (lo, hi) = (
         settings.start.min(settings.stop),

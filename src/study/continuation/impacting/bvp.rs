@@ -39,6 +39,7 @@ use crate::drive::{Excitation, Sine};
 use crate::laws::contact::Side;
 use crate::model::{Mode, Model};
 use crate::ode::{SolverError, Stats};
+use crate::study::mass_peaks::MassPeaks;
 use crate::study::orbit::{multipliers, Extent, Forcing, OrbitSummary, Parameter};
 
 use super::segment::{fly, Flight};
@@ -480,6 +481,7 @@ impl<'a, M: Model<N>, const N: usize> Problem<'a, M, N> {
         let n_out = self.base.layout().outputs.len();
         let mut out_sq = vec![0.0; n_out];
         let mut out_int = vec![0.0; n_out];
+        let mut peaks = MassPeaks::of(self.base.layout());
         let mut x_up = f64::NEG_INFINITY;
         let mut x_lo = f64::INFINITY;
         let mut speed = [0.0f64; 2];
@@ -531,6 +533,8 @@ impl<'a, M: Model<N>, const N: usize> Problem<'a, M, N> {
                     out_sq[i] += fl.out_sq[i];
                     out_int[i] += fl.out_int[i];
                 }
+                peaks.see(self.base.layout(), pre.as_slice());
+                peaks = peaks.max(&fl.mass_peaks);
                 let side = if pre[0] > 0.0 { 0 } else { 1 };
                 speed[side] = speed[side].max(pre[1].abs());
                 x_up = x_up.max(pre[0]);
@@ -555,6 +559,7 @@ impl<'a, M: Model<N>, const N: usize> Problem<'a, M, N> {
             Extent {
                 x_upper_m: x_up,
                 x_lower_m: x_lo,
+                mass_peaks: peaks,
                 contact_fraction: 0.0,
                 impacts: self.seq.impacts() as u32,
                 impact_speed_m_s: speed,

@@ -10,6 +10,7 @@ use crate::drive::{Excitation, Sine};
 use crate::model::{Mode, Model};
 use crate::num::roots::{illinois, RootOptions, Sample};
 use crate::ode::{Dopri5, HybridSystem, SolverError, Stats, Step, Tangent};
+use crate::study::mass_peaks::MassPeaks;
 use crate::study::orbit::Parameter;
 
 /// The state, its derivatives with respect to the start state, and the derivatives with
@@ -105,6 +106,9 @@ pub(super) struct Flight<const N: usize> {
     pub f_end: SVector<f64, N>,
     /// Interior extrema of x, in time order.
     pub extrema: Vec<Extremum<N>>,
+    /// Each mass's largest |x| and |v| at the ends and midpoints of the steps (a model of
+    /// several masses; none for one).
+    pub mass_peaks: MassPeaks,
     /// Integrals of the squares of the model's outputs over the flight (V^2 s).
     pub out_sq: Vec<f64>,
     /// Integrals of the model's outputs over the flight (V s).
@@ -156,6 +160,7 @@ pub(super) fn fly<M: Model<N>, const N: usize>(
     let mut upcrossing = None;
     let mut marked = vec![None; marks.len()];
     let mut buf = vec![0.0; n_out];
+    let mut mass_peaks = MassPeaks::of(model.layout());
     let mut out_at = |z: &Aug<N>, i: usize| {
         model.outputs(Mode::FREE, &z.y, &mut buf);
         buf[i]
@@ -169,6 +174,10 @@ pub(super) fn fly<M: Model<N>, const N: usize>(
         for i in 0..n_out {
             out_sq[i] += integrate(st, |z| out_at(z, i).powi(2));
             out_int[i] += integrate(st, |z| out_at(z, i));
+        }
+        if mass_peaks.len > 0 {
+            mass_peaks.see(model.layout(), st.y1.y.as_slice());
+            mass_peaks.see(model.layout(), st.at_theta(0.5).y.as_slice());
         }
         let (v0, v1) = (st.y0.y[1], st.y1.y[1]);
         if (v0 > 0.0) != (v1 > 0.0) && v0 != 0.0 {
@@ -196,6 +205,7 @@ pub(super) fn fly<M: Model<N>, const N: usize>(
         dphase: z.dp.column(1).into_owned(),
         f_end: model.rhs(Mode::FREE, &end, sine.accel(duration_s)),
         extrema,
+        mass_peaks,
         out_sq,
         out_int,
         upcrossing,
