@@ -18,6 +18,7 @@ mod calibration_artefact;
 mod cli;
 mod cli_devices;
 mod cli_interface;
+mod cli_merit;
 mod crosscheck_recording;
 mod determinism;
 mod fit_cli;
