@@ -258,7 +258,8 @@ pub fn design(a: DesignArgs) -> Result<()> {
 
     // Everything is computed: now write.
     write_outputs(&mut exp, &device, &p, &study, &maps, &merits)?;
-    let md = summary_md(&a, &loaded.file, &p, &study, &merits);
+    let md = summary_md(&a, &loaded.file, &p, &study, &merits)
+        + &crate::design_table::first_range_table(&p, &maps);
     exp.write_numbers_md(&md)?;
     print!("{md}");
     exp.write_plot(&plots(&p, &study, &maps))?;
@@ -555,7 +556,7 @@ fn plots(p: &Problem, study: &Study, maps: &[(usize, Vec<Evaluated>)]) -> Panels
                 series,
             )
             .log(p.ranges[0].spacing == endstop::device::Spacing::Log, false)
-            .legend(LegendPos::UpperRight),
+            .legend(LegendPos::UpperLeft),
         );
     }
     Panels::new(panels)

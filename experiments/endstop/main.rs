@@ -22,6 +22,8 @@
 mod basins;
 mod charge;
 mod design;
+mod design_table;
+mod merit;
 mod random;
 mod random_args;
 mod random_storage;

@@ -3,7 +3,8 @@
 //! is the one record engine's over the device's model (`endstop::study::record`); what is
 //! reported follows the model's outputs: a transducer with its own loads gets the loads' power
 //! and its spectrum (below), a model with a storage (behind an interface circuit) its DC
-//! power, efficiency, storage voltage and energy ledger (`random_storage.rs`).
+//! power, efficiency, storage voltage and energy ledger (`random_storage.rs`). A sine drive
+//! adds the harvester effectiveness of its power ([`crate::merit`]).
 
 use std::path::PathBuf;
 
@@ -324,6 +325,27 @@ fn displacement(
     Ok(Displacement { md, plot })
 }
 
+/// For a sine drive (`--sine-g`, its peak in g, at `--freq-hz`), the harvester effectiveness of
+/// the power `power_w` it delivers ([`crate::merit::effectiveness`]); nothing for a measured
+/// record, whose vibration is not the sine the bound is for.
+pub(crate) fn sine_effectiveness(
+    exp: &mut common::Experiment,
+    a: &RandomArgs,
+    device: &Device,
+    power_w: f64,
+) -> String {
+    match (a.accel_file.is_none(), a.sine_g, a.freq_hz) {
+        (true, Some(peak_g), Some(freq_hz)) => crate::merit::effectiveness(
+            exp,
+            device,
+            power_w,
+            peak_g / std::f64::consts::SQRT_2,
+            freq_hz,
+        ),
+        _ => String::new(),
+    }
+}
+
 /// The record of a measured drive (`path`) or of a sine (`--sine-g`, without a path).
 fn measured(a: &RandomArgs, file_device: &Device, path: Option<PathBuf>) -> Result<()> {
     let MeasuredDrive {
@@ -460,6 +482,7 @@ fn measured(a: &RandomArgs, file_device: &Device, path: Option<PathBuf>) -> Resu
         &s.mass_peaks,
         "over the analysed record",
     ));
+    let md = md + &sine_effectiveness(&mut exp, a, &device, s.p_total_w());
     exp.write_numbers_md(&md)?;
     print!("{md}");
     let plot = spectra_plot(

@@ -1,8 +1,10 @@
 //! `endstop sweep`: a stepped-sine up-sweep on a device file, with the impact onset and the
-//! end of the impacting branch refined, and the step's effect on that end.
+//! end of the impacting branch refined, and the step's effect on that end; the half-power band
+//! and the harvester effectiveness of its power ([`crate::merit`]).
 
 use anyhow::Result;
 
+use crate::merit;
 use crate::shared::{describe, implausible_drive, mass_peaks_md, start, step_effect, RangeArgs};
 use endstop::study::mass_peaks::MassPeaks;
 use endstop_experiments::io::plot::{LegendPos, LinePlot, Series, Style, PALETTE};
@@ -109,6 +111,20 @@ pub(crate) fn sweep(a: RangeArgs) -> Result<()> {
             "the end of the impacting branch",
             end.transition.value(),
             quarter,
+        ));
+    }
+    // The designer's figures of merit over the whole sweep (its frequencies increase): the
+    // half-power band, and the effectiveness at the band's peak.
+    let freqs_hz = col(&|m| m.freq_hz);
+    let power_w = col(&|m| m.p_total_w());
+    if let Some((line, band)) = merit::half_power(&mut exp, &freqs_hz, &power_w) {
+        md.push_str(&line);
+        md.push_str(&merit::effectiveness(
+            &mut exp,
+            &device,
+            band.peak_w,
+            a.accel_rms_g,
+            band.peak_hz,
         ));
     }
     exp.write_numbers_md(&md)?;

@@ -19,6 +19,7 @@ mod cli;
 mod cli_devices;
 mod cli_interface;
 mod cli_masses;
+mod cli_merit;
 mod crosscheck_recording;
 mod determinism;
 mod fit_cli;

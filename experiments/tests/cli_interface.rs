@@ -3,7 +3,8 @@
 //! response writes the sweeps and the continued branch, which turns at two folds with an
 //! unstable stretch between them; a noise ensemble writes each record's DC power, efficiency
 //! and ledger, and an open DC load is refused with nothing written; bad charging and noise
-//! options and an implausible drive are named.
+//! options and an implausible drive are named; the switched interfaces behind a coil are
+//! refused naming the parts.
 
 use std::path::Path;
 use std::process::Command;
@@ -272,4 +273,85 @@ fn an_implausible_drive_is_named() {
     let md = std::fs::read_to_string(out.join("numbers.md")).unwrap();
     assert!(md.contains("**warning**"), "{md}");
     let _ = std::fs::remove_dir_all(out);
+}
+
+/// The switched interfaces behind the electromagnetic example (`em_bridge.toml`, its bridge
+/// replaced): parallel and series SSHI and SECE, with and without its inductor, switch on a
+/// piezoelectric element's clamped capacitance, which a coil does not have, so they are
+/// refused, naming the interface and the transducer, by `sweep` on a device file and by
+/// `design` among its `--interfaces`, and nothing is written.
+#[test]
+fn switched_interfaces_behind_a_coil_are_refused_naming_the_parts() {
+    let dir = std::env::temp_dir().join(format!("endstop-cli-{}-em-switch", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let text = std::fs::read_to_string(example("em_bridge.toml")).unwrap();
+    let head = &text[..text.find("[interface]").unwrap()];
+    let load = "[interface.load]\nkind = \"resistor\"\nresistance_ohm = 100e3\n";
+    let diode =
+        "[interface.diode]\nlaw = \"piecewise_linear\"\nforward_drop_v = 0.2\non_resistance_ohm = 0.0\n";
+    let cases = [
+        ("parallel_sshi", format!("inversion_factor = 0.8\n{diode}")),
+        ("series_sshi", format!("inversion_factor = 0.8\n{diode}")),
+        ("sece", "efficiency = 0.8\n".to_string()),
+        (
+            "sece",
+            "inductance_h = 1e-3\ninductor_resistance_ohm = 10.0\nflyback_drop_v = 0.2\n"
+                .to_string(),
+        ),
+    ];
+    let refused = |args: &[&str], out: &Path, kind: &str| {
+        let o = Command::new(BIN)
+            .args(args)
+            .arg("--out")
+            .arg(out)
+            .output()
+            .unwrap();
+        assert_eq!(o.status.code(), Some(1), "{kind} is refused");
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(
+            err.contains(&format!(
+                "interface kind `{kind}` takes a piezoelectric transducer"
+            )) && err.contains("an electromagnetic transducer takes `resistive` or `full_bridge`"),
+            "{err}"
+        );
+        assert!(!out.exists(), "nothing written for {kind}");
+    };
+    for (n, (kind, keys)) in cases.iter().enumerate() {
+        let table = format!("kind = \"{kind}\"\nstorage_capacitance_f = 10e-6\n{keys}{load}");
+        let device = dir.join(format!("em_{n}.toml"));
+        std::fs::write(&device, format!("{head}[interface]\n{table}")).unwrap();
+        let device = device.to_str().unwrap();
+        let sweep = [
+            "sweep",
+            "--device",
+            device,
+            "--from",
+            "45",
+            "--to",
+            "55",
+            "--step",
+            "1",
+            "--accel-rms-g",
+            "0.2",
+        ];
+        refused(&sweep, &dir.join(format!("sweep_{n}")), kind);
+        let interfaces = dir.join(format!("interfaces_{n}.toml"));
+        std::fs::write(&interfaces, format!("[[interface]]\n{table}")).unwrap();
+        let design = [
+            "design",
+            "--device",
+            &example("em_bridge.toml"),
+            "--range",
+            "load.resistance_ohm=1e3..1e5",
+            "--freq-hz",
+            "50",
+            "--accel-rms-g",
+            "0.2",
+            "--interfaces",
+            interfaces.to_str().unwrap(),
+        ];
+        refused(&design, &dir.join(format!("design_{n}")), kind);
+    }
+    let _ = std::fs::remove_dir_all(&dir);
 }

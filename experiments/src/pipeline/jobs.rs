@@ -48,6 +48,7 @@ const RIGID: &str = "data/examples/rigid_restitution.toml";
 const RECORD: &str = "data/examples/machine_record.wav";
 const HARDENING: &str = "data/examples/hardening_em.toml";
 const BISTABLE: &str = "data/examples/bistable_stops_em.toml";
+const DESIGN_INTERFACES: &str = "data/design/interfaces.toml";
 
 /// A run of the `endstop` tool for the "Model your own harvester" chapter: `own_device_<stem>`,
 /// its arguments, and the files it reads.
@@ -396,6 +397,28 @@ pub const JOBS: &[Job] = &[
             "10",
         ],
         &[BISTABLE],
+    ),
+    // The design chapter's power against the stop gap, per interface, with the load chosen.
+    tool_run(
+        "own_device_design_gap",
+        &[
+            "design",
+            "--device",
+            PIEZO_BRIDGE,
+            "--range",
+            "stops.upper.gap_m=4e-5..1.6e-4",
+            "--range",
+            "load.resistance_ohm=3e3..1e6",
+            "--freq-hz",
+            "120",
+            "--accel-rms-g",
+            "0.3",
+            "--interfaces",
+            DESIGN_INTERFACES,
+            "--max-impact-speed-m-s",
+            "0.015",
+        ],
+        &[PIEZO_BRIDGE, DESIGN_INTERFACES],
     ),
     Job {
         name: "own_device_fit",

@@ -1,0 +1,53 @@
+//! The power maps of `endstop design` as a table for `numbers.md`: the power against the
+//! first range (the stop gap in the design chapter's example), each interface's best over the
+//! second range at each of its values, with the value that gives it and the impact speed there.
+
+use endstop::design::{Evaluated, Problem};
+use endstop_experiments::fmt_sig;
+
+/// The table of the maps (`maps[i] = (interface, n x n grid)`, the grid's index
+/// `k * n + j` for the `k`-th value of the first range and the `j`-th of the second, as
+/// [`Problem::grid`] lays it out); empty without maps.
+pub(crate) fn first_range_table(p: &Problem, maps: &[(usize, Vec<Evaluated>)]) -> String {
+    let Some((_, first)) = maps.first() else {
+        return String::new();
+    };
+    let n = (first.len() as f64).sqrt().round() as usize;
+    let (x, y) = (&p.ranges[0].path, &p.ranges[1].path);
+    let mut md = format!(
+        "\nPower against `{x}` from the maps ({n} x {n} points): at each value, each \
+         interface's largest power over `{y}`, the value of `{y}` that gives it, and the \
+         largest impact speed there (- where no design of the row could be evaluated).\n\n| `{x}` |"
+    );
+    let mut rule = String::from("|---|");
+    for (i, _) in maps {
+        let key = p.interfaces[*i].key();
+        md.push_str(&format!(
+            " `{key}`: power [uW] | at `{y}` | impact speed [m/s] |"
+        ));
+        rule.push_str("---|---|---|");
+    }
+    md.push('\n');
+    md.push_str(&rule);
+    md.push('\n');
+    for k in 0..n {
+        md.push_str(&format!("| {} |", fmt_sig(first[k * n].values[0], 3)));
+        for (_, grid) in maps {
+            let best = grid[k * n..(k + 1) * n]
+                .iter()
+                .filter_map(|e| e.result.as_ref().ok().map(|q| (e, q)))
+                .max_by(|a, b| a.1.power_w.total_cmp(&b.1.power_w));
+            match best {
+                Some((e, q)) => md.push_str(&format!(
+                    " {} | {} | {} |",
+                    fmt_sig(q.power_w * 1e6, 4),
+                    fmt_sig(e.values[1], 3),
+                    fmt_sig(q.impact_speed_m_s, 3)
+                )),
+                None => md.push_str(" - | - | - |"),
+            }
+        }
+        md.push('\n');
+    }
+    md
+}
