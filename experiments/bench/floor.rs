@@ -5,9 +5,9 @@
 //!   stops at ±10 um (e = 0.6), driven from rest by `a(t) = -10 cos(2π 1000 t)` m/s² for 10 s
 //!   and written at 50 kHz. The floor is `bench/floor_kernel.rs` (closed-form propagation,
 //!   Hermite guard, Newton on the closed form); the engine is `study::record` on the assembled
-//!   `Harvester` of a device with no transducer, under the cosine sampled at 50 kHz (read
-//!   between samples by linear interpolation, as every sampled drive is). Their impact counts
-//!   and positions at the samples are compared.
+//!   `Harvester` of a device with no transducer (whose record runs on `(x, v)` alone), under
+//!   the cosine sampled at 50 kHz (read between samples by linear interpolation, as every
+//!   sampled drive is). Their impact counts and positions at the samples are compared.
 //! * **Prototype 2's noise record** (Sa = 1.69e-3 g²/Hz, the paper's 10 s after its pre-roll,
 //!   seed 2012, stream 0): the floor is a lower bound, the exact propagation of the free
 //!   flight's linear part `L` under the same samples, one 4 x 4 product and two drive columns

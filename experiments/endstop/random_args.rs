@@ -8,6 +8,7 @@ use anyhow::{bail, Result};
 use clap::Parser;
 use endstop::device::Device;
 use endstop::drive::measured::MeasuredRecord;
+use endstop::drive::swept_sine_samples;
 use endstop::study::record::transient_s;
 use endstop::G;
 use endstop_experiments::fmt_sig;
@@ -42,6 +43,11 @@ pub struct RandomArgs {
     /// The sine drive's frequency (Hz), with --sine-g.
     #[arg(long, requires = "sine_g", allow_hyphen_values = true)]
     pub(crate) freq_hz: Option<f64>,
+    /// A linear chirp instead of a steady sine, with --sine-g: the sine holds --freq-hz through
+    /// the pre-roll and then sweeps linearly to this frequency (Hz) over --duration-s, at a
+    /// continuous phase.
+    #[arg(long, requires = "sine_g", allow_hyphen_values = true)]
+    pub(crate) chirp_to_hz: Option<f64>,
     /// A measured acceleration record to drive the device with instead of noise: a CSV file
     /// whose header names a time column (`time_s` or `time_ms`) and an acceleration column
     /// (`accel_m_per_s2` or `accel_g`), or a mono WAV file with --accel-scale. It is checked
@@ -115,30 +121,42 @@ pub(crate) struct MeasuredDrive {
     pub(crate) times: TimeSplit,
 }
 
-/// The sine drive of `--sine-g` and `--freq-hz` for `device`: the device's pre-roll and then
-/// `--duration-s`, sampled at `--sample-rate-hz`.
+/// The sine drive of `--sine-g` and `--freq-hz` for `device` (swept to `--chirp-to-hz` after
+/// the pre-roll, if given): the device's pre-roll and then `--duration-s`, sampled at
+/// `--sample-rate-hz`.
 fn sine_record(a: &RandomArgs, device: &Device, amplitude_g: f64) -> Result<MeasuredRecord> {
     let freq_hz = a.freq_hz.unwrap_or(f64::NAN);
     if !(amplitude_g.is_finite() && freq_hz.is_finite() && freq_hz > 0.0) {
         bail!("--sine-g = {amplitude_g}, --freq-hz = {freq_hz}: must be finite, the frequency > 0");
     }
+    let to_hz = a.chirp_to_hz.unwrap_or(freq_hz);
+    if !(to_hz.is_finite() && to_hz > 0.0) {
+        bail!("--chirp-to-hz = {to_hz}: must be finite and > 0");
+    }
     if !(a.duration_s.is_finite() && a.duration_s > 0.0) {
         bail!("--duration-s = {}: must be finite and > 0", a.duration_s);
     }
     let fs = a.sample_rate_hz;
-    let samples = ((transient_s(device) + a.duration_s) * fs).round();
+    let preroll_s = transient_s(device);
+    let samples = ((preroll_s + a.duration_s) * fs).round();
     if samples >= MAX_RESAMPLED as f64 {
         bail!("--duration-s = {} at --sample-rate-hz = {fs}: must give at most {MAX_RESAMPLED} samples", a.duration_s);
     }
-    let w = 2.0 * std::f64::consts::PI * freq_hz / fs;
-    let accel = (0..=samples as usize)
-        .map(|k| amplitude_g * G * (w * k as f64).sin())
-        .collect();
-    let name = format!(
-        "sine {} g at {} Hz",
-        fmt_sig(amplitude_g, 6),
-        fmt_sig(freq_hz, 6)
-    );
+    let hold = (preroll_s * fs).round() as usize;
+    let accel = swept_sine_samples(amplitude_g * G, freq_hz, to_hz, fs, hold, samples as usize);
+    let name = match a.chirp_to_hz {
+        Some(to) => format!(
+            "sine {} g at {} Hz, swept linearly to {} Hz",
+            fmt_sig(amplitude_g, 6),
+            fmt_sig(freq_hz, 6),
+            fmt_sig(to, 6)
+        ),
+        None => format!(
+            "sine {} g at {} Hz",
+            fmt_sig(amplitude_g, 6),
+            fmt_sig(freq_hz, 6)
+        ),
+    };
     Ok(MeasuredRecord::from_uniform(&name, fs, accel)?)
 }
 

@@ -307,3 +307,90 @@ fn a_sine_drive_for_a_fixed_time_writes_what_a_measured_record_writes() {
     assert!(rel(a, af) < 1e-9, "accel rms {a:e} vs {af:e}");
     let _ = std::fs::remove_dir_all(dir);
 }
+
+/// `--chirp-to-hz` sweeps the sine after the pre-roll and writes what `--accel-file` writes:
+/// the same samples (`endstop::drive::swept_sine_samples`, whose phase is checked against the
+/// chirp's closed form in its own tests) written to a CSV file give the same record (power,
+/// RMS displacement and RMS drive to 1e-9 relatively, as for the steady sine: equal rates, so
+/// nothing is resampled, and each sample written to the last bit), and the drive's spectrum
+/// peaks inside the swept band (to the Welch bin nearest its edges).
+#[test]
+fn a_chirp_drive_writes_what_a_measured_record_writes() {
+    let dir = tmp("chirp");
+    let piezo = data("examples/piezo_cantilever.toml");
+    let (amplitude_g, f0, f1, fs, duration_s) = (0.2, 100.0, 140.0, 20e3, 2.0);
+    let chirp_out = dir.join("chirp");
+    let o = run(&[
+        "random",
+        "--device",
+        &piezo,
+        "--sine-g",
+        "0.2",
+        "--freq-hz",
+        "100",
+        "--chirp-to-hz",
+        "140",
+        "--duration-s",
+        "2",
+        "--sample-rate-hz",
+        "20000",
+        "--out",
+        chirp_out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let df = read_parquet(&chirp_out.join("output_psd.parquet"));
+    let f = df.column("freq_hz").unwrap().f64().unwrap().clone();
+    let s = df.column("psd_g2_per_hz").unwrap().f64().unwrap().clone();
+    let bin_hz = f.get(1).unwrap() - f.get(0).unwrap();
+    let (peak_f, _) = f
+        .into_iter()
+        .zip(&s)
+        .map(|(f, s)| (f.unwrap(), s.unwrap()))
+        .fold((0.0, 0.0), |a, b| if b.1 > a.1 { b } else { a });
+    // Inside the band, to the Welch bin nearest its edges.
+    assert!(
+        (f0 - 0.5 * bin_hz..=f1 + 0.5 * bin_hz).contains(&peak_f),
+        "drive PSD peaks at {peak_f} Hz (bins of {bin_hz} Hz)"
+    );
+    let records = |out: &Path| {
+        let r = read_parquet(&out.join("records.parquet"));
+        let col = |c: &str| r.column(c).unwrap().f64().unwrap().get(0).unwrap();
+        (col("p_w"), col("x_rms_m"), col("accel_rms_g"))
+    };
+    let (p, x, a) = records(&chirp_out);
+    let text = std::fs::read_to_string(&piezo).unwrap();
+    let device = endstop::device::Device::from_toml_str(&text, &piezo).unwrap();
+    let preroll = endstop::study::record::transient_s(&device);
+    let (hold, n) = (
+        (preroll * fs).round() as usize,
+        ((preroll + duration_s) * fs).round() as usize,
+    );
+    let accel = endstop::drive::swept_sine_samples(amplitude_g * endstop::G, f0, f1, fs, hold, n);
+    let mut csv_text = String::from("time_s,accel_m_per_s2\n");
+    for (k, acc) in accel.iter().enumerate() {
+        let t = k as f64 / fs;
+        csv_text.push_str(&format!("{t:e},{acc:e}\n"));
+    }
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("chirp.csv");
+    std::fs::write(&file, csv_text).unwrap();
+    let file_out = dir.join("file");
+    let o = run(&[
+        "random",
+        "--device",
+        &piezo,
+        "--accel-file",
+        file.to_str().unwrap(),
+        "--sample-rate-hz",
+        "20000",
+        "--out",
+        file_out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let (pf, xf, af) = records(&file_out);
+    let rel = |u: f64, v: f64| (u - v).abs() / v.abs();
+    assert!(rel(p, pf) < 1e-9, "power {p:e} vs {pf:e}");
+    assert!(rel(x, xf) < 1e-9, "x rms {x:e} vs {xf:e}");
+    assert!(rel(a, af) < 1e-9, "accel rms {a:e} vs {af:e}");
+    let _ = std::fs::remove_dir_all(dir);
+}

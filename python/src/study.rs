@@ -4,6 +4,7 @@
 //! runs.
 
 use endstop::device::Device;
+use endstop::drive::swept_sine_samples;
 use endstop::paper::setups::paper_record;
 use endstop::physics::linear::white_noise_power_w;
 use endstop::physics::two_port::{self, TwoPort};
@@ -387,9 +388,10 @@ fn record<'py>(
 
 /// One record under a sine, `a(t) = accel_g g sin(2 pi freq_hz t)` from rest, sampled at
 /// `sample_rate_hz`: the device's pre-roll, discarded, then `duration_s` analysed, as
-/// `endstop random --sine-g`. Returns what [`record`] returns.
+/// `endstop random --sine-g`; with `chirp_to_hz`, swept linearly from `freq_hz` to it over the
+/// analysed time at a continuous phase (`--chirp-to-hz`). Returns what [`record`] returns.
 #[pyfunction]
-#[pyo3(signature = (device, accel_g, freq_hz, duration_s = 10.0, sample_rate_hz = 100e3))]
+#[pyo3(signature = (device, accel_g, freq_hz, duration_s = 10.0, sample_rate_hz = 100e3, chirp_to_hz = None))]
 fn sine_record<'py>(
     py: Python<'py>,
     device: &PyDevice,
@@ -397,9 +399,14 @@ fn sine_record<'py>(
     freq_hz: f64,
     duration_s: f64,
     sample_rate_hz: f64,
+    chirp_to_hz: Option<f64>,
 ) -> PyResult<Bound<'py, PyDict>> {
     if !(accel_g.is_finite() && freq_hz.is_finite() && freq_hz > 0.0) {
         return Err(arg_err("accel_g must be finite and freq_hz positive"));
+    }
+    let to_hz = chirp_to_hz.unwrap_or(freq_hz);
+    if !(to_hz.is_finite() && to_hz > 0.0) {
+        return Err(arg_err("chirp_to_hz must be positive"));
     }
     if !(duration_s.is_finite() && duration_s > 0.0) {
         return Err(arg_err("duration_s must be positive"));
@@ -410,11 +417,8 @@ fn sine_record<'py>(
     let dev = device.inner.clone();
     let n_tr = (transient_s(&dev) * sample_rate_hz).round() as usize;
     let n = n_tr + (duration_s * sample_rate_hz).round() as usize;
-    let w = 2.0 * std::f64::consts::PI * freq_hz / sample_rate_hz;
     let drive = SampledDrive {
-        accel: (0..=n)
-            .map(|k| accel_g * G * (w * k as f64).sin())
-            .collect(),
+        accel: swept_sine_samples(accel_g * G, freq_hz, to_hz, sample_rate_hz, n_tr, n).into(),
         sample_rate_hz,
         transient_samples: n_tr,
     };

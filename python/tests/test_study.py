@@ -66,6 +66,20 @@ def test_down_sweep_runs_downwards_and_ends_its_branch():
     assert r["branch_end_hz"] is not None and r["branch_end_kind"] is not None
 
 
+def test_a_chirp_record_holds_the_sine_through_the_preroll_then_sweeps():
+    dev = endstop.Device.prototype(2)
+    steady = endstop.study.sine_record(dev, 0.05, 650.0, duration_s=0.1)
+    unswept = endstop.study.sine_record(dev, 0.05, 650.0, duration_s=0.1, chirp_to_hz=650.0)
+    swept = endstop.study.sine_record(dev, 0.05, 650.0, duration_s=0.1, chirp_to_hz=750.0)
+    # Without a sweep the drive is the steady sine's, bit for bit.
+    assert np.array_equal(steady["v1_v"], unswept["v1_v"])
+    # The pre-roll is the steady sine's, so the first analysed sample is too; then it sweeps.
+    assert swept["v1_v"][0] == steady["v1_v"][0]
+    assert not np.array_equal(swept["v1_v"], steady["v1_v"])
+    with pytest.raises(ValueError, match="chirp_to_hz"):
+        endstop.study.sine_record(dev, 0.05, 650.0, chirp_to_hz=-1.0)
+
+
 def test_bad_arguments_raise_value_errors():
     dev = endstop.Device.prototype(2)
     with pytest.raises(ValueError, match="stop_hz"):

@@ -39,7 +39,7 @@ pub mod noise;
 mod sampled;
 mod sine;
 
-pub use chirp::{Chirp, Profile};
+pub use chirp::{swept_sine_samples, Chirp, Profile};
 pub use sampled::Sampled;
 pub use sine::{Parameter, Sine};
 

@@ -90,12 +90,15 @@ def record(device, psd_g2_per_hz, seed=2012, stream=0, duration_s=10.0):
     return _native.record(device, float(psd_g2_per_hz), int(seed), int(stream), float(duration_s))
 
 
-def sine_record(device, accel_g, freq_hz, duration_s=10.0, sample_rate_hz=100e3):
+def sine_record(device, accel_g, freq_hz, duration_s=10.0, sample_rate_hz=100e3,
+                chirp_to_hz=None):
     """One record under the sine ``a(t) = accel_g g sin(2 pi freq_hz t)`` from rest, the
-    device's pre-roll discarded and ``duration_s`` analysed (``endstop random --sine-g``): what
-    :func:`record` returns."""
+    device's pre-roll discarded and ``duration_s`` analysed (``endstop random --sine-g``); with
+    ``chirp_to_hz``, swept linearly from ``freq_hz`` to it over the analysed time at a continuous
+    phase (``--chirp-to-hz``): what :func:`record` returns."""
     return _native.sine_record(device, float(accel_g), float(freq_hz), float(duration_s),
-                               float(sample_rate_hz))
+                               float(sample_rate_hz),
+                               None if chirp_to_hz is None else float(chirp_to_hz))
 
 
 def ensemble(device, psd_g2_per_hz, records=4, duration_s=10.0, seed=2012):

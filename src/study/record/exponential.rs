@@ -17,29 +17,29 @@ use super::{Fallback, FreeFlightPath, EXPONENTIAL_ORDER, STOP_MARGIN};
 /// The exponential step for one model, remainder type `R` and sample interval (see the module
 /// docs).
 pub(super) struct ExpFlight<R, const N: usize> {
-    remainder: R,
-    method: ExpAdams<N, EXPONENTIAL_ORDER>,
+    pub(super) remainder: R,
+    pub(super) method: ExpAdams<N, EXPONENTIAL_ORDER>,
     /// The remainder at the last samples since the last mode switch.
     history: History<N, EXPONENTIAL_ORDER>,
     /// Largest x an exponential step may reach: the upper gap less [`STOP_MARGIN`] of it
     /// (infinite without a stop), or the split's reach.
-    upper: f64,
+    pub(super) upper: f64,
     /// Largest -x an exponential step may reach.
-    lower: f64,
+    pub(super) lower: f64,
     /// `L`, `c` and the scales, for the dense output the books read.
-    l: SMatrix<f64, N, N>,
-    c: SVector<f64, N>,
+    pub(super) l: SMatrix<f64, N, N>,
+    pub(super) c: SVector<f64, N>,
     scales: SVector<f64, N>,
     /// The step's dense output at the Gauss nodes, once the books ask for it.
     dense: Option<[ExpAdams<N, EXPONENTIAL_ORDER>; 3]>,
     /// The free flight is linear: its remainder is identically zero, so a step needs no
     /// history and is the propagator's product with the input's two columns alone.
-    linear: bool,
+    pub(super) linear: bool,
     /// A linear free flight resolved by the sample interval between rigid stops: its stops,
     /// where an interval's rebounds are located on the exact solution (`impacts.rs`).
-    rigid: Option<Vec<RigidStop>>,
+    pub(super) rigid: Option<Vec<RigidStop>>,
     /// `1 / scales`.
-    inv_scales: SVector<f64, N>,
+    pub(super) inv_scales: SVector<f64, N>,
     /// The rebounds of the last step.
     rebounds: Rebounds,
 }
@@ -143,7 +143,6 @@ impl<M: Model<N>, R: Remainder<N>, const N: usize> FastPath<M, N> for ExpFlight<
                 return None;
             };
             let (end, rebounds) = impacts::interval(
-                model,
                 &self.l,
                 &self.c,
                 &self.inv_scales,
@@ -151,6 +150,7 @@ impl<M: Model<N>, R: Remainder<N>, const N: usize> FastPath<M, N> for ExpFlight<
                 y,
                 h,
                 [a0, a1],
+                |guard, at, a| model.switch(Mode::FREE, guard, at, a) == Mode::FREE,
             )?;
             self.rebounds = rebounds;
             let r = self.remainder.remainder_and_outputs(&end, outputs);
@@ -197,7 +197,7 @@ impl<M: Model<N>, R: Remainder<N>, const N: usize> FastPath<M, N> for ExpFlight<
 /// the cubic from above (and its mirror from below); most steps stop at that test. Otherwise
 /// the cubic's interior extrema (the roots of its derivative) are checked.
 #[inline(always)]
-fn hermite_within(x0: f64, m0: f64, x1: f64, m1: f64, upper: f64, lower: f64) -> bool {
+pub(super) fn hermite_within(x0: f64, m0: f64, x1: f64, m1: f64, upper: f64, lower: f64) -> bool {
     let slack = 4.0 / 27.0 * (m0.abs() + m1.abs());
     let (hi, lo) = (max2(x0, x1), -max2(-x0, -x1));
     if hi + slack < upper && -lo + slack < lower {

@@ -19,7 +19,7 @@
 
 use nalgebra::{SMatrix, SVector};
 
-use crate::model::{Mode, Model};
+use crate::model::Model;
 
 use super::stepping::{POSITION, VELOCITY};
 
@@ -104,7 +104,8 @@ impl<const N: usize> Series<N> {
         terms[0] = *y;
         let size = y.component_mul(inv_scales).amax().max(1.0);
         let mut d = *y;
-        let mut tau_k = 1.0;
+        // k! as the product 1 * 2 * ... * k, in that order.
+        let (mut tau_k, mut k_factorial) = (1.0, 1.0);
         for k in 1..MAX_TERMS {
             d = l * d;
             match k {
@@ -113,7 +114,8 @@ impl<const N: usize> Series<N> {
                 _ => {}
             }
             tau_k *= len_s / k as f64;
-            terms[k] = d / factorial(k);
+            k_factorial *= k as f64;
+            terms[k] = d / k_factorial;
             let scaled = (d * tau_k).component_mul(inv_scales).amax();
             if k > 2 && scaled <= TAYLOR_TOL * size {
                 return Some(Self { terms, len: k + 1 });
@@ -142,18 +144,13 @@ impl<const N: usize> Series<N> {
     }
 }
 
-/// `k!` as a float.
-fn factorial(k: usize) -> f64 {
-    (1..=k).map(|i| i as f64).product()
-}
-
-/// One interval of a linear free flight from `y` at `t0` with the input `a0`, `a1` at its
-/// ends, each rebound off a rigid stop applied by the model's switch; the state at its end and
-/// the rebounds, or `None` to hand the interval to Dormand-Prince (a series that does not
-/// converge, a switch that does not stay in free flight, chatter).
+/// One interval of a linear free flight from `y` with the input `a0`, `a1` at its ends, each
+/// rebound off a rigid stop applied by `rebound` (the stop's guard, the state there, the input
+/// there; true when the model stays in free flight, as [`Model::switch`] decides); the state at
+/// its end and the rebounds, or `None` to hand the interval to Dormand-Prince (a series that
+/// does not converge, a switch that does not stay in free flight, chatter).
 #[allow(clippy::too_many_arguments)]
-pub(super) fn interval<M: Model<N>, const N: usize>(
-    model: &M,
+pub(super) fn interval<const N: usize>(
     l: &SMatrix<f64, N, N>,
     c: &SVector<f64, N>,
     inv_scales: &SVector<f64, N>,
@@ -161,6 +158,7 @@ pub(super) fn interval<M: Model<N>, const N: usize>(
     y: &SVector<f64, N>,
     h: f64,
     [a0, a1]: [f64; 2],
+    mut rebound: impl FnMut(usize, &mut SVector<f64, N>, f64) -> bool,
 ) -> Option<(SVector<f64, N>, Rebounds)> {
     let s = (a1 - a0) / h;
     let mut rebounds = Rebounds::default();
@@ -176,8 +174,7 @@ pub(super) fn interval<M: Model<N>, const N: usize>(
         }
         let mut at = series.at(tau);
         t += tau;
-        let mode = model.switch(Mode::FREE, stop.guard, &mut at, a0 + s * t);
-        if mode != Mode::FREE {
+        if !rebound(stop.guard, &mut at, a0 + s * t) {
             return None;
         }
         rebounds.at[rebounds.len] = (t, at[POSITION].abs());

@@ -14,7 +14,10 @@
 //!
 //! * a model whose free flight splits into a linear part and a small remainder (a transducer
 //!   with its own loads, [`crate::model::FlightSplit`]): between contacts an interval is one
-//!   step of the exponential Adams-Bashforth method ([`crate::ode::exponential`]);
+//!   step of the exponential Adams-Bashforth method ([`crate::ode::exponential`]); a linear
+//!   free flight between rigid stops is one product with the propagator, with its rebounds
+//!   located on the exact solution (`impacts.rs`), and where the model holds every component
+//!   past `(x, v)` at zero (no transducer) on `(x, v)` alone (`mechanical.rs`);
 //! * a model without that split whose modes are affine (an interface circuit with
 //!   piecewise-linear diodes, [`crate::model::Model::affine`]): an interval in an affine mode is
 //!   advanced exactly by the mode's propagator of the state augmented with the interpolated
@@ -74,6 +77,7 @@ mod affine;
 mod books;
 mod exponential;
 mod impacts;
+mod mechanical;
 mod spectrum;
 mod stepping;
 mod storage;
@@ -600,7 +604,10 @@ impl<M: Model<N>, O: RecordObserver, const N: usize> FlightVisitor<N> for Visit<
             books,
         } = self;
         match ExpFlight::new(model, dt, split, remainder) {
-            Ok(fast) => run(model, drive, rtol, fast, observer, books),
+            Ok(fast) => match fast.mechanical(model, books.is_some()) {
+                Some(mech) => run(model, drive, rtol, mech, observer, books),
+                None => run(model, drive, rtol, fast, observer, books),
+            },
             Err(why) => run(model, drive, rtol, NoFast(why), observer, books),
         }
     }
