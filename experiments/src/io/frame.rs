@@ -84,7 +84,7 @@ pub fn column_name(name: &str) -> &'static str {
         .lock()
         .unwrap_or_else(std::sync::PoisonError::into_inner);
     match names.get(name) {
-        Some(n) => *n,
+        Some(n) => n,
         None => {
             let n: &'static str = Box::leak(name.to_string().into_boxed_str());
             names.insert(n);
