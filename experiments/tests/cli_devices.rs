@@ -247,26 +247,13 @@ fn a_sine_drive_for_a_fixed_time_writes_what_a_measured_record_writes() {
         sine_out.to_str().unwrap(),
     ]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let df = read_parquet(&sine_out.join("output_psd.parquet"));
-    let f = df.column("freq_hz").unwrap().f64().unwrap().clone();
-    let s = df.column("psd_g2_per_hz").unwrap().f64().unwrap().clone();
-    let bin_hz = f.get(1).unwrap() - f.get(0).unwrap();
-    let (peak_f, _) = f
-        .into_iter()
-        .zip(&s)
-        .map(|(f, s)| (f.unwrap(), s.unwrap()))
-        .fold((0.0, 0.0), |a, b| if b.1 > a.1 { b } else { a });
+    let (peak_f, bin_hz) = drive_psd_peak(&sine_out);
     // The Welch bin nearest the sine.
     assert!(
         (peak_f - freq_hz).abs() <= 0.5 * bin_hz,
         "drive PSD peaks at {peak_f} Hz (bins of {bin_hz} Hz)"
     );
-    let records = |out: &Path| {
-        let r = read_parquet(&out.join("records.parquet"));
-        let col = |c: &str| r.column(c).unwrap().f64().unwrap().get(0).unwrap();
-        (col("p_w"), col("x_rms_m"), col("accel_rms_g"))
-    };
-    let (p, x, a) = records(&sine_out);
+    let (p, x, a) = first_record(&sine_out);
     assert!(
         (a / (amplitude_g / 2f64.sqrt()) - 1.0).abs() < 1e-4,
         "RMS drive {a} g"
@@ -278,33 +265,10 @@ fn a_sine_drive_for_a_fixed_time_writes_what_a_measured_record_writes() {
     let n = ((preroll + duration_s) * fs).round() as usize;
     let g = endstop::G;
     let w = 2.0 * std::f64::consts::PI * freq_hz / fs;
-    let mut csv_text = String::from("time_s,accel_m_per_s2\n");
-    for k in 0..=n {
-        let t = k as f64 / fs;
-        let acc = amplitude_g * g * (w * k as f64).sin();
-        csv_text.push_str(&format!("{t:e},{acc:e}\n"));
-    }
-    std::fs::create_dir_all(&dir).unwrap();
-    let file = dir.join("sine.csv");
-    std::fs::write(&file, csv_text).unwrap();
-    let file_out = dir.join("file");
-    let o = run(&[
-        "random",
-        "--device",
-        &piezo,
-        "--accel-file",
-        file.to_str().unwrap(),
-        "--sample-rate-hz",
-        "20000",
-        "--out",
-        file_out.to_str().unwrap(),
-    ]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let (pf, xf, af) = records(&file_out);
-    let rel = |u: f64, v: f64| (u - v).abs() / v.abs();
-    assert!(rel(p, pf) < 1e-9, "power {p:e} vs {pf:e}");
-    assert!(rel(x, xf) < 1e-9, "x rms {x:e} vs {xf:e}");
-    assert!(rel(a, af) < 1e-9, "accel rms {a:e} vs {af:e}");
+    let accel: Vec<f64> = (0..=n)
+        .map(|k| amplitude_g * g * (w * k as f64).sin())
+        .collect();
+    same_record_from_file(&dir, &piezo, "sine", &accel, fs, (p, x, a));
     let _ = std::fs::remove_dir_all(dir);
 }
 
@@ -338,26 +302,13 @@ fn a_chirp_drive_writes_what_a_measured_record_writes() {
         chirp_out.to_str().unwrap(),
     ]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let df = read_parquet(&chirp_out.join("output_psd.parquet"));
-    let f = df.column("freq_hz").unwrap().f64().unwrap().clone();
-    let s = df.column("psd_g2_per_hz").unwrap().f64().unwrap().clone();
-    let bin_hz = f.get(1).unwrap() - f.get(0).unwrap();
-    let (peak_f, _) = f
-        .into_iter()
-        .zip(&s)
-        .map(|(f, s)| (f.unwrap(), s.unwrap()))
-        .fold((0.0, 0.0), |a, b| if b.1 > a.1 { b } else { a });
+    let (peak_f, bin_hz) = drive_psd_peak(&chirp_out);
     // Inside the band, to the Welch bin nearest its edges.
     assert!(
         (f0 - 0.5 * bin_hz..=f1 + 0.5 * bin_hz).contains(&peak_f),
         "drive PSD peaks at {peak_f} Hz (bins of {bin_hz} Hz)"
     );
-    let records = |out: &Path| {
-        let r = read_parquet(&out.join("records.parquet"));
-        let col = |c: &str| r.column(c).unwrap().f64().unwrap().get(0).unwrap();
-        (col("p_w"), col("x_rms_m"), col("accel_rms_g"))
-    };
-    let (p, x, a) = records(&chirp_out);
+    let (p, x, a) = first_record(&chirp_out);
     let text = std::fs::read_to_string(&piezo).unwrap();
     let device = endstop::device::Device::from_toml_str(&text, &piezo).unwrap();
     let preroll = endstop::study::record::transient_s(&device);
@@ -366,31 +317,69 @@ fn a_chirp_drive_writes_what_a_measured_record_writes() {
         ((preroll + duration_s) * fs).round() as usize,
     );
     let accel = endstop::drive::swept_sine_samples(amplitude_g * endstop::G, f0, f1, fs, hold, n);
+    same_record_from_file(&dir, &piezo, "chirp", &accel, fs, (p, x, a));
+    let _ = std::fs::remove_dir_all(dir);
+}
+
+/// The drive spectrum's peak frequency in a `random` run's `output_psd.parquet` and the Welch
+/// bin width (Hz).
+fn drive_psd_peak(out: &Path) -> (f64, f64) {
+    let df = read_parquet(&out.join("output_psd.parquet"));
+    let f = df.column("freq_hz").unwrap().f64().unwrap().clone();
+    let s = df.column("psd_g2_per_hz").unwrap().f64().unwrap().clone();
+    let bin_hz = f.get(1).unwrap() - f.get(0).unwrap();
+    let (peak_f, _) = f
+        .into_iter()
+        .zip(&s)
+        .map(|(f, s)| (f.unwrap(), s.unwrap()))
+        .fold((0.0, 0.0), |a, b| if b.1 > a.1 { b } else { a });
+    (peak_f, bin_hz)
+}
+
+/// The first record's power (W), RMS displacement (m) and RMS drive (g) of a `random` run.
+fn first_record(out: &Path) -> (f64, f64, f64) {
+    let r = read_parquet(&out.join("records.parquet"));
+    let col = |c: &str| r.column(c).unwrap().f64().unwrap().get(0).unwrap();
+    (col("p_w"), col("x_rms_m"), col("accel_rms_g"))
+}
+
+/// Writes `accel` (m/s^2, sampled at `fs` Hz from t = 0) to `<dir>/<name>.csv`, runs `random
+/// --accel-file` on it at the same rate, and asserts the record's power, RMS displacement and
+/// RMS drive equal `expected` to 1e-9 relatively (equal rates: nothing is resampled, and each
+/// sample is written to the last bit).
+fn same_record_from_file(
+    dir: &Path,
+    device: &str,
+    name: &str,
+    accel: &[f64],
+    fs: f64,
+    expected: (f64, f64, f64),
+) {
     let mut csv_text = String::from("time_s,accel_m_per_s2\n");
     for (k, acc) in accel.iter().enumerate() {
         let t = k as f64 / fs;
         csv_text.push_str(&format!("{t:e},{acc:e}\n"));
     }
-    std::fs::create_dir_all(&dir).unwrap();
-    let file = dir.join("chirp.csv");
+    std::fs::create_dir_all(dir).unwrap();
+    let file = dir.join(format!("{name}.csv"));
     std::fs::write(&file, csv_text).unwrap();
-    let file_out = dir.join("file");
+    let file_out = dir.join(format!("{name}_file"));
     let o = run(&[
         "random",
         "--device",
-        &piezo,
+        device,
         "--accel-file",
         file.to_str().unwrap(),
         "--sample-rate-hz",
-        "20000",
+        &format!("{fs}"),
         "--out",
         file_out.to_str().unwrap(),
     ]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let (pf, xf, af) = records(&file_out);
+    let (p, x, a) = expected;
+    let (pf, xf, af) = first_record(&file_out);
     let rel = |u: f64, v: f64| (u - v).abs() / v.abs();
     assert!(rel(p, pf) < 1e-9, "power {p:e} vs {pf:e}");
     assert!(rel(x, xf) < 1e-9, "x rms {x:e} vs {xf:e}");
     assert!(rel(a, af) < 1e-9, "accel rms {a:e} vs {af:e}");
-    let _ = std::fs::remove_dir_all(dir);
 }
