@@ -7,6 +7,8 @@ use endstop::design::merit;
 use endstop::device::Device;
 use endstop_experiments::{fmt_sig, Experiment};
 
+use crate::random_args::RandomArgs;
+
 /// The harvester effectiveness of `power_w` delivered under a sine of `accel_rms_g` (g rms) at
 /// `freq_hz` (Mitcheson, Yeatman, Rao, Holmes and Green, Proc. IEEE 96(9) (2008) 1457, the
 /// section on harvester effectiveness: the power over the largest power of an ideal
@@ -82,4 +84,25 @@ pub(crate) fn half_power(
         fmt_sig(b.peak_hz, 5)
     );
     Some((line, b))
+}
+
+/// For a sine drive (`--sine-g`, its peak in g, at `--freq-hz`), the harvester effectiveness of
+/// the power `power_w` it delivers ([`effectiveness`]); nothing for a measured
+/// record, whose vibration is not the sine the bound is for.
+pub(crate) fn sine_effectiveness(
+    exp: &mut Experiment,
+    a: &RandomArgs,
+    device: &Device,
+    power_w: f64,
+) -> String {
+    match (a.accel_file.is_none(), a.sine_g, a.freq_hz) {
+        (true, Some(peak_g), Some(freq_hz)) => effectiveness(
+            exp,
+            device,
+            power_w,
+            peak_g / std::f64::consts::SQRT_2,
+            freq_hz,
+        ),
+        _ => String::new(),
+    }
 }

@@ -325,27 +325,6 @@ fn displacement(
     Ok(Displacement { md, plot })
 }
 
-/// For a sine drive (`--sine-g`, its peak in g, at `--freq-hz`), the harvester effectiveness of
-/// the power `power_w` it delivers ([`crate::merit::effectiveness`]); nothing for a measured
-/// record, whose vibration is not the sine the bound is for.
-pub(crate) fn sine_effectiveness(
-    exp: &mut common::Experiment,
-    a: &RandomArgs,
-    device: &Device,
-    power_w: f64,
-) -> String {
-    match (a.accel_file.is_none(), a.sine_g, a.freq_hz) {
-        (true, Some(peak_g), Some(freq_hz)) => crate::merit::effectiveness(
-            exp,
-            device,
-            power_w,
-            peak_g / std::f64::consts::SQRT_2,
-            freq_hz,
-        ),
-        _ => String::new(),
-    }
-}
-
 /// The record of a measured drive (`path`) or of a sine (`--sine-g`, without a path).
 fn measured(a: &RandomArgs, file_device: &Device, path: Option<PathBuf>) -> Result<()> {
     let MeasuredDrive {
@@ -482,7 +461,7 @@ fn measured(a: &RandomArgs, file_device: &Device, path: Option<PathBuf>) -> Resu
         &s.mass_peaks,
         "over the analysed record",
     ));
-    let md = md + &sine_effectiveness(&mut exp, a, &device, s.p_total_w());
+    let md = md + &crate::merit::sine_effectiveness(&mut exp, a, &device, s.p_total_w());
     exp.write_numbers_md(&md)?;
     print!("{md}");
     let plot = spectra_plot(

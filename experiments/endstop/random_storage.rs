@@ -192,7 +192,7 @@ fn measured(a: &RandomArgs, mut m: MeasuredDrive, file: &str) -> Result<()> {
         r.summary.exponential_steps,
         r.summary.stats.accepted,
     );
-    let md = md + &crate::random::sine_effectiveness(&mut exp, a, &device, r.p_dc_w);
+    let md = md + &crate::merit::sine_effectiveness(&mut exp, a, &device, r.p_dc_w);
     exp.write_numbers_md(&md)?;
     print!("{md}");
     m.times.lap("output");
