@@ -56,8 +56,8 @@ fn each_mass_peaks_are_the_closed_form_amplitudes_of_the_linear_chain() {
             !(0.85..1.15).contains(&ratio),
             "{f_hz} Hz: amplitudes too alike"
         );
-        for k in 0..2 {
-            let (xa, va) = (x[k].norm(), w * x[k].norm());
+        for (k, xk) in x.iter().take(2).enumerate() {
+            let (xa, va) = (xk.norm(), w * xk.norm());
             // Sampled at the ends and midpoints of the steps, a peak is never above the
             // orbit's (1e-6: the integrator's rtol of 1e-8 over a block, with room), and
             // below it by at most 1 - cos(pi / s) for s samples a period: Dormand-Prince at
