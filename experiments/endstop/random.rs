@@ -57,6 +57,21 @@ fn free_flight_label(p: FreeFlightPath) -> String {
     }
 }
 
+/// The linear theory the outputs are compared with: the one-mass model linearised about rest
+/// with its stops away; none for a device of several masses, which it does not describe (its
+/// linear columns are then NaN, and `numbers.md` and `summary.json` say nothing of it).
+fn linear_theory(device: &Device) -> Option<LinearResponse> {
+    device.masses.is_none().then(|| LinearResponse::of(device))
+}
+
+/// The linear theory's power (W), if there is a linear theory, for `numbers.md`.
+fn linear_md(power_w: Option<f64>) -> String {
+    match power_w {
+        Some(p) => format!("{} nW", fmt_sig(p * 1e9, 4)),
+        None => "not computed for a device of several masses".into(),
+    }
+}
+
 /// The two panels: the output power PSD beside its linear theory, and the drive's PSD.
 fn spectra_plot(device: &Device, title: &str, out: &Psd, linear: &[f64], drive: &Psd) -> Panels {
     let pts = |p: &[f64], f: &[f64], scale: f64| -> Vec<(f64, f64)> {
@@ -115,8 +130,11 @@ fn noise(a: &RandomArgs, psd: f64) -> Result<()> {
     let out = &ens.mean_spectrum.total;
     let m = out.freq_hz.len();
     let sa_si = psd * G * G;
-    let lin = LinearResponse::of(&device);
-    let linear = lin.output_psd(sa_si, &out.freq_hz).density;
+    let lin = linear_theory(&device);
+    let linear = match &lin {
+        Some(l) => l.output_psd(sa_si, &out.freq_hz).density,
+        None => vec![f64::NAN; m],
+    };
     let mut df = df!(
         "freq_hz" => out.freq_hz.clone(),
         "out_psd_uw_per_hz" => out.density.iter().map(|d| d * 1e6).collect::<Vec<_>>(),
@@ -145,13 +163,15 @@ fn noise(a: &RandomArgs, psd: f64) -> Result<()> {
 
     let disp = displacement(&mut exp, &device, &spec.record, &ens, a)?;
     let band_hz = spec.record.noise.bandwidth_hz;
-    let linear_w = white_noise_power_w(&device, sa_si, 1e-3, band_hz);
+    let linear_w = lin.map(|_| white_noise_power_w(&device, sa_si, 1e-3, band_hz));
     let eq21 =
         TwoPort::try_of(&device).map(|_| endstop::physics::two_port::eq21_power_w(&device, psd));
     exp.number("power_w", ens.power_w.mean);
     exp.number("power_ci95_w", ens.power_w.ci95);
     exp.number("efficiency", ens.efficiency.mean);
-    exp.number("linear_power_w", linear_w);
+    if let Some(p) = linear_w {
+        exp.number("linear_power_w", p);
+    }
     if let Some(p) = eq21 {
         exp.number("eq21_power_w", p);
     }
@@ -165,7 +185,7 @@ fn noise(a: &RandomArgs, psd: f64) -> Result<()> {
     let mut md = format!(
         "Random vibration of `{}` ({} set; {}): two-sided Sa = {} g^2/Hz up to {} kHz, {} records \
          of {} s, seed {}, Welch segments of {} samples.\n\n\
-         - power of the loads: {} nW ± {} nW (95 %); linear theory without stops: {} nW{}\n\
+         - power of the loads: {} nW ± {} nW (95 %); linear theory without stops: {}{}\n\
          - efficiency 2P/(m Sa): {} %\n\
          - 3 dB bandwidth of the mean output PSD: {} Hz\n\
          - RMS displacement: {} um; time in contact: {} %; impacts: {}\n\
@@ -181,7 +201,7 @@ fn noise(a: &RandomArgs, psd: f64) -> Result<()> {
         nperseg,
         fmt_sig(ens.power_w.mean * 1e9, 4),
         fmt_sig(ens.power_w.ci95 * 1e9, 2),
-        fmt_sig(linear_w * 1e9, 4),
+        linear_md(linear_w),
         eq21.map(|p| format!(" (eq 21: {} nW)", fmt_sig(p * 1e9, 4)))
             .unwrap_or_default(),
         fmt_sig(ens.efficiency.mean * 100.0, 4),
@@ -374,16 +394,19 @@ fn measured(a: &RandomArgs, file_device: &Device, path: Option<PathBuf>) -> Resu
         ..drive_full.clone()
     };
     let drive_band = restrict(&drive_psd, lo, hi);
-    let lin = LinearResponse::of(&device);
+    let lin = linear_theory(&device);
     // The drive's own two-sided density at each frequency, through the same linear PSD.
     let linear_full: Vec<f64> = drive_psd
         .freq_hz
         .iter()
         .zip(&drive_psd.density)
-        .map(|(&f, &sa_g2)| lin.output_psd_w_per_hz(sa_g2 * G * G, f))
+        .map(|(&f, &sa_g2)| match &lin {
+            Some(l) => l.output_psd_w_per_hz(sa_g2 * G * G, f),
+            None => f64::NAN,
+        })
         .collect();
     let df_hz = drive_psd.df();
-    let linear_w: f64 = linear_full.iter().sum::<f64>() * df_hz;
+    let linear_w = lin.map(|_| linear_full.iter().sum::<f64>() * df_hz);
     let linear_band: Vec<f64> = drive_psd
         .freq_hz
         .iter()
@@ -423,7 +446,9 @@ fn measured(a: &RandomArgs, file_device: &Device, path: Option<PathBuf>) -> Resu
     exp.write_parquet("records", &mut per, &device.params)?;
 
     exp.number("power_w", s.p_total_w());
-    exp.number("linear_power_w", linear_w);
+    if let Some(p) = linear_w {
+        exp.number("linear_power_w", p);
+    }
     exp.number("accel_rms_g", accel_rms_g);
     exp.number("bw3db_hz", widths.bw3db_hz());
     exp.number("contact_fraction", s.contact_fraction);
@@ -433,7 +458,7 @@ fn measured(a: &RandomArgs, file_device: &Device, path: Option<PathBuf>) -> Resu
          resampled to {} Hz; the first {} s (five ring-up times) discarded; spectra in the band \
          {} to {} Hz, Welch segments of {} samples.\n\n\
          - RMS acceleration of the analysed record: {} g\n\
-         - power of the loads: {} nW; linear theory without stops under the same spectrum: {} nW\n\
+         - power of the loads: {} nW; linear theory without stops under the same spectrum: {}\n\
          - RMS displacement: {} um; time in contact: {} %; impacts: {}\n\
          - free flight integrated by: {}\n",
         loaded.file,
@@ -449,7 +474,7 @@ fn measured(a: &RandomArgs, file_device: &Device, path: Option<PathBuf>) -> Resu
         spec.welch.nperseg,
         fmt_sig(accel_rms_g, 4),
         fmt_sig(s.p_total_w() * 1e9, 4),
-        fmt_sig(linear_w * 1e9, 4),
+        linear_md(linear_w),
         fmt_sig(s.x_rms_m * 1e6, 3),
         fmt_sig(s.contact_fraction * 100.0, 3),
         s.impacts,

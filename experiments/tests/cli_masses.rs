@@ -124,6 +124,24 @@ fn a_two_mass_sweep_and_record_carry_each_mass_peaks() {
         md.contains("largest displacement and speed of each mass over the analysed record"),
         "{md}"
     );
+    // The one-mass linear theory does not describe two masses: no number is given for it.
+    assert!(
+        md.contains("linear theory without stops under the same spectrum: not computed for a device of several masses"),
+        "{md}"
+    );
+    let summary = std::fs::read_to_string(rec.join("summary.json")).unwrap();
+    assert!(!summary.contains("linear_power_w"), "{summary}");
+    let psd = read_parquet(&rec.join("output_psd.parquet"));
+    let linear = psd
+        .column("linear_psd_uw_per_hz")
+        .unwrap()
+        .f64()
+        .unwrap()
+        .clone();
+    assert!(
+        !linear.is_empty() && linear.into_iter().all(|v| v.is_none_or(f64::is_nan)),
+        "linear theory written for two masses"
+    );
     let _ = std::fs::remove_dir_all(out);
     let _ = std::fs::remove_dir_all(rec);
 }
