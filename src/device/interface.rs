@@ -1,8 +1,9 @@
 //! The interface circuit between a one-load transducer (piezoelectric or electromagnetic) and
-//! what it powers: the optional `[interface]` table of a device file. The module reads better
-//! whole: the table's raw keys, their parse into [`Interface`], the write-back to TOML and the
-//! checks are one format, a key read, written and checked side by side (the inductor's own
-//! keys and checks are in `sece_inductor`).
+//! what it powers: the optional `[interface]` table of a device file.
+//!
+//! The module reads better whole: the table's raw keys, their parse into [`Interface`], the
+//! write-back to TOML and the checks are one format, a key read, written and checked side by
+//! side (the inductor's own keys and checks are in `sece_inductor`).
 //!
 //! | `kind` | circuit | transducer |
 //! |---|---|---|
