@@ -47,7 +47,12 @@ fn the_earlier_format_loads_as_the_same_device() {
             "data/examples/my_harvester.toml",
         ),
     ] {
-        assert_eq!(load(old), load(new), "{old} vs {new}");
+        // The earlier format has no `[size]`: the devices agree in everything else.
+        let new = Device {
+            size: None,
+            ..load(new)
+        };
+        assert_eq!(load(old), new, "{old} vs {new:?}");
     }
 }
 
@@ -186,6 +191,29 @@ fn bad_stops_are_named_errors() {
         NONE,
     );
     assert!(e.contains("hertz_point"), "{e}");
+}
+
+#[test]
+fn the_volume_is_optional_positive_and_finite() {
+    use endstop::device::{ParamError, Size};
+    let text = |size: &str| device_text(size, NONE);
+    let d = Device::from_toml_str(&text("[size]\nvolume_m3 = 2.5e-9"), "ok.toml").unwrap();
+    assert_eq!(d.size, Some(Size { volume_m3: 2.5e-9 }));
+    assert_eq!(
+        Device::from_toml_str(&text(""), "ok.toml").unwrap().size,
+        None
+    );
+    for bad in ["0.0", "-1e-9", "inf", "nan"] {
+        let e = Device::from_toml_str(&text(&format!("[size]\nvolume_m3 = {bad}")), "bad.toml")
+            .expect_err(bad);
+        assert!(
+            matches!(&e, ParamError::OutOfRange { field, .. } if field == "size.volume_m3"),
+            "{bad}: {e}"
+        );
+    }
+    // An unknown key of the table.
+    let e = error("[size]\nvolume_m3 = 1e-9\nvolume_cm3 = 1.0", NONE);
+    assert!(e.contains("volume_cm3"), "{e}");
 }
 
 #[test]

@@ -49,6 +49,72 @@ pub(crate) fn effectiveness(
     )
 }
 
+/// The normalised power density of `power_w` delivered under a vibration of RMS acceleration
+/// `accel_rms_g` (g) (Beeby et al., J. Micromech. Microeng. 17 (2007) 1257: `P / (V a_rms^2)`,
+/// [`merit::normalised_power_density`]), with `V` the device's `[size] volume_m3`. Records
+/// `normalised_power_density_kg_s_per_m3` and `volume_m3` and returns the line for
+/// `numbers.md`; without a volume, no key and a line saying it needs one; nothing without a
+/// finite power.
+pub(crate) fn power_density(
+    exp: &mut Experiment,
+    device: &Device,
+    power_w: f64,
+    accel_rms_g: f64,
+) -> String {
+    if !power_w.is_finite() {
+        return String::new();
+    }
+    let density = device.size.map(|size| {
+        let v = size.volume_m3;
+        let npd = merit::normalised_power_density(power_w, v, accel_rms_g * endstop::G);
+        exp.number("normalised_power_density_kg_s_per_m3", npd);
+        exp.number("volume_m3", v);
+        (npd, v)
+    });
+    power_density_line(density)
+}
+
+/// The line of `numbers.md` for a normalised power density and the volume it is over (kg s
+/// m^-3, m^3), or saying that it needs the device's volume.
+pub(crate) fn power_density_line(density: Option<(f64, f64)>) -> String {
+    match density {
+        Some((npd, v)) => format!(
+            "- normalised power density (Beeby et al. 2007: P / (V a_rms^2), V = {} m^3): {} kg \
+             s m^-3\n",
+            fmt_sig(v, 3),
+            fmt_sig(npd, 3)
+        ),
+        None => "- normalised power density: needs the device volume (`[size] volume_m3` in the \
+                 device file)\n"
+            .to_string(),
+    }
+}
+
+/// The figures of merit of a mean power `power_w` under band-limited white noise of
+/// two-sided density `psd_g2_per_hz` (g^2/Hz) and mean square `mean_square_g2` (g^2, `2 B Sa`
+/// over the band `B`): the power per unit density `P / Sa` (kg, with `Sa` in (m/s^2)^2/Hz; the
+/// broadband bound of a linear resonator under white noise, `m Sa / 2`, makes it at most half
+/// the proof mass: the `2P/(m Sa)` already reported is its ratio to that bound) as
+/// `power_per_sa_kg`, and the normalised power density at the noise's RMS acceleration
+/// ([`power_density`]). Returns the lines for `numbers.md`; nothing without a finite power.
+pub(crate) fn noise_merits(
+    exp: &mut Experiment,
+    device: &Device,
+    power_w: f64,
+    psd_g2_per_hz: f64,
+    mean_square_g2: f64,
+) -> String {
+    if !power_w.is_finite() {
+        return String::new();
+    }
+    let per_sa = power_w / (psd_g2_per_hz * endstop::G * endstop::G);
+    exp.number("power_per_sa_kg", per_sa);
+    format!(
+        "- power per unit two-sided acceleration density P / Sa: {} kg (Sa in (m/s^2)^2/Hz)\n",
+        fmt_sig(per_sa, 4)
+    ) + &power_density(exp, device, power_w, mean_square_g2.sqrt())
+}
+
 /// The half-power band of the powers `power_w` at the increasing frequencies `freqs_hz` (the
 /// -3 dB band of a resonance, `f0 / Q` for a lightly damped linear oscillator: S. S. Rao,
 /// *Mechanical Vibrations*, 5th ed., 2011, section 3.4; read with linear interpolation by
@@ -87,22 +153,22 @@ pub(crate) fn half_power(
 }
 
 /// For a sine drive (`--sine-g`, its peak in g, at `--freq-hz`), the harvester effectiveness of
-/// the power `power_w` it delivers ([`effectiveness`]); nothing for a measured
-/// record, whose vibration is not the sine the bound is for.
-pub(crate) fn sine_effectiveness(
+/// the power `power_w` it delivers ([`effectiveness`]) and its normalised power density
+/// ([`power_density`]); for a measured record, whose vibration is not the sine the bound is
+/// for, the power density alone, at the analysed record's RMS acceleration `record_rms_g`.
+pub(crate) fn drive_merits(
     exp: &mut Experiment,
     a: &RandomArgs,
     device: &Device,
     power_w: f64,
+    record_rms_g: f64,
 ) -> String {
     match (a.accel_file.is_none(), a.sine_g, a.freq_hz) {
-        (true, Some(peak_g), Some(freq_hz)) => effectiveness(
-            exp,
-            device,
-            power_w,
-            peak_g / std::f64::consts::SQRT_2,
-            freq_hz,
-        ),
-        _ => String::new(),
+        (true, Some(peak_g), Some(freq_hz)) => {
+            let rms_g = peak_g / std::f64::consts::SQRT_2;
+            effectiveness(exp, device, power_w, rms_g, freq_hz)
+                + &power_density(exp, device, power_w, rms_g)
+        }
+        _ => power_density(exp, device, power_w, record_rms_g),
     }
 }

@@ -4,7 +4,9 @@
 //! reported follows the model's outputs: a transducer with its own loads gets the loads' power
 //! and its spectrum (below), a model with a storage (behind an interface circuit) its DC
 //! power, efficiency, storage voltage and energy ledger (`random_storage.rs`). A sine drive
-//! adds the harvester effectiveness of its power ([`crate::merit`]).
+//! adds the harvester effectiveness of its power, every drive its normalised power density
+//! where the device gives its volume, and noise its power per unit density
+//! ([`crate::merit`]).
 
 use std::path::PathBuf;
 
@@ -221,6 +223,13 @@ fn noise(a: &RandomArgs, psd: f64) -> Result<()> {
         "over the records",
     ));
     md.push_str(&disp.md);
+    md.push_str(&crate::merit::noise_merits(
+        &mut exp,
+        &device,
+        ens.power_w.mean,
+        psd,
+        spec.record.noise.mean_square_g2(),
+    ));
     exp.write_numbers_md(&md)?;
     print!("{md}");
     let drive = Psd {
@@ -486,7 +495,7 @@ fn measured(a: &RandomArgs, file_device: &Device, path: Option<PathBuf>) -> Resu
         &s.mass_peaks,
         "over the analysed record",
     ));
-    let md = md + &crate::merit::sine_effectiveness(&mut exp, a, &device, s.p_total_w());
+    let md = md + &crate::merit::drive_merits(&mut exp, a, &device, s.p_total_w(), accel_rms_g);
     exp.write_numbers_md(&md)?;
     print!("{md}");
     let plot = spectra_plot(

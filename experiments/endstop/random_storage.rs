@@ -135,7 +135,13 @@ fn noise(a: &RandomArgs, psd: f64) -> Result<()> {
             .map(|r| r.summary.exponential_steps)
             .sum::<u64>(),
         records.iter().map(|r| r.summary.stats.accepted).sum::<u64>(),
-    );
+    ) + &crate::merit::noise_merits(
+            &mut exp,
+            &device,
+            p_dc.mean,
+            psd,
+            spec.noise.mean_square_g2(),
+        );
     exp.write_numbers_md(&md)?;
     print!("{md}");
     exp.finish()
@@ -192,7 +198,14 @@ fn measured(a: &RandomArgs, mut m: MeasuredDrive, file: &str) -> Result<()> {
         r.summary.exponential_steps,
         r.summary.stats.accepted,
     );
-    let md = md + &crate::merit::sine_effectiveness(&mut exp, a, &device, r.p_dc_w);
+    let md = md
+        + &crate::merit::drive_merits(
+            &mut exp,
+            a,
+            &device,
+            r.p_dc_w,
+            r.summary.accel_mean_square_si.sqrt() / endstop::G,
+        );
     exp.write_numbers_md(&md)?;
     print!("{md}");
     m.times.lap("output");

@@ -1,6 +1,6 @@
 //! `endstop sweep`: a stepped-sine up-sweep on a device file, with the impact onset and the
-//! end of the impacting branch refined, and the step's effect on that end; the half-power band
-//! and the harvester effectiveness of its power ([`crate::merit`]).
+//! end of the impacting branch refined, and the step's effect on that end; the half-power band,
+//! the harvester effectiveness of its power and its normalised power density ([`crate::merit`]).
 
 use anyhow::Result;
 
@@ -125,6 +125,12 @@ pub(crate) fn sweep(a: RangeArgs) -> Result<()> {
             band.peak_w,
             a.accel_rms_g,
             band.peak_hz,
+        ));
+        md.push_str(&merit::power_density(
+            &mut exp,
+            &device,
+            band.peak_w,
+            a.accel_rms_g,
         ));
     }
     exp.write_numbers_md(&md)?;

@@ -24,6 +24,18 @@
 //!   damped linear oscillator `f0 / Q`; S. S. Rao, *Mechanical Vibrations*, 5th ed., 2011,
 //!   section 3.4, the quality factor and bandwidth), read from a sweep with linear
 //!   interpolation between its points.
+//! * **Normalised power density** ([`normalised_power_density`]): the power over the device's
+//!   volume and the square of the RMS base acceleration, `NPD = P / (V a_rms^2)` (kg s m^-3),
+//!   the figure S. P. Beeby, R. N. Torah, M. J. Tudor, P. Glynne-Jones, T. O'Donnell,
+//!   C. R. Saha and S. Roy compare generators by ("A micro electromagnetic generator for
+//!   vibration energy harvesting", J. Micromech. Microeng. 17 (2007) 1257, its comparison
+//!   with the literature) and the reviews after it tabulate: a resonant generator's power grows
+//!   as the acceleration squared and (at one shape) as its volume, so the quotient compares
+//!   devices driven and built differently. The text of the paper could not be read in this
+//!   build (its stored abstract names the figure only), so whether its acceleration is the
+//!   RMS or the amplitude is not read from it: here it is the RMS, the one level a noise has
+//!   as well as a sine (with a sine's amplitude `A = sqrt(2) a_rms` the quotient is half).
+//!   It needs the device's volume, `[size] volume_m3` ([`crate::device::size`]).
 //! * **Charging time** to a target voltage: the time the storage takes to charge from empty
 //!   with nothing drawing, by [`crate::study::charging`] on the design with its DC load open
 //!   ([`charging_time_s`]).
@@ -62,6 +74,13 @@ pub fn effectiveness(
 /// stops.
 pub fn displacement_limit_m(device: &Device) -> Option<f64> {
     device.stops.smallest_gap_m()
+}
+
+/// The normalised power density (kg s m^-3, module docs) of a power `power_w` delivered by a
+/// device of volume `volume_m3` under a vibration of RMS acceleration `accel_rms_m_s2`:
+/// `P / (V a_rms^2)`.
+pub fn normalised_power_density(power_w: f64, volume_m3: f64, accel_rms_m_s2: f64) -> f64 {
+    power_w / (volume_m3 * accel_rms_m_s2 * accel_rms_m_s2)
 }
 
 /// A half-power band read from a sweep.
@@ -162,6 +181,15 @@ mod tests {
         assert!((b.width_hz().unwrap() - 2.0).abs() < 1e-12);
         let cut = half_power_band(&f[1..], &p[1..]).unwrap();
         assert!(cut.lower_hz.is_none() && cut.upper_hz.is_some());
+    }
+
+    #[test]
+    fn the_normalised_power_density_is_power_over_volume_and_acceleration_squared() {
+        // By hand: 2 uW from 0.5 cm^3 under 0.5 m/s^2 rms: 2e-6 / (5e-7 * 0.25) = 16 kg s m^-3
+        // (the amplitude in place of the RMS would give 8, the acceleration unsquared 8).
+        let npd = normalised_power_density(2e-6, 5e-7, 0.5);
+        // Two roundings of 5e-7 and the quotient: a few ulps, 1e-14 relative.
+        assert!((npd / 16.0 - 1.0).abs() < 1e-14, "{npd}");
     }
 
     #[test]

@@ -126,6 +126,7 @@ impl LegacyDevice {
             }),
             interface: super::Interface::Resistive,
             masses: None,
+            size: None,
         }
     }
 }

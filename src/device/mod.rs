@@ -46,6 +46,7 @@ mod legacy;
 pub mod masses;
 mod paths;
 mod range;
+pub mod size;
 pub mod stops;
 pub mod suspension;
 pub mod transducer;
@@ -57,6 +58,7 @@ pub use crate::laws::contact::Side;
 pub use interface::{DcLoad, Diode, Interface, Inversion, Rectifier, SeceInductor};
 pub use masses::{Body, Link, MassStop, Masses};
 pub use range::{at_unit, own_value, with_values, ParamRange, Spacing, ACCEL_SCALE_PATH};
+pub use size::Size;
 pub use stops::{HertzLineStop, HertzPointStiffness, Stop, StopLaw, Stops};
 pub use suspension::Suspension;
 pub use transducer::{AreaOverlapPair, Electromagnetic, GapClosingPair, Piezoelectric, Transducer};
@@ -172,6 +174,8 @@ pub struct Device {
     /// mass, the springs to the frame, and the damping whose ring-up time `2 m / b`, which
     /// the studies settle over, is the slowest mass's) and [`Device::stops`] is empty.
     pub masses: Option<Masses>,
+    /// The device's volume, where the file gives one (`[size]`, [`size`]).
+    pub size: Option<Size>,
 }
 
 /// The file form of a device.
@@ -187,6 +191,30 @@ struct RawDevice {
     transducer: Transducer,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     interface: Option<interface::RawInterface>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    size: Option<Size>,
+}
+
+impl RawDevice {
+    /// The device of one mass this file form describes, before [`Device::validate`].
+    fn parse(self, c: &Checker) -> Result<Device, ParamError> {
+        let mut dev = Device {
+            interface: match self.interface {
+                Some(i) => i.parse(c)?,
+                None => Interface::Resistive,
+            },
+            stops: self.stops.parse(c)?,
+            name: self.name,
+            params: self.params,
+            description: self.description,
+            mechanics: self.mechanics.parse(c)?,
+            transducer: self.transducer,
+            masses: None,
+            size: self.size,
+        };
+        dev.derive_well_stiffness();
+        Ok(dev)
+    }
 }
 
 /// Builds [`ParamError`]s that name the source and check ranges.
@@ -307,24 +335,9 @@ impl Device {
             old.convert()
         } else {
             let raw: RawDevice = toml::from_str(text).map_err(|e| parse_err(e.to_string()))?;
-            let c = Checker {
+            raw.parse(&Checker {
                 source: source_name,
-            };
-            let mut dev = Device {
-                interface: match raw.interface {
-                    Some(i) => i.parse(&c)?,
-                    None => Interface::Resistive,
-                },
-                stops: raw.stops.parse(&c)?,
-                name: raw.name,
-                params: raw.params,
-                description: raw.description,
-                mechanics: raw.mechanics.parse(&c)?,
-                transducer: raw.transducer,
-                masses: None,
-            };
-            dev.derive_well_stiffness();
-            dev
+            })?
         };
         dev.validate(source_name)?;
         Ok(dev)
@@ -339,6 +352,7 @@ impl Device {
             stops: stops::RawStops::of(&self.stops),
             transducer: self.transducer.clone(),
             interface: interface::RawInterface::of(&self.interface),
+            size: self.size,
         }
     }
 
@@ -368,6 +382,8 @@ impl Device {
             transducer: Transducer,
             #[serde(default)]
             interface: Option<interface::RawInterface>,
+            #[serde(default)]
+            size: Option<Size>,
         }
         let raw: Common = toml::Value::Table(table)
             .try_into()
@@ -393,6 +409,7 @@ impl Device {
             stops: Stops::default(),
             transducer: raw.transducer,
             masses: Some(m),
+            size: raw.size,
         })
     }
 
@@ -437,6 +454,9 @@ impl Device {
         };
         if self.name.trim().is_empty() {
             return Err(c.message("name", "must not be empty"));
+        }
+        if let Some(size) = &self.size {
+            size.validate(&c)?;
         }
         if self.masses.is_some() {
             // The masses were checked on load ([`masses`]); the transducer and the interface

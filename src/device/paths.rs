@@ -166,20 +166,7 @@ impl Device {
         let c = super::Checker {
             source: &format!("parameter `{path}`"),
         };
-        let mut dev = Device {
-            interface: match raw.interface {
-                Some(i) => i.parse(&c)?,
-                None => super::Interface::Resistive,
-            },
-            stops: raw.stops.parse(&c)?,
-            name: raw.name,
-            params: raw.params,
-            description: raw.description,
-            mechanics: raw.mechanics.parse(&c)?,
-            transducer: raw.transducer,
-            masses: None,
-        };
-        dev.derive_well_stiffness();
+        let dev = raw.parse(&c)?;
         dev.validate(&format!("parameter `{path}`"))?;
         Ok(dev)
     }
