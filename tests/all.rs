@@ -18,6 +18,7 @@ mod common;
 mod calibration_recovery;
 mod crosscheck;
 mod design;
+mod design_noise;
 mod device_description;
 mod fit_family;
 mod fit_recovery;

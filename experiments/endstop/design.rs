@@ -9,6 +9,8 @@ use std::path::PathBuf;
 
 use anyhow::{bail, Context, Result};
 use clap::Parser;
+
+use crate::design_noise::{self, NoiseArgs};
 use endstop::design::{
     interfaces, merit, Answer, Evaluated, Limits, Problem, SearchSettings, Study, Verdict,
     Vibration,
@@ -20,9 +22,8 @@ use endstop::progress::Silent;
 use endstop::study::periodic::SteadySettings;
 
 use crate::shared::start;
-use endstop_experiments::io::frame::frame;
 use endstop_experiments::io::plot::{LegendPos, LinePlot, Panels, Series, Style, PALETTE};
-use endstop_experiments::row;
+
 use endstop_experiments::{fmt_sig, Experiment};
 
 /// The arguments of `endstop design`.
@@ -36,11 +37,18 @@ pub struct DesignArgs {
     #[arg(long = "range", required = true)]
     ranges: Vec<String>,
     /// A drive frequency (Hz); repeat for a band, whose worst frequency is the objective.
-    #[arg(long = "freq-hz", required = true, allow_hyphen_values = true)]
+    #[arg(
+        long = "freq-hz",
+        required_unless_present = "psd",
+        allow_hyphen_values = true
+    )]
     freqs_hz: Vec<f64>,
-    /// RMS base acceleration (g).
-    #[arg(long, allow_hyphen_values = true)]
-    accel_rms_g: f64,
+    /// RMS base acceleration of the sines (g).
+    #[arg(long, required_unless_present = "psd", allow_hyphen_values = true)]
+    accel_rms_g: Option<f64>,
+    /// The noise objective (--psd) in place of the sines.
+    #[command(flatten)]
+    noise: NoiseArgs,
     /// Interfaces to choose among: a TOML file of `[[interface]]` tables, each as a device
     /// file's `[interface]` (`kind = "resistive"` for the transducer's own load); default: the
     /// device's own interface.
@@ -86,11 +94,10 @@ fn interfaces_of(device: &Device, path: &std::path::Path) -> Result<Vec<Interfac
 
 /// Refuses options no design study can use, naming the option.
 fn check(a: &DesignArgs) -> Result<()> {
-    if !(a.accel_rms_g.is_finite() && a.accel_rms_g > 0.0) {
-        bail!(
-            "--accel-rms-g must be a finite positive number, not {}",
-            a.accel_rms_g
-        );
+    if let Some(g) = a.accel_rms_g {
+        if !(g.is_finite() && g > 0.0) {
+            bail!("--accel-rms-g must be a finite positive number, not {g}");
+        }
     }
     if a.freqs_hz.iter().any(|f| !(f.is_finite() && *f > 0.0))
         || a.freqs_hz.windows(2).any(|w| w[1] <= w[0])
@@ -125,41 +132,6 @@ fn check(a: &DesignArgs) -> Result<()> {
     Ok(())
 }
 
-/// One row per evaluated design.
-fn design_rows(
-    p: &Problem,
-    evals: &[Evaluated],
-    source: &str,
-) -> Result<polars::prelude::DataFrame> {
-    let names: Vec<&'static str> = p
-        .ranges
-        .iter()
-        .map(|r| &*Box::leak(r.path.clone().into_boxed_str()))
-        .collect();
-    let rows = evals.iter().map(|e| {
-        let perf = e.result.as_ref().ok();
-        let mut r = row![
-            "source" => source,
-            "interface" => p.interfaces[e.interface].key(),
-            "evaluated" => perf.is_some(),
-            "feasible" => e.feasible(),
-            "violation" => e.violation,
-            "power_w" => perf.map(|q| q.power_w),
-            "worst_freq_hz" => perf.map(|q| q.worst_freq_hz),
-            "impact_speed_m_s" => perf.map(|q| q.impact_speed_m_s),
-            "contact_force_n" => perf.map(|q| q.contact_force_n),
-            "displacement_m" => perf.map(|q| q.displacement_m),
-            "impacts_per_s" => perf.map(|q| q.impacts_per_s),
-            "error" => e.result.as_ref().err().cloned().unwrap_or_default(),
-        ];
-        for (n, v) in names.iter().zip(&e.values) {
-            r.push((*n, (*v).into()));
-        }
-        r
-    });
-    frame(rows)
-}
-
 fn words(p: &Problem, a: &Answer) -> String {
     let d = &a.design;
     let values: Vec<String> = p
@@ -172,8 +144,8 @@ fn words(p: &Problem, a: &Answer) -> String {
     let q =
         |f: fn(&endstop::design::Performance) -> f64| perf.map_or("-".into(), |x| fmt_sig(f(x), 4));
     format!(
-        "{} with the `{}` interface, {}: power {} W (worst over the band), impact speed {} m/s, \
-         contact force {} N, displacement {} m, {} impacts/s{}",
+        "{} with the `{}` interface, {}: power {} W ({}), impact speed {} m/s, contact force {} \
+         N, displacement {} m, {} impacts/s{}",
         match a.verdict {
             Verdict::Optimum => "**optimum**",
             Verdict::Infeasible =>
@@ -182,6 +154,11 @@ fn words(p: &Problem, a: &Answer) -> String {
         p.interfaces[d.interface].key(),
         values.join(", "),
         q(|x| x.power_w),
+        if p.noise.is_some() {
+            "mean over the records"
+        } else {
+            "worst over the band"
+        },
         q(|x| x.impact_speed_m_s),
         q(|x| x.contact_force_n),
         q(|x| x.displacement_m),
@@ -210,6 +187,7 @@ fn record_settings(
     exp.setting("ranges", json!(a.ranges));
     exp.setting("freqs_hz", json!(a.freqs_hz));
     exp.setting("accel_rms_g", json!(a.accel_rms_g));
+    exp.setting("noise", to_value(p.noise)?);
     exp.setting(
         "interfaces_file",
         json!(a.interfaces.as_ref().map(|f| f.display().to_string())),
@@ -255,10 +233,12 @@ pub fn design(a: DesignArgs) -> Result<()> {
         })?;
     let maps = power_maps(&a, &p, &study);
     let merits = merits(&a, &p, &study)?;
+    let confirmed = design_noise::confirm(&mut exp, &p, &study)?;
 
     // Everything is computed: now write.
     write_outputs(&mut exp, &device, &p, &study, &maps, &merits)?;
     let md = summary_md(&a, &loaded.file, &p, &study, &merits)
+        + &confirmed
         + &crate::design_table::first_range_table(&p, &maps);
     exp.write_numbers_md(&md)?;
     print!("{md}");
@@ -277,21 +257,30 @@ fn problem(a: &DesignArgs, device: &Device) -> Result<Problem> {
         Some(path) => interfaces_of(device, path)?,
         None => vec![device.interface.clone()],
     };
-    Ok(Problem::new(
-        device.clone(),
-        interfaces,
-        ranges,
-        Vibration {
-            freqs_hz: a.freqs_hz.clone(),
-            accel_rms_g: a.accel_rms_g,
-        },
-        Limits {
-            impact_speed_m_s: a.max_impact_speed_m_s,
-            contact_force_n: a.max_contact_force_n,
-            displacement_m: a.max_displacement_m,
-            impacts_per_s: a.max_impacts_per_s,
-        },
-    )?)
+    let limits = Limits {
+        impact_speed_m_s: a.max_impact_speed_m_s,
+        contact_force_n: a.max_contact_force_n,
+        displacement_m: a.max_displacement_m,
+        impacts_per_s: a.max_impacts_per_s,
+    };
+    Ok(match a.noise.objective()? {
+        Some(n) => Problem::under_noise(device.clone(), interfaces, ranges, n, limits)?,
+        None => Problem::new(
+            device.clone(),
+            interfaces,
+            ranges,
+            Vibration {
+                freqs_hz: a.freqs_hz.clone(),
+                accel_rms_g: sine_g(a),
+            },
+            limits,
+        )?,
+    })
+}
+
+/// The sines' RMS acceleration (g); NaN under noise, which has none.
+fn sine_g(a: &DesignArgs) -> f64 {
+    a.accel_rms_g.unwrap_or(f64::NAN)
 }
 
 /// The power maps: per interface, over the first two ranges, the others at that interface's
@@ -322,6 +311,9 @@ struct Merits {
     effectiveness: Option<f64>,
     band: Option<merit::HalfPowerBand>,
     charging: Option<Result<f64, String>>,
+    /// The normalised power density (kg s m^-3) and the volume (m^3) it is over, where the
+    /// device gives its volume.
+    density: Option<(f64, f64)>,
 }
 
 /// The answer's figures of merit: its effectiveness, its half-power band over the given
@@ -333,20 +325,31 @@ fn merits(a: &DesignArgs, p: &Problem, study: &Study) -> Result<Merits> {
     let limit_m = a
         .max_displacement_m
         .or_else(|| merit::displacement_limit_m(&best_dev));
-    let effectiveness = perf.zip(limit_m).map(|(q, zl)| {
+    // Under noise the effectiveness's sine bound and the charging's sine do not apply.
+    let sine = perf.filter(|_| p.noise.is_none());
+    let effectiveness = sine.zip(limit_m).map(|(q, zl)| {
         merit::effectiveness(
             q.power_w,
             best_dev.mechanics.mass_kg,
             zl,
-            a.accel_rms_g * endstop::G,
+            sine_g(a) * endstop::G,
             q.worst_freq_hz,
         )
+    });
+    let rms_g = p
+        .noise
+        .as_ref()
+        .map_or(sine_g(a), design_noise::noise_rms_g);
+    let density = perf.zip(best_dev.size).map(|(q, size)| {
+        let v = size.volume_m3;
+        let npd = merit::normalised_power_density(q.power_w, v, rms_g * endstop::G);
+        (npd, v)
     });
     let band = if a.freqs_hz.len() >= 3 {
         let pts = endstop::study::periodic::frequency_sweep(
             &best_dev,
             &a.freqs_hz,
-            a.accel_rms_g,
+            sine_g(a),
             &SteadySettings::default(),
             &Silent,
         )?;
@@ -358,10 +361,10 @@ fn merits(a: &DesignArgs, p: &Problem, study: &Study) -> Result<Merits> {
     } else {
         None
     };
-    let charging = match (a.target_v, perf) {
+    let charging = match (a.target_v, sine) {
         (Some(v), Some(q)) => merit::charging_time_s(
             &best_dev,
-            Sine::from_rms_g(a.accel_rms_g, q.worst_freq_hz),
+            Sine::from_rms_g(sine_g(a), q.worst_freq_hz),
             v,
             600.0,
             &Silent,
@@ -374,6 +377,7 @@ fn merits(a: &DesignArgs, p: &Problem, study: &Study) -> Result<Merits> {
         effectiveness,
         band,
         charging,
+        density,
     })
 }
 
@@ -387,10 +391,10 @@ fn write_outputs(
     merits: &Merits,
 ) -> Result<()> {
     let best = &study.answer.design;
-    let mut df = design_rows(p, &study.evaluations, "search")?;
+    let mut df = crate::design_table::design_rows(p, &study.evaluations, "search")?;
     exp.write_parquet("designs", &mut df, &device.params)?;
     for (i, grid) in maps {
-        let mut df = design_rows(p, grid, "map")?;
+        let mut df = crate::design_table::design_rows(p, grid, "map")?;
         exp.write_parquet(
             &format!("map_{}", p.interfaces[*i].key()),
             &mut df,
@@ -406,6 +410,10 @@ fn write_outputs(
     if let Some(e) = merits.effectiveness {
         exp.number("effectiveness", e);
     }
+    if let Some((npd, v)) = merits.density {
+        exp.number("normalised_power_density_kg_s_per_m3", npd);
+        exp.number("volume_m3", v);
+    }
     Ok(())
 }
 
@@ -413,16 +421,21 @@ fn write_outputs(
 /// figures of merit.
 fn summary_md(a: &DesignArgs, file: &str, p: &Problem, study: &Study, merits: &Merits) -> String {
     let (limit_m, effectiveness) = (merits.limit_m, merits.effectiveness);
+    let question = match &p.noise {
+        Some(n) => design_noise::question(n),
+        None => format!(
+            "under {} g rms at {} Hz (the objective is the worst of these frequencies)",
+            sine_g(a),
+            a.freqs_hz
+                .iter()
+                .map(|f| fmt_sig(*f, 6))
+                .collect::<Vec<_>>()
+                .join(", ")
+        ),
+    };
     let mut md = format!(
-        "Design of `{}` under {} g rms at {} Hz (the objective is the worst of these \
-         frequencies), over {}; interfaces: {}.\n\n- {}\n",
+        "Design of `{}` {question}, over {}; interfaces: {}.\n\n- {}\n",
         file,
-        a.accel_rms_g,
-        a.freqs_hz
-            .iter()
-            .map(|f| fmt_sig(*f, 6))
-            .collect::<Vec<_>>()
-            .join(", "),
         p.ranges
             .iter()
             .map(|r| format!(
@@ -465,6 +478,7 @@ fn summary_md(a: &DesignArgs, file: &str, p: &Problem, study: &Study, merits: &M
             fmt_sig(e, 3)
         ));
     }
+    md.push_str(&crate::merit::power_density_line(merits.density));
     if let Some(b) = &merits.band {
         md.push_str(&format!(
             "- half-power band of the answer over the given frequencies: {}\n",

@@ -1,9 +1,12 @@
-//! The power maps of `endstop design` as a table for `numbers.md`: the power against the
-//! first range (the stop gap in the design chapter's example), each interface's best over the
-//! second range at each of its values, with the value that gives it and the impact speed there.
+//! The tables of `endstop design`: its designs as Parquet rows, and the power maps as a table
+//! for `numbers.md`: the power against the first range (the stop gap in the design chapter's
+//! example), each interface's best over the second range at each of its values, with the value
+//! that gives it and the impact speed there.
 
+use anyhow::Result;
 use endstop::design::{Evaluated, Problem};
-use endstop_experiments::fmt_sig;
+use endstop_experiments::io::frame::frame;
+use endstop_experiments::{fmt_sig, row};
 
 /// The table of the maps (`maps[i] = (interface, n x n grid)`, the grid's index
 /// `k * n + j` for the `k`-th value of the first range and the `j`-th of the second, as
@@ -50,4 +53,39 @@ pub(crate) fn first_range_table(p: &Problem, maps: &[(usize, Vec<Evaluated>)]) -
         md.push('\n');
     }
     md
+}
+
+/// One row per evaluated design.
+pub(crate) fn design_rows(
+    p: &Problem,
+    evals: &[Evaluated],
+    source: &str,
+) -> Result<polars::prelude::DataFrame> {
+    let names: Vec<&'static str> = p
+        .ranges
+        .iter()
+        .map(|r| &*Box::leak(r.path.clone().into_boxed_str()))
+        .collect();
+    let rows = evals.iter().map(|e| {
+        let perf = e.result.as_ref().ok();
+        let mut r = row![
+            "source" => source,
+            "interface" => p.interfaces[e.interface].key(),
+            "evaluated" => perf.is_some(),
+            "feasible" => e.feasible(),
+            "violation" => e.violation,
+            "power_w" => perf.map(|q| q.power_w),
+            "worst_freq_hz" => perf.map(|q| q.worst_freq_hz),
+            "impact_speed_m_s" => perf.map(|q| q.impact_speed_m_s),
+            "contact_force_n" => perf.map(|q| q.contact_force_n),
+            "displacement_m" => perf.map(|q| q.displacement_m),
+            "impacts_per_s" => perf.map(|q| q.impacts_per_s),
+            "error" => e.result.as_ref().err().cloned().unwrap_or_default(),
+        ];
+        for (n, v) in names.iter().zip(&e.values) {
+            r.push((*n, (*v).into()));
+        }
+        r
+    });
+    frame(rows)
 }

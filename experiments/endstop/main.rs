@@ -22,6 +22,7 @@
 mod basins;
 mod charge;
 mod design;
+mod design_noise;
 mod design_table;
 mod merit;
 mod random;

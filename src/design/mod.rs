@@ -4,7 +4,9 @@
 //!
 //! * **Objective**: the mean DC power the design delivers to its load (the storage's DC load
 //!   behind a circuit, the resistive load otherwise) at its periodic steady state under a sine;
-//!   over a band of frequencies, the worst of them ([`evaluate`]).
+//!   over a band of frequencies, the worst of them ([`evaluate`]); or, under band-limited white
+//!   noise, its mean over an ensemble of records on common random numbers, the answer
+//!   confirmed on a fresh seed ([`noise`], [`Problem::with_noise`], [`Problem::confirm`]).
 //! * **Decision variables**: ranges of device-file keys ([`ParamRange`], as the fit and the
 //!   Sobol study use them), with [`LOAD_PATH`] standing for whichever load the interface has;
 //!   and a discrete choice among interface circuits, each searched in turn.
@@ -24,6 +26,7 @@
 pub mod evaluate;
 pub mod interfaces;
 pub mod merit;
+pub mod noise;
 pub mod search;
 
 use rayon::prelude::*;
@@ -33,6 +36,7 @@ use crate::progress::Progress;
 use crate::study::periodic::SteadySettings;
 
 pub use evaluate::{performance, EvalError, OrbitLimits, Performance};
+pub use noise::NoiseObjective;
 pub use search::SearchSettings;
 
 /// The path that stands for the design's load resistance, whatever its interface: the
@@ -115,6 +119,9 @@ pub struct Problem {
     pub limits: Limits,
     /// How each steady state is found.
     pub steady: SteadySettings,
+    /// The noise objective, in place of the sines of [`Problem::vibration`] ([`noise`]);
+    /// set by [`Problem::with_noise`].
+    pub noise: Option<NoiseObjective>,
 }
 
 /// Why a design problem could not be solved.
@@ -248,14 +255,16 @@ impl Problem {
             vibration,
             limits,
             steady: SteadySettings::default(),
+            noise: None,
         };
         p.check()?;
         Ok(p)
     }
 
     /// Checks the problem: at least one interface and one range, a vibration of positive
-    /// increasing frequencies and positive acceleration, positive limits, and every range valid
-    /// on the device behind every interface at both ends.
+    /// increasing frequencies and positive acceleration (or a valid noise objective in its
+    /// place), positive limits, and every range valid on the device behind every interface at
+    /// both ends.
     pub fn check(&self) -> Result<(), DesignError> {
         let bad = |m: String| Err(DesignError::Invalid(m));
         if self.interfaces.is_empty() {
@@ -264,21 +273,9 @@ impl Problem {
         if self.ranges.is_empty() {
             return bad("no range to design over".into());
         }
-        let v = &self.vibration;
-        if v.freqs_hz.is_empty()
-            || v.freqs_hz.iter().any(|f| !(f.is_finite() && *f > 0.0))
-            || v.freqs_hz.windows(2).any(|w| w[1] <= w[0])
-        {
-            return bad(format!(
-                "the frequencies must be positive and increasing, got {:?}",
-                v.freqs_hz
-            ));
-        }
-        if !(v.accel_rms_g.is_finite() && v.accel_rms_g > 0.0) {
-            return bad(format!(
-                "the RMS acceleration must be positive, got {}",
-                v.accel_rms_g
-            ));
+        match &self.noise {
+            Some(n) => n.check().map_err(DesignError::Invalid)?,
+            None => self.check_vibration()?,
         }
         let l = &self.limits;
         for (name, limit) in [
@@ -305,6 +302,28 @@ impl Problem {
             for u in [0.0, 1.0] {
                 self.device_at(i, &vec![u; self.ranges.len()])?;
             }
+        }
+        Ok(())
+    }
+
+    /// Checks the sines: positive increasing frequencies, a positive acceleration.
+    fn check_vibration(&self) -> Result<(), DesignError> {
+        let bad = |m: String| Err(DesignError::Invalid(m));
+        let v = &self.vibration;
+        if v.freqs_hz.is_empty()
+            || v.freqs_hz.iter().any(|f| !(f.is_finite() && *f > 0.0))
+            || v.freqs_hz.windows(2).any(|w| w[1] <= w[0])
+        {
+            return bad(format!(
+                "the frequencies must be positive and increasing, got {:?}",
+                v.freqs_hz
+            ));
+        }
+        if !(v.accel_rms_g.is_finite() && v.accel_rms_g > 0.0) {
+            return bad(format!(
+                "the RMS acceleration must be positive, got {}",
+                v.accel_rms_g
+            ));
         }
         Ok(())
     }
@@ -364,13 +383,18 @@ impl Problem {
         let unit: Vec<f64> = unit.iter().map(|u| u.clamp(0.0, 1.0)).collect();
         let (result, values) = match self.device_at(i, &unit) {
             Ok((dev, values)) => (
-                performance(
-                    &dev,
-                    &self.vibration.freqs_hz,
-                    self.vibration.accel_rms_g,
-                    &self.steady,
-                )
-                .map_err(|e| e.to_string()),
+                match &self.noise {
+                    Some(n) => noise::noise_power(&dev, n, n.seed)
+                        .map(|(_, p)| p)
+                        .map_err(|e| e.to_string()),
+                    None => performance(
+                        &dev,
+                        &self.vibration.freqs_hz,
+                        self.vibration.accel_rms_g,
+                        &self.steady,
+                    )
+                    .map_err(|e| e.to_string()),
+                },
                 values,
             ),
             Err(e) => (Err(e.to_string()), vec![f64::NAN; unit.len()]),
