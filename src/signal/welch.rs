@@ -206,6 +206,19 @@ pub fn welch(x: &[f64], fs: f64, cfg: &WelchOptions) -> Result<Psd, SpectralErro
     let step = nperseg - noverlap;
     let segments = (x.len() - nperseg) / step + 1;
     let n_bins = nperseg / 2 + 1;
+    let freq_hz = (0..n_bins)
+        .map(|k| k as f64 * fs / nperseg as f64)
+        .collect();
+
+    // A signal of zeros (the outputs of a device without a transducer) has the density zero
+    // in every bin, as the transform below gives it, bit for bit: no transform is needed.
+    if x.iter().all(|&v| v == 0.0) {
+        return Ok(Psd {
+            freq_hz,
+            density: vec![0.0; n_bins],
+            segments,
+        });
+    }
 
     let window = hann_periodic(nperseg);
     let win_sq_sum: f64 = window.iter().map(|w| w * w).sum();
@@ -242,10 +255,6 @@ pub fn welch(x: &[f64], fs: f64, cfg: &WelchOptions) -> Result<Psd, SpectralErro
             p * scale * one_sided
         })
         .collect();
-    let freq_hz = (0..n_bins)
-        .map(|k| k as f64 * fs / nperseg as f64)
-        .collect();
-
     Ok(Psd {
         freq_hz,
         density,
@@ -349,6 +358,21 @@ mod tests {
         assert!(msg.contains("fs = NaN"), "{msg}");
         assert_eq!(e(100, 50, 1.0).unwrap().segments, 1);
         assert_eq!(e(10, 5, 1.0).unwrap().segments, 19);
+    }
+
+    /// A signal of zeros (signed or not) has a density of positive zeros on the grid and
+    /// with the segments of any signal of its length; one nonzero sample leaves that path.
+    #[test]
+    fn zeros_have_zero_density_on_the_same_grid() {
+        let cfg = WelchOptions::half_overlap(256);
+        let mut x = vec![0.0; 3000];
+        x[7] = -0.0;
+        let zero = welch(&x, 1e3, &cfg).unwrap();
+        x[1500] = 1e-3;
+        let one = welch(&x, 1e3, &cfg).unwrap();
+        assert_eq!((&zero.freq_hz, zero.segments), (&one.freq_hz, one.segments));
+        assert!(zero.density.iter().all(|d| d.to_bits() == 0));
+        assert!(one.density.iter().any(|&d| d > 0.0));
     }
 
     #[test]

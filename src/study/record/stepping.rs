@@ -91,169 +91,291 @@ impl<M: Model<N>, const N: usize> FastPath<M, N> for NoFast {
 
 /// The record's loop for one model and fast path (see the parent module): the record, with
 /// what its books found when it kept them.
+///
+/// From rest, each sample interval is advanced by the fast path where it takes it, else by
+/// Dormand-Prince ([`Walk::interval`]); the books open at the first analysed sample; each
+/// analysed sample's outputs are kept ([`Samples`]); the record and its summary are read off
+/// at the end ([`Walk::record`]).
 pub(super) fn run<M: Model<N>, O: RecordObserver, F: FastPath<M, N>, const N: usize>(
     model: &M,
     drive: &SampledDrive,
     rtol: f64,
-    mut fast: F,
+    fast: F,
     observer: &mut O,
     mut books: Option<Books<N>>,
 ) -> Result<(Record, Option<Found>), RecordError> {
     let accel = &drive.accel;
-    let fs = drive.sample_rate_hz;
     let n_tr = drive.transient_samples;
     let n = accel.len() - n_tr;
-    let sampled = Sampled::new(accel.clone(), fs);
-    let dt = sampled.dt_s;
-    let t_start = sampled.time_of(n_tr);
-    let sys = Driven::new(model, sampled.clone());
-    let layout = model.layout();
-    let ix = POSITION;
-    let n_out = layout.outputs.len().min(MAX_OUTPUTS);
-    let free_flight = fast.path();
-
-    let y0 = model.rest_state();
-    let mode0 = model.mode_of(&y0);
-    let mut ode = Dopri5::new(0.0, y0, mode0, model.solver_options(rtol));
-    // The state at the current sample instant, and whether `ode` holds it (it does after a
-    // Dormand-Prince interval, not after a fast step).
-    let (mut y, mut mode, mut ode_current) = (y0, mode0, true);
-    fast.start(model, &y, mode);
-    let (mut v1, mut v2) = (Vec::with_capacity(n), Vec::with_capacity(n));
-    let mut more: Vec<Vec<f64>> = (2..n_out.max(2)).map(|_| Vec::with_capacity(n)).collect();
+    let (mut walk, mut y, mut mode) = Walk::start(model, drive, rtol, fast);
+    let mut samples = Samples::new(walk.n_out, n);
     let mut out = [0.0; MAX_OUTPUTS];
-    let mut stats = Contacts {
-        peaks: MassPeaks::of(layout),
-        ..Contacts::default()
-    };
-    let (mut sx2, mut sa2) = (0.0f64, 0.0f64);
-    let mut fast_steps = 0u64;
-
     for k in 0..n_tr + n {
         // Whether the fast step wrote the outputs at sample k.
         let mut have_out = false;
         if k > 0 {
-            let analysed = k > n_tr;
-            let t0 = sampled.time_of(k - 1);
             if k - 1 == n_tr {
                 if let Some(b) = books.as_mut() {
-                    fast.flush(b);
+                    walk.fast.flush(b);
                     b.open(model, mode, &y);
                     b.split(mode, &y);
                 }
             }
             let a = [accel[k - 1], accel[k]];
-            if let Some((next, wrote)) = fast.step(model, t0, &y, mode, a, &mut out, books.as_mut())
-            {
-                y = next;
-                have_out = wrote;
-                ode_current = false;
-                fast_steps += 1;
-                stats.fast(analysed, mode.in_contact(), dt, y[ix]);
-                if analysed && stats.peaks.len > 0 {
-                    stats.peaks.see(layout, y.as_slice());
-                }
-                for &(tau, x) in fast.rebounds() {
-                    stats.rebound(t0 + tau >= t_start - 0.5 * dt, x);
-                }
-            } else {
-                if !ode_current {
-                    ode.restart_with_step(t0, y, mode, dt);
-                    ode_current = true;
-                }
-                let events = ode.stats().events;
-                let mut watch = Watch {
-                    model,
-                    analysed_from: t_start - 0.5 * dt,
-                    stats: &mut stats,
-                    ix,
-                    books: books.as_mut(),
-                };
-                ode.integrate_observed(&sys, sampled.time_of(k), &mut watch)?;
-                (y, mode) = (ode.y(), ode.mode());
-                fast.after_dopri(model, &y, mode, ode.stats().events != events);
-            }
+            have_out = walk.interval(k, a, (&mut y, &mut mode), &mut out, &mut books)?;
         }
         if k >= n_tr {
             observer.sample(y.as_slice(), mode);
             if !have_out {
                 model.outputs(mode, &y, &mut out);
             }
-            v1.push(out[0]);
-            v2.push(out[1]);
-            for (o, v) in more.iter_mut().zip(&out[2..]) {
-                o.push(*v);
-            }
-            sx2 += y[ix] * y[ix];
-            sa2 += accel[k] * accel[k];
+            samples.push(&out, y[POSITION], accel[k]);
         }
     }
     let found = books.map(|mut b| {
-        fast.flush(&mut b);
+        walk.fast.flush(&mut b);
         b.found(model)
     });
+    let record = walk.record(samples, found.as_ref());
+    Ok((record, found))
+}
 
-    let nf = n as f64;
-    let power = |i: usize, v: &[f64]| match layout.outputs.get(i).and_then(|s| s.load) {
-        Some(Load::Resistor(r)) => v.iter().map(|v| v * v).sum::<f64>() / nf / r,
-        Some(load) => {
-            let sum = v.iter().sum::<f64>();
-            let squares = v.iter().map(|v| v * v).sum::<f64>();
-            load.mean_power(sum / nf, squares / nf)
-        }
-        None => 0.0,
-    };
-    let (p1_w, p2_w) = (power(0, &v1), power(1, &v2));
-    let duration = (n.saturating_sub(1)) as f64 * dt;
-    let analysed_s = (n.saturating_sub(1)) as f64 / fs;
-    let (mut p_drive_w, mut p_dc_w, mut vdc_v) = (None, None, None);
-    if let Some(f) = &found {
-        let drive_term = model.ledger_terms().iter().position(|t| t.name == "drive");
-        p_drive_w = drive_term.map(|i| f.analysed.energy_j[i] / analysed_s);
-        if let Some(i) = layout.output(STORAGE) {
-            let (mean, square) = (f.integrals[i] / analysed_s, f.squares[i] / analysed_s);
-            vdc_v = Some(mean);
-            p_dc_w = layout.outputs[i].load.map(|l| l.mean_power(mean, square));
-        }
+/// The record's walk from sample to sample: the integrator that takes the intervals the fast
+/// path does not, and the contact statistics so far. The state and mode at the current sample
+/// stay with the loop, in its registers.
+struct Walk<'m, M: Model<N>, F, const N: usize> {
+    model: &'m M,
+    /// The model under the sampled drive, for Dormand-Prince.
+    sys: Driven<'m, M, Sampled, N>,
+    fast: F,
+    ode: Dopri5<Driven<'m, M, Sampled, N>>,
+    /// Whether `ode` holds the state at the current sample (it does after a Dormand-Prince
+    /// interval, not after a fast step).
+    ode_current: bool,
+    stats: Contacts,
+    /// Intervals the fast path took.
+    fast_steps: u64,
+    /// Samples of the pre-roll, and the first analysed sample's time (s).
+    n_tr: usize,
+    t_start: f64,
+    /// The sample interval (s) and rate (Hz).
+    dt: f64,
+    fs: f64,
+    /// The model's outputs kept (at most [`MAX_OUTPUTS`]).
+    n_out: usize,
+}
+
+impl<'m, M: Model<N>, F: FastPath<M, N>, const N: usize> Walk<'m, M, F, N> {
+    /// The walk of `model` under `drive`, with the state it starts from: rest, and its mode.
+    fn start(
+        model: &'m M,
+        drive: &SampledDrive,
+        rtol: f64,
+        mut fast: F,
+    ) -> (Self, SVector<f64, N>, Mode) {
+        let fs = drive.sample_rate_hz;
+        let sampled = Sampled::new(drive.accel.clone(), fs);
+        let (dt, t_start) = (sampled.dt_s, sampled.time_of(drive.transient_samples));
+        let layout = model.layout();
+        let y = model.rest_state();
+        let mode = model.mode_of(&y);
+        let ode = Dopri5::new(0.0, y, mode, model.solver_options(rtol));
+        fast.start(model, &y, mode);
+        let walk = Self {
+            model,
+            sys: Driven::new(model, sampled),
+            fast,
+            ode,
+            ode_current: true,
+            stats: Contacts {
+                peaks: MassPeaks::of(layout),
+                ..Contacts::default()
+            },
+            fast_steps: 0,
+            n_tr: drive.transient_samples,
+            t_start,
+            dt,
+            fs,
+            n_out: layout.outputs.len().min(MAX_OUTPUTS),
+        };
+        (walk, y, mode)
     }
-    let summary = RecordSummary {
-        p1_w,
-        p2_w,
-        x_rms_m: (sx2 / nf).sqrt(),
-        x_peak_m: stats.x_peak,
-        mass_peaks: stats.peaks,
-        contact_fraction: if duration > 0.0 {
-            stats.contact_time / duration
-        } else {
-            0.0
-        },
-        impacts: stats.impacts,
-        accel_mean_square_si: sa2 / nf,
-        stats: {
-            // A fast step counts as an accepted step (with its remainder's evaluation).
-            let mut st = ode.stats();
-            st.accepted += fast_steps;
-            st.rhs_evals += F::RHS_EVALS * fast_steps;
-            st
-        },
-        exponential_steps: fast_steps,
-        free_flight,
-        p_drive_w,
-        p_dc_w,
-        vdc_v,
-    };
-    Ok((
+
+    /// Advances `(y, mode)` over the interval that ends at sample `k`, with the drive `a` at
+    /// its ends: by the fast path where it takes it (then `true` when it wrote the outputs at
+    /// sample `k` into `out`), else by Dormand-Prince.
+    #[inline(always)]
+    fn interval(
+        &mut self,
+        k: usize,
+        a: [f64; 2],
+        (y, mode): (&mut SVector<f64, N>, &mut Mode),
+        out: &mut [f64; MAX_OUTPUTS],
+        books: &mut Option<Books<N>>,
+    ) -> Result<bool, RecordError> {
+        let analysed = k > self.n_tr;
+        let t0 = self.sys.drive.time_of(k - 1);
+        let Some((next, wrote)) = self
+            .fast
+            .step(self.model, t0, y, *mode, a, out, books.as_mut())
+        else {
+            (*y, *mode) = self.dopri(k, t0, (*y, *mode), books.as_mut())?;
+            return Ok(false);
+        };
+        *y = next;
+        self.ode_current = false;
+        self.fast_steps += 1;
+        let s = &mut self.stats;
+        s.fast(analysed, mode.in_contact(), self.dt, y[POSITION]);
+        if analysed && s.peaks.len > 0 {
+            s.peaks.see(self.model.layout(), y.as_slice());
+        }
+        for &(tau, x) in self.fast.rebounds() {
+            s.rebound(t0 + tau >= self.t_start - 0.5 * self.dt, x);
+        }
+        Ok(wrote)
+    }
+
+    /// The state and mode at sample `k`, from `(y, mode)` at `t0` by Dormand-Prince with its
+    /// events, restarted there after fast steps.
+    fn dopri(
+        &mut self,
+        k: usize,
+        t0: f64,
+        (y, mode): (SVector<f64, N>, Mode),
+        books: Option<&mut Books<N>>,
+    ) -> Result<(SVector<f64, N>, Mode), RecordError> {
+        if !self.ode_current {
+            self.ode.restart_with_step(t0, y, mode, self.dt);
+            self.ode_current = true;
+        }
+        let events = self.ode.stats().events;
+        let mut watch = Watch {
+            model: self.model,
+            analysed_from: self.t_start - 0.5 * self.dt,
+            stats: &mut self.stats,
+            ix: POSITION,
+            books,
+        };
+        let t1 = self.sys.drive.time_of(k);
+        self.ode.integrate_observed(&self.sys, t1, &mut watch)?;
+        let (y, mode) = (self.ode.y(), self.ode.mode());
+        let switched = self.ode.stats().events != events;
+        self.fast.after_dopri(self.model, &y, mode, switched);
+        Ok((y, mode))
+    }
+
+    /// The record of the finished walk: the kept outputs, their loads' powers, and the
+    /// summary, with the storage's and the drive's terms where the books `found` them.
+    fn record(self, samples: Samples, found: Option<&Found>) -> Record {
+        let layout = self.model.layout();
+        let Samples {
+            v1,
+            v2,
+            more,
+            sx2,
+            sa2,
+        } = samples;
+        let n = v1.len();
+        let nf = n as f64;
+        let power = |i: usize, v: &[f64]| match layout.outputs.get(i).and_then(|s| s.load) {
+            Some(Load::Resistor(r)) => v.iter().map(|v| v * v).sum::<f64>() / nf / r,
+            Some(load) => {
+                let sum = v.iter().sum::<f64>();
+                let squares = v.iter().map(|v| v * v).sum::<f64>();
+                load.mean_power(sum / nf, squares / nf)
+            }
+            None => 0.0,
+        };
+        let (p1_w, p2_w) = (power(0, &v1), power(1, &v2));
+        let duration = (n.saturating_sub(1)) as f64 * self.dt;
+        let analysed_s = (n.saturating_sub(1)) as f64 / self.fs;
+        let (mut p_drive_w, mut p_dc_w, mut vdc_v) = (None, None, None);
+        if let Some(f) = found {
+            let drive_term = self
+                .model
+                .ledger_terms()
+                .iter()
+                .position(|t| t.name == "drive");
+            p_drive_w = drive_term.map(|i| f.analysed.energy_j[i] / analysed_s);
+            if let Some(i) = layout.output(STORAGE) {
+                let (mean, square) = (f.integrals[i] / analysed_s, f.squares[i] / analysed_s);
+                vdc_v = Some(mean);
+                p_dc_w = layout.outputs[i].load.map(|l| l.mean_power(mean, square));
+            }
+        }
+        let stats = self.stats;
+        let summary = RecordSummary {
+            p1_w,
+            p2_w,
+            x_rms_m: (sx2 / nf).sqrt(),
+            x_peak_m: stats.x_peak,
+            mass_peaks: stats.peaks,
+            contact_fraction: if duration > 0.0 {
+                stats.contact_time / duration
+            } else {
+                0.0
+            },
+            impacts: stats.impacts,
+            accel_mean_square_si: sa2 / nf,
+            stats: {
+                // A fast step counts as an accepted step (with its remainder's evaluation).
+                let mut st = self.ode.stats();
+                st.accepted += self.fast_steps;
+                st.rhs_evals += F::RHS_EVALS * self.fast_steps;
+                st
+            },
+            exponential_steps: self.fast_steps,
+            free_flight: self.fast.path(),
+            p_drive_w,
+            p_dc_w,
+            vdc_v,
+        };
         Record {
-            sample_rate_hz: fs,
-            v1_v: if n_out >= 1 { v1 } else { Vec::new() },
-            v2_v: if n_out >= 2 { v2 } else { Vec::new() },
+            sample_rate_hz: self.fs,
+            v1_v: if self.n_out >= 1 { v1 } else { Vec::new() },
+            v2_v: if self.n_out >= 2 { v2 } else { Vec::new() },
             more_v: more,
             outputs: layout.outputs.clone(),
-            ledger: found.as_ref().map(|f| f.analysed.clone()),
+            ledger: found.map(|f| f.analysed.clone()),
             summary,
-        },
-        found,
-    ))
+        }
+    }
+}
+
+/// The outputs at the analysed samples, and the sums of squares of the position and the
+/// drive there.
+struct Samples {
+    v1: Vec<f64>,
+    v2: Vec<f64>,
+    more: Vec<Vec<f64>>,
+    sx2: f64,
+    sa2: f64,
+}
+
+impl Samples {
+    /// Room for `n` samples of `n_out` outputs (the first two always kept).
+    fn new(n_out: usize, n: usize) -> Self {
+        Self {
+            v1: Vec::with_capacity(n),
+            v2: Vec::with_capacity(n),
+            more: (2..n_out.max(2)).map(|_| Vec::with_capacity(n)).collect(),
+            sx2: 0.0,
+            sa2: 0.0,
+        }
+    }
+
+    /// A sample: the outputs `out`, the position `x` (m) and the drive `a` (m/s^2).
+    #[inline(always)]
+    fn push(&mut self, out: &[f64; MAX_OUTPUTS], x: f64, a: f64) {
+        self.v1.push(out[0]);
+        self.v2.push(out[1]);
+        for (o, v) in self.more.iter_mut().zip(&out[2..]) {
+            o.push(*v);
+        }
+        self.sx2 += x * x;
+        self.sa2 += a * a;
+    }
 }
 
 /// The contact statistics over the analysed window: contact time, impacts (contact entries,
