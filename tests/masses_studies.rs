@@ -145,3 +145,58 @@ fn the_impacting_diagram_refuses_stops_between_masses_by_name() {
         Ok(_) => panic!("expected a refusal naming the masses, got a diagram"),
     }
 }
+
+#[test]
+fn a_basin_slice_starts_its_masses_there_and_the_others_at_rest() {
+    use endstop::progress::Silent;
+    use endstop::study::basins::{basins_on, Attractor, BasinGrid, BasinSettings, Slice};
+    use endstop::study::orbit::{Forcing, OrbitError};
+    let d = linear_chain();
+    let h = MassChain::<6>::new(&d).unwrap();
+    let idx = h.layout().masses.clone();
+    // The second mass's position and the first's velocity: exactly these two are set.
+    let slice = Slice {
+        x: idx[1].0,
+        v: idx[0].1,
+    };
+    let y = slice.state(&h, 1e-3, 2e-2);
+    for k in 0..6 {
+        let want = if k == idx[1].0 {
+            1e-3
+        } else if k == idx[0].1 {
+            2e-2
+        } else {
+            0.0
+        };
+        assert_eq!(y[k], want, "component {k}");
+    }
+    // A slice of two positions (or a component of no mass) is refused by name.
+    let grid = BasinGrid {
+        x_m: (0.0, 1e-3),
+        v_m_per_s: (0.0, 0.0),
+        nx: 2,
+        nv: 1,
+    };
+    let settings = BasinSettings {
+        grid,
+        max_periods: 1,
+        settle_tol: 1e-3,
+        rtol: 1e-9,
+    };
+    let at_rest = Attractor {
+        label: "rest".into(),
+        state: nalgebra::DVector::zeros(6),
+    };
+    let forcing = Forcing {
+        freq_hz: 70.0,
+        accel_rms_g: 0.1,
+    };
+    let bad = Slice {
+        x: idx[0].0,
+        v: idx[1].0,
+    };
+    match basins_on(&h, &forcing, &[at_rest], &settings, bad, &Silent) {
+        Err(OrbitError::Invalid(why)) => assert!(why.contains("slice"), "{why}"),
+        other => panic!("expected the slice refused, got {other:?}"),
+    }
+}

@@ -7,14 +7,14 @@ use std::path::PathBuf;
 
 use anyhow::{bail, Result};
 use clap::Parser;
-use common::io::frame::frame;
+use common::io::frame::{column_name, frame, Cell};
 use common::io::md::Table;
 use common::reports::basins_io::basin_map;
 use common::{fmt_sig, row};
 use endstop::device::Device;
 use endstop::model::Model;
-use endstop::study::attractors::{find_attractors, seeds, AttractorSearch, Attractors};
-use endstop::study::basins::{basins, BasinGrid, BasinSettings, Basins, UNSETTLED};
+use endstop::study::attractors::{find_attractors_from, seeds, AttractorSearch, Attractors};
+use endstop::study::basins::{basins_on, BasinGrid, BasinSettings, Basins, Slice, UNSETTLED};
 use endstop::study::displacement::two_wells;
 use endstop::study::orbit::{Forcing, ShootingOptions};
 use endstop_experiments as common;
@@ -55,6 +55,11 @@ pub(crate) struct BasinArgs {
     /// initial states spread over the grid.
     #[arg(long, default_value_t = 5)]
     seeds_per_side: usize,
+    /// On a device of several masses, the plane of the grid, `x:MASS,v:MASS` (a position and a
+    /// velocity, of one mass or two, by the device file's names); every other coordinate starts
+    /// at rest. Default: the transducer's mass. A one-mass device has one plane and refuses it.
+    #[arg(long)]
+    slice: Option<String>,
     /// Bias voltage (V) of an electrostatic transducer; default: the device file's.
     #[arg(long, allow_hyphen_values = true)]
     bias_v: Option<f64>,
@@ -156,6 +161,83 @@ impl BasinArgs {
     }
 }
 
+/// The masses of a model by name with their position's and velocity's state components (empty
+/// for a one-mass model, whose components are not named after a mass).
+fn mass_components<M: Model<N>, const N: usize>(h: &M) -> Vec<(String, usize, usize)> {
+    let l = h.layout();
+    l.masses
+        .iter()
+        .filter_map(|&(x, v)| {
+            let name = l.components.get(x)?.name.strip_prefix("x_")?;
+            Some((name.to_string(), x, v))
+        })
+        .collect()
+}
+
+/// The grid's plane on `h` from `--slice` (see [`BasinArgs::slice`]), with the names of its
+/// position's and velocity's masses (`None` on a one-mass model).
+fn resolve_slice<M: Model<N>, const N: usize>(
+    h: &M,
+    device: &Device,
+    slice: Option<&str>,
+) -> Result<(Slice, Option<(String, String)>)> {
+    let masses = mass_components(h);
+    if device.masses.is_none() {
+        if let Some(s) = slice {
+            bail!(
+                "--slice {s}: device `{}` has one mass, whose position and velocity the grid \
+                 spans; --slice chooses the plane on a device of several masses",
+                device.name
+            );
+        }
+        return Ok((Slice::FIRST, None));
+    }
+    let names: Vec<&str> = masses.iter().map(|m| m.0.as_str()).collect();
+    let Some(slice) = slice else {
+        let (name, x, v) = &masses[0];
+        return Ok((Slice { x: *x, v: *v }, Some((name.clone(), name.clone()))));
+    };
+    let bad = |why: &str| {
+        anyhow::anyhow!(
+            "--slice {slice}: {why}; give `x:MASS,v:MASS` with MASS one of the masses of `{}`: \
+             {}",
+            device.name,
+            names.join(", ")
+        )
+    };
+    let (Some(xm), Some(vm)) = (
+        slice
+            .split(',')
+            .next()
+            .and_then(|p| p.trim().strip_prefix("x:")),
+        slice
+            .split(',')
+            .nth(1)
+            .and_then(|p| p.trim().strip_prefix("v:")),
+    ) else {
+        return Err(bad("not of the form `x:MASS,v:MASS`"));
+    };
+    if slice.split(',').count() != 2 {
+        return Err(bad("not of the form `x:MASS,v:MASS`"));
+    }
+    let find = |name: &str| {
+        masses
+            .iter()
+            .find(|m| m.0 == name)
+            .ok_or_else(|| bad(&format!("no mass is named `{name}`")))
+    };
+    let (x, v) = (find(xm)?, find(vm)?);
+    Ok((Slice { x: x.1, v: v.2 }, Some((x.0.clone(), v.0.clone()))))
+}
+
+/// What the basins' run returns besides the attractors and the basins: the plane of the grid
+/// with its masses' names, and every mass's name and state components.
+struct Plane {
+    slice: Slice,
+    names: Option<(String, String)>,
+    masses: Vec<(String, usize, usize)>,
+}
+
 /// A summary key from a label (`left well, small` to `left_well_small`).
 fn key(label: &str) -> String {
     label
@@ -176,12 +258,24 @@ fn attractors_and_basins<M: Model<N>, const N: usize>(
     a: &BasinArgs,
     forcing: &Forcing,
     grid: BasinGrid,
-    seeds: &[(f64, f64)],
     search: &AttractorSearch,
     shooting: ShootingOptions,
-) -> Result<(Attractors, Basins)> {
+) -> Result<(Attractors, Basins, Plane)> {
+    let (slice, names) = resolve_slice(h, device, a.slice.as_deref())?;
+    // A one-mass device is seeded at its stable equilibria; a device of several masses at rest
+    // (its springs' equilibrium); then the grid's cells.
+    let starts: Vec<_> = if device.masses.is_none() {
+        seeds(device, &grid, a.seeds_per_side)
+    } else {
+        let mut s = vec![(0.0, 0.0)];
+        s.extend(seeds_on_grid(&grid, a.seeds_per_side));
+        s
+    }
+    .into_iter()
+    .map(|(x, v)| slice.state(h, x, v))
+    .collect();
     let found = common::with_progress(1, "attractors", |tick| {
-        let r = find_attractors(h, device, forcing, shooting, seeds, search);
+        let r = find_attractors_from(h, device, forcing, shooting, &starts, search);
         tick.tick();
         r
     })?;
@@ -204,9 +298,24 @@ fn attractors_and_basins<M: Model<N>, const N: usize>(
     };
     let catalogue = found.catalogue();
     let b = common::with_progress(grid.nx * grid.nv, "basins", |tick| {
-        basins(h, forcing, &catalogue, &settings, tick)
+        basins_on(h, forcing, &catalogue, &settings, slice, tick)
     })?;
-    Ok((found, b))
+    let plane = Plane {
+        slice,
+        names,
+        masses: mass_components(h),
+    };
+    Ok((found, b, plane))
+}
+
+/// The grid's cells taken `per_side` by `per_side`.
+fn seeds_on_grid(grid: &BasinGrid, per_side: usize) -> Vec<(f64, f64)> {
+    BasinGrid {
+        nx: per_side,
+        nv: per_side,
+        ..*grid
+    }
+    .cells()
 }
 
 /// Runs `endstop basins`.
@@ -221,20 +330,19 @@ pub(crate) fn basins_study(a: BasinArgs) -> Result<()> {
         accel_rms_g: a.accel_rms_g,
     };
     let shooting = ShootingOptions::default();
-    let seeds = seeds(&device, &grid, a.seeds_per_side);
     let search = AttractorSearch::default();
-    let (found, b) = endstop::with_harvester!(&device, |h| attractors_and_basins(
-        &h, &device, &a, &forcing, grid, &seeds, &search, shooting
+    let (found, b, plane) = endstop::with_harvester!(&device, |h| attractors_and_basins(
+        &h, &device, &a, &forcing, grid, &search, shooting
     ))?;
 
-    write_tables(&mut exp, &device.params, &b, &found)?;
+    write_tables(&mut exp, &device.params, &b, &found, &plane)?;
     let mut md = format!(
         "Basins of `{}` ({} set; {}) at {} Hz, {} g rms: a grid of {} by {} initial states, \
-         x from {} to {} um and v from {} to {} mm/s, each started at drive phase zero with the \
-         transducer at rest and run period by period until it stays within {} (scaled) of an \
+         x{} from {} to {} um and v{} from {} to {} mm/s, each started at drive phase zero with the \
+         transducer at rest{} and run period by period until it stays within {} (scaled) of an \
          attractor's state at drive phase zero for two periods in a row, for at most {} \
          periods; the attractors are the stable orbits of one drive period reached from {} \
-         seeds (the wells at rest and {} by {} states over the grid), each after {} periods \
+         seeds ({} and {} by {} states over the grid), each after {} periods \
          of transient and Newton's method on the period map.\n\n",
         loaded.file,
         device.params,
@@ -243,13 +351,25 @@ pub(crate) fn basins_study(a: BasinArgs) -> Result<()> {
         a.accel_rms_g,
         grid.nx,
         grid.nv,
+        plane.names.as_ref().map_or(String::new(), |n| format!(" of `{}`", n.0)),
         fmt_sig(grid.x_m.0 * 1e6, 4),
         fmt_sig(grid.x_m.1 * 1e6, 4),
+        plane.names.as_ref().map_or(String::new(), |n| format!(" of `{}`", n.1)),
         fmt_sig(grid.v_m_per_s.0 * 1e3, 4),
         fmt_sig(grid.v_m_per_s.1 * 1e3, 4),
+        if plane.names.is_some() {
+            " and every other mass at rest at its springs' equilibrium"
+        } else {
+            ""
+        },
         a.settle_tol,
         a.max_periods,
         found.seeds,
+        if plane.names.is_some() {
+            "the device at rest"
+        } else {
+            "the wells at rest"
+        },
         a.seeds_per_side,
         a.seeds_per_side,
         search.transient_periods,
@@ -261,7 +381,13 @@ pub(crate) fn basins_study(a: BasinArgs) -> Result<()> {
     let marks: Vec<(String, f64, f64)> = found
         .found
         .iter()
-        .map(|f| (f.label.clone(), f.orbit.state[0], f.orbit.state[1]))
+        .map(|f| {
+            (
+                f.label.clone(),
+                f.orbit.state[plane.slice.x],
+                f.orbit.state[plane.slice.v],
+            )
+        })
         .collect();
     let title = format!(
         "Basins at {} Hz, {} g rms: {}",
@@ -271,18 +397,29 @@ pub(crate) fn basins_study(a: BasinArgs) -> Result<()> {
     exp.finish()
 }
 
-/// Writes `basins.parquet` (the grid and each cell's attractor) and `attractors.parquet`.
+/// Writes `basins.parquet` (the grid and each cell's attractor) and `attractors.parquet`; on
+/// a device of several masses the grid's columns name their masses (`x0_<mass>_m`,
+/// `v0_<mass>_m_per_s`) and each attractor carries every mass's state at drive phase zero
+/// (`x_phase0_<mass>_m`, `v_phase0_<mass>_m_per_s`) after the transducer's mass's.
 fn write_tables(
     exp: &mut common::Experiment,
     set: &str,
     b: &Basins,
     found: &Attractors,
+    plane: &Plane,
 ) -> Result<()> {
     let place = |i: usize| b.attractor[i].map_or(UNSETTLED, |k| found.found[k].place.label());
+    let (x0, v0) = match &plane.names {
+        Some((x, v)) => (
+            column_name(&format!("x0_{x}_m")),
+            column_name(&format!("v0_{v}_m_per_s")),
+        ),
+        None => ("x0_m", "v0_m_per_s"),
+    };
     let rows = b.cells.iter().enumerate().map(|(i, &(x, v))| {
         row![
-            "x0_m" => x,
-            "v0_m_per_s" => v,
+            x0 => x,
+            v0 => v,
             "attractor" => b.label(i),
             "place" => place(i),
             "periods" => b.periods[i] as u64,
@@ -292,7 +429,7 @@ fn write_tables(
     let shares = b.shares();
     let rows = found.found.iter().zip(&shares).map(|(f, (_, share))| {
         let s = &f.orbit.summary;
-        row![
+        let mut r = row![
             "attractor" => f.label.as_str(),
             "place" => f.place.label(),
             "x_phase0_m" => f.orbit.state[0],
@@ -303,7 +440,18 @@ fn write_tables(
             "impacts_per_period" => s.impacts as u64,
             "max_multiplier_abs" => f.orbit.max_multiplier_abs(),
             "share" => *share,
-        ]
+        ];
+        for (name, x, v) in &plane.masses {
+            r.push((
+                column_name(&format!("x_phase0_{name}_m")),
+                Cell::from(f.orbit.state[*x]),
+            ));
+            r.push((
+                column_name(&format!("v_phase0_{name}_m_per_s")),
+                Cell::from(f.orbit.state[*v]),
+            ));
+        }
+        r
     });
     exp.write_parquet("attractors", &mut frame(rows)?, set)?;
     Ok(())

@@ -188,7 +188,7 @@ fn noise(a: &RandomArgs, psd: f64) -> Result<()> {
         "Random vibration of `{}` ({} set; {}): two-sided Sa = {} g^2/Hz up to {} kHz, {} records \
          of {} s, seed {}, Welch segments of {} samples.\n\n\
          - power of the loads: {} nW ± {} nW (95 %); linear theory without stops: {}{}\n\
-         - efficiency 2P/(m Sa): {} %\n\
+         - efficiency 2P/(m Sa): {} %{}\n\
          - 3 dB bandwidth of the mean output PSD: {} Hz\n\
          - RMS displacement: {} um; time in contact: {} %; impacts: {}\n\
          - free flight integrated by: {}\n",
@@ -207,6 +207,7 @@ fn noise(a: &RandomArgs, psd: f64) -> Result<()> {
         eq21.map(|p| format!(" (eq 21: {} nW)", fmt_sig(p * 1e9, 4)))
             .unwrap_or_default(),
         fmt_sig(ens.efficiency.mean * 100.0, 4),
+        driven_mass_md(&device),
         fmt_sig(ens.mean_widths.bw3db_hz(), 4),
         fmt_sig(ens.x_rms_m.mean * 1e6, 3),
         fmt_sig(ens.contact_fraction.mean * 100.0, 3),
@@ -524,4 +525,21 @@ fn with_mass_columns(
         df.with_column(polars::prelude::Series::new((*name).into(), col))?;
     }
     Ok(())
+}
+
+/// What `m` of the efficiency is on a device of several masses (empty for one mass): the mass
+/// the drive acts on, whose `m Sa / 2` is the power a white noise puts in.
+fn driven_mass_md(device: &endstop::device::Device) -> String {
+    match &device.masses {
+        None => String::new(),
+        Some(m) => format!(
+            " (m = {} g, {}: the power the noise puts in is m Sa / 2 whatever the springs, \
+             dampers and contacts)",
+            fmt_sig(m.driven_mass_kg() * 1e3, 4),
+            match m.drive_mass {
+                Some(j) => format!("the driven mass `{}`", m.bodies[j].name),
+                None => "the total mass, every mass driven by the frame".to_string(),
+            }
+        ),
+    }
 }

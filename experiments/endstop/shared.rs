@@ -248,14 +248,14 @@ pub(crate) fn implausible_drive(
 }
 
 /// One line on what a device is: its transducer (with its bias voltage, and a note where it
-/// has one load) and each side's stop.
+/// has one load) and each side's stop; on a device of several masses, the transducer's mass,
+/// every mass, spring, damper and stop (to the frame or between two masses) instead of the
+/// stops.
 pub(crate) fn describe(device: &Device) -> String {
-    let t = &device.transducer;
-    let transducer = match (t.bias_v(), t.loads()) {
-        (Some(vb), _) => format!("`{}` transducer at Vb = {vb} V", t.key()),
-        (None, 1) => format!("`{}` transducer, one load (v2 is zero)", t.key()),
-        (None, _) => format!("`{}` transducer", t.key()),
-    };
+    if let Some(m) = &device.masses {
+        return describe_masses(device, m);
+    }
+    let transducer = transducer_words(device);
     let side = |s: Option<&endstop::device::Stop>| match s {
         Some(s) => format!("`{}` at {} um", s.law.key(), fmt_sig(s.gap_m * 1e6, 4)),
         None => "none".to_string(),
@@ -269,6 +269,74 @@ pub(crate) fn describe(device: &Device) -> String {
         ),
     };
     format!("{transducer}, {stops}{}", suspension(device))
+}
+
+/// The transducer's words of [`describe`].
+fn transducer_words(device: &Device) -> String {
+    let t = &device.transducer;
+    match (t.bias_v(), t.loads()) {
+        (Some(vb), _) => format!("`{}` transducer at Vb = {vb} V", t.key()),
+        (None, 1) => format!("`{}` transducer, one load (v2 is zero)", t.key()),
+        (None, _) => format!("`{}` transducer", t.key()),
+    }
+}
+
+/// [`describe`] of a device of several masses.
+fn describe_masses(device: &Device, m: &endstop::device::Masses) -> String {
+    use endstop::device::Side;
+    let name = |i: usize| format!("`{}`", m.bodies[i].name);
+    let ends = |mass: usize, other: Option<usize>| match other {
+        Some(o) => format!("{}-{}", name(mass), name(o)),
+        None => format!("{}-frame", name(mass)),
+    };
+    let list = |items: Vec<String>| {
+        if items.is_empty() {
+            "none".to_string()
+        } else {
+            items.join(", ")
+        }
+    };
+    let links = |links: &[endstop::device::Link], unit: &str| {
+        list(
+            links
+                .iter()
+                .map(|l| format!("{} {} {unit}", ends(l.mass, l.other), fmt_sig(l.value, 4)))
+                .collect(),
+        )
+    };
+    let masses = list(
+        m.bodies
+            .iter()
+            .map(|b| format!("`{}` {} g", b.name, fmt_sig(b.mass_kg * 1e3, 4)))
+            .collect(),
+    );
+    let stops = list(
+        m.stops
+            .iter()
+            .map(|s| {
+                let side = match s.side {
+                    Side::Upper => "upper",
+                    Side::Lower => "lower",
+                };
+                format!(
+                    "{} {side} `{}` at {} um",
+                    ends(s.mass, s.other),
+                    s.stop.law.key(),
+                    fmt_sig(s.stop.gap_m * 1e6, 4)
+                )
+            })
+            .collect(),
+    );
+    let transducer = transducer_words(device);
+    let drive = m.drive_mass.map_or(String::new(), |j| {
+        format!("; a force drive on {} alone", name(j))
+    });
+    format!(
+        "{transducer} on {}; masses {masses}; springs {}; dampers {}; stops {stops}{drive}",
+        name(m.transducer_mass),
+        links(&m.springs, "N/m"),
+        links(&m.dampers, "N s/m"),
+    )
 }
 
 /// A nonlinear suspension's form and static equilibria, for [`describe`] (empty for a linear

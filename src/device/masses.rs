@@ -392,6 +392,18 @@ impl Masses {
         self.bodies.iter().map(|b| b.mass_kg).sum()
     }
 
+    /// The mass the drive acts on (kg): the total mass under the frame's acceleration, the
+    /// driven mass's under a force drive. A white noise of two-sided PSD `Sa` puts the mean
+    /// power `M Sa / 2` into the device with this `M`, whatever its springs, dampers and
+    /// contacts: each mass driven by `m_i a(t)` has its velocity jump by the acceleration's
+    /// impulse, so that `E[m_i a v_i] = m_i Sa / 2`, summed over the driven masses.
+    pub fn driven_mass_kg(&self) -> f64 {
+        match self.drive_mass {
+            Some(j) => self.bodies[j].mass_kg,
+            None => self.total_mass_kg(),
+        }
+    }
+
     /// The sum of the springs' stiffnesses to the frame (N/m).
     pub fn frame_stiffness_n_per_m(&self) -> f64 {
         self.springs

@@ -37,6 +37,7 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
+use nalgebra::SVector;
 use rayon::prelude::*;
 
 use crate::device::Device;
@@ -180,6 +181,23 @@ pub fn find_attractors<M: Model<N>, const N: usize>(
     seeds: &[(f64, f64)],
     search: &AttractorSearch,
 ) -> Result<Attractors, OrbitError> {
+    let starts: Vec<SVector<f64, N>> = seeds
+        .iter()
+        .map(|&(x, v)| base.static_state(x, v))
+        .collect();
+    find_attractors_from(base, device, forcing, shooting, &starts, search)
+}
+
+/// The stable period-one orbits reached from the initial states `starts` (each a whole
+/// state, as [`find_attractors`] makes from its seeds on the first mass).
+pub fn find_attractors_from<M: Model<N>, const N: usize>(
+    base: &M,
+    device: &Device,
+    forcing: &Forcing,
+    shooting: ShootingOptions,
+    starts: &[SVector<f64, N>],
+    search: &AttractorSearch,
+) -> Result<Attractors, OrbitError> {
     if !(search.same_tol.is_finite() && search.same_tol > 0.0) {
         return Err(OrbitError::Invalid(format!(
             "the tolerance for one orbit must be finite and positive, not {}",
@@ -188,11 +206,10 @@ pub fn find_attractors<M: Model<N>, const N: usize>(
     }
     let shooter = Shooter::new(base, shooting);
     let period = forcing.period_s();
-    let outcomes: Vec<SeedOutcome> = seeds
+    let outcomes: Vec<SeedOutcome> = starts
         .par_iter()
-        .map(|&(x, v)| {
+        .map(|&y0| {
             let mut stats = Stats::default();
-            let y0 = base.static_state(x, v);
             let transient = search.transient_periods as f64 * period;
             let Ok((y, _, st)) = shooter.flow(forcing, 0.0, y0, transient, |_, _| {}) else {
                 return (None, stats);
@@ -206,7 +223,7 @@ pub fn find_attractors<M: Model<N>, const N: usize>(
         .collect();
     let mut out = Attractors {
         found: Vec::new(),
-        seeds: seeds.len(),
+        seeds: starts.len(),
         not_converged: 0,
         unstable: 0,
         repeats: 0,

@@ -65,6 +65,50 @@ impl BasinGrid {
     }
 }
 
+/// The two state components a grid of initial states spans: a position and a velocity (of
+/// one mass or of two), every other component starting at rest, with the transducer's parts at
+/// their static equilibrium at the transducer's mass's position ([`Model::static_state`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Slice {
+    /// The state component of the grid's positions.
+    pub x: usize,
+    /// The state component of the grid's velocities.
+    pub v: usize,
+}
+
+impl Slice {
+    /// The first mass's position and velocity (the transducer's: components 0 and 1).
+    pub const FIRST: Slice = Slice { x: 0, v: 1 };
+
+    /// The initial state of the cell `(x, v)` on this slice (see [`Slice`]).
+    pub fn state<M: Model<N>, const N: usize>(&self, base: &M, x: f64, v: f64) -> SVector<f64, N> {
+        let x_first = if self.x == 0 { x } else { 0.0 };
+        let v_first = if self.v == 1 { v } else { 0.0 };
+        let mut y = base.static_state(x_first, v_first);
+        y[self.x] = x;
+        y[self.v] = v;
+        y
+    }
+
+    /// Refuses a slice whose components are not a position and a velocity of `base`'s masses.
+    fn check<M: Model<N>, const N: usize>(&self, base: &M) -> Result<(), OrbitError> {
+        let masses = &base.layout().masses;
+        let is_x = masses.iter().any(|&(x, _)| x == self.x);
+        let is_v = masses.iter().any(|&(_, v)| v == self.v);
+        // A model whose layout lists no masses has the first mass at 0 and 1.
+        let first = masses.is_empty() && *self == Self::FIRST;
+        if (is_x && is_v) || first {
+            Ok(())
+        } else {
+            Err(OrbitError::Invalid(format!(
+                "basins: the slice (components {} and {}) is not a mass's position and a \
+                 mass's velocity (the masses' components are {masses:?})",
+                self.x, self.v
+            )))
+        }
+    }
+}
+
 /// Settings of a basin computation.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct BasinSettings {
@@ -202,9 +246,25 @@ pub fn basins<M: Model<N>, const N: usize>(
     settings: &BasinSettings,
     on_cell: &dyn Progress,
 ) -> Result<Basins, OrbitError> {
+    basins_on(base, forcing, attractors, settings, Slice::FIRST, on_cell)
+}
+
+/// The basins as [`basins`] gives them, with the grid on `slice` (a position and a velocity of
+/// any masses; every other component at rest) instead of the first mass's.
+pub fn basins_on<M: Model<N>, const N: usize>(
+    base: &M,
+    forcing: &Forcing,
+    attractors: &[Attractor],
+    settings: &BasinSettings,
+    slice: Slice,
+    on_cell: &dyn Progress,
+) -> Result<Basins, OrbitError> {
+    slice.check(base)?;
     let cells = settings.grid.cells();
     let known = vec![None; cells.len()];
-    settle_cells(base, forcing, attractors, settings, cells, known, on_cell)
+    settle_cells(
+        base, forcing, attractors, settings, slice, cells, known, on_cell,
+    )
 }
 
 /// The basins on `coarse_settings.grid.refined()`, with the other settings of
@@ -260,16 +320,27 @@ pub fn refine<M: Model<N>, const N: usize>(
         grid: fine,
         ..*coarse_settings
     };
-    settle_cells(base, forcing, attractors, &settings, cells, known, on_cell)
+    settle_cells(
+        base,
+        forcing,
+        attractors,
+        &settings,
+        Slice::FIRST,
+        cells,
+        known,
+        on_cell,
+    )
 }
 
 /// Integrates every cell of `cells` without a `known` outcome until it settles (see the
-/// module docs) and collects the outcomes in grid order.
+/// module docs), each started on `slice`, and collects the outcomes in grid order.
+#[allow(clippy::too_many_arguments)]
 fn settle_cells<M: Model<N>, const N: usize>(
     base: &M,
     forcing: &Forcing,
     attractors: &[Attractor],
     settings: &BasinSettings,
+    slice: Slice,
     cells: Vec<(f64, f64)>,
     known: Vec<Option<(Option<usize>, usize)>>,
     on_cell: &dyn Progress,
@@ -294,7 +365,7 @@ fn settle_cells<M: Model<N>, const N: usize>(
             if let Some((found, k)) = *known {
                 return Ok((found, k, Stats::default()));
             }
-            let y0 = base.static_state(x, v);
+            let y0 = slice.state(base, x, v);
             let mut ode = Dopri5::new(0.0, y0, base.mode_of(&y0), opts.clone());
             let mut previous: Option<usize> = None;
             let mut found = None;
