@@ -100,7 +100,13 @@ fn bad_multi_mass_files_get_named_errors() {
     assert_eq!(field(text).as_deref(), Some("mechanics"));
     // The one-mass assembly refuses a device of several masses rather than model one of them.
     let d = Device::from_toml_str(UPCONVERTER, "upconverter.toml").unwrap();
-    assert!(endstop::physics::harvester::Harvester::<4>::new(&d).is_err());
+    assert!(
+        matches!(
+            endstop::physics::harvester::Harvester::<4>::new(&d),
+            Err(endstop::physics::harvester::AssemblyError::SeveralMasses { masses: 2, .. })
+        ),
+        "the one-mass assembly must name the device's masses"
+    );
 }
 
 /// The linear chain of the frequency-response check: mass a on a spring and damper to the

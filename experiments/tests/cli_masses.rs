@@ -492,7 +492,7 @@ fn fit_on_a_mass_file_runs_on_the_stepped_sweep_and_says_why() {
     let md = std::fs::read_to_string(out.join("numbers.md")).unwrap();
     assert!(
         md.contains("stepped-sweep model")
-            && md.contains("device `upconverter` has 2 masses; the branches are followed on a device of one mass"),
+            && md.contains("device `upconverter` has 2 masses: a model of one mass cannot take it"),
         "{md}"
     );
     let _ = std::fs::remove_dir_all(dir);

@@ -604,6 +604,15 @@ impl Device {
     pub fn suspension_omega_rad_s(&self) -> f64 {
         (self.mechanics.stiffness_n_per_m / self.mechanics.mass_kg).sqrt()
     }
+
+    /// The mass the drive acts on (kg): the proof mass of a device of one mass; of several,
+    /// [`Masses::driven_mass_kg`] (the total under the frame's acceleration). White noise of
+    /// two-sided density `Sa` puts the mean power `M Sa / 2` into the device with this `M`.
+    pub fn driven_mass_kg(&self) -> f64 {
+        self.masses
+            .as_ref()
+            .map_or(self.mechanics.mass_kg, Masses::driven_mass_kg)
+    }
 }
 
 /// A device serialises as its TOML text (the file form), so that any serde format can carry

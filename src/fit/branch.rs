@@ -106,16 +106,8 @@ impl Setup {
     }
 
     /// The one-mass model the branches are followed on; a device of several masses has none
-    /// (its stops are not the frame's two, which the grazing test reads), and its fit is the
-    /// stepped sweep's.
+    /// (the assembly says so), and its fit is the stepped sweep's.
     fn harvester(&self, device: &Device) -> Result<Harvester, Lost> {
-        if let Some(m) = &device.masses {
-            return Err(Lost(format!(
-                "device `{}` has {} masses; the branches are followed on a device of one mass",
-                device.name,
-                m.bodies.len()
-            )));
-        }
         Harvester::new(device).map_err(|e| Lost(e.to_string()))
     }
 }

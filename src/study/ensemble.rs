@@ -121,7 +121,7 @@ pub struct Ensemble {
     pub p2_w: MeanCi,
     /// Efficiency `2P/(m Sa)` per record (fraction): the power over the mean power the white
     /// noise puts in, `m Sa / 2`; on a device of several masses `m` is the driven mass
-    /// ([`crate::device::Masses::driven_mass_kg`]: the total under the frame's acceleration).
+    /// ([`Device::driven_mass_kg`]: the total under the frame's acceleration).
     pub efficiency: MeanCi,
     /// RMS displacement (m).
     pub x_rms_m: MeanCi,
@@ -332,12 +332,7 @@ fn analyse(case: &EnsembleCase, records: Vec<RecordResult>) -> Ensemble {
     let col = |f: &dyn Fn(&RecordSummary) -> f64| -> Vec<f64> {
         records.iter().map(|r| f(&r.summary)).collect()
     };
-    // The driven mass of a device of several masses (see `Masses::driven_mass_kg`).
-    let m = case
-        .device
-        .masses
-        .as_ref()
-        .map_or(case.device.mechanics.mass_kg, |m| m.driven_mass_kg());
+    let m = case.device.driven_mass_kg();
     let sa_si = case.spec.record.noise.psd_si();
     let mut stats = Stats::default();
     for r in &records {

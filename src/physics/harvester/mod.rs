@@ -133,6 +133,17 @@ pub enum AssemblyError {
         /// The smallest ratio accepted ([`STIFF_LIMIT`]).
         limit: f64,
     },
+    /// A device of several masses asked of the one-mass model.
+    #[error(
+        "device `{device}` has {masses} masses: a model of one mass cannot take it (it \
+         assembles into a chain of masses, `masses::MassChain`)"
+    )]
+    SeveralMasses {
+        /// The device.
+        device: String,
+        /// Its number of masses.
+        masses: usize,
+    },
     /// A combination of parts that is not supported yet.
     #[error("device `{device}`: {transducer} behind {interface} is not supported yet ({why})")]
     Unsupported {
@@ -169,12 +180,10 @@ impl<const N: usize> Harvester<N> {
     /// The model of a device (at its bias voltage and end-stop options); errs when its parts
     /// need another dimension than `N` ([`dimension`] says which) or do not combine.
     pub fn new(device: &Device) -> Result<Self, AssemblyError> {
-        if device.masses.is_some() {
-            return Err(AssemblyError::Unsupported {
+        if let Some(m) = &device.masses {
+            return Err(AssemblyError::SeveralMasses {
                 device: device.name.clone(),
-                transducer: device.transducer.key().to_string(),
-                interface: device.interface.key().to_string(),
-                why: "a device of several masses assembles into `masses::MassChain`".into(),
+                masses: m.bodies.len(),
             });
         }
         let port = port_of(device)?;
