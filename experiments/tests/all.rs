@@ -16,6 +16,7 @@ mod bad_input;
 mod bad_input_props;
 mod calibration_artefact;
 mod cli;
+mod cli_common;
 mod cli_devices;
 mod cli_interface;
 mod cli_masses;

@@ -5,7 +5,7 @@
 use std::path::Path;
 use std::process::Command;
 
-const BIN: &str = env!("CARGO_BIN_EXE_endstop");
+use crate::cli_common::{read_parquet, BIN};
 
 fn example() -> String {
     format!(
@@ -24,12 +24,6 @@ fn summary_number(dir: &Path, key: &str) -> Option<f64> {
     let text = std::fs::read_to_string(dir.join("summary.json")).unwrap();
     let v: serde_json::Value = serde_json::from_str(&text).unwrap();
     v["numbers"][key].as_f64()
-}
-
-fn read_parquet(path: &Path) -> polars::prelude::DataFrame {
-    use polars::prelude::*;
-    let f = std::fs::File::open(path).unwrap();
-    ParquetReader::new(f).finish().unwrap()
 }
 
 /// Runs the tool on the example device (`args` follow `<study> --device <example>`) writing

@@ -6,7 +6,7 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-const BIN: &str = env!("CARGO_BIN_EXE_endstop");
+use crate::cli_common::{read_parquet, run, BIN};
 
 fn data(rel: &str) -> String {
     format!("{}/../data/{rel}", env!("CARGO_MANIFEST_DIR"))
@@ -16,17 +16,6 @@ fn tmp(tag: &str) -> PathBuf {
     let d = std::env::temp_dir().join(format!("endstop-clidev-{}-{tag}", std::process::id()));
     let _ = std::fs::remove_dir_all(&d);
     d
-}
-
-fn read_parquet(path: &Path) -> polars::prelude::DataFrame {
-    use polars::prelude::*;
-    ParquetReader::new(std::fs::File::open(path).unwrap())
-        .finish()
-        .unwrap()
-}
-
-fn run(args: &[&str]) -> std::process::Output {
-    Command::new(BIN).args(args).output().unwrap()
 }
 
 /// Writes a CSV record of `n` rows at `dt` with header `time_s,accel_m_per_s2`, with `edit`

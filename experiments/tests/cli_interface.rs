@@ -9,13 +9,7 @@
 use std::path::Path;
 use std::process::Command;
 
-const BIN: &str = env!("CARGO_BIN_EXE_endstop");
-
-fn read_parquet(path: &Path) -> polars::prelude::DataFrame {
-    use polars::prelude::*;
-    let f = std::fs::File::open(path).unwrap();
-    ParquetReader::new(f).finish().unwrap()
-}
+use crate::cli_common::{read_parquet, BIN};
 
 /// At 1 g rms the stop bends the response: between 125 and 180 Hz the continued steady state
 /// turns at two folds, is unstable between them and stable on either side, and both sweeps

@@ -2,10 +2,9 @@
 //! Parquet and numbers carry every mass's peak displacement and speed under the mass's name,
 //! beside the one-mass columns of the output contract.
 
-use std::path::{Path, PathBuf};
-use std::process::Command;
+use std::path::PathBuf;
 
-const BIN: &str = env!("CARGO_BIN_EXE_endstop");
+use crate::cli_common::{read_parquet, run};
 
 /// The per-mass columns of the up-converter (its masses are `driver` and `generator`).
 const MASS_COLUMNS: [&str; 4] = [
@@ -26,17 +25,6 @@ fn tmp(tag: &str) -> PathBuf {
     let d = std::env::temp_dir().join(format!("endstop-climass-{}-{tag}", std::process::id()));
     let _ = std::fs::remove_dir_all(&d);
     d
-}
-
-fn read_parquet(path: &Path) -> polars::prelude::DataFrame {
-    use polars::prelude::*;
-    ParquetReader::new(std::fs::File::open(path).unwrap())
-        .finish()
-        .unwrap()
-}
-
-fn run(args: &[&str]) -> std::process::Output {
-    Command::new(BIN).args(args).output().unwrap()
 }
 
 /// Every per-mass column of `df` is there and positive, and the transducer mass's peak is the

@@ -5,10 +5,10 @@
 //! the attractors' table; a bad suspension or a bad basin option is refused by name, and
 //! nothing is written.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::process::Command;
 
-const BIN: &str = env!("CARGO_BIN_EXE_endstop");
+use crate::cli_common::{read_parquet, BIN};
 
 fn data(rel: &str) -> String {
     format!("{}/../data/{rel}", env!("CARGO_MANIFEST_DIR"))
@@ -18,13 +18,6 @@ fn tmp(tag: &str) -> PathBuf {
     let d = std::env::temp_dir().join(format!("endstop-springs-{}-{tag}", std::process::id()));
     let _ = std::fs::remove_dir_all(&d);
     d
-}
-
-fn read_parquet(path: &Path) -> polars::prelude::DataFrame {
-    use polars::prelude::*;
-    ParquetReader::new(std::fs::File::open(path).unwrap())
-        .finish()
-        .unwrap()
 }
 
 #[test]
