@@ -13,7 +13,9 @@ use common::reports::basins_io::basin_map;
 use common::{fmt_sig, row};
 use endstop::device::Device;
 use endstop::model::Model;
-use endstop::study::attractors::{find_attractors_from, seeds, AttractorSearch, Attractors};
+use endstop::study::attractors::{
+    find_attractors_from, grid_seeds, seeds, AttractorSearch, Attractors,
+};
 use endstop::study::basins::{basins_on, BasinGrid, BasinSettings, Basins, Slice, UNSETTLED};
 use endstop::study::displacement::two_wells;
 use endstop::study::orbit::{Forcing, ShootingOptions};
@@ -167,10 +169,8 @@ fn mass_components<M: Model<N>, const N: usize>(h: &M) -> Vec<(String, usize, us
     let l = h.layout();
     l.masses
         .iter()
-        .filter_map(|&(x, v)| {
-            let name = l.components.get(x)?.name.strip_prefix("x_")?;
-            Some((name.to_string(), x, v))
-        })
+        .enumerate()
+        .filter_map(|(k, &(x, v))| Some((l.mass_name(k)?.to_string(), x, v)))
         .collect()
 }
 
@@ -268,7 +268,7 @@ fn attractors_and_basins<M: Model<N>, const N: usize>(
         seeds(device, &grid, a.seeds_per_side)
     } else {
         let mut s = vec![(0.0, 0.0)];
-        s.extend(seeds_on_grid(&grid, a.seeds_per_side));
+        s.extend(grid_seeds(&grid, a.seeds_per_side));
         s
     }
     .into_iter()
@@ -306,16 +306,6 @@ fn attractors_and_basins<M: Model<N>, const N: usize>(
         masses: mass_components(h),
     };
     Ok((found, b, plane))
-}
-
-/// The grid's cells taken `per_side` by `per_side`.
-fn seeds_on_grid(grid: &BasinGrid, per_side: usize) -> Vec<(f64, f64)> {
-    BasinGrid {
-        nx: per_side,
-        nv: per_side,
-        ..*grid
-    }
-    .cells()
 }
 
 /// Runs `endstop basins`.

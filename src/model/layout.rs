@@ -78,6 +78,14 @@ impl Layout {
         self
     }
 
+    /// The name of mass `k`: its position's component `x_<name>` without the prefix. `None`
+    /// where the layout has no such mass or its position is not named after a mass (the one
+    /// mass of a one-mass model, whose position is `x`).
+    pub fn mass_name(&self, k: usize) -> Option<&str> {
+        let x = self.components.get(self.masses.get(k)?.0)?.name.as_str();
+        x.strip_prefix("x_")
+    }
+
     /// The index of the component named `name`.
     pub fn component(&self, name: &str) -> Option<usize> {
         self.components.iter().position(|s| s.name == name)

@@ -156,15 +156,19 @@ pub fn seeds(device: &Device, grid: &BasinGrid, per_side: usize) -> Vec<(f64, f6
         .filter(|e| e.stable && e.place == EquilibriumPlace::Free)
         .map(|e| (e.x_m, 0.0))
         .collect();
-    out.extend(
-        BasinGrid {
-            nx: per_side,
-            nv: per_side,
-            ..*grid
-        }
-        .cells(),
-    );
+    out.extend(grid_seeds(grid, per_side));
     out
+}
+
+/// The cells of `grid`'s ranges taken `per_side` by `per_side` (none for 0): the seeds a
+/// search spreads over the grid's plane.
+pub fn grid_seeds(grid: &BasinGrid, per_side: usize) -> Vec<(f64, f64)> {
+    BasinGrid {
+        nx: per_side,
+        nv: per_side,
+        ..*grid
+    }
+    .cells()
 }
 
 /// What one seed gave: an orbit (stable or not), or nothing.

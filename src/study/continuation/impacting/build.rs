@@ -122,11 +122,7 @@ pub fn rigid_diagram_of<M: Model<N> + Clone, const N: usize>(
     // Its grazings and impact maps are those of the first mass against the frame.
     if let Some(c) = present.iter().find(|c| c.mass != 0 || c.other.is_some()) {
         let (i, j) = (c.mass, c.other);
-        let names = &h.layout().components;
-        let mass = |k: usize| {
-            let x = names[h.layout().masses[k].0].name.as_str();
-            x.strip_prefix("x_").unwrap_or(x).to_string()
-        };
+        let mass = |k: usize| h.layout().mass_name(k).unwrap_or("?").to_string();
         return Err(OrbitError::Invalid(format!(
             "the impacting-orbit diagram follows the first mass's stops to the frame only; \
              this model has a stop {}: continue its branch from rest instead",
