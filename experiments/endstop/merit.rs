@@ -128,7 +128,9 @@ pub(crate) fn half_power(
 ) -> Option<(String, merit::HalfPowerBand)> {
     let b = merit::half_power_band(freqs_hz, power_w)?;
     exp.number("half_power_peak_hz", b.peak_hz);
-    let edge = |e: Option<f64>, beyond: &str| e.map_or(beyond.to_string(), |f| fmt_sig(f, 5));
+    let edge = |e: Option<f64>, beyond: &str| {
+        e.map_or(beyond.to_string(), |f| format!("{} Hz", fmt_sig(f, 5)))
+    };
     if let Some(f) = b.lower_hz {
         exp.number("half_power_lower_hz", f);
     }
@@ -143,10 +145,10 @@ pub(crate) fn half_power(
         None => "wider than the sweep".to_string(),
     };
     let line = format!(
-        "- half-power band of the power (Rao 2011, section 3.4): {width}, from {} to {} Hz \
+        "- half-power band of the power (Rao 2011, section 3.4): {width}, from {} to {} \
          about the peak at {} Hz\n",
-        edge(b.lower_hz, "below the sweep"),
-        edge(b.upper_hz, "above the sweep"),
+        edge(b.lower_hz, "below the sweep's start"),
+        edge(b.upper_hz, "above the sweep's end"),
         fmt_sig(b.peak_hz, 5)
     );
     Some((line, b))

@@ -7,6 +7,7 @@ use std::path::{Path, PathBuf};
 use anyhow::{bail, Result};
 use clap::Parser;
 use endstop::device::Device;
+use endstop::physics::harvester::masses::natural_frequencies_hz;
 use endstop::study::chirp::{
     default_ramp_rate_hz_per_s, default_step_hz, half_power_band, HalfPowerBand,
 };
@@ -61,8 +62,11 @@ pub(crate) struct Protocol {
     pub max_step_hz: f64,
     /// The step was chosen from the half-power band.
     pub default_step: bool,
-    /// The device's linear half-power band.
+    /// The device's linear half-power band (of a device of several masses: of their total
+    /// mass with the slowest mass's ring-up, which sets the default step and ramp).
     pub band: Option<HalfPowerBand>,
+    /// The undamped natural frequencies of a device of several masses (Hz); empty for one.
+    pub modes_hz: Vec<f64>,
     /// How each step is reached.
     pub approach: Approach,
 }
@@ -71,11 +75,21 @@ impl Protocol {
     /// One sentence on the protocol, for the numbers.
     pub fn words(&self) -> String {
         let band = self.band.map_or(String::new(), |b| {
-            format!(
-                " (linear resonance {} Hz, half-power width {} Hz)",
-                fmt_sig(b.peak_hz, 5),
-                fmt_sig(b.width_hz, 3)
-            )
+            if self.modes_hz.is_empty() {
+                format!(
+                    " (linear resonance {} Hz, half-power width {} Hz)",
+                    fmt_sig(b.peak_hz, 5),
+                    fmt_sig(b.width_hz, 3)
+                )
+            } else {
+                let modes: Vec<String> = self.modes_hz.iter().map(|&f| fmt_sig(f, 5)).collect();
+                format!(
+                    " (undamped natural frequencies {} Hz; the step and the ramp set by the \
+                     slowest mass's ring-up, a half-power width of {} Hz)",
+                    modes.join(", "),
+                    fmt_sig(b.width_hz, 3)
+                )
+            }
         });
         let step = if self.default_step {
             format!(
@@ -134,6 +148,7 @@ impl RangeArgs {
             max_step_hz: self.step.unwrap_or(0.01 * (self.to - self.from)),
             default_step: self.step.is_none(),
             band,
+            modes_hz: natural_frequencies_hz(device),
             approach: if self.steps_at_once {
                 Approach::Jump
             } else {

@@ -516,36 +516,80 @@ impl<const N: usize> MassChain<N> {
     }
 }
 
-/// The smallest positive natural frequency of undamped masses on springs (rad/s): the
-/// square root of the smallest positive eigenvalue of `M^-1/2 K M^-1/2`; 1 rad/s when no
-/// spring holds any mode.
+/// The natural frequencies of a device's undamped masses on their linear springs (Hz,
+/// increasing): the square roots of the positive eigenvalues of `M^-1/2 K M^-1/2`, over
+/// `2 pi`. The stops and the transducer are left out (open contacts, no electrical
+/// stiffness). Empty for a device of one mass, whose resonance is
+/// [`crate::physics::linear::open_circuit_resonance_hz`].
+///
+/// ```
+/// use endstop::device::Device;
+/// use endstop::physics::harvester::masses::natural_frequencies_hz;
+/// let d = Device::from_toml_str(
+///     include_str!("../../../../data/examples/upconverter.toml"),
+///     "upconverter.toml",
+/// )?;
+/// // A 20 Hz driver and a 200 Hz generator joined by nothing but a stop.
+/// let f = natural_frequencies_hz(&d);
+/// assert_eq!(f.len(), 2);
+/// assert!((f[0] - 20.0).abs() < 0.01 && (f[1] - 200.0).abs() < 0.1);
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+pub fn natural_frequencies_hz(device: &Device) -> Vec<f64> {
+    let Some(m) = &device.masses else {
+        return Vec::new();
+    };
+    let masses: Vec<f64> = m.bodies.iter().map(|b| b.mass_kg).collect();
+    let springs: Vec<(usize, Option<usize>, f64)> = m
+        .springs
+        .iter()
+        .map(|l| (l.mass, l.other, l.value))
+        .collect();
+    squared_frequencies(&masses, &springs)
+        .into_iter()
+        .map(|w2| w2.sqrt() / (2.0 * std::f64::consts::PI))
+        .collect()
+}
+
+/// The smallest positive natural frequency of undamped masses on springs (rad/s)
+/// ([`squared_frequencies`]); 1 rad/s when no spring holds any mode.
 fn slowest_frequency(bodies: &[ChainBody], springs: &[ChainLink]) -> f64 {
-    let n = bodies.len();
+    let masses: Vec<f64> = bodies.iter().map(|b| b.mass_kg).collect();
+    let springs: Vec<(usize, Option<usize>, f64)> =
+        springs.iter().map(|l| (l.mass, l.other, l.value)).collect();
+    squared_frequencies(&masses, &springs)
+        .first()
+        .map_or(1.0, |w2| w2.sqrt())
+}
+
+/// The positive eigenvalues (increasing, (rad/s)^2) of `M^-1/2 K M^-1/2` for masses
+/// `masses_kg` and springs `(mass, other mass or the frame, stiffness)`: the squared natural
+/// frequencies of the undamped chain. Eigenvalues below `1e-12` of the matrix's largest entry
+/// are the rigid-body modes of masses no spring holds, and are left out.
+fn squared_frequencies(masses_kg: &[f64], springs: &[(usize, Option<usize>, f64)]) -> Vec<f64> {
+    let n = masses_kg.len();
     let mut k = nalgebra::DMatrix::<f64>::zeros(n, n);
-    for s in springs {
-        k[(s.mass, s.mass)] += s.value;
-        if let Some(o) = s.other {
-            k[(o, o)] += s.value;
-            k[(s.mass, o)] -= s.value;
-            k[(o, s.mass)] -= s.value;
+    for &(i, other, value) in springs {
+        k[(i, i)] += value;
+        if let Some(o) = other {
+            k[(o, o)] += value;
+            k[(i, o)] -= value;
+            k[(o, i)] -= value;
         }
     }
     for i in 0..n {
         for j in 0..n {
-            k[(i, j)] /= (bodies[i].mass_kg * bodies[j].mass_kg).sqrt();
+            k[(i, j)] /= (masses_kg[i] * masses_kg[j]).sqrt();
         }
     }
     let scale = k.amax();
-    let w = k
+    let mut w2: Vec<f64> = k
         .symmetric_eigen()
         .eigenvalues
         .iter()
-        .filter(|&&l| l > 1e-12 * scale)
-        .fold(f64::INFINITY, |a, &l| a.min(l))
-        .sqrt();
-    if w.is_finite() {
-        w
-    } else {
-        1.0
-    }
+        .copied()
+        .filter(|&l| l > 1e-12 * scale)
+        .collect();
+    w2.sort_by(f64::total_cmp);
+    w2
 }
