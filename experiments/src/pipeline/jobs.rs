@@ -49,6 +49,53 @@ const RECORD: &str = "data/examples/machine_record.wav";
 const HARDENING: &str = "data/examples/hardening_em.toml";
 const BISTABLE: &str = "data/examples/bistable_stops_em.toml";
 const DESIGN_INTERFACES: &str = "data/design/interfaces.toml";
+const UPCONVERTER: &str = "data/examples/upconverter.toml";
+const UP_DIRECT: &str = "data/upconversion/direct.toml";
+const UP_GENERATOR: &str = "data/upconversion/generator_alone.toml";
+const UPCONVERTER_BRIDGE: &str = "data/upconversion/upconverter_bridge.toml";
+const UP_DIRECT_BRIDGE: &str = "data/upconversion/direct_bridge.toml";
+
+/// A job of the up-conversion chapter ([`crate::pipeline::upconversion`]): a sweep of a device
+/// over 10-40 Hz in 0.5 Hz steps at an RMS acceleration (g), or its charging from 0 to 0.5 V
+/// at 20 Hz and 0.2 g.
+macro_rules! up_job {
+    (sweep $name:literal, $device:expr, $g:literal) => {
+        tool_run(
+            $name,
+            &[
+                "sweep",
+                "--device",
+                $device,
+                "--from",
+                "10",
+                "--to",
+                "40",
+                "--step",
+                "0.5",
+                "--accel-rms-g",
+                $g,
+            ],
+            &[$device],
+        )
+    };
+    (charge $name:literal, $device:expr) => {
+        tool_run(
+            $name,
+            &[
+                "charge",
+                "--device",
+                $device,
+                "--freq-hz",
+                "20",
+                "--accel-rms-g",
+                "0.2",
+                "--target-v",
+                "0.5",
+            ],
+            &[$device],
+        )
+    };
+}
 
 /// A run of the `endstop` tool for the "Model your own harvester" chapter: `own_device_<stem>`,
 /// its arguments, and the files it reads.
@@ -398,6 +445,16 @@ pub const JOBS: &[Job] = &[
         ],
         &[BISTABLE],
     ),
+    // The up-conversion chapter: the up-converter against one mass at 20 Hz and against its
+    // generator alone, at two levels, and the charging of the first two.
+    up_job!(sweep "own_device_upconversion_upconverter_low", UPCONVERTER, "0.05"),
+    up_job!(sweep "own_device_upconversion_direct_low", UP_DIRECT, "0.05"),
+    up_job!(sweep "own_device_upconversion_generator_low", UP_GENERATOR, "0.05"),
+    up_job!(sweep "own_device_upconversion_upconverter_high", UPCONVERTER, "0.2"),
+    up_job!(sweep "own_device_upconversion_direct_high", UP_DIRECT, "0.2"),
+    up_job!(sweep "own_device_upconversion_generator_high", UP_GENERATOR, "0.2"),
+    up_job!(charge "own_device_upconversion_charge_upconverter", UPCONVERTER_BRIDGE),
+    up_job!(charge "own_device_upconversion_charge_direct", UP_DIRECT_BRIDGE),
     // The design chapter's power against the stop gap, per interface, with the load chosen.
     tool_run(
         "own_device_design_gap",

@@ -2,8 +2,10 @@
 //! skipped ([`freshness`]), how they are run ([`schedule`]), the scorecard ([`scorecard`]), the
 //! provenance page ([`provenance`]), the answer boxes that open the figure chapters
 //! ([`answers`]), what the book takes from the own-device runs and the deviations study
-//! ([`publish`]), the recorded definitive history match ([`recorded_history`]), the noise-level curve read from the springs jobs' summaries after they ran
-//! ([`noise_curve`]) and the book's build ([`book`]).
+//! ([`publish`]), the recorded definitive history match ([`recorded_history`]), the noise-level
+//! curve read from the springs jobs' summaries after they ran ([`noise_curve`]), the
+//! up-converter's comparison read from its jobs ([`upconversion`]) and the book's build
+//! ([`book`]).
 
 pub mod answers;
 pub mod book;
@@ -15,3 +17,4 @@ pub mod publish;
 pub mod recorded_history;
 pub mod schedule;
 pub mod scorecard;
+pub mod upconversion;

@@ -7,7 +7,8 @@ use anyhow::Result;
 use crate::pipeline::jobs::JOBS;
 
 /// Copies the own-device runs' numbers and plots into the book's generated directory, with
-/// the curve drawn from several of them ([`crate::pipeline::noise_curve`]).
+/// the curve and the comparison drawn from several of them ([`crate::pipeline::noise_curve`],
+/// [`crate::pipeline::upconversion`]).
 pub fn publish_own_device() -> Result<()> {
     let dst = crate::book_generated_root().join("own_device");
     for job in JOBS.iter().filter(|j| j.is_tool_run()) {
@@ -38,8 +39,9 @@ pub fn publish_own_device() -> Result<()> {
     write_device_count(&crate::root().join("book/src/own_device.md"), &dst)?;
     write_intro_example(&dst)?;
     // The bistable example's power and transition rate against the noise level, from its
-    // random jobs' summaries.
-    crate::pipeline::noise_curve::publish(&crate::results_root(), &dst)
+    // random jobs' summaries; the up-converter against one mass, from its sweeps and charges.
+    crate::pipeline::noise_curve::publish(&crate::results_root(), &dst)?;
+    crate::pipeline::upconversion::publish(&crate::results_root(), &dst)
 }
 
 /// The device files of the tool runs whose outputs the chapter `chapter` includes
