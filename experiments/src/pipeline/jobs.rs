@@ -1,5 +1,9 @@
 //! The jobs `reproduce` runs: what each one executes, which data files it reads (for its
 //! freshness key, see [`crate::pipeline::freshness`]), and when it runs.
+//!
+//! The module reads better whole: it is the one list of everything `reproduce` runs, in the
+//! book's order, and a reader who looks for what a chapter's plot comes from finds its job
+//! here beside the others; most of its length is that list's arguments, one per line.
 
 use std::path::PathBuf;
 
