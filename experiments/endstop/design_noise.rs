@@ -44,9 +44,6 @@ impl NoiseArgs {
         let Some(psd) = self.psd else {
             return Ok(None);
         };
-        if self.noise_seed == u64::MAX {
-            bail!("--noise-seed must leave room for the fresh seed (seed + 1)");
-        }
         let n = NoiseObjective {
             psd_g2_per_hz: psd,
             bandwidth_hz: self.noise_band_hz,
@@ -56,7 +53,7 @@ impl NoiseArgs {
             transient_s: 0.0,
         };
         if let Err(e) = n.check() {
-            bail!("--psd, --records, --duration-s, --noise-band-hz: {e}");
+            bail!("--psd, --records, --duration-s, --noise-band-hz, --noise-seed: {e}");
         }
         Ok(Some(n))
     }
@@ -67,14 +64,17 @@ pub(crate) fn noise_rms_g(n: &NoiseObjective) -> f64 {
     (2.0 * n.bandwidth_hz * n.psd_g2_per_hz).sqrt()
 }
 
-/// Under noise: the answer's power measured again on fresh records (seed + 1), recorded as
+/// Under noise: the answer's power measured again on fresh records
+/// ([`NoiseObjective::fresh_seed`]), recorded as
 /// `power_confirmed_w` and `power_confirmed_ci95_w`, and the lines for `numbers.md`; nothing
 /// without a noise objective.
 pub(crate) fn confirm(exp: &mut Experiment, p: &Problem, study: &Study) -> Result<String> {
     let Some(n) = p.noise else {
         return Ok(String::new());
     };
-    let fresh = n.seed + 1;
+    let Some(fresh) = n.fresh_seed() else {
+        return Ok(String::new());
+    };
     let Some(c) = p.confirm(&study.answer.design, fresh) else {
         return Ok(String::new());
     };

@@ -1,12 +1,13 @@
 //! `endstop.design`: the designer's inverse question ([`endstop::design`]), the twin of the
 //! `endstop design` command: the same problem built by [`Problem::new`] from the same inputs
 //! (ranges of device keys, interfaces by name or as tables, frequencies, acceleration,
-//! limits) and solved by [`Problem::solve`] with the GIL released; the answer as a dict with
-//! every evaluated design as numpy arrays.
+//! limits, or a noise objective in place of the sines) and solved by [`Problem::solve`] with
+//! the GIL released, the answer under noise confirmed on fresh records by [`Problem::confirm`];
+//! the answer as a dict with every evaluated design as numpy arrays.
 
 use endstop::design::{
-    interfaces, Answer, DesignError, Evaluated, Limits, Problem, SearchSettings, Study, Verdict,
-    Vibration, LIMIT_NAMES,
+    interfaces, Answer, DesignError, Evaluated, Limits, NoiseObjective, Problem, SearchSettings,
+    Study, Verdict, Vibration, LIMIT_NAMES,
 };
 use endstop::device::{Interface, ParamRange, Spacing};
 use endstop::progress::Silent;
@@ -209,19 +210,72 @@ fn answer_dict<'py>(py: Python<'py>, p: &Problem, a: &Answer) -> PyResult<Bound<
     design_dict(py, p, &a.design, Some(a.verdict))
 }
 
+/// The sines of a problem, or its noise objective (`psd_g2_per_hz` given, in place of the
+/// frequencies and the acceleration, as the command's `--psd`): what the command's
+/// `NoiseArgs::objective` builds, with the pre-roll left to [`Problem::under_noise`].
+struct Excitation {
+    freqs_hz: Option<Vec<f64>>,
+    accel_rms_g: Option<f64>,
+    noise: Option<NoiseObjective>,
+}
+
+impl Excitation {
+    fn problem(
+        self,
+        device: &PyDevice,
+        interfaces: Vec<Interface>,
+        ranges: Vec<ParamRange>,
+        limits: Limits,
+    ) -> PyResult<Problem> {
+        let dev = device.inner.clone();
+        match (self.noise, self.freqs_hz, self.accel_rms_g) {
+            (Some(n), None, None) => {
+                n.check().map_err(|e| {
+                    arg_err(format!(
+                        "psd_g2_per_hz, records, duration_s, noise_band_hz, noise_seed: {e}"
+                    ))
+                })?;
+                Problem::under_noise(dev, interfaces, ranges, n, limits)
+            }
+            (Some(_), _, _) => {
+                return Err(arg_err(
+                    "psd_g2_per_hz replaces freqs_hz and accel_rms_g: give the noise or the sines",
+                ))
+            }
+            (None, Some(freqs_hz), Some(accel_rms_g)) => Problem::new(
+                dev,
+                interfaces,
+                ranges,
+                Vibration {
+                    freqs_hz,
+                    accel_rms_g,
+                },
+                limits,
+            ),
+            (None, _, _) => {
+                return Err(arg_err(
+                    "give freqs_hz and accel_rms_g (sines), or psd_g2_per_hz (noise)",
+                ))
+            }
+        }
+        .map_err(design_err)
+    }
+}
+
 /// Solves a design problem by the library's search; see `endstop.design.design`.
 #[pyfunction]
 #[pyo3(name = "design")]
-#[pyo3(signature = (device, ranges, freqs_hz, accel_rms_g, interfaces = None,
+#[pyo3(signature = (device, ranges, freqs_hz = None, accel_rms_g = None, interfaces = None,
     max_impact_speed_m_s = None, max_contact_force_n = None, max_displacement_m = None,
-    max_impacts_per_s = None, samples = 32, seed = 0))]
+    max_impacts_per_s = None, samples = 32, seed = 0, psd_g2_per_hz = None, records = 8,
+    duration_s = 2.0, noise_band_hz = 10e3, noise_seed = 2012))]
 #[allow(clippy::too_many_arguments)]
 fn design_py<'py>(
     py: Python<'py>,
     device: &PyDevice,
     ranges: Vec<Bound<'py, PyAny>>,
-    freqs_hz: Vec<f64>,
-    accel_rms_g: f64,
+    freqs_hz: Option<Vec<f64>>,
+    accel_rms_g: Option<f64>,
     interfaces: Option<Bound<'py, PyList>>,
     max_impact_speed_m_s: Option<f64>,
     max_contact_force_n: Option<f64>,
@@ -229,32 +283,47 @@ fn design_py<'py>(
     max_impacts_per_s: Option<f64>,
     samples: usize,
     seed: u32,
+    psd_g2_per_hz: Option<f64>,
+    records: u64,
+    duration_s: f64,
+    noise_band_hz: f64,
+    noise_seed: u64,
 ) -> PyResult<Bound<'py, PyDict>> {
     let ranges = ranges.iter().map(range_of).collect::<PyResult<Vec<_>>>()?;
     let interfaces = interfaces_of(device, interfaces.as_ref())?;
-    let p = Problem::new(
-        device.inner.clone(),
-        interfaces,
-        ranges,
-        Vibration {
-            freqs_hz,
-            accel_rms_g,
-        },
-        Limits {
-            impact_speed_m_s: max_impact_speed_m_s,
-            contact_force_n: max_contact_force_n,
-            displacement_m: max_displacement_m,
-            impacts_per_s: max_impacts_per_s,
-        },
-    )
-    .map_err(design_err)?;
+    let excitation = Excitation {
+        freqs_hz,
+        accel_rms_g,
+        noise: psd_g2_per_hz.map(|psd| NoiseObjective {
+            psd_g2_per_hz: psd,
+            bandwidth_hz: noise_band_hz,
+            records,
+            duration_s,
+            seed: noise_seed,
+            transient_s: 0.0,
+        }),
+    };
+    let limits = Limits {
+        impact_speed_m_s: max_impact_speed_m_s,
+        contact_force_n: max_contact_force_n,
+        displacement_m: max_displacement_m,
+        impacts_per_s: max_impacts_per_s,
+    };
+    let p = excitation.problem(device, interfaces, ranges, limits)?;
     let settings = SearchSettings {
         samples,
         seed,
         ..SearchSettings::default()
     };
-    let study: Study = py
-        .detach(|| p.solve(&settings, &Silent))
+    let (study, confirmed) = py
+        .detach(|| -> Result<_, DesignError> {
+            let study: Study = p.solve(&settings, &Silent)?;
+            let fresh = p.noise.as_ref().and_then(NoiseObjective::fresh_seed);
+            let confirmed = fresh
+                .and_then(|f| p.confirm(&study.answer.design, f))
+                .transpose()?;
+            Ok((study, fresh.zip(confirmed)))
+        })
         .map_err(design_err)?;
     let d = PyDict::new(py);
     d.set_item("best", answer_dict(py, &p, &study.answer)?)?;
@@ -284,6 +353,11 @@ fn design_py<'py>(
         settings.budget(p.interfaces.len(), p.ranges.len()),
     )?;
     d.set_item("evaluations", study.evaluations.len())?;
+    // Under noise, the answer measured again on fresh records (the command's
+    // `power_confirmed_w` and `power_confirmed_ci95_w`); None under sines.
+    d.set_item("power_confirmed_w", confirmed.map(|(_, c)| c.mean))?;
+    d.set_item("power_confirmed_ci95_w", confirmed.map(|(_, c)| c.ci95))?;
+    d.set_item("confirm_seed", confirmed.map(|(s, _)| s))?;
     d.set_item("settings", settings_dict(py, &p, &settings)?)?;
     Ok(d)
 }
@@ -298,7 +372,12 @@ fn settings_dict<'py>(
 ) -> PyResult<Bound<'py, PyDict>> {
     let d = PyDict::new(py);
     d.set_item("freqs_hz", p.vibration.freqs_hz.clone())?;
-    d.set_item("accel_rms_g", p.vibration.accel_rms_g)?;
+    // Under noise there is no sine: None, as the command records an acceleration not given.
+    d.set_item(
+        "accel_rms_g",
+        Some(p.vibration.accel_rms_g).filter(|_| p.noise.is_none()),
+    )?;
+    d.set_item("noise", p.noise.map(|n| noise_dict(py, &n)).transpose()?)?;
     let limits = PyDict::new(py);
     let l = &p.limits;
     for (name, v) in LIMIT_NAMES.iter().zip([
@@ -327,6 +406,19 @@ fn settings_dict<'py>(
     s.set_item("jacobian", format!("{:?}", st.jacobian))?;
     s.set_item("max_map_periods", st.max_map_periods)?;
     d.set_item("steady", s)?;
+    Ok(d)
+}
+
+/// The noise objective as the command's `summary.json` records it (its `settings.noise`), the
+/// pre-roll as the problem set it.
+fn noise_dict<'py>(py: Python<'py>, n: &NoiseObjective) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    d.set_item("psd_g2_per_hz", n.psd_g2_per_hz)?;
+    d.set_item("bandwidth_hz", n.bandwidth_hz)?;
+    d.set_item("records", n.records)?;
+    d.set_item("duration_s", n.duration_s)?;
+    d.set_item("seed", n.seed)?;
+    d.set_item("transient_s", n.transient_s)?;
     Ok(d)
 }
 

@@ -9,9 +9,10 @@
 //!
 //! The Rust modules (private: the crate is the extension module, its API is Python's) mirror
 //! the Python package's: `design` (`endstop.design`), `device` (`endstop.Device`), `fit`
-//! (`endstop.fit`), `linear` (`endstop.linear`), `study` (`endstop.study`) and `paper`
-//! (`endstop.paper` and its `fig09`, `fig13` and `deviations`); each registers its functions
-//! in `_native`.
+//! (`endstop.fit`), `linear` (`endstop.linear`), `study` and `storage` (`endstop.study`: a
+//! model with a storage output, behind an interface circuit, goes through the same functions,
+//! `storage` holding its charging and its ensemble's report) and `paper` (`endstop.paper` and
+//! its `fig09`, `fig13` and `deviations`); each registers its functions in `_native`.
 
 use endstop::device::ParamError as LibParamError;
 use numpy::PyArray1;
@@ -23,10 +24,10 @@ mod design;
 mod device;
 mod fit;
 mod fit_spectrum;
-mod interface;
 mod linear;
 mod paper;
 mod springs;
+mod storage;
 mod study;
 
 pub(crate) use device::PyDevice;
@@ -76,7 +77,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     design::register(m)?;
     fit::register(m)?;
     fit_spectrum::register(m)?;
-    interface::register(m)?;
+    storage::register(m)?;
     linear::register(m)?;
     study::register(m)?;
     springs::register(m)?;

@@ -12,8 +12,8 @@ use endstop::progress::Silent;
 use endstop::study::amplitude::{amplitude_sweep_report, AmplitudeReport};
 use endstop::study::ensemble::{run_ensemble, EnsembleSpec};
 use endstop::study::record::{
-    simulate_drive, simulate_record, transient_s, RecordSpec, RecordSummary, SampledDrive, Scheme,
-    DEFAULT_RTOL,
+    has_storage, simulate_drive, simulate_record, transient_s, RecordSpec, RecordSummary,
+    SampledDrive, Scheme, DEFAULT_RTOL,
 };
 use endstop::study::steady::{settle_settings, Measurement};
 use endstop::study::stepped::{linspace_step, Approach, Transition};
@@ -23,6 +23,7 @@ use numpy::PyReadonlyArray1;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 
+use crate::storage::storage_ensemble_dict;
 use crate::{arg_err, array, solver_err, PyDevice};
 
 // ---------------------------------------------------------------------------------------------
@@ -227,8 +228,12 @@ fn down_sweep<'py>(
 
 /// The periodic orbits continued in frequency (shooting, Floquet multipliers,
 /// pseudo-arclength continuation through folds) from `start_hz` to `stop_hz` with steps of at
-/// most `step_hz`: the continuation of the `endstop response` command. Keys: per-orbit arrays
-/// `freq_hz`, `v1_rms_v`, `p_total_w`, `x_max_m`, `multiplier_max_abs`, `stable` (bool);
+/// most `step_hz`, for any device (a circuit's switchings are events of the orbit like its
+/// impacts): the continuation of the `endstop response` command. Keys: per-orbit arrays
+/// `freq_hz`, `v1_rms_v` and `v1_mean_v` (the RMS and the mean of the model's first output:
+/// load 1's voltage, or behind a circuit the storage voltage), `p_total_w` (the mean power of
+/// the loads on the outputs: behind a circuit, the DC load's), `x_max_m`,
+/// `multiplier_max_abs`, `stable` (bool);
 /// `events`, a list of dicts (`kind`: fold, branch point, period doubling, torus or grazing;
 /// `freq_hz`, `at_grazing`, `stable_before`, `stable_after`); `folds_hz` and `grazing_hz`
 /// (lists); `max_residual`.
@@ -254,6 +259,10 @@ fn orbits<'py>(
     };
     d.set_item("freq_hz", col(&|o| o.forcing.freq_hz))?;
     d.set_item("v1_rms_v", col(&|o| o.summary.v1_rms_v))?;
+    d.set_item(
+        "v1_mean_v",
+        col(&|o| o.summary.outputs.first().map_or(0.0, |s| s.mean)),
+    )?;
     d.set_item("p_total_w", col(&|o| o.summary.p_total_w))?;
     d.set_item("x_max_m", col(&|o| o.summary.x_max_m))?;
     d.set_item("multiplier_max_abs", col(&|o| o.max_multiplier_abs()))?;
@@ -433,9 +442,13 @@ fn sine_record<'py>(
     Ok(d)
 }
 
-/// An ensemble of independent random-vibration records (record i uses stream i of `seed`),
-/// with the ensemble-mean output PSD, power, efficiency and bandwidth: the `endstop random`
-/// command's study (same segmenting and analysis band).
+/// An ensemble of independent random-vibration records (record i uses stream i of `seed`) of
+/// any device, reported as the `endstop random` command reports it: for a transducer with its
+/// own loads, the ensemble-mean output PSD, power, efficiency and bandwidth (same segmenting
+/// and analysis band); for a model with a storage (behind an interface circuit), its DC power,
+/// the drive's power, their ratio, the storage voltage and the energy ledger of each record
+/// ([`crate::storage::storage_ensemble_dict`]). The records are the one record engine's either
+/// way.
 #[pyfunction]
 #[pyo3(signature = (device, psd_g2_per_hz, records = 4, duration_s = 10.0, seed = 2012))]
 fn ensemble<'py>(
@@ -450,8 +463,11 @@ fn ensemble<'py>(
         return Err(arg_err("records must be at least 1"));
     }
     let record = record_spec(&device.inner, psd_g2_per_hz, duration_s)?;
-    let band_hz = record.noise.bandwidth_hz;
     let dev = device.inner.clone();
+    if has_storage(&dev) {
+        return storage_ensemble_dict(py, dev, record, seed, records as u64);
+    }
+    let band_hz = record.noise.bandwidth_hz;
     let spec = EnsembleSpec::for_device(&dev, record, seed, records);
     let nperseg = spec.welch.nperseg;
     let ens = py

@@ -139,3 +139,81 @@ def test_design_releases_the_gil(root):
     finished_during = counted.is_set()
     th.join()
     assert finished_during, "the count could not run during the search: the GIL was held"
+
+
+# Under noise: the piezoelectric cantilever (no circuit: its own load is the interface), its
+# load over two decades around the matched 26.5 kOhm, a small ensemble (2 records of 0.5 s,
+# band 1 kHz) so that the search runs in seconds.
+NOISE_DEVICE = "data/examples/piezo_cantilever.toml"
+NOISE = dict(psd_g2_per_hz=1e-5, noise_band_hz=1e3, records=2, duration_s=0.5, noise_seed=11)
+
+
+def test_design_under_noise_matches_endstop_design_psd(root, tmp_path):
+    out = run_cli(["design", "--device", NOISE_DEVICE, "--range",
+                   "load.resistance_ohm=1e3..1e5", "--psd", "1e-5", "--noise-band-hz", "1e3",
+                   "--records", "2", "--duration-s", "0.5", "--noise-seed", "11",
+                   "--samples", "4", "--seed", "3", "--map-points", "0",
+                   "--out", str(tmp_path / "cli")],
+                  tmp_path)
+    cli_summary = summary(out / "cli" / "summary.json")
+    cli = cli_summary["numbers"]
+    rows = pd.read_parquet(out / "cli" / "designs.parquet")
+    py = endstop.design(root / NOISE_DEVICE, [("load.resistance_ohm", 1e3, 1e5)], samples=4,
+                        seed=3, **NOISE)
+    best = py["best"]
+    # The answer lies inside the range, and is the most powerful design evaluated (no limit:
+    # every design is feasible).
+    assert 1e3 <= best["params"]["load.resistance_ohm"] <= 1e5
+    assert best["verdict"] == "optimum"
+    assert best["power_w"] == np.nanmax(py["designs"]["power_w"])
+    # No sine under noise: no worst frequency, and the records do not measure impact speeds.
+    assert math.isnan(best["worst_freq_hz"]) and math.isnan(best["impact_speed_m_s"])
+    # The confirmation runs on fresh records: another seed than the search's.
+    assert py["settings"]["noise"]["seed"] == 11
+    assert py["confirm_seed"] == 12 != py["settings"]["noise"]["seed"]
+    assert py["power_confirmed_ci95_w"] > 0.0 and math.isfinite(py["power_confirmed_w"])
+    # The same search and confirmation as the command's, by the same code.
+    assert math.isclose(best["power_w"], cli["power_w"], rel_tol=REL, abs_tol=0.0)
+    for key in ["power_confirmed_w", "power_confirmed_ci95_w"]:
+        assert math.isclose(py[key], cli[key], rel_tol=REL, abs_tol=0.0), key
+    assert py["evaluations"] == cli["evaluations"] == len(rows)
+    np.testing.assert_allclose(py["designs"]["power_w"], rows["power_w"].to_numpy(dtype=float),
+                               rtol=REL, atol=0.0)
+    np.testing.assert_allclose(py["designs"]["load.resistance_ohm"],
+                               rows["load.resistance_ohm"].to_numpy(dtype=float), rtol=REL,
+                               atol=0.0)
+    cs, ps = cli_summary["settings"], py["settings"]
+    for key in ["search", "steady", "limits"]:
+        assert cs[key] == ps[key], key
+    assert cs["noise"].keys() == ps["noise"].keys()
+    for key, value in cs["noise"].items():
+        assert math.isclose(ps["noise"][key], value, rel_tol=REL, abs_tol=0.0), key
+    # The pre-roll is the problem's: five ring-up times 2 m / b of the cantilever (its damping
+    # does not vary over the range), 5 * 2 * 5e-3 / 0.0754 s, rounded up to a whole
+    # millisecond.
+    assert ps["noise"]["transient_s"] == pytest.approx(5 * 2 * 5e-3 / 0.0754, abs=1e-3)
+    assert ps["accel_rms_g"] is None and ps["freqs_hz"] == []
+
+
+def test_design_under_noise_refuses_what_it_cannot_do(root):
+    dev = endstop.Device.from_toml(root / NOISE_DEVICE)
+    r = [("load.resistance_ohm", 1e3, 1e5)]
+    with pytest.raises(ValueError, match="psd_g2_per_hz replaces"):
+        endstop.design(dev, r, 120.0, 0.3, samples=4, **NOISE)
+    with pytest.raises(ValueError, match="impact speed"):
+        endstop.design(dev, r, samples=4, max_impact_speed_m_s=0.1, **NOISE)
+    with pytest.raises(ValueError, match="at least 2 records"):
+        endstop.design(dev, r, samples=4, **dict(NOISE, records=1))
+    with pytest.raises(ValueError, match="fresh seed"):
+        endstop.design(dev, r, samples=4, **dict(NOISE, noise_seed=2**64 - 1))
+    with pytest.raises(ValueError, match="give freqs_hz and accel_rms_g"):
+        endstop.design(dev, r, samples=4)
+
+
+def test_the_docstring_example_runs(root, monkeypatch):
+    # The example opens its device by a path relative to the repository's root.
+    import doctest
+    from endstop import _design
+    monkeypatch.chdir(root)
+    failed, tried = doctest.testmod(_design)
+    assert tried >= 3 and failed == 0

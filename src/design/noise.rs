@@ -68,8 +68,8 @@ impl NoiseObjective {
         }
     }
 
-    /// Checks the objective: a positive level, band, length and pre-roll, and records to
-    /// average; the message names the field.
+    /// Checks the objective: a positive level, band, length and pre-roll, records to
+    /// average, and a seed that leaves room for the fresh one; the message names the field.
     pub fn check(&self) -> Result<(), String> {
         for (name, v) in [
             ("the noise's density", self.psd_g2_per_hz),
@@ -92,7 +92,16 @@ impl NoiseObjective {
                 self.records
             ));
         }
+        if self.fresh_seed().is_none() {
+            return Err("the search's seed must leave room for the fresh seed (seed + 1)".into());
+        }
         Ok(())
+    }
+
+    /// The seed of the confirmation's fresh records, `seed + 1` (independent of the search's:
+    /// a record's samples are those of its seed and stream); none for the largest seed.
+    pub fn fresh_seed(&self) -> Option<u64> {
+        self.seed.checked_add(1)
     }
 }
 

@@ -8,10 +8,11 @@ The model runs in Rust (the repository's `endstop` library); this package is its
 * :mod:`endstop.linear`: linear theory (eqs 11-22): two-port, k^2, Qm readings, eq 21, the
   linear output PSD;
 * :mod:`endstop.study`: simulations (frequency up-sweeps, amplitude sweeps, one random record,
-  an ensemble), returning dicts of numbers and numpy arrays;
+  an ensemble, the charging of a storage) of any device, with or without an interface circuit,
+  returning dicts of numbers and numpy arrays;
 * :func:`endstop.design`: the designer's inverse question, the most DC power over ranges of a
-  device's parameters and a choice of interface circuits within limits on impacts and stroke
-  (the ``endstop design`` command's);
+  device's parameters and a choice of interface circuits within limits on impacts and stroke,
+  under a sine or band-limited white noise (the ``endstop design`` command's);
 * :mod:`endstop.fit`: fitting a device's parameters to measured sweeps, with uncertainty;
 * :mod:`endstop.paper`: the paper's figure protocols (``endstop.paper.fig13.run()``) and the
   study of why the paper deviates (:mod:`endstop.paper.deviations`, ready for a Dask cluster).

@@ -1,6 +1,7 @@
 """The designer's inverse question, the twin of the ``endstop design`` command: which values of
 a device's parameters within ranges, and which interface circuit, deliver the most DC power
-under a sine (the worst over a band of frequencies), within the limits the device survives.
+under a sine (the worst over a band of frequencies) or under band-limited white noise (the mean
+over an ensemble of records), within the limits the device survives.
 The problem is built and solved by the library's ``endstop::design`` (the book chapter "Design
 your harvester"), as the command builds and solves it."""
 
@@ -11,9 +12,10 @@ import numpy as np
 from . import _native
 
 
-def design(device, ranges, freqs_hz, accel_rms_g, *, interfaces=None,
+def design(device, ranges, freqs_hz=None, accel_rms_g=None, *, interfaces=None,
            max_impact_speed_m_s=None, max_contact_force_n=None, max_displacement_m=None,
-           max_impacts_per_s=None, samples=32, seed=0):
+           max_impacts_per_s=None, samples=32, seed=0, psd_g2_per_hz=None, records=8,
+           duration_s=2.0, noise_band_hz=10e3, noise_seed=2012):
     """Searches ``ranges`` of ``device`` (an :class:`endstop.Device` or the path of a device
     file) for the design of most DC power.
 
@@ -31,6 +33,17 @@ def design(device, ranges, freqs_hz, accel_rms_g, *, interfaces=None,
       ``max_impacts_per_s``: the limits (``None``: not limited).
     * ``samples``: points of the search's scrambled Sobol sample per interface; ``seed``: its
       scramble (the command's ``--samples`` and ``--seed``).
+    * ``psd_g2_per_hz``: in place of ``freqs_hz`` and ``accel_rms_g``, the two-sided density
+      (g^2/Hz) of band-limited white noise up to ``noise_band_hz`` (sampled at ten times it):
+      the objective is then the mean DC power over ``records`` records of ``duration_s`` s
+      each, streams ``0..records`` of ``noise_seed``, the same records for every design
+      (common random numbers), after one pre-roll from rest for the whole problem (the longest
+      over the corners of the ranges). The answer is measured again on fresh records (seed
+      ``noise_seed + 1``) with its 95 % interval: the search's value is biased up by its choice
+      among noisy values, the fresh one is not (the command's ``--psd``, ``--records``,
+      ``--duration-s``, ``--noise-band-hz`` and ``--noise-seed``). Records measure the
+      displacement and the impacts, not the impact speed or the contact force: those limits
+      are refused under noise.
 
     Returns a dict: ``best`` (``verdict`` ``"optimum"``, or ``"infeasible"`` when no design
     tried meets every limit and this is the least violating; ``interface``, ``params`` (path
@@ -43,9 +56,14 @@ def design(device, ranges, freqs_hz, accel_rms_g, *, interfaces=None,
     ``power_w``, ``worst_freq_hz``, ``impact_speed_m_s``, ``contact_force_n``,
     ``displacement_m``, ``impacts_per_s`` (NaN where not evaluated), and lists ``interface``,
     ``error``); ``interfaces``, ``ranges``, ``samples``, ``seed``, ``polish_starts``,
-    ``max_iters``, ``budget`` (the most evaluations the search may make), ``evaluations``, and
-    ``settings``, what repeats the run besides the device (as the command's ``summary.json``
-    records it): ``freqs_hz``, ``accel_rms_g``, ``limits``, ``search`` (``samples``,
+    ``max_iters``, ``budget`` (the most evaluations the search may make), ``evaluations``;
+    under noise ``power_confirmed_w`` and ``power_confirmed_ci95_w`` (the answer's mean power
+    on the fresh records and its 95 % half-width, the command's numbers of those names) and
+    ``confirm_seed`` (all three ``None`` under sines); and ``settings``, what repeats the run
+    besides the device (as the command's ``summary.json`` records it): ``freqs_hz``,
+    ``accel_rms_g`` (``None`` under noise), ``noise`` (``psd_g2_per_hz``, ``bandwidth_hz``,
+    ``records``, ``duration_s``, ``seed``, ``transient_s``; ``None`` under sines), ``limits``,
+    ``search`` (``samples``,
     ``polish_starts``, ``max_iters``, ``simplex_size``, ``sd_tolerance``, ``seed``) and
     ``steady`` (the steady state's ``rtol``, ``transient_periods``, ``max_newton``, ``tol``,
     ``jacobian``, ``max_map_periods``).
@@ -53,13 +71,29 @@ def design(device, ranges, freqs_hz, accel_rms_g, *, interfaces=None,
     A range or interface that does not fit the device raises :class:`endstop.ParamError`
     naming the field; a malformed problem (no range, bad frequencies or limits) ``ValueError``;
     a problem no design of which could be evaluated :class:`endstop.SolverError`. The GIL is
-    released while the search runs."""
+    released while the search runs.
+
+    Under noise, the load of the piezoelectric cantilever over two decades (a few seconds):
+
+    >>> import endstop
+    >>> r = endstop.design("data/examples/piezo_cantilever.toml",
+    ...                    [("load.resistance_ohm", 1e3, 1e5)], psd_g2_per_hz=1e-5,
+    ...                    noise_band_hz=1e3, records=2, duration_s=0.5, samples=4)
+    >>> 1e3 <= r["best"]["params"]["load.resistance_ohm"] <= 1e5
+    True
+    >>> r["confirm_seed"] == r["settings"]["noise"]["seed"] + 1
+    True
+    """
     if isinstance(device, (str, os.PathLike)):
         device = _native.Device.from_toml(device)
-    freqs = [float(f) for f in np.atleast_1d(np.asarray(freqs_hz, dtype=float))]
+    freqs = None if freqs_hz is None else [
+        float(f) for f in np.atleast_1d(np.asarray(freqs_hz, dtype=float))]
     return _native.design(
-        device, list(ranges), freqs, float(accel_rms_g),
+        device, list(ranges), freqs, None if accel_rms_g is None else float(accel_rms_g),
         interfaces=None if interfaces is None else list(interfaces),
         max_impact_speed_m_s=max_impact_speed_m_s, max_contact_force_n=max_contact_force_n,
         max_displacement_m=max_displacement_m, max_impacts_per_s=max_impacts_per_s,
-        samples=int(samples), seed=int(seed))
+        samples=int(samples), seed=int(seed),
+        psd_g2_per_hz=None if psd_g2_per_hz is None else float(psd_g2_per_hz),
+        records=int(records), duration_s=float(duration_s), noise_band_hz=float(noise_band_hz),
+        noise_seed=int(noise_seed))

@@ -16,19 +16,17 @@ arrays, with the GIL released while it runs.
   Floquet stability and the folds, branch points and grazing points on the way (the
   ``endstop response`` command's continuation).
 
-For a device with an ``[interface]`` table (a bridge, SSHI or SECE into a storage capacitor),
-each the library's study written once for any model:
+Each takes any device the description allows, with or without an ``[interface]`` table (a
+bridge, SSHI or SECE into a storage capacitor), through the one library call its command makes
+on it: behind a circuit the model's first output is the storage voltage and the loads' power
+the DC load's (``v1_rms_v``, ``p1_w``, ``p_total_w`` of the sweeps and orbits), and
+:func:`ensemble` reports the storage's DC power, efficiency and energy ledger as ``endstop
+random`` does. Besides:
 
-* :func:`interface_sweep`: the periodic steady state at each frequency, found by shooting on
-  the period map from the previous one's state: the mean storage voltage, the DC load's power,
-  the ripple and the Floquet stability;
-* :func:`interface_response`: the periodic orbit continued in frequency through folds
-  (pseudo-arclength continuation), with its stability from the monodromy through saltation
-  matrices;
 * :func:`charge`: the time for the storage to reach a target voltage under a sine (the
   ``endstop charge`` command's study);
-* :func:`interface_ensemble`: noise records of the model with its storage, DC power and
-  efficiency (the ``endstop random`` command's study on such a device).
+* :func:`interface_ensemble`: an alias of :func:`ensemble`, named for a device behind an
+  interface circuit.
 """
 
 import numpy as np
@@ -47,7 +45,8 @@ def up_sweep(device, accel_rms_g, start_hz, stop_hz, step_hz=2.0, refine_tol_hz=
     ``jump_power_ratio``, ``max_v1_rms_v``. Each step is taken at once (the drive's
     frequency jumps, as the paper's figures and ``endstop sweep --steps-at-once`` do), or,
     with ``ramp_rate_hz_per_s``, reached by a phase-continuous ramp at that rate (Hz/s, as
-    ``--ramp-rate``)."""
+    ``--ramp-rate``). Behind an interface circuit ``v1_rms_v`` is the RMS of the storage
+    voltage and ``p1_w`` the DC load's power, as in the command's ``sweep.parquet``."""
     return _native.up_sweep(device, float(accel_rms_g), float(start_hz), float(stop_hz),
                             float(step_hz), float(refine_tol_hz), _rate(ramp_rate_hz_per_s))
 
@@ -77,9 +76,12 @@ def down_sweep(device, accel_rms_g, start_hz, stop_hz, step_hz=2.0, refine_tol_h
 def orbits(device, accel_rms_g, start_hz, stop_hz, step_hz=2.0):
     """Periodic orbits of ``device`` at ``accel_rms_g`` continued in frequency from
     ``start_hz`` to ``stop_hz`` (steps of at most ``step_hz``): per-orbit arrays ``freq_hz``,
-    ``v1_rms_v``, ``p_total_w``, ``x_max_m``, ``multiplier_max_abs`` and the list ``stable``;
-    ``events`` (dicts with ``kind``, ``freq_hz``, ``at_grazing``, ``stable_before``,
-    ``stable_after``), ``folds_hz``, ``grazing_hz`` and ``max_residual``."""
+    ``v1_rms_v`` and ``v1_mean_v`` (the RMS and the mean over the period of the model's first
+    output: load 1's voltage, or behind a circuit the storage voltage), ``p_total_w`` (the
+    loads' mean power: behind a circuit, the DC load's), ``x_max_m``, ``multiplier_max_abs``
+    and the list ``stable``; ``events`` (dicts with ``kind``, ``freq_hz``, ``at_grazing``,
+    ``stable_before``, ``stable_after``), ``folds_hz``, ``grazing_hz`` and
+    ``max_residual``."""
     return _native.orbits(device, float(accel_rms_g), float(start_hz), float(stop_hz),
                           float(step_hz))
 
@@ -102,47 +104,27 @@ def sine_record(device, accel_g, freq_hz, duration_s=10.0, sample_rate_hz=100e3,
 
 
 def ensemble(device, psd_g2_per_hz, records=4, duration_s=10.0, seed=2012):
-    """``records`` independent records (stream i of ``seed`` for record i): ``power_w`` and
-    its ``power_ci95_w``, ``efficiency`` (2P/(m Sa)), ``bw3db_hz`` of the mean PSD
-    (``freq_hz``, ``out_psd_w_per_hz``), ``eq21_power_w`` (None unless the transducer is a
-    capacitor pair), ``linear_power_w`` (the linearised model's power over the record's band,
-    any device), and per-record arrays in
-    ``records``."""
+    """``records`` independent records (stream i of ``seed`` for record i), each from rest with
+    the device's pre-roll discarded, reported as ``endstop random`` reports the device.
+
+    For a transducer with its own loads: ``power_w`` and its ``power_ci95_w``, ``efficiency``
+    (2P/(m Sa)), ``bw3db_hz`` of the mean PSD (``freq_hz``, ``out_psd_w_per_hz``),
+    ``eq21_power_w`` (None unless the transducer is a capacitor pair), ``linear_power_w`` (the
+    linearised model's power over the record's band, any device), and per-record arrays in
+    ``records``.
+
+    For a device behind an interface circuit into a storage (the command's numbers of the same
+    names): ``p_dc_w`` and ``efficiency`` (means, with ``p_dc_ci95_w`` and
+    ``efficiency_ci95`` half-widths), ``p_drive_w``, ``vdc_v``, ``preroll_s`` (the longer of
+    five ring-up times and five storage time constants) and per-record arrays ``p_dc_w_each``,
+    ``p_drive_w_each``, ``vdc_v_each``, ``ledger_relative_residual_each``. An open DC load (no
+    steady mean) raises :class:`endstop.SolverError`."""
     return _native.ensemble(device, float(psd_g2_per_hz), int(records), float(duration_s),
                             int(seed))
 
 
 __all__ = ["up_sweep", "down_sweep", "orbits", "amplitude_sweep", "record", "sine_record",
-           "ensemble"]
-
-
-def interface_sweep(device, accel_rms_g, freqs_hz):
-    """The periodic steady state of ``device`` (with an interface circuit and a DC load) at
-    ``accel_rms_g`` at each frequency of ``freqs_hz`` in order, found by shooting on the period
-    map from the previous one's state (the first from rest), measured over one period:
-    per-point arrays ``freq_hz``, ``vdc_v`` (the mean storage voltage), ``p_dc_w`` (the DC
-    load's mean power), ``ripple_v`` (the storage voltage's peak-to-peak), ``x_peak_m``,
-    ``multiplier_max_abs`` (NaN where no orbit of one period was found), the lists ``stable``,
-    ``method`` (``newton``, ``period map``, or the error where none was found) and ``found``.
-    The ``endstop sweep`` command reaches the same orbits by shooting and then measures them
-    over blocks of periods, to its block criterion."""
-    return _native.interface_sweep(device, float(accel_rms_g),
-                                   [float(f) for f in freqs_hz])
-
-
-def interface_response(device, accel_rms_g, start_hz, stop_hz, max_step_hz=0.5):
-    """The periodic orbit of ``device`` (with an interface circuit and a DC load) at
-    ``accel_rms_g`` continued in frequency from ``start_hz`` to ``stop_hz`` through folds by
-    pseudo-arclength continuation (from the orbit reached from rest at ``start_hz``, frequency
-    steps of at most ``max_step_hz``): per-point arrays ``freq_hz``, ``vdc_v`` (the mean
-    storage voltage over the period), ``p_dc_w`` (the DC load's mean power), ``x_peak_m``,
-    ``multiplier_max_abs``, the lists ``stable`` and ``method`` (every point is a Newton
-    solution on the period map, so ``newton``); ``folds_hz`` and ``end`` (``reached`` when the
-    branch passes ``stop_hz``, ``turned back past the start at <f> Hz`` when it returns past
-    ``start_hz`` after a fold; a branch that stalls or runs out of points raises
-    :class:`endstop.SolverError` naming the last frequency reached)."""
-    return _native.interface_response(device, float(accel_rms_g), float(start_hz),
-                                      float(stop_hz), float(max_step_hz))
+           "ensemble", "charge", "interface_ensemble"]
 
 
 def charge(device, freq_hz, accel_rms_g, target_v, start_v=0.0, ramp_periods=0.0,
@@ -156,11 +138,6 @@ def charge(device, freq_hz, accel_rms_g, target_v, start_v=0.0, ramp_periods=0.0
 
 
 def interface_ensemble(device, psd_g2_per_hz, records=4, duration_s=10.0, seed=2012):
-    """An ensemble of band-limited white-noise records (record i uses stream i of ``seed``)
-    of ``device`` with its interface circuit and storage, each from rest after a pre-roll
-    covering five storage time constants (the ``endstop random`` command's records and
-    summary): ``p_dc_w`` and ``efficiency`` (means, with ``*_ci95``
-    half-widths), ``p_drive_w``, ``vdc_v``, ``preroll_s`` and per-record arrays ``*_each``.
-    An open DC load (no steady mean) raises :class:`endstop.SolverError`."""
-    return _native.interface_ensemble(device, float(psd_g2_per_hz), int(records),
-                                      float(duration_s), int(seed))
+    """An alias of :func:`ensemble`, named for a device behind an interface circuit: it calls
+    :func:`ensemble` with the same arguments and returns what it returns."""
+    return ensemble(device, psd_g2_per_hz, records=records, duration_s=duration_s, seed=seed)
