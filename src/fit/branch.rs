@@ -17,11 +17,11 @@ use crate::physics::harvester::Harvester as Model4;
 
 /// The fit's model: the paper's devices, four components.
 type Harvester = Model4<4>;
-use crate::progress::Silent;
 use crate::study::orbit::Orbit;
 use crate::study::stepped::{in_contact, SweepStep, Transition};
-use crate::study::sweep::{BranchEndKind, DownEndKind, SweepSettings, REFINE_TOL_HZ};
+use crate::study::sweep::{BranchEndKind, DownEndKind};
 
+use super::model::SweepRun;
 use super::track::{
     locate_fold, locate_grazing, quantity_of, stable_orbit, track_grazing, Fold, Grazing, Guess,
     Lost,
@@ -160,34 +160,26 @@ struct Path {
 }
 
 impl Path {
-    fn run(device: &Device, data: &SweepData, s: &Setup) -> Result<Self, Lost> {
-        let settings = SweepSettings::for_device(device, data.grid(), REFINE_TOL_HZ);
-        Ok(match data.direction {
-            Direction::Up => {
-                let r = settings.run(device, s.accel_rms_g, &Silent)?;
-                let end = r
+    /// The path of the plain sweep `run` of a data set.
+    fn of(run: &SweepRun) -> Self {
+        match run {
+            SweepRun::Up(r) => Path {
+                values: r.sweep.values.clone(),
+                onset: r.onset,
+                contact_at_start: r.contact_at_start,
+                end: r
                     .branch_end()
-                    .map(|e| (e.kind == BranchEndKind::Jump, e.transition));
-                Path {
-                    values: r.sweep.values.clone(),
-                    onset: r.onset,
-                    contact_at_start: r.contact_at_start,
-                    end,
-                    steps: r.sweep.steps,
-                }
-            }
-            Direction::Down => {
-                let r = settings.run_down(device, s.accel_rms_g, &Silent)?;
-                let end = r.branch_end().map(|(k, t)| (k == DownEndKind::Jump, t));
-                Path {
-                    values: r.sweep.values.clone(),
-                    onset: None,
-                    contact_at_start: false,
-                    end,
-                    steps: r.sweep.steps,
-                }
-            }
-        })
+                    .map(|e| (e.kind == BranchEndKind::Jump, e.transition)),
+                steps: r.sweep.steps.clone(),
+            },
+            SweepRun::Down(r) => Path {
+                values: r.sweep.values.clone(),
+                onset: None,
+                contact_at_start: false,
+                end: r.branch_end().map(|(k, t)| (k == DownEndKind::Jump, t)),
+                steps: r.sweep.steps.clone(),
+            },
+        }
     }
 
     /// The last coarse step at or before `f` in the sweep's order.
@@ -235,11 +227,20 @@ impl Path {
 }
 
 /// The model of `data` on `device` with the acceleration factor `scale`, identified from the
-/// stepped sweep (see the module docs).
-pub(super) fn identify(device: &Device, scale: f64, data: &SweepData) -> Result<SetModel, Lost> {
+/// plain stepped sweep (see the module docs): `swept` when given (the design's sweep at the
+/// same values, [`SweepRun::plain`]), else swept here.
+pub(super) fn identify(
+    device: &Device,
+    scale: f64,
+    data: &SweepData,
+    swept: Option<&SweepRun>,
+) -> Result<SetModel, Lost> {
     let s = Setup::of(data, scale);
     let h = s.harvester(device)?;
-    let path = Path::run(device, data, &s)?;
+    let path = match swept {
+        Some(run) => Path::of(run),
+        None => Path::of(&SweepRun::plain(device, scale, data)?),
+    };
     let a = s.accel_rms_g;
     // The fold, when the sweep jumps, and the last coarse step before it. A branch that the
     // sweep leaves without a confirmed jump (a power drop below the sweep's criterion) may
@@ -449,4 +450,26 @@ pub(super) fn track(
         fold,
         points,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::fit::family::recovery_family;
+
+    /// The identification from the design's sweep is the one from a sweep run afresh: the
+    /// design's sweep at a start is the plain sweep the identification runs (the same
+    /// settings on the same device), so the two agree exactly, not to a tolerance.
+    #[test]
+    fn identification_from_the_designs_sweep_is_the_one_swept_afresh() {
+        // Case 1 of the recovery family: an up-sweep whose points show a jump at a fold.
+        let case = &recovery_family()[0];
+        let device = case.truth_device().unwrap();
+        let data = &case.data().unwrap()[0];
+        let swept = SweepRun::plain(&device, 1.0, data).unwrap();
+        let reused = identify(&device, 1.0, data, Some(&swept)).unwrap();
+        let fresh = identify(&device, 1.0, data, None).unwrap();
+        assert!(fresh.fold.is_some(), "the case's sweep jumps at a fold");
+        assert_eq!(reused, fresh);
+    }
 }

@@ -46,7 +46,8 @@
 //! free parameters), each ranked by the misfit of a cheap model, the plain stepped sweep over
 //! each data set's grid (one sweep per data set and start, evaluated in parallel). The best
 //! ranked [`FitSettings::refine`] are refined by Levenberg-Marquardt on the branches in their
-//! order, stopping early at one that converges with a chi-square (with stated standard
+//! order (each start's branches identified from its design sweep, which is the sweep the
+//! identification runs, so it is not run twice), stopping early at one that converges with a chi-square (with stated standard
 //! deviations) below its [`CHI2_QUANTILE`] quantile; the report is the best refined one
 //! (converged first, then the smallest SSR), whichever start it came from, and lists every
 //! start with its cheap misfit and refinement ([`FitReport::starts`]).

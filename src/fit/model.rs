@@ -10,9 +10,10 @@ use super::{
     Direction, FeatureKind, FitError, Quantity, SweepData, FIT_REFINE_TOL_HZ, FIT_REL_CHANGE_TOL,
 };
 use crate::device::Device;
+use crate::ode::SolverError;
 use crate::progress::Silent;
 use crate::study::steady::Measurement;
-use crate::study::sweep::{SweepSettings, REFINE_TOL_HZ};
+use crate::study::sweep::{DownSweepReport, SweepReport, SweepSettings, REFINE_TOL_HZ};
 
 /// The value of a measured quantity in a model measurement.
 fn quantity_of(q: Quantity, m: &Measurement) -> f64 {
@@ -56,16 +57,58 @@ fn sweep_with(
     scale: f64,
     data: &SweepData,
 ) -> Result<ModelSweep, FitError> {
+    Ok(model_of(
+        &SweepRun::run(settings, device, scale, data)?,
+        data,
+    ))
+}
+
+/// A stepped sweep of a data set in its direction, as the sweep reports it.
+#[derive(Debug, Clone)]
+pub(super) enum SweepRun {
+    /// An up-sweep.
+    Up(SweepReport),
+    /// A down-sweep.
+    Down(DownSweepReport),
+}
+
+impl SweepRun {
+    /// The sweep of `data`'s grid in its direction at its acceleration times `scale`.
+    pub(super) fn run(
+        settings: &SweepSettings,
+        device: &Device,
+        scale: f64,
+        data: &SweepData,
+    ) -> Result<Self, SolverError> {
+        let accel = data.accel_rms_g * scale;
+        Ok(match data.direction {
+            Direction::Up => SweepRun::Up(settings.run(device, accel, &Silent)?),
+            Direction::Down => SweepRun::Down(settings.run_down(device, accel, &Silent)?),
+        })
+    }
+
+    /// The plain sweep of `data` ([`model_curve`]'s settings): the cheap model of the
+    /// design and the sweep the branches are identified from.
+    pub(super) fn plain(
+        device: &Device,
+        scale: f64,
+        data: &SweepData,
+    ) -> Result<Self, SolverError> {
+        let settings = SweepSettings::for_device(device, data.grid(), REFINE_TOL_HZ);
+        Self::run(&settings, device, scale, data)
+    }
+}
+
+/// The model of `data` in the sweep `run` over its grid.
+fn model_of(run: &SweepRun, data: &SweepData) -> ModelSweep {
     let grid = data.grid();
-    let accel = data.accel_rms_g * scale;
     let (lo, hi) = (
         grid.iter().copied().fold(f64::INFINITY, f64::min),
         grid.iter().copied().fold(f64::NEG_INFINITY, f64::max),
     );
     let (mut curve, onset_hz, branch_end_hz): (Vec<(f64, f64)>, Option<f64>, Option<f64>) =
-        match data.direction {
-            Direction::Up => {
-                let r = settings.run(device, accel, &Silent)?;
+        match run {
+            SweepRun::Up(r) => {
                 let curve = r
                     .measurements()
                     .map(|m| (m.freq_hz, quantity_of(data.quantity, m)))
@@ -82,8 +125,7 @@ fn sweep_with(
                 };
                 (curve, Some(onset), Some(end))
             }
-            Direction::Down => {
-                let r = settings.run_down(device, accel, &Silent)?;
+            SweepRun::Down(r) => {
                 let curve = r
                     .measurements()
                     .map(|m| (m.freq_hz, quantity_of(data.quantity, m)))
@@ -93,11 +135,11 @@ fn sweep_with(
             }
         };
     curve.sort_by(|a, b| a.0.total_cmp(&b.0));
-    Ok(ModelSweep {
+    ModelSweep {
         curve,
         onset_hz,
         branch_end_hz,
-    })
+    }
 }
 
 /// The model's values for a data set (its points, its features, then the end of its branch
@@ -140,15 +182,18 @@ pub const DESIGN_GRID_INTERVALS: usize = 16;
 /// The values of [`model_values`] from the stepped sweep with a plain sweep's settings
 /// ([`model_curve`]): the cheap model that ranks the fit's starts. A data set without points
 /// (features only) is swept on its grid thinned to at most [`DESIGN_GRID_INTERVALS`]
-/// intervals, its ends kept: its features are refined by bisection whatever the grid.
+/// intervals, its ends kept: its features are refined by bisection whatever the grid. Returns
+/// the sweep too where it is the plain sweep of the data set's own grid ([`SweepRun::plain`]),
+/// the one the branches are identified from at these values.
 pub(super) fn design_values(
     device: &Device,
     scale: f64,
     data: &SweepData,
-) -> Result<Vec<f64>, FitError> {
+) -> Result<(Vec<f64>, Option<SweepRun>), FitError> {
     let grid = data.grid();
     if !data.points.is_empty() || grid.len() <= DESIGN_GRID_INTERVALS + 1 {
-        return Ok(values_of(&model_curve(device, scale, data)?, data));
+        let run = SweepRun::plain(device, scale, data)?;
+        return Ok((values_of(&model_of(&run, data), data), Some(run)));
     }
     let every = (grid.len() - 1).div_ceil(DESIGN_GRID_INTERVALS);
     let mut thin: Vec<f64> = grid.iter().copied().step_by(every).collect();
@@ -159,7 +204,10 @@ pub(super) fn design_values(
         grid_hz: Some(thin),
         ..data.clone()
     };
-    Ok(values_of(&model_curve(device, scale, &coarse)?, &coarse))
+    Ok((
+        values_of(&model_curve(device, scale, &coarse)?, &coarse),
+        None,
+    ))
 }
 
 /// The values of a data set's points, features and jump in the model sweep `m`.

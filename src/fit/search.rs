@@ -5,7 +5,7 @@
 
 use super::branch::{self, SetModel};
 use super::lm::{self, levenberg_marquardt_tracked, LmResult, LmSettings, Tracked};
-use super::model::design_values;
+use super::model::{design_values, SweepRun};
 use super::params::{apply, Transform};
 use super::report::{Refined, StartOrigin, StartTried};
 use super::{
@@ -41,12 +41,17 @@ impl Problem<'_> {
             .collect()
     }
 
-    /// The branches of every data set identified afresh at `u`.
-    fn identify(&self, u: &[f64]) -> Result<Vec<SetModel>, FitError> {
+    /// The branches of every data set identified afresh at `u`, from the plain sweeps `swept`
+    /// of every data set at `u` when given (the design's), else from sweeps run here.
+    fn identify(&self, u: &[f64], swept: Option<&[SweepRun]>) -> Result<Vec<SetModel>, FitError> {
         let (d, scale) = apply(self.device, self.free, &self.to_p(u))?;
         self.data
             .iter()
-            .map(|ds| branch::identify(&d, scale, ds).map_err(|l| FitError::Lost(l.0)))
+            .enumerate()
+            .map(|(i, ds)| {
+                branch::identify(&d, scale, ds, swept.and_then(|w| w.get(i)))
+                    .map_err(|l| FitError::Lost(l.0))
+            })
             .collect()
     }
 
@@ -148,14 +153,16 @@ impl Run {
     }
 }
 
-/// The search from `u0`: on the branches, identified there and afresh after each round while
-/// they differ; on the stepped sweep where they cannot be identified.
+/// The search from `u0`: on the branches, identified there (from the plain sweeps `swept` at
+/// `u0` when the design ran them) and afresh after each round while they differ; on the
+/// stepped sweep where they cannot be identified.
 pub(super) fn search_from(
     pb: &Problem<'_>,
     u0: &[f64],
+    swept: Option<&[SweepRun]>,
     settings: &LmSettings,
 ) -> Result<Run, FitError> {
-    let states = match pb.identify(u0) {
+    let states = match pb.identify(u0, swept) {
         Ok(s) => s,
         Err(e) => return stepped(pb, u0, settings, e.to_string()),
     };
@@ -168,7 +175,7 @@ pub(super) fn search_from(
             levenberg_marquardt_tracked(&OnBranches(pb), &u, states, Some(r0), settings)?;
         evaluations += lm.evaluations;
         iterations += lm.iterations;
-        let fresh = pb.identify(&lm.u);
+        let fresh = pb.identify(&lm.u, None);
         let disagreement = fresh
             .as_ref()
             .ok()
@@ -232,21 +239,28 @@ fn sobol_start(tr: &[Transform], k: usize) -> Vec<f64> {
         .collect()
 }
 
-/// The weighted SSR of the cheap model ([`design_values`]) at `u`; infinite where it cannot
-/// be evaluated.
-fn design_ssr(pb: &Problem<'_>, u: &[f64]) -> f64 {
-    let eval = || -> Result<f64, FitError> {
+/// The weighted SSR of the cheap model ([`design_values`]) at `u`, infinite where it cannot
+/// be evaluated, and its plain sweeps of every data set where each is the one the branches
+/// are identified from ([`SweepRun::plain`]).
+fn design_ssr(pb: &Problem<'_>, u: &[f64]) -> (f64, Option<Vec<SweepRun>>) {
+    let eval = || -> Result<(f64, Option<Vec<SweepRun>>), FitError> {
         let (d, scale) = apply(pb.device, pb.free, &pb.to_p(u))?;
         let mut m = Vec::with_capacity(pb.y.len());
+        let mut runs = Some(Vec::with_capacity(pb.data.len()));
         for ds in pb.data {
-            m.extend(design_values(&d, scale, ds)?);
+            let (values, run) = design_values(&d, scale, ds)?;
+            m.extend(values);
+            runs = runs.zip(run).map(|(mut rs, r)| {
+                rs.push(r);
+                rs
+            });
         }
-        Ok(pb.weighted(&m).iter().map(|r| r * r).sum())
+        Ok((pb.weighted(&m).iter().map(|r| r * r).sum(), runs))
     };
-    eval()
-        .ok()
-        .filter(|c| c.is_finite())
-        .unwrap_or(f64::INFINITY)
+    match eval() {
+        Ok((c, runs)) if c.is_finite() => (c, runs),
+        _ => (f64::INFINITY, None),
+    }
 }
 
 /// The searches of a fit: the design (the device's values and [`FitSettings::design_points`] points
@@ -284,10 +298,13 @@ pub(super) fn search(
         })
         .collect();
     // One design point alone (no design) is refined without being ranked.
+    let mut swept: Vec<Option<Vec<SweepRun>>> = vec![None; starts.len()];
     if starts.len() > 1 {
-        let costs: Vec<f64> = us.par_iter().map(|u| design_ssr(pb, u)).collect();
-        for (s, c) in starts.iter_mut().zip(costs) {
+        let costs: Vec<(f64, Option<Vec<SweepRun>>)> =
+            us.par_iter().map(|u| design_ssr(pb, u)).collect();
+        for ((s, w), (c, runs)) in starts.iter_mut().zip(&mut swept).zip(costs) {
             s.design_ssr = c;
+            *w = runs;
         }
     }
     // The best ranked starts whose cheap model could be evaluated (the device's values when
@@ -300,10 +317,16 @@ pub(super) fn search(
     if order.is_empty() {
         order.push(0);
     }
+    // Only the sweeps of the starts to be refined are kept.
+    for (i, w) in swept.iter_mut().enumerate() {
+        if !order.contains(&i) {
+            *w = None;
+        }
+    }
     let mut best: Option<(Run, usize)> = None;
     let mut last_err = None;
     for i in order {
-        let run = match search_from(pb, &us[i], &lm) {
+        let run = match search_from(pb, &us[i], swept[i].as_deref(), &lm) {
             Ok(run) => run,
             Err(e) => {
                 last_err = Some(e);
