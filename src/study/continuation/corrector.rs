@@ -6,13 +6,9 @@ use nalgebra::{DMatrix, DVector, SMatrix, SVector};
 
 use crate::model::Model;
 use crate::ode::Stats;
-use crate::study::orbit::{
-    Forcing, Linearised, Orbit, OrbitError, Shooter, CHORD_STEPS, SYMMETRY_TOL,
-};
+use crate::study::orbit::{Forcing, Linearised, Orbit, OrbitError, Shooter, CHORD_STEPS};
 
-use super::test_functions::{
-    contact_set, test_grazing, test_plus_one, Gaps, GRAZING_NEAR, SIDE_TESTS,
-};
+use super::test_functions::{test_grazing, test_plus_one, Gaps, GRAZING_NEAR};
 use super::{BranchPoint, ContinuationSettings, Rejection};
 
 /// Largest distance of a corrected point from its predictor, in arclength steps: beyond it
@@ -289,23 +285,10 @@ impl<M: Model<N>, const N: usize> Continuer<'_, '_, M, N> {
         if (mb / ma).max(ma / mb) > MAX_MULTIPLIER_RATIO {
             return Err(Rejection::MultiplierJump);
         }
-        // A branch of symmetric orbits keeps its symmetry: at a symmetry-breaking pitchfork the
-        // two mirror-image asymmetric branches leave it close in state, and a corrector that
-        // lands on one of them has left the branch (which passes the pitchfork as a branch
-        // point). The step is refined.
-        if self.shooter.base.mirror().is_some()
-            && self.is_symmetric(&last.orbit)
-            && !self.is_symmetric(&p.orbit)
-        {
-            return Err(Rejection::SymmetryLost);
-        }
-        // A step that starts or stops touching a stop (a change of the contact set: from no
-        // contact to one stop, or from one stop to both) is kept short: a long one can leave an
-        // impacting branch for another across a narrow loop of the branch (a fold just past
-        // the grazing) without passing the fold.
-        let gaps = Gaps::of(self.shooter.base);
-        let crossed = p.orbit.is_impacting() != last.orbit.is_impacting()
-            || contact_set(p, gaps) != contact_set(last, gaps);
+        // A step that starts or stops touching the stops is kept short: a long one can leave an
+        // impacting branch for the non-impacting one across a narrow loop of the branch (a fold
+        // just past the grazing) without passing the fold.
+        let crossed = p.orbit.is_impacting() != last.orbit.is_impacting();
         if crossed && dp > GRAZING_STEP * settings.max_param_step {
             return Err(Rejection::LongCrossing);
         }
@@ -314,6 +297,7 @@ impl<M: Model<N>, const N: usize> Continuer<'_, '_, M, N> {
         // along the branch it came on, unable to step across a corner (an impacting branch
         // that leaves at an angle, as with a large impact damping). Refined, and hopped over
         // when the step is exhausted ([`Continuer::corner_hop`]).
+        let gaps = Gaps::of(self.shooter.base);
         let graze_tol = GRAZING_NEAR * gaps.smallest();
         let slid_back = !crossed
             && !last.orbit.is_impacting()
@@ -327,40 +311,24 @@ impl<M: Model<N>, const N: usize> Continuer<'_, '_, M, N> {
         Ok(())
     }
 
-    /// Whether an orbit is its own mirror image half a period later (within
-    /// [`SYMMETRY_TOL`]); false where that cannot be computed.
-    fn is_symmetric(&self, orbit: &Orbit) -> bool {
-        matches!(self.shooter.symmetry_defect(orbit), Ok(Some(d)) if d <= SYMMETRY_TOL)
-    }
-
-    /// Hops over a corner of the branch at an orbit `last` that (nearly) grazes a stop: the
-    /// branch's mode (its contact set) changes there. From an orbit touching the stop it
-    /// grazes: shoots at fixed parameter values stepping away from `last` in the direction
-    /// opposite to its tangent's parameter component (the branch without that contact leaves
-    /// the corner that way), then the other way, and returns the first orbit found with
-    /// another contact set. From an orbit not touching it (a branch arriving at grazing, where
-    /// a large impact damping makes the branch with the contact leave at an angle that no
+    /// Hops over a corner of the branch at an orbit `last` that (nearly) grazes a stop.
+    /// From an impacting `last`: shoots at fixed parameter values stepping away from `last` in
+    /// the direction opposite to its tangent's parameter component (the non-impacting branch
+    /// leaves the corner that way), then the other way, and returns the first non-impacting
+    /// orbit found. From a non-impacting `last` (the free-flight branch arriving at grazing,
+    /// where a large impact damping makes the impacting branch leave at an angle that no
     /// arclength step converges across): steps on along its tangent and returns the first
-    /// orbit with another contact set. The tangent is oriented along the direction stepped.
-    /// `None` when `last` is not near grazing or nothing is found within `max_step`.
+    /// impacting orbit. The tangent is oriented along the direction stepped. `None` when
+    /// `last` is not near grazing or nothing is found within `max_step`.
     pub(super) fn corner_hop(&mut self, last: &BranchPoint, max_step: f64) -> Option<BranchPoint> {
         let gaps = Gaps::of(self.shooter.base);
-        let tol = GRAZING_NEAR * gaps.smallest();
-        let near = test_grazing(last, gaps).abs() <= tol;
-        // The stop grazed: the deepest side, or a side grazed while the other is touched (a
-        // corner between two impacting branches).
-        let near_side = SIDE_TESTS.into_iter().find(|t| t(last, gaps).abs() <= tol);
-        if !near && near_side.is_none() {
+        let near = test_grazing(last, gaps).abs() <= GRAZING_NEAR * gaps.smallest();
+        if !near {
             return None;
         }
         let param = self.settings.parameter;
         let p0 = last.orbit.param(param);
-        let modes = contact_set(last, gaps);
-        let leaving_contact = if near {
-            last.orbit.is_impacting()
-        } else {
-            near_side.is_some_and(|t| t(last, gaps) > 0.0)
-        };
+        let leaving_contact = last.orbit.is_impacting();
         let ahead = last.param_tangent().signum();
         let dirs: &[f64] = if leaving_contact {
             &[-ahead, ahead]
@@ -379,16 +347,7 @@ impl<M: Model<N>, const N: usize> Continuer<'_, '_, M, N> {
                     &mut self.stats,
                 );
                 if let Ok(o) = solved {
-                    let hopped = if near {
-                        o.is_impacting() != leaving_contact
-                    } else {
-                        let q = BranchPoint {
-                            orbit: o.clone(),
-                            tangent: last.tangent.clone(),
-                        };
-                        contact_set(&q, gaps) != modes
-                    };
-                    if hopped {
+                    if o.is_impacting() != leaving_contact {
                         let lin = self
                             .shooter
                             .linearise(&o.forcing, param, o.phase_rad, o.state_n(), &mut self.stats)

@@ -10,20 +10,8 @@ use crate::study::orbit::{is_neutral, OrbitError, Shooter};
 
 use super::corrector::Continuer;
 use super::test_functions::{
-    test_fold, test_grazing, test_minus_one, test_plus_one, test_torus, Gaps, SIDE_TESTS,
+    test_fold, test_grazing, test_minus_one, test_plus_one, test_torus, Gaps,
 };
-
-/// A test function of a branch point.
-type Test = fn(&BranchPoint, Gaps) -> f64;
-
-/// A grazing between two points of a branch: the test whose sign change marks it, and
-/// whether the other stop is touched on both sides of it (the orbit goes from touching one
-/// stop to touching both, a change of mode between two impacting branches).
-#[derive(Clone, Copy)]
-struct Grazing {
-    test: Test,
-    between_impacting: bool,
-}
 use super::{BranchPoint, Event, EventKind};
 
 impl<M: Model<N> + Clone, const N: usize> Continuer<'_, '_, M, N> {
@@ -90,22 +78,15 @@ impl<M: Model<N> + Clone, const N: usize> Continuer<'_, '_, M, N> {
     /// Locates a grazing between `a` and `b` on the branch of the same device with the stops
     /// removed, followed from whichever end does not touch a stop: that branch is smooth where
     /// the real one has the grazing singularity, and the orbit at which its largest |x|
-    /// reaches x_max is exactly the grazing orbit (it exerts no contact force). A grazing
-    /// between two impacting branches (the other stop touched throughout) has no stop-free
-    /// counterpart: it is located on the branch itself by its side's test.
+    /// reaches x_max is exactly the grazing orbit (it exerts no contact force).
     fn locate_grazing(
         &mut self,
         k: usize,
         a: &BranchPoint,
         b: &BranchPoint,
         ds: f64,
-        grazing: Grazing,
     ) -> Result<Event, OrbitError> {
         let gaps = Gaps::of(self.shooter.base);
-        let side = grazing.test;
-        if grazing.between_impacting {
-            return self.locate(EventKind::Grazing, k, a, b, ds, side, gaps);
-        }
         let free_model = self.shooter.base.without_contacts();
         let free = Shooter::with_scales(&free_model, self.shooter.cfg, self.shooter.scales());
         let mut c = Continuer {
@@ -113,7 +94,7 @@ impl<M: Model<N> + Clone, const N: usize> Continuer<'_, '_, M, N> {
             settings: self.settings,
             stats: Stats::default(),
         };
-        let from_a = side(a, gaps) <= 0.0;
+        let from_a = test_grazing(a, gaps) <= 0.0;
         // From the non-touching end towards the other one; from `b` the tangent inherited
         // from `a` may point either way (at a corner it points back into the corner), so both
         // directions are tried.
@@ -139,7 +120,7 @@ impl<M: Model<N> + Clone, const N: usize> Continuer<'_, '_, M, N> {
         'dirs: for anchor in candidates {
             for hi in tries.map(|f| f * ds) {
                 if let Ok((p, _)) = c.point_at(&anchor, hi) {
-                    if side(&p, gaps) > 0.0 {
+                    if test_grazing(&p, gaps) > 0.0 {
                         found = Some((anchor, p, hi));
                         break 'dirs;
                     }
@@ -154,7 +135,7 @@ impl<M: Model<N> + Clone, const N: usize> Continuer<'_, '_, M, N> {
                 residual: b.orbit.residual,
             });
         };
-        let mut e = c.locate(EventKind::Grazing, k, &anchor, &end, hi, side, gaps)?;
+        let mut e = c.locate(EventKind::Grazing, k, &anchor, &end, hi, test_grazing, gaps)?;
         self.stats += c.stats;
         if !from_a {
             e.s = ds - e.s.min(ds);
@@ -162,33 +143,6 @@ impl<M: Model<N> + Clone, const N: usize> Continuer<'_, '_, M, N> {
         e.stable_before = a.orbit.is_stable();
         e.stable_after = b.orbit.is_stable();
         Ok(e)
-    }
-
-    /// The grazing between `a` and `b`, if their contact sets differ: where the orbit starts
-    /// or stops touching any stop, the sign change of the deepest side's test
-    /// ([`test_grazing`]); where it goes from touching one stop to touching both (a change
-    /// of mode that the deepest side's test does not see), the sign change of the side that
-    /// differs.
-    fn grazing_between(a: &BranchPoint, b: &BranchPoint, gaps: Gaps) -> Option<Grazing> {
-        if (test_grazing(a, gaps) > 0.0) != (test_grazing(b, gaps) > 0.0) {
-            return Some(Grazing {
-                test: test_grazing,
-                between_impacting: false,
-            });
-        }
-        let touched = |t: Test| (t(a, gaps) > 0.0, t(b, gaps) > 0.0);
-        let [upper, lower] = SIDE_TESTS.map(touched);
-        match (upper, lower) {
-            ((x, y), (true, true)) if x != y => Some(Grazing {
-                test: SIDE_TESTS[0],
-                between_impacting: true,
-            }),
-            ((true, true), (x, y)) if x != y => Some(Grazing {
-                test: SIDE_TESTS[1],
-                between_impacting: true,
-            }),
-            _ => None,
-        }
     }
 
     // ANCHOR: events
@@ -206,24 +160,18 @@ impl<M: Model<N> + Clone, const N: usize> Continuer<'_, '_, M, N> {
     ) -> Result<Vec<Event>, OrbitError> {
         let gaps = Gaps::of(self.shooter.base);
         let mut out = Vec::new();
-        let grazing = Self::grazing_between(a, b, gaps);
-        let graze = grazing.is_some();
+        let graze = (test_grazing(a, gaps) > 0.0) != (test_grazing(b, gaps) > 0.0);
         // At a rigid stop the multipliers diverge at grazing (the saltation matrix grows like
         // the inverse impact speed): the interval holds a non-smooth point, across which no
         // smooth event is tested for, and a turn there is not a fold. The branches that meet
         // at such a point are the business of `impacting`.
         let rigid = self.shooter.base.contacts().iter().any(|c| c.rigid());
         let mut corner = false;
-        if let Some(grazing) = grazing {
+        if graze {
             // Located on the stop-free branch; a failure leaves the grazing unlocated (the
             // branch itself is fine) rather than ending the continuation.
-            if let Ok(g) = self.locate_grazing(k, a, b, ds, grazing) {
-                let leaves = if grazing.between_impacting {
-                    (grazing.test)(a, gaps) > 0.0 && (grazing.test)(b, gaps) <= 0.0
-                } else {
-                    a.orbit.is_impacting() && !b.orbit.is_impacting()
-                };
-                if leaves {
+            if let Ok(g) = self.locate_grazing(k, a, b, ds) {
+                if a.orbit.is_impacting() && !b.orbit.is_impacting() {
                     let away = self.u_of(&b.orbit) - self.u_of(&g.orbit);
                     if b.tangent.dot(&away) < 0.0 {
                         b.tangent = -b.tangent.clone();

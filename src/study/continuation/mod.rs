@@ -35,19 +35,6 @@
 //! A +1 crossing is called a fold only where the branch turns: a crossing without a turn is a
 //! branch point and is never presented as a fold. A turn at a grazing point, where the branch
 //! has a corner rather than a smooth maximum, is a fold whose `at_grazing` flag is set.
-//!
-//! # Corners and symmetry
-//! The contact set of an orbit (which stops it touches) is the branch's mode; where it changes
-//! (no contact to one stop, or one stop to both) the branch has a grazing, often a corner.
-//! A step across a change of mode is kept short and its grazing is located by that stop's own
-//! test (a change from one stop to both does not move the deepest excursion's test); where no
-//! step converges across the corner, the corrector hops to the first orbit of the other mode
-//! (a symmetric device's orbits grazing both stops at once are one grazing). A branch of
-//! symmetric orbits (each its own mirror image half a period later) keeps its symmetry: a
-//! corrected point that is not symmetric has gone onto one of the asymmetric branches that
-//! leave at a symmetry-breaking pitchfork, and the step is refined (Kuznetsov, section 7.4;
-//! a branch with a fixed mode between located mode changes is the segmented view of hybrid
-//! orbits in Dankowicz & Schilder, *Recipes for Continuation*, SIAM 2013).
 
 //!
 //! # Files

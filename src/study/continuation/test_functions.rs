@@ -57,48 +57,21 @@ pub(super) fn test_minus_one(p: &BranchPoint, _: Gaps) -> f64 {
 pub(super) fn test_torus(p: &BranchPoint, _: Gaps) -> f64 {
     p.orbit.max_multiplier_abs() - 1.0
 }
-/// How far an orbit is past grazing on one side (m): its largest reach towards that side
-/// less the gap, or, once it strikes a rigid stop there (which it never penetrates, so that
-/// the reach stays at the gap), its impact speed over `w0`. Both vanish at grazing; the side
-/// without a stop gives minus infinity.
-fn past_grazing(p: &BranchPoint, gaps: Gaps, upper: bool) -> f64 {
-    let s = &p.orbit.summary;
-    let (reach, gap, speed) = if upper {
-        (s.x_upper_m, gaps.upper, s.impact_speed_m_s[0])
-    } else {
-        (-s.x_lower_m, gaps.lower, s.impact_speed_m_s[1])
-    };
-    if speed > 0.0 {
-        speed / gaps.w0
-    } else {
-        reach - gap
-    }
-}
-
-/// How far an orbit is past grazing on the upper stop (see [`test_grazing`]).
-pub(super) fn test_grazing_upper(p: &BranchPoint, gaps: Gaps) -> f64 {
-    past_grazing(p, gaps, true)
-}
-
-/// How far an orbit is past grazing on the lower stop (see [`test_grazing`]).
-pub(super) fn test_grazing_lower(p: &BranchPoint, gaps: Gaps) -> f64 {
-    past_grazing(p, gaps, false)
-}
-
-/// How far an orbit is past grazing on its deeper side (m): the larger of the two sides'
-/// tests. It changes sign where the orbit starts or stops touching any stop; a change between
-/// touching one stop and touching both is seen by the sides' own tests ([`contact_set`]).
+/// How far an orbit is past grazing on its deeper side (m): the largest displacement less the
+/// gap, or, once it strikes a rigid stop (which it never penetrates, so that the displacement
+/// stays at the gap), its impact speed over `w0`. Both vanish at grazing.
 pub(super) fn test_grazing(p: &BranchPoint, gaps: Gaps) -> f64 {
-    test_grazing_upper(p, gaps).max(test_grazing_lower(p, gaps))
-}
-
-/// The grazing test of each side, upper first.
-pub(super) const SIDE_TESTS: [fn(&BranchPoint, Gaps) -> f64; 2] =
-    [test_grazing_upper, test_grazing_lower];
-
-/// The stops an orbit touches, upper first: the branch's mode. Two orbits of one branch with
-/// different contact sets lie on either side of a grazing of the side that differs, a corner
-/// of the branch where the mode changes.
-pub(super) fn contact_set(p: &BranchPoint, gaps: Gaps) -> [bool; 2] {
-    SIDE_TESTS.map(|t| t(p, gaps) > 0.0)
+    let s = &p.orbit.summary;
+    let side = |reach: f64, gap: f64, speed: f64| {
+        if speed > 0.0 {
+            speed / gaps.w0
+        } else {
+            reach - gap
+        }
+    };
+    side(s.x_upper_m, gaps.upper, s.impact_speed_m_s[0]).max(side(
+        -s.x_lower_m,
+        gaps.lower,
+        s.impact_speed_m_s[1],
+    ))
 }

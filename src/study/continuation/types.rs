@@ -322,10 +322,6 @@ pub enum Rejection {
     /// A free-flight branch turned back at grazing with no change of stability: the
     /// corrector slid back along the branch it came on instead of stepping across a corner.
     SlidBack,
-    /// The branch's orbits are symmetric (their own mirror image half a period later) and
-    /// the corrected one is not: it has gone onto an asymmetric branch at a symmetry-breaking
-    /// pitchfork.
-    SymmetryLost,
 }
 
 impl Rejection {
@@ -339,7 +335,6 @@ impl Rejection {
             Rejection::MultiplierJump => "multiplier jump",
             Rejection::LongCrossing => "long grazing crossing",
             Rejection::SlidBack => "slid back at grazing",
-            Rejection::SymmetryLost => "lost the symmetry",
         }
     }
 }
