@@ -295,7 +295,18 @@ impl MeasuredRecord {
         }
         // The reference step is the median (a gap does not move it); the rate is the mean
         // step's inverse, which averages the times' rounding.
-        let mut steps: Vec<f64> = t.windows(2).map(|w| w[1] - w[0]).collect();
+        let steps = || t.windows(2).map(|w| w[1] - w[0]);
+        let (min, max) = steps().fold((f64::INFINITY, 0.0f64), |(lo, hi), s| {
+            (lo.min(s), hi.max(s))
+        });
+        // The median lies in [min, max], and a rounded product with a positive factor is
+        // monotone in its operand: where every step is within the tolerance of both the
+        // smallest and the largest step, it is within the tolerance of the median, and the
+        // record is uniform without the median being found.
+        if min >= max * (1.0 - UNIFORM_TOL) && max <= min * (1.0 + UNIFORM_TOL) {
+            return Ok(Self::at_mean_step(source_name, t, accel_si));
+        }
+        let mut steps: Vec<f64> = steps().collect();
         let mid = steps.len() / 2;
         let median = *steps.select_nth_unstable_by(mid, f64::total_cmp).1;
         let (lo, hi) = (median * (1.0 - UNIFORM_TOL), median * (1.0 + UNIFORM_TOL));
@@ -310,12 +321,18 @@ impl MeasuredRecord {
                 tol_pct: UNIFORM_TOL * 100.0,
             });
         }
-        let mean = (t[n - 1] - t[0]) / (n - 1) as f64;
-        Ok(Self {
-            source_name: src(),
+        Ok(Self::at_mean_step(source_name, t, accel_si))
+    }
+
+    /// The record of checked times and accelerations: its rate the inverse of the mean step.
+    fn at_mean_step(source_name: &str, times_s: &[f64], accel_si: Vec<f64>) -> Self {
+        let n = times_s.len();
+        let mean = (times_s[n - 1] - times_s[0]) / (n - 1) as f64;
+        Self {
+            source_name: source_name.to_string(),
             sample_rate_hz: 1.0 / mean,
             accel_si,
-        })
+        }
     }
 
     /// A record of samples at `sample_rate_hz` (see the module docs for the checks).
@@ -476,6 +493,34 @@ mod tests {
                 ..
             }
         ));
+    }
+
+    /// Steps within the tolerance of the median but not of each other (0.992 and 1.008 of it:
+    /// 1.6 % apart) are uniform; one step 1.2 % short of the median is not, and is named.
+    #[test]
+    fn a_jittered_record_is_judged_by_its_median() {
+        let times = |step: &dyn Fn(usize) -> f64| {
+            let mut t = vec![0.0];
+            for k in 1..100 {
+                t.push(t[k - 1] + 1e-3 * step(k));
+            }
+            t
+        };
+        let jittered = |k: usize| [1.0, 0.992, 1.008][k % 3];
+        let t = times(&jittered);
+        let r = MeasuredRecord::from_times("a.csv", &rows(&t)).unwrap();
+        assert_eq!(r.sample_rate_hz, 1.0 / ((t[99] - t[0]) / 99.0));
+        let t = times(&|k| if k == 40 { 0.988 } else { jittered(k) });
+        match MeasuredRecord::from_times("a.csv", &rows(&t)) {
+            Err(MeasuredError::NonUniform {
+                at, median_step_s, ..
+            }) => {
+                assert_eq!(at, Position::Line(42));
+                // The median is the unjittered step, up to the times' rounding (1e-16 of 0.1 s).
+                assert!((median_step_s - 1e-3).abs() < 1e-15, "{median_step_s:e}");
+            }
+            other => panic!("{other:?}"),
+        }
     }
 
     #[test]

@@ -276,7 +276,11 @@ fn read_wav(path: &Path, file: &str, scale: f64) -> Result<MeasuredRecord, Recor
         file: file.to_string(),
         message: e.to_string(),
     };
-    let mut reader = hound::WavReader::open(path).map_err(io)?;
+    // The whole file in memory: hound reads the header, and the samples of a plain layout
+    // are decoded from the bytes in one pass (hound's iterator reads each sample through its
+    // own call on the reader, the larger part of a long file's reading time).
+    let bytes = std::fs::read(path).map_err(|e| io(hound::Error::IoError(e)))?;
+    let reader = hound::WavReader::new(std::io::Cursor::new(bytes.as_slice())).map_err(io)?;
     let spec = reader.spec();
     if spec.channels != 1 {
         return Err(RecordFileError::Channels {
@@ -284,26 +288,75 @@ fn read_wav(path: &Path, file: &str, scale: f64) -> Result<MeasuredRecord, Recor
             channels: spec.channels,
         });
     }
-    let samples: Vec<f64> = match spec.sample_format {
-        hound::SampleFormat::Float => reader
-            .samples::<f32>()
-            .map(|s| s.map(|v| f64::from(v) * scale))
-            .collect::<Result<_, _>>()
-            .map_err(io)?,
-        hound::SampleFormat::Int => {
-            let full = 2f64.powi(i32::from(spec.bits_per_sample) - 1);
-            reader
-                .samples::<i32>()
-                .map(|s| s.map(|v| f64::from(v) / full * scale))
-                .collect::<Result<_, _>>()
-                .map_err(io)?
-        }
+    let samples = match plain_samples(&bytes, reader, scale) {
+        Some(samples) => samples,
+        None => hound_samples(&bytes, scale).map_err(io)?,
     };
     Ok(MeasuredRecord::from_uniform(
         file,
         f64::from(spec.sample_rate),
         samples,
     )?)
+}
+
+/// The samples (m/s^2) of a WAV file's bytes read by hound's iterator, each a fraction of full
+/// scale times `scale`: the reader of every layout, and the one that names a bad sample.
+fn hound_samples(bytes: &[u8], scale: f64) -> Result<Vec<f64>, hound::Error> {
+    let mut reader = hound::WavReader::new(std::io::Cursor::new(bytes))?;
+    let spec = reader.spec();
+    match spec.sample_format {
+        hound::SampleFormat::Float => reader
+            .samples::<f32>()
+            .map(|s| s.map(|v| f64::from(v) * scale))
+            .collect(),
+        hound::SampleFormat::Int => {
+            let full = 2f64.powi(i32::from(spec.bits_per_sample) - 1);
+            reader
+                .samples::<i32>()
+                .map(|s| s.map(|v| f64::from(v) / full * scale))
+                .collect()
+        }
+    }
+}
+
+/// The samples of `reader` (positioned at its data, over `bytes`) decoded from the bytes, the
+/// same values as [`hound_samples`]: for the layouts hound decodes (8-bit unsigned; 16-, 24-
+/// and 32-bit signed, 24 bits also in 4 bytes; 32-bit float), little-endian, with every
+/// sample present. `None` for any other layout or a short data chunk, which hound reads and
+/// refuses.
+fn plain_samples(
+    bytes: &[u8],
+    reader: hound::WavReader<std::io::Cursor<&[u8]>>,
+    scale: f64,
+) -> Option<Vec<f64>> {
+    let (spec, n) = (reader.spec(), reader.len() as usize);
+    let start = usize::try_from(reader.into_inner().position()).ok()?;
+    // The data chunk's length (the 4 bytes before its data) is `n` samples of its width.
+    let len_bytes: [u8; 4] = bytes.get(start.checked_sub(4)?..start)?.try_into().ok()?;
+    let width = (u32::from_le_bytes(len_bytes) as usize).checked_div(n)?;
+    let data = bytes.get(start..start.checked_add(n.checked_mul(width)?)?)?;
+    let full = 2f64.powi(i32::from(spec.bits_per_sample) - 1);
+    let int = |v: i32| f64::from(v) / full * scale;
+    fn each(data: &[u8], width: usize, f: impl Fn(&[u8]) -> f64) -> Option<Vec<f64>> {
+        Some(data.chunks_exact(width).map(f).collect())
+    }
+    match (spec.sample_format, width, spec.bits_per_sample) {
+        (hound::SampleFormat::Float, 4, 32) => each(data, width, |b| {
+            f64::from(f32::from_le_bytes([b[0], b[1], b[2], b[3]])) * scale
+        }),
+        (hound::SampleFormat::Int, 1, 8) => each(data, width, |b| int(i32::from(b[0]) - 128)),
+        (hound::SampleFormat::Int, 2, 16) => each(data, width, |b| {
+            int(i32::from(i16::from_le_bytes([b[0], b[1]])))
+        }),
+        // A 24-bit sample in the high bytes of an `i32`, shifted back with its sign.
+        (hound::SampleFormat::Int, 3 | 4, 24) => each(data, width, |b| {
+            int(i32::from_le_bytes([0, b[0], b[1], b[2]]) >> 8)
+        }),
+        (hound::SampleFormat::Int, 4, 32) => each(data, width, |b| {
+            int(i32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+        }),
+        _ => None,
+    }
 }
 
 fn names(table: &[(&str, f64)]) -> String {
@@ -418,6 +471,76 @@ mod tests {
         assert_eq!(r.sample_rate_hz, 8000.0);
         assert_eq!(r.accel_si[0], 10.0);
         assert_eq!(r.accel_si[1], -10.0);
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    /// Every layout hound decodes reads the same values from the bytes as through hound's
+    /// iterator (bit for bit: the same arithmetic on the same integers), with a chunk after
+    /// the data ignored; a file cut short inside its data is left to hound, and refused with
+    /// its error.
+    #[test]
+    fn wav_samples_from_the_bytes_are_hounds() {
+        use hound::SampleFormat::{Float, Int};
+        fn reader(bytes: &[u8]) -> hound::WavReader<std::io::Cursor<&[u8]>> {
+            hound::WavReader::new(std::io::Cursor::new(bytes)).unwrap()
+        }
+        let dir = std::env::temp_dir().join(format!("endstop-wavs-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let layouts = [
+            (Float, 32, 4),
+            (Int, 8, 1),
+            (Int, 16, 2),
+            (Int, 24, 3),
+            (Int, 24, 4),
+            (Int, 32, 4),
+        ];
+        for (k, &(format, bits, width)) in layouts.iter().enumerate() {
+            let path = dir.join(format!("{k}.wav"));
+            let spec = hound::WavSpec {
+                channels: 1,
+                sample_rate: 8000,
+                bits_per_sample: bits,
+                sample_format: format,
+            };
+            let spec_ex = hound::WavSpecEx {
+                spec,
+                bytes_per_sample: width,
+            };
+            let file = std::io::BufWriter::new(std::fs::File::create(&path).unwrap());
+            let mut w = hound::WavWriter::new_with_spec_ex(file, spec_ex).unwrap();
+            let full = 1i64 << (bits - 1);
+            for j in 0..300i64 {
+                // Both extremes of the range, zero and values of every sign between.
+                let v = (j * 7919 % (2 * full)) - full;
+                match format {
+                    Float => w.write_sample((v as f64 / full as f64) as f32).unwrap(),
+                    Int => w.write_sample(v as i32).unwrap(),
+                }
+            }
+            w.finalize().unwrap();
+            let mut bytes = std::fs::read(&path).unwrap();
+            bytes.extend_from_slice(b"LIST\x04\0\0\0abcd");
+            std::fs::write(&path, &bytes).unwrap();
+            let want = hound_samples(&bytes, 3.0).unwrap();
+            let got = plain_samples(&bytes, reader(&bytes), 3.0).expect("a plain layout");
+            assert_eq!(read_record(&path, Some(3.0)).unwrap().accel_si, got);
+            assert_eq!(got.len(), 300, "{format:?} {bits} bits in {width} bytes");
+            let bits_of = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+            assert_eq!(
+                bits_of(&got),
+                bits_of(&want),
+                "{format:?} {bits} bits in {width} bytes"
+            );
+            // Cut inside the data (past the header, before the last sample's end).
+            let cut = &bytes[..bytes.len() - 12 - 1];
+            std::fs::write(&path, cut).unwrap();
+            assert_eq!(plain_samples(cut, reader(cut), 3.0), None);
+            let want = hound_samples(cut, 3.0).unwrap_err().to_string();
+            match read_record(&path, Some(3.0)) {
+                Err(RecordFileError::Io { message, .. }) => assert_eq!(message, want),
+                other => panic!("{other:?}"),
+            }
+        }
         std::fs::remove_dir_all(&dir).unwrap();
     }
 
