@@ -144,6 +144,52 @@ fn the_noise_optimum_load_is_the_closed_form() {
     assert!((fresh.mean - want).abs() <= 4.0 * se + bias * want);
 }
 
+/// Common random numbers: the search judges every design on the records of its own seed, so
+/// that any design's power is, bit for bit, the mean over exactly those records (the same
+/// seed, streams and pre-roll), whichever design it is. The optimum test above cannot see
+/// this: the load's power is flat enough near its optimum that a search on independent
+/// records per design lands within its bound too.
+#[test]
+fn every_design_is_judged_on_the_searchs_records() {
+    let device = generator();
+    let r_star = r_opt_ohm();
+    let range = ParamRange::new(
+        LOAD_PATH,
+        r_star / 10.0,
+        r_star * 10.0,
+        Spacing::auto(r_star / 10.0, r_star * 10.0),
+    )
+    .unwrap();
+    let noise = NoiseObjective {
+        psd_g2_per_hz: PSD_G2_PER_HZ,
+        bandwidth_hz: BAND_HZ,
+        records: 2,
+        duration_s: 0.5,
+        seed: 11,
+        transient_s: 0.0,
+    };
+    let p = Problem::under_noise(
+        device.clone(),
+        vec![Interface::Resistive],
+        vec![range],
+        noise,
+        Limits::default(),
+    )
+    .unwrap();
+    let noise = p.noise.unwrap();
+    for u in [0.1, 0.5, 0.9] {
+        let e = p.evaluate(0, &[u]);
+        let d = device.with_param(LOAD_PATH_OWN, e.values[0]).unwrap();
+        let (powers, _) = record_powers(&d, &noise, noise.seed).unwrap();
+        assert_eq!(
+            e.power_w(),
+            MeanCi::of(&powers).mean,
+            "the design at unit {u} ({} ohm) is not judged on the search's records",
+            e.values[0]
+        );
+    }
+}
+
 /// Behind the resistive interface the load is the transducer's own.
 const LOAD_PATH_OWN: &str = "transducer.load_resistance_ohm";
 
