@@ -56,6 +56,38 @@ fn r_opt_ohm() -> f64 {
     (RC_OHM * (RC_OHM + PHI_N_PER_A * PHI_N_PER_A / B_N_S_PER_M)).sqrt()
 }
 
+/// The load of the generator over a decade either side of `R*` under the white noise of this
+/// file (seed 11) with `records` records of `duration_s`, and the noise objective as the
+/// problem set it (its pre-roll).
+fn load_problem(records: u64, duration_s: f64) -> (Problem, NoiseObjective) {
+    let r_star = r_opt_ohm();
+    let range = ParamRange::new(
+        LOAD_PATH,
+        r_star / 10.0,
+        r_star * 10.0,
+        Spacing::auto(r_star / 10.0, r_star * 10.0),
+    )
+    .unwrap();
+    let noise = NoiseObjective {
+        psd_g2_per_hz: PSD_G2_PER_HZ,
+        bandwidth_hz: BAND_HZ,
+        records,
+        duration_s,
+        seed: 11,
+        transient_s: 0.0,
+    };
+    let p = Problem::under_noise(
+        generator(),
+        vec![Interface::Resistive],
+        vec![range],
+        noise,
+        Limits::default(),
+    )
+    .unwrap();
+    let noise = p.noise.unwrap();
+    (p, noise)
+}
+
 /// The search finds the optimum load under white noise within the resolution its ensemble
 /// allows, and the answer's power confirmed on a fresh seed agrees with the closed form.
 ///
@@ -73,30 +105,7 @@ fn r_opt_ohm() -> f64 {
 fn the_noise_optimum_load_is_the_closed_form() {
     let device = generator();
     let r_star = r_opt_ohm();
-    let range = ParamRange::new(
-        LOAD_PATH,
-        r_star / 10.0,
-        r_star * 10.0,
-        Spacing::auto(r_star / 10.0, r_star * 10.0),
-    )
-    .unwrap();
-    let noise = NoiseObjective {
-        psd_g2_per_hz: PSD_G2_PER_HZ,
-        bandwidth_hz: BAND_HZ,
-        records: 8,
-        duration_s: 2.0,
-        seed: 11,
-        transient_s: 0.0,
-    };
-    let p = Problem::under_noise(
-        device.clone(),
-        vec![Interface::Resistive],
-        vec![range],
-        noise,
-        Limits::default(),
-    )
-    .unwrap();
-    let noise = p.noise.unwrap();
+    let (p, noise) = load_problem(8, 2.0);
     // The pre-roll: the device's own, the same at both ends of the load's range.
     assert_eq!(noise.transient_s, transient_s(&device));
     let settings = SearchSettings {
@@ -152,31 +161,7 @@ fn the_noise_optimum_load_is_the_closed_form() {
 #[test]
 fn every_design_is_judged_on_the_searchs_records() {
     let device = generator();
-    let r_star = r_opt_ohm();
-    let range = ParamRange::new(
-        LOAD_PATH,
-        r_star / 10.0,
-        r_star * 10.0,
-        Spacing::auto(r_star / 10.0, r_star * 10.0),
-    )
-    .unwrap();
-    let noise = NoiseObjective {
-        psd_g2_per_hz: PSD_G2_PER_HZ,
-        bandwidth_hz: BAND_HZ,
-        records: 2,
-        duration_s: 0.5,
-        seed: 11,
-        transient_s: 0.0,
-    };
-    let p = Problem::under_noise(
-        device.clone(),
-        vec![Interface::Resistive],
-        vec![range],
-        noise,
-        Limits::default(),
-    )
-    .unwrap();
-    let noise = p.noise.unwrap();
+    let (p, noise) = load_problem(2, 0.5);
     for u in [0.1, 0.5, 0.9] {
         let e = p.evaluate(0, &[u]);
         let d = device.with_param(LOAD_PATH_OWN, e.values[0]).unwrap();
