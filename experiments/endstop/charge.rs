@@ -117,6 +117,14 @@ pub fn charge(a: ChargeArgs) -> Result<()> {
     exp.write_parquet("charge", &mut frame(rows)?, &device.params)?;
     exp.number("time_to_target_s", run.time_to_target_s);
     exp.number("stored_j", run.stored_j);
+    // The run's conditions, so that a publisher states them from the run, not from its job.
+    exp.number("freq_hz", a.freq_hz);
+    exp.number("accel_rms_g", a.accel_rms_g);
+    exp.number("start_v", a.start_v);
+    exp.number("target_v", a.target_v);
+    if let Some(c) = device.interface.storage_capacitance_f() {
+        exp.number("storage_capacitance_f", c);
+    }
     let md = format!(
         "Charging of `{}` ({} interface) at {} Hz, {} g rms, from {} V to {} V; the drive \
          starts at t = 0 from rest at phase zero{}.\n\n- time to the target: {} s\n- energy \

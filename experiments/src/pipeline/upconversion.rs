@@ -115,17 +115,43 @@ pub fn sweeps(results: &Path) -> Result<Vec<Swept>> {
     Ok(out)
 }
 
-/// The charging times `(label, seconds)`; an error names the job that has not run.
-pub fn charges(results: &Path) -> Result<Vec<(&'static str, f64)>> {
+/// One device's charging run, with the conditions the run states in its summary.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Charged {
+    /// The device's label.
+    pub label: &'static str,
+    /// The time to the target (s).
+    pub time_s: f64,
+    /// The storage capacitance (F).
+    pub storage_capacitance_f: f64,
+    /// The start and target voltages (V).
+    pub volts: (f64, f64),
+    /// The drive's frequency (Hz) and RMS acceleration (g).
+    pub drive: (f64, f64),
+}
+
+/// The charging runs; an error names the job that has not run or a number it lacks.
+pub fn charges(results: &Path) -> Result<Vec<Charged>> {
     CHARGES
         .iter()
         .map(|&(job, label)| {
             let n = numbers(results, job)?;
-            let t = n
+            let get = |key: &str| {
+                n.get(key)
+                    .copied()
+                    .with_context(|| format!("{job}'s summary has no `{key}`"))
+            };
+            let time_s = n
                 .get("time_to_target_s")
                 .copied()
                 .with_context(|| format!("{job} did not reach its target"))?;
-            Ok((label, t))
+            Ok(Charged {
+                label,
+                time_s,
+                storage_capacitance_f: get("storage_capacitance_f")?,
+                volts: (get("start_v")?, get("target_v")?),
+                drive: (get("freq_hz")?, get("accel_rms_g")?),
+            })
         })
         .collect()
 }
@@ -136,6 +162,17 @@ fn ratio_words(r: f64) -> String {
         format!("{r:.2e}")
     } else {
         fmt_sig(r, 3)
+    }
+}
+
+/// A run's condition in words: four significant digits without trailing zeros (4e-6 F in
+/// microfarads reads "4", not "4.000").
+fn plain(x: f64) -> String {
+    let s = fmt_sig(x, 4);
+    if s.contains('.') {
+        s.trim_end_matches('0').trim_end_matches('.').to_string()
+    } else {
+        s
     }
 }
 
@@ -154,7 +191,7 @@ fn band_words(band: (Option<f64>, Option<f64>)) -> String {
 }
 
 /// The table and the sentences that compare the devices (Markdown).
-pub fn comparison(sweeps: &[Swept], charges: &[(&str, f64)]) -> String {
+pub fn comparison(sweeps: &[Swept], charges: &[Charged]) -> String {
     let mut t = Table::new([
         "device",
         "level (g rms)",
@@ -197,11 +234,17 @@ pub fn comparison(sweeps: &[Swept], charges: &[(&str, f64)]) -> String {
             ));
         }
     }
-    for (label, t) in charges {
+    for c in charges {
         md.push_str(&format!(
-            "- Behind the full bridge, the {label} charges 4 uF from 0 to 0.5 V in {} s at \
-             20 Hz and 0.2 g.\n",
-            fmt_sig(*t, 3)
+            "- Behind the full bridge, the {} charges {} uF from {} to {} V in {} s at {} Hz \
+             and {} g.\n",
+            c.label,
+            plain(c.storage_capacitance_f * 1e6),
+            plain(c.volts.0),
+            plain(c.volts.1),
+            fmt_sig(c.time_s, 3),
+            plain(c.drive.0),
+            plain(c.drive.1),
         ));
     }
     md
@@ -317,7 +360,14 @@ mod tests {
             swept(direct, hi, 3e-6),
             swept(alone, hi, 1e-9),
         ];
-        let md = comparison(&s, &[(up, 1.5)]);
+        let charged = Charged {
+            label: up,
+            time_s: 1.5,
+            storage_capacitance_f: 4e-6,
+            volts: (0.0, 0.5),
+            drive: (20.0, 0.2),
+        };
+        let md = comparison(&s, &[charged]);
         assert!(md.contains("2.00e6 times its generator's alone and 0.250 times the single mass's: the single mass delivers more"), "{md}");
         assert!(
             md.contains("3.00 times the single mass's: the up-converter delivers more"),
@@ -327,7 +377,10 @@ mod tests {
             md.contains("beyond the sweep (19.00 to above 40 Hz)"),
             "{md}"
         );
-        assert!(md.contains("in 1.50 s"), "{md}");
+        assert!(
+            md.contains("charges 4 uF from 0 to 0.5 V in 1.50 s at 20 Hz and 0.2 g"),
+            "{md}"
+        );
     }
 
     /// Without the jobs' outputs the chapter's includes hold a note naming the missing job.
