@@ -82,9 +82,10 @@ pub fn write(mut exp: Experiment, run: &fig05::Run, claims: &Claims) -> Result<(
         .map_or(f64::NAN, |c| c.paper.to_f64());
     let mut text = md.render();
     text.push_str(&format!(
-        "\n**Eq 19 coefficient c** in k_im = c pi E t/(1 - nu^2), from four readings of \
+        "\n**Eq 19 coefficient c** in k_im = c pi E t/(1 - nu^2), from {} readings of \
          \"least-squares fit over 0-0.5 um\" (the paper prints {printed}). The coefficient does \
-         not depend on E or nu, only on the fit range in units of delta0.\n\n"
+         not depend on E or nu, only on the fit range in units of delta0.\n\n",
+        FIT_READINGS.len()
     ));
     text.push_str(&fits.render());
     text.push_str(&format!(
