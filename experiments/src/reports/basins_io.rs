@@ -38,5 +38,12 @@ pub fn basin_map(title: &str, b: &Basins, marks: &[(String, f64, f64)]) -> LineP
             Style::Circles,
         ));
     }
-    LinePlot::new(title, "Initial x [um]", "Initial v [mm/s]", series).legend(LegendPos::UpperRight)
+    // The grid fills the plot, so the range above it is widened by a band that holds the
+    // legend (about one legend row per 7 % of the grid's height), which then hides no cell.
+    let rows = series.len() as f64;
+    let plot = LinePlot::new(title, "Initial x [um]", "Initial v [mm/s]", series);
+    let (lo, hi) = plot.y_range;
+    let span = hi - lo;
+    plot.y(lo, hi + (0.07 * rows + 0.05) * span)
+        .legend(LegendPos::UpperRight)
 }

@@ -262,6 +262,8 @@ fn write_efficiency_plot(
     .x(lo, hi)
     .y(0.0, 100.0)
     .log(true, false)
-    .legend(LegendPos::LowerLeft);
+    // Upper right: above the efficiency, which falls where the level is high, and clear of
+    // the contact time, which lies along the lower axis at the low levels.
+    .legend(LegendPos::UpperRight);
     exp.write_extra_plot("fig14_efficiency", &plot)
 }

@@ -211,13 +211,21 @@ fn numbers_md(run: &fig15::Run, f: &Findings, paper_ratio: f64) -> String {
         None,
     ));
     md.push_str(&t.render());
+    // A share of the pairs in words: "none" rather than "a fraction 0".
+    let share = |x: f64| {
+        if x == 0.0 {
+            "none".to_string()
+        } else {
+            format!("a fraction {}", fmt_sig(x, 2))
+        }
+    };
     md.push_str(&format!(
-        "\nOf the single-record pairs, a fraction {} gives a 3 dB ratio of at least the paper's \
+        "\nOf the single-record pairs, {} gives a 3 dB ratio of at least the paper's \
          {paper_ratio}, and {} falls within the claims file's tolerance of it; with MATLAB's \
-         default segmenting a fraction {} reaches {paper_ratio}.\n",
-        fmt_sig(f.pairs_at_least_paper, 2),
-        fmt_sig(f.pairs_within_tolerance, 2),
-        fmt_sig(f.pairs_at_least_paper_matlab, 2),
+         default segmenting {} reaches {paper_ratio}.\n",
+        share(f.pairs_at_least_paper),
+        share(f.pairs_within_tolerance),
+        share(f.pairs_at_least_paper_matlab),
     ));
     md
 }
