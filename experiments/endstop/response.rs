@@ -235,7 +235,7 @@ fn summary_md(
         .fold(0.0, f64::max);
     let mut md = format!(
         "Whole response of `{}` ({} set; {}) from {} to {} Hz at {} g rms: sweeps in {} \
-         (transitions refined to 0.1 Hz); periodic orbits continued in frequency ({} branches, \
+         (transitions refined to 0.1 Hz); periodic orbits continued in frequency ({} {}, \
          {} points, largest residual {:.1e}).\n\n",
         file,
         device.params,
@@ -245,6 +245,11 @@ fn summary_md(
         a.accel_rms_g,
         protocol.words(),
         diagram.branches.len(),
+        if diagram.branches.len() == 1 {
+            "branch"
+        } else {
+            "branches"
+        },
         points,
         residual
     );
@@ -281,7 +286,11 @@ fn summary_md(
         if let Some(q) = q {
             exp.number("up_branch_end_quarter_step_hz", q);
         }
-        md.push_str(&step_effect("where the up-sweep leaves the branch", v, q));
+        md.push_str(&step_effect(
+            "the point where the up-sweep leaves the branch",
+            v,
+            q,
+        ));
     }
     if let Some((kind, t)) = down.branch_end() {
         exp.number("down_branch_end_hz", t.value());
@@ -297,7 +306,7 @@ fn summary_md(
             exp.number("down_branch_end_quarter_step_hz", q);
         }
         md.push_str(&step_effect(
-            "where the down-sweep leaves the branch",
+            "the point where the down-sweep leaves the branch",
             t.value(),
             q,
         ));

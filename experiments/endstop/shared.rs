@@ -180,12 +180,12 @@ pub(crate) fn step_effect(what: &str, at_step: f64, at_quarter: Option<f64>) -> 
             fmt_sig(q, 6)
         ),
         Some(q) => format!(
-            "- with a quarter of the step {what} is at {} Hz ({:.3} Hz from the step's, within \
+            "- with a quarter of the step, {what} is at {} Hz ({:.3} Hz from the step's, within \
              the refinement tolerance of {REFINE_TOL_HZ} Hz)\n",
             fmt_sig(q, 6),
             (q - at_step).abs()
         ),
-        None => format!("- with a quarter of the step {what} is not found\n"),
+        None => format!("- with a quarter of the step, {what} is not found\n"),
     }
 }
 

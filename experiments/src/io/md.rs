@@ -33,10 +33,11 @@ impl<const N: usize> Table<N> {
         self.rows.is_empty()
     }
 
-    /// The table as Markdown (a `|` inside a cell is escaped).
+    /// The table as Markdown (a `|` inside a cell is escaped, and `<` and `>` are written
+    /// as [`plain`] writes them).
     pub fn render(&self) -> String {
         let line = |cells: &[String; N]| {
-            let esc: Vec<String> = cells.iter().map(|c| c.replace('|', "\\|")).collect();
+            let esc: Vec<String> = cells.iter().map(|c| plain(c).replace('|', "\\|")).collect();
             format!("| {} |\n", esc.join(" | "))
         };
         let mut s = line(&self.header);
@@ -46,6 +47,13 @@ impl<const N: usize> Table<N> {
         }
         s
     }
+}
+
+/// Text for Markdown prose or a table cell with `<` and `>` as character references, so that
+/// a quantity such as `m<a v>` (a mean of a product) reads as written rather than as an HTML
+/// tag that swallows the text after it.
+pub fn plain(text: &str) -> String {
+    text.replace('<', "&lt;").replace('>', "&gt;")
 }
 
 /// The cells `lead` followed by the cells `rest`, as one header or row of `N = A + B` cells
@@ -76,6 +84,13 @@ mod tests {
             t.render(),
             "| claim | ours |\n|---|---|\n| F8-c | 1 \\| 2 |\n"
         );
+    }
+
+    #[test]
+    fn angle_brackets_in_a_cell_are_not_a_tag() {
+        let mut t = Table::new(["quantity"]);
+        t.row(["mean drive power m<a v> (W)".into()]);
+        assert!(t.render().contains("m&lt;a v&gt; (W)"), "{}", t.render());
     }
 
     #[test]

@@ -4,6 +4,7 @@
 
 use endstop::study::basins::Basins;
 
+use crate::io::legend::placed_clear;
 use crate::io::plot::{LegendPos, LinePlot, Series, Style, PALETTE};
 
 /// The basin map of `b` titled `title` (x in um, v in mm/s); `marks` are (label, x, v) of the
@@ -38,12 +39,9 @@ pub fn basin_map(title: &str, b: &Basins, marks: &[(String, f64, f64)]) -> LineP
             Style::Circles,
         ));
     }
-    // The grid fills the plot, so the range above it is widened by a band that holds the
-    // legend (about one legend row per 7 % of the grid's height), which then hides no cell.
-    let rows = series.len() as f64;
-    let plot = LinePlot::new(title, "Initial x [um]", "Initial v [mm/s]", series);
-    let (lo, hi) = plot.y_range;
-    let span = hi - lo;
-    plot.y(lo, hi + (0.07 * rows + 0.05) * span)
-        .legend(LegendPos::UpperRight)
+    // The grid fills the plot: the legend goes into room made above it.
+    placed_clear(
+        LinePlot::new(title, "Initial x [um]", "Initial v [mm/s]", series)
+            .legend(LegendPos::UpperRight),
+    )
 }

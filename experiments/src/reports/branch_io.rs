@@ -10,6 +10,7 @@ use endstop::study::continuation::{
 use endstop::study::orbit::Orbit;
 
 use crate::io::frame::Row;
+use crate::io::legend::placed_clear;
 use crate::io::md::Table;
 use crate::io::plot::{LegendPos, LinePlot, Panels, Series, Style, PALETTE};
 use crate::row;
@@ -161,20 +162,37 @@ pub fn response_figure(
     rms.extend(event_series(branch, v1));
     let mut phase = branch_series(branch, phase_lag_deg);
     phase.extend(event_series(branch, phase_lag_deg));
+    Panels::new(voltage_and_phase(title, rms, phase, x_hz, LegendPos::UpperLeft).into())
+}
+
+/// The two panels of a response over the frequencies `x_hz`: the RMS voltage of load 1 and
+/// the phase lag, each with its legend in the corner `corner` if that hides no data, else
+/// where [`placed_clear`] puts it.
+fn voltage_and_phase(
+    title: &str,
+    rms: Vec<Series>,
+    phase: Vec<Series>,
+    x_hz: (f64, f64),
+    corner: LegendPos,
+) -> [LinePlot; 2] {
     let (lo, hi) = (x_hz.0.min(x_hz.1), x_hz.0.max(x_hz.1));
-    Panels::new(vec![
-        LinePlot::new(title, "frequency [Hz]", "RMS output voltage V1 [V]", rms)
+    [
+        placed_clear(
+            LinePlot::new(title, "frequency [Hz]", "RMS output voltage V1 [V]", rms)
+                .x(lo, hi)
+                .legend(corner),
+        ),
+        placed_clear(
+            LinePlot::new(
+                "Phase of the displacement behind the drive (periodic orbits)",
+                "frequency [Hz]",
+                "phase lag [deg]",
+                phase,
+            )
             .x(lo, hi)
-            .legend(LegendPos::UpperLeft),
-        LinePlot::new(
-            "Phase of the displacement behind the drive (periodic orbits)",
-            "frequency [Hz]",
-            "phase lag [deg]",
-            phase,
-        )
-        .x(lo, hi)
-        .legend(LegendPos::UpperLeft),
-    ])
+            .legend(corner),
+        ),
+    ]
 }
 
 /// One row per orbit of every branch of a diagram, labelled `case`: the columns of
@@ -339,20 +357,8 @@ pub fn diagram_figure(
     rms.extend(diagram_event_series(d, v1));
     let mut phase = diagram_series(d, lag);
     phase.extend(diagram_event_series(d, lag));
-    let (lo, hi) = (x_hz.0.min(x_hz.1), x_hz.0.max(x_hz.1));
-    let mut panels = vec![
-        LinePlot::new(title, "frequency [Hz]", "RMS output voltage V1 [V]", rms)
-            .x(lo, hi)
-            .legend(LegendPos::LowerRight),
-        LinePlot::new(
-            "Phase of the displacement behind the drive (periodic orbits)",
-            "frequency [Hz]",
-            "phase lag [deg]",
-            phase,
-        )
-        .x(lo, hi)
-        .legend(LegendPos::LowerRight),
-    ];
+    let mut panels: Vec<LinePlot> =
+        voltage_and_phase(title, rms, phase, x_hz, LegendPos::LowerRight).into();
     // Where branches of impacting orbits meet at grazings, they crowd a narrow band: the
     // phase again, zoomed on the grazings.
     let grazings: Vec<f64> = d
@@ -381,7 +387,7 @@ pub fn diagram_figure(
         let mut zoom: Vec<Series> = diagram_series(d, lag).into_iter().map(inside).collect();
         zoom.extend(diagram_event_series(d, lag).into_iter().map(inside));
         zoom.retain(|s| !s.points.is_empty());
-        panels.push(
+        panels.push(placed_clear(
             LinePlot::new(
                 "The same, between the grazings",
                 "frequency [Hz]",
@@ -390,7 +396,7 @@ pub fn diagram_figure(
             )
             .x(za, zb)
             .legend(LegendPos::LowerRight),
-        );
+        ));
     }
     Panels::new(panels)
 }

@@ -48,7 +48,7 @@ pub fn write(mut exp: Experiment, run: &fig14::Run, claims: &Claims) -> Result<(
     md.push_str(&format!(
         "\n**Convergence.** The same records with Dormand-Prince everywhere (no exponential \
          free-flight step) at the relative tolerance {:e} instead of the exponential scheme \
-         with Dormand-Prince at {:e} between contacts:\n\n",
+         with Dormand-Prince at {:e} in and near contacts:\n\n",
         TIGHT_RTOL, run.levels[0].ens.spec.record.rtol
     ));
     let mut t = Table::new([

@@ -17,6 +17,7 @@ use endstop::fit::{
 use polars::prelude::*;
 use sha2::{Digest, Sha256};
 
+use crate::io::legend::placed_clear;
 use crate::io::plot::{LegendPos, LinePlot, Series, Style, PALETTE};
 use crate::reports::fit_csv::{parse_free, parse_sweep, FitInputError};
 use crate::{fmt_sig, git_commit, load_device_file, write_atomic, Experiment};
@@ -418,15 +419,15 @@ fn write_outputs(
         endstop::fit::data::Quantity::V1RmsV => "RMS voltage of load 1 [V] (v1_rms_v)",
         endstop::fit::data::Quantity::PTotalW => "power of the loads [W] (p_total_w)",
     };
-    exp.write_plot(
-        &LinePlot::new(
+    exp.write_plot(&placed_clear(
+        LinePlot::new(
             "Measured data and the fitted model",
             "frequency [Hz]",
             q,
             series,
         )
         .legend(LegendPos::UpperLeft),
-    )?;
+    ))?;
     exp.write_extra_plot(
         "endstop-fit-residuals",
         &LinePlot::new(

@@ -80,12 +80,17 @@ pub(super) fn charging(exp: &mut Experiment, piezo: &LoadedDevice) -> Result<()>
         .iter()
         .flat_map(|s| s.points.last().map(|p| p.0))
         .fold(0.0f64, f64::max);
-    series.push(Series::new(
-        "target",
-        vec![(0.0, cs.target_v), (t_end, cs.target_v)],
-        PALETTE[5],
-        Style::Dashed,
-    ));
+    // Drawn first, under the curves: a curve that approaches the target from below runs
+    // along it, and would be hidden by a line drawn over it.
+    series.insert(
+        0,
+        Series::new(
+            "target",
+            vec![(0.0, cs.target_v), (t_end, cs.target_v)],
+            PALETTE[5],
+            Style::Dashed,
+        ),
+    );
     exp.write_parquet("charging", &mut frame(rows)?, "hypothetical")?;
     exp.write_extra_plot(
         "interfaces_charging",
@@ -121,15 +126,21 @@ pub(super) fn charging(exp: &mut Experiment, piezo: &LoadedDevice) -> Result<()>
 /// Eight 2 s records behind every interface of the cantilever, at 1e-4 g^2/Hz, each after a
 /// pre-roll that lets the storage settle.
 pub(super) fn ensembles(exp: &mut Experiment, piezo: &LoadedDevice) -> Result<()> {
+    // The level (g²/Hz, two-sided), each record's analysed length (s) and the records per
+    // interface.
+    const LEVEL: f64 = 1e-4;
+    const SECS: f64 = 2.0;
+    const RECORDS: u64 = 8;
     // The pre-roll covers the storage's settling (five R_L C_s, `transient_s`) and at least
-    // the 1 s that rings the cantilever up.
+    // the time that rings the cantilever up (s).
+    const MIN_PRE_ROLL_S: f64 = 1.0;
     let spec = |secs: f64, d: &Device| -> Result<RecordSpec> {
         Ok(RecordSpec {
             noise: NoiseSpec {
                 duration_s: secs,
-                ..endstop::paper::setups::paper_noise(1e-4)
+                ..endstop::paper::setups::paper_noise(LEVEL)
             },
-            transient_s: transient_s(d).max(1.0),
+            transient_s: transient_s(d).max(MIN_PRE_ROLL_S),
             rtol: DEFAULT_RTOL,
             scheme: Scheme::Exponential,
         })
@@ -145,8 +156,8 @@ pub(super) fn ensembles(exp: &mut Experiment, piezo: &LoadedDevice) -> Result<()
     let mut rows = Vec::new();
     for (name, d) in variants(&piezo.device) {
         eprintln!("[interfaces] ensemble, {name}");
-        let spec = spec(2.0, &d)?;
-        let ens = storage_ensemble(&d, &spec, SEED, 8)?;
+        let spec = spec(SECS, &d)?;
+        let ens = storage_ensemble(&d, &spec, SEED, RECORDS)?;
         let n = ens.len() as f64;
         for (k, r) in ens.iter().enumerate() {
             rows.push(row!["interface" => name, "stream" => k, "p_dc_w" => r.p_dc_w, "p_drive_w" => r.p_drive_w, "vdc_v" => r.vdc_v]);
@@ -166,6 +177,12 @@ pub(super) fn ensembles(exp: &mut Experiment, piezo: &LoadedDevice) -> Result<()
         ]);
     }
     exp.write_parquet("ensembles", &mut frame(rows)?, "hypothetical")?;
-    write_atomic(&exp.book_dir.join("ensembles.md"), t.render().as_bytes())?;
+    let md = format!(
+        "Per interface: {RECORDS} records of band-limited white noise at {LEVEL:e} g²/Hz \
+         (two-sided), {SECS} s analysed each, seed {SEED}, after a pre-roll of the longer of \
+         five storage time constants and {MIN_PRE_ROLL_S} s (the cantilever's ring-up).\n\n{}",
+        t.render()
+    );
+    write_atomic(&exp.book_dir.join("ensembles.md"), md.as_bytes())?;
     Ok(())
 }

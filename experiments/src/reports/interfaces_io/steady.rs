@@ -152,6 +152,8 @@ pub(super) fn power_vs_frequency(
 ) -> Result<()> {
     let mut missing_f: Vec<String> = Vec::new();
     let mut by_map: Vec<String> = Vec::new();
+    // Steady states found, and how many of them are unstable.
+    let (mut found, mut unstable_n) = (0usize, 0usize);
     let mut rows = Vec::new();
     let mut plots = Vec::new();
     for (dev, from, to) in [(piezo, 110.0, 130.0), (em, 44.0, 56.0)] {
@@ -194,6 +196,8 @@ pub(super) fn power_vs_frequency(
             let c = PALETTE[k % PALETTE.len()];
             series.push(Series::new(name, pts(true), c, Style::LinePoints));
             let unstable = pts(false);
+            found += states.len();
+            unstable_n += unstable.len();
             if !unstable.is_empty() {
                 series.push(Series::new(
                     &format!("{name}, unstable"),
@@ -228,6 +232,19 @@ pub(super) fn power_vs_frequency(
             } else {
                 format!("No period-one steady state at: {}.\n", missing_f.join("; "))
             };
+            // The plots draw an unstable state as a cross of its interface's colour; say
+            // what a reader sees when there is none.
+            md.push_str(&if unstable_n == 0 {
+                format!(
+                    "All {found} steady states are stable (no Floquet multiplier outside the \
+                     unit circle), so no cross for an unstable one appears.\n"
+                )
+            } else {
+                format!(
+                    "{unstable_n} of the {found} steady states are unstable (a Floquet \
+                     multiplier outside the unit circle), drawn as crosses.\n"
+                )
+            });
             if !by_map.is_empty() {
                 md.push_str(&format!(
                     "\nNewton's method did not converge, and the period map iterated from the \

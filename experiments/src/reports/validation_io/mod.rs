@@ -336,7 +336,7 @@ fn write_tables(
     let book = &exp.book_dir;
     let within = checks.iter().filter(|c| c.passes()).count();
     let judged = checks.iter().filter(|c| !c.is_open()).count();
-    let label = |c: &&Check| format!("{}: {}", c.group, c.quantity);
+    let label = |c: &&Check| crate::io::md::plain(&format!("{}: {}", c.group, c.quantity));
     let not_met: Vec<String> = checks
         .iter()
         .filter(|c| !c.passes() && !c.is_open())

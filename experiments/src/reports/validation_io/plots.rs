@@ -52,6 +52,7 @@ pub(super) fn nlvib_plot(samples: &[nlvib::BranchSample], reference: &Reference)
     if let Some(l) = last {
         flush(&mut run, l, &mut labelled, &mut series);
     }
+    let ours = series.len();
     for (k, (h, points)) in reference
         .hb
         .iter()
@@ -69,6 +70,9 @@ pub(super) fn nlvib_plot(samples: &[nlvib::BranchSample], reference: &Reference)
             Style::Points,
         ));
     }
+    // Our branch drawn last, over NLvib-py's crosses: under them its stable and unstable
+    // stretches, which the crosses follow, would not show.
+    series.rotate_left(ours);
     LinePlot::new(
         "One-sided spring oscillator: first-harmonic amplitude (ours and NLvib-py)",
         "Omega [rad/s]",
