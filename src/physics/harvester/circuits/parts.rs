@@ -71,6 +71,8 @@ pub enum Switch {
     Sece(f64),
     /// SECE through its buck-boost inductor ([`super::sece_inductor`]).
     BuckBoost(BuckBoost),
+    /// Parallel SSHI whose inversion rings through its inductor ([`super::sshi_inductor`]).
+    Inverter(super::sshi_inductor::Inverter),
 }
 
 /// The buck-boost inductor of a SECE through its inductor, its resistance and its flyback
