@@ -88,3 +88,14 @@ pub struct BuckBoost {
     /// Index of the inductor current in the state.
     pub i: usize,
 }
+
+/// The shortest time constant (s) of an inductor `l` (H) with its resistance `rl` (ohm) in a
+/// loop with the capacitance `cp` (F): the ring's `sqrt(L Cp)`, or `L / R_L` if shorter.
+pub fn inductor_time_constant_s(l: f64, rl: f64, cp: f64) -> f64 {
+    let ring = (l * cp).sqrt();
+    if rl > 0.0 {
+        ring.min(l / rl)
+    } else {
+        ring
+    }
+}

@@ -245,11 +245,6 @@ impl Inverter {
     /// The shortest time constant of the ring (s): `sqrt(L Cp)`, or `L / R_L` if shorter.
     pub fn time_constant_s(&self, c: &Circuit) -> f64 {
         let (_, cp) = piezo(c);
-        let ring = (self.l * cp).sqrt();
-        if self.rl > 0.0 {
-            ring.min(self.l / self.rl)
-        } else {
-            ring
-        }
+        super::parts::inductor_time_constant_s(self.l, self.rl, cp)
     }
 }
