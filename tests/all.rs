@@ -32,6 +32,7 @@ mod integrator_stepping;
 mod interface_orbits;
 mod interface_records;
 mod interface_sece_inductor;
+mod interface_sshi_inductor;
 mod interfaces;
 mod interfaces_spice;
 mod masses;

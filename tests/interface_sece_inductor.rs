@@ -26,8 +26,7 @@
 use crate::common;
 use endstop::device::{DcLoad, Device, Interface, SeceInductor};
 use endstop::drive::{Excitation, Sine};
-use endstop::model::{Books, Contact, Driven, Ledger, Mode, Model};
-use endstop::ode::Dopri5;
+use endstop::model::{Contact, Ledger, Mode, Model};
 use endstop::physics::contact::Side;
 use endstop::physics::harvester::circuits::{Bridge, CircuitMode, Heading};
 use endstop::physics::harvester::stops::contact_of;
@@ -256,7 +255,7 @@ fn the_energy_ledger_closes() {
     let f = d.suspension_omega_rad_s() / (2.0 * PI);
     let sine = Sine::from_rms_g(1.0, f);
     let l: Result<Ledger, PeriodicError> =
-        endstop::with_harvester!(&d, |h| from_rest_ledger(&h, sine, 20.0 / f));
+        endstop::with_harvester!(&d, |h| common::from_rest_ledger(&h, sine, 20.0 / f));
     let l = l.unwrap();
     eprintln!("{l:?} relative residual {:e}", l.relative_residual());
     assert!(l.stop_absorbed() + l.impact_losses() > 0.0, "no contact");
@@ -264,20 +263,6 @@ fn the_energy_ledger_closes() {
         assert!(l.get(term) > 0.0, "nothing in {term}: {l:?}");
     }
     assert!(l.relative_residual().abs() < 1e-6, "{l:?}");
-}
-
-/// The ledger of `model` driven by `sine` from rest over `t_end_s` (Dormand-Prince at rtol
-/// 1e-9).
-fn from_rest_ledger<M: Model<N>, const N: usize>(
-    model: &M,
-    sine: Sine,
-    t_end_s: f64,
-) -> Result<Ledger, PeriodicError> {
-    let y0 = model.rest_state();
-    let mut books = Books::new(model, sine);
-    let mut ode = Dopri5::new(0.0, y0, model.mode_of(&y0), model.solver_options(1e-9));
-    ode.integrate_observed(&Driven::new(model, sine), t_end_s, &mut books)?;
-    Ok(books.ledger())
 }
 
 /// The description: the example round-trips through TOML and needs five components; bad

@@ -1,9 +1,10 @@
 //! `endstop random`: random vibration of any device, driven by band-limited white noise (an
 //! ensemble of records) or by one measured acceleration record read from a file. Every record
 //! is the one record engine's over the device's model (`endstop::study::record`); what is
-//! reported follows the model's outputs: a transducer with its own loads gets the loads' power
-//! and its spectrum (below), a model with a storage (behind an interface circuit) its DC
-//! power, efficiency, storage voltage and energy ledger (`random_storage.rs`). A sine drive
+//! reported follows the model's outputs (`endstop::study::random`, the one entry the Python
+//! `ensemble` calls too): a transducer with its own loads gets the loads' power and its
+//! spectrum (below), a model with a storage (behind an interface circuit) its DC power,
+//! efficiency, storage voltage and energy ledger (written by `random_storage.rs`). A sine drive
 //! adds the harvester effectiveness of its power, every drive its normalised power density
 //! where the device gives its volume, and noise its power per unit density
 //! ([`crate::merit`]).
@@ -18,9 +19,8 @@ use endstop::physics::two_port::TwoPort;
 use endstop::signal::bandwidth::{restrict, Widths};
 use endstop::signal::{welch, Psd};
 use endstop::study::ensemble::EnsembleSpec;
-use endstop::study::record::{
-    output_psd, simulate_drive, FreeFlightPath, RecordSpec, SampledDrive, Scheme, DEFAULT_RTOL,
-};
+use endstop::study::random::{random_ensemble, random_record, RandomEnsemble, RandomRecord};
+use endstop::study::record::{output_psd, FreeFlightPath, RecordSpec, SampledDrive};
 use endstop::G;
 use endstop_experiments as common;
 use polars::prelude::*;
@@ -37,9 +37,6 @@ use endstop::study::mass_peaks::MassPeaks;
 /// Runs `endstop random`.
 pub fn random(a: RandomArgs) -> Result<()> {
     let loaded = common::load_device_file(&a.device)?;
-    if endstop::study::record::has_storage(&loaded.device) {
-        return crate::random_storage::random(&a, &loaded.device);
-    }
     match (&a.accel_file, a.sine_g, a.psd) {
         (Some(path), _, _) => measured(&a, &loaded.device, Some(path.clone())),
         (None, Some(_), _) => measured(&a, &loaded.device, None),
@@ -123,11 +120,15 @@ fn noise(a: &RandomArgs, psd: f64) -> Result<()> {
     exp.seed = Some(a.seed);
     let mut record = paper_record(&device, psd);
     record.noise.duration_s = a.duration_s;
-    let spec = EnsembleSpec::for_device(&device, record, a.seed, a.records);
-    let nperseg = spec.welch.nperseg;
-    let ens = common::with_progress(a.records, "records", |tick| {
-        endstop::study::ensemble::run_ensemble(&device, &spec, tick)
-    })?;
+    let ens = match common::with_progress(a.records, "records", |tick| {
+        random_ensemble(&device, &record, a.seed, a.records, tick)
+    })? {
+        RandomEnsemble::Output(ens) => ens,
+        RandomEnsemble::Storage(records) => {
+            return crate::random_storage::noise(a, exp, &loaded, &device, psd, &record, &records)
+        }
+    };
+    let nperseg = ens.spec.welch.nperseg;
 
     let out = &ens.mean_spectrum.total;
     let m = out.freq_hz.len();
@@ -163,8 +164,8 @@ fn noise(a: &RandomArgs, psd: f64) -> Result<()> {
     with_mass_columns(&mut per, &masses, &peaks)?;
     exp.write_parquet("records", &mut per, &device.params)?;
 
-    let disp = displacement(&mut exp, &device, &spec.record, &ens, a)?;
-    let band_hz = spec.record.noise.bandwidth_hz;
+    let disp = displacement(&mut exp, &device, &ens.spec.record, &ens, a)?;
+    let band_hz = ens.spec.record.noise.bandwidth_hz;
     let linear_w = lin.map(|_| white_noise_power_w(&device, sa_si, 1e-3, band_hz));
     let eq21 =
         TwoPort::try_of(&device).map(|_| endstop::physics::two_port::eq21_power_w(&device, psd));
@@ -229,7 +230,7 @@ fn noise(a: &RandomArgs, psd: f64) -> Result<()> {
         &device,
         ens.power_w.mean,
         psd,
-        spec.record.noise.mean_square_g2(),
+        ens.spec.record.noise.mean_square_g2(),
     ));
     exp.write_numbers_md(&md)?;
     print!("{md}");
@@ -357,6 +358,21 @@ fn displacement(
 
 /// The record of a measured drive (`path`) or of a sine (`--sine-g`, without a path).
 fn measured(a: &RandomArgs, file_device: &Device, path: Option<PathBuf>) -> Result<()> {
+    let mut m = read_measured(a, file_device, path.as_deref())?;
+    let (mut exp, loaded, device) = start("endstop-random", &a.device, a.bias_v, a.out.clone())?;
+    let drive = SampledDrive {
+        accel: m.accel.clone(),
+        sample_rate_hz: m.fs,
+        transient_samples: m.n_tr,
+    };
+    m.times.lap("setup");
+    let out_rec = match random_record(&device, &drive)? {
+        RandomRecord::Output(r) => r,
+        RandomRecord::Storage(r) => {
+            let file = path.map_or(m.rec.source_name.clone(), |p| p.display().to_string());
+            return crate::random_storage::measured(a, exp, &loaded, &device, m, &file, *r);
+        }
+    };
     let MeasuredDrive {
         rec,
         accel,
@@ -365,14 +381,7 @@ fn measured(a: &RandomArgs, file_device: &Device, path: Option<PathBuf>) -> Resu
         preroll_s,
         band_hz: (lo, hi),
         mut times,
-    } = read_measured(a, file_device, path.as_deref())?;
-    let (mut exp, loaded, device) = start("endstop-random", &a.device, a.bias_v, a.out.clone())?;
-    times.lap("setup");
-    let drive = SampledDrive {
-        accel: accel.clone(),
-        sample_rate_hz: fs,
-        transient_samples: n_tr,
-    };
+    } = m;
     eprintln!(
         "[endstop-random] {}: {} samples at {} Hz resampled to {} Hz ({} s, pre-roll {} s)",
         rec.source_name,
@@ -382,7 +391,6 @@ fn measured(a: &RandomArgs, file_device: &Device, path: Option<PathBuf>) -> Resu
         fmt_sig(rec.duration_s(), 4),
         preroll_s
     );
-    let out_rec = simulate_drive(&device, &drive, DEFAULT_RTOL, Scheme::Exponential)?;
     times.lap("integrating");
 
     // The Welch segmenting and analysis band the noise ensembles use, for this length.

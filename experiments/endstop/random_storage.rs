@@ -2,48 +2,23 @@
 //! `[interface]`: a diode bridge, SSHI, SECE into a storage capacitor): for an ensemble of
 //! band-limited white-noise records, or one measured acceleration record, each run from rest
 //! with the pre-roll discarded, the DC power, the drive's power, their ratio (the efficiency),
-//! the mean storage voltage and the energy ledger's closure of each record. The records are the
-//! one record engine's (`endstop::study::record`): the affine modes of the circuit are
-//! propagated exactly between switchings, the rest by Dormand-Prince with its events.
+//! the mean storage voltage and the energy ledger's closure of each record. The records and
+//! the refusal of an open DC load (no steady mean under noise) are the library's one random
+//! path (`endstop::study::random`); this file writes what it returns.
 //!
 //! The pre-roll ([`endstop::study::record::transient_s`]) covers the storage as well as the
 //! mechanics: the storage charges towards its mean with the time constant of its DC load,
-//! `R C_s`, often longer than the mass's ring-up; an open DC load has no steady mean under
-//! noise and is refused before anything is written.
+//! `R C_s`, often longer than the mass's ring-up.
 
-use anyhow::{bail, Result};
+use anyhow::Result;
 use endstop::device::Device;
-use endstop::paper::setups::paper_record;
-use endstop::study::record::{
-    check_steady_mean, simulate_drive, storage_ensemble, SampledDrive, Scheme, StorageRecord,
-    StorageSummary, DEFAULT_RTOL,
-};
-use endstop_experiments::fmt_sig;
+use endstop::study::record::{RecordSpec, StorageRecord, StorageSummary};
 use endstop_experiments::io::frame::frame;
 use endstop_experiments::row;
+use endstop_experiments::{fmt_sig, Experiment, LoadedDevice};
 
-use crate::random_args::{read_measured, MeasuredDrive, RandomArgs};
-use crate::shared::{describe, start};
-
-/// Runs `endstop random` on `device` (as loaded from `a.device`), whose model has a storage.
-pub fn random(a: &RandomArgs, device: &Device) -> Result<()> {
-    check_steady_mean(device)?;
-    match (&a.accel_file, a.sine_g, a.psd) {
-        (Some(path), _, _) => {
-            let m = read_measured(a, device, Some(path))?;
-            measured(a, m, &path.display().to_string())
-        }
-        (None, Some(_), _) => {
-            let m = read_measured(a, device, None)?;
-            let source = m.rec.source_name.clone();
-            measured(a, m, &source)
-        }
-        (None, None, Some(psd)) => noise(a, psd),
-        (None, None, None) => {
-            bail!("give --psd (white noise), --sine-g (a sine) or --accel-file (a measured record)")
-        }
-    }
-}
+use crate::random_args::{MeasuredDrive, RandomArgs};
+use crate::shared::describe;
 
 /// The per-record table's rows.
 fn rows(records: &[StorageRecord], source: &str) -> Vec<endstop_experiments::io::frame::Row> {
@@ -66,23 +41,26 @@ fn rows(records: &[StorageRecord], source: &str) -> Vec<endstop_experiments::io:
         .collect()
 }
 
-fn noise(a: &RandomArgs, psd: f64) -> Result<()> {
-    a.check_noise(psd)?;
-    let (mut exp, loaded, device) = start("endstop-random", &a.device, a.bias_v, a.out.clone())?;
-    exp.seed = Some(a.seed);
-    let mut spec = paper_record(&device, psd);
-    spec.noise.duration_s = a.duration_s;
+/// Writes the report of the noise ensemble `records` (of the record `spec` at `psd` g^2/Hz).
+pub fn noise(
+    a: &RandomArgs,
+    mut exp: Experiment,
+    loaded: &LoadedDevice,
+    device: &Device,
+    psd: f64,
+    spec: &RecordSpec,
+    records: &[StorageRecord],
+) -> Result<()> {
     eprintln!(
         "[endstop-random] {} records of {} s behind the `{}` interface",
-        a.records,
+        records.len(),
         a.duration_s,
         device.interface.key()
     );
-    let records = storage_ensemble(&device, &spec, a.seed, a.records as u64)?;
     let source = format!("noise {psd:e} g^2/Hz, seed {}", a.seed);
     exp.write_parquet(
         "records",
-        &mut frame(rows(&records, &source))?,
+        &mut frame(rows(records, &source))?,
         &device.params,
     )?;
     let StorageSummary {
@@ -90,7 +68,7 @@ fn noise(a: &RandomArgs, psd: f64) -> Result<()> {
         p_drive_w: p_drive,
         efficiency: eff,
         vdc_v: vdc,
-    } = StorageSummary::of(&records);
+    } = StorageSummary::of(records);
     exp.number("p_dc_w", p_dc.mean);
     exp.number("p_dc_ci95_w", p_dc.ci95);
     exp.number("p_drive_w", p_drive.mean);
@@ -112,7 +90,7 @@ fn noise(a: &RandomArgs, psd: f64) -> Result<()> {
          Dormand-Prince with its events located)\n",
         loaded.file,
         device.params,
-        describe(&device),
+        describe(device),
         device.interface.key(),
         records.len(),
         psd,
@@ -129,7 +107,7 @@ fn noise(a: &RandomArgs, psd: f64) -> Result<()> {
         fmt_sig(eff.ci95, 2),
         fmt_sig(vdc.mean, 4),
         fmt_sig(vdc.ci95, 2),
-        largest_residual(&records),
+        largest_residual(records),
         records
             .iter()
             .map(|r| r.summary.exponential_steps)
@@ -137,7 +115,7 @@ fn noise(a: &RandomArgs, psd: f64) -> Result<()> {
         records.iter().map(|r| r.summary.stats.accepted).sum::<u64>(),
     ) + &crate::merit::noise_merits(
             &mut exp,
-            &device,
+            device,
             p_dc.mean,
             psd,
             spec.noise.mean_square_g2(),
@@ -147,18 +125,16 @@ fn noise(a: &RandomArgs, psd: f64) -> Result<()> {
     exp.finish()
 }
 
-fn measured(a: &RandomArgs, mut m: MeasuredDrive, file: &str) -> Result<()> {
-    let (mut exp, loaded, device) = start("endstop-random", &a.device, a.bias_v, a.out.clone())?;
-    m.times.lap("setup");
-    let drive = SampledDrive {
-        accel: m.accel.clone(),
-        sample_rate_hz: m.fs,
-        transient_samples: m.n_tr,
-    };
-    let record = simulate_drive(&device, &drive, DEFAULT_RTOL, Scheme::Exponential)?;
-    let Some(r) = StorageRecord::of(record, 0) else {
-        bail!("device `{}`: the record kept no storage books", device.name);
-    };
+/// Writes the report of the record `r` of the sampled drive `m` (read from `file`).
+pub fn measured(
+    a: &RandomArgs,
+    mut exp: Experiment,
+    loaded: &LoadedDevice,
+    device: &Device,
+    mut m: MeasuredDrive,
+    file: &str,
+    r: StorageRecord,
+) -> Result<()> {
     m.times.lap("integrating");
     exp.write_parquet(
         "records",
@@ -183,7 +159,7 @@ fn measured(a: &RandomArgs, mut m: MeasuredDrive, file: &str) -> Result<()> {
          Dormand-Prince with its events located)\n",
         loaded.file,
         device.params,
-        describe(&device),
+        describe(device),
         device.interface.key(),
         m.rec.accel_si.len(),
         fmt_sig(m.rec.sample_rate_hz, 6),
@@ -202,7 +178,7 @@ fn measured(a: &RandomArgs, mut m: MeasuredDrive, file: &str) -> Result<()> {
         + &crate::merit::drive_merits(
             &mut exp,
             a,
-            &device,
+            device,
             r.p_dc_w,
             r.summary.accel_mean_square_si.sqrt() / endstop::G,
         );

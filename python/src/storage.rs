@@ -4,13 +4,10 @@
 //! which `endstop.study.ensemble` gives for it as the `endstop random` command does. Each runs
 //! with the GIL released.
 
-use endstop::device::Device;
 use endstop::drive::Sine;
 use endstop::progress::Silent;
 use endstop::study::charging::{charge, ChargeSettings};
-use endstop::study::record::{
-    check_steady_mean, storage_ensemble, RecordSpec, StorageRecord, StorageSummary,
-};
+use endstop::study::record::{StorageRecord, StorageSummary};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
@@ -85,26 +82,19 @@ fn charge_storage<'py>(
     Ok(d)
 }
 
-/// The ensemble of the records `spec` of `device`, a model with a storage (record i uses
-/// stream i of `seed`), summarised over the records: the library's `storage_ensemble` and
-/// `StorageSummary`, as the `endstop random` command reports such a model. Keys: `p_dc_w`,
-/// `p_dc_ci95_w`, `p_drive_w`, `efficiency`, `efficiency_ci95`, `vdc_v`, `preroll_s`, and
-/// per-record arrays `p_dc_w_each`, `p_drive_w_each`, `vdc_v_each`,
-/// `ledger_relative_residual_each`. An open DC load (no steady mean) raises `SolverError`.
+/// The report of an ensemble of storage records (pre-roll `preroll_s`), summarised over the
+/// records (the library's `StorageSummary`), as the `endstop random` command reports such a
+/// model. Keys: `p_dc_w`, `p_dc_ci95_w`, `p_drive_w`, `efficiency`, `efficiency_ci95`,
+/// `vdc_v`, `preroll_s`, and per-record arrays `p_dc_w_each`, `p_drive_w_each`, `vdc_v_each`,
+/// `ledger_relative_residual_each`. (An open DC load, with no steady mean, is refused by the
+/// library before the records run, as `SolverError`.)
 pub(crate) fn storage_ensemble_dict<'py>(
     py: Python<'py>,
-    device: Device,
-    spec: RecordSpec,
-    seed: u64,
-    records: u64,
+    ens: &[StorageRecord],
+    preroll_s: f64,
 ) -> PyResult<Bound<'py, PyDict>> {
-    check_steady_mean(&device).map_err(solver_err)?;
-    let preroll_s = spec.transient_s;
-    let ens = py
-        .detach(move || storage_ensemble(&device, &spec, seed, records))
-        .map_err(solver_err)?;
     let each = |f: fn(&StorageRecord) -> f64| ens.iter().map(f).collect::<Vec<f64>>();
-    let sum = StorageSummary::of(&ens);
+    let sum = StorageSummary::of(ens);
     let d = PyDict::new(py);
     d.set_item("p_dc_w", sum.p_dc_w.mean)?;
     d.set_item("p_dc_ci95_w", sum.p_dc_w.ci95)?;

@@ -10,10 +10,10 @@ use endstop::physics::linear::white_noise_power_w;
 use endstop::physics::two_port::{self, TwoPort};
 use endstop::progress::Silent;
 use endstop::study::amplitude::{amplitude_sweep_report, AmplitudeReport};
-use endstop::study::ensemble::{run_ensemble, EnsembleSpec};
+use endstop::study::random::{random_ensemble, RandomEnsemble};
 use endstop::study::record::{
-    has_storage, simulate_drive, simulate_record, transient_s, RecordSpec, RecordSummary,
-    SampledDrive, Scheme, DEFAULT_RTOL,
+    simulate_drive, simulate_record, transient_s, RecordSpec, RecordSummary, SampledDrive, Scheme,
+    DEFAULT_RTOL,
 };
 use endstop::study::steady::{settle_settings, Measurement};
 use endstop::study::stepped::{linspace_step, Approach, Transition};
@@ -447,8 +447,8 @@ fn sine_record<'py>(
 /// own loads, the ensemble-mean output PSD, power, efficiency and bandwidth (same segmenting
 /// and analysis band); for a model with a storage (behind an interface circuit), its DC power,
 /// the drive's power, their ratio, the storage voltage and the energy ledger of each record
-/// ([`crate::storage::storage_ensemble_dict`]). The records are the one record engine's either
-/// way.
+/// ([`crate::storage::storage_ensemble_dict`]). The records and what they report are the
+/// library's one random path (`endstop::study::random`), the command's too.
 #[pyfunction]
 #[pyo3(signature = (device, psd_g2_per_hz, records = 4, duration_s = 10.0, seed = 2012))]
 fn ensemble<'py>(
@@ -464,15 +464,16 @@ fn ensemble<'py>(
     }
     let record = record_spec(&device.inner, psd_g2_per_hz, duration_s)?;
     let dev = device.inner.clone();
-    if has_storage(&dev) {
-        return storage_ensemble_dict(py, dev, record, seed, records as u64);
-    }
     let band_hz = record.noise.bandwidth_hz;
-    let spec = EnsembleSpec::for_device(&dev, record, seed, records);
-    let nperseg = spec.welch.nperseg;
-    let ens = py
-        .detach(move || run_ensemble(&dev, &spec, &Silent))
-        .map_err(solver_err)?;
+    let preroll_s = record.transient_s;
+    let ens = match py
+        .detach(move || random_ensemble(&dev, &record, seed, records, &Silent))
+        .map_err(solver_err)?
+    {
+        RandomEnsemble::Output(ens) => ens,
+        RandomEnsemble::Storage(ens) => return storage_ensemble_dict(py, &ens, preroll_s),
+    };
+    let nperseg = ens.spec.welch.nperseg;
     let d = PyDict::new(py);
     d.set_item("nperseg", nperseg)?;
     d.set_item("power_w", ens.power_w.mean)?;

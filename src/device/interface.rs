@@ -49,7 +49,9 @@
 //!
 //! A `sece` with `inductance_h` resolves its transfer through the inductor (optional
 //! `inductor_resistance_ohm` and the flyback diode's `flyback_drop_v`, both 0 by default) and
-//! takes no `efficiency`: what the transfer loses follows from them.
+//! takes no `efficiency`: what the transfer loses follows from them. A `parallel_sshi` with
+//! `inductance_h` (and optional `inductor_resistance_ohm`, 0 by default) rings its inversion
+//! through the inductor in time and takes no `inversion_factor` or `quality_factor`.
 
 use serde::{Deserialize, Serialize};
 
@@ -118,21 +120,32 @@ pub enum DcLoad {
     Open,
 }
 
-/// The switch's inversion: a factor, or the quality factor of the inductor branch.
+/// The switch's inversion: a factor, the quality factor of the inductor branch, or the
+/// inductor itself, through which the inversion rings in time (`parallel_sshi` only).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Inversion {
     /// gamma, in [0, 1).
     Factor(f64),
     /// Q > 0: gamma = exp(-pi / (2 Q)).
     QualityFactor(f64),
+    /// The inductor L (H) and its series resistance R_L (ohm): the element rings through
+    /// it at each extremum (see `physics::harvester::circuits::sshi_inductor`).
+    Inductor {
+        /// L (H).
+        inductance_h: f64,
+        /// R_L (ohm).
+        resistance_ohm: f64,
+    },
 }
 
 impl Inversion {
-    /// The inversion factor gamma.
-    pub fn gamma(self) -> f64 {
+    /// The inversion factor gamma of an instantaneous inversion; `None` for one through the
+    /// inductor, whose factor follows from the element's capacitance as well.
+    pub fn gamma(self) -> Option<f64> {
         match self {
-            Inversion::Factor(g) => g,
-            Inversion::QualityFactor(q) => (-std::f64::consts::PI / (2.0 * q)).exp(),
+            Inversion::Factor(g) => Some(g),
+            Inversion::QualityFactor(q) => Some((-std::f64::consts::PI / (2.0 * q)).exp()),
+            Inversion::Inductor { .. } => None,
         }
     }
 }
@@ -224,6 +237,13 @@ impl RawInterface {
         let inv = |raw: &mut RawInterface, v: &Inversion| match *v {
             Inversion::Factor(g) => raw.inversion_factor = Some(g),
             Inversion::QualityFactor(q) => raw.quality_factor = Some(q),
+            Inversion::Inductor {
+                inductance_h,
+                resistance_ohm,
+            } => {
+                raw.inductance_h = Some(inductance_h);
+                raw.inductor_resistance_ohm = Some(resistance_ohm);
+            }
         };
         match i {
             Interface::Resistive => return None,
@@ -296,16 +316,35 @@ impl RawInterface {
         if kind != "sece" && self.efficiency.is_some() {
             return Err(not_taken("efficiency"));
         }
-        SeceInductor::check_keys(
-            kind,
-            [
-                self.inductance_h,
-                self.inductor_resistance_ohm,
-                self.flyback_drop_v,
-            ],
-            self.efficiency.is_some(),
-            c,
-        )?;
+        let ring = kind == "parallel_sshi" && self.inductance_h.is_some();
+        if ring {
+            for (present, f) in [
+                (self.inversion_factor.is_some(), "inversion_factor"),
+                (self.quality_factor.is_some(), "quality_factor"),
+                (self.flyback_drop_v.is_some(), "flyback_drop_v"),
+            ] {
+                if present {
+                    return Err(c.message(
+                        &format!("interface.{f}"),
+                        &format!(
+                            "interface kind `parallel_sshi` with `inductance_h` takes no `{f}`: \
+                             the inversion rings through the inductor"
+                        ),
+                    ));
+                }
+            }
+        } else {
+            SeceInductor::check_keys(
+                kind,
+                [
+                    self.inductance_h,
+                    self.inductor_resistance_ohm,
+                    self.flyback_drop_v,
+                ],
+                self.efficiency.is_some(),
+                c,
+            )?;
+        }
         if kind == "sece" && self.diode.is_some() {
             return Err(c.message(
                 "interface.diode",
@@ -352,16 +391,24 @@ impl RawInterface {
         if kind == "full_bridge" {
             return Ok(Interface::FullBridge(rect));
         }
-        let inversion = match (self.inversion_factor, self.quality_factor) {
-            (Some(g), None) => Inversion::Factor(g),
-            (None, Some(q)) => Inversion::QualityFactor(q),
-            (Some(_), Some(_)) => {
+        let inversion = match (
+            self.inversion_factor,
+            self.quality_factor,
+            self.inductance_h,
+        ) {
+            (_, _, Some(inductance_h)) if ring => Inversion::Inductor {
+                inductance_h,
+                resistance_ohm: self.inductor_resistance_ohm.unwrap_or(0.0),
+            },
+            (Some(g), None, _) => Inversion::Factor(g),
+            (None, Some(q), _) => Inversion::QualityFactor(q),
+            (Some(_), Some(_), _) => {
                 return Err(c.message(
                     "interface.quality_factor",
                     "give `inversion_factor` or `quality_factor`, not both",
                 ))
             }
-            (None, None) => {
+            (None, None, _) => {
                 return Err(c.missing(
                     "interface.inversion_factor",
                     "the switch's inversion factor gamma (or `quality_factor`)",
@@ -573,6 +620,10 @@ impl Interface {
                     "in [0, 1)",
                 )?,
                 Inversion::QualityFactor(q) => c.positive("interface.quality_factor", q)?,
+                Inversion::Inductor {
+                    inductance_h,
+                    resistance_ohm,
+                } => ringing_inductor(self, inductance_h, resistance_ohm, transducer, c)?,
             },
             Interface::Sece { efficiency, .. } => {
                 c.within_closed("interface.efficiency", *efficiency, 0.0, 1.0, "in [0, 1]")?
@@ -638,6 +689,40 @@ impl Interface {
         }
         Ok(())
     }
+}
+
+/// Checks an SSHI's inverting inductor: a parallel SSHI's, positive, with a resistance that
+/// leaves the ring with the element's clamped capacitance underdamped, `R_L < 2 sqrt(L / Cp)`
+/// (with more, the element's voltage never swings through zero and nothing is inverted).
+fn ringing_inductor(
+    interface: &Interface,
+    inductance_h: f64,
+    resistance_ohm: f64,
+    transducer: &Transducer,
+    c: &Checker,
+) -> Result<(), ParamError> {
+    if !matches!(interface, Interface::ParallelSshi(..)) {
+        return Err(c.message(
+            "interface.inductance_h",
+            "only `parallel_sshi` rings its inversion through `inductance_h`",
+        ));
+    }
+    c.positive("interface.inductance_h", inductance_h)?;
+    c.non_negative("interface.inductor_resistance_ohm", resistance_ohm)?;
+    if let Transducer::Piezoelectric(p) = transducer {
+        let critical = 2.0 * (inductance_h / p.capacitance_f).sqrt();
+        if resistance_ohm >= critical {
+            return Err(c.err(
+                "interface.inductor_resistance_ohm",
+                resistance_ohm,
+                &format!(
+                    "below 2 sqrt(L / Cp) = {critical:e} ohm (an overdamped ring inverts \
+                     nothing)"
+                ),
+            ));
+        }
+    }
+    Ok(())
 }
 
 impl super::Device {

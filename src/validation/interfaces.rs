@@ -129,7 +129,8 @@ pub fn weak_coupling_checks(device: &Device) -> Result<Vec<Check>, ValidationErr
         WEAK_REASON,
     );
     let inv = Inversion::QualityFactor(QUALITY_FACTOR);
-    let gamma = inv.gamma();
+    // A quality factor always gives a factor; a NaN would fail every row that uses it.
+    let gamma = inv.gamma().unwrap_or(f64::NAN);
     let r_par = e.parallel_sshi_optimal_load(gamma);
     let s = c.run(Interface::ParallelSshi(c.rect.clone(), inv).with_load_resistance(r_par))?;
     let par_ref =

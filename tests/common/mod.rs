@@ -65,3 +65,19 @@ pub fn prototype1_sets() -> Prototype1Sets {
         calibrated: calibration().device.clone(),
     }
 }
+
+/// The energy ledger of `model` driven by `sine` from rest over `t_end_s` (Dormand-Prince at
+/// rtol 1e-9), as the interface tests close it.
+pub fn from_rest_ledger<M: endstop::model::Model<N>, const N: usize>(
+    model: &M,
+    sine: endstop::drive::Sine,
+    t_end_s: f64,
+) -> Result<endstop::model::Ledger, endstop::study::periodic::PeriodicError> {
+    use endstop::model::{Books, Driven};
+    let y0 = model.rest_state();
+    let mut books = Books::new(model, sine);
+    let mut ode =
+        endstop::ode::Dopri5::new(0.0, y0, model.mode_of(&y0), model.solver_options(1e-9));
+    ode.integrate_observed(&Driven::new(model, sine), t_end_s, &mut books)?;
+    Ok(books.ledger())
+}

@@ -232,7 +232,15 @@ impl<const N: usize> Harvester<N> {
         if let super::circuits::Switch::BuckBoost(b) = circuit.switch {
             out.extend(b.phase_guard_piece(circuit, cm.bridge, index));
         }
-        if circuit.has_conduction_events() {
+        let ring = match circuit.switch {
+            super::circuits::Switch::Inverter(v) => super::circuits::Inverter::stage(cm.bridge)
+                .map(|stage| v.guard_piece(circuit, stage, index)),
+            _ => None,
+        };
+        if let Some(piece) = ring {
+            // During a ring the bridge blocks: the ring's stage and the extremum guard it.
+            out.push(piece);
+        } else if circuit.has_conduction_events() {
             let drop = circuit.path_drop();
             let drive = match circuit.element {
                 Element::Piezo { .. } => unit(e, 1.0),

@@ -431,7 +431,7 @@ impl<const N: usize> Harvester<N> {
                     circuits::Element::Coil { .. } => names.push(("i", "A")),
                 }
                 names.push(("vs", "V"));
-                if let circuits::Switch::BuckBoost(_) = c.switch {
+                if let circuits::Switch::BuckBoost(_) | circuits::Switch::Inverter(_) = c.switch {
                     names.push(("i_inductor", "A"));
                 }
                 let load = match c.sink {
@@ -514,6 +514,10 @@ impl<const N: usize> Harvester<N> {
                     if let circuits::Switch::BuckBoost(b) = c.switch {
                         s[(b.i, b.i)] = 1.0;
                     }
+                    // An inverting inductor's current flows as the element's voltage drives it.
+                    if let circuits::Switch::Inverter(v) = c.switch {
+                        s[(v.i, v.i)] = -1.0;
+                    }
                 }
             },
         }
@@ -577,8 +581,11 @@ fn port_of(device: &Device) -> Result<Port, AssemblyError> {
 
 /// The interface circuit of a device, if its interface is not resistive.
 fn circuit_of(device: &Device) -> Result<Option<circuits::Circuit>, AssemblyError> {
-    use crate::device::Interface;
+    use crate::device::{Interface, Inversion};
     use circuits::{DiodeLaw, Sink, Switch};
+    /// The one inversion without a factor of its own: a series SSHI through its inductor.
+    const RING: &str = "a series SSHI's inversion through its inductor is not modelled; give \
+                        `inversion_factor` or `quality_factor`";
     if device.interface.is_resistive() {
         return Ok(None);
     }
@@ -621,17 +628,33 @@ fn circuit_of(device: &Device) -> Result<Option<circuits::Circuit>, AssemblyErro
             &r.load,
             Switch::None,
         ),
+        Interface::ParallelSshi(
+            r,
+            Inversion::Inductor {
+                inductance_h,
+                resistance_ohm,
+            },
+        ) => (
+            diode_of(&r.diode),
+            r.storage_capacitance_f,
+            &r.load,
+            Switch::Inverter(circuits::Inverter {
+                l: *inductance_h,
+                rl: *resistance_ohm,
+                i: 3 + e_slots,
+            }),
+        ),
         Interface::ParallelSshi(r, g) => (
             diode_of(&r.diode),
             r.storage_capacitance_f,
             &r.load,
-            Switch::Parallel(g.gamma()),
+            Switch::Parallel(g.gamma().ok_or_else(|| unsupported(RING))?),
         ),
         Interface::SeriesSshi(r, g) => (
             diode_of(&r.diode),
             r.storage_capacitance_f,
             &r.load,
-            Switch::Series(g.gamma()),
+            Switch::Series(g.gamma().ok_or_else(|| unsupported(RING))?),
         ),
         Interface::Sece {
             storage_capacitance_f,
@@ -659,6 +682,12 @@ fn circuit_of(device: &Device) -> Result<Option<circuits::Circuit>, AssemblyErro
     {
         return Err(unsupported(
             "a SECE's inductor discharges a piezoelectric element's clamped capacitance only",
+        ));
+    }
+    if matches!(switch, Switch::Inverter(_)) && !matches!(element, circuits::Element::Piezo { .. })
+    {
+        return Err(unsupported(
+            "an SSHI's inductor rings with a piezoelectric element's clamped capacitance only",
         ));
     }
     if matches!(element, circuits::Element::Pair(_)) && switch != Switch::None {

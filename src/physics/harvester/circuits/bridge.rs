@@ -61,6 +61,10 @@
 //!   through the inductor in time is [`super::sece_inductor`], which owns the behaviour of a
 //!   circuit with [`Switch::BuckBoost`]).
 //!
+//! A parallel SSHI whose inversion rings through its inductor in time is
+//! [`super::sshi_inductor`] ([`Switch::Inverter`]): the bridge's modes here, with the ring's
+//! stages added to them there.
+//!
 //! # Guards
 //! The circuit has one guard: the largest of its dimensionless guards (conduction and
 //! extremum), which turns positive when any of them does; the switch then picks the one that
@@ -69,6 +73,7 @@
 use nalgebra::{SMatrix, SVector};
 
 use super::parts::{BuckBoost, DiodeLaw, Sink, Switch};
+use super::sshi_inductor::Inverter;
 use crate::physics::transducer::CapacitorPair;
 
 /// An unused guard.
@@ -110,6 +115,14 @@ pub enum Bridge {
     /// Blocking, with a flyback diode carrying an inductor's current into the storage (a SECE
     /// through its inductor, [`super::sece_inductor`]).
     Flyback,
+    /// Blocking, with the element ringing through an inverting inductor (bits 3-4; a
+    /// parallel SSHI through its inductor, [`super::sshi_inductor`]).
+    Invert {
+        /// The element's voltage was negative when the switch closed.
+        negative: bool,
+        /// The element's voltage has crossed zero.
+        returning: bool,
+    },
 }
 
 impl Bridge {
@@ -117,7 +130,7 @@ impl Bridge {
     #[inline(always)]
     pub fn sign(self) -> f64 {
         match self {
-            Bridge::Off | Bridge::Flyback => 0.0,
+            Bridge::Off | Bridge::Flyback | Bridge::Invert { .. } => 0.0,
             Bridge::Positive => 1.0,
             Bridge::Negative => -1.0,
         }
@@ -131,6 +144,17 @@ pub enum Heading {
     Up,
     /// v < 0.
     Down,
+}
+
+impl Heading {
+    /// The heading after an extremum.
+    #[inline(always)]
+    pub fn turned(self) -> Self {
+        match self {
+            Heading::Up => Heading::Down,
+            Heading::Down => Heading::Up,
+        }
+    }
 }
 
 /// The circuit's mode, from and to its bits of a [`crate::model::Mode`].
@@ -148,6 +172,10 @@ impl CircuitMode {
     pub fn of(bits: u8) -> Self {
         Self {
             bridge: match bits & 3 {
+                _ if bits & 8 != 0 => Bridge::Invert {
+                    negative: bits & 1 != 0,
+                    returning: bits & 2 != 0,
+                },
                 0 => Bridge::Off,
                 1 => Bridge::Positive,
                 2 => Bridge::Negative,
@@ -169,6 +197,10 @@ impl CircuitMode {
             Bridge::Positive => 1,
             Bridge::Negative => 2,
             Bridge::Flyback => 3,
+            Bridge::Invert {
+                negative,
+                returning,
+            } => 8 | u8::from(negative) | (u8::from(returning) << 1),
         };
         b | if self.heading == Heading::Down { 4 } else { 0 }
     }
@@ -224,15 +256,30 @@ impl Circuit {
         }
     }
 
+    /// The inverting inductor of a parallel SSHI through its inductor, which adds the ring's
+    /// stages to the bridge's modes ([`super::sshi_inductor`]).
+    #[inline(always)]
+    fn inverter(&self) -> Option<Inverter> {
+        match self.switch {
+            Switch::Inverter(v) => Some(v),
+            _ => None,
+        }
+    }
+
     /// The state's dimension the circuit needs: its last component's index plus one.
     pub fn dimension(&self) -> usize {
-        self.buck_boost().map_or(self.vs, |b| b.i) + 1
+        match self.switch {
+            Switch::BuckBoost(b) => b.i + 1,
+            Switch::Inverter(v) => v.i + 1,
+            _ => self.vs + 1,
+        }
     }
 
     /// The bridge states of the circuit's modes.
     pub fn bridges(&self) -> &'static [Bridge] {
         match self.switch {
             Switch::BuckBoost(_) => &BuckBoost::PHASES,
+            Switch::Inverter(_) => &Inverter::PHASES,
             _ => &[Bridge::Off, Bridge::Positive, Bridge::Negative],
         }
     }
@@ -241,7 +288,10 @@ impl Circuit {
     /// bridge or parallel SSHI); series SSHI and SECE leave the element open there.
     #[inline(always)]
     pub fn bridge_between_extrema(&self) -> bool {
-        matches!(self.switch, Switch::None | Switch::Parallel(_))
+        matches!(
+            self.switch,
+            Switch::None | Switch::Parallel(_) | Switch::Inverter(_)
+        )
     }
 
     /// True when conduction changes are events (piecewise-linear diodes on a bridge that
@@ -352,7 +402,7 @@ impl Circuit {
                 let u = self.drive_voltage(y);
                 Self::path_current(is, nvt, u - vs) + Self::path_current(is, nvt, -u - vs)
             }
-            (_, _) if bridge == Bridge::Off => 0.0,
+            (_, _) if bridge.sign() == 0.0 => 0.0,
             (Element::Piezo { theta, cp }, DiodeLaw::PiecewiseLinear { vf, ron }) => {
                 let s = bridge.sign();
                 if ron == 0.0 {
@@ -403,6 +453,32 @@ impl Circuit {
         if let Some(b) = self.buck_boost() {
             return b.force_and_rates(self, bridge, y, rates);
         }
+        if let Some(v) = self.inverter() {
+            let ringing = Inverter::stage(bridge).is_some();
+            let f = self.bridge_force_and_rates(Self::open_in_ring(bridge), y, rates);
+            v.rates(self, ringing, y, rates);
+            return f;
+        }
+        self.bridge_force_and_rates(bridge, y, rates)
+    }
+
+    /// The bridge's state during a ring: off.
+    #[inline(always)]
+    fn open_in_ring(bridge: Bridge) -> Bridge {
+        match bridge {
+            Bridge::Invert { .. } => Bridge::Off,
+            b => b,
+        }
+    }
+
+    /// [`Circuit::force_and_rates`] of the bridge and its element.
+    #[inline]
+    fn bridge_force_and_rates<const N: usize>(
+        &self,
+        bridge: Bridge,
+        y: &SVector<f64, N>,
+        rates: &mut SVector<f64, N>,
+    ) -> f64 {
         let (e, ivs) = (self.e, self.vs);
         let vs = y[ivs];
         let il = self.sink.current(vs);
@@ -485,6 +561,7 @@ impl Circuit {
         if let Some(b) = self.buck_boost() {
             return b.diode_power(bridge, y);
         }
+        let bridge = Self::open_in_ring(bridge);
         if !self.bridge_between_extrema() {
             return 0.0;
         }
@@ -506,6 +583,9 @@ impl Circuit {
     pub fn element_loss<const N: usize>(&self, bridge: Bridge, y: &SVector<f64, N>) -> f64 {
         if let Some(b) = self.buck_boost() {
             return b.resistive_power(bridge, y);
+        }
+        if let Some(v) = self.inverter() {
+            return v.resistive_power(y);
         }
         match self.element {
             Element::Coil { rc, .. } => {
@@ -544,7 +624,11 @@ impl Circuit {
                 e
             }
         };
-        let inductor = self.buck_boost().map_or(0.0, |b| b.stored_energy(y));
+        let inductor = match self.switch {
+            Switch::BuckBoost(b) => b.stored_energy(y),
+            Switch::Inverter(v) => v.stored_energy(y),
+            _ => 0.0,
+        };
         e1 + inductor + 0.5 * self.cs * y[self.vs] * y[self.vs]
     }
 
@@ -578,6 +662,9 @@ impl Circuit {
                 if let Some(b) = self.buck_boost() {
                     b.scale(self, sc);
                 }
+                if let Some(v) = self.inverter() {
+                    v.scale(self, sc);
+                }
             }
             Element::Coil { phi, rc, l } => {
                 let w = v / x;
@@ -609,6 +696,9 @@ impl Circuit {
         if let Some(b) = self.buck_boost() {
             return b.time_constant_s(self);
         }
+        let ring = self
+            .inverter()
+            .map_or(f64::INFINITY, |v| v.time_constant_s(self));
         let capacitive = |c: f64| 2.0 * self.ron() * c * self.cs / (c + self.cs);
         match self.element {
             Element::Piezo { cp, .. } if self.ron() > 0.0 && self.bridge_between_extrema() => {
@@ -621,6 +711,7 @@ impl Circuit {
             Element::Coil { rc, l, .. } if l > 0.0 => l / (rc + 2.0 * self.ron()),
             _ => f64::INFINITY,
         }
+        .min(ring)
     }
 
     /// The switch's reset at an extremum: changes `y` and says what it lost.
@@ -630,7 +721,7 @@ impl Circuit {
         };
         let (e, ivs) = (self.e, self.vs);
         match self.switch {
-            Switch::None | Switch::BuckBoost(_) => ResetLoss::default(),
+            Switch::None | Switch::BuckBoost(_) | Switch::Inverter(_) => ResetLoss::default(),
             Switch::Parallel(gamma) => {
                 let en = 0.5 * cp * y[e] * y[e];
                 y[e] *= -gamma;
@@ -674,8 +765,11 @@ impl Circuit {
         y: &SVector<f64, N>,
         sc: &SVector<f64, N>,
     ) -> [f64; 2] {
+        let ring = self.inverter().zip(Inverter::stage(mode.bridge));
         let conduction = if let Some(b) = self.buck_boost() {
             b.phase_guard(self, mode.bridge, y, sc)
+        } else if let Some((v, stage)) = ring {
+            v.guard(self, stage, y, sc)
         } else if self.has_conduction_events() {
             let threshold = y[self.vs] + self.path_drop();
             match mode.bridge {
@@ -721,15 +815,29 @@ impl Circuit {
             let next = b.switch(self, mode, extremum >= conduction, y, sc);
             return (next, ResetLoss::default());
         }
+        if let Some(v) = self.inverter() {
+            let stage = Inverter::stage(mode.bridge);
+            if extremum >= conduction {
+                // v is put at exactly zero, as for every synchronous switch; an extremum
+                // during a ring only turns the heading.
+                y[1] = 0.0;
+                next.heading = mode.heading.turned();
+                if stage.is_none() {
+                    next.bridge = v.close(self, y, sc);
+                }
+                return (next, ResetLoss::default());
+            }
+            if let Some(stage) = stage {
+                next.bridge = v.advance(self, stage, y);
+                return (next, ResetLoss::default());
+            }
+        }
         if extremum >= conduction {
             // The extremum is located to the event tolerance; v is put at exactly zero so that
             // the guard of the new heading starts at zero and does not fire again at once.
             y[1] = 0.0;
             let loss = self.reset(y);
-            next.heading = match mode.heading {
-                Heading::Up => Heading::Down,
-                Heading::Down => Heading::Up,
-            };
+            next.heading = mode.heading.turned();
             if self.switch != Switch::None {
                 next.bridge = Bridge::Off;
             }
@@ -827,7 +935,9 @@ impl Circuit {
     /// where it has one, else off (a guard already positive switches it on at once); the
     /// heading from the velocity's sign.
     pub fn mode_of<const N: usize>(&self, y: &SVector<f64, N>) -> CircuitMode {
+        let ring = self.inverter().and_then(|v| v.phase_of(y));
         let bridge = match (self.element, self.buck_boost()) {
+            _ if ring.is_some() => ring.unwrap_or(Bridge::Off),
             (_, Some(b)) => b.phase_of(y),
             (Element::Coil { l, .. }, _) if l > 0.0 && y[self.e] > 0.0 => Bridge::Positive,
             (Element::Coil { l, .. }, _) if l > 0.0 && y[self.e] < 0.0 => Bridge::Negative,
@@ -866,6 +976,21 @@ impl Circuit {
         if let Some(b) = self.buck_boost() {
             return b.jacobian(self, bridge, m, j);
         }
+        self.bridge_jacobian(Self::open_in_ring(bridge), y, m, sc, j);
+        if let Some(v) = self.inverter() {
+            v.jacobian(self, Inverter::stage(bridge).is_some(), j);
+        }
+    }
+
+    /// [`Circuit::jacobian`] of the bridge and its element.
+    fn bridge_jacobian<const N: usize>(
+        &self,
+        bridge: Bridge,
+        y: &SVector<f64, N>,
+        m: f64,
+        sc: &SVector<f64, N>,
+        j: &mut SMatrix<f64, N, N>,
+    ) {
         let gl = self.sink_conductance();
         let cs = self.cs;
         let (e, ivs) = (self.e, self.vs);
@@ -989,7 +1114,7 @@ impl Circuit {
         };
         let (e, ivs) = (self.e, self.vs);
         match self.switch {
-            Switch::None | Switch::BuckBoost(_) => {}
+            Switch::None | Switch::BuckBoost(_) | Switch::Inverter(_) => {}
             Switch::Parallel(gamma) => g[(e, e)] = -gamma,
             Switch::Series(gamma) => {
                 let s = y[e].signum();

@@ -5,12 +5,16 @@
 //!   switches (parallel and series SSHI, SECE) acting at the displacement extrema.
 //! * [`sece_inductor`]: a SECE whose transfer runs through its buck-boost inductor, the
 //!   inductor current a state of its own.
+//! * [`sshi_inductor`]: a parallel SSHI whose inversion rings through its inductor, the
+//!   inductor current a state of its own.
 //! * [`parts`]: the diodes' law, the DC load and the synchronous switch it is built from
 //!   (with the buck-boost inductor's values).
 
 pub mod bridge;
 pub mod parts;
 pub mod sece_inductor;
+pub mod sshi_inductor;
 
 pub use bridge::*;
 pub use parts::{BuckBoost, DiodeLaw, Sink, Switch};
+pub use sshi_inductor::Inverter;

@@ -71,6 +71,8 @@ pub enum Switch {
     Sece(f64),
     /// SECE through its buck-boost inductor ([`super::sece_inductor`]).
     BuckBoost(BuckBoost),
+    /// Parallel SSHI whose inversion rings through its inductor ([`super::sshi_inductor`]).
+    Inverter(super::sshi_inductor::Inverter),
 }
 
 /// The buck-boost inductor of a SECE through its inductor, its resistance and its flyback
@@ -85,4 +87,15 @@ pub struct BuckBoost {
     pub vf: f64,
     /// Index of the inductor current in the state.
     pub i: usize,
+}
+
+/// The shortest time constant (s) of an inductor `l` (H) with its resistance `rl` (ohm) in a
+/// loop with the capacitance `cp` (F): the ring's `sqrt(L Cp)`, or `L / R_L` if shorter.
+pub fn inductor_time_constant_s(l: f64, rl: f64, cp: f64) -> f64 {
+    let ring = (l * cp).sqrt();
+    if rl > 0.0 {
+        ring.min(l / rl)
+    } else {
+        ring
+    }
 }

@@ -92,7 +92,7 @@ impl BuckBoost {
         rates[ivs] = -il / c.cs;
         rates[ii] = 0.0;
         match phase {
-            Bridge::Off => {}
+            Bridge::Off | Bridge::Invert { .. } => {}
             Bridge::Positive | Bridge::Negative => {
                 let s = phase.sign();
                 rates[e] -= s * i / cp;
@@ -121,7 +121,7 @@ impl BuckBoost {
         j[(e, 1)] = -theta / cp;
         j[(ivs, ivs)] = -gl / c.cs;
         match phase {
-            Bridge::Off => {}
+            Bridge::Off | Bridge::Invert { .. } => {}
             Bridge::Positive | Bridge::Negative => {
                 let s = phase.sign();
                 j[(e, ii)] = -s / cp;
@@ -146,7 +146,7 @@ impl BuckBoost {
         sc: &SVector<f64, N>,
     ) -> f64 {
         match phase {
-            Bridge::Off => f64::NEG_INFINITY,
+            Bridge::Off | Bridge::Invert { .. } => f64::NEG_INFINITY,
             Bridge::Positive | Bridge::Negative => -phase.sign() * y[c.e] / sc[c.e],
             Bridge::Flyback => -y[self.i] / sc[self.i],
         }
@@ -161,7 +161,7 @@ impl BuckBoost {
     ) -> Option<AffineGuard<N>> {
         let mut n = SVector::<f64, N>::zeros();
         match phase {
-            Bridge::Off => return None,
+            Bridge::Off | Bridge::Invert { .. } => return None,
             Bridge::Positive | Bridge::Negative => n[c.e] = -phase.sign(),
             Bridge::Flyback => n[self.i] = -1.0,
         }
@@ -206,7 +206,7 @@ impl BuckBoost {
                 y[self.i] = 0.0;
                 next.bridge = Bridge::Off;
             }
-            Bridge::Off => {}
+            Bridge::Off | Bridge::Invert { .. } => {}
         }
         next
     }
@@ -253,11 +253,6 @@ impl BuckBoost {
     /// The shortest time constant of a transfer (s): `sqrt(L Cp)`, or `L / R_L` if shorter.
     pub fn time_constant_s(&self, c: &Circuit) -> f64 {
         let (_, cp) = piezo(c);
-        let ring = (self.l * cp).sqrt();
-        if self.rl > 0.0 {
-            ring.min(self.l / self.rl)
-        } else {
-            ring
-        }
+        super::parts::inductor_time_constant_s(self.l, self.rl, cp)
     }
 }
