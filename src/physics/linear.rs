@@ -75,8 +75,13 @@ impl LinearResponse {
     /// The load voltages per unit base acceleration at `freq_hz` (V per m/s^2): both nodes of
     /// a pair, `[V, 0]` for one load, zero without a transducer.
     pub fn voltages_per_accel(&self, freq_hz: f64) -> [Complex<f64>; 2] {
-        let y = self.state_per_accel(freq_hz);
         let zero = Complex::new(0.0, 0.0);
+        // Without a transducer there is no voltage, whatever the mechanical state: the
+        // state's complex solve is skipped.
+        if let TransducerModel::None = self.transducer {
+            return [zero, zero];
+        }
+        let y = self.state_per_accel(freq_hz);
         match self.transducer {
             TransducerModel::None => [zero, zero],
             TransducerModel::Pair(p) => {

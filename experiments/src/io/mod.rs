@@ -1,7 +1,9 @@
 //! The helpers every report uses: plots drawn once into SVG and PNG ([`plot`]) with their legend
-//! clear of the data ([`legend`]), rows turned into typed data frames ([`frame`]) and Markdown
-//! tables ([`md`]), progress bars ([`progress`]). Nothing here knows a figure.
+//! clear of the data ([`legend`]) and dense lines thinned to what their pixels show
+//! ([`decimate`]), rows turned into typed data frames ([`frame`]) and Markdown tables ([`md`]),
+//! progress bars ([`progress`]). Nothing here knows a figure.
 
+pub mod decimate;
 pub mod frame;
 pub mod legend;
 pub mod md;

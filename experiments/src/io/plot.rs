@@ -6,6 +6,8 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 use std::sync::Once;
 
+use super::decimate::min_max_per_column;
+
 static FONT: &[u8] = include_bytes!("../../../assets/fonts/DejaVuSans.ttf");
 
 fn register_font() {
@@ -80,6 +82,9 @@ pub enum Style {
     Circles,
 }
 
+/// Points per pixel column of the plotting area above which a [`Style::Line`] is thinned to
+/// each column's extremes (which keep at most four).
+const DENSE_POINTS_PER_COLUMN: usize = 4;
 /// Half-size of a [`Style::Points`] cross (pixels).
 const POINT_RADIUS: i32 = 7;
 /// Radius of a [`Style::LinePoints`] marker (pixels).
@@ -330,9 +335,19 @@ macro_rules! draw_chart {
                 .collect();
             let line = ShapeStyle::from(&color).stroke_width(2);
             let anno = match s.style {
-                Style::Line => chart
-                    .draw_series(LineSeries::new(pts.clone(), line))
-                    .map_err(|e| anyhow!("series: {e}"))?,
+                Style::Line => {
+                    // A solid line of more points than its pixel columns can show is drawn
+                    // through the extremes of each column (see `decimate`).
+                    let width = chart.plotting_area().dim_in_pixel().0 as usize;
+                    let drawn = if pts.len() > DENSE_POINTS_PER_COLUMN * width {
+                        min_max_per_column(&pts, |p| chart.backend_coord(&p).0)
+                    } else {
+                        pts.clone()
+                    };
+                    chart
+                        .draw_series(LineSeries::new(drawn, line))
+                        .map_err(|e| anyhow!("series: {e}"))?
+                }
                 Style::Dashed => chart
                     .draw_series(DashedLineSeries::new(pts.clone(), 8, 5, line))
                     .map_err(|e| anyhow!("series: {e}"))?,
