@@ -50,6 +50,14 @@ pub struct DownSweepReport {
     pub refine_stats: Stats,
 }
 
+/// The rest state of `device`'s model and its mode: where a down-sweep starts.
+fn rest_of(device: &Device) -> Result<(DVector<f64>, Mode), SolverError> {
+    crate::with_harvester!(device, |h| {
+        let r = h.rest_state();
+        Ok::<_, SolverError>((DVector::from_column_slice(r.as_slice()), h.mode_of(&r)))
+    })
+}
+
 /// How a down-sweep leaves the lower (non-impacting) branch.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum DownEndKind {
@@ -116,11 +124,7 @@ impl SweepSettings {
         approach: Approach,
         progress: &dyn Progress,
     ) -> Result<DownSweepReport, SolverError> {
-        let rest = crate::with_harvester!(device, |h| {
-            let r = h.rest_state();
-            Ok::<_, SolverError>((DVector::from_column_slice(r.as_slice()), h.mode_of(&r)))
-        })?;
-        self.run_down_from(device, accel_rms_g, approach, rest, progress)
+        self.run_down_from(device, accel_rms_g, approach, rest_of(device)?, progress)
     }
 
     /// As [`SweepSettings::run_down_with`] from the state `start` (and its mode) at drive
@@ -150,10 +154,7 @@ impl SweepSettings {
         accel_rms_g: f64,
         stop: &mut dyn FnMut(&Measurement) -> bool,
     ) -> Result<Option<DownSweepReport>, SolverError> {
-        let rest = crate::with_harvester!(device, |h| {
-            let r = h.rest_state();
-            Ok::<_, SolverError>((DVector::from_column_slice(r.as_slice()), h.mode_of(&r)))
-        })?;
+        let rest = rest_of(device)?;
         self.run_down_from_until(device, accel_rms_g, Approach::Jump, rest, &Silent, stop)
     }
 
