@@ -69,6 +69,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             r.starts.len(),
             r.model
         );
+        println!(
+            "  design sweeps stopped early: {} of {} starts",
+            r.starts.iter().filter(|s| s.design_cut).count(),
+            r.starts.len()
+        );
         for (p, t) in r.params.iter().zip(&c.truth) {
             println!(
                 "  {}: {:.6e} ({:.6e} .. {:.6e}), truth {t:e}",

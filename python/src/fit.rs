@@ -132,6 +132,7 @@ fn report_dict<'py>(py: Python<'py>, r: &FitReport) -> PyResult<Bound<'py, PyDic
         q.set_item("origin", s.origin.to_string())?;
         q.set_item("values", s.values.clone())?;
         q.set_item("design_ssr", s.design_ssr)?;
+        q.set_item("design_cut", s.design_cut)?;
         q.set_item("refined_ssr", s.refined.as_ref().map(|f| f.ssr))?;
         q.set_item(
             "refined_values",

@@ -97,6 +97,50 @@ impl SweepRun {
         let settings = SweepSettings::for_device(device, data.grid(), REFINE_TOL_HZ);
         Self::run(&settings, device, scale, data)
     }
+
+    /// As [`SweepRun::plain`], telling `on_point(j, value)` the model's value at point `j` of
+    /// `data` as soon as the coarse steps fix it (the value [`model_values`] gives it, bit for
+    /// bit: the steps on either side of the point are measured, and those that follow lie
+    /// beyond it), the points in their order. `None` as soon as `on_point` returns true: the
+    /// rest of the sweep is not run.
+    pub(super) fn plain_watched(
+        device: &Device,
+        scale: f64,
+        data: &SweepData,
+        on_point: &mut dyn FnMut(usize, f64) -> bool,
+    ) -> Result<Option<Self>, SolverError> {
+        let settings = SweepSettings::for_device(device, data.grid(), REFINE_TOL_HZ);
+        let accel = data.accel_rms_g * scale;
+        // The steps so far, by frequency increasing, and the next point not yet told.
+        let mut curve: Vec<(f64, f64)> = Vec::new();
+        let mut next = 0;
+        let mut stop = |m: &Measurement| {
+            let at = curve.partition_point(|c| c.0 < m.freq_hz);
+            curve.insert(at, (m.freq_hz, quantity_of(data.quantity, m)));
+            while let Some(p) = data.points.get(next) {
+                let fixed = match data.direction {
+                    Direction::Up => p.freq_hz <= m.freq_hz,
+                    Direction::Down => p.freq_hz >= m.freq_hz,
+                };
+                if !fixed {
+                    break;
+                }
+                next += 1;
+                if on_point(next - 1, interpolate(&curve, p.freq_hz)) {
+                    return true;
+                }
+            }
+            false
+        };
+        Ok(match data.direction {
+            Direction::Up => settings
+                .run_until(device, accel, &mut stop)?
+                .map(SweepRun::Up),
+            Direction::Down => settings
+                .run_down_until(device, accel, &mut stop)?
+                .map(SweepRun::Down),
+        })
+    }
 }
 
 /// The model of `data` in the sweep `run` over its grid.
@@ -185,15 +229,22 @@ pub const DESIGN_GRID_INTERVALS: usize = 16;
 /// intervals, its ends kept: its features are refined by bisection whatever the grid. Returns
 /// the sweep too where it is the plain sweep of the data set's own grid ([`SweepRun::plain`]),
 /// the one the branches are identified from at these values.
+///
+/// The sweep of the data set's own grid tells `on_point` each point's value as soon as it is
+/// fixed ([`SweepRun::plain_watched`]); `None` when `on_point` stopped it.
+#[allow(clippy::type_complexity)]
 pub(super) fn design_values(
     device: &Device,
     scale: f64,
     data: &SweepData,
-) -> Result<(Vec<f64>, Option<SweepRun>), FitError> {
+    on_point: &mut dyn FnMut(usize, f64) -> bool,
+) -> Result<Option<(Vec<f64>, Option<SweepRun>)>, FitError> {
     let grid = data.grid();
     if !data.points.is_empty() || grid.len() <= DESIGN_GRID_INTERVALS + 1 {
-        let run = SweepRun::plain(device, scale, data)?;
-        return Ok((values_of(&model_of(&run, data), data), Some(run)));
+        let Some(run) = SweepRun::plain_watched(device, scale, data, on_point)? else {
+            return Ok(None);
+        };
+        return Ok(Some((values_of(&model_of(&run, data), data), Some(run))));
     }
     let every = (grid.len() - 1).div_ceil(DESIGN_GRID_INTERVALS);
     let mut thin: Vec<f64> = grid.iter().copied().step_by(every).collect();
@@ -204,10 +255,10 @@ pub(super) fn design_values(
         grid_hz: Some(thin),
         ..data.clone()
     };
-    Ok((
+    Ok(Some((
         values_of(&model_curve(device, scale, &coarse)?, &coarse),
         None,
-    ))
+    )))
 }
 
 /// The values of a data set's points, features and jump in the model sweep `m`.

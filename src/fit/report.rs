@@ -303,6 +303,10 @@ pub struct StartTried {
     /// Weighted SSR of the cheap model (a plain stepped sweep) there; infinite where it could
     /// not be evaluated, NaN when the design had one start only.
     pub design_ssr: f64,
+    /// True when the cheap model's sweeps were stopped once the SSR of the points they had
+    /// swept exceeded that of the last start kept for refinement (such a start cannot be among
+    /// them): `design_ssr` is then the SSR of those points, a lower bound of the whole.
+    pub design_cut: bool,
     /// The refinement from it, when it was among the best ranked.
     pub refined: Option<Refined>,
 }

@@ -277,6 +277,23 @@ impl<M: Model<N>, D: Drive, const N: usize> SteppedDrive<'_, M, D, N> {
         approach: Approach,
         on_step: &dyn Progress,
     ) -> Result<Sweep, SolverError> {
+        self.run_from_until(y, mode, from, values, approach, on_step, &mut |_| false)
+    }
+
+    /// As [`SteppedDrive::run_from`], stopping after the first step for which `stop(m)` is
+    /// true: the sweep returned then holds the steps up to that one only (its `values` cut
+    /// to match). The steps it holds are those of the whole run, bit for bit.
+    #[allow(clippy::too_many_arguments)]
+    pub fn run_from_until(
+        &self,
+        y: SVector<f64, N>,
+        mode: Mode,
+        from: Option<f64>,
+        values: &[f64],
+        approach: Approach,
+        on_step: &dyn Progress,
+        stop: &mut dyn FnMut(&Measurement) -> bool,
+    ) -> Result<Sweep, SolverError> {
         let (mut y, mut mode, mut prev) = (y, mode, from);
         // Nothing is known of the state given: the first step off it keeps its ramp.
         let mut contact = None;
@@ -289,11 +306,15 @@ impl<M: Model<N>, D: Drive, const N: usize> SteppedDrive<'_, M, D, N> {
             stats += step.stats;
             y = state_of(&step.state);
             mode = step.mode;
+            let stopped = stop(&step.measurement);
             steps.push(step);
             on_step.tick();
+            if stopped {
+                break;
+            }
         }
         Ok(Sweep {
-            values: values.to_vec(),
+            values: values[..steps.len()].to_vec(),
             steps,
             stats,
         })

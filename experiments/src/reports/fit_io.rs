@@ -289,6 +289,8 @@ fn starts_markdown(report: &FitReport) -> String {
         };
         let design = if s.design_ssr.is_nan() {
             "-".to_string()
+        } else if s.design_cut {
+            format!("> {} (sweep stopped)", fmt_sig(s.design_ssr, 4))
         } else {
             fmt_sig(s.design_ssr, 4)
         };

@@ -47,8 +47,9 @@ def fit(device, sweeps, free):
     interval), ``chi2_p``, ``model`` (in words), ``headline`` (None, or what must be read
     first: a value at an end of its range, an improbable chi-square, no convergence),
     ``starts_tried``, ``starts_refined``, ``starts`` (one dict per start: ``origin``,
-    ``values``, ``design_ssr``, ``refined_ssr``, ``refined_values``, ``settled``,
-    ``reported``), ``singular_ratio``,
+    ``values``, ``design_ssr``, ``design_cut`` (True when its sweep was stopped once past
+    the starts kept: ``design_ssr`` is then a lower bound), ``refined_ssr``,
+    ``refined_values``, ``settled``, ``reported``), ``singular_ratio``,
     ``evaluations``, ``converged`` and ``residuals``
     (arrays ``freq_hz``, ``measured``, ``model``, ``sigma`` and lists ``dataset``, ``what``).
     A bad path or range raises :class:`endstop.ParamError` naming the field; bad data raise

@@ -50,6 +50,14 @@ pub struct DownSweepReport {
     pub refine_stats: Stats,
 }
 
+/// The rest state of `device`'s model and its mode: where a down-sweep starts.
+fn rest_of(device: &Device) -> Result<(DVector<f64>, Mode), SolverError> {
+    crate::with_harvester!(device, |h| {
+        let r = h.rest_state();
+        Ok::<_, SolverError>((DVector::from_column_slice(r.as_slice()), h.mode_of(&r)))
+    })
+}
+
 /// How a down-sweep leaves the lower (non-impacting) branch.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum DownEndKind {
@@ -116,11 +124,7 @@ impl SweepSettings {
         approach: Approach,
         progress: &dyn Progress,
     ) -> Result<DownSweepReport, SolverError> {
-        let rest = crate::with_harvester!(device, |h| {
-            let r = h.rest_state();
-            Ok::<_, SolverError>((DVector::from_column_slice(r.as_slice()), h.mode_of(&r)))
-        })?;
-        self.run_down_from(device, accel_rms_g, approach, rest, progress)
+        self.run_down_from(device, accel_rms_g, approach, rest_of(device)?, progress)
     }
 
     /// As [`SweepSettings::run_down_with`] from the state `start` (and its mode) at drive
@@ -134,19 +138,52 @@ impl SweepSettings {
         start: (DVector<f64>, Mode),
         progress: &dyn Progress,
     ) -> Result<DownSweepReport, SolverError> {
+        let report =
+            self.run_down_from_until(device, accel_rms_g, approach, start, progress, &mut |_| {
+                false
+            })?;
+        Ok(report.expect("a sweep that is never stopped completes"))
+    }
+
+    /// As [`SweepSettings::run_down`], given each coarse step as it is measured: `None` as
+    /// soon as `stop(m)` is true for one (the rest of the sweep is not run), else the report,
+    /// the same as [`SweepSettings::run_down`]'s bit for bit.
+    pub fn run_down_until(
+        &self,
+        device: &Device,
+        accel_rms_g: f64,
+        stop: &mut dyn FnMut(&Measurement) -> bool,
+    ) -> Result<Option<DownSweepReport>, SolverError> {
+        let rest = rest_of(device)?;
+        self.run_down_from_until(device, accel_rms_g, Approach::Jump, rest, &Silent, stop)
+    }
+
+    fn run_down_from_until(
+        &self,
+        device: &Device,
+        accel_rms_g: f64,
+        approach: Approach,
+        start: (DVector<f64>, Mode),
+        progress: &dyn Progress,
+        stop: &mut dyn FnMut(&Measurement) -> bool,
+    ) -> Result<Option<DownSweepReport>, SolverError> {
         let mut freqs = self.freqs_hz.clone();
         freqs.sort_by(|a, b| b.total_cmp(a));
         crate::with_harvester!(device, |h| {
             let cont = frequency_continuation(&h, accel_rms_g, &self.cfg);
-            let sweep = cont.run_from(
+            let sweep = cont.run_from_until(
                 SVector::from_column_slice(start.0.as_slice()),
                 start.1,
                 None,
                 &freqs,
                 approach,
                 progress,
+                stop,
             )?;
-            analyse_down_sweep(&cont, sweep, self.refine_tol_hz, approach)
+            if sweep.steps.len() < freqs.len() {
+                return Ok(None);
+            }
+            analyse_down_sweep(&cont, sweep, self.refine_tol_hz, approach).map(Some)
         })
     }
 

@@ -40,7 +40,7 @@
 use crate::device::Device;
 use crate::model::Model;
 use crate::ode::{SolverError, Stats};
-use crate::progress::Progress;
+use crate::progress::{Progress, Silent};
 use crate::study::steady::{settle_settings_across_folds, Measurement, SettleSettings};
 use crate::study::stepped::{
     continue_sweep, first_contact, in_contact, values_beyond, with_midpoints, Approach, Drive,
@@ -301,9 +301,51 @@ impl SweepSettings {
         approach: Approach,
         progress: &dyn Progress,
     ) -> Result<SweepReport, SolverError> {
+        let report = self.run_on_until(base, accel_rms_g, approach, progress, &mut |_| false)?;
+        Ok(report.expect("a sweep that is never stopped completes"))
+    }
+
+    /// As [`SweepSettings::run`], given each coarse step of the requested range as it is
+    /// measured: `None` as soon as `stop(m)` is true for one (the rest of the sweep is not
+    /// run), else the report, the same as [`SweepSettings::run`]'s bit for bit.
+    pub fn run_until(
+        &self,
+        device: &Device,
+        accel_rms_g: f64,
+        stop: &mut dyn FnMut(&Measurement) -> bool,
+    ) -> Result<Option<SweepReport>, SolverError> {
+        crate::with_harvester!(device, |h| self.run_on_until(
+            &h,
+            accel_rms_g,
+            Approach::Jump,
+            &Silent,
+            stop
+        ))
+    }
+
+    fn run_on_until<M: Model<N>, const N: usize>(
+        &self,
+        base: &M,
+        accel_rms_g: f64,
+        approach: Approach,
+        progress: &dyn Progress,
+        stop: &mut dyn FnMut(&Measurement) -> bool,
+    ) -> Result<Option<SweepReport>, SolverError> {
         let freqs = &self.freqs_hz;
         let cont = frequency_continuation(base, accel_rms_g, &self.cfg);
-        let mut sweep = cont.run_with(freqs, approach, progress)?;
+        let rest = base.rest_state();
+        let mut sweep = cont.run_from_until(
+            rest,
+            base.mode_of(&rest),
+            None,
+            freqs,
+            approach,
+            progress,
+            stop,
+        )?;
+        if sweep.steps.len() < freqs.len() {
+            return Ok(None);
+        }
         let n = sweep.steps.len();
         let mut extended_from = None;
         let last_in_contact = sweep
@@ -327,7 +369,7 @@ impl SweepSettings {
         }
         let mut report = analyse_up_sweep(&cont, sweep, self.refine_tol_hz, approach)?;
         report.extended_from = extended_from;
-        Ok(report)
+        Ok(Some(report))
     }
 }
 
