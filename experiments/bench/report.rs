@@ -131,7 +131,9 @@ pub fn run(quick: bool) -> Result<()> {
 
     // A two-mass record against a one-mass record of as many impacts: only the whole
     // benchmark measures them, in alternated rounds.
-    let masses_md = common::book_generated_root().join("bench").join("masses.md");
+    let masses_md = common::book_generated_root()
+        .join("bench")
+        .join("masses.md");
     if !quick {
         let costs = masses::measure(repeats)?;
         if let Some(two) = costs.get(1) {
