@@ -12,6 +12,8 @@ use endstop::study::flow::{SineFlow, SineScheme};
 use endstop::study::record::{simulate_record, FreeFlightPath, Record, Scheme};
 use nalgebra::SVector;
 
+use crate::masses::{two_masses, NO_TRANSDUCER};
+
 const UPCONVERTER: &str = include_str!("../data/examples/upconverter.toml");
 
 fn upconverter() -> Device {
@@ -138,42 +140,22 @@ fn a_two_mass_record_on_exact_steps_follows_dormand_prince() {
     assert!(diff <= bound, "outputs differ by {diff:e} > {bound:e}");
 }
 
-/// Two undamped masses on springs to the frame (50 and 80 Hz alone) with a rigid stop of
-/// restitution 1 on both sides between them, released from rest apart from the first mass's
-/// velocity, no drive, no transducer.
+/// Two undamped masses of 1 g and 0.2 g on springs to the frame (50 and 80 Hz alone) with a
+/// rigid stop of restitution 1 on both sides between them, released from rest apart from the
+/// first mass's velocity, no drive, no transducer.
 fn undamped_pair() -> Device {
     let stop = |side: &str| {
         format!(
             "[[stops]]\nmasses = [1, 0]\nside = \"{side}\"\ngap_m = 1e-4\nlaw = \"restitution\"\ncoefficient = 1.0\n"
         )
     };
-    Device::from_toml_str(
-        &format!(
-            r#"
-name = "undamped_pair"
-params = "test"
-description = "two undamped masses striking each other"
-[[masses]]
-name = "a"
-mass_kg = 1e-3
-[[masses]]
-name = "b"
-mass_kg = 2e-4
-[[springs]]
-masses = [0]
-stiffness_n_per_m = 98.7
-[[springs]]
-masses = [1]
-stiffness_n_per_m = 50.5
-{}{}[transducer]
-kind = "none"
-"#,
-            stop("upper"),
-            stop("lower")
-        ),
-        "undamped_pair.toml",
-    )
-    .unwrap()
+    let text = two_masses(&format!(
+        "[[springs]]\nmasses = [0]\nstiffness_n_per_m = 98.7\n\
+         [[springs]]\nmasses = [1]\nstiffness_n_per_m = 50.5\n{}{}{NO_TRANSDUCER}",
+        stop("upper"),
+        stop("lower")
+    ));
+    Device::from_toml_str(&text, "undamped_pair.toml").unwrap()
 }
 
 /// Energy over thousands of impacts on the exact steps, and momentum across each impact. Each
