@@ -1,13 +1,15 @@
 //! `bench`: how fast the model runs, on fixed cases. Speed is measured here, never
 //! asserted by a test.
 //!
-//! Usage: `cargo run --release --bin bench [-- --quick | --interfaces | --fits | --floor]`
+//! Usage: `cargo run --release --bin bench [-- --quick | --interfaces | --masses | --fits |
+//! --floor]`
 //! (`--floor` times the record engine against its floor kernel, `bench/floor.rs`; `--fits`
 //! times every fit of the recovery family and Figure 8's on one thread and prints their
 //! table, writing nothing; `just bench` runs the
 //! whole benchmark; `reproduce` runs `--quick`, which keeps its last phase short;
 //! `--interfaces` measures the records behind an interface circuit alone and prints their
-//! table, writing nothing).
+//! table, writing nothing; `--masses` measures the two-mass record against a one-mass record
+//! of as many impacts alone and prints its table, writing nothing).
 //!
 //! * a 10 s prototype-1 record at Sa = 2.85e-2 g^2/Hz (heavy impacts; calibrated set, whose
 //!   stops are closer, and published set), and a 10 s prototype-2 record at 1.69e-3;
@@ -17,6 +19,8 @@
 //!   periodic orbit and (not with `--quick`) its whole response over its file's range, with
 //!   the ratio to a fixed-step RK4 at equal accuracy and to ngspice where it exports;
 //! * the bistable example's 10 s record beside its linear twin's, paired;
+//! * not with `--quick`: the up-converter's two-mass 10 s record against a one-mass record of
+//!   as many impacts, paired (`bench/masses.rs`);
 //! * not with `--quick`: a full Figure 8 sweep (every curve of the published set, one thread
 //!   and all threads), Figure 13's whole curve by continuation and by sweeps, the paper
 //!   records against RK4, and the untimed accuracy tables (`bench/accuracy.rs`;
@@ -46,6 +50,8 @@ mod floor;
 mod floor_kernel;
 #[path = "bench/interfaces.rs"]
 mod interfaces;
+#[path = "bench/masses.rs"]
+mod masses;
 #[path = "bench/report.rs"]
 mod report;
 #[path = "bench/rk4.rs"]
@@ -69,6 +75,10 @@ struct Args {
     /// nothing.
     #[arg(long)]
     interfaces: bool,
+    /// Measure a two-mass record against a one-mass record with as many impacts and print
+    /// their table, writing nothing.
+    #[arg(long)]
+    masses: bool,
     /// Time the fits of the recovery family and of Figure 8, each on one thread, and print
     /// their table, writing nothing.
     #[arg(long)]
@@ -97,6 +107,10 @@ fn run() -> Result<()> {
     }
     if args.floor {
         print!("{}", floor::table(&floor::measure(REPEATS)?, REPEATS));
+        return Ok(());
+    }
+    if args.masses {
+        print!("{}", masses::table(&masses::measure(REPEATS)?, REPEATS));
         return Ok(());
     }
     if args.interfaces {

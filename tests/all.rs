@@ -36,6 +36,7 @@ mod interface_sshi_inductor;
 mod interfaces;
 mod interfaces_spice;
 mod masses;
+mod masses_exact;
 mod masses_force_drive;
 mod masses_impact_damper;
 mod masses_studies;

@@ -13,7 +13,7 @@ use nalgebra::{Complex, Matrix2, SVector, Vector2};
 const UPCONVERTER: &str = include_str!("../data/examples/upconverter.toml");
 
 /// A two-mass file with the given tables after its masses (transducer none unless given).
-fn two_masses(rest: &str) -> String {
+pub(crate) fn two_masses(rest: &str) -> String {
     format!(
         r#"
 name = "pair"
@@ -30,7 +30,7 @@ mass_kg = 2e-4
     )
 }
 
-const NO_TRANSDUCER: &str = "[transducer]\nkind = \"none\"\n";
+pub(crate) const NO_TRANSDUCER: &str = "[transducer]\nkind = \"none\"\n";
 
 fn load(text: &str) -> Result<Device, ParamError> {
     Device::from_toml_str(text, "pair.toml")

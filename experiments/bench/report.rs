@@ -1,6 +1,7 @@
 //! The benchmark's run (`bench` and `bench --quick`): the main table of timed cases
 //! (`bench/cases.rs`), the comparison with RK4 and the accuracy tables (`bench/rk4.rs`), the
-//! records behind an interface (`bench/interfaces.rs`) and the example devices
+//! records behind an interface (`bench/interfaces.rs`), the two-mass record against a one-mass
+//! record (`bench/masses.rs`) and the example devices
 //! (`bench/examples.rs`), written to `data/results/bench/` and the book's Performance page.
 
 use anyhow::Result;
@@ -10,7 +11,7 @@ use polars::prelude::*;
 use common::{fmt_sig, Experiment};
 
 use crate::timing::sig_or_dash;
-use crate::{cases, examples, interfaces, rk4, REPEATS, SEED};
+use crate::{cases, examples, interfaces, masses, rk4, REPEATS, SEED};
 
 /// The whole benchmark's recorded tables (`data/recorded/bench/`): the whole run rewrites
 /// them, the short run shows them.
@@ -125,6 +126,28 @@ pub fn run(quick: bool) -> Result<()> {
             &interfaces_md,
             "interfaces.md",
             "the paired cost of records behind an interface",
+        )?;
+    }
+
+    // A two-mass record against a one-mass record of as many impacts: only the whole
+    // benchmark measures them, in alternated rounds.
+    let masses_md = common::book_generated_root()
+        .join("bench")
+        .join("masses.md");
+    if !quick {
+        let costs = masses::measure(repeats)?;
+        if let Some(two) = costs.get(1) {
+            exp.number("two_mass_record_cost_ratio_median", two.ratios.0);
+        }
+        let md = masses::table(&costs, repeats);
+        common::write_atomic(&masses_md, md.as_bytes())?;
+        common::write_atomic(&recorded("masses.md"), md.as_bytes())?;
+        print!("{md}");
+    } else if !masses_md.exists() {
+        show_recorded(
+            &masses_md,
+            "masses.md",
+            "the paired cost of a two-mass record",
         )?;
     }
 

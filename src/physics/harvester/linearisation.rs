@@ -109,7 +109,7 @@ impl<const N: usize> Harvester<N> {
     /// True when the port is linear in every mode: a loaded piezoelectric element, coil or no
     /// transducer; behind a circuit, a piezoelectric element or a coil with piecewise-linear
     /// diodes.
-    fn port_is_affine(&self) -> bool {
+    pub(super) fn port_is_affine(&self) -> bool {
         match &self.port {
             Port::Loaded(t) => !matches!(t, TransducerModel::Pair(_)),
             Port::Circuit(c) => {
@@ -216,7 +216,7 @@ impl<const N: usize> Harvester<N> {
     /// The affine pieces of a circuit's guard in a mode (each one fires the guard), in the
     /// state's units: the conduction threshold's two signs while the bridge is off, the
     /// current's zero while it conducts, and the extremum's velocity.
-    fn circuit_guard_pieces(
+    pub(super) fn circuit_guard_pieces(
         &self,
         circuit: &super::circuits::Circuit,
         cm: CircuitMode,

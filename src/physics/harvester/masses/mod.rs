@@ -35,6 +35,7 @@
 //! suspension and no stops: its forces, rates, Jacobian, guards, switches, ledger terms and
 //! stored energy are that harvester's.
 
+mod affine;
 mod model;
 
 use nalgebra::SVector;

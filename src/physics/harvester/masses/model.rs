@@ -337,6 +337,10 @@ impl<const N: usize> Model<N> for MassChain<N> {
         Some(d)
     }
 
+    fn affine(&self, mode: Mode) -> Option<crate::model::Affine<N>> {
+        self.affine_form(mode)
+    }
+
     fn without_contacts(&self) -> Self {
         self.without_stops()
     }
