@@ -16,7 +16,6 @@
 mod common;
 
 mod calibration_recovery;
-mod continuation_corners;
 mod crosscheck;
 mod design;
 mod design_noise;

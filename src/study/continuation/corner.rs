@@ -34,34 +34,45 @@ pub(super) struct Crossing {
     pub grazing: BranchPoint,
     /// Arclength of [`Crossing::grazing`] from the start.
     pub s_grazing: f64,
-    /// The first point past the corner with the predicted contact set.
+    /// The first point past the corner with a predicted contact set.
     pub past: BranchPoint,
     /// Arclength of [`Crossing::past`] from the start.
     pub s_past: f64,
 }
 
 impl<M: Model<N>, const N: usize> Continuer<'_, '_, M, N> {
-    /// Crosses the corner at which `last` (a point at which no step is accepted) stands: the
-    /// sides within [`GRAZING_NEAR`] of their gap change their contact, and the point past
+    /// Crosses the corner at which `last` (a point at which no step is accepted, after
+    /// `before` on the branch) stands: its
+    /// side nearest grazing, or every side within [`GRAZING_NEAR`] of its gap, changes its
+    /// contact, and the point past
     /// the corner is the first corrected point at arclengths `ds_max`, `ds_max` / 4, ... down
     /// to `ds_min` along `last`'s tangent whose contact set is that prediction, that lies near
     /// its predictor and within the largest parameter step. `None` when `last` is near no
     /// grazing or no such point is found.
     pub(super) fn cross_corner(
         &mut self,
+        before: Option<&BranchPoint>,
         last: &BranchPoint,
         ds_min: f64,
         ds_max: f64,
     ) -> Option<Crossing> {
         let gaps = Gaps::of(self.shooter.base);
         let near = GRAZING_NEAR * gaps.smallest();
-        let from = contact_set(last, gaps);
+        // The contact set of the branch before the corner, read at the point before `last`
+        // (at `last` the grazing side's distance is ~1e-17 m, of either sign).
+        let from = contact_set(before.unwrap_or(last), gaps);
         let distance = side_grazing(last, gaps);
         let changing = distance.map(|d| d.abs() <= near);
         if !changing.iter().any(|&c| c) {
             return None;
         }
-        let predicted = [from[0] != changing[0], from[1] != changing[1]];
+        // The nearest side changes, or every near side at once (a symmetric orbit grazing
+        // both stops): a side within `near` may still be deep in contact on the scale of a
+        // stiff stop's penetration.
+        let nearest = usize::from(distance[1].abs() < distance[0].abs());
+        let mut alone = from;
+        alone[nearest] = !from[nearest];
+        let predicted = [alone, [from[0] != changing[0], from[1] != changing[1]]];
         let anchor = self.u_of(&last.orbit);
         let param = self.settings.parameter;
         let p_last = last.orbit.param(param);
@@ -76,13 +87,13 @@ impl<M: Model<N>, const N: usize> Continuer<'_, '_, M, N> {
                 let predictor = &anchor + &last.tangent * s;
                 let close = (self.u_of(&p.orbit) - predictor).norm() <= MAX_CORRECTION * s;
                 let short = (p.orbit.param(param) - p_last).abs() <= self.settings.max_param_step;
-                if close && short && contact_set(&p, gaps) == predicted {
+                if close && short && predicted.contains(&contact_set(&p, gaps)) {
                     break (p, s);
                 }
             }
             s /= TRIAL_RATIO;
         };
-        let side = usize::from(!changing[0]);
+        let side = nearest;
         let (grazing, s_grazing) = self.locate_contact_change(last, &past, s_past, side, gaps);
         Some(Crossing {
             grazing,
