@@ -51,17 +51,25 @@ impl<M: Model<N>, const N: usize> Continuer<'_, '_, M, N> {
     /// grazing or no such point is found.
     pub(super) fn cross_corner(
         &mut self,
-        before: Option<&BranchPoint>,
+        before: &[BranchPoint],
         last: &BranchPoint,
         ds_min: f64,
         ds_max: f64,
     ) -> Option<Crossing> {
         let gaps = Gaps::of(self.shooter.base);
         let near = GRAZING_NEAR * gaps.smallest();
-        // The contact set of the branch before the corner, read at the point before `last`
-        // (at `last` the grazing side's distance is ~1e-17 m, of either sign).
-        let from = contact_set(before.unwrap_or(last), gaps);
         let distance = side_grazing(last, gaps);
+        let nearest = usize::from(distance[1].abs() < distance[0].abs());
+        // The contact set of the branch before the corner, read at the latest earlier point
+        // whose nearest side is clear of its stop by more than the integration's relative
+        // tolerance of the gap (at `last`, and at points crowded behind it, that side's
+        // distance is ~1e-17 m, of either sign).
+        let clear = self.shooter.cfg.rtol * gaps.smallest();
+        let from = before
+            .iter()
+            .rev()
+            .find(|p| side_grazing(p, gaps)[nearest].abs() > clear)
+            .map_or(contact_set(last, gaps), |p| contact_set(p, gaps));
         let changing = distance.map(|d| d.abs() <= near);
         if !changing.iter().any(|&c| c) {
             return None;
@@ -69,7 +77,6 @@ impl<M: Model<N>, const N: usize> Continuer<'_, '_, M, N> {
         // The nearest side changes, or every near side at once (a symmetric orbit grazing
         // both stops): a side within `near` may still be deep in contact on the scale of a
         // stiff stop's penetration.
-        let nearest = usize::from(distance[1].abs() < distance[0].abs());
         let mut alone = from;
         alone[nearest] = !from[nearest];
         let predicted = [alone, [from[0] != changing[0], from[1] != changing[1]]];

@@ -213,9 +213,8 @@ pub fn continue_branch_until<M: Model<N> + Clone, const N: usize>(
                     // At a corner where the contact set changes on the free-flight side too
                     // (both stops of a symmetric orbit at once, or one stop while the other is
                     // in contact), the grazing is located and the branch goes on past it.
-                    let before = points.len().checked_sub(2).map(|i| &points[i]);
                     if let Some(x) =
-                        c.cross_corner(before, &last, settings.ds_min, settings.ds_init)
+                        c.cross_corner(&points, &last, settings.ds_min, settings.ds_init)
                     {
                         let k = points.len() - 1;
                         let mut g = x.grazing;
