@@ -16,6 +16,7 @@
 mod common;
 
 mod calibration_recovery;
+mod continuation_corners;
 mod crosscheck;
 mod design;
 mod design_noise;

@@ -235,4 +235,34 @@ impl<M: Model<N> + Clone, const N: usize> Continuer<'_, '_, M, N> {
         Ok(out)
     }
     // ANCHOR_END: events
+
+    /// The events across a corner crossed where the contact set changes, from `a` on one
+    /// side to `b` on the other (at arclength `ds` along `a`'s tangent): the grazing, located
+    /// on the stop-free branch (left unlocated if that fails), and a fold at grazing where the
+    /// parameter turns there. No smooth event is tested for: the multipliers jump across the
+    /// corner, so a change of their test functions belongs to it.
+    pub(super) fn corner_events(
+        &mut self,
+        k: usize,
+        a: &BranchPoint,
+        b: &BranchPoint,
+        ds: f64,
+    ) -> Vec<Event> {
+        let gaps = Gaps::of(self.shooter.base);
+        let mut out = Vec::new();
+        let graze = (test_grazing(a, gaps) > 0.0) != (test_grazing(b, gaps) > 0.0);
+        if !graze {
+            return out;
+        }
+        if let Ok(g) = self.locate_grazing(k, a, b, ds) {
+            if (test_fold(a, gaps) > 0.0) != (test_fold(b, gaps) > 0.0) {
+                let mut fold = g.clone();
+                fold.kind = EventKind::Fold;
+                fold.at_grazing = true;
+                out.push(fold);
+            }
+            out.push(g);
+        }
+        out
+    }
 }

@@ -16,8 +16,10 @@
 //! turns by more than [`ContinuationSettings::max_turn_rad`], when the parameter moves by more
 //! than [`ContinuationSettings::max_param_step`], or for one of the other reasons of
 //! [`Rejection`] (each rejection is kept in [`Branch::rejections`]); it grows after easy
-//! corrections. A step below
-//! [`ContinuationSettings::ds_min`] is an error naming the last parameter value reached.
+//! corrections. Where the step falls below [`ContinuationSettings::ds_min`] at a grazing
+//! orbit, the corner there is hopped over or crossed (the grazing located on the branch by
+//! bisection and the predictor restarted past it); elsewhere it is an error naming the last
+//! parameter value reached.
 //!
 //! # Events (Seydel; Kuznetsov, chapter 10)
 //! Between two accepted points, sign changes of test functions mark events, each located by the
@@ -40,7 +42,8 @@
 //! # Files
 //! `types.rs` holds the settings and what a branch is made of, `corrector.rs` the
 //! predictor-corrector (Newton on the bordered system, tangents, the acceptance of a step,
-//! corner hops), `events.rs` the test functions and the location of events; this file holds the
+//! corner hops), `corner.rs` the crossing of a corner where the contact set changes,
+//! `events.rs` the test functions and the location of events; this file holds the
 //! loop that drives them ([`continue_branch`]) and the entry points.
 
 use nalgebra::{DVector, SVector};
@@ -50,6 +53,7 @@ use crate::ode::Stats;
 use crate::progress::{share, Progress};
 use crate::study::orbit::{Forcing, Orbit, OrbitError, Parameter, Shooter};
 
+mod corner;
 mod corrector;
 mod diagram;
 mod diagram_types;
@@ -204,6 +208,36 @@ pub fn continue_branch_until<M: Model<N> + Clone, const N: usize>(
                             break;
                         }
                         ds = settings.ds_init;
+                        continue;
+                    }
+                    // At a corner where the contact set changes on the free-flight side too
+                    // (both stops of a symmetric orbit at once, or one stop while the other is
+                    // in contact), the grazing is located and the branch goes on past it.
+                    if let Some(x) =
+                        c.cross_corner(&points, &last, settings.ds_min, settings.ds_init)
+                    {
+                        let k = points.len() - 1;
+                        let mut g = x.grazing;
+                        let mut found = Vec::new();
+                        let from = if x.s_grazing > 0.0 {
+                            found.extend(c.events_between(k, &last, &mut g, x.s_grazing)?);
+                            points.push(g.clone());
+                            g
+                        } else {
+                            last.clone()
+                        };
+                        let past = x.past;
+                        let s_rest = x.s_past - x.s_grazing;
+                        let k = points.len() - 1;
+                        found.extend(c.corner_events(k, &from, &past, s_rest));
+                        let done = found.iter().any(&mut until);
+                        events.extend(found);
+                        on_point(past.orbit.param(param));
+                        points.push(past);
+                        if done {
+                            break;
+                        }
+                        ds = (2.0 * x.s_past).clamp(settings.ds_min, settings.ds_init);
                         continue;
                     }
                     return Err(OrbitError::Stalled {

@@ -61,6 +61,12 @@ pub(super) fn test_torus(p: &BranchPoint, _: Gaps) -> f64 {
 /// gap, or, once it strikes a rigid stop (which it never penetrates, so that the displacement
 /// stays at the gap), its impact speed over `w0`. Both vanish at grazing.
 pub(super) fn test_grazing(p: &BranchPoint, gaps: Gaps) -> f64 {
+    let [upper, lower] = side_grazing(p, gaps);
+    upper.max(lower)
+}
+
+/// [`test_grazing`] of each side (upper, lower): positive while the orbit touches that stop.
+pub(super) fn side_grazing(p: &BranchPoint, gaps: Gaps) -> [f64; 2] {
     let s = &p.orbit.summary;
     let side = |reach: f64, gap: f64, speed: f64| {
         if speed > 0.0 {
@@ -69,9 +75,13 @@ pub(super) fn test_grazing(p: &BranchPoint, gaps: Gaps) -> f64 {
             reach - gap
         }
     };
-    side(s.x_upper_m, gaps.upper, s.impact_speed_m_s[0]).max(side(
-        -s.x_lower_m,
-        gaps.lower,
-        s.impact_speed_m_s[1],
-    ))
+    [
+        side(s.x_upper_m, gaps.upper, s.impact_speed_m_s[0]),
+        side(-s.x_lower_m, gaps.lower, s.impact_speed_m_s[1]),
+    ]
+}
+
+/// The stops an orbit touches (upper, lower): its contact set.
+pub(super) fn contact_set(p: &BranchPoint, gaps: Gaps) -> [bool; 2] {
+    side_grazing(p, gaps).map(|g| g > 0.0)
 }

@@ -1,0 +1,83 @@
+//! The continuation at a corner where the contact set changes: a symmetric orbit of
+//! prototype 2 leaving both stiff stops at once on Figure 13's branch at 0.31 g, at a point of
+//! the recorded history match (run 2 of prototype 2's first wave, whose continuation stalled
+//! there). The branch is continued as given and with the drive amplitude scaled by
+//! (1 + 4 eps), a change of the last bits of the arithmetic: both reach the end of the range
+//! with the same events in the same order at the same frequencies.
+
+use endstop::device::StiffnessModel;
+use endstop::paper::deviations::RangesFile;
+use endstop::paper::setups::{endstop, with_endstop, FIG13_BIAS_V};
+use endstop::progress::Silent;
+use endstop::study::continuation::{frequency_branch, Branch};
+
+use crate::common;
+
+/// Run 2 of prototype 2 in `tests/fixtures/history_points.csv` (unit-cube coordinates).
+const RUN_2: [f64; 8] = [
+    0.8895665758661684,
+    0.1622832700042394,
+    0.8676937526421881,
+    0.9567709555348249,
+    0.28157224702252764,
+    0.6296371298352567,
+    0.9988760919815375,
+    0.7593736317045318,
+];
+
+/// The relative change of an event's frequency that counts as another event: the one the
+/// `last_bits` example uses, a thousand times the events' location tolerance (1e-4 Hz at
+/// ~700 Hz is 1.4e-7 relative), far above rounding and far below the distance between two
+/// branches' events.
+const REL_CHANGE: f64 = 1e-3;
+
+/// Figure 13's 0.31 g branch with the linear stop at the run's variant, its drive scaled by
+/// `scale`.
+fn branch(scale: f64) -> Branch {
+    let ranges = RangesFile::bundled().expect("the bundled ranges parse");
+    let variant = ranges
+        .prototype2
+        .variant(&common::prototype2(), &RUN_2)
+        .expect("the run lies in the unit cube");
+    let base = variant.device.with_bias(FIG13_BIAS_V);
+    let bim = endstop(&base).damping_n_s_per_m;
+    let device = with_endstop(&base, StiffnessModel::Linear, bim);
+    let accel = 0.31 * variant.accel_scale * scale;
+    frequency_branch(&device, accel, 600.0, 850.0, 2.0, &Silent)
+        .expect("the branch passes the corner and reaches 850 Hz")
+}
+
+#[test]
+fn a_corner_gives_the_same_events_whatever_the_last_bits() {
+    let plain = branch(1.0);
+    let perturbed = branch(1.0 + 4.0 * f64::EPSILON);
+    let events = |b: &Branch| {
+        b.events
+            .iter()
+            .map(|e| (e.label(), e.param))
+            .collect::<Vec<_>>()
+    };
+    let (a, b) = (events(&plain), events(&perturbed));
+    assert!(
+        plain.grazing_events().next().is_some(),
+        "the branch reaches the stops: {a:?}"
+    );
+    assert_eq!(
+        a.iter().map(|e| &e.0).collect::<Vec<_>>(),
+        b.iter().map(|e| &e.0).collect::<Vec<_>>(),
+        "the same events in the same order: {a:?} against {b:?}"
+    );
+    for ((kind, x), (_, y)) in a.iter().zip(&b) {
+        assert!(
+            (x - y).abs() <= REL_CHANGE * x.abs(),
+            "{kind} at {x} Hz as given and {y} Hz perturbed"
+        );
+    }
+    for br in [&plain, &perturbed] {
+        let last = br.params().last().expect("a branch has points");
+        assert!(
+            last >= 850.0,
+            "the branch ends at {last} Hz, not past 850 Hz"
+        );
+    }
+}
