@@ -511,12 +511,17 @@ mod tests {
         assert!(cut_ranking_matches_whole(19) > 0);
     }
 
-    /// Every case of the family: some minutes.
+    /// The two slow cases of the family whose designs stop the most sweeps (13 and 16: 4 and 5
+    /// of 13 in the cost harness), about two minutes; every case takes some forty, too long
+    /// for CI's ignored tests.
     #[test]
-    #[ignore]
-    fn stopping_the_design_sweeps_early_keeps_the_same_starts_in_every_family_case() {
-        for case in 1..=recovery_family().len() {
-            cut_ranking_matches_whole(case);
+    #[ignore = "about two minutes on 2 cores; CI runs it with the ignored tests"]
+    fn stopping_the_design_sweeps_early_keeps_the_same_starts_in_the_slow_cases() {
+        for case in [13, 16] {
+            assert!(
+                cut_ranking_matches_whole(case) > 0,
+                "case {case}: no sweep stopped"
+            );
         }
     }
 }
