@@ -3,6 +3,9 @@
 //! and the synchronous switch acting at the displacement extrema. [`super::bridge`] writes the
 //! circuit's modes, guards and switches with them.
 
+use nalgebra::SVector;
+
+use super::bridge::{Circuit, Element};
 use crate::device::DcLoad;
 
 /// The diodes, evaluated.
@@ -75,27 +78,79 @@ pub enum Switch {
     Inverter(super::sshi_inductor::Inverter),
 }
 
-/// The buck-boost inductor of a SECE through its inductor, its resistance and its flyback
-/// diode, evaluated; its behaviour is [`super::sece_inductor`]'s.
+impl Switch {
+    /// The inductor the switch holds, if any.
+    pub fn inductor(&self) -> Option<Inductor> {
+        match *self {
+            Switch::BuckBoost(b) => Some(b.inductor),
+            Switch::Inverter(v) => Some(v.inductor),
+            Switch::None | Switch::Parallel(_) | Switch::Series(_) | Switch::Sece(_) => None,
+        }
+    }
+}
+
+/// The buck-boost inductor of a SECE through its inductor and its flyback diode, evaluated;
+/// its behaviour is [`super::sece_inductor`]'s.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct BuckBoost {
+    /// The inductor, its resistance and its current.
+    pub inductor: Inductor,
+    /// The flyback diode's forward drop V_F (V).
+    pub vf: f64,
+}
+
+/// An inductor with its series resistance, its current a state component of its own,
+/// evaluated: the part every circuit with an inductor holds ([`BuckBoost`],
+/// [`super::sshi_inductor::Inverter`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Inductor {
     /// L (H).
     pub l: f64,
     /// R_L (ohm).
     pub rl: f64,
-    /// The flyback diode's forward drop V_F (V).
-    pub vf: f64,
     /// Index of the inductor current in the state.
     pub i: usize,
 }
 
-/// The shortest time constant (s) of an inductor `l` (H) with its resistance `rl` (ohm) in a
-/// loop with the capacitance `cp` (F): the ring's `sqrt(L Cp)`, or `L / R_L` if shorter.
-pub fn inductor_time_constant_s(l: f64, rl: f64, cp: f64) -> f64 {
-    let ring = (l * cp).sqrt();
-    if rl > 0.0 {
-        ring.min(l / rl)
-    } else {
-        ring
+impl Inductor {
+    /// Power lost in the resistance (W) while the inductor carries the current `i` (A).
+    #[inline(always)]
+    pub fn resistive_power(&self, i: f64) -> f64 {
+        self.rl * i * i
+    }
+
+    /// The inductor's energy `L I^2 / 2` (J).
+    #[inline]
+    pub fn stored_energy<const N: usize>(&self, y: &SVector<f64, N>) -> f64 {
+        0.5 * self.l * y[self.i] * y[self.i]
+    }
+
+    /// The current's scale: the peak current of the element's capacitance discharging through
+    /// the inductor from the element's voltage scale, `Vp sqrt(Cp / L)`.
+    pub fn scale<const N: usize>(&self, c: &Circuit, sc: &mut SVector<f64, N>) {
+        let (_, cp) = piezo(c);
+        sc[self.i] = sc[c.e] * (cp / self.l).sqrt();
+    }
+
+    /// The shortest time constant (s) of the inductor in a loop with the element's
+    /// capacitance `Cp`: the ring's `sqrt(L Cp)`, or `L / R_L` if shorter.
+    pub fn time_constant_s(&self, c: &Circuit) -> f64 {
+        let (_, cp) = piezo(c);
+        let ring = (self.l * cp).sqrt();
+        if self.rl > 0.0 {
+            ring.min(self.l / self.rl)
+        } else {
+            ring
+        }
+    }
+}
+
+/// The element's coupling and capacitance (theta, Cp) for a circuit with an inductor: the
+/// description admits a piezoelectric element only, and the assembly refuses the others.
+#[inline(always)]
+pub(crate) fn piezo(c: &Circuit) -> (f64, f64) {
+    match c.element {
+        Element::Piezo { theta, cp } => (theta, cp),
+        _ => (0.0, f64::INFINITY),
     }
 }
