@@ -72,8 +72,7 @@
 
 use nalgebra::{SMatrix, SVector};
 
-use super::parts::{BuckBoost, DiodeLaw, Sink, Switch};
-use super::sshi_inductor::Inverter;
+use super::parts::{BuckBoost, DiodeLaw, Inverter, Sink, Switch};
 use crate::physics::transducer::CapacitorPair;
 
 /// An unused guard.
@@ -246,6 +245,16 @@ pub struct Circuit {
 }
 
 impl Circuit {
+    /// The element's coupling and capacitance (theta, Cp) for a circuit with an inductor: the
+    /// description admits a piezoelectric element only, and the assembly refuses the others.
+    #[inline(always)]
+    pub(crate) fn piezo(&self) -> (f64, f64) {
+        match self.element {
+            Element::Piezo { theta, cp } => (theta, cp),
+            _ => (0.0, f64::INFINITY),
+        }
+    }
+
     /// The buck-boost inductor of a SECE through its inductor, which then owns the circuit's
     /// behaviour ([`super::sece_inductor`]).
     #[inline(always)]
@@ -657,7 +666,7 @@ impl Circuit {
                 sc[self.e] = theta * x / cp;
                 sc[self.vs] = theta * x / cp;
                 if let Some(inductor) = self.switch.inductor() {
-                    inductor.scale(self, sc);
+                    inductor.scale(cp, sc[self.e], sc);
                 }
             }
             Element::Coil { phi, rc, l } => {
@@ -688,11 +697,11 @@ impl Circuit {
     /// rest), `L / (Rc + 2 R_on)` for a coil; infinite where a mode has none.
     pub fn conduction_time_constant_s(&self) -> f64 {
         if let Some(b) = self.buck_boost() {
-            return b.inductor.time_constant_s(self);
+            return b.inductor.time_constant_s(self.piezo().1);
         }
-        let ring = self
-            .inverter()
-            .map_or(f64::INFINITY, |v| v.inductor.time_constant_s(self));
+        let ring = self.inverter().map_or(f64::INFINITY, |v| {
+            v.inductor.time_constant_s(self.piezo().1)
+        });
         let capacitive = |c: f64| 2.0 * self.ron() * c * self.cs / (c + self.cs);
         match self.element {
             Element::Piezo { cp, .. } if self.ron() > 0.0 && self.bridge_between_extrema() => {

@@ -16,5 +16,5 @@ pub mod sece_inductor;
 pub mod sshi_inductor;
 
 pub use bridge::*;
+pub use parts::Inverter;
 pub use parts::{BuckBoost, DiodeLaw, Inductor, Sink, Switch};
-pub use sshi_inductor::Inverter;

@@ -5,7 +5,6 @@
 
 use nalgebra::SVector;
 
-use super::bridge::{Circuit, Element};
 use crate::device::DcLoad;
 
 /// The diodes, evaluated.
@@ -75,7 +74,7 @@ pub enum Switch {
     /// SECE through its buck-boost inductor ([`super::sece_inductor`]).
     BuckBoost(BuckBoost),
     /// Parallel SSHI whose inversion rings through its inductor ([`super::sshi_inductor`]).
-    Inverter(super::sshi_inductor::Inverter),
+    Inverter(Inverter),
 }
 
 impl Switch {
@@ -99,9 +98,17 @@ pub struct BuckBoost {
     pub vf: f64,
 }
 
+/// The inverting inductor of a parallel SSHI, evaluated; its behaviour is
+/// [`super::sshi_inductor`]'s.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Inverter {
+    /// The inductor, its resistance and its current.
+    pub inductor: Inductor,
+}
+
 /// An inductor with its series resistance, its current a state component of its own,
 /// evaluated: the part every circuit with an inductor holds ([`BuckBoost`],
-/// [`super::sshi_inductor::Inverter`]).
+/// [`Inverter`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Inductor {
     /// L (H).
@@ -125,32 +132,20 @@ impl Inductor {
         0.5 * self.l * y[self.i] * y[self.i]
     }
 
-    /// The current's scale: the peak current of the element's capacitance discharging through
-    /// the inductor from the element's voltage scale, `Vp sqrt(Cp / L)`.
-    pub fn scale<const N: usize>(&self, c: &Circuit, sc: &mut SVector<f64, N>) {
-        let (_, cp) = piezo(c);
-        sc[self.i] = sc[c.e] * (cp / self.l).sqrt();
+    /// The current's scale: the peak current of the element's capacitance `cp` discharging
+    /// through the inductor from the element's voltage scale `vp_scale`, `Vp sqrt(Cp / L)`.
+    pub fn scale<const N: usize>(&self, cp: f64, vp_scale: f64, sc: &mut SVector<f64, N>) {
+        sc[self.i] = vp_scale * (cp / self.l).sqrt();
     }
 
     /// The shortest time constant (s) of the inductor in a loop with the element's
-    /// capacitance `Cp`: the ring's `sqrt(L Cp)`, or `L / R_L` if shorter.
-    pub fn time_constant_s(&self, c: &Circuit) -> f64 {
-        let (_, cp) = piezo(c);
+    /// capacitance `cp`: the ring's `sqrt(L Cp)`, or `L / R_L` if shorter.
+    pub fn time_constant_s(&self, cp: f64) -> f64 {
         let ring = (self.l * cp).sqrt();
         if self.rl > 0.0 {
             ring.min(self.l / self.rl)
         } else {
             ring
         }
-    }
-}
-
-/// The element's coupling and capacitance (theta, Cp) for a circuit with an inductor: the
-/// description admits a piezoelectric element only, and the assembly refuses the others.
-#[inline(always)]
-pub(crate) fn piezo(c: &Circuit) -> (f64, f64) {
-    match c.element {
-        Element::Piezo { theta, cp } => (theta, cp),
-        _ => (0.0, f64::INFINITY),
     }
 }

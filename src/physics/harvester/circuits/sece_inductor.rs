@@ -39,7 +39,7 @@
 use nalgebra::{SMatrix, SVector};
 
 use super::bridge::{Bridge, Circuit, CircuitMode, Heading};
-use super::parts::{piezo, BuckBoost};
+use super::parts::BuckBoost;
 use crate::model::AffineGuard;
 
 /// A `|Vp|` below this fraction of its scale at an extremum is not extracted.
@@ -73,7 +73,7 @@ impl BuckBoost {
         y: &SVector<f64, N>,
         rates: &mut SVector<f64, N>,
     ) -> f64 {
-        let (theta, cp) = piezo(c);
+        let (theta, cp) = c.piezo();
         let (e, ivs, ii) = (c.e, c.vs, self.inductor.i);
         let (vp, vs) = (y[e], y[ivs]);
         let i = self.current(phase, y);
@@ -104,7 +104,7 @@ impl BuckBoost {
         m: f64,
         j: &mut SMatrix<f64, N, N>,
     ) {
-        let (theta, cp) = piezo(c);
+        let (theta, cp) = c.piezo();
         let (e, ivs, ii) = (c.e, c.vs, self.inductor.i);
         let gl = c.sink_conductance();
         j[(1, e)] += theta / m;

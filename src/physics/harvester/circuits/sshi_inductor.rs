@@ -49,18 +49,11 @@
 use nalgebra::{SMatrix, SVector};
 
 use super::bridge::{Bridge, Circuit};
-use super::parts::{piezo, Inductor};
+use super::parts::Inverter;
 use crate::model::AffineGuard;
 
 /// A `|Vp|` below this fraction of its scale at an extremum is not inverted (nothing rings).
 const EMPTY: f64 = 1e-9;
-
-/// The inverting inductor of a parallel SSHI, evaluated (see the module docs).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Inverter {
-    /// The inductor, its resistance and its current.
-    pub inductor: Inductor,
-}
 
 impl Inverter {
     /// The circuit's bridge states: the bridge's three, then the ring's stages by polarity.
@@ -118,7 +111,7 @@ impl Inverter {
     ) {
         rates[self.inductor.i] = 0.0;
         if ringing {
-            let (_, cp) = piezo(c);
+            let (_, cp) = c.piezo();
             let i = y[self.inductor.i];
             rates[c.e] -= i / cp;
             rates[self.inductor.i] = (y[c.e] - self.inductor.rl * i) / self.inductor.l;
@@ -128,7 +121,7 @@ impl Inverter {
     /// Adds the ring's loop to the open bridge's Jacobian (in a ringing stage).
     pub fn jacobian<const N: usize>(&self, c: &Circuit, ringing: bool, j: &mut SMatrix<f64, N, N>) {
         if ringing {
-            let (_, cp) = piezo(c);
+            let (_, cp) = c.piezo();
             j[(c.e, self.inductor.i)] = -1.0 / cp;
             j[(self.inductor.i, c.e)] = 1.0 / self.inductor.l;
             j[(self.inductor.i, self.inductor.i)] = -self.inductor.rl / self.inductor.l;
