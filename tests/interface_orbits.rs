@@ -98,26 +98,13 @@ fn jacobian_checks<M: Model<N>, const N: usize>(m: &M, name: &str) -> usize {
             }
             .bits();
             let mode = contact.with_circuit(0, bits);
-            let j = m.jacobian(mode, &y);
-            for c in 0..4 {
-                let h = 1e-6 * sc[c];
-                let (mut yp, mut ym) = (y, y);
-                yp[c] += h;
-                ym[c] -= h;
-                let fd = (m.rhs(mode, &yp, a) - m.rhs(mode, &ym, a)) / (2.0 * h);
-                for r in 0..4 {
-                    // A rate's scale: the row's scale times the suspension's 754 rad/s,
-                    // over the column's.
-                    let scale = (fd[r].abs() + j[(r, c)].abs()).max(754.0 * sc[r] / sc[c]);
-                    assert!(
-                        (fd[r] - j[(r, c)]).abs() <= 1e-6 * scale,
-                        "{name} {mode:?} ({r},{c}): {} vs {}",
-                        j[(r, c)],
-                        fd[r]
-                    );
-                    checked += 1;
-                }
-            }
+            checked += common::interface_checks::assert_jacobian_matches_differences(
+                m,
+                mode,
+                &y,
+                a,
+                &format!("{name} {mode:?}"),
+            );
         }
     }
     checked

@@ -19,11 +19,11 @@
 use crate::common;
 use endstop::device::{Device, Interface, Inversion, Rectifier};
 use endstop::drive::{Excitation, Sine};
-use endstop::model::{Driven, Ledger, Mode, Model};
+use endstop::model::{Driven, Mode, Model};
 use endstop::ode::{Dopri5, Observer, Step};
 use endstop::physics::harvester::circuits::{Bridge, CircuitMode, Heading};
 use endstop::physics::harvester::AssemblyError;
-use endstop::study::periodic::{steady_state_from_rest, PeriodicError, SteadySettings};
+use endstop::study::periodic::{steady_state_from_rest, SteadySettings};
 use nalgebra::SVector;
 use std::f64::consts::PI;
 
@@ -222,14 +222,7 @@ fn jacobian_matches_differences_in_every_stage() {
 }
 
 fn jacobian_checks<M: Model<N>, const N: usize>(m: &M) {
-    assert_eq!(N, 5, "x, v, Vp, Vs and the inductor current");
-    let sc = m.scales();
-    let mut y = SVector::<f64, N>::zeros();
-    y[0] = 1.05e-5;
-    y[1] = -0.03;
-    y[2] = 0.17 * sc[2];
-    y[3] = 0.11 * sc[3];
-    y[4] = 0.23 * sc[4];
+    let y = common::interface_checks::jacobian_state(m, 1.05e-5);
     let a = Sine::from_rms_g(0.3, 120.0).accel(1e-3);
     let stages = [
         Bridge::Off,
@@ -251,25 +244,13 @@ fn jacobian_checks<M: Model<N>, const N: usize>(m: &M) {
         .bits();
         assert_eq!(CircuitMode::of(bits).bridge, bridge);
         let mode = Mode::FREE.with_circuit(0, bits);
-        let j = m.jacobian(mode, &y);
-        for c in 0..N {
-            let h = 1e-6 * sc[c];
-            let (mut yp, mut ym) = (y, y);
-            yp[c] += h;
-            ym[c] -= h;
-            let fd = (m.rhs(mode, &yp, a) - m.rhs(mode, &ym, a)) / (2.0 * h);
-            for r in 0..N {
-                // A rate's scale: the row's scale times the suspension's 754 rad/s over the
-                // column's.
-                let scale = (fd[r].abs() + j[(r, c)].abs()).max(754.0 * sc[r] / sc[c]);
-                assert!(
-                    (fd[r] - j[(r, c)]).abs() <= 1e-6 * scale,
-                    "{bridge:?} ({r},{c}): {} vs {}",
-                    j[(r, c)],
-                    fd[r]
-                );
-            }
-        }
+        common::interface_checks::assert_jacobian_matches_differences(
+            m,
+            mode,
+            &y,
+            a,
+            &format!("{bridge:?}"),
+        );
     }
 }
 
@@ -278,56 +259,38 @@ fn jacobian_checks<M: Model<N>, const N: usize>(m: &M) {
 /// work, as for every other interface (rtol 1e-9 over 20 periods with events).
 #[test]
 fn the_energy_ledger_closes() {
-    let d = example();
-    let f = d.suspension_omega_rad_s() / (2.0 * PI);
-    let sine = Sine::from_rms_g(1.0, f);
-    let l: Result<Ledger, PeriodicError> =
-        endstop::with_harvester!(&d, |h| common::from_rest_ledger(&h, sine, 20.0 / f));
-    let l = l.unwrap();
-    eprintln!("{l:?} relative residual {:e}", l.relative_residual());
-    assert!(l.stop_absorbed() + l.impact_losses() > 0.0, "no contact");
-    for term in ["element", "diodes", "dc_load"] {
-        assert!(l.get(term) > 0.0, "nothing in {term}: {l:?}");
-    }
-    assert!(l.relative_residual().abs() < 1e-6, "{l:?}");
+    common::interface_checks::assert_ledger_closes_from_rest(&example());
 }
 
 /// The description: the example round-trips through TOML and needs five components; bad
 /// values and keys are errors naming the field.
 #[test]
 fn the_description_is_checked() {
-    let d = example();
-    let back = Device::from_toml_str(&d.to_toml_string(), "b.toml").unwrap();
-    assert_eq!(d, back);
-    assert_eq!(endstop::physics::harvester::dimension(&d), Ok(5));
-    let text = common::device_text("examples/piezo_sshi_inductor");
-    let cases = [
-        (
-            text.replace("inductance_h = 1e-3", "inductance_h = -1e-3"),
-            "interface.inductance_h",
-        ),
-        (
-            text.replace(
+    common::interface_checks::assert_description_checked(
+        &example(),
+        "examples/piezo_sshi_inductor",
+        5,
+        &[
+            (
+                "inductance_h = 1e-3",
+                "inductance_h = -1e-3",
+                "interface.inductance_h",
+            ),
+            (
                 "inductor_resistance_ohm = 47.1",
                 "inductor_resistance_ohm = 300.0",
+                "interface.inductor_resistance_ohm",
             ),
-            "interface.inductor_resistance_ohm",
-        ),
-        (
-            text.replace(
+            (
                 "inductor_resistance_ohm = 47.1",
                 "inductor_resistance_ohm = 47.1\nquality_factor = 3.0",
+                "interface.quality_factor",
             ),
-            "interface.quality_factor",
-        ),
-        (
-            text.replace("kind = \"parallel_sshi\"", "kind = \"series_sshi\""),
-            "interface.inductance_h",
-        ),
-    ];
-    for (t, field) in cases {
-        let e = Device::from_toml_str(&t, "bad.toml").unwrap_err();
-        eprintln!("{e}");
-        assert_eq!(e.field(), Some(field), "{e}");
-    }
+            (
+                "kind = \"parallel_sshi\"",
+                "kind = \"series_sshi\"",
+                "interface.inductance_h",
+            ),
+        ],
+    );
 }

@@ -4,6 +4,7 @@
 //! reaches with `use crate::common;`.
 #![allow(dead_code)]
 
+pub mod interface_checks;
 pub mod layout;
 pub mod linearisation;
 pub mod validation;

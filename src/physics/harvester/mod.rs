@@ -512,11 +512,11 @@ impl<const N: usize> Harvester<N> {
                     s[(c.vs, c.vs)] = 1.0;
                     // A buck-boost inductor's current flows one way behind its rectifier.
                     if let circuits::Switch::BuckBoost(b) = c.switch {
-                        s[(b.i, b.i)] = 1.0;
+                        s[(b.inductor.i, b.inductor.i)] = 1.0;
                     }
                     // An inverting inductor's current flows as the element's voltage drives it.
                     if let circuits::Switch::Inverter(v) = c.switch {
-                        s[(v.i, v.i)] = -1.0;
+                        s[(v.inductor.i, v.inductor.i)] = -1.0;
                     }
                 }
             },
@@ -639,9 +639,11 @@ fn circuit_of(device: &Device) -> Result<Option<circuits::Circuit>, AssemblyErro
             r.storage_capacitance_f,
             &r.load,
             Switch::Inverter(circuits::Inverter {
-                l: *inductance_h,
-                rl: *resistance_ohm,
-                i: 3 + e_slots,
+                inductor: circuits::Inductor {
+                    l: *inductance_h,
+                    rl: *resistance_ohm,
+                    i: 3 + e_slots,
+                },
             }),
         ),
         Interface::ParallelSshi(r, g) => (
@@ -671,10 +673,12 @@ fn circuit_of(device: &Device) -> Result<Option<circuits::Circuit>, AssemblyErro
             s.storage_capacitance_f,
             &s.load,
             Switch::BuckBoost(circuits::BuckBoost {
-                l: s.inductance_h,
-                rl: s.inductor_resistance_ohm,
+                inductor: circuits::Inductor {
+                    l: s.inductance_h,
+                    rl: s.inductor_resistance_ohm,
+                    i: 3 + e_slots,
+                },
                 vf: s.flyback_drop_v,
-                i: 3 + e_slots,
             }),
         ),
     };

@@ -72,8 +72,7 @@
 
 use nalgebra::{SMatrix, SVector};
 
-use super::parts::{BuckBoost, DiodeLaw, Sink, Switch};
-use super::sshi_inductor::Inverter;
+use super::parts::{BuckBoost, DiodeLaw, Inverter, Sink, Switch};
 use crate::physics::transducer::CapacitorPair;
 
 /// An unused guard.
@@ -246,6 +245,16 @@ pub struct Circuit {
 }
 
 impl Circuit {
+    /// The element's coupling and capacitance (theta, Cp) for a circuit with an inductor: the
+    /// description admits a piezoelectric element only, and the assembly refuses the others.
+    #[inline(always)]
+    pub(crate) fn piezo(&self) -> (f64, f64) {
+        match self.element {
+            Element::Piezo { theta, cp } => (theta, cp),
+            _ => (0.0, f64::INFINITY),
+        }
+    }
+
     /// The buck-boost inductor of a SECE through its inductor, which then owns the circuit's
     /// behaviour ([`super::sece_inductor`]).
     #[inline(always)]
@@ -268,11 +277,9 @@ impl Circuit {
 
     /// The state's dimension the circuit needs: its last component's index plus one.
     pub fn dimension(&self) -> usize {
-        match self.switch {
-            Switch::BuckBoost(b) => b.i + 1,
-            Switch::Inverter(v) => v.i + 1,
-            _ => self.vs + 1,
-        }
+        self.switch
+            .inductor()
+            .map_or(self.vs + 1, |inductor| inductor.i + 1)
     }
 
     /// The bridge states of the circuit's modes.
@@ -624,11 +631,10 @@ impl Circuit {
                 e
             }
         };
-        let inductor = match self.switch {
-            Switch::BuckBoost(b) => b.stored_energy(y),
-            Switch::Inverter(v) => v.stored_energy(y),
-            _ => 0.0,
-        };
+        let inductor = self
+            .switch
+            .inductor()
+            .map_or(0.0, |inductor| inductor.stored_energy(y));
         e1 + inductor + 0.5 * self.cs * y[self.vs] * y[self.vs]
     }
 
@@ -659,11 +665,8 @@ impl Circuit {
             Element::Piezo { theta, cp } => {
                 sc[self.e] = theta * x / cp;
                 sc[self.vs] = theta * x / cp;
-                if let Some(b) = self.buck_boost() {
-                    b.scale(self, sc);
-                }
-                if let Some(v) = self.inverter() {
-                    v.scale(self, sc);
+                if let Some(inductor) = self.switch.inductor() {
+                    inductor.scale(cp, sc[self.e], sc);
                 }
             }
             Element::Coil { phi, rc, l } => {
@@ -694,11 +697,11 @@ impl Circuit {
     /// rest), `L / (Rc + 2 R_on)` for a coil; infinite where a mode has none.
     pub fn conduction_time_constant_s(&self) -> f64 {
         if let Some(b) = self.buck_boost() {
-            return b.time_constant_s(self);
+            return b.inductor.time_constant_s(self.piezo().1);
         }
-        let ring = self
-            .inverter()
-            .map_or(f64::INFINITY, |v| v.time_constant_s(self));
+        let ring = self.inverter().map_or(f64::INFINITY, |v| {
+            v.inductor.time_constant_s(self.piezo().1)
+        });
         let capacitive = |c: f64| 2.0 * self.ron() * c * self.cs / (c + self.cs);
         match self.element {
             Element::Piezo { cp, .. } if self.ron() > 0.0 && self.bridge_between_extrema() => {

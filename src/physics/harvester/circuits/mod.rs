@@ -8,7 +8,7 @@
 //! * [`sshi_inductor`]: a parallel SSHI whose inversion rings through its inductor, the
 //!   inductor current a state of its own.
 //! * [`parts`]: the diodes' law, the DC load and the synchronous switch it is built from
-//!   (with the buck-boost inductor's values).
+//!   (with the inductor the circuits with an inductor hold).
 
 pub mod bridge;
 pub mod parts;
@@ -16,5 +16,5 @@ pub mod sece_inductor;
 pub mod sshi_inductor;
 
 pub use bridge::*;
-pub use parts::{BuckBoost, DiodeLaw, Sink, Switch};
-pub use sshi_inductor::Inverter;
+pub use parts::Inverter;
+pub use parts::{BuckBoost, DiodeLaw, Inductor, Sink, Switch};

@@ -3,6 +3,8 @@
 //! and the synchronous switch acting at the displacement extrema. [`super::bridge`] writes the
 //! circuit's modes, guards and switches with them.
 
+use nalgebra::SVector;
+
 use crate::device::DcLoad;
 
 /// The diodes, evaluated.
@@ -72,30 +74,78 @@ pub enum Switch {
     /// SECE through its buck-boost inductor ([`super::sece_inductor`]).
     BuckBoost(BuckBoost),
     /// Parallel SSHI whose inversion rings through its inductor ([`super::sshi_inductor`]).
-    Inverter(super::sshi_inductor::Inverter),
+    Inverter(Inverter),
 }
 
-/// The buck-boost inductor of a SECE through its inductor, its resistance and its flyback
-/// diode, evaluated; its behaviour is [`super::sece_inductor`]'s.
+impl Switch {
+    /// The inductor the switch holds, if any.
+    pub fn inductor(&self) -> Option<Inductor> {
+        match *self {
+            Switch::BuckBoost(b) => Some(b.inductor),
+            Switch::Inverter(v) => Some(v.inductor),
+            Switch::None | Switch::Parallel(_) | Switch::Series(_) | Switch::Sece(_) => None,
+        }
+    }
+}
+
+/// The buck-boost inductor of a SECE through its inductor and its flyback diode, evaluated;
+/// its behaviour is [`super::sece_inductor`]'s.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct BuckBoost {
+    /// The inductor, its resistance and its current.
+    pub inductor: Inductor,
+    /// The flyback diode's forward drop V_F (V).
+    pub vf: f64,
+}
+
+/// The inverting inductor of a parallel SSHI, evaluated; its behaviour is
+/// [`super::sshi_inductor`]'s.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Inverter {
+    /// The inductor, its resistance and its current.
+    pub inductor: Inductor,
+}
+
+/// An inductor with its series resistance, its current a state component of its own,
+/// evaluated: the part every circuit with an inductor holds ([`BuckBoost`],
+/// [`Inverter`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Inductor {
     /// L (H).
     pub l: f64,
     /// R_L (ohm).
     pub rl: f64,
-    /// The flyback diode's forward drop V_F (V).
-    pub vf: f64,
     /// Index of the inductor current in the state.
     pub i: usize,
 }
 
-/// The shortest time constant (s) of an inductor `l` (H) with its resistance `rl` (ohm) in a
-/// loop with the capacitance `cp` (F): the ring's `sqrt(L Cp)`, or `L / R_L` if shorter.
-pub fn inductor_time_constant_s(l: f64, rl: f64, cp: f64) -> f64 {
-    let ring = (l * cp).sqrt();
-    if rl > 0.0 {
-        ring.min(l / rl)
-    } else {
-        ring
+impl Inductor {
+    /// Power lost in the resistance (W) while the inductor carries the current `i` (A).
+    #[inline(always)]
+    pub fn resistive_power(&self, i: f64) -> f64 {
+        self.rl * i * i
+    }
+
+    /// The inductor's energy `L I^2 / 2` (J).
+    #[inline]
+    pub fn stored_energy<const N: usize>(&self, y: &SVector<f64, N>) -> f64 {
+        0.5 * self.l * y[self.i] * y[self.i]
+    }
+
+    /// The current's scale: the peak current of the element's capacitance `cp` discharging
+    /// through the inductor from the element's voltage scale `vp_scale`, `Vp sqrt(Cp / L)`.
+    pub fn scale<const N: usize>(&self, cp: f64, vp_scale: f64, sc: &mut SVector<f64, N>) {
+        sc[self.i] = vp_scale * (cp / self.l).sqrt();
+    }
+
+    /// The shortest time constant (s) of the inductor in a loop with the element's
+    /// capacitance `cp`: the ring's `sqrt(L Cp)`, or `L / R_L` if shorter.
+    pub fn time_constant_s(&self, cp: f64) -> f64 {
+        let ring = (self.l * cp).sqrt();
+        if self.rl > 0.0 {
+            ring.min(self.l / self.rl)
+        } else {
+            ring
+        }
     }
 }

@@ -38,22 +38,12 @@
 
 use nalgebra::{SMatrix, SVector};
 
-use super::bridge::{Bridge, Circuit, CircuitMode, Element, Heading};
+use super::bridge::{Bridge, Circuit, CircuitMode, Heading};
 use super::parts::BuckBoost;
 use crate::model::AffineGuard;
 
 /// A `|Vp|` below this fraction of its scale at an extremum is not extracted.
 const EMPTY: f64 = 1e-9;
-
-/// The element's coupling and capacitance (theta, Cp); the description admits a piezoelectric
-/// element only, and the assembly refuses the others.
-#[inline(always)]
-fn piezo(c: &Circuit) -> (f64, f64) {
-    match c.element {
-        Element::Piezo { theta, cp } => (theta, cp),
-        _ => (0.0, f64::INFINITY),
-    }
-}
 
 impl BuckBoost {
     /// The circuit's phases, as bridge states: open, charge by polarity, flyback.
@@ -70,7 +60,7 @@ impl BuckBoost {
         if phase == Bridge::Off {
             0.0
         } else {
-            y[self.i]
+            y[self.inductor.i]
         }
     }
 
@@ -83,8 +73,8 @@ impl BuckBoost {
         y: &SVector<f64, N>,
         rates: &mut SVector<f64, N>,
     ) -> f64 {
-        let (theta, cp) = piezo(c);
-        let (e, ivs, ii) = (c.e, c.vs, self.i);
+        let (theta, cp) = c.piezo();
+        let (e, ivs, ii) = (c.e, c.vs, self.inductor.i);
         let (vp, vs) = (y[e], y[ivs]);
         let i = self.current(phase, y);
         let il = c.sink.current(vs);
@@ -96,10 +86,10 @@ impl BuckBoost {
             Bridge::Positive | Bridge::Negative => {
                 let s = phase.sign();
                 rates[e] -= s * i / cp;
-                rates[ii] = (s * vp - self.rl * i) / self.l;
+                rates[ii] = (s * vp - self.inductor.rl * i) / self.inductor.l;
             }
             Bridge::Flyback => {
-                rates[ii] = (-(vs + self.vf) - self.rl * i) / self.l;
+                rates[ii] = (-(vs + self.vf) - self.inductor.rl * i) / self.inductor.l;
                 rates[ivs] = (i - il) / c.cs;
             }
         }
@@ -114,8 +104,8 @@ impl BuckBoost {
         m: f64,
         j: &mut SMatrix<f64, N, N>,
     ) {
-        let (theta, cp) = piezo(c);
-        let (e, ivs, ii) = (c.e, c.vs, self.i);
+        let (theta, cp) = c.piezo();
+        let (e, ivs, ii) = (c.e, c.vs, self.inductor.i);
         let gl = c.sink_conductance();
         j[(1, e)] += theta / m;
         j[(e, 1)] = -theta / cp;
@@ -125,12 +115,12 @@ impl BuckBoost {
             Bridge::Positive | Bridge::Negative => {
                 let s = phase.sign();
                 j[(e, ii)] = -s / cp;
-                j[(ii, e)] = s / self.l;
-                j[(ii, ii)] = -self.rl / self.l;
+                j[(ii, e)] = s / self.inductor.l;
+                j[(ii, ii)] = -self.inductor.rl / self.inductor.l;
             }
             Bridge::Flyback => {
-                j[(ii, ivs)] = -1.0 / self.l;
-                j[(ii, ii)] = -self.rl / self.l;
+                j[(ii, ivs)] = -1.0 / self.inductor.l;
+                j[(ii, ii)] = -self.inductor.rl / self.inductor.l;
                 j[(ivs, ii)] = 1.0 / c.cs;
             }
         }
@@ -148,7 +138,7 @@ impl BuckBoost {
         match phase {
             Bridge::Off | Bridge::Invert { .. } => f64::NEG_INFINITY,
             Bridge::Positive | Bridge::Negative => -phase.sign() * y[c.e] / sc[c.e],
-            Bridge::Flyback => -y[self.i] / sc[self.i],
+            Bridge::Flyback => -y[self.inductor.i] / sc[self.inductor.i],
         }
     }
 
@@ -163,7 +153,7 @@ impl BuckBoost {
         match phase {
             Bridge::Off | Bridge::Invert { .. } => return None,
             Bridge::Positive | Bridge::Negative => n[c.e] = -phase.sign(),
-            Bridge::Flyback => n[self.i] = -1.0,
+            Bridge::Flyback => n[self.inductor.i] = -1.0,
         }
         Some(AffineGuard { index, n, g0: 0.0 })
     }
@@ -188,7 +178,7 @@ impl BuckBoost {
                 Heading::Down => Heading::Up,
             };
             if mode.bridge == Bridge::Off && y[c.e].abs() > EMPTY * sc[c.e] {
-                y[self.i] = 0.0;
+                y[self.inductor.i] = 0.0;
                 next.bridge = if y[c.e] > 0.0 {
                     Bridge::Positive
                 } else {
@@ -203,7 +193,7 @@ impl BuckBoost {
                 next.bridge = Bridge::Flyback;
             }
             Bridge::Flyback => {
-                y[self.i] = 0.0;
+                y[self.inductor.i] = 0.0;
                 next.bridge = Bridge::Off;
             }
             Bridge::Off | Bridge::Invert { .. } => {}
@@ -213,7 +203,7 @@ impl BuckBoost {
 
     /// The phase a state starts in: flyback while the inductor carries a current, else open.
     pub fn phase_of<const N: usize>(&self, y: &SVector<f64, N>) -> Bridge {
-        if y[self.i] > 0.0 {
+        if y[self.inductor.i] > 0.0 {
             Bridge::Flyback
         } else {
             Bridge::Off
@@ -223,36 +213,16 @@ impl BuckBoost {
     /// Power lost in the inductor's resistance (W).
     #[inline]
     pub fn resistive_power<const N: usize>(&self, phase: Bridge, y: &SVector<f64, N>) -> f64 {
-        let i = self.current(phase, y);
-        self.rl * i * i
+        self.inductor.resistive_power(self.current(phase, y))
     }
 
     /// Power lost in the flyback diode (W).
     #[inline]
     pub fn diode_power<const N: usize>(&self, phase: Bridge, y: &SVector<f64, N>) -> f64 {
         if phase == Bridge::Flyback {
-            self.vf * y[self.i]
+            self.vf * y[self.inductor.i]
         } else {
             0.0
         }
-    }
-
-    /// The inductor's energy `L I^2 / 2` (J).
-    #[inline]
-    pub fn stored_energy<const N: usize>(&self, y: &SVector<f64, N>) -> f64 {
-        0.5 * self.l * y[self.i] * y[self.i]
-    }
-
-    /// The inductor current's scale: the peak current of a transfer from the element's
-    /// voltage scale, `Vp sqrt(Cp / L)`.
-    pub fn scale<const N: usize>(&self, c: &Circuit, sc: &mut SVector<f64, N>) {
-        let (_, cp) = piezo(c);
-        sc[self.i] = sc[c.e] * (cp / self.l).sqrt();
-    }
-
-    /// The shortest time constant of a transfer (s): `sqrt(L Cp)`, or `L / R_L` if shorter.
-    pub fn time_constant_s(&self, c: &Circuit) -> f64 {
-        let (_, cp) = piezo(c);
-        super::parts::inductor_time_constant_s(self.l, self.rl, cp)
     }
 }

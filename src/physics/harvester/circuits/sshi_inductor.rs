@@ -48,32 +48,12 @@
 
 use nalgebra::{SMatrix, SVector};
 
-use super::bridge::{Bridge, Circuit, Element};
+use super::bridge::{Bridge, Circuit};
+use super::parts::Inverter;
 use crate::model::AffineGuard;
 
 /// A `|Vp|` below this fraction of its scale at an extremum is not inverted (nothing rings).
 const EMPTY: f64 = 1e-9;
-
-/// The inverting inductor of a parallel SSHI, evaluated (see the module docs).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Inverter {
-    /// L (H).
-    pub l: f64,
-    /// R_L (ohm).
-    pub rl: f64,
-    /// Index of the inductor current in the state.
-    pub i: usize,
-}
-
-/// The element's coupling and capacitance (theta, Cp); the assembly admits a piezoelectric
-/// element only.
-#[inline(always)]
-fn piezo(c: &Circuit) -> (f64, f64) {
-    match c.element {
-        Element::Piezo { theta, cp } => (theta, cp),
-        _ => (0.0, f64::INFINITY),
-    }
-}
 
 impl Inverter {
     /// The circuit's bridge states: the bridge's three, then the ring's stages by polarity.
@@ -114,8 +94,8 @@ impl Inverter {
 
     /// The inversion factor of the free ring (see the module docs) on the capacitance `cp`.
     pub fn gamma(&self, cp: f64) -> f64 {
-        let alpha = self.rl / (2.0 * self.l);
-        let wd = (1.0 / (self.l * cp) - alpha * alpha).sqrt();
+        let alpha = self.inductor.rl / (2.0 * self.inductor.l);
+        let wd = (1.0 / (self.inductor.l * cp) - alpha * alpha).sqrt();
         (-alpha * std::f64::consts::PI / wd).exp()
     }
 
@@ -129,22 +109,22 @@ impl Inverter {
         y: &SVector<f64, N>,
         rates: &mut SVector<f64, N>,
     ) {
-        rates[self.i] = 0.0;
+        rates[self.inductor.i] = 0.0;
         if ringing {
-            let (_, cp) = piezo(c);
-            let i = y[self.i];
+            let (_, cp) = c.piezo();
+            let i = y[self.inductor.i];
             rates[c.e] -= i / cp;
-            rates[self.i] = (y[c.e] - self.rl * i) / self.l;
+            rates[self.inductor.i] = (y[c.e] - self.inductor.rl * i) / self.inductor.l;
         }
     }
 
     /// Adds the ring's loop to the open bridge's Jacobian (in a ringing stage).
     pub fn jacobian<const N: usize>(&self, c: &Circuit, ringing: bool, j: &mut SMatrix<f64, N, N>) {
         if ringing {
-            let (_, cp) = piezo(c);
-            j[(c.e, self.i)] = -1.0 / cp;
-            j[(self.i, c.e)] = 1.0 / self.l;
-            j[(self.i, self.i)] = -self.rl / self.l;
+            let (_, cp) = c.piezo();
+            j[(c.e, self.inductor.i)] = -1.0 / cp;
+            j[(self.inductor.i, c.e)] = 1.0 / self.inductor.l;
+            j[(self.inductor.i, self.inductor.i)] = -self.inductor.rl / self.inductor.l;
         }
     }
 
@@ -158,7 +138,7 @@ impl Inverter {
         sc: &SVector<f64, N>,
     ) -> f64 {
         if returning {
-            -s * y[self.i] / sc[self.i]
+            -s * y[self.inductor.i] / sc[self.inductor.i]
         } else {
             -s * y[c.e] / sc[c.e]
         }
@@ -172,7 +152,7 @@ impl Inverter {
         index: usize,
     ) -> AffineGuard<N> {
         let mut n = SVector::<f64, N>::zeros();
-        n[if returning { self.i } else { c.e }] = -s;
+        n[if returning { self.inductor.i } else { c.e }] = -s;
         AffineGuard { index, n, g0: 0.0 }
     }
 
@@ -187,7 +167,7 @@ impl Inverter {
         if y[c.e].abs() <= EMPTY * sc[c.e] {
             return Bridge::Off;
         }
-        y[self.i] = 0.0;
+        y[self.inductor.i] = 0.0;
         Bridge::Invert {
             negative: y[c.e] < 0.0,
             returning: false,
@@ -203,7 +183,7 @@ impl Inverter {
         y: &mut SVector<f64, N>,
     ) -> Bridge {
         if returning {
-            y[self.i] = 0.0;
+            y[self.inductor.i] = 0.0;
             return Bridge::Off;
         }
         y[c.e] = 0.0;
@@ -216,7 +196,7 @@ impl Inverter {
     /// The stage a state starts in: returning while the inductor carries a current (in its
     /// direction), else the switch open.
     pub fn phase_of<const N: usize>(&self, y: &SVector<f64, N>) -> Option<Bridge> {
-        let i = y[self.i];
+        let i = y[self.inductor.i];
         (i != 0.0).then_some(Bridge::Invert {
             negative: i < 0.0,
             returning: true,
@@ -226,25 +206,6 @@ impl Inverter {
     /// Power lost in the inductor's resistance (W).
     #[inline]
     pub fn resistive_power<const N: usize>(&self, y: &SVector<f64, N>) -> f64 {
-        self.rl * y[self.i] * y[self.i]
-    }
-
-    /// The inductor's energy `L I^2 / 2` (J).
-    #[inline]
-    pub fn stored_energy<const N: usize>(&self, y: &SVector<f64, N>) -> f64 {
-        0.5 * self.l * y[self.i] * y[self.i]
-    }
-
-    /// The inductor current's scale: the ring's peak current from the element's voltage
-    /// scale, `Vp sqrt(Cp / L)`.
-    pub fn scale<const N: usize>(&self, c: &Circuit, sc: &mut SVector<f64, N>) {
-        let (_, cp) = piezo(c);
-        sc[self.i] = sc[c.e] * (cp / self.l).sqrt();
-    }
-
-    /// The shortest time constant of the ring (s): `sqrt(L Cp)`, or `L / R_L` if shorter.
-    pub fn time_constant_s(&self, c: &Circuit) -> f64 {
-        let (_, cp) = piezo(c);
-        super::parts::inductor_time_constant_s(self.l, self.rl, cp)
+        self.inductor.resistive_power(y[self.inductor.i])
     }
 }
