@@ -40,6 +40,27 @@ fn show_recorded(dst: &std::path::Path, file: &str, what: &str) -> Result<()> {
     common::write_atomic(dst, md.as_bytes())
 }
 
+/// A table only the whole benchmark measures (`quick` false): `measure` makes it, and it is
+/// written into the book and recorded as `file`. `--quick` keeps the last whole run's table
+/// (it names its commit), or else shows the recording (`show_recorded`).
+fn whole_only(
+    quick: bool,
+    file: &str,
+    what: &str,
+    measure: impl FnOnce() -> Result<String>,
+) -> Result<()> {
+    let dst = common::book_generated_root().join("bench").join(file);
+    if !quick {
+        let md = measure()?;
+        common::write_atomic(&dst, md.as_bytes())?;
+        common::write_atomic(&recorded(file), md.as_bytes())?;
+        print!("{md}");
+    } else if !dst.exists() {
+        show_recorded(&dst, file, what)?;
+    }
+    Ok(())
+}
+
 /// Runs every case ([`REPEATS`] times, once with `quick`) and writes the tables.
 pub fn run(quick: bool) -> Result<()> {
     let repeats = if quick { 1 } else { REPEATS };
@@ -83,73 +104,49 @@ pub fn run(quick: bool) -> Result<()> {
     }
     exp.write_numbers_md(&md)?;
     print!("{md}");
-    // The comparison with RK4 and the accuracy tables: only the whole benchmark measures
-    // them. `--quick` keeps the last whole run's tables (they name their commit), or says
-    // how to make them where there are none.
-    let full_md = common::book_generated_root().join("bench").join("full.md");
-    if !quick {
-        let md = format!(
-            "*Measured by the whole benchmark (`just bench`) at commit `{}`.*\n{}",
-            common::git_commit(),
-            rk4::paper_rk4_and_accuracy(&mut exp, &records, &p1, &p2)?
-        );
-        common::write_atomic(&full_md, md.as_bytes())?;
-        common::write_atomic(&recorded("full.md"), md.as_bytes())?;
-        print!("{md}");
-    } else if !full_md.exists() {
-        show_recorded(
-            &full_md,
-            "full.md",
-            "the comparison with RK4 and the accuracy tables",
-        )?;
-    }
-    // Records behind an interface circuit against the resistive load: only the whole
-    // benchmark measures them, in alternated rounds.
-    let interfaces_md = common::book_generated_root()
-        .join("bench")
-        .join("interfaces.md");
-    if !quick {
-        let costs = interfaces::measure(repeats)?;
-        for c in &costs.interfaces {
-            let key = c.name.split(' ').next().unwrap_or(c.name);
-            exp.number(
-                &format!("interface_record_cost_ratio_median_{key}"),
-                c.ratios.0,
-            );
-        }
-        let md = interfaces::table(&costs, repeats);
-        common::write_atomic(&interfaces_md, md.as_bytes())?;
-        common::write_atomic(&recorded("interfaces.md"), md.as_bytes())?;
-        print!("{md}");
-    } else if !interfaces_md.exists() {
-        show_recorded(
-            &interfaces_md,
-            "interfaces.md",
-            "the paired cost of records behind an interface",
-        )?;
-    }
-
-    // A two-mass record against a one-mass record of as many impacts: only the whole
-    // benchmark measures them, in alternated rounds.
-    let masses_md = common::book_generated_root()
-        .join("bench")
-        .join("masses.md");
-    if !quick {
-        let costs = masses::measure(repeats)?;
-        if let Some(two) = costs.get(1) {
-            exp.number("two_mass_record_cost_ratio_median", two.ratios.0);
-        }
-        let md = masses::table(&costs, repeats);
-        common::write_atomic(&masses_md, md.as_bytes())?;
-        common::write_atomic(&recorded("masses.md"), md.as_bytes())?;
-        print!("{md}");
-    } else if !masses_md.exists() {
-        show_recorded(
-            &masses_md,
-            "masses.md",
-            "the paired cost of a two-mass record",
-        )?;
-    }
+    // The comparison with RK4 and the accuracy tables.
+    whole_only(
+        quick,
+        "full.md",
+        "the comparison with RK4 and the accuracy tables",
+        || {
+            Ok(format!(
+                "*Measured by the whole benchmark (`just bench`) at commit `{}`.*\n{}",
+                common::git_commit(),
+                rk4::paper_rk4_and_accuracy(&mut exp, &records, &p1, &p2)?
+            ))
+        },
+    )?;
+    // Records behind an interface circuit against the resistive load, in alternated rounds.
+    whole_only(
+        quick,
+        "interfaces.md",
+        "the paired cost of records behind an interface",
+        || {
+            let costs = interfaces::measure(repeats)?;
+            for c in &costs.interfaces {
+                let key = c.name.split(' ').next().unwrap_or(c.name);
+                exp.number(
+                    &format!("interface_record_cost_ratio_median_{key}"),
+                    c.ratios.0,
+                );
+            }
+            Ok(interfaces::table(&costs, repeats))
+        },
+    )?;
+    // A two-mass record against a one-mass record of as many impacts, in alternated rounds.
+    whole_only(
+        quick,
+        "masses.md",
+        "the paired cost of a two-mass record",
+        || {
+            let costs = masses::measure(repeats)?;
+            if let Some(two) = costs.get(1) {
+                exp.number("two_mass_record_cost_ratio_median", two.ratios.0);
+            }
+            Ok(masses::table(&costs, repeats))
+        },
+    )?;
 
     // Every example device.
     let costs = examples::measure(&common::root(), repeats, quick)?;
