@@ -227,20 +227,11 @@ impl Path {
 }
 
 /// The model of `data` on `device` with the acceleration factor `scale`, identified from the
-/// plain stepped sweep (see the module docs): `swept` when given (the design's sweep at the
-/// same values, [`SweepRun::plain`]), else swept here.
-pub(super) fn identify(
-    device: &Device,
-    scale: f64,
-    data: &SweepData,
-    swept: Option<&SweepRun>,
-) -> Result<SetModel, Lost> {
+/// plain stepped sweep ([`SweepRun::plain`], see the module docs).
+pub(super) fn identify(device: &Device, scale: f64, data: &SweepData) -> Result<SetModel, Lost> {
     let s = Setup::of(data, scale);
     let h = s.harvester(device)?;
-    let path = match swept {
-        Some(run) => Path::of(run),
-        None => Path::of(&SweepRun::plain(device, scale, data)?),
-    };
+    let path = Path::of(&SweepRun::plain(device, scale, data)?);
     let a = s.accel_rms_g;
     // The fold, when the sweep jumps, and the last coarse step before it. A branch that the
     // sweep leaves without a confirmed jump (a power drop below the sweep's criterion) may
@@ -450,26 +441,4 @@ pub(super) fn track(
         fold,
         points,
     })
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::fit::family::recovery_family;
-
-    /// The identification from the design's sweep is the one from a sweep run afresh: the
-    /// design's sweep at a start is the plain sweep the identification runs (the same
-    /// settings on the same device), so the two agree exactly, not to a tolerance.
-    #[test]
-    fn identification_from_the_designs_sweep_is_the_one_swept_afresh() {
-        // Case 1 of the recovery family: an up-sweep whose points show a jump at a fold.
-        let case = &recovery_family()[0];
-        let device = case.truth_device().unwrap();
-        let data = &case.data().unwrap()[0];
-        let swept = SweepRun::plain(&device, 1.0, data).unwrap();
-        let reused = identify(&device, 1.0, data, Some(&swept)).unwrap();
-        let fresh = identify(&device, 1.0, data, None).unwrap();
-        assert!(fresh.fold.is_some(), "the case's sweep jumps at a fold");
-        assert_eq!(reused, fresh);
-    }
 }

@@ -43,14 +43,14 @@
 //! # Global search
 //! The starts are the device's values and the points of a Sobol sequence over the transformed
 //! box ([`FitSettings::design_points`]: `DESIGN_BASE + DESIGN_PER_PARAM p` of them for `p`
-//! free parameters), each ranked by the misfit of a cheap model, the plain stepped sweep over
-//! each data set's grid (one sweep per data set and start, evaluated in parallel). A start's
+//! free parameters), each ranked by the misfit of a cheap model, the stepped sweep over
+//! each data set's grid with shorter steady-state blocks than a plain sweep's
+//! ([`model::DESIGN_BLOCK_PERIODS`]; one sweep per data set and start, evaluated in parallel). A start's
 //! sweeps stop as soon as the misfit of the points they have swept exceeds that of the last of
 //! the best [`FitSettings::refine`] evaluated whole so far: the rest could only raise it, so
 //! the best ranked are those of the whole sweeps, with the same misfits. The best
 //! ranked [`FitSettings::refine`] are refined by Levenberg-Marquardt on the branches in their
-//! order (each start's branches identified from its design sweep, which is the sweep the
-//! identification runs, so it is not run twice), stopping early at one that converges with a chi-square (with stated standard
+//! order, stopping early at one that converges with a chi-square (with stated standard
 //! deviations) below its [`CHI2_QUANTILE`] quantile; the report is the best refined one
 //! (converged first, then the smallest SSR), whichever start it came from, and lists every
 //! start with its cheap misfit and refinement ([`FitReport::starts`]).

@@ -12,7 +12,7 @@ use super::{
 use crate::device::Device;
 use crate::ode::SolverError;
 use crate::progress::Silent;
-use crate::study::steady::Measurement;
+use crate::study::steady::{Measurement, SettleSettings, FOLD_BLOCK_PERIODS};
 use crate::study::sweep::{DownSweepReport, SweepReport, SweepSettings, REFINE_TOL_HZ};
 
 /// The value of a measured quantity in a model measurement.
@@ -87,8 +87,8 @@ impl SweepRun {
         })
     }
 
-    /// The plain sweep of `data` ([`model_curve`]'s settings): the cheap model of the
-    /// design and the sweep the branches are identified from.
+    /// The plain sweep of `data` ([`model_curve`]'s settings): the sweep the branches are
+    /// identified from.
     pub(super) fn plain(
         device: &Device,
         scale: f64,
@@ -98,18 +98,18 @@ impl SweepRun {
         Self::run(&settings, device, scale, data)
     }
 
-    /// As [`SweepRun::plain`], telling `on_point(j, value)` the model's value at point `j` of
-    /// `data` as soon as the coarse steps fix it (the value [`model_values`] gives it, bit for
-    /// bit: the steps on either side of the point are measured, and those that follow lie
-    /// beyond it), the points in their order. `None` as soon as `on_point` returns true: the
-    /// rest of the sweep is not run.
-    pub(super) fn plain_watched(
+    /// The sweep of `data` with `settings`, telling `on_point(j, value)` the model's value at
+    /// point `j` of `data` as soon as the coarse steps fix it (the value the whole sweep gives
+    /// it, bit for bit: the steps on either side of the point are measured, and those that
+    /// follow lie beyond it), the points in their order. `None` as soon as `on_point` returns
+    /// true: the rest of the sweep is not run.
+    fn watched(
+        settings: &SweepSettings,
         device: &Device,
         scale: f64,
         data: &SweepData,
         on_point: &mut dyn FnMut(usize, f64) -> bool,
     ) -> Result<Option<Self>, SolverError> {
-        let settings = SweepSettings::for_device(device, data.grid(), REFINE_TOL_HZ);
         let accel = data.accel_rms_g * scale;
         // The steps so far, by frequency increasing, and the next point not yet told.
         let mut curve: Vec<(f64, f64)> = Vec::new();
@@ -223,28 +223,49 @@ pub fn model_values(device: &Device, scale: f64, data: &SweepData) -> Result<Vec
 /// `design_values`).
 pub const DESIGN_GRID_INTERVALS: usize = 16;
 
-/// The values of [`model_values`] from the stepped sweep with a plain sweep's settings
-/// ([`model_curve`]): the cheap model that ranks the fit's starts. A data set without points
+/// Shortest steady-state block of the cheap model's sweeps (periods): a quarter of a plain
+/// sweep's ([`FOLD_BLOCK_PERIODS`]). Past a fold the state leaves the branch after a passage
+/// time that falls like the inverse square root of the distance from the fold (see
+/// [`crate::study::steady`]), so a horizon a quarter as long leaves the branch within 16 times
+/// the distance a plain sweep's does: 1.6 Hz past prototype 1's folds instead of 0.1 Hz,
+/// about a grid step of a measured sweep (1 to 5 Hz), which is all a ranking of starts needs.
+/// Blocks of the ring-up time, where it is longer, are kept.
+pub const DESIGN_BLOCK_PERIODS: usize = FOLD_BLOCK_PERIODS / 4;
+
+/// The cheap model's sweep settings over `grid`: a plain sweep's ([`model_curve`]) with
+/// blocks of at least [`DESIGN_BLOCK_PERIODS`] periods.
+fn design_settings(device: &Device, grid: Vec<f64>) -> SweepSettings {
+    let (lo, hi) = grid
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &f| {
+            (lo.min(f), hi.max(f))
+        });
+    let ring_s = 2.0 * device.mechanics.mass_kg / device.mechanics.damping_n_s_per_m;
+    let mut settings = SweepSettings::for_device(device, grid, REFINE_TOL_HZ);
+    settings.cfg = SettleSettings::for_ring_time(ring_s, 0.5 * (lo + hi), DESIGN_BLOCK_PERIODS);
+    settings
+}
+
+/// The values of [`model_values`] from the stepped sweep with the cheap settings
+/// (`design_settings`): the model that ranks the fit's starts. A data set without points
 /// (features only) is swept on its grid thinned to at most [`DESIGN_GRID_INTERVALS`]
-/// intervals, its ends kept: its features are refined by bisection whatever the grid. Returns
-/// the sweep too where it is the plain sweep of the data set's own grid ([`SweepRun::plain`]),
-/// the one the branches are identified from at these values.
+/// intervals, its ends kept: its features are refined by bisection whatever the grid.
 ///
 /// The sweep of the data set's own grid tells `on_point` each point's value as soon as it is
-/// fixed ([`SweepRun::plain_watched`]); `None` when `on_point` stopped it.
-#[allow(clippy::type_complexity)]
+/// fixed (the value the whole sweep gives it); `None` when `on_point` stopped it.
 pub(super) fn design_values(
     device: &Device,
     scale: f64,
     data: &SweepData,
     on_point: &mut dyn FnMut(usize, f64) -> bool,
-) -> Result<Option<(Vec<f64>, Option<SweepRun>)>, FitError> {
+) -> Result<Option<Vec<f64>>, FitError> {
     let grid = data.grid();
     if !data.points.is_empty() || grid.len() <= DESIGN_GRID_INTERVALS + 1 {
-        let Some(run) = SweepRun::plain_watched(device, scale, data, on_point)? else {
+        let settings = design_settings(device, grid);
+        let Some(run) = SweepRun::watched(&settings, device, scale, data, on_point)? else {
             return Ok(None);
         };
-        return Ok(Some((values_of(&model_of(&run, data), data), Some(run))));
+        return Ok(Some(values_of(&model_of(&run, data), data)));
     }
     let every = (grid.len() - 1).div_ceil(DESIGN_GRID_INTERVALS);
     let mut thin: Vec<f64> = grid.iter().copied().step_by(every).collect();
@@ -255,9 +276,10 @@ pub(super) fn design_values(
         grid_hz: Some(thin),
         ..data.clone()
     };
-    Ok(Some((
-        values_of(&model_curve(device, scale, &coarse)?, &coarse),
-        None,
+    let settings = design_settings(device, coarse.grid());
+    Ok(Some(values_of(
+        &model_of(&SweepRun::run(&settings, device, scale, &coarse)?, &coarse),
+        &coarse,
     )))
 }
 

@@ -5,7 +5,7 @@
 
 use super::branch::{self, SetModel};
 use super::lm::{self, levenberg_marquardt_tracked, LmResult, LmSettings, Tracked};
-use super::model::{design_values, SweepRun};
+use super::model::design_values;
 use super::params::{apply, Transform};
 use super::report::{Refined, StartOrigin, StartTried};
 use super::{
@@ -41,17 +41,12 @@ impl Problem<'_> {
             .collect()
     }
 
-    /// The branches of every data set identified afresh at `u`, from the plain sweeps `swept`
-    /// of every data set at `u` when given (the design's), else from sweeps run here.
-    fn identify(&self, u: &[f64], swept: Option<&[SweepRun]>) -> Result<Vec<SetModel>, FitError> {
+    /// The branches of every data set identified afresh at `u`.
+    fn identify(&self, u: &[f64]) -> Result<Vec<SetModel>, FitError> {
         let (d, scale) = apply(self.device, self.free, &self.to_p(u))?;
         self.data
             .iter()
-            .enumerate()
-            .map(|(i, ds)| {
-                branch::identify(&d, scale, ds, swept.and_then(|w| w.get(i)))
-                    .map_err(|l| FitError::Lost(l.0))
-            })
+            .map(|ds| branch::identify(&d, scale, ds).map_err(|l| FitError::Lost(l.0)))
             .collect()
     }
 
@@ -153,16 +148,14 @@ impl Run {
     }
 }
 
-/// The search from `u0`: on the branches, identified there (from the plain sweeps `swept` at
-/// `u0` when the design ran them) and afresh after each round while they differ; on the
-/// stepped sweep where they cannot be identified.
+/// The search from `u0`: on the branches, identified there and afresh after each round while
+/// they differ; on the stepped sweep where they cannot be identified.
 pub(super) fn search_from(
     pb: &Problem<'_>,
     u0: &[f64],
-    swept: Option<&[SweepRun]>,
     settings: &LmSettings,
 ) -> Result<Run, FitError> {
-    let states = match pb.identify(u0, swept) {
+    let states = match pb.identify(u0) {
         Ok(s) => s,
         Err(e) => return stepped(pb, u0, settings, e.to_string()),
     };
@@ -175,7 +168,7 @@ pub(super) fn search_from(
             levenberg_marquardt_tracked(&OnBranches(pb), &u, states, Some(r0), settings)?;
         evaluations += lm.evaluations;
         iterations += lm.iterations;
-        let fresh = pb.identify(&lm.u, None);
+        let fresh = pb.identify(&lm.u);
         let disagreement = fresh
             .as_ref()
             .ok()
@@ -247,10 +240,8 @@ const PARTIAL_SSR_MARGIN: f64 = 1e-9;
 
 /// The cheap model's cost at a design point.
 enum DesignCost {
-    /// The weighted SSR (infinite where the model cannot be evaluated) and the plain sweeps of
-    /// every data set where each is the one the branches are identified from
-    /// ([`SweepRun::plain`]).
-    Whole(f64, Option<Vec<SweepRun>>),
+    /// The weighted SSR (infinite where the model cannot be evaluated).
+    Whole(f64),
     /// The sweeps were stopped once the weighted SSR of the points swept so far (this value,
     /// a lower bound of the whole) exceeded the bound.
     Cut(f64),
@@ -264,7 +255,6 @@ fn design_ssr(pb: &Problem<'_>, u: &[f64], bound: &dyn Fn() -> f64) -> DesignCos
     let eval = |partial: &mut f64| -> Result<DesignCost, FitError> {
         let (d, scale) = apply(pb.device, pb.free, &pb.to_p(u))?;
         let mut m = Vec::with_capacity(pb.y.len());
-        let mut runs = Some(Vec::with_capacity(pb.data.len()));
         for ds in pb.data {
             let offset = m.len();
             let mut on_point = |j: usize, value: f64| {
@@ -272,22 +262,18 @@ fn design_ssr(pb: &Problem<'_>, u: &[f64], bound: &dyn Fn() -> f64) -> DesignCos
                 *partial += r * r;
                 *partial * (1.0 - PARTIAL_SSR_MARGIN) > bound()
             };
-            let Some((values, run)) = design_values(&d, scale, ds, &mut on_point)? else {
+            let Some(values) = design_values(&d, scale, ds, &mut on_point)? else {
                 return Ok(DesignCost::Cut(*partial));
             };
             m.extend(values);
-            runs = runs.zip(run).map(|(mut rs, r)| {
-                rs.push(r);
-                rs
-            });
         }
         let c: f64 = pb.weighted(&m).iter().map(|r| r * r).sum();
-        Ok(DesignCost::Whole(c, runs))
+        Ok(DesignCost::Whole(c))
     };
     match eval(&mut partial) {
-        Ok(DesignCost::Whole(c, runs)) if c.is_finite() => DesignCost::Whole(c, runs),
+        Ok(DesignCost::Whole(c)) if c.is_finite() => DesignCost::Whole(c),
         Ok(DesignCost::Cut(c)) => DesignCost::Cut(c),
-        _ => DesignCost::Whole(f64::INFINITY, None),
+        _ => DesignCost::Whole(f64::INFINITY),
     }
 }
 
@@ -311,7 +297,7 @@ fn design_costs(pb: &Problem<'_>, us: &[Vec<f64>], keep: usize) -> Vec<DesignCos
     us.par_iter()
         .map(|u| {
             let cost = design_ssr(pb, u, &bound);
-            if let DesignCost::Whole(c, _) = cost {
+            if let DesignCost::Whole(c) = cost {
                 if c.is_finite() {
                     whole.lock().unwrap_or_else(|e| e.into_inner()).push(c);
                 }
@@ -372,14 +358,12 @@ pub(super) fn search(
         })
         .collect();
     // One design point alone (no design) is refined without being ranked.
-    let mut swept: Vec<Option<Vec<SweepRun>>> = vec![None; starts.len()];
     if starts.len() > 1 {
         let costs = design_costs(pb, &us, settings.refine.max(1));
-        for ((s, w), cost) in starts.iter_mut().zip(&mut swept).zip(costs) {
+        for (s, cost) in starts.iter_mut().zip(costs) {
             match cost {
-                DesignCost::Whole(c, runs) => {
+                DesignCost::Whole(c) => {
                     s.design_ssr = c;
-                    *w = runs;
                 }
                 DesignCost::Cut(c) => {
                     s.design_ssr = c;
@@ -390,16 +374,10 @@ pub(super) fn search(
     }
     let ssr: Vec<f64> = starts.iter().map(|s| s.design_ssr).collect();
     let order = best_ranked(&ssr, settings.refine.max(1));
-    // Only the sweeps of the starts to be refined are kept.
-    for (i, w) in swept.iter_mut().enumerate() {
-        if !order.contains(&i) {
-            *w = None;
-        }
-    }
     let mut best: Option<(Run, usize)> = None;
     let mut last_err = None;
     for i in order {
-        let run = match search_from(pb, &us[i], swept[i].as_deref(), &lm) {
+        let run = match search_from(pb, &us[i], &lm) {
             Ok(run) => run,
             Err(e) => {
                 last_err = Some(e);
@@ -469,7 +447,7 @@ mod tests {
             costs
                 .iter()
                 .map(|d| match d {
-                    DesignCost::Whole(c, _) | DesignCost::Cut(c) => *c,
+                    DesignCost::Whole(c) | DesignCost::Cut(c) => *c,
                 })
                 .collect()
         };
