@@ -242,7 +242,7 @@ pub struct FitSettings {
 
 /// Points of the design per free parameter, beside [`DESIGN_BASE`]: a Sobol sequence of
 /// `DESIGN_BASE + DESIGN_PER_PARAM p` points puts points in each half of every range and in
-/// every quadrant of each pair, at the price of one plain stepped sweep per data set each.
+/// every quadrant of each pair, at the price of one cheap stepped sweep per data set each.
 pub const DESIGN_PER_PARAM: usize = 4;
 
 /// Points of the design whatever the number of free parameters.

@@ -300,8 +300,8 @@ pub struct StartTried {
     pub origin: StartOrigin,
     /// Its values, in the order of the free parameters.
     pub values: Vec<f64>,
-    /// Weighted SSR of the cheap model (a plain stepped sweep) there; infinite where it could
-    /// not be evaluated, NaN when the design had one start only.
+    /// Weighted SSR of the cheap model (a stepped sweep with short blocks) there; infinite
+    /// where it could not be evaluated, NaN when the design had one start only.
     pub design_ssr: f64,
     /// True when the cheap model's sweeps were stopped once the SSR of the points they had
     /// swept exceeded that of the last start kept for refinement (such a start cannot be among
