@@ -483,7 +483,11 @@ fn summary_md(a: &DesignArgs, file: &str, p: &Problem, study: &Study, merits: &M
         }
     }
     let best = &study.answer.design;
-    if p.ranges.iter().zip(&best.unit).any(|(r, u)| !at_end(r, *u).is_empty()) {
+    if p.ranges
+        .iter()
+        .zip(&best.unit)
+        .any(|(r, u)| !at_end(r, *u).is_empty())
+    {
         md.push_str(
             "- the answer lies at an end of a range: a better design may lie beyond it (widen \
              that range where the device allows)\n",
@@ -562,8 +566,18 @@ fn plots(p: &Problem, study: &Study, maps: &[(usize, Vec<Evaluated>)]) -> Panels
     let top_uw = done.iter().map(|e| perf(e).1 * 1e6).fold(0.0, f64::max);
     let (v, w) = perf(&study.answer.design);
     let mut series = vec![
-        Series::new("designs within the limits", dots(true), PALETTE[2], Style::Dots),
-        Series::new("designs beyond a limit", dots(false), PALETTE[1], Style::Dots),
+        Series::new(
+            "designs within the limits",
+            dots(true),
+            PALETTE[2],
+            Style::Dots,
+        ),
+        Series::new(
+            "designs beyond a limit",
+            dots(false),
+            PALETTE[1],
+            Style::Dots,
+        ),
         Series::new("Pareto front", front, PALETTE[0], Style::LinePoints),
         Series::new("the answer", vec![(v, w * 1e6)], PALETTE[4], Style::Circles),
     ];

@@ -17,7 +17,8 @@ fn example(name: &str) -> String {
 /// of every design in `designs.parquet`.
 #[test]
 fn an_unmeetable_limit_is_reported_infeasible_with_the_least_violating_design() {
-    let out = std::env::temp_dir().join(format!("endstop-design-{}-infeasible", std::process::id()));
+    let out =
+        std::env::temp_dir().join(format!("endstop-design-{}-infeasible", std::process::id()));
     let _ = std::fs::remove_dir_all(&out);
     let o = run(&[
         "design",
@@ -121,6 +122,9 @@ fn an_answer_at_the_end_of_a_range_is_said_to_be() {
         1,
         "only the gap is at an end: {answer}"
     );
-    assert!(md.contains("- the answer lies at an end of a range"), "{md}");
+    assert!(
+        md.contains("- the answer lies at an end of a range"),
+        "{md}"
+    );
     let _ = std::fs::remove_dir_all(&out);
 }

@@ -305,7 +305,11 @@ impl LinePlot {
 fn clip_x(points: &[(f64, f64)], lo: f64, hi: f64) -> Vec<Vec<(f64, f64)>> {
     let inside = |x: f64| (lo..=hi).contains(&x);
     if let [p] = points {
-        return if inside(p.0) { vec![vec![*p]] } else { Vec::new() };
+        return if inside(p.0) {
+            vec![vec![*p]]
+        } else {
+            Vec::new()
+        };
     }
     let mut pieces = Vec::new();
     let mut piece: Vec<(f64, f64)> = Vec::new();
@@ -674,8 +678,16 @@ mod tests {
             "V [V]",
             vec![
                 line("stable", vec![(0.0, 0.0), (1.0, 10.0)], Style::Line),
-                line("", vec![(2.0, 1.0), (4.0, 2.0), (5.0, 3.0), (9.0, 20.0)], Style::Line),
-                line("unstable", vec![(4.0, 5.0), (8.0, 5.0), (5.0, 6.0)], Style::Dashed),
+                line(
+                    "",
+                    vec![(2.0, 1.0), (4.0, 2.0), (5.0, 3.0), (9.0, 20.0)],
+                    Style::Line,
+                ),
+                line(
+                    "unstable",
+                    vec![(4.0, 5.0), (8.0, 5.0), (5.0, 6.0)],
+                    Style::Dashed,
+                ),
                 Series::new("marks", vec![(8.0, 1.0)], PALETTE[1], Style::Triangles),
             ],
         );
@@ -700,7 +712,10 @@ mod tests {
         // LinePlot::new's margins over the kept 1.5..7.25: 5 % of the span below, 8 % above
         // (to rounding).
         let (y0, y1) = z.y_range;
-        assert!((y0 - 1.2125).abs() < 1e-12 && (y1 - 7.71).abs() < 1e-12, "{y0} {y1}");
+        assert!(
+            (y0 - 1.2125).abs() < 1e-12 && (y1 - 7.71).abs() < 1e-12,
+            "{y0} {y1}"
+        );
     }
 
     #[test]

@@ -10,8 +10,8 @@ use endstop::study::steady::FOLD_BLOCK_PERIODS;
 use endstop::study::sweep::DownEndKind;
 
 use crate::io::frame::frame;
-use crate::io::md::Table;
 use crate::io::legend::placed_clear;
+use crate::io::md::Table;
 use crate::io::plot::{LinePlot, Panels};
 use crate::reports::branch_io::{continuation_rows, response_figure};
 use crate::{fmt_sig, row, Experiment};
