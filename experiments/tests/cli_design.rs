@@ -1,5 +1,7 @@
-//! `endstop design` on a problem no design can meet: what the designer reads must say
-//! infeasible and name the least violating design, never an optimum.
+//! What `endstop design` tells the designer: on a problem no design can meet, infeasible and
+//! the least violating design, never an optimum; an answer at the end of a range, said to be.
+
+use std::path::PathBuf;
 
 use polars::prelude::*;
 
@@ -7,6 +9,22 @@ use crate::cli_common::{read_parquet, run};
 
 fn example(name: &str) -> String {
     format!("{}/../data/examples/{name}", env!("CARGO_MANIFEST_DIR"))
+}
+
+/// Runs `endstop design` on the example `device` with `args` into a fresh directory named by
+/// `tag`; returns the directory and its `numbers.md`.
+fn design(tag: &str, device: &str, args: &[&str]) -> (PathBuf, String) {
+    let out = std::env::temp_dir().join(format!("endstop-design-{}-{tag}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&out);
+    let device = example(device);
+    let mut all = vec!["design", "--device", &device, "--map-points", "0"];
+    all.extend_from_slice(args);
+    let out_arg = out.to_str().unwrap().to_string();
+    all.extend_from_slice(&["--out", &out_arg]);
+    let o = run(&all);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let md = std::fs::read_to_string(out.join("numbers.md")).unwrap();
+    (out, md)
 }
 
 /// The piezoelectric cantilever at 0.5 g with its stopper's gap kept between 20 and 50 um,
@@ -17,32 +35,24 @@ fn example(name: &str) -> String {
 /// of every design in `designs.parquet`.
 #[test]
 fn an_unmeetable_limit_is_reported_infeasible_with_the_least_violating_design() {
-    let out =
-        std::env::temp_dir().join(format!("endstop-design-{}-infeasible", std::process::id()));
-    let _ = std::fs::remove_dir_all(&out);
-    let o = run(&[
-        "design",
-        "--device",
-        &example("piezo_cantilever.toml"),
-        "--range",
-        "stops.upper.gap_m=2e-5..5e-5",
-        "--range",
-        "load.resistance_ohm=1e4..1e5",
-        "--freq-hz",
-        "120",
-        "--accel-rms-g",
-        "0.5",
-        "--max-impact-speed-m-s",
-        "1e-6",
-        "--samples",
-        "8",
-        "--map-points",
-        "0",
-        "--out",
-        out.to_str().unwrap(),
-    ]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let md = std::fs::read_to_string(out.join("numbers.md")).unwrap();
+    let (out, md) = design(
+        "infeasible",
+        "piezo_cantilever.toml",
+        &[
+            "--range",
+            "stops.upper.gap_m=2e-5..5e-5",
+            "--range",
+            "load.resistance_ohm=1e4..1e5",
+            "--freq-hz",
+            "120",
+            "--accel-rms-g",
+            "0.5",
+            "--max-impact-speed-m-s",
+            "1e-6",
+            "--samples",
+            "8",
+        ],
+    );
     assert!(
         md.contains("**infeasible**: no design tried meets every limit; the least violating is"),
         "{md}"
@@ -88,27 +98,20 @@ fn an_unmeetable_limit_is_reported_infeasible_with_the_least_violating_design() 
 /// 31 kohm in that map).
 #[test]
 fn an_answer_at_the_end_of_a_range_is_said_to_be() {
-    let out = std::env::temp_dir().join(format!("endstop-design-{}-end", std::process::id()));
-    let _ = std::fs::remove_dir_all(&out);
-    let o = run(&[
-        "design",
-        "--device",
-        &example("piezo_bridge.toml"),
-        "--range",
-        "stops.upper.gap_m=4e-5..8e-5",
-        "--range",
-        "load.resistance_ohm=3e3..3e5",
-        "--freq-hz",
-        "120",
-        "--accel-rms-g",
-        "0.3",
-        "--map-points",
-        "0",
-        "--out",
-        out.to_str().unwrap(),
-    ]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let md = std::fs::read_to_string(out.join("numbers.md")).unwrap();
+    let (out, md) = design(
+        "end",
+        "piezo_bridge.toml",
+        &[
+            "--range",
+            "stops.upper.gap_m=4e-5..8e-5",
+            "--range",
+            "load.resistance_ohm=3e3..3e5",
+            "--freq-hz",
+            "120",
+            "--accel-rms-g",
+            "0.3",
+        ],
+    );
     let answer = md
         .lines()
         .find(|l| l.starts_with("- **optimum**"))
