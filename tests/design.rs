@@ -1,8 +1,9 @@
 //! The design search ([`endstop::design`]) against what it must find: a brute-force grid's
-//! best on two two-variable cases, the closed-form optimal load of a linear piezoelectric
-//! harvester, the diode bridge's optimum load in weak coupling (Shu and Lien's), SECE's power
-//! whatever its load, and an infeasible problem reported as such; the interfaces read as a
-//! designer names them; the effectiveness's bound against our own resonant generator.
+//! best on two two-variable cases and on a third, a device the search was not tuned on; the
+//! closed-form optimal load of a linear piezoelectric harvester, the diode bridge's optimum
+//! load in weak coupling (Shu and Lien's), SECE's power whatever its load, and an infeasible
+//! problem reported as such; the interfaces read as a designer names them; the
+//! effectiveness's bound against our own resonant generator.
 
 use endstop::design::{
     answer, interfaces, Evaluated, Limits, Problem, SearchSettings, Verdict, Vibration, LOAD_PATH,
@@ -122,6 +123,28 @@ fn the_search_finds_the_grid_best_over_load_and_tuning() {
         vec![118.0, 122.0],
         0.05,
     );
+    search_against_grid(&p, 31);
+}
+
+/// A device no search setting was chosen on: the electromagnetic harvester of
+/// `em_asymmetric` (a coil, a Hunt-Crossley lid and a Hertzian base 1.5 mm below rest), its
+/// load (40 ohm to 4 kohm, a decade either side of its coil's 400 ohm) and its lid's gap (0.6
+/// to 2 mm), at its 50 Hz resonance under 0.2 g, where it strikes its base, with the contact
+/// force limited to 0.02 N: a third of the 0.065 N of the best design without the limit
+/// (`endstop design` on the same problem), so that the limit binds. The grid: 31 x 31
+/// points, the load in steps of a factor 1.166 (log spacing), the gap in steps of 46.7 um.
+#[test]
+fn the_search_finds_the_grid_best_on_a_device_it_was_not_tuned_on() {
+    let mut p = problem(
+        example("em_asymmetric"),
+        vec![
+            range(LOAD_PATH, 40.0, 4000.0),
+            range("stops.upper.gap_m", 0.6e-3, 2.0e-3),
+        ],
+        vec![50.0],
+        0.2,
+    );
+    p.limits.contact_force_n = Some(0.02);
     search_against_grid(&p, 31);
 }
 

@@ -15,13 +15,14 @@ use endstop::design::{
     interfaces, merit, Answer, Evaluated, Limits, Problem, SearchSettings, Study, Verdict,
     Vibration,
 };
-use endstop::device::{Device, Interface, ParamRange};
+use endstop::device::{Device, Interface, ParamRange, Spacing};
 use endstop::drive::Sine;
 use endstop::num::pareto::pareto_front;
 use endstop::progress::Silent;
 use endstop::study::periodic::SteadySettings;
 
 use crate::shared::start;
+use endstop_experiments::io::legend::placed_clear;
 use endstop_experiments::io::plot::{LegendPos, LinePlot, Panels, Series, Style, PALETTE};
 
 use endstop_experiments::{fmt_sig, Experiment};
@@ -137,8 +138,8 @@ fn words(p: &Problem, a: &Answer) -> String {
     let values: Vec<String> = p
         .ranges
         .iter()
-        .zip(&d.values)
-        .map(|(r, v)| format!("`{}` = {}", r.path, fmt_sig(*v, 4)))
+        .zip(d.values.iter().zip(&d.unit))
+        .map(|(r, (v, u))| format!("`{}` = {}{}", r.path, fmt_sig(*v, 4), at_end(r, *u)))
         .collect();
     let perf = d.result.as_ref().ok();
     let q =
@@ -169,6 +170,21 @@ fn words(p: &Problem, a: &Answer) -> String {
             String::new()
         }
     )
+}
+
+/// Says whether a design's value lies at an end of its range (unit coordinate 0 or 1, where
+/// the search clamps it): the best design may then lie beyond the range. A switch's two
+/// settings are its whole range, and are not said to be ends.
+fn at_end(range: &ParamRange, unit: f64) -> &'static str {
+    if range.spacing == Spacing::Switch {
+        ""
+    } else if unit <= 0.0 {
+        " (the lower end of its range)"
+    } else if unit >= 1.0 {
+        " (the upper end of its range)"
+    } else {
+        ""
+    }
 }
 
 /// Records in `summary.json` what repeats the run besides the device file (recorded with its
@@ -466,6 +482,17 @@ fn summary_md(a: &DesignArgs, file: &str, p: &Problem, study: &Study, merits: &M
             )),
         }
     }
+    let best = &study.answer.design;
+    if p.ranges
+        .iter()
+        .zip(&best.unit)
+        .any(|(r, u)| !at_end(r, *u).is_empty())
+    {
+        md.push_str(
+            "- the answer lies at an end of a range: a better design may lie beyond it (widen \
+             that range where the device allows)\n",
+        );
+    }
     md.push_str(&format!(
         "- designs evaluated: {}\n",
         study.evaluations.len()
@@ -500,8 +527,10 @@ fn summary_md(a: &DesignArgs, file: &str, p: &Problem, study: &Study, merits: &M
     md
 }
 
-/// The Pareto front of power against impact speed over every evaluated design, and the power
-/// map of each interface over the first two ranges (a curve per value of the second).
+/// The Pareto front of power against impact speed over every evaluated design (those within
+/// the limits apart from those beyond one, the answer marked, the impact speed's limit drawn
+/// where there is one), and the power map of each interface over the first two ranges (a curve
+/// per value of the second).
 fn plots(p: &Problem, study: &Study, maps: &[(usize, Vec<Evaluated>)]) -> Panels {
     let done: Vec<&Evaluated> = study
         .evaluations
@@ -525,23 +554,48 @@ fn plots(p: &Problem, study: &Study, maps: &[(usize, Vec<Evaluated>)]) -> Panels
         .into_iter()
         .map(|k| (pts[k].0, -pts[k].1 * 1e6))
         .collect();
-    let all: Vec<(f64, f64)> = done
-        .iter()
-        .map(|e| {
-            let (v, w) = perf(e);
-            (v, w * 1e6)
-        })
-        .collect();
-    let pareto = LinePlot::new(
+    let dots = |feasible: bool| -> Vec<(f64, f64)> {
+        done.iter()
+            .filter(|e| e.feasible() == feasible)
+            .map(|e| {
+                let (v, w) = perf(e);
+                (v, w * 1e6)
+            })
+            .collect()
+    };
+    let top_uw = done.iter().map(|e| perf(e).1 * 1e6).fold(0.0, f64::max);
+    let (v, w) = perf(&study.answer.design);
+    let mut series = vec![
+        Series::new(
+            "designs within the limits",
+            dots(true),
+            PALETTE[2],
+            Style::Dots,
+        ),
+        Series::new(
+            "designs beyond a limit",
+            dots(false),
+            PALETTE[1],
+            Style::Dots,
+        ),
+        Series::new("Pareto front", front, PALETTE[0], Style::LinePoints),
+        Series::new("the answer", vec![(v, w * 1e6)], PALETTE[4], Style::Circles),
+    ];
+    if let Some(l) = p.limits.impact_speed_m_s {
+        series.push(Series::new(
+            &format!("impact speed limit, {} m/s", fmt_sig(l, 3)),
+            vec![(l, 0.0), (l, top_uw)],
+            PALETTE[6],
+            Style::Dashed,
+        ));
+    }
+    series.retain(|s| !s.points.is_empty());
+    let pareto = placed_clear(LinePlot::new(
         "Power against impact speed",
         "largest impact speed [m/s]",
         "DC power [uW]",
-        vec![
-            Series::new("designs evaluated", all, PALETTE[1], Style::Dots),
-            Series::new("Pareto front", front, PALETTE[0], Style::LinePoints),
-        ],
-    )
-    .legend(LegendPos::LowerRight);
+        series,
+    ));
     let mut panels = vec![pareto];
     for (i, grid) in maps {
         let n = (grid.len() as f64).sqrt().round() as usize;

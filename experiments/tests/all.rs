@@ -17,6 +17,7 @@ mod bad_input_props;
 mod calibration_artefact;
 mod cli;
 mod cli_common;
+mod cli_design;
 mod cli_devices;
 mod cli_interface;
 mod cli_masses;

@@ -17,6 +17,10 @@ use crate::{fmt_sig, row, Experiment};
 /// Bottom of the plot's y axis (g²/Hz), as in the paper's Figure 10.
 const Y_MIN: f64 = 1e-5;
 
+/// The parameter-set label of the spectra: they describe the generated excitation alone, and
+/// no device's parameters enter them.
+const NO_DEVICE: &str = "excitation only, no device parameters";
+
 /// Writes everything of one run of Figure 10: the numbers of the summary, the book's table,
 /// the spectra as Parquet and the plot.
 pub fn write(mut exp: Experiment, run: &fig10::Run, claims: &Claims) -> Result<()> {
@@ -121,7 +125,7 @@ fn write_parquet(exp: &Experiment, run: &fig10::Run, f: &fig10::Findings) -> Res
                 "psd_g2_per_hz" => d,
                 "series" => series,
                 "realisation" => real,
-                "params" => "none",
+                "params" => NO_DEVICE,
             ]);
         }
     }
@@ -131,10 +135,10 @@ fn write_parquet(exp: &Experiment, run: &fig10::Run, f: &fig10::Findings) -> Res
             "psd_g2_per_hz" => spec.ideal_psd_g2_per_hz(fr),
             "series" => "target",
             "realisation" => "target",
-            "params" => "none",
+            "params" => NO_DEVICE,
         ]);
     }
-    exp.write_parquet("fig10_psd", &mut frame(rows)?, "none")?;
+    exp.write_parquet("fig10_psd", &mut frame(rows)?, NO_DEVICE)?;
 
     Ok(())
 }

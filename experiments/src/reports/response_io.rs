@@ -10,6 +10,7 @@ use endstop::study::steady::FOLD_BLOCK_PERIODS;
 use endstop::study::sweep::DownEndKind;
 
 use crate::io::frame::frame;
+use crate::io::legend::placed_clear;
 use crate::io::md::Table;
 use crate::io::plot::{LinePlot, Panels};
 use crate::reports::branch_io::{continuation_rows, response_figure};
@@ -491,19 +492,43 @@ fn ghost_words(ghost: &[response::GhostRow], who: &str) -> String {
     }
 }
 
-/// The whole response of a case: its branch with both sweeps, RMS voltage and phase.
+/// A hysteresis band narrower than this share of the plotted frequencies gets a panel of its
+/// own: at the whole response's scale its two branches are drawn on top of each other.
+const NARROW_BAND_SHARE: f64 = 0.05;
+
+/// The whole response of a case: its branch with both sweeps, RMS voltage and phase, and, for
+/// a hysteresis band too narrow to see at that scale, a third panel with the RMS voltage over
+/// the band and half its width on either side, its scale stated in its title.
 fn curve_plot(c: &CaseRun) -> Panels {
     let steps = |ms: Vec<&endstop::study::steady::Measurement>| -> Vec<(f64, f64)> {
         ms.into_iter().map(|m| (m.freq_hz, m.v1_rms_v)).collect()
     };
     let s = &c.setup.continuation;
-    response_figure(
+    let mut fig = response_figure(
         &format!("Whole response: {}", c.setup.case.label()),
         &c.branch,
         steps(c.up.measurements().collect()),
         steps(c.down.measurements().collect()),
         (s.start, s.stop),
-    )
+    );
+    let span_hz = (s.stop - s.start).abs();
+    if let Some((a, b)) = c.band_hz() {
+        let width = b - a;
+        if width < NARROW_BAND_SHARE * span_hz {
+            let (lo, hi) = (a - 0.5 * width, b + 0.5 * width);
+            let title = format!(
+                "Hysteresis band, {} to {} Hz, enlarged {}x in frequency",
+                fmt_sig(a, 6),
+                fmt_sig(b, 6),
+                fmt_sig(span_hz / (hi - lo), 2),
+            );
+            let zoom = placed_clear(fig.plots[0].zoomed(&title, lo, hi));
+            let mut plots = fig.plots;
+            plots.push(zoom);
+            fig = Panels::new(plots);
+        }
+    }
+    fig
 }
 
 fn basin_plot(c: &CaseRun) -> LinePlot {
