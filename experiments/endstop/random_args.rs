@@ -204,7 +204,7 @@ pub(crate) fn read_measured(
         );
     }
     times.lap("reading");
-    let accel: Arc<[f64]> = rec.resampled(fs).into();
+    let accel: Arc<[f64]> = rec.resampled(fs);
     times.lap("resampling");
     let n_tr = (preroll_s * fs).round() as usize;
     Ok(MeasuredDrive {

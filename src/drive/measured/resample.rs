@@ -23,6 +23,8 @@
 //! Past the record's ends the samples are zero (a zero-padded copy of the record, so that
 //! every output is a dot product of the same length).
 
+use std::sync::Arc;
+
 use super::{HALF_TAPS, KAISER_BETA};
 
 /// Largest worst-case error of the table plan, relative to the record's largest sample.
@@ -213,12 +215,13 @@ fn rational(c: f64, max_p: u64, close: impl Fn(u64, u64) -> bool) -> Option<(u64
     None
 }
 
-/// `x` at `fs_in` resampled to `m` outputs at `fs` by `plan`.
-pub(super) fn resample(x: &[f64], fs_in: f64, fs: f64, m: usize, plan: Plan) -> Vec<f64> {
+/// `x` at `fs_in` resampled to `m` outputs at `fs` by `plan`, shared (the record engine reads
+/// its drive through an `Arc`): at equal rates the one copy of the samples.
+pub(super) fn resample(x: &[f64], fs_in: f64, fs: f64, m: usize, plan: Plan) -> Arc<[f64]> {
     let kernel = Kernel::new(fs_in, fs);
     match plan {
-        Plan::Identity => x[..m.min(x.len())].to_vec(),
-        Plan::Direct => direct(x, fs_in, fs, m, &kernel),
+        Plan::Identity => Arc::from(&x[..m.min(x.len())]),
+        Plan::Direct => direct(x, fs_in, fs, m, &kernel).into(),
         Plan::Polyphase { p, q } => {
             let (lead, taps) = (kernel.lead(), kernel.taps());
             let table = weights(&kernel, p as usize, p as usize);
@@ -475,7 +478,7 @@ mod tests {
             assert_eq!(m, x.len());
             let plan = Plan::choose(x.len(), m, fs_in, fs);
             assert_eq!(plan, Plan::Identity, "{fs_in} to {fs}");
-            assert_eq!(resample(&x, fs_in, fs, m, plan), x);
+            assert_eq!(&resample(&x, fs_in, fs, m, plan)[..], &x[..]);
         }
     }
 
