@@ -540,6 +540,8 @@ pub(super) struct AffineModes<const N: usize, const U: usize, const S: usize> {
     current: Option<(Mode, usize, Option<GuardValues>)>,
     /// The rebounds off rigid stops inside the last interval.
     rebounds: Rebounds,
+    /// The states at those rebounds, before each reset.
+    rebound_states: Vec<SVector<f64, N>>,
 }
 
 impl<const N: usize, const U: usize, const S: usize> AffineModes<N, U, S> {
@@ -551,6 +553,7 @@ impl<const N: usize, const U: usize, const S: usize> AffineModes<N, U, S> {
             entries: Vec::new(),
             current: None,
             rebounds: Rebounds::default(),
+            rebound_states: Vec::new(),
         }
     }
 
@@ -586,6 +589,7 @@ impl<M: Model<N>, const N: usize, const U: usize, const S: usize> FastPath<M, N>
         books: Option<&mut Books<N>>,
     ) -> Option<(SVector<f64, N>, bool)> {
         self.rebounds.len = 0;
+        self.rebound_states.clear();
         let (index, cached) = match self.current {
             Some((m, i, g)) if m == mode => (i, g),
             _ => (self.index(model, mode), None),
@@ -602,10 +606,15 @@ impl<M: Model<N>, const N: usize, const U: usize, const S: usize> FastPath<M, N>
             if books.is_some() {
                 return None;
             }
-            let (y1, rebounds) = affine
-                .rebounding
-                .as_ref()?
-                .interval(model, mode, y, a0, slope, self.h)?;
+            let (y1, rebounds) = affine.rebounding.as_ref()?.interval(
+                model,
+                mode,
+                y,
+                a0,
+                slope,
+                self.h,
+                &mut self.rebound_states,
+            )?;
             self.rebounds = rebounds;
             return Some((y1, false));
         };
@@ -620,6 +629,10 @@ impl<M: Model<N>, const N: usize, const U: usize, const S: usize> FastPath<M, N>
 
     fn rebounds(&self) -> &[(f64, f64)] {
         self.rebounds.found()
+    }
+
+    fn rebound_states(&self) -> &[SVector<f64, N>] {
+        &self.rebound_states
     }
 
     fn after_dopri(&mut self, _model: &M, _y: &SVector<f64, N>, _mode: Mode, _switched: bool) {

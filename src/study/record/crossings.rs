@@ -96,7 +96,8 @@ impl<const U: usize> Rebounding<U> {
     /// The state one interval `h` after `y` in `mode` (the drive `a0` at its start and its
     /// slope `slope`), each rebound off a rigid stop located on the exact solution and applied
     /// by the model's own switch ([`Model::switch`]), with the rebounds (time into the
-    /// interval, |x| of the first mass there); `None` to hand the interval to Dormand-Prince:
+    /// interval, |x| of the first mass there) and, in `states`, the state at each rebound
+    /// before its reset; `None` to hand the interval to Dormand-Prince:
     /// a guard that is not a rebound fires, a switch leaves the mode (a mass comes to rest),
     /// more than [`MAX_REBOUNDS`] rebounds (chatter), or a series that does not converge.
     #[allow(clippy::too_many_arguments)]
@@ -108,6 +109,7 @@ impl<const U: usize> Rebounding<U> {
         a0: f64,
         slope: f64,
         h: f64,
+        states: &mut Vec<SVector<f64, N>>,
     ) -> Option<(SVector<f64, N>, Rebounds)> {
         let augment = |y: &SVector<f64, N>, a: f64| {
             let mut u = SVector::<f64, U>::zeros();
@@ -136,6 +138,7 @@ impl<const U: usize> Rebounding<U> {
             t += tau;
             let a = a0 + slope * t;
             let mut ys = head(&at);
+            states.push(ys);
             let index = self.indices[j];
             let next = model.switch(mode, index, &mut ys, a);
             if next != mode || model.switch_kind(mode, index, next) != SwitchKind::Rebound {
