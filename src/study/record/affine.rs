@@ -28,8 +28,10 @@
 //! [`AffineMode::step`] refuses an interval in which a guard may turn positive (its cubic
 //! Hermite estimate from its exact values and rates at both ends comes within
 //! [`GRAZE_MARGIN`] of zero, and so does the estimate on one of [`PARTS`] parts of the
-//! interval within the margin's `PARTS^4`-th), and the record hands that interval to
-//! Dormand-Prince, whose events are located on its dense output.
+//! interval within the margin's `PARTS^4`-th). There, where the mode has rigid stops, the
+//! interval's crossings are located on the mode's exact solution and each rebound is applied
+//! by the model's switch (`crossings.rs`); an interval with another switch (a mass comes to
+//! rest, a circuit acts) goes to Dormand-Prince, whose events are located on its dense output.
 //!
 //! # The books by Gram sums
 //! In an affine mode every integrand of the books (the drive's `m a v`, the dampers' `b v^2`,
@@ -54,12 +56,14 @@ use crate::ode::GAUSS_LEGENDRE_3;
 use crate::study::flow::{cubic_max, GRAZE_MARGIN};
 
 use super::books::{integrands, Books, Found};
+use super::crossings::Rebounding;
+use super::impacts::Rebounds;
 use super::stepping::{self, FastPath, NoFast};
 use super::{Fallback, FreeFlightPath, Record, RecordError, RecordObserver, SampledDrive};
 
 /// Most guard pieces of a mode: two stops' (or a contact's boundary and bracket), the
 /// conduction's two pieces while a bridge is off, and a switch's extremum.
-const MAX_GUARDS: usize = 5;
+pub(super) const MAX_GUARDS: usize = 5;
 /// Rows of the guard matrix: each guard's value and its rate times the step.
 const GUARD_ROWS: usize = 2 * MAX_GUARDS;
 /// The guards' values and scaled rates at a state.
@@ -120,6 +124,9 @@ struct AffineMode<const N: usize, const U: usize, const S: usize> {
     guards: SMatrix<f64, GUARD_ROWS, U>,
     /// `W` of each integrand of the books (none when the record keeps no books).
     weights: Vec<SMatrix<f64, U, U>>,
+    /// The interval's rebounds off rigid stops on the exact solution, where the mode has
+    /// rigid stops to meet (`crossings.rs`).
+    rebounding: Option<Rebounding<U>>,
 }
 
 impl<const N: usize, const U: usize, const S: usize> AffineMode<N, U, S> {
@@ -253,6 +260,7 @@ impl<const N: usize, const U: usize, const S: usize> AffineMode<N, U, S> {
             d * expm_n(&(d_inv * a * d * (h / PARTS as f64))) * d_inv
         };
         let (guards, used) = guard_rows::<N, U>(&affine.guards, &a, h, &sc)?;
+        let rebounding = Rebounding::of(model, mode, &affine.guards, &guards, &a, &scale, h);
         let next_guards = guards * e;
         let mut power = part;
         let inner = std::array::from_fn(|_| {
@@ -275,6 +283,7 @@ impl<const N: usize, const U: usize, const S: usize> AffineMode<N, U, S> {
             inner,
             guards,
             weights,
+            rebounding,
         })
     }
 }
@@ -529,6 +538,10 @@ pub(super) struct AffineModes<const N: usize, const U: usize, const S: usize> {
     entries: Vec<(Mode, Option<AffineMode<N, U, S>>, Gram<U>)>,
     /// The current mode's entry and its guards at the current sample, once known.
     current: Option<(Mode, usize, Option<GuardValues>)>,
+    /// The rebounds off rigid stops inside the last interval.
+    rebounds: Rebounds,
+    /// The states at those rebounds, before each reset.
+    rebound_states: Vec<SVector<f64, N>>,
 }
 
 impl<const N: usize, const U: usize, const S: usize> AffineModes<N, U, S> {
@@ -539,6 +552,8 @@ impl<const N: usize, const U: usize, const S: usize> AffineModes<N, U, S> {
             integrals,
             entries: Vec::new(),
             current: None,
+            rebounds: Rebounds::default(),
+            rebound_states: Vec::new(),
         }
     }
 
@@ -573,6 +588,8 @@ impl<M: Model<N>, const N: usize, const U: usize, const S: usize> FastPath<M, N>
         _outputs: &mut [f64; MAX_OUTPUTS],
         books: Option<&mut Books<N>>,
     ) -> Option<(SVector<f64, N>, bool)> {
+        self.rebounds.len = 0;
+        self.rebound_states.clear();
         let (index, cached) = match self.current {
             Some((m, i, g)) if m == mode => (i, g),
             _ => (self.index(model, mode), None),
@@ -580,9 +597,27 @@ impl<M: Model<N>, const N: usize, const U: usize, const S: usize> FastPath<M, N>
         self.current = Some((mode, index, None));
         let (_, affine, gram) = &mut self.entries[index];
         let affine = affine.as_ref()?;
-        let u0 = AffineMode::<N, U, S>::augment(y, a0, (a1 - a0) / self.h);
+        let slope = (a1 - a0) / self.h;
+        let u0 = AffineMode::<N, U, S>::augment(y, a0, slope);
         let g0 = cached.unwrap_or_else(|| affine.guards_at(&u0));
-        let (y1, g1) = affine.step(&u0, &g0)?;
+        let Some((y1, g1)) = affine.step(&u0, &g0) else {
+            // A guard may fire: rigid stops' rebounds on the exact solution, where the books
+            // (which take whole intervals of one mode) are not kept.
+            if books.is_some() {
+                return None;
+            }
+            let (y1, rebounds) = affine.rebounding.as_ref()?.interval(
+                model,
+                mode,
+                y,
+                a0,
+                slope,
+                self.h,
+                &mut self.rebound_states,
+            )?;
+            self.rebounds = rebounds;
+            return Some((y1, false));
+        };
         if let Some(b) = books {
             b.open(model, mode, y);
             gram.add(&u0);
@@ -590,6 +625,14 @@ impl<M: Model<N>, const N: usize, const U: usize, const S: usize> FastPath<M, N>
         }
         self.current = Some((mode, index, Some(g1)));
         Some((y1, false))
+    }
+
+    fn rebounds(&self) -> &[(f64, f64)] {
+        self.rebounds.found()
+    }
+
+    fn rebound_states(&self) -> &[SVector<f64, N>] {
+        &self.rebound_states
     }
 
     fn after_dopri(&mut self, _model: &M, _y: &SVector<f64, N>, _mode: Mode, _switched: bool) {

@@ -348,7 +348,13 @@ fn piecewise_crossing<const N: usize>(
 /// since iterates that approach from before the root, as on a concave rising function, leave
 /// `b` at an older iterate), so that the root it returns is never early by more than a few
 /// ulps.
-fn newton(mut a: f64, mut b: f64, fa: f64, start: f64, f: impl Fn(f64) -> (f64, f64)) -> f64 {
+pub(super) fn newton(
+    mut a: f64,
+    mut b: f64,
+    fa: f64,
+    start: f64,
+    f: impl Fn(f64) -> (f64, f64),
+) -> f64 {
     let sa = fa.signum();
     let tol = 4.0 * f64::EPSILON * b.abs();
     let mut t = if start > a && start < b {

@@ -21,10 +21,12 @@
 //! * a model without that split whose modes are affine (an interface circuit with
 //!   piecewise-linear diodes, [`crate::model::Model::affine`]): an interval in an affine mode is
 //!   advanced exactly by the mode's propagator of the state augmented with the interpolated
-//!   drive (`affine.rs`), and its guards are checked as affine functions with their rates.
+//!   drive (`affine.rs`), and its guards are checked as affine functions with their rates; the
+//!   rebounds off rigid stops (of the frame or between two masses) inside an interval are
+//!   located on the mode's exact solution (`crossings.rs`).
 //!
-//! An interval that may come near a stop or where a guard may fire, every contact and the
-//! samples just after it, and every interval of a mode that is not affine go to
+//! Any other interval that may come near a stop or where a guard may fire, every contact and
+//! the samples just after it, and every interval of a mode that is not affine go to
 //! [`crate::ode::Dopri5`], for which every sample instant is a breakpoint and every switch an
 //! event located on its dense output. [`simulate_on`] runs any model.
 //!
@@ -75,6 +77,7 @@ use crate::study::mass_peaks::MassPeaks;
 
 mod affine;
 mod books;
+mod crossings;
 mod exponential;
 mod impacts;
 mod mechanical;

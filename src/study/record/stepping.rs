@@ -56,6 +56,13 @@ pub(super) trait FastPath<M: Model<N>, const N: usize> {
         &[]
     }
 
+    /// The states at those rebounds, before each one's reset (empty where the fast path does
+    /// not keep them): a model of several masses takes each mass's peaks there, since the
+    /// impact's speed is met between samples.
+    fn rebound_states(&self) -> &[SVector<f64, N>] {
+        &[]
+    }
+
     /// A Dormand-Prince interval ended at `y` in `mode`; `switched` when a mode switch
     /// happened inside it.
     fn after_dopri(&mut self, _model: &M, _y: &SVector<f64, N>, _mode: Mode, _switched: bool) {}
@@ -230,8 +237,17 @@ impl<'m, M: Model<N>, F: FastPath<M, N>, const N: usize> Walk<'m, M, F, N> {
         if analysed && s.peaks.len > 0 {
             s.peaks.see(self.model.layout(), y.as_slice());
         }
+        let from = self.t_start - 0.5 * self.dt;
         for &(tau, x) in self.fast.rebounds() {
-            s.rebound(t0 + tau >= self.t_start - 0.5 * self.dt, x);
+            s.rebound(t0 + tau >= from, x);
+        }
+        if s.peaks.len > 0 {
+            let rebounds = self.fast.rebounds().iter();
+            for (&(tau, _), at) in rebounds.zip(self.fast.rebound_states()) {
+                if t0 + tau >= from {
+                    s.peaks.see(self.model.layout(), at.as_slice());
+                }
+            }
         }
         Ok(wrote)
     }
