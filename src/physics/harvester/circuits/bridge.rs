@@ -4,8 +4,7 @@
 //! synchronous switch acting at the displacement extrema, the `v = 0` events, or an
 //! inductor's transfer in time.
 //!
-//! The circuit sees the transducer as a port ([`super::element`]).
-//! The bridge current `i >= 0` leaves the element's terminal of polarity `s = +-1` and charges
+//! The circuit sees the transducer as a port ([`super::element`]). The bridge current `i >= 0` leaves the element's terminal of polarity `s = +-1` and charges
 //! the storage `Cs`, which feeds the DC load current `I_L(Vs)` (`Vs / R`, `(Vs - V_b) / R_b`
 //! for a battery, 0 open).
 //!
