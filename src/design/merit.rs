@@ -40,7 +40,7 @@
 //!   with nothing drawing, by [`crate::study::charging`] on the design with its DC load open
 //!   ([`charging_time_s`]).
 
-use crate::device::{DcLoad, Device, Interface};
+use crate::device::{DcLoad, Device};
 use crate::drive::Sine;
 use crate::progress::Progress;
 use crate::study::charging::{charge, ChargeError, ChargeSettings};
@@ -146,14 +146,7 @@ pub fn charging_time_s(
     progress: &dyn Progress,
 ) -> Option<Result<f64, ChargeError>> {
     let mut open = device.clone();
-    match &mut open.interface {
-        Interface::Resistive => return None,
-        Interface::FullBridge(r) | Interface::ParallelSshi(r, _) | Interface::SeriesSshi(r, _) => {
-            r.load = DcLoad::Open
-        }
-        Interface::Sece { load, .. } => *load = DcLoad::Open,
-        Interface::SeceInductor(s) => s.load = DcLoad::Open,
-    }
+    *open.interface.load_mut()? = DcLoad::Open;
     let settings = ChargeSettings {
         start_v: 0.0,
         target_v,

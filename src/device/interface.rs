@@ -478,18 +478,24 @@ impl Interface {
         }
     }
 
+    /// The DC load to change, for every kind but `resistive`.
+    pub fn load_mut(&mut self) -> Option<&mut DcLoad> {
+        match self {
+            Interface::Resistive => None,
+            Interface::FullBridge(r)
+            | Interface::ParallelSshi(r, _)
+            | Interface::SeriesSshi(r, _) => Some(&mut r.load),
+            Interface::Sece { load, .. } => Some(load),
+            Interface::SeceInductor(s) => Some(&mut s.load),
+        }
+    }
+
     /// A copy with another DC load resistance (a battery or open load becomes a resistor);
     /// the resistive interface is returned unchanged.
     pub fn with_load_resistance(&self, resistance_ohm: f64) -> Self {
         let mut i = self.clone();
-        let load = DcLoad::Resistor { resistance_ohm };
-        match &mut i {
-            Interface::Resistive => {}
-            Interface::FullBridge(r)
-            | Interface::ParallelSshi(r, _)
-            | Interface::SeriesSshi(r, _) => r.load = load,
-            Interface::Sece { load: l, .. } => *l = load,
-            Interface::SeceInductor(s) => s.load = load,
+        if let Some(load) = i.load_mut() {
+            *load = DcLoad::Resistor { resistance_ohm };
         }
         i
     }

@@ -18,7 +18,7 @@ use crate::laws::contact::{ContactDamping, ContactLaw, Side, StopModel};
 use crate::model::{Affine, AffineGuard, Contact, Mode};
 use crate::physics::transducer::TransducerModel;
 
-use super::circuits::{Bridge, CircuitMode, Element};
+use super::circuits::{Bridge, CircuitKind, CircuitMode, Element};
 use super::port::{head, Port};
 use super::stops::{contact_of, FrameStops};
 use super::{Harvester, STOP_GUARDS};
@@ -229,16 +229,9 @@ impl<const N: usize> Harvester<N> {
             n
         };
         let (e, vs) = (circuit.e, circuit.vs);
-        if let super::circuits::Switch::BuckBoost(b) = circuit.switch {
-            out.extend(b.phase_guard_piece(circuit, cm.bridge, index));
-        }
-        let ring = match circuit.switch {
-            super::circuits::Switch::Inverter(v) => super::circuits::Inverter::stage(cm.bridge)
-                .map(|stage| v.guard_piece(circuit, stage, index)),
-            _ => None,
-        };
-        if let Some(piece) = ring {
-            // During a ring the bridge blocks: the ring's stage and the extremum guard it.
+        if let Some(piece) = circuit.kind.guard_piece(circuit, cm.bridge, index) {
+            // The kind's own phase guards it in place of the bridge's conduction (during an
+            // inductor's transfer the bridge blocks).
             out.push(piece);
         } else if circuit.has_conduction_events() {
             let drop = circuit.path_drop();
@@ -285,7 +278,7 @@ impl<const N: usize> Harvester<N> {
                 }
             }
         }
-        if !matches!(circuit.switch, super::circuits::Switch::None) {
+        if circuit.kind.acts_at_extrema() {
             let sign = match cm.heading {
                 super::circuits::Heading::Up => -1.0,
                 super::circuits::Heading::Down => 1.0,

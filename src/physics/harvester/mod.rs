@@ -431,7 +431,7 @@ impl<const N: usize> Harvester<N> {
                     circuits::Element::Coil { .. } => names.push(("i", "A")),
                 }
                 names.push(("vs", "V"));
-                if let circuits::Switch::BuckBoost(_) | circuits::Switch::Inverter(_) = c.switch {
+                if circuits::CircuitKind::inductor(&c.kind).is_some() {
                     names.push(("i_inductor", "A"));
                 }
                 let load = match c.sink {
@@ -510,14 +510,7 @@ impl<const N: usize> Harvester<N> {
                 _ => {
                     s[(c.e, c.e)] = -1.0;
                     s[(c.vs, c.vs)] = 1.0;
-                    // A buck-boost inductor's current flows one way behind its rectifier.
-                    if let circuits::Switch::BuckBoost(b) = c.switch {
-                        s[(b.inductor.i, b.inductor.i)] = 1.0;
-                    }
-                    // An inverting inductor's current flows as the element's voltage drives it.
-                    if let circuits::Switch::Inverter(v) = c.switch {
-                        s[(v.inductor.i, v.inductor.i)] = -1.0;
-                    }
+                    circuits::CircuitKind::mirror(&c.kind, &mut s);
                 }
             },
         }
@@ -579,13 +572,11 @@ fn port_of(device: &Device) -> Result<Port, AssemblyError> {
     }
 }
 
-/// The interface circuit of a device, if its interface is not resistive.
+/// The interface circuit of a device, if its interface is not resistive: its kind from the
+/// registration point ([`circuits::Kind::of`]), refused where the kind cannot act on the
+/// element.
 fn circuit_of(device: &Device) -> Result<Option<circuits::Circuit>, AssemblyError> {
-    use crate::device::{Interface, Inversion};
-    use circuits::{DiodeLaw, Sink, Switch};
-    /// The one inversion without a factor of its own: a series SSHI through its inductor.
-    const RING: &str = "a series SSHI's inversion through its inductor is not modelled; give \
-                        `inversion_factor` or `quality_factor`";
+    use circuits::CircuitKind;
     if device.interface.is_resistive() {
         return Ok(None);
     }
@@ -603,108 +594,18 @@ fn circuit_of(device: &Device) -> Result<Option<circuits::Circuit>, AssemblyErro
         TransducerModel::Pair(p) => (circuits::Element::Pair(p), 2),
         TransducerModel::None => return Err(unsupported("there is no transducer to connect")),
     };
-    let diode_of = |d: &crate::device::Diode| match *d {
-        crate::device::Diode::PiecewiseLinear {
-            forward_drop_v,
-            on_resistance_ohm,
-        } => DiodeLaw::PiecewiseLinear {
-            vf: forward_drop_v,
-            ron: on_resistance_ohm,
-        },
-        crate::device::Diode::Shockley {
-            saturation_current_a,
-            ideality,
-            thermal_voltage_v,
-        } => DiodeLaw::Shockley {
-            is: saturation_current_a,
-            nvt: ideality * thermal_voltage_v,
-        },
+    let Some(d) = circuits::Kind::of(&device.interface, 3 + e_slots).map_err(unsupported)? else {
+        return Ok(None);
     };
-    let (diode, cs, load, switch) = match &device.interface {
-        Interface::Resistive => return Ok(None),
-        Interface::FullBridge(r) => (
-            diode_of(&r.diode),
-            r.storage_capacitance_f,
-            &r.load,
-            Switch::None,
-        ),
-        Interface::ParallelSshi(
-            r,
-            Inversion::Inductor {
-                inductance_h,
-                resistance_ohm,
-            },
-        ) => (
-            diode_of(&r.diode),
-            r.storage_capacitance_f,
-            &r.load,
-            Switch::Inverter(circuits::Inverter {
-                inductor: circuits::Inductor {
-                    l: *inductance_h,
-                    rl: *resistance_ohm,
-                    i: 3 + e_slots,
-                },
-            }),
-        ),
-        Interface::ParallelSshi(r, g) => (
-            diode_of(&r.diode),
-            r.storage_capacitance_f,
-            &r.load,
-            Switch::Parallel(g.gamma().ok_or_else(|| unsupported(RING))?),
-        ),
-        Interface::SeriesSshi(r, g) => (
-            diode_of(&r.diode),
-            r.storage_capacitance_f,
-            &r.load,
-            Switch::Series(g.gamma().ok_or_else(|| unsupported(RING))?),
-        ),
-        Interface::Sece {
-            storage_capacitance_f,
-            load,
-            efficiency,
-        } => (
-            DiodeLaw::PiecewiseLinear { vf: 0.0, ron: 0.0 },
-            *storage_capacitance_f,
-            load,
-            Switch::Sece(*efficiency),
-        ),
-        Interface::SeceInductor(s) => (
-            DiodeLaw::PiecewiseLinear { vf: 0.0, ron: 0.0 },
-            s.storage_capacitance_f,
-            &s.load,
-            Switch::BuckBoost(circuits::BuckBoost {
-                inductor: circuits::Inductor {
-                    l: s.inductance_h,
-                    rl: s.inductor_resistance_ohm,
-                    i: 3 + e_slots,
-                },
-                vf: s.flyback_drop_v,
-            }),
-        ),
-    };
-    if matches!(switch, Switch::BuckBoost(_)) && !matches!(element, circuits::Element::Piezo { .. })
-    {
-        return Err(unsupported(
-            "a SECE's inductor discharges a piezoelectric element's clamped capacitance only",
-        ));
-    }
-    if matches!(switch, Switch::Inverter(_)) && !matches!(element, circuits::Element::Piezo { .. })
-    {
-        return Err(unsupported(
-            "an SSHI's inductor rings with a piezoelectric element's clamped capacitance only",
-        ));
-    }
-    if matches!(element, circuits::Element::Pair(_)) && switch != Switch::None {
-        return Err(unsupported(
-            "a synchronous switch acts on a piezoelectric element's voltage only",
-        ));
+    if let Some(why) = d.kind.refuses(&element) {
+        return Err(unsupported(why));
     }
     Ok(Some(circuits::Circuit {
         element,
-        diode,
-        cs,
-        sink: Sink::of(load),
-        switch,
+        diode: d.diode,
+        cs: d.cs,
+        sink: circuits::Sink::of(d.load),
+        kind: d.kind,
         e: 2,
         vs: 2 + e_slots,
     }))

@@ -3,7 +3,7 @@
 //! `experiments/bench/interfaces.rs`).
 
 use anyhow::Result;
-use endstop::device::{Device, Interface, Rectifier};
+use endstop::device::Device;
 use endstop::drive::noise::NoiseSpec;
 use endstop::drive::Sine;
 use endstop::study::charging::{charge, ChargeSettings};
@@ -19,16 +19,8 @@ use crate::{fmt_sig, row, write_atomic, Experiment, LoadedDevice};
 /// with a storage.
 fn open_storage(d: &Device) -> Device {
     let mut open = d.clone();
-    match &mut open.interface {
-        Interface::FullBridge(r) | Interface::ParallelSshi(r, _) | Interface::SeriesSshi(r, _) => {
-            *r = Rectifier {
-                load: endstop::device::DcLoad::Open,
-                ..r.clone()
-            };
-        }
-        Interface::Sece { load, .. } => *load = endstop::device::DcLoad::Open,
-        Interface::SeceInductor(s) => s.load = endstop::device::DcLoad::Open,
-        Interface::Resistive => {}
+    if let Some(load) = open.interface.load_mut() {
+        *load = endstop::device::DcLoad::Open;
     }
     open
 }

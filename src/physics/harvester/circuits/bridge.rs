@@ -1,25 +1,10 @@
 //! An interface circuit between a transducer and a DC load ([`crate::device::interface`]): a
 //! diode bridge whose conduction starts and stops at located events, into a storage capacitor
-//! that feeds the load, with a synchronous switch (SSHI, SECE) acting at the displacement
-//! extrema, the `v = 0` events.
+//! that feeds the load, with the behaviour its kind adds ([`super::CircuitKind`]): a
+//! synchronous switch acting at the displacement extrema, the `v = 0` events, or an
+//! inductor's transfer in time.
 //!
-//! The module reads better whole: the modes' equations, their guards and the resets at the
-//! switches are one state machine, each part written against the others.
-//!
-//! # The transducer as a port
-//! The circuit sees the transducer as a port ([`Element`]):
-//! * a **piezoelectric element**, a current source `-theta v` into its clamped capacitance
-//!   `Cp`: its voltage `Vp` is a state, `Cp Vp' = -theta v - i`, and it puts `+theta Vp` on
-//!   the mass;
-//! * a **coil**, the EMF `Phi v` behind `Rc` and `L`: its current `I` is a state
-//!   (`L I' = Phi v - Rc I - V_terminal`; algebraic when `L = 0`), and it puts `-Phi I` on the
-//!   mass;
-//! * an **electrostatic pair** (eqs 8-10) across its two electrodes: the node charges `s1`,
-//!   `s2` are states, the port's voltage is `V1 - V2` with `V_i = (s_i + (C_i - C0) Vb) / D_i`,
-//!   `D_i = C_i + Cp + CL`; a current `i` out of electrode 1 and into electrode 2 moves
-//!   `s1' = -i`, `s2' = +i`, and the force is eq 9's.
-//!
-//! The bridge current `i >= 0` leaves the element's terminal of polarity `s = +-1` and charges
+//! The circuit sees the transducer as a port ([`super::element`]). The bridge current `i >= 0` leaves the element's terminal of polarity `s = +-1` and charges
 //! the storage `Cs`, which feeds the DC load current `I_L(Vs)` (`Vs / R`, `(Vs - V_b) / R_b`
 //! for a battery, 0 open).
 //!
@@ -45,25 +30,12 @@
 //! Shockley diodes have no modes: the two diodes of a conducting path share its voltage `u`
 //! equally (the bridge is symmetric), so a path carries `I_s (exp(u / (2 n V_T)) - 1)`; the
 //! port's current is the difference of the two paths', the storage's their sum.
-//!
-//! # Synchronous switches (piezoelectric element)
+//! # Extrema
 //! The mode also remembers the sign of the velocity (the heading); an extremum is the guard
 //! `-v` (or `v`) turning positive, where `v` is set to exactly zero (a projection within the
-//! event tolerance, so that the next heading's guard starts at zero). There:
+//! event tolerance, so that the next heading's guard starts at zero), and the circuit's kind
+//! acts there ([`super::instant`], [`super::sece_inductor`], [`super::sshi_inductor`]).
 //!
-//! * parallel SSHI: `Vp -> -gamma Vp` (the LC half-cycle is instantaneous; its loss
-//!   `(1 - gamma^2) Cp Vp^2 / 2` is a switching loss);
-//! * series SSHI: the loop of `Cp`, the inductor, the bridge and `Cs` rings for half a cycle:
-//!   its voltage `u = |Vp| - Vs - 2 V_F` (when positive) becomes `-gamma u`, moving the charge
-//!   `q = (1 + gamma) u Cp Cs / (Cp + Cs)` from the element to the storage (`2 V_F q` is lost
-//!   in the diodes, the rest of the drop is a switching loss);
-//! * SECE: `Vp -> 0` and `Cs Vs^2 / 2` gains `eta Cp Vp^2 / 2` (its transfer resolved
-//!   through the inductor in time is [`super::sece_inductor`], which owns the behaviour of a
-//!   circuit with [`Switch::BuckBoost`]).
-//!
-//! A parallel SSHI whose inversion rings through its inductor in time is
-//! [`super::sshi_inductor`] ([`Switch::Inverter`]): the bridge's modes here, with the ring's
-//! stages added to them there.
 //!
 //! # Guards
 //! The circuit has one guard: the largest of its dimensionless guards (conduction and
@@ -72,158 +44,14 @@
 
 use nalgebra::{SMatrix, SVector};
 
-use super::parts::{BuckBoost, DiodeLaw, Inverter, Sink, Switch};
-use crate::physics::transducer::CapacitorPair;
+use super::element::Element;
+use super::kind::CircuitKind;
+use super::mode::{Bridge, CircuitMode, Heading, ResetLoss};
+use super::parts::{DiodeLaw, Sink};
+use super::Kind;
 
 /// An unused guard.
-const OFF: f64 = f64::NEG_INFINITY;
-
-/// The transducer as the circuit sees it (see the module docs).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum Element {
-    /// A piezoelectric element: coupling theta (N/V) and clamped capacitance Cp (F).
-    Piezo {
-        /// theta (N/V).
-        theta: f64,
-        /// Cp (F).
-        cp: f64,
-    },
-    /// A coil: transduction Phi (N/A), resistance Rc (ohm), inductance L (H).
-    Coil {
-        /// Phi (N/A).
-        phi: f64,
-        /// Rc (ohm).
-        rc: f64,
-        /// L (H).
-        l: f64,
-    },
-    /// An electrostatic pair across its two electrodes (its loads' `rl` is that of an
-    /// optional bleed resistor on each electrode, infinite without one).
-    Pair(CapacitorPair),
-}
-
-/// Whether the bridge conducts (bits 0-1 of the circuit's mode bits).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Bridge {
-    /// Blocking (or, with Shockley diodes, always: the law is smooth).
-    Off,
-    /// Conducting from the element's positive terminal.
-    Positive,
-    /// Conducting from its negative terminal.
-    Negative,
-    /// Blocking, with a flyback diode carrying an inductor's current into the storage (a SECE
-    /// through its inductor, [`super::sece_inductor`]).
-    Flyback,
-    /// Blocking, with the element ringing through an inverting inductor (bits 3-4; a
-    /// parallel SSHI through its inductor, [`super::sshi_inductor`]).
-    Invert {
-        /// The element's voltage was negative when the switch closed.
-        negative: bool,
-        /// The element's voltage has crossed zero.
-        returning: bool,
-    },
-}
-
-impl Bridge {
-    /// +1, -1, or 0 when off.
-    #[inline(always)]
-    pub fn sign(self) -> f64 {
-        match self {
-            Bridge::Off | Bridge::Flyback | Bridge::Invert { .. } => 0.0,
-            Bridge::Positive => 1.0,
-            Bridge::Negative => -1.0,
-        }
-    }
-}
-
-/// The sign of the velocity since the last extremum (bit 2 of the circuit's mode bits).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Heading {
-    /// v >= 0.
-    Up,
-    /// v < 0.
-    Down,
-}
-
-impl Heading {
-    /// The heading after an extremum.
-    #[inline(always)]
-    pub fn turned(self) -> Self {
-        match self {
-            Heading::Up => Heading::Down,
-            Heading::Down => Heading::Up,
-        }
-    }
-}
-
-/// The circuit's mode, from and to its bits of a [`crate::model::Mode`].
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct CircuitMode {
-    /// Bridge conduction.
-    pub bridge: Bridge,
-    /// Sign of the velocity since the last extremum.
-    pub heading: Heading,
-}
-
-impl CircuitMode {
-    /// The mode of the bits.
-    #[inline(always)]
-    pub fn of(bits: u8) -> Self {
-        Self {
-            bridge: match bits & 3 {
-                _ if bits & 8 != 0 => Bridge::Invert {
-                    negative: bits & 1 != 0,
-                    returning: bits & 2 != 0,
-                },
-                0 => Bridge::Off,
-                1 => Bridge::Positive,
-                2 => Bridge::Negative,
-                _ => Bridge::Flyback,
-            },
-            heading: if bits & 4 == 0 {
-                Heading::Up
-            } else {
-                Heading::Down
-            },
-        }
-    }
-
-    /// The bits of the mode.
-    #[inline(always)]
-    pub fn bits(self) -> u8 {
-        let b = match self.bridge {
-            Bridge::Off => 0,
-            Bridge::Positive => 1,
-            Bridge::Negative => 2,
-            Bridge::Flyback => 3,
-            Bridge::Invert {
-                negative,
-                returning,
-            } => 8 | u8::from(negative) | (u8::from(returning) << 1),
-        };
-        b | if self.heading == Heading::Down { 4 } else { 0 }
-    }
-}
-
-/// What a switch of the circuit lost (J): in the diodes and in the switch.
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
-pub struct ResetLoss {
-    /// Diode conduction during a transfer.
-    pub diode: f64,
-    /// The switch: inversion losses, a converter's inefficiency.
-    pub switching: f64,
-}
-
-/// A pair's node voltages, capacitances and their slopes at one state.
-#[derive(Debug, Clone, Copy)]
-struct PairState {
-    /// Node voltages (V).
-    v: [f64; 2],
-    /// `D_i = C_i + Cp + CL` (F).
-    d: [f64; 2],
-    /// `dC_i / dx` (F/m).
-    a: [f64; 2],
-}
+pub(super) const OFF: f64 = f64::NEG_INFINITY;
 
 /// The interface circuit, evaluated (see the module docs).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -236,8 +64,8 @@ pub struct Circuit {
     pub cs: f64,
     /// The DC load.
     pub sink: Sink,
-    /// The switch.
-    pub switch: Switch,
+    /// The circuit's kind: what it adds to the bridge.
+    pub kind: Kind,
     /// Index of the element's first state component (its second follows, for a pair).
     pub e: usize,
     /// Index of the storage voltage.
@@ -255,50 +83,23 @@ impl Circuit {
         }
     }
 
-    /// The buck-boost inductor of a SECE through its inductor, which then owns the circuit's
-    /// behaviour ([`super::sece_inductor`]).
-    #[inline(always)]
-    fn buck_boost(&self) -> Option<BuckBoost> {
-        match self.switch {
-            Switch::BuckBoost(b) => Some(b),
-            _ => None,
-        }
-    }
-
-    /// The inverting inductor of a parallel SSHI through its inductor, which adds the ring's
-    /// stages to the bridge's modes ([`super::sshi_inductor`]).
-    #[inline(always)]
-    fn inverter(&self) -> Option<Inverter> {
-        match self.switch {
-            Switch::Inverter(v) => Some(v),
-            _ => None,
-        }
-    }
-
     /// The state's dimension the circuit needs: its last component's index plus one.
     pub fn dimension(&self) -> usize {
-        self.switch
+        self.kind
             .inductor()
             .map_or(self.vs + 1, |inductor| inductor.i + 1)
     }
 
     /// The bridge states of the circuit's modes.
     pub fn bridges(&self) -> &'static [Bridge] {
-        match self.switch {
-            Switch::BuckBoost(_) => &BuckBoost::PHASES,
-            Switch::Inverter(_) => &Inverter::PHASES,
-            _ => &[Bridge::Off, Bridge::Positive, Bridge::Negative],
-        }
+        self.kind.phases()
     }
 
     /// True when the bridge connects the element to the storage between extrema (a plain
     /// bridge or parallel SSHI); series SSHI and SECE leave the element open there.
     #[inline(always)]
     pub fn bridge_between_extrema(&self) -> bool {
-        matches!(
-            self.switch,
-            Switch::None | Switch::Parallel(_) | Switch::Inverter(_)
-        )
+        self.kind.bridge_between_extrema()
     }
 
     /// True when conduction changes are events (piecewise-linear diodes on a bridge that
@@ -328,55 +129,9 @@ impl Circuit {
 
     /// The current of one conducting path of two Shockley diodes at its voltage `u` (A).
     #[inline(always)]
-    fn path_current(is: f64, nvt: f64, u: f64) -> f64 {
+    pub(super) fn path_current(is: f64, nvt: f64, u: f64) -> f64 {
         is * (u / (2.0 * nvt)).exp_m1()
     }
-
-    /// A pair's node voltages and capacitances.
-    #[inline(always)]
-    fn pair<const N: usize>(&self, p: &CapacitorPair, y: &SVector<f64, N>) -> PairState {
-        let z = SVector::<f64, 4>::new(y[0], y[1], y[self.e], y[self.e + 1]);
-        let el = p.electrical(&z);
-        let a = p.capacitance_slopes(y[0]);
-        PairState {
-            v: el.v,
-            d: [el.c[0] + p.cp + p.cl, el.c[1] + p.cp + p.cl],
-            a,
-        }
-    }
-
-    /// The port's voltage that drives the bridge: `Vp`, `V1 - V2`, or the coil's EMF `Phi v`.
-    #[inline(always)]
-    pub fn drive_voltage<const N: usize>(&self, y: &SVector<f64, N>) -> f64 {
-        match self.element {
-            Element::Piezo { .. } => y[self.e],
-            Element::Coil { phi, .. } => phi * y[1],
-            Element::Pair(p) => {
-                let ps = self.pair(&p, y);
-                ps.v[0] - ps.v[1]
-            }
-        }
-    }
-
-    /// A capacitive port's elastance `S` (V/C) and its voltage's rate with no port current
-    /// (V/s; a pair's node loads still drain it), for the ideal bridge's constraint (see the
-    /// module docs).
-    #[inline]
-    fn elastance_and_open_rate<const N: usize>(&self, y: &SVector<f64, N>) -> (f64, f64) {
-        match self.element {
-            Element::Piezo { theta, cp } => (1.0 / cp, -theta * y[1] / cp),
-            Element::Pair(p) => {
-                let ps = self.pair(&p, y);
-                // dV_i/dt with no port current: the motion's -a_i v (V_i - Vb) / D_i and the
-                // node's own load draining it, -(V_i / R_L) / D_i.
-                let r1 = -(ps.a[0] * y[1] * (ps.v[0] - p.vb) + ps.v[0] / p.rl) / ps.d[0];
-                let r2 = -(ps.a[1] * y[1] * (ps.v[1] - p.vb) + ps.v[1] / p.rl) / ps.d[1];
-                (1.0 / ps.d[0] + 1.0 / ps.d[1], r1 - r2)
-            }
-            Element::Coil { .. } => (0.0, 0.0),
-        }
-    }
-
     /// The coil current in a bridge mode (A); zero for a capacitive element.
     #[inline(always)]
     pub fn coil_current<const N: usize>(&self, bridge: Bridge, y: &SVector<f64, N>) -> f64 {
@@ -447,7 +202,6 @@ impl Circuit {
             DiodeLaw::PiecewiseLinear { .. } => bridge.sign() * self.bridge_current(bridge, y),
         }
     }
-
     /// The force on the mass (N), and the rates of the element's components and of the
     /// storage voltage written into `rates` (at the state's indices), in a bridge mode.
     #[inline]
@@ -457,30 +211,12 @@ impl Circuit {
         y: &SVector<f64, N>,
         rates: &mut SVector<f64, N>,
     ) -> f64 {
-        if let Some(b) = self.buck_boost() {
-            return b.force_and_rates(self, bridge, y, rates);
-        }
-        if let Some(v) = self.inverter() {
-            let ringing = Inverter::stage(bridge).is_some();
-            let f = self.bridge_force_and_rates(Self::open_in_ring(bridge), y, rates);
-            v.rates(self, ringing, y, rates);
-            return f;
-        }
-        self.bridge_force_and_rates(bridge, y, rates)
+        self.kind.force_and_rates(self, bridge, y, rates)
     }
 
-    /// The bridge's state during a ring: off.
-    #[inline(always)]
-    fn open_in_ring(bridge: Bridge) -> Bridge {
-        match bridge {
-            Bridge::Invert { .. } => Bridge::Off,
-            b => b,
-        }
-    }
-
-    /// [`Circuit::force_and_rates`] of the bridge and its element.
+    /// The bridge and its element's force and rates (see [`Circuit::force_and_rates`]).
     #[inline]
-    fn bridge_force_and_rates<const N: usize>(
+    pub(super) fn bridge_force_and_rates<const N: usize>(
         &self,
         bridge: Bridge,
         y: &SVector<f64, N>,
@@ -561,14 +297,19 @@ impl Circuit {
             }
         }
     }
-
     /// Power lost in the diodes (W).
     #[inline]
     pub fn diode_power<const N: usize>(&self, bridge: Bridge, y: &SVector<f64, N>) -> f64 {
-        if let Some(b) = self.buck_boost() {
-            return b.diode_power(bridge, y);
-        }
-        let bridge = Self::open_in_ring(bridge);
+        self.kind.diode_power(self, bridge, y)
+    }
+
+    /// Power lost in the bridge's diodes (W).
+    #[inline]
+    pub(super) fn bridge_diode_power<const N: usize>(
+        &self,
+        bridge: Bridge,
+        y: &SVector<f64, N>,
+    ) -> f64 {
         if !self.bridge_between_extrema() {
             return 0.0;
         }
@@ -585,15 +326,16 @@ impl Circuit {
         }
     }
 
-    /// Power lost in the coil's resistance, or a pair's bleed resistors (W).
+    /// Power lost in the element (W): a coil's resistance, a pair's bleed resistors, a
+    /// circuit's inductor.
     #[inline]
     pub fn element_loss<const N: usize>(&self, bridge: Bridge, y: &SVector<f64, N>) -> f64 {
-        if let Some(b) = self.buck_boost() {
-            return b.resistive_power(bridge, y);
-        }
-        if let Some(v) = self.inverter() {
-            return v.resistive_power(y);
-        }
+        self.kind.element_loss(self, bridge, y)
+    }
+
+    /// Power lost in the coil's resistance, or a pair's bleed resistors (W).
+    #[inline]
+    pub(super) fn port_loss<const N: usize>(&self, bridge: Bridge, y: &SVector<f64, N>) -> f64 {
         match self.element {
             Element::Coil { rc, .. } => {
                 let i = self.coil_current(bridge, y);
@@ -614,73 +356,15 @@ impl Circuit {
         y[self.vs] * self.sink.current(y[self.vs])
     }
 
-    /// Energy on the element's capacitance (against a pair's bias) or in the coil, and on the
-    /// storage (J).
+    /// Energy on the element's capacitance (against a pair's bias) or in the coil, in a
+    /// circuit's inductor, and on the storage (J).
     pub fn stored_energy<const N: usize>(&self, y: &SVector<f64, N>) -> f64 {
-        let e1 = match self.element {
-            Element::Piezo { cp, .. } => 0.5 * cp * y[self.e] * y[self.e],
-            Element::Coil { l, .. } => 0.5 * l * y[self.e] * y[self.e],
-            Element::Pair(p) => {
-                let z = SVector::<f64, 4>::new(y[0], y[1], y[self.e], y[self.e + 1]);
-                let el = p.electrical(&z);
-                let mut e = 0.0;
-                for i in 0..2 {
-                    let u = el.v[i] - p.vb;
-                    e += 0.5 * (el.c[i] + p.cp) * u * u + 0.5 * p.cl * el.v[i] * el.v[i];
-                }
-                e
-            }
-        };
+        let e1 = self.element_energy(y);
         let inductor = self
-            .switch
+            .kind
             .inductor()
             .map_or(0.0, |inductor| inductor.stored_energy(y));
         e1 + inductor + 0.5 * self.cs * y[self.vs] * y[self.vs]
-    }
-
-    /// The charge a pair's bias source has delivered (C); zero for the others.
-    pub fn source_charge<const N: usize>(&self, y: &SVector<f64, N>) -> f64 {
-        match self.element {
-            Element::Pair(p) => {
-                let z = SVector::<f64, 4>::new(y[0], y[1], y[self.e], y[self.e + 1]);
-                let el = p.electrical(&z);
-                (0..2).map(|i| (el.c[i] + p.cp) * (p.vb - el.v[i])).sum()
-            }
-            _ => 0.0,
-        }
-    }
-
-    /// The bias voltage of a pair (V); zero otherwise.
-    pub fn bias_v(&self) -> f64 {
-        match self.element {
-            Element::Pair(p) => p.vb,
-            _ => 0.0,
-        }
-    }
-
-    /// The scales of the element's components and of the storage voltage, for a displacement
-    /// scale `x` and velocity scale `v`, written into `sc`.
-    pub fn scales<const N: usize>(&self, x: f64, v: f64, sc: &mut SVector<f64, N>) {
-        match self.element {
-            Element::Piezo { theta, cp } => {
-                sc[self.e] = theta * x / cp;
-                sc[self.vs] = theta * x / cp;
-                if let Some(inductor) = self.switch.inductor() {
-                    inductor.scale(cp, sc[self.e], sc);
-                }
-            }
-            Element::Coil { phi, rc, l } => {
-                let w = v / x;
-                sc[self.e] = phi * v / (rc + 2.0 * self.ron() + w * l);
-                sc[self.vs] = phi * v;
-            }
-            Element::Pair(p) => {
-                let q = p.c0 * p.vb.max(1.0) * x / p.length_scale();
-                sc[self.e] = q;
-                sc[self.e + 1] = q;
-                sc[self.vs] = q / (p.c0 + p.cp + p.cl);
-            }
-        }
     }
 
     /// The storage's time constant through its load (s): `R Cs` for a resistor, `R_b Cs` for
@@ -692,16 +376,16 @@ impl Circuit {
         }
     }
 
-    /// The shortest time constant of a conduction mode (s): `2 R_on C_port Cs / (C_port + Cs)`
-    /// for a capacitive element with an on-resistance (`C_port` the element's capacitance at
-    /// rest), `L / (Rc + 2 R_on)` for a coil; infinite where a mode has none.
+    /// The shortest time constant of the circuit's modes (s).
     pub fn conduction_time_constant_s(&self) -> f64 {
-        if let Some(b) = self.buck_boost() {
-            return b.inductor.time_constant_s(self.piezo().1);
-        }
-        let ring = self.inverter().map_or(f64::INFINITY, |v| {
-            v.inductor.time_constant_s(self.piezo().1)
-        });
+        self.kind.time_constant_s(self)
+    }
+
+    /// The shortest time constant of a bridge's conduction mode (s):
+    /// `2 R_on C_port Cs / (C_port + Cs)` for a capacitive element with an on-resistance
+    /// (`C_port` the element's capacitance at rest), `L / (Rc + 2 R_on)` for a coil; infinite
+    /// where a mode has none.
+    pub(super) fn bridge_time_constant_s(&self) -> f64 {
         let capacitive = |c: f64| 2.0 * self.ron() * c * self.cs / (c + self.cs);
         match self.element {
             Element::Piezo { cp, .. } if self.ron() > 0.0 && self.bridge_between_extrema() => {
@@ -714,50 +398,24 @@ impl Circuit {
             Element::Coil { rc, l, .. } if l > 0.0 => l / (rc + 2.0 * self.ron()),
             _ => f64::INFINITY,
         }
-        .min(ring)
     }
 
-    /// The switch's reset at an extremum: changes `y` and says what it lost.
+    /// The kind's reset at an extremum: changes `y` and says what it lost (a synchronous
+    /// switch acts on a piezoelectric element only).
     pub fn reset<const N: usize>(&self, y: &mut SVector<f64, N>) -> ResetLoss {
         let Element::Piezo { cp, .. } = self.element else {
             return ResetLoss::default();
         };
-        let (e, ivs) = (self.e, self.vs);
-        match self.switch {
-            Switch::None | Switch::BuckBoost(_) | Switch::Inverter(_) => ResetLoss::default(),
-            Switch::Parallel(gamma) => {
-                let en = 0.5 * cp * y[e] * y[e];
-                y[e] *= -gamma;
-                ResetLoss {
-                    diode: 0.0,
-                    switching: en * (1.0 - gamma * gamma),
-                }
-            }
-            Switch::Series(gamma) => {
-                let s = y[e].signum();
-                let u = s * y[e] - y[ivs] - self.path_drop();
-                if u <= 0.0 {
-                    return ResetLoss::default();
-                }
-                let ceff = cp * self.cs / (cp + self.cs);
-                let q = (1.0 + gamma) * u * ceff;
-                y[e] -= s * q / cp;
-                y[ivs] += q / self.cs;
-                ResetLoss {
-                    diode: self.path_drop() * q,
-                    switching: 0.5 * ceff * u * u * (1.0 - gamma * gamma),
-                }
-            }
-            Switch::Sece(eta) => {
-                let en = 0.5 * cp * y[e] * y[e];
-                y[ivs] = (y[ivs] * y[ivs] + 2.0 * eta * en / self.cs).sqrt();
-                y[e] = 0.0;
-                ResetLoss {
-                    diode: 0.0,
-                    switching: (1.0 - eta) * en,
-                }
-            }
-        }
+        self.kind.reset(self, cp, y)
+    }
+
+    /// The Jacobian of [`Circuit::reset`] at the state `y` just before it (the velocity is
+    /// zero there and stays so: the reset leaves it alone), into `g` (the identity elsewhere).
+    pub fn reset_jacobian<const N: usize>(&self, y: &SVector<f64, N>, g: &mut SMatrix<f64, N, N>) {
+        let Element::Piezo { cp, .. } = self.element else {
+            return;
+        };
+        self.kind.reset_jacobian(self, cp, y, g);
     }
 
     /// The circuit's guards, dimensionless, at the state scales `sc`: (conduction, extremum).
@@ -768,14 +426,27 @@ impl Circuit {
         y: &SVector<f64, N>,
         sc: &SVector<f64, N>,
     ) -> [f64; 2] {
-        let ring = self.inverter().zip(Inverter::stage(mode.bridge));
-        let conduction = if let Some(b) = self.buck_boost() {
-            b.phase_guard(self, mode.bridge, y, sc)
-        } else if let Some((v, stage)) = ring {
-            v.guard(self, stage, y, sc)
-        } else if self.has_conduction_events() {
+        let conduction = self.kind.conduction_guard(self, mode.bridge, y, sc);
+        let extremum = match (self.kind.acts_at_extrema(), mode.heading) {
+            (false, _) => OFF,
+            (true, Heading::Up) => -y[1] / sc[1],
+            (true, Heading::Down) => y[1] / sc[1],
+        };
+        [conduction, extremum]
+    }
+
+    /// The bridge's conduction guard, dimensionless at the scales `sc` ([`OFF`] where
+    /// conduction changes are not events).
+    #[inline]
+    pub(super) fn bridge_guard<const N: usize>(
+        &self,
+        bridge: Bridge,
+        y: &SVector<f64, N>,
+        sc: &SVector<f64, N>,
+    ) -> f64 {
+        if self.has_conduction_events() {
             let threshold = y[self.vs] + self.path_drop();
-            match mode.bridge {
+            match bridge {
                 Bridge::Off => (self.drive_voltage(y).abs() - threshold) / sc[self.vs],
                 b => {
                     let s = b.sign();
@@ -795,13 +466,7 @@ impl Circuit {
             }
         } else {
             OFF
-        };
-        let extremum = match (self.switch, mode.heading) {
-            (Switch::None, _) => OFF,
-            (_, Heading::Up) => -y[1] / sc[1],
-            (_, Heading::Down) => y[1] / sc[1],
-        };
-        [conduction, extremum]
+        }
     }
 
     /// The circuit's switch when its guard fires (at the scales `sc`): the new circuit mode,
@@ -812,36 +477,27 @@ impl Circuit {
         y: &mut SVector<f64, N>,
         sc: &SVector<f64, N>,
     ) -> (CircuitMode, ResetLoss) {
-        let mut next = mode;
         let [conduction, extremum] = self.guards(mode, y, sc);
-        if let Some(b) = self.buck_boost() {
-            let next = b.switch(self, mode, extremum >= conduction, y, sc);
-            return (next, ResetLoss::default());
-        }
-        if let Some(v) = self.inverter() {
-            let stage = Inverter::stage(mode.bridge);
-            if extremum >= conduction {
-                // v is put at exactly zero, as for every synchronous switch; an extremum
-                // during a ring only turns the heading.
-                y[1] = 0.0;
-                next.heading = mode.heading.turned();
-                if stage.is_none() {
-                    next.bridge = v.close(self, y, sc);
-                }
-                return (next, ResetLoss::default());
-            }
-            if let Some(stage) = stage {
-                next.bridge = v.advance(self, stage, y);
-                return (next, ResetLoss::default());
-            }
-        }
-        if extremum >= conduction {
+        self.kind.switch(self, mode, extremum >= conduction, y, sc)
+    }
+
+    /// The bridge's switch (see [`Circuit::switch`]): at an extremum (`extremum`) the kind's
+    /// reset, else a conduction starting or ending.
+    pub(super) fn bridge_switch<const N: usize>(
+        &self,
+        mode: CircuitMode,
+        extremum: bool,
+        y: &mut SVector<f64, N>,
+        sc: &SVector<f64, N>,
+    ) -> (CircuitMode, ResetLoss) {
+        let mut next = mode;
+        if extremum {
             // The extremum is located to the event tolerance; v is put at exactly zero so that
             // the guard of the new heading starts at zero and does not fire again at once.
             y[1] = 0.0;
             let loss = self.reset(y);
             next.heading = mode.heading.turned();
-            if self.switch != Switch::None {
+            if self.kind.acts_at_extrema() {
                 next.bridge = Bridge::Off;
             }
             return (next, loss);
@@ -877,23 +533,6 @@ impl Circuit {
             }
         };
         (next, ResetLoss::default())
-    }
-
-    /// Puts a capacitive port's voltage at the conduction threshold `s (Vs + 2 V_F)` (a
-    /// projection within the event tolerance): the piezo's voltage is set, the pair's charge
-    /// moved from one electrode to the other.
-    fn project<const N: usize>(&self, s: f64, y: &mut SVector<f64, N>) {
-        let target = s * (y[self.vs] + self.path_drop());
-        match self.element {
-            Element::Piezo { .. } => y[self.e] = target,
-            Element::Pair(_) => {
-                let (el, _) = self.elastance_and_open_rate(y);
-                let dq = (self.drive_voltage(y) - target) / el;
-                y[self.e] -= dq;
-                y[self.e + 1] += dq;
-            }
-            Element::Coil { .. } => {}
-        }
     }
 
     /// After a conduction's exit has put the port's voltage on the threshold, moves it inside
@@ -933,26 +572,26 @@ impl Circuit {
             }
         }
     }
-
-    /// The mode a state starts in: the bridge conducting in the direction of a coil's current
-    /// where it has one, else off (a guard already positive switches it on at once); the
-    /// heading from the velocity's sign.
+    /// The mode a state starts in: the kind's phase at the state, and the heading from the
+    /// velocity's sign.
     pub fn mode_of<const N: usize>(&self, y: &SVector<f64, N>) -> CircuitMode {
-        let ring = self.inverter().and_then(|v| v.phase_of(y));
-        let bridge = match (self.element, self.buck_boost()) {
-            _ if ring.is_some() => ring.unwrap_or(Bridge::Off),
-            (_, Some(b)) => b.phase_of(y),
-            (Element::Coil { l, .. }, _) if l > 0.0 && y[self.e] > 0.0 => Bridge::Positive,
-            (Element::Coil { l, .. }, _) if l > 0.0 && y[self.e] < 0.0 => Bridge::Negative,
-            _ => Bridge::Off,
-        };
         CircuitMode {
-            bridge,
+            bridge: self.kind.phase_of(self, y),
             heading: if y[1] >= 0.0 {
                 Heading::Up
             } else {
                 Heading::Down
             },
+        }
+    }
+
+    /// The bridge's state at a state: conducting in the direction of a coil's current where
+    /// it has one, else off (a guard already positive switches it on at once).
+    pub(super) fn bridge_phase_of<const N: usize>(&self, y: &SVector<f64, N>) -> Bridge {
+        match self.element {
+            Element::Coil { l, .. } if l > 0.0 && y[self.e] > 0.0 => Bridge::Positive,
+            Element::Coil { l, .. } if l > 0.0 && y[self.e] < 0.0 => Bridge::Negative,
+            _ => Bridge::Off,
         }
     }
 
@@ -976,168 +615,6 @@ impl Circuit {
         sc: &SVector<f64, N>,
         j: &mut SMatrix<f64, N, N>,
     ) {
-        if let Some(b) = self.buck_boost() {
-            return b.jacobian(self, bridge, m, j);
-        }
-        self.bridge_jacobian(Self::open_in_ring(bridge), y, m, sc, j);
-        if let Some(v) = self.inverter() {
-            v.jacobian(self, Inverter::stage(bridge).is_some(), j);
-        }
-    }
-
-    /// [`Circuit::jacobian`] of the bridge and its element.
-    fn bridge_jacobian<const N: usize>(
-        &self,
-        bridge: Bridge,
-        y: &SVector<f64, N>,
-        m: f64,
-        sc: &SVector<f64, N>,
-        j: &mut SMatrix<f64, N, N>,
-    ) {
-        let gl = self.sink_conductance();
-        let cs = self.cs;
-        let (e, ivs) = (self.e, self.vs);
-        match self.element {
-            Element::Piezo { theta, cp } => {
-                j[(1, e)] += theta / m;
-                let open_v = -theta / cp;
-                let set_open = |j: &mut SMatrix<f64, N, N>| {
-                    j[(e, 1)] = open_v;
-                    j[(ivs, ivs)] = -gl / cs;
-                };
-                if !self.bridge_between_extrema() {
-                    set_open(j);
-                    return;
-                }
-                match self.diode {
-                    DiodeLaw::Shockley { is, nvt } => {
-                        // path current I_s (exp(u / 2nVT) - 1), u1 = Vp - Vs, u2 = -Vp - Vs.
-                        let d = |u: f64| is / (2.0 * nvt) * (u / (2.0 * nvt)).exp();
-                        let (d1, d2) = (d(y[e] - y[ivs]), d(-y[e] - y[ivs]));
-                        // i1 - i2 and i1 + i2 in (Vp, Vs).
-                        let diff = (d1 + d2, -d1 + d2);
-                        let sum = (d1 - d2, -d1 - d2);
-                        j[(e, 1)] = open_v;
-                        j[(e, e)] = -diff.0 / cp;
-                        j[(e, ivs)] = -diff.1 / cp;
-                        j[(ivs, e)] = sum.0 / cs;
-                        j[(ivs, ivs)] = (sum.1 - gl) / cs;
-                    }
-                    DiodeLaw::PiecewiseLinear { ron, .. } => match bridge {
-                        Bridge::Off => set_open(j),
-                        b => {
-                            let s = b.sign();
-                            if ron == 0.0 {
-                                let (dv, dvs) = (-s * theta / (cp + cs), -gl / (cp + cs));
-                                j[(e, 1)] = dv * s;
-                                j[(e, ivs)] = dvs * s;
-                                j[(ivs, 1)] = dv;
-                                j[(ivs, ivs)] = dvs;
-                            } else {
-                                let (die, divs) = (s / (2.0 * ron), -1.0 / (2.0 * ron));
-                                j[(e, 1)] = open_v;
-                                j[(e, e)] = -die * (s / cp);
-                                j[(e, ivs)] = -divs * (s / cp);
-                                j[(ivs, e)] = die / cs;
-                                j[(ivs, ivs)] = (divs - gl) / cs;
-                            }
-                        }
-                    },
-                }
-            }
-            Element::Coil { phi, rc, l } => {
-                let s = bridge.sign();
-                let rpath = rc + 2.0 * self.ron();
-                // The coil current's gradient in (v, I, Vs).
-                let di = if l > 0.0 {
-                    [0.0, 1.0, 0.0]
-                } else if bridge == Bridge::Off {
-                    [0.0; 3]
-                } else {
-                    [phi / rpath, 0.0, -s / rpath]
-                };
-                let cols = [1, e, ivs];
-                for (k, &c) in cols.iter().enumerate() {
-                    j[(1, c)] += di[k] * -phi / m;
-                }
-                if l > 0.0 && bridge != Bridge::Off {
-                    let src = [phi, 0.0, -s];
-                    for (k, &c) in cols.iter().enumerate() {
-                        j[(e, c)] = (src[k] - di[k] * rpath) / l;
-                    }
-                } else if l > 0.0 {
-                    j[(e, e)] = -rpath / l;
-                }
-                for (k, &c) in cols.iter().enumerate() {
-                    let gl_k = if c == ivs { gl } else { 0.0 };
-                    j[(ivs, c)] = (di[k] * s - gl_k) / cs;
-                }
-            }
-            Element::Pair(_) => self.pair_jacobian(bridge, y, m, sc, j),
-        }
-    }
-
-    /// The pair's part of the Jacobian, by central differences of the circuit's force and
-    /// rates in the state's scaled coordinates: the port's equations are smooth in each mode,
-    /// and their derivatives by hand would repeat the node voltages' quotient rule for every
-    /// diode law; the monodromy they feed is checked against differences of the period map.
-    fn pair_jacobian<const N: usize>(
-        &self,
-        bridge: Bridge,
-        y: &SVector<f64, N>,
-        m: f64,
-        sc: &SVector<f64, N>,
-        j: &mut SMatrix<f64, N, N>,
-    ) {
-        let rows = [self.e, self.e + 1, self.vs];
-        let eval = |z: &SVector<f64, N>| {
-            let mut r = SVector::<f64, N>::zeros();
-            let f = self.force_and_rates(bridge, z, &mut r);
-            (f, r)
-        };
-        for c in [0, 1, self.e, self.e + 1, self.vs] {
-            // Steps of 1e-6 of each scale: truncation ~1e-12 and rounding ~1e-10 of a row.
-            let h = 1e-6 * sc[c];
-            let (mut yp, mut ym) = (*y, *y);
-            yp[c] += h;
-            ym[c] -= h;
-            let ((fp, rp), (fm, rm)) = (eval(&yp), eval(&ym));
-            j[(1, c)] += (fp - fm) / (2.0 * h) / m;
-            for &r in &rows {
-                j[(r, c)] = (rp[r] - rm[r]) / (2.0 * h);
-            }
-        }
-    }
-
-    /// The Jacobian of [`Circuit::reset`] at the state `y` just before it (the velocity is
-    /// zero there and stays so: the reset leaves it alone), into `g` (the identity elsewhere).
-    pub fn reset_jacobian<const N: usize>(&self, y: &SVector<f64, N>, g: &mut SMatrix<f64, N, N>) {
-        let Element::Piezo { cp, .. } = self.element else {
-            return;
-        };
-        let (e, ivs) = (self.e, self.vs);
-        match self.switch {
-            Switch::None | Switch::BuckBoost(_) | Switch::Inverter(_) => {}
-            Switch::Parallel(gamma) => g[(e, e)] = -gamma,
-            Switch::Series(gamma) => {
-                let s = y[e].signum();
-                if s * y[e] - y[ivs] - self.path_drop() > 0.0 {
-                    // q = (1 + gamma) ceff (s Vp - Vs - 2 V_F); Vp -= s q / Cp, Vs += q / Cs.
-                    let k = (1.0 + gamma) * cp * self.cs / (cp + self.cs);
-                    g[(e, e)] = 1.0 - k / cp;
-                    g[(e, ivs)] = s * k / cp;
-                    g[(ivs, e)] = s * k / self.cs;
-                    g[(ivs, ivs)] = 1.0 - k / self.cs;
-                }
-            }
-            Switch::Sece(eta) => {
-                let vs = (y[ivs] * y[ivs] + eta * cp * y[e] * y[e] / self.cs).sqrt();
-                g[(e, e)] = 0.0;
-                if vs > 0.0 {
-                    g[(ivs, e)] = eta * cp * y[e] / (self.cs * vs);
-                    g[(ivs, ivs)] = y[ivs] / vs;
-                }
-            }
-        }
+        self.kind.jacobian(self, bridge, y, m, sc, j);
     }
 }

@@ -1,11 +1,11 @@
 //! The parts of an interface circuit, evaluated from the device's description
 //! ([`crate::device::interface`]): the diodes' law, the DC load the storage capacitor feeds,
-//! and the synchronous switch acting at the displacement extrema. [`super::bridge`] writes the
-//! circuit's modes, guards and switches with them.
+//! and the inductor a circuit kind may hold. [`super::bridge`] writes the circuit's modes,
+//! guards and switches with them.
 
 use nalgebra::SVector;
 
-use crate::device::DcLoad;
+use crate::device::{DcLoad, Diode};
 
 /// The diodes, evaluated.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -24,6 +24,29 @@ pub enum DiodeLaw {
         /// n V_T (V).
         nvt: f64,
     },
+}
+
+impl DiodeLaw {
+    /// The law of the described diodes.
+    pub(crate) fn of(d: &Diode) -> Self {
+        match *d {
+            Diode::PiecewiseLinear {
+                forward_drop_v,
+                on_resistance_ohm,
+            } => DiodeLaw::PiecewiseLinear {
+                vf: forward_drop_v,
+                ron: on_resistance_ohm,
+            },
+            Diode::Shockley {
+                saturation_current_a,
+                ideality,
+                thermal_voltage_v,
+            } => DiodeLaw::Shockley {
+                is: saturation_current_a,
+                nvt: ideality * thermal_voltage_v,
+            },
+        }
+    }
 }
 
 /// The DC load, evaluated.
@@ -60,55 +83,9 @@ impl Sink {
     }
 }
 
-/// The synchronous switch, if any.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum Switch {
-    /// None: a plain bridge.
-    None,
-    /// Parallel SSHI with inversion factor gamma.
-    Parallel(f64),
-    /// Series SSHI with inversion factor gamma.
-    Series(f64),
-    /// SECE with efficiency eta.
-    Sece(f64),
-    /// SECE through its buck-boost inductor ([`super::sece_inductor`]).
-    BuckBoost(BuckBoost),
-    /// Parallel SSHI whose inversion rings through its inductor ([`super::sshi_inductor`]).
-    Inverter(Inverter),
-}
-
-impl Switch {
-    /// The inductor the switch holds, if any.
-    pub fn inductor(&self) -> Option<Inductor> {
-        match *self {
-            Switch::BuckBoost(b) => Some(b.inductor),
-            Switch::Inverter(v) => Some(v.inductor),
-            Switch::None | Switch::Parallel(_) | Switch::Series(_) | Switch::Sece(_) => None,
-        }
-    }
-}
-
-/// The buck-boost inductor of a SECE through its inductor and its flyback diode, evaluated;
-/// its behaviour is [`super::sece_inductor`]'s.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct BuckBoost {
-    /// The inductor, its resistance and its current.
-    pub inductor: Inductor,
-    /// The flyback diode's forward drop V_F (V).
-    pub vf: f64,
-}
-
-/// The inverting inductor of a parallel SSHI, evaluated; its behaviour is
-/// [`super::sshi_inductor`]'s.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Inverter {
-    /// The inductor, its resistance and its current.
-    pub inductor: Inductor,
-}
-
 /// An inductor with its series resistance, its current a state component of its own,
-/// evaluated: the part every circuit with an inductor holds ([`BuckBoost`],
-/// [`Inverter`]).
+/// evaluated: the part every circuit with an inductor holds ([`super::BuckBoost`],
+/// [`super::Inverter`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Inductor {
     /// L (H).

@@ -1,6 +1,6 @@
 //! Synchronous electric charge extraction through its buck-boost inductor: the SECE whose
 //! transfer is resolved in time, with the inductor current a state of its own
-//! ([`crate::device::SeceInductor`]). The instantaneous SECE of [`super::bridge`] is its limit
+//! ([`crate::device::SeceInductor`]). The instantaneous SECE of [`super::instant`] is its limit
 //! of a fast inductor.
 //!
 //! # The circuit
@@ -38,12 +38,24 @@
 
 use nalgebra::{SMatrix, SVector};
 
-use super::bridge::{Bridge, Circuit, CircuitMode, Heading};
-use super::parts::BuckBoost;
+use super::bridge::Circuit;
+use super::element::Element;
+use super::kind::CircuitKind;
+use super::mode::{Bridge, CircuitMode, Heading, ResetLoss};
+use super::parts::Inductor;
 use crate::model::AffineGuard;
 
 /// A `|Vp|` below this fraction of its scale at an extremum is not extracted.
 const EMPTY: f64 = 1e-9;
+
+/// The buck-boost inductor of a SECE through its inductor and its flyback diode, evaluated.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BuckBoost {
+    /// The inductor, its resistance and its current.
+    pub inductor: Inductor,
+    /// The flyback diode's forward drop V_F (V).
+    pub vf: f64,
+}
 
 impl BuckBoost {
     /// The circuit's phases, as bridge states: open, charge by polarity, flyback.
@@ -66,7 +78,7 @@ impl BuckBoost {
 
     /// The force on the mass (N) and the rates of `Vp`, `Vs` and `I` in a phase.
     #[inline]
-    pub fn force_and_rates<const N: usize>(
+    fn phase_rates<const N: usize>(
         &self,
         c: &Circuit,
         phase: Bridge,
@@ -97,7 +109,7 @@ impl BuckBoost {
     }
 
     /// The circuit's part of the Jacobian in a phase (see [`Circuit::jacobian`]).
-    pub fn jacobian<const N: usize>(
+    fn phase_jacobian<const N: usize>(
         &self,
         c: &Circuit,
         phase: Bridge,
@@ -128,7 +140,7 @@ impl BuckBoost {
 
     /// The phase's guard, dimensionless at the scales `sc` (the extremum's is the circuit's).
     #[inline]
-    pub fn phase_guard<const N: usize>(
+    fn phase_guard<const N: usize>(
         &self,
         c: &Circuit,
         phase: Bridge,
@@ -143,7 +155,7 @@ impl BuckBoost {
     }
 
     /// The phase's guard as an affine function of the state (for the exact propagators).
-    pub fn phase_guard_piece<const N: usize>(
+    fn phase_guard_piece<const N: usize>(
         &self,
         c: &Circuit,
         phase: Bridge,
@@ -160,7 +172,7 @@ impl BuckBoost {
 
     /// The switch when the circuit's guard fires (`extremum` when the extremum's guard is the
     /// larger): the next mode, with `y` projected.
-    pub fn switch<const N: usize>(
+    fn phase_switch<const N: usize>(
         &self,
         c: &Circuit,
         mode: CircuitMode,
@@ -202,7 +214,7 @@ impl BuckBoost {
     }
 
     /// The phase a state starts in: flyback while the inductor carries a current, else open.
-    pub fn phase_of<const N: usize>(&self, y: &SVector<f64, N>) -> Bridge {
+    fn phase_at<const N: usize>(&self, y: &SVector<f64, N>) -> Bridge {
         if y[self.inductor.i] > 0.0 {
             Bridge::Flyback
         } else {
@@ -212,17 +224,126 @@ impl BuckBoost {
 
     /// Power lost in the inductor's resistance (W).
     #[inline]
-    pub fn resistive_power<const N: usize>(&self, phase: Bridge, y: &SVector<f64, N>) -> f64 {
+    fn resistive_power<const N: usize>(&self, phase: Bridge, y: &SVector<f64, N>) -> f64 {
         self.inductor.resistive_power(self.current(phase, y))
     }
 
     /// Power lost in the flyback diode (W).
     #[inline]
-    pub fn diode_power<const N: usize>(&self, phase: Bridge, y: &SVector<f64, N>) -> f64 {
+    fn flyback_power<const N: usize>(&self, phase: Bridge, y: &SVector<f64, N>) -> f64 {
         if phase == Bridge::Flyback {
             self.vf * y[self.inductor.i]
         } else {
             0.0
         }
+    }
+}
+
+impl CircuitKind for BuckBoost {
+    fn refuses(&self, element: &Element) -> Option<&'static str> {
+        (!matches!(element, Element::Piezo { .. })).then_some(
+            "a SECE's inductor discharges a piezoelectric element's clamped capacitance only",
+        )
+    }
+
+    fn inductor(&self) -> Option<Inductor> {
+        Some(self.inductor)
+    }
+
+    fn phases(&self) -> &'static [Bridge] {
+        &Self::PHASES
+    }
+
+    #[inline(always)]
+    fn bridge_between_extrema(&self) -> bool {
+        false
+    }
+
+    #[inline(always)]
+    fn force_and_rates<const N: usize>(
+        &self,
+        c: &Circuit,
+        bridge: Bridge,
+        y: &SVector<f64, N>,
+        rates: &mut SVector<f64, N>,
+    ) -> f64 {
+        self.phase_rates(c, bridge, y, rates)
+    }
+
+    fn jacobian<const N: usize>(
+        &self,
+        c: &Circuit,
+        bridge: Bridge,
+        _y: &SVector<f64, N>,
+        m: f64,
+        _sc: &SVector<f64, N>,
+        j: &mut SMatrix<f64, N, N>,
+    ) {
+        self.phase_jacobian(c, bridge, m, j)
+    }
+
+    #[inline(always)]
+    fn diode_power<const N: usize>(
+        &self,
+        _c: &Circuit,
+        bridge: Bridge,
+        y: &SVector<f64, N>,
+    ) -> f64 {
+        self.flyback_power(bridge, y)
+    }
+
+    #[inline(always)]
+    fn element_loss<const N: usize>(
+        &self,
+        _c: &Circuit,
+        bridge: Bridge,
+        y: &SVector<f64, N>,
+    ) -> f64 {
+        self.resistive_power(bridge, y)
+    }
+
+    fn time_constant_s(&self, c: &Circuit) -> f64 {
+        self.inductor.time_constant_s(c.piezo().1)
+    }
+
+    #[inline(always)]
+    fn conduction_guard<const N: usize>(
+        &self,
+        c: &Circuit,
+        bridge: Bridge,
+        y: &SVector<f64, N>,
+        sc: &SVector<f64, N>,
+    ) -> f64 {
+        self.phase_guard(c, bridge, y, sc)
+    }
+
+    fn guard_piece<const N: usize>(
+        &self,
+        c: &Circuit,
+        bridge: Bridge,
+        index: usize,
+    ) -> Option<AffineGuard<N>> {
+        self.phase_guard_piece(c, bridge, index)
+    }
+
+    fn switch<const N: usize>(
+        &self,
+        c: &Circuit,
+        mode: CircuitMode,
+        extremum: bool,
+        y: &mut SVector<f64, N>,
+        sc: &SVector<f64, N>,
+    ) -> (CircuitMode, ResetLoss) {
+        let next = self.phase_switch(c, mode, extremum, y, sc);
+        (next, ResetLoss::default())
+    }
+
+    fn phase_of<const N: usize>(&self, _c: &Circuit, y: &SVector<f64, N>) -> Bridge {
+        self.phase_at(y)
+    }
+
+    /// The current flows one way behind the rectifier: it keeps its sign.
+    fn mirror<const N: usize>(&self, s: &mut SMatrix<f64, N, N>) {
+        s[(self.inductor.i, self.inductor.i)] = 1.0;
     }
 }

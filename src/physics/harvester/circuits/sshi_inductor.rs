@@ -2,7 +2,7 @@
 //! parallel SSHI (Guyomar et al. 2005, IEEE TUFFC 52 584; Lefeuvre et al. 2006) resolved in
 //! time, the inductor current a state of its own (`parallel_sshi` with `inductance_h` in the
 //! device's `[interface]`). The instantaneous inversion `Vp -> -gamma Vp` of
-//! [`super::bridge`] is its limit of a fast inductor.
+//! [`super::instant`] is its limit of a fast inductor.
 //!
 //! # The circuit
 //! A piezoelectric element (`Cp`, coupling `theta`) behind the full bridge into the storage
@@ -48,12 +48,22 @@
 
 use nalgebra::{SMatrix, SVector};
 
-use super::bridge::{Bridge, Circuit};
-use super::parts::Inverter;
+use super::bridge::Circuit;
+use super::element::Element;
+use super::kind::CircuitKind;
+use super::mode::{Bridge, CircuitMode, ResetLoss};
+use super::parts::Inductor;
 use crate::model::AffineGuard;
 
 /// A `|Vp|` below this fraction of its scale at an extremum is not inverted (nothing rings).
 const EMPTY: f64 = 1e-9;
+
+/// The inverting inductor of a parallel SSHI, evaluated.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Inverter {
+    /// The inductor, its resistance and its current.
+    pub inductor: Inductor,
+}
 
 impl Inverter {
     /// The circuit's bridge states: the bridge's three, then the ring's stages by polarity.
@@ -102,7 +112,7 @@ impl Inverter {
     /// Adds the ring's loop to the rates the open bridge wrote (in a ringing stage), or holds
     /// the current (switch open).
     #[inline]
-    pub fn rates<const N: usize>(
+    fn ring_rates<const N: usize>(
         &self,
         c: &Circuit,
         ringing: bool,
@@ -119,7 +129,12 @@ impl Inverter {
     }
 
     /// Adds the ring's loop to the open bridge's Jacobian (in a ringing stage).
-    pub fn jacobian<const N: usize>(&self, c: &Circuit, ringing: bool, j: &mut SMatrix<f64, N, N>) {
+    fn ring_jacobian<const N: usize>(
+        &self,
+        c: &Circuit,
+        ringing: bool,
+        j: &mut SMatrix<f64, N, N>,
+    ) {
         if ringing {
             let (_, cp) = c.piezo();
             j[(c.e, self.inductor.i)] = -1.0 / cp;
@@ -130,7 +145,7 @@ impl Inverter {
 
     /// The ring's guard in a stage, dimensionless at the scales `sc`.
     #[inline]
-    pub fn guard<const N: usize>(
+    fn ring_guard<const N: usize>(
         &self,
         c: &Circuit,
         (s, returning): (f64, bool),
@@ -145,7 +160,7 @@ impl Inverter {
     }
 
     /// The ring's guard in a stage as an affine function of the state.
-    pub fn guard_piece<const N: usize>(
+    fn ring_piece<const N: usize>(
         &self,
         c: &Circuit,
         (s, returning): (f64, bool),
@@ -158,7 +173,7 @@ impl Inverter {
 
     /// At an extremum with the switch open: the ring's first stage, with the current put at
     /// zero, unless the element holds nothing to invert (then the bridge stays off).
-    pub fn close<const N: usize>(
+    fn close<const N: usize>(
         &self,
         c: &Circuit,
         y: &mut SVector<f64, N>,
@@ -176,7 +191,7 @@ impl Inverter {
 
     /// The ring's guard fired in a stage: the next stage, or the switch open, with the
     /// quantity that crossed zero put at exactly zero.
-    pub fn advance<const N: usize>(
+    fn advance<const N: usize>(
         &self,
         c: &Circuit,
         (s, returning): (f64, bool),
@@ -195,7 +210,7 @@ impl Inverter {
 
     /// The stage a state starts in: returning while the inductor carries a current (in its
     /// direction), else the switch open.
-    pub fn phase_of<const N: usize>(&self, y: &SVector<f64, N>) -> Option<Bridge> {
+    fn ring_phase_of<const N: usize>(&self, y: &SVector<f64, N>) -> Option<Bridge> {
         let i = y[self.inductor.i];
         (i != 0.0).then_some(Bridge::Invert {
             negative: i < 0.0,
@@ -205,7 +220,141 @@ impl Inverter {
 
     /// Power lost in the inductor's resistance (W).
     #[inline]
-    pub fn resistive_power<const N: usize>(&self, y: &SVector<f64, N>) -> f64 {
+    fn resistive_power<const N: usize>(&self, y: &SVector<f64, N>) -> f64 {
         self.inductor.resistive_power(y[self.inductor.i])
+    }
+}
+
+/// The bridge's state during a ring: off.
+#[inline(always)]
+fn open_in_ring(bridge: Bridge) -> Bridge {
+    match bridge {
+        Bridge::Invert { .. } => Bridge::Off,
+        b => b,
+    }
+}
+
+impl CircuitKind for Inverter {
+    fn refuses(&self, element: &Element) -> Option<&'static str> {
+        (!matches!(element, Element::Piezo { .. })).then_some(
+            "an SSHI's inductor rings with a piezoelectric element's clamped capacitance only",
+        )
+    }
+
+    fn inductor(&self) -> Option<Inductor> {
+        Some(self.inductor)
+    }
+
+    fn phases(&self) -> &'static [Bridge] {
+        &Self::PHASES
+    }
+
+    /// The bridge's rates, open during a ring, with the ring's loop added.
+    #[inline(always)]
+    fn force_and_rates<const N: usize>(
+        &self,
+        c: &Circuit,
+        bridge: Bridge,
+        y: &SVector<f64, N>,
+        rates: &mut SVector<f64, N>,
+    ) -> f64 {
+        let ringing = Self::stage(bridge).is_some();
+        let f = c.bridge_force_and_rates(open_in_ring(bridge), y, rates);
+        self.ring_rates(c, ringing, y, rates);
+        f
+    }
+
+    fn jacobian<const N: usize>(
+        &self,
+        c: &Circuit,
+        bridge: Bridge,
+        y: &SVector<f64, N>,
+        m: f64,
+        sc: &SVector<f64, N>,
+        j: &mut SMatrix<f64, N, N>,
+    ) {
+        c.bridge_jacobian(open_in_ring(bridge), y, m, sc, j);
+        self.ring_jacobian(c, Self::stage(bridge).is_some(), j);
+    }
+
+    #[inline(always)]
+    fn diode_power<const N: usize>(&self, c: &Circuit, bridge: Bridge, y: &SVector<f64, N>) -> f64 {
+        c.bridge_diode_power(open_in_ring(bridge), y)
+    }
+
+    #[inline(always)]
+    fn element_loss<const N: usize>(
+        &self,
+        _c: &Circuit,
+        _bridge: Bridge,
+        y: &SVector<f64, N>,
+    ) -> f64 {
+        self.resistive_power(y)
+    }
+
+    fn time_constant_s(&self, c: &Circuit) -> f64 {
+        let ring = self.inductor.time_constant_s(c.piezo().1);
+        c.bridge_time_constant_s().min(ring)
+    }
+
+    /// The ring's stage guards it; the bridge's conduction guards the open switch.
+    #[inline(always)]
+    fn conduction_guard<const N: usize>(
+        &self,
+        c: &Circuit,
+        bridge: Bridge,
+        y: &SVector<f64, N>,
+        sc: &SVector<f64, N>,
+    ) -> f64 {
+        match Self::stage(bridge) {
+            Some(stage) => self.ring_guard(c, stage, y, sc),
+            None => c.bridge_guard(bridge, y, sc),
+        }
+    }
+
+    fn guard_piece<const N: usize>(
+        &self,
+        c: &Circuit,
+        bridge: Bridge,
+        index: usize,
+    ) -> Option<AffineGuard<N>> {
+        Self::stage(bridge).map(|stage| self.ring_piece(c, stage, index))
+    }
+
+    fn switch<const N: usize>(
+        &self,
+        c: &Circuit,
+        mode: CircuitMode,
+        extremum: bool,
+        y: &mut SVector<f64, N>,
+        sc: &SVector<f64, N>,
+    ) -> (CircuitMode, ResetLoss) {
+        let mut next = mode;
+        let stage = Self::stage(mode.bridge);
+        if extremum {
+            // v is put at exactly zero, as for every synchronous switch; an extremum during a
+            // ring only turns the heading.
+            y[1] = 0.0;
+            next.heading = mode.heading.turned();
+            if stage.is_none() {
+                next.bridge = self.close(c, y, sc);
+            }
+            return (next, ResetLoss::default());
+        }
+        if let Some(stage) = stage {
+            next.bridge = self.advance(c, stage, y);
+            return (next, ResetLoss::default());
+        }
+        c.bridge_switch(mode, false, y, sc)
+    }
+
+    fn phase_of<const N: usize>(&self, c: &Circuit, y: &SVector<f64, N>) -> Bridge {
+        self.ring_phase_of(y)
+            .unwrap_or_else(|| c.bridge_phase_of(y))
+    }
+
+    /// The current flows as the element's voltage drives it: it changes sign.
+    fn mirror<const N: usize>(&self, s: &mut SMatrix<f64, N, N>) {
+        s[(self.inductor.i, self.inductor.i)] = -1.0;
     }
 }
