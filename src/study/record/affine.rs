@@ -3,6 +3,10 @@
 //! their rates, and the exact integrals over the interval of the record's books (the
 //! energy-ledger powers, the outputs and their squares).
 //!
+//! The module reads better whole: the propagator, the guard rows, the hand-over to the
+//! rebound search and the books' Gram sums are built from one augmented state with one
+//! scaling, and a reader checks each against that same construction.
+//!
 //! # The augmented state
 //! An affine mode is `y' = L y + c a(t) + d` ([`crate::model::Model::affine`]; behind an
 //! interface circuit the forward drops and a battery's voltage are in `d`). Over a sample
