@@ -60,14 +60,11 @@ use crate::ode::GAUSS_LEGENDRE_3;
 use crate::study::flow::{cubic_max, GRAZE_MARGIN};
 
 use super::books::{integrands, Books, Found};
-use super::crossings::Rebounding;
+use super::crossings::{Rebounding, MAX_GUARDS};
 use super::impacts::Rebounds;
 use super::stepping::{self, FastPath, NoFast};
 use super::{Fallback, FreeFlightPath, Record, RecordError, RecordObserver, SampledDrive};
 
-/// Most guard pieces of a mode: two stops' (or a contact's boundary and bracket), the
-/// conduction's two pieces while a bridge is off, and a switch's extremum.
-pub(super) const MAX_GUARDS: usize = 5;
 /// Rows of the guard matrix: each guard's value and its rate times the step.
 const GUARD_ROWS: usize = 2 * MAX_GUARDS;
 /// The guards' values and scaled rates at a state.

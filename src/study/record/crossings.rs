@@ -29,10 +29,12 @@ use crate::model::{AffineGuard, Contact, Mode, Model, SwitchKind};
 use crate::ode::exponential::RESOLVED_NORM;
 use crate::ode::phi::scaled;
 
-use super::affine::MAX_GUARDS;
 use super::impacts::{self, Rebounds, MAX_REBOUNDS, MAX_TERMS, TAYLOR_TOL};
 use super::stepping::POSITION;
 
+/// Most guard pieces of a mode: two stops' (or a contact's boundary and bracket), the
+/// conduction's two pieces while a bridge is off, and a switch's extremum.
+pub(super) const MAX_GUARDS: usize = 5;
 /// Pieces each interval is cut into for the search.
 const PIECES: usize = 4;
 

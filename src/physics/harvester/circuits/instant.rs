@@ -18,9 +18,8 @@
 
 use nalgebra::{SMatrix, SVector};
 
-use super::bridge::Circuit;
+use super::bridge::{Circuit, CircuitKind};
 use super::element::Element;
-use super::kind::CircuitKind;
 use super::mode::ResetLoss;
 
 /// Why a synchronous switch refuses an element.

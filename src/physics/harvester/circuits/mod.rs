@@ -1,5 +1,5 @@
 //! The interface circuits a transducer's port can sit behind: a diode bridge into a storage
-//! capacitor and DC load ([`bridge`], its element [`element`], its modes [`mode`], its
+//! capacitor and DC load ([`bridge`], its element [`element`] and what it reads of it [`port`], its modes [`mode`], its
 //! linearisation [`jacobian`], its parts [`parts`]), and the kinds of circuit built on it,
 //! each one file implementing [`CircuitKind`]:
 //!
@@ -18,18 +18,17 @@ pub mod bridge;
 pub mod element;
 pub mod instant;
 pub mod jacobian;
-pub mod kind;
 pub mod mode;
 pub mod parts;
+pub mod port;
 pub mod sece_inductor;
 pub mod sshi_inductor;
 
 use nalgebra::{SMatrix, SVector};
 
-pub use bridge::Circuit;
+pub use bridge::{Circuit, CircuitKind};
 pub use element::Element;
 pub use instant::{FullBridge, ParallelSshi, Sece, SeriesSshi};
-pub use kind::CircuitKind;
 pub use mode::{Bridge, CircuitMode, Heading, ResetLoss};
 pub use parts::{DiodeLaw, Inductor, Sink};
 pub use sece_inductor::BuckBoost;

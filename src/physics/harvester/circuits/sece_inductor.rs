@@ -38,9 +38,8 @@
 
 use nalgebra::{SMatrix, SVector};
 
-use super::bridge::Circuit;
+use super::bridge::{Circuit, CircuitKind};
 use super::element::Element;
-use super::kind::CircuitKind;
 use super::mode::{Bridge, CircuitMode, Heading, ResetLoss};
 use super::parts::Inductor;
 use crate::model::AffineGuard;

@@ -48,9 +48,8 @@
 
 use nalgebra::{SMatrix, SVector};
 
-use super::bridge::Circuit;
+use super::bridge::{Circuit, CircuitKind};
 use super::element::Element;
-use super::kind::CircuitKind;
 use super::mode::{Bridge, CircuitMode, ResetLoss};
 use super::parts::Inductor;
 use crate::model::AffineGuard;
