@@ -4,6 +4,11 @@
 //! synchronous switch acting at the displacement extrema, the `v = 0` events, or an
 //! inductor's transfer in time.
 //!
+//! The module reads better whole: the circuit calls its kind at every rate, guard and switch,
+//! and the trait's defaults are the circuit's own bridge equations, so the two are one
+//! definition read together (the element's port is in [`super::port`], the linearisation in
+//! [`super::jacobian`]).
+//!
 //! The circuit sees the transducer as a port ([`super::element`]). The bridge current `i >= 0` leaves the element's terminal of polarity `s = +-1` and charges
 //! the storage `Cs`, which feeds the DC load current `I_L(Vs)` (`Vs / R`, `(Vs - V_b) / R_b`
 //! for a battery, 0 open).
@@ -50,11 +55,6 @@
 //! ledger's losses and the mirror of its own slots. Its methods take the circuit ([`Circuit`])
 //! the kind belongs to: its element, diodes, storage and load, and the bridge's own equations
 //! to build on.
-//!
-//! The module reads better whole: the circuit calls its kind at every rate, guard and switch,
-//! and the trait's defaults are the circuit's own bridge equations, so the two are one
-//! definition read together (the element's port is in [`super::port`], the linearisation in
-//! [`super::jacobian`]).
 
 use nalgebra::{SMatrix, SVector};
 
