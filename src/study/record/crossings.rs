@@ -204,13 +204,14 @@ pub(super) fn first_crossing<const U: usize>(
     u0: &SVector<f64, U>,
     len: f64,
 ) -> Option<Search<U>> {
-    let terms = series(a, inv_scale, u0, len)?;
+    let (all, n) = series(a, inv_scale, u0, len)?;
+    let terms = &all[..n];
     let mut polys = [Poly {
         coef: [0.0; MAX_TERMS],
         len: terms.len(),
     }; MAX_GUARDS];
     for (p, row) in polys.iter_mut().zip(rows) {
-        for (c, w) in p.coef.iter_mut().zip(&terms) {
+        for (c, w) in p.coef.iter_mut().zip(terms) {
             *c = row.dot(w);
         }
         let (g0, d0) = (p.coef[0], p.coef[1]);
@@ -244,24 +245,25 @@ pub(super) fn first_crossing<const U: usize>(
 
 /// The terms `A^k u0 / k!` of the series over `len`, until a term spanned over `len` falls
 /// below [`TAYLOR_TOL`] of the state's scaled size (past the quadratic term); `None` where
-/// that takes more than [`MAX_TERMS`] terms.
+/// that takes more than [`MAX_TERMS`] terms. The terms are held on the stack (with how many
+/// there are): the search runs inside the record's stepping loop, which allocates nothing.
 fn series<const U: usize>(
     a: &SMatrix<f64, U, U>,
     inv_scale: &SVector<f64, U>,
     u0: &SVector<f64, U>,
     len: f64,
-) -> Option<Vec<SVector<f64, U>>> {
+) -> Option<([SVector<f64, U>; MAX_TERMS], usize)> {
     let size = u0.component_mul(inv_scale).amax().max(1.0);
-    let mut terms = Vec::with_capacity(16);
-    terms.push(*u0);
+    let mut terms = [SVector::<f64, U>::zeros(); MAX_TERMS];
+    terms[0] = *u0;
     let mut spanned_factor = 1.0;
     for k in 1..MAX_TERMS {
         let next = a * terms[k - 1] / k as f64;
         spanned_factor *= len;
         let scaled = next.component_mul(inv_scale).amax() * spanned_factor;
-        terms.push(next);
+        terms[k] = next;
         if k > 2 && scaled <= TAYLOR_TOL * size {
-            return Some(terms);
+            return Some((terms, k + 1));
         }
     }
     None
