@@ -79,14 +79,8 @@ impl<M: Model<N>, const N: usize> Continuer<'_, '_, M, N> {
         }
         // The nearest contact changes, or every near contact at once (a symmetric orbit
         // grazing both stops): a contact within `near` may still be deep in it on the scale of
-        // a stiff stop's penetration. A symmetric orbit goes on along the symmetric branch,
-        // whose contacts change together (see [`Continuer::breaks_symmetry`]).
-        let symmetric = self.shooter.base.mirror().is_some() && self.is_symmetric(&last.orbit);
-        let predicted: &[u32] = if symmetric {
-            &[from ^ changing]
-        } else {
-            &[from ^ (1 << nearest), from ^ changing]
-        };
+        // a stiff stop's penetration.
+        let predicted = [from ^ (1 << nearest), from ^ changing];
         let anchor = self.u_of(&last.orbit);
         let param = self.settings.parameter;
         let p_last = last.orbit.param(param);
@@ -101,8 +95,7 @@ impl<M: Model<N>, const N: usize> Continuer<'_, '_, M, N> {
                 let predictor = &anchor + &last.tangent * s;
                 let close = (self.u_of(&p.orbit) - predictor).norm() <= MAX_CORRECTION * s;
                 let short = (p.orbit.param(param) - p_last).abs() <= self.settings.max_param_step;
-                let kept = !symmetric || self.is_symmetric(&p.orbit);
-                if close && short && kept && predicted.contains(&contact_set(&p, gaps)) {
+                if close && short && predicted.contains(&contact_set(&p, gaps)) {
                     break (p, s);
                 }
             }

@@ -6,11 +6,9 @@ use nalgebra::{DMatrix, DVector, SMatrix, SVector};
 
 use crate::model::Model;
 use crate::ode::Stats;
-use crate::study::orbit::{
-    Forcing, Linearised, Orbit, OrbitError, Shooter, CHORD_STEPS, SYMMETRY_TOL,
-};
+use crate::study::orbit::{Forcing, Linearised, Orbit, OrbitError, Shooter, CHORD_STEPS};
 
-use super::test_functions::{contact_set, test_grazing, test_plus_one, Gaps, GRAZING_NEAR};
+use super::test_functions::{test_grazing, test_plus_one, Gaps, GRAZING_NEAR};
 use super::{BranchPoint, ContinuationSettings, Rejection};
 
 /// Largest distance of a corrected point from its predictor, in arclength steps: beyond it
@@ -310,29 +308,7 @@ impl<M: Model<N>, const N: usize> Continuer<'_, '_, M, N> {
         if slid_back {
             return Err(Rejection::SlidBack);
         }
-        if contact_set(p, gaps) != contact_set(last, gaps) && self.breaks_symmetry(last, p) {
-            return Err(Rejection::SymmetryLost);
-        }
         Ok(())
-    }
-
-    /// True when `o` is a symmetric orbit of a device with the mirror symmetry (its defect
-    /// within [`SYMMETRY_TOL`]; see [`crate::study::orbit::HalfMap`]).
-    pub(super) fn is_symmetric(&self, o: &Orbit) -> bool {
-        matches!(self.shooter.symmetry_defect(o), Ok(Some(d)) if d <= SYMMETRY_TOL)
-    }
-
-    /// True when the step from `last` to `p` leaves the symmetric branch: `last` symmetric
-    /// and `p` not. At a symmetric orbit grazing two mirror-image contacts at once the
-    /// symmetric branch goes on through the corner, and a pair of asymmetric branches, each
-    /// touching one of the two, leaves it there (a symmetry-breaking pitchfork at a
-    /// codimension-two corner of the contact set; di Bernardo et al., *Piecewise-smooth
-    /// Dynamical Systems*, 2008, section 2.6): a corrector that lands on one of them has
-    /// switched branches by the accident of its step's length.
-    pub(super) fn breaks_symmetry(&self, last: &BranchPoint, p: &BranchPoint) -> bool {
-        self.shooter.base.mirror().is_some()
-            && self.is_symmetric(&last.orbit)
-            && !self.is_symmetric(&p.orbit)
     }
 
     /// Hops over a corner of the branch at an orbit `last` that (nearly) grazes a stop.
@@ -353,9 +329,6 @@ impl<M: Model<N>, const N: usize> Continuer<'_, '_, M, N> {
         let param = self.settings.parameter;
         let p0 = last.orbit.param(param);
         let leaving_contact = last.orbit.is_impacting();
-        // From a symmetric orbit the hop stays on the symmetric branch (see
-        // [`Continuer::breaks_symmetry`]).
-        let symmetric = self.shooter.base.mirror().is_some() && self.is_symmetric(&last.orbit);
         let ahead = last.param_tangent().signum();
         let dirs: &[f64] = if leaving_contact {
             &[-ahead, ahead]
@@ -374,8 +347,7 @@ impl<M: Model<N>, const N: usize> Continuer<'_, '_, M, N> {
                     &mut self.stats,
                 );
                 if let Ok(o) = solved {
-                    if o.is_impacting() != leaving_contact && (!symmetric || self.is_symmetric(&o))
-                    {
+                    if o.is_impacting() != leaving_contact {
                         let lin = self
                             .shooter
                             .linearise(&o.forcing, param, o.phase_rad, o.state_n(), &mut self.stats)

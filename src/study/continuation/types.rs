@@ -322,9 +322,6 @@ pub enum Rejection {
     /// A free-flight branch turned back at grazing with no change of stability: the
     /// corrector slid back along the branch it came on instead of stepping across a corner.
     SlidBack,
-    /// The step changes the contact set of a symmetric orbit and lands on an asymmetric one:
-    /// it has left the symmetric branch for one that bifurcates from it at the corner.
-    SymmetryLost,
 }
 
 impl Rejection {
@@ -338,7 +335,6 @@ impl Rejection {
             Rejection::MultiplierJump => "multiplier jump",
             Rejection::LongCrossing => "long grazing crossing",
             Rejection::SlidBack => "slid back at grazing",
-            Rejection::SymmetryLost => "left the symmetric branch",
         }
     }
 }
