@@ -4,12 +4,17 @@
 //! there). The branch is continued as given and with the drive amplitude scaled by
 //! (1 + 4 eps), a change of the last bits of the arithmetic: both reach the end of the range
 //! with the same events in the same order at the same frequencies.
+//!
+//! A corner of a contact between two masses: the example up-converter's driver starts to
+//! strike its generator (a rigid stop between the masses) on its branch at 0.05 g, and the
+//! branch is to go on past it with the grazing located there.
 
+use endstop::device::Device;
 use endstop::device::StiffnessModel;
 use endstop::paper::deviations::RangesFile;
 use endstop::paper::setups::{endstop, with_endstop, FIG13_BIAS_V};
 use endstop::progress::Silent;
-use endstop::study::continuation::{frequency_branch, Branch};
+use endstop::study::continuation::{frequency_branch, Branch, EventKind};
 
 use crate::common;
 
@@ -80,4 +85,51 @@ fn a_corner_gives_the_same_events_whatever_the_last_bits() {
             "the branch ends at {last} Hz, not past 850 Hz"
         );
     }
+}
+
+const UPCONVERTER: &str = include_str!("../data/examples/upconverter.toml");
+
+#[test]
+#[ignore = "not met yet: the branch stalls at 19.2753 Hz, the onset of impacts between the \
+            masses (a rigid contact), where no step, hop or corner crossing is accepted"]
+fn the_upconverter_branch_crosses_the_onset_of_impacts_between_its_masses() {
+    let device = Device::from_toml_str(UPCONVERTER, "upconverter.toml").expect("the file loads");
+    // The range and largest step of `endstop response --from 10 --to 40` (a hundredth of the
+    // range), begun close below the onset.
+    let branch = frequency_branch(&device, 0.05, 17.0, 25.0, 0.3, &Silent)
+        .expect("the branch passes the onset of impacts and reaches 25 Hz");
+    let last = branch.params().last().expect("a branch has points");
+    assert!(last >= 25.0, "the branch ends at {last} Hz");
+    // The grazing of the stop between the masses (the model's only contact): the first point
+    // that strikes it lies past the grazing, every point before it is free of impacts.
+    let first_impacting = branch
+        .points
+        .iter()
+        .position(|p| p.orbit.is_impacting())
+        .expect("the branch reaches the stop between the masses");
+    let grazing = branch
+        .events
+        .iter()
+        .find(|e| e.kind == EventKind::Grazing)
+        .unwrap_or_else(|| panic!("no grazing among {:?}", events(&branch)));
+    assert_eq!(
+        grazing.after_point + 1,
+        first_impacting,
+        "the grazing lies between the last free point and the first impacting one"
+    );
+    // At the located grazing the driver's largest excursion towards the generator equals the
+    // gap: the orbit is located to 1e-4 Hz on the branch, over which the excursion moves by
+    // far less than a thousandth of the 0.5 mm gap (its slope is a few mm per Hz).
+    let gap_m = 0.5e-3;
+    let reach = &grazing.orbit.summary.contact_reach;
+    assert_eq!(reach.len, 1, "one contact");
+    assert!(
+        (reach.reach_m[0] - gap_m).abs() <= 1e-3 * gap_m,
+        "the grazing orbit reaches {} m of the {gap_m} m gap",
+        reach.reach_m[0]
+    );
+}
+
+fn events(b: &Branch) -> Vec<(String, f64)> {
+    b.events.iter().map(|e| (e.label(), e.param)).collect()
 }
