@@ -10,14 +10,14 @@
 //! contact set predicted from the grazing distances is found at the longest arclength that
 //! converges near its predictor, the
 //! grazing orbit between them is located by bisection on the arclength with the changed
-//! side's grazing distance as its test, and the predictor restarts from the point on the new
+//! contact's grazing distance as its test, and the predictor restarts from the point on the new
 //! side with that side's own tangent.
 
 use crate::model::Model;
 use crate::num::roots::{illinois, RootOptions, Sample};
 
 use super::corrector::Continuer;
-use super::test_functions::{contact_set, side_grazing, Gaps, GRAZING_NEAR};
+use super::test_functions::{contact_grazing, contact_set, Gaps, GRAZING_NEAR};
 use super::BranchPoint;
 
 /// Largest distance of the point past the corner from its predictor, in arclength steps (as
@@ -42,9 +42,9 @@ pub(super) struct Crossing {
 
 impl<M: Model<N>, const N: usize> Continuer<'_, '_, M, N> {
     /// Crosses the corner at which `last` (a point at which no step is accepted, after
-    /// `before` on the branch) stands: its
-    /// side nearest grazing, or every side within [`GRAZING_NEAR`] of its gap, changes its
-    /// contact, and the point past
+    /// `before` on the branch) stands: its contact nearest grazing (a stop to the frame or
+    /// between two masses), or every contact within [`GRAZING_NEAR`] of its gap, changes,
+    /// and the point past
     /// the corner is the first corrected point at arclengths `ds_max`, `ds_max` / 4, ... down
     /// to `ds_min` along `last`'s tangent whose contact set is that prediction, that lies near
     /// its predictor and within the largest parameter step. `None` when `last` is near no
@@ -58,28 +58,29 @@ impl<M: Model<N>, const N: usize> Continuer<'_, '_, M, N> {
     ) -> Option<Crossing> {
         let gaps = Gaps::of(self.shooter.base);
         let near = GRAZING_NEAR * gaps.smallest();
-        let distance = side_grazing(last, gaps);
-        let nearest = usize::from(distance[1].abs() < distance[0].abs());
+        let distance = contact_grazing(last, gaps);
+        let nearest =
+            (0..gaps.len()).min_by(|&i, &j| distance[i].abs().total_cmp(&distance[j].abs()))?;
         // The contact set of the branch before the corner, read at the latest earlier point
-        // whose nearest side is clear of its stop by more than the integration's relative
-        // tolerance of the gap (at `last`, and at points crowded behind it, that side's
+        // whose nearest contact is clear of it by more than the integration's relative
+        // tolerance of the gap (at `last`, and at points crowded behind it, that contact's
         // distance is ~1e-17 m, of either sign).
         let clear = self.shooter.cfg.rtol * gaps.smallest();
         let from = before
             .iter()
             .rev()
-            .find(|p| side_grazing(p, gaps)[nearest].abs() > clear)
+            .find(|p| contact_grazing(p, gaps)[nearest].abs() > clear)
             .map_or(contact_set(last, gaps), |p| contact_set(p, gaps));
-        let changing = distance.map(|d| d.abs() <= near);
-        if !changing.iter().any(|&c| c) {
+        let changing = (0..gaps.len())
+            .filter(|&k| distance[k].abs() <= near)
+            .fold(0u32, |set, k| set | (1 << k));
+        if changing == 0 {
             return None;
         }
-        // The nearest side changes, or every near side at once (a symmetric orbit grazing
-        // both stops): a side within `near` may still be deep in contact on the scale of a
-        // stiff stop's penetration.
-        let mut alone = from;
-        alone[nearest] = !from[nearest];
-        let predicted = [alone, [from[0] != changing[0], from[1] != changing[1]]];
+        // The nearest contact changes, or every near contact at once (a symmetric orbit
+        // grazing both stops): a contact within `near` may still be deep in it on the scale of
+        // a stiff stop's penetration.
+        let predicted = [from ^ (1 << nearest), from ^ changing];
         let anchor = self.u_of(&last.orbit);
         let param = self.settings.parameter;
         let p_last = last.orbit.param(param);
@@ -100,8 +101,7 @@ impl<M: Model<N>, const N: usize> Continuer<'_, '_, M, N> {
             }
             s /= TRIAL_RATIO;
         };
-        let side = nearest;
-        let (grazing, s_grazing) = self.locate_contact_change(last, &past, s_past, side, gaps);
+        let (grazing, s_grazing) = self.locate_contact_change(last, &past, s_past, nearest, gaps);
         Some(Crossing {
             grazing,
             s_grazing,
@@ -111,17 +111,17 @@ impl<M: Model<N>, const N: usize> Continuer<'_, '_, M, N> {
     }
 
     /// The point between `a` and `b` (at arclength `ds` along `a`'s tangent) nearest the
-    /// change of contact of stop `side`, on `a`'s side of it, with its arclength: bisection by
-    /// the root finder on the side's grazing distance (`a` itself if every trial fails).
+    /// change of contact `k`, on `a`'s side of it, with its arclength: bisection by the root
+    /// finder on the contact's grazing distance (`a` itself if every trial fails).
     fn locate_contact_change(
         &mut self,
         a: &BranchPoint,
         b: &BranchPoint,
         ds: f64,
-        side: usize,
+        k: usize,
         gaps: Gaps,
     ) -> (BranchPoint, f64) {
-        let f = |p: &BranchPoint| side_grazing(p, gaps)[side];
+        let f = |p: &BranchPoint| contact_grazing(p, gaps)[k];
         let (fa, fb) = (f(a), f(b));
         let opts = RootOptions {
             f_tol: None,

@@ -88,7 +88,8 @@ impl<M: Model<N> + Clone, const N: usize> Continuer<'_, '_, M, N> {
     ) -> Result<Event, OrbitError> {
         let gaps = Gaps::of(self.shooter.base);
         let free_model = self.shooter.base.without_contacts();
-        let free = Shooter::with_scales(&free_model, self.shooter.cfg, self.shooter.scales());
+        let free = Shooter::with_scales(&free_model, self.shooter.cfg, self.shooter.scales())
+            .measuring(self.shooter.base.contacts());
         let mut c = Continuer {
             shooter: &free,
             settings: self.settings,

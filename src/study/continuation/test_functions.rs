@@ -3,41 +3,43 @@
 //! corrector (which watches grazing and the +1 multiplier while it steps) and the event
 //! location along the branch read them here.
 
-use crate::model::Model;
+use crate::model::{Model, MAX_CONTACTS};
 
 use super::BranchPoint;
 
-/// The gaps of a model's two sides (infinite where there is no stop), for the grazing test.
+/// The gaps of a model's contacts (stops to the frame and between masses, in the order of
+/// [`Model::contacts`]), for the grazing test.
 #[derive(Debug, Clone, Copy)]
 pub(super) struct Gaps {
-    upper: f64,
-    lower: f64,
+    gap_m: [f64; MAX_CONTACTS],
+    len: usize,
     /// The suspension's natural frequency (rad/s), which turns an impact speed into a length.
     w0: f64,
 }
 
 impl Gaps {
-    /// The gaps of the first mass's stops to the frame: the sides the orbit's summary measures.
+    /// The gaps of every contact of `h`.
     pub(super) fn of<M: Model<N>, const N: usize>(h: &M) -> Self {
-        let (mut upper, mut lower) = (f64::INFINITY, f64::INFINITY);
-        for c in h.contacts() {
-            if c.mass == 0 && c.other.is_none() {
-                if c.side > 0.0 {
-                    upper = upper.min(c.gap);
-                } else {
-                    lower = lower.min(c.gap);
-                }
-            }
+        let mut gap_m = [f64::INFINITY; MAX_CONTACTS];
+        let contacts = h.contacts();
+        for (g, c) in gap_m.iter_mut().zip(&contacts) {
+            *g = c.gap;
         }
         Self {
-            upper,
-            lower,
+            gap_m,
+            len: contacts.len().min(MAX_CONTACTS),
             w0: h.omega_rad_s(),
         }
     }
 
+    /// The smallest gap (infinite without contacts).
     pub(super) fn smallest(self) -> f64 {
-        self.upper.min(self.lower)
+        self.gap_m.iter().fold(f64::INFINITY, |a, &g| a.min(g))
+    }
+
+    /// The number of contacts.
+    pub(super) fn len(self) -> usize {
+        self.len
     }
 }
 
@@ -57,31 +59,31 @@ pub(super) fn test_minus_one(p: &BranchPoint, _: Gaps) -> f64 {
 pub(super) fn test_torus(p: &BranchPoint, _: Gaps) -> f64 {
     p.orbit.max_multiplier_abs() - 1.0
 }
-/// How far an orbit is past grazing on its deeper side (m): the largest displacement less the
-/// gap, or, once it strikes a rigid stop (which it never penetrates, so that the displacement
-/// stays at the gap), its impact speed over `w0`. Both vanish at grazing.
+/// How far an orbit is past grazing on its deepest contact (m): the largest approach of a
+/// contact less its gap, or, once it strikes a rigid contact (which it never penetrates, so
+/// that the approach stays at the gap), its impact speed over `w0`. Both vanish at grazing.
 pub(super) fn test_grazing(p: &BranchPoint, gaps: Gaps) -> f64 {
-    let [upper, lower] = side_grazing(p, gaps);
-    upper.max(lower)
+    contact_grazing(p, gaps)
+        .iter()
+        .take(gaps.len)
+        .fold(f64::NEG_INFINITY, |a, &g| a.max(g))
 }
 
-/// [`test_grazing`] of each side (upper, lower): positive while the orbit touches that stop.
-pub(super) fn side_grazing(p: &BranchPoint, gaps: Gaps) -> [f64; 2] {
-    let s = &p.orbit.summary;
-    let side = |reach: f64, gap: f64, speed: f64| {
-        if speed > 0.0 {
-            speed / gaps.w0
-        } else {
-            reach - gap
-        }
-    };
-    [
-        side(s.x_upper_m, gaps.upper, s.impact_speed_m_s[0]),
-        side(-s.x_lower_m, gaps.lower, s.impact_speed_m_s[1]),
-    ]
+/// [`test_grazing`] of each contact (in the order of [`Model::contacts`]; negative infinity
+/// past the model's contacts): positive while the orbit touches that contact.
+pub(super) fn contact_grazing(p: &BranchPoint, gaps: Gaps) -> [f64; MAX_CONTACTS] {
+    p.orbit
+        .summary
+        .contact_reach
+        .grazing_m(&gaps.gap_m[..gaps.len], gaps.w0)
 }
 
-/// The stops an orbit touches (upper, lower): its contact set.
-pub(super) fn contact_set(p: &BranchPoint, gaps: Gaps) -> [bool; 2] {
-    side_grazing(p, gaps).map(|g| g > 0.0)
+/// The contacts an orbit touches, bit `k` for contact `k`: its contact set.
+pub(super) fn contact_set(p: &BranchPoint, gaps: Gaps) -> u32 {
+    contact_grazing(p, gaps)
+        .iter()
+        .take(gaps.len)
+        .enumerate()
+        .filter(|(_, g)| **g > 0.0)
+        .fold(0, |set, (k, _)| set | (1 << k))
 }

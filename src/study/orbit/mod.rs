@@ -58,10 +58,12 @@ use crate::ode::SolverError;
 use crate::study::mass_peaks::MassPeaks;
 
 mod period_sums;
+mod reach;
 mod shooter;
 mod symmetry;
 mod variational;
 
+pub use reach::ContactReach;
 pub use shooter::{Linearised, Shooter};
 pub use symmetry::{HalfMap, SYMMETRY_TOL};
 
@@ -235,6 +237,9 @@ pub struct OrbitSummary {
     /// zero where it does not: a rigid stop is never penetrated, so this, not the largest
     /// displacement, says how deep an orbit is past grazing.
     pub impact_speed_m_s: [f64; 2],
+    /// How far the orbit reaches towards each of the model's contacts (those between two
+    /// masses too), and the speed at which it strikes each rigid one.
+    pub contact_reach: ContactReach,
     /// Time after the section at which x first crosses zero upwards (s), if it does.
     pub upcrossing_s: Option<f64>,
 }
@@ -263,6 +268,7 @@ impl OrbitSummary {
                 contact_fraction: acc.contact_time / period,
                 impacts: acc.impacts,
                 impact_speed_m_s: [acc.impact_speed[0], acc.impact_speed[1]],
+                contact_reach: acc.reach,
                 upcrossing_s: acc.upcrossing,
             },
         )
@@ -299,6 +305,7 @@ impl OrbitSummary {
             contact_fraction: extent.contact_fraction,
             impacts: extent.impacts,
             impact_speed_m_s: extent.impact_speed_m_s,
+            contact_reach: extent.contact_reach,
             upcrossing_s: extent.upcrossing_s,
         }
     }
@@ -314,6 +321,7 @@ pub(crate) struct Extent {
     pub(crate) contact_fraction: f64,
     pub(crate) impacts: u32,
     pub(crate) impact_speed_m_s: [f64; 2],
+    pub(crate) contact_reach: ContactReach,
     pub(crate) upcrossing_s: Option<f64>,
 }
 

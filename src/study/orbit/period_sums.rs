@@ -4,10 +4,12 @@
 
 use nalgebra::SVector;
 
-use crate::model::{Mode, Model, SwitchKind, MAX_CONTACTS, MAX_OUTPUTS};
+use crate::model::{ContactGeometry, Mode, Model, SwitchKind, MAX_CONTACTS, MAX_OUTPUTS};
 use crate::num::roots::{illinois, RootOptions, Sample};
 use crate::ode::{Observer, Step};
 use crate::study::mass_peaks::MassPeaks;
+
+use super::reach::ContactReach;
 
 /// Whole-period sums over the accepted steps of one period.
 #[derive(Debug)]
@@ -25,12 +27,21 @@ pub(super) struct Sums {
     /// The velocity at the end of the last step (before a switch, the impact velocity).
     last_v: f64,
     pub(super) impact_speed: Vec<f64>,
+    /// How far each of the model's contacts is reached.
+    pub(super) reach: ContactReach,
+    /// The state at the end of the last step (before a switch, the state at the impact).
+    last_y: Vec<f64>,
 }
 
 impl Sums {
     /// Nothing summed for `outputs` outputs and `contacts` contacts; the extremes start empty
     /// (an orbit in a well off x = 0 never reaches zero, so zero is no bound on its extremes).
-    pub(super) fn new(outputs: usize, contacts: usize, mass_peaks: MassPeaks) -> Self {
+    pub(super) fn new(
+        outputs: usize,
+        contacts: usize,
+        mass_peaks: MassPeaks,
+        reach: ContactReach,
+    ) -> Self {
         Self {
             squares: vec![0.0; outputs],
             integrals: vec![0.0; outputs],
@@ -43,6 +54,8 @@ impl Sums {
             upcrossing: None,
             last_v: 0.0,
             impact_speed: vec![0.0; contacts],
+            reach,
+            last_y: Vec::new(),
         }
     }
 }
@@ -54,16 +67,25 @@ pub(super) struct Accumulator<'m, M> {
     pub(super) sums: Sums,
     /// One evaluation of the outputs.
     buf: Vec<f64>,
+    /// The model's contacts.
+    contacts: Vec<ContactGeometry>,
 }
 
 impl<'m, M> Accumulator<'m, M> {
-    /// Sums of a model's period, for `outputs` outputs and the masses of `mass_peaks`
-    /// ([`MassPeaks::of`] the model's layout).
-    pub(super) fn new(model: &'m M, outputs: usize, mass_peaks: MassPeaks) -> Self {
+    /// Sums of a model's period, for `outputs` outputs, the masses of `mass_peaks`
+    /// ([`MassPeaks::of`] the model's layout) and the reach of `contacts`.
+    pub(super) fn new(
+        model: &'m M,
+        outputs: usize,
+        mass_peaks: MassPeaks,
+        contacts: Vec<ContactGeometry>,
+    ) -> Self {
+        let reach = ContactReach::new(contacts.len());
         Self {
             model,
-            sums: Sums::new(outputs, MAX_CONTACTS, mass_peaks),
+            sums: Sums::new(outputs, MAX_CONTACTS, mass_peaks, reach),
             buf: vec![0.0; outputs],
+            contacts,
         }
     }
 }
@@ -71,6 +93,10 @@ impl<'m, M> Accumulator<'m, M> {
 impl<M: Model<N>, const N: usize> Observer<SVector<f64, N>, Mode> for Accumulator<'_, M> {
     fn step(&mut self, st: &Step<SVector<f64, N>>, mode: Mode) {
         self.sums.add(self.model, st, mode, &mut self.buf);
+        let layout = self.model.layout();
+        self.sums
+            .reach
+            .see_step(&self.contacts, layout, st, |f| root_on_step_of(st, f));
     }
 
     fn switched(&mut self, _t: f64, from: Mode, to: Mode) {
@@ -82,6 +108,10 @@ impl<M: Model<N>, const N: usize> Observer<SVector<f64, N>, Mode> for Accumulato
             let v = self.sums.last_v;
             let side = usize::from(v < 0.0);
             self.sums.impact_speed[side] = self.sums.impact_speed[side].max(v.abs());
+            let layout = self.model.layout();
+            self.sums
+                .reach
+                .strike(&self.contacts, layout, &self.sums.last_y);
         }
     }
 }
@@ -135,6 +165,8 @@ impl Sums {
             self.upcrossing = root_on_step(st, 0).map(|th| st.t0 + th * st.h);
         }
         self.last_v = st.y1[1];
+        self.last_y.clear();
+        self.last_y.extend_from_slice(st.y1.as_slice());
         let contact = mode.in_contact();
         if contact {
             self.contact_time += st.h;
@@ -149,11 +181,19 @@ impl Sums {
 /// theta in [0, 1] where component `c` of the dense output of `st` changes sign (the upper
 /// end of the final bracket), located by the crate's root finder to 1e-12 of the step.
 fn root_on_step<const N: usize>(st: &Step<SVector<f64, N>>, c: usize) -> Option<f64> {
+    root_on_step_of(st, &|y: &SVector<f64, N>| y[c])
+}
+
+/// theta in [0, 1] where `g` of the dense output of `st` changes sign, as [`root_on_step`].
+fn root_on_step_of<const N: usize>(
+    st: &Step<SVector<f64, N>>,
+    g: &dyn Fn(&SVector<f64, N>) -> f64,
+) -> Option<f64> {
     let f =
-        |th: f64| -> Result<(f64, ()), std::convert::Infallible> { Ok((st.at_theta(th)[c], ())) };
+        |th: f64| -> Result<(f64, ()), std::convert::Infallible> { Ok((g(&st.at_theta(th)), ())) };
     let (a, b) = (
-        Sample::new(0.0, st.y0[c], ()),
-        Sample::new(1.0, st.y1[c], ()),
+        Sample::new(0.0, g(&st.y0), ()),
+        Sample::new(1.0, g(&st.y1), ()),
     );
     let opts = RootOptions {
         f_tol: None,

@@ -5,7 +5,7 @@ use nalgebra::{SMatrix, SVector};
 
 use crate::drive::Sine;
 use crate::model::tangent::{tangent_options, Tangents};
-use crate::model::{Mode, Model};
+use crate::model::{ContactGeometry, Mode, Model};
 use crate::ode::{SolverError, Stats, Step, Tangent};
 use crate::study::flow::{Engine, SineFlow};
 
@@ -33,6 +33,8 @@ pub struct Shooter<'a, M, const N: usize> {
     /// Settings.
     pub cfg: ShootingOptions,
     scales: SVector<f64, N>,
+    /// The contacts whose reach an orbit's summary measures (`None`: the model's own).
+    measured: Option<Vec<ContactGeometry>>,
 }
 
 impl<'a, M: Model<N>, const N: usize> Shooter<'a, M, N> {
@@ -43,7 +45,20 @@ impl<'a, M: Model<N>, const N: usize> Shooter<'a, M, N> {
 
     /// Shooting with given state scales (e.g. those of another model of the same device).
     pub fn with_scales(base: &'a M, cfg: ShootingOptions, scales: SVector<f64, N>) -> Self {
-        Self { base, cfg, scales }
+        Self {
+            base,
+            cfg,
+            scales,
+            measured: None,
+        }
+    }
+
+    /// The same shooter with the summaries' reach measured for `contacts` (those of another
+    /// model of the same device, e.g. the device with its stops, on the flow without them).
+    #[must_use]
+    pub fn measuring(mut self, contacts: Vec<ContactGeometry>) -> Self {
+        self.measured = Some(contacts);
+        self
     }
 
     /// The state scales of the scaled coordinates.
@@ -244,7 +259,11 @@ impl<'a, M: Model<N>, const N: usize> Shooter<'a, M, N> {
         let sine = forcing.sine(phase_rad);
         let outputs = self.base.layout().outputs.len();
         let peaks = crate::study::mass_peaks::MassPeaks::of(self.base.layout());
-        let mut acc = Accumulator::new(self.base, outputs, peaks);
+        let contacts = self
+            .measured
+            .clone()
+            .unwrap_or_else(|| self.base.contacts());
+        let mut acc = Accumulator::new(self.base, outputs, peaks, contacts);
         let mut ode = SineFlow::new(
             self.base,
             sine,

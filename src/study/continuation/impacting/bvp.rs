@@ -40,7 +40,7 @@ use crate::laws::contact::Side;
 use crate::model::{Mode, Model};
 use crate::ode::{SolverError, Stats};
 use crate::study::mass_peaks::MassPeaks;
-use crate::study::orbit::{multipliers, Extent, Forcing, OrbitSummary, Parameter};
+use crate::study::orbit::{multipliers, ContactReach, Extent, Forcing, OrbitSummary, Parameter};
 
 use super::segment::{fly, Flight};
 
@@ -485,6 +485,11 @@ impl<'a, M: Model<N>, const N: usize> Problem<'a, M, N> {
         let mut x_up = f64::NEG_INFINITY;
         let mut x_lo = f64::INFINITY;
         let mut speed = [0.0f64; 2];
+        // The reach of every contact at the states the flights keep: the rebounds and the
+        // interior extrema of x (the first mass's stops to the frame are the problem's).
+        let contacts = self.base.contacts();
+        let mut reach = ContactReach::new(contacts.len());
+        let layout = self.base.layout();
         let mut section = None;
         let mut zeros: Vec<SVector<f64, N>> = Vec::new();
         let mirror = self.mirror.unwrap_or_else(SMatrix::<f64, N, N>::identity);
@@ -537,11 +542,14 @@ impl<'a, M: Model<N>, const N: usize> Problem<'a, M, N> {
                 peaks = peaks.max(&fl.mass_peaks);
                 let side = if pre[0] > 0.0 { 0 } else { 1 };
                 speed[side] = speed[side].max(pre[1].abs());
+                reach.see(&contacts, layout, pre.as_slice());
+                reach.strike(&contacts, layout, pre.as_slice());
                 x_up = x_up.max(pre[0]);
                 x_lo = x_lo.min(pre[0]);
                 for x in &fl.extrema {
                     x_up = x_up.max(x.state[0]);
                     x_lo = x_lo.min(x.state[0]);
+                    reach.see(&contacts, layout, x.state.as_slice());
                 }
                 if section.is_none() {
                     if let Some((t, y)) = fl.upcrossing {
@@ -563,6 +571,7 @@ impl<'a, M: Model<N>, const N: usize> Problem<'a, M, N> {
                 contact_fraction: 0.0,
                 impacts: self.seq.impacts() as u32,
                 impact_speed_m_s: speed,
+                contact_reach: reach,
                 upcrossing_s: section.map(|_| 0.0),
             },
         );
