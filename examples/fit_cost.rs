@@ -69,6 +69,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             r.starts.len(),
             r.model
         );
+        for w in &r.warnings {
+            if let endstop::fit::FitWarning::SteppedSweepModel { why } = w {
+                println!("  stepped-sweep model: {why}");
+            }
+        }
         println!(
             "  design sweeps stopped early: {} of {} starts",
             r.starts.iter().filter(|s| s.design_cut).count(),

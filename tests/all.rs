@@ -43,6 +43,7 @@ mod masses_impact_damper;
 mod masses_studies;
 mod nlvib_unilateral;
 mod pair_bridge_spice;
+mod period_two;
 mod record_accuracy;
 mod record_figures;
 mod record_ledger;

@@ -10,7 +10,10 @@
 //! orbit once the fold has moved below (for an up-sweep) its frequency, so that its model
 //! value is continuous in the parameters as the fold passes it; a point on the second branch
 //! is compared with the second branch's orbit. The onset and a gradual end of contact are
-//! grazing orbits, a jump the fold: each moves smoothly with the parameters.
+//! grazing orbits, a jump the fold: each moves smoothly with the parameters. Where a branch's
+//! orbit has lost its stability by a period doubling, a point is compared with the stable
+//! orbit of two drive periods born there, which the steady state follows past the doubling
+//! and which joins the period-1 orbit at it.
 
 use crate::device::Device;
 use crate::physics::harvester::Harvester as Model4;
@@ -23,7 +26,7 @@ use crate::study::sweep::{BranchEndKind, DownEndKind};
 
 use super::model::SweepRun;
 use super::track::{
-    locate_fold, locate_grazing, quantity_of, stable_orbit, track_grazing, Fold, Grazing, Guess,
+    locate_fold, locate_grazing, point_orbit, quantity_of, track_grazing, Fold, Grazing, Guess,
     Lost,
 };
 use super::{Direction, FeatureKind, SweepData};
@@ -306,12 +309,13 @@ pub(super) fn identify(device: &Device, scale: f64, data: &SweepData) -> Result<
         let f = p.freq_hz;
         let j = path.nearest(f);
         let step_orbit = |j: usize| {
-            stable_orbit(
+            point_orbit(
                 &h,
                 f,
                 a,
                 0.0,
                 nalgebra::SVector::from_column_slice(path.steps[j].state.as_slice()),
+                1,
             )
         };
         let (Some(fold), Some(k)) = (&fold, k_jump) else {
@@ -329,7 +333,7 @@ pub(super) fn identify(device: &Device, scale: f64, data: &SweepData) -> Result<
                 PointModel::Orbit(Box::new(step_orbit(j)?))
             } else {
                 let g = fold.nearest(f);
-                PointModel::Orbit(Box::new(stable_orbit(&h, f, a, g.phase_rad, g.state)?))
+                PointModel::Orbit(Box::new(point_orbit(&h, f, a, g.phase_rad, g.state, 1)?))
             }
         } else if j > k {
             PointModel::Orbit(Box::new(step_orbit(j)?))
@@ -359,11 +363,11 @@ fn second_branch_back(
     f: f64,
 ) -> Result<PointModel, Lost> {
     let start = nalgebra::SVector::from_column_slice(path.steps[k + 1].state.as_slice());
-    let mut o = stable_orbit(h, path.values[k + 1], a, 0.0, start)
+    let mut o = point_orbit(h, path.values[k + 1], a, 0.0, start, 1)
         .map_err(|e| Lost(format!("second branch at the jump: {}", e.0)))?;
     for i in (j..=k).rev() {
         let fi = if i == j { f } else { path.values[i] };
-        match stable_orbit(h, fi, a, o.phase_rad, o.state_n()) {
+        match point_orbit(h, fi, a, o.phase_rad, o.state_n(), o.periods) {
             Ok(next) => o = next,
             Err(_) => return Ok(PointModel::Nearest(Box::new(o))),
         }
@@ -410,23 +414,25 @@ pub(super) fn track(
         let pm = match (&fold, first) {
             (Some(fold), true) if fold.beyond(f) => PointModel::AtFold,
             (Some(fold), true) => {
-                let (ph, y) = match pm {
-                    PointModel::Orbit(o) | PointModel::Nearest(o) => (o.phase_rad, o.state_n()),
+                let (ph, y, n) = match pm {
+                    PointModel::Orbit(o) | PointModel::Nearest(o) => {
+                        (o.phase_rad, o.state_n(), o.periods)
+                    }
                     PointModel::AtFold => {
                         let g = fold.nearest(f);
-                        (g.phase_rad, g.state)
+                        (g.phase_rad, g.state, 1)
                     }
                 };
-                PointModel::Orbit(Box::new(stable_orbit(&h, f, a, ph, y).map_err(ctx)?))
+                PointModel::Orbit(Box::new(point_orbit(&h, f, a, ph, y, n).map_err(ctx)?))
             }
             _ => match pm {
                 PointModel::Orbit(o) => PointModel::Orbit(Box::new(
-                    stable_orbit(&h, f, a, o.phase_rad, o.state_n()).map_err(ctx)?,
+                    point_orbit(&h, f, a, o.phase_rad, o.state_n(), o.periods).map_err(ctx)?,
                 )),
                 PointModel::Nearest(o) => {
                     let fo = o.forcing.freq_hz;
                     PointModel::Nearest(Box::new(
-                        stable_orbit(&h, fo, a, o.phase_rad, o.state_n()).map_err(ctx)?,
+                        point_orbit(&h, fo, a, o.phase_rad, o.state_n(), o.periods).map_err(ctx)?,
                     ))
                 }
                 PointModel::AtFold => return Err(Lost("a point at a fold that vanished".into())),

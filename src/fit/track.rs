@@ -12,7 +12,7 @@ type Harvester = Model4<4>;
 type State = nalgebra::SVector<f64, 4>;
 use crate::progress::Silent;
 use crate::study::continuation::{continue_branch_until, ContinuationSettings, Event, EventKind};
-use crate::study::orbit::{Forcing, Orbit, Parameter, Shooter, ShootingOptions};
+use crate::study::orbit::{Forcing, Orbit, Parameter, Shooter, ShootingOptions, DISTINCT_REL};
 
 use super::Quantity;
 
@@ -65,7 +65,7 @@ fn forcing(freq_hz: f64, accel_rms_g: f64) -> Forcing {
 /// The periodic orbit of `h` at `freq_hz` by Newton from `guess` (the state at drive phase
 /// `phase_rad`), with its section moved into free flight; refused unless stable (a measured
 /// steady state is stable).
-pub(super) fn stable_orbit(
+fn stable_orbit(
     h: &Harvester,
     freq_hz: f64,
     accel_rms_g: f64,
@@ -92,12 +92,61 @@ fn orbit(
     let shooter = Shooter::new(h, shooting());
     let mut stats = Stats::default();
     let f = forcing(freq_hz, accel_rms_g);
-    let o = shooter.solve(&f, Parameter::Frequency, phase_rad, guess, &mut stats)?;
+    orbit_of(&shooter, &f, phase_rad, guess, 1, &mut stats)
+}
+
+/// The orbit of `periods` drive periods under `f` by Newton from `guess`, with its section
+/// moved into free flight.
+fn orbit_of(
+    shooter: &Shooter<'_, Harvester, 4>,
+    f: &Forcing,
+    phase_rad: f64,
+    guess: State,
+    periods: usize,
+    stats: &mut Stats,
+) -> Result<Orbit, Lost> {
+    let p = Parameter::Frequency;
+    let o = shooter.solve_periods(f, p, phase_rad, guess, periods, stats)?;
     if shooter.section_is_free(&o) {
         Ok(o)
     } else {
-        Ok(shooter.reanchor(&o, Parameter::Frequency, &mut stats)?)
+        Ok(shooter.reanchor(&o, p, stats)?)
     }
+}
+
+/// The stable orbit a measured point is compared with: as [`stable_orbit`] from an orbit of
+/// `periods` drive periods (1 or 2), and where the period-1 orbit has lost its stability by a
+/// period doubling, the orbit of two periods born there (past the doubling the steady state
+/// is that orbit while it is stable). A fixed point of the two-period map that one period
+/// leaves in place is the period-1 orbit (the doubling has moved past the point): it is
+/// followed as such, so that the value is continuous as the doubling passes.
+pub(super) fn point_orbit(
+    h: &Harvester,
+    freq_hz: f64,
+    accel_rms_g: f64,
+    phase_rad: f64,
+    guess: State,
+    periods: usize,
+) -> Result<Orbit, Lost> {
+    let shooter = Shooter::new(h, shooting());
+    let mut stats = Stats::default();
+    let f = forcing(freq_hz, accel_rms_g);
+    let p = Parameter::Frequency;
+    let mut o = orbit_of(&shooter, &f, phase_rad, guess, periods, &mut stats)?;
+    if o.periods == 2 && shooter.one_period_split(&o, p)? <= DISTINCT_REL {
+        o = orbit_of(&shooter, &f, o.phase_rad, o.state_n(), 1, &mut stats)?;
+    }
+    if o.periods == 1 && o.is_flip_unstable() {
+        o = shooter.period_doubled(&o, &f, p, &mut stats)?;
+    }
+    if !o.is_stable() {
+        return Err(Lost(format!(
+            "the orbit of {} period(s) at {freq_hz} Hz is unstable (largest multiplier {:.4})",
+            o.periods,
+            o.max_multiplier_abs()
+        )));
+    }
+    Ok(o)
 }
 
 /// A grazing orbit: where the branch of the device without its stops reaches a stop. Before

@@ -42,7 +42,8 @@
 //! This file holds what an orbit is (its drive, settings, errors and summary); `shooter.rs`
 //! the period map and Newton's method on it, `variational.rs` the variational equations with
 //! their saltation matrices, `period_sums.rs` the sums over one period behind an
-//! [`OrbitSummary`], and `symmetry.rs` the mirror symmetry x -> -x with the half-period map
+//! [`OrbitSummary`], `doubling.rs` the orbits of two drive periods born where an orbit
+//! loses stability by a period doubling, and `symmetry.rs` the mirror symmetry x -> -x with the half-period map
 //! of symmetric orbits.
 //!
 //! [`Dopri5`]: crate::ode::Dopri5
@@ -57,12 +58,14 @@ use crate::model::Layout;
 use crate::ode::SolverError;
 use crate::study::mass_peaks::MassPeaks;
 
+mod doubling;
 mod period_sums;
 mod reach;
 mod shooter;
 mod symmetry;
 mod variational;
 
+pub use doubling::{flip_vector, DISTINCT_REL, DOUBLED_AMPLITUDES};
 pub use reach::ContactReach;
 pub use shooter::{Linearised, Shooter};
 pub use symmetry::{HalfMap, SYMMETRY_TOL};
@@ -332,6 +335,9 @@ pub struct Orbit {
     pub forcing: Forcing,
     /// Drive phase at the section (rad).
     pub phase_rad: f64,
+    /// Drive periods in the orbit's period (1, or 2 for an orbit born at a period doubling):
+    /// the monodromy, multipliers, residual and summary are those of this many periods.
+    pub periods: usize,
     /// State at the section (the model's components, [`crate::model::Layout`]).
     pub state: DVector<f64>,
     /// Monodromy matrix in scaled coordinates (z = y / scales).
@@ -343,7 +349,7 @@ pub struct Orbit {
     pub residual: f64,
     /// Newton iterations used.
     pub iterations: usize,
-    /// Whole-period measures.
+    /// Measures over the orbit's whole period (`periods` drive periods).
     pub summary: OrbitSummary,
 }
 
@@ -367,6 +373,20 @@ impl Orbit {
     /// True when every multiplier off the neutral band lies inside the unit circle.
     pub fn is_stable(&self) -> bool {
         self.max_multiplier_abs() < 1.0
+    }
+
+    /// True when the multiplier of largest modulus is real and below -1: the orbit has lost
+    /// its stability by a period doubling (a flip).
+    pub fn is_flip_unstable(&self) -> bool {
+        self.multipliers
+            .iter()
+            .find(|m| !is_neutral(**m, false))
+            .is_some_and(|m| m.im.abs() < NEUTRAL_BAND && m.re < -1.0)
+    }
+
+    /// The orbit's period (s): `periods` drive periods.
+    pub fn period_s(&self) -> f64 {
+        self.periods as f64 * self.forcing.period_s()
     }
 
     /// True when the orbit touches a stop.

@@ -256,6 +256,19 @@ impl<'a, M: Model<N>, const N: usize> Shooter<'a, M, N> {
         y: SVector<f64, N>,
         stats: &mut Stats,
     ) -> Result<(SVector<f64, N>, OrbitSummary), SolverError> {
+        self.measure_periods(forcing, phase_rad, y, 1, stats)
+    }
+
+    /// As [`Shooter::measure`] over `periods` drive periods (the map and measures of an
+    /// orbit of that many periods).
+    pub fn measure_periods(
+        &self,
+        forcing: &Forcing,
+        phase_rad: f64,
+        y: SVector<f64, N>,
+        periods: usize,
+        stats: &mut Stats,
+    ) -> Result<(SVector<f64, N>, OrbitSummary), SolverError> {
         let sine = forcing.sine(phase_rad);
         let outputs = self.base.layout().outputs.len();
         let peaks = crate::study::mass_peaks::MassPeaks::of(self.base.layout());
@@ -272,10 +285,10 @@ impl<'a, M: Model<N>, const N: usize> Shooter<'a, M, N> {
             self.base.mode_of(&y),
             self.cfg.rtol,
         );
-        ode.integrate_observed(forcing.period_s(), &mut acc)?;
+        let period = periods as f64 * forcing.period_s();
+        ode.integrate_observed(period, &mut acc)?;
         let (end, st) = (ode.y(), ode.stats());
         *stats += st;
-        let period = forcing.period_s();
         Ok((end, OrbitSummary::of(self.base.layout(), &acc.sums, period)))
     }
 
@@ -325,12 +338,33 @@ impl<'a, M: Model<N>, const N: usize> Shooter<'a, M, N> {
         guess: SVector<f64, N>,
         stats: &mut Stats,
     ) -> Result<Orbit, OrbitError> {
+        self.solve_periods(forcing, param, phase_rad, guess, 1, stats)
+    }
+
+    /// As [`Shooter::solve`] for an orbit of `periods` drive periods: Newton's method on the
+    /// map over that many periods (whose fixed points include the orbits of every divisor of
+    /// `periods`: the caller tells them apart).
+    pub fn solve_periods(
+        &self,
+        forcing: &Forcing,
+        param: Parameter,
+        phase_rad: f64,
+        guess: SVector<f64, N>,
+        periods: usize,
+        stats: &mut Stats,
+    ) -> Result<Orbit, OrbitError> {
+        if periods == 0 {
+            return Err(OrbitError::Invalid(
+                "an orbit spans at least one drive period".into(),
+            ));
+        }
         let err = |e| self.solver_err(param, forcing, e);
+        let duration_s = periods as f64 * forcing.period_s();
         let mut y = guess;
         let mut residual = f64::INFINITY;
         for it in 0..=self.cfg.max_newton {
             let lin = self
-                .linearise(forcing, param, phase_rad, y, stats)
+                .linearise_over(forcing, param, phase_rad, y, duration_s, stats)
                 .map_err(err)?;
             let g = (lin.end - y).component_div(&self.scales);
             residual = g.norm() / self.norm(&y).max(1e-300);
@@ -342,11 +376,16 @@ impl<'a, M: Model<N>, const N: usize> Shooter<'a, M, N> {
                 // with the same matrix: the two integrations differ by their global error,
                 // a few rtol.
                 for _ in 0..CHORD_STEPS {
-                    let (end, summary) = self.measure(forcing, phase_rad, y, stats).map_err(err)?;
+                    let (end, summary) = self
+                        .measure_periods(forcing, phase_rad, y, periods, stats)
+                        .map_err(err)?;
                     let gp = (end - y).component_div(&self.scales);
                     let plain = gp.norm() / self.norm(&y).max(1e-300);
                     if plain < self.cfg.residual_tol {
-                        return self.orbit(forcing, param, phase_rad, y, m, plain, it, summary);
+                        let mut o =
+                            self.orbit(forcing, param, phase_rad, y, m, plain, it, summary)?;
+                        o.periods = periods;
+                        return Ok(o);
                     }
                     residual = plain;
                     let Some(dz) = lu.solve(&(-gp)) else { break };
@@ -370,7 +409,7 @@ impl<'a, M: Model<N>, const N: usize> Shooter<'a, M, N> {
         })
     }
 
-    /// Builds an orbit from a converged state.
+    /// Builds an orbit of one drive period from a converged state.
     #[allow(clippy::too_many_arguments)]
     pub(crate) fn orbit(
         &self,
@@ -390,6 +429,7 @@ impl<'a, M: Model<N>, const N: usize> Shooter<'a, M, N> {
         Ok(Orbit {
             forcing: *forcing,
             phase_rad,
+            periods: 1,
             state: nalgebra::DVector::from_column_slice(y.as_slice()),
             monodromy: nalgebra::DMatrix::from_column_slice(N, N, monodromy.as_slice()),
             multipliers,
@@ -431,7 +471,7 @@ impl<'a, M: Model<N>, const N: usize> Shooter<'a, M, N> {
         *stats += st;
         let w = 2.0 * std::f64::consts::PI * f.freq_hz;
         let phase = (orbit.phase_rad + w * t).rem_euclid(2.0 * std::f64::consts::PI);
-        self.solve(f, param, phase, y, stats)
+        self.solve_periods(f, param, phase, y, orbit.periods, stats)
     }
 
     /// The state of an orbit at drive phase `phase_rad` (integrated from its section).
