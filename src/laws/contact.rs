@@ -71,7 +71,7 @@ impl ContactLaw {
         match self {
             ContactLaw::Hertz(h) => h.force_of_delta(delta_m),
             ContactLaw::Linear(k) => k * delta_m,
-            ContactLaw::Power { k, n } => k * delta_m.powf(*n),
+            ContactLaw::Power { k, n } => k * power(delta_m, *n),
         }
     }
 
@@ -84,7 +84,7 @@ impl ContactLaw {
         match self {
             ContactLaw::Hertz(h) => h.stiffness_of_delta(delta_m),
             ContactLaw::Linear(k) => *k,
-            ContactLaw::Power { k, n } => k * n * delta_m.powf(n - 1.0),
+            ContactLaw::Power { k, n } => k * n * power(delta_m, n - 1.0),
         }
     }
 
@@ -98,6 +98,22 @@ impl ContactLaw {
             ContactLaw::Linear(k) => 0.5 * k * delta_m * delta_m,
             ContactLaw::Power { k, n } => k * delta_m.powf(n + 1.0) / (n + 1.0),
         }
+    }
+}
+
+/// `delta^n` for `delta > 0`, Hertz's `n = 3/2` (and its stiffness's `1/2`) by a square root:
+/// the right-hand side of a contact phase evaluates the force (and the variational equations
+/// its stiffness) at every stage of every step, and a general power costs several times a
+/// square root. A correctly rounded square root and one product differ from the power by at
+/// most about one unit in the last place.
+#[inline]
+fn power(delta_m: f64, n: f64) -> f64 {
+    if n == 1.5 {
+        delta_m * delta_m.sqrt()
+    } else if n == 0.5 {
+        delta_m.sqrt()
+    } else {
+        delta_m.powf(n)
     }
 }
 
@@ -228,6 +244,26 @@ impl StopModel {
         match self {
             StopModel::Compliant { law, .. } => law.stiffness(delta_max),
             StopModel::Rigid { .. } => 0.0,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Hertz's powers by square roots agree with the general power to a few units in the last
+    /// place (each side rounds at most twice: 4 ulp relative, 1e-15, bounds both) over the
+    /// penetrations a stop sees, from 1e-12 m to 1 m.
+    #[test]
+    fn hertz_powers_by_square_roots_match_the_general_power() {
+        for i in 0..=1200 {
+            let d = 10f64.powf(-12.0 + f64::from(i) / 100.0);
+            for n in [1.5, 0.5] {
+                let rel = (power(d, n) / d.powf(n) - 1.0).abs();
+                assert!(rel <= 4.0 * f64::EPSILON, "d {d}, n {n}: {rel:e}");
+            }
+            assert_eq!(power(d, 2.0), d.powf(2.0));
         }
     }
 }
