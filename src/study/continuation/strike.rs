@@ -88,9 +88,10 @@ impl<M: Model<N>, const N: usize> Continuer<'_, '_, M, N> {
         };
         let ahead = last.param_tangent().signum();
         let max_step = self.settings.max_param_step;
-        let (past, dir) = [ahead, -ahead]
-            .into_iter()
-            .find_map(|dir| self.shoot_away(last, dir, max_step, added).map(|p| (p, dir)))?;
+        let (past, dir) = [ahead, -ahead].into_iter().find_map(|dir| {
+            self.shoot_away(last, dir, max_step, added)
+                .map(|p| (p, dir))
+        })?;
         let past = self.reanchor(past.clone()).unwrap_or(past);
         let grazing = self.locate_strike_by_param(last, &past, dir, k, n, gaps);
         let mut events = Vec::new();

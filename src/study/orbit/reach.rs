@@ -156,7 +156,13 @@ impl ContactReach {
     /// its free peak less the gap `gap_m` (negative, zero at the grazing) while it strikes it
     /// `strikes` times, the slowest strike's speed over `w0_rad_s` (positive, zero at the grazing)
     /// once it strikes it once more; `None` for any other count of strikes.
-    pub fn strike_grazing_m(&self, k: usize, strikes: u32, gap_m: f64, w0_rad_s: f64) -> Option<f64> {
+    pub fn strike_grazing_m(
+        &self,
+        k: usize,
+        strikes: u32,
+        gap_m: f64,
+        w0_rad_s: f64,
+    ) -> Option<f64> {
         let n = *self.strikes.get(k)?;
         if n == strikes {
             Some(self.free_peak_m[k] - gap_m)
