@@ -326,8 +326,6 @@ impl<M: Model<N>, const N: usize> Continuer<'_, '_, M, N> {
         if !near {
             return None;
         }
-        let param = self.settings.parameter;
-        let p0 = last.orbit.param(param);
         let leaving_contact = last.orbit.is_impacting();
         let ahead = last.param_tangent().signum();
         let dirs: &[f64] = if leaving_contact {
@@ -335,32 +333,54 @@ impl<M: Model<N>, const N: usize> Continuer<'_, '_, M, N> {
         } else {
             &[ahead]
         };
-        for &dir in dirs {
-            let mut step = 1e-4 * max_step;
-            while step <= max_step {
-                let f = last.orbit.forcing.with(param, p0 + dir * step);
-                let solved = self.shooter.solve(
-                    &f,
-                    param,
-                    last.orbit.phase_rad,
-                    last.orbit.state_n(),
-                    &mut self.stats,
-                );
-                if let Ok(o) = solved {
-                    if o.is_impacting() != leaving_contact {
-                        let lin = self
-                            .shooter
-                            .linearise(&o.forcing, param, o.phase_rad, o.state_n(), &mut self.stats)
-                            .ok()?;
-                        let jac = self.kernel_jacobian(&lin);
-                        let e = join(&SVector::<f64, N>::zeros(), dir);
-                        let tangent = tangent(&jac, &e)?;
-                        return Some(BranchPoint { orbit: o, tangent });
-                    }
+        dirs.iter().find_map(|&dir| {
+            self.shoot_away(last, dir, max_step, |o| o.is_impacting() != leaving_contact)
+        })
+    }
+
+    /// The first orbit that `accept` takes, shot at fixed parameter values stepping from
+    /// `last` in the direction `dir` (+1 or -1) by 1e-4 `max_step`, four times that, ... up to
+    /// `max_step`, each from `last`'s state; with its tangent, oriented along `dir`.
+    pub(super) fn shoot_away(
+        &mut self,
+        last: &BranchPoint,
+        dir: f64,
+        max_step: f64,
+        accept: impl Fn(&Orbit) -> bool,
+    ) -> Option<BranchPoint> {
+        let param = self.settings.parameter;
+        let p0 = last.orbit.param(param);
+        let mut step = 1e-4 * max_step;
+        while step <= max_step {
+            let f = last.orbit.forcing.with(param, p0 + dir * step);
+            let solved = self.shooter.solve(
+                &f,
+                param,
+                last.orbit.phase_rad,
+                last.orbit.state_n(),
+                &mut self.stats,
+            );
+            if let Ok(o) = solved {
+                if accept(&o) {
+                    return self.with_tangent(o, dir);
                 }
-                step *= 4.0;
             }
+            step *= 4.0;
         }
         None
+    }
+
+    /// A point of the branch at the orbit `o`, its tangent oriented so that the parameter
+    /// moves in the direction `dir`.
+    pub(super) fn with_tangent(&mut self, o: Orbit, dir: f64) -> Option<BranchPoint> {
+        let param = self.settings.parameter;
+        let lin = self
+            .shooter
+            .linearise(&o.forcing, param, o.phase_rad, o.state_n(), &mut self.stats)
+            .ok()?;
+        let jac = self.kernel_jacobian(&lin);
+        let e = join(&SVector::<f64, N>::zeros(), dir);
+        let tangent = tangent(&jac, &e)?;
+        Some(BranchPoint { orbit: o, tangent })
     }
 }

@@ -170,7 +170,9 @@ impl Diagram {
             // The corner and its grazing are one point: kept once, as the corner.
             if kind == EventKind::Grazing {
                 if let Some(prev) = events.iter_mut().find(|x| {
-                    x.kind == EventKind::Grazing && (x.param - e.param).abs() < 1e-9 * e.param.abs()
+                    x.kind == EventKind::Grazing
+                        && x.contact == e.contact
+                        && (x.param - e.param).abs() < 1e-9 * e.param.abs()
                 }) {
                     prev.corner |= corner;
                     continue;
@@ -183,6 +185,7 @@ impl Diagram {
                 branches: vec![0],
                 stable: vec![e.stable_before, e.stable_after],
                 corner,
+                contact: e.contact,
             });
         }
         events.sort_by(|a, b| a.param.total_cmp(&b.param));

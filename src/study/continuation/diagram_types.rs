@@ -200,13 +200,19 @@ pub struct DiagramEvent {
     /// non-smooth fold, the border-collision of two orbits; di Bernardo et al. 2008, section
     /// 4.2), rather than passing through.
     pub corner: bool,
+    /// For a grazing at which a rigid contact gains or loses a strike per period (the set of
+    /// contacts touched unchanged): that contact (its index in
+    /// [`crate::model::Model::contacts`]).
+    pub contact: Option<usize>,
 }
 
 impl DiagramEvent {
     /// Label for tables: the kind, and at a corner (a grazing where the branch turns) that the
     /// fold there is non-smooth.
     pub fn label(&self) -> String {
-        if self.corner {
+        if let (EventKind::Grazing, Some(k)) = (self.kind, self.contact) {
+            format!("grazing of contact {k} (a strike more or less per period)")
+        } else if self.corner {
             format!(
                 "{} (non-smooth fold: the branch turns there)",
                 self.kind.label()

@@ -72,6 +72,7 @@ impl<M: Model<N> + Clone, const N: usize> Continuer<'_, '_, M, N> {
             at_grazing: false,
             stable_before: a.orbit.is_stable(),
             stable_after: b.orbit.is_stable(),
+            contact: None,
         })
     }
 
@@ -232,6 +233,7 @@ impl<M: Model<N> + Clone, const N: usize> Continuer<'_, '_, M, N> {
                 out.push(self.locate(EventKind::Torus, k, a, b, ds, test_torus, gaps)?);
             }
         }
+        out.extend(self.strike_events(k, a, b, ds));
         out.sort_by(|x, y| x.s.total_cmp(&y.s));
         Ok(out)
     }

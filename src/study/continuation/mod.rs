@@ -18,8 +18,9 @@
 //! [`Rejection`] (each rejection is kept in [`Branch::rejections`]); it grows after easy
 //! corrections. Where the step falls below [`ContinuationSettings::ds_min`] at a grazing
 //! orbit, the corner there is hopped over or crossed (the grazing located on the branch by
-//! bisection and the predictor restarted past it); elsewhere it is an error naming the last
-//! parameter value reached.
+//! bisection and the predictor restarted past it), as is a grazing at which a rigid contact
+//! gains a strike per period; elsewhere it is an error naming the last parameter value
+//! reached.
 //!
 //! # Events (Seydel; Kuznetsov, chapter 10)
 //! Between two accepted points, sign changes of test functions mark events, each located by the
@@ -33,6 +34,7 @@
 //! | period doubling | prod (mu_i + 1) | a real multiplier crosses -1 |
 //! | torus | largest modulus - 1 | a complex pair leaves the unit circle |
 //! | grazing | max |x| - x_max (for a rigid stop it strikes, the impact speed over w0) | the orbit starts or stops touching a stop |
+//! | grazing of a contact | its free peak between strikes less its gap, or its slowest strike's speed over w0 | a rigid contact gains or loses a strike per period |
 //!
 //! A +1 crossing is called a fold only where the branch turns: a crossing without a turn is a
 //! branch point and is never presented as a fold. A turn at a grazing point, where the branch
@@ -43,6 +45,7 @@
 //! `types.rs` holds the settings and what a branch is made of, `corrector.rs` the
 //! predictor-corrector (Newton on the bordered system, tangents, the acceptance of a step,
 //! corner hops), `corner.rs` the crossing of a corner where the contact set changes,
+//! `strike.rs` the crossing of a grazing that adds a strike of a rigid contact,
 //! `events.rs` the test functions and the location of events; this file holds the
 //! loop that drives them ([`continue_branch`]) and the entry points.
 
@@ -59,6 +62,7 @@ mod diagram;
 mod diagram_types;
 mod events;
 pub mod impacting;
+mod strike;
 mod test_functions;
 mod types;
 
@@ -238,6 +242,20 @@ pub fn continue_branch_until<M: Model<N> + Clone, const N: usize>(
                             break;
                         }
                         ds = (2.0 * x.s_past).clamp(settings.ds_min, settings.ds_init);
+                        continue;
+                    }
+                    // At a grazing that adds a strike of a rigid contact (its free approach
+                    // between strikes reaching the gap, the contact set unchanged), the
+                    // orbit with the added strike is found and the branch goes on from it.
+                    if let Some(x) = c.cross_strike_grazing(points.len() - 1, &last) {
+                        let done = x.events.iter().any(&mut until);
+                        events.extend(x.events);
+                        on_point(x.past.orbit.param(param));
+                        points.push(x.past);
+                        if done {
+                            break;
+                        }
+                        ds = settings.ds_init;
                         continue;
                     }
                     return Err(OrbitError::Stalled {

@@ -41,6 +41,16 @@ impl Gaps {
     pub(super) fn len(self) -> usize {
         self.len
     }
+
+    /// The gap of contact `k` (m; infinite past the model's contacts).
+    pub(super) fn gap(self, k: usize) -> f64 {
+        self.gap_m.get(k).copied().unwrap_or(f64::INFINITY)
+    }
+
+    /// The suspension's natural frequency (rad/s).
+    pub(super) fn w0(self) -> f64 {
+        self.w0
+    }
 }
 
 /// An orbit is near grazing when its largest displacement is within this fraction of the gap

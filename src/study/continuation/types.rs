@@ -191,13 +191,19 @@ pub struct Event {
     pub stable_before: bool,
     /// Stable on the side after it.
     pub stable_after: bool,
+    /// For a grazing at which a rigid contact gains or loses a strike per period while the
+    /// set of contacts touched stays the same: that contact (its index in
+    /// [`crate::model::Model::contacts`]).
+    pub contact: Option<usize>,
 }
 
 impl Event {
     /// Label for tables: the kind, and for a fold where the orbit grazes a stop (a corner of
     /// the branch) that it is at grazing.
     pub fn label(&self) -> String {
-        if self.at_grazing {
+        if let (EventKind::Grazing, Some(k)) = (self.kind, self.contact) {
+            format!("grazing of contact {k} (a strike more or less per period)")
+        } else if self.at_grazing {
             format!("{} (at grazing)", self.kind.label())
         } else {
             self.kind.label().to_string()

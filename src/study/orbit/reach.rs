@@ -5,6 +5,14 @@
 //! grazing distance of contact `k` is its reach less its gap; for a rigid contact struck, its
 //! impact speed says how deep the orbit is past grazing (a rigid contact is never
 //! penetrated).
+//!
+//! An orbit that strikes a rigid contact can approach it again between its strikes without
+//! touching it: the highest such approach (a local maximum of the approach coordinate short of
+//! the gap, its free peak) less the gap reaches zero where one more strike per period begins,
+//! a grazing bifurcation that changes the number of impacts and not the set of contacts
+//! touched (Nordmark, J. Sound Vib. 145, 1991). The reach counts the strikes of each rigid
+//! contact and keeps the slowest, the measure of how deep the newest strike is past that
+//! grazing.
 
 use nalgebra::SVector;
 
@@ -41,6 +49,13 @@ pub struct ContactReach {
     pub reach_m: [f64; MAX_CONTACTS],
     /// Largest speed at which each rigid contact is struck (m/s), zero where it is not.
     pub impact_speed_m_s: [f64; MAX_CONTACTS],
+    /// Highest local maximum of each contact's approach coordinate short of its gap (m): the
+    /// highest approach that does not touch it; negative infinity where there is none.
+    pub free_peak_m: [f64; MAX_CONTACTS],
+    /// Strikes of each rigid contact over the period.
+    pub strikes: [u32; MAX_CONTACTS],
+    /// Smallest speed at which each rigid contact is struck (m/s), infinite where it is not.
+    pub slowest_strike_m_s: [f64; MAX_CONTACTS],
 }
 
 impl Default for ContactReach {
@@ -56,6 +71,9 @@ impl ContactReach {
             len: len.min(MAX_CONTACTS),
             reach_m: [f64::NEG_INFINITY; MAX_CONTACTS],
             impact_speed_m_s: [0.0; MAX_CONTACTS],
+            free_peak_m: [f64::NEG_INFINITY; MAX_CONTACTS],
+            strikes: [0; MAX_CONTACTS],
+            slowest_strike_m_s: [f64::INFINITY; MAX_CONTACTS],
         }
     }
 
@@ -68,7 +86,9 @@ impl ContactReach {
 
     /// Takes one step into the reach: its ends and, where a contact's relative velocity
     /// changes sign inside it, the extremum located on the dense output by `root` (which
-    /// returns the fraction of the step at which the given function of the state vanishes).
+    /// returns the fraction of the step at which the given function of the state vanishes);
+    /// a maximum of the approach short of the gap is a free peak. A strike ends a step (the
+    /// velocity jumps between two steps), so that it is never taken for a free peak.
     pub(crate) fn see_step<const N: usize>(
         &mut self,
         contacts: &[ContactGeometry],
@@ -85,6 +105,10 @@ impl ContactReach {
                 if let Some(th) = root(&|y| relative(c, layout, y.as_slice()).1) {
                     let x = approach(c, layout, st.at_theta(th).as_slice()).0;
                     self.reach_m[k] = self.reach_m[k].max(x);
+                    let maximum = c.side * v0 > 0.0;
+                    if maximum && x < c.gap {
+                        self.free_peak_m[k] = self.free_peak_m[k].max(x);
+                    }
                 }
             }
         }
@@ -105,6 +129,8 @@ impl ContactReach {
             });
         if let Some((k, (_, rate))) = struck {
             self.impact_speed_m_s[k] = self.impact_speed_m_s[k].max(rate);
+            self.slowest_strike_m_s[k] = self.slowest_strike_m_s[k].min(rate);
+            self.strikes[k] += 1;
         }
     }
 
@@ -123,5 +149,27 @@ impl ContactReach {
             };
         }
         out
+    }
+
+    /// How far an orbit's newest strike of contact `k` is past the grazing at which it begins,
+    /// for an orbit that strikes it `strikes` times a period on the side before that grazing:
+    /// its free peak less the gap `gap_m` (negative, zero at the grazing) while it strikes it
+    /// `strikes` times, the slowest strike's speed over `w0_rad_s` (positive, zero at the grazing)
+    /// once it strikes it once more; `None` for any other count of strikes.
+    pub fn strike_grazing_m(
+        &self,
+        k: usize,
+        strikes: u32,
+        gap_m: f64,
+        w0_rad_s: f64,
+    ) -> Option<f64> {
+        let n = *self.strikes.get(k)?;
+        if n == strikes {
+            Some(self.free_peak_m[k] - gap_m)
+        } else if n == strikes + 1 {
+            Some(self.slowest_strike_m_s[k] / w0_rad_s)
+        } else {
+            None
+        }
     }
 }

@@ -618,6 +618,7 @@ impl<M: Model<N> + Clone, const N: usize> Builder<'_, M, N> {
                     branches: vec![idx],
                     stable: vec![e.stable_before, e.stable_after],
                     corner: false,
+                    contact: None,
                 });
                 self.starts_at_event(idx, problem, e);
             }
@@ -661,6 +662,7 @@ impl<M: Model<N> + Clone, const N: usize> Builder<'_, M, N> {
                 branches,
                 stable,
                 corner: false,
+                contact: None,
             });
         }
         for (i, g) in self.grazings.iter().enumerate() {
