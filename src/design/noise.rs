@@ -167,6 +167,7 @@ impl Problem {
             limits,
             steady: SteadySettings::default(),
             noise: None,
+            record: None,
         }
         .with_noise(noise)
     }
@@ -175,18 +176,28 @@ impl Problem {
     /// the longest over the corners of the ranges and the interfaces, module docs); refused with
     /// limits on the impact speed or the contact force, which records do not measure.
     pub fn with_noise(mut self, mut noise: NoiseObjective) -> Result<Problem, DesignError> {
+        noise.transient_s = self.longest_transient_s("noise")?;
+        self.record = None;
+        self.noise = Some(noise);
+        self.check()?;
+        Ok(self)
+    }
+
+    /// The longest pre-roll ([`transient_s`]) over the corners of the ranges and the
+    /// interfaces, for a sampled drive (`drive` names it in errors); refused with limits on
+    /// the impact speed or the contact force, which records do not measure.
+    pub(super) fn longest_transient_s(&self, drive: &str) -> Result<f64, DesignError> {
         if self.limits.impact_speed_m_s.is_some() || self.limits.contact_force_n.is_some() {
-            return Err(DesignError::Invalid(
-                "under noise the records measure the displacement and the impacts, not the \
+            return Err(DesignError::Invalid(format!(
+                "under {drive} the records measure the displacement and the impacts, not the \
                  impact speed or the contact force: limit only those two"
-                    .into(),
-            ));
+            )));
         }
         let dims = self.ranges.len();
         if dims > 12 {
             return Err(DesignError::Invalid(format!(
-                "under noise the pre-roll is read at the 2^n corners of the ranges: at most 12 \
-                 ranges, got {dims}"
+                "under {drive} the pre-roll is read at the 2^n corners of the ranges: at most \
+                 12 ranges, got {dims}"
             )));
         }
         let mut longest: f64 = 0.0;
@@ -197,10 +208,7 @@ impl Problem {
                 longest = longest.max(transient_s(&dev));
             }
         }
-        noise.transient_s = longest;
-        self.noise = Some(noise);
-        self.check()?;
-        Ok(self)
+        Ok(longest)
     }
 
     /// The power of `design` measured again under the noise objective on `seed`, with its 95 %
