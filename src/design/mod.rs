@@ -387,6 +387,12 @@ impl Problem {
         Ok((dev, values))
     }
 
+    /// True when a design's orbit measures its impact speed and contact force: under sines,
+    /// not under a noise or a record, which measure the displacement and the impacts only.
+    pub fn measures_impacts(&self) -> bool {
+        self.noise.is_none() && self.record.is_none()
+    }
+
     /// Evaluates interface `i` at the unit point `unit` (never fails: a failure is the
     /// evaluation's result).
     pub fn evaluate(&self, i: usize, unit: &[f64]) -> Evaluated {
