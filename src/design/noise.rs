@@ -156,6 +156,17 @@ impl Problem {
         noise: NoiseObjective,
         limits: Limits,
     ) -> Result<Problem, DesignError> {
+        Problem::without_sines(device, interfaces, ranges, limits).with_noise(noise)
+    }
+
+    /// The problem of `device` without a vibration (no frequency, a NaN acceleration), for a
+    /// sampled drive to take the sines' place; unchecked.
+    pub(super) fn without_sines(
+        device: Device,
+        interfaces: Vec<Interface>,
+        ranges: Vec<ParamRange>,
+        limits: Limits,
+    ) -> Problem {
         Problem {
             device,
             interfaces,
@@ -169,7 +180,6 @@ impl Problem {
             noise: None,
             record: None,
         }
-        .with_noise(noise)
     }
 
     /// The problem with the noise objective `noise` in place of the sines (its pre-roll set to

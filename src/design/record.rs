@@ -22,10 +22,9 @@
 use std::sync::Arc;
 
 use crate::device::{Device, Interface, ParamRange};
-use crate::study::periodic::SteadySettings;
 use crate::study::record::{simulate_drive, RecordError, SampledDrive, Scheme, DEFAULT_RTOL};
 
-use super::{DesignError, Limits, Performance, Problem, Vibration};
+use super::{DesignError, Limits, Performance, Problem};
 
 /// A measured acceleration record a design is judged over (module docs).
 #[derive(Debug, Clone, PartialEq)]
@@ -136,20 +135,7 @@ impl Problem {
         record: RecordObjective,
         limits: Limits,
     ) -> Result<Problem, DesignError> {
-        Problem {
-            device,
-            interfaces,
-            ranges,
-            vibration: Vibration {
-                freqs_hz: Vec::new(),
-                accel_rms_g: f64::NAN,
-            },
-            limits,
-            steady: SteadySettings::default(),
-            noise: None,
-            record: None,
-        }
-        .with_record(record)
+        Problem::without_sines(device, interfaces, ranges, limits).with_record(record)
     }
 
     /// The problem with the measured record `record` in place of the sines or the noise (its
