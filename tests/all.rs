@@ -20,6 +20,7 @@ mod continuation_corners;
 mod crosscheck;
 mod design;
 mod design_noise;
+mod design_record;
 mod device_description;
 mod fit_family;
 mod fit_recovery;

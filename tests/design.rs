@@ -31,6 +31,7 @@ fn problem(device: Device, ranges: Vec<ParamRange>, freqs_hz: Vec<f64>, g: f64) 
         limits: Limits::default(),
         steady: SteadySettings::default(),
         noise: None,
+        record: None,
     }
 }
 

@@ -1,7 +1,8 @@
 //! `endstop design`: the designer's inverse question on a device file, the I/O around
 //! [`endstop::design`]. The ranges, vibration and limits come from the command line; the
 //! interfaces to choose among from `--interfaces FILE` (TOML, `[[interface]]` tables in the
-//! device file's form) or, without it, the device's own interface.
+//! device file's form) or, without it, the device's own interface. The vibration is sines,
+//! a noise (`--psd`) or a measured record (`--accel-file`).
 //!
 //! Everything is computed before anything is written: a run that fails leaves no output.
 
@@ -11,19 +12,17 @@ use anyhow::{bail, Context, Result};
 use clap::Parser;
 
 use crate::design_noise::{self, NoiseArgs};
+use crate::design_record::{self, ReadRecord, RecordArgs};
 use endstop::design::{
     interfaces, merit, Answer, Evaluated, Limits, Problem, SearchSettings, Study, Verdict,
     Vibration,
 };
 use endstop::device::{Device, Interface, ParamRange, Spacing};
 use endstop::drive::Sine;
-use endstop::num::pareto::pareto_front;
 use endstop::progress::Silent;
 use endstop::study::periodic::SteadySettings;
 
 use crate::shared::start;
-use endstop_experiments::io::legend::placed_clear;
-use endstop_experiments::io::plot::{LegendPos, LinePlot, Panels, Series, Style, PALETTE};
 
 use endstop_experiments::{fmt_sig, Experiment};
 
@@ -40,16 +39,23 @@ pub struct DesignArgs {
     /// A drive frequency (Hz); repeat for a band, whose worst frequency is the objective.
     #[arg(
         long = "freq-hz",
-        required_unless_present = "psd",
+        required_unless_present_any = ["psd", "accel_file"],
         allow_hyphen_values = true
     )]
     freqs_hz: Vec<f64>,
     /// RMS base acceleration of the sines (g).
-    #[arg(long, required_unless_present = "psd", allow_hyphen_values = true)]
+    #[arg(
+        long,
+        required_unless_present_any = ["psd", "accel_file"],
+        allow_hyphen_values = true
+    )]
     accel_rms_g: Option<f64>,
     /// The noise objective (--psd) in place of the sines.
     #[command(flatten)]
     noise: NoiseArgs,
+    /// The measured record (--accel-file) in place of the sines.
+    #[command(flatten)]
+    record: RecordArgs,
     /// Interfaces to choose among: a TOML file of `[[interface]]` tables, each as a device
     /// file's `[interface]` (`kind = "resistive"` for the transducer's own load); default: the
     /// device's own interface.
@@ -144,9 +150,19 @@ fn words(p: &Problem, a: &Answer) -> String {
     let perf = d.result.as_ref().ok();
     let q =
         |f: fn(&endstop::design::Performance) -> f64| perf.map_or("-".into(), |x| fmt_sig(f(x), 4));
+    // Under a noise or a record the impact speed and the contact force are not measured.
+    let impacts = if p.measures_impacts() {
+        format!(
+            "impact speed {} m/s, contact force {} N, ",
+            q(|x| x.impact_speed_m_s),
+            q(|x| x.contact_force_n)
+        )
+    } else {
+        String::new()
+    };
     format!(
-        "{} with the `{}` interface, {}: power {} W ({}), impact speed {} m/s, contact force {} \
-         N, displacement {} m, {} impacts/s{}",
+        "{} with the `{}` interface, {}: power {} W ({}), {impacts}displacement {} m, {} \
+         impacts/s{}",
         match a.verdict {
             Verdict::Optimum => "**optimum**",
             Verdict::Infeasible =>
@@ -157,11 +173,11 @@ fn words(p: &Problem, a: &Answer) -> String {
         q(|x| x.power_w),
         if p.noise.is_some() {
             "mean over the records"
+        } else if p.record.is_some() {
+            "mean over the record"
         } else {
             "worst over the band"
         },
-        q(|x| x.impact_speed_m_s),
-        q(|x| x.contact_force_n),
         q(|x| x.displacement_m),
         q(|x| x.impacts_per_s),
         if a.verdict == Verdict::Infeasible {
@@ -205,6 +221,19 @@ fn record_settings(
     exp.setting("accel_rms_g", json!(a.accel_rms_g));
     exp.setting("noise", to_value(p.noise)?);
     exp.setting(
+        "accel_file",
+        json!(a
+            .record
+            .accel_file
+            .as_ref()
+            .map(|f| f.display().to_string())),
+    );
+    if let Some(r) = &p.record {
+        exp.setting("accel_scale", json!(a.record.accel_scale));
+        exp.setting("record_sample_rate_hz", json!(r.sample_rate_hz));
+        exp.setting("record_transient_s", json!(r.transient_s));
+    }
+    exp.setting(
         "interfaces_file",
         json!(a.interfaces.as_ref().map(|f| f.display().to_string())),
     );
@@ -234,7 +263,8 @@ fn record_settings(
 pub fn design(a: DesignArgs) -> Result<()> {
     check(&a)?;
     let (mut exp, loaded, device) = start("endstop-design", &a.device, None, a.out.clone())?;
-    let p = problem(&a, &device)?;
+    let record = a.record.objective()?;
+    let p = problem(&a, &device, record.as_ref())?;
     let settings = SearchSettings {
         samples: a.samples,
         seed: a.seed,
@@ -248,22 +278,22 @@ pub fn design(a: DesignArgs) -> Result<()> {
             p.solve(&settings, pr)
         })?;
     let maps = power_maps(&a, &p, &study);
-    let merits = merits(&a, &p, &study)?;
+    let merits = merits(&a, &p, &study, record.as_ref())?;
     let confirmed = design_noise::confirm(&mut exp, &p, &study)?;
 
     // Everything is computed: now write.
     write_outputs(&mut exp, &device, &p, &study, &maps, &merits)?;
-    let md = summary_md(&a, &loaded.file, &p, &study, &merits)
+    let md = summary_md(&a, &loaded.file, &p, &study, &merits, record.as_ref())
         + &confirmed
         + &crate::design_table::first_range_table(&p, &maps);
     exp.write_numbers_md(&md)?;
     print!("{md}");
-    exp.write_plot(&plots(&p, &study, &maps))?;
+    exp.write_plot(&crate::design_plot::plots(&p, &study, &maps))?;
     exp.finish()
 }
 
 /// The design problem of the command line on `device`.
-fn problem(a: &DesignArgs, device: &Device) -> Result<Problem> {
+fn problem(a: &DesignArgs, device: &Device, record: Option<&ReadRecord>) -> Result<Problem> {
     let ranges = a
         .ranges
         .iter()
@@ -279,6 +309,16 @@ fn problem(a: &DesignArgs, device: &Device) -> Result<Problem> {
         displacement_m: a.max_displacement_m,
         impacts_per_s: a.max_impacts_per_s,
     };
+    if let Some(r) = record {
+        let o = r.objective.clone();
+        return Ok(Problem::under_record(
+            device.clone(),
+            interfaces,
+            ranges,
+            o,
+            limits,
+        )?);
+    }
     Ok(match a.noise.objective()? {
         Some(n) => Problem::under_noise(device.clone(), interfaces, ranges, n, limits)?,
         None => Problem::new(
@@ -334,15 +374,21 @@ struct Merits {
 
 /// The answer's figures of merit: its effectiveness, its half-power band over the given
 /// frequencies and its charging time to the target.
-fn merits(a: &DesignArgs, p: &Problem, study: &Study) -> Result<Merits> {
+fn merits(
+    a: &DesignArgs,
+    p: &Problem,
+    study: &Study,
+    record: Option<&ReadRecord>,
+) -> Result<Merits> {
     let best = &study.answer.design;
     let (best_dev, _) = p.device_at(best.interface, &best.unit)?;
     let perf = best.result.as_ref().ok();
     let limit_m = a
         .max_displacement_m
         .or_else(|| merit::displacement_limit_m(&best_dev));
-    // Under noise the effectiveness's sine bound and the charging's sine do not apply.
-    let sine = perf.filter(|_| p.noise.is_none());
+    // Under noise or a record the effectiveness's sine bound and the charging's sine do not
+    // apply.
+    let sine = perf.filter(|_| p.noise.is_none() && p.record.is_none());
     let effectiveness = sine.zip(limit_m).map(|(q, zl)| {
         merit::effectiveness(
             q.power_w,
@@ -352,10 +398,11 @@ fn merits(a: &DesignArgs, p: &Problem, study: &Study) -> Result<Merits> {
             q.worst_freq_hz,
         )
     });
-    let rms_g = p
-        .noise
-        .as_ref()
-        .map_or(sine_g(a), design_noise::noise_rms_g);
+    let rms_g = match (&p.noise, record) {
+        (Some(n), _) => design_noise::noise_rms_g(n),
+        (None, Some(r)) => r.rms_g,
+        (None, None) => sine_g(a),
+    };
     let density = perf.zip(best_dev.size).map(|(q, size)| {
         let v = size.volume_m3;
         let npd = merit::normalised_power_density(q.power_w, v, rms_g * endstop::G);
@@ -435,11 +482,19 @@ fn write_outputs(
 
 /// The summary in words: the question, the answer (overall and per interface) and its
 /// figures of merit.
-fn summary_md(a: &DesignArgs, file: &str, p: &Problem, study: &Study, merits: &Merits) -> String {
+fn summary_md(
+    a: &DesignArgs,
+    file: &str,
+    p: &Problem,
+    study: &Study,
+    merits: &Merits,
+    record: Option<&ReadRecord>,
+) -> String {
     let (limit_m, effectiveness) = (merits.limit_m, merits.effectiveness);
-    let question = match &p.noise {
-        Some(n) => design_noise::question(n),
-        None => format!(
+    let question = match (&p.noise, record) {
+        (Some(n), _) => design_noise::question(n),
+        (None, Some(r)) => design_record::question(p, &r.described, r.rms_g),
+        (None, None) => format!(
             "under {} g rms at {} Hz (the objective is the worst of these frequencies)",
             sine_g(a),
             a.freqs_hz
@@ -525,107 +580,4 @@ fn summary_md(a: &DesignArgs, file: &str, p: &Problem, study: &Study, merits: &M
         None => {}
     }
     md
-}
-
-/// The Pareto front of power against impact speed over every evaluated design (those within
-/// the limits apart from those beyond one, the answer marked, the impact speed's limit drawn
-/// where there is one), and the power map of each interface over the first two ranges (a curve
-/// per value of the second).
-fn plots(p: &Problem, study: &Study, maps: &[(usize, Vec<Evaluated>)]) -> Panels {
-    let done: Vec<&Evaluated> = study
-        .evaluations
-        .iter()
-        .filter(|e| e.result.is_ok())
-        .collect();
-    let perf = |e: &Evaluated| {
-        e.result
-            .as_ref()
-            .map(|q| (q.impact_speed_m_s, q.power_w))
-            .unwrap_or_default()
-    };
-    let pts: Vec<(f64, f64)> = done
-        .iter()
-        .map(|e| {
-            let (v, w) = perf(e);
-            (v, -w)
-        })
-        .collect();
-    let front: Vec<(f64, f64)> = pareto_front(&pts)
-        .into_iter()
-        .map(|k| (pts[k].0, -pts[k].1 * 1e6))
-        .collect();
-    let dots = |feasible: bool| -> Vec<(f64, f64)> {
-        done.iter()
-            .filter(|e| e.feasible() == feasible)
-            .map(|e| {
-                let (v, w) = perf(e);
-                (v, w * 1e6)
-            })
-            .collect()
-    };
-    let top_uw = done.iter().map(|e| perf(e).1 * 1e6).fold(0.0, f64::max);
-    let (v, w) = perf(&study.answer.design);
-    let mut series = vec![
-        Series::new(
-            "designs within the limits",
-            dots(true),
-            PALETTE[2],
-            Style::Dots,
-        ),
-        Series::new(
-            "designs beyond a limit",
-            dots(false),
-            PALETTE[1],
-            Style::Dots,
-        ),
-        Series::new("Pareto front", front, PALETTE[0], Style::LinePoints),
-        Series::new("the answer", vec![(v, w * 1e6)], PALETTE[4], Style::Circles),
-    ];
-    if let Some(l) = p.limits.impact_speed_m_s {
-        series.push(Series::new(
-            &format!("impact speed limit, {} m/s", fmt_sig(l, 3)),
-            vec![(l, 0.0), (l, top_uw)],
-            PALETTE[6],
-            Style::Dashed,
-        ));
-    }
-    series.retain(|s| !s.points.is_empty());
-    let pareto = placed_clear(LinePlot::new(
-        "Power against impact speed",
-        "largest impact speed [m/s]",
-        "DC power [uW]",
-        series,
-    ));
-    let mut panels = vec![pareto];
-    for (i, grid) in maps {
-        let n = (grid.len() as f64).sqrt().round() as usize;
-        let series = (0..n)
-            .step_by((n / 5).max(1))
-            .enumerate()
-            .map(|(c, j)| {
-                let pts = (0..n)
-                    .filter_map(|k| {
-                        let e = &grid[k * n + j];
-                        e.result
-                            .as_ref()
-                            .ok()
-                            .map(|q| (e.values[0], q.power_w * 1e6))
-                    })
-                    .collect();
-                let label = format!("{} = {}", p.ranges[1].path, fmt_sig(grid[j].values[1], 3));
-                Series::new(&label, pts, PALETTE[c % PALETTE.len()], Style::LinePoints)
-            })
-            .collect();
-        panels.push(
-            LinePlot::new(
-                &format!("Power map, `{}` interface", p.interfaces[*i].key()),
-                &p.ranges[0].path,
-                "DC power [uW]",
-                series,
-            )
-            .log(p.ranges[0].spacing == endstop::device::Spacing::Log, false)
-            .legend(LegendPos::UpperLeft),
-        );
-    }
-    Panels::new(panels)
 }

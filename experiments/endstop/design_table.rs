@@ -1,7 +1,8 @@
 //! The tables of `endstop design`: its designs as Parquet rows, and the power maps as a table
 //! for `numbers.md`: the power against the first range (the stop gap in the design chapter's
 //! example), each interface's best over the second range at each of its values, with the value
-//! that gives it and the impact speed there.
+//! that gives it and the impact speed there (the displacement under a noise or a record,
+//! which measure no impact speed).
 
 use anyhow::Result;
 use endstop::design::{Evaluated, Problem};
@@ -17,17 +18,20 @@ pub(crate) fn first_range_table(p: &Problem, maps: &[(usize, Vec<Evaluated>)]) -
     };
     let n = (first.len() as f64).sqrt().round() as usize;
     let (x, y) = (&p.ranges[0].path, &p.ranges[1].path);
+    let (what, head) = if p.measures_impacts() {
+        ("impact speed", "impact speed [m/s]")
+    } else {
+        ("displacement", "displacement [um]")
+    };
     let mut md = format!(
         "\nPower against `{x}` from the maps ({n} x {n} points): at each value, each \
          interface's largest power over `{y}`, the value of `{y}` that gives it, and the \
-         largest impact speed there (- where no design of the row could be evaluated).\n\n| `{x}` |"
+         largest {what} there (- where no design of the row could be evaluated).\n\n| `{x}` |"
     );
     let mut rule = String::from("|---|");
     for (i, _) in maps {
         let key = p.interfaces[*i].key();
-        md.push_str(&format!(
-            " `{key}`: power [uW] | at `{y}` | impact speed [m/s] |"
-        ));
+        md.push_str(&format!(" `{key}`: power [uW] | at `{y}` | {head} |"));
         rule.push_str("---|---|---|");
     }
     md.push('\n');
@@ -45,7 +49,14 @@ pub(crate) fn first_range_table(p: &Problem, maps: &[(usize, Vec<Evaluated>)]) -
                     " {} | {} | {} |",
                     fmt_sig(q.power_w * 1e6, 4),
                     fmt_sig(e.values[1], 3),
-                    fmt_sig(q.impact_speed_m_s, 3)
+                    fmt_sig(
+                        if p.measures_impacts() {
+                            q.impact_speed_m_s
+                        } else {
+                            q.displacement_m * 1e6
+                        },
+                        3
+                    )
                 )),
                 None => md.push_str(" - | - | - |"),
             }

@@ -23,6 +23,8 @@ mod basins;
 mod charge;
 mod design;
 mod design_noise;
+mod design_plot;
+mod design_record;
 mod design_table;
 mod merit;
 mod random;

@@ -131,3 +131,51 @@ fn an_answer_at_the_end_of_a_range_is_said_to_be() {
     );
     let _ = std::fs::remove_dir_all(&out);
 }
+
+/// A measured record in place of the sines: a CSV record of the cantilever's 120 Hz drive at
+/// 0.3 g rms. `numbers.md` says the objective is the mean power over the record after the
+/// pre-roll and that it needs no confirmation on fresh seeds; `summary.json` records the
+/// file, the rate and the pre-roll, and holds no confirmed power.
+#[test]
+fn a_measured_record_is_designed_over_without_confirmation() {
+    let dir = std::env::temp_dir().join(format!("endstop-design-rec-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let csv = dir.join("sine.csv");
+    let (fs, peak) = (10e3, 0.3 * std::f64::consts::SQRT_2 * 9.80665);
+    let mut text = String::from("time_s,accel_m_per_s2\n");
+    for k in 0..12_000 {
+        let t = k as f64 / fs;
+        let a = peak * (2.0 * std::f64::consts::PI * 120.0 * t).sin();
+        text.push_str(&format!("{t:.6},{a:.9e}\n"));
+    }
+    std::fs::write(&csv, text).unwrap();
+    let (out, md) = design(
+        "record",
+        "piezo_cantilever.toml",
+        &[
+            "--range",
+            "load.resistance_ohm=1e4..1e5",
+            "--accel-file",
+            csv.to_str().unwrap(),
+            "--sample-rate-hz",
+            "20000",
+            "--samples",
+            "4",
+        ],
+    );
+    assert!(md.contains("over the measured record"), "{md}");
+    assert!(md.contains("no confirmation on fresh seeds"), "{md}");
+    assert!(md.contains("(mean over the record)"), "{md}");
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert!(summary["numbers"]["power_w"].as_f64().unwrap() > 0.0);
+    assert!(summary["numbers"].get("power_confirmed_w").is_none());
+    let settings = &summary["settings"];
+    assert_eq!(settings["record_sample_rate_hz"].as_f64(), Some(20e3));
+    assert!(settings["record_transient_s"].as_f64().unwrap() > 0.0);
+    assert!(settings["accel_file"]
+        .as_str()
+        .unwrap()
+        .ends_with("sine.csv"));
+    let _ = std::fs::remove_dir_all(&dir);
+}

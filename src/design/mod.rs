@@ -6,7 +6,9 @@
 //!   behind a circuit, the resistive load otherwise) at its periodic steady state under a sine;
 //!   over a band of frequencies, the worst of them ([`evaluate`]); or, under band-limited white
 //!   noise, its mean over an ensemble of records on common random numbers, the answer
-//!   confirmed on a fresh seed ([`noise`], [`Problem::with_noise`], [`Problem::confirm`]).
+//!   confirmed on a fresh seed ([`noise`], [`Problem::with_noise`], [`Problem::confirm`]);
+//!   or, over a measured acceleration record, its mean over that record, deterministic
+//!   ([`record`], [`Problem::with_record`]).
 //! * **Decision variables**: ranges of device-file keys ([`ParamRange`], as the fit and the
 //!   Sobol study use them), with [`LOAD_PATH`] standing for whichever load the interface has;
 //!   and a discrete choice among interface circuits, each searched in turn.
@@ -27,6 +29,7 @@ pub mod evaluate;
 pub mod interfaces;
 pub mod merit;
 pub mod noise;
+pub mod record;
 pub mod search;
 
 use rayon::prelude::*;
@@ -37,6 +40,7 @@ use crate::study::periodic::SteadySettings;
 
 pub use evaluate::{performance, EvalError, OrbitLimits, Performance};
 pub use noise::NoiseObjective;
+pub use record::RecordObjective;
 pub use search::SearchSettings;
 
 /// The path that stands for the design's load resistance, whatever its interface: the
@@ -122,6 +126,9 @@ pub struct Problem {
     /// The noise objective, in place of the sines of [`Problem::vibration`] ([`noise`]);
     /// set by [`Problem::with_noise`].
     pub noise: Option<NoiseObjective>,
+    /// The measured record, in place of the sines and the noise ([`record`]); set by
+    /// [`Problem::with_record`].
+    pub record: Option<RecordObjective>,
 }
 
 /// Why a design problem could not be solved.
@@ -256,6 +263,7 @@ impl Problem {
             limits,
             steady: SteadySettings::default(),
             noise: None,
+            record: None,
         };
         p.check()?;
         Ok(p)
@@ -273,9 +281,11 @@ impl Problem {
         if self.ranges.is_empty() {
             return bad("no range to design over".into());
         }
-        match &self.noise {
-            Some(n) => n.check().map_err(DesignError::Invalid)?,
-            None => self.check_vibration()?,
+        match (&self.noise, &self.record) {
+            (Some(_), Some(_)) => return bad("give a noise or a measured record, not both".into()),
+            (Some(n), None) => n.check().map_err(DesignError::Invalid)?,
+            (None, Some(r)) => r.check().map_err(DesignError::Invalid)?,
+            (None, None) => self.check_vibration()?,
         }
         let l = &self.limits;
         for (name, limit) in [
@@ -377,17 +387,24 @@ impl Problem {
         Ok((dev, values))
     }
 
+    /// True when a design's orbit measures its impact speed and contact force: under sines,
+    /// not under a noise or a record, which measure the displacement and the impacts only.
+    pub fn measures_impacts(&self) -> bool {
+        self.noise.is_none() && self.record.is_none()
+    }
+
     /// Evaluates interface `i` at the unit point `unit` (never fails: a failure is the
     /// evaluation's result).
     pub fn evaluate(&self, i: usize, unit: &[f64]) -> Evaluated {
         let unit: Vec<f64> = unit.iter().map(|u| u.clamp(0.0, 1.0)).collect();
         let (result, values) = match self.device_at(i, &unit) {
             Ok((dev, values)) => (
-                match &self.noise {
-                    Some(n) => noise::noise_power(&dev, n, n.seed)
+                match (&self.noise, &self.record) {
+                    (Some(n), _) => noise::noise_power(&dev, n, n.seed)
                         .map(|(_, p)| p)
                         .map_err(|e| e.to_string()),
-                    None => performance(
+                    (None, Some(r)) => record::record_power(&dev, r).map_err(|e| e.to_string()),
+                    (None, None) => performance(
                         &dev,
                         &self.vibration.freqs_hz,
                         self.vibration.accel_rms_g,

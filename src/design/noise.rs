@@ -156,6 +156,17 @@ impl Problem {
         noise: NoiseObjective,
         limits: Limits,
     ) -> Result<Problem, DesignError> {
+        Problem::without_sines(device, interfaces, ranges, limits).with_noise(noise)
+    }
+
+    /// The problem of `device` without a vibration (no frequency, a NaN acceleration), for a
+    /// sampled drive to take the sines' place; unchecked.
+    pub(super) fn without_sines(
+        device: Device,
+        interfaces: Vec<Interface>,
+        ranges: Vec<ParamRange>,
+        limits: Limits,
+    ) -> Problem {
         Problem {
             device,
             interfaces,
@@ -167,26 +178,36 @@ impl Problem {
             limits,
             steady: SteadySettings::default(),
             noise: None,
+            record: None,
         }
-        .with_noise(noise)
     }
 
     /// The problem with the noise objective `noise` in place of the sines (its pre-roll set to
     /// the longest over the corners of the ranges and the interfaces, module docs); refused with
     /// limits on the impact speed or the contact force, which records do not measure.
     pub fn with_noise(mut self, mut noise: NoiseObjective) -> Result<Problem, DesignError> {
+        noise.transient_s = self.longest_transient_s("noise")?;
+        self.record = None;
+        self.noise = Some(noise);
+        self.check()?;
+        Ok(self)
+    }
+
+    /// The longest pre-roll ([`transient_s`]) over the corners of the ranges and the
+    /// interfaces, for a sampled drive (`drive` names it in errors); refused with limits on
+    /// the impact speed or the contact force, which records do not measure.
+    pub(super) fn longest_transient_s(&self, drive: &str) -> Result<f64, DesignError> {
         if self.limits.impact_speed_m_s.is_some() || self.limits.contact_force_n.is_some() {
-            return Err(DesignError::Invalid(
-                "under noise the records measure the displacement and the impacts, not the \
+            return Err(DesignError::Invalid(format!(
+                "under {drive} the records measure the displacement and the impacts, not the \
                  impact speed or the contact force: limit only those two"
-                    .into(),
-            ));
+            )));
         }
         let dims = self.ranges.len();
         if dims > 12 {
             return Err(DesignError::Invalid(format!(
-                "under noise the pre-roll is read at the 2^n corners of the ranges: at most 12 \
-                 ranges, got {dims}"
+                "under {drive} the pre-roll is read at the 2^n corners of the ranges: at most \
+                 12 ranges, got {dims}"
             )));
         }
         let mut longest: f64 = 0.0;
@@ -197,10 +218,7 @@ impl Problem {
                 longest = longest.max(transient_s(&dev));
             }
         }
-        noise.transient_s = longest;
-        self.noise = Some(noise);
-        self.check()?;
-        Ok(self)
+        Ok(longest)
     }
 
     /// The power of `design` measured again under the noise objective on `seed`, with its 95 %

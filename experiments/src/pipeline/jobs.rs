@@ -53,6 +53,7 @@ const RECORD: &str = "data/examples/machine_record.wav";
 const HARDENING: &str = "data/examples/hardening_em.toml";
 const BISTABLE: &str = "data/examples/bistable_stops_em.toml";
 const DESIGN_INTERFACES: &str = "data/design/interfaces.toml";
+const EM_BRIDGE: &str = "data/examples/em_bridge.toml";
 const UPCONVERTER: &str = "data/examples/upconverter.toml";
 const UP_DIRECT: &str = "data/upconversion/direct.toml";
 const UP_GENERATOR: &str = "data/upconversion/generator_alone.toml";
@@ -96,6 +97,18 @@ macro_rules! up_job {
                 "--target-v",
                 "0.5",
             ],
+            &[$device],
+        )
+    };
+}
+
+/// A job of the design chapter's example devices: `endstop design` on `$device` at one
+/// frequency (Hz) and RMS acceleration (g) over the ranges, with the options after them.
+macro_rules! design_job {
+    ($name:literal, $device:expr, $freq:literal, $g:literal, [$($arg:expr),* $(,)?]) => {
+        tool_run(
+            $name,
+            &["design", "--device", $device, "--freq-hz", $freq, "--accel-rms-g", $g, $($arg),*],
             &[$device],
         )
     };
@@ -480,6 +493,83 @@ pub const JOBS: &[Job] = &[
             "0.015",
         ],
         &[PIEZO_BRIDGE, DESIGN_INTERFACES],
+    ),
+    // The design chapter's example devices, each over its load (or its battery's voltage) and
+    // its stop gap where it has one, at its resonance.
+    design_job!(
+        "own_device_design_cantilever",
+        PIEZO,
+        "120",
+        "0.3",
+        [
+            "--range",
+            "load.resistance_ohm=3e3..3e5",
+            "--range",
+            "stops.upper.gap_m=3e-5..3e-4",
+            "--max-impact-speed-m-s",
+            "0.08",
+        ]
+    ),
+    design_job!(
+        "own_device_design_em",
+        EM,
+        "50",
+        "0.2",
+        [
+            "--range",
+            "load.resistance_ohm=40..4000",
+            "--range",
+            "stops.upper.gap_m=6e-4..2e-3",
+            "--max-contact-force-n",
+            "0.02",
+        ]
+    ),
+    design_job!(
+        "own_device_design_em_bridge",
+        EM_BRIDGE,
+        "50",
+        "0.2",
+        [
+            "--range",
+            "interface.load.voltage_v=0.5..5",
+            "--range",
+            "stops.upper.gap_m=6e-4..2e-3",
+            "--max-contact-force-n",
+            "0.02",
+        ]
+    ),
+    design_job!(
+        "own_device_design_electrostatic",
+        EXAMPLE,
+        "616",
+        "0.3",
+        [
+            "--range",
+            "load.resistance_ohm=1e6..1e8",
+            "--range",
+            "stops.both.gap_m=5e-6..1.5e-5",
+        ]
+    ),
+    design_job!(
+        "own_device_design_hardening",
+        HARDENING,
+        "110",
+        "0.1",
+        ["--range", "load.resistance_ohm=10..1000",]
+    ),
+    design_job!(
+        "own_device_design_bistable",
+        BISTABLE,
+        "55",
+        "0.5",
+        [
+            "--range",
+            "load.resistance_ohm=10..1000",
+            "--range",
+            "stops.both.gap_m=6e-4..1.2e-3",
+            "--max-impact-speed-m-s",
+            "0.15",
+        ]
     ),
     Job {
         name: "own_device_fit",

@@ -1,0 +1,140 @@
+//! The plot of `endstop design`: the Pareto front of power against impact speed over the
+//! designs evaluated, and the power maps.
+
+use endstop::design::{Evaluated, Problem, Study};
+use endstop::num::pareto::pareto_front;
+use endstop_experiments::fmt_sig;
+use endstop_experiments::io::legend::placed_clear;
+use endstop_experiments::io::plot::{LegendPos, LinePlot, Panels, Series, Style, PALETTE};
+
+/// The Pareto front of power against impact speed over every evaluated design (those within
+/// the limits apart from those beyond one, the answer marked, the impact speed's limit drawn
+/// where there is one; against the largest displacement and its limit under a noise or a
+/// record, which measure no impact speed), and the power map of each interface over the first two ranges (a curve
+/// per value of the second).
+pub(crate) fn plots(p: &Problem, study: &Study, maps: &[(usize, Vec<Evaluated>)]) -> Panels {
+    let done: Vec<&Evaluated> = study
+        .evaluations
+        .iter()
+        .filter(|e| e.result.is_ok())
+        .collect();
+    let speed = p.measures_impacts();
+    let perf = |e: &Evaluated| {
+        e.result
+            .as_ref()
+            .map(|q| {
+                let x = if speed {
+                    q.impact_speed_m_s
+                } else {
+                    q.displacement_m * 1e6
+                };
+                (x, q.power_w)
+            })
+            .unwrap_or_default()
+    };
+    let pts: Vec<(f64, f64)> = done
+        .iter()
+        .map(|e| {
+            let (v, w) = perf(e);
+            (v, -w)
+        })
+        .collect();
+    let front: Vec<(f64, f64)> = pareto_front(&pts)
+        .into_iter()
+        .map(|k| (pts[k].0, -pts[k].1 * 1e6))
+        .collect();
+    let dots = |feasible: bool| -> Vec<(f64, f64)> {
+        done.iter()
+            .filter(|e| e.feasible() == feasible)
+            .map(|e| {
+                let (v, w) = perf(e);
+                (v, w * 1e6)
+            })
+            .collect()
+    };
+    let top_uw = done.iter().map(|e| perf(e).1 * 1e6).fold(0.0, f64::max);
+    let (v, w) = perf(&study.answer.design);
+    let mut series = vec![
+        Series::new(
+            "designs within the limits",
+            dots(true),
+            PALETTE[2],
+            Style::Dots,
+        ),
+        Series::new(
+            "designs beyond a limit",
+            dots(false),
+            PALETTE[1],
+            Style::Dots,
+        ),
+        Series::new("Pareto front", front, PALETTE[0], Style::LinePoints),
+        Series::new("the answer", vec![(v, w * 1e6)], PALETTE[4], Style::Circles),
+    ];
+    let limit = if speed {
+        p.limits
+            .impact_speed_m_s
+            .map(|l| (l, format!("impact speed limit, {} m/s", fmt_sig(l, 3))))
+    } else {
+        p.limits.displacement_m.map(|l| {
+            (
+                l * 1e6,
+                format!("displacement limit, {} um", fmt_sig(l * 1e6, 3)),
+            )
+        })
+    };
+    if let Some((l, label)) = limit {
+        series.push(Series::new(
+            &label,
+            vec![(l, 0.0), (l, top_uw)],
+            PALETTE[6],
+            Style::Dashed,
+        ));
+    }
+    series.retain(|s| !s.points.is_empty());
+    let pareto = placed_clear(LinePlot::new(
+        if speed {
+            "Power against impact speed"
+        } else {
+            "Power against displacement"
+        },
+        if speed {
+            "largest impact speed [m/s]"
+        } else {
+            "largest displacement [um]"
+        },
+        "DC power [uW]",
+        series,
+    ));
+    let mut panels = vec![pareto];
+    for (i, grid) in maps {
+        let n = (grid.len() as f64).sqrt().round() as usize;
+        let series = (0..n)
+            .step_by((n / 5).max(1))
+            .enumerate()
+            .map(|(c, j)| {
+                let pts = (0..n)
+                    .filter_map(|k| {
+                        let e = &grid[k * n + j];
+                        e.result
+                            .as_ref()
+                            .ok()
+                            .map(|q| (e.values[0], q.power_w * 1e6))
+                    })
+                    .collect();
+                let label = format!("{} = {}", p.ranges[1].path, fmt_sig(grid[j].values[1], 3));
+                Series::new(&label, pts, PALETTE[c % PALETTE.len()], Style::LinePoints)
+            })
+            .collect();
+        panels.push(
+            LinePlot::new(
+                &format!("Power map, `{}` interface", p.interfaces[*i].key()),
+                &p.ranges[0].path,
+                "DC power [uW]",
+                series,
+            )
+            .log(p.ranges[0].spacing == endstop::device::Spacing::Log, false)
+            .legend(LegendPos::UpperLeft),
+        );
+    }
+    Panels::new(panels)
+}
