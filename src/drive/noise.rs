@@ -334,7 +334,7 @@ fn synthesize<T>(
         let inv_m = 1.0 / grid.period as f64;
         let sample = |j: usize| {
             let z = pairs[j / 2];
-            (if j % 2 == 0 { z.re } else { z.im }) * inv_m
+            (if j.is_multiple_of(2) { z.re } else { z.im }) * inv_m
         };
         Ok(out(grid.n, &sample))
     })

@@ -41,9 +41,12 @@ pub(super) struct InverseRealFft {
 impl InverseRealFft {
     /// Plans the transform of real length `len`, which the caller makes even and positive.
     pub(super) fn new(len: usize) -> Self {
-        debug_assert!(len >= 2 && len % 2 == 0, "an even length >= 2: {len}");
+        debug_assert!(
+            len >= 2 && len.is_multiple_of(2),
+            "an even length >= 2: {len}"
+        );
         let half = len / 2;
-        let twiddle_count = len / 4 + usize::from(len % 4 != 0);
+        let twiddle_count = len / 4 + usize::from(!len.is_multiple_of(4));
         let step = -2.0 * std::f64::consts::PI / len as f64;
         let twiddles = (1..twiddle_count)
             .map(|k| {
