@@ -114,35 +114,53 @@ pub fn load_device_file(path: &Path) -> Result<LoadedDevice> {
     Ok(LoadedDevice { device, file, text })
 }
 
-/// The git commit of the working tree (with `-dirty` if it has uncommitted changes).
+/// The git commit of the working tree (with `-dirty` if a tracked file has uncommitted
+/// changes), or `unknown` outside a repository or before its first commit.
+///
+/// One `git status` gives both: with `--porcelain=v2 --branch` its `# branch.oid` line names
+/// the commit `HEAD` points to, and every line that does not start with `#` is a changed
+/// tracked file (`--untracked-files=no`; `--no-ahead-behind` spares the count against an
+/// upstream, which the answer does not need). A process started costs about 1.5 ms of
+/// processor time, the dirty check itself about 2.5 ms more, the state of every tracked file
+/// read from the index and the disk.
 pub fn git_commit() -> String {
     static COMMIT: OnceLock<String> = OnceLock::new();
     COMMIT
         .get_or_init(|| {
-            let run = |args: &[&str]| {
-                std::process::Command::new("git")
-                    .args(args)
-                    .current_dir(root())
-                    .output()
-                    .ok()
-                    .filter(|o| o.status.success())
-                    .map(|o| String::from_utf8_lossy(&o.stdout).trim().to_string())
-            };
-            match run(&["rev-parse", "HEAD"]) {
-                Some(c) => {
-                    let dirty = run(&["status", "--porcelain", "--untracked-files=no"])
-                        .map(|s| !s.is_empty())
-                        .unwrap_or(false);
-                    if dirty {
-                        format!("{c}-dirty")
-                    } else {
-                        c
-                    }
-                }
-                None => "unknown".to_string(),
-            }
+            std::process::Command::new("git")
+                .args([
+                    "status",
+                    "--porcelain=v2",
+                    "--branch",
+                    "--no-ahead-behind",
+                    "--untracked-files=no",
+                ])
+                .current_dir(root())
+                .output()
+                .ok()
+                .filter(|o| o.status.success())
+                .and_then(|o| commit_of_status(&String::from_utf8_lossy(&o.stdout)))
+                .unwrap_or_else(|| "unknown".to_string())
         })
         .clone()
+}
+
+/// The commit, `-dirty` when a tracked file changed, from the text of `git status
+/// --porcelain=v2 --branch`; None without a commit (`# branch.oid (initial)`).
+fn commit_of_status(status: &str) -> Option<String> {
+    let oid = status
+        .lines()
+        .find_map(|l| l.strip_prefix("# branch.oid "))?
+        .trim();
+    if !oid.bytes().all(|b| b.is_ascii_hexdigit()) || oid.is_empty() {
+        return None;
+    }
+    let dirty = status.lines().any(|l| !l.is_empty() && !l.starts_with('#'));
+    Some(if dirty {
+        format!("{oid}-dirty")
+    } else {
+        oid.to_string()
+    })
 }
 
 /// Writes `bytes` to `path` atomically (temporary file in the same directory, then rename).
@@ -603,5 +621,26 @@ mod caption_tests {
             ),
             "{md}"
         );
+    }
+}
+
+#[cfg(test)]
+mod commit_tests {
+    use super::commit_of_status;
+
+    #[test]
+    fn commit_of_status_reads_the_oid_and_the_changed_files() {
+        let oid = "a6d7e3904cf3721f8e87eba4a158f962f400ca9e";
+        let clean = format!("# branch.oid {oid}\n# branch.head main\n");
+        assert_eq!(commit_of_status(&clean).as_deref(), Some(oid));
+        let changed =
+            format!("{clean}1 .M N... 100644 100644 100644 f5218f58 f5218f58 src/drive/noise.rs\n");
+        assert_eq!(commit_of_status(&changed), Some(format!("{oid}-dirty")));
+        // A detached head has the same oid line; a repository without a commit has none.
+        let detached = format!("# branch.oid {oid}\n# branch.head (detached)\n");
+        assert_eq!(commit_of_status(&detached).as_deref(), Some(oid));
+        let initial = "# branch.oid (initial)\n# branch.head main\n";
+        assert_eq!(commit_of_status(initial), None);
+        assert_eq!(commit_of_status(""), None);
     }
 }

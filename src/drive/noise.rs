@@ -30,20 +30,21 @@
 //!   per Hz on each side. The realised variance is `2 K df Sa_SI` in expectation, which equals
 //!   `2 B Sa_SI` whenever `B / df` is an integer (the choice of `M` makes it one whenever
 //!   `fs / B` is an integer, as for the paper's values: `K = 100 000` at `M = 10^6`).
-//! * **Normalisation.** The inverse transform (`realfft`'s complex-to-real transform over
-//!   RustFFT) does not normalise: it computes `Σ_k X_k e^{+2πikn/M}` over the full Hermitian
-//!   spectrum from the half `X_0..=X_{M/2}`, with one complex FFT of length `M/2`; we divide
-//!   by `M` once, when copying the samples out (`x[n] = (...) / M`), which makes it the
-//!   inverse of the un-normalised forward DFT.
+//! * **Normalisation.** The inverse transform ([`inverse`], a complex-to-real transform over
+//!   RustFFT's scalar planner) does not normalise: it computes `Σ_k X_k e^{+2πikn/M}` over the
+//!   full Hermitian spectrum from the half `X_0..=X_{M/2}`, with one complex FFT of length
+//!   `M/2`; we divide by `M` once, when copying the samples out (`x[n] = (...) / M`), which
+//!   makes it the inverse of the un-normalised forward DFT.
 //! * **Random numbers.** `ChaCha8Rng::seed_from_u64(seed)` then `set_stream(stream)`; one
 //!   stream is one realisation, so parallel realisations do not depend on thread scheduling.
 //!   Gaussians come from Box-Muller on `rng.random::<f64>()` (53-bit uniforms in `[0, 1)`):
 //!   `u₁ = 1 - U` in `(0, 1]`, `r = √(-2 ln u₁)`, `θ = 2π U'`, `(g₁, g₂) = (r cos θ, r sin θ)`,
 //!   one pair per bin, bins drawn in increasing `k`.
-//! * **Determinism.** RustFFT is built without its SIMD features, so its planner is scalar and
-//!   the result does not depend on which SIMD instructions the CPU offers. Bit-identical output across machines still
-//!   assumes the same `ln`/`sin`/`cos` (the platform libm) for Box-Muller and for RustFFT's
-//!   twiddle factors; on one platform the bytes are fixed by `(spec, seed, stream)`.
+//! * **Determinism.** The transform runs on RustFFT's scalar planner by name, not on the
+//!   planner that picks the CPU's SIMD instructions, so the result does not depend on which of
+//!   them the CPU offers. Bit-identical output across machines still assumes the same
+//!   `ln`/`sin`/`cos` (the platform libm) for Box-Muller and for RustFFT's twiddle factors; on
+//!   one platform the bytes are fixed by `(spec, seed, stream)`.
 //!
 //! Memory: the half-spectrum and the transform's output (`M/2 + 1` complex and `M` real values,
 //! plus RustFFT's scratch), kept per thread with the transform's plan for the next record of
@@ -54,13 +55,16 @@ use rand_chacha::ChaCha8Rng;
 use std::cell::RefCell;
 use std::sync::Arc;
 
-use realfft::num_complex::Complex;
-use realfft::{ComplexToReal, RealFftPlanner};
+use rustfft::num_complex::Complex;
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
 use crate::num::gaussian::box_muller;
 use crate::G;
+
+mod inverse;
+
+use inverse::InverseRealFft;
 
 /// Relative slack when deciding whether the band edge `B` falls on a bin (`f_k <= B`).
 const BAND_EDGE_SLACK: f64 = 1e-9;
@@ -270,15 +274,11 @@ pub fn generate_shared(spec: &NoiseSpec, seed: u64, stream: u64) -> Result<Arc<[
 /// The inverse transform of one synthesis period, kept per thread: an ensemble's records all
 /// have the same length, so each thread plans (and computes the twiddle factors) once.
 struct Synthesis {
-    period: usize,
     k_max: usize,
     /// Inverse real FFT of length `period` (Hermitian half-spectrum in, real samples out).
-    fft: Arc<dyn ComplexToReal<f64>>,
-    /// The half-spectrum `X_0..=X_{period/2}` and the transform's scratch.
+    fft: InverseRealFft,
+    /// The half-spectrum `X_0..=X_{period/2}`.
     spectrum: Vec<Complex<f64>>,
-    scratch: Vec<Complex<f64>>,
-    /// The transform's output, `period` samples (un-normalised).
-    samples: Vec<f64>,
 }
 
 thread_local! {
@@ -287,14 +287,10 @@ thread_local! {
 
 impl Synthesis {
     fn new(period: usize, k_max: usize) -> Self {
-        let fft = RealFftPlanner::<f64>::new().plan_fft_inverse(period);
         Self {
-            period,
             k_max,
-            spectrum: fft.make_input_vec(),
-            scratch: fft.make_scratch_vec(),
-            samples: fft.make_output_vec(),
-            fft,
+            fft: InverseRealFft::new(period),
+            spectrum: vec![Complex::new(0.0, 0.0); period / 2 + 1],
         }
     }
 }
@@ -302,7 +298,7 @@ impl Synthesis {
 /// Draws the coefficients of `(spec, seed, stream)`, transforms them over the synthesis
 /// period, and hands `out` the record length and the function that reads sample `j`.
 ///
-/// The transform is `realfft`'s complex-to-real inverse: from the half-spectrum
+/// The transform is the complex-to-real inverse of [`inverse`]: from the half-spectrum
 /// `X_0..=X_{M/2}` of the Hermitian spectrum it computes `Σ_k X_k e^{2πijk/M}` over all `M`
 /// bins, un-normalised, with one complex FFT of half the length for an even `M`.
 fn synthesize<T>(
@@ -316,7 +312,7 @@ fn synthesize<T>(
         let mut cache = cell.borrow_mut();
         if cache
             .as_ref()
-            .is_none_or(|c| c.period != grid.period || c.k_max != grid.k_max)
+            .is_none_or(|c| c.fft.len() != grid.period || c.k_max != grid.k_max)
         {
             *cache = Some(Synthesis::new(grid.period, grid.k_max));
         }
@@ -331,17 +327,16 @@ fn synthesize<T>(
             *c = draw_coefficient(&mut rng, amp);
         }
         syn.spectrum[grid.k_max + 1..].fill(zero);
-        // The buffers come from the plan and DC and Nyquist are zero: nothing to refuse.
-        if let Err(e) =
-            syn.fft
-                .process_with_scratch(&mut syn.spectrum, &mut syn.samples, &mut syn.scratch)
-        {
-            unreachable!("the inverse real FFT refused its own buffers: {e}")
-        }
-        // The inverse is un-normalised: divide by M when reading the samples, once.
+        // DC and Nyquist are zero, as the transform asks.
+        let pairs = syn.fft.process(&mut syn.spectrum);
+        // The inverse is un-normalised: divide by M when reading the samples, once. Sample `j`
+        // is the real (even `j`) or imaginary (odd `j`) part of the pair `j / 2`.
         let inv_m = 1.0 / grid.period as f64;
-        let samples = &syn.samples;
-        Ok(out(grid.n, &|j| samples[j] * inv_m))
+        let sample = |j: usize| {
+            let z = pairs[j / 2];
+            (if j.is_multiple_of(2) { z.re } else { z.im }) * inv_m
+        };
+        Ok(out(grid.n, &sample))
     })
 }
 
