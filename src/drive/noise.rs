@@ -30,7 +30,7 @@
 //!   per Hz on each side. The realised variance is `2 K df Sa_SI` in expectation, which equals
 //!   `2 B Sa_SI` whenever `B / df` is an integer (the choice of `M` makes it one whenever
 //!   `fs / B` is an integer, as for the paper's values: `K = 100 000` at `M = 10^6`).
-//! * **Normalisation.** The inverse transform ([`inverse`], a complex-to-real transform over
+//! * **Normalisation.** The inverse transform (`inverse.rs`, a complex-to-real transform over
 //!   RustFFT's scalar planner) does not normalise: it computes `Σ_k X_k e^{+2πikn/M}` over the
 //!   full Hermitian spectrum from the half `X_0..=X_{M/2}`, with one complex FFT of length
 //!   `M/2`; we divide by `M` once, when copying the samples out (`x[n] = (...) / M`), which
@@ -298,7 +298,7 @@ impl Synthesis {
 /// Draws the coefficients of `(spec, seed, stream)`, transforms them over the synthesis
 /// period, and hands `out` the record length and the function that reads sample `j`.
 ///
-/// The transform is the complex-to-real inverse of [`inverse`]: from the half-spectrum
+/// The transform is the complex-to-real inverse of `inverse.rs`: from the half-spectrum
 /// `X_0..=X_{M/2}` of the Hermitian spectrum it computes `Σ_k X_k e^{2πijk/M}` over all `M`
 /// bins, un-normalised, with one complex FFT of half the length for an even `M`.
 fn synthesize<T>(
