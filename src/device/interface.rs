@@ -1,9 +1,11 @@
 //! The interface circuit between a one-load transducer (piezoelectric or electromagnetic) and
 //! what it powers: the optional `[interface]` table of a device file.
 //!
-//! The module reads better whole: the table's raw keys, their parse into [`Interface`], the
-//! write-back to TOML and the checks are one format, a key read, written and checked side by
-//! side (the inductor's own keys and checks are in `sece_inductor`).
+//! This file holds what every kind shares: the diodes, the DC load, the inversion, the file
+//! form and the checks of the storage, the load and the diodes. What one kind adds (its keys,
+//! their checks with errors naming the field, and its model) is the kind's own file in
+//! [`crate::physics::harvester::circuits`], which implements `InterfaceKind` and is
+//! registered there, where [`Interface`] is declared.
 //!
 //! | `kind` | circuit | transducer |
 //! |---|---|---|
@@ -53,12 +55,14 @@
 //! `inductance_h` (and optional `inductor_resistance_ohm`, 0 by default) rings its inversion
 //! through the inductor in time and takes no `inversion_factor` or `quality_factor`.
 
+use serde::de::DeserializeOwned;
 use serde::{Deserialize, Serialize};
 
 use super::{Checker, ParamError, Transducer};
+use crate::physics::harvester::circuits::Described;
 
-mod sece_inductor;
-pub use sece_inductor::SeceInductor;
+pub use crate::physics::harvester::circuits::sece_inductor::SeceInductor;
+pub use crate::physics::harvester::circuits::Interface;
 
 /// The bridge's diodes.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -150,32 +154,6 @@ impl Inversion {
     }
 }
 
-/// The interface circuit (see the module docs).
-#[derive(Debug, Clone, PartialEq, Default)]
-pub enum Interface {
-    /// The transducer's own resistive load.
-    #[default]
-    Resistive,
-    /// A full-wave diode bridge into a storage capacitor and a DC load.
-    FullBridge(Rectifier),
-    /// The bridge with a parallel inverting switch.
-    ParallelSshi(Rectifier, Inversion),
-    /// The bridge behind a series inverting switch.
-    SeriesSshi(Rectifier, Inversion),
-    /// Synchronous electric charge extraction.
-    Sece {
-        /// Storage capacitance (F).
-        storage_capacitance_f: f64,
-        /// The DC load.
-        load: DcLoad,
-        /// Fraction of the extracted energy that reaches the storage.
-        efficiency: f64,
-    },
-    /// Synchronous electric charge extraction through its buck-boost inductor (`kind =
-    /// "sece"` with `inductance_h`).
-    SeceInductor(SeceInductor),
-}
-
 /// A diode bridge into a storage capacitor with a DC load.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Rectifier {
@@ -187,252 +165,227 @@ pub struct Rectifier {
     pub load: DcLoad,
 }
 
-/// The file form of `[interface]`: every key any kind takes, checked against the kind on
-/// conversion, so that a key of another kind is named in the error.
-#[derive(Debug, Clone, Default, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub(crate) struct RawInterface {
-    kind: String,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    storage_capacitance_f: Option<f64>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    inversion_factor: Option<f64>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    quality_factor: Option<f64>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    efficiency: Option<f64>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    diode: Option<Diode>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    load: Option<DcLoad>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    inductance_h: Option<f64>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    inductor_resistance_ohm: Option<f64>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    flyback_drop_v: Option<f64>,
+/// One kind of interface circuit as a device file describes it: the keys of its
+/// `[interface]` table, their checks (each error naming its field), and the circuit model
+/// they give. A kind's own file implements it; the registration point,
+/// [`crate::physics::harvester::circuits`], pairs it with its [`Interface`] variant.
+pub(crate) trait InterfaceKind: Sync {
+    /// The `kind` key.
+    fn key(&self) -> &'static str;
+
+    /// Whether a table with this kind's `kind` key describes this kind (kinds sharing a key
+    /// are told apart by their other keys).
+    fn claims(&self, _keys: &toml::Table) -> bool {
+        true
+    }
+
+    /// That the kind takes `key` in the table `keys` (the error names the field).
+    fn check_key(&self, keys: &toml::Table, key: &str, c: &Checker) -> Result<(), ParamError>;
+
+    /// The interface the table describes, its keys checked by [`InterfaceKind::check_key`].
+    fn parse(&self, keys: &toml::Table, c: &Checker) -> Result<Interface, ParamError>;
+
+    /// The file keys of `i`, in the order the file writes them.
+    fn write(&self, i: &Interface, keys: &mut Keys);
+
+    /// The storage capacitance (F) and the DC load of `i`.
+    fn storage<'a>(&self, i: &'a Interface) -> Option<(f64, &'a DcLoad)>;
+
+    /// The DC load of `i`, to change.
+    fn load_mut<'a>(&self, i: &'a mut Interface) -> Option<&'a mut DcLoad>;
+
+    /// The rectifier of `i`, for a kind whose bridge has the file's diodes.
+    fn rectifier<'a>(&self, _i: &'a Interface) -> Option<&'a Rectifier> {
+        None
+    }
+
+    /// True for a kind whose switch acts on a piezoelectric element's clamped capacitance,
+    /// which a coil or an electrostatic pair does not have.
+    fn piezo_only(&self) -> bool {
+        true
+    }
+
+    /// Checks the kind's own values of `i`, against the transducer where they depend on it.
+    fn validate(&self, _i: &Interface, _t: &Transducer, _c: &Checker) -> Result<(), ParamError> {
+        Ok(())
+    }
+
+    /// Checks the diodes against the kind, after the checks every bridge's diodes take.
+    fn check_diode(&self, _diode: &Diode, _c: &Checker) -> Result<(), ParamError> {
+        Ok(())
+    }
+
+    /// The circuit model of `i`, the kind's own state component (an inductor's current) at
+    /// `slot`, or why the description has none.
+    fn model<'a>(&self, i: &'a Interface, slot: usize) -> Result<Described<'a>, &'static str>;
 }
 
-/// The kinds, in the order of the module docs.
-pub const INTERFACE_KINDS: [&str; 5] = [
-    "resistive",
-    "full_bridge",
-    "parallel_sshi",
-    "series_sshi",
-    "sece",
-];
+/// The `kind` key of the transducer's own resistive load.
+const RESISTIVE: &str = "resistive";
+
+/// Why the `shockley` law is refused.
+pub(crate) const SHOCKLEY_SCOPE: &str = "the `shockley` law is modelled for a piezoelectric \
+     element or an electrostatic pair with `full_bridge` (and a piezoelectric element with \
+     `parallel_sshi`); use `piecewise_linear`";
+
+/// The keys of an interface in the order its file form writes them.
+pub(crate) type Keys = Vec<(&'static str, toml::Value)>;
+
+/// Appends `key = value` to a file form.
+pub(crate) fn put(keys: &mut Keys, key: &'static str, value: impl Serialize) {
+    if let Ok(v) = toml::Value::try_from(value) {
+        keys.push((key, v));
+    }
+}
+
+/// Appends the storage capacitance and the DC load, the keys every kind has.
+pub(crate) fn put_storage(keys: &mut Keys, storage_capacitance_f: f64) {
+    put(keys, "storage_capacitance_f", storage_capacitance_f);
+}
+
+/// The value of `key` in the table, if given.
+pub(crate) fn value<T: DeserializeOwned>(
+    keys: &toml::Table,
+    key: &str,
+    c: &Checker,
+) -> Result<Option<T>, ParamError> {
+    keys.get(key)
+        .map(|v| {
+            v.clone().try_into().map_err(|e: toml::de::Error| {
+                c.message(&format!("interface.{key}"), e.to_string().trim())
+            })
+        })
+        .transpose()
+}
+
+/// The number `key` of the table, if given.
+pub(crate) fn number(keys: &toml::Table, key: &str, c: &Checker) -> Result<Option<f64>, ParamError> {
+    value(keys, key, c)
+}
+
+/// The storage capacitance (F) and the DC load, which every kind needs.
+pub(crate) fn storage_and_load(
+    keys: &toml::Table,
+    c: &Checker,
+) -> Result<(f64, DcLoad), ParamError> {
+    let cs = number(keys, "storage_capacitance_f", c)?
+        .ok_or_else(|| c.missing("interface.storage_capacitance_f", "the storage capacitor"))?;
+    let load = value(keys, "load", c)?.ok_or_else(|| {
+        c.missing("interface.load", "the DC load (resistor, battery or open)")
+    })?;
+    Ok((cs, load))
+}
+
+/// The rectifier: storage, load and diodes (ideal when not given).
+pub(crate) fn rectifier(keys: &toml::Table, c: &Checker) -> Result<Rectifier, ParamError> {
+    let (storage_capacitance_f, load) = storage_and_load(keys, c)?;
+    Ok(Rectifier {
+        storage_capacitance_f,
+        diode: value(keys, "diode", c)?.unwrap_or_default(),
+        load,
+    })
+}
+
+/// That interface kind `kind` takes no `key`.
+pub(crate) fn not_taken(kind: &str, key: &str, c: &Checker) -> ParamError {
+    c.message(
+        &format!("interface.{key}"),
+        &format!("interface kind `{kind}` takes no `{key}`"),
+    )
+}
+
+/// That `key` is one of `taken`, the keys of interface kind `kind`.
+pub(crate) fn takes(kind: &str, taken: &[&str], key: &str, c: &Checker) -> Result<(), ParamError> {
+    if taken.contains(&key) {
+        Ok(())
+    } else {
+        Err(not_taken(kind, key, c))
+    }
+}
+
+/// The `kind` keys, the resistive default first, then the registered kinds'.
+pub fn interface_kinds() -> Vec<&'static str> {
+    let mut out = vec![RESISTIVE];
+    for k in Interface::KINDS {
+        if !out.contains(&k.key()) {
+            out.push(k.key());
+        }
+    }
+    out
+}
+
+/// The file form of `[interface]`: its keys in their order (`kind` first), each read and
+/// checked by the kind the `kind` key names.
+#[derive(Debug, Clone, Default)]
+pub(crate) struct RawInterface(Vec<(String, toml::Value)>);
+
+impl Serialize for RawInterface {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        use serde::ser::SerializeMap;
+        let mut m = s.serialize_map(Some(self.0.len()))?;
+        for (k, v) in &self.0 {
+            m.serialize_entry(k, v)?;
+        }
+        m.end()
+    }
+}
+
+impl<'de> Deserialize<'de> for RawInterface {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        Ok(RawInterface(toml::Table::deserialize(d)?.into_iter().collect()))
+    }
+}
 
 impl RawInterface {
     /// The file form of an interface (`None` for the default, resistive).
     pub(crate) fn of(i: &Interface) -> Option<Self> {
-        let mut raw = RawInterface {
-            kind: i.key().to_string(),
-            ..Default::default()
-        };
-        let rect = |raw: &mut RawInterface, r: &Rectifier| {
-            raw.storage_capacitance_f = Some(r.storage_capacitance_f);
-            raw.diode = Some(r.diode.clone());
-            raw.load = Some(r.load.clone());
-        };
-        let inv = |raw: &mut RawInterface, v: &Inversion| match *v {
-            Inversion::Factor(g) => raw.inversion_factor = Some(g),
-            Inversion::QualityFactor(q) => raw.quality_factor = Some(q),
-            Inversion::Inductor {
-                inductance_h,
-                resistance_ohm,
-            } => {
-                raw.inductance_h = Some(inductance_h);
-                raw.inductor_resistance_ohm = Some(resistance_ohm);
-            }
-        };
-        match i {
-            Interface::Resistive => return None,
-            Interface::FullBridge(r) => rect(&mut raw, r),
-            Interface::ParallelSshi(r, v) | Interface::SeriesSshi(r, v) => {
-                rect(&mut raw, r);
-                inv(&mut raw, v);
-            }
-            Interface::Sece {
-                storage_capacitance_f,
-                load,
-                efficiency,
-            } => {
-                raw.storage_capacitance_f = Some(*storage_capacitance_f);
-                raw.load = Some(load.clone());
-                raw.efficiency = Some(*efficiency);
-            }
-            Interface::SeceInductor(s) => {
-                raw.storage_capacitance_f = Some(s.storage_capacitance_f);
-                raw.load = Some(s.load.clone());
-                raw.inductance_h = Some(s.inductance_h);
-                raw.inductor_resistance_ohm = Some(s.inductor_resistance_ohm);
-                raw.flyback_drop_v = Some(s.flyback_drop_v);
-            }
-        }
-        Some(raw)
+        let kind = i.kind()?;
+        let mut keys: Keys = vec![("kind", toml::Value::String(kind.key().to_string()))];
+        kind.write(i, &mut keys);
+        Some(RawInterface(
+            keys.into_iter().map(|(k, v)| (k.to_string(), v)).collect(),
+        ))
     }
 
     /// Converts the file form, naming any key that does not belong to the kind.
     pub(crate) fn parse(self, c: &Checker) -> Result<Interface, ParamError> {
-        let kind = self.kind.as_str();
-        if !INTERFACE_KINDS.contains(&kind) {
+        let mut keys: toml::Table = self.0.into_iter().collect();
+        let kind = match keys.remove("kind") {
+            Some(toml::Value::String(k)) => k,
+            Some(v) => {
+                return Err(c.message("interface.kind", &format!("`{v}` is not a kind's name")))
+            }
+            None => return Err(c.missing("interface.kind", "the kind of interface circuit")),
+        };
+        if kind == RESISTIVE {
+            return match keys.keys().next() {
+                Some(key) => Err(not_taken(&kind, key, c)),
+                None => Ok(Interface::Resistive),
+            };
+        }
+        let Some(described) = Interface::KINDS
+            .iter()
+            .find(|k| k.key() == kind && k.claims(&keys))
+        else {
             return Err(c.message(
                 "interface.kind",
                 &format!(
                     "unknown kind `{kind}`; the kinds are: {}",
-                    INTERFACE_KINDS.join(", ")
+                    interface_kinds().join(", ")
                 ),
             ));
-        }
-        let takes_switch = matches!(kind, "parallel_sshi" | "series_sshi");
-        let not_taken = |field: &str| {
-            c.message(
-                &format!("interface.{field}"),
-                &format!("interface kind `{kind}` takes no `{field}`"),
-            )
         };
-        if kind == "resistive" {
-            for (present, f) in [
-                (
-                    self.storage_capacitance_f.is_some(),
-                    "storage_capacitance_f",
-                ),
-                (self.diode.is_some(), "diode"),
-                (self.load.is_some(), "load"),
-            ] {
-                if present {
-                    return Err(not_taken(f));
-                }
-            }
+        for key in keys.keys() {
+            described.check_key(&keys, key, c)?;
         }
-        if !takes_switch {
-            if self.inversion_factor.is_some() {
-                return Err(not_taken("inversion_factor"));
-            }
-            if self.quality_factor.is_some() {
-                return Err(not_taken("quality_factor"));
-            }
-        }
-        if kind != "sece" && self.efficiency.is_some() {
-            return Err(not_taken("efficiency"));
-        }
-        let ring = kind == "parallel_sshi" && self.inductance_h.is_some();
-        if ring {
-            for (present, f) in [
-                (self.inversion_factor.is_some(), "inversion_factor"),
-                (self.quality_factor.is_some(), "quality_factor"),
-                (self.flyback_drop_v.is_some(), "flyback_drop_v"),
-            ] {
-                if present {
-                    return Err(c.message(
-                        &format!("interface.{f}"),
-                        &format!(
-                            "interface kind `parallel_sshi` with `inductance_h` takes no `{f}`: \
-                             the inversion rings through the inductor"
-                        ),
-                    ));
-                }
-            }
-        } else {
-            SeceInductor::check_keys(
-                kind,
-                [
-                    self.inductance_h,
-                    self.inductor_resistance_ohm,
-                    self.flyback_drop_v,
-                ],
-                self.efficiency.is_some(),
-                c,
-            )?;
-        }
-        if kind == "sece" && self.diode.is_some() {
-            return Err(c.message(
-                "interface.diode",
-                "interface kind `sece` takes no `diode`: its `efficiency` covers the converter's \
-                 rectifier",
-            ));
-        }
-        if kind == "resistive" {
-            return Ok(Interface::Resistive);
-        }
-        let cs = self
-            .storage_capacitance_f
-            .ok_or_else(|| c.missing("interface.storage_capacitance_f", "the storage capacitor"))?;
-        let load = self.load.ok_or_else(|| {
-            c.missing("interface.load", "the DC load (resistor, battery or open)")
-        })?;
-        if let (true, Some(inductance_h)) = (kind == "sece", self.inductance_h) {
-            return Ok(Interface::SeceInductor(SeceInductor {
-                storage_capacitance_f: cs,
-                load,
-                inductance_h,
-                inductor_resistance_ohm: self.inductor_resistance_ohm.unwrap_or(0.0),
-                flyback_drop_v: self.flyback_drop_v.unwrap_or(0.0),
-            }));
-        }
-        if kind == "sece" {
-            let efficiency = self.efficiency.ok_or_else(|| {
-                c.missing(
-                    "interface.efficiency",
-                    "the fraction of the extracted energy that reaches the storage",
-                )
-            })?;
-            return Ok(Interface::Sece {
-                storage_capacitance_f: cs,
-                load,
-                efficiency,
-            });
-        }
-        let rect = Rectifier {
-            storage_capacitance_f: cs,
-            diode: self.diode.unwrap_or_default(),
-            load,
-        };
-        if kind == "full_bridge" {
-            return Ok(Interface::FullBridge(rect));
-        }
-        let inversion = match (
-            self.inversion_factor,
-            self.quality_factor,
-            self.inductance_h,
-        ) {
-            (_, _, Some(inductance_h)) if ring => Inversion::Inductor {
-                inductance_h,
-                resistance_ohm: self.inductor_resistance_ohm.unwrap_or(0.0),
-            },
-            (Some(g), None, _) => Inversion::Factor(g),
-            (None, Some(q), _) => Inversion::QualityFactor(q),
-            (Some(_), Some(_), _) => {
-                return Err(c.message(
-                    "interface.quality_factor",
-                    "give `inversion_factor` or `quality_factor`, not both",
-                ))
-            }
-            (None, None, _) => {
-                return Err(c.missing(
-                    "interface.inversion_factor",
-                    "the switch's inversion factor gamma (or `quality_factor`)",
-                ))
-            }
-        };
-        Ok(if kind == "parallel_sshi" {
-            Interface::ParallelSshi(rect, inversion)
-        } else {
-            Interface::SeriesSshi(rect, inversion)
-        })
+        described.parse(&keys, c)
     }
 }
 
 impl Interface {
     /// The `kind` key.
     pub fn key(&self) -> &'static str {
-        match self {
-            Interface::Resistive => "resistive",
-            Interface::FullBridge(_) => "full_bridge",
-            Interface::ParallelSshi(..) => "parallel_sshi",
-            Interface::SeriesSshi(..) => "series_sshi",
-            Interface::Sece { .. } | Interface::SeceInductor(_) => "sece",
-        }
+        self.kind().map_or(RESISTIVE, |k| k.key())
     }
 
     /// True for the default, the transducer's own resistive load.
@@ -453,41 +406,17 @@ impl Interface {
 
     /// The storage capacitance (F), for every kind but `resistive`.
     pub fn storage_capacitance_f(&self) -> Option<f64> {
-        match self {
-            Interface::Resistive => None,
-            Interface::FullBridge(r)
-            | Interface::ParallelSshi(r, _)
-            | Interface::SeriesSshi(r, _) => Some(r.storage_capacitance_f),
-            Interface::Sece {
-                storage_capacitance_f,
-                ..
-            } => Some(*storage_capacitance_f),
-            Interface::SeceInductor(s) => Some(s.storage_capacitance_f),
-        }
+        self.kind()?.storage(self).map(|(cs, _)| cs)
     }
 
     /// The DC load, for every kind but `resistive`.
     pub fn load(&self) -> Option<&DcLoad> {
-        match self {
-            Interface::Resistive => None,
-            Interface::FullBridge(r)
-            | Interface::ParallelSshi(r, _)
-            | Interface::SeriesSshi(r, _) => Some(&r.load),
-            Interface::Sece { load, .. } => Some(load),
-            Interface::SeceInductor(s) => Some(&s.load),
-        }
+        self.kind()?.storage(self).map(|(_, load)| load)
     }
 
     /// The DC load to change, for every kind but `resistive`.
     pub fn load_mut(&mut self) -> Option<&mut DcLoad> {
-        match self {
-            Interface::Resistive => None,
-            Interface::FullBridge(r)
-            | Interface::ParallelSshi(r, _)
-            | Interface::SeriesSshi(r, _) => Some(&mut r.load),
-            Interface::Sece { load, .. } => Some(load),
-            Interface::SeceInductor(s) => Some(&mut s.load),
-        }
+        self.kind()?.load_mut(self)
     }
 
     /// A copy with another DC load resistance (a battery or open load becomes a resistor);
@@ -502,17 +431,15 @@ impl Interface {
 
     /// Checks the values and that the transducer takes this interface.
     pub(crate) fn validate(&self, transducer: &Transducer, c: &Checker) -> Result<(), ParamError> {
-        let rect = match self {
-            Interface::Resistive => return Ok(()),
-            Interface::FullBridge(r)
-            | Interface::ParallelSshi(r, _)
-            | Interface::SeriesSshi(r, _) => Some(r),
-            Interface::Sece { .. } | Interface::SeceInductor(_) => None,
+        let Some(kind) = self.kind() else {
+            return Ok(());
         };
-        self.validate_transducer(transducer, rect, c)?;
-        self.validate_values(transducer, c)?;
+        let rect = kind.rectifier(self);
+        self.validate_transducer(kind, transducer, rect, c)?;
+        self.validate_values(c)?;
+        kind.validate(self, transducer, c)?;
         if let Some(r) = rect {
-            self.validate_diode(r, transducer, c)?;
+            validate_diode(kind, r, transducer, c)?;
         }
         Ok(())
     }
@@ -520,6 +447,7 @@ impl Interface {
     /// That the transducer takes this interface, and leaves the DC load to it.
     fn validate_transducer(
         &self,
+        kind: &dyn InterfaceKind,
         transducer: &Transducer,
         rect: Option<&Rectifier>,
         c: &Checker,
@@ -527,7 +455,7 @@ impl Interface {
         match transducer {
             Transducer::Piezoelectric(_) => {}
             Transducer::Electromagnetic(em) => {
-                if !matches!(self, Interface::FullBridge(_)) {
+                if kind.piezo_only() {
                     return Err(c.message(
                         "interface.kind",
                         &format!(
@@ -553,7 +481,7 @@ impl Interface {
                 }
             }
             Transducer::AreaOverlapPair(_) | Transducer::GapClosingPair(_) => {
-                if !matches!(self, Interface::FullBridge(_)) {
+                if kind.piezo_only() {
                     return Err(c.message(
                         "interface.kind",
                         &format!(
@@ -594,8 +522,8 @@ impl Interface {
         Ok(())
     }
 
-    /// The storage, the load, and the inversion, the SECE's efficiency or its inductor.
-    fn validate_values(&self, transducer: &Transducer, c: &Checker) -> Result<(), ParamError> {
+    /// The storage and the load, which every kind has.
+    fn validate_values(&self, c: &Checker) -> Result<(), ParamError> {
         c.positive(
             "interface.storage_capacitance_f",
             self.storage_capacitance_f().unwrap_or(f64::NAN),
@@ -616,119 +544,51 @@ impl Interface {
             }
             _ => {}
         }
-        match self {
-            Interface::ParallelSshi(_, inv) | Interface::SeriesSshi(_, inv) => match *inv {
-                Inversion::Factor(g) => c.within_closed(
-                    "interface.inversion_factor",
-                    g,
-                    0.0,
-                    1.0 - f64::EPSILON,
-                    "in [0, 1)",
-                )?,
-                Inversion::QualityFactor(q) => c.positive("interface.quality_factor", q)?,
-                Inversion::Inductor {
-                    inductance_h,
-                    resistance_ohm,
-                } => ringing_inductor(self, inductance_h, resistance_ohm, transducer, c)?,
-            },
-            Interface::Sece { efficiency, .. } => {
-                c.within_closed("interface.efficiency", *efficiency, 0.0, 1.0, "in [0, 1]")?
-            }
-            Interface::SeceInductor(s) => s.validate(transducer, c)?,
-            _ => {}
-        }
-        Ok(())
-    }
-
-    /// The rectifier's diodes, and that their law suits the transducer and the interface.
-    fn validate_diode(
-        &self,
-        r: &Rectifier,
-        transducer: &Transducer,
-        c: &Checker,
-    ) -> Result<(), ParamError> {
-        match r.diode {
-            Diode::PiecewiseLinear {
-                forward_drop_v,
-                on_resistance_ohm,
-            } => {
-                c.non_negative("interface.diode.forward_drop_v", forward_drop_v)?;
-                c.non_negative("interface.diode.on_resistance_ohm", on_resistance_ohm)?;
-                if matches!(self, Interface::SeriesSshi(..)) && on_resistance_ohm != 0.0 {
-                    return Err(c.err(
-                        "interface.diode.on_resistance_ohm",
-                        on_resistance_ohm,
-                        "0 for `series_sshi` (its diodes conduct only during the \
-                         inversion, whose losses the inversion factor covers)",
-                    ));
-                }
-            }
-            Diode::Shockley {
-                saturation_current_a,
-                ideality,
-                thermal_voltage_v,
-            } => {
-                c.positive("interface.diode.saturation_current_a", saturation_current_a)?;
-                c.within_closed(
-                    "interface.diode.ideality",
-                    ideality,
-                    0.5,
-                    10.0,
-                    "in [0.5, 10]",
-                )?;
-                c.positive("interface.diode.thermal_voltage_v", thermal_voltage_v)?;
-                let capacitive = matches!(
-                    transducer,
-                    Transducer::Piezoelectric(_)
-                        | Transducer::AreaOverlapPair(_)
-                        | Transducer::GapClosingPair(_)
-                );
-                if !capacitive || matches!(self, Interface::SeriesSshi(..)) {
-                    return Err(c.message(
-                        "interface.diode.law",
-                        "the `shockley` law is modelled for a piezoelectric element or an \
-                         electrostatic pair with `full_bridge` (and a piezoelectric element \
-                         with `parallel_sshi`); use `piecewise_linear`",
-                    ));
-                }
-            }
-        }
         Ok(())
     }
 }
 
-/// Checks an SSHI's inverting inductor: a parallel SSHI's, positive, with a resistance that
-/// leaves the ring with the element's clamped capacitance underdamped, `R_L < 2 sqrt(L / Cp)`
-/// (with more, the element's voltage never swings through zero and nothing is inverted).
-fn ringing_inductor(
-    interface: &Interface,
-    inductance_h: f64,
-    resistance_ohm: f64,
+/// The rectifier's diodes, and that their law suits the transducer and the kind.
+fn validate_diode(
+    kind: &dyn InterfaceKind,
+    r: &Rectifier,
     transducer: &Transducer,
     c: &Checker,
 ) -> Result<(), ParamError> {
-    if !matches!(interface, Interface::ParallelSshi(..)) {
-        return Err(c.message(
-            "interface.inductance_h",
-            "only `parallel_sshi` rings its inversion through `inductance_h`",
-        ));
-    }
-    c.positive("interface.inductance_h", inductance_h)?;
-    c.non_negative("interface.inductor_resistance_ohm", resistance_ohm)?;
-    if let Transducer::Piezoelectric(p) = transducer {
-        let critical = 2.0 * (inductance_h / p.capacitance_f).sqrt();
-        if resistance_ohm >= critical {
-            return Err(c.err(
-                "interface.inductor_resistance_ohm",
-                resistance_ohm,
-                &format!(
-                    "below 2 sqrt(L / Cp) = {critical:e} ohm (an overdamped ring inverts \
-                     nothing)"
-                ),
-            ));
+    match r.diode {
+        Diode::PiecewiseLinear {
+            forward_drop_v,
+            on_resistance_ohm,
+        } => {
+            c.non_negative("interface.diode.forward_drop_v", forward_drop_v)?;
+            c.non_negative("interface.diode.on_resistance_ohm", on_resistance_ohm)?;
+        }
+        Diode::Shockley {
+            saturation_current_a,
+            ideality,
+            thermal_voltage_v,
+        } => {
+            c.positive("interface.diode.saturation_current_a", saturation_current_a)?;
+            c.within_closed(
+                "interface.diode.ideality",
+                ideality,
+                0.5,
+                10.0,
+                "in [0.5, 10]",
+            )?;
+            c.positive("interface.diode.thermal_voltage_v", thermal_voltage_v)?;
+            let capacitive = matches!(
+                transducer,
+                Transducer::Piezoelectric(_)
+                    | Transducer::AreaOverlapPair(_)
+                    | Transducer::GapClosingPair(_)
+            );
+            if !capacitive {
+                return Err(c.message("interface.diode.law", SHOCKLEY_SCOPE));
+            }
         }
     }
-    Ok(())
+    kind.check_diode(&r.diode, c)
 }
 
 impl super::Device {

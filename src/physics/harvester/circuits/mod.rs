@@ -10,9 +10,11 @@
 //! * [`sshi_inductor`]: a parallel SSHI whose inversion rings through its inductor, the
 //!   inductor current a state of its own.
 //!
-//! This file is the one registration point: [`Kind`] names every kind and [`Kind::of`] maps a
-//! device's `[interface]` to one. A new kind is a new file implementing [`CircuitKind`], a
-//! variant here with its line in `each_kind!`, and its arm in [`Kind::of`].
+//! Each kind's file holds its description as well: its keys in the device's `[interface]`,
+//! their checks and its model (`InterfaceKind`). This file is the one registration point:
+//! [`Interface`] names every description (a variant and the `InterfaceKind` that reads it)
+//! and [`Kind`] every model. A new kind is a new file implementing [`CircuitKind`] and
+//! `InterfaceKind`, and its line in each of the two lists below.
 
 pub mod bridge;
 pub mod element;
@@ -31,15 +33,84 @@ pub use element::Element;
 pub use instant::{FullBridge, ParallelSshi, Sece, SeriesSshi};
 pub use mode::{Bridge, CircuitMode, Heading, ResetLoss};
 pub use parts::{DiodeLaw, Inductor, Sink};
-pub use sece_inductor::BuckBoost;
+pub use sece_inductor::{BuckBoost, SeceInductor};
 pub use sshi_inductor::Inverter;
 
-use crate::device::{DcLoad, Interface, Inversion};
+use crate::device::interface::{DcLoad, InterfaceKind, Inversion, Rectifier};
 use crate::model::AffineGuard;
 
-/// Every kind of interface circuit, each delegating to its own file's [`CircuitKind`].
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum Kind {
+/// Declares [`Interface`], a variant per registered description, each variant read, checked
+/// and modelled by the [`InterfaceKind`] after its arrow.
+macro_rules! descriptions {
+    ($($(#[$doc:meta])* $variant:ident $shape:tt => $described:expr,)*) => {
+        /// The interface circuit of a device's `[interface]` (see [`crate::device::interface`]).
+        #[derive(Debug, Clone, PartialEq, Default)]
+        pub enum Interface {
+            /// The transducer's own resistive load.
+            #[default]
+            Resistive,
+            $($(#[$doc])* $variant $shape,)*
+        }
+
+        impl Interface {
+            /// Every registered kind's description, in the order of registration.
+            pub(crate) const KINDS: &'static [&'static dyn InterfaceKind] = &[$(&$described),*];
+
+            /// The description of this interface's kind; `None` for the resistive default.
+            pub(crate) fn kind(&self) -> Option<&'static dyn InterfaceKind> {
+                match self {
+                    Interface::Resistive => None,
+                    $(Interface::$variant { .. } => Some(&$described as &'static dyn InterfaceKind),)*
+                }
+            }
+        }
+    };
+}
+
+/// Declares [`Kind`], a variant per circuit model, and `each_kind!`, which evaluates a body
+/// with the kind inside a [`Kind`] bound to a name (`$d` is a `$`, for the inner macro).
+macro_rules! models {
+    ($d:tt $($(#[$doc:meta])* $variant:ident($model:ty),)*) => {
+        /// Every kind of interface circuit, each delegating to its own file's [`CircuitKind`].
+        #[derive(Debug, Clone, Copy, PartialEq)]
+        pub enum Kind {
+            $($(#[$doc])* $variant($model),)*
+        }
+
+        /// Evaluates `$body` with `$k` bound to the kind inside `$kind` (a [`Kind`]).
+        macro_rules! each_kind {
+            ($d kind:expr, $d k:ident => $d body:expr) => {
+                match $d kind {
+                    $(Kind::$variant($d k) => $d body,)*
+                }
+            };
+        }
+    };
+}
+
+descriptions! {
+    /// A full-wave diode bridge into a storage capacitor and a DC load.
+    FullBridge(Rectifier) => instant::FullBridgeFile,
+    /// The bridge with a parallel inverting switch.
+    ParallelSshi(Rectifier, Inversion) => instant::ParallelSshiFile,
+    /// The bridge behind a series inverting switch.
+    SeriesSshi(Rectifier, Inversion) => instant::SeriesSshiFile,
+    /// Synchronous electric charge extraction.
+    Sece {
+        /// Storage capacitance (F).
+        storage_capacitance_f: f64,
+        /// The DC load.
+        load: DcLoad,
+        /// Fraction of the extracted energy that reaches the storage.
+        efficiency: f64,
+    } => instant::SeceFile,
+    /// Synchronous electric charge extraction through its buck-boost inductor (`kind =
+    /// "sece"` with `inductance_h`).
+    SeceInductor(SeceInductor) => sece_inductor::SeceInductorFile,
+}
+
+models! {
+    $
     /// A plain full bridge.
     FullBridge(FullBridge),
     /// Parallel SSHI with an instantaneous inversion.
@@ -52,20 +123,6 @@ pub enum Kind {
     SeceInductor(BuckBoost),
     /// Parallel SSHI whose inversion rings through its inductor.
     SshiInductor(Inverter),
-}
-
-/// Evaluates `$body` with `$k` bound to the kind inside `$kind` (a [`Kind`]).
-macro_rules! each_kind {
-    ($kind:expr, $k:ident => $body:expr) => {
-        match $kind {
-            Kind::FullBridge($k) => $body,
-            Kind::ParallelSshi($k) => $body,
-            Kind::SeriesSshi($k) => $body,
-            Kind::Sece($k) => $body,
-            Kind::SeceInductor($k) => $body,
-            Kind::SshiInductor($k) => $body,
-        }
-    };
 }
 
 /// The circuit a device's `[interface]` describes, before its element is attached.
@@ -86,76 +143,10 @@ impl Kind {
     /// current) at `slot`; `None` for a resistive interface, or why the description has no
     /// model.
     pub fn of(interface: &Interface, slot: usize) -> Result<Option<Described<'_>>, &'static str> {
-        /// The one inversion without a factor of its own: a series SSHI through its inductor.
-        const RING: &str = "a series SSHI's inversion through its inductor is not modelled; \
-                            give `inversion_factor` or `quality_factor`";
-        /// The ideal rectifier of a SECE.
-        const IDEAL: DiodeLaw = DiodeLaw::PiecewiseLinear { vf: 0.0, ron: 0.0 };
-        let inductor = |l: f64, rl: f64| Inductor { l, rl, i: slot };
-        let (diode, cs, load, kind) = match interface {
-            Interface::Resistive => return Ok(None),
-            Interface::FullBridge(r) => (
-                DiodeLaw::of(&r.diode),
-                r.storage_capacitance_f,
-                &r.load,
-                Kind::FullBridge(FullBridge),
-            ),
-            Interface::ParallelSshi(
-                r,
-                Inversion::Inductor {
-                    inductance_h,
-                    resistance_ohm,
-                },
-            ) => (
-                DiodeLaw::of(&r.diode),
-                r.storage_capacitance_f,
-                &r.load,
-                Kind::SshiInductor(Inverter {
-                    inductor: inductor(*inductance_h, *resistance_ohm),
-                }),
-            ),
-            Interface::ParallelSshi(r, g) => (
-                DiodeLaw::of(&r.diode),
-                r.storage_capacitance_f,
-                &r.load,
-                Kind::ParallelSshi(ParallelSshi {
-                    gamma: g.gamma().ok_or(RING)?,
-                }),
-            ),
-            Interface::SeriesSshi(r, g) => (
-                DiodeLaw::of(&r.diode),
-                r.storage_capacitance_f,
-                &r.load,
-                Kind::SeriesSshi(SeriesSshi {
-                    gamma: g.gamma().ok_or(RING)?,
-                }),
-            ),
-            Interface::Sece {
-                storage_capacitance_f,
-                load,
-                efficiency,
-            } => (
-                IDEAL,
-                *storage_capacitance_f,
-                load,
-                Kind::Sece(Sece { eta: *efficiency }),
-            ),
-            Interface::SeceInductor(s) => (
-                IDEAL,
-                s.storage_capacitance_f,
-                &s.load,
-                Kind::SeceInductor(BuckBoost {
-                    inductor: inductor(s.inductance_h, s.inductor_resistance_ohm),
-                    vf: s.flyback_drop_v,
-                }),
-            ),
-        };
-        Ok(Some(Described {
-            diode,
-            cs,
-            load,
-            kind,
-        }))
+        match interface.kind() {
+            Some(k) => k.model(interface, slot).map(Some),
+            None => Ok(None),
+        }
     }
 }
 

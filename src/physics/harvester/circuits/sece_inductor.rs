@@ -1,6 +1,7 @@
 //! Synchronous electric charge extraction through its buck-boost inductor: the SECE whose
 //! transfer is resolved in time, with the inductor current a state of its own
-//! ([`crate::device::SeceInductor`]). The instantaneous SECE of [`super::instant`] is its limit
+//! ([`SeceInductor`], its description: `sece` with `inductance_h` in a device's
+//! `[interface]`). The instantaneous SECE of [`super::instant`] is its limit
 //! of a fast inductor.
 //!
 //! # The circuit
@@ -42,6 +43,10 @@ use super::bridge::{Circuit, CircuitKind};
 use super::element::Element;
 use super::mode::{Bridge, CircuitMode, Heading, ResetLoss};
 use super::parts::Inductor;
+use super::instant::{IDEAL, SECE_DIODE};
+use super::{Described, Kind};
+use crate::device::interface::{number, put, put_storage, storage_and_load, takes, InterfaceKind, Keys};
+use crate::device::{Checker, DcLoad, Interface, ParamError, Transducer};
 use crate::model::AffineGuard;
 
 /// A `|Vp|` below this fraction of its scale at an extremum is not extracted.
@@ -344,5 +349,148 @@ impl CircuitKind for BuckBoost {
     /// The current flows one way behind the rectifier: it keeps its sign.
     fn mirror<const N: usize>(&self, s: &mut SMatrix<f64, N, N>) {
         s[(self.inductor.i, self.inductor.i)] = 1.0;
+    }
+}
+
+/// A SECE whose transfer runs through its buck-boost inductor, as a device describes it: at
+/// each displacement extremum the rectified element discharges into the inductor, which then
+/// discharges into the storage through a flyback diode ([`BuckBoost`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct SeceInductor {
+    /// Storage capacitance C_s (F).
+    pub storage_capacitance_f: f64,
+    /// The DC load.
+    pub load: DcLoad,
+    /// The inductance L (H).
+    pub inductance_h: f64,
+    /// The inductor's series resistance R_L (ohm).
+    pub inductor_resistance_ohm: f64,
+    /// The flyback diode's forward drop V_F (V).
+    pub flyback_drop_v: f64,
+}
+
+/// The description of `sece` with `inductance_h` (optional `inductor_resistance_ohm` and
+/// `flyback_drop_v`, 0 when not given): it takes no `efficiency`, the transfer losing what
+/// the resistance and the diode take.
+pub struct SeceInductorFile;
+
+impl SeceInductorFile {
+    /// The variant's description.
+    fn of(i: &Interface) -> Option<&SeceInductor> {
+        match i {
+            Interface::SeceInductor(s) => Some(s),
+            _ => None,
+        }
+    }
+}
+
+impl InterfaceKind for SeceInductorFile {
+    fn key(&self) -> &'static str {
+        "sece"
+    }
+
+    fn claims(&self, keys: &toml::Table) -> bool {
+        keys.contains_key("inductance_h")
+    }
+
+    fn check_key(&self, _keys: &toml::Table, key: &str, c: &Checker) -> Result<(), ParamError> {
+        match key {
+            "efficiency" => Err(c.message(
+                "interface.efficiency",
+                "interface kind `sece` with `inductance_h` takes no `efficiency`: the transfer \
+                 through the inductor loses what its resistance and flyback diode take",
+            )),
+            "diode" => Err(c.message("interface.diode", SECE_DIODE)),
+            _ => takes(
+                self.key(),
+                &[
+                    "storage_capacitance_f",
+                    "load",
+                    "inductance_h",
+                    "inductor_resistance_ohm",
+                    "flyback_drop_v",
+                ],
+                key,
+                c,
+            ),
+        }
+    }
+
+    fn parse(&self, keys: &toml::Table, c: &Checker) -> Result<Interface, ParamError> {
+        let (storage_capacitance_f, load) = storage_and_load(keys, c)?;
+        Ok(Interface::SeceInductor(SeceInductor {
+            storage_capacitance_f,
+            load,
+            inductance_h: number(keys, "inductance_h", c)?.unwrap_or(f64::NAN),
+            inductor_resistance_ohm: number(keys, "inductor_resistance_ohm", c)?.unwrap_or(0.0),
+            flyback_drop_v: number(keys, "flyback_drop_v", c)?.unwrap_or(0.0),
+        }))
+    }
+
+    fn write(&self, i: &Interface, keys: &mut Keys) {
+        if let Some(s) = Self::of(i) {
+            put_storage(keys, s.storage_capacitance_f);
+            put(keys, "load", &s.load);
+            put(keys, "inductance_h", s.inductance_h);
+            put(keys, "inductor_resistance_ohm", s.inductor_resistance_ohm);
+            put(keys, "flyback_drop_v", s.flyback_drop_v);
+        }
+    }
+
+    fn storage<'a>(&self, i: &'a Interface) -> Option<(f64, &'a DcLoad)> {
+        Self::of(i).map(|s| (s.storage_capacitance_f, &s.load))
+    }
+
+    fn load_mut<'a>(&self, i: &'a mut Interface) -> Option<&'a mut DcLoad> {
+        match i {
+            Interface::SeceInductor(s) => Some(&mut s.load),
+            _ => None,
+        }
+    }
+
+    /// The inductor's values, and that the charge phase's loop with the element's clamped
+    /// capacitance is underdamped, `R_L < 2 sqrt(L / Cp)`: with more, the element's voltage
+    /// decays without reaching zero and the transfer never ends.
+    fn validate(&self, i: &Interface, t: &Transducer, c: &Checker) -> Result<(), ParamError> {
+        let Some(s) = Self::of(i) else {
+            return Ok(());
+        };
+        c.positive("interface.inductance_h", s.inductance_h)?;
+        c.non_negative(
+            "interface.inductor_resistance_ohm",
+            s.inductor_resistance_ohm,
+        )?;
+        c.non_negative("interface.flyback_drop_v", s.flyback_drop_v)?;
+        if let Transducer::Piezoelectric(p) = t {
+            let critical = 2.0 * (s.inductance_h / p.capacitance_f).sqrt();
+            if s.inductor_resistance_ohm >= critical {
+                return Err(c.err(
+                    "interface.inductor_resistance_ohm",
+                    s.inductor_resistance_ohm,
+                    &format!(
+                        "below 2 sqrt(L / Cp) = {critical:e} ohm (an overdamped transfer never \
+                         empties the element)"
+                    ),
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    fn model<'a>(&self, i: &'a Interface, slot: usize) -> Result<Described<'a>, &'static str> {
+        let s = Self::of(i).ok_or("the interface is not a SECE through its inductor")?;
+        Ok(Described {
+            diode: IDEAL,
+            cs: s.storage_capacitance_f,
+            load: &s.load,
+            kind: Kind::SeceInductor(BuckBoost {
+                inductor: Inductor {
+                    l: s.inductance_h,
+                    rl: s.inductor_resistance_ohm,
+                    i: slot,
+                },
+                vf: s.flyback_drop_v,
+            }),
+        })
     }
 }

@@ -52,6 +52,8 @@ use super::bridge::{Circuit, CircuitKind};
 use super::element::Element;
 use super::mode::{Bridge, CircuitMode, ResetLoss};
 use super::parts::Inductor;
+use crate::device::interface::number;
+use crate::device::{Checker, Inversion, ParamError, Transducer};
 use crate::model::AffineGuard;
 
 /// A `|Vp|` below this fraction of its scale at an extremum is not inverted (nothing rings).
@@ -356,4 +358,49 @@ impl CircuitKind for Inverter {
     fn mirror<const N: usize>(&self, s: &mut SMatrix<f64, N, N>) {
         s[(self.inductor.i, self.inductor.i)] = -1.0;
     }
+}
+
+/// The file keys of the ringing inductor, beside a parallel SSHI's bridge.
+pub(super) const KEYS: [&str; 2] = ["inductance_h", "inductor_resistance_ohm"];
+
+/// The inversion through the inductor a parallel SSHI's keys give, if `inductance_h` is
+/// among them (`inductor_resistance_ohm` is 0 when not given).
+pub(super) fn inversion(
+    keys: &toml::Table,
+    c: &Checker,
+) -> Result<Option<Inversion>, ParamError> {
+    let Some(inductance_h) = number(keys, "inductance_h", c)? else {
+        return Ok(None);
+    };
+    Ok(Some(Inversion::Inductor {
+        inductance_h,
+        resistance_ohm: number(keys, "inductor_resistance_ohm", c)?.unwrap_or(0.0),
+    }))
+}
+
+/// Checks the inverting inductor: positive, with a resistance that leaves the ring with the
+/// element's clamped capacitance underdamped, `R_L < 2 sqrt(L / Cp)` (with more, the
+/// element's voltage never swings through zero and nothing is inverted).
+pub(super) fn check_ring(
+    inductance_h: f64,
+    resistance_ohm: f64,
+    transducer: &Transducer,
+    c: &Checker,
+) -> Result<(), ParamError> {
+    c.positive("interface.inductance_h", inductance_h)?;
+    c.non_negative("interface.inductor_resistance_ohm", resistance_ohm)?;
+    if let Transducer::Piezoelectric(p) = transducer {
+        let critical = 2.0 * (inductance_h / p.capacitance_f).sqrt();
+        if resistance_ohm >= critical {
+            return Err(c.err(
+                "interface.inductor_resistance_ohm",
+                resistance_ohm,
+                &format!(
+                    "below 2 sqrt(L / Cp) = {critical:e} ohm (an overdamped ring inverts \
+                     nothing)"
+                ),
+            ));
+        }
+    }
+    Ok(())
 }
