@@ -259,7 +259,11 @@ pub(crate) fn value<T: DeserializeOwned>(
 }
 
 /// The number `key` of the table, if given.
-pub(crate) fn number(keys: &toml::Table, key: &str, c: &Checker) -> Result<Option<f64>, ParamError> {
+pub(crate) fn number(
+    keys: &toml::Table,
+    key: &str,
+    c: &Checker,
+) -> Result<Option<f64>, ParamError> {
     value(keys, key, c)
 }
 
@@ -270,9 +274,8 @@ pub(crate) fn storage_and_load(
 ) -> Result<(f64, DcLoad), ParamError> {
     let cs = number(keys, "storage_capacitance_f", c)?
         .ok_or_else(|| c.missing("interface.storage_capacitance_f", "the storage capacitor"))?;
-    let load = value(keys, "load", c)?.ok_or_else(|| {
-        c.missing("interface.load", "the DC load (resistor, battery or open)")
-    })?;
+    let load = value(keys, "load", c)?
+        .ok_or_else(|| c.missing("interface.load", "the DC load (resistor, battery or open)"))?;
     Ok((cs, load))
 }
 
@@ -301,6 +304,33 @@ pub(crate) fn takes(kind: &str, taken: &[&str], key: &str, c: &Checker) -> Resul
     } else {
         Err(not_taken(kind, key, c))
     }
+}
+
+/// The order in which a table's keys are checked, so that of two keys a kind does not take
+/// the same one is named whatever the file's order: the bridge's, the switches', the
+/// inductors', then any other key in alphabetical order.
+const CHECK_ORDER: [&str; 9] = [
+    "storage_capacitance_f",
+    "diode",
+    "load",
+    "inversion_factor",
+    "quality_factor",
+    "efficiency",
+    "inductance_h",
+    "inductor_resistance_ohm",
+    "flyback_drop_v",
+];
+
+/// The keys of `keys` in [`CHECK_ORDER`].
+fn check_order(keys: &toml::Table) -> impl Iterator<Item = &str> {
+    let known = CHECK_ORDER
+        .iter()
+        .filter_map(|k| keys.get_key_value(*k).map(|(k, _)| k.as_str()));
+    let other = keys
+        .keys()
+        .map(String::as_str)
+        .filter(|k| !CHECK_ORDER.iter().any(|o| o == k));
+    known.chain(other)
 }
 
 /// The `kind` keys, the resistive default first, then the registered kinds'.
@@ -332,7 +362,9 @@ impl Serialize for RawInterface {
 
 impl<'de> Deserialize<'de> for RawInterface {
     fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
-        Ok(RawInterface(toml::Table::deserialize(d)?.into_iter().collect()))
+        Ok(RawInterface(
+            toml::Table::deserialize(d)?.into_iter().collect(),
+        ))
     }
 }
 
@@ -375,7 +407,7 @@ impl RawInterface {
                 ),
             ));
         };
-        for key in keys.keys() {
+        for key in check_order(&keys) {
             described.check_key(&keys, key, c)?;
         }
         described.parse(&keys, c)

@@ -32,7 +32,9 @@ use crate::device::interface::{
     number, put, put_storage, rectifier, storage_and_load, takes, InterfaceKind, Keys,
     SHOCKLEY_SCOPE,
 };
-use crate::device::{Checker, DcLoad, Diode, Interface, Inversion, ParamError, Rectifier, Transducer};
+use crate::device::{
+    Checker, DcLoad, Diode, Interface, Inversion, ParamError, Rectifier, Transducer,
+};
 
 /// Why a synchronous switch refuses an element.
 const PIEZO_ONLY: &str = "a synchronous switch acts on a piezoelectric element's voltage only";
@@ -353,9 +355,17 @@ impl InterfaceKind for ParallelSshiFile {
 
     fn check_key(&self, keys: &toml::Table, key: &str, c: &Checker) -> Result<(), ParamError> {
         if !keys.contains_key("inductance_h") {
-            return takes(self.key(), &[&BRIDGE_KEYS[..], &INVERSION_KEYS[..]].concat(), key, c);
+            return takes(
+                self.key(),
+                &[&BRIDGE_KEYS[..], &INVERSION_KEYS[..]].concat(),
+                key,
+                c,
+            );
         }
-        if matches!(key, "inversion_factor" | "quality_factor" | "flyback_drop_v") {
+        if matches!(
+            key,
+            "inversion_factor" | "quality_factor" | "flyback_drop_v"
+        ) {
             return Err(c.message(
                 &format!("interface.{key}"),
                 &format!(
@@ -364,7 +374,12 @@ impl InterfaceKind for ParallelSshiFile {
                 ),
             ));
         }
-        takes(self.key(), &[&BRIDGE_KEYS[..], &sshi_inductor::KEYS[..]].concat(), key, c)
+        takes(
+            self.key(),
+            &[&BRIDGE_KEYS[..], &sshi_inductor::KEYS[..]].concat(),
+            key,
+            c,
+        )
     }
 
     fn parse(&self, keys: &toml::Table, c: &Checker) -> Result<Interface, ParamError> {
@@ -449,11 +464,19 @@ impl InterfaceKind for SeriesSshiFile {
     }
 
     fn check_key(&self, _keys: &toml::Table, key: &str, c: &Checker) -> Result<(), ParamError> {
-        takes(self.key(), &[&BRIDGE_KEYS[..], &INVERSION_KEYS[..]].concat(), key, c)
+        takes(
+            self.key(),
+            &[&BRIDGE_KEYS[..], &INVERSION_KEYS[..]].concat(),
+            key,
+            c,
+        )
     }
 
     fn parse(&self, keys: &toml::Table, c: &Checker) -> Result<Interface, ParamError> {
-        Ok(Interface::SeriesSshi(rectifier(keys, c)?, inversion(keys, c)?))
+        Ok(Interface::SeriesSshi(
+            rectifier(keys, c)?,
+            inversion(keys, c)?,
+        ))
     }
 
     fn write(&self, i: &Interface, keys: &mut Keys) {

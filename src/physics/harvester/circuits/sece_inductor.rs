@@ -41,11 +41,13 @@ use nalgebra::{SMatrix, SVector};
 
 use super::bridge::{Circuit, CircuitKind};
 use super::element::Element;
+use super::instant::{IDEAL, SECE_DIODE};
 use super::mode::{Bridge, CircuitMode, Heading, ResetLoss};
 use super::parts::Inductor;
-use super::instant::{IDEAL, SECE_DIODE};
 use super::{Described, Kind};
-use crate::device::interface::{number, put, put_storage, storage_and_load, takes, InterfaceKind, Keys};
+use crate::device::interface::{
+    number, put, put_storage, storage_and_load, takes, InterfaceKind, Keys,
+};
 use crate::device::{Checker, DcLoad, Interface, ParamError, Transducer};
 use crate::model::AffineGuard;
 

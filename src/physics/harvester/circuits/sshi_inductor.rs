@@ -365,10 +365,7 @@ pub(super) const KEYS: [&str; 2] = ["inductance_h", "inductor_resistance_ohm"];
 
 /// The inversion through the inductor a parallel SSHI's keys give, if `inductance_h` is
 /// among them (`inductor_resistance_ohm` is 0 when not given).
-pub(super) fn inversion(
-    keys: &toml::Table,
-    c: &Checker,
-) -> Result<Option<Inversion>, ParamError> {
+pub(super) fn inversion(keys: &toml::Table, c: &Checker) -> Result<Option<Inversion>, ParamError> {
     let Some(inductance_h) = number(keys, "inductance_h", c)? else {
         return Ok(None);
     };
