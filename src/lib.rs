@@ -74,12 +74,14 @@
 //!
 //! | module | what | paper |
 //! |---|---|---|
-//! | [`device`] | validated device descriptions: mechanics, stops, transducer | Tables 1 and 2 |
+//! | [`device`] | validated device descriptions: mechanics, stops, transducer, interface | Tables 1 and 2 |
+//! | [`circuits`] | the interface circuits behind a transducer, each kind one file: its keys, checks and model | |
 //! | [`laws::hertz`] | Hertz line contact and its linear fit | eqs 3-6, 19, Figure 5 |
 //! | [`laws::contact`] | contact modes and the stops' force laws | eqs 1-2 |
+//! | [`laws::pair`] | the electrostatic pair's capacitances, node voltages and force | eqs 7-10 |
 //! | [`physics::transducer`] | the transducers' forces, rates and loads | eqs 8-10 |
 //! | [`model`] | the one model every study takes: modes, guards, switches, free flight split, energy ledger | |
-//! | [`physics::harvester`] | the harvester assembled from a device's parts as a [`model::Model`], with its interface circuits | eqs 7-10 |
+//! | [`physics::harvester`] | the harvester assembled from a device's parts as a [`model::Model`], behind its interface circuit | eqs 7-10 |
 //! | [`physics::linear`] | linear frequency response of any device | |
 //! | [`physics::two_port`] | linear two-port, coupling, broadband efficiency | eqs 11-18, 21-22 |
 //! | [`drive`] | sine, sampled and band-limited noise accelerations | Figure 10 |
@@ -121,6 +123,8 @@
 
 #![warn(missing_docs)]
 
+mod check;
+pub mod circuits;
 pub mod design;
 pub mod device;
 pub mod drive;

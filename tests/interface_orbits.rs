@@ -8,7 +8,7 @@ use endstop::device::{Device, Diode, Interface, Inversion};
 use endstop::drive::{Excitation, Sine};
 use endstop::model::{Contact, Mode, Model};
 use endstop::physics::contact::Side;
-use endstop::physics::harvester::circuits::{Bridge, CircuitMode, Heading};
+use endstop::circuits::{Bridge, CircuitMode, Heading};
 use endstop::physics::harvester::stops::contact_of;
 use endstop::physics::harvester::AssemblyError;
 use endstop::progress::Silent;

@@ -1,4 +1,4 @@
-//! The SECE through its buck-boost inductor (`physics::harvester::circuits::sece_inductor`,
+//! The SECE through its buck-boost inductor (`circuits::sece_inductor`,
 //! `data/examples/piezo_sece_inductor.toml`): its limit of a fast inductor against the
 //! instantaneous SECE, its Jacobian and monodromy, its energy ledger, and its description's
 //! named errors.
@@ -28,7 +28,7 @@ use endstop::device::{DcLoad, Device, Interface, SeceInductor};
 use endstop::drive::{Excitation, Sine};
 use endstop::model::{Contact, Mode, Model};
 use endstop::physics::contact::Side;
-use endstop::physics::harvester::circuits::{Bridge, CircuitMode, Heading};
+use endstop::circuits::{Bridge, CircuitMode, Heading};
 use endstop::physics::harvester::stops::contact_of;
 use endstop::physics::harvester::AssemblyError;
 use endstop::study::periodic::{

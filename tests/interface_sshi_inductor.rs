@@ -1,5 +1,5 @@
 //! The parallel SSHI whose inversion rings through its inductor
-//! (`physics::harvester::circuits::sshi_inductor`, `data/examples/piezo_sshi_inductor.toml`):
+//! (`circuits::sshi_inductor`, `data/examples/piezo_sshi_inductor.toml`):
 //! one ring against the closed form of the L-C-R half period, its limit of a fast inductor
 //! against the instantaneous SSHI, its Jacobian, its energy ledger, and its description.
 //!
@@ -21,7 +21,7 @@ use endstop::device::{Device, Interface, Inversion, Rectifier};
 use endstop::drive::{Excitation, Sine};
 use endstop::model::{Driven, Mode, Model};
 use endstop::ode::{Dopri5, Observer, Step};
-use endstop::physics::harvester::circuits::{Bridge, CircuitMode, Heading};
+use endstop::circuits::{Bridge, CircuitMode, Heading};
 use endstop::physics::harvester::AssemblyError;
 use endstop::study::periodic::{steady_state_from_rest, SteadySettings};
 use nalgebra::SVector;

@@ -1,10 +1,11 @@
 //! The interface circuit between a one-load transducer (piezoelectric or electromagnetic) and
 //! what it powers: the optional `[interface]` table of a device file.
 //!
-//! This file holds what every kind shares: the diodes, the DC load, the inversion, the file
-//! form and the checks of the storage, the load and the diodes. What one kind adds (its keys,
-//! their checks with errors naming the field, and its model) is the kind's own file in
-//! [`crate::physics::harvester::circuits`], which implements `InterfaceKind` and is
+//! This file reads the table and holds the checks every kind shares: the file form, the
+//! storage, the load, the diodes, and which transducers a kind takes. The words every kind
+//! shares (the diodes, the DC load, the inversion) are [`crate::circuits::description`]'s;
+//! what one kind adds (its keys, their checks with errors naming the field, and its model) is
+//! the kind's own file in [`crate::circuits`], which implements `InterfaceKind` and is
 //! registered there, where [`Interface`] is declared.
 //!
 //! | `kind` | circuit | transducer |
@@ -55,256 +56,16 @@
 //! `inductance_h` (and optional `inductor_resistance_ohm`, 0 by default) rings its inversion
 //! through the inductor in time and takes no `inversion_factor` or `quality_factor`.
 
-use serde::de::DeserializeOwned;
 use serde::{Deserialize, Serialize};
 
 use super::{Checker, ParamError, Transducer};
-use crate::physics::harvester::circuits::Described;
+use crate::circuits::description::{not_taken, Keys, RESISTIVE, SHOCKLEY_SCOPE};
+use crate::circuits::InterfaceKind;
 
-pub use crate::physics::harvester::circuits::sece_inductor::SeceInductor;
-pub use crate::physics::harvester::circuits::Interface;
+pub use crate::circuits::description::THERMAL_VOLTAGE_V;
+pub use crate::circuits::sece_inductor::SeceInductor;
+pub use crate::circuits::{DcLoad, Diode, Interface, Inversion, Rectifier};
 
-/// The bridge's diodes.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(tag = "law", rename_all = "snake_case", deny_unknown_fields)]
-pub enum Diode {
-    /// A forward drop and an on-resistance (per diode); conduction starts and stops at
-    /// located events.
-    PiecewiseLinear {
-        /// Forward drop V_F of one diode (V).
-        forward_drop_v: f64,
-        /// On-resistance of one diode (ohm); zero: ideal with a drop.
-        on_resistance_ohm: f64,
-    },
-    /// The Shockley law `I = I_s (exp(V / (n V_T)) - 1)`, smooth (no events).
-    Shockley {
-        /// Saturation current I_s (A).
-        saturation_current_a: f64,
-        /// Ideality factor n.
-        ideality: f64,
-        /// Thermal voltage V_T (V); 25.85 mV (300.15 K) when not given.
-        #[serde(default = "thermal_voltage_default")]
-        thermal_voltage_v: f64,
-    },
-}
-
-fn thermal_voltage_default() -> f64 {
-    THERMAL_VOLTAGE_V
-}
-
-/// k T / q at 27 degrees C (300.15 K), ngspice's default temperature (V).
-pub const THERMAL_VOLTAGE_V: f64 = 1.380_649e-23 * 300.15 / 1.602_176_634e-19;
-
-impl Default for Diode {
-    fn default() -> Self {
-        Diode::PiecewiseLinear {
-            forward_drop_v: 0.0,
-            on_resistance_ohm: 0.0,
-        }
-    }
-}
-
-/// What the storage capacitor feeds.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
-pub enum DcLoad {
-    /// A resistor.
-    Resistor {
-        /// Resistance (ohm).
-        resistance_ohm: f64,
-    },
-    /// A battery: a constant voltage behind a series resistance.
-    Battery {
-        /// Its voltage (V).
-        voltage_v: f64,
-        /// Its series resistance (ohm).
-        series_resistance_ohm: f64,
-    },
-    /// Nothing: the storage only charges.
-    Open,
-}
-
-/// The switch's inversion: a factor, the quality factor of the inductor branch, or the
-/// inductor itself, through which the inversion rings in time (`parallel_sshi` only).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum Inversion {
-    /// gamma, in [0, 1).
-    Factor(f64),
-    /// Q > 0: gamma = exp(-pi / (2 Q)).
-    QualityFactor(f64),
-    /// The inductor L (H) and its series resistance R_L (ohm): the element rings through
-    /// it at each extremum (see `physics::harvester::circuits::sshi_inductor`).
-    Inductor {
-        /// L (H).
-        inductance_h: f64,
-        /// R_L (ohm).
-        resistance_ohm: f64,
-    },
-}
-
-impl Inversion {
-    /// The inversion factor gamma of an instantaneous inversion; `None` for one through the
-    /// inductor, whose factor follows from the element's capacitance as well.
-    pub fn gamma(self) -> Option<f64> {
-        match self {
-            Inversion::Factor(g) => Some(g),
-            Inversion::QualityFactor(q) => Some((-std::f64::consts::PI / (2.0 * q)).exp()),
-            Inversion::Inductor { .. } => None,
-        }
-    }
-}
-
-/// A diode bridge into a storage capacitor with a DC load.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Rectifier {
-    /// Storage capacitance C_s (F).
-    pub storage_capacitance_f: f64,
-    /// The diodes.
-    pub diode: Diode,
-    /// The DC load.
-    pub load: DcLoad,
-}
-
-/// One kind of interface circuit as a device file describes it: the keys of its
-/// `[interface]` table, their checks (each error naming its field), and the circuit model
-/// they give. A kind's own file implements it; the registration point,
-/// [`crate::physics::harvester::circuits`], pairs it with its [`Interface`] variant.
-pub(crate) trait InterfaceKind: Sync {
-    /// The `kind` key.
-    fn key(&self) -> &'static str;
-
-    /// Whether a table with this kind's `kind` key describes this kind (kinds sharing a key
-    /// are told apart by their other keys).
-    fn claims(&self, _keys: &toml::Table) -> bool {
-        true
-    }
-
-    /// That the kind takes `key` in the table `keys` (the error names the field).
-    fn check_key(&self, keys: &toml::Table, key: &str, c: &Checker) -> Result<(), ParamError>;
-
-    /// The interface the table describes, its keys checked by [`InterfaceKind::check_key`].
-    fn parse(&self, keys: &toml::Table, c: &Checker) -> Result<Interface, ParamError>;
-
-    /// The file keys of `i`, in the order the file writes them.
-    fn write(&self, i: &Interface, keys: &mut Keys);
-
-    /// The storage capacitance (F) and the DC load of `i`.
-    fn storage<'a>(&self, i: &'a Interface) -> Option<(f64, &'a DcLoad)>;
-
-    /// The DC load of `i`, to change.
-    fn load_mut<'a>(&self, i: &'a mut Interface) -> Option<&'a mut DcLoad>;
-
-    /// The rectifier of `i`, for a kind whose bridge has the file's diodes.
-    fn rectifier<'a>(&self, _i: &'a Interface) -> Option<&'a Rectifier> {
-        None
-    }
-
-    /// True for a kind whose switch acts on a piezoelectric element's clamped capacitance,
-    /// which a coil or an electrostatic pair does not have.
-    fn piezo_only(&self) -> bool {
-        true
-    }
-
-    /// Checks the kind's own values of `i`, against the transducer where they depend on it.
-    fn validate(&self, _i: &Interface, _t: &Transducer, _c: &Checker) -> Result<(), ParamError> {
-        Ok(())
-    }
-
-    /// Checks the diodes against the kind, after the checks every bridge's diodes take.
-    fn check_diode(&self, _diode: &Diode, _c: &Checker) -> Result<(), ParamError> {
-        Ok(())
-    }
-
-    /// The circuit model of `i`, the kind's own state component (an inductor's current) at
-    /// `slot`, or why the description has none.
-    fn model<'a>(&self, i: &'a Interface, slot: usize) -> Result<Described<'a>, &'static str>;
-}
-
-/// The `kind` key of the transducer's own resistive load.
-const RESISTIVE: &str = "resistive";
-
-/// Why the `shockley` law is refused.
-pub(crate) const SHOCKLEY_SCOPE: &str = "the `shockley` law is modelled for a piezoelectric \
-     element or an electrostatic pair with `full_bridge` (and a piezoelectric element with \
-     `parallel_sshi`); use `piecewise_linear`";
-
-/// The keys of an interface in the order its file form writes them.
-pub(crate) type Keys = Vec<(&'static str, toml::Value)>;
-
-/// Appends `key = value` to a file form.
-pub(crate) fn put(keys: &mut Keys, key: &'static str, value: impl Serialize) {
-    if let Ok(v) = toml::Value::try_from(value) {
-        keys.push((key, v));
-    }
-}
-
-/// Appends the storage capacitance and the DC load, the keys every kind has.
-pub(crate) fn put_storage(keys: &mut Keys, storage_capacitance_f: f64) {
-    put(keys, "storage_capacitance_f", storage_capacitance_f);
-}
-
-/// The value of `key` in the table, if given.
-pub(crate) fn value<T: DeserializeOwned>(
-    keys: &toml::Table,
-    key: &str,
-    c: &Checker,
-) -> Result<Option<T>, ParamError> {
-    keys.get(key)
-        .map(|v| {
-            v.clone().try_into().map_err(|e: toml::de::Error| {
-                c.message(&format!("interface.{key}"), e.to_string().trim())
-            })
-        })
-        .transpose()
-}
-
-/// The number `key` of the table, if given.
-pub(crate) fn number(
-    keys: &toml::Table,
-    key: &str,
-    c: &Checker,
-) -> Result<Option<f64>, ParamError> {
-    value(keys, key, c)
-}
-
-/// The storage capacitance (F) and the DC load, which every kind needs.
-pub(crate) fn storage_and_load(
-    keys: &toml::Table,
-    c: &Checker,
-) -> Result<(f64, DcLoad), ParamError> {
-    let cs = number(keys, "storage_capacitance_f", c)?
-        .ok_or_else(|| c.missing("interface.storage_capacitance_f", "the storage capacitor"))?;
-    let load = value(keys, "load", c)?
-        .ok_or_else(|| c.missing("interface.load", "the DC load (resistor, battery or open)"))?;
-    Ok((cs, load))
-}
-
-/// The rectifier: storage, load and diodes (ideal when not given).
-pub(crate) fn rectifier(keys: &toml::Table, c: &Checker) -> Result<Rectifier, ParamError> {
-    let (storage_capacitance_f, load) = storage_and_load(keys, c)?;
-    Ok(Rectifier {
-        storage_capacitance_f,
-        diode: value(keys, "diode", c)?.unwrap_or_default(),
-        load,
-    })
-}
-
-/// That interface kind `kind` takes no `key`.
-pub(crate) fn not_taken(kind: &str, key: &str, c: &Checker) -> ParamError {
-    c.message(
-        &format!("interface.{key}"),
-        &format!("interface kind `{kind}` takes no `{key}`"),
-    )
-}
-
-/// That `key` is one of `taken`, the keys of interface kind `kind`.
-pub(crate) fn takes(kind: &str, taken: &[&str], key: &str, c: &Checker) -> Result<(), ParamError> {
-    if taken.contains(&key) {
-        Ok(())
-    } else {
-        Err(not_taken(kind, key, c))
-    }
-}
 
 /// The order in which a table's keys are checked, so that of two keys a kind does not take
 /// the same one is named whatever the file's order: the bridge's, the switches', the
@@ -415,52 +176,6 @@ impl RawInterface {
 }
 
 impl Interface {
-    /// The `kind` key.
-    pub fn key(&self) -> &'static str {
-        self.kind().map_or(RESISTIVE, |k| k.key())
-    }
-
-    /// True for the default, the transducer's own resistive load.
-    pub fn is_resistive(&self) -> bool {
-        matches!(self, Interface::Resistive)
-    }
-
-    /// The device path of the load resistance behind this interface: the transducer's own
-    /// `transducer.load_resistance_ohm` for `resistive`, the DC load's
-    /// `interface.load.resistance_ohm` behind a circuit.
-    pub fn load_resistance_path(&self) -> &'static str {
-        if self.is_resistive() {
-            "transducer.load_resistance_ohm"
-        } else {
-            "interface.load.resistance_ohm"
-        }
-    }
-
-    /// The storage capacitance (F), for every kind but `resistive`.
-    pub fn storage_capacitance_f(&self) -> Option<f64> {
-        self.kind()?.storage(self).map(|(cs, _)| cs)
-    }
-
-    /// The DC load, for every kind but `resistive`.
-    pub fn load(&self) -> Option<&DcLoad> {
-        self.kind()?.storage(self).map(|(_, load)| load)
-    }
-
-    /// The DC load to change, for every kind but `resistive`.
-    pub fn load_mut(&mut self) -> Option<&mut DcLoad> {
-        self.kind()?.load_mut(self)
-    }
-
-    /// A copy with another DC load resistance (a battery or open load becomes a resistor);
-    /// the resistive interface is returned unchanged.
-    pub fn with_load_resistance(&self, resistance_ohm: f64) -> Self {
-        let mut i = self.clone();
-        if let Some(load) = i.load_mut() {
-            *load = DcLoad::Resistor { resistance_ohm };
-        }
-        i
-    }
-
     /// Checks the values and that the transducer takes this interface.
     pub(crate) fn validate(&self, transducer: &Transducer, c: &Checker) -> Result<(), ParamError> {
         let Some(kind) = self.kind() else {
@@ -469,7 +184,11 @@ impl Interface {
         let rect = kind.rectifier(self);
         self.validate_transducer(kind, transducer, rect, c)?;
         self.validate_values(c)?;
-        kind.validate(self, transducer, c)?;
+        let clamped_capacitance_f = match transducer {
+            Transducer::Piezoelectric(p) => Some(p.capacitance_f),
+            _ => None,
+        };
+        kind.validate(self, clamped_capacitance_f, c)?;
         if let Some(r) = rect {
             validate_diode(kind, r, transducer, c)?;
         }

@@ -1,6 +1,6 @@
 //! The ngspice netlist of a piezoelectric harvester behind a full-wave diode bridge into a
 //! storage capacitor and a resistor, for the cross-check of the interface circuits
-//! ([`crate::physics::harvester::circuits`]).
+//! ([`crate::circuits`]).
 //!
 //! The mechanical side is the mobility analogue of the paper's netlist (see [`crate::spice`]:
 //! 1 V of `vel` = 1 mm/s, 1 V of `xpos` = 1 um, 1 A = 1 mN). The element is its clamped

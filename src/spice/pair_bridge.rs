@@ -1,6 +1,6 @@
 //! The ngspice netlist of the paper's electrostatic pair behind a full bridge of Shockley
 //! diodes into a storage capacitor and a resistor: the circuit of
-//! [`crate::physics::harvester::circuits`] with an electrostatic pair as its element
+//! [`crate::circuits`] with an electrostatic pair as its element
 //! (`data/examples/prototype2_bridge.toml`, with Shockley diodes in place of its
 //! piecewise-linear ones).
 //!

@@ -18,7 +18,7 @@ use nalgebra::SVector;
 
 use crate::model::{Contact, Flow, LedgerTerm, Mode, SwitchKind};
 
-use super::circuits::CircuitMode;
+use crate::circuits::CircuitMode;
 use super::port::{head, Port};
 use super::stops::FrameStops;
 use super::Harvester;

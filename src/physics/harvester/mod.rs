@@ -29,7 +29,8 @@
 //! ([`Contact::Resting`]) until the holding force changes sign. The position error of this
 //! shortcut is below that height; the sequence it replaces would have lasted `2u/(A(1 - e))`.
 
-pub mod circuits;
+/// The interface circuits the harvester's transducer can sit behind, reached from here too.
+pub use crate::circuits;
 mod flight;
 mod ledger;
 mod linearisation;

@@ -6,7 +6,7 @@ use nalgebra::{SMatrix, SVector};
 
 use crate::physics::transducer::{State, TransducerModel};
 
-use super::circuits::{Bridge, Circuit, CircuitMode, Element};
+use crate::circuits::{Bridge, Circuit, CircuitMode, Element};
 
 /// The transducer and what it drives (see the module docs).
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -11,12 +11,16 @@
 //!   inductor current a state of its own.
 //!
 //! Each kind's file holds its description as well: its keys in the device's `[interface]`,
-//! their checks and its model (`InterfaceKind`). This file is the one registration point:
+//! their checks and its model (`InterfaceKind`), in the words all kinds share
+//! ([`description`]: the diodes, the DC load, the inversion). The device's description
+//! ([`crate::device`]) holds an [`Interface`] and reads it through these; no circuit reads the
+//! device. This file is the one registration point:
 //! [`Interface`] names every description (a variant and the `InterfaceKind` that reads it)
 //! and [`Kind`] every model. A new kind is a new file implementing [`CircuitKind`] and
 //! `InterfaceKind`, and its line in each of the two lists below.
 
 pub mod bridge;
+pub mod description;
 pub mod element;
 pub mod instant;
 pub mod jacobian;
@@ -36,7 +40,8 @@ pub use parts::{DiodeLaw, Inductor, Sink};
 pub use sece_inductor::{BuckBoost, SeceInductor};
 pub use sshi_inductor::Inverter;
 
-use crate::device::interface::{DcLoad, InterfaceKind, Inversion, Rectifier};
+pub use description::{DcLoad, Diode, Inversion, Rectifier};
+pub(crate) use description::InterfaceKind;
 use crate::model::AffineGuard;
 
 /// Declares [`Interface`], a variant per registered description, each variant read, checked

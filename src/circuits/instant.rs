@@ -28,13 +28,12 @@ use super::mode::ResetLoss;
 use super::parts::{DiodeLaw, Inductor};
 use super::sshi_inductor::{self, Inverter};
 use super::{Described, Kind};
-use crate::device::interface::{
-    number, put, put_storage, rectifier, storage_and_load, takes, InterfaceKind, Keys,
-    SHOCKLEY_SCOPE,
+use super::description::{
+    number, put, put_storage, rectifier, storage_and_load, takes, DcLoad, Diode, InterfaceKind,
+    Inversion, Keys, Rectifier, SHOCKLEY_SCOPE,
 };
-use crate::device::{
-    Checker, DcLoad, Diode, Interface, Inversion, ParamError, Rectifier, Transducer,
-};
+use super::Interface;
+use crate::check::{Checker, ParamError};
 
 /// Why a synchronous switch refuses an element.
 const PIEZO_ONLY: &str = "a synchronous switch acts on a piezoelectric element's voltage only";
@@ -409,7 +408,12 @@ impl InterfaceKind for ParallelSshiFile {
         rect(i)
     }
 
-    fn validate(&self, i: &Interface, t: &Transducer, c: &Checker) -> Result<(), ParamError> {
+    fn validate(
+        &self,
+        i: &Interface,
+        clamped_capacitance_f: Option<f64>,
+        c: &Checker,
+    ) -> Result<(), ParamError> {
         match Self::of(i) {
             Some((
                 _,
@@ -417,7 +421,9 @@ impl InterfaceKind for ParallelSshiFile {
                     inductance_h,
                     resistance_ohm,
                 },
-            )) => sshi_inductor::check_ring(inductance_h, resistance_ohm, t, c),
+            )) => {
+                sshi_inductor::check_ring(inductance_h, resistance_ohm, clamped_capacitance_f, c)
+            },
             Some((_, v)) => check_inversion(v, c),
             None => Ok(()),
         }
@@ -497,7 +503,7 @@ impl InterfaceKind for SeriesSshiFile {
         rect(i)
     }
 
-    fn validate(&self, i: &Interface, _t: &Transducer, c: &Checker) -> Result<(), ParamError> {
+    fn validate(&self, i: &Interface, _cp: Option<f64>, c: &Checker) -> Result<(), ParamError> {
         match Self::of(i) {
             Some((_, Inversion::Inductor { .. })) => Err(c.message(
                 "interface.inductance_h",
@@ -612,7 +618,7 @@ impl InterfaceKind for SeceFile {
         }
     }
 
-    fn validate(&self, i: &Interface, _t: &Transducer, c: &Checker) -> Result<(), ParamError> {
+    fn validate(&self, i: &Interface, _cp: Option<f64>, c: &Checker) -> Result<(), ParamError> {
         match i {
             Interface::Sece { efficiency, .. } => {
                 c.within_closed("interface.efficiency", *efficiency, 0.0, 1.0, "in [0, 1]")

@@ -45,10 +45,11 @@ use super::instant::{IDEAL, SECE_DIODE};
 use super::mode::{Bridge, CircuitMode, Heading, ResetLoss};
 use super::parts::Inductor;
 use super::{Described, Kind};
-use crate::device::interface::{
-    number, put, put_storage, storage_and_load, takes, InterfaceKind, Keys,
+use super::description::{
+    number, put, put_storage, storage_and_load, takes, DcLoad, InterfaceKind, Keys,
 };
-use crate::device::{Checker, DcLoad, Interface, ParamError, Transducer};
+use super::Interface;
+use crate::check::{Checker, ParamError};
 use crate::model::AffineGuard;
 
 /// A `|Vp|` below this fraction of its scale at an extremum is not extracted.
@@ -453,7 +454,12 @@ impl InterfaceKind for SeceInductorFile {
     /// The inductor's values, and that the charge phase's loop with the element's clamped
     /// capacitance is underdamped, `R_L < 2 sqrt(L / Cp)`: with more, the element's voltage
     /// decays without reaching zero and the transfer never ends.
-    fn validate(&self, i: &Interface, t: &Transducer, c: &Checker) -> Result<(), ParamError> {
+    fn validate(
+        &self,
+        i: &Interface,
+        clamped_capacitance_f: Option<f64>,
+        c: &Checker,
+    ) -> Result<(), ParamError> {
         let Some(s) = Self::of(i) else {
             return Ok(());
         };
@@ -463,8 +469,8 @@ impl InterfaceKind for SeceInductorFile {
             s.inductor_resistance_ohm,
         )?;
         c.non_negative("interface.flyback_drop_v", s.flyback_drop_v)?;
-        if let Transducer::Piezoelectric(p) = t {
-            let critical = 2.0 * (s.inductance_h / p.capacitance_f).sqrt();
+        if let Some(cp) = clamped_capacitance_f {
+            let critical = 2.0 * (s.inductance_h / cp).sqrt();
             if s.inductor_resistance_ohm >= critical {
                 return Err(c.err(
                     "interface.inductor_resistance_ohm",

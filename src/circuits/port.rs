@@ -7,7 +7,7 @@ use nalgebra::SVector;
 
 use super::bridge::{Circuit, CircuitKind};
 use super::element::{Element, PairState};
-use crate::physics::transducer::CapacitorPair;
+use crate::laws::pair::CapacitorPair;
 
 impl Circuit {
     /// A pair's node voltages and capacitances.

@@ -52,8 +52,8 @@ use super::bridge::{Circuit, CircuitKind};
 use super::element::Element;
 use super::mode::{Bridge, CircuitMode, ResetLoss};
 use super::parts::Inductor;
-use crate::device::interface::number;
-use crate::device::{Checker, Inversion, ParamError, Transducer};
+use super::description::{number, Inversion};
+use crate::check::{Checker, ParamError};
 use crate::model::AffineGuard;
 
 /// A `|Vp|` below this fraction of its scale at an extremum is not inverted (nothing rings).
@@ -376,18 +376,19 @@ pub(super) fn inversion(keys: &toml::Table, c: &Checker) -> Result<Option<Invers
 }
 
 /// Checks the inverting inductor: positive, with a resistance that leaves the ring with the
-/// element's clamped capacitance underdamped, `R_L < 2 sqrt(L / Cp)` (with more, the
-/// element's voltage never swings through zero and nothing is inverted).
+/// element's clamped capacitance `clamped_capacitance_f` (F; `None` for another transducer)
+/// underdamped, `R_L < 2 sqrt(L / Cp)` (with more, the element's voltage never swings through
+/// zero and nothing is inverted).
 pub(super) fn check_ring(
     inductance_h: f64,
     resistance_ohm: f64,
-    transducer: &Transducer,
+    clamped_capacitance_f: Option<f64>,
     c: &Checker,
 ) -> Result<(), ParamError> {
     c.positive("interface.inductance_h", inductance_h)?;
     c.non_negative("interface.inductor_resistance_ohm", resistance_ohm)?;
-    if let Transducer::Piezoelectric(p) = transducer {
-        let critical = 2.0 * (inductance_h / p.capacitance_f).sqrt();
+    if let Some(cp) = clamped_capacitance_f {
+        let critical = 2.0 * (inductance_h / cp).sqrt();
         if resistance_ohm >= critical {
             return Err(c.err(
                 "interface.inductor_resistance_ohm",

@@ -5,7 +5,7 @@
 
 use nalgebra::SVector;
 
-use crate::device::{DcLoad, Diode};
+use super::description::{DcLoad, Diode};
 
 /// The diodes, evaluated.
 #[derive(Debug, Clone, Copy, PartialEq)]

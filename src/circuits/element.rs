@@ -13,7 +13,7 @@
 //!   `V_i = (s_i + (C_i - C0) Vb) / D_i`, `D_i = C_i + Cp + CL`; a current `i` out of
 //!   electrode 1 and into electrode 2 moves `s1' = -i`, `s2' = +i`, and the force is eq 9's.
 
-use crate::physics::transducer::CapacitorPair;
+use crate::laws::pair::CapacitorPair;
 
 /// The transducer as the circuit sees it (see the module docs).
 #[derive(Debug, Clone, Copy, PartialEq)]
