@@ -27,12 +27,11 @@ use super::element::Element;
 use super::mode::ResetLoss;
 use super::parts::{DiodeLaw, Inductor};
 use super::sshi_inductor::{self, Inverter};
-use super::{Described, Kind};
 use super::description::{
-    number, put, put_storage, rectifier, storage_and_load, takes, DcLoad, Diode, InterfaceKind,
+    number, put, put_storage, rectifier, storage_and_load, takes, DcLoad, Diode, 
     Inversion, Keys, Rectifier, SHOCKLEY_SCOPE,
 };
-use super::Interface;
+use super::{Described, Interface, InterfaceKind, Kind};
 use crate::check::{Checker, ParamError};
 
 /// Why a synchronous switch refuses an element.

@@ -41,7 +41,9 @@ pub use sece_inductor::{BuckBoost, SeceInductor};
 pub use sshi_inductor::Inverter;
 
 pub use description::{DcLoad, Diode, Inversion, Rectifier};
-pub(crate) use description::InterfaceKind;
+
+use crate::check::{Checker, ParamError};
+use description::{Keys, RESISTIVE};
 use crate::model::AffineGuard;
 
 /// Declares [`Interface`], a variant per registered description, each variant read, checked
@@ -128,6 +130,115 @@ models! {
     SeceInductor(BuckBoost),
     /// Parallel SSHI whose inversion rings through its inductor.
     SshiInductor(Inverter),
+}
+
+/// One kind of interface circuit as a device file describes it: the keys of its
+/// `[interface]` table, their checks (each error naming its field), and the circuit model
+/// they give. A kind's own file implements it; the registration point,
+/// [`crate::circuits`], pairs it with its [`Interface`] variant.
+pub(crate) trait InterfaceKind: Sync {
+    /// The `kind` key.
+    fn key(&self) -> &'static str;
+
+    /// Whether a table with this kind's `kind` key describes this kind (kinds sharing a key
+    /// are told apart by their other keys).
+    fn claims(&self, _keys: &toml::Table) -> bool {
+        true
+    }
+
+    /// That the kind takes `key` in the table `keys` (the error names the field).
+    fn check_key(&self, keys: &toml::Table, key: &str, c: &Checker) -> Result<(), ParamError>;
+
+    /// The interface the table describes, its keys checked by [`InterfaceKind::check_key`].
+    fn parse(&self, keys: &toml::Table, c: &Checker) -> Result<Interface, ParamError>;
+
+    /// The file keys of `i`, in the order the file writes them.
+    fn write(&self, i: &Interface, keys: &mut Keys);
+
+    /// The storage capacitance (F) and the DC load of `i`.
+    fn storage<'a>(&self, i: &'a Interface) -> Option<(f64, &'a DcLoad)>;
+
+    /// The DC load of `i`, to change.
+    fn load_mut<'a>(&self, i: &'a mut Interface) -> Option<&'a mut DcLoad>;
+
+    /// The rectifier of `i`, for a kind whose bridge has the file's diodes.
+    fn rectifier<'a>(&self, _i: &'a Interface) -> Option<&'a Rectifier> {
+        None
+    }
+
+    /// True for a kind whose switch acts on a piezoelectric element's clamped capacitance,
+    /// which a coil or an electrostatic pair does not have.
+    fn piezo_only(&self) -> bool {
+        true
+    }
+
+    /// Checks the kind's own values of `i`, against the clamped capacitance (F) of a
+    /// piezoelectric element where they depend on it (`None` for another transducer).
+    fn validate(
+        &self,
+        _i: &Interface,
+        _clamped_capacitance_f: Option<f64>,
+        _c: &Checker,
+    ) -> Result<(), ParamError> {
+        Ok(())
+    }
+
+    /// Checks the diodes against the kind, after the checks every bridge's diodes take.
+    fn check_diode(&self, _diode: &Diode, _c: &Checker) -> Result<(), ParamError> {
+        Ok(())
+    }
+
+    /// The circuit model of `i`, the kind's own state component (an inductor's current) at
+    /// `slot`, or why the description has none.
+    fn model<'a>(&self, i: &'a Interface, slot: usize) -> Result<Described<'a>, &'static str>;
+}
+
+impl Interface {
+    /// The `kind` key.
+    pub fn key(&self) -> &'static str {
+        self.kind().map_or(RESISTIVE, |k| k.key())
+    }
+
+    /// True for the default, the transducer's own resistive load.
+    pub fn is_resistive(&self) -> bool {
+        matches!(self, Interface::Resistive)
+    }
+
+    /// The device path of the load resistance behind this interface: the transducer's own
+    /// `transducer.load_resistance_ohm` for `resistive`, the DC load's
+    /// `interface.load.resistance_ohm` behind a circuit.
+    pub fn load_resistance_path(&self) -> &'static str {
+        if self.is_resistive() {
+            "transducer.load_resistance_ohm"
+        } else {
+            "interface.load.resistance_ohm"
+        }
+    }
+
+    /// The storage capacitance (F), for every kind but `resistive`.
+    pub fn storage_capacitance_f(&self) -> Option<f64> {
+        self.kind()?.storage(self).map(|(cs, _)| cs)
+    }
+
+    /// The DC load, for every kind but `resistive`.
+    pub fn load(&self) -> Option<&DcLoad> {
+        self.kind()?.storage(self).map(|(_, load)| load)
+    }
+
+    /// The DC load to change, for every kind but `resistive`.
+    pub fn load_mut(&mut self) -> Option<&mut DcLoad> {
+        self.kind()?.load_mut(self)
+    }
+
+    /// A copy with another DC load resistance (a battery or open load becomes a resistor);
+    /// the resistive interface is returned unchanged.
+    pub fn with_load_resistance(&self, resistance_ohm: f64) -> Self {
+        let mut i = self.clone();
+        if let Some(load) = i.load_mut() {
+            *load = DcLoad::Resistor { resistance_ohm };
+        }
+        i
+    }
 }
 
 /// The circuit a device's `[interface]` describes, before its element is attached.

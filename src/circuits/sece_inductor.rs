@@ -44,11 +44,10 @@ use super::element::Element;
 use super::instant::{IDEAL, SECE_DIODE};
 use super::mode::{Bridge, CircuitMode, Heading, ResetLoss};
 use super::parts::Inductor;
-use super::{Described, Kind};
 use super::description::{
-    number, put, put_storage, storage_and_load, takes, DcLoad, InterfaceKind, Keys,
+    number, put, put_storage, storage_and_load, takes, DcLoad,  Keys,
 };
-use super::Interface;
+use super::{Described, Interface, InterfaceKind, Kind};
 use crate::check::{Checker, ParamError};
 use crate::model::AffineGuard;
 
