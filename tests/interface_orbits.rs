@@ -4,11 +4,11 @@
 //! studies are the generic ones (`study::periodic`, `study::orbit`) on the assembled model.
 
 use crate::common;
+use endstop::circuits::{Bridge, CircuitMode, Heading};
 use endstop::device::{Device, Diode, Interface, Inversion};
 use endstop::drive::{Excitation, Sine};
 use endstop::model::{Contact, Mode, Model};
 use endstop::physics::contact::Side;
-use endstop::circuits::{Bridge, CircuitMode, Heading};
 use endstop::physics::harvester::stops::contact_of;
 use endstop::physics::harvester::AssemblyError;
 use endstop::progress::Silent;

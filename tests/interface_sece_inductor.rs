@@ -24,11 +24,11 @@
 //! difference shrinks with `L`.
 
 use crate::common;
+use endstop::circuits::{Bridge, CircuitMode, Heading};
 use endstop::device::{DcLoad, Device, Interface, SeceInductor};
 use endstop::drive::{Excitation, Sine};
 use endstop::model::{Contact, Mode, Model};
 use endstop::physics::contact::Side;
-use endstop::circuits::{Bridge, CircuitMode, Heading};
 use endstop::physics::harvester::stops::contact_of;
 use endstop::physics::harvester::AssemblyError;
 use endstop::study::periodic::{

@@ -17,11 +17,11 @@
 //! `w_0 = 1 / sqrt(L Cp) = 1.4e5 rad/s`, 1.4e-6.
 
 use crate::common;
+use endstop::circuits::{Bridge, CircuitMode, Heading};
 use endstop::device::{Device, Interface, Inversion, Rectifier};
 use endstop::drive::{Excitation, Sine};
 use endstop::model::{Driven, Mode, Model};
 use endstop::ode::{Dopri5, Observer, Step};
-use endstop::circuits::{Bridge, CircuitMode, Heading};
 use endstop::physics::harvester::AssemblyError;
 use endstop::study::periodic::{steady_state_from_rest, SteadySettings};
 use nalgebra::SVector;

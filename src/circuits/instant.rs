@@ -23,14 +23,14 @@
 use nalgebra::{SMatrix, SVector};
 
 use super::bridge::{Circuit, CircuitKind};
+use super::description::{
+    number, put, put_storage, rectifier, storage_and_load, takes, DcLoad, Diode, Inversion, Keys,
+    Rectifier, SHOCKLEY_SCOPE,
+};
 use super::element::Element;
 use super::mode::ResetLoss;
 use super::parts::{DiodeLaw, Inductor};
 use super::sshi_inductor::{self, Inverter};
-use super::description::{
-    number, put, put_storage, rectifier, storage_and_load, takes, DcLoad, Diode, 
-    Inversion, Keys, Rectifier, SHOCKLEY_SCOPE,
-};
 use super::{Described, Interface, InterfaceKind, Kind};
 use crate::check::{Checker, ParamError};
 
@@ -420,9 +420,7 @@ impl InterfaceKind for ParallelSshiFile {
                     inductance_h,
                     resistance_ohm,
                 },
-            )) => {
-                sshi_inductor::check_ring(inductance_h, resistance_ohm, clamped_capacitance_f, c)
-            },
+            )) => sshi_inductor::check_ring(inductance_h, resistance_ohm, clamped_capacitance_f, c),
             Some((_, v)) => check_inversion(v, c),
             None => Ok(()),
         }

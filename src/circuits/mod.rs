@@ -43,8 +43,8 @@ pub use sshi_inductor::Inverter;
 pub use description::{DcLoad, Diode, Inversion, Rectifier};
 
 use crate::check::{Checker, ParamError};
-use description::{Keys, RESISTIVE};
 use crate::model::AffineGuard;
+use description::{Keys, RESISTIVE};
 
 /// Declares [`Interface`], a variant per registered description, each variant read, checked
 /// and modelled by the [`InterfaceKind`] after its arrow.

@@ -40,13 +40,11 @@
 use nalgebra::{SMatrix, SVector};
 
 use super::bridge::{Circuit, CircuitKind};
+use super::description::{number, put, put_storage, storage_and_load, takes, DcLoad, Keys};
 use super::element::Element;
 use super::instant::{IDEAL, SECE_DIODE};
 use super::mode::{Bridge, CircuitMode, Heading, ResetLoss};
 use super::parts::Inductor;
-use super::description::{
-    number, put, put_storage, storage_and_load, takes, DcLoad,  Keys,
-};
 use super::{Described, Interface, InterfaceKind, Kind};
 use crate::check::{Checker, ParamError};
 use crate::model::AffineGuard;

@@ -49,10 +49,10 @@
 use nalgebra::{SMatrix, SVector};
 
 use super::bridge::{Circuit, CircuitKind};
+use super::description::{number, Inversion};
 use super::element::Element;
 use super::mode::{Bridge, CircuitMode, ResetLoss};
 use super::parts::Inductor;
-use super::description::{number, Inversion};
 use crate::check::{Checker, ParamError};
 use crate::model::AffineGuard;
 

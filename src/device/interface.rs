@@ -66,7 +66,6 @@ pub use crate::circuits::description::THERMAL_VOLTAGE_V;
 pub use crate::circuits::sece_inductor::SeceInductor;
 pub use crate::circuits::{DcLoad, Diode, Interface, Inversion, Rectifier};
 
-
 /// The order in which a table's keys are checked, so that of two keys a kind does not take
 /// the same one is named whatever the file's order: the bridge's, the switches', the
 /// inductors', then any other key in alphabetical order.

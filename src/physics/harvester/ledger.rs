@@ -16,9 +16,9 @@
 
 use nalgebra::SVector;
 
+use crate::circuits::CircuitMode;
 use crate::model::{Contact, Flow, LedgerTerm, Mode, SwitchKind};
 
-use crate::circuits::CircuitMode;
 use super::port::{head, Port};
 use super::stops::FrameStops;
 use super::Harvester;
