@@ -412,7 +412,7 @@ impl<const N: usize> MassChain<N> {
 
     /// The resting contact of a mode, if any.
     #[inline(always)]
-    fn resting(&self, mode: Mode) -> Option<usize> {
+    pub(super) fn resting(&self, mode: Mode) -> Option<usize> {
         if !mode.in_contact() {
             return None;
         }

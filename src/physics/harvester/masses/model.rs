@@ -341,6 +341,13 @@ impl<const N: usize> Model<N> for MassChain<N> {
         self.affine_form(mode)
     }
 
+    fn driven_affine(&self, mode: Mode) -> Option<crate::model::DrivenAffine<N>> {
+        match self.resting(mode) {
+            Some(k) => self.resting_form(mode, k),
+            None => self.affine_form(mode).map(Into::into),
+        }
+    }
+
     fn without_contacts(&self) -> Self {
         self.without_stops()
     }
