@@ -130,6 +130,10 @@ fn a_two_mass_record_on_exact_steps_follows_dormand_prince() {
     );
     let impacts = fine.summary.impacts;
     assert!(impacts >= 20, "{impacts} impacts");
+    println!(
+        "impacts: exact {}, Dormand-Prince {impacts}",
+        exact.summary.impacts
+    );
     assert_eq!(exact.summary.impacts, impacts, "impacts");
     let on_dopri = exact.summary.stats.events;
     assert!(

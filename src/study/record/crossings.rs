@@ -52,8 +52,8 @@ pub(super) const MAX_GUARDS: usize = 5;
 const PIECES: usize = 4;
 
 /// Largest value (in units of the guard's scale) a guard may have at the start of a stretch
-/// while its rate is negative: a state projected onto the guard's surface by a switch, which
-/// lies on it only to rounding and leaves it.
+/// while it leaves zero ([`leaving`]): a state projected onto the guard's surface by a switch,
+/// which lies on it only to rounding and leaves it.
 const START_SLACK: f64 = 1e-9;
 
 /// What a guard crossing inside an interval does on the exact path.
