@@ -318,3 +318,51 @@ fn resting_contacts_are_affine_in_the_state_and_the_drive() {
     let w = resting_is_affine(&held);
     assert!((w - 2e-4).abs() <= 1e-18, "{w:e}");
 }
+
+/// A resting pair released where an integrator that moves both masses has left their
+/// separation a rounding past the gap (the up-converter's driver on its generator): the
+/// release puts the pair back on the contact's surface, so that the free mode starts with its
+/// penetration at most zero and no strike at zero relative speed is read at the release; the
+/// velocities and the struck mass's position are kept, and the mover moves by rounding only
+/// (a few ulps of its position).
+#[test]
+fn a_released_pair_leaves_from_the_contact_surface() {
+    let h = MassChain::<6>::new(&upconverter()).unwrap();
+    let c = h.contacts()[0];
+    let struck = h.layout().masses[c.mass];
+    let mover = h.layout().masses[c.other.expect("a contact between two masses")];
+    let mut y = h.rest_state();
+    y[struck.0] = 6.8e-6;
+    y[struck.1] = -0.103;
+    y[mover.1] = y[struck.1];
+    y[mover.0] = y[struck.0] + c.side * c.gap;
+    let a = -4.7;
+    let mut g = vec![0.0; h.guard_count()];
+    let penetration = |y: &SVector<f64, 6>, g: &mut Vec<f64>| {
+        h.guards(Mode::FREE, y, || a, g);
+        g[0]
+    };
+    while penetration(&y, &mut g) <= 0.0 {
+        y[mover.0] = if c.side > 0.0 {
+            y[mover.0].next_up()
+        } else {
+            y[mover.0].next_down()
+        };
+    }
+    let before = y;
+    let resting = Mode::FREE.with_contact(0, Contact::Resting);
+    let next = h.switch(resting, 1, &mut y, a);
+    assert_eq!(next, Mode::FREE);
+    let after = penetration(&y, &mut g);
+    assert!(after <= 0.0, "penetration {after:e} after the release");
+    assert_eq!(y[struck.0], before[struck.0]);
+    assert_eq!(
+        (y[struck.1], y[mover.1]),
+        (before[struck.1], before[mover.1])
+    );
+    let moved = (y[mover.0] - before[mover.0]).abs();
+    assert!(
+        moved <= 8.0 * f64::EPSILON * before[mover.0].abs(),
+        "the mover moved by {moved:e}"
+    );
+}
