@@ -190,6 +190,27 @@ pub struct Affine<const N: usize> {
     pub guards: Vec<AffineGuard<N>>,
 }
 
+/// A mode that is affine in the state and the drive together: `y' = L y + c a + d` as in
+/// [`Affine`], with guards `n . y + drive[j] a + g0` (guard `j` of `affine.guards` plus
+/// `drive[j]` times the drive). A resting contact's holding force is one: the drive's inertial
+/// force presses a mass onto a frame stop or pulls it off, so its release depends on the drive
+/// as well as on the state.
+#[derive(Debug, Clone, PartialEq)]
+pub struct DrivenAffine<const N: usize> {
+    /// The mode's dynamics and the state's part of each guard.
+    pub affine: Affine<N>,
+    /// Each guard's coefficient on the drive (s^2 per m times the guard's unit).
+    pub drive: Vec<f64>,
+}
+
+impl<const N: usize> From<Affine<N>> for DrivenAffine<N> {
+    /// An affine mode whose guards do not depend on the drive.
+    fn from(affine: Affine<N>) -> Self {
+        let drive = vec![0.0; affine.guards.len()];
+        Self { affine, drive }
+    }
+}
+
 /// Where a contact is: between a mass and the frame (`other` none) or between two masses,
 /// on the side `side` (+1: the mass's displacement, or `x_other - x_mass`, grows towards it;
 /// -1: it shrinks towards it), `gap` away (m); a rigid contact (an instantaneous impact) has
@@ -322,6 +343,13 @@ pub trait Model<const N: usize>: Send + Sync {
     /// guard that depends on the drive) or the model leaves it to the adaptive integrator.
     fn affine(&self, _mode: Mode) -> Option<Affine<N>> {
         None
+    }
+
+    /// The affine form of `mode` with guards that may depend on the drive ([`DrivenAffine`]):
+    /// every mode of [`Model::affine`], and where the model has them modes such as a resting
+    /// contact, whose release depends on the drive; the default is [`Model::affine`].
+    fn driven_affine(&self, mode: Mode) -> Option<DrivenAffine<N>> {
+        self.affine(mode).map(DrivenAffine::from)
     }
 
     /// The model's contacts, in the order of [`Mode::contact`] (contact `k` is the `k`-th; a

@@ -26,16 +26,18 @@
 //! approximate by quadrature.
 //!
 //! # Guards
-//! Every guard of an affine mode is affine in the state (the model hands its pieces over: a
-//! stop's penetration, a linear contact's bracket, a bridge's conduction threshold or current,
-//! a switch's velocity), and so is its rate: both are rows on `u`, evaluated at each sample.
+//! Every guard of an affine mode is affine in the state and the drive (the model hands its
+//! pieces over, [`Model::driven_affine`]: a stop's penetration, a linear contact's bracket, a
+//! resting contact's holding force, a bridge's conduction threshold or current, a switch's
+//! velocity), and so is its rate: both are rows on `u`, evaluated at each sample.
 //! [`AffineMode::step`] refuses an interval in which a guard may turn positive (its cubic
 //! Hermite estimate from its exact values and rates at both ends comes within
 //! [`GRAZE_MARGIN`] of zero, and so does the estimate on one of [`PARTS`] parts of the
-//! interval within the margin's `PARTS^4`-th). There, where the mode has rigid stops, the
-//! interval's crossings are located on the mode's exact solution and each rebound is applied
-//! by the model's switch (`crossings.rs`); an interval with another switch (a mass comes to
-//! rest, a circuit acts) goes to Dormand-Prince, whose events are located on its dense output.
+//! interval within the margin's `PARTS^4`-th). There the
+//! interval's crossings of rigid stops (rebounds, a contact that comes to rest) and a resting
+//! contact's release are located on the exact solution of each mode in turn and applied by
+//! the model's switch (`crossings.rs`); an interval with another switch (a circuit acts) goes
+//! to Dormand-Prince, whose events are located on its dense output.
 //!
 //! # The books by Gram sums
 //! In an affine mode every integrand of the books (the drive's `m a v`, the dampers' `b v^2`,
@@ -54,13 +56,13 @@
 
 use nalgebra::{DMatrix, SMatrix, SVector};
 
-use crate::model::{AffineGuard, Mode, Model, MAX_OUTPUTS};
+use crate::model::{AffineGuard, DrivenAffine, Mode, Model, MAX_OUTPUTS};
 use crate::ode::phi::{expm_n, phi_functions};
 use crate::ode::GAUSS_LEGENDRE_3;
 use crate::study::flow::{cubic_max, GRAZE_MARGIN};
 
 use super::books::{integrands, Books, Found};
-use super::crossings::{Rebounding, MAX_GUARDS};
+use super::crossings::{walk, ModeTable, Rebounding, MAX_GUARDS};
 use super::impacts::Rebounds;
 use super::stepping::{self, FastPath, NoFast};
 use super::{Fallback, FreeFlightPath, Record, RecordError, RecordObserver, SampledDrive};
@@ -153,9 +155,11 @@ impl<const N: usize, const U: usize, const S: usize> AffineMode<N, U, S> {
     /// (exact values and rates at both ends) comes within [`GRAZE_MARGIN`] of zero.
     #[inline(always)]
     fn step(&self, u0: &[f64; U], g0: &GuardValues) -> Option<(SVector<f64, N>, GuardValues)> {
+        // The state's rows and the used guards' (the unused guards' rows are never read).
+        let live = N + 2 * self.used;
         let mut r = [0.0; S];
         for (col, &uj) in self.step_columns.iter().zip(u0) {
-            for (ri, ci) in r.iter_mut().zip(col) {
+            for (ri, ci) in r[..live].iter_mut().zip(&col[..live]) {
                 *ri += ci * uj;
             }
         }
@@ -215,7 +219,7 @@ impl<const N: usize, const U: usize, const S: usize> AffineMode<N, U, S> {
         if U != N + 3 || S != N + GUARD_ROWS {
             return None;
         }
-        let affine = model.affine(mode)?;
+        let DrivenAffine { affine, drive } = model.driven_affine(mode)?;
         let sc = model.scales();
         let (ix, iv) = model.layout().masses.first().copied().unwrap_or((0, 1));
         let a_scale = sc[iv] / sc[ix] * sc[iv];
@@ -260,7 +264,7 @@ impl<const N: usize, const U: usize, const S: usize> AffineMode<N, U, S> {
             let d_inv = SMatrix::<f64, U, U>::from_diagonal(&scale.map(|s| 1.0 / s));
             d * expm_n(&(d_inv * a * d * (h / PARTS as f64))) * d_inv
         };
-        let (guards, used) = guard_rows::<N, U>(&affine.guards, &a, h, &sc)?;
+        let (guards, used) = guard_rows::<N, U>(&affine.guards, &drive, &a, h, &scale)?;
         let rebounding = Rebounding::of(model, mode, &affine.guards, &guards, &a, &scale, h);
         let next_guards = guards * e;
         let mut power = part;
@@ -348,27 +352,29 @@ fn matches_rhs<M: Model<N>, const N: usize, const U: usize>(
     true
 }
 
-/// The guards of a mode as rows on `u` (see [`AffineMode`]) and how many there are, or `None`
-/// when there are more than [`MAX_GUARDS`] or one is constant.
+/// The guards of a mode as rows on `u` (see [`AffineMode`]), guard `j` with the coefficient
+/// `drive[j]` on the drive, and how many there are, or `None` when there are more than
+/// [`MAX_GUARDS`] or one is constant; `scale` holds the augmented state's scales.
 fn guard_rows<const N: usize, const U: usize>(
     list: &[AffineGuard<N>],
+    drive: &[f64],
     a: &SMatrix<f64, U, U>,
     h: f64,
-    sc: &SVector<f64, N>,
+    scale: &SVector<f64, U>,
 ) -> Option<(SMatrix<f64, GUARD_ROWS, U>, usize)> {
-    if list.len() > MAX_GUARDS {
+    if list.len() > MAX_GUARDS || drive.len() != list.len() {
         return None;
     }
     let mut rows = SMatrix::<f64, GUARD_ROWS, U>::zeros();
-    for (j, g) in list.iter().enumerate() {
-        let norm = g.n.component_mul(sc).norm();
+    for (j, (g, &w)) in list.iter().zip(drive).enumerate() {
+        let mut value = SVector::<f64, U>::zeros();
+        value.fixed_rows_mut::<N>(0).copy_from(&g.n);
+        value[N] = w;
+        let norm = value.component_mul(scale).norm();
         if !(norm > 0.0 && norm.is_finite()) {
             return None;
         }
-        let mut value = SVector::<f64, U>::zeros();
-        for i in 0..N {
-            value[i] = g.n[i] / norm;
-        }
+        value /= norm;
         value[U - 1] = g.g0 / norm;
         let rate = a.transpose() * value * h;
         rows.set_row(2 * j, &value.transpose());
@@ -529,35 +535,16 @@ impl<const U: usize> Gram<U> {
 }
 
 /// The affine modes of a record met so far, each prepared when first met, with each mode's
-/// Gram sum `Σ u_k u_k^T` over the intervals it advanced since the books last took them: the
-/// record's fast path for a model without a free-flight split.
-pub(super) struct AffineModes<const N: usize, const U: usize, const S: usize> {
+/// Gram sum `Σ u_k u_k^T` over the intervals it advanced since the books last took them.
+struct Modes<const N: usize, const U: usize, const S: usize> {
     h: f64,
     /// The books' integrands, when the record keeps them.
     integrals: Option<usize>,
     /// Each mode met, its affine form if it has one, and its Gram sum.
     entries: Vec<(Mode, Option<AffineMode<N, U, S>>, Gram<U>)>,
-    /// The current mode's entry and its guards at the current sample, once known.
-    current: Option<(Mode, usize, Option<GuardValues>)>,
-    /// The rebounds off rigid stops inside the last interval.
-    rebounds: Rebounds,
-    /// The states at those rebounds, before each reset.
-    rebound_states: Vec<SVector<f64, N>>,
 }
 
-impl<const N: usize, const U: usize, const S: usize> AffineModes<N, U, S> {
-    /// No mode yet, on intervals of `h`, with the books' `integrals` integrands.
-    fn new(h: f64, integrals: Option<usize>) -> Self {
-        Self {
-            h,
-            integrals,
-            entries: Vec::new(),
-            current: None,
-            rebounds: Rebounds::default(),
-            rebound_states: Vec::new(),
-        }
-    }
-
+impl<const N: usize, const U: usize, const S: usize> Modes<N, U, S> {
     /// The index of `mode`, preparing it when it is new.
     fn index<M: Model<N>>(&mut self, model: &M, mode: Mode) -> usize {
         if let Some(i) = self.entries.iter().position(|(m, _, _)| *m == mode) {
@@ -566,6 +553,45 @@ impl<const N: usize, const U: usize, const S: usize> AffineModes<N, U, S> {
         let affine = AffineMode::of(model, mode, self.h, self.integrals);
         self.entries.push((mode, affine, Gram([[0.0; U]; U])));
         self.entries.len() - 1
+    }
+}
+
+impl<const N: usize, const U: usize, const S: usize> ModeTable<N, U> for Modes<N, U, S> {
+    fn crossings_of<M: Model<N>>(&mut self, model: &M, mode: Mode) -> Option<&Rebounding<U>> {
+        let i = self.index(model, mode);
+        self.entries[i].1.as_ref()?.rebounding.as_ref()
+    }
+}
+
+/// The record's fast path for a model without a free-flight split: its affine modes
+/// ([`Modes`]), the current one's guards, and what the last interval met inside it.
+pub(super) struct AffineModes<const N: usize, const U: usize, const S: usize> {
+    modes: Modes<N, U, S>,
+    /// The current mode's entry and its guards at the current sample, once known.
+    current: Option<(Mode, usize, Option<GuardValues>)>,
+    /// The impacts inside the last interval.
+    rebounds: Rebounds,
+    /// The states at those impacts, before each reset.
+    rebound_states: Vec<SVector<f64, N>>,
+    /// The mode at the last interval's end and its time in contact (s), where switches inside
+    /// it were applied on the exact solution.
+    inside: Option<(Mode, f64)>,
+}
+
+impl<const N: usize, const U: usize, const S: usize> AffineModes<N, U, S> {
+    /// No mode yet, on intervals of `h`, with the books' `integrals` integrands.
+    fn new(h: f64, integrals: Option<usize>) -> Self {
+        Self {
+            modes: Modes {
+                h,
+                integrals,
+                entries: Vec::new(),
+            },
+            current: None,
+            rebounds: Rebounds::default(),
+            rebound_states: Vec::new(),
+            inside: None,
+        }
     }
 }
 
@@ -591,34 +617,43 @@ impl<M: Model<N>, const N: usize, const U: usize, const S: usize> FastPath<M, N>
     ) -> Option<(SVector<f64, N>, bool)> {
         self.rebounds.len = 0;
         self.rebound_states.clear();
+        self.inside = None;
         let (index, cached) = match self.current {
             Some((m, i, g)) if m == mode => (i, g),
-            _ => (self.index(model, mode), None),
+            _ => (self.modes.index(model, mode), None),
         };
         self.current = Some((mode, index, None));
-        let (_, affine, gram) = &mut self.entries[index];
+        let (_, affine, gram) = &mut self.modes.entries[index];
         let affine = affine.as_ref()?;
-        let slope = (a1 - a0) / self.h;
+        let h = self.modes.h;
+        let slope = (a1 - a0) / h;
         let u0 = AffineMode::<N, U, S>::augment(y, a0, slope);
         let g0 = cached.unwrap_or_else(|| affine.guards_at(&u0));
-        let Some((y1, g1)) = affine.step(&u0, &g0) else {
-            // A guard may fire: rigid stops' rebounds on the exact solution, where the books
-            // (which take whole intervals of one mode) are not kept.
+        let Some((mut y1, g1)) = affine.step(&u0, &g0) else {
+            // A guard may fire: the switches the exact solution locates (rigid stops'
+            // rebounds, a contact that comes to rest or is released), where the books (which
+            // take whole intervals of one mode) are not kept.
             if books.is_some() {
                 return None;
             }
-            let (y1, rebounds) = affine.rebounding.as_ref()?.interval(
+            let walked = walk(
                 model,
+                &mut self.modes,
                 mode,
                 y,
                 a0,
                 slope,
-                self.h,
+                h,
                 &mut self.rebound_states,
             )?;
-            self.rebounds = rebounds;
-            return Some((y1, false));
+            self.rebounds = walked.impacts;
+            self.inside = Some((walked.mode, walked.contact_s));
+            self.current = Some((walked.mode, self.modes.index(model, walked.mode), None));
+            return Some((walked.y, false));
         };
+        if let Some(r) = affine.rebounding.as_ref() {
+            r.hold(&mut y1);
+        }
         if let Some(b) = books {
             b.open(model, mode, y);
             gram.add(&u0);
@@ -636,6 +671,10 @@ impl<M: Model<N>, const N: usize, const U: usize, const S: usize> FastPath<M, N>
         &self.rebound_states
     }
 
+    fn inside(&self) -> Option<(Mode, f64)> {
+        self.inside
+    }
+
     fn after_dopri(&mut self, _model: &M, _y: &SVector<f64, N>, _mode: Mode, _switched: bool) {
         if let Some((_, _, g)) = self.current.as_mut() {
             *g = None;
@@ -645,11 +684,11 @@ impl<M: Model<N>, const N: usize, const U: usize, const S: usize> FastPath<M, N>
     /// Each integral over the intervals the affine modes advanced since the last fold:
     /// `Σ_modes Σ_ij W_ij G_ij`.
     fn flush(&mut self, books: &mut Books<N>) {
-        let Some(count) = self.integrals else {
+        let Some(count) = self.modes.integrals else {
             return;
         };
         let mut out = vec![0.0; count];
-        for (_, affine, gram) in self.entries.iter_mut() {
+        for (_, affine, gram) in self.modes.entries.iter_mut() {
             if let Some(affine) = affine {
                 let g = SMatrix::<f64, U, U>::from_fn(|i, j| gram.0[j][i]);
                 for (o, w) in out.iter_mut().zip(&affine.weights) {

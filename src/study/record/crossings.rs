@@ -1,6 +1,7 @@
 //! Guard crossings inside a sample interval of an affine mode, located on its exact solution,
-//! so that an interval in which a mass strikes a rigid stop (of the frame or of another mass)
-//! costs a few polynomial evaluations instead of a Dormand-Prince integration.
+//! so that an interval in which a mass strikes a rigid stop (of the frame or of another mass),
+//! comes to rest on it or leaves it costs a few polynomial evaluations instead of a
+//! Dormand-Prince integration.
 //!
 //! Over a sample interval an affine mode with the linearly interpolated drive is the
 //! time-invariant `u' = A u` on the augmented state `u = (y, a, a', 1)` (`affine.rs`), whose
@@ -9,8 +10,20 @@
 //! [`RESOLVED_NORM`](crate::ode::exponential::RESOLVED_NORM)) the series summed until its terms
 //! fall below rounding ([`TAYLOR_TOL`], at most [`MAX_TERMS`] terms) is the exact propagator to
 //! rounding, as for the one mass's free flight (`impacts.rs`). Every guard of the mode is
-//! affine in the state, a row `g` on `u`, so along the interval it is the polynomial
+//! affine in the state and the drive, a row `g` on `u` (a resting contact's holding force
+//! takes the drive's inertial force), so along the interval it is the polynomial
 //! `Σ (g · A^k u0 / k!) t^k`: one dot product per term and guard.
+//!
+//! **Switches across modes.** An interval is walked from switch to switch ([`walk`]): a
+//! rigid stop's penetration while apart is an impact, which the model's switch turns into a
+//! rebound (the same mode) or a rest (the resting mode, when the relative speed is below the
+//! model's stick criterion); a resting contact's holding force turning negative is its
+//! release (the mode apart). Each switch is applied by the model's own
+//! [`Model::switch`], and the walk goes on in the mode it leads to, on that mode's exact
+//! solution, to the interval's end. While a contact rests the record holds it on its surface
+//! ([`Rebounding::hold`]): the propagator keeps the constraint only to rounding, and the
+//! released pair must leave the surface with zero relative speed, which the start check of a
+//! stretch reads as leaving by the first derivative that is not zero.
 //!
 //! The first crossing is found as the one mass's rebounds are found in pieces: the interval is
 //! cut into [`PIECES`] pieces, a piece on which a guard's rate changes sign is split at the
@@ -39,26 +52,53 @@ pub(super) const MAX_GUARDS: usize = 5;
 const PIECES: usize = 4;
 
 /// Largest value (in units of the guard's scale) a guard may have at the start of a stretch
-/// while its rate is negative: a state projected onto the guard's surface by a switch, which
-/// lies on it only to rounding and leaves it.
+/// while it leaves zero ([`leaving`]): a state projected onto the guard's surface by a switch,
+/// which lies on it only to rounding and leaves it.
 const START_SLACK: f64 = 1e-9;
 
-/// What an affine mode needs to carry its intervals across rebounds off rigid stops: its
-/// augmented matrix, the augmented state's inverse scales, its guards as rows on the augmented
-/// state with the model's guard index of each and whether it is a rigid stop's (a rebound).
+/// What a guard crossing inside an interval does on the exact path.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) enum Handled {
+    /// A rigid stop's penetration while apart: a rebound, or the contact comes to rest (a
+    /// stick), both impacts.
+    Impact,
+    /// A resting contact's holding force changes sign: the contact opens.
+    Release,
+    /// Another switch (a circuit acts, a compliant contact): the interval goes to
+    /// Dormand-Prince.
+    Other,
+}
+
+/// A resting contact held on its surface by the record: the struck mass's (or the frame's)
+/// position and velocity indices, the mover's, the side and the gap (see
+/// [`Rebounding::hold`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Held {
+    struck: Option<(usize, usize)>,
+    mover: (usize, usize),
+    side: f64,
+    gap: f64,
+}
+
+/// What an affine mode needs to carry its intervals across its switches on the exact
+/// solution: its augmented matrix, the augmented state's inverse scales, its guards as rows on
+/// the augmented state with the model's guard index of each and what its crossing does, and
+/// the resting contact it holds, if any.
 #[derive(Debug, Clone, PartialEq)]
 pub(super) struct Rebounding<const U: usize> {
     a: SMatrix<f64, U, U>,
     inv_scale: SVector<f64, U>,
     rows: Vec<SVector<f64, U>>,
     indices: Vec<usize>,
-    rebound: Vec<bool>,
+    handled: Vec<Handled>,
+    held: Option<Held>,
 }
 
 impl<const U: usize> Rebounding<U> {
-    /// The rebounds of `mode` of `model` with the augmented matrix `a` (on the scales `scale`)
-    /// and its guards `list` (as rows `rows`, value and rate of each in turn) on intervals of
-    /// `h`; `None` where the mode has no rigid stop to meet, or `h` does not resolve it.
+    /// The crossings of `mode` of `model` with the augmented matrix `a` (on the scales
+    /// `scale`) and its guards `list` (as rows `rows`, value and rate of each in turn) on
+    /// intervals of `h`; `None` where the mode has no rigid stop to meet or resting contact to
+    /// release, or `h` does not resolve it.
     pub(super) fn of<M: Model<N>, const N: usize, const R: usize>(
         model: &M,
         mode: Mode,
@@ -69,19 +109,39 @@ impl<const U: usize> Rebounding<U> {
         h: f64,
     ) -> Option<Self> {
         let contacts = model.contacts();
-        let rebound: Vec<bool> = list
+        let handled: Vec<Handled> = list
             .iter()
             .map(|g| {
                 let k = g.index / 2;
-                g.index % 2 == 0
-                    && contacts
-                        .get(k)
-                        .is_some_and(|c| c.rigid() && c.gap.is_finite())
-                    && mode.contact(k) == Contact::Apart
+                let rigid = contacts
+                    .get(k)
+                    .is_some_and(|c| c.rigid() && c.gap.is_finite());
+                match (rigid, g.index % 2, mode.contact(k)) {
+                    (true, 0, Contact::Apart) => Handled::Impact,
+                    (true, 1, Contact::Resting) => Handled::Release,
+                    _ => Handled::Other,
+                }
             })
             .collect();
-        if U != N + 3 || !rebound.contains(&true) || scaled(&(a * h), scale).norm() > RESOLVED_NORM
-        {
+        let held = (0..contacts.len())
+            .find(|&k| mode.contact(k) == Contact::Resting)
+            .and_then(|k| {
+                let c = &contacts[k];
+                let masses = &model.layout().masses;
+                let mover = *masses.get(c.other.unwrap_or(c.mass))?;
+                let struck = match c.other {
+                    Some(_) => Some(*masses.get(c.mass)?),
+                    None => None,
+                };
+                Some(Held {
+                    struck,
+                    mover,
+                    side: c.side,
+                    gap: c.gap,
+                })
+            });
+        let any = handled.iter().any(|k| *k != Handled::Other);
+        if U != N + 3 || !any || scaled(&(a * h), scale).norm() > RESOLVED_NORM {
             return None;
         }
         Some(Self {
@@ -91,65 +151,157 @@ impl<const U: usize> Rebounding<U> {
                 .map(|j| rows.row(2 * j).transpose())
                 .collect(),
             indices: list.iter().map(|g| g.index).collect(),
-            rebound,
+            handled,
+            held,
         })
     }
 
-    /// The state one interval `h` after `y` in `mode` (the drive `a0` at its start and its
-    /// slope `slope`), each rebound off a rigid stop located on the exact solution and applied
-    /// by the model's own switch ([`Model::switch`]), with the rebounds (time into the
-    /// interval, |x| of the first mass there) and, in `states`, the state at each rebound
-    /// before its reset; `None` to hand the interval to Dormand-Prince:
-    /// a guard that is not a rebound fires, a switch leaves the mode (a mass comes to rest),
-    /// more than [`MAX_REBOUNDS`] rebounds (chatter), or a series that does not converge.
-    #[allow(clippy::too_many_arguments)]
-    pub(super) fn interval<M: Model<N>, const N: usize>(
-        &self,
-        model: &M,
-        mode: Mode,
-        y: &SVector<f64, N>,
-        a0: f64,
-        slope: f64,
-        h: f64,
-        states: &mut Vec<SVector<f64, N>>,
-    ) -> Option<(SVector<f64, N>, Rebounds)> {
-        let augment = |y: &SVector<f64, N>, a: f64| {
-            let mut u = SVector::<f64, U>::zeros();
-            u.fixed_rows_mut::<N>(0).copy_from(y);
-            u[N] = a;
-            u[N + 1] = slope;
-            u[U - 1] = 1.0;
-            u
+    /// Puts a resting contact's mover back on the contact's surface with the struck mass's
+    /// velocity (at rest on a frame stop): the exact propagator keeps the constraint only to
+    /// rounding, and a pair that drifts apart by a rounding would read as leaving or meeting
+    /// the stop again. The mover steps inside by ulps where the sum lands past the surface,
+    /// as the model's own projection does.
+    pub(super) fn hold<const N: usize>(&self, y: &mut SVector<f64, N>) {
+        let Some(h) = self.held else {
+            return;
         };
-        let head = |u: &SVector<f64, U>| u.fixed_rows::<N>(0).into_owned();
-        let mut rebounds = Rebounds::default();
-        let (mut u, mut t) = (augment(y, a0), 0.0);
-        loop {
-            let left = h - t;
-            if left <= 0.0 {
-                return Some((head(&u), rebounds));
-            }
-            let (tau, j, at) = match first_crossing(&self.a, &self.inv_scale, &self.rows, &u, left)?
-            {
-                Search::Clear(end) => return Some((head(&end), rebounds)),
-                Search::Crossing(tau, j, at) => (tau, j, at),
+        let (ix, iv) = h.mover;
+        let (xs, vs) = h.struck.map_or((0.0, 0.0), |(jx, jv)| (y[jx], y[jv]));
+        y[iv] = vs;
+        y[ix] = xs + h.side * h.gap;
+        while h.side * (y[ix] - xs) - h.gap > 0.0 {
+            y[ix] = if h.side > 0.0 {
+                y[ix].next_down()
+            } else {
+                y[ix].next_up()
             };
-            if !self.rebound[j] || rebounds.len == MAX_REBOUNDS {
-                return None;
-            }
-            t += tau;
-            let a = a0 + slope * t;
-            let mut ys = head(&at);
-            states.push(ys);
-            let index = self.indices[j];
-            let next = model.switch(mode, index, &mut ys, a);
-            if next != mode || model.switch_kind(mode, index, next) != SwitchKind::Rebound {
-                return None;
-            }
-            rebounds.at[rebounds.len] = (t, ys[POSITION].abs());
-            rebounds.len += 1;
-            u = augment(&ys, a);
         }
+    }
+
+    /// The first switch within `len` of the augmented state `u` on the exact solution:
+    /// where the search ends, with the model's guard index of a crossing and what it does;
+    /// `None` hands the interval to Dormand-Prince (see [`first_crossing`]).
+    pub(super) fn search(&self, u: &SVector<f64, U>, len: f64) -> Option<Found<U>> {
+        Some(
+            match first_crossing(&self.a, &self.inv_scale, &self.rows, u, len)? {
+                Search::Clear(end) => Found::Clear(end),
+                Search::Crossing(tau, j, at) => {
+                    Found::Switch(tau, self.indices[j], self.handled[j], at)
+                }
+            },
+        )
+    }
+}
+
+/// Where the search of an interval's stretch in one mode ends ([`Rebounding::search`]).
+pub(super) enum Found<const U: usize> {
+    /// A switch: the time into the stretch (s), the model's guard, what it does, and the
+    /// augmented state there.
+    Switch(f64, usize, Handled, SVector<f64, U>),
+    /// No switch: the augmented state at the stretch's end.
+    Clear(SVector<f64, U>),
+}
+
+/// What a walk across an interval's switches found: the state at its end, the mode there, the
+/// time it spent in contact (s), and the impacts inside it (time into the interval, |x| of the
+/// first mass there), the states at them before each reset in `states`.
+pub(super) struct Walked<const N: usize> {
+    pub(super) y: SVector<f64, N>,
+    pub(super) mode: Mode,
+    pub(super) contact_s: f64,
+    pub(super) impacts: Rebounds,
+}
+
+/// The affine modes' data a walk reads: each mode's crossings, prepared when first met.
+pub(super) trait ModeTable<const N: usize, const U: usize> {
+    /// The crossings of `mode` of `model`, or `None` where it has none on the exact path.
+    fn crossings_of<M: Model<N>>(&mut self, model: &M, mode: Mode) -> Option<&Rebounding<U>>;
+}
+
+/// The state one interval `h` after `y` in `mode` (the drive `a0` at its start and its slope
+/// `slope`), each switch of the modes' [`Handled`] kinds located on the exact solution of
+/// the mode it happens in and applied by the model's own switch ([`Model::switch`]): rebounds
+/// off rigid stops, a contact that comes to rest, a resting contact's release; `None` to hand
+/// the interval to Dormand-Prince: another guard fires, a mode without exact crossings is
+/// entered, more than [`MAX_REBOUNDS`] impacts (chatter), or a series that does not converge.
+#[allow(clippy::too_many_arguments)]
+pub(super) fn walk<M: Model<N>, T: ModeTable<N, U>, const N: usize, const U: usize>(
+    model: &M,
+    table: &mut T,
+    mode: Mode,
+    y: &SVector<f64, N>,
+    a0: f64,
+    slope: f64,
+    h: f64,
+    states: &mut Vec<SVector<f64, N>>,
+) -> Option<Walked<N>> {
+    let augment = |y: &SVector<f64, N>, a: f64| {
+        let mut u = SVector::<f64, U>::zeros();
+        u.fixed_rows_mut::<N>(0).copy_from(y);
+        u[N] = a;
+        u[N + 1] = slope;
+        u[U - 1] = 1.0;
+        u
+    };
+    let head = |u: &SVector<f64, U>| u.fixed_rows::<N>(0).into_owned();
+    let mut walked = Walked {
+        y: *y,
+        mode,
+        contact_s: 0.0,
+        impacts: Rebounds::default(),
+    };
+    let (mut u, mut t) = (augment(y, a0), 0.0);
+    loop {
+        let left = h - t;
+        let here = table.crossings_of(model, walked.mode)?;
+        let found = if left > 0.0 {
+            here.search(&u, left)?
+        } else {
+            Found::Clear(u)
+        };
+        let (tau, index, handled, at) = match found {
+            Found::Clear(end) => {
+                walked.y = head(&end);
+                here.hold(&mut walked.y);
+                if walked.mode.in_contact() {
+                    walked.contact_s += left.max(0.0);
+                }
+                return Some(walked);
+            }
+            Found::Switch(tau, index, handled, at) => (tau, index, handled, at),
+        };
+        if handled == Handled::Other {
+            return None;
+        }
+        let mut ys = head(&at);
+        here.hold(&mut ys);
+        if walked.mode.in_contact() {
+            walked.contact_s += tau;
+        }
+        t += tau;
+        let a = a0 + slope * t;
+        if handled == Handled::Impact {
+            if walked.impacts.len == MAX_REBOUNDS {
+                return None;
+            }
+            states.push(ys);
+        }
+        let next = model.switch(walked.mode, index, &mut ys, a);
+        let kind = model.switch_kind(walked.mode, index, next);
+        let expected = match handled {
+            Handled::Impact => matches!(kind, SwitchKind::Rebound | SwitchKind::Stick),
+            _ => kind == SwitchKind::Release,
+        };
+        if !expected {
+            return None;
+        }
+        if handled == Handled::Impact {
+            let w = &mut walked.impacts;
+            w.at[w.len] = (t, ys[POSITION].abs());
+            w.len += 1;
+        }
+        walked.mode = next;
+        u = augment(&ys, a);
     }
 }
 
@@ -214,8 +366,8 @@ pub(super) fn first_crossing<const U: usize>(
         for (c, w) in p.coef.iter_mut().zip(terms) {
             *c = row.dot(w);
         }
-        let (g0, d0) = (p.coef[0], p.coef[1]);
-        if g0 >= 0.0 && !(g0 <= START_SLACK && d0 < 0.0) {
+        let g0 = p.coef[0];
+        if g0 >= 0.0 && !(g0 <= START_SLACK && leaving(&p.coef[1..p.len])) {
             return None;
         }
     }
@@ -241,6 +393,14 @@ pub(super) fn first_crossing<const U: usize>(
         ta = tb;
     }
     Some(Search::Clear(state(len)))
+}
+
+/// True when a guard at zero leaves it: its first derivative at the start that is not zero
+/// (of the Taylor coefficients `rates`) is negative. A pair released from rest together
+/// leaves its stop with zero relative speed, and the relative acceleration that the release's
+/// holding force turns negative.
+fn leaving(rates: &[f64]) -> bool {
+    rates.iter().find(|c| **c != 0.0).is_some_and(|c| *c < 0.0)
 }
 
 /// The terms `A^k u0 / k!` of the series over `len`, until a term spanned over `len` falls

@@ -22,8 +22,9 @@
 //!   piecewise-linear diodes, [`crate::model::Model::affine`]): an interval in an affine mode is
 //!   advanced exactly by the mode's propagator of the state augmented with the interpolated
 //!   drive (`affine.rs`), and its guards are checked as affine functions with their rates; the
-//!   rebounds off rigid stops (of the frame or between two masses) inside an interval are
-//!   located on the mode's exact solution (`crossings.rs`).
+//!   rebounds off rigid stops (of the frame or between two masses) inside an interval, a
+//!   contact that comes to rest and a resting contact's release (whose holding force takes the
+//!   drive) are located on the modes' exact solutions (`crossings.rs`).
 //!
 //! Any other interval that may come near a stop or where a guard may fire, every contact and
 //! the samples just after it, and every interval of a mode that is not affine go to

@@ -63,6 +63,14 @@ pub(super) trait FastPath<M: Model<N>, const N: usize> {
         &[]
     }
 
+    /// The mode at the last fast interval's end and the time it spent in contact (s), where
+    /// switches inside it changed its mode on the exact solution (a contact came to rest or
+    /// was released); its impacts are then all among [`Self::rebounds`]. `None`: the interval
+    /// ended in the mode it started in, in contact throughout or not at all.
+    fn inside(&self) -> Option<(Mode, f64)> {
+        None
+    }
+
     /// A Dormand-Prince interval ended at `y` in `mode`; `switched` when a mode switch
     /// happened inside it.
     fn after_dopri(&mut self, _model: &M, _y: &SVector<f64, N>, _mode: Mode, _switched: bool) {}
@@ -233,7 +241,13 @@ impl<'m, M: Model<N>, F: FastPath<M, N>, const N: usize> Walk<'m, M, F, N> {
         self.ode_current = false;
         self.fast_steps += 1;
         let s = &mut self.stats;
-        s.fast(analysed, mode.in_contact(), self.dt, y[POSITION]);
+        match self.fast.inside() {
+            Some((end, contact_s)) => {
+                *mode = end;
+                s.switched_inside(analysed, mode.in_contact(), contact_s, y[POSITION]);
+            }
+            None => s.fast(analysed, mode.in_contact(), self.dt, y[POSITION]),
+        }
         if analysed && s.peaks.len > 0 {
             s.peaks.see(self.model.layout(), y.as_slice());
         }
@@ -424,6 +438,17 @@ impl Contacts {
 }
 
 impl Contacts {
+    /// A fast step that ends at the position `x`, in contact or not, after `contact_s` in
+    /// contact; its impacts come as rebounds ([`Self::rebound`]).
+    #[inline(always)]
+    fn switched_inside(&mut self, analysed: bool, now: bool, contact_s: f64, x: f64) {
+        if analysed {
+            self.contact_time += contact_s;
+            self.x_peak = self.x_peak.max(x.abs());
+        }
+        self.in_contact = now;
+    }
+
     /// A rebound off a rigid stop at the position `x`, in the analysed window or not.
     #[inline(always)]
     fn rebound(&mut self, analysed: bool, x: f64) {

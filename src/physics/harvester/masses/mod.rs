@@ -26,7 +26,8 @@
 //! relative rebound could rise no higher than [`STICK_HEIGHT_REL`] of the displacement scale
 //! under the relative acceleration pressing the contact shut, the contact rests
 //! (`Contact::Resting`): a mass on a frame stop stands still, two masses move as one body (their
-//! common velocity the momentum's) until the force that holds them together changes sign. One
+//! common velocity the momentum's) until the force that holds them together changes sign, when
+//! they leave from the contact's surface (projected onto it, as an impact is). One
 //! contact rests at a time: a second contact that chatters while another rests rebounds on
 //! (the integrator then ends with its smallest step, a named error).
 //!
@@ -412,7 +413,7 @@ impl<const N: usize> MassChain<N> {
 
     /// The resting contact of a mode, if any.
     #[inline(always)]
-    fn resting(&self, mode: Mode) -> Option<usize> {
+    pub(super) fn resting(&self, mode: Mode) -> Option<usize> {
         if !mode.in_contact() {
             return None;
         }

@@ -275,7 +275,13 @@ impl<const N: usize> Model<N> for MassChain<N> {
             }
             (Contact::Pressed, _) => mode.with_contact(k, Contact::Clipped),
             (Contact::Clipped, _) => mode.with_contact(k, Contact::Pressed),
-            (Contact::Resting, _) => mode.with_contact(k, Contact::Apart),
+            (Contact::Resting, _) => {
+                // The pair leaves the surface it rested on: an integrator that moves both
+                // masses keeps their separation only to rounding, and a separation left past
+                // the gap would read as a strike at zero relative speed at the release.
+                self.project(c, y);
+                mode.with_contact(k, Contact::Apart)
+            }
         }
     }
 
@@ -339,6 +345,13 @@ impl<const N: usize> Model<N> for MassChain<N> {
 
     fn affine(&self, mode: Mode) -> Option<crate::model::Affine<N>> {
         self.affine_form(mode)
+    }
+
+    fn driven_affine(&self, mode: Mode) -> Option<crate::model::DrivenAffine<N>> {
+        match self.resting(mode) {
+            Some(k) => self.resting_form(mode, k),
+            None => self.affine_form(mode).map(Into::into),
+        }
     }
 
     fn without_contacts(&self) -> Self {
