@@ -358,6 +358,8 @@ fn displacement(
 
 /// The record of a measured drive (`path`) or of a sine (`--sine-g`, without a path).
 fn measured(a: &RandomArgs, file_device: &Device, path: Option<PathBuf>) -> Result<()> {
+    // The provenance's `git status` runs beside the reading and the integration.
+    common::git_commit_in_background();
     let mut m = read_measured(a, file_device, path.as_deref())?;
     let (mut exp, loaded, device) = start("endstop-random", &a.device, a.bias_v, a.out.clone())?;
     let drive = SampledDrive {
@@ -434,6 +436,78 @@ fn measured(a: &RandomArgs, file_device: &Device, path: Option<PathBuf>) -> Resu
         .collect();
     times.lap("spectra");
 
+    // The figure is drawn on a thread beside the data files' writing (it reads the spectra
+    // alone) and written after them.
+    std::thread::scope(|scope| {
+        let figure = scope.spawn(|| {
+            common::RenderedPlot::of(&spectra_plot(
+                &device,
+                "Output PSD under a measured record",
+                &out,
+                &linear_band,
+                &drive_band,
+            ))
+        });
+        let written = measured_outputs(
+            a,
+            &mut exp,
+            &loaded.file,
+            &device,
+            &rec,
+            &out_rec,
+            &out,
+            (&linear_band, linear_w),
+            &drive_band,
+            MeasuredShape {
+                fs,
+                preroll_s,
+                band_hz: (lo, hi),
+                nperseg: spec.welch.nperseg,
+            },
+        );
+        let figure = figure
+            .join()
+            .map_err(|_| anyhow::anyhow!("drawing the figure failed (its thread panicked)"))?;
+        written?;
+        let stem = exp.name.clone();
+        exp.write_rendered_plot(&stem, figure?)
+    })?;
+    times.lap("output");
+    times.report("endstop-random", &mut exp);
+    exp.finish()
+}
+
+/// The sampling of a measured record's run, for its text: the integrator's rate (Hz), the
+/// pre-roll (s), the analysis band (Hz) and the Welch segment length (samples).
+struct MeasuredShape {
+    fs: f64,
+    preroll_s: f64,
+    band_hz: (f64, f64),
+    nperseg: usize,
+}
+
+/// Writes a measured record's data files and numbers (the figure is the caller's): its output
+/// PSD beside the linear theory's (`linear`: the band's densities and the total power), the
+/// record's row, and `numbers.md`.
+#[allow(clippy::too_many_arguments)]
+fn measured_outputs(
+    a: &RandomArgs,
+    exp: &mut common::Experiment,
+    device_file: &str,
+    device: &Device,
+    rec: &endstop::drive::measured::MeasuredRecord,
+    out_rec: &endstop::study::record::Record,
+    out: &Psd,
+    (linear_band, linear_w): (&[f64], Option<f64>),
+    drive_band: &Psd,
+    shape: MeasuredShape,
+) -> Result<()> {
+    let MeasuredShape {
+        fs,
+        preroll_s,
+        band_hz: (lo, hi),
+        nperseg,
+    } = shape;
     let m = out.freq_hz.len();
     let file = rec.source_name.clone();
     let mut df = df!(
@@ -447,7 +521,7 @@ fn measured(a: &RandomArgs, file_device: &Device, path: Option<PathBuf>) -> Resu
     exp.write_parquet("output_psd", &mut df, &device.params)?;
     let s = &out_rec.summary;
     let accel_rms_g = s.accel_mean_square_si.sqrt() / G;
-    let widths = Widths::of(&out);
+    let widths = Widths::of(out);
     let mut per = df!(
         "realisation" => [0u64],
         "p_w" => [s.p_total_w()],
@@ -459,7 +533,7 @@ fn measured(a: &RandomArgs, file_device: &Device, path: Option<PathBuf>) -> Resu
         "accel_rms_g" => [accel_rms_g],
         "params" => [device.params.clone()],
     )?;
-    let masses = mass_columns(&device)?;
+    let masses = mass_columns(device)?;
     with_mass_columns(&mut per, &masses, &[s.mass_peaks])?;
     exp.write_parquet("records", &mut per, &device.params)?;
 
@@ -479,9 +553,9 @@ fn measured(a: &RandomArgs, file_device: &Device, path: Option<PathBuf>) -> Resu
          - power of the loads: {} nW; linear theory without stops under the same spectrum: {}\n\
          - RMS displacement: {} um; time in contact: {} %; impacts: {}\n\
          - free flight integrated by: {}\n",
-        loaded.file,
+        device_file,
         device.params,
-        describe(&device),
+        describe(device),
         rec.accel_si.len(),
         fmt_sig(rec.sample_rate_hz, 6),
         fmt_sig(rec.duration_s(), 4),
@@ -489,7 +563,7 @@ fn measured(a: &RandomArgs, file_device: &Device, path: Option<PathBuf>) -> Resu
         preroll_s,
         fmt_sig(lo, 4),
         fmt_sig(hi, 4),
-        spec.welch.nperseg,
+        nperseg,
         fmt_sig(accel_rms_g, 4),
         fmt_sig(s.p_total_w() * 1e9, 4),
         linear_md(linear_w),
@@ -499,25 +573,15 @@ fn measured(a: &RandomArgs, file_device: &Device, path: Option<PathBuf>) -> Resu
         free_flight_label(s.free_flight),
     );
     md.push_str(&mass_peaks_md(
-        &mut exp,
+        exp,
         &masses,
         &s.mass_peaks,
         "over the analysed record",
     ));
-    let md = md + &crate::merit::drive_merits(&mut exp, a, &device, s.p_total_w(), accel_rms_g);
+    let md = md + &crate::merit::drive_merits(exp, a, device, s.p_total_w(), accel_rms_g);
     exp.write_numbers_md(&md)?;
     print!("{md}");
-    let plot = spectra_plot(
-        &device,
-        "Output PSD under a measured record",
-        &out,
-        &linear_band,
-        &drive_band,
-    );
-    exp.write_plot(&plot)?;
-    times.lap("output");
-    times.report("endstop-random", &mut exp);
-    exp.finish()
+    Ok(())
 }
 
 /// Adds to `df` (one row per record) each mass's peaks of the records, under the per-mass

@@ -35,6 +35,7 @@ static GLOBAL: mimalloc::MiMalloc = mimalloc::MiMalloc;
 use std::collections::BTreeMap;
 use std::io::Write;
 use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Mutex, MutexGuard, OnceLock};
 use std::time::Instant;
 
@@ -120,15 +121,17 @@ pub fn load_device_file(path: &Path) -> Result<LoadedDevice> {
 /// One `git status` gives both: with `--porcelain=v2 --branch` its `# branch.oid` line names
 /// the commit `HEAD` points to, and every line that does not start with `#` is a changed
 /// tracked file (`--untracked-files=no`; `--no-ahead-behind` spares the count against an
-/// upstream, which the answer does not need). A process started costs about 1.5 ms of
-/// processor time, the dirty check itself about 2.5 ms more, the state of every tracked file
-/// read from the index and the disk.
+/// upstream, which the answer does not need; `--no-optional-locks` keeps it from writing the
+/// index it refreshes, which a look-up beside other work must not lock). A process started
+/// costs about 1.5 ms of processor time, the dirty check itself about 2.5 ms more, the state
+/// of every tracked file read from the index and the disk.
 pub fn git_commit() -> String {
     static COMMIT: OnceLock<String> = OnceLock::new();
     COMMIT
         .get_or_init(|| {
             std::process::Command::new("git")
                 .args([
+                    "--no-optional-locks",
                     "status",
                     "--porcelain=v2",
                     "--branch",
@@ -143,6 +146,27 @@ pub fn git_commit() -> String {
                 .unwrap_or_else(|| "unknown".to_string())
         })
         .clone()
+}
+
+/// Whether [`git_commit_in_background`] started the look-up: then [`write_atomic`] waits for
+/// its answer before it writes anything.
+static GIT_IN_BACKGROUND: AtomicBool = AtomicBool::new(false);
+
+/// Starts [`git_commit`] on a thread, so that its `git status` (a process of some 4 ms of
+/// processor time) runs beside the caller's reading and integrating instead of before them.
+///
+/// The answer stays what it would be at the start of the run: [`write_atomic`] waits for it
+/// before it writes any file, so the dirty check never sees the run's own outputs. Where no
+/// thread can be started, [`git_commit`] runs `git` itself when it is first asked.
+pub fn git_commit_in_background() {
+    if !GIT_IN_BACKGROUND.swap(true, Ordering::SeqCst) {
+        let started = std::thread::Builder::new()
+            .name("git-commit".into())
+            .spawn(|| {
+                git_commit();
+            });
+        drop(started);
+    }
 }
 
 /// The commit, `-dirty` when a tracked file changed, from the text of `git status
@@ -164,7 +188,13 @@ fn commit_of_status(status: &str) -> Option<String> {
 }
 
 /// Writes `bytes` to `path` atomically (temporary file in the same directory, then rename).
+///
+/// After [`git_commit_in_background`] it first waits for the commit, so that the provenance
+/// describes the tree before the run wrote into it.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
+    if GIT_IN_BACKGROUND.load(Ordering::SeqCst) {
+        git_commit();
+    }
     let dir = path.parent().context("output path has no parent")?;
     std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
     let tmp = dir.join(format!(
@@ -179,6 +209,25 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
     }
     std::fs::rename(&tmp, path).with_context(|| format!("cannot rename to {}", path.display()))?;
     Ok(())
+}
+
+/// A figure rendered and not yet written: its title, SVG text and PNG bytes.
+pub struct RenderedPlot {
+    title: String,
+    svg: String,
+    png: Vec<u8>,
+}
+
+impl RenderedPlot {
+    /// Renders `fig` ([`io::plot::render`]); it touches no file, so it may run on any thread.
+    pub fn of<F: io::plot::Chart>(fig: &F) -> Result<Self> {
+        let (svg, png) = io::plot::render(fig)?;
+        Ok(Self {
+            title: fig.title(),
+            svg,
+            png,
+        })
+    }
 }
 
 /// One experiment's output directory and provenance.
@@ -227,7 +276,13 @@ struct Summary<'a> {
 impl Experiment {
     /// Starts an experiment: prints its name and prepares its directories.
     pub fn start(name: &str) -> Self {
-        eprintln!("[{name}] running (commit {})", git_commit());
+        // After `git_commit_in_background` the commit is still being read: the line that ends
+        // the run names it.
+        if GIT_IN_BACKGROUND.load(Ordering::SeqCst) {
+            eprintln!("[{name}] running");
+        } else {
+            eprintln!("[{name}] running (commit {})", git_commit());
+        }
         Self {
             name: name.to_string(),
             dir: results_root().join(name),
@@ -350,7 +405,13 @@ impl Experiment {
     /// Renders an extra figure under another file stem (e.g. `fig08_convergence`), with its
     /// caption as [`Experiment::write_plot`].
     pub fn write_extra_plot<F: io::plot::Chart>(&self, stem: &str, fig: &F) -> Result<()> {
-        let (svg, png) = io::plot::render(fig)?;
+        self.write_rendered_plot(stem, RenderedPlot::of(fig)?)
+    }
+
+    /// Writes a figure rendered beforehand ([`RenderedPlot::of`], e.g. on a thread beside
+    /// the data files' writing) as [`Experiment::write_extra_plot`] writes it.
+    pub fn write_rendered_plot(&self, stem: &str, plot: RenderedPlot) -> Result<()> {
+        let RenderedPlot { title, svg, png } = plot;
         // The `endstop` tool's runs write the book's copy into their own directory: once.
         let dirs = if self.book_dir == self.dir {
             vec![&self.dir]
@@ -361,7 +422,7 @@ impl Experiment {
             write_atomic(&dir.join(format!("{stem}.svg")), svg.as_bytes())?;
             write_atomic(&dir.join(format!("{stem}.png")), &png)?;
         }
-        lock(&self.plots).push((stem.to_string(), fig.title()));
+        lock(&self.plots).push((stem.to_string(), title));
         Ok(())
     }
 
@@ -514,10 +575,11 @@ impl Experiment {
             serde_json::to_string_pretty(&timing)?.as_bytes(),
         )?;
         eprintln!(
-            "[{}] wrote {} ({:.2} s)",
+            "[{}] wrote {} ({:.2} s, commit {})",
             self.name,
             self.dir.strip_prefix(root()).unwrap_or(&self.dir).display(),
-            secs
+            secs,
+            git_commit()
         );
         Ok(())
     }
@@ -530,6 +592,12 @@ impl Experiment {
 /// `n` cores cannot finish before the sum over its experiments divided by `n`.
 pub fn cpu_time_s() -> Option<f64> {
     Some(rusage_s(Who::This)? + rusage_s(Who::Children)?)
+}
+
+/// Processor time this process's own threads have used so far, user and system, without its
+/// child processes (s); None where `getrusage` is not available.
+pub fn own_cpu_time_s() -> Option<f64> {
+    rusage_s(Who::This)
 }
 
 /// Processor time, user and system, of this process's child processes that have ended and

@@ -5,9 +5,11 @@
 //!
 //! A run calls [`TimeSplit::lap`] at the end of each phase: the time since the previous lap is
 //! added to that phase, so that the phases add up to the time since [`TimeSplit::start`]. Each
-//! phase gets its wall time ([`Instant`]) and its processor time ([`crate::cpu_time_s`], user
-//! and system): on a shared machine the wall time includes waiting for a processor, which the
-//! processor time does not.
+//! phase gets its wall time ([`Instant`]) and the processor time of the process's own threads
+//! ([`crate::own_cpu_time_s`], user and system): on a shared machine the wall time includes
+//! waiting for a processor, which the processor time does not. Child processes (the
+//! provenance's `git`) run beside the phases and are counted once, in a phase of their own
+//! ([`TimeSplit::children`]), whichever phase they end in.
 
 use std::time::Instant;
 
@@ -29,6 +31,8 @@ pub struct Phase {
 pub struct TimeSplit {
     last: Instant,
     last_cpu: Option<f64>,
+    /// The child processes' processor time at the start (s).
+    children_start: Option<f64>,
     phases: Vec<Phase>,
 }
 
@@ -37,18 +41,28 @@ impl TimeSplit {
     pub fn start() -> Self {
         Self {
             last: Instant::now(),
-            last_cpu: crate::cpu_time_s(),
+            last_cpu: crate::own_cpu_time_s(),
+            children_start: crate::children_cpu_time_s(),
             phases: Vec::new(),
         }
     }
 
     /// Ends a stretch of `phase`: adds the time since the previous lap (or the start) to it.
     pub fn lap(&mut self, phase: &'static str) {
-        let (now, cpu) = (Instant::now(), crate::cpu_time_s());
+        let (now, cpu) = (Instant::now(), crate::own_cpu_time_s());
         let wall_s = now.duration_since(self.last).as_secs_f64();
         let cpu_s = cpu.zip(self.last_cpu).map(|(c, c0)| c - c0);
         (self.last, self.last_cpu) = (now, cpu);
         self.add(phase, wall_s, cpu_s);
+    }
+
+    /// Adds the processor time of the child processes waited for since the start as the
+    /// phase `phase`, of no wall time of its own (they ran beside the other phases).
+    pub fn children(&mut self, phase: &'static str) {
+        let cpu_s = crate::children_cpu_time_s()
+            .zip(self.children_start)
+            .map(|(c, c0)| c - c0);
+        self.add(phase, 0.0, cpu_s);
     }
 
     fn add(&mut self, name: &'static str, wall_s: f64, cpu_s: Option<f64>) {
@@ -104,13 +118,16 @@ impl TimeSplit {
         )
     }
 
-    /// Prints the split on stderr under `tag` and records it in `exp`'s `timing.json`
-    /// (`phases_wall_s` and `phases_cpu_s`, by phase).
+    /// Prints the split on stderr under `tag`, with the child processes' phase
+    /// ([`TimeSplit::children`]), and records it in `exp`'s `timing.json` (`phases_wall_s` and
+    /// `phases_cpu_s`, by phase).
     pub fn report(&self, tag: &str, exp: &mut Experiment) {
-        eprintln!("[{tag}] time split, {}", self.line());
+        let mut all = self.clone();
+        all.children("child processes");
+        eprintln!("[{tag}] time split, {}", all.line());
         let by_phase = |f: &dyn Fn(&Phase) -> serde_json::Value| {
             serde_json::Value::Object(
-                self.phases
+                all.phases
                     .iter()
                     .map(|p| (p.name.to_string(), f(p)))
                     .collect(),
@@ -150,5 +167,22 @@ mod tests {
         );
         t.lap("output");
         assert_eq!(t.phases().len(), 3);
+    }
+
+    /// The child processes' phase holds the processor time of a child waited for after the
+    /// start, and no wall time (the child ran beside the other phases).
+    #[test]
+    fn child_processes_count_in_their_own_phase() {
+        let mut t = TimeSplit::start();
+        // `true` ends at once: its processor time is some microseconds, perhaps 0 at the
+        // clock's resolution, never negative.
+        let ran = std::process::Command::new("true").status();
+        t.lap("work");
+        t.children("child processes");
+        let p = t.phases()[1];
+        assert_eq!((p.name, p.wall_s), ("child processes", 0.0));
+        if ran.is_ok() {
+            assert!(p.cpu_s.is_none_or(|c| c >= 0.0), "{p:?}");
+        }
     }
 }
