@@ -290,13 +290,14 @@ fn a_grazing_corner_is_crossed_from_the_free_flight_side() {
     assert!(b.points.iter().any(|p| p.orbit.is_impacting()));
 }
 
-/// The fold of Figure 13's upper branch found directly from the branch's last point before
-/// it ([`Shooter::fold_near`]) is the continuation's fold: the same frequency to 1e-7
-/// relative, a multiplier at 1 to 1e-3, and the branch turning back below it. Both locate the frequency's extremum along the
-/// arclength (the continuation to 1e-4, the direct search to 1e-5), which leaves the
-/// frequency off by the square of that times the branch's curvature, and both solve the orbit
-/// to a residual of 1e-9: 1e-7 is well above either error and far below the move of the fold
-/// with the integrator's tolerance (`branch_residuals_and_fold_convergence`).
+/// The fold of Figure 13's upper branch found directly from the branch's last point 1 Hz
+/// before it ([`Shooter::fold_near`]) is the continuation's fold: the same frequency to 1e-7
+/// relative, a multiplier at 1 to 1e-3, and the branch turning back below it. Both locate the
+/// frequency's extremum along the arclength (the continuation to 1e-4, the direct search to
+/// 1e-5), which leaves the frequency off by the square of that times the branch's curvature,
+/// and both solve the orbit to a residual of 1e-9: 1e-7 is well above either error and far
+/// below the move of the fold with the integrator's tolerance
+/// (`branch_residuals_and_fold_convergence`).
 #[test]
 fn fold_found_directly_is_the_continuations_fold() {
     let (h, b) = fig13_branch(ShootingOptions::default());
@@ -304,7 +305,14 @@ fn fold_found_directly_is_the_continuations_fold() {
         .events_of(EventKind::Fold)
         .find(|e| !e.at_grazing)
         .expect("a smooth fold");
-    let start = &b.points[fold.after_point].orbit;
+    // The last point at least 1 Hz before the fold (half the continuation's largest step):
+    // far enough that the search has to move.
+    let start = &b.points[..=fold.after_point]
+        .iter()
+        .rev()
+        .find(|p| fold.param - p.orbit.forcing.freq_hz >= 1.0)
+        .expect("a point 1 Hz before the fold")
+        .orbit;
     let shooter = Shooter::new(&h, ShootingOptions::default());
     let search = FoldSearch {
         param: Parameter::Frequency,
