@@ -23,14 +23,11 @@ use nalgebra::{DMatrix, DVector, SMatrix, SVector};
 use crate::model::Model;
 use crate::ode::Stats;
 
+use super::doubling::eigenvector_near;
 use super::{Forcing, Orbit, OrbitError, Parameter, Shooter, CHORD_STEPS};
 
 /// Secant steps before the search for a fold is given up.
 const FOLD_SECANT_STEPS: usize = 12;
-
-/// Inverse-iteration sweeps for the direction of the multiplier nearest 1 (see
-/// [`super::flip_vector`] for the same iteration at -1).
-const INVERSE_SWEEPS: usize = 3;
 
 /// How a fold is sought by [`Shooter::fold_near`].
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -45,24 +42,6 @@ pub struct FoldSearch {
     /// Largest secant step in arclength: a step beyond it would leave the neighbourhood in
     /// which the fold's old direction parametrises the branch.
     pub max_step: f64,
-}
-
-/// The real eigenvector of a scaled monodromy for its real multiplier nearest 1, of unit
-/// length (None when the iteration fails).
-fn unit_direction<const N: usize>(m: &SMatrix<f64, N, N>) -> Option<SVector<f64, N>> {
-    // A shift just off 1 keeps the matrix regular.
-    let shift = 1.0 + 1e-8;
-    let lu = crate::num::dense::Lu::of(&(m - SMatrix::<f64, N, N>::identity() * shift));
-    let mut v = SVector::<f64, N>::repeat(1.0);
-    for _ in 0..INVERSE_SWEEPS {
-        let w = lu.solve(&v)?;
-        let n = w.norm();
-        if !(n.is_finite() && n > 0.0) {
-            return None;
-        }
-        v = w / n;
-    }
-    Some(v)
 }
 
 /// A fold found by [`Shooter::fold_near`].
@@ -121,7 +100,8 @@ impl<M: Model<N>, const N: usize> Shooter<'_, M, N> {
             residual,
         };
         let p0 = from.param(param);
-        let v = unit_direction::<N>(&from.monodromy_n()).ok_or_else(|| fail(p0, f64::NAN))?;
+        let v =
+            eigenvector_near::<N>(&from.monodromy_n(), 1.0).ok_or_else(|| fail(p0, f64::NAN))?;
         let z0 = from.state_n::<N>().component_div(&self.scales());
         let anchor = DVector::from_fn(N + 1, |i, _| {
             if i < N {
