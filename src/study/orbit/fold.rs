@@ -13,10 +13,10 @@
 //!   P(z, q) - z = 0,   t0 . (u - u0) = s,
 //!
 //! its tangent is the kernel of [M - I | dP/dq] normalised by t0 . t = 1, and a secant
-//! iteration on t_q(s) = 0 finds the fold (Keller's pseudo-arclength bordering,
-//! Kuznetsov, "Elements of Applied Bifurcation Theory", 3rd ed., section 10.2; the fold as the
-//! zero of the tangent's parameter component, ibid. section 10.2.2). The fold's parameter is
-//! stationary in s, so its error is of the order of the square of the error in s.
+//! iteration on t_q(s) = 0 finds the fold (Keller's pseudo-arclength bordering, and the fold
+//! as the zero of the tangent's parameter component: Kuznetsov, "Elements of Applied
+//! Bifurcation Theory", 3rd ed., chapter 10). The fold's parameter is stationary in s, so its
+//! error is of the order of the square of the error in s.
 
 use nalgebra::{DMatrix, DVector, SMatrix, SVector};
 
@@ -83,9 +83,9 @@ impl<M: Model<N>, const N: usize> Shooter<'_, M, N> {
     /// The fold of the branch through the fold `from` of a nearby system (an orbit at a
     /// fold of the same branch at slightly different model parameters, or at this model near
     /// its fold): the orbit where the branch's parameter is extremal, with its section at
-    /// `from`'s phase, with the branch's curvature there (which way it turns). Errors when Newton's method or the secant iteration does not converge;
-    /// the caller checks that the fold found is the one it follows (its parameter and its
-    /// multiplier at 1).
+    /// `from`'s phase, and the branch's curvature there (which way it turns). Errors when
+    /// Newton's method or the secant iteration does not converge; the caller checks that the
+    /// fold found is the one it follows (its parameter and its multiplier at 1).
     pub fn fold_near(
         &self,
         from: &Orbit,
