@@ -12,7 +12,7 @@ use endstop::progress::Silent;
 use endstop::study::continuation::{
     continue_branch, first_orbit, Branch, ContinuationSettings, EventKind,
 };
-use endstop::study::orbit::{Forcing, Parameter, Shooter, ShootingOptions};
+use endstop::study::orbit::{FoldSearch, Forcing, Parameter, Shooter, ShootingOptions};
 use nalgebra::{Complex, Matrix3};
 
 use crate::common;
@@ -288,4 +288,58 @@ fn a_grazing_corner_is_crossed_from_the_free_flight_side() {
             .collect::<Vec<_>>()
     );
     assert!(b.points.iter().any(|p| p.orbit.is_impacting()));
+}
+
+/// The fold of Figure 13's upper branch found directly from the branch's last point 1 Hz
+/// before it ([`Shooter::fold_near`]) is the continuation's fold: the same frequency to 1e-7
+/// relative, a multiplier at 1 to 1e-3, and the branch turning back below it. Both locate the
+/// frequency's extremum along the arclength (the continuation to 1e-4, the direct search to
+/// 1e-5), which leaves the frequency off by the square of that times the branch's curvature,
+/// and both solve the orbit to a residual of 1e-9: 1e-7 is well above either error and far
+/// below the move of the fold with the integrator's tolerance
+/// (`branch_residuals_and_fold_convergence`).
+#[test]
+fn fold_found_directly_is_the_continuations_fold() {
+    let (h, b) = fig13_branch(ShootingOptions::default());
+    let fold = b
+        .events_of(EventKind::Fold)
+        .find(|e| !e.at_grazing)
+        .expect("a smooth fold");
+    // The last point at least 1 Hz before the fold (half the continuation's largest step):
+    // far enough that the search has to move.
+    let start = &b.points[..=fold.after_point]
+        .iter()
+        .rev()
+        .find(|p| fold.param - p.orbit.forcing.freq_hz >= 1.0)
+        .expect("a point 1 Hz before the fold")
+        .orbit;
+    let shooter = Shooter::new(&h, ShootingOptions::default());
+    let search = FoldSearch {
+        param: Parameter::Frequency,
+        param_scale: 1.0,
+        tol: 1e-5,
+        max_step: 2.0,
+    };
+    let mut stats = Stats::default();
+    let found = shooter.fold_near(start, &search, &mut stats).unwrap();
+    let o = &found.orbit;
+    let rel = (o.forcing.freq_hz - fold.param).abs() / fold.param;
+    let near_one = o
+        .multipliers
+        .iter()
+        .map(|m| (m - 1.0).norm())
+        .fold(f64::INFINITY, f64::min);
+    println!(
+        "fold {} Hz from {} Hz: continuation {} Hz ({rel:e}), multiplier off 1 by {near_one:e}",
+        o.forcing.freq_hz, start.forcing.freq_hz, fold.param
+    );
+    assert!(
+        rel < 1e-7,
+        "{} vs {} ({rel:e})",
+        o.forcing.freq_hz,
+        fold.param
+    );
+    assert!(near_one < 1e-3, "multiplier off 1 by {near_one:e}");
+    // The upper branch ends at its largest frequency (the jump down of an up-sweep).
+    assert!(found.curvature < 0.0, "curvature {:e}", found.curvature);
 }

@@ -26,8 +26,8 @@ use crate::study::sweep::{BranchEndKind, DownEndKind};
 
 use super::model::SweepRun;
 use super::track::{
-    locate_fold, locate_grazing, point_orbit, quantity_of, track_grazing, Fold, Grazing, Guess,
-    Lost,
+    locate_fold, locate_grazing, point_orbit, quantity_of, track_fold, track_grazing, Fold,
+    Grazing, Guess, Lost,
 };
 use super::{Direction, FeatureKind, SweepData};
 
@@ -375,6 +375,30 @@ fn second_branch_back(
     Ok(PointModel::Orbit(Box::new(o)))
 }
 
+/// The fold of `h` from the fold `f` at nearby parameter values: by Newton's method from
+/// where it was, while no point of the first branch that lay beyond it comes to lie before
+/// it; else (or where Newton's method loses it) by a continuation up to it. A point that
+/// crosses the fold starts from the states before it, and those are fresh only from a
+/// continuation (Newton's method keeps the old ones).
+fn follow_fold(
+    h: &Harvester,
+    a: f64,
+    s: &Setup,
+    f: &Fold,
+    data: &SweepData,
+    points: &[(bool, PointModel)],
+) -> Result<Fold, Lost> {
+    if let Ok(new) = track_fold(h, a, f, s.fold_limit(), s.step) {
+        let crossed = data.points.iter().zip(points).any(|(p, (first, pm))| {
+            *first && matches!(pm, PointModel::AtFold) && !new.beyond(p.freq_hz)
+        });
+        if !crossed {
+            return Ok(new);
+        }
+    }
+    locate_fold(h, a, &f.before, f.freq_hz(), f.dir, s.fold_limit(), s.step)
+}
+
 /// The model of `data` on `device` with the acceleration factor `scale`, followed from the
 /// model `prev` at nearby parameter values.
 pub(super) fn track(
@@ -387,15 +411,7 @@ pub(super) fn track(
     let h = s.harvester(device)?;
     let a = s.accel_rms_g;
     let fold = match &prev.fold {
-        Some(f) => Some(locate_fold(
-            &h,
-            a,
-            &f.before,
-            f.freq_hz(),
-            f.dir,
-            s.fold_limit(),
-            s.step,
-        )?),
+        Some(f) => Some(follow_fold(&h, a, &s, f, data, &prev.points)?),
         None => None,
     };
     let edge = |e: &Option<Edge>| -> Result<Option<Edge>, Lost> {

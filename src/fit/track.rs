@@ -12,7 +12,9 @@ type Harvester = Model4<4>;
 type State = nalgebra::SVector<f64, 4>;
 use crate::progress::Silent;
 use crate::study::continuation::{continue_branch_until, ContinuationSettings, Event, EventKind};
-use crate::study::orbit::{Forcing, Orbit, Parameter, Shooter, ShootingOptions, DISTINCT_REL};
+use crate::study::orbit::{
+    FoldSearch, Forcing, Orbit, Parameter, Shooter, ShootingOptions, DISTINCT_REL,
+};
 
 use super::Quantity;
 
@@ -331,6 +333,69 @@ impl Fold {
             })
             .unwrap_or(Guess::of(&self.orbit))
     }
+}
+
+/// A fold followed by Newton's method is taken for the one it follows when its multiplier
+/// nearest 1 lies this close to 1: at a smooth fold M - I is singular, and the fold's location
+/// to [`FOLD_LOCATE_TOL_HZ`] leaves the multiplier within about that of 1 times the branch's
+/// curvature; the corner of a branch at a grazing, where the branch turns without a
+/// multiplier at 1, is far from it.
+const FOLD_MULTIPLIER_TOL: f64 = 0.02;
+
+/// Largest move of a fold followed by Newton's method, relative to its frequency (as a
+/// grazing's, [`track_grazing`]): a fold further away is located afresh.
+const FOLD_MOVE_REL: f64 = 0.05;
+
+/// The fold of `h` near `from` (the fold at the parameters before), by Newton's method on the
+/// fold itself ([`Shooter::fold_near`]) instead of a continuation up to it; the states before
+/// it are kept as Newton guesses. Refused unless the fold found is the one followed: as far
+/// from the old as [`FOLD_MOVE_REL`] allows, short of `limit_hz`, with the same contacts, a
+/// multiplier at 1, and the branch turning back against the sweep's direction there (the
+/// branch's other fold turns the other way). The states before it are those of the fold it
+/// started from: they serve as Newton guesses only while no point crosses the fold (see
+/// `branch::track`).
+pub(super) fn track_fold(
+    h: &Harvester,
+    accel_rms_g: f64,
+    from: &Fold,
+    limit_hz: f64,
+    max_step_hz: f64,
+) -> Result<Fold, Lost> {
+    let shooter = Shooter::new(h, shooting());
+    let mut stats = Stats::default();
+    let mut start = from.orbit.clone();
+    start.forcing.accel_rms_g = accel_rms_g;
+    let search = FoldSearch {
+        param: Parameter::Frequency,
+        param_scale: 1.0,
+        tol: FOLD_LOCATE_TOL_HZ,
+        max_step: max_step_hz,
+    };
+    let found = shooter.fold_near(&start, &search, &mut stats)?;
+    let o = found.orbit;
+    let (f_old, f_new) = (from.freq_hz(), o.forcing.freq_hz);
+    let near_one = o
+        .multipliers
+        .iter()
+        .map(|m| (m - 1.0).norm())
+        .fold(f64::INFINITY, f64::min);
+    if (f_new - f_old).abs() > FOLD_MOVE_REL * f_old
+        || (f_new - limit_hz) * from.dir > 0.0
+        || o.summary.impacts != from.orbit.summary.impacts
+        || near_one > FOLD_MULTIPLIER_TOL
+        || found.curvature * from.dir >= 0.0
+    {
+        return Err(Lost(format!(
+            "fold followed from {f_old} Hz to {f_new} Hz is another (multiplier off 1 by \
+             {near_one:.3e}, {} impacts, curvature {:.3e})",
+            o.summary.impacts, found.curvature
+        )));
+    }
+    Ok(Fold {
+        orbit: o,
+        before: from.before.clone(),
+        dir: from.dir,
+    })
 }
 
 /// Starts tried, each further from the old fold, before a fold is given up as lost.

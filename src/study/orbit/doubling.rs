@@ -43,7 +43,15 @@ pub fn flip_vector<const N: usize>(orbit: &Orbit) -> Option<SVector<f64, N>> {
         .filter(|m| m.im == 0.0 && m.re < 0.0)
         .min_by(|a, b| (a.re + 1.0).abs().total_cmp(&(b.re + 1.0).abs()))?
         .re;
-    let m: SMatrix<f64, N, N> = orbit.monodromy_n();
+    eigenvector_near(&orbit.monodromy_n(), mu)
+}
+
+/// The real eigenvector of the scaled monodromy `m` for its real multiplier `mu` (or the one
+/// nearest it), of unit length, by inverse iteration (None when the iteration fails).
+pub(super) fn eigenvector_near<const N: usize>(
+    m: &SMatrix<f64, N, N>,
+    mu: f64,
+) -> Option<SVector<f64, N>> {
     // A shift just off the multiplier keeps the matrix regular.
     let shift = mu * (1.0 + 1e-8);
     let lu = crate::num::dense::Lu::of(&(m - SMatrix::<f64, N, N>::identity() * shift));

@@ -43,7 +43,8 @@
 //! the period map and Newton's method on it, `variational.rs` the variational equations with
 //! their saltation matrices, `period_sums.rs` the sums over one period behind an
 //! [`OrbitSummary`], `doubling.rs` the orbits of two drive periods born where an orbit
-//! loses stability by a period doubling, and `symmetry.rs` the mirror symmetry x -> -x with the half-period map
+//! loses stability by a period doubling, `fold.rs` a fold found directly from a fold of a
+//! nearby system, and `symmetry.rs` the mirror symmetry x -> -x with the half-period map
 //! of symmetric orbits.
 //!
 //! [`Dopri5`]: crate::ode::Dopri5
@@ -59,6 +60,7 @@ use crate::ode::SolverError;
 use crate::study::mass_peaks::MassPeaks;
 
 mod doubling;
+mod fold;
 mod period_sums;
 mod reach;
 mod shooter;
@@ -66,6 +68,7 @@ mod symmetry;
 mod variational;
 
 pub use doubling::{flip_vector, DISTINCT_REL, DOUBLED_AMPLITUDES};
+pub use fold::{FoldOrbit, FoldSearch};
 pub use reach::ContactReach;
 pub use shooter::{Linearised, Shooter};
 pub use symmetry::{HalfMap, SYMMETRY_TOL};
