@@ -68,7 +68,18 @@ pub(crate) fn plots(p: &Problem, study: &Study, maps: &[(usize, Vec<Evaluated>)]
             Style::Dots,
         ),
         Series::new("Pareto front", front, PALETTE[0], Style::LinePoints),
-        Series::new("the answer", vec![(v, w * 1e6)], PALETTE[4], Style::Circles),
+        Series::new(
+            // A design whose orbit touches no stop has no impact speed: its point sits at
+            // zero, which the label says rather than leaving it to read as a missing value.
+            if speed && v == 0.0 {
+                "the answer (touches no stop)"
+            } else {
+                "the answer"
+            },
+            vec![(v, w * 1e6)],
+            PALETTE[4],
+            Style::Circles,
+        ),
     ];
     let limit = if speed {
         p.limits
@@ -91,7 +102,7 @@ pub(crate) fn plots(p: &Problem, study: &Study, maps: &[(usize, Vec<Evaluated>)]
         ));
     }
     series.retain(|s| !s.points.is_empty());
-    let pareto = placed_clear(LinePlot::new(
+    let plot = LinePlot::new(
         if speed {
             "Power against impact speed"
         } else {
@@ -104,7 +115,12 @@ pub(crate) fn plots(p: &Problem, study: &Study, maps: &[(usize, Vec<Evaluated>)]
         },
         "DC power [uW]",
         series,
-    ));
+    );
+    // The designs that touch no stop sit at zero on the x axis; a margin on either side keeps
+    // their markers off the axis line, where they would read as part of it.
+    let (x0, x1) = plot.x_range;
+    let pad = 0.03 * (x1 - x0).max(f64::MIN_POSITIVE);
+    let pareto = placed_clear(plot.x(x0 - pad, x1 + pad));
     let mut panels = vec![pareto];
     for (i, grid) in maps {
         let n = (grid.len() as f64).sqrt().round() as usize;
@@ -125,7 +141,9 @@ pub(crate) fn plots(p: &Problem, study: &Study, maps: &[(usize, Vec<Evaluated>)]
                 Series::new(&label, pts, PALETTE[c % PALETTE.len()], Style::LinePoints)
             })
             .collect();
-        panels.push(
+        // The legend goes where it hides no curve, or above them: a fixed corner covers the
+        // curves of whichever value of the second range peaks there.
+        panels.push(placed_clear(
             LinePlot::new(
                 &format!("Power map, `{}` interface", p.interfaces[*i].key()),
                 &p.ranges[0].path,
@@ -134,7 +152,7 @@ pub(crate) fn plots(p: &Problem, study: &Study, maps: &[(usize, Vec<Evaluated>)]
             )
             .log(p.ranges[0].spacing == endstop::device::Spacing::Log, false)
             .legend(LegendPos::UpperLeft),
-        );
+        ));
     }
     Panels::new(panels)
 }
