@@ -102,7 +102,10 @@ pub(crate) fn plots(p: &Problem, study: &Study, maps: &[(usize, Vec<Evaluated>)]
         ));
     }
     series.retain(|s| !s.points.is_empty());
-    let plot = LinePlot::new(
+    // The designs that touch no stop sit at zero impact speed, on the y axis: the x range is
+    // not padded below zero, whose ticks would then carry the float noise of the tick steps
+    // (8.7e-19 for 0); the answer's label says when it touches no stop.
+    let pareto = placed_clear(LinePlot::new(
         if speed {
             "Power against impact speed"
         } else {
@@ -115,12 +118,7 @@ pub(crate) fn plots(p: &Problem, study: &Study, maps: &[(usize, Vec<Evaluated>)]
         },
         "DC power [uW]",
         series,
-    );
-    // The designs that touch no stop sit at zero on the x axis; a margin on either side keeps
-    // their markers off the axis line, where they would read as part of it.
-    let (x0, x1) = plot.x_range;
-    let pad = 0.03 * (x1 - x0).max(f64::MIN_POSITIVE);
-    let pareto = placed_clear(plot.x(x0 - pad, x1 + pad));
+    ));
     let mut panels = vec![pareto];
     for (i, grid) in maps {
         let n = (grid.len() as f64).sqrt().round() as usize;

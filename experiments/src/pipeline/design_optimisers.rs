@@ -140,9 +140,8 @@ pub fn render(runs: &[Run], comments: &[String]) -> Result<String> {
                     format!("{} ({} to {})", fmt_sig(m, 2), fmt_sig(a, 2), fmt_sig(b, 2))
                 }),
                 median_range(&all).map_or("-".into(), |m| m.0.to_string()),
-                median_range(&ratio).map_or("-".into(), |(m, a, b)| {
-                    format!("{:.4} ({:.4} to {:.4})", m, a, b)
-                }),
+                median_range(&ratio)
+                    .map_or("-".into(), |(m, a, b)| format!("{m:.4} ({a:.4} to {b:.4})")),
             ]);
         }
         totals.push((total[0], total[1]));
