@@ -68,7 +68,18 @@ pub(crate) fn plots(p: &Problem, study: &Study, maps: &[(usize, Vec<Evaluated>)]
             Style::Dots,
         ),
         Series::new("Pareto front", front, PALETTE[0], Style::LinePoints),
-        Series::new("the answer", vec![(v, w * 1e6)], PALETTE[4], Style::Circles),
+        Series::new(
+            // A design whose orbit touches no stop has no impact speed: its point sits at
+            // zero, which the label says rather than leaving it to read as a missing value.
+            if speed && v == 0.0 {
+                "the answer (touches no stop)"
+            } else {
+                "the answer"
+            },
+            vec![(v, w * 1e6)],
+            PALETTE[4],
+            Style::Circles,
+        ),
     ];
     let limit = if speed {
         p.limits
@@ -91,6 +102,9 @@ pub(crate) fn plots(p: &Problem, study: &Study, maps: &[(usize, Vec<Evaluated>)]
         ));
     }
     series.retain(|s| !s.points.is_empty());
+    // The designs that touch no stop sit at zero impact speed, on the y axis: the x range is
+    // not padded below zero, whose ticks would then carry the float noise of the tick steps
+    // (8.7e-19 for 0); the answer's label says when it touches no stop.
     let pareto = placed_clear(LinePlot::new(
         if speed {
             "Power against impact speed"
@@ -125,7 +139,9 @@ pub(crate) fn plots(p: &Problem, study: &Study, maps: &[(usize, Vec<Evaluated>)]
                 Series::new(&label, pts, PALETTE[c % PALETTE.len()], Style::LinePoints)
             })
             .collect();
-        panels.push(
+        // The legend goes where it hides no curve, or above them: a fixed corner covers the
+        // curves of whichever value of the second range peaks there.
+        panels.push(placed_clear(
             LinePlot::new(
                 &format!("Power map, `{}` interface", p.interfaces[*i].key()),
                 &p.ranges[0].path,
@@ -134,7 +150,7 @@ pub(crate) fn plots(p: &Problem, study: &Study, maps: &[(usize, Vec<Evaluated>)]
             )
             .log(p.ranges[0].spacing == endstop::device::Spacing::Log, false)
             .legend(LegendPos::UpperLeft),
-        );
+        ));
     }
     Panels::new(panels)
 }

@@ -19,8 +19,8 @@
 //! where the orbit starts to touch a stop or jumps between branches; a space-filling sample
 //! finds the basin, and Nelder-Mead, which needs no gradient, polishes it in a few dozen
 //! evaluations. The checks of `tests/design.rs` print the sample's best beside the polished
-//! answer and a brute-force grid's best; argmin's particle swarm has not been measured
-//! against it.
+//! answer and a brute-force grid's best; the example `design_optimisers` measures the search
+//! against CMA-ES on the same problems (the evaluations to within 1 % of the grid's best).
 
 use std::sync::Mutex;
 

@@ -41,7 +41,9 @@ pub fn publish_own_device() -> Result<()> {
     // The bistable example's power and transition rate against the noise level, from its
     // random jobs' summaries; the up-converter against one mass, from its sweeps and charges.
     crate::pipeline::noise_curve::publish(&crate::results_root(), &dst)?;
-    crate::pipeline::upconversion::publish(&crate::results_root(), &dst)
+    crate::pipeline::upconversion::publish(&crate::results_root(), &dst)?;
+    // The Design chapter's choice of optimiser, from its recorded comparison.
+    crate::pipeline::design_optimisers::publish(&crate::root(), &dst)
 }
 
 /// The device files of the tool runs whose outputs the chapter `chapter` includes
