@@ -25,7 +25,6 @@ use cmaes::{CMAESOptions, DVector};
 use endstop::design::search::{score, search};
 use endstop::design::{Evaluated, Limits, Problem, SearchSettings, Vibration, LOAD_PATH};
 use endstop::device::{Device, ParamRange, Spacing};
-use endstop::study::periodic::SteadySettings;
 
 /// The grid's points per range (the design checks' grid).
 const GRID_N: usize = 31;
@@ -51,25 +50,24 @@ fn range(path: &str, lo: f64, hi: f64) -> Result<ParamRange, Box<dyn std::error:
     Ok(ParamRange::new(path, lo, hi, Spacing::auto(lo, hi))?)
 }
 
-fn problem(device: Device, ranges: Vec<ParamRange>, freqs_hz: Vec<f64>, g: f64) -> Problem {
-    Problem {
-        interfaces: vec![device.interface.clone()],
-        device,
-        ranges,
-        vibration: Vibration {
-            freqs_hz,
-            accel_rms_g: g,
-        },
-        limits: Limits::default(),
-        steady: SteadySettings::default(),
-        noise: None,
-        record: None,
-    }
+fn problem(
+    device: Device,
+    ranges: Vec<ParamRange>,
+    freqs_hz: Vec<f64>,
+    g: f64,
+    limits: Limits,
+) -> Result<Problem, Box<dyn std::error::Error>> {
+    let interfaces = vec![device.interface.clone()];
+    let vibration = Vibration {
+        freqs_hz,
+        accel_rms_g: g,
+    };
+    Ok(Problem::new(device, interfaces, ranges, vibration, limits)?)
 }
 
 /// The three problems of the design checks, named.
 fn cases() -> Result<Vec<(&'static str, Problem)>, Box<dyn std::error::Error>> {
-    let mut gap = problem(
+    let gap = problem(
         device("piezo_cantilever")?,
         vec![
             range(LOAD_PATH, 3e3, 3e5)?,
@@ -77,8 +75,11 @@ fn cases() -> Result<Vec<(&'static str, Problem)>, Box<dyn std::error::Error>> {
         ],
         vec![120.0],
         0.3,
-    );
-    gap.limits.impact_speed_m_s = Some(0.08);
+        Limits {
+            impact_speed_m_s: Some(0.08),
+            ..Limits::default()
+        },
+    )?;
     let tuning = problem(
         device("piezo_bridge")?,
         vec![
@@ -87,8 +88,9 @@ fn cases() -> Result<Vec<(&'static str, Problem)>, Box<dyn std::error::Error>> {
         ],
         vec![118.0, 122.0],
         0.05,
-    );
-    let mut em = problem(
+        Limits::default(),
+    )?;
+    let em = problem(
         device("em_asymmetric")?,
         vec![
             range(LOAD_PATH, 40.0, 4000.0)?,
@@ -96,8 +98,11 @@ fn cases() -> Result<Vec<(&'static str, Problem)>, Box<dyn std::error::Error>> {
         ],
         vec![50.0],
         0.2,
-    );
-    em.limits.contact_force_n = Some(0.02);
+        Limits {
+            contact_force_n: Some(0.02),
+            ..Limits::default()
+        },
+    )?;
     Ok(vec![
         ("cantilever_load_gap", gap),
         ("bridge_load_tuning", tuning),
