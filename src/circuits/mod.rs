@@ -254,18 +254,6 @@ pub struct Described<'a> {
     pub kind: Kind,
 }
 
-impl Kind {
-    /// The circuit an interface describes, with a kind's own state component (an inductor's
-    /// current) at `slot`; `None` for a resistive interface, or why the description has no
-    /// model.
-    pub fn of(interface: &Interface, slot: usize) -> Result<Option<Described<'_>>, &'static str> {
-        match interface.kind() {
-            Some(k) => k.model(interface, slot).map(Some),
-            None => Ok(None),
-        }
-    }
-}
-
 impl CircuitKind for Kind {
     fn refuses(&self, element: &Element) -> Option<&'static str> {
         each_kind!(self, k => k.refuses(element))

@@ -573,14 +573,14 @@ fn port_of(device: &Device) -> Result<Port, AssemblyError> {
     }
 }
 
-/// The interface circuit of a device, if its interface is not resistive: its kind from the
-/// registration point ([`circuits::Kind::of`]), refused where the kind cannot act on the
+/// The interface circuit of a device, if its interface names a kind: the kind's model from
+/// its description (registered in [`circuits`]), refused where the kind cannot act on the
 /// element.
 fn circuit_of(device: &Device) -> Result<Option<circuits::Circuit>, AssemblyError> {
     use circuits::CircuitKind;
-    if device.interface.is_resistive() {
+    let Some(kind) = device.interface.kind() else {
         return Ok(None);
-    }
+    };
     let unsupported = |why: &str| AssemblyError::Unsupported {
         device: device.name.clone(),
         transducer: device.transducer.key().to_string(),
@@ -595,9 +595,9 @@ fn circuit_of(device: &Device) -> Result<Option<circuits::Circuit>, AssemblyErro
         TransducerModel::Pair(p) => (circuits::Element::Pair(p), 2),
         TransducerModel::None => return Err(unsupported("there is no transducer to connect")),
     };
-    let Some(d) = circuits::Kind::of(&device.interface, 3 + e_slots).map_err(unsupported)? else {
-        return Ok(None);
-    };
+    let d = kind
+        .model(&device.interface, 3 + e_slots)
+        .map_err(unsupported)?;
     if let Some(why) = d.kind.refuses(&element) {
         return Err(unsupported(why));
     }
