@@ -78,7 +78,7 @@ const PARTS: usize = 8;
 
 /// Runs a record of a model without a free-flight split on its affine modes, or on
 /// Dormand-Prince throughout when it has none. The loop is compiled for the augmented state's
-/// dimension `U = N + 3` and the step's rows `S = N + GUARD_ROWS`.
+/// dimension `U = N + 3`.
 pub(super) fn run<M: Model<N>, O: RecordObserver, const N: usize>(
     model: &M,
     drive: &SampledDrive,
@@ -90,17 +90,17 @@ pub(super) fn run<M: Model<N>, O: RecordObserver, const N: usize>(
     let integrals = books.as_ref().map(Books::integrands);
     if model.modes().iter().any(|m| model.affine(*m).is_some()) {
         macro_rules! on {
-            ($u:literal, $s:literal) => {{
-                let fast = AffineModes::<N, $u, $s>::new(h, integrals);
+            ($u:literal) => {{
+                let fast = AffineModes::<N, $u>::new(h, integrals);
                 return stepping::run(model, drive, rtol, fast, observer, books);
             }};
         }
         match N {
-            2 => on!(5, 12),
-            3 => on!(6, 13),
-            4 => on!(7, 14),
-            5 => on!(8, 15),
-            6 => on!(9, 16),
+            2 => on!(5),
+            3 => on!(6),
+            4 => on!(7),
+            5 => on!(8),
+            6 => on!(9),
             _ => {}
         }
     }
@@ -108,17 +108,21 @@ pub(super) fn run<M: Model<N>, O: RecordObserver, const N: usize>(
     stepping::run(model, drive, rtol, fast, observer, books)
 }
 
-/// One affine mode on the sample grid (see the module docs), for the state's dimension `N`,
-/// the augmented state's `U = N + 3` and the step's rows `S = N + GUARD_ROWS`.
+/// One affine mode on the sample grid (see the module docs), for the state's dimension `N` and
+/// the augmented state's `U = N + 3`.
 #[derive(Debug, Clone, PartialEq)]
-struct AffineMode<const N: usize, const U: usize, const S: usize> {
-    /// The columns of `[P; G e^{hA}]`: `P`, the state's rows of `e^{hA}`, gives the next
-    /// state `P u_k`; `G` holds the guards as rows on `u` (row `2j` guard `j`'s value, row
-    /// `2j + 1` its rate times the step, each divided by the guard's scale, the norm of its
-    /// gradient on the state's characteristic scales, so that [`GRAZE_MARGIN`] applies to
-    /// each; an unused guard is the constant -1), so that `G e^{hA} u_k` are the guards at
-    /// the next sample. Plain columns, so that the product is a few vector operations.
-    step_columns: [[f64; S]; U],
+struct AffineMode<const N: usize, const U: usize> {
+    /// The columns of `P`, the state's rows of `e^{hA}`: the next state is `P u_k`. Plain
+    /// columns of the state's fixed length, so that the product is a few vector operations
+    /// on an accumulator held in registers.
+    state_columns: [[f64; N]; U],
+    /// The rows of `G e^{hA}`: `G` holds the guards as rows on `u` (row `2j` guard `j`'s
+    /// value, row `2j + 1` its rate times the step, each divided by the guard's scale, the
+    /// norm of its gradient on the state's characteristic scales, so that [`GRAZE_MARGIN`]
+    /// applies to each; an unused guard is the constant -1), so that `G e^{hA} u_k` are the
+    /// guards at the next sample. Rows, so that a step takes the dot products of the used
+    /// guards' rows only.
+    next_guard_rows: [[f64; U]; GUARD_ROWS],
     /// Guards in use (the first ones).
     used: usize,
     /// `G e^{i h A / PARTS}` for `i = 1 .. PARTS - 1`: the guards inside the interval.
@@ -132,7 +136,7 @@ struct AffineMode<const N: usize, const U: usize, const S: usize> {
     rebounding: Option<Rebounding<U>>,
 }
 
-impl<const N: usize, const U: usize, const S: usize> AffineMode<N, U, S> {
+impl<const N: usize, const U: usize> AffineMode<N, U> {
     /// The augmented state at a sample: the state, the drive there and its slope to the next
     /// sample.
     #[inline(always)]
@@ -155,15 +159,18 @@ impl<const N: usize, const U: usize, const S: usize> AffineMode<N, U, S> {
     /// (exact values and rates at both ends) comes within [`GRAZE_MARGIN`] of zero.
     #[inline(always)]
     fn step(&self, u0: &[f64; U], g0: &GuardValues) -> Option<(SVector<f64, N>, GuardValues)> {
-        // The state's rows and the used guards' (the unused guards' rows are never read).
-        let live = N + 2 * self.used;
-        let mut r = [0.0; S];
-        for (col, &uj) in self.step_columns.iter().zip(u0) {
-            for (ri, ci) in r[..live].iter_mut().zip(&col[..live]) {
-                *ri += ci * uj;
+        // The state by columns, the used guards by rows (the unused guards' values are never
+        // read); each sum runs over `u` in order.
+        let mut y1 = [0.0; N];
+        for (col, &uj) in self.state_columns.iter().zip(u0) {
+            for (yi, ci) in y1.iter_mut().zip(col) {
+                *yi += ci * uj;
             }
         }
-        let g1 = GuardValues::from_column_slice(&r[N..]);
+        let mut g1 = GuardValues::zeros();
+        for (gi, row) in g1.iter_mut().zip(&self.next_guard_rows[..2 * self.used]) {
+            *gi = row.iter().zip(u0).fold(0.0, |acc, (ri, uj)| acc + ri * uj);
+        }
         for j in 0..self.used {
             let (v0, d0, v1, d1) = (g0[2 * j], g0[2 * j + 1], g1[2 * j], g1[2 * j + 1]);
             // The Hermite basis functions of the slopes are at most 4/27 in absolute value and
@@ -175,7 +182,7 @@ impl<const N: usize, const U: usize, const S: usize> AffineMode<N, U, S> {
                 return None;
             }
         }
-        Some((SVector::from_column_slice(&r[..N]), g1))
+        Some((SVector::from(y1), g1))
     }
 
     /// True when every guard stays clear of zero on each of [`PARTS`] equal parts of the
@@ -216,7 +223,7 @@ impl<const N: usize, const U: usize, const S: usize> AffineMode<N, U, S> {
     /// integrands of the books (none: the record keeps no books), or `None` when it is not
     /// affine (see the module docs).
     fn of<M: Model<N>>(model: &M, mode: Mode, h: f64, integrals: Option<usize>) -> Option<Self> {
-        if U != N + 3 || S != N + GUARD_ROWS {
+        if U != N + 3 {
             return None;
         }
         let DrivenAffine { affine, drive } = model.driven_affine(mode)?;
@@ -273,17 +280,11 @@ impl<const N: usize, const U: usize, const S: usize> AffineMode<N, U, S> {
             power *= part;
             g
         });
-        let step_columns = std::array::from_fn(|j| {
-            std::array::from_fn(|i| {
-                if i < N {
-                    e[(i, j)]
-                } else {
-                    next_guards[(i - N, j)]
-                }
-            })
-        });
+        let state_columns = std::array::from_fn(|j| std::array::from_fn(|i| e[(i, j)]));
+        let next_guard_rows = std::array::from_fn(|i| std::array::from_fn(|j| next_guards[(i, j)]));
         Some(Self {
-            step_columns,
+            state_columns,
+            next_guard_rows,
             used,
             inner,
             guards,
@@ -536,15 +537,15 @@ impl<const U: usize> Gram<U> {
 
 /// The affine modes of a record met so far, each prepared when first met, with each mode's
 /// Gram sum `Σ u_k u_k^T` over the intervals it advanced since the books last took them.
-struct Modes<const N: usize, const U: usize, const S: usize> {
+struct Modes<const N: usize, const U: usize> {
     h: f64,
     /// The books' integrands, when the record keeps them.
     integrals: Option<usize>,
     /// Each mode met, its affine form if it has one, and its Gram sum.
-    entries: Vec<(Mode, Option<AffineMode<N, U, S>>, Gram<U>)>,
+    entries: Vec<(Mode, Option<AffineMode<N, U>>, Gram<U>)>,
 }
 
-impl<const N: usize, const U: usize, const S: usize> Modes<N, U, S> {
+impl<const N: usize, const U: usize> Modes<N, U> {
     /// The index of `mode`, preparing it when it is new.
     fn index<M: Model<N>>(&mut self, model: &M, mode: Mode) -> usize {
         if let Some(i) = self.entries.iter().position(|(m, _, _)| *m == mode) {
@@ -556,7 +557,7 @@ impl<const N: usize, const U: usize, const S: usize> Modes<N, U, S> {
     }
 }
 
-impl<const N: usize, const U: usize, const S: usize> ModeTable<N, U> for Modes<N, U, S> {
+impl<const N: usize, const U: usize> ModeTable<N, U> for Modes<N, U> {
     fn crossings_of<M: Model<N>>(&mut self, model: &M, mode: Mode) -> Option<&Rebounding<U>> {
         let i = self.index(model, mode);
         self.entries[i].1.as_ref()?.rebounding.as_ref()
@@ -565,8 +566,8 @@ impl<const N: usize, const U: usize, const S: usize> ModeTable<N, U> for Modes<N
 
 /// The record's fast path for a model without a free-flight split: its affine modes
 /// ([`Modes`]), the current one's guards, and what the last interval met inside it.
-pub(super) struct AffineModes<const N: usize, const U: usize, const S: usize> {
-    modes: Modes<N, U, S>,
+pub(super) struct AffineModes<const N: usize, const U: usize> {
+    modes: Modes<N, U>,
     /// The current mode's entry and its guards at the current sample, once known.
     current: Option<(Mode, usize, Option<GuardValues>)>,
     /// The impacts inside the last interval.
@@ -578,7 +579,7 @@ pub(super) struct AffineModes<const N: usize, const U: usize, const S: usize> {
     inside: Option<(Mode, f64)>,
 }
 
-impl<const N: usize, const U: usize, const S: usize> AffineModes<N, U, S> {
+impl<const N: usize, const U: usize> AffineModes<N, U> {
     /// No mode yet, on intervals of `h`, with the books' `integrals` integrands.
     fn new(h: f64, integrals: Option<usize>) -> Self {
         Self {
@@ -595,9 +596,7 @@ impl<const N: usize, const U: usize, const S: usize> AffineModes<N, U, S> {
     }
 }
 
-impl<M: Model<N>, const N: usize, const U: usize, const S: usize> FastPath<M, N>
-    for AffineModes<N, U, S>
-{
+impl<M: Model<N>, const N: usize, const U: usize> FastPath<M, N> for AffineModes<N, U> {
     const RHS_EVALS: u64 = 0;
 
     fn path(&self) -> FreeFlightPath {
@@ -627,7 +626,7 @@ impl<M: Model<N>, const N: usize, const U: usize, const S: usize> FastPath<M, N>
         let affine = affine.as_ref()?;
         let h = self.modes.h;
         let slope = (a1 - a0) / h;
-        let u0 = AffineMode::<N, U, S>::augment(y, a0, slope);
+        let u0 = AffineMode::<N, U>::augment(y, a0, slope);
         let g0 = cached.unwrap_or_else(|| affine.guards_at(&u0));
         let Some((mut y1, g1)) = affine.step(&u0, &g0) else {
             // A guard may fire: the switches the exact solution locates (rigid stops'
