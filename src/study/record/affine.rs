@@ -154,11 +154,17 @@ impl<const N: usize, const U: usize> AffineMode<N, U> {
         self.guards * SVector::<f64, U>::from_column_slice(u)
     }
 
-    /// The state one interval after `u0` (whose guards are `g0`) with its guards there, or
-    /// `None` when a guard may turn positive inside the interval: its cubic Hermite estimate
-    /// (exact values and rates at both ends) comes within [`GRAZE_MARGIN`] of zero.
+    /// The state one interval after `u0` (whose guards are `g0`), its used guards there
+    /// written into `g1`, or `None` when a guard may turn positive inside the interval: its
+    /// cubic Hermite estimate (exact values and rates at both ends) comes within
+    /// [`GRAZE_MARGIN`] of zero.
     #[inline(always)]
-    fn step(&self, u0: &[f64; U], g0: &GuardValues) -> Option<(SVector<f64, N>, GuardValues)> {
+    fn step(
+        &self,
+        u0: &[f64; U],
+        g0: &GuardValues,
+        g1: &mut GuardValues,
+    ) -> Option<SVector<f64, N>> {
         // The state by columns, the used guards by rows (the unused guards' values are never
         // read); each sum runs over `u` in order.
         let mut y1 = [0.0; N];
@@ -167,7 +173,6 @@ impl<const N: usize, const U: usize> AffineMode<N, U> {
                 *yi += ci * uj;
             }
         }
-        let mut g1 = GuardValues::zeros();
         for (gi, row) in g1.iter_mut().zip(&self.next_guard_rows[..2 * self.used]) {
             *gi = row.iter().zip(u0).fold(0.0, |acc, (ri, uj)| acc + ri * uj);
         }
@@ -178,11 +183,11 @@ impl<const N: usize, const U: usize> AffineMode<N, U> {
             if v0.max(v1) + 4.0 / 27.0 * (d0.abs() + d1.abs()) < -GRAZE_MARGIN {
                 continue;
             }
-            if cubic_max(v0, d0, v1, d1) >= -GRAZE_MARGIN && !self.clear_on_parts(u0, g0, &g1) {
+            if cubic_max(v0, d0, v1, d1) >= -GRAZE_MARGIN && !self.clear_on_parts(u0, g0, g1) {
                 return None;
             }
         }
-        Some((SVector::from(y1), g1))
+        Some(SVector::from(y1))
     }
 
     /// True when every guard stays clear of zero on each of [`PARTS`] equal parts of the
@@ -568,8 +573,13 @@ impl<const N: usize, const U: usize> ModeTable<N, U> for Modes<N, U> {
 /// ([`Modes`]), the current one's guards, and what the last interval met inside it.
 pub(super) struct AffineModes<const N: usize, const U: usize> {
     modes: Modes<N, U>,
-    /// The current mode's entry and its guards at the current sample, once known.
-    current: Option<(Mode, usize, Option<GuardValues>)>,
+    /// The current mode and its entry.
+    current: Option<(Mode, usize)>,
+    /// The current mode's guards at the current sample, where [`Self::guards_known`]: kept
+    /// apart from the mode, so that a step reads them in place.
+    guards_now: GuardValues,
+    /// Whether [`Self::guards_now`] holds the guards at the current sample.
+    guards_known: bool,
     /// The impacts inside the last interval.
     rebounds: Rebounds,
     /// The states at those impacts, before each reset.
@@ -589,6 +599,8 @@ impl<const N: usize, const U: usize> AffineModes<N, U> {
                 entries: Vec::new(),
             },
             current: None,
+            guards_now: GuardValues::zeros(),
+            guards_known: false,
             rebounds: Rebounds::default(),
             rebound_states: Vec::new(),
             inside: None,
@@ -617,18 +629,26 @@ impl<M: Model<N>, const N: usize, const U: usize> FastPath<M, N> for AffineModes
         self.rebounds.len = 0;
         self.rebound_states.clear();
         self.inside = None;
-        let (index, cached) = match self.current {
-            Some((m, i, g)) if m == mode => (i, g),
-            _ => (self.modes.index(model, mode), None),
+        let index = match self.current {
+            Some((m, i)) if m == mode => i,
+            _ => {
+                self.guards_known = false;
+                let i = self.modes.index(model, mode);
+                self.current = Some((mode, i));
+                i
+            }
         };
-        self.current = Some((mode, index, None));
         let (_, affine, gram) = &mut self.modes.entries[index];
         let affine = affine.as_ref()?;
         let h = self.modes.h;
         let slope = (a1 - a0) / h;
         let u0 = AffineMode::<N, U>::augment(y, a0, slope);
-        let g0 = cached.unwrap_or_else(|| affine.guards_at(&u0));
-        let Some((mut y1, g1)) = affine.step(&u0, &g0) else {
+        if !self.guards_known {
+            self.guards_now = affine.guards_at(&u0);
+        }
+        let mut g1 = GuardValues::zeros();
+        let Some(mut y1) = affine.step(&u0, &self.guards_now, &mut g1) else {
+            self.guards_known = false;
             // A guard may fire: the switches the exact solution locates (rigid stops'
             // rebounds, a contact that comes to rest or is released), where the books (which
             // take whole intervals of one mode) are not kept.
@@ -647,7 +667,7 @@ impl<M: Model<N>, const N: usize, const U: usize> FastPath<M, N> for AffineModes
             )?;
             self.rebounds = walked.impacts;
             self.inside = Some((walked.mode, walked.contact_s));
-            self.current = Some((walked.mode, self.modes.index(model, walked.mode), None));
+            self.current = Some((walked.mode, self.modes.index(model, walked.mode)));
             return Some((walked.y, false));
         };
         if let Some(r) = affine.rebounding.as_ref() {
@@ -658,7 +678,8 @@ impl<M: Model<N>, const N: usize, const U: usize> FastPath<M, N> for AffineModes
             gram.add(&u0);
             b.close(mode, &y1);
         }
-        self.current = Some((mode, index, Some(g1)));
+        self.guards_now = g1;
+        self.guards_known = true;
         Some((y1, false))
     }
 
@@ -675,9 +696,7 @@ impl<M: Model<N>, const N: usize, const U: usize> FastPath<M, N> for AffineModes
     }
 
     fn after_dopri(&mut self, _model: &M, _y: &SVector<f64, N>, _mode: Mode, _switched: bool) {
-        if let Some((_, _, g)) = self.current.as_mut() {
-            *g = None;
-        }
+        self.guards_known = false;
     }
 
     /// Each integral over the intervals the affine modes advanced since the last fold:
