@@ -4,7 +4,9 @@
 //! the parent module's docs).
 
 use super::branch::{self, SetModel};
-use super::lm::{self, levenberg_marquardt_tracked, LmResult, LmSettings, Tracked};
+use super::lm::{
+    self, levenberg_marquardt_resumed, levenberg_marquardt_tracked, LmResult, LmSettings, Tracked,
+};
 use super::model::design_values;
 use super::params::{apply, Transform};
 use super::report::{Refined, StartOrigin, StartTried};
@@ -230,7 +232,7 @@ fn stepped(
         cost_rel_tol: tight.cost_rel_tol.max(HANDOVER_COST_REL_TOL),
         ..tight
     };
-    let (near, last) = levenberg_marquardt_tracked(&Stepped(pb), u0, Costs::NONE, None, &loose)?;
+    let (near, last) = levenberg_marquardt_tracked(&Stepped(pb), u0, Costs::none(), None, &loose)?;
     let near_ssr = last.here;
     if let Ok(states) = pb.identify(&near.u) {
         if let Ok(mut run) = on_branches(pb, &near.u, states, settings) {
@@ -241,18 +243,38 @@ fn stepped(
             }
         }
     }
-    // The loose search stopped where the tight one would not have: carry it on.
+    // The loose search stopped where the tight one would not have: carry it on from its
+    // point, Jacobian and damping, so that it takes the tight search's own steps.
     let drop = last.before - last.here;
-    let short = near.stop == lm::Termination::CostConverged
+    let step = last
+        .u_here
+        .iter()
+        .zip(&last.u_before)
+        .map(|(a, b)| (a - b) * (a - b))
+        .sum::<f64>()
+        .sqrt();
+    let loose_stop = near.stop == lm::Termination::CostConverged
         && !(drop < tight.cost_rel_tol * last.before || drop < tight.cost_abs_tol);
+    let short = loose_stop && step >= tight.step_tol;
     let lm = if short {
-        let r0 = near.residuals.clone();
-        let (more, _) = levenberg_marquardt_tracked(&Stepped(pb), &near.u, last, Some(r0), &tight)?;
+        let (r0, j0) = (near.residuals.clone(), near.jacobian.clone());
+        let rest = LmSettings {
+            lambda0: near.lambda,
+            max_iter: tight.max_iter.saturating_sub(near.iterations),
+            ..tight
+        };
+        let (more, _) = levenberg_marquardt_resumed(&Stepped(pb), &near.u, last, r0, j0, &rest)?;
         LmResult {
             evaluations: near.evaluations + more.evaluations - 1,
             iterations: near.iterations + more.iterations,
             failed_trials: near.failed_trials + more.failed_trials,
             ..more
+        }
+    } else if loose_stop {
+        // Where the tight search stops by the step's length.
+        LmResult {
+            stop: lm::Termination::StepConverged,
+            ..near
         }
     } else {
         near
@@ -265,19 +287,26 @@ fn stepped(
     })
 }
 
-/// The weighted SSR at an evaluated point and at the accepted point it was evaluated from:
-/// what the stepped search carries, so that the last accepted step's decrease is known.
-#[derive(Debug, Clone, Copy, PartialEq)]
+/// The weighted SSR and the point of an evaluation and of the accepted point it was evaluated
+/// from: what the stepped search carries, so that the last accepted step's decrease and length
+/// are known.
+#[derive(Debug, Clone, PartialEq)]
 struct Costs {
     here: f64,
     before: f64,
+    u_here: Vec<f64>,
+    u_before: Vec<f64>,
 }
 
 impl Costs {
-    const NONE: Costs = Costs {
-        here: f64::NAN,
-        before: f64::NAN,
-    };
+    fn none() -> Costs {
+        Costs {
+            here: f64::NAN,
+            before: f64::NAN,
+            u_here: Vec::new(),
+            u_before: Vec::new(),
+        }
+    }
 }
 
 /// The misfit on the stepped sweep.
@@ -301,6 +330,8 @@ impl Tracked for Stepped<'_, '_> {
             Costs {
                 here,
                 before: from.here,
+                u_here: u.to_vec(),
+                u_before: from.u_here.clone(),
             },
         ))
     }
