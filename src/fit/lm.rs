@@ -122,6 +122,8 @@ pub struct LmResult {
     pub failed_trials: usize,
     /// Why it stopped.
     pub stop: Termination,
+    /// The damping at the stop (where a search resumed from this point starts).
+    pub lambda: f64,
 }
 
 fn cost(r: &[f64]) -> f64 {
@@ -205,19 +207,40 @@ pub fn levenberg_marquardt_tracked<P: Tracked>(
     s: &LmSettings,
 ) -> Result<(LmResult, P::State), P::Error> {
     let p = u0.len();
-    let mut u = u0.to_vec();
-    let (mut r, mut state) = match r0 {
+    let (r, state) = match r0 {
         Some(r) => (r, state0),
-        None => problem.residuals(&u, &state0)?,
+        None => problem.residuals(u0, &state0)?,
     };
+    let jac = jacobian(problem, u0, &r, &state, s.fd_step)?;
+    let (mut res, state) = levenberg_marquardt_resumed(problem, u0, state, r, jac, s)?;
+    res.evaluations += p;
+    Ok((res, state))
+}
+
+/// As [`levenberg_marquardt_tracked`] from a point whose residuals `r0` and Jacobian `jac0`
+/// (with [`LmSettings::fd_step`]) are known, as at the end of an earlier search with looser
+/// tolerances; the evaluations counted are the start's (one) and this search's own. Started
+/// with the earlier search's damping ([`LmResult::lambda`]) as [`LmSettings::lambda0`] and its
+/// remaining iterations as [`LmSettings::max_iter`], it takes the steps that search would have
+/// taken with these tolerances.
+pub fn levenberg_marquardt_resumed<P: Tracked>(
+    problem: &P,
+    u0: &[f64],
+    state0: P::State,
+    r0: Vec<f64>,
+    jac0: DMatrix<f64>,
+    s: &LmSettings,
+) -> Result<(LmResult, P::State), P::Error> {
+    let p = u0.len();
+    let mut u = u0.to_vec();
+    let (mut r, mut state) = (r0, state0);
     let mut evaluations = 1;
     let mut failed = 0;
     let mut c = cost(&r);
     let mut lambda = s.lambda0;
     let mut stop = Termination::MaxIter;
     let mut iterations = 0;
-    let mut jac = jacobian(problem, &u, &r, &state, s.fd_step)?;
-    evaluations += p;
+    let mut jac = jac0;
     while iterations < s.max_iter {
         iterations += 1;
         let a = jac.transpose() * &jac;
@@ -299,6 +322,7 @@ pub fn levenberg_marquardt_tracked<P: Tracked>(
             evaluations,
             failed_trials: failed,
             stop,
+            lambda,
         },
         state,
     ))

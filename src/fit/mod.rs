@@ -38,7 +38,12 @@
 //! is run again from there ([`MAX_ROUNDS`] times at most) and a remaining difference is a
 //! warning ([`FitWarning::BranchChanged`]). Where the branches cannot be identified (a response
 //! that is not periodic, a jump that is not a fold) the model is the stepped sweep itself
-//! ([`model`]), with a warning ([`FitWarning::SteppedSweepModel`]).
+//! ([`model`]), with a warning ([`FitWarning::SteppedSweepModel`]). A start where they cannot
+//! be identified but the optimum lies where they can (a band without a periodic response below
+//! the onset of impacts at the start's values) is searched on the stepped sweep until its steps
+//! lower the misfit by less than a percent and on the branches from there, each of whose
+//! evaluations costs a few periods per measured value instead of a whole sweep; the branches'
+//! result is kept when it settles with a misfit no larger than the stepped sweep's.
 //!
 //! # Global search
 //! The starts are the device's values and the points of a Sobol sequence over the transformed

@@ -4,7 +4,9 @@
 //! the parent module's docs).
 
 use super::branch::{self, SetModel};
-use super::lm::{self, levenberg_marquardt_tracked, LmResult, LmSettings, Tracked};
+use super::lm::{
+    self, levenberg_marquardt_resumed, levenberg_marquardt_tracked, LmResult, LmSettings, Tracked,
+};
 use super::model::design_values;
 use super::params::{apply, Transform};
 use super::report::{Refined, StartOrigin, StartTried};
@@ -149,16 +151,27 @@ impl Run {
 }
 
 /// The search from `u0`: on the branches, identified there and afresh after each round while
-/// they differ; on the stepped sweep where they cannot be identified.
+/// they differ; where they cannot be identified there, on the stepped sweep until it is near
+/// its optimum and on the branches from there ([`stepped`]).
 pub(super) fn search_from(
     pb: &Problem<'_>,
     u0: &[f64],
     settings: &LmSettings,
 ) -> Result<Run, FitError> {
-    let states = match pb.identify(u0) {
-        Ok(s) => s,
-        Err(e) => return stepped(pb, u0, settings, e.to_string()),
-    };
+    match pb.identify(u0) {
+        Ok(states) => on_branches(pb, u0, states, settings),
+        Err(e) => stepped(pb, u0, settings, e.to_string()),
+    }
+}
+
+/// The rounds of the search on the branches from `u0`, whose branches `states` are
+/// identified there.
+fn on_branches(
+    pb: &Problem<'_>,
+    u0: &[f64],
+    states: Vec<SetModel>,
+    settings: &LmSettings,
+) -> Result<Run, FitError> {
     let mut states = states;
     let mut u = u0.to_vec();
     let (mut evaluations, mut iterations) = (0, 0);
@@ -191,32 +204,137 @@ pub(super) fn search_from(
     unreachable!("the last round returns")
 }
 
-/// The search on the stepped sweep (the model of [`super::model`]).
+/// The stepped-sweep search hands over to the branches once an accepted step lowers its cost
+/// by less than this fraction: near a minimum of chi-square `c` a step that lowers it by
+/// `1e-2 c` lies within about `sqrt(1e-2 c)` standard errors of it (`c` of the order of the
+/// degrees of freedom), close enough for Newton's method to identify the branches the data
+/// follow, where the start may lie in a region without them (a response that is not periodic
+/// below the onset of impacts).
+pub(super) const HANDOVER_COST_REL_TOL: f64 = 1e-2;
+
+/// The search on the stepped sweep (the model of [`super::model`]) from `u0`, where the
+/// branches cannot be identified (`why`): a loose search ([`HANDOVER_COST_REL_TOL`]) to near
+/// its optimum, then the branches from there when they can be identified and their search
+/// settles no worse than the stepped sweep's (each stepped evaluation costs a whole sweep to a
+/// tight steady state, each on the branches a few periods per measured value); else the
+/// stepped search carried on to its own tolerances where the loose one stopped short of them.
 fn stepped(
     pb: &Problem<'_>,
     u0: &[f64],
     settings: &LmSettings,
     why: String,
 ) -> Result<Run, FitError> {
-    let residuals = |u: &[f64]| -> Result<Vec<f64>, FitError> {
-        let (d, scale) = apply(pb.device, pb.free, &pb.to_p(u))?;
-        let mut m = Vec::with_capacity(pb.y.len());
-        for ds in pb.data {
-            m.extend(model_values(&d, scale, ds)?);
-        }
-        Ok(pb.weighted(&m))
-    };
-    let settings = LmSettings {
+    let tight = LmSettings {
         fd_step: settings.fd_step.max(lm::STEPPED_FD_STEP),
         ..*settings
     };
-    let lm = lm::levenberg_marquardt(residuals, u0, &settings)?;
+    let loose = LmSettings {
+        cost_rel_tol: tight.cost_rel_tol.max(HANDOVER_COST_REL_TOL),
+        ..tight
+    };
+    let (near, last) = levenberg_marquardt_tracked(&Stepped(pb), u0, Costs::none(), None, &loose)?;
+    let near_ssr = last.here;
+    if let Ok(states) = pb.identify(&near.u) {
+        if let Ok(mut run) = on_branches(pb, &near.u, states, settings) {
+            run.evaluations += near.evaluations;
+            run.iterations += near.iterations;
+            if run.settled() && run.ssr() <= near_ssr {
+                return Ok(run);
+            }
+        }
+    }
+    // The loose search stopped where the tight one would not have: carry it on from its
+    // point, Jacobian and damping, so that it takes the tight search's own steps.
+    let drop = last.before - last.here;
+    let step = last
+        .u_here
+        .iter()
+        .zip(&last.u_before)
+        .map(|(a, b)| (a - b) * (a - b))
+        .sum::<f64>()
+        .sqrt();
+    let loose_stop = near.stop == lm::Termination::CostConverged
+        && !(drop < tight.cost_rel_tol * last.before || drop < tight.cost_abs_tol);
+    let short = loose_stop && step >= tight.step_tol;
+    let lm = if short {
+        let (r0, j0) = (near.residuals.clone(), near.jacobian.clone());
+        let rest = LmSettings {
+            lambda0: near.lambda,
+            max_iter: tight.max_iter.saturating_sub(near.iterations),
+            ..tight
+        };
+        let (more, _) = levenberg_marquardt_resumed(&Stepped(pb), &near.u, last, r0, j0, &rest)?;
+        LmResult {
+            evaluations: near.evaluations + more.evaluations - 1,
+            iterations: near.iterations + more.iterations,
+            failed_trials: near.failed_trials + more.failed_trials,
+            ..more
+        }
+    } else if loose_stop {
+        // Where the tight search stops by the step's length.
+        LmResult {
+            stop: lm::Termination::StepConverged,
+            ..near
+        }
+    } else {
+        near
+    };
     Ok(Run {
         evaluations: lm.evaluations,
         iterations: lm.iterations,
         lm,
         used: Used::SteppedSweep { why },
     })
+}
+
+/// The weighted SSR and the point of an evaluation and of the accepted point it was evaluated
+/// from: what the stepped search carries, so that the last accepted step's decrease and length
+/// are known.
+#[derive(Debug, Clone, PartialEq)]
+struct Costs {
+    here: f64,
+    before: f64,
+    u_here: Vec<f64>,
+    u_before: Vec<f64>,
+}
+
+impl Costs {
+    fn none() -> Costs {
+        Costs {
+            here: f64::NAN,
+            before: f64::NAN,
+            u_here: Vec::new(),
+            u_before: Vec::new(),
+        }
+    }
+}
+
+/// The misfit on the stepped sweep.
+struct Stepped<'a, 'b>(&'a Problem<'b>);
+
+impl Tracked for Stepped<'_, '_> {
+    type State = Costs;
+    type Error = FitError;
+
+    fn residuals(&self, u: &[f64], from: &Costs) -> Result<(Vec<f64>, Costs), FitError> {
+        let pb = self.0;
+        let (d, scale) = apply(pb.device, pb.free, &pb.to_p(u))?;
+        let mut m = Vec::with_capacity(pb.y.len());
+        for ds in pb.data {
+            m.extend(model_values(&d, scale, ds)?);
+        }
+        let r = pb.weighted(&m);
+        let here = r.iter().map(|x| x * x).sum();
+        Ok((
+            r,
+            Costs {
+                here,
+                before: from.here,
+                u_here: u.to_vec(),
+                u_before: from.u_here.clone(),
+            },
+        ))
+    }
 }
 
 /// The point `k` (from 1) of the Sobol sequence in the transformed box: each parameter's
