@@ -1,5 +1,5 @@
 //! The plot of `endstop design`: the Pareto front of power against impact speed over the
-//! designs evaluated, and the power maps.
+//! designs evaluated, and the power maps (over a single range, the power against it).
 
 use endstop::design::{Evaluated, Problem, Study};
 use endstop::num::pareto::pareto_front;
@@ -10,8 +10,9 @@ use endstop_experiments::io::plot::{LegendPos, LinePlot, Panels, Series, Style, 
 /// The Pareto front of power against impact speed over every evaluated design (those within
 /// the limits apart from those beyond one, the answer marked, the impact speed's limit drawn
 /// where there is one; against the largest displacement and its limit under a noise or a
-/// record, which measure no impact speed), and the power map of each interface over the first two ranges (a curve
-/// per value of the second).
+/// record, which measure no impact speed), and the power map of each interface over the first
+/// two ranges (a curve per value of the second); over a single range, every design's power
+/// against it, per interface.
 pub(crate) fn plots(p: &Problem, study: &Study, maps: &[(usize, Vec<Evaluated>)]) -> Panels {
     let done: Vec<&Evaluated> = study
         .evaluations
@@ -120,6 +121,9 @@ pub(crate) fn plots(p: &Problem, study: &Study, maps: &[(usize, Vec<Evaluated>)]
         series,
     ));
     let mut panels = vec![pareto];
+    if p.ranges.len() == 1 {
+        panels.push(over_the_range(p, &done));
+    }
     for (i, grid) in maps {
         let n = (grid.len() as f64).sqrt().round() as usize;
         let series = (0..n)
@@ -143,7 +147,7 @@ pub(crate) fn plots(p: &Problem, study: &Study, maps: &[(usize, Vec<Evaluated>)]
         // curves of whichever value of the second range peaks there.
         panels.push(placed_clear(
             LinePlot::new(
-                &format!("Power map, `{}` interface", p.interfaces[*i].key()),
+                &format!("Power map, {} interface", p.interfaces[*i].key()),
                 &p.ranges[0].path,
                 "DC power [uW]",
                 series,
@@ -153,4 +157,40 @@ pub(crate) fn plots(p: &Problem, study: &Study, maps: &[(usize, Vec<Evaluated>)]
         ));
     }
     Panels::new(panels)
+}
+
+/// Every evaluated design's power against the single range's value, a series per interface:
+/// the curve a designer reads the choice off (a device without stops has every design at
+/// zero impact speed, where the Pareto panel shows the powers but not what gives them).
+fn over_the_range(p: &Problem, done: &[&Evaluated]) -> LinePlot {
+    let range = &p.ranges[0];
+    let series = p
+        .interfaces
+        .iter()
+        .enumerate()
+        .map(|(i, iface)| {
+            let mut pts: Vec<(f64, f64)> = done
+                .iter()
+                .filter(|e| e.interface == i)
+                .filter_map(|e| Some((e.values[0], e.result.as_ref().ok()?.power_w * 1e6)))
+                .collect();
+            pts.sort_by(|a, b| a.0.total_cmp(&b.0));
+            Series::new(
+                &format!("{} interface", iface.key()),
+                pts,
+                PALETTE[i % PALETTE.len()],
+                Style::Dots,
+            )
+        })
+        .filter(|s| !s.points.is_empty())
+        .collect();
+    placed_clear(
+        LinePlot::new(
+            &format!("Power against {}", range.path),
+            &range.path,
+            "DC power [uW]",
+            series,
+        )
+        .log(range.spacing == endstop::device::Spacing::Log, false),
+    )
 }

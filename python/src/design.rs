@@ -3,15 +3,18 @@
 //! (ranges of device keys, interfaces by name or as tables, frequencies, acceleration,
 //! limits, or a noise objective in place of the sines) and solved by [`Problem::solve`] with
 //! the GIL released, the answer under noise confirmed on fresh records by [`Problem::confirm`];
-//! the answer as a dict with every evaluated design as numpy arrays.
+//! the answer as a dict with every evaluated design as numpy arrays. A measured record in
+//! place of the sines is checked and resampled by the library's [`MeasuredRecord`], as the
+//! command's `--accel-file` is, and designed over by [`Problem::under_record`].
 
 use endstop::design::{
-    interfaces, Answer, DesignError, Evaluated, Limits, NoiseObjective, Problem, SearchSettings,
-    Study, Verdict, Vibration, LIMIT_NAMES,
+    interfaces, Answer, DesignError, Evaluated, Limits, NoiseObjective, Problem, RecordObjective,
+    SearchSettings, Study, Verdict, Vibration, LIMIT_NAMES,
 };
 use endstop::device::{Interface, ParamRange, Spacing};
+use endstop::drive::measured::MeasuredRecord;
 use endstop::progress::Silent;
-use numpy::PyArray1;
+use numpy::{PyArray1, PyReadonlyArray1};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList, PyString};
 
@@ -210,13 +213,63 @@ fn answer_dict<'py>(py: Python<'py>, p: &Problem, a: &Answer) -> PyResult<Bound<
     design_dict(py, p, &a.design, Some(a.verdict))
 }
 
-/// The sines of a problem, or its noise objective (`psd_g2_per_hz` given, in place of the
-/// frequencies and the acceleration, as the command's `--psd`): what the command's
-/// `NoiseArgs::objective` builds, with the pre-roll left to [`Problem::under_noise`].
+/// The most samples a resampled record may have (as the command's).
+const MAX_RESAMPLED: usize = 1 << 27;
+
+/// The measured record of `accel_m_s2` (m/s^2) sampled at `sample_rate_hz`, checked and
+/// resampled to `integrator_rate_hz` (default: its own rate) by [`MeasuredRecord`], as the
+/// command reads and resamples `--accel-file` to `--sample-rate-hz`; none without a record.
+fn record_of(
+    accel_m_s2: Option<PyReadonlyArray1<'_, f64>>,
+    sample_rate_hz: Option<f64>,
+    integrator_rate_hz: Option<f64>,
+) -> PyResult<Option<RecordObjective>> {
+    let (accel, fs) = match (accel_m_s2, sample_rate_hz) {
+        (None, None) if integrator_rate_hz.is_none() => return Ok(None),
+        (None, _) => {
+            return Err(arg_err(
+                "sample_rate_hz and integrator_rate_hz describe a measured record: give \
+                 accel_m_s2 with them",
+            ))
+        }
+        (Some(_), None) => {
+            return Err(arg_err(
+                "accel_m_s2 needs its sample_rate_hz (Hz): the record's samples are at \
+                 t = k / sample_rate_hz",
+            ))
+        }
+        (Some(a), Some(fs)) => (a.as_array().to_vec(), fs),
+    };
+    // The library names the source (`accel_m_s2`), the field, the sample and the value.
+    let rec = MeasuredRecord::from_uniform("accel_m_s2", fs, accel)
+        .map_err(|e| arg_err(e.to_string()))?;
+    let rate = integrator_rate_hz.unwrap_or(fs);
+    if !(rate.is_finite() && rate > 0.0) {
+        return Err(arg_err(format!(
+            "integrator_rate_hz = {rate}: must be finite and > 0"
+        )));
+    }
+    let samples = rec.duration_s() * rate;
+    if samples > MAX_RESAMPLED as f64 {
+        return Err(arg_err(format!(
+            "integrator_rate_hz = {rate} gives {samples:.0} samples over the record's {} s: \
+             must give at most {MAX_RESAMPLED}",
+            rec.duration_s()
+        )));
+    }
+    Ok(Some(RecordObjective::new(rec.resampled(rate), rate)))
+}
+
+/// The sines of a problem, its noise objective (`psd_g2_per_hz` given, in place of the
+/// frequencies and the acceleration, as the command's `--psd`: what the command's
+/// `NoiseArgs::objective` builds, with the pre-roll left to [`Problem::under_noise`]), or its
+/// measured record (`accel_m_s2` given, as the command's `--accel-file`, the pre-roll left to
+/// [`Problem::under_record`]).
 struct Excitation {
     freqs_hz: Option<Vec<f64>>,
     accel_rms_g: Option<f64>,
     noise: Option<NoiseObjective>,
+    record: Option<RecordObjective>,
 }
 
 impl Excitation {
@@ -228,6 +281,19 @@ impl Excitation {
         limits: Limits,
     ) -> PyResult<Problem> {
         let dev = device.inner.clone();
+        if let Some(r) = self.record {
+            if self.noise.is_some() {
+                return Err(arg_err(
+                    "give a noise (psd_g2_per_hz) or a measured record (accel_m_s2), not both",
+                ));
+            }
+            if self.freqs_hz.is_some() || self.accel_rms_g.is_some() {
+                return Err(arg_err(
+                    "accel_m_s2 replaces freqs_hz and accel_rms_g: give the record or the sines",
+                ));
+            }
+            return Problem::under_record(dev, interfaces, ranges, r, limits).map_err(design_err);
+        }
         match (self.noise, self.freqs_hz, self.accel_rms_g) {
             (Some(n), None, None) => {
                 n.check().map_err(|e| {
@@ -254,7 +320,8 @@ impl Excitation {
             ),
             (None, _, _) => {
                 return Err(arg_err(
-                    "give freqs_hz and accel_rms_g (sines), or psd_g2_per_hz (noise)",
+                    "give freqs_hz and accel_rms_g (sines), psd_g2_per_hz (noise) or accel_m_s2 \
+                     (a measured record)",
                 ))
             }
         }
@@ -268,7 +335,8 @@ impl Excitation {
 #[pyo3(signature = (device, ranges, freqs_hz = None, accel_rms_g = None, interfaces = None,
     max_impact_speed_m_s = None, max_contact_force_n = None, max_displacement_m = None,
     max_impacts_per_s = None, samples = 32, seed = 0, psd_g2_per_hz = None, records = 8,
-    duration_s = 2.0, noise_band_hz = 10e3, noise_seed = 2012))]
+    duration_s = 2.0, noise_band_hz = 10e3, noise_seed = 2012, accel_m_s2 = None,
+    sample_rate_hz = None, integrator_rate_hz = None))]
 #[allow(clippy::too_many_arguments)]
 fn design_py<'py>(
     py: Python<'py>,
@@ -288,7 +356,11 @@ fn design_py<'py>(
     duration_s: f64,
     noise_band_hz: f64,
     noise_seed: u64,
+    accel_m_s2: Option<PyReadonlyArray1<'py, f64>>,
+    sample_rate_hz: Option<f64>,
+    integrator_rate_hz: Option<f64>,
 ) -> PyResult<Bound<'py, PyDict>> {
+    let record = record_of(accel_m_s2, sample_rate_hz, integrator_rate_hz)?;
     let ranges = ranges.iter().map(range_of).collect::<PyResult<Vec<_>>>()?;
     let interfaces = interfaces_of(device, interfaces.as_ref())?;
     let excitation = Excitation {
@@ -302,6 +374,7 @@ fn design_py<'py>(
             seed: noise_seed,
             transient_s: 0.0,
         }),
+        record,
     };
     let limits = Limits {
         impact_speed_m_s: max_impact_speed_m_s,
@@ -372,12 +445,17 @@ fn settings_dict<'py>(
 ) -> PyResult<Bound<'py, PyDict>> {
     let d = PyDict::new(py);
     d.set_item("freqs_hz", p.vibration.freqs_hz.clone())?;
-    // Under noise there is no sine: None, as the command records an acceleration not given.
+    // Under noise or a record there is no sine: None, as the command records an acceleration
+    // not given.
     d.set_item(
         "accel_rms_g",
-        Some(p.vibration.accel_rms_g).filter(|_| p.noise.is_none()),
+        Some(p.vibration.accel_rms_g).filter(|_| p.noise.is_none() && p.record.is_none()),
     )?;
     d.set_item("noise", p.noise.map(|n| noise_dict(py, &n)).transpose()?)?;
+    d.set_item(
+        "record",
+        p.record.as_ref().map(|r| record_dict(py, r)).transpose()?,
+    )?;
     let limits = PyDict::new(py);
     let l = &p.limits;
     for (name, v) in LIMIT_NAMES.iter().zip([
@@ -419,6 +497,18 @@ fn noise_dict<'py>(py: Python<'py>, n: &NoiseObjective) -> PyResult<Bound<'py, P
     d.set_item("duration_s", n.duration_s)?;
     d.set_item("seed", n.seed)?;
     d.set_item("transient_s", n.transient_s)?;
+    Ok(d)
+}
+
+/// The measured record as the problem holds it: the integrator's rate, its samples at that
+/// rate, the pre-roll the problem set and the analysed stretch after it (the command's
+/// `record_sample_rate_hz` and `record_transient_s`).
+fn record_dict<'py>(py: Python<'py>, r: &RecordObjective) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    d.set_item("sample_rate_hz", r.sample_rate_hz)?;
+    d.set_item("samples", r.accel_m_s2.len())?;
+    d.set_item("transient_s", r.transient_s)?;
+    d.set_item("analysed_s", r.analysed_s())?;
     Ok(d)
 }
 

@@ -1,5 +1,5 @@
-"""`endstop.design` against the `endstop design` command on the same problem and seed, and its
-errors.
+"""`endstop.design` against the `endstop design` command on the same problem and seed (under
+sines, under noise and over a measured record), and its errors.
 
 Both build the problem and search it by the same library code (`endstop::design`), so every
 design evaluated agrees, in order, far beyond the digits the command prints: the tolerance is
@@ -210,10 +210,124 @@ def test_design_under_noise_refuses_what_it_cannot_do(root):
         endstop.design(dev, r, samples=4)
 
 
+# Over a measured record: the piezoelectric cantilever driven at 120 Hz, 0.3 g rms, sampled
+# for 1.2 s at 8192 Hz, its load over a decade. The rate is a power of two, so that the times
+# written to the command's CSV file are exact and the command reads the record at exactly this
+# rate: both sides resample the same samples at the same rates, by the same code.
+RECORD_FS_HZ = 8192.0
+
+
+def sine_record():
+    t = np.arange(round(1.2 * RECORD_FS_HZ)) / RECORD_FS_HZ
+    return t, 0.3 * np.sqrt(2.0) * 9.80665 * np.sin(2.0 * np.pi * 120.0 * t)
+
+
+@pytest.mark.parametrize("integrator_rate_hz", [None, 2 * RECORD_FS_HZ])
+def test_design_over_a_record_matches_endstop_design_accel_file(root, tmp_path,
+                                                                integrator_rate_hz):
+    t, a = sine_record()
+    csv = tmp_path / "record.csv"
+    # repr writes each float so that it reads back as the same float.
+    csv.write_text("time_s,accel_m_per_s2\n"
+                   + "".join(f"{ti!r},{ai!r}\n" for ti, ai in zip(t.tolist(), a.tolist())))
+    rate = RECORD_FS_HZ if integrator_rate_hz is None else integrator_rate_hz
+    out = run_cli(["design", "--device", NOISE_DEVICE, "--range",
+                   "load.resistance_ohm=1e4..1e5", "--accel-file", str(csv),
+                   "--sample-rate-hz", repr(rate), "--samples", "4", "--seed", "3",
+                   "--map-points", "0", "--out", str(tmp_path / "cli")],
+                  tmp_path)
+    cli_summary = summary(out / "cli" / "summary.json")
+    cli = cli_summary["numbers"]
+    rows = pd.read_parquet(out / "cli" / "designs.parquet")
+    # A sequence, as a designer may hold a record, for the call without resampling.
+    record = a if integrator_rate_hz is not None else a.tolist()
+    py = endstop.design(root / NOISE_DEVICE, [("load.resistance_ohm", 1e4, 1e5)], samples=4,
+                        seed=3, accel_m_s2=record, sample_rate_hz=RECORD_FS_HZ,
+                        integrator_rate_hz=integrator_rate_hz)
+    best = py["best"]
+    assert best["verdict"] == "optimum" and 1e4 <= best["params"]["load.resistance_ohm"] <= 1e5
+    assert best["power_w"] == np.nanmax(py["designs"]["power_w"]) > 0.0
+    # The same optimum as the command's, and every design the search evaluated, in order.
+    assert math.isclose(best["power_w"], cli["power_w"], rel_tol=REL, abs_tol=0.0)
+    assert py["evaluations"] == cli["evaluations"] == len(rows)
+    for col in ["power_w", "displacement_m", "impacts_per_s", "load.resistance_ohm"]:
+        np.testing.assert_allclose(py["designs"][col], rows[col].to_numpy(dtype=float),
+                                   rtol=REL, atol=0.0, err_msg=col)
+    # A record is deterministic: nothing is confirmed on fresh records, by either.
+    assert py["power_confirmed_w"] is None and py["confirm_seed"] is None
+    assert "power_confirmed_w" not in cli
+    # The record as the problem holds it: the integrator's rate, its samples at that rate (the
+    # record's span, its len(t) - 1 steps each cut into rate / fs), and the pre-roll the
+    # problem set, the command's.
+    ps, cs = py["settings"], cli_summary["settings"]
+    assert ps["record"]["sample_rate_hz"] == cs["record_sample_rate_hz"] == rate
+    assert ps["record"]["samples"] == (len(t) - 1) * round(rate / RECORD_FS_HZ) + 1
+    assert math.isclose(ps["record"]["transient_s"], cs["record_transient_s"], rel_tol=REL)
+    assert 0.0 < ps["record"]["transient_s"] < 1.2
+    for key in ["search", "steady", "limits"]:
+        assert cs[key] == ps[key], key
+    assert ps["noise"] is None and ps["accel_rms_g"] is None and ps["freqs_hz"] == []
+
+
+def record_design(root, **kw):
+    """`endstop.design` of the cantilever's load over a record: the sine record at its rate
+    unless the keywords replace it."""
+    args = dict(accel_m_s2=sine_record()[1], sample_rate_hz=RECORD_FS_HZ, samples=4)
+    args.update(kw)
+    return endstop.design(root / NOISE_DEVICE, [("load.resistance_ohm", 1e4, 1e5)], **args)
+
+
+def test_an_empty_record_is_refused(root):
+    with pytest.raises(ValueError, match="accel_m_s2: 0 samples: must be at least 16"):
+        record_design(root, accel_m_s2=[])
+
+
+def test_a_record_with_a_sample_not_finite_is_refused(root):
+    for bad in [float("nan"), float("inf")]:
+        a = sine_record()[1]
+        a[5] = bad
+        with pytest.raises(ValueError, match="accel_m_s2: sample 5: accel = .* is not a finite"):
+            record_design(root, accel_m_s2=a)
+
+
+def test_a_record_rate_not_positive_is_refused(root):
+    for bad in [0.0, -8192.0, float("nan"), float("inf")]:
+        with pytest.raises(ValueError, match="sample_rate_hz = .* must be finite and > 0"):
+            record_design(root, sample_rate_hz=bad)
+        with pytest.raises(ValueError, match="integrator_rate_hz = .* must be finite and > 0"):
+            record_design(root, integrator_rate_hz=bad)
+
+
+def test_a_record_beside_the_sines_or_the_noise_is_refused(root):
+    with pytest.raises(ValueError, match="accel_m_s2 replaces freqs_hz and accel_rms_g"):
+        record_design(root, freqs_hz=[118.0, 120.0, 122.0], accel_rms_g=0.3)
+    with pytest.raises(ValueError, match="accel_m_s2 replaces freqs_hz and accel_rms_g"):
+        record_design(root, freqs_hz=120.0)
+    with pytest.raises(ValueError, match="not both"):
+        record_design(root, psd_g2_per_hz=1e-5)
+
+
+def test_a_record_refuses_what_it_cannot_do(root):
+    # Without its rate, or a rate without a record.
+    with pytest.raises(ValueError, match="accel_m_s2 needs its sample_rate_hz"):
+        record_design(root, sample_rate_hz=None)
+    with pytest.raises(ValueError, match="give accel_m_s2 with them"):
+        record_design(root, accel_m_s2=None, freqs_hz=120.0, accel_rms_g=0.3)
+    # Not a 1-D record.
+    with pytest.raises(ValueError, match="1-D"):
+        record_design(root, accel_m_s2=np.zeros((2, 100)))
+    # Shorter than the pre-roll the ranges need (0.66 s for the cantilever).
+    with pytest.raises(ValueError, match="give a longer record"):
+        record_design(root, accel_m_s2=sine_record()[1][:1000])
+    # A record measures no impact speed.
+    with pytest.raises(ValueError, match="impact speed"):
+        record_design(root, max_impact_speed_m_s=0.1)
+
+
 def test_the_docstring_example_runs(root, monkeypatch):
     # The example opens its device by a path relative to the repository's root.
     import doctest
     from endstop import _design
     monkeypatch.chdir(root)
     failed, tried = doctest.testmod(_design)
-    assert tried >= 3 and failed == 0
+    assert tried >= 9 and failed == 0

@@ -12,7 +12,8 @@ The model runs in Rust (the repository's `endstop` library); this package is its
   returning dicts of numbers and numpy arrays;
 * :func:`endstop.design`: the designer's inverse question, the most DC power over ranges of a
   device's parameters and a choice of interface circuits within limits on impacts and stroke,
-  under a sine or band-limited white noise (the ``endstop design`` command's);
+  under a sine, band-limited white noise or a measured acceleration record (the ``endstop
+  design`` command's);
 * :mod:`endstop.fit`: fitting a device's parameters to measured sweeps, with uncertainty;
 * :mod:`endstop.paper`: the paper's figure protocols (``endstop.paper.fig13.run()``) and the
   study of why the paper deviates (:mod:`endstop.paper.deviations`, ready for a Dask cluster).

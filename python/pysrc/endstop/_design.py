@@ -1,7 +1,8 @@
 """The designer's inverse question, the twin of the ``endstop design`` command: which values of
 a device's parameters within ranges, and which interface circuit, deliver the most DC power
-under a sine (the worst over a band of frequencies) or under band-limited white noise (the mean
-over an ensemble of records), within the limits the device survives.
+under a sine (the worst over a band of frequencies), under band-limited white noise (the mean
+over an ensemble of records) or over a measured acceleration record (the mean over it), within
+the limits the device survives.
 The problem is built and solved by the library's ``endstop::design`` (the book chapter "Design
 your harvester"), as the command builds and solves it."""
 
@@ -15,7 +16,8 @@ from . import _native
 def design(device, ranges, freqs_hz=None, accel_rms_g=None, *, interfaces=None,
            max_impact_speed_m_s=None, max_contact_force_n=None, max_displacement_m=None,
            max_impacts_per_s=None, samples=32, seed=0, psd_g2_per_hz=None, records=8,
-           duration_s=2.0, noise_band_hz=10e3, noise_seed=2012):
+           duration_s=2.0, noise_band_hz=10e3, noise_seed=2012, accel_m_s2=None,
+           sample_rate_hz=None, integrator_rate_hz=None):
     """Searches ``ranges`` of ``device`` (an :class:`endstop.Device` or the path of a device
     file) for the design of most DC power.
 
@@ -44,6 +46,22 @@ def design(device, ranges, freqs_hz=None, accel_rms_g=None, *, interfaces=None,
       ``--duration-s``, ``--noise-band-hz`` and ``--noise-seed``). Records measure the
       displacement and the impacts, not the impact speed or the contact force: those limits
       are refused under noise.
+    * ``accel_m_s2``: in place of ``freqs_hz`` and ``accel_rms_g`` (and of the noise), a
+      measured base acceleration (m/s^2), a 1-D array or sequence of samples at
+      ``t = k / sample_rate_hz`` (``sample_rate_hz`` in Hz, needed with it). It is checked and
+      resampled (band-limited) to ``integrator_rate_hz`` (default: the record's own rate),
+      the rate the drive is read at by linear interpolation between samples, as the command's
+      ``--accel-file`` is resampled to its ``--sample-rate-hz`` (default 100 kHz there: give
+      ``integrator_rate_hz=100e3`` for the command's answer on a record of another rate, and a
+      rate well above the device's resonance for a coarsely sampled record). The objective is
+      the mean DC power over the record after one pre-roll from rest for the whole problem
+      (the longest over the corners of the ranges), the same record for every design; it is
+      deterministic, so nothing is confirmed on fresh records. As under noise, the record
+      measures the displacement and the impacts, not the impact speed or the contact force:
+      those limits are refused. An empty or too short record (fewer than 16 samples, or none
+      left after the pre-roll), a sample that is not finite, a rate that is not finite and
+      positive, or a record given beside the sines or the noise raises ``ValueError`` naming
+      the argument.
 
     Returns a dict: ``best`` (``verdict`` ``"optimum"``, or ``"infeasible"`` when no design
     tried meets every limit and this is the least violating; ``interface``, ``params`` (path
@@ -61,8 +79,10 @@ def design(device, ranges, freqs_hz=None, accel_rms_g=None, *, interfaces=None,
     on the fresh records and its 95 % half-width, the command's numbers of those names) and
     ``confirm_seed`` (all three ``None`` under sines); and ``settings``, what repeats the run
     besides the device (as the command's ``summary.json`` records it): ``freqs_hz``,
-    ``accel_rms_g`` (``None`` under noise), ``noise`` (``psd_g2_per_hz``, ``bandwidth_hz``,
-    ``records``, ``duration_s``, ``seed``, ``transient_s``; ``None`` under sines), ``limits``,
+    ``accel_rms_g`` (``None`` under noise or a record), ``noise`` (``psd_g2_per_hz``,
+    ``bandwidth_hz``, ``records``, ``duration_s``, ``seed``, ``transient_s``; ``None`` otherwise),
+    ``record`` (``sample_rate_hz``, the integrator's, ``samples`` at it, ``transient_s``,
+    ``analysed_s``; ``None`` otherwise), ``limits``,
     ``search`` (``samples``,
     ``polish_starts``, ``max_iters``, ``simplex_size``, ``sd_tolerance``, ``seed``) and
     ``steady`` (the steady state's ``rtol``, ``transient_periods``, ``max_newton``, ``tol``,
@@ -83,9 +103,27 @@ def design(device, ranges, freqs_hz=None, accel_rms_g=None, *, interfaces=None,
     True
     >>> r["confirm_seed"] == r["settings"]["noise"]["seed"] + 1
     True
+
+    Over a measured record (here a 120 Hz sine of 0.3 g rms sampled at 10 kHz for 1.2 s):
+
+    >>> import numpy as np
+    >>> t = np.arange(12_000) / 10e3
+    >>> a = 0.3 * np.sqrt(2) * 9.80665 * np.sin(2 * np.pi * 120 * t)
+    >>> r = endstop.design("data/examples/piezo_cantilever.toml",
+    ...                    [("load.resistance_ohm", 1e4, 1e5)], accel_m_s2=a,
+    ...                    sample_rate_hz=10e3, samples=4)
+    >>> r["best"]["power_w"] > 0 and r["power_confirmed_w"] is None
+    True
     """
     if isinstance(device, (str, os.PathLike)):
         device = _native.Device.from_toml(device)
+    record = None
+    if accel_m_s2 is not None:
+        record = np.ascontiguousarray(np.asarray(accel_m_s2, dtype=float))
+        if record.ndim != 1:
+            raise ValueError(
+                f"accel_m_s2 must be a 1-D array or sequence of samples, not of shape "
+                f"{record.shape}")
     freqs = None if freqs_hz is None else [
         float(f) for f in np.atleast_1d(np.asarray(freqs_hz, dtype=float))]
     return _native.design(
@@ -96,4 +134,6 @@ def design(device, ranges, freqs_hz=None, accel_rms_g=None, *, interfaces=None,
         samples=int(samples), seed=int(seed),
         psd_g2_per_hz=None if psd_g2_per_hz is None else float(psd_g2_per_hz),
         records=int(records), duration_s=float(duration_s), noise_band_hz=float(noise_band_hz),
-        noise_seed=int(noise_seed))
+        noise_seed=int(noise_seed), accel_m_s2=record,
+        sample_rate_hz=None if sample_rate_hz is None else float(sample_rate_hz),
+        integrator_rate_hz=None if integrator_rate_hz is None else float(integrator_rate_hz))
