@@ -148,8 +148,9 @@ const SECOND_STRIKE_HZ: f64 = 19.2753;
 
 /// Where the orbit striking twice a period meets the grazing that adds a third strike: the
 /// crossing finds no orbit striking three times a period by Newton at fixed frequencies from
-/// the last point (the first it finds, 0.03 Hz on, strikes four times), and the branch stops
-/// there.
+/// the last point, on the maps over one to four drive periods (the first orbit it finds,
+/// 0.03 Hz on, strikes four times a period), nor any orbit of several periods, and the
+/// branch stops there.
 const THIRD_STRIKE_HZ: f64 = 19.3299;
 
 #[test]

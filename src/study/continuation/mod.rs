@@ -19,8 +19,10 @@
 //! corrections. Where the step falls below [`ContinuationSettings::ds_min`] at a grazing
 //! orbit, the corner there is hopped over or crossed (the grazing located on the branch by
 //! bisection and the predictor restarted past it), as is a grazing at which a rigid contact
-//! gains a strike per period; elsewhere it is an error naming the last parameter value
-//! reached.
+//! gains a strike per period (its orbit past the grazing sought on the maps over one to four
+//! drive periods, and taken where it is an orbit of one period); elsewhere it is an error
+//! naming the last parameter value reached, or, where past such a grazing only an orbit of
+//! several periods is found, naming that orbit's periods and parameter value.
 //!
 //! # Events (Seydel; Kuznetsov, chapter 10)
 //! Between two accepted points, sign changes of test functions mark events, each located by the
@@ -46,6 +48,7 @@
 //! predictor-corrector (Newton on the bordered system, tangents, the acceptance of a step,
 //! corner hops), `corner.rs` the crossing of a corner where the contact set changes,
 //! `strike.rs` the crossing of a grazing that adds a strike of a rigid contact,
+//! `periods.rs` the search for an orbit on the maps over several periods,
 //! `events.rs` the test functions and the location of events; this file holds the
 //! loop that drives them ([`continue_branch`]) and the entry points.
 
@@ -62,6 +65,7 @@ mod diagram;
 mod diagram_types;
 mod events;
 pub mod impacting;
+mod periods;
 mod strike;
 mod test_functions;
 mod types;
@@ -72,6 +76,7 @@ pub use diagram_types::{
     BranchEnd, BranchKind, Diagram, DiagramBranch, DiagramEvent, DiagramPoint, EndKind,
     EventKind as DiagramEventKind,
 };
+use strike::StrikeOutcome;
 pub use types::{Branch, BranchPoint, ContinuationSettings, Event, EventKind, Rejection};
 
 /// The first orbit of a branch: Newton at `forcing` from `guess` (the state at drive phase
@@ -247,16 +252,29 @@ pub fn continue_branch_until<M: Model<N> + Clone, const N: usize>(
                     // At a grazing that adds a strike of a rigid contact (its free approach
                     // between strikes reaching the gap, the contact set unchanged), the
                     // orbit with the added strike is found and the branch goes on from it.
-                    if let Some(x) = c.cross_strike_grazing(points.len() - 1, &last) {
-                        let done = x.events.iter().any(&mut until);
-                        events.extend(x.events);
-                        on_point(x.past.orbit.param(param));
-                        points.push(x.past);
-                        if done {
-                            break;
+                    match c.cross_strike_grazing(points.len() - 1, &last) {
+                        Some(StrikeOutcome::Crossed(x)) => {
+                            let done = x.events.iter().any(&mut until);
+                            events.extend(x.events);
+                            on_point(x.past.orbit.param(param));
+                            points.push(x.past);
+                            if done {
+                                break;
+                            }
+                            ds = settings.ds_init;
+                            continue;
                         }
-                        ds = settings.ds_init;
-                        continue;
+                        // The continuation follows orbits of one period: past the grazing
+                        // only an orbit of several periods is found, and the branch ends.
+                        Some(StrikeOutcome::OtherPeriod(o)) => {
+                            return Err(OrbitError::OtherPeriod {
+                                what: param.label(),
+                                last_param: p_last,
+                                periods: o.periods,
+                                param: o.param(param),
+                            });
+                        }
+                        None => {}
                     }
                     return Err(OrbitError::Stalled {
                         what: param.label(),
