@@ -64,6 +64,39 @@ impl<M: Model<N>, const N: usize> Continuer<'_, '_, M, N> {
         several.map(Shot::Several)
     }
 
+    /// The first stable orbit at `forcing` found by Newton's method on the maps over k = 1,
+    /// 2, ..., [`MAX_PERIODS`] drive periods from the state `y` at drive phase `phase_rad`,
+    /// each as the orbit of its least period, with its section moved into free flight.
+    pub(super) fn stable_orbit_from(
+        &mut self,
+        forcing: &Forcing,
+        phase_rad: f64,
+        y: SVector<f64, N>,
+    ) -> Option<Orbit> {
+        let param = self.settings.parameter;
+        for k in 1..=MAX_PERIODS {
+            let solved =
+                self.shooter
+                    .solve_periods(forcing, param, phase_rad, y, k, &mut self.stats);
+            let Ok(o) = solved else {
+                continue;
+            };
+            let Some(Shot::One(o) | Shot::Several(o)) = self.least_period(o) else {
+                continue;
+            };
+            if !o.is_stable() {
+                continue;
+            }
+            if self.shooter.section_is_free(&o) {
+                return Some(o);
+            }
+            if let Ok(o) = self.shooter.reanchor(&o, param, &mut self.stats) {
+                return Some(o);
+            }
+        }
+        None
+    }
+
     /// The orbit `o`, a fixed point of the map over its `periods` drive periods, as an orbit
     /// of its least period: the least d dividing them whose map P^d moves its section state
     /// by less than [`DISTINCT_REL`] of its scaled norm, solved again by Newton's method on

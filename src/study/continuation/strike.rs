@@ -57,6 +57,9 @@ pub(super) enum StrikeOutcome {
     /// No orbit of one period with the added strike, but an orbit of several drive periods
     /// (its least number in [`Orbit::periods`]): the first found, nearest the last point.
     OtherPeriod(Orbit),
+    /// The last point is at such a grazing, and no orbit is found past it (or the branch
+    /// follows orbits of several periods, whose grazings the search does not cross).
+    NotFound,
 }
 
 impl<M: Model<N>, const N: usize> Continuer<'_, '_, M, N> {
@@ -76,7 +79,8 @@ impl<M: Model<N>, const N: usize> Continuer<'_, '_, M, N> {
     /// step, then behind it (where the branch turns back at the grazing), each on the maps
     /// over one to [`super::periods::MAX_PERIODS`] drive periods ([`Continuer::shoot_periods`]). Where no
     /// such orbit of one period is found, the first orbit of several periods found is
-    /// returned instead. `None` when `last` is near no such grazing or no orbit is found.
+    /// returned instead; [`StrikeOutcome::NotFound`] when no orbit is found, and at once on a
+    /// branch of orbits of several periods. `None` when `last` is near no such grazing.
     pub(super) fn cross_strike_grazing(
         &mut self,
         k_last: usize,
@@ -92,6 +96,9 @@ impl<M: Model<N>, const N: usize> Continuer<'_, '_, M, N> {
             .filter(|(_, d)| d.abs() <= near)
             .min_by(|a, b| a.1.abs().total_cmp(&b.1.abs()))?
             .0;
+        if self.periods > 1 {
+            return Some(StrikeOutcome::NotFound);
+        }
         let n = strikes(last, k);
         let len = gaps.len();
         let before: Vec<u32> = (0..len).map(|j| strikes(last, j)).collect();
@@ -100,9 +107,10 @@ impl<M: Model<N>, const N: usize> Continuer<'_, '_, M, N> {
             (0..len).all(|j| r.strikes[j] == before[j] + u32::from(j == k))
         };
         let ahead = last.param_tangent().signum();
-        let (past, dir) = match self.shoot_strike(last, ahead, added)? {
-            Ok(found) => found,
-            Err(other) => return Some(StrikeOutcome::OtherPeriod(other)),
+        let (past, dir) = match self.shoot_strike(last, ahead, added) {
+            Some(Ok(found)) => found,
+            Some(Err(other)) => return Some(StrikeOutcome::OtherPeriod(other)),
+            None => return Some(StrikeOutcome::NotFound),
         };
         let past = self.reanchor(past.clone()).unwrap_or(past);
         let grazing = self.locate_strike_by_param(last, &past, dir, k, n, gaps);
@@ -200,12 +208,7 @@ impl<M: Model<N>, const N: usize> Continuer<'_, '_, M, N> {
                 let phase = a.orbit.phase_rad;
                 let o = [&a.orbit, &b.orbit]
                     .into_iter()
-                    .find_map(|from| {
-                        let guess = from.state_n();
-                        self.shooter
-                            .solve(&f, param, phase, guess, &mut self.stats)
-                            .ok()
-                    })
+                    .find_map(|from| self.solve(&f, phase, from.state_n()).ok())
                     .ok_or(())?;
                 let v = strike_test(&o, gaps, k, n).ok_or(())?;
                 if v < 0.0 && d > best.1 {
