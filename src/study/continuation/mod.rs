@@ -400,30 +400,21 @@ pub fn response_from_rest(
 ) -> Result<Response, OrbitError> {
     settings.validate()?;
     crate::with_harvester!(device, |h| {
-        let shooter = Shooter::new(&h, settings.shooting);
-        let mut stats = Stats::default();
-        let first = first_orbit(
-            &shooter,
-            &start,
-            settings.parameter,
-            h.rest_state(),
-            resume.transient_periods,
-            &mut stats,
-        )?;
+        let (first, stats) = orbit_from_rest(&h, start, settings, resume.transient_periods)?;
         let mut r = response_of_model(&h, first, settings, resume, progress)?;
         r.stats += stats;
         Ok(r)
     })
 }
 
-/// [`branch_from_rest`] on a model.
-pub fn branch_of_model<M: Model<N> + Clone, const N: usize>(
+/// The first orbit of a branch from rest ([`first_orbit`]) with the counters of its
+/// integrations.
+fn orbit_from_rest<M: Model<N>, const N: usize>(
     h: &M,
     start: Forcing,
     settings: &ContinuationSettings,
     transient_periods: usize,
-    progress: &dyn Progress,
-) -> Result<Branch, OrbitError> {
+) -> Result<(Orbit, Stats), OrbitError> {
     let shooter = Shooter::new(h, settings.shooting);
     let mut stats = Stats::default();
     let first = first_orbit(
@@ -434,6 +425,18 @@ pub fn branch_of_model<M: Model<N> + Clone, const N: usize>(
         transient_periods,
         &mut stats,
     )?;
+    Ok((first, stats))
+}
+
+/// [`branch_from_rest`] on a model.
+pub fn branch_of_model<M: Model<N> + Clone, const N: usize>(
+    h: &M,
+    start: Forcing,
+    settings: &ContinuationSettings,
+    transient_periods: usize,
+    progress: &dyn Progress,
+) -> Result<Branch, OrbitError> {
+    let (first, stats) = orbit_from_rest(h, start, settings, transient_periods)?;
     let mut branch = continue_branch(h, first, settings, progress)?;
     branch.stats += stats;
     Ok(branch)
