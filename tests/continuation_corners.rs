@@ -12,15 +12,25 @@
 //! orbit that strikes once per period meets a grazing where the next approach of the masses
 //! after the impact reaches the gap (a second impact per period begins, the contact set
 //! staying the same): the branch crosses it and reports it as a grazing of that contact. It
-//! stops at the next such grazing, where a third impact per period begins.
+//! stops at the next such grazing, where a third impact per period begins; the response
+//! resumes past it in steps with transients, finds a stable orbit again a few steps on and
+//! reaches the end of its range, and an orbit of the branch found there agrees with a long
+//! record at its frequency.
 
 use endstop::device::Device;
 use endstop::device::StiffnessModel;
+use endstop::model::Model;
+use endstop::ode::SolverError;
 use endstop::paper::deviations::RangesFile;
 use endstop::paper::setups::{endstop, with_endstop, FIG13_BIAS_V};
 use endstop::progress::Silent;
-use endstop::study::continuation::{frequency_branch, Branch, EventKind};
-use endstop::study::orbit::OrbitError;
+use endstop::study::continuation::{
+    frequency_branch, response_from_rest, Branch, ContinuationSettings, EventKind, Response,
+    ResumeSettings, STEPPED_MEASURE_PERIODS,
+};
+use endstop::study::orbit::{Forcing, Orbit, OrbitError};
+use endstop::study::steady::{settle_and_measure, Measurement, SettleSettings};
+use nalgebra::SVector;
 
 use crate::common;
 
@@ -148,8 +158,9 @@ const SECOND_STRIKE_HZ: f64 = 19.2753;
 
 /// Where the orbit striking twice a period meets the grazing that adds a third strike: the
 /// crossing finds no orbit striking three times a period by Newton at fixed frequencies from
-/// the last point (the first it finds, 0.03 Hz on, strikes four times), and the branch stops
-/// there.
+/// the last point, on the maps over one to four drive periods (the first orbit it finds,
+/// 0.03 Hz on, strikes four times a period), nor any orbit of several periods, and the
+/// branch stops there.
 const THIRD_STRIKE_HZ: f64 = 19.3299;
 
 #[test]
@@ -199,9 +210,10 @@ fn the_upconverter_branch_crosses_the_grazing_that_adds_a_second_strike() {
     );
 }
 
-/// The current behaviour at the third strike, a known limitation (see [`THIRD_STRIKE_HZ`]).
+/// The branch alone (without the resumption) still ends at the third strike, with the error
+/// that names where (see [`THIRD_STRIKE_HZ`]): the resumption below starts there.
 #[test]
-fn the_upconverter_branch_stops_where_a_third_strike_per_period_begins() {
+fn the_upconverter_branch_alone_stops_where_a_third_strike_per_period_begins() {
     let device = Device::from_toml_str(UPCONVERTER, "upconverter.toml").expect("the file loads");
     match frequency_branch(&device, 0.05, 17.0, 25.0, 0.3, &Silent) {
         // The step halves to the smallest arclength (1e-7 Hz) before it stops: the stall lies
@@ -216,6 +228,134 @@ fn the_upconverter_branch_stops_where_a_third_strike_per_period_begins() {
             b.params().last()
         ),
     }
+}
+
+/// The step of the resumption: the stepped sweep's default step for the up-converter over
+/// `endstop response --from 10 --to 40` (a quarter of the driver's half-power width, rounded
+/// down).
+const RESUME_STEP_HZ: f64 = 0.1;
+
+/// The up-converter's response at 0.05 g from 17 to 25 Hz with the resumption past the third
+/// strike (transients of 200 periods, as the diagram's first orbit from rest).
+fn upconverter_response() -> Response {
+    let device = Device::from_toml_str(UPCONVERTER, "upconverter.toml").expect("the file loads");
+    let start = Forcing {
+        freq_hz: 17.0,
+        accel_rms_g: 0.05,
+    };
+    let settings = ContinuationSettings::frequency(17.0, 25.0, 0.3);
+    let resume = ResumeSettings {
+        step: RESUME_STEP_HZ,
+        transient_periods: 200,
+        measure_periods: STEPPED_MEASURE_PERIODS,
+    };
+    response_from_rest(&device, start, &settings, &resume, &Silent)
+        .expect("the response reaches the end of the range")
+}
+
+#[test]
+fn the_upconverter_response_resumes_past_the_third_strike_and_completes_its_range() {
+    let r = upconverter_response();
+    assert!(
+        r.reach(1.0) >= 25.0 - RESUME_STEP_HZ,
+        "the response reaches {} Hz, not the end of the range",
+        r.reach(1.0)
+    );
+    // The first branch ends at the third strike, where the resumption takes over.
+    let first = r.branches().next().expect("a first branch");
+    let end = first.params().fold(f64::NEG_INFINITY, f64::max);
+    assert!(
+        (end - THIRD_STRIKE_HZ).abs() < 1e-3,
+        "the first branch ends at {end} Hz"
+    );
+    let stop = r
+        .ends
+        .first()
+        .expect("the first branch ends short of the range");
+    assert!(
+        stop.piece == 0 && stop.at_strike && matches!(stop.error, OrbitError::Stalled { .. }),
+        "the first branch ends with a stall at the strike: {stop:?}"
+    );
+    // The new path fires: a stable orbit found from a transient past the end begins a new
+    // branch within a few steps of it, and every branch found starts past the first's end.
+    let found = r.found();
+    let &(periods, at_hz) = found.first().unwrap_or_else(|| panic!("no branch found"));
+    assert!(
+        at_hz > end && at_hz <= end + 5.0 * RESUME_STEP_HZ,
+        "the first branch found (period {periods}) is at {at_hz} Hz"
+    );
+    assert!((1..=4).contains(&periods), "{periods} periods");
+    for b in r.branches().skip(1) {
+        let o = &b.points[0].orbit;
+        assert!(o.is_stable(), "a branch found is stable where found");
+        assert!(o.param(b.parameter) > end);
+    }
+    // Stepped points lie between the branches, each at a frequency no branch covers there.
+    for s in r.stepped() {
+        assert!(s.forcing.freq_hz > end && s.periods == STEPPED_MEASURE_PERIODS);
+    }
+}
+
+/// The relative difference allowed between a continued orbit's RMS voltage and a long record's
+/// at the same frequency: ten times the record's steady-state criterion (two blocks of 120
+/// periods within 1e-4 of each other), far above the integrators' errors (rtol 1e-10).
+const RECORD_RMS_REL: f64 = 1e-3;
+
+#[test]
+fn an_orbit_past_the_third_strike_matches_a_long_record() {
+    let r = upconverter_response();
+    let device = Device::from_toml_str(UPCONVERTER, "upconverter.toml").expect("the file loads");
+    // The first branch found, at its most strongly attracting point (the smallest largest
+    // multiplier, which a record settles onto soonest): a continued orbit, not the one the
+    // transient seeded.
+    let b = r
+        .branches()
+        .nth(1)
+        .expect("a branch found past the third strike");
+    let p = b
+        .points
+        .iter()
+        .skip(1)
+        .min_by(|x, y| {
+            x.orbit
+                .max_multiplier_abs()
+                .total_cmp(&y.orbit.max_multiplier_abs())
+        })
+        .expect("a continued point");
+    let o = &p.orbit;
+    let f_hz = o.forcing.freq_hz;
+    assert!(o.is_stable(), "the orbit at {f_hz} Hz is stable");
+    // A long record at that frequency from the orbit's state put a tenth off it: 2400 periods to settle (a hundred and fifty ring-up times 2m/b of the
+    // driver), then blocks of 120 periods (a multiple of every orbit's period up to four).
+    let cfg = SettleSettings {
+        rtol: 1e-10,
+        block_periods: 120,
+        settle_blocks: 20,
+        rel_change_tol: 1e-4,
+        max_blocks: 20,
+    };
+    let m =
+        endstop::with_harvester!(&device, |h| long_record(&h, o, &cfg)).expect("the record runs");
+    assert!(m.converged, "the record settles at {f_hz} Hz");
+    let rel = (m.v1_rms_v / o.summary.v1_rms_v - 1.0).abs();
+    assert!(
+        rel <= RECORD_RMS_REL,
+        "at {f_hz} Hz the record's RMS {} V against the orbit's {} V ({rel:e})",
+        m.v1_rms_v,
+        o.summary.v1_rms_v
+    );
+}
+
+/// The steady state from the orbit's section state scaled by 1.1 (every component a tenth
+/// off the orbit) under its drive, settled and measured by `cfg`.
+fn long_record<M: Model<N>, const N: usize>(
+    h: &M,
+    o: &Orbit,
+    cfg: &SettleSettings,
+) -> Result<Measurement, SolverError> {
+    let y: SVector<f64, N> = o.state_n::<N>() * 1.1;
+    let sine = o.forcing.sine(o.phase_rad);
+    settle_and_measure(h, sine, y, h.mode_of(&y), o.forcing.accel_rms_g, cfg).map(|r| r.0)
 }
 
 fn events(b: &Branch) -> Vec<(String, f64)> {

@@ -12,7 +12,9 @@ use common::{fmt_sig, row, Experiment};
 use endstop::device::Device;
 use endstop::study::chirp::{ChirpReport, ChirpSweep};
 use endstop::study::continuation::impacting::DiagramSettings;
-use endstop::study::continuation::{diagram, ContinuationSettings, Diagram, DiagramEventKind};
+use endstop::study::continuation::{
+    diagram_with_step, ContinuationSettings, Diagram, DiagramEventKind,
+};
 use endstop::study::orbit::Forcing;
 use endstop::study::stepped::Approach;
 use endstop::study::sweep::{DownSweepReport, SweepReport, SweepSettings};
@@ -131,7 +133,8 @@ fn swept_sines(
     Ok((u?, d?))
 }
 
-/// Every branch of periodic orbits from the range's lower end, with its events.
+/// Every branch of periodic orbits from the range's lower end, with its events; where a
+/// branch ends at a grazing that adds a strike, resumed in the sweeps' steps after transients.
 fn continue_orbits(device: &Device, a: &RangeArgs, protocol: &Protocol) -> Result<Diagram> {
     eprintln!(
         "[endstop-response] continuing the periodic orbits from {} Hz",
@@ -143,11 +146,12 @@ fn continue_orbits(device: &Device, a: &RangeArgs, protocol: &Protocol) -> Resul
     };
     let cont = ContinuationSettings::frequency(a.from, a.to, protocol.max_step_hz);
     Ok(common::with_progress(1, "continuation", |branch| {
-        diagram(
+        diagram_with_step(
             device,
             start_drive,
             &cont,
             &DiagramSettings::default(),
+            protocol.step_hz,
             branch,
         )
     })?)

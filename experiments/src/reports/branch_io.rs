@@ -206,6 +206,9 @@ pub fn diagram_rows(case: &str, d: &Diagram) -> Vec<Row> {
     let mut segment = 0u32;
     for (i, b) in d.branches.iter().enumerate() {
         let mut prev: Option<bool> = None;
+        // A point past the end of a branch where no stable orbit is found is measured, not
+        // continued: it has no multipliers (NaN in their columns, unstable in `stable`).
+        let continued = b.kind != BranchKind::Stepped;
         for p in &b.points {
             if prev.is_some_and(|s| s != p.is_stable()) {
                 segment += 1;
@@ -222,8 +225,8 @@ pub fn diagram_rows(case: &str, d: &Diagram) -> Vec<Row> {
                 "accel_rms_g" => p.forcing.accel_rms_g,
                 "v1_rms_v" => p.summary.v1_rms_v,
                 "x_max_m" => p.summary.x_max_m,
-                "stable" => p.is_stable(),
-                "multiplier_max_abs" => p.max_multiplier_abs(),
+                "stable" => continued && p.is_stable(),
+                "multiplier_max_abs" => if continued { p.max_multiplier_abs() } else { f64::NAN },
                 "branch" => i as u32,
                 "branch_label" => b.label.as_str(),
                 "segment" => segment,
@@ -233,6 +236,7 @@ pub fn diagram_rows(case: &str, d: &Diagram) -> Vec<Row> {
                 "min_impact_speed_m_s" => speed,
                 "half_multiplier_max_abs" => p.half_multiplier_max_abs(),
                 "phase_lag_deg" => p.phase_lag_deg(),
+                "continued" => continued,
             ]);
         }
         segment += 1;
@@ -260,7 +264,13 @@ fn diagram_series(d: &Diagram, value: impl Fn(&DiagramPoint) -> Option<f64>) -> 
                     b.label.clone()
                 };
                 labelled = true;
-                let style = if st { Style::Line } else { Style::Dashed };
+                let style = if b.kind == BranchKind::Stepped {
+                    Style::Points
+                } else if st {
+                    Style::Line
+                } else {
+                    Style::Dashed
+                };
                 series.push(Series::new(&label, std::mem::take(seg), color, style));
             }
             seg.clear();
@@ -292,6 +302,7 @@ fn diagram_series(d: &Diagram, value: impl Fn(&DiagramPoint) -> Option<f64>) -> 
 fn branch_color(b: &DiagramBranch) -> plotters::style::RGBColor {
     match &b.kind {
         BranchKind::NonImpacting | BranchKind::Continued => PALETTE[0],
+        BranchKind::Stepped => PALETTE[7],
         BranchKind::Impacting(q) => match (q.closure, q.impacts()) {
             (Closure::Mirror, _) => PALETTE[5],
             (Closure::Periodic(1), 1) => PALETTE[3],
@@ -461,7 +472,9 @@ pub fn diagram_words(d: &Diagram) -> String {
             b.points.len().to_string(),
             format!("{lo:.4}"),
             format!("{hi:.4}"),
-            if stretches.is_empty() {
+            if b.kind == BranchKind::Stepped {
+                "not continued: no stable orbit of up to 4 periods".into()
+            } else if stretches.is_empty() {
                 "none".into()
             } else {
                 stretches.join(", ")
@@ -480,7 +493,11 @@ pub fn diagram_words(d: &Diagram) -> String {
     for e in &d.events {
         let kind = e.label();
         let st = |s: bool| if s { "stable" } else { "unstable" };
-        let stability = if e.kind == DiagramEventKind::Grazing {
+        let by_branch = matches!(
+            e.kind,
+            DiagramEventKind::Grazing | DiagramEventKind::BranchFound
+        );
+        let stability = if by_branch {
             e.branches
                 .iter()
                 .zip(&e.stable)

@@ -29,11 +29,13 @@ struct Corrected {
     iterations: usize,
 }
 
-/// The continuation's working state: the shooter on the period map, the settings, and the
-/// integrator counters of every integration so far.
+/// The continuation's working state: the shooter, the settings, the drive periods of the map
+/// whose fixed points the branch follows (1: the period map; k: the map over k periods, for a
+/// branch of orbits of k periods), and the integrator counters of every integration so far.
 pub(super) struct Continuer<'s, 'a, M, const N: usize> {
     pub(super) shooter: &'s Shooter<'a, M, N>,
     pub(super) settings: ContinuationSettings,
+    pub(super) periods: usize,
     pub(super) stats: Stats,
 }
 
@@ -73,6 +75,42 @@ pub(super) fn tangent(jac: &DMatrix<f64>, prev: &DVector<f64>) -> Option<DVector
 impl<M: Model<N>, const N: usize> Continuer<'_, '_, M, N> {
     fn p_of(&self, q: f64) -> f64 {
         q * self.settings.param_scale
+    }
+
+    /// The branch's map (over [`Continuer::periods`] drive periods) at `y`, linearised.
+    pub(super) fn linearise(
+        &mut self,
+        forcing: &Forcing,
+        phase_rad: f64,
+        y: SVector<f64, N>,
+    ) -> Result<Linearised<N>, OrbitError> {
+        let param = self.settings.parameter;
+        let duration_s = self.periods as f64 * forcing.period_s();
+        self.shooter
+            .linearise_over(forcing, param, phase_rad, y, duration_s, &mut self.stats)
+            .map_err(|e| OrbitError::Solver {
+                what: param.label(),
+                param: forcing.get(param),
+                source: e,
+            })
+    }
+
+    /// Newton's method for a fixed point of the branch's map at `forcing` from `guess`.
+    pub(super) fn solve(
+        &mut self,
+        forcing: &Forcing,
+        phase_rad: f64,
+        guess: SVector<f64, N>,
+    ) -> Result<Orbit, OrbitError> {
+        let param = self.settings.parameter;
+        self.shooter.solve_periods(
+            forcing,
+            param,
+            phase_rad,
+            guess,
+            self.periods,
+            &mut self.stats,
+        )
     }
 
     pub(super) fn u_of(&self, o: &Orbit) -> DVector<f64> {
@@ -116,14 +154,7 @@ impl<M: Model<N>, const N: usize> Continuer<'_, '_, M, N> {
             let forcing = template.with(param, p);
             let z: SVector<f64, N> = state_part(&u);
             let y = z.component_mul(&sc);
-            let lin = self
-                .shooter
-                .linearise(&forcing, param, phase, y, &mut self.stats)
-                .map_err(|e| OrbitError::Solver {
-                    what: param.label(),
-                    param: p,
-                    source: e,
-                })?;
+            let lin = self.linearise(&forcing, phase, y)?;
             let g = (lin.end - y).component_div(&sc);
             let m = self.shooter.scaled_monodromy(&lin.monodromy);
             let gq = lin.dp.component_div(&sc) * self.settings.param_scale;
@@ -140,7 +171,7 @@ impl<M: Model<N>, const N: usize> Continuer<'_, '_, M, N> {
                     let y = z.component_mul(&sc);
                     let (end, summary) = self
                         .shooter
-                        .measure(&forcing, phase, y, &mut self.stats)
+                        .measure_periods(&forcing, phase, y, self.periods, &mut self.stats)
                         .map_err(|e| OrbitError::Solver {
                             what: param.label(),
                             param: p,
@@ -149,9 +180,10 @@ impl<M: Model<N>, const N: usize> Continuer<'_, '_, M, N> {
                     let gp = (end - y).component_div(&sc);
                     let plain = gp.norm() / z.norm().max(1e-300);
                     if plain < cfg.residual_tol {
-                        let orbit = self
+                        let mut orbit = self
                             .shooter
                             .orbit(&forcing, param, phase, y, m, plain, it, summary)?;
+                        orbit.periods = self.periods;
                         return Ok(Corrected {
                             orbit,
                             jac,
@@ -229,14 +261,7 @@ impl<M: Model<N>, const N: usize> Continuer<'_, '_, M, N> {
         let param = self.settings.parameter;
         let o = self.shooter.reanchor(&p.orbit, param, &mut self.stats)?;
         // The kernel at the new section, oriented so that the parameter moves the same way.
-        let lin = self
-            .shooter
-            .linearise(&o.forcing, param, o.phase_rad, o.state_n(), &mut self.stats)
-            .map_err(|e| OrbitError::Solver {
-                what: param.label(),
-                param: o.param(param),
-                source: e,
-            })?;
+        let lin = self.linearise(&o.forcing, o.phase_rad, o.state_n())?;
         let jac = self.kernel_jacobian(&lin);
         let sign = p.param_tangent().signum();
         let e = join(&SVector::<f64, N>::zeros(), sign);
@@ -353,13 +378,7 @@ impl<M: Model<N>, const N: usize> Continuer<'_, '_, M, N> {
         let mut step = 1e-4 * max_step;
         while step <= max_step {
             let f = last.orbit.forcing.with(param, p0 + dir * step);
-            let solved = self.shooter.solve(
-                &f,
-                param,
-                last.orbit.phase_rad,
-                last.orbit.state_n(),
-                &mut self.stats,
-            );
+            let solved = self.solve(&f, last.orbit.phase_rad, last.orbit.state_n());
             if let Ok(o) = solved {
                 if accept(&o) {
                     return self.with_tangent(o, dir);
@@ -373,11 +392,7 @@ impl<M: Model<N>, const N: usize> Continuer<'_, '_, M, N> {
     /// A point of the branch at the orbit `o`, its tangent oriented so that the parameter
     /// moves in the direction `dir`.
     pub(super) fn with_tangent(&mut self, o: Orbit, dir: f64) -> Option<BranchPoint> {
-        let param = self.settings.parameter;
-        let lin = self
-            .shooter
-            .linearise(&o.forcing, param, o.phase_rad, o.state_n(), &mut self.stats)
-            .ok()?;
+        let lin = self.linearise(&o.forcing, o.phase_rad, o.state_n()).ok()?;
         let jac = self.kernel_jacobian(&lin);
         let e = join(&SVector::<f64, N>::zeros(), dir);
         let tangent = tangent(&jac, &e)?;

@@ -20,8 +20,12 @@ use super::diagram_types::{
     orbit_point, BranchEnd, BranchKind, Diagram, DiagramBranch, DiagramEvent, DiagramPoint,
     EndKind, EventKind,
 };
+use super::impacting::bvp::side_stops;
 use super::impacting::{rigid_diagram, DiagramSettings};
-use super::{branch_from_rest, Branch, ContinuationSettings, EventKind as BranchEventKind};
+use super::{
+    found_label, response_from_rest, Branch, ContinuationSettings, EventKind as BranchEventKind,
+    Piece, Response, ResumeSettings, SteppedPoint,
+};
 
 /// True when every stop of the device's model is rigid (and it has one): the model's
 /// contacts ([`Model::contacts`]), so that a device of several masses counts its stops to the
@@ -61,9 +65,10 @@ fn rigid_diagram_applies(device: &Device) -> bool {
 
 /// The diagram of `device` under the drive `start` (at the settings' start value) over the
 /// settings' range: [`rigid_diagram`] for a device whose stops are all rigid and all the first
-/// mass's to the frame, else the branch
-/// continued from rest ([`branch_from_rest`]) as a diagram of one branch
-/// ([`Diagram::from_branch`]). `progress` is told of each branch as it is begun.
+/// mass's to the frame, else the response from rest ([`response_from_rest`]: the branch
+/// continued from rest, resumed past a grazing that adds a strike where it ends there, in
+/// steps of the settings' largest parameter step) as a diagram ([`Diagram::from_response`]).
+/// `progress` is told of each branch as it is begun.
 pub fn diagram(
     device: &Device,
     start: Forcing,
@@ -71,14 +76,45 @@ pub fn diagram(
     options: &DiagramSettings,
     progress: &dyn Progress,
 ) -> Result<Diagram, OrbitError> {
+    diagram_with_step(
+        device,
+        start,
+        settings,
+        options,
+        settings.max_param_step,
+        progress,
+    )
+}
+
+/// Drive periods over which a stepped point is measured: enough for the mean number of
+/// impacts a period of a response that repeats no period to two digits' resolution (a
+/// hundredth of an impact a period is one impact in a hundred periods).
+pub const STEPPED_MEASURE_PERIODS: usize = 100;
+
+/// [`diagram`], where the response is resumed past a grazing that adds a strike in steps of
+/// `step` (Hz or g; a stepped sweep's step), each after `options.transient_periods` periods of
+/// transient, a point without an orbit measured over [`STEPPED_MEASURE_PERIODS`] periods.
+pub fn diagram_with_step(
+    device: &Device,
+    start: Forcing,
+    settings: &ContinuationSettings,
+    options: &DiagramSettings,
+    step: f64,
+    progress: &dyn Progress,
+) -> Result<Diagram, OrbitError> {
     if rigid_diagram_applies(device) {
         return rigid_diagram(device, start, settings, options, progress);
     }
     progress.stage("periodic orbits from rest");
-    let branch = branch_from_rest(device, start, settings, options.transient_periods, &Silent)?;
+    let resume = ResumeSettings {
+        step,
+        transient_periods: options.transient_periods,
+        measure_periods: STEPPED_MEASURE_PERIODS,
+    };
+    let response = response_from_rest(device, start, settings, &resume, &Silent)?;
     crate::with_harvester!(device, |h| {
         let shooter = Shooter::new(&h, settings.shooting);
-        Diagram::from_branch(&shooter, &branch)
+        Diagram::from_response(&shooter, &response)
     })
 }
 
@@ -138,77 +174,229 @@ impl Diagram {
         shooter: &Shooter<'_, M, N>,
         branch: &Branch,
     ) -> Result<Self, OrbitError> {
-        let mut stats = Stats::default();
-        let points = branch
-            .points
-            .iter()
-            .map(|p| orbit_point(shooter, &p.orbit, false, &mut stats))
-            .collect::<Result<Vec<_>, _>>()?;
-        let mut events: Vec<DiagramEvent> = Vec::new();
-        for e in &branch.events {
-            let corner = e.kind == BranchEventKind::Fold && e.at_grazing;
-            let kind = match e.kind {
-                _ if corner => EventKind::Grazing,
-                BranchEventKind::Fold => EventKind::Fold,
-                BranchEventKind::BranchPoint => {
-                    let half = shooter.half_map(&e.orbit, &mut stats)?;
-                    let at_minus_one = half.as_ref().is_some_and(|h| {
-                        h.multipliers
-                            .iter()
-                            .any(|m| (m + 1.0).norm() < HALF_MINUS_ONE_TOL)
-                    });
-                    if at_minus_one {
-                        EventKind::SymmetryBreaking
-                    } else {
-                        EventKind::BranchPoint
-                    }
-                }
-                BranchEventKind::PeriodDoubling => EventKind::PeriodDoubling,
-                BranchEventKind::Torus => EventKind::Torus,
-                BranchEventKind::Grazing => EventKind::Grazing,
-            };
-            // The corner and its grazing are one point: kept once, as the corner.
-            if kind == EventKind::Grazing {
-                if let Some(prev) = events.iter_mut().find(|x| {
-                    x.kind == EventKind::Grazing
-                        && x.contact == e.contact
-                        && (x.param - e.param).abs() < 1e-9 * e.param.abs()
-                }) {
-                    prev.corner |= corner;
-                    continue;
-                }
-            }
-            events.push(DiagramEvent {
-                kind,
-                param: e.param,
-                point: orbit_point(shooter, &e.orbit, true, &mut stats)?,
-                branches: vec![0],
-                stable: vec![e.stable_before, e.stable_after],
-                corner,
-                contact: e.contact,
-            });
-        }
-        events.sort_by(|a, b| a.param.total_cmp(&b.param));
-        let end = |p: &DiagramPoint| BranchEnd {
-            kind: EndKind::Range,
-            param: p.forcing.get(branch.parameter),
-            residual: 0.0,
-            meets: Vec::new(),
+        let mut stats = branch.stats;
+        let part = BranchPart {
+            index: 0,
+            label: "periodic orbits".into(),
+            start: EndKind::Range,
+            end: EndKind::Range,
         };
-        let (first, last) = (end(&points[0]), end(&points[points.len() - 1]));
-        let mut all = branch.stats;
-        all += stats;
+        let (b, mut events) = diagram_branch(shooter, branch, part, &mut stats)?;
+        events.sort_by(|a, b| a.param.total_cmp(&b.param));
         Ok(Diagram {
             parameter: branch.parameter,
-            branches: vec![DiagramBranch {
-                kind: BranchKind::Continued,
-                label: "periodic orbits".into(),
-                points,
-                start: first,
-                end: last,
-            }],
+            branches: vec![b],
             events,
-            stats: all,
+            stats,
         })
+    }
+
+    /// A response as a diagram: each continued branch as in [`Diagram::from_branch`] (the
+    /// first labelled "periodic orbits", each found from a transient by its orbits' periods
+    /// and where it is found, with an event of kind [`EventKind::BranchFound`] there), and each
+    /// run of stepped points as a branch of kind [`BranchKind::Stepped`].
+    pub fn from_response<M: Model<N>, const N: usize>(
+        shooter: &Shooter<'_, M, N>,
+        response: &Response,
+    ) -> Result<Self, OrbitError> {
+        let param = response.parameter;
+        let mut stats = response.stats;
+        let mut branches: Vec<DiagramBranch> = Vec::new();
+        let mut events = Vec::new();
+        let count = response.pieces.len();
+        for (i, piece) in response.pieces.iter().enumerate() {
+            let index = branches.len();
+            // How the piece before ends and the next begins.
+            let before = response.ends.iter().find(|e| e.piece + 1 == i);
+            let start = match (piece, before) {
+                _ if i == 0 => EndKind::Range,
+                (Piece::Continued(_), _) => EndKind::Found,
+                (Piece::Stepped(_), Some(e)) if !e.at_strike => EndKind::Stalled,
+                (Piece::Stepped(_), _) => EndKind::Strike,
+            };
+            let ended = response.ends.iter().find(|e| e.piece == i);
+            let end = match (piece, ended) {
+                (Piece::Continued(_), Some(e)) if e.at_strike => EndKind::Strike,
+                (Piece::Continued(_), Some(_)) => EndKind::Stalled,
+                _ if i + 1 == count => EndKind::Range,
+                (Piece::Continued(_), None) => EndKind::Range,
+                (Piece::Stepped(_), _) => EndKind::Found,
+            };
+            match piece {
+                Piece::Continued(b) => {
+                    stats += b.stats;
+                    let first = &b.points[0].orbit;
+                    let label = if i == 0 {
+                        "periodic orbits".to_string()
+                    } else {
+                        found_label(first.periods, first.param(param), param)
+                    };
+                    let part = BranchPart {
+                        index,
+                        label,
+                        start,
+                        end,
+                    };
+                    let (db, evs) = diagram_branch(shooter, b, part, &mut stats)?;
+                    if i > 0 {
+                        events.push(DiagramEvent {
+                            kind: EventKind::BranchFound,
+                            param: first.param(param),
+                            point: db.points[0].clone(),
+                            branches: vec![index],
+                            stable: vec![true],
+                            corner: false,
+                            contact: None,
+                        });
+                    }
+                    branches.push(db);
+                    events.extend(evs);
+                }
+                Piece::Stepped(points) => {
+                    let points: Vec<DiagramPoint> =
+                        points.iter().map(|p| stepped_point(shooter, p)).collect();
+                    let at = |p: &DiagramPoint| BranchEnd {
+                        kind: start,
+                        param: p.forcing.get(param),
+                        residual: 0.0,
+                        meets: Vec::new(),
+                    };
+                    let (first, mut last) = (at(&points[0]), at(&points[points.len() - 1]));
+                    last.kind = end;
+                    let from = first.param;
+                    branches.push(DiagramBranch {
+                        kind: BranchKind::Stepped,
+                        label: format!("not continued from {from:.4}"),
+                        points,
+                        start: first,
+                        end: last,
+                    });
+                }
+            }
+        }
+        events.sort_by(|a, b| a.param.total_cmp(&b.param));
+        Ok(Diagram {
+            parameter: param,
+            branches,
+            events,
+            stats,
+        })
+    }
+}
+
+/// Where a branch goes in a diagram: its index, label and how its ends are described.
+struct BranchPart {
+    index: usize,
+    label: String,
+    start: EndKind,
+    end: EndKind,
+}
+
+/// A continued branch as a branch of a diagram with its events (see
+/// [`Diagram::from_branch`]); `stats` accumulates the integrations made for them.
+fn diagram_branch<M: Model<N>, const N: usize>(
+    shooter: &Shooter<'_, M, N>,
+    branch: &Branch,
+    part: BranchPart,
+    stats: &mut Stats,
+) -> Result<(DiagramBranch, Vec<DiagramEvent>), OrbitError> {
+    let points = branch
+        .points
+        .iter()
+        .map(|p| orbit_point(shooter, &p.orbit, false, stats))
+        .collect::<Result<Vec<_>, _>>()?;
+    let mut events: Vec<DiagramEvent> = Vec::new();
+    for e in &branch.events {
+        let corner = e.kind == BranchEventKind::Fold && e.at_grazing;
+        let kind = match e.kind {
+            _ if corner => EventKind::Grazing,
+            BranchEventKind::Fold => EventKind::Fold,
+            BranchEventKind::BranchPoint => {
+                let half = shooter.half_map(&e.orbit, stats)?;
+                let at_minus_one = half.as_ref().is_some_and(|h| {
+                    h.multipliers
+                        .iter()
+                        .any(|m| (m + 1.0).norm() < HALF_MINUS_ONE_TOL)
+                });
+                if at_minus_one {
+                    EventKind::SymmetryBreaking
+                } else {
+                    EventKind::BranchPoint
+                }
+            }
+            BranchEventKind::PeriodDoubling => EventKind::PeriodDoubling,
+            BranchEventKind::Torus => EventKind::Torus,
+            BranchEventKind::Grazing => EventKind::Grazing,
+        };
+        // The corner and its grazing are one point: kept once, as the corner.
+        if kind == EventKind::Grazing {
+            if let Some(prev) = events.iter_mut().find(|x| {
+                x.kind == EventKind::Grazing
+                    && x.contact == e.contact
+                    && (x.param - e.param).abs() < 1e-9 * e.param.abs()
+            }) {
+                prev.corner |= corner;
+                continue;
+            }
+        }
+        events.push(DiagramEvent {
+            kind,
+            param: e.param,
+            point: orbit_point(shooter, &e.orbit, true, stats)?,
+            branches: vec![part.index],
+            stable: vec![e.stable_before, e.stable_after],
+            corner,
+            contact: e.contact,
+        });
+    }
+    let end = |p: &DiagramPoint, kind: EndKind| BranchEnd {
+        kind,
+        param: p.forcing.get(branch.parameter),
+        residual: 0.0,
+        meets: Vec::new(),
+    };
+    let (first, last) = (
+        end(&points[0], part.start),
+        end(&points[points.len() - 1], part.end),
+    );
+    Ok((
+        DiagramBranch {
+            kind: BranchKind::Continued,
+            label: part.label,
+            points,
+            start: first,
+            end: last,
+        },
+        events,
+    ))
+}
+
+/// A stepped point as a point of a diagram: its measures over its periods, no multipliers,
+/// a residual of NaN (it is no orbit), its state at the start of the measurement as its
+/// fingerprint.
+fn stepped_point<M: Model<N>, const N: usize>(
+    shooter: &Shooter<'_, M, N>,
+    p: &SteppedPoint,
+) -> DiagramPoint {
+    let speeds = p
+        .summary
+        .impact_speed_m_s
+        .iter()
+        .copied()
+        .filter(|s| *s > 0.0)
+        .collect();
+    let [(g_up, _), (g_lo, _)] = side_stops(shooter.base);
+    DiagramPoint {
+        forcing: p.forcing,
+        periods: p.periods as u32,
+        multipliers: Vec::new(),
+        half_multipliers: None,
+        summary: p.summary.clone(),
+        section: None,
+        impact_speeds_m_s: speeds,
+        clearance_m: (g_up - p.summary.x_upper_m).min(g_lo + p.summary.x_lower_m),
+        symmetric: false,
+        residual: f64::NAN,
+        fingerprint: p.state.clone(),
     }
 }

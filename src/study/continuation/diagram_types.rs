@@ -78,6 +78,10 @@ pub enum BranchKind {
     /// One branch continued on the period map through grazing (a device with a compliant
     /// stop): its orbits touch the stops or not.
     Continued,
+    /// Values of the parameter past the end of a branch at which no stable periodic orbit is
+    /// found: the response measured after a transient, as a stepped sine measures it, not
+    /// continued (its points are no orbits: no multipliers, a residual of NaN).
+    Stepped,
 }
 
 /// How a branch ends.
@@ -100,6 +104,12 @@ pub enum EndKind {
     Stalled,
     /// The budget of points ran out.
     Budget,
+    /// The branch ends at a grazing that adds a strike of a rigid contact, past which no
+    /// orbit is found from its last orbit.
+    Strike,
+    /// An orbit found from the state after a transient: a branch begins there, and the
+    /// stepped points before it end.
+    Found,
 }
 
 impl EndKind {
@@ -114,6 +124,8 @@ impl EndKind {
             EndKind::Rest => "the orbit reached from rest",
             EndKind::Stalled => "stalled",
             EndKind::Budget => "point budget",
+            EndKind::Strike => "a grazing that adds a strike (no orbit found past it)",
+            EndKind::Found => "an orbit found after a transient",
         }
     }
 }
@@ -165,6 +177,10 @@ pub enum EventKind {
     PeriodDoubling,
     /// A complex pair through the unit circle.
     Torus,
+    /// A stable orbit found from the state after a transient past the end of a branch: a new
+    /// branch begins there (its orbit's least number of drive periods in
+    /// [`DiagramPoint::periods`]).
+    BranchFound,
 }
 
 impl EventKind {
@@ -177,6 +193,7 @@ impl EventKind {
             EventKind::SymmetryBreaking => "symmetry-breaking pitchfork",
             EventKind::PeriodDoubling => "period doubling",
             EventKind::Torus => "torus",
+            EventKind::BranchFound => "branch found",
         }
     }
 }
@@ -212,6 +229,8 @@ impl DiagramEvent {
     pub fn label(&self) -> String {
         if let (EventKind::Grazing, Some(k)) = (self.kind, self.contact) {
             format!("grazing of contact {k} (a strike more or less per period)")
+        } else if self.kind == EventKind::BranchFound {
+            format!("period-{} branch found", self.point.periods)
         } else if self.corner {
             format!(
                 "{} (non-smooth fold: the branch turns there)",
@@ -283,7 +302,7 @@ pub(crate) fn orbit_point<M: Model<N>, const N: usize>(
     let symmetric = half.is_some();
     Ok(DiagramPoint {
         forcing: o.forcing,
-        periods: 1,
+        periods: o.periods as u32,
         multipliers: o.multipliers.clone(),
         half_multipliers: half.map(|h| h.multipliers),
         summary: o.summary.clone(),

@@ -94,6 +94,7 @@ impl<M: Model<N> + Clone, const N: usize> Continuer<'_, '_, M, N> {
         let mut c = Continuer {
             shooter: &free,
             settings: self.settings,
+            periods: self.periods,
             stats: Stats::default(),
         };
         let from_a = test_grazing(a, gaps) <= 0.0;

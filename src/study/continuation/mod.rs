@@ -19,8 +19,14 @@
 //! corrections. Where the step falls below [`ContinuationSettings::ds_min`] at a grazing
 //! orbit, the corner there is hopped over or crossed (the grazing located on the branch by
 //! bisection and the predictor restarted past it), as is a grazing at which a rigid contact
-//! gains a strike per period; elsewhere it is an error naming the last parameter value
-//! reached.
+//! gains a strike per period (its orbit past the grazing sought on the maps over one to four
+//! drive periods, and taken where it is an orbit of one period); elsewhere it is an error
+//! naming the last parameter value reached, or, where past such a grazing only an orbit of
+//! several periods is found, naming that orbit's periods and parameter value. A branch
+//! followed from an orbit of k drive periods is continued on the map over k periods. Where a
+//! branch ends at such a grazing, the response goes on in steps with transients
+//! ([`response_of_model`]): each stable orbit found from a transient begins a new branch, and
+//! the values without one are measured and not continued.
 //!
 //! # Events (Seydel; Kuznetsov, chapter 10)
 //! Between two accepted points, sign changes of test functions mark events, each located by the
@@ -46,6 +52,8 @@
 //! predictor-corrector (Newton on the bordered system, tangents, the acceptance of a step,
 //! corner hops), `corner.rs` the crossing of a corner where the contact set changes,
 //! `strike.rs` the crossing of a grazing that adds a strike of a rigid contact,
+//! `periods.rs` the search for an orbit on the maps over several periods, `resume.rs`
+//! the response past a branch's end at such a grazing,
 //! `events.rs` the test functions and the location of events; this file holds the
 //! loop that drives them ([`continue_branch`]) and the entry points.
 
@@ -62,16 +70,22 @@ mod diagram;
 mod diagram_types;
 mod events;
 pub mod impacting;
+mod periods;
+mod resume;
 mod strike;
 mod test_functions;
 mod types;
 
 use corrector::Continuer;
-pub use diagram::{all_stops_rigid, diagram, frequency_diagram};
+pub use diagram::{
+    all_stops_rigid, diagram, diagram_with_step, frequency_diagram, STEPPED_MEASURE_PERIODS,
+};
 pub use diagram_types::{
     BranchEnd, BranchKind, Diagram, DiagramBranch, DiagramEvent, DiagramPoint, EndKind,
     EventKind as DiagramEventKind,
 };
+pub use resume::{found_label, response_of_model, Piece, Response, ResumeSettings, SteppedPoint};
+use strike::StrikeOutcome;
 pub use types::{Branch, BranchPoint, ContinuationSettings, Event, EventKind, Rejection};
 
 /// The first orbit of a branch: Newton at `forcing` from `guess` (the state at drive phase
@@ -132,14 +146,49 @@ pub fn continue_branch_until<M: Model<N> + Clone, const N: usize>(
     first: Orbit,
     settings: &ContinuationSettings,
     progress: &dyn Progress,
-    mut until: impl FnMut(&Event) -> bool,
+    until: impl FnMut(&Event) -> bool,
 ) -> Result<Branch, OrbitError> {
+    let followed = follow(base, first, settings, progress, until)?;
+    match followed.end {
+        None => Ok(followed.branch),
+        Some(end) => Err(end.error),
+    }
+}
+
+/// Why a branch ends short of its range: the error, and whether the branch ends at a grazing
+/// that adds a strike of a rigid contact (where no orbit past it is found, or only one of
+/// several periods).
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct Ending {
+    pub error: OrbitError,
+    pub at_strike: bool,
+}
+
+/// A branch as far as it is followed, and why it ends short of its range (`None`: it reaches
+/// the end of the range, or the event asked for).
+pub(crate) struct Followed {
+    pub branch: Branch,
+    pub end: Option<Ending>,
+}
+
+/// The loop of [`continue_branch_until`] on the map over `first.periods` drive periods (the
+/// orbits of a branch have the first orbit's number of periods), keeping the points reached
+/// where the branch ends short of its range. An error of the setup or of an event's location
+/// is returned as an error.
+pub(crate) fn follow<M: Model<N> + Clone, const N: usize>(
+    base: &M,
+    first: Orbit,
+    settings: &ContinuationSettings,
+    progress: &dyn Progress,
+    mut until: impl FnMut(&Event) -> bool,
+) -> Result<Followed, OrbitError> {
     settings.validate()?;
     let on_point = |p: f64| progress.fraction(share(settings.start, settings.stop, p));
     let shooter = Shooter::new(base, settings.shooting);
     let mut c = Continuer {
         shooter: &shooter,
         settings: *settings,
+        periods: first.periods.max(1),
         stats: Stats::default(),
     };
     let param = settings.parameter;
@@ -147,19 +196,7 @@ pub fn continue_branch_until<M: Model<N> + Clone, const N: usize>(
     // The first tangent: the kernel oriented along the parameter's direction.
     let mut start_dir = DVector::zeros(N + 1);
     start_dir[N] = dir;
-    let lin = shooter
-        .linearise(
-            &first.forcing,
-            param,
-            first.phase_rad,
-            first.state_n(),
-            &mut c.stats,
-        )
-        .map_err(|e| OrbitError::Solver {
-            what: param.label(),
-            param: first.param(param),
-            source: e,
-        })?;
+    let lin = c.linearise(&first.forcing, first.phase_rad, first.state_n())?;
     let jac = c.kernel_jacobian(&lin);
     let tangent = corrector::tangent(&jac, &start_dir).ok_or(OrbitError::Invalid(
         "the first orbit is singular (a fold or branch point): start elsewhere".into(),
@@ -172,17 +209,25 @@ pub fn continue_branch_until<M: Model<N> + Clone, const N: usize>(
     let mut events = Vec::new();
     let mut ds = settings.ds_init;
     let mut rejections = Vec::new();
-    loop {
+    let stalled = |p_last: f64| OrbitError::Stalled {
+        what: param.label(),
+        last_param: p_last,
+        ds_min: settings.ds_min,
+    };
+    let end = loop {
         let last = points.last().expect("a branch has a point").clone();
         let p_last = last.orbit.param(param);
         if settings.beyond_stop(p_last) {
-            break;
+            break None;
         }
         if points.len() >= settings.max_points {
-            return Err(OrbitError::TooManyPoints {
-                what: param.label(),
-                last_param: p_last,
-                points: settings.max_points,
+            break Some(Ending {
+                error: OrbitError::TooManyPoints {
+                    what: param.label(),
+                    last_param: p_last,
+                    points: settings.max_points,
+                },
+                at_strike: false,
             });
         }
         let accepted = c
@@ -209,7 +254,7 @@ pub fn continue_branch_until<M: Model<N> + Clone, const N: usize>(
                         on_point(p.orbit.param(param));
                         points.push(p);
                         if done {
-                            break;
+                            break None;
                         }
                         ds = settings.ds_init;
                         continue;
@@ -239,7 +284,7 @@ pub fn continue_branch_until<M: Model<N> + Clone, const N: usize>(
                         on_point(past.orbit.param(param));
                         points.push(past);
                         if done {
-                            break;
+                            break None;
                         }
                         ds = (2.0 * x.s_past).clamp(settings.ds_min, settings.ds_init);
                         continue;
@@ -247,21 +292,42 @@ pub fn continue_branch_until<M: Model<N> + Clone, const N: usize>(
                     // At a grazing that adds a strike of a rigid contact (its free approach
                     // between strikes reaching the gap, the contact set unchanged), the
                     // orbit with the added strike is found and the branch goes on from it.
-                    if let Some(x) = c.cross_strike_grazing(points.len() - 1, &last) {
-                        let done = x.events.iter().any(&mut until);
-                        events.extend(x.events);
-                        on_point(x.past.orbit.param(param));
-                        points.push(x.past);
-                        if done {
-                            break;
+                    match c.cross_strike_grazing(points.len() - 1, &last) {
+                        Some(StrikeOutcome::Crossed(x)) => {
+                            let done = x.events.iter().any(&mut until);
+                            events.extend(x.events);
+                            on_point(x.past.orbit.param(param));
+                            points.push(x.past);
+                            if done {
+                                break None;
+                            }
+                            ds = settings.ds_init;
+                            continue;
                         }
-                        ds = settings.ds_init;
-                        continue;
+                        // The continuation follows orbits of one period: past the grazing
+                        // only an orbit of several periods is found, and the branch ends.
+                        Some(StrikeOutcome::OtherPeriod(o)) => {
+                            break Some(Ending {
+                                error: OrbitError::OtherPeriod {
+                                    what: param.label(),
+                                    last_param: p_last,
+                                    periods: o.periods,
+                                    param: o.param(param),
+                                },
+                                at_strike: true,
+                            });
+                        }
+                        Some(StrikeOutcome::NotFound) => {
+                            break Some(Ending {
+                                error: stalled(p_last),
+                                at_strike: true,
+                            });
+                        }
+                        None => {}
                     }
-                    return Err(OrbitError::Stalled {
-                        what: param.label(),
-                        last_param: p_last,
-                        ds_min: settings.ds_min,
+                    break Some(Ending {
+                        error: stalled(p_last),
+                        at_strike: false,
                     });
                 }
                 continue;
@@ -280,20 +346,23 @@ pub fn continue_branch_until<M: Model<N> + Clone, const N: usize>(
         };
         points.push(p);
         if done {
-            break;
+            break None;
         }
         if its <= 2 {
             ds = (ds * 1.5).min(settings.ds_max);
         } else if its >= 5 {
             ds = (ds * 0.6).max(settings.ds_min);
         }
-    }
-    Ok(Branch {
-        parameter: param,
-        points,
-        events,
-        stats: c.stats,
-        rejections,
+    };
+    Ok(Followed {
+        branch: Branch {
+            parameter: param,
+            points,
+            events,
+            stats: c.stats,
+            rejections,
+        },
+        end,
     })
 }
 
@@ -318,14 +387,34 @@ pub fn branch_from_rest(
     ))
 }
 
-/// [`branch_from_rest`] on a model.
-pub fn branch_of_model<M: Model<N> + Clone, const N: usize>(
+/// The response of `device` over the settings' range from the drive `start`: the branch
+/// continued from the orbit reached from rest (as [`branch_from_rest`], with
+/// `resume.transient_periods` periods of transient at most), resumed past every grazing that
+/// adds a strike at which a branch ends ([`response_of_model`]).
+pub fn response_from_rest(
+    device: &crate::device::Device,
+    start: Forcing,
+    settings: &ContinuationSettings,
+    resume: &ResumeSettings,
+    progress: &dyn Progress,
+) -> Result<Response, OrbitError> {
+    settings.validate()?;
+    crate::with_harvester!(device, |h| {
+        let (first, stats) = orbit_from_rest(&h, start, settings, resume.transient_periods)?;
+        let mut r = response_of_model(&h, first, settings, resume, progress)?;
+        r.stats += stats;
+        Ok(r)
+    })
+}
+
+/// The first orbit of a branch from rest ([`first_orbit`]) with the counters of its
+/// integrations.
+fn orbit_from_rest<M: Model<N>, const N: usize>(
     h: &M,
     start: Forcing,
     settings: &ContinuationSettings,
     transient_periods: usize,
-    progress: &dyn Progress,
-) -> Result<Branch, OrbitError> {
+) -> Result<(Orbit, Stats), OrbitError> {
     let shooter = Shooter::new(h, settings.shooting);
     let mut stats = Stats::default();
     let first = first_orbit(
@@ -336,6 +425,18 @@ pub fn branch_of_model<M: Model<N> + Clone, const N: usize>(
         transient_periods,
         &mut stats,
     )?;
+    Ok((first, stats))
+}
+
+/// [`branch_from_rest`] on a model.
+pub fn branch_of_model<M: Model<N> + Clone, const N: usize>(
+    h: &M,
+    start: Forcing,
+    settings: &ContinuationSettings,
+    transient_periods: usize,
+    progress: &dyn Progress,
+) -> Result<Branch, OrbitError> {
+    let (first, stats) = orbit_from_rest(h, start, settings, transient_periods)?;
     let mut branch = continue_branch(h, first, settings, progress)?;
     branch.stats += stats;
     Ok(branch)

@@ -8,8 +8,9 @@
 //! it as that corner is treated, as an event of the hybrid continuation (Dankowicz and
 //! Schilder, *Recipes for Continuation*, 2013): the first orbit with the added strike is
 //! shot at fixed parameter values stepping away from the last point (the corner hop's
-//! search), the grazing between them is located by bisection on the parameter with the
-//! contact's strike test ([`crate::study::orbit::ContactReach::strike_grazing_m`]), and the
+//! search, on the maps over one to four drive periods where the one-period map's Newton
+//! iteration misses it: [`super::periods`]), the grazing between them is located by
+//! bisection on the parameter with the contact's strike test ([`crate::study::orbit::ContactReach::strike_grazing_m`]), and the
 //! predictor restarts from the orbit past it with that orbit's own tangent. Each rigid
 //! contact's strike test is also watched between accepted points, so that a step that
 //! passes such a grazing reports it.
@@ -23,6 +24,7 @@ use crate::num::roots::{illinois, RootOptions, Sample};
 use crate::study::orbit::Orbit;
 
 use super::corrector::Continuer;
+use super::periods::Shot;
 use super::test_functions::{test_fold, Gaps, GRAZING_NEAR};
 use super::{BranchPoint, Event, EventKind};
 
@@ -48,6 +50,18 @@ pub(super) struct StrikeCrossing {
     pub past: BranchPoint,
 }
 
+/// What the search past a grazing that adds a strike finds.
+pub(super) enum StrikeOutcome {
+    /// The grazing crossed onto the orbits of one period with the added strike.
+    Crossed(StrikeCrossing),
+    /// No orbit of one period with the added strike, but an orbit of several drive periods
+    /// (its least number in [`Orbit::periods`]): the first found, nearest the last point.
+    OtherPeriod(Orbit),
+    /// The last point is at such a grazing, and no orbit is found past it (or the branch
+    /// follows orbits of several periods, whose grazings the search does not cross).
+    NotFound,
+}
+
 impl<M: Model<N>, const N: usize> Continuer<'_, '_, M, N> {
     /// The rigid contacts of the model, by index.
     fn rigid_contacts(&self) -> Vec<usize> {
@@ -62,13 +76,16 @@ impl<M: Model<N>, const N: usize> Continuer<'_, '_, M, N> {
     /// within [`GRAZING_NEAR`] of the smallest gap, gains a strike. The point past it is the
     /// first orbit that strikes that contact once more (and every other contact as often as
     /// `last`), shot at fixed parameter values ahead of `last` up to the largest parameter
-    /// step, then behind it (where the branch turns back at the grazing). `None` when `last`
-    /// is near no such grazing or no such orbit is found.
+    /// step, then behind it (where the branch turns back at the grazing), each on the maps
+    /// over one to [`super::periods::MAX_PERIODS`] drive periods ([`Continuer::shoot_periods`]). Where no
+    /// such orbit of one period is found, the first orbit of several periods found is
+    /// returned instead; [`StrikeOutcome::NotFound`] when no orbit is found, and at once on a
+    /// branch of orbits of several periods. `None` when `last` is near no such grazing.
     pub(super) fn cross_strike_grazing(
         &mut self,
         k_last: usize,
         last: &BranchPoint,
-    ) -> Option<StrikeCrossing> {
+    ) -> Option<StrikeOutcome> {
         let gaps = Gaps::of(self.shooter.base);
         let near = GRAZING_NEAR * gaps.smallest();
         let distance = |k: usize| strike_test(&last.orbit, gaps, k, strikes(last, k));
@@ -79,6 +96,9 @@ impl<M: Model<N>, const N: usize> Continuer<'_, '_, M, N> {
             .filter(|(_, d)| d.abs() <= near)
             .min_by(|a, b| a.1.abs().total_cmp(&b.1.abs()))?
             .0;
+        if self.periods > 1 {
+            return Some(StrikeOutcome::NotFound);
+        }
         let n = strikes(last, k);
         let len = gaps.len();
         let before: Vec<u32> = (0..len).map(|j| strikes(last, j)).collect();
@@ -87,11 +107,11 @@ impl<M: Model<N>, const N: usize> Continuer<'_, '_, M, N> {
             (0..len).all(|j| r.strikes[j] == before[j] + u32::from(j == k))
         };
         let ahead = last.param_tangent().signum();
-        let max_step = self.settings.max_param_step;
-        let (past, dir) = [ahead, -ahead].into_iter().find_map(|dir| {
-            self.shoot_away(last, dir, max_step, added)
-                .map(|p| (p, dir))
-        })?;
+        let (past, dir) = match self.shoot_strike(last, ahead, added) {
+            Some(Ok(found)) => found,
+            Some(Err(other)) => return Some(StrikeOutcome::OtherPeriod(other)),
+            None => return Some(StrikeOutcome::NotFound),
+        };
         let past = self.reanchor(past.clone()).unwrap_or(past);
         let grazing = self.locate_strike_by_param(last, &past, dir, k, n, gaps);
         let mut events = Vec::new();
@@ -114,7 +134,42 @@ impl<M: Model<N>, const N: usize> Continuer<'_, '_, M, N> {
             events.push(fold);
         }
         events.push(e);
-        Some(StrikeCrossing { events, past })
+        Some(StrikeOutcome::Crossed(StrikeCrossing { events, past }))
+    }
+
+    /// The first orbit of one period that `added` takes, shot at fixed parameter values
+    /// stepping from `last` in the direction `ahead` by 1e-4 of the largest parameter step,
+    /// four times that, ... up to the largest step, then the other way, each on the maps over
+    /// one to [`super::periods::MAX_PERIODS`] drive periods from `last`'s state: with its tangent and the
+    /// direction it lies in. Where there is none, the first orbit of several periods found
+    /// (`Err`); `None` when neither is found.
+    fn shoot_strike(
+        &mut self,
+        last: &BranchPoint,
+        ahead: f64,
+        added: impl Fn(&Orbit) -> bool,
+    ) -> Option<Result<(BranchPoint, f64), Orbit>> {
+        let param = self.settings.parameter;
+        let p0 = last.orbit.param(param);
+        let max_step = self.settings.max_param_step;
+        let mut other = None;
+        for dir in [ahead, -ahead] {
+            let mut step = 1e-4 * max_step;
+            while step <= max_step {
+                let f = last.orbit.forcing.with(param, p0 + dir * step);
+                match self.shoot_periods(&f, &last.orbit, &added) {
+                    Some(Shot::One(o)) => {
+                        if let Some(p) = self.with_tangent(o, dir) {
+                            return Some(Ok((p, dir)));
+                        }
+                    }
+                    Some(Shot::Several(o)) if other.is_none() => other = Some(o),
+                    _ => {}
+                }
+                step *= 4.0;
+            }
+        }
+        other.map(Err)
     }
 
     /// The orbit nearest the grazing of contact `k` between `a` (striking it `n` times) and
@@ -153,12 +208,7 @@ impl<M: Model<N>, const N: usize> Continuer<'_, '_, M, N> {
                 let phase = a.orbit.phase_rad;
                 let o = [&a.orbit, &b.orbit]
                     .into_iter()
-                    .find_map(|from| {
-                        let guess = from.state_n();
-                        self.shooter
-                            .solve(&f, param, phase, guess, &mut self.stats)
-                            .ok()
-                    })
+                    .find_map(|from| self.solve(&f, phase, from.state_n()).ok())
                     .ok_or(())?;
                 let v = strike_test(&o, gaps, k, n).ok_or(())?;
                 if v < 0.0 && d > best.1 {

@@ -195,6 +195,23 @@ pub enum OrbitError {
         /// The smallest step allowed.
         ds_min: f64,
     },
+    /// Past a grazing that adds a strike, where a branch of orbits of one period ends, the
+    /// only orbit found is one of several drive periods: the continuation follows orbits of
+    /// one period and stops there.
+    #[error(
+        "the branch of one-period orbits ends at {what} = {last_param}: past it the only orbit \
+         found has {periods} drive periods (at {what} = {param})"
+    )]
+    OtherPeriod {
+        /// What the parameter is.
+        what: &'static str,
+        /// The last parameter value reached on the branch.
+        last_param: f64,
+        /// The least number of drive periods of the orbit found.
+        periods: usize,
+        /// Its parameter value.
+        param: f64,
+    },
     /// The continuation used its whole budget of points inside the range.
     #[error("the continuation used all {points} points and stopped at {what} = {last_param}")]
     TooManyPoints {

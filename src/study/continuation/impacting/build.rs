@@ -487,7 +487,7 @@ impl<M: Model<N> + Clone, const N: usize> Builder<'_, M, N> {
                     && q.periods() == seq.periods()
                     && self.distance_to(b, p) < ON_BRANCH
             }
-            BranchKind::NonImpacting | BranchKind::Continued => false,
+            BranchKind::NonImpacting | BranchKind::Continued | BranchKind::Stepped => false,
         })
     }
 
@@ -508,7 +508,7 @@ impl<M: Model<N> + Clone, const N: usize> Builder<'_, M, N> {
                     && q.periods() == seq.periods()
                     && self.distance_to(b, probe) < 0.05 * moved
             }
-            BranchKind::NonImpacting | BranchKind::Continued => false,
+            BranchKind::NonImpacting | BranchKind::Continued | BranchKind::Stepped => false,
         })
     }
 
