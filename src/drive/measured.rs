@@ -470,6 +470,17 @@ mod tests {
         assert_eq!(r.accel_si.len(), 100);
     }
 
+    /// At its own rate a record is its drive, shared: the same allocation, not a copy; at
+    /// another rate the drive is a new one.
+    #[test]
+    fn the_drive_at_the_records_own_rate_is_its_samples() {
+        let samples: Arc<[f64]> = (0..1000).map(|k| (0.01 * k as f64).sin()).collect();
+        let r = MeasuredRecord::from_uniform("s.wav", 1000.0, Arc::clone(&samples)).unwrap();
+        assert!(Arc::ptr_eq(&r.accel_si, &samples));
+        assert!(Arc::ptr_eq(&r.resampled(1000.0), &samples));
+        assert!(!Arc::ptr_eq(&r.resampled(2000.0), &samples));
+    }
+
     #[test]
     fn a_gap_nan_or_backward_time_is_named_with_its_line() {
         let mut t = uniform(100, 1e-3);
