@@ -384,13 +384,16 @@ fn measured(a: &RandomArgs, file_device: &Device, path: Option<PathBuf>) -> Resu
         band_hz: (lo, hi),
         mut times,
     } = m;
+    // The record's text needs its shape alone: its samples are the drive's (shared, or
+    // resampled from them) and go with it.
+    let rec = RecordRead::of(rec);
     eprintln!(
         "[endstop-random] {}: {} samples at {} Hz resampled to {} Hz ({} s, pre-roll {} s)",
-        rec.source_name,
-        rec.accel_si.len(),
-        fmt_sig(rec.sample_rate_hz, 6),
+        rec.name,
+        rec.samples,
+        fmt_sig(rec.rate_hz, 6),
         fs,
-        fmt_sig(rec.duration_s(), 4),
+        fmt_sig(rec.duration_s, 4),
         preroll_s
     );
     times.lap("integrating");
@@ -403,16 +406,12 @@ fn measured(a: &RandomArgs, file_device: &Device, path: Option<PathBuf>) -> Resu
     let rl = device.transducer.load_resistance_ohm();
     let full = output_psd(&out_rec.v1_v, &out_rec.v2_v, fs, rl, &spec.welch)?;
     let out = restrict(&full.total, lo, hi);
-    let drive_full = welch(&accel[n_tr..], fs, &spec.welch)?;
-    // Two-sided, in g^2/Hz, like --psd.
-    let drive_psd = Psd {
-        density: drive_full
-            .density
-            .iter()
-            .map(|d| d / 2.0 / (G * G))
-            .collect(),
-        ..drive_full.clone()
-    };
+    // Two-sided, in g^2/Hz, like --psd (in place).
+    let mut drive_psd = welch(&accel[n_tr..], fs, &spec.welch)?;
+    drive_psd
+        .density
+        .iter_mut()
+        .for_each(|d| *d = *d / 2.0 / (G * G));
     let drive_band = restrict(&drive_psd, lo, hi);
     let lin = linear_theory(&device);
     // The drive's own two-sided density at each frequency, through the same linear PSD.
@@ -435,6 +434,11 @@ fn measured(a: &RandomArgs, file_device: &Device, path: Option<PathBuf>) -> Resu
         .map(|(_, p)| *p)
         .collect();
     times.lap("spectra");
+    // The drive and the record's per-sample outputs are done with: freed before the outputs
+    // take their buffers (the figure's raster, the data frames), which reuse their pages
+    // instead of fresh ones the kernel zeroes first.
+    let summary = out_rec.summary;
+    drop((out_rec, drive, accel));
 
     // The figure is drawn on a thread beside the data files' writing (it reads the spectra
     // alone) and written after them.
@@ -454,7 +458,7 @@ fn measured(a: &RandomArgs, file_device: &Device, path: Option<PathBuf>) -> Resu
             &loaded.file,
             &device,
             &rec,
-            &out_rec,
+            &summary,
             &out,
             (&linear_band, linear_w),
             &drive_band,
@@ -477,6 +481,27 @@ fn measured(a: &RandomArgs, file_device: &Device, path: Option<PathBuf>) -> Resu
     exp.finish()
 }
 
+/// A measured record as read, for the run's text: its name, its samples, its rate (Hz) and
+/// its duration (s).
+struct RecordRead {
+    name: String,
+    samples: usize,
+    rate_hz: f64,
+    duration_s: f64,
+}
+
+impl RecordRead {
+    /// The shape of `rec`, which it drops (with its share of the samples).
+    fn of(rec: endstop::drive::measured::MeasuredRecord) -> Self {
+        Self {
+            name: rec.source_name.clone(),
+            samples: rec.accel_si.len(),
+            rate_hz: rec.sample_rate_hz,
+            duration_s: rec.duration_s(),
+        }
+    }
+}
+
 /// The sampling of a measured record's run, for its text: the integrator's rate (Hz), the
 /// pre-roll (s), the analysis band (Hz) and the Welch segment length (samples).
 struct MeasuredShape {
@@ -495,8 +520,8 @@ fn measured_outputs(
     exp: &mut common::Experiment,
     device_file: &str,
     device: &Device,
-    rec: &endstop::drive::measured::MeasuredRecord,
-    out_rec: &endstop::study::record::Record,
+    rec: &RecordRead,
+    s: &endstop::study::record::RecordSummary,
     out: &Psd,
     (linear_band, linear_w): (&[f64], Option<f64>),
     drive_band: &Psd,
@@ -509,7 +534,7 @@ fn measured_outputs(
         nperseg,
     } = shape;
     let m = out.freq_hz.len();
-    let file = rec.source_name.clone();
+    let file = rec.name.clone();
     let mut df = df!(
         "freq_hz" => out.freq_hz.clone(),
         "out_psd_uw_per_hz" => out.density.iter().map(|d| d * 1e6).collect::<Vec<_>>(),
@@ -519,7 +544,6 @@ fn measured_outputs(
         "params" => vec![device.params.clone(); m],
     )?;
     exp.write_parquet("output_psd", &mut df, &device.params)?;
-    let s = &out_rec.summary;
     let accel_rms_g = s.accel_mean_square_si.sqrt() / G;
     let widths = Widths::of(out);
     let mut per = df!(
@@ -556,9 +580,9 @@ fn measured_outputs(
         device_file,
         device.params,
         describe(device),
-        rec.accel_si.len(),
-        fmt_sig(rec.sample_rate_hz, 6),
-        fmt_sig(rec.duration_s(), 4),
+        rec.samples,
+        fmt_sig(rec.rate_hz, 6),
+        fmt_sig(rec.duration_s, 4),
         fs,
         preroll_s,
         fmt_sig(lo, 4),

@@ -15,18 +15,20 @@
 //!   plots, the book's tables and sentences), and the readers of measured files;
 //! * [`io`]: the helpers every report uses (plots, data frames, Markdown tables, progress bars);
 //!
-//! and [`ngspice`], the runner of the external circuit simulator, and [`commit`], the
-//! commit every output names.
+//! and [`ngspice`], the runner of the external circuit simulator, [`commit`], the commit
+//! every output names, and [`usage`], the processor time and memory a run reports of itself.
 pub mod commit;
 pub mod io;
 pub mod ngspice;
 pub mod pipeline;
 pub mod reports;
 pub mod time_split;
+pub mod usage;
 
 pub use commit::{git_commit, git_commit_in_background};
 pub use io::progress::{progress, with_progress, Bar};
 pub use reports::calibration_io::{calibrated_prototype1, prototype1_both_sets};
+pub use usage::{children_cpu_time_s, cpu_time_s, own_cpu_time_s, own_memory, Memory};
 
 /// Every experiment binary allocates through mimalloc: a record's 10^6-sample vectors are
 /// freed and allocated again record after record, and the system allocator returns them to
@@ -511,53 +513,6 @@ impl Experiment {
         );
         Ok(())
     }
-}
-
-/// Processor time this process has used so far, user and system, its waited-for child
-/// processes (ngspice) included (s); None where `getrusage` is not available.
-///
-/// With the wall time it says how much of the machine an experiment needs: `reproduce` on
-/// `n` cores cannot finish before the sum over its experiments divided by `n`.
-pub fn cpu_time_s() -> Option<f64> {
-    Some(rusage_s(Who::This)? + rusage_s(Who::Children)?)
-}
-
-/// Processor time this process's own threads have used so far, user and system, without its
-/// child processes (s); None where `getrusage` is not available.
-pub fn own_cpu_time_s() -> Option<f64> {
-    rusage_s(Who::This)
-}
-
-/// Processor time, user and system, of this process's child processes that have ended and
-/// been waited for (s); None where `getrusage` is not available.
-pub fn children_cpu_time_s() -> Option<f64> {
-    rusage_s(Who::Children)
-}
-
-enum Who {
-    This,
-    Children,
-}
-
-#[cfg(unix)]
-fn rusage_s(who: Who) -> Option<f64> {
-    let who = match who {
-        Who::This => libc::RUSAGE_SELF,
-        Who::Children => libc::RUSAGE_CHILDREN,
-    };
-    // SAFETY: `getrusage` only writes the struct it is handed, plain data that is valid
-    // zeroed.
-    let mut u: libc::rusage = unsafe { std::mem::zeroed() };
-    if unsafe { libc::getrusage(who, &mut u) } != 0 {
-        return None;
-    }
-    let tv = |t: libc::timeval| t.tv_sec as f64 + t.tv_usec as f64 * 1e-6;
-    Some(tv(u.ru_utime) + tv(u.ru_stime))
-}
-
-#[cfg(not(unix))]
-fn rusage_s(_who: Who) -> Option<f64> {
-    None
 }
 
 /// Locks a mutex, also after a panic elsewhere (the data are append-only lists).

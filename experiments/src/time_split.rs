@@ -10,6 +10,10 @@
 //! waiting for a processor, which the processor time does not. Child processes (the
 //! provenance's `git`) run beside the phases and are counted once, in a phase of their own
 //! ([`TimeSplit::children`]), whichever phase they end in.
+//!
+//! Each phase also gets the process's minor page faults ([`crate::own_memory`]): the fresh
+//! pages it touched, which the kernel zeroes first (for a short run a large share of its
+//! processor time), and the peak resident set at the phase's end.
 
 use std::time::Instant;
 
@@ -24,6 +28,11 @@ pub struct Phase {
     pub wall_s: f64,
     /// Processor time, user and system (s); None where it cannot be read.
     pub cpu_s: Option<f64>,
+    /// Minor page faults of the process's own threads; None where they cannot be read.
+    pub minor_faults: Option<u64>,
+    /// The process's peak resident set at the phase's last end (bytes); None where it cannot
+    /// be read.
+    pub peak_rss_bytes: Option<u64>,
 }
 
 /// The seconds spent in each phase so far, in the order the phases first ended.
@@ -31,6 +40,7 @@ pub struct Phase {
 pub struct TimeSplit {
     last: Instant,
     last_cpu: Option<f64>,
+    last_memory: Option<crate::Memory>,
     /// The child processes' processor time at the start (s).
     children_start: Option<f64>,
     phases: Vec<Phase>,
@@ -42,6 +52,7 @@ impl TimeSplit {
         Self {
             last: Instant::now(),
             last_cpu: crate::own_cpu_time_s(),
+            last_memory: crate::own_memory(),
             children_start: crate::children_cpu_time_s(),
             phases: Vec::new(),
         }
@@ -49,11 +60,28 @@ impl TimeSplit {
 
     /// Ends a stretch of `phase`: adds the time since the previous lap (or the start) to it.
     pub fn lap(&mut self, phase: &'static str) {
-        let (now, cpu) = (Instant::now(), crate::own_cpu_time_s());
+        let (now, cpu, memory) = (Instant::now(), crate::own_cpu_time_s(), crate::own_memory());
         let wall_s = now.duration_since(self.last).as_secs_f64();
         let cpu_s = cpu.zip(self.last_cpu).map(|(c, c0)| c - c0);
-        (self.last, self.last_cpu) = (now, cpu);
+        let used = memory.zip(self.last_memory).map(|(m, m0)| crate::Memory {
+            minor_faults: m.minor_faults.saturating_sub(m0.minor_faults),
+            peak_rss_bytes: m.peak_rss_bytes,
+        });
+        (self.last, self.last_cpu, self.last_memory) = (now, cpu, memory);
         self.add(phase, wall_s, cpu_s);
+        self.add_memory(phase, used);
+    }
+
+    /// Adds `used`'s page faults to `phase` (which has ended at least once) and sets its peak.
+    fn add_memory(&mut self, phase: &'static str, used: Option<crate::Memory>) {
+        if let Some(p) = self.phases.iter_mut().find(|p| p.name == phase) {
+            let faults = used.map(|u| u.minor_faults);
+            p.minor_faults = match p.minor_faults {
+                Some(f) => faults.map(|g| f + g),
+                None => faults,
+            };
+            p.peak_rss_bytes = used.map(|u| u.peak_rss_bytes);
+        }
     }
 
     /// Adds the processor time of the child processes waited for since the start as the
@@ -75,6 +103,8 @@ impl TimeSplit {
                 name,
                 wall_s,
                 cpu_s,
+                minor_faults: None,
+                peak_rss_bytes: None,
             }),
         }
     }
@@ -119,8 +149,9 @@ impl TimeSplit {
     }
 
     /// Prints the split on stderr under `tag`, with the child processes' phase
-    /// ([`TimeSplit::children`]), and records it in `exp`'s `timing.json` (`phases_wall_s` and
-    /// `phases_cpu_s`, by phase).
+    /// ([`TimeSplit::children`]), and records it in `exp`'s `timing.json` (`phases_wall_s`,
+    /// `phases_cpu_s`, `phases_minor_faults` and `phases_peak_rss_bytes`, by phase; the child
+    /// processes' memory is not counted).
     pub fn report(&self, tag: &str, exp: &mut Experiment) {
         let mut all = self.clone();
         all.children("child processes");
@@ -135,6 +166,16 @@ impl TimeSplit {
         };
         exp.timing("phases_wall_s", by_phase(&|p| serde_json::json!(p.wall_s)));
         exp.timing("phases_cpu_s", by_phase(&|p| serde_json::json!(p.cpu_s)));
+        let own = || self.phases.iter();
+        let memory = |f: &dyn Fn(&Phase) -> Option<u64>| {
+            serde_json::Value::Object(
+                own()
+                    .map(|p| (p.name.to_string(), serde_json::json!(f(p))))
+                    .collect(),
+            )
+        };
+        exp.timing("phases_minor_faults", memory(&|p| p.minor_faults));
+        exp.timing("phases_peak_rss_bytes", memory(&|p| p.peak_rss_bytes));
     }
 }
 
@@ -184,5 +225,22 @@ mod tests {
         if ran.is_ok() {
             assert!(p.cpu_s.is_none_or(|c| c >= 0.0), "{p:?}");
         }
+    }
+
+    /// A phase that touches fresh memory has page faults and a peak resident set at least that
+    /// large (where `getrusage` gives them): 64 MiB written, far above what the test harness
+    /// holds, so the bound does not depend on the rest of the process.
+    #[test]
+    fn memory_counts_the_fresh_pages_a_phase_touches() {
+        const BYTES: usize = 64 << 20;
+        let mut t = TimeSplit::start();
+        let fresh = vec![1u8; BYTES];
+        t.lap("touching");
+        let p = t.phases()[0];
+        if crate::own_memory().is_some() {
+            assert!(p.minor_faults.is_some_and(|f| f >= 1), "{p:?}");
+            assert!(p.peak_rss_bytes.is_some_and(|b| b >= BYTES as u64), "{p:?}");
+        }
+        assert_eq!(fresh.iter().map(|&b| usize::from(b)).sum::<usize>(), BYTES);
     }
 }

@@ -230,8 +230,9 @@ pub struct MeasuredRecord {
     pub source_name: String,
     /// Its sample rate (Hz).
     pub sample_rate_hz: f64,
-    /// Accelerations (m/s^2), sample k at `t = k / sample_rate_hz`.
-    pub accel_si: Vec<f64>,
+    /// Accelerations (m/s^2), sample k at `t = k / sample_rate_hz`; shared, so that the drive
+    /// at the record's own rate is these samples, not a copy ([`MeasuredRecord::resampled`]).
+    pub accel_si: Arc<[f64]>,
 }
 
 impl MeasuredRecord {
@@ -242,7 +243,7 @@ impl MeasuredRecord {
         rows: &[(Position, f64, f64)],
     ) -> Result<Self, MeasuredError> {
         let times: Vec<f64> = rows.iter().map(|r| r.1).collect();
-        let accel = rows.iter().map(|r| r.2).collect();
+        let accel: Arc<[f64]> = rows.iter().map(|r| r.2).collect();
         Self::from_columns(source_name, &times, accel, |k| rows[k].0)
     }
 
@@ -253,9 +254,10 @@ impl MeasuredRecord {
     pub fn from_columns(
         source_name: &str,
         times_s: &[f64],
-        accel_si: Vec<f64>,
+        accel_si: impl Into<Arc<[f64]>>,
         position: impl Fn(usize) -> Position,
     ) -> Result<Self, MeasuredError> {
+        let accel_si = accel_si.into();
         let src = || source_name.to_string();
         let n = times_s.len();
         if accel_si.len() != n {
@@ -278,7 +280,7 @@ impl MeasuredRecord {
             field: field.into(),
             value,
         };
-        for (k, (&t, &a)) in times_s.iter().zip(&accel_si).enumerate() {
+        for (k, (&t, &a)) in times_s.iter().zip(accel_si.iter()).enumerate() {
             if !t.is_finite() {
                 return Err(bad(k, "time_s", t));
             }
@@ -327,7 +329,7 @@ impl MeasuredRecord {
     }
 
     /// The record of checked times and accelerations: its rate the inverse of the mean step.
-    fn at_mean_step(source_name: &str, times_s: &[f64], accel_si: Vec<f64>) -> Self {
+    fn at_mean_step(source_name: &str, times_s: &[f64], accel_si: Arc<[f64]>) -> Self {
         let n = times_s.len();
         let mean = (times_s[n - 1] - times_s[0]) / (n - 1) as f64;
         Self {
@@ -337,12 +339,14 @@ impl MeasuredRecord {
         }
     }
 
-    /// A record of samples at `sample_rate_hz` (see the module docs for the checks).
+    /// A record of samples at `sample_rate_hz` (see the module docs for the checks); samples
+    /// given as an `Arc` are kept as they are, without a copy.
     pub fn from_uniform(
         source_name: &str,
         sample_rate_hz: f64,
-        accel_si: Vec<f64>,
+        accel_si: impl Into<Arc<[f64]>>,
     ) -> Result<Self, MeasuredError> {
+        let accel_si = accel_si.into();
         let src = || source_name.to_string();
         if !(sample_rate_hz.is_finite() && sample_rate_hz > 0.0) {
             return Err(MeasuredError::NotPositive {
@@ -435,6 +439,10 @@ impl MeasuredRecord {
         let fs_in = self.sample_rate_hz;
         let m = (self.duration_s() * rate_hz + 1e-9).floor() as usize + 1;
         let plan = resample::Plan::choose(self.accel_si.len(), m, fs_in, rate_hz);
+        // At the record's own rate the drive is the record's samples, shared.
+        if plan == resample::Plan::Identity && m >= self.accel_si.len() {
+            return Arc::clone(&self.accel_si);
+        }
         resample::resample(&self.accel_si, fs_in, rate_hz, m, plan)
     }
 }
@@ -460,6 +468,17 @@ mod tests {
         let r = MeasuredRecord::from_times("a.csv", &rows(&uniform(100, 1e-3))).unwrap();
         assert!((r.sample_rate_hz - 1000.0).abs() < 1e-9);
         assert_eq!(r.accel_si.len(), 100);
+    }
+
+    /// At its own rate a record is its drive, shared: the same allocation, not a copy; at
+    /// another rate the drive is a new one.
+    #[test]
+    fn the_drive_at_the_records_own_rate_is_its_samples() {
+        let samples: Arc<[f64]> = (0..1000).map(|k| (0.01 * k as f64).sin()).collect();
+        let r = MeasuredRecord::from_uniform("s.wav", 1000.0, Arc::clone(&samples)).unwrap();
+        assert!(Arc::ptr_eq(&r.accel_si, &samples));
+        assert!(Arc::ptr_eq(&r.resampled(1000.0), &samples));
+        assert!(!Arc::ptr_eq(&r.resampled(2000.0), &samples));
     }
 
     #[test]

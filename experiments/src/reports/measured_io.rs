@@ -12,6 +12,7 @@
 //! scale (1.0) in m/s^2: a WAV file carries no unit.
 
 use std::path::Path;
+use std::sync::Arc;
 
 use endstop::drive::measured::{MeasuredError, MeasuredRecord, Position};
 use thiserror::Error;
@@ -301,7 +302,7 @@ fn read_wav(path: &Path, file: &str, scale: f64) -> Result<MeasuredRecord, Recor
 
 /// The samples (m/s^2) of a WAV file's bytes read by hound's iterator, each a fraction of full
 /// scale times `scale`: the reader of every layout, and the one that names a bad sample.
-fn hound_samples(bytes: &[u8], scale: f64) -> Result<Vec<f64>, hound::Error> {
+fn hound_samples(bytes: &[u8], scale: f64) -> Result<Arc<[f64]>, hound::Error> {
     let mut reader = hound::WavReader::new(std::io::Cursor::new(bytes))?;
     let spec = reader.spec();
     match spec.sample_format {
@@ -328,7 +329,7 @@ fn plain_samples(
     bytes: &[u8],
     reader: hound::WavReader<std::io::Cursor<&[u8]>>,
     scale: f64,
-) -> Option<Vec<f64>> {
+) -> Option<Arc<[f64]>> {
     let (spec, n) = (reader.spec(), reader.len() as usize);
     let start = usize::try_from(reader.into_inner().position()).ok()?;
     // The data chunk's length (the 4 bytes before its data) is `n` samples of its width.
@@ -337,7 +338,9 @@ fn plain_samples(
     let data = bytes.get(start..start.checked_add(n.checked_mul(width)?)?)?;
     let full = 2f64.powi(i32::from(spec.bits_per_sample) - 1);
     let int = |v: i32| f64::from(v) / full * scale;
-    fn each(data: &[u8], width: usize, f: impl Fn(&[u8]) -> f64) -> Option<Vec<f64>> {
+    // Collected straight into the shared samples the record keeps (an iterator of known
+    // length fills one allocation), not into a vector copied after.
+    fn each(data: &[u8], width: usize, f: impl Fn(&[u8]) -> f64) -> Option<Arc<[f64]>> {
         Some(data.chunks_exact(width).map(f).collect())
     }
     match (spec.sample_format, width, spec.bits_per_sample) {
@@ -523,7 +526,7 @@ mod tests {
             std::fs::write(&path, &bytes).unwrap();
             let want = hound_samples(&bytes, 3.0).unwrap();
             let got = plain_samples(&bytes, reader(&bytes), 3.0).expect("a plain layout");
-            assert_eq!(read_record(&path, Some(3.0)).unwrap().accel_si, got);
+            assert_eq!(*read_record(&path, Some(3.0)).unwrap().accel_si, got[..]);
             assert_eq!(got.len(), 300, "{format:?} {bits} bits in {width} bytes");
             let bits_of = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
             assert_eq!(

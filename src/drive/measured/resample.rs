@@ -216,7 +216,8 @@ fn rational(c: f64, max_p: u64, close: impl Fn(u64, u64) -> bool) -> Option<(u64
 }
 
 /// `x` at `fs_in` resampled to `m` outputs at `fs` by `plan`, shared (the record engine reads
-/// its drive through an `Arc`): at equal rates the one copy of the samples.
+/// its drive through an `Arc`): at equal rates a copy of the samples (a whole record shares
+/// its own instead, [`super::MeasuredRecord::resampled`]).
 pub(super) fn resample(x: &[f64], fs_in: f64, fs: f64, m: usize, plan: Plan) -> Arc<[f64]> {
     let kernel = Kernel::new(fs_in, fs);
     match plan {
