@@ -57,8 +57,8 @@ impl ResumeSettings {
     }
 }
 
-/// A value of the parameter at which no stable periodic orbit of one to
-/// [`super::periods::MAX_PERIODS`] drive periods is found from the state after the transient:
+/// A value of the parameter at which no stable periodic orbit of one to four (the
+/// continuation's largest period count) drive periods is found from the state after the transient:
 /// the response over [`SteppedPoint::periods`] drive periods from that state, as a stepped
 /// sine measures it (not an orbit, and not continued).
 #[derive(Debug, Clone, PartialEq)]
