@@ -24,9 +24,11 @@ use endstop::ode::SolverError;
 use endstop::paper::deviations::RangesFile;
 use endstop::paper::setups::{endstop, with_endstop, FIG13_BIAS_V};
 use endstop::progress::Silent;
+use endstop::study::continuation::impacting::DiagramSettings;
 use endstop::study::continuation::{
-    frequency_branch, response_from_rest, Branch, ContinuationSettings, EventKind, Response,
-    ResumeSettings, STEPPED_MEASURE_PERIODS,
+    diagram_with_step, frequency_branch, response_from_rest, Branch, BranchKind,
+    ContinuationSettings, DiagramPoint, EventKind, Response, ResumeSettings,
+    STEPPED_MEASURE_PERIODS,
 };
 use endstop::study::orbit::{Forcing, Orbit, OrbitError};
 use endstop::study::steady::{settle_and_measure, Measurement, SettleSettings};
@@ -360,4 +362,58 @@ fn long_record<M: Model<N>, const N: usize>(
 
 fn events(b: &Branch) -> Vec<(String, f64)> {
     b.events.iter().map(|e| (e.label(), e.param)).collect()
+}
+
+/// The up-converter's diagram over the third strike in a fine step, as `endstop response
+/// --device data/examples/upconverter.toml --from 19 --to 19.6 --step 0.01 --accel-rms-g
+/// 0.05` computes it: past the strike the branches found stall among grazings and changes of
+/// stability (one of which keeps its event test's sign across its step: it is found by the
+/// count of unstable multipliers and placed within the step), one stretch has no stable orbit of up to four periods and
+/// is measured, not continued, and the diagram reaches the end of its range.
+#[test]
+fn the_upconverter_diagram_in_a_fine_step_reaches_its_end_through_measured_points() {
+    let device = Device::from_toml_str(UPCONVERTER, "upconverter.toml").expect("the file loads");
+    let (from_hz, to_hz, step_hz) = (19.0, 19.6, 0.01);
+    let start = Forcing {
+        freq_hz: from_hz,
+        accel_rms_g: 0.05,
+    };
+    let settings = ContinuationSettings::frequency(from_hz, to_hz, step_hz);
+    let d = diagram_with_step(
+        &device,
+        start,
+        &settings,
+        &DiagramSettings::default(),
+        step_hz,
+        &Silent,
+    )
+    .expect("the diagram is computed");
+    let reach = d
+        .branches
+        .iter()
+        .flat_map(|b| &b.points)
+        .map(|p| p.forcing.freq_hz)
+        .fold(f64::NEG_INFINITY, f64::max);
+    assert!(
+        reach >= to_hz - step_hz,
+        "the diagram reaches {reach} Hz, not the end of the range"
+    );
+    let measured: Vec<&DiagramPoint> = d
+        .branches
+        .iter()
+        .filter(|b| b.kind == BranchKind::Stepped)
+        .flat_map(|b| &b.points)
+        .collect();
+    assert!(
+        !measured.is_empty(),
+        "no stretch without a stable orbit: the measured path is not reached"
+    );
+    for p in measured {
+        assert!(
+            p.multipliers.is_empty() && p.residual.is_nan() && p.forcing.freq_hz > THIRD_STRIKE_HZ,
+            "a measured point is no orbit and lies past the third strike: {} Hz",
+            p.forcing.freq_hz
+        );
+        assert_eq!(p.periods as usize, STEPPED_MEASURE_PERIODS);
+    }
 }

@@ -45,7 +45,12 @@ impl<M: Model<N> + Clone, const N: usize> Continuer<'_, '_, M, N> {
         };
         let lo = Sample::new(0.0, fa, ());
         let hi = Sample::new(ds, fb, ());
-        let root = illinois(
+        // The search's outcome is the best sample, whatever its end: a failed evaluation ends it
+        // with the bracket reached, and where the test keeps its sign across the step (a torus
+        // is found by the count of unstable multipliers, which also changes where multipliers
+        // jump, as at a grazing, or cross together) the event still lies within the step,
+        // placed at the end where its test is smaller.
+        let _ = illinois(
             |s| -> Result<(f64, ()), OrbitError> {
                 let (p, _) = self.point_at(a, s)?;
                 let v = test(&p, gaps);
@@ -58,9 +63,6 @@ impl<M: Model<N> + Clone, const N: usize> Continuer<'_, '_, M, N> {
             hi,
             &opts,
         );
-        if let Err(crate::num::roots::RootError::NotBracketed { .. }) = root {
-            unreachable!("the ends bracket a sign change by construction")
-        }
         let (s_best, _, best) = best;
         Ok(Event {
             kind,
