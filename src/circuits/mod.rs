@@ -199,20 +199,13 @@ impl Interface {
         self.kind().map_or(RESISTIVE, |k| k.key())
     }
 
-    /// True for the default, the transducer's own resistive load.
-    pub fn is_resistive(&self) -> bool {
-        matches!(self, Interface::Resistive)
-    }
-
     /// The device path of the load resistance behind this interface: the transducer's own
-    /// `transducer.load_resistance_ohm` for `resistive`, the DC load's
+    /// `transducer.load_resistance_ohm` where no circuit kind stands between, the DC load's
     /// `interface.load.resistance_ohm` behind a circuit.
     pub fn load_resistance_path(&self) -> &'static str {
-        if self.is_resistive() {
-            "transducer.load_resistance_ohm"
-        } else {
+        self.kind().map_or("transducer.load_resistance_ohm", |_| {
             "interface.load.resistance_ohm"
-        }
+        })
     }
 
     /// The storage capacitance (F), for every kind but `resistive`.

@@ -347,7 +347,7 @@ impl super::Device {
     #[must_use]
     pub fn behind(&self, interface: Interface) -> Self {
         let mut d = self.clone();
-        if !interface.is_resistive() {
+        if interface.kind().is_some() {
             if let Some(r) = d.own_load_mut() {
                 *r = f64::INFINITY;
             }

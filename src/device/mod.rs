@@ -304,7 +304,7 @@ impl Device {
     /// A one-load transducer (piezoelectric, electromagnetic) with no interface circuit needs
     /// its own resistive load.
     fn check_own_load(&self, c: &Checker) -> Result<(), ParamError> {
-        if self.interface.is_resistive()
+        if self.interface.kind().is_none()
             && matches!(
                 self.transducer,
                 Transducer::Piezoelectric(_) | Transducer::Electromagnetic(_)
