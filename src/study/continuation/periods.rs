@@ -44,18 +44,10 @@ impl<M: Model<N>, const N: usize> Continuer<'_, '_, M, N> {
         from: &Orbit,
         accept: impl Fn(&Orbit) -> bool,
     ) -> Option<Shot> {
-        let param = self.settings.parameter;
-        let phase = from.phase_rad;
         let guess: SVector<f64, N> = from.state_n();
         let mut several = None;
         for k in 1..=MAX_PERIODS {
-            let solved =
-                self.shooter
-                    .solve_periods(forcing, param, phase, guess, k, &mut self.stats);
-            let Ok(o) = solved else {
-                continue;
-            };
-            match self.least_period(o) {
+            match self.shot(forcing, from.phase_rad, guess, k) {
                 Some(Shot::One(o)) if accept(&o) => return Some(Shot::One(o)),
                 Some(Shot::Several(o)) if several.is_none() => several = Some(o),
                 _ => {}
@@ -75,13 +67,7 @@ impl<M: Model<N>, const N: usize> Continuer<'_, '_, M, N> {
     ) -> Option<Orbit> {
         let param = self.settings.parameter;
         for k in 1..=MAX_PERIODS {
-            let solved =
-                self.shooter
-                    .solve_periods(forcing, param, phase_rad, y, k, &mut self.stats);
-            let Ok(o) = solved else {
-                continue;
-            };
-            let Some(Shot::One(o) | Shot::Several(o)) = self.least_period(o) else {
+            let Some(Shot::One(o) | Shot::Several(o)) = self.shot(forcing, phase_rad, y, k) else {
                 continue;
             };
             if !o.is_stable() {
@@ -95,6 +81,24 @@ impl<M: Model<N>, const N: usize> Continuer<'_, '_, M, N> {
             }
         }
         None
+    }
+
+    /// The orbit found by Newton's method on the map over `k` drive periods from the state
+    /// `y` at drive phase `phase_rad`, as the orbit of its least period; `None` where Newton's
+    /// method or the reduction fails.
+    fn shot(
+        &mut self,
+        forcing: &Forcing,
+        phase_rad: f64,
+        y: SVector<f64, N>,
+        k: usize,
+    ) -> Option<Shot> {
+        let param = self.settings.parameter;
+        let o = self
+            .shooter
+            .solve_periods(forcing, param, phase_rad, y, k, &mut self.stats)
+            .ok()?;
+        self.least_period(o)
     }
 
     /// The orbit `o`, a fixed point of the map over its `periods` drive periods, as an orbit
@@ -135,12 +139,7 @@ impl<M: Model<N>, const N: usize> Continuer<'_, '_, M, N> {
         y: SVector<f64, N>,
         d: usize,
     ) -> Option<f64> {
-        let duration_s = d as f64 * forcing.period_s();
-        let (end, _, st) = self
-            .shooter
-            .flow(forcing, phase_rad, y, duration_s, |_, _| {})
-            .ok()?;
-        self.stats += st;
+        let end = self.settle(forcing, phase_rad, y, d).ok()?;
         Some(self.shooter.norm(&(end - y)) / self.shooter.norm(&y).max(1e-300))
     }
 }

@@ -273,7 +273,7 @@ pub fn response_of_model<M: Model<N> + Clone, const N: usize>(
 
 impl<M: Model<N>, const N: usize> Continuer<'_, '_, M, N> {
     /// The state after `periods` drive periods from `y` at drive phase `phase_rad`.
-    fn settle(
+    pub(super) fn settle(
         &mut self,
         forcing: &Forcing,
         phase_rad: f64,
