@@ -68,6 +68,7 @@ mod study_determinism;
 mod sweep_figures;
 mod sweep_steps;
 mod swept_sine;
+mod upconverter_response;
 mod validation;
 
 /// Every file of `tests/` is a module here.

@@ -247,6 +247,7 @@ impl Diagram {
                             stable: vec![true],
                             corner: false,
                             contact: None,
+                            strikes: None,
                         });
                     }
                     branches.push(db);
@@ -347,6 +348,7 @@ fn diagram_branch<M: Model<N>, const N: usize>(
             stable: vec![e.stable_before, e.stable_after],
             corner,
             contact: e.contact,
+            strikes: e.strikes,
         });
     }
     let end = |p: &DiagramPoint, kind: EndKind| BranchEnd {

@@ -221,6 +221,10 @@ pub struct DiagramEvent {
     /// contacts touched unchanged): that contact (its index in
     /// [`crate::model::Model::contacts`]).
     pub contact: Option<usize>,
+    /// For a grazing of a contact that gains or loses a strike per period: the lesser number
+    /// of that contact's strikes a period on its two sides (the grazing lies between that
+    /// number and one more), which tells apart two such grazings a little apart.
+    pub strikes: Option<u32>,
 }
 
 impl DiagramEvent {
@@ -228,7 +232,10 @@ impl DiagramEvent {
     /// fold there is non-smooth.
     pub fn label(&self) -> String {
         if let (EventKind::Grazing, Some(k)) = (self.kind, self.contact) {
-            format!("grazing of contact {k} (a strike more or less per period)")
+            match self.strikes {
+                Some(n) => format!("grazing of contact {k} ({n} to {} strikes a period)", n + 1),
+                None => format!("grazing of contact {k} (a strike more or less per period)"),
+            }
         } else if self.kind == EventKind::BranchFound {
             format!("period-{} branch found", self.point.periods)
         } else if self.corner {

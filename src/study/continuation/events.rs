@@ -6,7 +6,7 @@
 use crate::model::Model;
 use crate::num::roots::{illinois, RootOptions, Sample};
 use crate::ode::Stats;
-use crate::study::orbit::{is_neutral, OrbitError, Shooter};
+use crate::study::orbit::{is_neutral, OrbitError, Shooter, NEUTRAL_BAND};
 
 use super::corrector::Continuer;
 use super::test_functions::{
@@ -75,6 +75,7 @@ impl<M: Model<N> + Clone, const N: usize> Continuer<'_, '_, M, N> {
             stable_before: a.orbit.is_stable(),
             stable_after: b.orbit.is_stable(),
             contact: None,
+            strikes: None,
         })
     }
 
@@ -150,6 +151,29 @@ impl<M: Model<N> + Clone, const N: usize> Continuer<'_, '_, M, N> {
         Ok(e)
     }
 
+    /// Whether the change of the count of unstable multipliers between `a` and `b` can be a
+    /// complex pair crossing the unit circle (a Neimark-Sacker point): the count of unstable
+    /// multipliers off the real axis changes while that of real ones stays, and no rigid
+    /// contact gains or loses a strike a period between them. Across such a grazing the
+    /// multipliers jump (the saltation matrix of a strike at vanishing speed grows without
+    /// bound; Nordmark, J. Sound Vib. 145, 1991), so that a changed count there is that jump,
+    /// no continuous crossing; the grazing is reported as itself ([`Self::strike_events`]).
+    fn pair_may_cross(&self, a: &BranchPoint, b: &BranchPoint) -> bool {
+        let complex_unstable = |p: &BranchPoint| {
+            let m = &p.orbit.multipliers;
+            let off = m.iter().filter(|m| m.im.abs() >= NEUTRAL_BAND && m.norm() > 1.0);
+            let off = off.count();
+            (off, p.orbit.unstable_count() - off)
+        };
+        let (ca, ra) = complex_unstable(a);
+        let (cb, rb) = complex_unstable(b);
+        let contacts = self.shooter.base.contacts();
+        let strikes = |p: &BranchPoint, k: usize| p.orbit.summary.contact_reach.strikes[k];
+        let jump = (0..Gaps::of(self.shooter.base).len())
+            .any(|k| contacts[k].rigid() && strikes(a, k) != strikes(b, k));
+        ca != cb && ra == rb && !jump
+    }
+
     // ANCHOR: events
     /// The events between points `k` and `k + 1` (at arclength `ds` along point k's
     /// tangent). `b` may have its tangent reversed: where the branch leaves contact at a
@@ -208,7 +232,10 @@ impl<M: Model<N> + Clone, const N: usize> Continuer<'_, '_, M, N> {
         };
         let plus1 = changes(test_plus_one, b) && neutral(a) == neutral(b);
         let minus1 = changes(test_minus_one, b);
-        let torus = a.orbit.unstable_count() != b.orbit.unstable_count() && !plus1 && !minus1;
+        let torus = a.orbit.unstable_count() != b.orbit.unstable_count()
+            && !plus1
+            && !minus1
+            && self.pair_may_cross(a, b);
         // At a corner the changes of stability belong to the corner (the fold above); across
         // a rigid stop's grazing they belong to no smooth event.
         if !(corner || graze && rigid) {

@@ -126,6 +126,7 @@ impl<M: Model<N>, const N: usize> Continuer<'_, '_, M, N> {
             stable_before: last.orbit.is_stable(),
             stable_after: past.orbit.is_stable(),
             contact: Some(k),
+            strikes: Some(n),
         };
         if (test_fold(last, gaps) > 0.0) != (test_fold(&past, gaps) > 0.0) {
             let mut fold = e.clone();
@@ -284,6 +285,7 @@ impl<M: Model<N>, const N: usize> Continuer<'_, '_, M, N> {
                 stable_before: a.orbit.is_stable(),
                 stable_after: b.orbit.is_stable(),
                 contact: Some(c),
+                strikes: Some(n),
             });
         }
         out

@@ -619,6 +619,7 @@ impl<M: Model<N> + Clone, const N: usize> Builder<'_, M, N> {
                     stable: vec![e.stable_before, e.stable_after],
                     corner: false,
                     contact: None,
+                    strikes: None,
                 });
                 self.starts_at_event(idx, problem, e);
             }
@@ -663,6 +664,7 @@ impl<M: Model<N> + Clone, const N: usize> Builder<'_, M, N> {
                 stable,
                 corner: false,
                 contact: None,
+                strikes: None,
             });
         }
         for (i, g) in self.grazings.iter().enumerate() {
