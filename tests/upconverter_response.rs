@@ -9,7 +9,7 @@
 use endstop::device::Device;
 use endstop::progress::Silent;
 use endstop::study::continuation::{
-    response_from_rest, Branch, BranchPoint, ContinuationSettings, EventKind, Response,
+    response_from_rest, Branch, BranchPoint, ContinuationSettings, Event, EventKind, Response,
     ResumeSettings, STEPPED_MEASURE_PERIODS,
 };
 use endstop::study::orbit::{Forcing, NEUTRAL_BAND};
@@ -52,7 +52,7 @@ fn strikes(p: &BranchPoint) -> u32 {
     p.orbit.summary.contact_reach.strikes[0]
 }
 
-fn events_of(b: &Branch, kind: EventKind) -> impl Iterator<Item = &endstop::study::continuation::Event> {
+fn events_of(b: &Branch, kind: EventKind) -> impl Iterator<Item = &Event> {
     b.events.iter().filter(move |e| e.kind == kind)
 }
 
@@ -66,7 +66,11 @@ fn each_torus_event_is_a_complex_pair_crossing_the_unit_circle() {
             let (a, z) = (&b.points[e.after_point], &b.points[e.after_point + 1]);
             let f = e.param;
             // No jump: the stop between the masses is struck as often on both sides.
-            assert_eq!(strikes(a), strikes(z), "a strike gained or lost across {f} Hz");
+            assert_eq!(
+                strikes(a),
+                strikes(z),
+                "a strike gained or lost across {f} Hz"
+            );
             // The pair lies on either side of the circle at the two points, and on it (to
             // the location's tolerance) at the event.
             let (ma, mz) = (pair_modulus(a), pair_modulus(z));

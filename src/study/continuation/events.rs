@@ -3,6 +3,8 @@
 //! root finder along the branch, and the location of grazing on the branch of the same device
 //! without stops.
 
+use nalgebra::Complex;
+
 use crate::model::Model;
 use crate::num::roots::{illinois, RootOptions, Sample};
 use crate::ode::Stats;
@@ -160,9 +162,8 @@ impl<M: Model<N> + Clone, const N: usize> Continuer<'_, '_, M, N> {
     /// no continuous crossing; the grazing is reported as itself ([`Self::strike_events`]).
     fn pair_may_cross(&self, a: &BranchPoint, b: &BranchPoint) -> bool {
         let complex_unstable = |p: &BranchPoint| {
-            let m = &p.orbit.multipliers;
-            let off = m.iter().filter(|m| m.im.abs() >= NEUTRAL_BAND && m.norm() > 1.0);
-            let off = off.count();
+            let off_axis = |m: &&Complex<f64>| m.im.abs() >= NEUTRAL_BAND && m.norm() > 1.0;
+            let off = p.orbit.multipliers.iter().filter(off_axis).count();
             (off, p.orbit.unstable_count() - off)
         };
         let (ca, ra) = complex_unstable(a);
