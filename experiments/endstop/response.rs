@@ -57,18 +57,24 @@ pub(crate) fn response(args: ResponseArgs) -> Result<()> {
     let settings = a.sweep_settings(&device, &protocol);
     let freqs = &settings.freqs_hz;
     let approach = protocol.approach;
-    let (up, down) = common::with_progress(2 * freqs.len(), "sweeps", |tick| {
-        rayon::join(
-            || settings.run_with(&device, a.accel_rms_g, approach, tick),
-            || settings.run_down_with(&device, a.accel_rms_g, approach, tick),
-        )
-    });
-    let (up, down) = (up?, down?);
+    // The continuation is one thread's work: it runs beside the two sweeps, which share
+    // nothing with it, so that the run's wall time is about that of the longer of the two.
+    let ((up, down), diagram) = rayon::join(
+        || {
+            common::with_progress(2 * freqs.len(), "sweeps", |tick| {
+                rayon::join(
+                    || settings.run_with(&device, a.accel_rms_g, approach, tick),
+                    || settings.run_down_with(&device, a.accel_rms_g, approach, tick),
+                )
+            })
+        },
+        || continue_orbits(&device, a, &protocol),
+    );
+    let (up, down, diagram) = (up?, down?, diagram?);
     let chirps = match args.sweep_rate {
         Some(rate) => Some(swept_sines(&settings, &device, a, rate)?),
         None => None,
     };
-    let diagram = continue_orbits(&device, a, &protocol)?;
     write_parquet(&exp, &device, &diagram, &up, &down, chirps.as_ref())?;
     let found = Found {
         up: &up,
