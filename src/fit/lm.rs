@@ -51,6 +51,10 @@ pub struct LmSettings {
     /// Longest step (unbounded coordinates, Euclidean norm): a direction the data hardly
     /// constrain would otherwise be thrown to the edge of its range by a tiny gradient.
     pub max_step: f64,
+    /// Difference the Jacobian at the point where the search converges (true), or leave the
+    /// one of the point before the last step (false: for a search whose stop hands over to
+    /// another model that may never need it; [`LmResult::jacobian_at_u`] says which).
+    pub jacobian_at_stop: bool,
 }
 
 /// Forward-difference step of the stepped-sweep model: a steady state converged to a relative
@@ -73,6 +77,7 @@ impl Default for LmSettings {
             max_step: 2.0,
             noise_rel_tol: 1e-3,
             cost_abs_tol: 0.0,
+            jacobian_at_stop: true,
         }
     }
 }
@@ -112,8 +117,12 @@ pub struct LmResult {
     pub u: Vec<f64>,
     /// Residuals there.
     pub residuals: Vec<f64>,
-    /// Jacobian of the residuals there (rows: residuals, columns: coordinates).
+    /// Jacobian of the residuals there (rows: residuals, columns: coordinates), or at the
+    /// point before the last step when [`LmResult::jacobian_at_u`] is false.
     pub jacobian: DMatrix<f64>,
+    /// Whether [`LmResult::jacobian`] is the one at [`LmResult::u`] (false only after a
+    /// convergence with [`LmSettings::jacobian_at_stop`] false).
+    pub jacobian_at_u: bool,
     /// Outer iterations.
     pub iterations: usize,
     /// Residual evaluations, the Jacobians' included.
@@ -241,6 +250,7 @@ pub fn levenberg_marquardt_resumed<P: Tracked>(
     let mut stop = Termination::MaxIter;
     let mut iterations = 0;
     let mut jac = jac0;
+    let mut jacobian_at_u = true;
     while iterations < s.max_iter {
         iterations += 1;
         let a = jac.transpose() * &jac;
@@ -302,14 +312,21 @@ pub fn levenberg_marquardt_resumed<P: Tracked>(
         r = rt;
         state = st;
         c = ct;
-        jac = jacobian(problem, &u, &r, &state, s.fd_step)?;
-        evaluations += p;
-        if drop < s.cost_rel_tol || c_before - c < s.cost_abs_tol {
-            stop = Termination::CostConverged;
-            break;
+        let converged = if drop < s.cost_rel_tol || c_before - c < s.cost_abs_tol {
+            Some(Termination::CostConverged)
+        } else if step_norm < s.step_tol {
+            Some(Termination::StepConverged)
+        } else {
+            None
+        };
+        if converged.is_none() || s.jacobian_at_stop {
+            jac = jacobian(problem, &u, &r, &state, s.fd_step)?;
+            evaluations += p;
+        } else {
+            jacobian_at_u = false;
         }
-        if step_norm < s.step_tol {
-            stop = Termination::StepConverged;
+        if let Some(t) = converged {
+            stop = t;
             break;
         }
     }
@@ -318,6 +335,7 @@ pub fn levenberg_marquardt_resumed<P: Tracked>(
             u,
             residuals: r,
             jacobian: jac,
+            jacobian_at_u,
             iterations,
             evaluations,
             failed_trials: failed,

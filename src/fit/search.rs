@@ -228,11 +228,16 @@ fn stepped(
         fd_step: settings.fd_step.max(lm::STEPPED_FD_STEP),
         ..*settings
     };
+    // The Jacobian where the loose search converges serves only a search carried on there
+    // (each of its columns a whole sweep): it is differenced when the branches do not take
+    // over.
     let loose = LmSettings {
         cost_rel_tol: tight.cost_rel_tol.max(HANDOVER_COST_REL_TOL),
+        jacobian_at_stop: false,
         ..tight
     };
-    let (near, last) = levenberg_marquardt_tracked(&Stepped(pb), u0, Costs::none(), None, &loose)?;
+    let (mut near, last) =
+        levenberg_marquardt_tracked(&Stepped(pb), u0, Costs::none(), None, &loose)?;
     let near_ssr = last.here;
     if let Ok(states) = pb.identify(&near.u) {
         if let Ok(mut run) = on_branches(pb, &near.u, states, settings) {
@@ -242,6 +247,11 @@ fn stepped(
                 return Ok(run);
             }
         }
+    }
+    if !near.jacobian_at_u {
+        near.jacobian = lm::jacobian(&Stepped(pb), &near.u, &near.residuals, &last, tight.fd_step)?;
+        near.evaluations += pb.free.len();
+        near.jacobian_at_u = true;
     }
     // The loose search stopped where the tight one would not have: carry it on from its
     // point, Jacobian and damping, so that it takes the tight search's own steps.
