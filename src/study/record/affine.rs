@@ -116,13 +116,14 @@ struct AffineMode<const N: usize, const U: usize> {
     /// columns of the state's fixed length, so that the product is a few vector operations
     /// on an accumulator held in registers.
     state_columns: [[f64; N]; U],
-    /// The rows of `G e^{hA}`: `G` holds the guards as rows on `u` (row `2j` guard `j`'s
+    /// The columns of `G e^{hA}`: `G` holds the guards as rows on `u` (row `2j` guard `j`'s
     /// value, row `2j + 1` its rate times the step, each divided by the guard's scale, the
     /// norm of its gradient on the state's characteristic scales, so that [`GRAZE_MARGIN`]
     /// applies to each; an unused guard is the constant -1), so that `G e^{hA} u_k` are the
-    /// guards at the next sample. Rows, so that a step takes the dot products of the used
-    /// guards' rows only.
-    next_guard_rows: [[f64; U]; GUARD_ROWS],
+    /// guards at the next sample. Columns, as the state's, so that a step sums the used
+    /// guards' rows in the same pass over `u` as the state, a few vector operations per
+    /// component of `u`.
+    next_guard_columns: [[f64; GUARD_ROWS]; U],
     /// Guards in use (the first ones).
     used: usize,
     /// `G e^{i h A / PARTS}` for `i = 1 .. PARTS - 1`: the guards inside the interval.
@@ -165,17 +166,16 @@ impl<const N: usize, const U: usize> AffineMode<N, U> {
         g0: &GuardValues,
         g1: &mut GuardValues,
     ) -> Option<SVector<f64, N>> {
-        // The state by columns, the used guards by rows (the unused guards' values are never
-        // read); each sum runs over `u` in order.
-        let mut y1 = [0.0; N];
-        for (col, &uj) in self.state_columns.iter().zip(u0) {
-            for (yi, ci) in y1.iter_mut().zip(col) {
-                *yi += ci * uj;
-            }
-        }
-        for (gi, row) in g1.iter_mut().zip(&self.next_guard_rows[..2 * self.used]) {
-            *gi = row.iter().zip(u0).fold(0.0, |acc, (ri, uj)| acc + ri * uj);
-        }
+        // The unused guards' values are never read: the pass sums the used guards' rows only,
+        // compiled for their count.
+        let y1 = match self.used {
+            0 => self.advance::<0>(u0, g1),
+            1 => self.advance::<2>(u0, g1),
+            2 => self.advance::<4>(u0, g1),
+            3 => self.advance::<6>(u0, g1),
+            4 => self.advance::<8>(u0, g1),
+            _ => self.advance::<GUARD_ROWS>(u0, g1),
+        };
         for j in 0..self.used {
             let (v0, d0, v1, d1) = (g0[2 * j], g0[2 * j + 1], g1[2 * j], g1[2 * j + 1]);
             // The Hermite basis functions of the slopes are at most 4/27 in absolute value and
@@ -188,6 +188,30 @@ impl<const N: usize, const U: usize> AffineMode<N, U> {
             }
         }
         Some(SVector::from(y1))
+    }
+
+    /// The state one interval after `u0` and the first `R` rows of the guards there (written
+    /// into `g1`), in one pass over `u0` by columns: each sum runs over `u` in order from
+    /// zero, the dot product of a row with `u0`.
+    #[inline(always)]
+    fn advance<const R: usize>(&self, u0: &[f64; U], g1: &mut GuardValues) -> [f64; N] {
+        let mut y1 = [0.0; N];
+        let mut g = [0.0; R];
+        for ((col, guard_col), &uj) in self
+            .state_columns
+            .iter()
+            .zip(&self.next_guard_columns)
+            .zip(u0)
+        {
+            for (yi, ci) in y1.iter_mut().zip(col) {
+                *yi += ci * uj;
+            }
+            for (gi, ci) in g.iter_mut().zip(guard_col) {
+                *gi += ci * uj;
+            }
+        }
+        g1.as_mut_slice()[..R].copy_from_slice(&g);
+        y1
     }
 
     /// True when every guard stays clear of zero on each of [`PARTS`] equal parts of the
@@ -286,10 +310,11 @@ impl<const N: usize, const U: usize> AffineMode<N, U> {
             g
         });
         let state_columns = std::array::from_fn(|j| std::array::from_fn(|i| e[(i, j)]));
-        let next_guard_rows = std::array::from_fn(|i| std::array::from_fn(|j| next_guards[(i, j)]));
+        let next_guard_columns =
+            std::array::from_fn(|j| std::array::from_fn(|i| next_guards[(i, j)]));
         Some(Self {
             state_columns,
-            next_guard_rows,
+            next_guard_columns,
             used,
             inner,
             guards,
