@@ -387,10 +387,12 @@ fn record<'py>(
     let rec = py
         .detach(move || simulate_record(&dev, &spec, seed, stream))
         .map_err(solver_err)?;
+    let mut rec = rec;
+    let [v1, v2] = rec.take_pair();
     let d = PyDict::new(py);
     d.set_item("sample_rate_hz", rec.sample_rate_hz)?;
-    d.set_item("v1_v", array(py, rec.v1_v))?;
-    d.set_item("v2_v", array(py, rec.v2_v))?;
+    d.set_item("v1_v", array(py, v1))?;
+    d.set_item("v2_v", array(py, v2))?;
     summary_items(&d, &rec.summary)?;
     Ok(d)
 }
@@ -434,10 +436,12 @@ fn sine_record<'py>(
     let rec = py
         .detach(move || simulate_drive(&dev, &drive, DEFAULT_RTOL, Scheme::Exponential))
         .map_err(solver_err)?;
+    let mut rec = rec;
+    let [v1, v2] = rec.take_pair();
     let d = PyDict::new(py);
     d.set_item("sample_rate_hz", rec.sample_rate_hz)?;
-    d.set_item("v1_v", array(py, rec.v1_v))?;
-    d.set_item("v2_v", array(py, rec.v2_v))?;
+    d.set_item("v1_v", array(py, v1))?;
+    d.set_item("v2_v", array(py, v2))?;
     summary_items(&d, &rec.summary)?;
     Ok(d)
 }
