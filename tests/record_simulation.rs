@@ -121,3 +121,44 @@ fn exponential_scheme_matches_dormand_prince_on_impact_free_records() {
         );
     }
 }
+
+/// A device without a transducer: its record keeps no samples of its two load voltages, which
+/// the model holds at zero, and reads them as zeros; its loads' power and output spectrum are
+/// those of the zeros, bit for bit (a zero of positive sign, as the sum of zeros gives it).
+#[test]
+fn a_record_keeps_no_samples_of_the_outputs_a_device_without_a_transducer_lacks() {
+    use endstop::device::Device;
+    use endstop::signal::{welch, WelchOptions};
+    let text = "name = \"plain\"\nparams = \"hypothetical\"\ndescription = \"a test\"\n\
+        [mechanics]\nmass_kg = 1e-3\nstiffness_n_per_m = 39478.4\ndamping_n_s_per_m = 0.0628\n\
+        [stops.both]\ngap_m = 1e-5\nlaw = \"restitution\"\ncoefficient = 0.6\n\
+        [transducer]\nkind = \"none\"\n";
+    let device = Device::from_toml_str(text, "plain.toml").unwrap();
+    // 0.1 s of a 1 kHz sine of 10 m/s^2 at 50 kHz after 10 ms: it strikes the stops.
+    let (fs, n_tr, n) = (50e3, 500, 5000);
+    let accel: Vec<f64> = (0..n_tr + n)
+        .map(|k| -10.0 * (2.0 * std::f64::consts::PI * 1e3 * k as f64 / fs).cos())
+        .collect();
+    let drive = SampledDrive {
+        accel: accel.into(),
+        sample_rate_hz: fs,
+        transient_samples: n_tr,
+    };
+    let mut rec = simulate_drive(&device, &drive, DEFAULT_RTOL, Scheme::Exponential).unwrap();
+    assert!(rec.summary.impacts > 0, "{:?}", rec.summary);
+    assert_eq!(rec.samples, n);
+    assert!(rec.v1_v.is_empty() && rec.v2_v.is_empty());
+    assert_eq!(rec.outputs.len(), 2, "the outputs keep their names");
+    assert_eq!(rec.output_samples(0).as_ref(), vec![0.0; n].as_slice());
+    assert_eq!(rec.output_samples(1).as_ref(), vec![0.0; n].as_slice());
+    assert_eq!(rec.summary.p_total_w().to_bits(), 0);
+    let cfg = WelchOptions::half_overlap(1024);
+    let rl = device.transducer.load_resistance_ohm();
+    let psd = output_psd(&rec, rl, &cfg).unwrap();
+    let zeros = welch(&vec![0.0; n], fs, &cfg).unwrap();
+    assert_eq!(psd.load1.freq_hz, zeros.freq_hz);
+    assert_eq!(psd.total.segments, zeros.segments);
+    assert!(psd.total.density.iter().all(|d| d.to_bits() == 0));
+    let [v1, v2] = rec.take_pair();
+    assert_eq!((v1, v2), (vec![0.0; n], vec![0.0; n]));
+}

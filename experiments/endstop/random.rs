@@ -404,7 +404,7 @@ fn measured(a: &RandomArgs, file_device: &Device, path: Option<PathBuf>) -> Resu
     spec_rec.noise.duration_s = (accel.len() - n_tr) as f64 / fs;
     let spec = EnsembleSpec::for_device(&device, spec_rec, 0, 1);
     let rl = device.transducer.load_resistance_ohm();
-    let full = output_psd(&out_rec.v1_v, &out_rec.v2_v, fs, rl, &spec.welch)?;
+    let full = output_psd(&out_rec, rl, &spec.welch)?;
     let out = restrict(&full.total, lo, hi);
     // Two-sided, in g^2/Hz, like --psd (in place).
     let mut drive_psd = welch(&accel[n_tr..], fs, &spec.welch)?;

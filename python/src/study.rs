@@ -384,13 +384,14 @@ fn record<'py>(
 ) -> PyResult<Bound<'py, PyDict>> {
     let spec = record_spec(&device.inner, psd_g2_per_hz, duration_s)?;
     let dev = device.inner.clone();
-    let rec = py
+    let mut rec = py
         .detach(move || simulate_record(&dev, &spec, seed, stream))
         .map_err(solver_err)?;
+    let [v1, v2] = rec.take_pair();
     let d = PyDict::new(py);
     d.set_item("sample_rate_hz", rec.sample_rate_hz)?;
-    d.set_item("v1_v", array(py, rec.v1_v))?;
-    d.set_item("v2_v", array(py, rec.v2_v))?;
+    d.set_item("v1_v", array(py, v1))?;
+    d.set_item("v2_v", array(py, v2))?;
     summary_items(&d, &rec.summary)?;
     Ok(d)
 }
@@ -431,13 +432,14 @@ fn sine_record<'py>(
         sample_rate_hz,
         transient_samples: n_tr,
     };
-    let rec = py
+    let mut rec = py
         .detach(move || simulate_drive(&dev, &drive, DEFAULT_RTOL, Scheme::Exponential))
         .map_err(solver_err)?;
+    let [v1, v2] = rec.take_pair();
     let d = PyDict::new(py);
     d.set_item("sample_rate_hz", rec.sample_rate_hz)?;
-    d.set_item("v1_v", array(py, rec.v1_v))?;
-    d.set_item("v2_v", array(py, rec.v2_v))?;
+    d.set_item("v1_v", array(py, v1))?;
+    d.set_item("v2_v", array(py, v2))?;
     summary_items(&d, &rec.summary)?;
     Ok(d)
 }

@@ -44,6 +44,10 @@ pub struct Layout {
     pub masses: Vec<(usize, usize)>,
     /// The model's named outputs ([`super::Model::outputs`]).
     pub outputs: Vec<Slot>,
+    /// The outputs the model holds at zero whatever its state (the loads of a transducer it
+    /// does not have), by index into `outputs`: named, so that tables keep their columns, but
+    /// a record keeps no samples of them.
+    pub zero_outputs: Vec<usize>,
 }
 
 impl Layout {
@@ -61,6 +65,7 @@ impl Layout {
                 .collect(),
             masses: vec![(0, 1)],
             outputs: Vec::new(),
+            zero_outputs: Vec::new(),
         }
     }
 
@@ -113,6 +118,11 @@ impl Layout {
             p += sum / duration / r;
         }
         p
+    }
+
+    /// Whether the model holds output `i` at zero (see [`Layout::zero_outputs`]).
+    pub fn held_at_zero(&self, i: usize) -> bool {
+        self.zero_outputs.contains(&i)
     }
 
     /// The index of the output named `name`.

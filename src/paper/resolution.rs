@@ -108,11 +108,7 @@ pub fn run(
                 .iter()
                 .map(|&n| {
                     let cfg = WelchOptions::half_overlap(n);
-                    Ok(
-                        output_psd(&rec.v1_v, &rec.v2_v, rec.sample_rate_hz, rl, &cfg)?
-                            .restrict(lo, hi)
-                            .total,
-                    )
+                    Ok(output_psd(&rec, rl, &cfg)?.restrict(lo, hi).total)
                 })
                 .collect::<Result<Vec<_>, RecordError>>();
             progress.tick();

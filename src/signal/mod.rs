@@ -21,4 +21,4 @@ pub mod bandwidth;
 pub mod welch;
 
 pub use bandwidth::{width_at_fraction, Bandwidth, Widths};
-pub use welch::{hann_periodic, welch, Psd, SpectralError, WelchOptions};
+pub use welch::{hann_periodic, welch, welch_of_zeros, Psd, SpectralError, WelchOptions};

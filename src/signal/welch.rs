@@ -192,39 +192,15 @@ impl Psd {
 /// # Ok::<(), Box<dyn std::error::Error>>(())
 /// ```
 pub fn welch(x: &[f64], fs: f64, cfg: &WelchOptions) -> Result<Psd, SpectralError> {
-    let WelchOptions { nperseg, noverlap } = *cfg;
-    if !(fs.is_finite() && fs > 0.0) {
-        return Err(SpectralError::InvalidSampleRate { fs });
-    }
-    if nperseg == 0 {
-        return Err(SpectralError::NpersegZero);
-    }
-    if nperseg > x.len() {
-        return Err(SpectralError::NpersegTooLong {
-            nperseg,
-            len: x.len(),
-        });
-    }
-    if noverlap >= nperseg {
-        return Err(SpectralError::NoverlapTooLarge { noverlap, nperseg });
-    }
-
-    let step = nperseg - noverlap;
-    let segments = (x.len() - nperseg) / step + 1;
-    let n_bins = nperseg / 2 + 1;
-    let freq_hz = (0..n_bins)
-        .map(|k| k as f64 * fs / nperseg as f64)
-        .collect();
-
     // A signal of zeros (the outputs of a device without a transducer) has the density zero
     // in every bin, as the transform below gives it, bit for bit: no transform is needed.
     if all_zero(x) {
-        return Ok(Psd {
-            freq_hz,
-            density: vec![0.0; n_bins],
-            segments,
-        });
+        return welch_of_zeros(x.len(), fs, cfg);
     }
+    let (freq_hz, segments) = grid(x.len(), fs, cfg)?;
+    let WelchOptions { nperseg, noverlap } = *cfg;
+    let step = nperseg - noverlap;
+    let n_bins = freq_hz.len();
 
     let window = hann_periodic(nperseg);
     let win_sq_sum: f64 = window.iter().map(|w| w * w).sum();
@@ -266,6 +242,42 @@ pub fn welch(x: &[f64], fs: f64, cfg: &WelchOptions) -> Result<Psd, SpectralErro
         density,
         segments,
     })
+}
+
+/// The Welch PSD of `len` zeros sampled at `fs` Hz: [`welch`]'s bins and segment count, the
+/// density zero in each bin (as [`welch`] gives it for a signal of zeros), without the signal.
+pub fn welch_of_zeros(len: usize, fs: f64, cfg: &WelchOptions) -> Result<Psd, SpectralError> {
+    let (freq_hz, segments) = grid(len, fs, cfg)?;
+    let n_bins = freq_hz.len();
+    Ok(Psd {
+        freq_hz,
+        density: vec![0.0; n_bins],
+        segments,
+    })
+}
+
+/// The bin frequencies (Hz) and the number of segments of a Welch estimate of `len` samples
+/// at `fs` Hz, or why `cfg` does not apply to them.
+fn grid(len: usize, fs: f64, cfg: &WelchOptions) -> Result<(Vec<f64>, usize), SpectralError> {
+    let WelchOptions { nperseg, noverlap } = *cfg;
+    if !(fs.is_finite() && fs > 0.0) {
+        return Err(SpectralError::InvalidSampleRate { fs });
+    }
+    if nperseg == 0 {
+        return Err(SpectralError::NpersegZero);
+    }
+    if nperseg > len {
+        return Err(SpectralError::NpersegTooLong { nperseg, len });
+    }
+    if noverlap >= nperseg {
+        return Err(SpectralError::NoverlapTooLarge { noverlap, nperseg });
+    }
+    let step = nperseg - noverlap;
+    let segments = (len - nperseg) / step + 1;
+    let freq_hz = (0..nperseg / 2 + 1)
+        .map(|k| k as f64 * fs / nperseg as f64)
+        .collect();
+    Ok((freq_hz, segments))
 }
 
 /// The sum of `x` by numpy's pairwise summation scheme (its `pairwise_sum`, which `np.mean`
@@ -467,6 +479,37 @@ mod tests {
         let abs_sum: f64 = x.iter().map(|v| v.abs()).sum();
         let bound = k * f64::EPSILON * abs_sum + f64::EPSILON * (sum + carry).abs();
         assert!((pairwise_sum(&x) - (sum + carry)).abs() <= bound);
+    }
+
+    #[test]
+    fn zeros_need_no_signal() {
+        // The estimate of a signal of zeros without the signal: the same bins, segments and
+        // (zero) densities bit for bit, and the same refusals, checked in the same order.
+        let cfg = WelchOptions::half_overlap(256);
+        for n in [256, 257, 1000, 4096] {
+            let got = welch_of_zeros(n, 1e3, &cfg).unwrap();
+            assert_eq!(got, welch(&vec![0.0; n], 1e3, &cfg).unwrap(), "n = {n}");
+            assert!(got.density.iter().all(|d| d.to_bits() == 0), "n = {n}");
+        }
+        let bad = [
+            (100, 0.0, cfg),
+            (100, 1e3, WelchOptions::half_overlap(0)),
+            (100, 1e3, cfg),
+            (
+                300,
+                1e3,
+                WelchOptions {
+                    nperseg: 256,
+                    noverlap: 256,
+                },
+            ),
+        ];
+        for (n, fs, c) in bad {
+            assert_eq!(
+                welch_of_zeros(n, fs, &c).unwrap_err(),
+                welch(&vec![0.0; n], fs, &c).unwrap_err()
+            );
+        }
     }
 
     #[test]

@@ -223,12 +223,11 @@ pub fn run_record(
     let rec = simulate_record(device, &spec.record, spec.seed, stream)?;
     let rl = device.transducer.load_resistance_ohm();
     let (lo, hi) = spec.analysis_band_hz;
-    let spectrum =
-        output_psd(&rec.v1_v, &rec.v2_v, rec.sample_rate_hz, rl, &spec.welch)?.restrict(lo, hi);
+    let spectrum = output_psd(&rec, rl, &spec.welch)?.restrict(lo, hi);
     let widths = Widths::of(&spectrum.total);
     let alt = match &spec.alt_welch {
         Some(cfg) => {
-            let s = output_psd(&rec.v1_v, &rec.v2_v, rec.sample_rate_hz, rl, cfg)?;
+            let s = output_psd(&rec, rl, cfg)?;
             let t = restrict(&s.total, lo, hi);
             let w = Widths::of(&t);
             Some((t, w))

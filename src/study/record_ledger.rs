@@ -69,7 +69,7 @@ pub fn record_ledgers(
     stream: u64,
 ) -> Result<(Record, RecordLedgers), RecordError> {
     let (record, found) = simulate_found(device, spec, seed, stream, &mut Booked)?;
-    let analysed_s = (record.v1_v.len().saturating_sub(1)) as f64 / record.sample_rate_hz;
+    let analysed_s = (record.samples.saturating_sub(1)) as f64 / record.sample_rate_hz;
     // The observer asks for the books, so the record kept them.
     let found = found.unwrap_or_default();
     Ok((

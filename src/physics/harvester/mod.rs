@@ -445,7 +445,12 @@ impl<const N: usize> Harvester<N> {
         };
         let mut layout = Layout::new(&names);
         layout.components[1].name = "v_mass".into();
-        layout.with_outputs(&outputs)
+        let mut layout = layout.with_outputs(&outputs);
+        // Without a transducer both load voltages are zero whatever the state.
+        if matches!(&self.port, Port::Loaded(TransducerModel::None)) {
+            layout.zero_outputs = vec![0, 1];
+        }
+        layout
     }
 
     fn make_scales(&self) -> SVector<f64, N> {

@@ -82,6 +82,7 @@ mod crossings;
 mod exponential;
 mod impacts;
 mod mechanical;
+mod outputs;
 mod spectrum;
 mod stepping;
 mod storage;
@@ -381,11 +382,16 @@ impl RecordSummary {
 pub struct Record {
     /// Sample rate of the outputs (Hz).
     pub sample_rate_hz: f64,
+    /// The number of analysed sample instants (the length of each output kept).
+    pub samples: usize,
     /// The model's first output (V1 of the paper's pair; the storage voltage behind an
     /// interface circuit) at `t = transient + k / fs`, `k = 0 .. N` (V); empty for a model
-    /// without outputs.
+    /// without outputs, and for an output the model holds at zero (a load voltage without a
+    /// transducer, [`crate::model::Layout::zero_outputs`]), whose samples
+    /// [`Record::output_samples`] gives.
     pub v1_v: Vec<f64>,
-    /// Its second output (V2; the element's voltage behind a circuit) at the same instants (V).
+    /// Its second output (V2; the element's voltage behind a circuit) at the same instants (V);
+    /// empty where `v1_v` is.
     pub v2_v: Vec<f64>,
     /// Its further outputs, in order, at the same instants.
     pub more_v: Vec<Vec<f64>>,

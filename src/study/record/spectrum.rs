@@ -3,6 +3,8 @@
 use crate::signal::bandwidth::restrict;
 use crate::signal::{self, Psd, SpectralError, WelchOptions};
 
+use super::Record;
+
 /// Output power spectral density of both loads and of each, one-sided, W/Hz.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct OutputSpectrum {
@@ -25,21 +27,29 @@ impl OutputSpectrum {
     }
 }
 
-/// One-sided Welch estimate of the output power PSD of both loads, `(S_V1 + S_V2)/RL` (W/Hz),
-/// and of each load (see the module docs).
+/// One-sided Welch estimate of the output power PSD of both loads of `record`,
+/// `(S_V1 + S_V2)/RL` (W/Hz), and of each load (see the module docs). An output the model
+/// holds at zero, whose samples the record does not keep, has the density zero.
 pub fn output_psd(
-    v1_v: &[f64],
-    v2_v: &[f64],
-    sample_rate_hz: f64,
+    record: &Record,
     load_resistance_ohm: f64,
     cfg: &WelchOptions,
 ) -> Result<OutputSpectrum, SpectralError> {
+    let fs = record.sample_rate_hz;
     let scale = |mut p: Psd| {
         p.density.iter_mut().for_each(|d| *d /= load_resistance_ohm);
         p
     };
-    let load1 = scale(signal::welch(v1_v, sample_rate_hz, cfg)?);
-    let load2 = scale(signal::welch(v2_v, sample_rate_hz, cfg)?);
+    // Output `i`'s samples are kept unless the model has it and holds it at zero.
+    let density = |i: usize, v: &[f64]| {
+        if v.len() == record.samples || i >= record.outputs.len() {
+            signal::welch(v, fs, cfg)
+        } else {
+            signal::welch_of_zeros(record.samples, fs, cfg)
+        }
+    };
+    let load1 = scale(density(0, &record.v1_v)?);
+    let load2 = scale(density(1, &record.v2_v)?);
     let total = Psd {
         freq_hz: load1.freq_hz.clone(),
         density: load1

@@ -6,7 +6,7 @@
 use nalgebra::SVector;
 
 use crate::drive::Sampled;
-use crate::model::{Driven, Load, Mode, Model, SwitchKind, MAX_OUTPUTS};
+use crate::model::{Driven, Layout, Load, Mode, Model, SwitchKind, MAX_OUTPUTS};
 use crate::ode::{Dopri5, Observer, Step};
 use crate::study::mass_peaks::MassPeaks;
 
@@ -123,7 +123,7 @@ pub(super) fn run<M: Model<N>, O: RecordObserver, F: FastPath<M, N>, const N: us
     let n_tr = drive.transient_samples;
     let n = accel.len() - n_tr;
     let (mut walk, mut y, mut mode) = Walk::start(model, drive, rtol, fast);
-    let mut samples = Samples::new(walk.n_out, n);
+    let mut samples = Samples::new(model.layout(), walk.n_out, n);
     let mut out = [0.0; MAX_OUTPUTS];
     for k in 0..n_tr + n {
         // Whether the fast step wrote the outputs at sample k.
@@ -305,10 +305,14 @@ impl<'m, M: Model<N>, F: FastPath<M, N>, const N: usize> Walk<'m, M, F, N> {
             more,
             sx2,
             sa2,
+            n,
+            ..
         } = samples;
-        let n = v1.len();
         let nf = n as f64;
+        // An output the model holds at zero keeps no samples: its power is zero (an empty
+        // sum is -0.0, which the sum of the zeros is not).
         let power = |i: usize, v: &[f64]| match layout.outputs.get(i).and_then(|s| s.load) {
+            _ if v.is_empty() => 0.0,
             Some(Load::Resistor(r)) => v.iter().map(|v| v * v).sum::<f64>() / nf / r,
             Some(load) => {
                 let sum = v.iter().sum::<f64>();
@@ -363,6 +367,7 @@ impl<'m, M: Model<N>, F: FastPath<M, N>, const N: usize> Walk<'m, M, F, N> {
         };
         Record {
             sample_rate_hz: self.fs,
+            samples: n,
             v1_v: if self.n_out >= 1 { v1 } else { Vec::new() },
             v2_v: if self.n_out >= 2 { v2 } else { Vec::new() },
             more_v: more,
@@ -374,32 +379,47 @@ impl<'m, M: Model<N>, F: FastPath<M, N>, const N: usize> Walk<'m, M, F, N> {
 }
 
 /// The outputs at the analysed samples, and the sums of squares of the position and the
-/// drive there.
+/// drive there. An output the model holds at zero keeps no samples (its vector stays empty,
+/// without room).
 struct Samples {
     v1: Vec<f64>,
     v2: Vec<f64>,
     more: Vec<Vec<f64>>,
+    /// Whether the first two outputs' samples are kept.
+    keep: [bool; 2],
     sx2: f64,
     sa2: f64,
+    /// Analysed samples so far.
+    n: usize,
 }
 
 impl Samples {
-    /// Room for `n` samples of `n_out` outputs (the first two always kept).
-    fn new(n_out: usize, n: usize) -> Self {
+    /// Room for `n` samples of `n_out` outputs of `layout` (the first two kept unless the
+    /// model holds them at zero).
+    fn new(layout: &Layout, n_out: usize, n: usize) -> Self {
+        let keep = [!layout.held_at_zero(0), !layout.held_at_zero(1)];
+        let room = |kept: bool| Vec::with_capacity(if kept { n } else { 0 });
         Self {
-            v1: Vec::with_capacity(n),
-            v2: Vec::with_capacity(n),
+            v1: room(keep[0]),
+            v2: room(keep[1]),
             more: (2..n_out.max(2)).map(|_| Vec::with_capacity(n)).collect(),
+            keep,
             sx2: 0.0,
             sa2: 0.0,
+            n: 0,
         }
     }
 
     /// A sample: the outputs `out`, the position `x` (m) and the drive `a` (m/s^2).
     #[inline(always)]
     fn push(&mut self, out: &[f64; MAX_OUTPUTS], x: f64, a: f64) {
-        self.v1.push(out[0]);
-        self.v2.push(out[1]);
+        if self.keep[0] {
+            self.v1.push(out[0]);
+        }
+        if self.keep[1] {
+            self.v2.push(out[1]);
+        }
+        self.n += 1;
         for (o, v) in self.more.iter_mut().zip(&out[2..]) {
             o.push(*v);
         }

@@ -327,7 +327,10 @@ impl<const N: usize> MassChain<N> {
                 outputs.push((x.as_str(), "m", None));
             }
         }
-        layout.with_outputs(&outputs)
+        let mut layout = layout.with_outputs(&outputs);
+        // The inner model's outputs come first, at the same indices.
+        layout.zero_outputs = inner.zero_outputs.clone();
+        layout
     }
 
     /// Relative position and velocity of a contact (`x_i - x_j`, `v_i - v_j`; the frame's at
