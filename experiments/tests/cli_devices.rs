@@ -372,3 +372,27 @@ fn same_record_from_file(
     assert!(rel(x, xf) < 1e-9, "x rms {x:e} vs {xf:e}");
     assert!(rel(a, af) < 1e-9, "accel rms {a:e} vs {af:e}");
 }
+
+/// A device whose resonance lies below the record's frequency resolution (the rigid-stop
+/// oscillator of the validation chapter, 0.16 Hz, against Welch bins about 1.5 Hz apart) has
+/// no bin in its analysis band: a named error before any record runs, and nothing written.
+#[test]
+fn random_on_a_resonance_below_the_resolution_is_refused_and_writes_nothing() {
+    let out = tmp("empty-band");
+    let o = run(&[
+        "random",
+        "--device",
+        &data("validation/grazing_rigid.toml"),
+        "--psd",
+        "1e-4",
+        "--records",
+        "1",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(err.contains("analysis_band_hz"), "{err}");
+    assert!(!err.contains("panicked"), "{err}");
+    assert!(!out.exists(), "nothing written");
+}

@@ -86,6 +86,34 @@ impl EnsembleSpec {
     }
 }
 
+impl EnsembleSpec {
+    /// Refuses an analysis band with no bin of a Welch estimate in it (bins lie `fs / nperseg`
+    /// apart from 0 Hz): its spectra would be empty and its widths undefined, as for a device
+    /// whose resonance lies far below the record's frequency resolution.
+    fn check_band_holds_a_bin(&self) -> Result<(), RecordError> {
+        let (lo, hi) = self.analysis_band_hz;
+        let fs = self.record.noise.sample_rate_hz;
+        let holds = |w: &WelchOptions| {
+            let df = fs / w.nperseg as f64;
+            (lo / df).ceil() * df <= hi
+        };
+        if !(lo.is_finite() && hi.is_finite() && lo <= hi)
+            || !holds(&self.welch)
+            || self.alt_welch.as_ref().is_some_and(|w| !holds(w))
+        {
+            return Err(RecordError::InvalidSpec {
+                field: "analysis_band_hz",
+                value: hi,
+                expected:
+                    "a band holding at least one bin of the Welch estimate: the resonance lies \
+                           below the record's frequency resolution (lengthen the record or \
+                           lower its sample rate)",
+            });
+        }
+        Ok(())
+    }
+}
+
 /// One record of an ensemble, analysed (the voltages themselves are not kept).
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct RecordResult {
@@ -259,6 +287,7 @@ pub fn run_ensembles(
             });
         }
         c.spec.record.validate()?;
+        c.spec.check_band_holds_a_bin()?;
     }
     let jobs: Vec<(usize, usize)> = cases
         .iter()
