@@ -97,10 +97,8 @@ impl EnsembleSpec {
             let df = fs / w.nperseg as f64;
             (lo / df).ceil() * df <= hi
         };
-        if !(lo.is_finite() && hi.is_finite() && lo <= hi)
-            || !holds(&self.welch)
-            || self.alt_welch.as_ref().is_some_and(|w| !holds(w))
-        {
+        let alt_holds = self.alt_welch.as_ref().is_none_or(holds);
+        if !(lo.is_finite() && hi.is_finite() && lo <= hi && holds(&self.welch) && alt_holds) {
             return Err(RecordError::InvalidSpec {
                 field: "analysis_band_hz",
                 value: hi,
