@@ -18,25 +18,35 @@ impl Record {
             1 => &self.v2_v[..],
             _ => self.more_v.get(i - 2).map_or(&[][..], |v| &v[..]),
         };
-        if kept.len() == self.samples {
+        if self.keeps(i, kept) {
             kept.into()
         } else {
             vec![0.0; self.samples].into()
         }
     }
 
+    /// Whether `kept`, the record's vector of output `i`, holds that output's samples: it does
+    /// unless the model has the output and holds it at zero, when the vector stays empty.
+    pub(super) fn keeps(&self, i: usize, kept: &[f64]) -> bool {
+        kept.len() == self.samples || i >= self.outputs.len()
+    }
+
     /// The first two outputs' samples ([`Record::output_samples`] of 0 and 1), taken out of
     /// the record: its own vectors where it keeps them, zeros for an output the model holds at
     /// zero.
     pub fn take_pair(&mut self) -> [Vec<f64>; 2] {
-        let (n, has) = (self.samples, self.outputs.len());
-        let take = |v: &mut Vec<f64>, i: usize| {
-            if v.len() == n || i >= has {
+        let n = self.samples;
+        let keeps = [self.keeps(0, &self.v1_v), self.keeps(1, &self.v2_v)];
+        let take = |v: &mut Vec<f64>, kept: bool| {
+            if kept {
                 std::mem::take(v)
             } else {
                 vec![0.0; n]
             }
         };
-        [take(&mut self.v1_v, 0), take(&mut self.v2_v, 1)]
+        [
+            take(&mut self.v1_v, keeps[0]),
+            take(&mut self.v2_v, keeps[1]),
+        ]
     }
 }

@@ -40,9 +40,8 @@ pub fn output_psd(
         p.density.iter_mut().for_each(|d| *d /= load_resistance_ohm);
         p
     };
-    // Output `i`'s samples are kept unless the model has it and holds it at zero.
     let density = |i: usize, v: &[f64]| {
-        if v.len() == record.samples || i >= record.outputs.len() {
+        if record.keeps(i, v) {
             signal::welch(v, fs, cfg)
         } else {
             signal::welch_of_zeros(record.samples, fs, cfg)
