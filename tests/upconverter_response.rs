@@ -6,6 +6,8 @@
 //! add a strike a period, some a few 1e-5 Hz apart, are each reported once and told apart by
 //! their counts of strikes.
 
+use std::sync::OnceLock;
+
 use endstop::device::Device;
 use endstop::progress::Silent;
 use endstop::study::continuation::{
@@ -16,7 +18,13 @@ use endstop::study::orbit::{Forcing, NEUTRAL_BAND};
 
 const UPCONVERTER: &str = include_str!("../data/examples/upconverter.toml");
 
-fn response() -> Response {
+/// The response, computed once for the tests of this file.
+fn response() -> &'static Response {
+    static RESPONSE: OnceLock<Response> = OnceLock::new();
+    RESPONSE.get_or_init(computed)
+}
+
+fn computed() -> Response {
     let device = Device::from_toml_str(UPCONVERTER, "upconverter.toml").expect("the file loads");
     let start = Forcing {
         freq_hz: 10.0,
