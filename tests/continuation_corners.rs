@@ -17,6 +17,8 @@
 //! reaches the end of its range, and an orbit of the branch found there agrees with a long
 //! record at its frequency.
 
+use std::sync::OnceLock;
+
 use endstop::device::Device;
 use endstop::device::StiffnessModel;
 use endstop::model::Model;
@@ -26,9 +28,8 @@ use endstop::paper::setups::{endstop, with_endstop, FIG13_BIAS_V};
 use endstop::progress::Silent;
 use endstop::study::continuation::impacting::DiagramSettings;
 use endstop::study::continuation::{
-    diagram_with_step, frequency_branch, response_from_rest, Branch, BranchKind,
-    ContinuationSettings, DiagramPoint, EventKind, Response, ResumeSettings,
-    STEPPED_MEASURE_PERIODS,
+    diagram_with_step, frequency_branch, Branch, BranchKind, ContinuationSettings, DiagramPoint,
+    EventKind, Response, STEPPED_MEASURE_PERIODS,
 };
 use endstop::study::orbit::{Forcing, Orbit, OrbitError};
 use endstop::study::steady::{settle_and_measure, Measurement, SettleSettings};
@@ -232,27 +233,12 @@ fn the_upconverter_branch_alone_stops_where_a_third_strike_per_period_begins() {
     }
 }
 
-/// The step of the resumption: the stepped sweep's default step for the up-converter over
-/// `endstop response --from 10 --to 40` (a quarter of the driver's half-power width, rounded
-/// down).
-const RESUME_STEP_HZ: f64 = 0.1;
+const RESUME_STEP_HZ: f64 = common::UPCONVERTER_RESUME_STEP_HZ;
 
-/// The up-converter's response at 0.05 g from 17 to 25 Hz with the resumption past the third
-/// strike (transients of 200 periods, as the diagram's first orbit from rest).
-fn upconverter_response() -> Response {
-    let device = Device::from_toml_str(UPCONVERTER, "upconverter.toml").expect("the file loads");
-    let start = Forcing {
-        freq_hz: 17.0,
-        accel_rms_g: 0.05,
-    };
-    let settings = ContinuationSettings::frequency(17.0, 25.0, 0.3);
-    let resume = ResumeSettings {
-        step: RESUME_STEP_HZ,
-        transient_periods: 200,
-        measure_periods: STEPPED_MEASURE_PERIODS,
-    };
-    response_from_rest(&device, start, &settings, &resume, &Silent)
-        .expect("the response reaches the end of the range")
+/// The up-converter's response from 17 to 25 Hz, past the third strike, computed once.
+fn upconverter_response() -> &'static Response {
+    static RESPONSE: OnceLock<Response> = OnceLock::new();
+    RESPONSE.get_or_init(|| common::upconverter_response(17.0, 25.0))
 }
 
 #[test]

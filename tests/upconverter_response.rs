@@ -8,36 +8,15 @@
 
 use std::sync::OnceLock;
 
-use endstop::device::Device;
-use endstop::progress::Silent;
-use endstop::study::continuation::{
-    response_from_rest, Branch, BranchPoint, ContinuationSettings, Event, EventKind, Response,
-    ResumeSettings, STEPPED_MEASURE_PERIODS,
-};
-use endstop::study::orbit::{Forcing, NEUTRAL_BAND};
+use endstop::study::continuation::{Branch, BranchPoint, Event, EventKind, Response};
+use endstop::study::orbit::NEUTRAL_BAND;
 
-const UPCONVERTER: &str = include_str!("../data/examples/upconverter.toml");
+use crate::common;
 
 /// The response, computed once for the tests of this file.
 fn response() -> &'static Response {
     static RESPONSE: OnceLock<Response> = OnceLock::new();
-    RESPONSE.get_or_init(computed)
-}
-
-fn computed() -> Response {
-    let device = Device::from_toml_str(UPCONVERTER, "upconverter.toml").expect("the file loads");
-    let start = Forcing {
-        freq_hz: 10.0,
-        accel_rms_g: 0.05,
-    };
-    let settings = ContinuationSettings::frequency(10.0, 40.0, 0.3);
-    let resume = ResumeSettings {
-        step: 0.1,
-        transient_periods: 200,
-        measure_periods: STEPPED_MEASURE_PERIODS,
-    };
-    response_from_rest(&device, start, &settings, &resume, &Silent)
-        .expect("the response reaches the end of the range")
+    RESPONSE.get_or_init(|| common::upconverter_response(10.0, 40.0))
 }
 
 /// The largest modulus of a multiplier off the real axis (NaN without one).

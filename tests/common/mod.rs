@@ -82,3 +82,41 @@ pub fn from_rest_ledger<M: endstop::model::Model<N>, const N: usize>(
     ode.integrate_observed(&Driven::new(model, sine), t_end_s, &mut books)?;
     Ok(books.ledger())
 }
+
+/// The step of the up-converter's resumption past a branch's end: the stepped sweep's default
+/// step for it over `endstop response --from 10 --to 40` (a quarter of the driver's
+/// half-power width, rounded down).
+pub const UPCONVERTER_RESUME_STEP_HZ: f64 = 0.1;
+
+/// The up-converter's (`data/examples/upconverter.toml`) response at 0.05 g from `from_hz` to
+/// `to_hz`, as `endstop response` computes it: continuation steps of at most 0.3 Hz, the
+/// resumption past a branch's end in [`UPCONVERTER_RESUME_STEP_HZ`] after transients of 200
+/// periods (as the diagram's first orbit from rest).
+pub fn upconverter_response(from_hz: f64, to_hz: f64) -> endstop::study::continuation::Response {
+    use endstop::study::continuation::{
+        response_from_rest, ContinuationSettings, ResumeSettings, STEPPED_MEASURE_PERIODS,
+    };
+    let device = Device::from_toml_str(
+        include_str!("../../data/examples/upconverter.toml"),
+        "upconverter.toml",
+    )
+    .expect("the file loads");
+    let start = endstop::study::orbit::Forcing {
+        freq_hz: from_hz,
+        accel_rms_g: 0.05,
+    };
+    let settings = ContinuationSettings::frequency(from_hz, to_hz, 0.3);
+    let resume = ResumeSettings {
+        step: UPCONVERTER_RESUME_STEP_HZ,
+        transient_periods: 200,
+        measure_periods: STEPPED_MEASURE_PERIODS,
+    };
+    response_from_rest(
+        &device,
+        start,
+        &settings,
+        &resume,
+        &endstop::progress::Silent,
+    )
+    .expect("the response reaches the end of the range")
+}
