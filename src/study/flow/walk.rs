@@ -39,12 +39,13 @@ pub(crate) trait Carrier<const N: usize>: HybridSystem<Mode = Mode> {
     /// True when the observers are shown every step with its dense output.
     const DENSE: bool;
 
-    /// The vector over `[t, t + s]` in the affine mode `am`, `e = e^{s L}`, given its value
-    /// `z` at `t` and the state `y1` at `t + s`.
+    /// The vector over `[t, t + s]` in the affine mode `am`, given its value `z` at `t` and
+    /// the state `y1` at `t + s`; `e` gives `e^{s L}`, called only by a carrier that needs it
+    /// (the state alone does not, and the step to an event then skips its exponential).
     fn carry(
         &self,
         am: &AffineMode<N>,
-        e: &SMatrix<f64, N, N>,
+        e: impl FnOnce() -> SMatrix<f64, N, N>,
         t: f64,
         s: f64,
         z: &Self::State,
@@ -75,7 +76,7 @@ impl<M: Model<N>, const N: usize> Carrier<N> for Driven<'_, M, Sine, N> {
     fn carry(
         &self,
         _: &AffineMode<N>,
-        _: &SMatrix<f64, N, N>,
+        _: impl FnOnce() -> SMatrix<f64, N, N>,
         _: f64,
         _: f64,
         _: &SVector<f64, N>,
@@ -359,7 +360,6 @@ impl<S: Carrier<N>, const N: usize> Engine<S, N> {
             if let Some(ev) = self.locate(i, &am, &at, &next) {
                 // The step to the event, then the switch.
                 if ev.s > 0.0 {
-                    let e_ev = expm_n(&(am.l * ev.s));
                     let (p_ev, a_ev) = am.forced(at.t + ev.s);
                     let end = Point {
                         t: at.t + ev.s,
@@ -368,7 +368,8 @@ impl<S: Carrier<N>, const N: usize> Engine<S, N> {
                         f: am.rhs_with(a_ev, &ev.y),
                     };
                     self.show(&am, observer, &at, &end, None);
-                    self.z = self.sys.carry(&am, &e_ev, at.t, ev.s, &self.z, &ev.y);
+                    let e_ev = || expm_n(&(am.l * ev.s));
+                    self.z = self.sys.carry(&am, e_ev, at.t, ev.s, &self.z, &ev.y);
                     self.switches_here = 0;
                 }
                 self.t = at.t + ev.s;
@@ -376,7 +377,7 @@ impl<S: Carrier<N>, const N: usize> Engine<S, N> {
             }
             let half = whole.then(|| *self.props[i].dyadic(1));
             self.show(&am, observer, &at, &next, half);
-            self.z = self.sys.carry(&am, &e, at.t, s, &self.z, &y1);
+            self.z = self.sys.carry(&am, || e, at.t, s, &self.z, &y1);
             self.t = t1;
             self.switches_here = 0;
             at = next;

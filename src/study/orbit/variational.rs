@@ -27,12 +27,13 @@ impl<M: Model<N>, const N: usize> Carrier<N> for Tangents<'_, M, Sine, N> {
     fn carry(
         &self,
         am: &AffineMode<N>,
-        e: &SMatrix<f64, N, N>,
+        e: impl FnOnce() -> SMatrix<f64, N, N>,
         t: f64,
         s: f64,
         z: &Tangent<N>,
         y1: &SVector<f64, N>,
     ) -> Tangent<N> {
+        let e = e();
         let mut phi = SMatrix::<f64, N, N>::zeros();
         for c in 0..N {
             phi.set_column(c, &(e * z.phi.column(c)));
