@@ -5,7 +5,7 @@
 //! --floor]`
 //! (`--floor` times the record engine against its floor kernel, `bench/floor.rs`; `--fits`
 //! times every fit of the recovery family and Figure 8's on one thread and prints their
-//! table, writing nothing; `just bench` runs the
+//! table, writing nothing, `--fit-only 13,20,fig8` some of them; `just bench` runs the
 //! whole benchmark; `reproduce` runs `--quick`, which keeps its last phase short;
 //! `--interfaces` measures the records behind an interface circuit alone and prints their
 //! table, writing nothing; `--masses` measures the two-mass record against a one-mass record
@@ -90,6 +90,10 @@ struct Args {
     /// Runs of each fit with `--fits`.
     #[arg(long, default_value_t = 3)]
     fit_repeats: usize,
+    /// With `--fits`, time only these fits: a family case by its number, Figure 8 as `fig8`
+    /// (comma-separated; all when not given).
+    #[arg(long, value_delimiter = ',')]
+    fit_only: Vec<String>,
 }
 
 fn main() {
@@ -101,7 +105,10 @@ fn run() -> Result<()> {
     if args.fits {
         print!(
             "{}",
-            fits::table(&fits::measure(args.fit_repeats)?, args.fit_repeats)
+            fits::table(
+                &fits::measure(args.fit_repeats, &args.fit_only)?,
+                args.fit_repeats
+            )
         );
         return Ok(());
     }

@@ -53,19 +53,30 @@ fn fig08() -> Result<(
     Ok((device, vec![data], free))
 }
 
-/// Times every fit `repeats` times, each on one thread.
-pub fn measure(repeats: usize) -> Result<Vec<FitCost>> {
+/// Whether the fit `id` (a family case's number, `fig8` for Figure 8) is among
+/// `only` (every fit when `only` is empty).
+fn chosen(only: &[String], id: &str) -> bool {
+    only.is_empty() || only.iter().any(|o| o == id)
+}
+
+/// Times every fit chosen by `only` (see [`chosen`]) `repeats` times, each on one thread.
+pub fn measure(repeats: usize, only: &[String]) -> Result<Vec<FitCost>> {
     let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build()?;
-    let mut cases = vec![{
+    let mut cases = Vec::new();
+    if chosen(only, "fig8") {
         let (device, data, free) = fig08()?;
-        (
+        cases.push((
             "Figure 8 (prototype 1, kink and jump)".to_string(),
             device,
             data,
             free,
-        )
-    }];
+        ));
+    }
     for c in recovery_family() {
+        let number = c.name.split_whitespace().next().unwrap_or_default();
+        if !chosen(only, number) {
+            continue;
+        }
         cases.push((
             c.name.to_string(),
             c.start_device()?,
