@@ -62,6 +62,15 @@ fn chosen(only: &[String], id: &str) -> bool {
 /// Times every fit chosen by `only` (see [`chosen`]) `repeats` times, each on one thread.
 pub fn measure(repeats: usize, only: &[String]) -> Result<Vec<FitCost>> {
     let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build()?;
+    let family = recovery_family();
+    let known =
+        |id: &str| id == "fig8" || family.iter().any(|c| c.name.starts_with(&format!("{id} ")));
+    if let Some(unknown) = only.iter().find(|id| !known(id)) {
+        anyhow::bail!(
+            "--fit-only {unknown}: no such fit (a recovery-family case's number, 1 to {}, or fig8)",
+            family.len()
+        );
+    }
     let mut cases = Vec::new();
     if chosen(only, "fig8") {
         let (device, data, free) = fig08()?;
@@ -72,7 +81,7 @@ pub fn measure(repeats: usize, only: &[String]) -> Result<Vec<FitCost>> {
             free,
         ));
     }
-    for c in recovery_family() {
+    for c in family {
         let number = c.name.split_whitespace().next().unwrap_or_default();
         if !chosen(only, number) {
             continue;
