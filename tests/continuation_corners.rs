@@ -19,7 +19,6 @@
 
 use std::sync::OnceLock;
 
-use endstop::device::Device;
 use endstop::device::StiffnessModel;
 use endstop::model::Model;
 use endstop::ode::SolverError;
@@ -106,15 +105,13 @@ fn a_corner_gives_the_same_events_whatever_the_last_bits() {
     }
 }
 
-const UPCONVERTER: &str = include_str!("../data/examples/upconverter.toml");
-
 /// The onset of impacts of the up-converter's branch lies at 19.1246 Hz, below the stall
 /// stated by the next test: the branch is continued to a little past it.
 const ONSET_RANGE_HZ: (f64, f64) = (17.0, 19.25);
 
 #[test]
 fn the_upconverter_branch_crosses_the_onset_of_impacts_between_its_masses() {
-    let device = Device::from_toml_str(UPCONVERTER, "upconverter.toml").expect("the file loads");
+    let device = common::upconverter();
     // The largest step of `endstop response --from 10 --to 40` (a hundredth of the range).
     let (from_hz, to_hz) = ONSET_RANGE_HZ;
     let branch = frequency_branch(&device, 0.05, from_hz, to_hz, 0.3, &Silent)
@@ -168,7 +165,7 @@ const THIRD_STRIKE_HZ: f64 = 19.3299;
 
 #[test]
 fn the_upconverter_branch_crosses_the_grazing_that_adds_a_second_strike() {
-    let device = Device::from_toml_str(UPCONVERTER, "upconverter.toml").expect("the file loads");
+    let device = common::upconverter();
     let branch = frequency_branch(&device, 0.05, 17.0, 19.32, 0.3, &Silent)
         .expect("the branch crosses the grazing that adds a strike");
     let last = branch.params().last().expect("a branch has points");
@@ -217,7 +214,7 @@ fn the_upconverter_branch_crosses_the_grazing_that_adds_a_second_strike() {
 /// that names where (see [`THIRD_STRIKE_HZ`]): the resumption below starts there.
 #[test]
 fn the_upconverter_branch_alone_stops_where_a_third_strike_per_period_begins() {
-    let device = Device::from_toml_str(UPCONVERTER, "upconverter.toml").expect("the file loads");
+    let device = common::upconverter();
     match frequency_branch(&device, 0.05, 17.0, 25.0, 0.3, &Silent) {
         // The step halves to the smallest arclength (1e-7 Hz) before it stops: the stall lies
         // within far less than 1e-3 Hz of the grazing, which the window allows for.
@@ -233,8 +230,6 @@ fn the_upconverter_branch_alone_stops_where_a_third_strike_per_period_begins() {
     }
 }
 
-const RESUME_STEP_HZ: f64 = common::UPCONVERTER_RESUME_STEP_HZ;
-
 /// The up-converter's response from 17 to 25 Hz, past the third strike, computed once.
 fn upconverter_response() -> &'static Response {
     static RESPONSE: OnceLock<Response> = OnceLock::new();
@@ -245,7 +240,7 @@ fn upconverter_response() -> &'static Response {
 fn the_upconverter_response_resumes_past_the_third_strike_and_completes_its_range() {
     let r = upconverter_response();
     assert!(
-        r.reach(1.0) >= 25.0 - RESUME_STEP_HZ,
+        r.reach(1.0) >= 25.0 - common::UPCONVERTER_RESUME_STEP_HZ,
         "the response reaches {} Hz, not the end of the range",
         r.reach(1.0)
     );
@@ -269,7 +264,7 @@ fn the_upconverter_response_resumes_past_the_third_strike_and_completes_its_rang
     let found = r.found();
     let &(periods, at_hz) = found.first().unwrap_or_else(|| panic!("no branch found"));
     assert!(
-        at_hz > end && at_hz <= end + 5.0 * RESUME_STEP_HZ,
+        at_hz > end && at_hz <= end + 5.0 * common::UPCONVERTER_RESUME_STEP_HZ,
         "the first branch found (period {periods}) is at {at_hz} Hz"
     );
     assert!((1..=4).contains(&periods), "{periods} periods");
@@ -292,7 +287,7 @@ const RECORD_RMS_REL: f64 = 1e-3;
 #[test]
 fn an_orbit_past_the_third_strike_matches_a_long_record() {
     let r = upconverter_response();
-    let device = Device::from_toml_str(UPCONVERTER, "upconverter.toml").expect("the file loads");
+    let device = common::upconverter();
     // The first branch found, at its most strongly attracting point (the smallest largest
     // multiplier, which a record settles onto soonest): a continued orbit, not the one the
     // transient seeded.
@@ -358,7 +353,7 @@ fn events(b: &Branch) -> Vec<(String, f64)> {
 /// is measured, not continued, and the diagram reaches the end of its range.
 #[test]
 fn the_upconverter_diagram_in_a_fine_step_reaches_its_end_through_measured_points() {
-    let device = Device::from_toml_str(UPCONVERTER, "upconverter.toml").expect("the file loads");
+    let device = common::upconverter();
     let (from_hz, to_hz, step_hz) = (19.0, 19.6, 0.01);
     let start = Forcing {
         freq_hz: from_hz,

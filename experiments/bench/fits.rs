@@ -59,12 +59,16 @@ fn chosen(only: &[String], id: &str) -> bool {
     only.is_empty() || only.iter().any(|o| o == id)
 }
 
+/// A family case's id: the number its name starts with.
+fn case_id(name: &str) -> &str {
+    name.split_whitespace().next().unwrap_or_default()
+}
+
 /// Times every fit chosen by `only` (see [`chosen`]) `repeats` times, each on one thread.
 pub fn measure(repeats: usize, only: &[String]) -> Result<Vec<FitCost>> {
     let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build()?;
     let family = recovery_family();
-    let known =
-        |id: &str| id == "fig8" || family.iter().any(|c| c.name.starts_with(&format!("{id} ")));
+    let known = |id: &str| id == "fig8" || family.iter().any(|c| case_id(c.name) == id);
     if let Some(unknown) = only.iter().find(|id| !known(id)) {
         anyhow::bail!(
             "--fit-only {unknown}: no such fit (a recovery-family case's number, 1 to {}, or fig8)",
@@ -82,8 +86,7 @@ pub fn measure(repeats: usize, only: &[String]) -> Result<Vec<FitCost>> {
         ));
     }
     for c in family {
-        let number = c.name.split_whitespace().next().unwrap_or_default();
-        if !chosen(only, number) {
+        if !chosen(only, case_id(c.name)) {
             continue;
         }
         cases.push((

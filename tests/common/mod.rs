@@ -83,6 +83,15 @@ pub fn from_rest_ledger<M: endstop::model::Model<N>, const N: usize>(
     Ok(books.ledger())
 }
 
+/// The up-converter, `data/examples/upconverter.toml`.
+pub fn upconverter() -> Device {
+    Device::from_toml_str(
+        include_str!("../../data/examples/upconverter.toml"),
+        "upconverter.toml",
+    )
+    .expect("the file loads")
+}
+
 /// The step of the up-converter's resumption past a branch's end: the stepped sweep's default
 /// step for it over `endstop response --from 10 --to 40` (a quarter of the driver's
 /// half-power width, rounded down).
@@ -96,11 +105,7 @@ pub fn upconverter_response(from_hz: f64, to_hz: f64) -> endstop::study::continu
     use endstop::study::continuation::{
         response_from_rest, ContinuationSettings, ResumeSettings, STEPPED_MEASURE_PERIODS,
     };
-    let device = Device::from_toml_str(
-        include_str!("../../data/examples/upconverter.toml"),
-        "upconverter.toml",
-    )
-    .expect("the file loads");
+    let device = upconverter();
     let start = endstop::study::orbit::Forcing {
         freq_hz: from_hz,
         accel_rms_g: 0.05,
