@@ -311,6 +311,18 @@ pub trait Observer<V, M> {
     fn step(&mut self, step: &Step<V>, mode: M);
     /// A mode switch at time `t` from `from` to `to` (after the system's reset of the state).
     fn switched(&mut self, _t: f64, _from: M, _to: M) {}
+    /// False for an observer that looks at nothing: an integrator may then skip building
+    /// what it would only show (the exact path's dense output through its midpoint).
+    const SEES: bool = true;
+}
+
+/// An observer of nothing: integration alone, without the work of showing its steps.
+pub(crate) struct Unseen;
+
+impl<V, M> Observer<V, M> for Unseen {
+    #[inline(always)]
+    fn step(&mut self, _: &Step<V>, _: M) {}
+    const SEES: bool = false;
 }
 
 /// An observer of the steps alone, from a closure.

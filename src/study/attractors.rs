@@ -215,7 +215,7 @@ pub fn find_attractors_from<M: Model<N>, const N: usize>(
         .map(|&y0| {
             let mut stats = Stats::default();
             let transient = search.transient_periods as f64 * period;
-            let Ok((y, _, st)) = shooter.flow(forcing, 0.0, y0, transient, |_, _| {}) else {
+            let Ok((y, _, st)) = shooter.advance(forcing, 0.0, y0, transient) else {
                 return (None, stats);
             };
             stats += st;

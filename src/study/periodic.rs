@@ -199,7 +199,7 @@ pub fn period_map<M: Model<N>, const N: usize>(
     rtol: f64,
 ) -> Result<SVector<f64, N>, SolverError> {
     let mut flow = SineFlow::new(model, sine, 0.0, *y, model.mode_of(y), rtol);
-    flow.integrate(sine.period_s(), |_, _| {})?;
+    flow.advance(sine.period_s())?;
     Ok(flow.y())
 }
 
@@ -283,7 +283,7 @@ pub fn steady_state<M: Model<N>, const N: usize>(
         model.mode_of(start),
         settings.rtol,
     );
-    flow.integrate(settings.transient_periods as f64 * period, |_, _| {})?;
+    flow.advance(settings.transient_periods as f64 * period)?;
     let mut y = flow.y();
     let after_transient = y;
     let scaled = |d: &SVector<f64, N>| d.component_div(&sc);

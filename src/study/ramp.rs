@@ -57,7 +57,7 @@ pub fn ramp<M: Model<N>, const N: usize>(
         let f = from.0 + (to.0 - from.0) * s;
         let g = from.1 + (to.1 - from.1) * s;
         let mut flow = SineFlow::new(base, Sine::from_rms_g(g, f), 0.0, y, mode, rtol);
-        flow.integrate(1.0 / f, |_, _| {})?;
+        flow.advance(1.0 / f)?;
         (y, mode) = (flow.y(), flow.mode());
         stats += flow.stats();
     }

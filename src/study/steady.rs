@@ -315,7 +315,7 @@ pub fn settle_and_measure<M: Model<N>, const N: usize>(
     let mut t_end = 0.0;
     for _ in 0..cfg.settle_blocks {
         t_end += block_t;
-        ode.integrate(t_end, |_, _| {})?;
+        ode.advance(t_end)?;
     }
     let mut prev: Option<(f64, f64)> = None;
     let mut blocks = 0;

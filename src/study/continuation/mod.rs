@@ -103,12 +103,11 @@ pub fn first_orbit<M: Model<N>, const N: usize>(
         Ok(o) => o,
         Err(_) => {
             let (y, _, st) = shooter
-                .flow(
+                .advance(
                     forcing,
                     0.0,
                     guess,
                     transient_periods as f64 * forcing.period_s(),
-                    |_, _| {},
                 )
                 .map_err(|e| OrbitError::Solver {
                     what: param.label(),

@@ -283,7 +283,7 @@ impl<M: Model<N>, const N: usize> Continuer<'_, '_, M, N> {
         let duration_s = periods as f64 * forcing.period_s();
         let (end, _, st) = self
             .shooter
-            .flow(forcing, phase_rad, y, duration_s, |_, _| {})
+            .advance(forcing, phase_rad, y, duration_s)
             .map_err(|e| self.shooter.solver_err(self.settings.parameter, forcing, e))?;
         self.stats += st;
         Ok(end)

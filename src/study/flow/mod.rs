@@ -55,7 +55,7 @@ use nalgebra::SVector;
 
 use crate::drive::Sine;
 use crate::model::{Driven, Mode, Model};
-use crate::ode::{Observer, Options, SolverError, Stats, Step, Steps};
+use crate::ode::{Observer, Options, SolverError, Stats, Step, Steps, Unseen};
 
 /// How a [`SineFlow`] integrates.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -140,6 +140,12 @@ impl<'m, M: Model<N>, const N: usize> SineFlow<'m, M, N> {
     /// Counters since the start (see the module docs for what an exact step counts).
     pub fn stats(&self) -> Stats {
         self.engine.stats()
+    }
+
+    /// Integrates to `t_end` showing nothing (a transient): the steps are the same as
+    /// [`SineFlow::integrate`]'s, without building the dense output an observer would see.
+    pub fn advance(&mut self, t_end: f64) -> Result<(), SolverError> {
+        self.engine.integrate_observed(t_end, &mut Unseen)
     }
 
     /// Integrates to `t_end`, calling `observer` with every step and the mode over it.

@@ -360,14 +360,16 @@ impl<S: Carrier<N>, const N: usize> Engine<S, N> {
             if let Some(ev) = self.locate(i, &am, &at, &next) {
                 // The step to the event, then the switch.
                 if ev.s > 0.0 {
-                    let (p_ev, a_ev) = am.forced(at.t + ev.s);
-                    let end = Point {
-                        t: at.t + ev.s,
-                        y: ev.y,
-                        p: p_ev,
-                        f: am.rhs_with(a_ev, &ev.y),
-                    };
-                    self.show(&am, observer, &at, &end, None);
+                    if S::DENSE && O::SEES {
+                        let (p_ev, a_ev) = am.forced(at.t + ev.s);
+                        let end = Point {
+                            t: at.t + ev.s,
+                            y: ev.y,
+                            p: p_ev,
+                            f: am.rhs_with(a_ev, &ev.y),
+                        };
+                        self.show(&am, observer, &at, &end, None);
+                    }
                     let e_ev = || expm_n(&(am.l * ev.s));
                     self.z = self.sys.carry(&am, e_ev, at.t, ev.s, &self.z, &ev.y);
                     self.switches_here = 0;
@@ -375,8 +377,10 @@ impl<S: Carrier<N>, const N: usize> Engine<S, N> {
                 self.t = at.t + ev.s;
                 return self.switch(&am, ev.index, ev.y, observer);
             }
-            let half = whole.then(|| *self.props[i].dyadic(1));
-            self.show(&am, observer, &at, &next, half);
+            if S::DENSE && O::SEES {
+                let half = whole.then(|| *self.props[i].dyadic(1));
+                self.show(&am, observer, &at, &next, half);
+            }
             self.z = self.sys.carry(&am, || e, at.t, s, &self.z, &y1);
             self.t = t1;
             self.switches_here = 0;
@@ -386,7 +390,8 @@ impl<S: Carrier<N>, const N: usize> Engine<S, N> {
     }
 
     /// Shows the step from `a` to `b` to the observer, with the quartic dense output through
-    /// the exact midpoint (`half` is `e^{sL/2}` when known).
+    /// the exact midpoint (`half` is `e^{sL/2}` when known). Called only where the carrier is
+    /// dense and the observer sees its steps: the work is that of showing alone.
     fn show<O: Observer<S::State, Mode>>(
         &self,
         am: &AffineMode<N>,
@@ -395,9 +400,6 @@ impl<S: Carrier<N>, const N: usize> Engine<S, N> {
         b: &Point<N>,
         half: Option<SMatrix<f64, N, N>>,
     ) {
-        if !S::DENSE {
-            return;
-        }
         let s = b.t - a.t;
         let half = half.unwrap_or_else(|| expm_n(&(am.l * (0.5 * s))));
         let y_mid = half * (a.y - a.p) + am.particular(a.t + 0.5 * s);

@@ -6,7 +6,7 @@ use nalgebra::{SMatrix, SVector};
 use crate::drive::Sine;
 use crate::model::tangent::{tangent_options, Tangents};
 use crate::model::{ContactGeometry, Mode, Model};
-use crate::ode::{SolverError, Stats, Step, Tangent};
+use crate::ode::{Observer, SolverError, Stats, Step, Steps, Tangent, Unseen};
 use crate::study::flow::{Engine, SineFlow};
 
 use super::period_sums::Accumulator;
@@ -89,6 +89,29 @@ impl<'a, M: Model<N>, const N: usize> Shooter<'a, M, N> {
         duration_s: f64,
         observer: O,
     ) -> Result<(SVector<f64, N>, Mode, Stats), SolverError> {
+        self.run(forcing, phase_rad, y, duration_s, &mut Steps(observer))
+    }
+
+    /// As [`Shooter::flow`], showing nothing (the same steps, without the dense output an
+    /// observer would see).
+    pub fn advance(
+        &self,
+        forcing: &Forcing,
+        phase_rad: f64,
+        y: SVector<f64, N>,
+        duration_s: f64,
+    ) -> Result<(SVector<f64, N>, Mode, Stats), SolverError> {
+        self.run(forcing, phase_rad, y, duration_s, &mut Unseen)
+    }
+
+    fn run<O: Observer<SVector<f64, N>, Mode>>(
+        &self,
+        forcing: &Forcing,
+        phase_rad: f64,
+        y: SVector<f64, N>,
+        duration_s: f64,
+        observer: &mut O,
+    ) -> Result<(SVector<f64, N>, Mode, Stats), SolverError> {
         let sine = forcing.sine(phase_rad);
         let mut ode = SineFlow::new(
             self.base,
@@ -98,7 +121,7 @@ impl<'a, M: Model<N>, const N: usize> Shooter<'a, M, N> {
             self.base.mode_of(&y),
             self.cfg.rtol,
         );
-        ode.integrate(duration_s, observer)?;
+        ode.integrate_observed(duration_s, observer)?;
         Ok((ode.y(), ode.mode(), ode.stats()))
     }
 
@@ -109,7 +132,7 @@ impl<'a, M: Model<N>, const N: usize> Shooter<'a, M, N> {
         phase_rad: f64,
         y: SVector<f64, N>,
     ) -> Result<SVector<f64, N>, SolverError> {
-        self.flow(forcing, phase_rad, y, forcing.period_s(), |_, _| {})
+        self.advance(forcing, phase_rad, y, forcing.period_s())
             .map(|r| r.0)
     }
 
@@ -466,7 +489,7 @@ impl<'a, M: Model<N>, const N: usize> Shooter<'a, M, N> {
         };
         let f = &orbit.forcing;
         let (y, _, st) = self
-            .flow(f, orbit.phase_rad, orbit.state_n(), t, |_, _| {})
+            .advance(f, orbit.phase_rad, orbit.state_n(), t)
             .map_err(|e| self.solver_err(param, f, e))?;
         *stats += st;
         let w = 2.0 * std::f64::consts::PI * f.freq_hz;
@@ -487,7 +510,7 @@ impl<'a, M: Model<N>, const N: usize> Shooter<'a, M, N> {
         if t == 0.0 {
             return Ok(orbit.state_n());
         }
-        self.flow(f, orbit.phase_rad, orbit.state_n(), t, |_, _| {})
+        self.advance(f, orbit.phase_rad, orbit.state_n(), t)
             .map(|r| r.0)
     }
 }

@@ -42,13 +42,7 @@ impl<M: Model<N>, const N: usize> Shooter<'_, M, N> {
         };
         let f = &orbit.forcing;
         let (y, _, _) = self
-            .flow(
-                f,
-                orbit.phase_rad,
-                orbit.state_n(),
-                0.5 * f.period_s(),
-                |_, _| {},
-            )
+            .advance(f, orbit.phase_rad, orbit.state_n(), 0.5 * f.period_s())
             .map_err(|e| OrbitError::Solver {
                 what: "half-period map",
                 param: f.freq_hz,
