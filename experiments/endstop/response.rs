@@ -57,20 +57,36 @@ pub(crate) fn response(args: ResponseArgs) -> Result<()> {
     let settings = a.sweep_settings(&device, &protocol);
     let freqs = &settings.freqs_hz;
     let approach = protocol.approach;
-    // The continuation is one thread's work: it runs beside the two sweeps, which share
-    // nothing with it, so that the run's wall time is about that of the longer of the two.
-    let ((up, down), diagram) = rayon::join(
-        || {
-            common::with_progress(2 * freqs.len(), "sweeps", |tick| {
-                rayon::join(
-                    || settings.run_with(&device, a.accel_rms_g, approach, tick),
-                    || settings.run_down_with(&device, a.accel_rms_g, approach, tick),
-                )
+    // Three pieces of work share nothing: the up-sweep and the down-sweep, each followed by
+    // its branch's end found again at a quarter of the step, and the continuation. Each runs
+    // on a thread of its own, so that the processors share themselves among all three and
+    // the run's wall time is about half their sum on two cores (a pool of two would run the
+    // continuation and then one sweep on the same thread).
+    let (sweeps, diagram) = std::thread::scope(|s| {
+        let diagram = s.spawn(|| continue_orbits(&device, a, &protocol));
+        let sweeps = common::with_progress(2 * freqs.len(), "sweeps", |tick| {
+            std::thread::scope(|s| {
+                let down = s.spawn(|| -> Result<_> {
+                    let down = settings.run_down_with(&device, a.accel_rms_g, approach, tick)?;
+                    let quarter = settings
+                        .down_end_with_step_divided(&device, a.accel_rms_g, approach, &down, 4.0)?
+                        .map(|e| e.1.value());
+                    Ok((down, quarter))
+                });
+                let up = || -> Result<_> {
+                    let up = settings.run_with(&device, a.accel_rms_g, approach, tick)?;
+                    let quarter = settings
+                        .up_end_with_step_divided(&device, a.accel_rms_g, approach, &up, 4.0)?
+                        .map(|e| e.transition.value());
+                    Ok((up, quarter))
+                };
+                (up(), joined(down))
             })
-        },
-        || continue_orbits(&device, a, &protocol),
-    );
-    let (up, down, diagram) = (up?, down?, diagram?);
+        });
+        (sweeps, joined(diagram))
+    });
+    let ((up, up_quarter_hz), (down, down_quarter_hz)) = (sweeps.0?, sweeps.1?);
+    let diagram = diagram?;
     let chirps = match args.sweep_rate {
         Some(rate) => Some(swept_sines(&settings, &device, a, rate)?),
         None => None,
@@ -79,18 +95,12 @@ pub(crate) fn response(args: ResponseArgs) -> Result<()> {
     let found = Found {
         up: &up,
         down: &down,
+        up_quarter_hz,
+        down_quarter_hz,
         chirps: chirps.as_ref(),
         diagram: &diagram,
     };
-    let mut md = summary_md(
-        &mut exp,
-        &loaded.file,
-        &device,
-        a,
-        &settings,
-        &protocol,
-        &found,
-    )?;
+    let mut md = summary_md(&mut exp, &loaded.file, &device, a, &protocol, &found)?;
     if args.step_study {
         eprintln!("[endstop-response] the down-sweep's end against its step");
         md.push_str(&step_study(
@@ -113,8 +123,17 @@ pub(crate) fn response(args: ResponseArgs) -> Result<()> {
 struct Found<'a> {
     up: &'a SweepReport,
     down: &'a DownSweepReport,
+    /// Where the up-sweep leaves its branch with a quarter of the step (Hz).
+    up_quarter_hz: Option<f64>,
+    /// Where the down-sweep leaves its branch with a quarter of the step (Hz).
+    down_quarter_hz: Option<f64>,
     chirps: Option<&'a (ChirpReport, ChirpReport)>,
     diagram: &'a Diagram,
+}
+
+/// The value of a scoped thread, its panic carried on.
+fn joined<T>(h: std::thread::ScopedJoinHandle<'_, T>) -> T {
+    h.join().unwrap_or_else(|p| std::panic::resume_unwind(p))
 }
 
 /// The swept sines up and down at `rate` (Hz/s).
@@ -225,17 +244,17 @@ fn summary_md(
     file: &str,
     device: &Device,
     a: &RangeArgs,
-    settings: &SweepSettings,
     protocol: &Protocol,
     found: &Found<'_>,
 ) -> Result<String> {
     let Found {
         up,
         down,
+        up_quarter_hz,
+        down_quarter_hz,
         chirps,
         diagram,
     } = *found;
-    let approach = protocol.approach;
     let points: usize = diagram.branches.iter().map(|b| b.points.len()).sum();
     let residual = diagram
         .branches
@@ -290,9 +309,7 @@ fn summary_md(
             fmt_sig(v, 6),
             e.kind.label()
         ));
-        let q = settings
-            .up_end_with_step_divided(device, a.accel_rms_g, approach, up, 4.0)?
-            .map(|e| e.transition.value());
+        let q = up_quarter_hz;
         if let Some(q) = q {
             exp.number("up_branch_end_quarter_step_hz", q);
         }
@@ -309,9 +326,7 @@ fn summary_md(
             fmt_sig(t.value(), 6),
             kind.label()
         ));
-        let q = settings
-            .down_end_with_step_divided(device, a.accel_rms_g, approach, down, 4.0)?
-            .map(|e| e.1.value());
+        let q = down_quarter_hz;
         if let Some(q) = q {
             exp.number("down_branch_end_quarter_step_hz", q);
         }
