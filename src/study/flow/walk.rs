@@ -3,6 +3,8 @@
 //! It carries either the state alone or the state with its variational equations
 //! ([`Carrier`]).
 
+use std::sync::Arc;
+
 use nalgebra::{SMatrix, SVector};
 
 use crate::drive::Sine;
@@ -144,7 +146,8 @@ pub(crate) struct Engine<S: Carrier<N>, const N: usize> {
     sys: S,
     /// The affine modes (none when the free flight is not affine: then everything goes to
     /// Dormand-Prince).
-    modes: Option<Vec<AffineMode<N>>>,
+    /// Shared, so that a step holds its mode while it changes the engine.
+    modes: Option<Arc<[AffineMode<N>]>>,
     props: Vec<Propagators<N>>,
     h: f64,
     t: f64,
@@ -195,7 +198,7 @@ impl<S: Carrier<N>, const N: usize> Engine<S, N> {
         let time_tol = opts.event_time_tol;
         let model = sys.model();
         let modes = if exact {
-            affine_modes(model, sys.sine())
+            affine_modes(model, sys.sine()).map(Arc::from)
         } else {
             None
         };
@@ -322,14 +325,14 @@ impl<S: Carrier<N>, const N: usize> Engine<S, N> {
         t_end: f64,
         observer: &mut O,
     ) -> Result<(), SolverError> {
-        let modes = self.modes.as_ref().expect("an affine mode has its modes");
-        let am = modes[i].clone();
+        let modes = Arc::clone(self.modes.as_ref().expect("an affine mode has its modes"));
+        let am = &modes[i];
         // A guard already positive at the start fires at once (as in Dormand-Prince); one
         // within the rounding of its affine row is at zero (see
         // `AffineGuard::positive_beyond_rounding`).
         let y: SVector<f64, N> = head(&self.z);
         if let Some(g) = am.guards.iter().find(|g| g.positive_beyond_rounding(&y)) {
-            return self.switch(&am, g.index, y, observer);
+            return self.switch(am, g.index, y, observer);
         }
         let t0 = self.t;
         let (p0, a0) = am.forced(t0);
@@ -357,7 +360,7 @@ impl<S: Carrier<N>, const N: usize> Engine<S, N> {
             };
             self.stats.accepted += 1;
             self.stats.rhs_evals += 1;
-            if let Some(ev) = self.locate(i, &am, &at, &next) {
+            if let Some(ev) = self.locate(i, am, &at, &next) {
                 // The step to the event, then the switch.
                 if ev.s > 0.0 {
                     if S::DENSE && O::SEES {
@@ -368,20 +371,20 @@ impl<S: Carrier<N>, const N: usize> Engine<S, N> {
                             p: p_ev,
                             f: am.rhs_with(a_ev, &ev.y),
                         };
-                        self.show(&am, observer, &at, &end, None);
+                        self.show(am, observer, &at, &end, None);
                     }
                     let e_ev = || expm_n(&(am.l * ev.s));
-                    self.z = self.sys.carry(&am, e_ev, at.t, ev.s, &self.z, &ev.y);
+                    self.z = self.sys.carry(am, e_ev, at.t, ev.s, &self.z, &ev.y);
                     self.switches_here = 0;
                 }
                 self.t = at.t + ev.s;
-                return self.switch(&am, ev.index, ev.y, observer);
+                return self.switch(am, ev.index, ev.y, observer);
             }
             if S::DENSE && O::SEES {
                 let half = whole.then(|| *self.props[i].dyadic(1));
-                self.show(&am, observer, &at, &next, half);
+                self.show(am, observer, &at, &next, half);
             }
-            self.z = self.sys.carry(&am, || e, at.t, s, &self.z, &y1);
+            self.z = self.sys.carry(am, || e, at.t, s, &self.z, &y1);
             self.t = t1;
             self.switches_here = 0;
             at = next;
