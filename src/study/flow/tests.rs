@@ -229,3 +229,24 @@ fn exact_variational_equations_match_finite_differences() {
         / fd_dp.component_div(&model.scales()).amax();
     assert!(err < 1e-6, "dP/df differs by {err:e}");
 }
+
+#[test]
+fn a_transient_advanced_unseen_takes_the_same_steps_as_one_observed() {
+    // Not building the dense output for an observer that sees nothing must leave the steps
+    // alone: the same final state and mode bit for bit, the same counters, over a run that
+    // impacts (events, partial steps) on the exact path.
+    let model = Harvester::<4>::new(&example("piezo")).unwrap();
+    let sine = Sine::from_rms_g(0.5, 130.0);
+    let new = || SineFlow::new(&model, sine, 0.0, model.rest_state(), Mode::FREE, 1e-8);
+    let (mut seen, mut unseen) = (new(), new());
+    assert!(seen.is_exact());
+    let t_end = 40.0 / sine.freq_hz;
+    let mut shown = 0;
+    seen.integrate(t_end, |_, _| shown += 1).unwrap();
+    unseen.advance(t_end).unwrap();
+    assert!(seen.stats().events > 40, "the run must impact");
+    assert!(shown > 0);
+    assert_eq!(seen.y(), unseen.y());
+    assert_eq!(seen.mode(), unseen.mode());
+    assert_eq!(seen.stats(), unseen.stats());
+}
