@@ -29,6 +29,11 @@ use super::{Forcing, Orbit, OrbitError, Parameter, Shooter, CHORD_STEPS};
 /// Secant steps before the search for a fold is given up.
 const FOLD_SECANT_STEPS: usize = 12;
 
+/// Lengths tried for the secant's first step, each a tenth of the one before, before the
+/// search for a fold is given up: the first is a tenth of [`FoldSearch::max_step`], the last
+/// a thousandth.
+const FIRST_STEP_TRIES: usize = 3;
+
 /// How a fold is sought by [`Shooter::fold_near`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct FoldSearch {
@@ -120,9 +125,21 @@ impl<M: Model<N>, const N: usize> Shooter<'_, M, N> {
         };
         let (mut sa, mut a) = (0.0, self.corrected(&ctx, &anchor, 0.0, stats)?);
         // A first step of a tenth of the largest: either side brackets a t_q that is nearly
-        // linear in s near the fold.
+        // linear in s near the fold. Where Newton's method does not converge there (the step
+        // left the neighbourhood in which the old direction parametrises the branch) the step
+        // is shortened tenfold, up to `FIRST_STEP_TRIES` lengths in all.
         let mut sb = 0.1 * search.max_step;
-        let mut b = self.corrected(&ctx, &(&a.u + &a.tangent * sb), sb, stats)?;
+        let mut tries = 1;
+        let mut b = loop {
+            match self.corrected(&ctx, &(&a.u + &a.tangent * sb), sb, stats) {
+                Ok(b) => break b,
+                Err(e) if tries == FIRST_STEP_TRIES => return Err(e),
+                Err(_) => {
+                    sb *= 0.1;
+                    tries += 1;
+                }
+            }
+        };
         for _ in 0..FOLD_SECANT_STEPS {
             let slope = (b.t_q::<N>() - a.t_q::<N>()) / (sb - sa);
             if !(slope.is_finite() && slope != 0.0) {
