@@ -45,6 +45,7 @@ mod masses_studies;
 mod nlvib_unilateral;
 mod pair_bridge_spice;
 mod period_two;
+mod pwsdde_impduff;
 mod record_accuracy;
 mod record_figures;
 mod record_ledger;

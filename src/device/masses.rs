@@ -20,6 +20,7 @@
 //! [[springs]]                  # one mass: to the frame; two: between them
 //! masses = [0]
 //! stiffness_n_per_m = 15.8
+//! cubic_n_per_m3 = 0.0         # optional: a hardening (> 0) or softening cubic term k3 d^3
 //!
 //! [[dampers]]
 //! masses = [0, 1]
@@ -70,6 +71,9 @@ pub struct Link {
     pub other: Option<usize>,
     /// The stiffness (N/m) of a spring, the coefficient (N s/m) of a damper.
     pub value: f64,
+    /// A spring's cubic stiffness k3 (N/m^3): its force is `value d + k3 d^3` on the
+    /// extension `d`; zero for a linear spring and for every damper.
+    pub cubic_n_per_m3: f64,
 }
 
 /// A stop: mass `mass` meets the frame where `x = side * gap`, or meets mass `other` where
@@ -119,6 +123,12 @@ pub(super) struct RawBody {
 pub(super) struct RawSpring {
     masses: Vec<usize>,
     stiffness_n_per_m: f64,
+    #[serde(default, skip_serializing_if = "is_zero")]
+    cubic_n_per_m3: f64,
+}
+
+fn is_zero(x: &f64) -> bool {
+    *x == 0.0
 }
 
 #[derive(Debug, Clone, Serialize, Deserialize)]
@@ -224,10 +234,14 @@ impl RawMasses {
             let f = format!("springs[{i}]");
             let (mass, other) = ends(&f, &s.masses)?;
             c.positive(&format!("{f}.stiffness_n_per_m"), s.stiffness_n_per_m)?;
+            if !s.cubic_n_per_m3.is_finite() {
+                return Err(c.message(&format!("{f}.cubic_n_per_m3"), "must be a finite number"));
+            }
             springs.push(Link {
                 mass,
                 other,
                 value: s.stiffness_n_per_m,
+                cubic_n_per_m3: s.cubic_n_per_m3,
             });
         }
         let mut dampers = Vec::new();
@@ -239,6 +253,7 @@ impl RawMasses {
                 mass,
                 other,
                 value: d.damping_n_s_per_m,
+                cubic_n_per_m3: 0.0,
             });
         }
         let mut stops = Vec::new();
@@ -338,6 +353,7 @@ impl RawMasses {
             .map(|l| RawSpring {
                 masses: ends(l.mass, l.other),
                 stiffness_n_per_m: l.value,
+                cubic_n_per_m3: l.cubic_n_per_m3,
             })
             .collect();
         if !springs.is_empty() {

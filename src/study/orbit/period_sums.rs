@@ -104,7 +104,9 @@ impl<M: Model<N>, const N: usize> Observer<SVector<f64, N>, Mode> for Accumulato
         if kind == SwitchKind::Rebound {
             self.sums.impacts += 1;
         }
-        if matches!(kind, SwitchKind::Rebound | SwitchKind::Stick) {
+        // A switch at the period's first instant comes before any step: there is no state
+        // before it to measure, and the same strike ends the period.
+        if matches!(kind, SwitchKind::Rebound | SwitchKind::Stick) && !self.sums.last_y.is_empty() {
             let v = self.sums.last_v;
             let side = usize::from(v < 0.0);
             self.sums.impact_speed[side] = self.sums.impact_speed[side].max(v.abs());

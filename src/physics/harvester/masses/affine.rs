@@ -1,8 +1,9 @@
 //! The affine form of each linear mode of several masses, which the exact propagators use
 //! ([`crate::study::flow`] under a sine, the records' affine steps on the sample grid).
 //!
-//! The springs and dampers between the masses and to the frame are linear, so a mode is affine
-//! when the port is (a loaded piezoelectric element, coil or none; behind a circuit, a
+//! The dampers between the masses and to the frame are linear, and so are the springs unless
+//! one has a cubic term (then no mode is affine), so a mode is affine when the port is (a
+//! loaded piezoelectric element, coil or none; behind a circuit, a
 //! piezoelectric element or a coil with piecewise-linear diodes) and each contact adds no
 //! nonlinear force: apart, clipped (a tension-free stop whose bracket is negative), or pressed
 //! with a linear spring and a viscous damper. A resting contact (a mass held on a frame stop,
@@ -36,9 +37,14 @@ use super::super::STOP_GUARDS;
 use super::{ChainContact, MassChain};
 
 impl<const N: usize> MassChain<N> {
+    /// True when no spring has a cubic term.
+    fn springs_linear(&self) -> bool {
+        self.springs.iter().all(|s| s.cubic_n_per_m3 == 0.0)
+    }
+
     /// The affine form of `mode` (see the module docs), or `None` where it is not affine.
     pub(super) fn affine_form(&self, mode: Mode) -> Option<Affine<N>> {
-        if !self.inner.port_is_affine() {
+        if !(self.inner.port_is_affine() && self.springs_linear()) {
             return None;
         }
         let apart = mode.without_contacts();
@@ -114,7 +120,7 @@ impl<const N: usize> MassChain<N> {
         let rests = matches!(self.contacts.get(k)?.stop, StopModel::Rigid { .. });
         let others_apart =
             (0..self.contacts.len()).all(|j| j == k || mode.contact(j) == Contact::Apart);
-        if !(rests && others_apart && self.inner.port_is_affine()) {
+        if !(rests && others_apart && self.inner.port_is_affine() && self.springs_linear()) {
             return None;
         }
         let apart = mode.without_contacts();

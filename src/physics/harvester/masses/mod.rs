@@ -2,7 +2,8 @@
 //! `[[masses]]` ([`crate::device::masses`]).
 //!
 //! Mechanics: each mass `i` obeys `m_i x_i'' = m_i a(t) - sum springs - sum dampers - sum
-//! contact forces (+ F_e on the transducer's mass)`, every displacement relative to the frame.
+//! contact forces (+ F_e on the transducer's mass)`, every displacement relative to the frame,
+//! a spring's force `k d + k3 d^3` on its extension `d` (`k3` zero for a linear spring).
 //! A device with a `drive_mass` ([`crate::device::Masses::drive_mass`]) is driven by a force
 //! `m_j a(t)` on that mass alone, the frame still: the drive term `m_i a` is then mass `j`'s.
 //! A spring or damper between masses `i` and `j` acts on `x_i - x_j`; a stop between them is
@@ -75,6 +76,8 @@ pub struct ChainLink {
     pub other: Option<usize>,
     /// Stiffness (N/m) or damping (N s/m).
     pub value: f64,
+    /// A spring's cubic stiffness (N/m^3), zero for a linear spring and a damper.
+    pub cubic_n_per_m3: f64,
     /// Its name (ledger terms).
     pub(crate) label: usize,
 }
@@ -193,6 +196,7 @@ impl<const N: usize> MassChain<N> {
                     mass: order(l.mass),
                     other: l.other.map(order),
                     value: l.value,
+                    cubic_n_per_m3: l.cubic_n_per_m3,
                     label,
                 })
                 .collect()
@@ -390,9 +394,13 @@ impl<const N: usize> MassChain<N> {
         let vel = |i: usize| y[self.bodies[i].ix + 1];
         for s in &self.springs {
             let d = pos(s.mass) - s.other.map_or(0.0, pos);
-            f[s.mass] -= s.value * d;
+            let mut fs = s.value * d;
+            if s.cubic_n_per_m3 != 0.0 {
+                fs += s.cubic_n_per_m3 * d * d * d;
+            }
+            f[s.mass] -= fs;
             if let Some(o) = s.other {
-                f[o] += s.value * d;
+                f[o] += fs;
             }
         }
         for s in &self.dampers {

@@ -78,6 +78,9 @@ impl<const N: usize> MassChain<N> {
         for s in &self.springs {
             let d = y[self.bodies[s.mass].ix] - s.other.map_or(0.0, |o| y[self.bodies[o].ix]);
             e += 0.5 * s.value * d * d;
+            if s.cubic_n_per_m3 != 0.0 {
+                e += 0.25 * s.cubic_n_per_m3 * d * d * d * d;
+            }
         }
         for (k, c) in self.contacts.iter().enumerate() {
             if mode.contact(k) == Contact::Pressed {
@@ -169,7 +172,12 @@ impl<const N: usize> Model<N> for MassChain<N> {
             }
         };
         for s in &self.springs {
-            pair(&mut df, s.mass, s.other, 0, s.value);
+            let mut k = s.value;
+            if s.cubic_n_per_m3 != 0.0 {
+                let d = y[ix(s.mass)] - s.other.map_or(0.0, |o| y[ix(o)]);
+                k += 3.0 * s.cubic_n_per_m3 * d * d;
+            }
+            pair(&mut df, s.mass, s.other, 0, k);
         }
         for s in &self.dampers {
             pair(&mut df, s.mass, s.other, 1, s.value);
