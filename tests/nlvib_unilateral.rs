@@ -35,7 +35,7 @@ use endstop::study::orbit::{Forcing, Orbit, Parameter, Shooter, ShootingOptions}
 use endstop::validation::harmonics::first_harmonic;
 use endstop::validation::Check;
 
-use crate::common::validation::{assert_all, root};
+use crate::common::validation::{assert_all, reference_rows, root};
 
 const TWO_PI: f64 = 2.0 * std::f64::consts::PI;
 /// The example's harmonics and the check's.
@@ -56,25 +56,7 @@ const EXACT_SOURCE: &str =
 
 /// The rows of a reference CSV file, by column name.
 fn rows(name: &str) -> Vec<HashMap<String, String>> {
-    let path = root().join("data/references/nlvib_unilateral").join(name);
-    let text = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{path:?}: {e}"));
-    let mut lines = text.lines();
-    let header: Vec<String> = lines
-        .next()
-        .unwrap_or_default()
-        .split(',')
-        .map(str::to_string)
-        .collect();
-    lines
-        .filter(|l| !l.trim().is_empty())
-        .map(|l| {
-            header
-                .iter()
-                .cloned()
-                .zip(l.split(',').map(str::to_string))
-                .collect()
-        })
-        .collect()
+    reference_rows("nlvib_unilateral", name)
 }
 
 fn num(r: &HashMap<String, String>, key: &str) -> f64 {

@@ -39,7 +39,7 @@ use endstop::study::continuation::{
 use endstop::study::orbit::{Forcing, Orbit, OrbitError, Parameter, Shooter, ShootingOptions};
 use endstop::validation::Check;
 
-use crate::common::validation::{assert_all, root};
+use crate::common::validation::{assert_all, reference_rows, root};
 
 /// Our event location (rad/s).
 const LOCATE_TOL_RAD_S: f64 = 1e-6;
@@ -57,27 +57,7 @@ type Row = HashMap<String, String>;
 
 /// The rows of one mesh's reference file, by column name.
 fn rows(mesh: u32) -> Vec<Row> {
-    let path = root()
-        .join("data/references/pwsdde_impduff")
-        .join(format!("points_M{mesh}.csv"));
-    let text = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{path:?}: {e}"));
-    let mut lines = text.lines();
-    let header: Vec<String> = lines
-        .next()
-        .unwrap_or_default()
-        .split(',')
-        .map(str::to_string)
-        .collect();
-    lines
-        .filter(|l| !l.trim().is_empty())
-        .map(|l| {
-            header
-                .iter()
-                .cloned()
-                .zip(l.split(',').map(str::to_string))
-                .collect()
-        })
-        .collect()
+    reference_rows("pwsdde_impduff", &format!("points_M{mesh}.csv"))
 }
 
 fn num(r: &Row, key: &str) -> f64 {

@@ -1,12 +1,38 @@
 //! What the validation tests share: the validation devices and the assertion of a set of
 //! checks.
 
+use std::collections::HashMap;
+
 use endstop::device::Device;
 use endstop::validation::Check;
 
 /// The repository's root.
 pub fn root() -> std::path::PathBuf {
     std::path::Path::new(env!("CARGO_MANIFEST_DIR")).to_path_buf()
+}
+
+/// The rows of the reference file `data/references/<folder>/<file>` (comma-separated, a
+/// header line of column names), each by column name.
+pub fn reference_rows(folder: &str, file: &str) -> Vec<HashMap<String, String>> {
+    let path = root().join("data/references").join(folder).join(file);
+    let text = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{path:?}: {e}"));
+    let mut lines = text.lines();
+    let header: Vec<String> = lines
+        .next()
+        .unwrap_or_default()
+        .split(',')
+        .map(str::to_string)
+        .collect();
+    lines
+        .filter(|l| !l.trim().is_empty())
+        .map(|l| {
+            header
+                .iter()
+                .cloned()
+                .zip(l.split(',').map(str::to_string))
+                .collect()
+        })
+        .collect()
 }
 
 /// The validation device `data/validation/<name>.toml`.
