@@ -20,22 +20,18 @@
 //!   derived from, test it.
 
 use std::collections::HashMap;
-use std::f64::consts::{FRAC_PI_2, SQRT_2};
+use std::f64::consts::FRAC_PI_2;
 
 use endstop::device::Device;
 use endstop::model::Model;
 use endstop::num::compare::{Comparison, Measure};
 use endstop::ode::Stats;
-use endstop::physics::harvester::masses::MassChain;
-use endstop::progress::Silent;
-use endstop::study::continuation::{
-    continue_branch, first_orbit, Branch, ContinuationSettings, EventKind,
-};
-use endstop::study::orbit::{Forcing, Orbit, Parameter, Shooter, ShootingOptions};
+use endstop::study::continuation::{Branch, EventKind};
+use endstop::study::orbit::{Orbit, Parameter};
 use endstop::validation::harmonics::first_harmonic;
 use endstop::validation::Check;
 
-use crate::common::validation::{assert_all, reference_rows, root};
+use crate::common::validation::{assert_all, reference_rows, root, ForcedChain};
 
 const TWO_PI: f64 = 2.0 * std::f64::consts::PI;
 /// The example's harmonics and the check's.
@@ -86,84 +82,45 @@ fn hb_bound(a21: f64, a41: f64) -> f64 {
     (a21 - a41).abs() / (1.0 - H / H_CHECK)
 }
 
-struct Ours {
-    model: MassChain<6>,
-    accel_rms_g: f64,
+/// The first-harmonic amplitudes of both masses (m).
+fn amplitudes(ours: &ForcedChain, orbit: &Orbit) -> [f64; 2] {
+    let s = ours.shooter();
+    let m = &ours.model.layout().masses;
+    [m[0].0, m[1].0].map(|ix| first_harmonic(&s, orbit, |y| y[ix]).unwrap().norm())
 }
 
-impl Ours {
-    fn new(device: &Device) -> Self {
-        let model = MassChain::<6>::new(device).unwrap();
-        // The force 0.1 cos(Om t) on mass 1 is m_1 a with a peak acceleration of 0.1 / m_1.
-        let m1 = device.masses.as_ref().unwrap().bodies[1].mass_kg;
-        Self {
-            model,
-            accel_rms_g: 0.1 / m1 / SQRT_2 / endstop::G,
-        }
-    }
-
-    fn shooter(&self) -> Shooter<'_, MassChain<6>, 6> {
-        Shooter::new(&self.model, ShootingOptions::default())
-    }
-
-    fn forcing(&self, omega_rad_s: f64) -> Forcing {
-        Forcing {
-            freq_hz: omega_rad_s / TWO_PI,
-            accel_rms_g: self.accel_rms_g,
-        }
-    }
-
-    /// The first-harmonic amplitudes of both masses (m).
-    fn amplitudes(&self, orbit: &Orbit) -> [f64; 2] {
-        let s = self.shooter();
-        let m = &self.model.layout().masses;
-        [m[0].0, m[1].0].map(|ix| first_harmonic(&s, orbit, |y| y[ix]).unwrap().norm())
-    }
-
-    /// Our orbit by Newton from a reference state `[q0, q1, v0, v1]` at the cosine's phase
-    /// zero (our sine drive's phase pi/2): the state only picks the branch.
-    fn through(&self, omega_rad_s: f64, state: [f64; 4]) -> Orbit {
-        let m = &self.model.layout().masses;
-        let mut y = nalgebra::SVector::<f64, 6>::zeros();
-        y[m[0].0] = state[0];
-        y[m[1].0] = state[1];
-        y[m[0].1] = state[2];
-        y[m[1].1] = state[3];
-        let mut stats = Stats::default();
-        self.shooter()
-            .solve(
-                &self.forcing(omega_rad_s),
-                Parameter::Frequency,
-                FRAC_PI_2,
-                y,
-                &mut stats,
-            )
-            .unwrap()
-    }
-
-    /// Our branch from Omega = 0.5 to 0.8 rad/s, from rest.
-    fn branch(&self) -> Branch {
-        let mut settings =
-            ContinuationSettings::frequency(0.5 / TWO_PI, 0.8 / TWO_PI, MAX_STEP_RAD_S / TWO_PI);
-        settings.locate_tol = LOCATE_TOL_RAD_S / TWO_PI;
-        let mut stats = Stats::default();
-        let first = first_orbit(
-            &self.shooter(),
-            &self.forcing(0.5),
+/// Our orbit by Newton from a reference state `[q0, q1, v0, v1]` at the cosine's phase
+/// zero (our sine drive's phase pi/2): the state only picks the branch.
+fn through(ours: &ForcedChain, omega_rad_s: f64, state: [f64; 4]) -> Orbit {
+    let m = &ours.model.layout().masses;
+    let mut y = nalgebra::SVector::<f64, 6>::zeros();
+    y[m[0].0] = state[0];
+    y[m[1].0] = state[1];
+    y[m[0].1] = state[2];
+    y[m[1].1] = state[3];
+    let mut stats = Stats::default();
+    ours.shooter()
+        .solve(
+            &ours.forcing(omega_rad_s),
             Parameter::Frequency,
-            self.model.rest_state(),
-            200,
+            FRAC_PI_2,
+            y,
             &mut stats,
         )
-        .unwrap();
-        continue_branch(&self.model, first, &settings, &Silent).unwrap()
-    }
+        .unwrap()
+}
+
+/// Our branch from Omega = 0.5 to 0.8 rad/s, from rest.
+fn our_branch(ours: &ForcedChain) -> Branch {
+    let first = ours.settled(0.5);
+    ours.branch(first, [0.5, 0.8], MAX_STEP_RAD_S, LOCATE_TOL_RAD_S)
+        .unwrap()
 }
 
 /// The first-harmonic amplitudes of both masses at Omega = 0.50, 0.52, ..., 0.80 (every
 /// solution of the branch there) against NLvib-py's H = 21 harmonic balance. A row whose
 /// Newton (at H = 21 or 41) did not converge has no truncation bound and is not compared.
-fn point_checks(ours: &Ours) -> Vec<Check> {
+fn point_checks(ours: &ForcedChain) -> Vec<Check> {
     let mut out = Vec::new();
     for r in rows("points.csv") {
         if r["converged"] != "true" {
@@ -171,8 +128,12 @@ fn point_checks(ours: &Ours) -> Vec<Check> {
             continue;
         }
         let om = num(&r, "omega_rad_s");
-        let orbit = ours.through(om, ["q0_m", "q1_m", "v0_m_s", "v1_m_s"].map(|k| num(&r, k)));
-        let a = ours.amplitudes(&orbit);
+        let orbit = through(
+            &ours,
+            om,
+            ["q0_m", "q1_m", "v0_m_s", "v1_m_s"].map(|k| num(&r, k)),
+        );
+        let a = amplitudes(&ours, &orbit);
         for (d, ad) in a.iter().enumerate() {
             let (a21, a41) = (
                 num(&r, &format!("a{d}_amplitude_m_h21")),
@@ -193,14 +154,14 @@ fn point_checks(ours: &Ours) -> Vec<Check> {
 /// The peak of mass 1's first-harmonic amplitude on our branch: the vertex of the parabola in
 /// the arclength of (Om, a1) through the largest point and its neighbours, and the spread of
 /// the neighbouring triples' vertices (its accuracy).
-fn our_peak(ours: &Ours, branch: &Branch, near_rad_s: f64) -> (f64, f64, f64) {
+fn our_peak(ours: &ForcedChain, branch: &Branch, near_rad_s: f64) -> (f64, f64, f64) {
     let pts: Vec<(f64, f64)> = branch
         .points
         .iter()
         .map(|p| p.orbit.forcing.freq_hz * TWO_PI)
         .zip(&branch.points)
         .filter(|(om, _)| (om - near_rad_s).abs() < 0.02)
-        .map(|(om, p)| (om, ours.amplitudes(&p.orbit)[1]))
+        .map(|(om, p)| (om, amplitudes(&ours, &p.orbit)[1]))
         .collect();
     let k = (0..pts.len())
         .max_by(|&a, &b| pts[a].1.total_cmp(&pts[b].1))
@@ -250,8 +211,9 @@ fn nlvib_two_dof_unilateral_spring_example_matches_our_continuation() {
     let text =
         std::fs::read_to_string(root().join("data/validation/nlvib_unilateral.toml")).unwrap();
     let device = Device::from_toml_str(&text, "nlvib_unilateral.toml").unwrap();
-    let ours = Ours::new(&device);
-    let branch = ours.branch();
+    // NLvib's force 0.1 cos(Om t) acts on mass 1.
+    let ours = ForcedChain::new(&device, 1, 0.1);
+    let branch = our_branch(&ours);
     for e in &branch.events {
         eprintln!(
             "ours: {} at Om = {} rad/s",
@@ -374,7 +336,7 @@ fn nlvib_two_dof_unilateral_spring_example_matches_our_continuation() {
 /// "beyond period doubling", Om = 0.635 "stable period-one", Om = 0.6 "beyond Neimark-Sacker".
 /// Ours there, each a yes (1) or no (0): at the peak a real multiplier below -1, at 0.635 every
 /// multiplier inside the unit circle, at 0.6 a complex pair outside it.
-fn published_points(ours: &Ours, branch: &Branch, peak_rad_s: f64) -> Vec<Check> {
+fn published_points(ours: &ForcedChain, branch: &Branch, peak_rad_s: f64) -> Vec<Check> {
     let source = "NLvib EXAMPLES/03_twoDOFoscillator_unilateralSpring (maltekrack/NLvib 0a2c965)";
     let at = |om: f64| -> Orbit {
         let mut stats = Stats::default();

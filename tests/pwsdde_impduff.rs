@@ -25,21 +25,14 @@
 //!   found): there the gap from its last orbit to that one is added.
 
 use std::collections::HashMap;
-use std::f64::consts::{SQRT_2, TAU};
+use std::f64::consts::TAU;
 
-use endstop::device::Device;
-use endstop::model::Model;
 use endstop::num::compare::{Comparison, Measure};
-use endstop::ode::Stats;
-use endstop::physics::harvester::masses::MassChain;
-use endstop::progress::Silent;
-use endstop::study::continuation::{
-    continue_branch, first_orbit, Branch, ContinuationSettings, EventKind,
-};
-use endstop::study::orbit::{Forcing, Orbit, OrbitError, Parameter, Shooter, ShootingOptions};
+use endstop::study::continuation::{Branch, EventKind};
+use endstop::study::orbit::{Orbit, OrbitError};
 use endstop::validation::Check;
 
-use crate::common::validation::{assert_all, reference_rows, root};
+use crate::common::validation::{assert_all, device, reference_rows, ForcedChain};
 
 /// Our event location (rad/s).
 const LOCATE_TOL_RAD_S: f64 = 1e-6;
@@ -133,60 +126,6 @@ fn check(quantity: String, theirs: f64, ours: f64, tolerance: f64, reason: &str)
     }
 }
 
-struct Ours {
-    model: MassChain<6>,
-    accel_rms_g: f64,
-}
-
-impl Ours {
-    fn new() -> Self {
-        let text =
-            std::fs::read_to_string(root().join("data/validation/pwsdde_impduff.toml")).unwrap();
-        let device = Device::from_toml_str(&text, "pwsdde_impduff.toml").unwrap();
-        let model = MassChain::<6>::new(&device).unwrap();
-        // The force cos(omega t) of 1 N on the primary is m_0 a with a peak of 1 / m_0.
-        let m0 = device.masses.as_ref().unwrap().bodies[0].mass_kg;
-        Self {
-            model,
-            accel_rms_g: 1.0 / m0 / SQRT_2 / endstop::G,
-        }
-    }
-
-    fn shooter(&self) -> Shooter<'_, MassChain<6>, 6> {
-        Shooter::new(&self.model, ShootingOptions::default())
-    }
-
-    fn forcing(&self, omega_rad_s: f64) -> Forcing {
-        Forcing {
-            freq_hz: omega_rad_s / TAU,
-            accel_rms_g: self.accel_rms_g,
-        }
-    }
-
-    /// The orbit reached from rest after a transient at omega, as the demo's simulation finds
-    /// its first orbits.
-    fn settled(&self, omega_rad_s: f64) -> Orbit {
-        let mut stats = Stats::default();
-        first_orbit(
-            &self.shooter(),
-            &self.forcing(omega_rad_s),
-            Parameter::Frequency,
-            self.model.rest_state(),
-            200,
-            &mut stats,
-        )
-        .unwrap()
-    }
-
-    /// Our branch through `first` from `from` to `to` (rad/s).
-    fn branch(&self, first: Orbit, from: f64, to: f64) -> Result<Branch, OrbitError> {
-        let mut settings =
-            ContinuationSettings::frequency(from / TAU, to / TAU, MAX_STEP_RAD_S / TAU);
-        settings.locate_tol = LOCATE_TOL_RAD_S / TAU;
-        continue_branch(&self.model, first, &settings, &Silent)
-    }
-}
-
 /// The primary's half peak-to-peak displacement over an orbit (m).
 fn amplitude(o: &Orbit) -> f64 {
     0.5 * (o.summary.x_upper_m - o.summary.x_lower_m)
@@ -197,7 +136,8 @@ fn amplitude(o: &Orbit) -> f64 {
 #[test]
 fn pwsdde_impact_duffing_demo_matches_our_continuation() {
     let (r20, r40) = (Reference { rows: rows(20) }, Reference { rows: rows(40) });
-    let ours = Ours::new();
+    // The demo's force cos(omega t) of 1 N acts on the primary.
+    let ours = ForcedChain::new(&device("pwsdde_impduff"), 0, 1.0);
     let first = |b: &Branch, kind: EventKind| -> f64 {
         b.events_of(kind)
             .map(|e| e.param * TAU)
@@ -205,18 +145,23 @@ fn pwsdde_impact_duffing_demo_matches_our_continuation() {
             .unwrap_or(f64::NAN)
     };
     let start = ours.settled(0.7);
-    let down = ours.branch(start.clone(), 0.7, 0.6).unwrap();
-    let up = ours.branch(start.clone(), 0.7, 1.2).unwrap();
+    let down = ours
+        .branch(start.clone(), [0.7, 0.6], MAX_STEP_RAD_S, LOCATE_TOL_RAD_S)
+        .unwrap();
+    let up = ours
+        .branch(start.clone(), [0.7, 1.2], MAX_STEP_RAD_S, LOCATE_TOL_RAD_S)
+        .unwrap();
     // Our branch of one-period orbits ends at the grazing above, where a strike more begins:
     // past it the shooting finds only an orbit of several periods. That end is our grazing;
     // its error the gap to the orbit found past it, with our location.
-    let (above, above_gap) = match ours.branch(start.clone(), 0.7, 2.3) {
-        Err(OrbitError::OtherPeriod {
-            last_param, param, ..
-        }) => (last_param * TAU, (param - last_param).abs() * TAU),
-        Ok(b) => (first(&b, EventKind::Grazing), 0.0),
-        Err(e) => panic!("our branch above 0.7 rad/s: {e}"),
-    };
+    let (above, above_gap) =
+        match ours.branch(start.clone(), [0.7, 2.3], MAX_STEP_RAD_S, LOCATE_TOL_RAD_S) {
+            Err(OrbitError::OtherPeriod {
+                last_param, param, ..
+            }) => (last_param * TAU, (param - last_param).abs() * TAU),
+            Ok(b) => (first(&b, EventKind::Grazing), 0.0),
+            Err(e) => panic!("our branch above 0.7 rad/s: {e}"),
+        };
     eprintln!("ours: the one-period branch ends above at omega = {above} rad/s");
     for (name, b) in [("down", &down), ("up", &up)] {
         for e in &b.events {

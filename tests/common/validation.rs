@@ -3,8 +3,75 @@
 
 use std::collections::HashMap;
 
+use std::f64::consts::{SQRT_2, TAU};
+
 use endstop::device::Device;
+use endstop::model::Model;
+use endstop::ode::Stats;
+use endstop::physics::harvester::masses::MassChain;
+use endstop::progress::Silent;
+use endstop::study::continuation::{continue_branch, first_orbit, Branch, ContinuationSettings};
+use endstop::study::orbit::{Forcing, Orbit, OrbitError, Parameter, Shooter, ShootingOptions};
 use endstop::validation::Check;
+
+/// A two-mass device under a peer tool's harmonic force on one mass: the force `F cos(w t)` on
+/// mass `k` is the inertial force of a base acceleration of peak `F / m_k` on that mass alone
+/// (the device file sets `drive_mass`).
+pub struct ForcedChain {
+    pub model: MassChain<6>,
+    pub accel_rms_g: f64,
+}
+
+impl ForcedChain {
+    /// The device under a force of peak `force_n` on mass `mass`.
+    pub fn new(device: &Device, mass: usize, force_n: f64) -> Self {
+        let model = MassChain::<6>::new(device).unwrap();
+        let m = device.masses.as_ref().unwrap().bodies[mass].mass_kg;
+        Self {
+            model,
+            accel_rms_g: force_n / m / SQRT_2 / endstop::G,
+        }
+    }
+
+    pub fn shooter(&self) -> Shooter<'_, MassChain<6>, 6> {
+        Shooter::new(&self.model, ShootingOptions::default())
+    }
+
+    pub fn forcing(&self, omega_rad_s: f64) -> Forcing {
+        Forcing {
+            freq_hz: omega_rad_s / TAU,
+            accel_rms_g: self.accel_rms_g,
+        }
+    }
+
+    /// The orbit reached from rest after a transient of 200 periods at `omega_rad_s`.
+    pub fn settled(&self, omega_rad_s: f64) -> Orbit {
+        let mut stats = Stats::default();
+        first_orbit(
+            &self.shooter(),
+            &self.forcing(omega_rad_s),
+            Parameter::Frequency,
+            self.model.rest_state(),
+            200,
+            &mut stats,
+        )
+        .unwrap()
+    }
+
+    /// The branch through `first` from `from` to `to` (rad/s), in steps of at most `max_step`
+    /// with events located to `locate_tol` (rad/s).
+    pub fn branch(
+        &self,
+        first: Orbit,
+        [from, to]: [f64; 2],
+        max_step: f64,
+        locate_tol: f64,
+    ) -> Result<Branch, OrbitError> {
+        let mut settings = ContinuationSettings::frequency(from / TAU, to / TAU, max_step / TAU);
+        settings.locate_tol = locate_tol / TAU;
+        continue_branch(&self.model, first, &settings, &Silent)
+    }
+}
 
 /// The repository's root.
 pub fn root() -> std::path::PathBuf {
