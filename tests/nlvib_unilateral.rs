@@ -24,14 +24,15 @@ use std::f64::consts::FRAC_PI_2;
 
 use endstop::device::Device;
 use endstop::model::Model;
-use endstop::num::compare::{Comparison, Measure};
 use endstop::ode::Stats;
 use endstop::study::continuation::{Branch, EventKind};
 use endstop::study::orbit::{Orbit, Parameter};
 use endstop::validation::harmonics::first_harmonic;
 use endstop::validation::Check;
 
-use crate::common::validation::{assert_all, reference_rows, root, ForcedChain};
+use crate::common::validation::{
+    absolute_check, assert_all, reference_num as num, reference_rows, root, ForcedChain,
+};
 
 const TWO_PI: f64 = 2.0 * std::f64::consts::PI;
 /// The example's harmonics and the check's.
@@ -55,26 +56,8 @@ fn rows(name: &str) -> Vec<HashMap<String, String>> {
     reference_rows("nlvib_unilateral", name)
 }
 
-fn num(r: &HashMap<String, String>, key: &str) -> f64 {
-    r.get(key)
-        .and_then(|v| v.parse().ok())
-        .unwrap_or_else(|| panic!("column {key} missing or not a number in {r:?}"))
-}
-
 fn check(quantity: String, theirs: f64, ours: f64, tolerance: f64, reason: &str) -> Check {
-    Check {
-        group: GROUP.into(),
-        source: SOURCE.into(),
-        quantity,
-        compared: Comparison {
-            ours,
-            reference: theirs,
-            measure: Measure::Absolute,
-            tolerance,
-        },
-        reason: reason.into(),
-        open: None,
-    }
+    absolute_check([GROUP, SOURCE], quantity, theirs, ours, tolerance, reason)
 }
 
 /// The truncation bound of an H = 21 value from its H = 41 value (module docs).
@@ -129,11 +112,11 @@ fn point_checks(ours: &ForcedChain) -> Vec<Check> {
         }
         let om = num(&r, "omega_rad_s");
         let orbit = through(
-            &ours,
+            ours,
             om,
             ["q0_m", "q1_m", "v0_m_s", "v1_m_s"].map(|k| num(&r, k)),
         );
-        let a = amplitudes(&ours, &orbit);
+        let a = amplitudes(ours, &orbit);
         for (d, ad) in a.iter().enumerate() {
             let (a21, a41) = (
                 num(&r, &format!("a{d}_amplitude_m_h21")),
@@ -161,7 +144,7 @@ fn our_peak(ours: &ForcedChain, branch: &Branch, near_rad_s: f64) -> (f64, f64, 
         .map(|p| p.orbit.forcing.freq_hz * TWO_PI)
         .zip(&branch.points)
         .filter(|(om, _)| (om - near_rad_s).abs() < 0.02)
-        .map(|(om, p)| (om, amplitudes(&ours, &p.orbit)[1]))
+        .map(|(om, p)| (om, amplitudes(ours, &p.orbit)[1]))
         .collect();
     let k = (0..pts.len())
         .max_by(|&a, &b| pts[a].1.total_cmp(&pts[b].1))

@@ -27,12 +27,13 @@
 use std::collections::HashMap;
 use std::f64::consts::TAU;
 
-use endstop::num::compare::{Comparison, Measure};
 use endstop::study::continuation::{Branch, EventKind};
 use endstop::study::orbit::{Orbit, OrbitError};
 use endstop::validation::Check;
 
-use crate::common::validation::{assert_all, device, reference_rows, ForcedChain};
+use crate::common::validation::{
+    absolute_check, assert_all, device, reference_num as num, reference_rows, ForcedChain,
+};
 
 /// Our event location (rad/s).
 const LOCATE_TOL_RAD_S: f64 = 1e-6;
@@ -51,12 +52,6 @@ type Row = HashMap<String, String>;
 /// The rows of one mesh's reference file, by column name.
 fn rows(mesh: u32) -> Vec<Row> {
     reference_rows("pwsdde_impduff", &format!("points_M{mesh}.csv"))
-}
-
-fn num(r: &Row, key: &str) -> f64 {
-    r.get(key)
-        .and_then(|v| v.parse().ok())
-        .unwrap_or_else(|| panic!("column {key} missing or not a number in {r:?}"))
 }
 
 /// One mesh's reading of the demo's branches.
@@ -111,19 +106,7 @@ impl Reference {
 }
 
 fn check(quantity: String, theirs: f64, ours: f64, tolerance: f64, reason: &str) -> Check {
-    Check {
-        group: GROUP.into(),
-        source: SOURCE.into(),
-        quantity,
-        compared: Comparison {
-            ours,
-            reference: theirs,
-            measure: Measure::Absolute,
-            tolerance,
-        },
-        reason: reason.into(),
-        open: None,
-    }
+    absolute_check([GROUP, SOURCE], quantity, theirs, ours, tolerance, reason)
 }
 
 /// The primary's half peak-to-peak displacement over an orbit (m).

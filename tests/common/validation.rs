@@ -7,6 +7,7 @@ use std::f64::consts::{SQRT_2, TAU};
 
 use endstop::device::Device;
 use endstop::model::Model;
+use endstop::num::compare::{Comparison, Measure};
 use endstop::ode::Stats;
 use endstop::physics::harvester::masses::MassChain;
 use endstop::progress::Silent;
@@ -100,6 +101,37 @@ pub fn reference_rows(folder: &str, file: &str) -> Vec<HashMap<String, String>> 
                 .collect()
         })
         .collect()
+}
+
+/// The number in column `key` of a reference row.
+pub fn reference_num(r: &HashMap<String, String>, key: &str) -> f64 {
+    r.get(key)
+        .and_then(|v| v.parse().ok())
+        .unwrap_or_else(|| panic!("column {key} missing or not a number in {r:?}"))
+}
+
+/// A judged check of `group` against `source` by absolute difference.
+pub fn absolute_check(
+    [group, source]: [&str; 2],
+    quantity: String,
+    theirs: f64,
+    ours: f64,
+    tolerance: f64,
+    reason: &str,
+) -> Check {
+    Check {
+        group: group.into(),
+        source: source.into(),
+        quantity,
+        compared: Comparison {
+            ours,
+            reference: theirs,
+            measure: Measure::Absolute,
+            tolerance,
+        },
+        reason: reason.into(),
+        open: None,
+    }
 }
 
 /// The validation device `data/validation/<name>.toml`.
