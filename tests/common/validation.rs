@@ -11,7 +11,9 @@ use endstop::num::compare::{Comparison, Measure};
 use endstop::ode::Stats;
 use endstop::physics::harvester::masses::MassChain;
 use endstop::progress::Silent;
-use endstop::study::continuation::{continue_branch, first_orbit, Branch, ContinuationSettings};
+use endstop::study::continuation::{
+    continue_branch_until, first_orbit, Branch, ContinuationSettings, Event,
+};
 use endstop::study::orbit::{Forcing, Orbit, OrbitError, Parameter, Shooter, ShootingOptions};
 use endstop::validation::Check;
 
@@ -64,13 +66,25 @@ impl ForcedChain {
     pub fn branch(
         &self,
         first: Orbit,
-        [from, to]: [f64; 2],
+        range: [f64; 2],
         max_step: f64,
         locate_tol: f64,
     ) -> Result<Branch, OrbitError> {
+        self.branch_until(first, range, max_step, locate_tol, |_| false)
+    }
+
+    /// [`Self::branch`], ending at the point after the first event for which `until` is true.
+    pub fn branch_until(
+        &self,
+        first: Orbit,
+        [from, to]: [f64; 2],
+        max_step: f64,
+        locate_tol: f64,
+        until: impl FnMut(&Event) -> bool,
+    ) -> Result<Branch, OrbitError> {
         let mut settings = ContinuationSettings::frequency(from / TAU, to / TAU, max_step / TAU);
         settings.locate_tol = locate_tol / TAU;
-        continue_branch(&self.model, first, &settings, &Silent)
+        continue_branch_until(&self.model, first, &settings, &Silent, until)
     }
 }
 
