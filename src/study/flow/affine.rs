@@ -81,12 +81,12 @@ impl<const N: usize> AffineMode<N> {
 
     /// The drive's phase at time `t` as (sin, cos).
     #[inline(always)]
-    fn phase_at(&self, t: f64) -> (f64, f64) {
+    pub(crate) fn phase_at(&self, t: f64) -> (f64, f64) {
         (self.omega * t + self.phase).sin_cos()
     }
 
     /// The periodic particular solution `p(t)`.
-    #[inline(always)]
+    #[cfg(test)]
     pub(crate) fn particular(&self, t: f64) -> SVector<f64, N> {
         self.forced(t).0
     }
@@ -94,7 +94,13 @@ impl<const N: usize> AffineMode<N> {
     /// The periodic particular solution `p(t)` and the drive `a(t)`.
     #[inline(always)]
     pub(crate) fn forced(&self, t: f64) -> (SVector<f64, N>, f64) {
-        let (s, c) = self.phase_at(t);
+        self.forced_at_phase(self.phase_at(t))
+    }
+
+    /// The periodic particular solution and the drive where the drive's phase has the sine
+    /// and cosine `(s, c)`.
+    #[inline(always)]
+    pub(crate) fn forced_at_phase(&self, (s, c): (f64, f64)) -> (SVector<f64, N>, f64) {
         let mut p = self.y_s;
         for i in 0..N {
             p[i] += self.amplitude * (self.z[i].re * s + self.z[i].im * c);
@@ -112,12 +118,6 @@ impl<const N: usize> AffineMode<N> {
             }
         }
         f
-    }
-
-    /// The right-hand side at time `t`.
-    #[inline(always)]
-    pub(crate) fn rhs(&self, t: f64, y: &SVector<f64, N>) -> SVector<f64, N> {
-        self.rhs_with(self.amplitude * self.phase_at(t).0, y)
     }
 
     /// The particular solution of the variational equations' parameter column: `dp/dp` at

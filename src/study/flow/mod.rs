@@ -42,6 +42,7 @@
 //! right-hand-side evaluation.
 
 mod affine;
+mod phase;
 #[cfg(test)]
 mod tests;
 mod walk;

@@ -14,6 +14,7 @@ use crate::ode::MAX_SWITCHES_AT_ONE_TIME;
 use crate::ode::{Dopri5, HybridSystem, Observer, Options, SolverError, Stats, Step, Vector};
 
 use super::affine::{fastest_oscillation, AffineMode};
+use super::phase::PhaseGrid;
 
 /// Fewest grid steps per drive period.
 pub const MIN_STEPS_PER_PERIOD: usize = 64;
@@ -122,8 +123,12 @@ impl<const N: usize> Propagators<N> {
 
 /// The grid step of a model under its drive: [`MIN_STEPS_PER_PERIOD`] per period at least,
 /// and [`MIN_STEPS_PER_OSCILLATION`] per period of the fastest oscillation of its affine
-/// modes, a whole number per drive period.
-fn grid_step<const N: usize>(period: f64, modes: &[AffineMode<N>], unused: &[usize]) -> f64 {
+/// modes, a whole number per drive period; with that number.
+fn grid_step<const N: usize>(
+    period: f64,
+    modes: &[AffineMode<N>],
+    unused: &[usize],
+) -> (f64, usize) {
     let mut fastest = 0.0f64;
     for m in modes {
         fastest = fastest.max(fastest_oscillation(&m.l, unused));
@@ -131,7 +136,7 @@ fn grid_step<const N: usize>(period: f64, modes: &[AffineMode<N>], unused: &[usi
     let per_oscillation =
         (period * fastest / (2.0 * std::f64::consts::PI) * MIN_STEPS_PER_OSCILLATION as f64).ceil();
     let steps = (MIN_STEPS_PER_PERIOD as f64).max(per_oscillation);
-    period / steps
+    (period / steps, steps as usize)
 }
 
 /// A located event: where in the step (s from its start), which guard, and the state there.
@@ -163,6 +168,9 @@ pub(crate) struct Engine<S: Carrier<N>, const N: usize> {
     switches_here: u32,
     /// The model's state scales (for the guards' scales).
     scales: SVector<f64, N>,
+    /// The drive's phase on the half-grid, for a model of several masses (see
+    /// [`Engine::forced`]); none for one mass.
+    phases: Option<PhaseGrid>,
 }
 
 /// The affine modes of a model under a sine: every mode the model can be in whose affine
@@ -203,13 +211,15 @@ impl<S: Carrier<N>, const N: usize> Engine<S, N> {
             None
         };
         let exact_path = modes.is_some();
-        let (h, props) = match &modes {
+        let several_masses = model.layout().masses.len() > 1;
+        let (h, props, phases) = match &modes {
             Some(m) => {
-                let h = grid_step(sys.sine().period_s(), m, model.unused());
+                let (h, steps) = grid_step(sys.sine().period_s(), m, model.unused());
                 let props = m.iter().map(|a| Propagators::new(&a.l, h)).collect();
-                (h, props)
+                let phases = several_masses.then(|| PhaseGrid::new(sys.sine(), steps, h));
+                (h, props, phases)
             }
-            None => (0.0, Vec::new()),
+            None => (0.0, Vec::new(), None),
         };
         let scales = model.scales();
         Self {
@@ -226,6 +236,19 @@ impl<S: Carrier<N>, const N: usize> Engine<S, N> {
             time_tol,
             switches_here: 0,
             scales,
+            phases,
+        }
+    }
+
+    /// The particular solution of `am` and the drive at time `t`. A model of several masses
+    /// reads the drive's phase on the half-grid from its table ([`PhaseGrid`]: one `sin_cos`
+    /// per point of one period instead of one per point); a model of one mass computes it at
+    /// every point, the arithmetic its recorded results were computed with.
+    #[inline(always)]
+    fn forced(&mut self, am: &AffineMode<N>, t: f64) -> (SVector<f64, N>, f64) {
+        match &mut self.phases {
+            Some(g) => am.forced_at_phase(g.at(t)),
+            None => am.forced(t),
         }
     }
 
@@ -335,7 +358,7 @@ impl<S: Carrier<N>, const N: usize> Engine<S, N> {
             return self.switch(am, g.index, y, observer);
         }
         let t0 = self.t;
-        let (p0, a0) = am.forced(t0);
+        let (p0, a0) = self.forced(am, t0);
         let mut at = Point {
             t: t0,
             y,
@@ -345,12 +368,17 @@ impl<S: Carrier<N>, const N: usize> Engine<S, N> {
         while self.t < t_end {
             let (t1, whole) = self.next_point(t_end);
             let s = t1 - at.t;
-            let e = if whole {
-                self.props[i].step
+            // A partial step shown to the observer needs `e^{sL/2}` for its midpoint; with
+            // several masses `e^{sL}` is its square (one exponential instead of two).
+            let (e, half) = if whole {
+                (self.props[i].step, None)
+            } else if self.phases.is_some() && S::DENSE && O::SEES {
+                let half = expm_n(&(am.l * (0.5 * s)));
+                (half * half, Some(half))
             } else {
-                expm_n(&(am.l * s))
+                (expm_n(&(am.l * s)), None)
             };
-            let (p1, a1) = am.forced(t1);
+            let (p1, a1) = self.forced(am, t1);
             let y1 = e * (at.y - at.p) + p1;
             let next = Point {
                 t: t1,
@@ -364,7 +392,7 @@ impl<S: Carrier<N>, const N: usize> Engine<S, N> {
                 // The step to the event, then the switch.
                 if ev.s > 0.0 {
                     if S::DENSE && O::SEES {
-                        let (p_ev, a_ev) = am.forced(at.t + ev.s);
+                        let (p_ev, a_ev) = self.forced(am, at.t + ev.s);
                         let end = Point {
                             t: at.t + ev.s,
                             y: ev.y,
@@ -381,7 +409,11 @@ impl<S: Carrier<N>, const N: usize> Engine<S, N> {
                 return self.switch(am, ev.index, ev.y, observer);
             }
             if S::DENSE && O::SEES {
-                let half = whole.then(|| *self.props[i].dyadic(1));
+                let half = if whole {
+                    Some(*self.props[i].dyadic(1))
+                } else {
+                    half
+                };
                 self.show(am, observer, &at, &next, half);
             }
             self.z = self.sys.carry(am, || e, at.t, s, &self.z, &y1);
@@ -396,7 +428,7 @@ impl<S: Carrier<N>, const N: usize> Engine<S, N> {
     /// the exact midpoint (`half` is `e^{sL/2}` when known). Called only where the carrier is
     /// dense and the observer sees its steps: the work is that of showing alone.
     fn show<O: Observer<S::State, Mode>>(
-        &self,
+        &mut self,
         am: &AffineMode<N>,
         observer: &mut O,
         a: &Point<N>,
@@ -405,7 +437,7 @@ impl<S: Carrier<N>, const N: usize> Engine<S, N> {
     ) {
         let s = b.t - a.t;
         let half = half.unwrap_or_else(|| expm_n(&(am.l * (0.5 * s))));
-        let y_mid = half * (a.y - a.p) + am.particular(a.t + 0.5 * s);
+        let y_mid = half * (a.y - a.p) + self.forced(am, a.t + 0.5 * s).0;
         let step = Step::from_ends_and_midpoint(
             a.t,
             s,
@@ -485,7 +517,9 @@ impl<S: Carrier<N>, const N: usize> Engine<S, N> {
                 if cubic_max(g0, d0, g1, d1) < -GRAZE_MARGIN * scale {
                     continue;
                 }
-                let (s_max, y_max) = self.bisect(i, am, a, s, |y, t| g.n.dot(&am.rhs(t, y)) <= 0.0);
+                let (s_max, y_max) = self.bisect(i, am, a, s, |y, drive| {
+                    g.n.dot(&am.rhs_with(drive, y)) <= 0.0
+                });
                 (g.at(&y_max) > 0.0).then_some((s_max, y_max))
             };
             let Some((s_hi, y_hi)) = upper else { continue };
@@ -504,7 +538,8 @@ impl<S: Carrier<N>, const N: usize> Engine<S, N> {
         best
     }
 
-    /// The first point of `(0, s]` after `a` where `past(y, t)` holds (it does at `s`, where
+    /// The first point of `(0, s]` after `a` where `past(y, drive)` holds, with the drive's
+    /// acceleration `drive` there (it does at `s`, where
     /// the state is `y_s` if known, and not at 0, and once it holds it keeps holding over the
     /// step), to the event time tolerance, with the state there: bisection on the exact
     /// solution through the propagators `e^{h L / 2^j}`.
@@ -527,16 +562,18 @@ impl<S: Carrier<N>, const N: usize> Engine<S, N> {
                 continue;
             }
             let d = *self.props[i].dyadic(j);
-            let p_c = am.particular(a.t + lo + ds);
+            let (p_c, drive_c) = self.forced(am, a.t + lo + ds);
             let y_c = d * (y_lo - p_lo) + p_c;
-            if past(&y_c, a.t + lo + ds) {
+            if past(&y_c, drive_c) {
                 (hi, y_hi) = (lo + ds, Some(y_c));
             } else {
                 (lo, y_lo, p_lo) = (lo + ds, y_c, p_c);
             }
         }
-        let y =
-            y_hi.unwrap_or_else(|| expm_n(&(am.l * hi)) * (a.y - a.p) + am.particular(a.t + hi));
+        let y = match y_hi {
+            Some(y) => y,
+            None => expm_n(&(am.l * hi)) * (a.y - a.p) + self.forced(am, a.t + hi).0,
+        };
         (hi, y)
     }
 
