@@ -183,6 +183,7 @@ impl SweepSettings {
         )
     }
 
+    #[allow(clippy::too_many_arguments)]
     fn run_down_from_until(
         &self,
         device: &Device,
