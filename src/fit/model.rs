@@ -357,3 +357,61 @@ fn interpolate(curve: &[(f64, f64)], f: f64) -> f64 {
     let (a, b) = (curve[k - 1], curve[k]);
     a.1 + (b.1 - a.1) * (f - a.0) / (b.0 - a.0)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::fit::{Feature, Point};
+
+    /// The values with only the transitions they read refined equal, bit for bit, those of the
+    /// sweep with every transition refined: up and down, with points of no value, with the
+    /// points the sweep gives (a jump between them where it shows one), and with the onset
+    /// (up) and the branch end measured.
+    #[test]
+    fn refining_only_the_transitions_read_leaves_every_value_the_same() {
+        let text = include_str!(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/data/examples/piezo_cantilever.toml"
+        ));
+        let device = Device::from_toml_str(text, "piezo_cantilever.toml").unwrap();
+        let same = |data: &SweepData| {
+            let partly = model_values(&device, 1.0, data).unwrap();
+            let wholly = values_of(&model_sweep(&device, 1.0, data).unwrap(), data);
+            let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+            assert_eq!(bits(&partly), bits(&wholly), "{:?}", data.direction);
+            partly
+        };
+        for direction in [Direction::Up, Direction::Down] {
+            let mut data = SweepData {
+                label: "refine".into(),
+                direction,
+                accel_rms_g: 0.5,
+                quantity: Quantity::V1RmsV,
+                points: (0..=15)
+                    .map(|i| Point {
+                        freq_hz: 100.0 + 4.0 * i as f64,
+                        value: 0.0,
+                        sigma: None,
+                    })
+                    .collect(),
+                grid_hz: None,
+                features: vec![],
+            };
+            let values = same(&data);
+            for (p, v) in data.points.iter_mut().zip(values) {
+                p.value = v;
+            }
+            same(&data);
+            let feature = |kind| Feature {
+                kind,
+                freq_hz: 130.0,
+                sigma_hz: 1.0,
+            };
+            data.features = match direction {
+                Direction::Up => vec![feature(FeatureKind::Onset), feature(FeatureKind::BranchEnd)],
+                Direction::Down => vec![feature(FeatureKind::BranchEnd)],
+            };
+            same(&data);
+        }
+    }
+}
