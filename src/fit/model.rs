@@ -11,9 +11,8 @@ use super::{
 };
 use crate::device::Device;
 use crate::ode::SolverError;
-use crate::progress::Silent;
 use crate::study::steady::{Measurement, SettleSettings, FOLD_BLOCK_PERIODS};
-use crate::study::sweep::{DownSweepReport, SweepReport, SweepSettings, REFINE_TOL_HZ};
+use crate::study::sweep::{DownSweepReport, Refine, SweepReport, SweepSettings, REFINE_TOL_HZ};
 
 /// The value of a measured quantity in a model measurement.
 fn quantity_of(q: Quantity, m: &Measurement) -> f64 {
@@ -37,10 +36,27 @@ pub struct ModelSweep {
 /// The model of a data set on `device` with the acceleration factor `scale` (the fit's sweep
 /// settings, see the module docs).
 pub fn model_sweep(device: &Device, scale: f64, data: &SweepData) -> Result<ModelSweep, FitError> {
-    let grid = data.grid();
-    let mut settings = SweepSettings::for_device(device, grid, FIT_REFINE_TOL_HZ);
+    sweep_with(&fit_settings(device, data), device, scale, data)
+}
+
+/// The fit's sweep settings over the grid of `data` (see the module docs).
+fn fit_settings(device: &Device, data: &SweepData) -> SweepSettings {
+    let mut settings = SweepSettings::for_device(device, data.grid(), FIT_REFINE_TOL_HZ);
     settings.cfg.rel_change_tol = FIT_REL_CHANGE_TOL;
-    sweep_with(&settings, device, scale, data)
+    settings
+}
+
+/// The transitions the values of `data` read ([`values_of`]): the onset where it measures
+/// one, the end of the branch where it measures one or its points show a jump. The others
+/// are left unrefined: each refinement is a bisection of steady states, and the coarse steps
+/// the points read do not depend on it.
+fn refine_for(data: &SweepData) -> Refine {
+    let has = |kind| data.features.iter().any(|f| f.kind == kind);
+    Refine {
+        onset: has(FeatureKind::Onset),
+        branch_end: has(FeatureKind::BranchEnd) || data.measured_jump().is_some(),
+        contact_beside_jump: false,
+    }
 }
 
 /// The stepped sweep of a data set with the settings of a plain sweep
@@ -58,7 +74,7 @@ fn sweep_with(
     data: &SweepData,
 ) -> Result<ModelSweep, FitError> {
     Ok(model_of(
-        &SweepRun::run(settings, device, scale, data)?,
+        &SweepRun::run(settings, device, scale, data, Refine::ALL)?,
         data,
     ))
 }
@@ -73,29 +89,44 @@ pub(super) enum SweepRun {
 }
 
 impl SweepRun {
-    /// The sweep of `data`'s grid in its direction at its acceleration times `scale`.
+    /// The sweep of `data`'s grid in its direction at its acceleration times `scale`, with
+    /// the transitions `refine` names refined.
     pub(super) fn run(
         settings: &SweepSettings,
         device: &Device,
         scale: f64,
         data: &SweepData,
+        refine: Refine,
     ) -> Result<Self, SolverError> {
         let accel = data.accel_rms_g * scale;
-        Ok(match data.direction {
-            Direction::Up => SweepRun::Up(settings.run(device, accel, &Silent)?),
-            Direction::Down => SweepRun::Down(settings.run_down(device, accel, &Silent)?),
-        })
+        let never = &mut |_: &Measurement| false;
+        let run = match data.direction {
+            Direction::Up => settings
+                .run_until_refining(device, accel, refine, never)?
+                .map(SweepRun::Up),
+            Direction::Down => settings
+                .run_down_until_refining(device, accel, refine, never)?
+                .map(SweepRun::Down),
+        };
+        Ok(run.expect("a sweep that is never stopped completes"))
     }
 
     /// The plain sweep of `data` ([`model_curve`]'s settings): the sweep the branches are
-    /// identified from.
+    /// identified from, with the transitions the identification reads refined (the onset
+    /// where the data measure it; the end of the branch where they measure it or have points).
     pub(super) fn plain(
         device: &Device,
         scale: f64,
         data: &SweepData,
     ) -> Result<Self, SolverError> {
         let settings = SweepSettings::for_device(device, data.grid(), REFINE_TOL_HZ);
-        Self::run(&settings, device, scale, data)
+        let has = |kind| data.features.iter().any(|f| f.kind == kind);
+        let refine = Refine {
+            onset: has(FeatureKind::Onset),
+            branch_end: has(FeatureKind::BranchEnd) || !data.points.is_empty(),
+            contact_beside_jump: false,
+        };
+        Self::run(&settings, device, scale, data, refine)
     }
 
     /// The sweep of `data` with `settings`, telling `on_point(j, value)` the model's value at
@@ -132,12 +163,13 @@ impl SweepRun {
             }
             false
         };
+        let refine = refine_for(data);
         Ok(match data.direction {
             Direction::Up => settings
-                .run_until(device, accel, &mut stop)?
+                .run_until_refining(device, accel, refine, &mut stop)?
                 .map(SweepRun::Up),
             Direction::Down => settings
-                .run_down_until(device, accel, &mut stop)?
+                .run_down_until_refining(device, accel, refine, &mut stop)?
                 .map(SweepRun::Down),
         })
     }
@@ -216,7 +248,9 @@ fn model_of(run: &SweepRun, data: &SweepData) -> ModelSweep {
 /// ```
 /// acceleration factor `scale`.
 pub fn model_values(device: &Device, scale: f64, data: &SweepData) -> Result<Vec<f64>, FitError> {
-    Ok(values_of(&model_sweep(device, scale, data)?, data))
+    let settings = fit_settings(device, data);
+    let run = SweepRun::run(&settings, device, scale, data, refine_for(data))?;
+    Ok(values_of(&model_of(&run, data), data))
 }
 
 /// Most intervals of the grid of the cheap model's sweep of a data set without points (see
@@ -278,7 +312,10 @@ pub(super) fn design_values(
     };
     let settings = design_settings(device, coarse.grid());
     Ok(Some(values_of(
-        &model_of(&SweepRun::run(&settings, device, scale, &coarse)?, &coarse),
+        &model_of(
+            &SweepRun::run(&settings, device, scale, &coarse, refine_for(&coarse))?,
+            &coarse,
+        ),
         &coarse,
     )))
 }
@@ -319,4 +356,62 @@ fn interpolate(curve: &[(f64, f64)], f: f64) -> f64 {
     }
     let (a, b) = (curve[k - 1], curve[k]);
     a.1 + (b.1 - a.1) * (f - a.0) / (b.0 - a.0)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::fit::{Feature, Point};
+
+    /// The values with only the transitions they read refined equal, bit for bit, those of the
+    /// sweep with every transition refined: up and down, with points of no value, with the
+    /// points the sweep gives (a jump between them where it shows one), and with the onset
+    /// (up) and the branch end measured.
+    #[test]
+    fn refining_only_the_transitions_read_leaves_every_value_the_same() {
+        let text = include_str!(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/data/examples/piezo_cantilever.toml"
+        ));
+        let device = Device::from_toml_str(text, "piezo_cantilever.toml").unwrap();
+        let same = |data: &SweepData| {
+            let partly = model_values(&device, 1.0, data).unwrap();
+            let wholly = values_of(&model_sweep(&device, 1.0, data).unwrap(), data);
+            let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+            assert_eq!(bits(&partly), bits(&wholly), "{:?}", data.direction);
+            partly
+        };
+        for direction in [Direction::Up, Direction::Down] {
+            let mut data = SweepData {
+                label: "refine".into(),
+                direction,
+                accel_rms_g: 0.5,
+                quantity: Quantity::V1RmsV,
+                points: (0..=15)
+                    .map(|i| Point {
+                        freq_hz: 100.0 + 4.0 * i as f64,
+                        value: 0.0,
+                        sigma: None,
+                    })
+                    .collect(),
+                grid_hz: None,
+                features: vec![],
+            };
+            let values = same(&data);
+            for (p, v) in data.points.iter_mut().zip(values) {
+                p.value = v;
+            }
+            same(&data);
+            let feature = |kind| Feature {
+                kind,
+                freq_hz: 130.0,
+                sigma_hz: 1.0,
+            };
+            data.features = match direction {
+                Direction::Up => vec![feature(FeatureKind::Onset), feature(FeatureKind::BranchEnd)],
+                Direction::Down => vec![feature(FeatureKind::BranchEnd)],
+            };
+            same(&data);
+        }
+    }
 }

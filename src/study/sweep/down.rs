@@ -4,7 +4,7 @@
 //! by a local rerun around it.
 
 use super::{
-    analyse_up_sweep, frequency_continuation, BranchEnd, SweepReport, SweepSettings,
+    analyse_up_sweep, frequency_continuation, BranchEnd, Refine, SweepReport, SweepSettings,
     CANDIDATE_DROP, JUMP_MIN_DROP,
 };
 use nalgebra::{DVector, SVector};
@@ -138,10 +138,15 @@ impl SweepSettings {
         start: (DVector<f64>, Mode),
         progress: &dyn Progress,
     ) -> Result<DownSweepReport, SolverError> {
-        let report =
-            self.run_down_from_until(device, accel_rms_g, approach, start, progress, &mut |_| {
-                false
-            })?;
+        let report = self.run_down_from_until(
+            device,
+            accel_rms_g,
+            approach,
+            start,
+            progress,
+            Refine::ALL,
+            &mut |_| false,
+        )?;
         Ok(report.expect("a sweep that is never stopped completes"))
     }
 
@@ -154,10 +159,31 @@ impl SweepSettings {
         accel_rms_g: f64,
         stop: &mut dyn FnMut(&Measurement) -> bool,
     ) -> Result<Option<DownSweepReport>, SolverError> {
-        let rest = rest_of(device)?;
-        self.run_down_from_until(device, accel_rms_g, Approach::Jump, rest, &Silent, stop)
+        self.run_down_until_refining(device, accel_rms_g, Refine::ALL, stop)
     }
 
+    /// As [`SweepSettings::run_down_until`], refining only the transitions `refine` names (the
+    /// coarse steps and those refined are the same bit for bit).
+    pub fn run_down_until_refining(
+        &self,
+        device: &Device,
+        accel_rms_g: f64,
+        refine: Refine,
+        stop: &mut dyn FnMut(&Measurement) -> bool,
+    ) -> Result<Option<DownSweepReport>, SolverError> {
+        let rest = rest_of(device)?;
+        self.run_down_from_until(
+            device,
+            accel_rms_g,
+            Approach::Jump,
+            rest,
+            &Silent,
+            refine,
+            stop,
+        )
+    }
+
+    #[allow(clippy::too_many_arguments)]
     fn run_down_from_until(
         &self,
         device: &Device,
@@ -165,6 +191,7 @@ impl SweepSettings {
         approach: Approach,
         start: (DVector<f64>, Mode),
         progress: &dyn Progress,
+        refine: Refine,
         stop: &mut dyn FnMut(&Measurement) -> bool,
     ) -> Result<Option<DownSweepReport>, SolverError> {
         let mut freqs = self.freqs_hz.clone();
@@ -183,7 +210,7 @@ impl SweepSettings {
             if sweep.steps.len() < freqs.len() {
                 return Ok(None);
             }
-            analyse_down_sweep(&cont, sweep, self.refine_tol_hz, approach).map(Some)
+            analyse_down_sweep(&cont, sweep, self.refine_tol_hz, approach, refine).map(Some)
         })
     }
 
@@ -209,7 +236,7 @@ impl SweepSettings {
         };
         crate::with_harvester!(device, |h| {
             let cont = frequency_continuation(&h, accel_rms_g, &self.cfg);
-            let r = analyse_down_sweep(&cont, local, self.refine_tol_hz, approach)?;
+            let r = analyse_down_sweep(&cont, local, self.refine_tol_hz, approach, Refine::ALL)?;
             Ok(r.branch_end())
         })
     }
@@ -235,7 +262,7 @@ impl SweepSettings {
         };
         crate::with_harvester!(device, |h| {
             let cont = frequency_continuation(&h, accel_rms_g, &self.cfg);
-            let r = analyse_up_sweep(&cont, local, self.refine_tol_hz, approach)?;
+            let r = analyse_up_sweep(&cont, local, self.refine_tol_hz, approach, Refine::ALL)?;
             Ok(r.branch_end())
         })
     }
@@ -318,6 +345,7 @@ fn analyse_down_sweep<M: Model<N>, D: Drive, const N: usize>(
     sweep: Sweep,
     tol: f64,
     approach: Approach,
+    refine: Refine,
 ) -> Result<DownSweepReport, SolverError> {
     let mut refine_stats = Stats::default();
     let steps = &sweep.steps;
@@ -325,7 +353,12 @@ fn analyse_down_sweep<M: Model<N>, D: Drive, const N: usize>(
     let confirm = 1.0 / (1.0 - JUMP_MIN_DROP);
     let mut jump = None;
     let mut jump_power_ratio = None;
-    for k in 1..steps.len() {
+    let candidates = if refine.branch_end {
+        1..steps.len()
+    } else {
+        0..0
+    };
+    for k in candidates {
         let a = &steps[k - 1].measurement;
         let b = &steps[k].measurement;
         // The lower branch's own climb towards resonance (the log-power's rate per Hz over the
@@ -365,7 +398,7 @@ fn analyse_down_sweep<M: Model<N>, D: Drive, const N: usize>(
         }
     }
     let (contact, contact_power_ratio) = match first_contact(&sweep) {
-        Some(k) if k > 0 => {
+        Some(k) if k > 0 && refine.contact(jump.is_some()) => {
             let r = cont.refine_steps_with(&sweep, k, |m| !in_contact(m), tol, approach)?;
             refine_stats += r.stats;
             let ratio = r.after.measurement.p_total_w() / r.before.measurement.p_total_w();

@@ -81,6 +81,35 @@ impl BranchEndKind {
     }
 }
 
+/// Which transitions a sweep's analysis refines, each by a bisection of steady states that
+/// leaves the coarse steps as they are. The sweeps of the command refine every one
+/// ([`Refine::ALL`]); a caller that reads only some (the fit's model reads the features its data
+/// measure) leaves the others unrefined (`None` in the report).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Refine {
+    /// The impact onset of an up-sweep.
+    pub onset: bool,
+    /// The end of the branch ([`SweepReport::branch_end`], [`DownSweepReport::branch_end`]):
+    /// the jump, and where there is none the loss of contact (up) or the first contact (down).
+    pub branch_end: bool,
+    /// The loss of contact (up) or the first contact (down) also where a jump ends the branch.
+    pub contact_beside_jump: bool,
+}
+
+impl Refine {
+    /// Every transition.
+    pub const ALL: Self = Self {
+        onset: true,
+        branch_end: true,
+        contact_beside_jump: true,
+    };
+
+    /// Whether the contact transition is refined, given whether a jump was found.
+    fn contact(self, jump_found: bool) -> bool {
+        self.contact_beside_jump || (self.branch_end && !jump_found)
+    }
+}
+
 /// Where and how the impacting branch ends.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct BranchEnd {
@@ -301,7 +330,14 @@ impl SweepSettings {
         approach: Approach,
         progress: &dyn Progress,
     ) -> Result<SweepReport, SolverError> {
-        let report = self.run_on_until(base, accel_rms_g, approach, progress, &mut |_| false)?;
+        let report = self.run_on_until(
+            base,
+            accel_rms_g,
+            approach,
+            progress,
+            Refine::ALL,
+            &mut |_| false,
+        )?;
         Ok(report.expect("a sweep that is never stopped completes"))
     }
 
@@ -314,11 +350,24 @@ impl SweepSettings {
         accel_rms_g: f64,
         stop: &mut dyn FnMut(&Measurement) -> bool,
     ) -> Result<Option<SweepReport>, SolverError> {
+        self.run_until_refining(device, accel_rms_g, Refine::ALL, stop)
+    }
+
+    /// As [`SweepSettings::run_until`], refining only the transitions `refine` names (the
+    /// coarse steps and those refined are the same bit for bit).
+    pub fn run_until_refining(
+        &self,
+        device: &Device,
+        accel_rms_g: f64,
+        refine: Refine,
+        stop: &mut dyn FnMut(&Measurement) -> bool,
+    ) -> Result<Option<SweepReport>, SolverError> {
         crate::with_harvester!(device, |h| self.run_on_until(
             &h,
             accel_rms_g,
             Approach::Jump,
             &Silent,
+            refine,
             stop
         ))
     }
@@ -329,6 +378,7 @@ impl SweepSettings {
         accel_rms_g: f64,
         approach: Approach,
         progress: &dyn Progress,
+        refine: Refine,
         stop: &mut dyn FnMut(&Measurement) -> bool,
     ) -> Result<Option<SweepReport>, SolverError> {
         let freqs = &self.freqs_hz;
@@ -367,7 +417,7 @@ impl SweepSettings {
                 extended_from = Some(n);
             }
         }
-        let mut report = analyse_up_sweep(&cont, sweep, self.refine_tol_hz, approach)?;
+        let mut report = analyse_up_sweep(&cont, sweep, self.refine_tol_hz, approach, refine)?;
         report.extended_from = extended_from;
         Ok(Some(report))
     }
@@ -378,13 +428,14 @@ fn analyse_up_sweep<M: Model<N>, D: Drive, const N: usize>(
     sweep: Sweep,
     tol: f64,
     approach: Approach,
+    refine: Refine,
 ) -> Result<SweepReport, SolverError> {
     let mut refine_stats = Stats::default();
     let steps = &sweep.steps;
     let k_on = first_contact(&sweep);
     let contact_at_start = k_on == Some(0);
     let onset = match k_on {
-        Some(k) if k > 0 => {
+        Some(k) if k > 0 && refine.onset => {
             let r = cont.refine_steps_with(&sweep, k, |m| !in_contact(m), tol, approach)?;
             refine_stats += r.stats;
             Some(r.transition)
@@ -395,7 +446,12 @@ fn analyse_up_sweep<M: Model<N>, D: Drive, const N: usize>(
     let mut jump_power_ratio = None;
     let mut contact_lost = None;
     if let Some(k0) = k_on {
-        for k in (k0 + 1)..steps.len() {
+        let candidates = if refine.branch_end {
+            (k0 + 1)..steps.len()
+        } else {
+            0..0
+        };
+        for k in candidates {
             let a = &steps[k - 1].measurement;
             let b = &steps[k].measurement;
             if !(in_contact(a) && b.p_total_w() < (1.0 - CANDIDATE_DROP) * a.p_total_w()) {
@@ -412,7 +468,8 @@ fn analyse_up_sweep<M: Model<N>, D: Drive, const N: usize>(
                 break;
             }
         }
-        if let Some(k) = ((k0 + 1)..steps.len()).find(|&k| !in_contact(&steps[k].measurement)) {
+        let lost = ((k0 + 1)..steps.len()).find(|&k| !in_contact(&steps[k].measurement));
+        if let Some(k) = lost.filter(|_| refine.contact(jump.is_some())) {
             let r = cont.refine_steps_with(&sweep, k, in_contact, tol, approach)?;
             refine_stats += r.stats;
             contact_lost = Some(r.transition);
