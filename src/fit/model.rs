@@ -51,10 +51,16 @@ fn fit_settings(device: &Device, data: &SweepData) -> SweepSettings {
 /// are left unrefined: each refinement is a bisection of steady states, and the coarse steps
 /// the points read do not depend on it.
 fn refine_for(data: &SweepData) -> Refine {
+    refine_reading(data, data.measured_jump().is_some())
+}
+
+/// The onset refined where `data` measures one, the end of the branch where it measures one
+/// or where `end_read` (a reader of the sweep other than the features needs it).
+fn refine_reading(data: &SweepData, end_read: bool) -> Refine {
     let has = |kind| data.features.iter().any(|f| f.kind == kind);
     Refine {
         onset: has(FeatureKind::Onset),
-        branch_end: has(FeatureKind::BranchEnd) || data.measured_jump().is_some(),
+        branch_end: has(FeatureKind::BranchEnd) || end_read,
         contact_beside_jump: false,
     }
 }
@@ -120,12 +126,7 @@ impl SweepRun {
         data: &SweepData,
     ) -> Result<Self, SolverError> {
         let settings = SweepSettings::for_device(device, data.grid(), REFINE_TOL_HZ);
-        let has = |kind| data.features.iter().any(|f| f.kind == kind);
-        let refine = Refine {
-            onset: has(FeatureKind::Onset),
-            branch_end: has(FeatureKind::BranchEnd) || !data.points.is_empty(),
-            contact_beside_jump: false,
-        };
+        let refine = refine_reading(data, !data.points.is_empty());
         Self::run(&settings, device, scale, data, refine)
     }
 

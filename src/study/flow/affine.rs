@@ -81,7 +81,7 @@ impl<const N: usize> AffineMode<N> {
 
     /// The drive's phase at time `t` as (sin, cos).
     #[inline(always)]
-    pub(crate) fn phase_at(&self, t: f64) -> (f64, f64) {
+    fn phase_at(&self, t: f64) -> (f64, f64) {
         (self.omega * t + self.phase).sin_cos()
     }
 
