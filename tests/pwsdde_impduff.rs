@@ -27,14 +27,17 @@
 //! condition at the interior nodes of its Chebyshev mesh only, not on the interpolant between
 //! them, so that its grazing is where the node nearest the orbit's free peak reaches the stop.
 //! That node falls short of the peak by about half the peak's curvature times the node's
-//! distance from it squared, a distance set by where the peak falls between the nodes, which
-//! changes with M by no converging rule: its grazing lies above the orbit's by that shortfall
-//! over the rate at which the peak rises with omega, and its orbits between the two cross the
-//! stop between nodes. The mesh-to-mesh change that shrank from M = 40 to 80 was that
-//! shortfall's, not a convergence. The rows after it reproduce the test on our orbits: the
-//! node test of each mesh, evaluated on our orbits just below our grazing and extrapolated to
-//! its zero, against PWSDDE-cont's grazing at every mesh. The grazing row itself is reported
-//! open (its difference shown, not judged): the reference holds no grazing of the orbit.
+//! distance from it squared, a distance set by where the peak falls between the nodes: it is
+//! bounded by a multiple of the node spacing squared, so it vanishes as M grows, but it is not
+//! monotone in M (the peak may fall near a node at one mesh and between two at the next). Its
+//! grazing lies above the orbit's by that shortfall over the rate at which the peak rises with
+//! omega, and its orbits between the two cross the stop between nodes. The mesh-to-mesh change
+//! that shrank from M = 40 to 80 was that shortfall's, not the approach to the orbit's
+//! grazing, which lies below all four meshes' values. The rows after it reproduce the test on
+//! our orbits: the node test of each mesh, evaluated on our orbits just below our grazing and
+//! extrapolated to its zero, against PWSDDE-cont's grazing at every mesh. The grazing row
+//! itself is reported open (its difference shown, not judged): the reference holds no grazing
+//! of the orbit.
 //!
 //! Tolerances, each derived from the two sides' own errors before comparing:
 //! * PWSDDE-cont's discretisation: the difference of its M = 80 and M = 60 values;
