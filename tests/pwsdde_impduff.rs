@@ -404,26 +404,25 @@ fn pwsdde_impact_duffing_demo_matches_our_continuation() {
     let down = ours
         .branch(start.clone(), [0.7, 0.6], MAX_STEP_RAD_S, LOCATE_TOL_RAD_S)
         .unwrap();
-    let up = ours
-        .branch(start.clone(), [0.7, 1.2], MAX_STEP_RAD_S, LOCATE_TOL_RAD_S)
-        .unwrap();
     // Our branch of one-period orbits ends at the grazing above, where a strike more begins:
     // past it the shooting finds only an orbit of several periods. That end is our grazing;
     // its error the gap to the orbit found past it, with our location. The branch is followed
-    // in two legs, split short of that end, whose last orbit begins the march to the orbits
-    // that reproduce PWSDDE-cont's grazing test.
-    let split = ours
+    // in two legs, split short of that end: the first holds the pitchfork, and its last orbit
+    // begins the march to the orbits that reproduce PWSDDE-cont's grazing test.
+    let up = ours
         .branch(
             start.clone(),
             [0.7, SPLIT_RAD_S],
             MAX_STEP_RAD_S,
             LOCATE_TOL_RAD_S,
         )
-        .unwrap()
+        .unwrap();
+    let split = up
         .points
-        .pop()
+        .last()
         .expect("a branch has a point")
-        .orbit;
+        .orbit
+        .clone();
     let split_om = split.forcing.freq_hz * TAU;
     let (above, above_gap) = match ours.branch(
         split.clone(),
