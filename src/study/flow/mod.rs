@@ -42,12 +42,14 @@
 //! right-hand-side evaluation.
 
 mod affine;
+mod grid;
 mod phase;
 #[cfg(test)]
 mod tests;
 mod walk;
 
-pub use walk::{GRAZE_MARGIN, MIN_STEPS_PER_OSCILLATION, MIN_STEPS_PER_PERIOD};
+pub use grid::{MIN_STEPS_PER_OSCILLATION, MIN_STEPS_PER_PERIOD};
+pub use walk::GRAZE_MARGIN;
 
 pub(crate) use affine::AffineMode;
 pub(crate) use walk::{cubic_max, Carrier, Engine};

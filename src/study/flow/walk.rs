@@ -13,15 +13,9 @@ use crate::ode::phi::expm_n;
 use crate::ode::MAX_SWITCHES_AT_ONE_TIME;
 use crate::ode::{Dopri5, HybridSystem, Observer, Options, SolverError, Stats, Step, Vector};
 
-use super::affine::{fastest_oscillation, AffineMode};
+use super::affine::AffineMode;
+use super::grid::{grid_step, Propagators};
 use super::phase::PhaseGrid;
-
-/// Fewest grid steps per drive period.
-pub const MIN_STEPS_PER_PERIOD: usize = 64;
-
-/// Fewest grid steps per period of the fastest oscillation of an affine mode (the imaginary
-/// part of an eigenvalue of its `L`).
-pub const MIN_STEPS_PER_OSCILLATION: usize = 32;
 
 /// A guard whose cubic estimate over a step peaks within this fraction of its scale below zero
 /// is maximised on the exact solution (see the module docs of [`super`]).
@@ -87,56 +81,6 @@ impl<M: Model<N>, const N: usize> Carrier<N> for Driven<'_, M, Sine, N> {
     ) -> SVector<f64, N> {
         *y1
     }
-}
-
-/// The propagators of one affine mode on the grid: `e^{hL}` and `e^{h L / 2^j}`
-/// (computed when first needed).
-#[derive(Debug, Clone)]
-struct Propagators<const N: usize> {
-    step: SMatrix<f64, N, N>,
-    /// `dyadic[j - 1] = e^{h L / 2^j}`.
-    dyadic: Vec<SMatrix<f64, N, N>>,
-    l: SMatrix<f64, N, N>,
-    h: f64,
-}
-
-impl<const N: usize> Propagators<N> {
-    fn new(l: &SMatrix<f64, N, N>, h: f64) -> Self {
-        Self {
-            step: expm_n(&(l * h)),
-            dyadic: Vec::new(),
-            l: *l,
-            h,
-        }
-    }
-
-    /// `e^{h L / 2^j}`, `j >= 1`.
-    fn dyadic(&mut self, j: usize) -> &SMatrix<f64, N, N> {
-        while self.dyadic.len() < j {
-            let k = self.dyadic.len() + 1;
-            let m = expm_n(&(self.l * (self.h * 0.5f64.powi(k as i32))));
-            self.dyadic.push(m);
-        }
-        &self.dyadic[j - 1]
-    }
-}
-
-/// The grid step of a model under its drive: [`MIN_STEPS_PER_PERIOD`] per period at least,
-/// and [`MIN_STEPS_PER_OSCILLATION`] per period of the fastest oscillation of its affine
-/// modes, a whole number per drive period; with that number.
-fn grid_step<const N: usize>(
-    period: f64,
-    modes: &[AffineMode<N>],
-    unused: &[usize],
-) -> (f64, usize) {
-    let mut fastest = 0.0f64;
-    for m in modes {
-        fastest = fastest.max(fastest_oscillation(&m.l, unused));
-    }
-    let per_oscillation =
-        (period * fastest / (2.0 * std::f64::consts::PI) * MIN_STEPS_PER_OSCILLATION as f64).ceil();
-    let steps = (MIN_STEPS_PER_PERIOD as f64).max(per_oscillation);
-    (period / steps, steps as usize)
 }
 
 /// A located event: where in the step (s from its start), which guard, and the state there.
@@ -368,18 +312,23 @@ impl<S: Carrier<N>, const N: usize> Engine<S, N> {
         while self.t < t_end {
             let (t1, whole) = self.next_point(t_end);
             let s = t1 - at.t;
-            // A partial step shown to the observer needs `e^{sL/2}` for its midpoint; with
-            // several masses `e^{sL}` is its square (one exponential instead of two).
-            let (e, half) = if whole {
-                (self.props[i].step, None)
+            // A whole step reads `e^{hL}` from the grid's propagators (no copy); a partial
+            // step computes `e^{sL}`, and one shown to the observer needs `e^{sL/2}` for its
+            // midpoint: with several masses `e^{sL}` is its square (one exponential instead
+            // of two).
+            let partial = if whole {
+                None
             } else if self.phases.is_some() && S::DENSE && O::SEES {
                 let half = expm_n(&(am.l * (0.5 * s)));
-                (half * half, Some(half))
+                Some((half * half, Some(half)))
             } else {
-                (expm_n(&(am.l * s)), None)
+                Some((expm_n(&(am.l * s)), None))
             };
             let (p1, a1) = self.forced(am, t1);
-            let y1 = e * (at.y - at.p) + p1;
+            let y1 = match &partial {
+                Some((e, _)) => e * (at.y - at.p),
+                None => self.props[i].step * (at.y - at.p),
+            } + p1;
             let next = Point {
                 t: t1,
                 y: y1,
@@ -399,7 +348,7 @@ impl<S: Carrier<N>, const N: usize> Engine<S, N> {
                             p: p_ev,
                             f: am.rhs_with(a_ev, &ev.y),
                         };
-                        self.show(am, observer, &at, &end, None);
+                        self.show(am, observer, &at, &end, Half::Given(None));
                     }
                     let e_ev = || expm_n(&(am.l * ev.s));
                     self.z = self.sys.carry(am, e_ev, at.t, ev.s, &self.z, &ev.y);
@@ -409,14 +358,19 @@ impl<S: Carrier<N>, const N: usize> Engine<S, N> {
                 return self.switch(am, ev.index, ev.y, observer);
             }
             if S::DENSE && O::SEES {
-                let half = if whole {
-                    Some(*self.props[i].dyadic(1))
-                } else {
-                    half
+                let half = match &partial {
+                    None => Half::Whole(i),
+                    Some((_, half)) => Half::Given(half.as_ref()),
                 };
                 self.show(am, observer, &at, &next, half);
             }
-            self.z = self.sys.carry(am, || e, at.t, s, &self.z, &y1);
+            self.z = match &partial {
+                Some((e, _)) => self.sys.carry(am, || *e, at.t, s, &self.z, &y1),
+                None => {
+                    let step = &self.props[i].step;
+                    self.sys.carry(am, || *step, at.t, s, &self.z, &y1)
+                }
+            };
             self.t = t1;
             self.switches_here = 0;
             at = next;
@@ -425,19 +379,24 @@ impl<S: Carrier<N>, const N: usize> Engine<S, N> {
     }
 
     /// Shows the step from `a` to `b` to the observer, with the quartic dense output through
-    /// the exact midpoint (`half` is `e^{sL/2}` when known). Called only where the carrier is
-    /// dense and the observer sees its steps: the work is that of showing alone.
+    /// the exact midpoint. Called only where the carrier is dense and the observer sees its
+    /// steps: the work is that of showing alone.
     fn show<O: Observer<S::State, Mode>>(
         &mut self,
         am: &AffineMode<N>,
         observer: &mut O,
         a: &Point<N>,
         b: &Point<N>,
-        half: Option<SMatrix<f64, N, N>>,
+        half: Half<'_, N>,
     ) {
         let s = b.t - a.t;
-        let half = half.unwrap_or_else(|| expm_n(&(am.l * (0.5 * s))));
-        let y_mid = half * (a.y - a.p) + self.forced(am, a.t + 0.5 * s).0;
+        let p_mid = self.forced(am, a.t + 0.5 * s).0;
+        let d = a.y - a.p;
+        let y_mid = match half {
+            Half::Whole(i) => self.props[i].dyadic(1) * d,
+            Half::Given(Some(m)) => m * d,
+            Half::Given(None) => expm_n(&(am.l * (0.5 * s))) * d,
+        } + p_mid;
         let step = Step::from_ends_and_midpoint(
             a.t,
             s,
@@ -561,9 +520,8 @@ impl<S: Carrier<N>, const N: usize> Engine<S, N> {
             if lo + ds >= hi {
                 continue;
             }
-            let d = *self.props[i].dyadic(j);
             let (p_c, drive_c) = self.forced(am, a.t + lo + ds);
-            let y_c = d * (y_lo - p_lo) + p_c;
+            let y_c = self.props[i].dyadic(j) * (y_lo - p_lo) + p_c;
             if past(&y_c, drive_c) {
                 (hi, y_hi) = (lo + ds, Some(y_c));
             } else {
@@ -588,6 +546,14 @@ impl<S: Carrier<N>, const N: usize> Engine<S, N> {
     ) -> (f64, SVector<f64, N>) {
         self.bisect_with(i, am, a, s, None, past)
     }
+}
+
+/// `e^{sL/2}` for the midpoint of a step of length `s` shown to the observer: the grid's
+/// `e^{hL/2}` of affine mode `i` for a whole step, or a matrix already computed, or none (then
+/// the step computes it).
+enum Half<'a, const N: usize> {
+    Whole(usize),
+    Given(Option<&'a SMatrix<f64, N, N>>),
 }
 
 /// A point of an exact step: time, state, the particular solution and the right-hand side
