@@ -9,7 +9,10 @@
 //! computed by `sin_cos` of `w (j h / 2) + phi`, so that no chain of rotations is longer than
 //! [`SYNC`] and their rounding cannot grow. The table's angle, `j = k mod 2n`, stays within one
 //! period and is rounded less than `w t + phi` at `t = k h / 2`. Times off the half-grid (an
-//! event, the bisection's points) get the sine and cosine of `w t + phi`.
+//! event) get the sine and cosine of `w t + phi`. The bisection of an event, whose points lie
+//! at `t0 + sum of h / 2^j`, turns the phase at its lower end by the rotations of `w h / 2^j`
+//! ([`PhaseGrid::turn`], each found once), a chain of at most 63 rotations from a value of the
+//! table.
 
 use crate::drive::Sine;
 
@@ -33,6 +36,14 @@ pub(crate) struct PhaseGrid {
     step_turn: (f64, f64),
     /// (sin, cos) at `j h / 2` for `j` in `0..2n`; NaN until first needed.
     table: Vec<(f64, f64)>,
+    /// `dyadic_turns[j - 1]` = (sin, cos) of `w h / 2^j`, when first needed.
+    dyadic_turns: Vec<(f64, f64)>,
+}
+
+/// The phase `(s, c)` turned by the rotation `(sr, cr)`: (sin, cos) of the sum of the angles.
+#[inline(always)]
+pub(crate) fn turned((s, c): (f64, f64), (sr, cr): (f64, f64)) -> (f64, f64) {
+    (s * cr + c * sr, c * cr - s * sr)
 }
 
 impl PhaseGrid {
@@ -46,7 +57,20 @@ impl PhaseGrid {
             half_turn: (omega * 0.5 * h).sin_cos(),
             step_turn: (omega * h).sin_cos(),
             table: vec![(f64::NAN, f64::NAN); 2 * steps],
+            dyadic_turns: Vec::new(),
         }
+    }
+
+    /// (sin, cos) of `w h / 2^j`, `j >= 1`: the rotation of the phase by the bisection's step
+    /// `h / 2^j`.
+    #[inline(always)]
+    pub(crate) fn turn(&mut self, j: usize) -> (f64, f64) {
+        while self.dyadic_turns.len() < j {
+            let k = self.dyadic_turns.len() + 1;
+            let angle = self.omega * (2.0 * self.half_h) * 0.5f64.powi(k as i32);
+            self.dyadic_turns.push(angle.sin_cos());
+        }
+        self.dyadic_turns[j - 1]
     }
 
     /// The drive's phase at time `t` as (sin, cos): from the table on the half-grid, by
@@ -70,11 +94,10 @@ impl PhaseGrid {
     /// the same [`SYNC`] half-steps, else by `sin_cos`.
     fn fill(&self, j: usize) -> (f64, f64) {
         let known = |i: usize| i / SYNC == j / SYNC && !self.table[i].0.is_nan();
-        let turn = |(s, c): (f64, f64), (sr, cr): (f64, f64)| (s * cr + c * sr, c * cr - s * sr);
         if j >= 2 && known(j - 2) {
-            turn(self.table[j - 2], self.step_turn)
+            turned(self.table[j - 2], self.step_turn)
         } else if j >= 1 && known(j - 1) {
-            turn(self.table[j - 1], self.half_turn)
+            turned(self.table[j - 1], self.half_turn)
         } else {
             (self.omega * (j as f64 * self.half_h) + self.phase).sin_cos()
         }
@@ -122,5 +145,39 @@ mod tests {
         let mut g = PhaseGrid::new(&sine, steps, h);
         let t = 3.3 * h;
         assert_eq!(g.at(t), (omega * t + sine.phase_rad).sin_cos());
+    }
+
+    /// A bisection from a grid point far on, its lower end turned by the dyadic rotations
+    /// (going up at every odd halving), agrees with `sin_cos` of `w t + phi` at every point to
+    /// the rounding of the angle and of the chain (the table's [`SYNC`] rotations and one per
+    /// halving).
+    #[test]
+    fn dyadic_turns_follow_the_phase_through_a_bisection() {
+        let sine = Sine {
+            freq_hz: 23.9,
+            amplitude_m_s2: 1.0,
+            phase_rad: -1.1,
+        };
+        let steps = 640;
+        let h = sine.period_s() / steps as f64;
+        let omega = 2.0 * std::f64::consts::PI * sine.freq_hz;
+        let mut g = PhaseGrid::new(&sine, steps, h);
+        let t0 = 70_001.0 * h;
+        let mut lo = 0.0;
+        let mut phase_lo = g.at(t0);
+        for j in 1..=52usize {
+            let ds = h * 0.5f64.powi(j as i32);
+            let phase_c = turned(phase_lo, g.turn(j));
+            let angle = omega * (t0 + lo + ds) + sine.phase_rad;
+            let (s0, c0) = angle.sin_cos();
+            let tol = 4.0 * f64::EPSILON * angle.abs() + 4.0 * (SYNC + j) as f64 * f64::EPSILON;
+            assert!(
+                (phase_c.0 - s0).abs() <= tol && (phase_c.1 - c0).abs() <= tol,
+                "halving {j}: {phase_c:?} against ({s0}, {c0})"
+            );
+            if j % 2 == 1 {
+                (lo, phase_lo) = (lo + ds, phase_c);
+            }
+        }
     }
 }

@@ -15,7 +15,7 @@ use crate::ode::{Dopri5, HybridSystem, Observer, Options, SolverError, Stats, St
 
 use super::affine::AffineMode;
 use super::grid::{grid_step, Propagators};
-use super::phase::PhaseGrid;
+use super::phase::{turned, PhaseGrid};
 
 /// A guard whose cubic estimate over a step peaks within this fraction of its scale below zero
 /// is maximised on the exact solution (see the module docs of [`super`]).
@@ -513,6 +513,9 @@ impl<S: Carrier<N>, const N: usize> Engine<S, N> {
     ) -> (f64, SVector<f64, N>) {
         let (mut lo, mut y_lo, mut p_lo) = (0.0, a.y, a.p);
         let (mut hi, mut y_hi) = (s, y_s);
+        // With several masses the drive's phase at the lower end is carried and turned by
+        // the dyadic rotations (see `phase.rs`) instead of a `sin_cos` per halving.
+        let mut phase_lo = self.phases.as_mut().map(|g| g.at(a.t));
         let mut j = 0usize;
         while hi - lo > self.time_tol && j < 63 {
             j += 1;
@@ -520,12 +523,18 @@ impl<S: Carrier<N>, const N: usize> Engine<S, N> {
             if lo + ds >= hi {
                 continue;
             }
-            let (p_c, drive_c) = self.forced(am, a.t + lo + ds);
+            let (phase_c, (p_c, drive_c)) = match (self.phases.as_mut(), phase_lo) {
+                (Some(g), Some(ph)) => {
+                    let ph_c = turned(ph, g.turn(j));
+                    (Some(ph_c), am.forced_at_phase(ph_c))
+                }
+                _ => (None, self.forced(am, a.t + lo + ds)),
+            };
             let y_c = self.props[i].dyadic(j) * (y_lo - p_lo) + p_c;
             if past(&y_c, drive_c) {
                 (hi, y_hi) = (lo + ds, Some(y_c));
             } else {
-                (lo, y_lo, p_lo) = (lo + ds, y_c, p_c);
+                (lo, y_lo, p_lo, phase_lo) = (lo + ds, y_c, p_c, phase_c);
             }
         }
         let y = match y_hi {
