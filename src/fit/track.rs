@@ -349,11 +349,12 @@ const FOLD_MOVE_REL: f64 = 0.05;
 /// The fold of `h` near `from` (the fold at the parameters before), by Newton's method on the
 /// fold itself ([`Shooter::fold_near`]) instead of a continuation up to it; the states before
 /// it are kept as Newton guesses. Refused unless the fold found is the one followed: as far
-/// from the old as [`FOLD_MOVE_REL`] allows, short of `limit_hz`, with the same contacts, a
-/// multiplier at 1, and the branch turning back against the sweep's direction there (the
-/// branch's other fold turns the other way). The states before it are those of the fold it
-/// started from: they serve as Newton guesses only while no point crosses the fold (see
-/// `branch::track`).
+/// from the old as [`FOLD_MOVE_REL`] allows, short of `limit_hz`, a multiplier at 1, the
+/// branch turning back against the sweep's direction there (the branch's other fold turns the
+/// other way), and the same contacts, or other contacts that the stable branch half a sweep
+/// step before it has too (the parameters moved the fold onto that branch). The states before
+/// it are those of the fold it started from: they serve as Newton guesses only while no point
+/// crosses the fold (see `branch::track`).
 pub(super) fn track_fold(
     h: &Harvester,
     accel_rms_g: f64,
@@ -379,11 +380,20 @@ pub(super) fn track_fold(
         .iter()
         .map(|m| (m - 1.0).norm())
         .fold(f64::INFINITY, f64::min);
+    // A fold whose impact count changed (the parameters moved it onto a branch with more or
+    // fewer impacts per period) is kept when the branch it ends is that fold's: the stable
+    // orbit Newton finds half a step before it has the fold's impact count.
+    let impacts = o.summary.impacts;
+    let same_branch = || {
+        let f_side = f_new - from.dir * 0.5 * max_step_hz;
+        stable_orbit(h, f_side, accel_rms_g, o.phase_rad, o.state_n())
+            .is_ok_and(|side| side.summary.impacts == impacts)
+    };
     if (f_new - f_old).abs() > FOLD_MOVE_REL * f_old
         || (f_new - limit_hz) * from.dir > 0.0
-        || o.summary.impacts != from.orbit.summary.impacts
         || near_one > FOLD_MULTIPLIER_TOL
         || found.curvature * from.dir >= 0.0
+        || (impacts != from.orbit.summary.impacts && !same_branch())
     {
         return Err(Lost(format!(
             "fold followed from {f_old} Hz to {f_new} Hz is another (multiplier off 1 by \
