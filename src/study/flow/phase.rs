@@ -11,8 +11,8 @@
 //! period and is rounded less than `w t + phi` at `t = k h / 2`. Times off the half-grid (an
 //! event) get the sine and cosine of `w t + phi`. The bisection of an event, whose points lie
 //! at `t0 + sum of h / 2^j`, turns the phase at its lower end by the rotations of `w h / 2^j`
-//! ([`PhaseGrid::turn`], each found once), a chain of at most 63 rotations from a value of the
-//! table.
+//! ([`PhaseGrid::turn`], each found once), a chain of at most 63 rotations from the phase at
+//! `t0` (a value of the table, or `sin_cos` when the step starts at an event).
 
 use crate::drive::Sine;
 
@@ -31,12 +31,12 @@ pub(crate) struct PhaseGrid {
     /// The drive's angular frequency (rad/s) and phase (rad).
     omega: f64,
     phase: f64,
-    /// (sin, cos) of `w h / 2` and of `w h`.
-    half_turn: (f64, f64),
+    /// (sin, cos) of `w h`.
     step_turn: (f64, f64),
     /// (sin, cos) at `j h / 2` for `j` in `0..2n`; NaN until first needed.
     table: Vec<(f64, f64)>,
-    /// `dyadic_turns[j - 1]` = (sin, cos) of `w h / 2^j`, when first needed.
+    /// `dyadic_turns[j - 1]` = (sin, cos) of `w h / 2^j`: the half-step's from the start, the
+    /// others when first needed.
     dyadic_turns: Vec<(f64, f64)>,
 }
 
@@ -54,10 +54,9 @@ impl PhaseGrid {
             half_h: 0.5 * h,
             omega,
             phase: sine.phase_rad,
-            half_turn: (omega * 0.5 * h).sin_cos(),
             step_turn: (omega * h).sin_cos(),
             table: vec![(f64::NAN, f64::NAN); 2 * steps],
-            dyadic_turns: Vec::new(),
+            dyadic_turns: vec![(omega * 0.5 * h).sin_cos()],
         }
     }
 
@@ -97,7 +96,7 @@ impl PhaseGrid {
         if j >= 2 && known(j - 2) {
             turned(self.table[j - 2], self.step_turn)
         } else if j >= 1 && known(j - 1) {
-            turned(self.table[j - 1], self.half_turn)
+            turned(self.table[j - 1], self.dyadic_turns[0])
         } else {
             (self.omega * (j as f64 * self.half_h) + self.phase).sin_cos()
         }

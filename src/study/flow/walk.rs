@@ -348,7 +348,7 @@ impl<S: Carrier<N>, const N: usize> Engine<S, N> {
                             p: p_ev,
                             f: am.rhs_with(a_ev, &ev.y),
                         };
-                        self.show(am, observer, &at, &end, Half::Given(None));
+                        self.show(am, observer, &at, &end, Half::Compute);
                     }
                     let e_ev = || expm_n(&(am.l * ev.s));
                     self.z = self.sys.carry(am, e_ev, at.t, ev.s, &self.z, &ev.y);
@@ -360,7 +360,7 @@ impl<S: Carrier<N>, const N: usize> Engine<S, N> {
             if S::DENSE && O::SEES {
                 let half = match &partial {
                     None => Half::Whole(i),
-                    Some((_, half)) => Half::Given(half.as_ref()),
+                    Some((_, half)) => half.as_ref().map_or(Half::Compute, Half::Known),
                 };
                 self.show(am, observer, &at, &next, half);
             }
@@ -394,8 +394,8 @@ impl<S: Carrier<N>, const N: usize> Engine<S, N> {
         let d = a.y - a.p;
         let y_mid = match half {
             Half::Whole(i) => self.props[i].dyadic(1) * d,
-            Half::Given(Some(m)) => m * d,
-            Half::Given(None) => expm_n(&(am.l * (0.5 * s))) * d,
+            Half::Known(m) => m * d,
+            Half::Compute => expm_n(&(am.l * (0.5 * s))) * d,
         } + p_mid;
         let step = Step::from_ends_and_midpoint(
             a.t,
@@ -557,12 +557,14 @@ impl<S: Carrier<N>, const N: usize> Engine<S, N> {
     }
 }
 
-/// `e^{sL/2}` for the midpoint of a step of length `s` shown to the observer: the grid's
-/// `e^{hL/2}` of affine mode `i` for a whole step, or a matrix already computed, or none (then
-/// the step computes it).
+/// Where `e^{sL/2}` comes from for the midpoint of a step of length `s` shown to the observer.
 enum Half<'a, const N: usize> {
+    /// A whole step of affine mode `i`: the grid's `e^{hL/2}`.
     Whole(usize),
-    Given(Option<&'a SMatrix<f64, N, N>>),
+    /// Already computed.
+    Known(&'a SMatrix<f64, N, N>),
+    /// Computed by the step.
+    Compute,
 }
 
 /// A point of an exact step: time, state, the particular solution and the right-hand side
