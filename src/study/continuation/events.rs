@@ -84,14 +84,17 @@ impl<M: Model<N> + Clone, const N: usize> Continuer<'_, '_, M, N> {
     /// Locates a grazing between `a` and `b` on the branch of the same device with the stops
     /// removed, followed from whichever end does not touch a stop: that branch is smooth where
     /// the real one has the grazing singularity, and the orbit at which its largest |x|
-    /// reaches x_max is exactly the grazing orbit (it exerts no contact force).
+    /// reaches x_max is exactly the grazing orbit (it exerts no contact force). Followed from
+    /// `b`, it also tells which way along `b`'s tangent the stop is reached: `Some(true)` when
+    /// along the tangent (it points back into the grazing), `Some(false)` when against it;
+    /// `None` when followed from `a`.
     fn locate_grazing(
         &mut self,
         k: usize,
         a: &BranchPoint,
         b: &BranchPoint,
         ds: f64,
-    ) -> Result<Event, OrbitError> {
+    ) -> Result<(Event, Option<bool>), OrbitError> {
         let gaps = Gaps::of(self.shooter.base);
         let free_model = self.shooter.base.without_contacts();
         let free = Shooter::with_scales(&free_model, self.shooter.cfg, self.shooter.scales())
@@ -135,6 +138,12 @@ impl<M: Model<N> + Clone, const N: usize> Continuer<'_, '_, M, N> {
                 }
             }
         }
+        // From `b`, the stop is reached along its own tangent when the anchor kept it.
+        let along_b = (!from_a).then(|| {
+            found
+                .as_ref()
+                .is_some_and(|(anchor, _, _)| anchor.tangent.dot(&b.tangent) > 0.0)
+        });
         let Some((anchor, end, hi)) = found else {
             return Err(OrbitError::NoConvergence {
                 what: self.settings.parameter.label(),
@@ -150,7 +159,7 @@ impl<M: Model<N> + Clone, const N: usize> Continuer<'_, '_, M, N> {
         }
         e.stable_before = a.orbit.is_stable();
         e.stable_after = b.orbit.is_stable();
-        Ok(e)
+        Ok((e, along_b))
     }
 
     /// Whether the change of the count of unstable multipliers between `a` and `b` can be a
@@ -200,10 +209,21 @@ impl<M: Model<N> + Clone, const N: usize> Continuer<'_, '_, M, N> {
         if graze {
             // Located on the stop-free branch; a failure leaves the grazing unlocated (the
             // branch itself is fine) rather than ending the continuation.
-            if let Ok(g) = self.locate_grazing(k, a, b, ds) {
+            if let Ok((g, along_b)) = self.locate_grazing(k, a, b, ds) {
                 if a.orbit.is_impacting() && !b.orbit.is_impacting() {
-                    let away = self.u_of(&b.orbit) - self.u_of(&g.orbit);
-                    if b.tangent.dot(&away) < 0.0 {
+                    // The branch goes on away from the grazing orbit: against the direction
+                    // in which the stop-free branch from `b` reaches the stop. That direction
+                    // is known even where `b` lies at the grazing orbit to rounding (its
+                    // distance to the stop ~1e-15 m, the located grazing `b` itself), where
+                    // the difference of the two orbits has no direction.
+                    let back = match along_b {
+                        Some(along) => along,
+                        None => {
+                            let away = self.u_of(&b.orbit) - self.u_of(&g.orbit);
+                            b.tangent.dot(&away) < 0.0
+                        }
+                    };
+                    if back {
                         b.tangent = -b.tangent.clone();
                     }
                     corner = (a.param_tangent() > 0.0) != (b.param_tangent() > 0.0);
@@ -288,7 +308,7 @@ impl<M: Model<N> + Clone, const N: usize> Continuer<'_, '_, M, N> {
         if !graze {
             return out;
         }
-        if let Ok(g) = self.locate_grazing(k, a, b, ds) {
+        if let Ok((g, _)) = self.locate_grazing(k, a, b, ds) {
             if (test_fold(a, gaps) > 0.0) != (test_fold(b, gaps) > 0.0) {
                 let mut fold = g.clone();
                 fold.kind = EventKind::Fold;
