@@ -5,6 +5,10 @@
 //! (1 + 4 eps), a change of the last bits of the arithmetic: both reach the end of the range
 //! with the same events in the same order at the same frequencies.
 //!
+//! Where that branch with the Hertz stop leaves contact coming back down in frequency (a fold
+//! at grazing), a step can land on the grazing orbit to rounding: runs 4, 6 and 11 of the same
+//! wave stalled there one way of the last bits each. Continued as given and perturbed, each
+//! reaches the end of the range with the same events.
 //!
 //! A corner of a contact between two masses: the example up-converter's driver starts to
 //! strike its generator (a rigid stop between the masses) on its branch at 0.05 g, and the
@@ -22,6 +26,7 @@ use std::sync::OnceLock;
 use endstop::device::StiffnessModel;
 use endstop::model::Model;
 use endstop::ode::SolverError;
+use endstop::paper::deviations::sweeps::{P2_HERTZ_BIM, P2_RANGE_HZ, P2_STEP_HZ};
 use endstop::paper::deviations::RangesFile;
 use endstop::paper::setups::{endstop, with_endstop, FIG13_BIAS_V};
 use endstop::progress::Silent;
@@ -102,6 +107,111 @@ fn a_corner_gives_the_same_events_whatever_the_last_bits() {
             last >= 850.0,
             "the branch ends at {last} Hz, not past 850 Hz"
         );
+    }
+}
+
+/// Runs 4, 6 and 11 of prototype 2 in `tests/fixtures/history_points.csv` (unit-cube
+/// coordinates): Figure 13's 0.31 g branch with the Hertz stop stalled at the corner where it
+/// leaves contact coming back down in frequency, one way of the last bits each (4 and 11 with
+/// the drive scaled by 1 + 4 eps, 6 as given), where the step that crossed the grazing landed
+/// on the grazing orbit to rounding.
+const HERTZ_RUNS: [(&str, [f64; 8]); 3] = [
+    (
+        "p2:4",
+        [
+            0.006567485432423121,
+            0.5496506590595835,
+            0.2373222379981695,
+            0.3079454545768192,
+            0.24626456354527249,
+            0.10617626031454266,
+            0.07174169477943085,
+            0.06184601422217495,
+        ],
+    ),
+    (
+        "p2:6",
+        [
+            0.23379327175342884,
+            0.975853719550558,
+            0.17885053591754183,
+            0.4521674386236036,
+            0.4806309393457363,
+            0.30226652297550977,
+            0.6393133162178852,
+            0.1861928819235077,
+        ],
+    ),
+    (
+        "p2:11",
+        [
+            0.5029302445271846,
+            0.04037808350201206,
+            0.5284640278476087,
+            0.8554542432256372,
+            0.7953135977025394,
+            0.18446536998342838,
+            0.9130631076087583,
+            0.3968432131959068,
+        ],
+    ),
+];
+
+/// Figure 13's 0.31 g branch with the Hertz stop of the deviations study at the history
+/// point `coords`, its drive scaled by `scale`.
+fn hertz_branch(coords: &[f64; 8], scale: f64) -> Result<Branch, OrbitError> {
+    let ranges = RangesFile::bundled().expect("the bundled ranges parse");
+    let variant = ranges
+        .prototype2
+        .variant(&common::prototype2(), coords)
+        .expect("the run lies in the unit cube");
+    let base = variant.device.with_bias(FIG13_BIAS_V);
+    let device = with_endstop(&base, StiffnessModel::Hertz, P2_HERTZ_BIM);
+    let accel = 0.31 * variant.accel_scale * scale;
+    frequency_branch(
+        &device,
+        accel,
+        P2_RANGE_HZ.0,
+        P2_RANGE_HZ.1,
+        P2_STEP_HZ,
+        &Silent,
+    )
+}
+
+#[test]
+fn a_step_landing_on_the_grazing_orbit_keeps_the_branch_whatever_the_last_bits() {
+    for (label, coords) in &HERTZ_RUNS {
+        let run = |scale: f64| {
+            hertz_branch(coords, scale)
+                .unwrap_or_else(|e| panic!("{label} scaled by {scale:e}: {e}"))
+        };
+        let (plain, perturbed) = (run(1.0), run(1.0 + 4.0 * f64::EPSILON));
+        let events = |b: &Branch| {
+            b.events
+                .iter()
+                .map(|e| (e.label(), e.param))
+                .collect::<Vec<_>>()
+        };
+        let (a, b) = (events(&plain), events(&perturbed));
+        assert_eq!(
+            a.iter().map(|e| &e.0).collect::<Vec<_>>(),
+            b.iter().map(|e| &e.0).collect::<Vec<_>>(),
+            "{label}: the same events in the same order: {a:?} against {b:?}"
+        );
+        for ((kind, x), (_, y)) in a.iter().zip(&b) {
+            assert!(
+                (x - y).abs() <= REL_CHANGE * x.abs(),
+                "{label}: {kind} at {x} Hz as given and {y} Hz perturbed"
+            );
+        }
+        for br in [&plain, &perturbed] {
+            let last = br.params().last().expect("a branch has points");
+            assert!(
+                last >= P2_RANGE_HZ.1,
+                "{label}: the branch ends at {last} Hz, not at {} Hz",
+                P2_RANGE_HZ.1
+            );
+        }
     }
 }
 
