@@ -75,39 +75,47 @@ fn branch(scale: f64) -> Branch {
         .expect("the branch passes the corner and reaches 850 Hz")
 }
 
-#[test]
-fn a_corner_gives_the_same_events_whatever_the_last_bits() {
-    let plain = branch(1.0);
-    let perturbed = branch(1.0 + 4.0 * f64::EPSILON);
+/// Asserts that `plain` and `perturbed` (one branch as given and with its drive scaled by a
+/// few ulps) have the same events in the same order, each at the same parameter to
+/// [`REL_CHANGE`], and both reach `end_hz`; `what` names the case.
+fn assert_same_branch(what: &str, plain: &Branch, perturbed: &Branch, end_hz: f64) {
     let events = |b: &Branch| {
         b.events
             .iter()
             .map(|e| (e.label(), e.param))
             .collect::<Vec<_>>()
     };
-    let (a, b) = (events(&plain), events(&perturbed));
-    assert!(
-        plain.grazing_events().next().is_some(),
-        "the branch reaches the stops: {a:?}"
-    );
+    let (a, b) = (events(plain), events(perturbed));
     assert_eq!(
         a.iter().map(|e| &e.0).collect::<Vec<_>>(),
         b.iter().map(|e| &e.0).collect::<Vec<_>>(),
-        "the same events in the same order: {a:?} against {b:?}"
+        "{what}: the same events in the same order: {a:?} against {b:?}"
     );
     for ((kind, x), (_, y)) in a.iter().zip(&b) {
         assert!(
             (x - y).abs() <= REL_CHANGE * x.abs(),
-            "{kind} at {x} Hz as given and {y} Hz perturbed"
+            "{what}: {kind} at {x} Hz as given and {y} Hz perturbed"
         );
     }
-    for br in [&plain, &perturbed] {
+    for br in [plain, perturbed] {
         let last = br.params().last().expect("a branch has points");
         assert!(
-            last >= 850.0,
-            "the branch ends at {last} Hz, not past 850 Hz"
+            last >= end_hz,
+            "{what}: the branch ends at {last} Hz, not past {end_hz} Hz"
         );
     }
+}
+
+#[test]
+fn a_corner_gives_the_same_events_whatever_the_last_bits() {
+    let plain = branch(1.0);
+    let perturbed = branch(1.0 + 4.0 * f64::EPSILON);
+    assert!(
+        plain.grazing_events().next().is_some(),
+        "the branch reaches the stops: {:?}",
+        plain.events
+    );
+    assert_same_branch("run 2", &plain, &perturbed, 850.0);
 }
 
 /// Runs 4, 6 and 11 of prototype 2 in `tests/fixtures/history_points.csv` (unit-cube
@@ -186,32 +194,7 @@ fn a_step_landing_on_the_grazing_orbit_keeps_the_branch_whatever_the_last_bits()
                 .unwrap_or_else(|e| panic!("{label} scaled by {scale:e}: {e}"))
         };
         let (plain, perturbed) = (run(1.0), run(1.0 + 4.0 * f64::EPSILON));
-        let events = |b: &Branch| {
-            b.events
-                .iter()
-                .map(|e| (e.label(), e.param))
-                .collect::<Vec<_>>()
-        };
-        let (a, b) = (events(&plain), events(&perturbed));
-        assert_eq!(
-            a.iter().map(|e| &e.0).collect::<Vec<_>>(),
-            b.iter().map(|e| &e.0).collect::<Vec<_>>(),
-            "{label}: the same events in the same order: {a:?} against {b:?}"
-        );
-        for ((kind, x), (_, y)) in a.iter().zip(&b) {
-            assert!(
-                (x - y).abs() <= REL_CHANGE * x.abs(),
-                "{label}: {kind} at {x} Hz as given and {y} Hz perturbed"
-            );
-        }
-        for br in [&plain, &perturbed] {
-            let last = br.params().last().expect("a branch has points");
-            assert!(
-                last >= P2_RANGE_HZ.1,
-                "{label}: the branch ends at {last} Hz, not at {} Hz",
-                P2_RANGE_HZ.1
-            );
-        }
+        assert_same_branch(label, &plain, &perturbed, P2_RANGE_HZ.1);
     }
 }
 
