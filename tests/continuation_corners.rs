@@ -194,6 +194,11 @@ fn a_step_landing_on_the_grazing_orbit_keeps_the_branch_whatever_the_last_bits()
                 .unwrap_or_else(|e| panic!("{label} scaled by {scale:e}: {e}"))
         };
         let (plain, perturbed) = (run(1.0), run(1.0 + 4.0 * f64::EPSILON));
+        assert!(
+            plain.grazing_events().next().is_some(),
+            "{label}: the branch reaches the stop: {:?}",
+            plain.events
+        );
         assert_same_branch(label, &plain, &perturbed, P2_RANGE_HZ.1);
     }
 }
