@@ -41,17 +41,25 @@ use nalgebra::SVector;
 
 use crate::common;
 
-/// Run 2 of prototype 2 in `tests/fixtures/history_points.csv` (unit-cube coordinates).
-const RUN_2: [f64; 8] = [
-    0.8895665758661684,
-    0.1622832700042394,
-    0.8676937526421881,
-    0.9567709555348249,
-    0.28157224702252764,
-    0.6296371298352567,
-    0.9988760919815375,
-    0.7593736317045318,
-];
+/// The recorded history points: prototype, run, unit-cube coordinates (eight), failures.
+const HISTORY_POINTS: &str = include_str!("fixtures/history_points.csv");
+
+/// The unit-cube coordinates of history point `label` (`prototype:run`) of
+/// `tests/fixtures/history_points.csv`.
+fn history_point(label: &str) -> [f64; 8] {
+    let line = HISTORY_POINTS
+        .lines()
+        .filter(|l| !l.starts_with('#'))
+        .find(|l| l.splitn(3, ',').take(2).collect::<Vec<_>>().join(":") == label)
+        .unwrap_or_else(|| panic!("no history point {label}"));
+    let coords: Vec<f64> = line
+        .split(',')
+        .skip(2)
+        .take(8)
+        .map(|x| x.parse().expect("a coordinate"))
+        .collect();
+    coords.try_into().expect("eight coordinates")
+}
 
 /// The relative change of an event's frequency that counts as another event: the one the
 /// `last_bits` example uses, a thousand times the events' location tolerance (1e-4 Hz at
@@ -59,20 +67,31 @@ const RUN_2: [f64; 8] = [
 /// branches' events.
 const REL_CHANGE: f64 = 1e-3;
 
-/// Figure 13's 0.31 g branch with the linear stop at the run's variant, its drive scaled by
-/// `scale`.
-fn branch(scale: f64) -> Branch {
+/// Figure 13's 0.31 g branch of the deviations study at history point `label` with the
+/// stop law `law` (its damping `bim`, or the prototype's), its drive scaled by `scale`.
+fn fig13_branch(
+    label: &str,
+    law: StiffnessModel,
+    bim: Option<f64>,
+    scale: f64,
+) -> Result<Branch, OrbitError> {
     let ranges = RangesFile::bundled().expect("the bundled ranges parse");
     let variant = ranges
         .prototype2
-        .variant(&common::prototype2(), &RUN_2)
+        .variant(&common::prototype2(), &history_point(label))
         .expect("the run lies in the unit cube");
     let base = variant.device.with_bias(FIG13_BIAS_V);
-    let bim = endstop(&base).damping_n_s_per_m;
-    let device = with_endstop(&base, StiffnessModel::Linear, bim);
+    let bim = bim.unwrap_or_else(|| endstop(&base).damping_n_s_per_m);
+    let device = with_endstop(&base, law, bim);
     let accel = 0.31 * variant.accel_scale * scale;
-    frequency_branch(&device, accel, 600.0, 850.0, 2.0, &Silent)
-        .expect("the branch passes the corner and reaches 850 Hz")
+    frequency_branch(
+        &device,
+        accel,
+        P2_RANGE_HZ.0,
+        P2_RANGE_HZ.1,
+        P2_STEP_HZ,
+        &Silent,
+    )
 }
 
 /// Asserts that `plain` and `perturbed` (one branch as given and with its drive scaled by a
@@ -108,6 +127,11 @@ fn assert_same_branch(what: &str, plain: &Branch, perturbed: &Branch, end_hz: f6
 
 #[test]
 fn a_corner_gives_the_same_events_whatever_the_last_bits() {
+    // Run 2 of prototype 2, whose continuation stalled at this corner in the record.
+    let branch = |scale: f64| {
+        fig13_branch("p2:2", StiffnessModel::Linear, None, scale)
+            .unwrap_or_else(|e| panic!("p2:2 scaled by {scale:e}: {e}"))
+    };
     let plain = branch(1.0);
     let perturbed = branch(1.0 + 4.0 * f64::EPSILON);
     assert!(
@@ -115,82 +139,21 @@ fn a_corner_gives_the_same_events_whatever_the_last_bits() {
         "the branch reaches the stops: {:?}",
         plain.events
     );
-    assert_same_branch("run 2", &plain, &perturbed, 850.0);
+    assert_same_branch("p2:2", &plain, &perturbed, P2_RANGE_HZ.1);
 }
 
-/// Runs 4, 6 and 11 of prototype 2 in `tests/fixtures/history_points.csv` (unit-cube
-/// coordinates): Figure 13's 0.31 g branch with the Hertz stop stalled at the corner where it
-/// leaves contact coming back down in frequency, one way of the last bits each (4 and 11 with
-/// the drive scaled by 1 + 4 eps, 6 as given), where the step that crossed the grazing landed
-/// on the grazing orbit to rounding.
-const HERTZ_RUNS: [(&str, [f64; 8]); 3] = [
-    (
-        "p2:4",
-        [
-            0.006567485432423121,
-            0.5496506590595835,
-            0.2373222379981695,
-            0.3079454545768192,
-            0.24626456354527249,
-            0.10617626031454266,
-            0.07174169477943085,
-            0.06184601422217495,
-        ],
-    ),
-    (
-        "p2:6",
-        [
-            0.23379327175342884,
-            0.975853719550558,
-            0.17885053591754183,
-            0.4521674386236036,
-            0.4806309393457363,
-            0.30226652297550977,
-            0.6393133162178852,
-            0.1861928819235077,
-        ],
-    ),
-    (
-        "p2:11",
-        [
-            0.5029302445271846,
-            0.04037808350201206,
-            0.5284640278476087,
-            0.8554542432256372,
-            0.7953135977025394,
-            0.18446536998342838,
-            0.9130631076087583,
-            0.3968432131959068,
-        ],
-    ),
-];
-
-/// Figure 13's 0.31 g branch with the Hertz stop of the deviations study at the history
-/// point `coords`, its drive scaled by `scale`.
-fn hertz_branch(coords: &[f64; 8], scale: f64) -> Result<Branch, OrbitError> {
-    let ranges = RangesFile::bundled().expect("the bundled ranges parse");
-    let variant = ranges
-        .prototype2
-        .variant(&common::prototype2(), coords)
-        .expect("the run lies in the unit cube");
-    let base = variant.device.with_bias(FIG13_BIAS_V);
-    let device = with_endstop(&base, StiffnessModel::Hertz, P2_HERTZ_BIM);
-    let accel = 0.31 * variant.accel_scale * scale;
-    frequency_branch(
-        &device,
-        accel,
-        P2_RANGE_HZ.0,
-        P2_RANGE_HZ.1,
-        P2_STEP_HZ,
-        &Silent,
-    )
-}
+/// Runs 4, 6 and 11 of prototype 2 in `tests/fixtures/history_points.csv`: Figure 13's
+/// 0.31 g branch with the Hertz stop stalled at the corner where it leaves contact coming back
+/// down in frequency, one way of the last bits each (4 and 11 with the drive scaled by
+/// 1 + 4 eps, 6 as given), where the step that crossed the grazing landed on the grazing
+/// orbit to rounding.
+const HERTZ_RUNS: [&str; 3] = ["p2:4", "p2:6", "p2:11"];
 
 #[test]
 fn a_step_landing_on_the_grazing_orbit_keeps_the_branch_whatever_the_last_bits() {
-    for (label, coords) in &HERTZ_RUNS {
+    for label in HERTZ_RUNS {
         let run = |scale: f64| {
-            hertz_branch(coords, scale)
+            fig13_branch(label, StiffnessModel::Hertz, Some(P2_HERTZ_BIM), scale)
                 .unwrap_or_else(|e| panic!("{label} scaled by {scale:e}: {e}"))
         };
         let (plain, perturbed) = (run(1.0), run(1.0 + 4.0 * f64::EPSILON));

@@ -109,15 +109,19 @@ impl<M: Model<N> + Clone, const N: usize> Continuer<'_, '_, M, N> {
         // From the non-touching end towards the other one; from `b` the tangent inherited
         // from `a` may point either way (at a corner it points back into the corner), so both
         // directions are tried.
-        let candidates: Vec<BranchPoint> = if from_a {
-            vec![a.clone()]
+        // Each candidate with the way it runs along `b`'s tangent (none from `a`).
+        let candidates: Vec<(BranchPoint, Option<bool>)> = if from_a {
+            vec![(a.clone(), None)]
         } else {
             vec![
-                BranchPoint {
-                    orbit: b.orbit.clone(),
-                    tangent: -b.tangent.clone(),
-                },
-                b.clone(),
+                (
+                    BranchPoint {
+                        orbit: b.orbit.clone(),
+                        tangent: -b.tangent.clone(),
+                    },
+                    Some(false),
+                ),
+                (b.clone(), Some(true)),
             ]
         };
         // Bracket the crossing on the stop-free branch (it differs from the real one past the
@@ -125,25 +129,21 @@ impl<M: Model<N> + Clone, const N: usize> Continuer<'_, '_, M, N> {
         // `ds` is the hop's length, which can be far longer than the stop-free branch can be
         // followed in one step: shorter steps are tried last.
         let mut found = None;
+        let mut along_b = None;
         let tries = [
             1.0, 2.0, 4.0, 8.0, 0.5, 0.25, 0.125, 0.0625, 0.03125, 0.015625,
         ];
-        'dirs: for anchor in candidates {
+        'dirs: for (anchor, along) in candidates {
             for hi in tries.map(|f| f * ds) {
                 if let Ok((p, _)) = c.point_at(&anchor, hi) {
                     if test_grazing(&p, gaps) > 0.0 {
                         found = Some((anchor, p, hi));
+                        along_b = along;
                         break 'dirs;
                     }
                 }
             }
         }
-        // From `b`, the stop is reached along its own tangent when the anchor kept it.
-        let along_b = (!from_a).then(|| {
-            found
-                .as_ref()
-                .is_some_and(|(anchor, _, _)| anchor.tangent.dot(&b.tangent) > 0.0)
-        });
         let Some((anchor, end, hi)) = found else {
             return Err(OrbitError::NoConvergence {
                 what: self.settings.parameter.label(),
@@ -218,6 +218,8 @@ impl<M: Model<N> + Clone, const N: usize> Continuer<'_, '_, M, N> {
                     // the difference of the two orbits has no direction.
                     let back = match along_b {
                         Some(along) => along,
+                        // Followed from `a` (its grazing test says free, though it impacts):
+                        // the orbits' difference has a direction there.
                         None => {
                             let away = self.u_of(&b.orbit) - self.u_of(&g.orbit);
                             b.tangent.dot(&away) < 0.0
