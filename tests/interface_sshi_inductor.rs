@@ -23,7 +23,9 @@ use endstop::drive::{Excitation, Sine};
 use endstop::model::{Driven, Mode, Model};
 use endstop::ode::{Dopri5, Observer, Step};
 use endstop::physics::harvester::AssemblyError;
-use endstop::study::periodic::{steady_state_from_rest, SteadySettings};
+use endstop::study::periodic::{
+    steady_state, steady_state_from_rest, PeriodicState, SteadySettings,
+};
 use nalgebra::SVector;
 use std::f64::consts::PI;
 
@@ -169,6 +171,12 @@ fn ring_of<M: Model<N>, const N: usize>(m: &M) -> (f64, f64) {
 /// the instantaneous parallel SSHI with the ring's own factor. What is asserted is the
 /// limit: the difference shrinks with the ring, at least as fast as the ring's duration
 /// (an observed order of at least 0.9 between the last two rows).
+///
+/// The steady state compared is the one continued from the instantaneous SSHI's: shooting
+/// starts from its section state with no current in the inductor. Near the resonance this
+/// device has more than one stable steady state (at ring/T = 1e-3 two, with DC powers nearly
+/// a factor two apart), and which one a start from rest settles on is decided by the last
+/// bits of the arithmetic; the limit is a statement about one attractor, so the test names it.
 #[test]
 fn a_fast_inductor_approaches_the_instantaneous_sshi() {
     let d = example();
@@ -190,8 +198,13 @@ fn a_fast_inductor_approaches_the_instantaneous_sshi() {
         let dl = with_inductor(&d, l, q);
         let gamma = damped_gamma(l, (l / c).sqrt() / q, c);
         instant.interface = Interface::ParallelSshi(rect.clone(), Inversion::Factor(gamma));
-        let (s, reference) = (steady(&dl), steady(&instant));
+        let reference = steady(&instant);
         assert!(!reference.contact, "the drive must stay off the stop");
+        let s = continued(&dl, sine, &reference.state);
+        assert!(
+            s.is_stable() && reference.is_stable(),
+            "{s:?}\n{reference:?}"
+        );
         let dp = (s.p_dc_w - reference.p_dc_w) / reference.p_dc_w;
         eprintln!(
             "{l:.3e} | {ratio:.0e} | {:.6e} | {:.6e} | {dp:+.3e}",
@@ -206,6 +219,23 @@ fn a_fast_inductor_approaches_the_instantaneous_sshi() {
     let order = (a.1.abs() / b.1.abs()).log10() / (a.0 / b.0).log10();
     eprintln!("observed order between ring/T = 1e-3 and 1e-4: {order:.2}");
     assert!(order >= 0.9, "{rows:?}");
+}
+
+/// The steady state of `d` (a parallel SSHI through its inductor) continued from the section
+/// state `instant` of the instantaneous SSHI: the same state with no current in the inductor.
+fn continued(d: &Device, sine: Sine, instant: &[f64]) -> PeriodicState {
+    let r: Result<PeriodicState, AssemblyError> =
+        endstop::with_harvester!(d, |m| Ok(continued_on(&m, sine, instant)));
+    r.unwrap()
+}
+
+fn continued_on<M: Model<N>, const N: usize>(m: &M, sine: Sine, instant: &[f64]) -> PeriodicState {
+    assert_eq!(N, instant.len() + 1, "the inductor adds its current");
+    let mut y = SVector::<f64, N>::zeros();
+    for (k, v) in instant.iter().enumerate() {
+        y[k] = *v;
+    }
+    steady_state(m, sine, &y, &SteadySettings::default()).unwrap_or_else(|e| panic!("{e}"))
 }
 
 /// At each stage of the ring and of the bridge, the analytic Jacobian equals central
