@@ -112,9 +112,11 @@ pub(crate) struct Engine<S: Carrier<N>, const N: usize> {
     switches_here: u32,
     /// The model's state scales (for the guards' scales).
     scales: SVector<f64, N>,
-    /// The drive's phase on the half-grid, for a model of several masses (see
-    /// [`Engine::forced`]); none for one mass.
+    /// The drive's phase on the half-grid (see [`Engine::forced`]); none off the exact path.
     phases: Option<PhaseGrid>,
+    /// True when a partial step shown to an observer takes `e^{sL}` as the square of its
+    /// half-step's exponential (several masses; see [`Engine::exact`]).
+    square_half: bool,
 }
 
 /// The affine modes of a model under a sine: every mode the model can be in whose affine
@@ -160,7 +162,7 @@ impl<S: Carrier<N>, const N: usize> Engine<S, N> {
             Some(m) => {
                 let (h, steps) = grid_step(sys.sine().period_s(), m, model.unused());
                 let props = m.iter().map(|a| Propagators::new(&a.l, h)).collect();
-                let phases = several_masses.then(|| PhaseGrid::new(sys.sine(), steps, h));
+                let phases = Some(PhaseGrid::new(sys.sine(), steps, h));
                 (h, props, phases)
             }
             None => (0.0, Vec::new(), None),
@@ -181,13 +183,13 @@ impl<S: Carrier<N>, const N: usize> Engine<S, N> {
             switches_here: 0,
             scales,
             phases,
+            square_half: several_masses,
         }
     }
 
-    /// The particular solution of `am` and the drive at time `t`. A model of several masses
-    /// reads the drive's phase on the half-grid from its table ([`PhaseGrid`]: one `sin_cos`
-    /// per point of one period instead of one per point); a model of one mass computes it at
-    /// every point, the arithmetic its recorded results were computed with.
+    /// The particular solution of `am` and the drive at time `t`: on the exact path the
+    /// drive's phase on the half-grid is read from its table ([`PhaseGrid`]: one `sin_cos`
+    /// per point of one period instead of one per point).
     #[inline(always)]
     fn forced(&mut self, am: &AffineMode<N>, t: f64) -> (SVector<f64, N>, f64) {
         match &mut self.phases {
@@ -318,7 +320,7 @@ impl<S: Carrier<N>, const N: usize> Engine<S, N> {
             // of two).
             let partial = if whole {
                 None
-            } else if self.phases.is_some() && S::DENSE && O::SEES {
+            } else if self.square_half && S::DENSE && O::SEES {
                 let half = expm_n(&(am.l * (0.5 * s)));
                 Some((half * half, Some(half)))
             } else {
@@ -513,7 +515,7 @@ impl<S: Carrier<N>, const N: usize> Engine<S, N> {
     ) -> (f64, SVector<f64, N>) {
         let (mut lo, mut y_lo, mut p_lo) = (0.0, a.y, a.p);
         let (mut hi, mut y_hi) = (s, y_s);
-        // With several masses the drive's phase at the lower end is carried and turned by
+        // On the exact path the drive's phase at the lower end is carried and turned by
         // the dyadic rotations (see `phase.rs`) instead of a `sin_cos` per halving.
         let mut phase_lo = self.phases.as_mut().map(|g| g.at(a.t));
         let mut j = 0usize;
