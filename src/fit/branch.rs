@@ -24,6 +24,7 @@ use crate::study::orbit::Orbit;
 use crate::study::stepped::{in_contact, SweepStep, Transition};
 use crate::study::sweep::{BranchEndKind, DownEndKind};
 
+use super::clear;
 use super::model::SweepRun;
 use super::track::{
     locate_fold, locate_grazing, point_orbit, quantity_of, track_fold, track_grazing, Fold,
@@ -41,6 +42,16 @@ pub(super) enum PointModel {
     /// A point of the second branch where that branch does not reach: the orbit where it
     /// ends nearest the point, followed at its own frequency.
     Nearest(Box<Orbit>),
+}
+
+impl PointModel {
+    /// The orbit the point is compared with, where it is not the fold's.
+    fn orbit(&self) -> Option<&Orbit> {
+        match self {
+            PointModel::Orbit(o) | PointModel::Nearest(o) => Some(o),
+            PointModel::AtFold => None,
+        }
+    }
 }
 
 /// The model of a measured frequency feature.
@@ -68,6 +79,9 @@ pub(super) struct SetModel {
     fold: Option<Fold>,
     /// Each point: on the first branch, and its model.
     points: Vec<(bool, PointModel)>,
+    /// The device the model was found on (what a change of parameters leaves in place is
+    /// read against it, [`clear`]).
+    device: Device,
 }
 
 /// The accelerations, grid and direction of a data set at an acceleration factor.
@@ -348,6 +362,7 @@ pub(super) fn identify(device: &Device, scale: f64, data: &SweepData) -> Result<
         bracket,
         fold,
         points,
+        device: device.clone(),
     })
 }
 
@@ -400,7 +415,9 @@ fn follow_fold(
 }
 
 /// The model of `data` on `device` with the acceleration factor `scale`, followed from the
-/// model `prev` at nearby parameter values.
+/// model `prev` at nearby parameter values. An orbit of `prev` that the change of device
+/// cannot move (it differs only in a stop the orbit stays clear of, [`clear`]) is kept as it
+/// is.
 pub(super) fn track(
     device: &Device,
     scale: f64,
@@ -410,7 +427,10 @@ pub(super) fn track(
     let s = Setup::of(data, scale);
     let h = s.harvester(device)?;
     let a = s.accel_rms_g;
+    let unchanged = clear::unchanged(&prev.device, device);
+    let kept = |o: &Orbit| unchanged.is_some_and(|u| u.keeps(o, a));
     let fold = match &prev.fold {
+        Some(f) if kept(&f.orbit) => Some(f.clone()),
         Some(f) => Some(follow_fold(&h, a, &s, f, data, &prev.points)?),
         None => None,
     };
@@ -429,6 +449,7 @@ pub(super) fn track(
         let ctx = |e: Lost| Lost(format!("point at {f} Hz: {}", e.0));
         let pm = match (&fold, first) {
             (Some(fold), true) if fold.beyond(f) => PointModel::AtFold,
+            (_, _) if pm.orbit().is_some_and(kept) => pm.clone(),
             (Some(fold), true) => {
                 let (ph, y, n) = match pm {
                     PointModel::Orbit(o) | PointModel::Nearest(o) => {
@@ -462,5 +483,6 @@ pub(super) fn track(
         bracket,
         fold,
         points,
+        device: device.clone(),
     })
 }

@@ -87,6 +87,7 @@
 //! parameter in it an infinite standard error and its whole range as interval.
 
 mod branch;
+mod clear;
 pub mod data;
 pub mod family;
 pub mod lm;
