@@ -23,6 +23,7 @@ mod design_noise;
 mod design_record;
 mod device_description;
 mod fit_family;
+mod fit_points_decide;
 mod fit_recovery;
 mod foundation;
 mod general_model;

@@ -310,14 +310,15 @@ pub(super) fn identify(device: &Device, scale: f64, data: &SweepData) -> Result<
         Some(_) => Some(end_edge()?),
         None => None,
     };
-    // Which branch a point lies on: the measurement says, by its measured branch end or the
-    // jump its points show; else the stepped sweep at these values.
-    let measured_end = data
+    // Which branch a point lies on: the measurement says, by the jump its points show, else
+    // by its stated branch end; else the stepped sweep at these values. The points come
+    // first: a stated end has an uncertainty of its own, which can place it past a measured
+    // frequency at which the points have already jumped.
+    let measured_end = data.points_jump().map(|j| j.mid_hz()).or(data
         .features
         .iter()
         .find(|f| f.kind == FeatureKind::BranchEnd)
-        .map(|f| f.freq_hz)
-        .or(jump.map(|j| j.mid_hz()));
+        .map(|f| f.freq_hz));
     let mut points = Vec::with_capacity(data.points.len());
     for p in &data.points {
         let f = p.freq_hz;

@@ -255,6 +255,13 @@ impl SweepData {
         {
             return None;
         }
+        self.points_jump()
+    }
+
+    /// The jump the measured points show, whether or not the data set states a branch end:
+    /// the largest change against the sweep's direction of jumping between consecutive
+    /// points, when it meets the criteria of [`SweepData::measured_jump`].
+    pub fn points_jump(&self) -> Option<MeasuredJump> {
         let sign = match self.direction {
             Direction::Up => 1.0,
             Direction::Down => -1.0,
