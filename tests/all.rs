@@ -25,6 +25,7 @@ mod device_description;
 mod fit_family;
 mod fit_points_decide;
 mod fit_recovery;
+mod fit_untouched_gap;
 mod foundation;
 mod general_model;
 mod history_matching;

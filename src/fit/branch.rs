@@ -138,6 +138,22 @@ fn edge_value(e: &Edge, fold: Option<&Fold>) -> f64 {
 }
 
 impl SetModel {
+    /// How far the model's orbits (its points' and its fold's) reach towards the stop on
+    /// `side` (m; zero for none).
+    pub(super) fn reach_m(&self, side: crate::laws::contact::Side) -> f64 {
+        use crate::laws::contact::Side;
+        let reach = |o: &Orbit| match side {
+            Side::Upper => o.summary.x_upper_m,
+            Side::Lower => -o.summary.x_lower_m,
+        };
+        self.points
+            .iter()
+            .filter_map(|(_, pm)| pm.orbit())
+            .chain(self.fold.iter().map(|f| &f.orbit))
+            .map(reach)
+            .fold(0.0, f64::max)
+    }
+
     /// The model's values for the data set: its points, then its features.
     pub(super) fn values(&self, data: &SweepData) -> Vec<f64> {
         let fold_value = self

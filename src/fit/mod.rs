@@ -98,6 +98,7 @@ mod search;
 pub mod spectrum;
 mod track;
 mod uncertainty;
+mod untouched;
 
 use statrs::distribution::{ChiSquared, ContinuousCDF};
 use thiserror::Error;

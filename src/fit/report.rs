@@ -265,12 +265,20 @@ impl FitReport {
 }
 
 /// Where a start of the design lies.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Eq, Serialize)]
 pub enum StartOrigin {
     /// The device's own values.
     DeviceFile,
     /// The k-th point (from 1) of the Sobol sequence over the ranges.
     Sobol(usize),
+    /// The fit refined from start `from` (an index into the starts) with the gap `param`,
+    /// beyond the reach of every orbit there, moved inside it (`fit::untouched`).
+    Untouched {
+        /// The start whose fit it moved (an index into the starts).
+        from: usize,
+        /// The parameter moved (its path).
+        param: String,
+    },
 }
 
 impl std::fmt::Display for StartOrigin {
@@ -278,6 +286,11 @@ impl std::fmt::Display for StartOrigin {
         match self {
             StartOrigin::DeviceFile => write!(f, "the device file's values"),
             StartOrigin::Sobol(k) => write!(f, "Sobol point {k}"),
+            StartOrigin::Untouched { from, param } => write!(
+                f,
+                "start {from}'s fit with `{param}`, beyond every orbit's reach there, moved \
+                 inside it"
+            ),
         }
     }
 }

@@ -10,6 +10,7 @@ use super::lm::{
 use super::model::design_values;
 use super::params::{apply, Transform};
 use super::report::{Refined, StartOrigin, StartTried};
+use super::untouched;
 use super::{
     model_values, FitError, FitSettings, SweepData, AGREE_REL, AGREE_SIGMA, MAX_ROUNDS,
     STATED_COST_ABS_TOL,
@@ -44,12 +45,18 @@ impl Problem<'_> {
     }
 
     /// The branches of every data set identified afresh at `u`.
-    fn identify(&self, u: &[f64]) -> Result<Vec<SetModel>, FitError> {
+    pub(super) fn identify(&self, u: &[f64]) -> Result<Vec<SetModel>, FitError> {
         let (d, scale) = apply(self.device, self.free, &self.to_p(u))?;
         self.data
             .iter()
             .map(|ds| branch::identify(&d, scale, ds).map_err(|l| FitError::Lost(l.0)))
             .collect()
+    }
+
+    /// The weighted SSR on the branches identified afresh at `u`.
+    pub(super) fn branch_ssr(&self, u: &[f64]) -> Result<f64, FitError> {
+        let states = self.identify(u)?;
+        Ok(self.residuals_of(&states).iter().map(|r| r * r).sum())
     }
 
     /// The weighted residuals of the models `states` (without following them).
@@ -504,6 +511,8 @@ pub(super) fn search(
     let order = best_ranked(&ssr, settings.refine.max(1));
     let mut best: Option<(Run, usize)> = None;
     let mut last_err = None;
+    let good = |r: &Run| r.settled() && chi2_limit.is_some_and(|l| r.ssr() <= l);
+    let improbable = |r: &Run| chi2_limit.is_some_and(|l| r.ssr() > l);
     for i in order {
         let run = match search_from(pb, &us[i], &lm) {
             Ok(run) => run,
@@ -517,14 +526,41 @@ pub(super) fn search(
             settled: run.settled(),
             values: pb.to_p(&run.lm.u),
         });
-        let good = run.settled() && chi2_limit.is_some_and(|l| run.ssr() <= l);
-        let better = best
-            .as_ref()
-            .is_none_or(|(b, _)| (run.settled(), -run.ssr()) > (b.settled(), -b.ssr()));
-        if better {
-            best = Some((run, i));
+        // A gap this fit leaves beyond every orbit's reach, tried inside it
+        // ([`untouched`]) before the next start.
+        let moved = improbable(&run)
+            .then(|| untouched::lower_trial(pb, &run))
+            .flatten()
+            .and_then(|(u, _, k)| Some((search_from(pb, &u, &lm).ok()?, u, k)));
+        let mut runs = vec![(run, i)];
+        if let Some((next, u, k)) = moved {
+            starts.push(StartTried {
+                origin: StartOrigin::Untouched {
+                    from: i,
+                    param: pb.free[k].path.clone(),
+                },
+                values: pb.to_p(&u),
+                design_ssr: f64::NAN,
+                design_cut: false,
+                refined: Some(Refined {
+                    ssr: next.ssr(),
+                    settled: next.settled(),
+                    values: pb.to_p(&next.lm.u),
+                }),
+            });
+            runs.push((next, starts.len() - 1));
         }
-        if good {
+        let mut done = false;
+        for (run, j) in runs {
+            done |= good(&run);
+            let better = best
+                .as_ref()
+                .is_none_or(|(b, _)| (run.settled(), -run.ssr()) > (b.settled(), -b.ssr()));
+            if better {
+                best = Some((run, j));
+            }
+        }
+        if done {
             break;
         }
     }
