@@ -45,7 +45,7 @@ impl Problem<'_> {
     }
 
     /// The branches of every data set identified afresh at `u`.
-    pub(super) fn identify(&self, u: &[f64]) -> Result<Vec<SetModel>, FitError> {
+    fn identify(&self, u: &[f64]) -> Result<Vec<SetModel>, FitError> {
         let (d, scale) = apply(self.device, self.free, &self.to_p(u))?;
         self.data
             .iter()
@@ -54,7 +54,7 @@ impl Problem<'_> {
     }
 
     /// The weighted SSR on the branches identified afresh at `u`.
-    pub(super) fn branch_ssr(&self, u: &[f64]) -> Result<f64, FitError> {
+    fn branch_ssr(&self, u: &[f64]) -> Result<f64, FitError> {
         let states = self.identify(u)?;
         Ok(self.residuals_of(&states).iter().map(|r| r * r).sum())
     }
@@ -529,7 +529,16 @@ pub(super) fn search(
         // A gap this fit leaves beyond every orbit's reach, tried inside it
         // ([`untouched`]) before the next start.
         let moved = improbable(&run)
-            .then(|| untouched::lower_trial(pb, &run))
+            .then(|| {
+                untouched::lower_trial(
+                    pb.free,
+                    &pb.tr,
+                    &run.lm,
+                    run.ssr(),
+                    |u| pb.identify(u).ok(),
+                    |u| pb.branch_ssr(u).ok(),
+                )
+            })
             .flatten()
             .and_then(|(u, _, k)| Some((search_from(pb, &u, &lm).ok()?, u, k)));
         let mut runs = vec![(run, i)];

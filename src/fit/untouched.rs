@@ -8,18 +8,21 @@
 //! gap is tried at a ladder of values inside the edge, the others held, each trial on the
 //! branches identified there, and the lowest trial below the fit is refined as one more start.
 
-use super::search::{Problem, Run};
+use super::branch::SetModel;
+use super::lm::LmResult;
+use super::params::Transform;
+use crate::device::ParamRange;
 use crate::laws::contact::Side;
 
 /// The trials lie at `reach (1 - 2^-j)` for these `j`: a geometric ladder from within 1 % of
 /// the edge to 12.5 % inside it, each step twice as deep as the last.
 const LADDER: std::ops::RangeInclusive<i32> = 3..=7;
 
-/// The parameters whose Jacobian column at the run's optimum is exactly zero (none when the
-/// Jacobian is not the optimum's).
-pub(super) fn untouched(run: &Run) -> Vec<usize> {
-    let j = &run.lm.jacobian;
-    if !run.lm.jacobian_at_u {
+/// The parameters whose Jacobian column at the search's optimum `lm` is exactly zero (none when
+/// the Jacobian is not the optimum's).
+pub(super) fn untouched(lm: &LmResult) -> Vec<usize> {
+    let j = &lm.jacobian;
+    if !lm.jacobian_at_u {
         return Vec::new();
     }
     (0..j.ncols())
@@ -37,20 +40,29 @@ fn gap_sides(path: &str) -> &'static [Side] {
     }
 }
 
-/// The lowest trial of an untouched gap of `run` with its SSR and the parameter's index, when
-/// it lies below the run's SSR.
-pub(super) fn lower_trial(pb: &Problem<'_>, run: &Run) -> Option<(Vec<f64>, f64, usize)> {
-    let gaps: Vec<usize> = untouched(run)
+/// The lowest trial of an untouched gap at the search's optimum `lm` (of the free parameters
+/// `free` with their transforms `tr`), with its SSR and the parameter's index, when it lies
+/// below `ssr`, the optimum's. `identify` gives the branches identified at a point, `ssr_at`
+/// the SSR on the branches identified there.
+pub(super) fn lower_trial(
+    free: &[ParamRange],
+    tr: &[Transform],
+    lm: &LmResult,
+    ssr: f64,
+    identify: impl Fn(&[f64]) -> Option<Vec<SetModel>>,
+    ssr_at: impl Fn(&[f64]) -> Option<f64>,
+) -> Option<(Vec<f64>, f64, usize)> {
+    let gaps: Vec<usize> = untouched(lm)
         .into_iter()
-        .filter(|&k| !gap_sides(&pb.free[k].path).is_empty())
+        .filter(|&k| !gap_sides(&free[k].path).is_empty())
         .collect();
     if gaps.is_empty() {
         return None;
     }
-    let states = pb.identify(&run.lm.u).ok()?;
+    let states = identify(&lm.u)?;
     let mut best: Option<(Vec<f64>, f64, usize)> = None;
     for k in gaps {
-        let f = &pb.free[k];
+        let f = &free[k];
         let reach = gap_sides(&f.path)
             .iter()
             .flat_map(|&side| states.iter().map(move |s| s.reach_m(side)))
@@ -60,13 +72,13 @@ pub(super) fn lower_trial(pb: &Problem<'_>, run: &Run) -> Option<(Vec<f64>, f64,
             if !(f.lo < gap && gap < f.hi) {
                 continue;
             }
-            let mut u = run.lm.u.clone();
-            u[k] = pb.tr[k].to_u(gap);
-            let Ok(ssr) = pb.branch_ssr(&u) else {
+            let mut u = lm.u.clone();
+            u[k] = tr[k].to_u(gap);
+            let Some(trial) = ssr_at(&u) else {
                 continue;
             };
-            if ssr < run.ssr() && best.as_ref().is_none_or(|b| ssr < b.1) {
-                best = Some((u, ssr, k));
+            if trial < ssr && best.as_ref().is_none_or(|b| trial < b.1) {
+                best = Some((u, trial, k));
             }
         }
     }
