@@ -2,6 +2,12 @@
 //! be identified, on the stepped sweep ([`super::model`]); the rounds of one start; and the
 //! global search, a design of starts ranked by a cheap model with the best few refined (see
 //! the parent module's docs).
+//!
+//! The module reads better whole: the global search is the loop over the rounds of one start
+//! (a refined start, its fallback to the stepped sweep, and the trial of a gap left beyond
+//! every orbit's reach all return the same `Run` on the same `Problem`), and the design's
+//! ranking stops a start's cheap sweep by the cost of the starts the loop will refine, which
+//! its test checks against whole sweeps beside them.
 
 use super::branch::{self, SetModel};
 use super::lm::{
