@@ -14,7 +14,7 @@ use crate::study::orbit::Orbit;
 /// extremes are located on the dense output to the integrator's tolerance (1e-9 relative and
 /// below), so a thousandth of the gap leaves them far clear, and an orbit that near grazing is
 /// found afresh.
-const CLEAR_REL: f64 = 1e-3;
+pub(super) const CLEAR_REL: f64 = 1e-3;
 
 /// What a change of device leaves in place.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -98,6 +98,9 @@ pub enum Termination {
     NoDescent,
     /// [`LmSettings::max_iter`] Jacobians were computed.
     MaxIter,
+    /// The problem asked to stop at an accepted point ([`Tracked::hand_over`]), to be
+    /// searched on from there with another model.
+    HandedOver,
 }
 
 impl Termination {
@@ -152,6 +155,14 @@ pub trait Tracked: Sync {
         u: &[f64],
         from: &Self::State,
     ) -> Result<(Vec<f64>, Self::State), Self::Error>;
+
+    /// True when the search is to stop at the accepted point `u` (with residuals `r` and state
+    /// `state`), not yet converged, and hand over to another model there
+    /// ([`Termination::HandedOver`]): asked after each accepted step, before its Jacobian is
+    /// computed. Never, by default.
+    fn hand_over(&self, _u: &[f64], _r: &[f64], _state: &Self::State) -> bool {
+        false
+    }
 }
 
 /// A residual function without state as a [`Tracked`] problem.
@@ -319,6 +330,11 @@ pub fn levenberg_marquardt_resumed<P: Tracked>(
         } else {
             None
         };
+        if converged.is_none() && problem.hand_over(&u, &r, &state) {
+            stop = Termination::HandedOver;
+            jacobian_at_u = false;
+            break;
+        }
         if converged.is_none() || s.jacobian_at_stop {
             jac = jacobian(problem, &u, &r, &state, s.fd_step)?;
             evaluations += p;
@@ -375,5 +391,67 @@ mod tests {
             "{:?}",
             r.u
         );
+    }
+
+    /// A search that hands over at an accepted point, carried on from there with its damping
+    /// and remaining iterations, takes the steps of the search that never handed over: the
+    /// same optimum to the last bit, with the same number of evaluations (the start counted
+    /// once).
+    #[test]
+    fn a_search_carried_on_after_a_handover_takes_the_same_steps() {
+        struct Decay {
+            t: Vec<f64>,
+            y: Vec<f64>,
+            below: Option<f64>,
+        }
+        impl Tracked for Decay {
+            type State = ();
+            type Error = ();
+            fn residuals(&self, u: &[f64], _: &()) -> Result<(Vec<f64>, ()), ()> {
+                let r = self.t.iter().zip(&self.y);
+                Ok((r.map(|(t, y)| u[0] * (-u[1] * t).exp() - y).collect(), ()))
+            }
+            fn hand_over(&self, _: &[f64], r: &[f64], _: &()) -> bool {
+                self.below.is_some_and(|b| cost(r) < b)
+            }
+        }
+        let t: Vec<f64> = (0..12).map(|i| 0.25 * i as f64).collect();
+        let y: Vec<f64> = t
+            .iter()
+            .map(|t| 3.0 * (-0.7 * t).exp() + 0.01 * t.sin())
+            .collect();
+        let s = LmSettings {
+            fd_step: 1e-7,
+            cost_rel_tol: 1e-12,
+            step_tol: 1e-10,
+            ..LmSettings::default()
+        };
+        let plain = Decay {
+            t: t.clone(),
+            y: y.clone(),
+            below: None,
+        };
+        let (whole, ()) = levenberg_marquardt_tracked(&plain, &[1.0, 0.1], (), None, &s).unwrap();
+        let (r0, ()) = plain.residuals(&[1.0, 0.1], &()).unwrap();
+        let watched = Decay {
+            t,
+            y,
+            below: Some(0.5 * cost(&r0)),
+        };
+        let (near, ()) = levenberg_marquardt_tracked(&watched, &[1.0, 0.1], (), None, &s).unwrap();
+        assert_eq!(near.stop, Termination::HandedOver);
+        assert!(!near.jacobian_at_u);
+        let rest = LmSettings {
+            lambda0: near.lambda,
+            max_iter: s.max_iter - near.iterations,
+            ..s
+        };
+        let (more, ()) =
+            levenberg_marquardt_tracked(&plain, &near.u, (), Some(near.residuals.clone()), &rest)
+                .unwrap();
+        assert_eq!(more.u, whole.u);
+        assert_eq!(more.stop, whole.stop);
+        assert_eq!(near.iterations + more.iterations, whole.iterations);
+        assert_eq!(near.evaluations + more.evaluations - 1, whole.evaluations);
     }
 }

@@ -93,9 +93,11 @@ pub mod family;
 pub mod lm;
 pub mod model;
 pub mod params;
+mod problem;
 pub mod report;
 mod search;
 pub mod spectrum;
+mod start;
 mod track;
 mod uncertainty;
 mod untouched;
@@ -382,7 +384,7 @@ pub fn fit(
     let u0: Vec<f64> = tr.iter().zip(&starts).map(|(t, &v)| t.to_u(v)).collect();
     let (y, sigma, stated) = measured(data);
     let all_stated = stated.iter().all(|&s| s);
-    let pb = search::Problem {
+    let pb = problem::Problem {
         device,
         data,
         free,
@@ -410,9 +412,9 @@ pub fn fit(
 
 /// The report of the search's best run `run` (see [`fit()`]).
 fn summarise(
-    pb: &search::Problem<'_>,
+    pb: &problem::Problem<'_>,
     starts: &[f64],
-    run: search::Run,
+    run: problem::Run,
     tried: Vec<report::StartTried>,
     best_start: usize,
     chi2_limit: Option<f64>,
@@ -493,9 +495,9 @@ fn summarise(
 }
 
 /// The model a search used, in words, with its warning.
-fn model_warning(used: &search::Used, warnings: &mut Vec<FitWarning>) -> String {
+fn model_warning(used: &problem::Used, warnings: &mut Vec<FitWarning>) -> String {
     match used {
-        search::Used::Branches {
+        problem::Used::Branches {
             disagreement,
             rounds,
         } => {
@@ -508,7 +510,7 @@ fn model_warning(used: &search::Used, warnings: &mut Vec<FitWarning>) -> String 
             }
             "branches of periodic orbits".to_string()
         }
-        search::Used::SteppedSweep { why } => {
+        problem::Used::SteppedSweep { why } => {
             warnings.push(FitWarning::SteppedSweepModel { why: why.clone() });
             "stepped sweep".to_string()
         }
@@ -517,7 +519,7 @@ fn model_warning(used: &search::Used, warnings: &mut Vec<FitWarning>) -> String 
 
 /// The residual rows at the optimum (weighted residuals `r`), data set by data set: points,
 /// features, then the jump the points show.
-fn residual_rows(pb: &search::Problem<'_>, r: &[f64]) -> Vec<Residual> {
+fn residual_rows(pb: &problem::Problem<'_>, r: &[f64]) -> Vec<Residual> {
     let mut rows = Vec::with_capacity(r.len());
     let mut i = 0;
     for d in pb.data {

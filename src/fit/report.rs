@@ -271,13 +271,16 @@ pub enum StartOrigin {
     DeviceFile,
     /// The k-th point (from 1) of the Sobol sequence over the ranges.
     Sobol(usize),
-    /// The fit refined from start `from` (an index into the starts) with the gap `param`,
-    /// beyond the reach of every orbit there, moved inside it (`fit::untouched`).
+    /// Start `from` (an index into the starts), or the fit refined from it, with the gap
+    /// `param`, beyond the reach of every orbit there, moved inside it (`fit::untouched`).
     Untouched {
-        /// The start whose fit it moved (an index into the starts).
+        /// The start whose values (or fit) it moved (an index into the starts).
         from: usize,
         /// The parameter moved (its path).
         param: String,
+        /// True when the fit refined from the start was moved, false when the start itself
+        /// was (and it was refined from there instead).
+        of_fit: bool,
     },
 }
 
@@ -286,10 +289,15 @@ impl std::fmt::Display for StartOrigin {
         match self {
             StartOrigin::DeviceFile => write!(f, "the device file's values"),
             StartOrigin::Sobol(k) => write!(f, "Sobol point {k}"),
-            StartOrigin::Untouched { from, param } => write!(
+            StartOrigin::Untouched {
+                from,
+                param,
+                of_fit,
+            } => write!(
                 f,
-                "start {from}'s fit with `{param}`, beyond every orbit's reach there, moved \
-                 inside it"
+                "start {from}{} with `{param}`, beyond every orbit's reach there, moved \
+                 inside it",
+                if *of_fit { "'s fit" } else { "" }
             ),
         }
     }

@@ -1,365 +1,20 @@
-//! The search of a fit: the misfit on the branches ([`super::branch`]) or, where they cannot
-//! be identified, on the stepped sweep ([`super::model`]); the rounds of one start; and the
-//! global search, a design of starts ranked by a cheap model with the best few refined (see
-//! the parent module's docs).
+//! The global search of a fit: a design of starts ranked by a cheap model (the stepped sweep
+//! with short blocks), the best few refined from one start each ([`super::start`]), and a
+//! gap left beyond every orbit's reach tried inside it ([`super::untouched`]); see the parent
+//! module's docs.
 //!
-//! The module reads better whole: the global search is the loop over the rounds of one start
-//! (a refined start, its fallback to the stepped sweep, and the trial of a gap left beyond
-//! every orbit's reach all return the same `Run` on the same `Problem`), and the design's
-//! ranking stops a start's cheap sweep by the cost of the starts the loop will refine, which
-//! its test checks against whole sweeps beside them.
+//! The module reads better whole: the design's ranking stops a start's cheap sweep by the
+//! cost of the starts the loop will refine, which its test checks against whole sweeps beside
+//! them.
 
-use super::branch::{self, SetModel};
-use super::lm::{
-    self, levenberg_marquardt_resumed, levenberg_marquardt_tracked, LmResult, LmSettings, Tracked,
-};
 use super::model::design_values;
 use super::params::{apply, Transform};
+use super::problem::{Problem, Run};
 use super::report::{Refined, StartOrigin, StartTried};
+use super::start::search_from;
 use super::untouched;
-use super::{
-    model_values, FitError, FitSettings, SweepData, AGREE_REL, AGREE_SIGMA, MAX_ROUNDS,
-    STATED_COST_ABS_TOL,
-};
-use crate::device::{Device, ParamRange};
+use super::{FitError, FitSettings, STATED_COST_ABS_TOL};
 use rayon::prelude::*;
-
-/// What every evaluation needs: the device, the data, the free parameters with their
-/// transforms, and the measured values with their weights.
-pub(super) struct Problem<'a> {
-    pub(super) device: &'a Device,
-    pub(super) data: &'a [SweepData],
-    pub(super) free: &'a [ParamRange],
-    pub(super) tr: Vec<Transform>,
-    pub(super) y: Vec<f64>,
-    pub(super) sigma: Vec<f64>,
-    /// Which measured values state their standard deviation (features always do).
-    pub(super) stated: Vec<bool>,
-}
-
-impl Problem<'_> {
-    pub(super) fn to_p(&self, u: &[f64]) -> Vec<f64> {
-        self.tr.iter().zip(u).map(|(t, &u)| t.to_p(u)).collect()
-    }
-
-    fn weighted(&self, m: &[f64]) -> Vec<f64> {
-        m.iter()
-            .zip(&self.y)
-            .zip(&self.sigma)
-            .map(|((m, y), s)| (m - y) / s)
-            .collect()
-    }
-
-    /// The branches of every data set identified afresh at `u`.
-    fn identify(&self, u: &[f64]) -> Result<Vec<SetModel>, FitError> {
-        let (d, scale) = apply(self.device, self.free, &self.to_p(u))?;
-        self.data
-            .iter()
-            .map(|ds| branch::identify(&d, scale, ds).map_err(|l| FitError::Lost(l.0)))
-            .collect()
-    }
-
-    /// The weighted SSR on the branches identified afresh at `u`.
-    fn branch_ssr(&self, u: &[f64]) -> Result<f64, FitError> {
-        let states = self.identify(u)?;
-        Ok(self.residuals_of(&states).iter().map(|r| r * r).sum())
-    }
-
-    /// The weighted residuals of the models `states` (without following them).
-    fn residuals_of(&self, states: &[SetModel]) -> Vec<f64> {
-        let m: Vec<f64> = self
-            .data
-            .iter()
-            .zip(states)
-            .flat_map(|(ds, s)| s.values(ds))
-            .collect();
-        self.weighted(&m)
-    }
-
-    /// The largest difference between two sets of weighted residuals in units of its
-    /// tolerance ([`AGREE_SIGMA`] standard deviations, or [`AGREE_REL`] of the value); at most
-    /// 1 when they agree.
-    fn disagreement(&self, a: &[f64], b: &[f64]) -> f64 {
-        a.iter()
-            .zip(b)
-            .enumerate()
-            .map(|(i, (a, b))| {
-                let tol = if self.stated[i] {
-                    AGREE_SIGMA
-                } else {
-                    AGREE_REL * self.y[i].abs() / self.sigma[i]
-                };
-                let d = (a - b).abs() / tol;
-                if d.is_nan() {
-                    f64::INFINITY
-                } else {
-                    d
-                }
-            })
-            .fold(0.0, f64::max)
-    }
-}
-
-/// The misfit on the branches, followed from the accepted point's.
-struct OnBranches<'a, 'b>(&'a Problem<'b>);
-
-impl Tracked for OnBranches<'_, '_> {
-    type State = Vec<SetModel>;
-    type Error = FitError;
-
-    fn residuals(
-        &self,
-        u: &[f64],
-        from: &Vec<SetModel>,
-    ) -> Result<(Vec<f64>, Vec<SetModel>), FitError> {
-        let pb = self.0;
-        let (d, scale) = apply(pb.device, pb.free, &pb.to_p(u))?;
-        let states = pb
-            .data
-            .iter()
-            .zip(from)
-            .map(|(ds, prev)| branch::track(&d, scale, ds, prev).map_err(|l| FitError::Lost(l.0)))
-            .collect::<Result<Vec<_>, _>>()?;
-        Ok((pb.residuals_of(&states), states))
-    }
-}
-
-/// Which model a search used.
-#[derive(Debug, Clone, PartialEq)]
-pub(super) enum Used {
-    /// The branches; `disagreement` is that of the last fresh identification (at most 1: they
-    /// agree), `None` when it failed.
-    Branches {
-        disagreement: Option<f64>,
-        rounds: usize,
-    },
-    /// The stepped sweep, because the branches could not be identified.
-    SteppedSweep { why: String },
-}
-
-/// The outcome of the search from one start.
-pub(super) struct Run {
-    pub(super) lm: LmResult,
-    pub(super) used: Used,
-    /// Evaluations of every round (the fresh identifications not counted).
-    pub(super) evaluations: usize,
-    /// Iterations of every round.
-    pub(super) iterations: usize,
-}
-
-impl Run {
-    pub(super) fn ssr(&self) -> f64 {
-        self.lm.residuals.iter().map(|r| r * r).sum()
-    }
-
-    /// True when the search converged, on branches that agree with the ones identified afresh
-    /// or on the stepped sweep (which has nothing to agree with).
-    pub(super) fn settled(&self) -> bool {
-        self.lm.stop.converged()
-            && match self.used {
-                Used::Branches { disagreement, .. } => disagreement.is_some_and(|d| d <= 1.0),
-                Used::SteppedSweep { .. } => true,
-            }
-    }
-}
-
-/// The search from `u0`: on the branches, identified there and afresh after each round while
-/// they differ; where they cannot be identified there, on the stepped sweep until it is near
-/// its optimum and on the branches from there ([`stepped`]).
-pub(super) fn search_from(
-    pb: &Problem<'_>,
-    u0: &[f64],
-    settings: &LmSettings,
-) -> Result<Run, FitError> {
-    match pb.identify(u0) {
-        Ok(states) => on_branches(pb, u0, states, settings),
-        Err(e) => stepped(pb, u0, settings, e.to_string()),
-    }
-}
-
-/// The rounds of the search on the branches from `u0`, whose branches `states` are
-/// identified there.
-fn on_branches(
-    pb: &Problem<'_>,
-    u0: &[f64],
-    states: Vec<SetModel>,
-    settings: &LmSettings,
-) -> Result<Run, FitError> {
-    let mut states = states;
-    let mut u = u0.to_vec();
-    let (mut evaluations, mut iterations) = (0, 0);
-    for round in 1..=MAX_ROUNDS {
-        let r0 = pb.residuals_of(&states);
-        let (lm, followed) =
-            levenberg_marquardt_tracked(&OnBranches(pb), &u, states, Some(r0), settings)?;
-        evaluations += lm.evaluations;
-        iterations += lm.iterations;
-        let fresh = pb.identify(&lm.u);
-        let disagreement = fresh
-            .as_ref()
-            .ok()
-            .map(|f| pb.disagreement(&pb.residuals_of(f), &pb.residuals_of(&followed)));
-        let done = disagreement.is_none_or(|d| d <= 1.0) || round == MAX_ROUNDS;
-        if done {
-            return Ok(Run {
-                lm,
-                used: Used::Branches {
-                    disagreement,
-                    rounds: round,
-                },
-                evaluations,
-                iterations,
-            });
-        }
-        states = fresh.expect("checked above");
-        u = lm.u;
-    }
-    unreachable!("the last round returns")
-}
-
-/// The stepped-sweep search hands over to the branches once an accepted step lowers its cost
-/// by less than this fraction: near a minimum of chi-square `c` a step that lowers it by
-/// `1e-2 c` lies within about `sqrt(1e-2 c)` standard errors of it (`c` of the order of the
-/// degrees of freedom), close enough for Newton's method to identify the branches the data
-/// follow, where the start may lie in a region without them (a response that is not periodic
-/// below the onset of impacts).
-pub(super) const HANDOVER_COST_REL_TOL: f64 = 1e-2;
-
-/// The search on the stepped sweep (the model of [`super::model`]) from `u0`, where the
-/// branches cannot be identified (`why`): a loose search ([`HANDOVER_COST_REL_TOL`]) to near
-/// its optimum, then the branches from there when they can be identified and their search
-/// settles no worse than the stepped sweep's (each stepped evaluation costs a whole sweep to a
-/// tight steady state, each on the branches a few periods per measured value); else the
-/// stepped search carried on to its own tolerances where the loose one stopped short of them.
-fn stepped(
-    pb: &Problem<'_>,
-    u0: &[f64],
-    settings: &LmSettings,
-    why: String,
-) -> Result<Run, FitError> {
-    let tight = LmSettings {
-        fd_step: settings.fd_step.max(lm::STEPPED_FD_STEP),
-        ..*settings
-    };
-    // The Jacobian where the loose search converges serves only a search carried on there
-    // (each of its columns a whole sweep): it is differenced when the branches do not take
-    // over.
-    let loose = LmSettings {
-        cost_rel_tol: tight.cost_rel_tol.max(HANDOVER_COST_REL_TOL),
-        jacobian_at_stop: false,
-        ..tight
-    };
-    let (mut near, last) =
-        levenberg_marquardt_tracked(&Stepped(pb), u0, Costs::none(), None, &loose)?;
-    let near_ssr = last.here;
-    if let Ok(states) = pb.identify(&near.u) {
-        if let Ok(mut run) = on_branches(pb, &near.u, states, settings) {
-            run.evaluations += near.evaluations;
-            run.iterations += near.iterations;
-            if run.settled() && run.ssr() <= near_ssr {
-                return Ok(run);
-            }
-        }
-    }
-    if !near.jacobian_at_u {
-        near.jacobian = lm::jacobian(&Stepped(pb), &near.u, &near.residuals, &last, tight.fd_step)?;
-        near.evaluations += pb.free.len();
-        near.jacobian_at_u = true;
-    }
-    // The loose search stopped where the tight one would not have: carry it on from its
-    // point, Jacobian and damping, so that it takes the tight search's own steps.
-    let drop = last.before - last.here;
-    let step = last
-        .u_here
-        .iter()
-        .zip(&last.u_before)
-        .map(|(a, b)| (a - b) * (a - b))
-        .sum::<f64>()
-        .sqrt();
-    let loose_stop = near.stop == lm::Termination::CostConverged
-        && !(drop < tight.cost_rel_tol * last.before || drop < tight.cost_abs_tol);
-    let short = loose_stop && step >= tight.step_tol;
-    let lm = if short {
-        let (r0, j0) = (near.residuals.clone(), near.jacobian.clone());
-        let rest = LmSettings {
-            lambda0: near.lambda,
-            max_iter: tight.max_iter.saturating_sub(near.iterations),
-            ..tight
-        };
-        let (more, _) = levenberg_marquardt_resumed(&Stepped(pb), &near.u, last, r0, j0, &rest)?;
-        LmResult {
-            evaluations: near.evaluations + more.evaluations - 1,
-            iterations: near.iterations + more.iterations,
-            failed_trials: near.failed_trials + more.failed_trials,
-            ..more
-        }
-    } else if loose_stop {
-        // Where the tight search stops by the step's length.
-        LmResult {
-            stop: lm::Termination::StepConverged,
-            ..near
-        }
-    } else {
-        near
-    };
-    Ok(Run {
-        evaluations: lm.evaluations,
-        iterations: lm.iterations,
-        lm,
-        used: Used::SteppedSweep { why },
-    })
-}
-
-/// The weighted SSR and the point of an evaluation and of the accepted point it was evaluated
-/// from: what the stepped search carries, so that the last accepted step's decrease and length
-/// are known.
-#[derive(Debug, Clone, PartialEq)]
-struct Costs {
-    here: f64,
-    before: f64,
-    u_here: Vec<f64>,
-    u_before: Vec<f64>,
-}
-
-impl Costs {
-    fn none() -> Costs {
-        Costs {
-            here: f64::NAN,
-            before: f64::NAN,
-            u_here: Vec::new(),
-            u_before: Vec::new(),
-        }
-    }
-}
-
-/// The misfit on the stepped sweep.
-struct Stepped<'a, 'b>(&'a Problem<'b>);
-
-impl Tracked for Stepped<'_, '_> {
-    type State = Costs;
-    type Error = FitError;
-
-    fn residuals(&self, u: &[f64], from: &Costs) -> Result<(Vec<f64>, Costs), FitError> {
-        let pb = self.0;
-        let (d, scale) = apply(pb.device, pb.free, &pb.to_p(u))?;
-        let mut m = Vec::with_capacity(pb.y.len());
-        for ds in pb.data {
-            m.extend(model_values(&d, scale, ds)?);
-        }
-        let r = pb.weighted(&m);
-        let here = r.iter().map(|x| x * x).sum();
-        Ok((
-            r,
-            Costs {
-                here,
-                before: from.here,
-                u_here: u.to_vec(),
-                u_before: from.u_here.clone(),
-            },
-        ))
-    }
-}
-
 /// The point `k` (from 1) of the Sobol sequence in the transformed box: each parameter's
 /// range with a twentieth cut off at either end (a start at an end would sit where the
 /// transform is flat).
@@ -519,50 +174,78 @@ pub(super) fn search(
     let mut last_err = None;
     let good = |r: &Run| r.settled() && chi2_limit.is_some_and(|l| r.ssr() <= l);
     let improbable = |r: &Run| chi2_limit.is_some_and(|l| r.ssr() > l);
+    let untouched_start = |from: usize, u: &[f64], k: usize, of_fit: bool, run: &Run| StartTried {
+        origin: StartOrigin::Untouched {
+            from,
+            param: pb.free[k].path.clone(),
+            of_fit,
+        },
+        values: pb.to_p(u),
+        design_ssr: f64::NAN,
+        design_cut: false,
+        refined: Some(Refined {
+            ssr: run.ssr(),
+            settled: run.settled(),
+            values: pb.to_p(&run.lm.u),
+        }),
+    };
     for i in order {
-        let run = match search_from(pb, &us[i], &lm) {
+        // A gap beyond every orbit's reach at the start is tried inside it first
+        // ([`untouched`]); the refinement goes from the lowest trial below the start.
+        let identified = pb.identify(&us[i]);
+        let inside = identified.as_ref().ok().and_then(|states| {
+            let gaps = untouched::beyond_reach(pb.free, &pb.to_p(&us[i]), states);
+            let ssr: f64 = pb.residuals_of(states).iter().map(|r| r * r).sum();
+            untouched::lower_trial(pb.free, &pb.tr, &us[i], &gaps, states, ssr, |u| {
+                pb.followed_ssr(u, states)
+            })
+        });
+        let (u0, identified, moved_at) = match inside {
+            Some((u, _, k, states)) => (u, Ok(states), Some(k)),
+            None => (us[i].clone(), identified, None),
+        };
+        let run = match search_from(pb, &u0, identified, &lm, chi2_limit) {
             Ok(run) => run,
             Err(e) => {
                 last_err = Some(e);
                 continue;
             }
         };
-        starts[i].refined = Some(Refined {
-            ssr: run.ssr(),
-            settled: run.settled(),
-            values: pb.to_p(&run.lm.u),
-        });
-        // A gap this fit leaves beyond every orbit's reach, tried inside it
-        // ([`untouched`]) before the next start.
+        let j = match moved_at {
+            Some(k) => {
+                starts.push(untouched_start(i, &u0, k, false, &run));
+                starts.len() - 1
+            }
+            None => {
+                starts[i].refined = Some(Refined {
+                    ssr: run.ssr(),
+                    settled: run.settled(),
+                    values: pb.to_p(&run.lm.u),
+                });
+                i
+            }
+        };
+        // A gap this fit leaves beyond every orbit's reach, tried inside it before the next
+        // start.
         let moved = improbable(&run)
             .then(|| {
-                untouched::lower_trial(
-                    pb.free,
-                    &pb.tr,
-                    &run.lm,
-                    run.ssr(),
-                    |u| pb.identify(u).ok(),
-                    |u| pb.branch_ssr(u).ok(),
-                )
+                let gaps = untouched::untouched(&run.lm);
+                if gaps.is_empty() {
+                    return None;
+                }
+                let states = pb.identify(&run.lm.u).ok()?;
+                untouched::lower_trial(pb.free, &pb.tr, &run.lm.u, &gaps, &states, run.ssr(), |u| {
+                    pb.followed_ssr(u, &states)
+                })
             })
             .flatten()
-            .and_then(|(u, _, k)| Some((search_from(pb, &u, &lm).ok()?, u, k)));
-        let mut runs = vec![(run, i)];
-        if let Some((next, u, k)) = moved {
-            starts.push(StartTried {
-                origin: StartOrigin::Untouched {
-                    from: i,
-                    param: pb.free[k].path.clone(),
-                },
-                values: pb.to_p(&u),
-                design_ssr: f64::NAN,
-                design_cut: false,
-                refined: Some(Refined {
-                    ssr: next.ssr(),
-                    settled: next.settled(),
-                    values: pb.to_p(&next.lm.u),
-                }),
+            .and_then(|(u, _, k, states)| {
+                let next = search_from(pb, &u, Ok(states), &lm, chi2_limit).ok()?;
+                Some((next, u, k))
             });
+        let mut runs = vec![(run, j)];
+        if let Some((next, u, k)) = moved {
+            starts.push(untouched_start(j, &u, k, true, &next));
             runs.push((next, starts.len() - 1));
         }
         let mut done = false;

@@ -6,9 +6,16 @@
 //! the optimum can lie just inside it, where the largest orbits (those at the top of a branch,
 //! before its fold) start to strike the stop. When the best refined fit is improbable, such a
 //! gap is tried at a ladder of values inside the edge, the others held, each trial on the
-//! branches identified there, and the lowest trial below the fit is refined as one more start.
+//! branches followed there from the fit's (as a step of the search would be, an evaluation
+//! that costs a few periods per measured value), and the lowest trial below the fit is refined
+//! as one more start.
+//! A start whose gap lies beyond every orbit's reach is met the same way before it is refined:
+//! the trial there is a descent along the one direction Levenberg-Marquardt cannot see, and the
+//! refinement goes from the lowest trial below the start itself, where it can move that gap
+//! back out if the data want it there (inside the reach its column is no longer zero).
 
 use super::branch::SetModel;
+use super::clear::CLEAR_REL;
 use super::lm::LmResult;
 use super::params::Transform;
 use crate::device::ParamRange;
@@ -40,28 +47,42 @@ fn gap_sides(path: &str) -> &'static [Side] {
     }
 }
 
-/// The lowest trial of an untouched gap at the search's optimum `lm` (of the free parameters
-/// `free` with their transforms `tr`), with its SSR and the parameter's index, when it lies
-/// below `ssr`, the optimum's. `identify` gives the branches identified at a point, `ssr_at`
-/// the SSR on the branches identified there.
-pub(super) fn lower_trial(
+/// The gap parameters among `free` (at the values `p`) that lie beyond every orbit of
+/// `states` by more than the margin at which orbits are kept ([`CLEAR_REL`]): those whose
+/// column of the misfit's Jacobian there is exactly zero.
+pub(super) fn beyond_reach(free: &[ParamRange], p: &[f64], states: &[SetModel]) -> Vec<usize> {
+    (0..free.len())
+        .filter(|&k| {
+            let sides = gap_sides(&free[k].path);
+            !sides.is_empty()
+                && sides.iter().all(|&side| {
+                    states
+                        .iter()
+                        .all(|s| s.reach_m(side) < p[k] * (1.0 - CLEAR_REL))
+                })
+        })
+        .collect()
+}
+
+/// The lowest trial of the gaps `gaps` (indices into the free parameters `free`, with their
+/// transforms `tr`) moved inside the reach of the orbits `states` at `u`, the other parameters
+/// held, with its SSR, the parameter's index and what `trial` returned with the SSR, when it
+/// lies below `ssr`, the SSR at `u`. `trial` gives the SSR on the branches identified at a
+/// point (and those branches), `None` where they cannot be.
+pub(super) fn lower_trial<T>(
     free: &[ParamRange],
     tr: &[Transform],
-    lm: &LmResult,
+    u: &[f64],
+    gaps: &[usize],
+    states: &[SetModel],
     ssr: f64,
-    identify: impl Fn(&[f64]) -> Option<Vec<SetModel>>,
-    ssr_at: impl Fn(&[f64]) -> Option<f64>,
-) -> Option<(Vec<f64>, f64, usize)> {
-    let gaps: Vec<usize> = untouched(lm)
-        .into_iter()
-        .filter(|&k| !gap_sides(&free[k].path).is_empty())
-        .collect();
-    if gaps.is_empty() {
-        return None;
-    }
-    let states = identify(&lm.u)?;
-    let mut best: Option<(Vec<f64>, f64, usize)> = None;
-    for k in gaps {
+    trial: impl Fn(&[f64]) -> Option<(f64, T)>,
+) -> Option<(Vec<f64>, f64, usize, T)> {
+    let mut best: Option<(Vec<f64>, f64, usize, T)> = None;
+    for &k in gaps
+        .iter()
+        .filter(|&&k| !gap_sides(&free[k].path).is_empty())
+    {
         let f = &free[k];
         let reach = gap_sides(&f.path)
             .iter()
@@ -72,13 +93,13 @@ pub(super) fn lower_trial(
             if !(f.lo < gap && gap < f.hi) {
                 continue;
             }
-            let mut u = lm.u.clone();
-            u[k] = tr[k].to_u(gap);
-            let Some(trial) = ssr_at(&u) else {
+            let mut v = u.to_vec();
+            v[k] = tr[k].to_u(gap);
+            let Some((c, payload)) = trial(&v) else {
                 continue;
             };
-            if trial < ssr && best.as_ref().is_none_or(|b| trial < b.1) {
-                best = Some((u, trial, k));
+            if c < ssr && best.as_ref().is_none_or(|b| c < b.1) {
+                best = Some((v, c, k, payload));
             }
         }
     }
