@@ -174,6 +174,11 @@ pub(super) fn search(
     let mut last_err = None;
     let good = |r: &Run| r.settled() && chi2_limit.is_some_and(|l| r.ssr() <= l);
     let improbable = |r: &Run| chi2_limit.is_some_and(|l| r.ssr() > l);
+    let refined = |run: &Run| Refined {
+        ssr: run.ssr(),
+        settled: run.settled(),
+        values: pb.to_p(&run.lm.u),
+    };
     let untouched_start = |from: usize, u: &[f64], k: usize, of_fit: bool, run: &Run| StartTried {
         origin: StartOrigin::Untouched {
             from,
@@ -183,11 +188,7 @@ pub(super) fn search(
         values: pb.to_p(u),
         design_ssr: f64::NAN,
         design_cut: false,
-        refined: Some(Refined {
-            ssr: run.ssr(),
-            settled: run.settled(),
-            values: pb.to_p(&run.lm.u),
-        }),
+        refined: Some(refined(run)),
     };
     for i in order {
         // A gap beyond every orbit's reach at the start is tried inside it first
@@ -217,11 +218,7 @@ pub(super) fn search(
                 starts.len() - 1
             }
             None => {
-                starts[i].refined = Some(Refined {
-                    ssr: run.ssr(),
-                    settled: run.settled(),
-                    values: pb.to_p(&run.lm.u),
-                });
+                starts[i].refined = Some(refined(&run));
                 i
             }
         };
