@@ -45,15 +45,20 @@ impl Problem<'_> {
             .collect()
     }
 
-    /// The weighted SSR at `u` on the branches `from` followed there, with the branches
-    /// followed; `None` where they are lost.
+    /// The weighted SSR at `u` on the branches `from` (the models at `from_u`) followed
+    /// there, with the branches followed; `None` where they are lost.
     pub(super) fn followed_ssr(
         &self,
         u: &[f64],
+        from_u: &[f64],
         from: &[SetModel],
     ) -> Option<(f64, Vec<SetModel>)> {
-        let (r, states) = OnBranches(self).residuals(u, &from.to_vec()).ok()?;
-        Some((r.iter().map(|r| r * r).sum(), states))
+        let from = Followed {
+            u: from_u.to_vec(),
+            sets: from.to_vec(),
+        };
+        let (r, followed) = OnBranches(self).residuals(u, &from).ok()?;
+        Some((r.iter().map(|r| r * r).sum(), followed.sets))
     }
 
     /// The weighted residuals of the models `states` (without following them).
@@ -91,27 +96,65 @@ impl Problem<'_> {
     }
 }
 
+/// Halvings of a step of the parameters tried where the branches are lost over the whole
+/// step. Newton's method from the accepted point's orbits fails where a long trial step of the
+/// search moves an orbit further than its iterations reach; over half the step, from the
+/// orbits there, it reaches (a homotopy in the parameters). A branch that ends inside the step
+/// is lost over its parts too, at the cost of their evaluations: one halving, since a second
+/// rescued fewer trials than it cost where the search meets a branch's end again and again
+/// (the recovery family's cases 15 and 18, `bench --fits --fit-only 15,18`).
+const MAX_HALVINGS: u32 = 1;
+
+/// The models of the data sets at the parameters `u` (unbounded coordinates) they were
+/// followed to.
+#[derive(Clone)]
+pub(super) struct Followed {
+    u: Vec<f64>,
+    sets: Vec<SetModel>,
+}
+
 /// The misfit on the branches, followed from the accepted point's.
 struct OnBranches<'a, 'b>(&'a Problem<'b>);
 
-impl Tracked for OnBranches<'_, '_> {
-    type State = Vec<SetModel>;
-    type Error = FitError;
-
-    fn residuals(
-        &self,
-        u: &[f64],
-        from: &Vec<SetModel>,
-    ) -> Result<(Vec<f64>, Vec<SetModel>), FitError> {
+impl OnBranches<'_, '_> {
+    /// The branches `from` followed to `u` in one step.
+    fn follow_step(&self, u: &[f64], from: &Followed) -> Result<Followed, FitError> {
         let pb = self.0;
         let (d, scale) = apply(pb.device, pb.free, &pb.to_p(u))?;
-        let states = pb
+        let sets = pb
             .data
             .iter()
-            .zip(from)
+            .zip(&from.sets)
             .map(|(ds, prev)| branch::track(&d, scale, ds, prev).map_err(|l| FitError::Lost(l.0)))
             .collect::<Result<Vec<_>, _>>()?;
-        Ok((pb.residuals_of(&states), states))
+        Ok(Followed {
+            u: u.to_vec(),
+            sets,
+        })
+    }
+
+    /// The branches `from` followed to `u`: in one step, else over its halves with up to
+    /// `halvings` further halvings each; the error is the whole step's.
+    fn follow(&self, u: &[f64], from: &Followed, halvings: u32) -> Result<Followed, FitError> {
+        match self.follow_step(u, from) {
+            Err(FitError::Lost(why)) if halvings > 0 => {
+                let mid: Vec<f64> = from.u.iter().zip(u).map(|(a, b)| 0.5 * (a + b)).collect();
+                self.follow(&mid, from, halvings - 1)
+                    .and_then(|m| self.follow(u, &m, halvings - 1))
+                    .map_err(|_| FitError::Lost(why))
+            }
+            other => other,
+        }
+    }
+}
+
+impl Tracked for OnBranches<'_, '_> {
+    type State = Followed;
+    type Error = FitError;
+
+    fn residuals(&self, u: &[f64], from: &Followed) -> Result<(Vec<f64>, Followed), FitError> {
+        let followed = self.follow(u, from, MAX_HALVINGS)?;
+        Ok((self.0.residuals_of(&followed.sets), followed))
     }
 }
 
@@ -167,8 +210,13 @@ pub(super) fn on_branches(
     let (mut evaluations, mut iterations) = (0, 0);
     for round in 1..=MAX_ROUNDS {
         let r0 = pb.residuals_of(&states);
+        let from = Followed {
+            u: u.clone(),
+            sets: states,
+        };
         let (lm, followed) =
-            levenberg_marquardt_tracked(&OnBranches(pb), &u, states, Some(r0), settings)?;
+            levenberg_marquardt_tracked(&OnBranches(pb), &u, from, Some(r0), settings)?;
+        let followed = followed.sets;
         evaluations += lm.evaluations;
         iterations += lm.iterations;
         let fresh = pb.identify(&lm.u);

@@ -198,7 +198,7 @@ pub(super) fn search(
             let gaps = untouched::beyond_reach(pb.free, &pb.to_p(&us[i]), states);
             let ssr: f64 = pb.residuals_of(states).iter().map(|r| r * r).sum();
             untouched::lower_trial(pb.free, &pb.tr, &us[i], &gaps, states, ssr, |u| {
-                pb.followed_ssr(u, states)
+                pb.followed_ssr(u, &us[i], states)
             })
         });
         let (u0, identified, moved_at) = match inside {
@@ -232,7 +232,7 @@ pub(super) fn search(
                 }
                 let states = pb.identify(&run.lm.u).ok()?;
                 untouched::lower_trial(pb.free, &pb.tr, &run.lm.u, &gaps, &states, run.ssr(), |u| {
-                    pb.followed_ssr(u, &states)
+                    pb.followed_ssr(u, &run.lm.u, &states)
                 })
             })
             .flatten()
