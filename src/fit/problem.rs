@@ -101,14 +101,16 @@ impl Problem<'_> {
 /// search moves an orbit further than its iterations reach; over half the step, from the
 /// orbits there, it reaches (a homotopy in the parameters). A branch that ends inside the step
 /// is lost over its parts too, at the cost of their evaluations: one halving, since a second
-/// rescued fewer trials than it cost where the search meets a branch's end again and again
-/// (the recovery family's cases 15 and 18, `bench --fits --fit-only 15,18`).
+/// cost more time than it saved where the search meets a branch's end again and again (the
+/// recovery family's case 18 on one thread: 6.0 to 7.5 s with none, 7.3 to 7.8 s with one,
+/// 9.8 to 11.6 s with two; `bench --fits --fit-only 15,18` times it). It changes the speed of
+/// a fit, not its outcome: the recovery family's results are the same with it.
 const MAX_HALVINGS: u32 = 1;
 
 /// The models of the data sets at the parameters `u` (unbounded coordinates) they were
 /// followed to.
 #[derive(Clone)]
-pub(super) struct Followed {
+struct Followed {
     u: Vec<f64>,
     sets: Vec<SetModel>,
 }
