@@ -103,8 +103,9 @@ impl Problem<'_> {
 /// is lost over its parts too, at the cost of their evaluations: one halving, since a second
 /// cost more time than it saved where the search meets a branch's end again and again (the
 /// recovery family's case 18 on one thread: 6.0 to 7.5 s with none, 7.3 to 7.8 s with one,
-/// 9.8 to 11.6 s with two; `bench --fits --fit-only 15,18` times it). It changes the speed of
-/// a fit, not its outcome: the recovery family's results are the same with it.
+/// 9.8 to 11.6 s with two, by the `fit_cost` example; `bench --fits --fit-only 15,18` is the
+/// benchmark of record). It changes the speed of a fit, not its outcome: the recovery
+/// family's results are the same with it.
 const MAX_HALVINGS: u32 = 1;
 
 /// The models of the data sets at the parameters `u` (unbounded coordinates) they were

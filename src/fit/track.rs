@@ -41,8 +41,8 @@ const FOLD_LOCATE_TOL_HZ: f64 = 1e-5;
 /// shooting settings otherwise): from a good guess Newton converges in three or four, and a
 /// branch that has ended is given up early. Fewer lose the orbits of the long steps a search
 /// needs (with 5 the recovery family's cases 15 and 18 end at chi-square per degree of
-/// freedom 2.2 and 3.2 instead of 1.1, after 36 and 43 s); more gain nothing (16: the same
-/// times within the host's noise); `fit_cost -- 15 18` measures it.
+/// freedom 2.2 and 3.2 instead of 1.1); more gain nothing (with 16 cases 15, 20 and 21 take
+/// the same time within the host's noise); the `fit_cost` example measures both.
 const TRACK_MAX_NEWTON: usize = 8;
 
 fn shooting() -> ShootingOptions {
