@@ -49,8 +49,9 @@
 //! The starts are the device's values and the points of a Sobol sequence over the transformed
 //! box ([`FitSettings::design_points`]: `DESIGN_BASE + DESIGN_PER_PARAM p` of them for `p`
 //! free parameters), each ranked by the misfit of a cheap model, the stepped sweep over
-//! each data set's grid with shorter steady-state blocks than a plain sweep's
-//! ([`model::DESIGN_BLOCK_PERIODS`]; one sweep per data set and start, evaluated in parallel). A start's
+//! each data set's grid with steady-state blocks a quarter of a plain sweep's
+//! ([`model::DESIGN_BLOCK_PERIODS`], [`model::DESIGN_RING_FRACTION`]; one sweep per data set
+//! and start, evaluated in parallel). A start's
 //! sweeps stop as soon as the misfit of the points they have swept exceeds that of the last of
 //! the best [`FitSettings::refine`] evaluated whole so far: the rest could only raise it, so
 //! the best ranked are those of the whole sweeps, with the same misfits. The best

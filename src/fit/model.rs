@@ -221,6 +221,7 @@ fn model_of(run: &SweepRun, data: &SweepData) -> ModelSweep {
 
 /// The model's values for a data set (its points, its features, then the end of its branch
 /// where the points show a jump, [`SweepData::measured_jump`]) on `device` with the
+/// acceleration factor `scale`.
 ///
 /// ```
 /// use endstop::device::Device;
@@ -247,7 +248,6 @@ fn model_of(run: &SweepRun, data: &SweepData) -> ModelSweep {
 /// assert!(v1.iter().zip(&v2).all(|(a, b)| (b / a - 2.0).abs() < 1e-5));
 /// # Ok::<(), Box<dyn std::error::Error>>(())
 /// ```
-/// acceleration factor `scale`.
 pub fn model_values(device: &Device, scale: f64, data: &SweepData) -> Result<Vec<f64>, FitError> {
     let settings = fit_settings(device, data);
     let run = SweepRun::run(&settings, device, scale, data, refine_for(data))?;
@@ -264,11 +264,22 @@ pub const DESIGN_GRID_INTERVALS: usize = 16;
 /// [`crate::study::steady`]), so a horizon a quarter as long leaves the branch within 16 times
 /// the distance a plain sweep's does: 1.6 Hz past prototype 1's folds instead of 0.1 Hz,
 /// about a grid step of a measured sweep (1 to 5 Hz), which is all a ranking of starts needs.
-/// Blocks of the ring-up time, where it is longer, are kept.
+/// Where the ring-up time sets a plain sweep's block instead, the cheap model's is a quarter
+/// of it too ([`DESIGN_RING_FRACTION`]).
 pub const DESIGN_BLOCK_PERIODS: usize = FOLD_BLOCK_PERIODS / 4;
 
+/// The cheap model's blocks where the ring-up time `2m/b` sets them: this fraction of it. A
+/// transient of relative size `a` decays like `a exp(-t b / 2m)`, so it changes by
+/// `a (1 - exp(-B b / 2m))` over a block of `B`: the steady-state criterion (a relative change
+/// `tol` of the RMS voltages between blocks) leaves a transient of `tol / (1 - e^-1/4)`, 4.5
+/// `tol` (4.5e-3 with a plain sweep's criterion), against 1.6 `tol` with blocks of the whole
+/// ring-up time. The cheap model only ranks the starts, whose misfits differ by orders of
+/// magnitude more than that; the refinement's own models are converged to their criteria.
+pub const DESIGN_RING_FRACTION: f64 = 0.25;
+
 /// The cheap model's sweep settings over `grid`: a plain sweep's ([`model_curve`]) with
-/// blocks of at least [`DESIGN_BLOCK_PERIODS`] periods.
+/// blocks of [`DESIGN_RING_FRACTION`] of the ring-up time, at least [`DESIGN_BLOCK_PERIODS`]
+/// periods.
 fn design_settings(device: &Device, grid: Vec<f64>) -> SweepSettings {
     let (lo, hi) = grid
         .iter()
@@ -277,7 +288,11 @@ fn design_settings(device: &Device, grid: Vec<f64>) -> SweepSettings {
         });
     let ring_s = 2.0 * device.mechanics.mass_kg / device.mechanics.damping_n_s_per_m;
     let mut settings = SweepSettings::for_device(device, grid, REFINE_TOL_HZ);
-    settings.cfg = SettleSettings::for_ring_time(ring_s, 0.5 * (lo + hi), DESIGN_BLOCK_PERIODS);
+    settings.cfg = SettleSettings::for_ring_time(
+        DESIGN_RING_FRACTION * ring_s,
+        0.5 * (lo + hi),
+        DESIGN_BLOCK_PERIODS,
+    );
     settings
 }
 
