@@ -197,9 +197,15 @@ pub(super) fn search(
         let inside = identified.as_ref().ok().and_then(|states| {
             let gaps = untouched::beyond_reach(pb.free, &pb.to_p(&us[i]), states);
             let ssr: f64 = pb.residuals_of(states).iter().map(|r| r * r).sum();
-            untouched::lower_trial(pb.free, &pb.tr, &us[i], &gaps, states, ssr, |u| {
-                pb.followed_ssr(u, &us[i], states)
-            })
+            untouched::lower_trial(
+                pb.free,
+                &pb.tr,
+                &us[i],
+                &gaps,
+                states,
+                ssr,
+                |u, at, from| pb.followed_ssr(u, at, from),
+            )
         });
         let (u0, identified, moved_at) = match inside {
             Some((u, _, k, states)) => (u, Ok(states), Some(k)),
@@ -231,9 +237,15 @@ pub(super) fn search(
                     return None;
                 }
                 let states = pb.identify(&run.lm.u).ok()?;
-                untouched::lower_trial(pb.free, &pb.tr, &run.lm.u, &gaps, &states, run.ssr(), |u| {
-                    pb.followed_ssr(u, &run.lm.u, &states)
-                })
+                untouched::lower_trial(
+                    pb.free,
+                    &pb.tr,
+                    &run.lm.u,
+                    &gaps,
+                    &states,
+                    run.ssr(),
+                    |u, at, from| pb.followed_ssr(u, at, from),
+                )
             })
             .flatten()
             .and_then(|(u, _, k, states)| {

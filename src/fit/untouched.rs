@@ -6,9 +6,9 @@
 //! the optimum can lie just inside it, where the largest orbits (those at the top of a branch,
 //! before its fold) start to strike the stop. When the best refined fit is improbable, such a
 //! gap is tried at a ladder of values inside the edge, the others held, each trial on the
-//! branches followed there from the fit's (as a step of the search would be, an evaluation
-//! that costs a few periods per measured value), and the lowest trial below the fit is refined
-//! as one more start.
+//! branches followed there from the fit's, rung by rung from the edge inwards (as steps of the
+//! search would be, each an evaluation that costs a few periods per measured value), and the
+//! lowest trial below the fit is refined as one more start.
 //! A start whose gap lies beyond every orbit's reach is met the same way before it is refined:
 //! the trial there is a descent along the one direction Levenberg-Marquardt cannot see, and the
 //! refinement goes from the lowest trial below the start itself, where it can move that gap
@@ -66,19 +66,22 @@ pub(super) fn beyond_reach(free: &[ParamRange], p: &[f64], states: &[SetModel]) 
 
 /// The lowest trial of the gaps `gaps` (indices into the free parameters `free`, with their
 /// transforms `tr`) moved inside the reach of the orbits `states` at `u`, the other parameters
-/// held, with its SSR, the parameter's index and what `trial` returned with the SSR, when it
-/// lies below `ssr`, the SSR at `u`. `trial` gives the SSR on the branches identified at a
-/// point (and those branches), `None` where they cannot be.
-pub(super) fn lower_trial<T>(
+/// held, with its SSR, the parameter's index and the branches followed there, when it lies
+/// below `ssr`, the SSR at `u`. `trial(v, from_u, from)` gives the SSR at `v` on the branches
+/// `from` (at `from_u`) followed there, and those branches; `None` where they are lost. The
+/// rungs of a gap are taken from the edge inwards, each followed from the last one reached
+/// (from `u` and `states` for the first): a homotopy in the gap, each rung's orbits found by
+/// Newton's method from those of a nearby gap rather than of the start's.
+pub(super) fn lower_trial(
     free: &[ParamRange],
     tr: &[Transform],
     u: &[f64],
     gaps: &[usize],
     states: &[SetModel],
     ssr: f64,
-    trial: impl Fn(&[f64]) -> Option<(f64, T)>,
-) -> Option<(Vec<f64>, f64, usize, T)> {
-    let mut best: Option<(Vec<f64>, f64, usize, T)> = None;
+    trial: impl Fn(&[f64], &[f64], &[SetModel]) -> Option<(f64, Vec<SetModel>)>,
+) -> Option<(Vec<f64>, f64, usize, Vec<SetModel>)> {
+    let mut best: Option<(Vec<f64>, f64, usize, Vec<SetModel>)> = None;
     for &k in gaps
         .iter()
         .filter(|&&k| !gap_sides(&free[k].path).is_empty())
@@ -88,19 +91,21 @@ pub(super) fn lower_trial<T>(
             .iter()
             .flat_map(|&side| states.iter().map(move |s| s.reach_m(side)))
             .fold(0.0, f64::max);
-        for j in LADDER {
+        let mut from: (Vec<f64>, Vec<SetModel>) = (u.to_vec(), states.to_vec());
+        for j in LADDER.rev() {
             let gap = reach * (1.0 - 0.5f64.powi(j));
             if !(f.lo < gap && gap < f.hi) {
                 continue;
             }
             let mut v = u.to_vec();
             v[k] = tr[k].to_u(gap);
-            let Some((c, payload)) = trial(&v) else {
+            let Some((c, followed)) = trial(&v, &from.0, &from.1) else {
                 continue;
             };
             if c < ssr && best.as_ref().is_none_or(|b| c < b.1) {
-                best = Some((v, c, k, payload));
+                best = Some((v.clone(), c, k, followed.clone()));
             }
+            from = (v, followed);
         }
     }
     best
