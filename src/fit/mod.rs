@@ -51,10 +51,10 @@
 //! free parameters), each ranked by the misfit of a cheap model, the stepped sweep over
 //! each data set's grid with steady-state blocks a quarter of a plain sweep's
 //! ([`model::DESIGN_BLOCK_PERIODS`], [`model::DESIGN_RING_FRACTION`]; one sweep per data set
-//! and start, evaluated in parallel). A start's
-//! sweeps stop as soon as the misfit of the points they have swept exceeds that of the last of
-//! the best [`FitSettings::refine`] evaluated whole so far: the rest could only raise it, so
-//! the best ranked are those of the whole sweeps, with the same misfits. The best
+//! and start, evaluated in parallel). A start's sweeps stop as soon as the misfit of the points
+//! they have swept exceeds that of the last of the best [`FitSettings::refine`] evaluated whole
+//! so far: the rest could only raise it, so the best ranked are those of the whole sweeps, with
+//! the same misfits. The best
 //! ranked [`FitSettings::refine`] are refined by Levenberg-Marquardt on the branches in their
 //! order, stopping early at one that converges with a chi-square (with stated standard
 //! deviations) below its [`CHI2_QUANTILE`] quantile; the report is the best refined one

@@ -11,6 +11,7 @@ use super::{
 };
 use crate::device::Device;
 use crate::ode::SolverError;
+use crate::study::record::ring_up_time_s;
 use crate::study::steady::{Measurement, SettleSettings, FOLD_BLOCK_PERIODS};
 use crate::study::sweep::{DownSweepReport, Refine, SweepReport, SweepSettings, REFINE_TOL_HZ};
 
@@ -279,8 +280,9 @@ pub const DESIGN_BLOCK_PERIODS: usize = FOLD_BLOCK_PERIODS / 4;
 /// `a (1 - exp(-B b / 2m))` over a block of `B`: the steady-state criterion (a relative change
 /// `tol` of the RMS voltages between blocks) leaves a transient of `tol / (1 - e^-1/4)`, 4.5
 /// `tol` (4.5e-3 with a plain sweep's criterion), against 1.6 `tol` with blocks of the whole
-/// ring-up time. The cheap model only ranks the starts, whose misfits differ by orders of
-/// magnitude more than that; the refinement's own models are converged to their criteria.
+/// ring-up time. The cheap model only ranks the starts, and the refinement's own models are
+/// converged to their criteria: the recovery family's fits refine the same starts and end at
+/// the same values with either block.
 pub const DESIGN_RING_FRACTION: f64 = 0.25;
 
 /// The cheap model's sweep settings over `grid`: a plain sweep's ([`model_curve`]) with
@@ -292,10 +294,9 @@ fn design_settings(device: &Device, grid: Vec<f64>) -> SweepSettings {
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &f| {
             (lo.min(f), hi.max(f))
         });
-    let ring_s = 2.0 * device.mechanics.mass_kg / device.mechanics.damping_n_s_per_m;
     let mut settings = SweepSettings::for_device(device, grid, REFINE_TOL_HZ);
     settings.cfg = SettleSettings::for_ring_time(
-        DESIGN_RING_FRACTION * ring_s,
+        DESIGN_RING_FRACTION * ring_up_time_s(device),
         0.5 * (lo + hi),
         DESIGN_BLOCK_PERIODS,
     );

@@ -197,15 +197,7 @@ pub(super) fn search(
         let inside = identified.as_ref().ok().and_then(|states| {
             let gaps = untouched::beyond_reach(pb.free, &pb.to_p(&us[i]), states);
             let ssr: f64 = pb.residuals_of(states).iter().map(|r| r * r).sum();
-            untouched::lower_trial(
-                pb.free,
-                &pb.tr,
-                &us[i],
-                &gaps,
-                states,
-                ssr,
-                |u, at, from| pb.followed_ssr(u, at, from),
-            )
+            untouched::lower_trial(pb, &us[i], &gaps, states, ssr)
         });
         let (u0, identified, moved_at) = match inside {
             Some((u, _, k, states)) => (u, Ok(states), Some(k)),
@@ -237,15 +229,7 @@ pub(super) fn search(
                     return None;
                 }
                 let states = pb.identify(&run.lm.u).ok()?;
-                untouched::lower_trial(
-                    pb.free,
-                    &pb.tr,
-                    &run.lm.u,
-                    &gaps,
-                    &states,
-                    run.ssr(),
-                    |u, at, from| pb.followed_ssr(u, at, from),
-                )
+                untouched::lower_trial(pb, &run.lm.u, &gaps, &states, run.ssr())
             })
             .flatten()
             .and_then(|(u, _, k, states)| {

@@ -17,7 +17,7 @@
 use super::branch::SetModel;
 use super::clear::CLEAR_REL;
 use super::lm::LmResult;
-use super::params::Transform;
+use super::problem::Problem;
 use crate::device::ParamRange;
 use crate::laws::contact::Side;
 
@@ -64,23 +64,21 @@ pub(super) fn beyond_reach(free: &[ParamRange], p: &[f64], states: &[SetModel]) 
         .collect()
 }
 
-/// The lowest trial of the gaps `gaps` (indices into the free parameters `free`, with their
-/// transforms `tr`) moved inside the reach of the orbits `states` at `u`, the other parameters
-/// held, with its SSR, the parameter's index and the branches followed there, when it lies
-/// below `ssr`, the SSR at `u`. `trial(v, from_u, from)` gives the SSR at `v` on the branches
-/// `from` (at `from_u`) followed there, and those branches; `None` where they are lost. The
-/// rungs of a gap are taken from the edge inwards, each followed from the last one reached
-/// (from `u` and `states` for the first): a homotopy in the gap, each rung's orbits found by
-/// Newton's method from those of a nearby gap rather than of the start's.
+/// The lowest trial of the gaps `gaps` (indices into the problem's free parameters) moved
+/// inside the reach of the orbits `states` at `u`, the other parameters held, with its SSR,
+/// the parameter's index and the branches followed there, when it lies below `ssr`, the SSR
+/// at `u`; a rung where the branches are lost is skipped. The rungs of a gap are taken from
+/// the edge inwards, each followed from the last one reached (from `u` and `states` for the
+/// first): a homotopy in the gap, each rung's orbits found by Newton's method from those of a
+/// nearby gap rather than of the start's.
 pub(super) fn lower_trial(
-    free: &[ParamRange],
-    tr: &[Transform],
+    pb: &Problem<'_>,
     u: &[f64],
     gaps: &[usize],
     states: &[SetModel],
     ssr: f64,
-    trial: impl Fn(&[f64], &[f64], &[SetModel]) -> Option<(f64, Vec<SetModel>)>,
 ) -> Option<(Vec<f64>, f64, usize, Vec<SetModel>)> {
+    let (free, tr) = (pb.free, &pb.tr);
     let mut best: Option<(Vec<f64>, f64, usize, Vec<SetModel>)> = None;
     for &k in gaps
         .iter()
@@ -99,7 +97,7 @@ pub(super) fn lower_trial(
             }
             let mut v = u.to_vec();
             v[k] = tr[k].to_u(gap);
-            let Some((c, followed)) = trial(&v, &from.0, &from.1) else {
+            let Some((c, followed)) = pb.followed_ssr(&v, &from.0, &from.1) else {
                 continue;
             };
             if c < ssr && best.as_ref().is_none_or(|b| c < b.1) {
