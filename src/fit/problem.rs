@@ -182,6 +182,10 @@ pub(super) struct Run {
     pub(super) evaluations: usize,
     /// Iterations of every round.
     pub(super) iterations: usize,
+    /// The branches identified afresh at `lm.u` by the last round (none on the stepped
+    /// sweep, or where the identification failed): kept so that a later look at the same
+    /// point does not repeat it.
+    pub(super) identified: Option<Vec<SetModel>>,
 }
 
 impl Run {
@@ -237,6 +241,7 @@ pub(super) fn on_branches(
                 },
                 evaluations,
                 iterations,
+                identified: fresh.ok(),
             });
         }
         states = fresh.expect("checked above");

@@ -228,7 +228,10 @@ pub(super) fn search(
                 if gaps.is_empty() {
                     return None;
                 }
-                let states = pb.identify(&run.lm.u).ok()?;
+                let states = match &run.identified {
+                    Some(states) => states.clone(),
+                    None => pb.identify(&run.lm.u).ok()?,
+                };
                 untouched::lower_trial(pb, &run.lm.u, &gaps, &states, run.ssr())
             })
             .flatten()

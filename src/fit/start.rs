@@ -168,6 +168,7 @@ fn stepped(
         iterations: lm.iterations,
         lm,
         used: Used::SteppedSweep { why },
+        identified: None,
     }))
 }
 
