@@ -21,7 +21,7 @@ use std::cell::Cell;
 use nalgebra::{SMatrix, SVector};
 
 use crate::drive::{Excitation, Parameter, Sine};
-use crate::ode::{HybridSystem, Options, Tangent};
+use crate::ode::{HybridSystem, Options, Step, Tangent};
 
 use super::{Mode, Model};
 
@@ -170,6 +170,20 @@ impl<M: Model<N>, E: Parametric, const N: usize> HybridSystem for Tangents<'_, M
     #[inline]
     fn guards(&self, mode: Mode, t: f64, z: &Tangent<N>, g: &mut [f64]) {
         self.model.guards(mode, &z.y, || self.drive.accel(t), g)
+    }
+
+    /// The guards read the state alone: only it is interpolated, not the tangent map.
+    #[inline(always)]
+    fn guards_on_step(
+        &self,
+        mode: Mode,
+        t: f64,
+        step: &Step<Tangent<N>>,
+        theta: f64,
+        g: &mut [f64],
+    ) {
+        let y = step.part_at_theta(theta, |z| &z.y);
+        self.model.guards(mode, &y, || self.drive.accel(t), g)
     }
 
     // ANCHOR: saltation

@@ -50,7 +50,7 @@ fn guard_at<S: HybridSystem>(
     i: usize,
     buf: &mut [f64],
 ) -> f64 {
-    sys.guards(mode, step.t0 + theta * step.h, &step.at_theta(theta), buf);
+    sys.guards_on_step(mode, step.t0 + theta * step.h, step, theta, buf);
     buf[i]
 }
 
@@ -70,14 +70,14 @@ pub(crate) fn locate<S: HybridSystem>(
     let Scratch { values, samples } = scratch;
     // Per guard, its values at theta = 0 and at the probes (the stored end states at 0 and 1).
     for (k, &th) in THETAS.iter().enumerate() {
-        let y = if th == 1.0 {
-            step.y1
+        let t = step.t0 + th * step.h;
+        if th == 1.0 {
+            sys.guards(mode, t, &step.y1, values);
         } else if th == 0.0 {
-            step.y0
+            sys.guards(mode, t, &step.y0, values);
         } else {
-            step.at_theta(th)
-        };
-        sys.guards(mode, step.t0 + th * step.h, &y, values);
+            sys.guards_on_step(mode, t, step, th, values);
+        }
         for (s, gi) in samples.iter_mut().zip(values.iter()) {
             s[k] = *gi;
         }
