@@ -3,39 +3,51 @@
 //! irregular response, whose value jitters from one run to the next) and from points a jump
 //! crosses, against the rows of the settled steps.
 //!
-//! At recovery-family case 21's optimum (a rigid stop; the steps at 116-120 Hz do not
-//! settle, the branch ends near 154 Hz) the damping's derivative is taken by forward
-//! differences of several relative sizes, in standard deviations of each point per unit
+//! At recovery-family case 21's optimum, as its fit finds it (a rigid stop; the steps at
+//! 116-120 Hz do not settle, the branch ends near 154 Hz), the damping's derivative is taken
+//! by forward differences of several relative sizes, in standard deviations of each point per unit
 //! relative change. A smooth model's rows do not depend on the step; the printed rows of the
 //! unsettled steps and of the jump do, and they make the sum `J^T J` that an interval is
 //! computed from.
 //!
-//! Usage: `cargo run --release --example stepped_rows`.
+//! Usage: `cargo run --release --example stepped_rows` (the fit itself first, some 15 s).
 
 use endstop::fit::family::recovery_family;
-use endstop::fit::model_values;
+use endstop::fit::{fit, model_values, FitSettings};
 
-/// Case 21's fitted gap and damping (`cargo run --release --example fit_cost -- 21` on
-/// b2f6464).
-const OPTIMUM: [(&str, f64); 2] = [
-    ("stops.upper.gap_m", 1.006597e-4),
-    ("mechanics.damping_n_s_per_m", 7.549879e-2),
-];
+/// The parameter whose rows are shown.
+const DAMPING: &str = "mechanics.damping_n_s_per_m";
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let case = &recovery_family()[20];
     let data = case.data()?;
-    let base = case.truth_device()?;
+    let report = fit(
+        &case.start_device()?,
+        &data,
+        &case.free,
+        &FitSettings::default(),
+    )?;
+    let fitted = report
+        .params
+        .iter()
+        .find(|p| p.path == DAMPING)
+        .ok_or("case 21 fits the damping")?;
+    println!(
+        "case {}: fitted damping {:.6e}, 95 % {:.6e} .. {:.6e} (standard error {:.2e} of it)",
+        case.name,
+        fitted.value,
+        fitted.interval.0,
+        fitted.interval.1,
+        fitted.std_err / fitted.value
+    );
+    let base = &report.device;
     let values = |damping_factor: f64| -> Result<Vec<f64>, Box<dyn std::error::Error>> {
-        let d = base.with_params(&[OPTIMUM[0], (OPTIMUM[1].0, OPTIMUM[1].1 * damping_factor)])?;
-        Ok(model_values(&d, 1.0, &data[0])?)
+        let d = base.with_params(&[(DAMPING, fitted.value * damping_factor)])?;
+        Ok(model_values(&d, report.accel_scale, &data[0])?)
     };
     let at = values(1.0)?;
     let points = &data[0].points;
-    println!(
-        "case {}: damping's rows (sigmas per unit relative change)",
-        case.name
-    );
+    println!("the damping's rows (sigmas per unit relative change):");
     for rel in [1e-4, 1e-3, 2.75e-3, 5.5e-3, 1.1e-2] {
         let moved = values(1.0 + rel)?;
         let (mut all, mut unsettled, mut jump) = (0.0, 0.0, 0.0);

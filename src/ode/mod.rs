@@ -404,14 +404,12 @@ impl<V: Vector> Step<V> {
 
     /// Dense output at theta = (t - t0)/h in [0, 1].
     pub fn at_theta(&self, theta: f64) -> V {
-        let th1 = 1.0 - theta;
-        let r = &self.rcont;
-        r[0] + (r[1] + (r[2] + (r[3] + r[4] * th1) * theta) * th1) * theta
+        self.part_at_theta(theta, |v| v)
     }
 
     /// The dense output at theta of the part of the state that `part` picks (a field of a
-    /// [`Tangent`]): the same operations on each of its components as [`Step::at_theta`]
-    /// performs on the whole state, hence the same bits, without the work on the rest.
+    /// [`Tangent`], or the whole state for [`Step::at_theta`]): the same operations on each of
+    /// its components, hence the same bits, without the work on the rest.
     #[inline]
     pub fn part_at_theta<P: Vector>(&self, theta: f64, part: impl Fn(&V) -> &P) -> P {
         let th1 = 1.0 - theta;
